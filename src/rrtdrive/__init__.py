@@ -1,0 +1,38 @@
+"""rrtdrive: curvature-bounded paths with an improved RRT-Connect, driven closed-loop in highway-env."""
+
+from __future__ import annotations
+
+from rrtdrive.collision import CheckerConfig, CollisionChecker
+from rrtdrive.maps import BUILTIN_MAPS, Map, Obstacle, builtin_map, load_map, resolve_map, save_map
+from rrtdrive.types import (
+    Budget,
+    InputError,
+    Path,
+    PlanResult,
+    PlanStatus,
+    Pose,
+    Tree,
+    VehicleParams,
+)
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "BUILTIN_MAPS",
+    "Budget",
+    "CheckerConfig",
+    "CollisionChecker",
+    "InputError",
+    "Map",
+    "Obstacle",
+    "Path",
+    "PlanResult",
+    "PlanStatus",
+    "Pose",
+    "Tree",
+    "VehicleParams",
+    "builtin_map",
+    "load_map",
+    "resolve_map",
+    "save_map",
+]

@@ -1,0 +1,451 @@
+"""Maps: bounds, oriented rectangular obstacles, a start and a goal pose.
+
+The JSON format (SPEC §2)::
+
+    {"name": "parking_lot", "bounds": [0, 0, 100, 100],
+     "obstacles": [{"center": [50.0, 20.0], "size": [4.3, 1.8], "yaw": 0.0}],
+     "start": [5.0, 5.0, 0.0], "goal": [90.0, 80.0, 1.5708]}
+
+Loading validates every field and names the offending one in an
+:class:`~rrtdrive.types.InputError`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path as FsPath
+
+import numpy as np
+import shapely
+
+from rrtdrive.types import InputError, Pose, VehicleParams, require_finite, require_positive
+from rrtdrive.vehicle import footprint_polygon
+
+__all__ = [
+    "Obstacle",
+    "Map",
+    "BUILTIN_MAPS",
+    "builtin_map",
+    "load_map",
+    "save_map",
+    "resolve_map",
+    "check_endpoint",
+]
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """An oriented rectangle: centre, size ``(length along yaw, width)``, yaw."""
+
+    center: tuple[float, float]
+    size: tuple[float, float]
+    yaw: float = 0.0
+
+    def __post_init__(self) -> None:
+        center = _pair(self.center, "obstacle.center")
+        size = _pair(self.size, "obstacle.size")
+        require_positive("obstacle.size", size[0])
+        require_positive("obstacle.size", size[1])
+        require_finite("obstacle.yaw", self.yaw)
+        object.__setattr__(self, "center", center)
+        object.__setattr__(self, "size", size)
+        object.__setattr__(self, "yaw", float(self.yaw))
+
+    def corners(self) -> np.ndarray:
+        """The four corners, shape ``(4, 2)``, counter-clockwise."""
+        half_l, half_w = self.size[0] / 2.0, self.size[1] / 2.0
+        local = np.array([[-half_l, -half_w], [half_l, -half_w], [half_l, half_w], [-half_l, half_w]])
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        rot = np.array([[c, -s], [s, c]])
+        return local @ rot.T + np.asarray(self.center)
+
+    def polygon(self) -> shapely.Polygon:
+        """The rectangle as a shapely polygon."""
+        return shapely.Polygon(self.corners())
+
+    def grown(self, amount: float) -> Obstacle:
+        """This rectangle with ``amount`` added to its length and to its width."""
+        return Obstacle(self.center, (self.size[0] + amount, self.size[1] + amount), self.yaw)
+
+    def to_json(self) -> dict[str, object]:
+        """JSON-ready dict."""
+        return {"center": list(self.center), "size": list(self.size), "yaw": self.yaw}
+
+
+@dataclass(frozen=True)
+class Map:
+    """A planning map: the region, its obstacles and one start/goal query.
+
+    Construction validates the start and goal against ``vehicle``: each must lie
+    within the bounds and the car's body there must be clear of every obstacle
+    and inside the bounds.
+
+    Parameters
+    ----------
+    name : str
+        Map name.
+    bounds : tuple of float
+        ``(xmin, ymin, xmax, ymax)``; outside counts as an obstacle.
+    obstacles : tuple of Obstacle
+        Oriented rectangles.
+    start, goal : Pose
+        Rear-axle poses.
+    vehicle : VehicleParams
+        The car used to validate the start and goal footprints.
+    """
+
+    name: str
+    bounds: tuple[float, float, float, float]
+    obstacles: tuple[Obstacle, ...]
+    start: Pose
+    goal: Pose
+    vehicle: VehicleParams = dataclasses.field(default_factory=VehicleParams, compare=False)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name:
+            raise InputError(f"name: expected a non-empty string, got {self.name!r}")
+        b = self.bounds
+        if not isinstance(b, (list, tuple)) or len(b) != 4:
+            raise InputError(f"bounds: expected [xmin, ymin, xmax, ymax], got {b!r}")
+        require_finite("bounds", *b)
+        b = tuple(float(v) for v in b)
+        if b[2] <= b[0] or b[3] <= b[1]:
+            raise InputError(f"bounds: need xmin < xmax and ymin < ymax, got {list(b)}")
+        object.__setattr__(self, "bounds", b)
+        object.__setattr__(self, "obstacles", tuple(self.obstacles))
+        for label, pose in (("start", self.start), ("goal", self.goal)):
+            if not isinstance(pose, Pose):
+                raise InputError(f"{label}: expected a Pose, got {pose!r}")
+            check_endpoint(self, pose, label, self.vehicle)
+
+    @property
+    def width(self) -> float:
+        """Extent along x in metres."""
+        return self.bounds[2] - self.bounds[0]
+
+    @property
+    def height(self) -> float:
+        """Extent along y in metres."""
+        return self.bounds[3] - self.bounds[1]
+
+    def with_query(self, start: Pose | None = None, goal: Pose | None = None) -> Map:
+        """A copy with another start and/or goal (validated)."""
+        return dataclasses.replace(
+            self, start=start if start is not None else self.start,
+            goal=goal if goal is not None else self.goal,
+        )
+
+    def obstacle_union(self) -> shapely.Geometry:
+        """All obstacles as one shapely geometry (empty if none)."""
+        return shapely.union_all([o.polygon() for o in self.obstacles])
+
+    def to_json(self) -> dict[str, object]:
+        """JSON-ready dict in the map file format."""
+        return {
+            "name": self.name,
+            "bounds": list(self.bounds),
+            "obstacles": [o.to_json() for o in self.obstacles],
+            "start": list(self.start.as_tuple()),
+            "goal": list(self.goal.as_tuple()),
+        }
+
+
+def check_endpoint(m: Map, pose: Pose, label: str, vehicle: VehicleParams) -> None:
+    """Raise :class:`InputError` unless the car at ``pose`` lies in bounds and clear of obstacles.
+
+    Parameters
+    ----------
+    m : Map
+        The map (only bounds and obstacles are read).
+    pose : Pose
+        Rear-axle pose to check.
+    label : str
+        Field name for the message (``"start"`` or ``"goal"``).
+    vehicle : VehicleParams
+        The car.
+    """
+    xmin, ymin, xmax, ymax = m.bounds
+    if not (xmin <= pose.x <= xmax and ymin <= pose.y <= ymax):
+        raise InputError(
+            f"{label}: ({pose.x:g}, {pose.y:g}) lies outside the bounds {list(m.bounds)}"
+        )
+    body = footprint_polygon(pose.as_tuple(), vehicle)
+    if not shapely.box(xmin, ymin, xmax, ymax).contains(body):
+        raise InputError(f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) leaves the bounds")
+    for i, obstacle in enumerate(m.obstacles):
+        if obstacle.polygon().intersects(body):
+            raise InputError(
+                f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) overlaps obstacle {i} "
+                f"at {list(obstacle.center)}"
+            )
+
+
+def _pair(value: object, name: str) -> tuple[float, float]:
+    if not isinstance(value, (list, tuple, np.ndarray)) or len(value) != 2:
+        raise InputError(f"{name}: expected two numbers, got {value!r}")
+    require_finite(name, *value)
+    return (float(value[0]), float(value[1]))
+
+
+# ----------------------------------------------------------------------------- JSON
+
+_MAP_KEYS = {"name", "bounds", "obstacles", "start", "goal"}
+_OBSTACLE_KEYS = {"center", "size", "yaw"}
+
+
+def map_from_json(data: object, vehicle: VehicleParams | None = None) -> Map:
+    """Build a :class:`Map` from parsed JSON, validating every field.
+
+    Parameters
+    ----------
+    data : object
+        Parsed JSON (a dict in the map file format).
+    vehicle : VehicleParams, optional
+        The car for the start/goal footprint checks.
+
+    Returns
+    -------
+    Map
+    """
+    if not isinstance(data, dict):
+        raise InputError(f"map: expected a JSON object, got {type(data).__name__}")
+    unknown = set(data) - _MAP_KEYS
+    if unknown:
+        raise InputError(f"map: unknown key(s) {sorted(unknown)}; allowed {sorted(_MAP_KEYS)}")
+    missing = {"bounds", "start", "goal"} - set(data)
+    if missing:
+        raise InputError(f"map: missing key(s) {sorted(missing)}")
+    raw_obstacles = data.get("obstacles", [])
+    if not isinstance(raw_obstacles, list):
+        raise InputError("obstacles: expected a list")
+    obstacles = []
+    for i, item in enumerate(raw_obstacles):
+        if not isinstance(item, dict):
+            raise InputError(f"obstacles[{i}]: expected an object, got {item!r}")
+        bad = set(item) - _OBSTACLE_KEYS
+        if bad:
+            raise InputError(f"obstacles[{i}]: unknown key(s) {sorted(bad)}")
+        if "center" not in item or "size" not in item:
+            raise InputError(f"obstacles[{i}]: needs 'center' and 'size'")
+        try:
+            obstacles.append(Obstacle(item["center"], item["size"], item.get("yaw", 0.0)))
+        except InputError as exc:
+            raise InputError(f"obstacles[{i}].{exc}") from None
+    return Map(
+        name=str(data.get("name", "map")),
+        bounds=data["bounds"],
+        obstacles=tuple(obstacles),
+        start=Pose.from_seq(data["start"], "start"),
+        goal=Pose.from_seq(data["goal"], "goal"),
+        vehicle=vehicle or VehicleParams(),
+    )
+
+
+def load_map(path: str | os.PathLike[str], vehicle: VehicleParams | None = None) -> Map:
+    """Load and validate a map file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A JSON file in the map format.
+    vehicle : VehicleParams, optional
+        The car for the start/goal checks.
+
+    Returns
+    -------
+    Map
+    """
+    try:
+        text = FsPath(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"map: cannot read {path}: {exc.strerror}") from None
+    try:
+        data = json.loads(text, parse_constant=_reject_constant)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"map: malformed JSON in {path}: {exc.msg} (line {exc.lineno})") from None
+    return map_from_json(data, vehicle)
+
+
+def _reject_constant(name: str) -> float:
+    raise InputError(f"map: non-finite number {name} is not allowed")
+
+
+def save_map(m: Map, path: str | os.PathLike[str]) -> None:
+    """Write ``m`` as JSON atomically (temporary file, then rename)."""
+    write_text_atomic(path, json.dumps(m.to_json(), indent=2) + "\n")
+
+
+def write_text_atomic(path: str | os.PathLike[str], text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file in the same folder and a rename."""
+    target = FsPath(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or ".")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, target)
+    except BaseException:
+        FsPath(tmp).unlink(missing_ok=True)
+        raise
+
+
+# ----------------------------------------------------------------------------- built-ins
+
+#: Width of a highway-env lane, used by the overtake road so the scene matches.
+LANE_WIDTH = 4.0
+
+
+def overtake_map() -> Map:
+    """A straight two-lane road along x with its edges as walls and a stopped car in the ego lane.
+
+    The road spans y in [42, 50]: the ego lane is centred on y = 44, the
+    oncoming lane on y = 48. The stopped car's body is centred at (50, 44).
+    """
+    road_low, road_high = 42.0, 42.0 + 2 * LANE_WIDTH
+    ego_lane = road_low + LANE_WIDTH / 2
+    edge = 1.0
+    obstacles = (
+        Obstacle((50.0, road_low - edge / 2), (100.0, edge)),
+        Obstacle((50.0, road_high + edge / 2), (100.0, edge)),
+        Obstacle((50.0, ego_lane), (4.3, 1.8)),
+    )
+    return Map(
+        "overtake", (0.0, 0.0, 100.0, 100.0), obstacles,
+        Pose(5.0, ego_lane, 0.0), Pose(92.0, ego_lane, 0.0),
+    )
+
+
+#: Parking-lot geometry, shared with the highway-env scene builder.
+PARKING_SPOT_WIDTH = 3.0
+PARKING_SPOT_DEPTH = 5.5
+PARKING_ROW_CENTRES = (20.0, 45.0, 70.0)
+PARKING_ROW_X = (14.0, 86.0)
+#: Empty spots per (row index, side, spot index); side 0 faces -y, side 1 faces +y.
+PARKING_EMPTY_SPOTS = frozenset(
+    {(0, 0, 3), (0, 1, 17), (1, 0, 9), (1, 1, 4), (1, 1, 20), (2, 0, 14), (2, 1, 19), (2, 1, 6)}
+)
+#: Spots replaced by solid blocks (islands with lamp posts, trolley bays).
+PARKING_BLOCK_SPOTS = frozenset({(0, 0, 11), (0, 0, 12), (1, 1, 11), (1, 1, 12), (2, 0, 2)})
+
+
+def parking_spots() -> list[tuple[int, int, int, float, float]]:
+    """Every spot of the lot as ``(row, side, index, x_centre, y_centre)``."""
+    spots = []
+    count = int(round((PARKING_ROW_X[1] - PARKING_ROW_X[0]) / PARKING_SPOT_WIDTH))
+    for r, yc in enumerate(PARKING_ROW_CENTRES):
+        for side in (0, 1):
+            y = yc - PARKING_SPOT_DEPTH / 2 if side == 0 else yc + PARKING_SPOT_DEPTH / 2
+            for i in range(count):
+                x = PARKING_ROW_X[0] + PARKING_SPOT_WIDTH * (i + 0.5)
+                spots.append((r, side, i, x, y))
+    return spots
+
+
+def parking_goal_pose(row: int, side: int, index: int, vehicle: VehicleParams | None = None) -> Pose:
+    """The rear-axle pose of a car parked nose-in, centred in the given spot."""
+    vehicle = vehicle or VehicleParams()
+    for r, s, i, x, y in parking_spots():
+        if (r, s, i) == (row, side, index):
+            # Nose-in: a side-1 spot (upper half of a row) opens upward, so the car faces -y.
+            yaw = -math.pi / 2 if s == 1 else math.pi / 2
+            centre_to_axle = vehicle.length / 2 - vehicle.rear_overhang
+            return Pose(x - centre_to_axle * math.cos(yaw), y - centre_to_axle * math.sin(yaw), yaw)
+    raise InputError(f"spot: no spot {(row, side, index)}")
+
+
+def parking_lot_map() -> Map:
+    """Three double rows of parked cars, solid blocks, aisles; the goal far from the entrance.
+
+    The entrance is at the bottom-left (start heading +x); the goal is an empty
+    nose-in spot on the upper side of the top row, near the right end.
+    """
+    obstacles: list[Obstacle] = []
+    for r, side, i, x, y in parking_spots():
+        key = (r, side, i)
+        if key in PARKING_BLOCK_SPOTS:
+            obstacles.append(Obstacle((x, y), (PARKING_SPOT_WIDTH, PARKING_SPOT_DEPTH)))
+        elif key not in PARKING_EMPTY_SPOTS:
+            obstacles.append(Obstacle((x, y), (4.3, 1.8), math.pi / 2))
+    # A kerb between the two halves of each double row keeps cars from driving through it.
+    for yc in PARKING_ROW_CENTRES:
+        obstacles.append(
+            Obstacle(((PARKING_ROW_X[0] + PARKING_ROW_X[1]) / 2, yc), (PARKING_ROW_X[1] - PARKING_ROW_X[0], 0.4))
+        )
+    # Solid blocks: a kiosk building, a ticket booth by the entrance, a planter on the right.
+    obstacles += [
+        Obstacle((35.0, 90.0), (24.0, 10.0)),
+        Obstacle((6.0, 30.0), (6.0, 6.0)),
+        Obstacle((93.0, 57.0), (6.0, 10.0)),
+    ]
+    return Map(
+        "parking_lot", (0.0, 0.0, 100.0, 100.0), tuple(obstacles),
+        Pose(5.0, 6.0, 0.0), parking_goal_pose(2, 1, 19),
+    )
+
+
+def narrow_gap_map() -> Map:
+    """A wall across the map with one passage 2.8 m wide (the car is 1.8 m wide)."""
+    gap, y_gap, thickness = 2.8, 50.0, 2.0
+    low_len = y_gap - gap / 2
+    high_len = 100.0 - (y_gap + gap / 2)
+    obstacles = (
+        Obstacle((50.0, low_len / 2), (thickness, low_len)),
+        Obstacle((50.0, 100.0 - high_len / 2), (thickness, high_len)),
+    )
+    return Map(
+        "narrow_gap", (0.0, 0.0, 100.0, 100.0), obstacles,
+        Pose(10.0, 20.0, 0.0), Pose(85.0, 80.0, 0.0),
+    )
+
+
+def no_path_map() -> Map:
+    """The goal sits inside a closed ring of walls: no path exists."""
+    obstacles = (
+        Obstacle((77.5, 65.0), (27.0, 2.0)),
+        Obstacle((77.5, 90.0), (27.0, 2.0)),
+        Obstacle((65.0, 77.5), (2.0, 27.0)),
+        Obstacle((90.0, 77.5), (2.0, 27.0)),
+    )
+    return Map(
+        "no_path", (0.0, 0.0, 100.0, 100.0), obstacles,
+        Pose(10.0, 10.0, 0.0), Pose(75.0, 77.5, 0.0),
+    )
+
+
+BUILTIN_MAPS: dict[str, Callable[[], Map]] = {
+    "overtake": overtake_map,
+    "parking_lot": parking_lot_map,
+    "narrow_gap": narrow_gap_map,
+    "no_path": no_path_map,
+}
+
+
+def builtin_map(name: str) -> Map:
+    """Return the built-in map called ``name``.
+
+    Examples
+    --------
+    >>> builtin_map("overtake").start
+    Pose(x=5.0, y=44.0, yaw=0.0)
+    """
+    try:
+        return BUILTIN_MAPS[name]()
+    except KeyError:
+        raise InputError(
+            f"map: unknown map {name!r}; built-ins are {sorted(BUILTIN_MAPS)} or give a .json file"
+        ) from None
+
+
+def resolve_map(spec: str, vehicle: VehicleParams | None = None) -> Map:
+    """A built-in map by name, or a map file by path."""
+    if spec in BUILTIN_MAPS:
+        m = builtin_map(spec)
+        return m if vehicle is None else dataclasses.replace(m, vehicle=vehicle)
+    if spec.endswith(".json") or os.path.sep in spec or FsPath(spec).exists():
+        return load_map(spec, vehicle)
+    return builtin_map(spec)

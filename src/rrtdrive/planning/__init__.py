@@ -1,0 +1,47 @@
+"""Planners: RRT, RRT-Connect, RRT* and the improved RRT-Connect, behind one protocol."""
+
+from __future__ import annotations
+
+from rrtdrive.planning.base import (
+    PLANNERS,
+    GrowingTree,
+    Planner,
+    PlanningProblem,
+    polyline_path,
+)
+from rrtdrive.types import InputError
+
+__all__ = ["PLANNERS", "GrowingTree", "Planner", "PlanningProblem", "make_planner", "polyline_path"]
+
+
+def _load_builtin_planners() -> None:
+    # Importing the modules registers their planners.
+    import importlib
+
+    for module in ("rrt", "rrt_connect", "rrt_star", "improved"):
+        try:
+            importlib.import_module(f"rrtdrive.planning.{module}")
+        except ModuleNotFoundError as exc:  # a planner module not written yet
+            if exc.name != f"rrtdrive.planning.{module}":
+                raise
+
+
+_load_builtin_planners()
+
+
+def make_planner(name: str, **options: object) -> Planner:
+    """Build the registered planner ``name`` with keyword ``options``.
+
+    Raises
+    ------
+    InputError
+        For an unknown name or option.
+    """
+    try:
+        factory = PLANNERS[name]
+    except KeyError:
+        raise InputError(f"planner: unknown planner {name!r}; choose from {sorted(PLANNERS)}") from None
+    try:
+        return factory(**options)
+    except TypeError as exc:
+        raise InputError(f"planner: {exc}") from None

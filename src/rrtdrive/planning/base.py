@@ -1,0 +1,320 @@
+"""The planner seam: problem, protocol, growing trees, budgets, and shared helpers."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from rrtdrive.collision import CheckerConfig, CollisionChecker
+from rrtdrive.maps import Map
+from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Pose, Tree, VehicleParams
+
+__all__ = [
+    "PlanningProblem",
+    "Planner",
+    "GrowingTree",
+    "Stopwatch",
+    "precheck",
+    "failure",
+    "polyline_path",
+    "polyline_curvature",
+    "resample_polyline",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class PlanningProblem:
+    """One query: a map, the car, its checker, a start and a goal.
+
+    Build it with :meth:`from_map`; checkers are cached per map so that repeated
+    queries on one map pay the distance-field construction once.
+    """
+
+    map: Map
+    checker: CollisionChecker
+    start: Pose
+    goal: Pose
+    vehicle: VehicleParams = field(default_factory=VehicleParams)
+
+    @classmethod
+    def from_map(
+        cls,
+        m: Map,
+        checker: CollisionChecker | None = None,
+        config: CheckerConfig | None = None,
+    ) -> PlanningProblem:
+        """The problem of map ``m`` with its own start and goal."""
+        if checker is None:
+            checker = cached_checker(m, config)
+        return cls(m, checker, m.start, m.goal, m.vehicle)
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """The map's ``(xmin, ymin, xmax, ymax)``."""
+        return self.map.bounds
+
+
+_CHECKERS: dict[tuple[object, ...], CollisionChecker] = {}
+
+
+def cached_checker(m: Map, config: CheckerConfig | None = None) -> CollisionChecker:
+    """The checker for ``m``'s obstacles, bounds and car, built once per process."""
+    config = config or CheckerConfig()
+    key = (m.bounds, m.obstacles, m.vehicle, config)
+    checker = _CHECKERS.get(key)
+    if checker is None:
+        if len(_CHECKERS) > 16:
+            _CHECKERS.clear()
+        checker = CollisionChecker.for_map(m, config=config)
+        _CHECKERS[key] = checker
+    return checker
+
+
+@runtime_checkable
+class Planner(Protocol):
+    """What every planner offers."""
+
+    name: str
+
+    def solve(
+        self, problem: PlanningProblem, rng: np.random.Generator, budget: Budget
+    ) -> PlanResult:
+        """Plan from ``problem.start`` to ``problem.goal`` within ``budget``; never return None."""
+        ...
+
+
+class Stopwatch:
+    """Wall-clock budget keeper started at construction."""
+
+    def __init__(self, budget: Budget) -> None:
+        self.budget = budget
+        self.t0 = time.perf_counter()
+        self._deadline = self.t0 + budget.max_time_s
+
+    def elapsed(self) -> float:
+        """Seconds since start."""
+        return time.perf_counter() - self.t0
+
+    def expired(self) -> bool:
+        """True once the time budget is spent."""
+        return time.perf_counter() >= self._deadline
+
+
+class GrowingTree:
+    """A tree in preallocated numpy arrays with vectorised nearest and near-set queries.
+
+    Parameters
+    ----------
+    root : array_like
+        Root position ``(x, y)``.
+    capacity : int
+        Initial capacity; the arrays double when full.
+    virtual_parent : array_like, optional
+        A position that acts as the root's parent for angle tests (never a node).
+    """
+
+    def __init__(
+        self, root: np.ndarray, capacity: int = 1024, virtual_parent: np.ndarray | None = None
+    ) -> None:
+        self.nodes = np.empty((capacity, 2))
+        self.parents = np.empty(capacity, dtype=np.int64)
+        self.cost = np.empty(capacity)
+        self.nodes[0] = root
+        self.parents[0] = -1
+        self.cost[0] = 0.0
+        self.size = 1
+        self.virtual_parent = None if virtual_parent is None else np.asarray(virtual_parent, float)
+
+    def __len__(self) -> int:
+        return self.size
+
+    def add(self, point: np.ndarray, parent: int, cost: float | None = None) -> int:
+        """Append ``point`` with ``parent``; return its index."""
+        if self.size == len(self.nodes):
+            self.nodes = np.concatenate([self.nodes, np.empty_like(self.nodes)])
+            self.parents = np.concatenate([self.parents, np.empty_like(self.parents)])
+            self.cost = np.concatenate([self.cost, np.empty_like(self.cost)])
+        i = self.size
+        self.nodes[i] = point
+        self.parents[i] = parent
+        if cost is None:
+            p = self.nodes[parent]
+            cost = self.cost[parent] + math.hypot(point[0] - p[0], point[1] - p[1])
+        self.cost[i] = cost
+        self.size += 1
+        return i
+
+    def sq_dists(self, point: np.ndarray) -> np.ndarray:
+        """Squared distances from every node to ``point``."""
+        d = self.nodes[: self.size] - point
+        return np.einsum("ij,ij->i", d, d)
+
+    def nearest(self, point: np.ndarray) -> int:
+        """Index of the node nearest to ``point``."""
+        return int(np.argmin(self.sq_dists(point)))
+
+    def near(self, point: np.ndarray, radius: float) -> np.ndarray:
+        """Indices of the nodes within ``radius`` of ``point``."""
+        return np.flatnonzero(self.sq_dists(point) <= radius * radius)
+
+    def parent_positions(self) -> np.ndarray:
+        """Each node's parent position (the root's virtual parent, or NaN), shape ``(size, 2)``."""
+        par = self.parents[: self.size]
+        out = self.nodes[np.maximum(par, 0)].copy()
+        root_parent = self.virtual_parent if self.virtual_parent is not None else (np.nan, np.nan)
+        out[par < 0] = root_parent
+        return out
+
+    def branch(self, i: int) -> np.ndarray:
+        """Positions from node ``i`` back to the root, ``(K, 2)``."""
+        out = []
+        while i >= 0:
+            out.append(self.nodes[i])
+            i = int(self.parents[i])
+        return np.array(out)
+
+    def freeze(self) -> Tree:
+        """An immutable copy for the result."""
+        return Tree(self.nodes[: self.size].copy(), self.parents[: self.size].copy())
+
+
+def step_towards(a: np.ndarray, b: np.ndarray, step: float) -> tuple[np.ndarray, bool]:
+    """The point ``step`` from ``a`` towards ``b`` (or ``b`` itself when nearer); and whether it is ``b``."""
+    d = b - a
+    dist = math.hypot(d[0], d[1])
+    if dist <= step:
+        return b.copy(), True
+    return a + d * (step / dist), False
+
+
+def sample_point(
+    rng: np.random.Generator, bounds: tuple[float, float, float, float]
+) -> np.ndarray:
+    """A uniform point in the bounds."""
+    return rng.uniform((bounds[0], bounds[1]), (bounds[2], bounds[3]))
+
+
+def precheck(problem: PlanningProblem, planner: str, watch: Stopwatch) -> PlanResult | None:
+    """Fail early on an invalid start or goal or a provably unreachable goal; else ``None``."""
+    checker = problem.checker
+    if not checker.pose_free(problem.start.as_tuple()):
+        return failure(planner, PlanStatus.INVALID_START, watch, "start: the car's body collides there")
+    if not checker.pose_free(problem.goal.as_tuple()):
+        return failure(planner, PlanStatus.INVALID_GOAL, watch, "goal: the car's body collides there")
+    if checker.provably_disconnected(problem.start.xy, problem.goal.xy):
+        return failure(
+            planner,
+            PlanStatus.PROVEN_UNREACHABLE,
+            watch,
+            "goal unreachable: start and goal lie in different free components of the "
+            "clearance grid (no collision-free motion connects them)",
+        )
+    return None
+
+
+def failure(
+    planner: str,
+    status: PlanStatus,
+    watch: Stopwatch,
+    message: str,
+    trees: tuple[Tree, ...] = (),
+    iterations: int = 0,
+    raw_path: np.ndarray | None = None,
+    stats: dict[str, float] | None = None,
+) -> PlanResult:
+    """A failed :class:`PlanResult` with an empty path."""
+    return PlanResult(
+        status=status,
+        planner=planner,
+        path=Path.empty(),
+        raw_path=np.zeros((0, 2)) if raw_path is None else raw_path,
+        trees=trees,
+        nodes=sum(len(t) for t in trees),
+        iterations=iterations,
+        planning_time_s=watch.elapsed(),
+        message=message,
+        stats=stats or {},
+    )
+
+
+def polyline_curvature(points: np.ndarray) -> np.ndarray:
+    """Menger curvature (1 / radius of the circle through three points) at each vertex.
+
+    The end vertices get 0. Signed: positive for a left (counter-clockwise) turn.
+
+    Examples
+    --------
+    >>> pts = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0]])
+    >>> polyline_curvature(pts).round(6)
+    array([0., 1., 0.])
+    """
+    p = np.asarray(points, dtype=float)
+    k = np.zeros(len(p))
+    if len(p) < 3:
+        return k
+    a, b, c = p[:-2], p[1:-1], p[2:]
+    ab, bc, ca = b - a, c - b, a - c
+    cross = ab[:, 0] * bc[:, 1] - ab[:, 1] * bc[:, 0]
+    denom = np.linalg.norm(ab, axis=1) * np.linalg.norm(bc, axis=1) * np.linalg.norm(ca, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k[1:-1] = np.where(denom > 1e-12, 2.0 * cross / denom, 0.0)
+    return k
+
+
+def resample_polyline(points: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """Points along a polyline at most ``spacing`` apart, keeping every vertex.
+
+    Returns
+    -------
+    samples : numpy.ndarray
+        ``(N, 2)`` positions.
+    vertex_index : numpy.ndarray
+        Index into ``samples`` of each input vertex.
+    """
+    p = np.asarray(points, dtype=float)
+    seg = np.hypot(*np.diff(p, axis=0).T)
+    pieces = np.maximum(1, np.ceil(seg / spacing - 1e-9).astype(np.int64))
+    owner = np.repeat(np.arange(len(seg)), pieces)
+    first = np.repeat(np.cumsum(pieces) - pieces, pieces)
+    frac = (np.arange(len(owner)) - first) / np.repeat(pieces, pieces)
+    out = p[owner] + frac[:, None] * (p[owner + 1] - p[owner])
+    out = np.vstack([out, p[-1:]])
+    vertex_index = np.concatenate([[0], np.cumsum(pieces)])
+    return out, vertex_index
+
+
+def polyline_path(points: np.ndarray, spacing: float = 0.25) -> Path:
+    """A :class:`Path` along a raw polyline: headings along its segments, Menger curvature at vertices.
+
+    Used for the baselines' raw tree paths: they have corners, and the curvature
+    column reports them (the circle through each corner and its neighbours).
+    """
+    p = np.asarray(points, dtype=float)
+    if len(p) < 2:
+        return Path(np.column_stack([p, np.zeros((len(p), 2))]), p)
+    xy, vertex_index = resample_polyline(p, spacing)
+    seg_yaw = np.arctan2(*np.diff(p, axis=0).T[::-1])
+    owner = np.searchsorted(vertex_index, np.arange(len(xy)), side="right") - 1
+    yaw = seg_yaw[np.minimum(owner, len(seg_yaw) - 1)]
+    kappa = np.zeros(len(xy))
+    kappa[vertex_index] = polyline_curvature(p)
+    return Path(np.column_stack([xy, yaw, kappa]), p)
+
+
+PlannerFactory = Callable[..., Planner]
+PLANNERS: dict[str, PlannerFactory] = {}
+
+
+def register_planner(name: str) -> Callable[[PlannerFactory], PlannerFactory]:
+    """Class decorator adding a planner factory to :data:`PLANNERS`."""
+
+    def deco(factory: PlannerFactory) -> PlannerFactory:
+        PLANNERS[name] = factory
+        return factory
+
+    return deco

@@ -1,0 +1,315 @@
+"""Plain data types shared by every part of rrtdrive.
+
+Everything here is a frozen dataclass validated on construction; bulk geometry
+travels as numpy arrays.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = [
+    "InputError",
+    "Pose",
+    "VehicleParams",
+    "Path",
+    "Tree",
+    "PlanStatus",
+    "PlanResult",
+    "Budget",
+]
+
+
+class InputError(ValueError):
+    """Bad user input; the message names the offending field."""
+
+
+def require_finite(name: str, *values: float) -> None:
+    """Raise :class:`InputError` naming ``name`` unless every value is a finite real number.
+
+    Parameters
+    ----------
+    name : str
+        Field name used in the error message.
+    *values : float
+        Values to check.
+    """
+    for v in values:
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
+            raise InputError(f"{name}: expected a number, got {type(v).__name__} {v!r}")
+        if not math.isfinite(float(v)):
+            raise InputError(f"{name}: must be finite, got {v!r}")
+
+
+def require_positive(name: str, value: float) -> None:
+    """Raise :class:`InputError` unless ``value`` is a finite number > 0."""
+    require_finite(name, value)
+    if value <= 0:
+        raise InputError(f"{name}: must be > 0, got {value!r}")
+
+
+def wrap_angle(angle: float | np.ndarray) -> float | np.ndarray:
+    """Wrap an angle (or an array of angles) to [-pi, pi)."""
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A planar pose of the rear-axle centre: position in metres, yaw in radians (CCW from +x)."""
+
+    x: float
+    y: float
+    yaw: float
+
+    def __post_init__(self) -> None:
+        require_finite("pose", self.x, self.y, self.yaw)
+        object.__setattr__(self, "x", float(self.x))
+        object.__setattr__(self, "y", float(self.y))
+        object.__setattr__(self, "yaw", float(self.yaw))
+
+    @classmethod
+    def from_seq(cls, values: object, name: str = "pose") -> Pose:
+        """Build a pose from a ``[x, y, yaw]`` sequence, naming ``name`` in errors."""
+        if not isinstance(values, (list, tuple, np.ndarray)) or len(values) != 3:
+            raise InputError(f"{name}: expected [x, y, yaw], got {values!r}")
+        require_finite(name, *values)
+        return cls(float(values[0]), float(values[1]), float(values[2]))
+
+    def as_tuple(self) -> tuple[float, float, float]:
+        """Return ``(x, y, yaw)``."""
+        return (self.x, self.y, self.yaw)
+
+    @property
+    def xy(self) -> np.ndarray:
+        """Position as a length-2 array."""
+        return np.array([self.x, self.y])
+
+
+@dataclass(frozen=True)
+class VehicleParams:
+    """The car of the paper (Table 2): the single source of truth for every module.
+
+    Parameters
+    ----------
+    length, width : float
+        Body size in metres.
+    wheelbase : float
+        Distance rear axle to front axle in metres.
+    min_turning_radius : float
+        Minimum turning radius of the rear axle in metres; the binding path limit.
+    max_steer : float
+        Actuator limit of the front-wheel angle in radians.
+
+    Examples
+    --------
+    >>> v = VehicleParams()
+    >>> round(v.kappa_max, 4), round(v.rear_overhang, 3)
+    (0.1667, 0.895)
+    """
+
+    length: float = 4.30
+    width: float = 1.80
+    wheelbase: float = 2.51
+    min_turning_radius: float = 6.0
+    max_steer: float = math.radians(30.0)
+
+    def __post_init__(self) -> None:
+        for name in ("length", "width", "wheelbase", "min_turning_radius", "max_steer"):
+            require_positive(f"vehicle.{name}", getattr(self, name))
+        if self.wheelbase >= self.length:
+            raise InputError(
+                f"vehicle.wheelbase: must be shorter than the length {self.length}, "
+                f"got {self.wheelbase}"
+            )
+        if self.max_steer >= math.pi / 2:
+            raise InputError(f"vehicle.max_steer: must be below pi/2, got {self.max_steer}")
+        if self.wheelbase / math.tan(self.max_steer) > self.min_turning_radius + 1e-9:
+            raise InputError(
+                "vehicle.min_turning_radius: the steering limit cannot reach it "
+                f"(wheelbase / tan(max_steer) = "
+                f"{self.wheelbase / math.tan(self.max_steer):.3f} m > {self.min_turning_radius} m)"
+            )
+
+    @property
+    def rear_overhang(self) -> float:
+        """Distance from the rear axle back to the rear bumper (symmetric body)."""
+        return (self.length - self.wheelbase) / 2.0
+
+    @property
+    def front_extent(self) -> float:
+        """Distance from the rear axle forward to the front bumper."""
+        return self.length - self.rear_overhang
+
+    @property
+    def kappa_max(self) -> float:
+        """Largest admissible path curvature, 1 / min_turning_radius."""
+        return 1.0 / self.min_turning_radius
+
+    @property
+    def steer_for_kappa_max(self) -> float:
+        """Steering angle that drives the curvature limit, atan(L * kappa_max)."""
+        return math.atan(self.wheelbase * self.kappa_max)
+
+
+@dataclass(frozen=True, eq=False)
+class Path:
+    """A sampled path: rows ``[x, y, yaw, kappa]`` of the rear-axle centre.
+
+    Attributes
+    ----------
+    samples : numpy.ndarray
+        Shape ``(N, 4)``; empty ``(0, 4)`` for a failed plan.
+    waypoints : numpy.ndarray
+        Shape ``(M, 2)``: the control points or polyline vertices the path came from.
+    """
+
+    samples: np.ndarray
+    waypoints: np.ndarray
+
+    def __post_init__(self) -> None:
+        s = np.asarray(self.samples, dtype=float).reshape(-1, 4)
+        w = np.asarray(self.waypoints, dtype=float).reshape(-1, 2)
+        s.setflags(write=False)
+        w.setflags(write=False)
+        object.__setattr__(self, "samples", s)
+        object.__setattr__(self, "waypoints", w)
+
+    @classmethod
+    def empty(cls) -> Path:
+        """An empty path, used by failed plans."""
+        return cls(np.zeros((0, 4)), np.zeros((0, 2)))
+
+    def __len__(self) -> int:
+        return len(self.samples)
+
+    @property
+    def xy(self) -> np.ndarray:
+        """Sample positions, shape ``(N, 2)``."""
+        return self.samples[:, :2]
+
+    @property
+    def length(self) -> float:
+        """Arc length of the sampled polyline in metres."""
+        if len(self.samples) < 2:
+            return 0.0
+        return float(np.sum(np.hypot(*np.diff(self.samples[:, :2], axis=0).T)))
+
+    @property
+    def max_curvature(self) -> float:
+        """Largest absolute curvature over the samples (0 for an empty path)."""
+        return float(np.max(np.abs(self.samples[:, 3]))) if len(self.samples) else 0.0
+
+    def arc_length(self) -> np.ndarray:
+        """Cumulative arc length at each sample, starting at 0."""
+        if len(self.samples) == 0:
+            return np.zeros(0)
+        steps = np.hypot(*np.diff(self.samples[:, :2], axis=0).T)
+        return np.concatenate([[0.0], np.cumsum(steps)])
+
+
+@dataclass(frozen=True, eq=False)
+class Tree:
+    """A search tree for plotting: node positions and parent indices (-1 for the root)."""
+
+    nodes: np.ndarray
+    parents: np.ndarray
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "nodes", np.asarray(self.nodes, dtype=float).reshape(-1, 2))
+        object.__setattr__(self, "parents", np.asarray(self.parents, dtype=np.int64).reshape(-1))
+
+    def __len__(self) -> int:
+        return len(self.nodes)
+
+    def edges(self) -> np.ndarray:
+        """Segments ``(E, 2, 2)`` from each non-root node to its parent."""
+        child = np.flatnonzero(self.parents >= 0)
+        return np.stack([self.nodes[child], self.nodes[self.parents[child]]], axis=1)
+
+
+class PlanStatus(enum.Enum):
+    """Outcome of a planning query (after OMPL's PlannerStatus)."""
+
+    SOLVED = "solved"
+    NO_PATH_IN_BUDGET = "no_path_in_budget"
+    PROVEN_UNREACHABLE = "proven_unreachable"
+    INVALID_START = "invalid_start"
+    INVALID_GOAL = "invalid_goal"
+    POSTPROCESS_FAILED = "postprocess_failed"
+
+    @property
+    def success(self) -> bool:
+        """True only for :attr:`SOLVED`."""
+        return self is PlanStatus.SOLVED
+
+
+@dataclass(frozen=True)
+class Budget:
+    """Limits on a search: both are enforced, whichever comes first ends it.
+
+    Parameters
+    ----------
+    max_iterations : int
+        Largest number of sampling iterations.
+    max_time_s : float
+        Largest wall time in seconds.
+    """
+
+    max_iterations: int = 20_000
+    max_time_s: float = 5.0
+
+    def __post_init__(self) -> None:
+        if isinstance(self.max_iterations, bool) or not isinstance(self.max_iterations, int):
+            raise InputError(f"budget.max_iterations: expected an integer, got {self.max_iterations!r}")
+        if self.max_iterations <= 0:
+            raise InputError(f"budget.max_iterations: must be > 0, got {self.max_iterations}")
+        require_positive("budget.max_time_s", self.max_time_s)
+
+
+@dataclass(frozen=True, eq=False)
+class PlanResult:
+    """What every planner returns, successful or not (never ``None``).
+
+    Attributes
+    ----------
+    status : PlanStatus
+        Outcome; ``status.success`` is the success flag.
+    planner : str
+        Registered planner name.
+    path : Path
+        Final sampled path (empty on failure).
+    raw_path : numpy.ndarray
+        The tree path before any post-processing, shape ``(K, 2)``.
+    trees : tuple of Tree
+        Search trees for plotting (one or two).
+    nodes : int
+        Total number of tree nodes.
+    iterations : int
+        Sampling iterations used.
+    planning_time_s : float
+        Wall time of the query.
+    message : str
+        Human-readable reason on failure, or a short summary.
+    stats : dict
+        Extra per-planner statistics (floats and ints).
+    """
+
+    status: PlanStatus
+    planner: str
+    path: Path
+    raw_path: np.ndarray
+    trees: tuple[Tree, ...]
+    nodes: int
+    iterations: int
+    planning_time_s: float
+    message: str = ""
+    stats: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def success(self) -> bool:
+        """True when a path was found and passed every check."""
+        return self.status.success
