@@ -148,7 +148,9 @@ class CollisionChecker:
             c, s = math.cos(o.yaw), math.sin(o.yaw)
             along = c * gx + s * gy
             across = -s * gx + c * gy
-            inside = (np.abs(along) <= o.size[0] / 2 + grow) & (np.abs(across) <= o.size[1] / 2 + grow)
+            inside = (np.abs(along) <= o.size[0] / 2 + grow) & (
+                np.abs(across) <= o.size[1] / 2 + grow
+            )
             occupied[i0:i1, j0:j1] |= inside
         return occupied
 
@@ -183,7 +185,12 @@ class CollisionChecker:
         """Vectorised :meth:`clearance` for points of shape ``(N, 2)``."""
         p = np.asarray(points, dtype=float).reshape(-1, 2)
         idx = np.floor((p - self._origin) * self._inv_h).astype(np.int64)
-        ok = (idx[:, 0] >= 0) & (idx[:, 1] >= 0) & (idx[:, 0] < self._shape[0]) & (idx[:, 1] < self._shape[1])
+        ok = (
+            (idx[:, 0] >= 0)
+            & (idx[:, 1] >= 0)
+            & (idx[:, 0] < self._shape[0])
+            & (idx[:, 1] < self._shape[1])
+        )
         out = np.full(len(p), -np.inf)
         out[ok] = self._clearance[idx[ok, 0], idx[ok, 1]]
         return out
@@ -305,7 +312,7 @@ class CollisionChecker:
         return inside & ~shapely.intersects(self._union, rects)
 
     def path_free(self, samples: np.ndarray, spacing: float = 0.1) -> tuple[bool, np.ndarray]:
-        """Exact test of a sampled path, densified so consecutive poses are at most ``spacing`` apart.
+        """Exact test of a sampled path, densified to poses at most ``spacing`` apart.
 
         Parameters
         ----------
@@ -335,7 +342,11 @@ class CollisionChecker:
         a, b = s[owner], s[owner + 1]
         dyaw = (b[:, 2] - a[:, 2] + np.pi) % (2 * np.pi) - np.pi
         dense = np.column_stack(
-            [a[:, 0] + frac * (b[:, 0] - a[:, 0]), a[:, 1] + frac * (b[:, 1] - a[:, 1]), a[:, 2] + frac * dyaw]
+            [
+                a[:, 0] + frac * (b[:, 0] - a[:, 0]),
+                a[:, 1] + frac * (b[:, 1] - a[:, 1]),
+                a[:, 2] + frac * dyaw,
+            ]
         )
         dense = np.vstack([dense, s[-1:]])
         owner = np.append(owner, len(seg) - 1)

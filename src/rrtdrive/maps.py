@@ -60,7 +60,9 @@ class Obstacle:
     def corners(self) -> np.ndarray:
         """The four corners, shape ``(4, 2)``, counter-clockwise."""
         half_l, half_w = self.size[0] / 2.0, self.size[1] / 2.0
-        local = np.array([[-half_l, -half_w], [half_l, -half_w], [half_l, half_w], [-half_l, half_w]])
+        local = np.array(
+            [[-half_l, -half_w], [half_l, -half_w], [half_l, half_w], [-half_l, half_w]]
+        )
         c, s = math.cos(self.yaw), math.sin(self.yaw)
         rot = np.array([[c, -s], [s, c]])
         return local @ rot.T + np.asarray(self.center)
@@ -137,7 +139,8 @@ class Map:
     def with_query(self, start: Pose | None = None, goal: Pose | None = None) -> Map:
         """A copy with another start and/or goal (validated)."""
         return dataclasses.replace(
-            self, start=start if start is not None else self.start,
+            self,
+            start=start if start is not None else self.start,
             goal=goal if goal is not None else self.goal,
         )
 
@@ -315,8 +318,11 @@ def overtake_map() -> Map:
         Obstacle((50.0, ego_lane), (4.3, 1.8)),
     )
     return Map(
-        "overtake", (0.0, 0.0, 100.0, 100.0), obstacles,
-        Pose(5.0, ego_lane, 0.0), Pose(92.0, ego_lane, 0.0),
+        "overtake",
+        (0.0, 0.0, 100.0, 100.0),
+        obstacles,
+        Pose(5.0, ego_lane, 0.0),
+        Pose(92.0, ego_lane, 0.0),
     )
 
 
@@ -346,7 +352,9 @@ def parking_spots() -> list[tuple[int, int, int, float, float]]:
     return spots
 
 
-def parking_goal_pose(row: int, side: int, index: int, vehicle: VehicleParams | None = None) -> Pose:
+def parking_goal_pose(
+    row: int, side: int, index: int, vehicle: VehicleParams | None = None
+) -> Pose:
     """The rear-axle pose of a car parked nose-in, centred in the given spot."""
     vehicle = vehicle or VehicleParams()
     for r, s, i, x, y in parking_spots():
@@ -374,7 +382,10 @@ def parking_lot_map() -> Map:
     # A kerb between the two halves of each double row keeps cars from driving through it.
     for yc in PARKING_ROW_CENTRES:
         obstacles.append(
-            Obstacle(((PARKING_ROW_X[0] + PARKING_ROW_X[1]) / 2, yc), (PARKING_ROW_X[1] - PARKING_ROW_X[0], 0.4))
+            Obstacle(
+                ((PARKING_ROW_X[0] + PARKING_ROW_X[1]) / 2, yc),
+                (PARKING_ROW_X[1] - PARKING_ROW_X[0], 0.4),
+            )
         )
     # Solid blocks: a kiosk building, a ticket booth by the entrance, a planter on the right.
     obstacles += [
@@ -383,8 +394,11 @@ def parking_lot_map() -> Map:
         Obstacle((93.0, 57.0), (6.0, 10.0)),
     ]
     return Map(
-        "parking_lot", (0.0, 0.0, 100.0, 100.0), tuple(obstacles),
-        Pose(5.0, 6.0, 0.0), parking_goal_pose(2, 1, 19),
+        "parking_lot",
+        (0.0, 0.0, 100.0, 100.0),
+        tuple(obstacles),
+        Pose(5.0, 6.0, 0.0),
+        parking_goal_pose(2, 1, 19),
     )
 
 
@@ -398,8 +412,11 @@ def narrow_gap_map() -> Map:
         Obstacle((50.0, 100.0 - high_len / 2), (thickness, high_len)),
     )
     return Map(
-        "narrow_gap", (0.0, 0.0, 100.0, 100.0), obstacles,
-        Pose(10.0, 20.0, 0.0), Pose(85.0, 80.0, 0.0),
+        "narrow_gap",
+        (0.0, 0.0, 100.0, 100.0),
+        obstacles,
+        Pose(10.0, 20.0, 0.0),
+        Pose(85.0, 80.0, 0.0),
     )
 
 
@@ -412,8 +429,11 @@ def no_path_map() -> Map:
         Obstacle((90.0, 77.5), (2.0, 27.0)),
     )
     return Map(
-        "no_path", (0.0, 0.0, 100.0, 100.0), obstacles,
-        Pose(10.0, 10.0, 0.0), Pose(75.0, 77.5, 0.0),
+        "no_path",
+        (0.0, 0.0, 100.0, 100.0),
+        obstacles,
+        Pose(10.0, 10.0, 0.0),
+        Pose(75.0, 77.5, 0.0),
     )
 
 

@@ -264,7 +264,9 @@ class Budget:
 
     def __post_init__(self) -> None:
         if isinstance(self.max_iterations, bool) or not isinstance(self.max_iterations, int):
-            raise InputError(f"budget.max_iterations: expected an integer, got {self.max_iterations!r}")
+            raise InputError(
+                f"budget.max_iterations: expected an integer, got {self.max_iterations!r}"
+            )
         if self.max_iterations <= 0:
             raise InputError(f"budget.max_iterations: must be > 0, got {self.max_iterations}")
         require_positive("budget.max_time_s", self.max_time_s)

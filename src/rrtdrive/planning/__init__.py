@@ -40,7 +40,9 @@ def make_planner(name: str, **options: object) -> Planner:
     try:
         factory = PLANNERS[name]
     except KeyError:
-        raise InputError(f"planner: unknown planner {name!r}; choose from {sorted(PLANNERS)}") from None
+        raise InputError(
+            f"planner: unknown planner {name!r}; choose from {sorted(PLANNERS)}"
+        ) from None
     try:
         return factory(**options)
     except TypeError as exc:

@@ -184,7 +184,7 @@ class GrowingTree:
 
 
 def step_towards(a: np.ndarray, b: np.ndarray, step: float) -> tuple[np.ndarray, bool]:
-    """The point ``step`` from ``a`` towards ``b`` (or ``b`` itself when nearer); and whether it is ``b``."""
+    """The point ``step`` from ``a`` towards ``b`` (``b`` itself when nearer), and whether it is ``b``."""
     d = b - a
     dist = math.hypot(d[0], d[1])
     if dist <= step:
@@ -192,9 +192,7 @@ def step_towards(a: np.ndarray, b: np.ndarray, step: float) -> tuple[np.ndarray,
     return a + d * (step / dist), False
 
 
-def sample_point(
-    rng: np.random.Generator, bounds: tuple[float, float, float, float]
-) -> np.ndarray:
+def sample_point(rng: np.random.Generator, bounds: tuple[float, float, float, float]) -> np.ndarray:
     """A uniform point in the bounds."""
     return rng.uniform((bounds[0], bounds[1]), (bounds[2], bounds[3]))
 
@@ -203,9 +201,13 @@ def precheck(problem: PlanningProblem, planner: str, watch: Stopwatch) -> PlanRe
     """Fail early on an invalid start or goal or a provably unreachable goal; else ``None``."""
     checker = problem.checker
     if not checker.pose_free(problem.start.as_tuple()):
-        return failure(planner, PlanStatus.INVALID_START, watch, "start: the car's body collides there")
+        return failure(
+            planner, PlanStatus.INVALID_START, watch, "start: the car's body collides there"
+        )
     if not checker.pose_free(problem.goal.as_tuple()):
-        return failure(planner, PlanStatus.INVALID_GOAL, watch, "goal: the car's body collides there")
+        return failure(
+            planner, PlanStatus.INVALID_GOAL, watch, "goal: the car's body collides there"
+        )
     if checker.provably_disconnected(problem.start.xy, problem.goal.xy):
         return failure(
             planner,
@@ -289,7 +291,7 @@ def resample_polyline(points: np.ndarray, spacing: float) -> tuple[np.ndarray, n
 
 
 def polyline_path(points: np.ndarray, spacing: float = 0.25) -> Path:
-    """A :class:`Path` along a raw polyline: headings along its segments, Menger curvature at vertices.
+    """A :class:`Path` along a raw polyline: headings along segments, Menger curvature at vertices.
 
     Used for the baselines' raw tree paths: they have corners, and the curvature
     column reports them (the circle through each corner and its neighbours).

@@ -1,0 +1,143 @@
+"""Matplotlib figures of maps, search trees and paths (headless, Agg backend)."""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path as FsPath
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.axes import Axes  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
+from matplotlib.patches import Polygon as PolygonPatch  # noqa: E402
+from matplotlib.patches import Rectangle  # noqa: E402
+
+from rrtdrive.maps import Map  # noqa: E402
+from rrtdrive.types import Path, PlanResult, Pose, Tree, VehicleParams  # noqa: E402
+from rrtdrive.vehicle import footprint_corners  # noqa: E402
+
+__all__ = [
+    "draw_map",
+    "draw_trees",
+    "draw_path",
+    "draw_pose",
+    "plot_plan",
+    "plot_curvature",
+    "save_figure",
+]
+
+TREE_COLOURS = ("tab:blue", "tab:red")
+
+
+def draw_map(ax: Axes, m: Map, show_query: bool = True) -> None:
+    """Draw the bounds, the obstacles and (optionally) the start and goal cars."""
+    xmin, ymin, xmax, ymax = m.bounds
+    ax.add_patch(Rectangle((xmin, ymin), xmax - xmin, ymax - ymin, fill=False, lw=2.0, ec="black"))
+    for o in m.obstacles:
+        ax.add_patch(PolygonPatch(o.corners(), closed=True, fc="0.35", ec="0.15", lw=0.5))
+    if show_query:
+        draw_pose(ax, m.start, m.vehicle, "tab:green", "start")
+        draw_pose(ax, m.goal, m.vehicle, "tab:purple", "goal")
+    pad = 0.02 * max(xmax - xmin, ymax - ymin)
+    ax.set_xlim(xmin - pad, xmax + pad)
+    ax.set_ylim(ymin - pad, ymax + pad)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+
+
+def draw_pose(
+    ax: Axes, pose: Pose, vehicle: VehicleParams, colour: str, label: str | None = None
+) -> None:
+    """Draw the car's body at ``pose`` and an arrow along its heading."""
+    corners = footprint_corners(np.array(pose.as_tuple()), vehicle)
+    ax.add_patch(PolygonPatch(corners, closed=True, fc=colour, ec=colour, alpha=0.35, lw=1.0))
+    ax.arrow(
+        pose.x,
+        pose.y,
+        3.0 * math.cos(pose.yaw),
+        3.0 * math.sin(pose.yaw),
+        head_width=1.0,
+        length_includes_head=True,
+        color=colour,
+        label=label,
+    )
+
+
+def draw_trees(ax: Axes, trees: Sequence[Tree], lw: float = 0.5, alpha: float = 0.6) -> None:
+    """Draw each tree's edges (first tree blue, second red) and nodes."""
+    for tree, colour in zip(trees, TREE_COLOURS * 4, strict=False):
+        if len(tree) == 0:
+            continue
+        ax.add_collection(LineCollection(tree.edges(), colors=colour, lw=lw, alpha=alpha))
+        ax.plot(tree.nodes[:, 0], tree.nodes[:, 1], ".", ms=2, color=colour, alpha=alpha)
+
+
+def draw_path(
+    ax: Axes,
+    xy: np.ndarray,
+    colour: str = "tab:orange",
+    label: str | None = None,
+    lw: float = 2.0,
+    marker: str | None = None,
+) -> None:
+    """Draw a polyline or sampled path ``(N, >=2)``."""
+    xy = np.asarray(xy)
+    if len(xy):
+        ax.plot(xy[:, 0], xy[:, 1], color=colour, lw=lw, label=label, marker=marker, ms=4)
+
+
+def plot_plan(m: Map, result: PlanResult, title: str | None = None) -> Figure:
+    """The map, the trees, the raw tree path, the waypoints and the final path of one result."""
+    fig, ax = plt.subplots(figsize=(7.5, 7.5))
+    draw_map(ax, m)
+    draw_trees(ax, result.trees)
+    draw_path(ax, result.raw_path, "tab:gray", "raw tree path", lw=1.0)
+    if len(result.path):
+        draw_path(ax, result.path.waypoints, "tab:olive", "waypoints", lw=0.8, marker="o")
+        draw_path(ax, result.path.xy, "tab:orange", "path")
+    status = "solved" if result.success else result.status.value
+    ax.set_title(title or f"{m.name}: {result.planner} ({status}, {result.nodes} nodes)")
+    ax.legend(loc="upper right", fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def plot_curvature(path: Path, kappa_max: float, ax: Axes | None = None) -> Figure:
+    """Curvature against normalised path length (the paper's Figs. 14 and 16)."""
+    fig = ax.figure if ax is not None else plt.figure(figsize=(7, 3))
+    ax = ax or fig.add_subplot(111)
+    s = path.arc_length()
+    ax.plot(s / max(s[-1], 1e-9), path.samples[:, 3], color="tab:blue", label="κ(s)")
+    for sign in (1, -1):
+        ax.axhline(
+            sign * kappa_max, color="tab:red", ls="--", lw=1.0, label="±κ_max" if sign > 0 else None
+        )
+    ax.set_xlabel("normalised path length")
+    ax.set_ylabel("curvature [1/m]")
+    ax.legend(loc="upper right", fontsize=8)
+    return fig
+
+
+def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: int = 110) -> None:
+    """Save ``fig`` atomically (temporary file in the same folder, then rename) and close it."""
+    target = FsPath(path)
+    suffix = target.suffix or ".png"
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.stem}.", suffix=suffix, dir=target.parent or ".")
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=dpi)
+        os.replace(tmp, target)
+    except BaseException:
+        FsPath(tmp).unlink(missing_ok=True)
+        raise
+    finally:
+        plt.close(fig)

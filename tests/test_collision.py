@@ -1,0 +1,183 @@
+"""The checker against shapely, the independent reference."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given
+from hypothesis import strategies as st
+
+from rrtdrive.collision import CheckerConfig, CollisionChecker
+from rrtdrive.maps import Map, Obstacle, builtin_map
+from rrtdrive.planning.base import cached_checker
+from rrtdrive.types import Pose, VehicleParams
+
+V = VehicleParams()
+
+
+def reference_body(x: float, y: float, yaw: float) -> shapely.Polygon:
+    """The body rectangle built from first principles (not with rrtdrive.vehicle)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    pts = []
+    for lx, ly in ((-0.895, -0.9), (3.405, -0.9), (3.405, 0.9), (-0.895, 0.9)):
+        pts.append((x + c * lx - s * ly, y + s * lx + c * ly))
+    return shapely.Polygon(pts)
+
+
+_UNIONS: dict[Map, shapely.Geometry] = {}
+
+
+def reference_free(m: Map, x: float, y: float, yaw: float) -> bool:
+    body = reference_body(x, y, yaw)
+    if not shapely.box(*m.bounds).contains(body):
+        return False
+    if m not in _UNIONS:
+        _UNIONS[m] = shapely.union_all([shapely.Polygon(o.corners()) for o in m.obstacles])
+        shapely.prepare(_UNIONS[m])
+    return not _UNIONS[m].intersects(body)
+
+
+poses = st.tuples(st.floats(0.0, 100.0), st.floats(0.0, 100.0), st.floats(-math.pi, math.pi))
+
+
+@given(pose=poses)
+def test_exact_pose_test_agrees_with_shapely(parking_lot, parking_checker, pose):
+    assert parking_checker.pose_free(pose) == reference_free(parking_lot, *pose)
+
+
+def test_exact_agrees_on_many_poses_near_obstacles(parking_lot, parking_checker):
+    rng = np.random.default_rng(1)
+    # Poses concentrated around obstacle corners, where the fast screen is inconclusive.
+    corners = np.concatenate([o.corners() for o in parking_lot.obstacles])
+    pick = corners[rng.integers(0, len(corners), 3000)]
+    poses = np.column_stack(
+        [pick + rng.normal(0, 2.0, pick.shape), rng.uniform(-math.pi, math.pi, len(pick))]
+    )
+    got = parking_checker.poses_free(poses)
+    want = np.array([reference_free(parking_lot, *p) for p in poses])
+    assert (got == want).all()
+    # Both outcomes occur, so the comparison means something.
+    assert 0.1 < want.mean() < 0.9
+
+
+@given(pose=poses)
+def test_fast_pose_screen_is_conservative(parking_lot, parking_checker, pose):
+    if parking_checker.poses_free_fast(np.array([pose]))[0]:
+        assert reference_free(parking_lot, *pose)
+
+
+@given(
+    a=st.tuples(st.floats(0.0, 100.0), st.floats(0.0, 100.0)),
+    angle=st.floats(-math.pi, math.pi),
+    length=st.floats(0.0, 12.0),
+)
+def test_fast_edge_test_never_calls_a_colliding_edge_free(
+    parking_lot, parking_checker, a, angle, length
+):
+    b = (a[0] + length * math.cos(angle), a[1] + length * math.sin(angle))
+    if not parking_checker.edge_free(a, b):
+        return
+    # Swept body: rectangles at dense poses along the edge, heading along the edge.
+    n = max(2, int(length / 0.05) + 1)
+    for t in np.linspace(0.0, 1.0, n):
+        x, y = a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])
+        assert reference_free(parking_lot, x, y, angle)
+
+
+def test_edge_test_is_not_uselessly_strict(parking_checker):
+    # Plenty of room in the bottom aisle: a 20 m edge there is free.
+    assert parking_checker.edge_free((5.0, 6.0), (25.0, 6.0))
+    # Straight through a parked row is not.
+    assert not parking_checker.edge_free((50.0, 6.0), (50.0, 30.0))
+
+
+def test_edge_test_random_rate_matches_shapely_rate(parking_lot, parking_checker):
+    # Conservative but not useless: it frees most edges that the swept shapely body frees.
+    rng = np.random.default_rng(3)
+    free_fast = free_ref = 0
+    for _ in range(300):
+        a = rng.uniform(0, 100, 2)
+        ang = rng.uniform(-math.pi, math.pi)
+        b = a + 5.0 * np.array([math.cos(ang), math.sin(ang)])
+        fast = parking_checker.edge_free(a, b)
+        ref = all(
+            reference_free(parking_lot, *(a + t * (b - a)), ang) for t in np.linspace(0, 1, 51)
+        )
+        assert not fast or ref
+        free_fast += fast
+        free_ref += ref
+    assert free_fast >= 0.7 * free_ref
+
+
+@given(p=st.tuples(st.floats(-5.0, 105.0), st.floats(-5.0, 105.0)))
+def test_clearance_is_a_lower_bound(parking_lot, parking_checker, p):
+    point = shapely.Point(p)
+    outside = shapely.box(*parking_lot.bounds).exterior
+    if not shapely.box(*parking_lot.bounds).contains(point):
+        assert parking_checker.clearance(*p) <= 0.0
+        return
+    true = min(parking_lot.obstacle_union().distance(point), outside.distance(point))
+    if parking_lot.obstacle_union().contains(point):
+        true = 0.0
+    assert parking_checker.clearance(*p) <= true + 1e-9
+    assert parking_checker.clearance(*p) >= true - 0.3  # and tight to within the grid error
+
+
+rect = st.builds(
+    lambda cx, cy, lx, ly, yaw: Obstacle((cx, cy), (lx, ly), yaw),
+    st.floats(2.0, 28.0),
+    st.floats(2.0, 28.0),
+    st.floats(0.2, 8.0),
+    st.floats(0.2, 8.0),
+    st.floats(-math.pi, math.pi),
+)
+
+
+@given(
+    obstacles=st.lists(rect, min_size=1, max_size=5),
+    pose=st.tuples(st.floats(0.0, 30.0), st.floats(0.0, 30.0), st.floats(-math.pi, math.pi)),
+)
+def test_random_maps_exact_and_fast_agree_with_shapely(obstacles, pose):
+    checker = CollisionChecker((0.0, 0.0, 30.0, 30.0), obstacles, V, CheckerConfig(resolution=0.1))
+    ref_map_free = shapely.box(0, 0, 30, 30).contains(reference_body(*pose)) and not any(
+        o.polygon().intersects(reference_body(*pose)) for o in obstacles
+    )
+    assert checker.pose_free(pose) == ref_map_free
+    if checker.poses_free_fast(np.array([pose]))[0]:
+        assert ref_map_free
+
+
+def test_path_free_finds_the_colliding_segment(parking_checker):
+    samples = np.array([[5.0, 6.0, 0.0], [30.0, 6.0, 0.0], [30.0, 30.0, math.pi / 2]])
+    ok, bad = parking_checker.path_free(samples, spacing=0.1)
+    assert not ok
+    assert list(bad) == [1]
+    ok, bad = parking_checker.path_free(samples[:2], spacing=0.1)
+    assert ok and len(bad) == 0
+
+
+@pytest.mark.parametrize(
+    "name, disconnected",
+    [
+        ("no_path", True),
+        ("parking_lot", False),
+        ("overtake", False),
+        ("narrow_gap", False),
+    ],
+)
+def test_connectivity_proof(name, disconnected):
+    m = builtin_map(name)
+    checker = cached_checker(m)
+    assert checker.provably_disconnected(m.start.xy, m.goal.xy) == disconnected
+
+
+def test_connectivity_proof_is_sound_for_a_gap_the_car_just_fits():
+    # A 1.9 m gap: the car (1.8 m) fits, so the grid must not call it closed.
+    walls = (Obstacle((15.0, 7.05), (1.0, 14.1)), Obstacle((15.0, 23.95), (1.0, 14.1)))
+    m = Map("gap", (0.0, 0.0, 30.0, 31.0), walls, Pose(3.0, 15.5, 0.0), Pose(25.0, 15.5, 0.0))
+    assert not CollisionChecker.for_map(m).provably_disconnected(m.start.xy, m.goal.xy)
+    # The car driving straight through the gap is free by the exact reference.
+    assert all(reference_free(m, x, 15.5, 0.0) for x in np.linspace(3.0, 25.0, 221))

@@ -1,0 +1,133 @@
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+import shapely
+
+from rrtdrive.maps import (
+    BUILTIN_MAPS,
+    Map,
+    Obstacle,
+    builtin_map,
+    load_map,
+    map_from_json,
+    resolve_map,
+    save_map,
+)
+from rrtdrive.types import InputError, Pose
+
+
+@pytest.mark.parametrize("name", sorted(BUILTIN_MAPS))
+def test_builtins_are_valid_100m_maps(name):
+    m = builtin_map(name)
+    assert m.bounds == (0.0, 0.0, 100.0, 100.0)
+    assert m.name == name
+    assert len(m.obstacles) >= 2
+
+
+def test_parking_lot_is_complex(parking_lot):
+    assert len(parking_lot.obstacles) > 100
+    start, goal = parking_lot.start, parking_lot.goal
+    assert math.hypot(goal.x - start.x, goal.y - start.y) > 80
+    # Parked cars of the paper's size and some larger solid blocks.
+    sizes = {o.size for o in parking_lot.obstacles}
+    assert (4.3, 1.8) in sizes
+    assert any(s[0] * s[1] > 50 for s in sizes)
+
+
+def test_roundtrip(tmp_path):
+    for name in BUILTIN_MAPS:
+        m = builtin_map(name)
+        save_map(m, tmp_path / f"{name}.json")
+        again = load_map(tmp_path / f"{name}.json")
+        assert again == m
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(f"{n}.json" for n in BUILTIN_MAPS)
+
+
+def _base():
+    return {
+        "name": "t",
+        "bounds": [0, 0, 50, 50],
+        "obstacles": [{"center": [25.0, 25.0], "size": [4.0, 2.0], "yaw": 0.3}],
+        "start": [5.0, 5.0, 0.0],
+        "goal": [40.0, 40.0, 1.0],
+    }
+
+
+@pytest.mark.parametrize(
+    "patch, field",
+    [
+        ({"bounds": [0, 0, -5, 50]}, "bounds"),
+        ({"bounds": [0, 0, 50]}, "bounds"),
+        ({"bounds": "big"}, "bounds"),
+        ({"start": [5.0, 5.0]}, "start"),
+        ({"start": [5.0, "a", 0.0]}, "start"),
+        ({"start": [500.0, 5.0, 0.0]}, "start"),
+        ({"goal": [25.0, 25.0, 0.0]}, "goal"),
+        ({"goal": [49.5, 40.0, 0.0]}, "goal"),
+        ({"start": [5.0, float("nan"), 0.0]}, "start"),
+        ({"goal": [40.0, float("inf"), 0.0]}, "goal"),
+        ({"obstacles": [{"center": [1, 1], "size": [0, 2]}]}, r"obstacles\[0\].obstacle.size"),
+        ({"obstacles": [{"center": [1, 1], "size": [-1, 2]}]}, "obstacle.size"),
+        ({"obstacles": [{"center": [1], "size": [1, 2]}]}, "obstacle.center"),
+        ({"obstacles": [{"center": [1, 1], "size": [1, 2], "colour": 3}]}, "obstacles"),
+        ({"obstacles": {"center": [1, 1]}}, "obstacles"),
+        ({"extra": 1}, "unknown key"),
+    ],
+)
+def test_bad_map_fields_are_named(patch, field):
+    data = _base() | patch
+    with pytest.raises(InputError, match=field):
+        map_from_json(data)
+
+
+def test_missing_keys_named():
+    data = _base()
+    del data["goal"]
+    with pytest.raises(InputError, match="goal"):
+        map_from_json(data)
+
+
+def test_malformed_json_and_nan_literals(tmp_path):
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    with pytest.raises(InputError, match="malformed JSON"):
+        load_map(bad)
+    nan = tmp_path / "nan.json"
+    nan.write_text(json.dumps(_base()).replace("5.0, 5.0, 0.0", "5.0, NaN, 0.0"))
+    with pytest.raises(InputError, match="non-finite"):
+        load_map(nan)
+    with pytest.raises(InputError, match="cannot read"):
+        load_map(tmp_path / "missing.json")
+
+
+def test_unknown_builtin():
+    with pytest.raises(InputError, match="unknown map 'nope'"):
+        resolve_map("nope")
+
+
+def test_start_inside_obstacle_rejected_against_shapely():
+    # The check must agree with an independent shapely overlap test of the body.
+    m = map_from_json(_base())
+    inside = Pose(24.0, 25.0, 0.0)
+    with pytest.raises(InputError, match="start: .*overlaps obstacle 0"):
+        m.with_query(start=inside)
+    body = shapely.box(24.0 - 0.895, 25.0 - 0.9, 24.0 + 3.405, 25.0 + 0.9)
+    assert body.intersects(m.obstacles[0].polygon())
+
+
+def test_obstacle_geometry():
+    o = Obstacle((1.0, 2.0), (4.0, 2.0), math.pi / 2)
+    poly = o.polygon()
+    assert poly.area == pytest.approx(8.0)
+    minx, miny, maxx, maxy = poly.bounds
+    assert (maxx - minx, maxy - miny) == pytest.approx((2.0, 4.0))
+    assert o.grown(1.0).size == (5.0, 3.0)
+
+
+def test_map_is_hashable_and_equal():
+    a, b = builtin_map("overtake"), builtin_map("overtake")
+    assert a == b and hash(a) == hash(b)
+    assert isinstance(a, Map)
