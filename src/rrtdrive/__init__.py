@@ -1,4 +1,4 @@
-"""rrtdrive: curvature-bounded car paths (improved RRT-Connect), driven closed-loop in highway-env."""
+"""rrtdrive: curvature-bounded car paths (improved RRT-Connect) driven in highway-env."""
 
 from __future__ import annotations
 

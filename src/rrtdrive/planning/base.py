@@ -184,7 +184,7 @@ class GrowingTree:
 
 
 def step_towards(a: np.ndarray, b: np.ndarray, step: float) -> tuple[np.ndarray, bool]:
-    """The point ``step`` from ``a`` towards ``b`` (``b`` itself when nearer), and whether it is ``b``."""
+    """The point ``step`` from ``a`` towards ``b`` (``b`` when nearer); and whether it is ``b``."""
     d = b - a
     dist = math.hypot(d[0], d[1])
     if dist <= step:

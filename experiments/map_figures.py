@@ -1,0 +1,35 @@
+"""Draw every built-in map to docs/figures/map_<name>.png.
+
+Usage: python experiments/map_figures.py [--out docs/figures]
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+
+from rrtdrive.maps import BUILTIN_MAPS, builtin_map
+from rrtdrive.plotting import draw_map, save_figure
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--out", default="docs/figures", help="output folder")
+    args = parser.parse_args()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    for name in BUILTIN_MAPS:
+        m = builtin_map(name)
+        fig, ax = plt.subplots(figsize=(6, 6))
+        draw_map(ax, m)
+        ax.set_title(f"{name}: {len(m.obstacles)} obstacles")
+        ax.legend(loc="upper right", fontsize=8)
+        fig.tight_layout()
+        save_figure(fig, out / f"map_{name}.png", dpi=90)
+        print(out / f"map_{name}.png")
+
+
+if __name__ == "__main__":
+    main()
