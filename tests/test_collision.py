@@ -181,3 +181,10 @@ def test_connectivity_proof_is_sound_for_a_gap_the_car_just_fits():
     assert not CollisionChecker.for_map(m).provably_disconnected(m.start.xy, m.goal.xy)
     # The car driving straight through the gap is free by the exact reference.
     assert all(reference_free(m, x, 15.5, 0.0) for x in np.linspace(3.0, 25.0, 221))
+
+
+@given(pose=poses)
+def test_scalar_fast_pose_test_equals_vectorised(parking_checker, pose):
+    assert parking_checker.pose_free_fast(*pose) == bool(
+        parking_checker.poses_free_fast(np.array([pose]))[0]
+    )

@@ -1,0 +1,153 @@
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from rrtdrive.cli import main
+from rrtdrive.maps import builtin_map, save_map
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_plan_json_success_and_deterministic(capsys):
+    argv = ["plan", "parking_lot", "--planner", "rrt-connect", "--seed", "0", "--json", "-"]
+    code, out, _ = run(capsys, *argv)
+    assert code == 0
+    first = json.loads(out)
+    assert first["success"] is True
+    for key in ("planner", "seed", "path", "waypoints", "length_m", "max_curvature", "nodes",
+                "planning_time_s", "message"):
+        assert key in first
+    path = np.array(first["path"])
+    assert path.shape[1] == 4
+    assert np.hypot(*np.diff(path[:, :2], axis=0).T).max() <= 0.25 + 1e-6
+    m = builtin_map("parking_lot")
+    np.testing.assert_allclose(path[0, :2], [m.start.x, m.start.y], atol=1e-6)
+    np.testing.assert_allclose(path[-1, :2], [m.goal.x, m.goal.y], atol=1e-6)
+    code, out, _ = run(capsys, *argv)
+    second = json.loads(out)
+    first.pop("planning_time_s")
+    second.pop("planning_time_s")
+    assert first == second
+
+
+def test_plan_no_path_exits_1_with_message(capsys):
+    code, out, err = run(capsys, "plan", "no_path", "--planner", "rrt-connect", "--json", "-")
+    assert code == 1
+    data = json.loads(out)
+    assert data["success"] is False and "unreachable" in data["message"]
+    assert "unreachable" in err
+
+
+def _write_map(tmp_path, **patch):
+    data = builtin_map("overtake").to_json() | patch
+    f = tmp_path / "m.json"
+    f.write_text(json.dumps(data))
+    return str(f)
+
+
+def _one_line_error(code, err, needle):
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    assert needle in lines[0], lines[0]
+
+
+@pytest.mark.parametrize(
+    "argv, needle",
+    [
+        (["plan", "atlantis"], "unknown map 'atlantis'"),
+        (["plan", "overtake", "--planner", "dijkstra"], "unknown planner 'dijkstra'"),
+        (["plan", "overtake", "--start", "1,2"], "--start"),
+        (["plan", "overtake", "--goal", "a,b,c"], "--goal"),
+        (["plan", "overtake", "--goal", "nan,44,0"], "--goal"),
+        (["plan", "overtake", "--start", "inf,44,0"], "--start"),
+        (["plan", "overtake", "--start", "-5,44,0"], "start"),
+        (["plan", "overtake", "--goal", "150,44,0"], "goal"),
+        (["plan", "overtake", "--goal", "50,44,0"], "goal"),
+        (["plan", "overtake", "--step", "0"], "step"),
+        (["plan", "overtake", "--step", "-2"], "step"),
+        (["plan", "overtake", "--seed", "-1"], "--seed"),
+        (["plan", "overtake", "--seed", "x"], "--seed"),
+        (["plan", "overtake", "--max-time", "0"], "--max-time"),
+        (["plan", "overtake", "--max-iterations", "nan"], "--max-iterations"),
+    ],
+)
+def test_bad_input_one_line_exit_2(capsys, argv, needle):
+    with pytest.raises(SystemExit) as info:
+        code = main(argv)
+        raise SystemExit(code)
+    _, err = capsys.readouterr()
+    _one_line_error(info.value.code, err, needle)
+
+
+@pytest.mark.parametrize(
+    "patch, needle",
+    [
+        ({"start": [50.0, 44.0, 0.0]}, "start"),
+        ({"start": [5.0, 44.0]}, "start"),
+        ({"bounds": [0, 0, "x", 100]}, "bounds"),
+        ({"obstacles": [{"center": [10, 10], "size": [0, 1]}]}, "size"),
+        ({"obstacles": [{"center": [10, 10], "size": [1e309, 1]}]}, "size"),
+    ],
+)
+def test_bad_map_file_one_line_exit_2(capsys, tmp_path, patch, needle):
+    f = _write_map(tmp_path, **patch)
+    code, _, err = run(capsys, "plan", f, "--planner", "rrt-connect")
+    _one_line_error(code, err, needle)
+
+
+def test_malformed_json_file(capsys, tmp_path):
+    f = tmp_path / "broken.json"
+    f.write_text('{"bounds": [0, 0, 100, 100], "start": [1, 2')
+    code, _, err = run(capsys, "plan", str(f))
+    _one_line_error(code, err, "malformed JSON")
+
+
+def test_custom_map_file_and_plot(capsys, tmp_path):
+    f = tmp_path / "lot.json"
+    save_map(builtin_map("overtake"), f)
+    png = tmp_path / "out.png"
+    code, out, _ = run(capsys, "plan", str(f), "--planner", "rrt-connect", "--plot", str(png))
+    assert code == 0 and "solved" in out
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(png)
+    assert img.shape[0] > 300 and img.std() > 0.05  # a real figure, not a blank canvas
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+def test_json_to_file_is_atomic(capsys, tmp_path):
+    target = tmp_path / "r.json"
+    code, _, _ = run(capsys, "plan", "overtake", "--planner", "rrt", "--json", str(target))
+    assert code == 0
+    assert json.loads(target.read_text())["planner"] == "rrt"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.json"]
+
+
+def test_maps_export(capsys, tmp_path):
+    code, out, _ = run(capsys, "maps", "--export", str(tmp_path))
+    assert code == 0 and "parking_lot" in out
+    assert len(list(tmp_path.glob("*.json"))) == 4
+
+
+def test_console_script_help_and_exit_codes():
+    exe = shutil.which("rrtdrive")
+    cmd = [exe] if exe else [sys.executable, "-m", "rrtdrive"]
+    for sub in ([], ["plan"], ["maps"]):
+        proc = subprocess.run([*cmd, *sub, "--help"], capture_output=True, text=True, check=False)
+        assert proc.returncode == 0 and "usage:" in proc.stdout
+    proc = subprocess.run([*cmd, "plan", "no_path", "--planner", "rrt"], capture_output=True,
+                          text=True, check=False)
+    assert proc.returncode == 1
+    assert "unreachable" in proc.stdout
