@@ -113,6 +113,7 @@ class CollisionChecker:
         self._inside = shapely.box(*self.bounds)
         shapely.prepare(self._inside)
         self.edge_radius = vehicle.width / 2.0 + self.config.margin
+        self._cap_inset = math.sqrt(self.edge_radius**2 - (vehicle.width / 2.0) ** 2)
         self._disc_offsets, disc_radius = cover_discs(vehicle, 3)
         self._disc_offsets_list = [float(o) for o in self._disc_offsets]
         self.disc_radius = disc_radius + self.config.margin
@@ -225,8 +226,11 @@ class CollisionChecker:
     def edge_free(self, a: Sequence[float], b: Sequence[float]) -> bool:
         """Fast conservative test of a tree edge a->b driven with heading along the edge.
 
-        The swept body lies inside the capsule of radius ``W/2 + margin`` around
-        the centre line from ``a - rear_overhang * u`` to ``b + front_extent * u``.
+        The swept body lies inside the capsule of radius ``r = W/2 + margin``
+        around the centre line from ``a - (rear_overhang - e) * u`` to
+        ``b + (front_extent - e) * u``, where ``e = sqrt(r^2 - (W/2)^2)`` pulls
+        the round caps in just so far that they still contain the body's corners
+        (without it the caps would reach ``r`` past each bumper).
         A degenerate edge (a == b) is checked as the body at ``a`` with any heading,
         i.e. the disc that contains every orientation.
         """
@@ -237,7 +241,8 @@ class CollisionChecker:
             reach = math.hypot(self.vehicle.front_extent, self.vehicle.width / 2)
             return self.clearance(ax, ay) - reach - self.config.margin >= 0.0
         ux, uy = dx / length, dy / length
-        back, front = self.vehicle.rear_overhang, self.vehicle.front_extent
+        back = self.vehicle.rear_overhang - self._cap_inset
+        front = self.vehicle.front_extent - self._cap_inset
         return self.segment_clear(
             (ax - ux * back, ay - uy * back),
             (ax + dx + ux * front, ay + dy + uy * front),
@@ -311,8 +316,11 @@ class CollisionChecker:
         return free
 
     def pose_free(self, pose: Sequence[float]) -> bool:
-        """Exact body test for one pose."""
-        return bool(self.poses_free(np.asarray(pose, dtype=float).reshape(1, 3))[0])
+        """Exact body test for one pose (scalar disc screen first, shapely when unsure)."""
+        x, y, yaw = float(pose[0]), float(pose[1]), float(pose[2])
+        if self.pose_free_fast(x, y, yaw):
+            return True
+        return bool(self._exact(np.array([[x, y, yaw]]))[0])
 
     def _exact(self, poses: np.ndarray) -> np.ndarray:
         rects = shapely.polygons(footprint_corners(poses, self.vehicle))

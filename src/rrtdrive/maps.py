@@ -352,17 +352,25 @@ def parking_spots() -> list[tuple[int, int, int, float, float]]:
     return spots
 
 
+#: How far a parked car's body centre sits from its spot's centre towards the aisle.
+PARKING_SETBACK = 0.5
+
+
 def parking_goal_pose(
     row: int, side: int, index: int, vehicle: VehicleParams | None = None
 ) -> Pose:
-    """The rear-axle pose of a car parked nose-in, centred in the given spot."""
+    """The rear-axle pose of a car parked nose-in in the given spot.
+
+    The body is centred across the spot and set back :data:`PARKING_SETBACK`
+    towards the aisle, so its nose stays 0.9 m clear of the kerb.
+    """
     vehicle = vehicle or VehicleParams()
     for r, s, i, x, y in parking_spots():
         if (r, s, i) == (row, side, index):
             # Nose-in: a side-1 spot (upper half of a row) opens upward, so the car faces -y.
             yaw = -math.pi / 2 if s == 1 else math.pi / 2
-            centre_to_axle = vehicle.length / 2 - vehicle.rear_overhang
-            return Pose(x - centre_to_axle * math.cos(yaw), y - centre_to_axle * math.sin(yaw), yaw)
+            back = vehicle.length / 2 - vehicle.rear_overhang + PARKING_SETBACK
+            return Pose(x - back * math.cos(yaw), y - back * math.sin(yaw), yaw)
     raise InputError(f"spot: no spot {(row, side, index)}")
 
 

@@ -1,0 +1,201 @@
+"""Speed benchmark: the improved RRT-Connect against OMPL, side by side, same map, same checker.
+
+Usage::
+
+    pip install ".[ompl]"
+    python experiments/bench_planners.py --map parking_lot --seeds 20 --out results
+
+Rows:
+
+- ``improved-rrt-connect``: our planner, planning time including post-processing.
+- ``ompl-r2-rrtconnect+simplify``: OMPL RRTConnect (range 5 m) in R² plus
+  ``simplifySolution`` — the same geometric problem without the curvature bound.
+  A state is valid when the checker's clearance at the point is at least the
+  swept-capsule radius of our edge test (W/2 + margin).
+- ``ompl-dubins-*``: OMPL's forward-only curvature-bounded planners in
+  ``DubinsStateSpace(6.0)``: RRT, BIT* stopped at the first solution, RRTConnect
+  (known to fail in that asymmetric space, ompl#1356). A state is valid when the
+  body's three covering discs are clear (the checker's fast pose test).
+
+Every OMPL planner gets the same wall-time cap; a run that returns no exact
+solution in time counts as a failure. Writes ``OUT/bench_planners_<map>.json``
+and ``.md`` with the command, the seeds and every per-run row.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from rrtdrive.maps import builtin_map, write_text_atomic
+from rrtdrive.planning import PlanningProblem, make_planner
+from rrtdrive.types import Budget
+
+
+def ompl_run(kind: str, planner_name: str, problem: PlanningProblem, seed: int, cap: float) -> dict:
+    from ompl import base as ob
+    from ompl import geometric as og
+    from ompl import util as ou
+
+    checker, m = problem.checker, problem.map
+    xmin, ymin, xmax, ymax = m.bounds
+    if kind == "r2":
+        space = ob.RealVectorStateSpace(2)
+    else:
+        space = ob.DubinsStateSpace(problem.vehicle.min_turning_radius)
+    bounds = ob.RealVectorBounds(2)
+    bounds.setLow(0, xmin)
+    bounds.setLow(1, ymin)
+    bounds.setHigh(0, xmax)
+    bounds.setHigh(1, ymax)
+    space.setBounds(bounds)
+    ss = og.SimpleSetup(space)
+    if kind == "r2":
+        clearance, radius = checker.clearance, checker.edge_radius
+        ss.setStateValidityChecker(lambda s: clearance(s[0], s[1]) >= radius)
+    else:
+        free = checker.pose_free_fast
+        ss.setStateValidityChecker(lambda s: free(s.getX(), s.getY(), s.getYaw()))
+    si = ss.getSpaceInformation()
+    si.setStateValidityCheckingResolution(0.25 / space.getMaximumExtent())
+    start, goal = space.allocState(), space.allocState()
+    if kind == "r2":
+        start[0], start[1] = problem.start.x, problem.start.y
+        goal[0], goal[1] = problem.goal.x, problem.goal.y
+    else:
+        for st, pose in ((start, problem.start), (goal, problem.goal)):
+            st.setX(pose.x)
+            st.setY(pose.y)
+            st.setYaw(pose.yaw)
+    ss.setStartAndGoalStates(start, goal)
+    ou.RNG.setSeed(seed + 1)  # OMPL rejects seed 0
+    if planner_name == "RRTConnect":
+        planner = og.RRTConnect(si)
+        planner.setRange(5.0)
+    elif planner_name == "RRT":
+        planner = og.RRT(si)
+        planner.setRange(5.0)
+    elif planner_name == "BITstar":
+        planner = og.BITstar(si)
+    else:
+        raise ValueError(planner_name)
+    ss.setPlanner(planner)
+    objective = ob.PathLengthOptimizationObjective(si)
+    objective.setCostThreshold(ob.Cost(float("inf")))
+    ss.setOptimizationObjective(objective)
+    t0 = time.perf_counter()
+    status = ss.solve(cap)
+    exact = status.asString() == "Exact solution"
+    if exact and kind == "r2":
+        ss.simplifySolution()
+    elapsed = time.perf_counter() - t0
+    length = ss.getSolutionPath().length() if exact else float("nan")
+    return {"success": exact, "time_s": elapsed, "length_m": length}
+
+
+def ours_run(problem: PlanningProblem, seed: int, budget: Budget) -> dict:
+    result = make_planner("improved-rrt-connect").solve(problem, np.random.default_rng(seed), budget)
+    return {
+        "success": result.success,
+        "time_s": result.planning_time_s,
+        "length_m": result.path.length if result.success else float("nan"),
+    }
+
+
+ROWS = (
+    ("improved-rrt-connect", None, None),
+    ("ompl-r2-rrtconnect+simplify", "r2", "RRTConnect"),
+    ("ompl-dubins-rrt", "dubins", "RRT"),
+    ("ompl-dubins-bitstar-first", "dubins", "BITstar"),
+    ("ompl-dubins-rrtconnect", "dubins", "RRTConnect"),
+)
+
+
+def summarise(runs: list[dict]) -> dict:
+    ok = [r for r in runs if r["success"]]
+    times = [r["time_s"] for r in runs]
+    return {
+        "runs": len(runs),
+        "success_rate": len(ok) / len(runs),
+        "median_time_s": statistics.median(times),
+        "mean_time_s": statistics.fmean(times),
+        "mean_length_m": statistics.fmean(r["length_m"] for r in ok) if ok else float("nan"),
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--map", default="parking_lot")
+    parser.add_argument("--seeds", type=int, default=20)
+    parser.add_argument("--cap", type=float, default=5.0, help="OMPL time cap per run [s]")
+    parser.add_argument("--out", default="results")
+    args = parser.parse_args(argv)
+    try:
+        import ompl  # noqa: F401
+    except ImportError:
+        print("OMPL is not installed: pip install '.[ompl]'", file=sys.stderr)
+        return 2
+    m = builtin_map(args.map)
+    t0 = time.perf_counter()
+    problem = PlanningProblem.from_map(m)
+    checker_build_s = time.perf_counter() - t0
+    budget = Budget(max_iterations=20_000, max_time_s=args.cap)
+    per_run: dict[str, list[dict]] = {name: [] for name, _, _ in ROWS}
+    # Interleave planners seed by seed so that machine noise hits every row alike.
+    for seed in range(args.seeds):
+        for name, kind, ompl_name in ROWS:
+            if kind is None:
+                row = ours_run(problem, seed, budget)
+            else:
+                row = ompl_run(kind, ompl_name, problem, seed, args.cap)
+            per_run[name].append({"seed": seed, **row})
+        print(f"seed {seed + 1}/{args.seeds} done", file=sys.stderr)
+    summary = {name: summarise(runs) for name, runs in per_run.items()}
+    ours = summary["improved-rrt-connect"]
+    for s in summary.values():
+        s["time_ratio_ours_over_this"] = ours["median_time_s"] / s["median_time_s"]
+        s["length_ratio_ours_over_this"] = ours["mean_length_m"] / s["mean_length_m"]
+    command = "python experiments/bench_planners.py " + " ".join(argv or sys.argv[1:])
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    payload = {
+        "command": command.strip(),
+        "map": args.map,
+        "seeds": list(range(args.seeds)),
+        "ompl_time_cap_s": args.cap,
+        "checker_build_s": checker_build_s,
+        "machine": f"{platform.machine()} {platform.python_version()}",
+        "summary": summary,
+        "runs": per_run,
+    }
+    write_text_atomic(out / f"bench_planners_{args.map}.json", json.dumps(payload, indent=1) + "\n")
+    lines = [
+        f"# Planner speed on `{args.map}` ({args.seeds} seeds, same checker)",
+        "",
+        f"Command: `{payload['command']}`  ",
+        f"Checker construction (once per map, not in any row): {checker_build_s * 1e3:.0f} ms",
+        "",
+        "| planner | success | median time [ms] | mean length [m] | ours / this time | ours / this length |",
+        "|---|---|---|---|---|---|",
+    ]
+    for name, s in summary.items():
+        lines.append(
+            f"| {name} | {100 * s['success_rate']:.0f} % | {1e3 * s['median_time_s']:.2f} | "
+            f"{s['mean_length_m']:.2f} | {s['time_ratio_ours_over_this']:.3f} | "
+            f"{s['length_ratio_ours_over_this']:.3f} |"
+        )
+    text = "\n".join(lines) + "\n"
+    write_text_atomic(out / f"bench_planners_{args.map}.md", text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
