@@ -1,0 +1,77 @@
+"""Path-tracking controllers on the kinematic bicycle: pure pursuit, Stanley and LQR.
+
+All share one protocol (:class:`Controller`: ``reset(path)``,
+``control(state) -> (accel, steer)``), one speed profile with a PI loop and one
+steering limit. Build one by name with :func:`make_controller`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from rrtdrive.controllers.base import (
+    Controller,
+    PathProjector,
+    Projection,
+    TrackingController,
+    VehicleState,
+)
+from rrtdrive.controllers.lqr import LQR
+from rrtdrive.controllers.pure_pursuit import PurePursuit
+from rrtdrive.controllers.speed import SpeedConfig, SpeedController, SpeedProfile
+from rrtdrive.controllers.stanley import Stanley
+from rrtdrive.types import InputError
+
+__all__ = [
+    "CONTROLLERS",
+    "LQR",
+    "Controller",
+    "PathProjector",
+    "Projection",
+    "PurePursuit",
+    "SpeedConfig",
+    "SpeedController",
+    "SpeedProfile",
+    "Stanley",
+    "TrackingController",
+    "VehicleState",
+    "make_controller",
+]
+
+CONTROLLERS: dict[str, Callable[..., TrackingController]] = {
+    "pure-pursuit": PurePursuit,
+    "stanley": Stanley,
+    "lqr": LQR,
+}
+
+
+def make_controller(name: str, **options: object) -> TrackingController:
+    """Build the controller ``name`` (``pure-pursuit``, ``stanley`` or ``lqr``).
+
+    Parameters
+    ----------
+    name : str
+        Registered name.
+    **options
+        Keyword arguments of the controller class (``vehicle``, ``speed``, gains).
+
+    Raises
+    ------
+    InputError
+        For an unknown name or option.
+
+    Examples
+    --------
+    >>> make_controller("stanley").name
+    'stanley'
+    """
+    try:
+        cls = CONTROLLERS[name]
+    except KeyError:
+        raise InputError(
+            f"controller: unknown controller {name!r}; choose from {sorted(CONTROLLERS)}"
+        ) from None
+    try:
+        return cls(**options)  # type: ignore[arg-type]
+    except TypeError as exc:
+        raise InputError(f"controller: {exc}") from None
