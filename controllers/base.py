@@ -1,0 +1,313 @@
+"""The controller seam: vehicle state, the Controller protocol, and a fast path projector.
+
+Every controller tracks a :class:`rrtdrive.types.Path` (rear-axle samples
+``[x, y, yaw, kappa]``) on the same kinematic bicycle (:class:`VehicleParams`).
+``control`` runs once per simulation step, so the projector works in plain
+Python on lists with a local search from the previous match (no numpy per step).
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from rrtdrive.controllers.speed import SpeedConfig, SpeedController, SpeedProfile
+
+from rrtdrive.types import InputError, Path, VehicleParams, require_finite, require_positive
+
+__all__ = [
+    "VehicleState",
+    "Controller",
+    "Projection",
+    "PathProjector",
+    "TrackingController",
+    "wrap",
+]
+
+_TWO_PI = 2.0 * math.pi
+
+
+def wrap(angle: float) -> float:
+    """Wrap one angle to [-pi, pi) (scalar, no numpy)."""
+    return (angle + math.pi) % _TWO_PI - math.pi
+
+
+@dataclass(frozen=True)
+class VehicleState:
+    """What a controller sees each step: the rear-axle pose, speed and current steering.
+
+    Parameters
+    ----------
+    x, y, yaw : float
+        Rear-axle pose (metres, radians).
+    speed : float
+        Longitudinal speed in m/s.
+    steer : float
+        Front-wheel angle applied in the last step, radians.
+    t : float
+        Simulation time in seconds.
+    """
+
+    x: float
+    y: float
+    yaw: float
+    speed: float = 0.0
+    steer: float = 0.0
+    t: float = 0.0
+
+
+@runtime_checkable
+class Controller(Protocol):
+    """A path-tracking controller on the kinematic bicycle."""
+
+    name: str
+
+    def reset(self, path: Path) -> None:
+        """Start tracking ``path`` (clears all internal state)."""
+        ...
+
+    def control(self, state: VehicleState) -> tuple[float, float]:
+        """Return ``(acceleration m/s^2, steering angle rad)`` for ``state``."""
+        ...
+
+
+@dataclass(frozen=True)
+class Projection:
+    """A point projected on the path.
+
+    Attributes
+    ----------
+    index : int
+        Index of the segment start sample.
+    s : float
+        Arc length of the foot point (may run past either end on the extensions).
+    x, y, yaw, kappa : float
+        Foot point, path heading and curvature there.
+    cte : float
+        Signed lateral offset of the point from the path, positive to the left.
+    """
+
+    index: int
+    s: float
+    x: float
+    y: float
+    yaw: float
+    kappa: float
+    cte: float
+
+
+class PathProjector:
+    """Projects points on a sampled path; beyond either end the path runs straight on.
+
+    Parameters
+    ----------
+    path : Path
+        At least two samples.
+
+    Examples
+    --------
+    >>> xs = np.linspace(0.0, 10.0, 41)
+    >>> p = Path(np.column_stack([xs, 0 * xs, 0 * xs, 0 * xs]), np.zeros((0, 2)))
+    >>> pr = PathProjector(p).project(3.1, 0.5)
+    >>> round(pr.s, 6), round(pr.cte, 6)
+    (3.1, 0.5)
+    """
+
+    def __init__(self, path: Path) -> None:
+        samples = np.asarray(path.samples, dtype=float)
+        if samples.ndim != 2 or samples.shape[1] != 4 or len(samples) < 2:
+            raise InputError(
+                f"path: need at least two samples [x, y, yaw, kappa], got {samples.shape}"
+            )
+        require_finite("path", *samples.ravel().tolist())
+        xy = samples[:, :2]
+        seg = np.hypot(*np.diff(xy, axis=0).T)
+        keep = np.concatenate([[True], seg > 1e-9])  # drop repeated samples
+        samples = samples[keep]
+        if len(samples) < 2:
+            raise InputError("path: all samples coincide")
+        self.samples = samples
+        self.x = samples[:, 0].tolist()
+        self.y = samples[:, 1].tolist()
+        self.yaw = np.unwrap(samples[:, 2]).tolist()
+        self.kappa = samples[:, 3].tolist()
+        s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(samples[:, :2], axis=0).T))])
+        self.s = s.tolist()
+        self.length = float(s[-1])
+        self.n = len(self.x)
+        # Segment directions (unit) for projection.
+        d = np.diff(samples[:, :2], axis=0)
+        norm = np.hypot(d[:, 0], d[:, 1])
+        self.ux = (d[:, 0] / norm).tolist()
+        self.uy = (d[:, 1] / norm).tolist()
+        self.seg_len = norm.tolist()
+        self.hint = 0
+
+    def reset_hint(self, index: int = 0) -> None:
+        """Restart the local search at segment ``index``."""
+        self.hint = max(0, min(index, self.n - 2))
+
+    def _seg_dist2(self, i: int, px: float, py: float) -> float:
+        dx, dy = px - self.x[i], py - self.y[i]
+        t = dx * self.ux[i] + dy * self.uy[i]
+        if t < 0.0:
+            t = 0.0
+        elif t > self.seg_len[i]:
+            t = self.seg_len[i]
+        ex, ey = dx - t * self.ux[i], dy - t * self.uy[i]
+        return ex * ex + ey * ey
+
+    def nearest_segment(self, px: float, py: float, window: int = 40) -> int:
+        """Index of the segment nearest to ``(px, py)`` near the last match.
+
+        Searches ``window`` segments ahead of and a few behind the last match, so
+        progress is continuous even where the path comes back near itself.
+        """
+        lo = max(0, self.hint - 4)
+        hi = min(self.n - 1, self.hint + window)
+        best, best_d = lo, math.inf
+        for i in range(lo, hi):
+            dd = self._seg_dist2(i, px, py)
+            if dd < best_d:
+                best, best_d = i, dd
+        # If the best is at the window's far edge, keep walking while it improves.
+        while best == hi - 1 and hi < self.n - 1:
+            dd = self._seg_dist2(hi, px, py)
+            if dd <= best_d:
+                best, best_d = hi, dd
+                hi += 1
+            else:
+                break
+        self.hint = best
+        return best
+
+    def project(self, px: float, py: float) -> Projection:
+        """Foot point of ``(px, py)`` on the path (with straight extensions at the ends)."""
+        i = self.nearest_segment(px, py)
+        dx, dy = px - self.x[i], py - self.y[i]
+        ux, uy = self.ux[i], self.uy[i]
+        t = dx * ux + dy * uy
+        seg = self.seg_len[i]
+        if (i == 0 and t < 0.0) or (i == self.n - 2 and t > seg):
+            # On the straight extension before the start or past the end.
+            end = 0 if t < 0.0 else self.n - 1
+            yaw = self.yaw[end]
+            c, s_ = math.cos(yaw), math.sin(yaw)
+            ex, ey = px - self.x[end], py - self.y[end]
+            along = ex * c + ey * s_
+            return Projection(
+                i, self.s[end] + along, self.x[end] + along * c, self.y[end] + along * s_,
+                yaw, 0.0, ey * c - ex * s_,
+            )
+        if t < 0.0:
+            t = 0.0
+        elif t > seg:
+            t = seg
+        frac = t / seg
+        yaw = self.yaw[i] + frac * (self.yaw[i + 1] - self.yaw[i])
+        kappa = self.kappa[i] + frac * (self.kappa[i + 1] - self.kappa[i])
+        # Signed offset from the segment's line, positive to the left of the path.
+        cte = ux * dy - uy * dx
+        return Projection(i, self.s[i] + t, self.x[i] + t * ux, self.y[i] + t * uy, yaw, kappa, cte)
+
+    def point_at(self, s: float) -> tuple[float, float, float, float]:
+        """``(x, y, yaw, kappa)`` at arc length ``s``, straight on past either end."""
+        if s <= 0.0:
+            yaw = self.yaw[0]
+            return (self.x[0] + s * math.cos(yaw), self.y[0] + s * math.sin(yaw), yaw, 0.0)
+        if s >= self.length:
+            yaw = self.yaw[-1]
+            d = s - self.length
+            return (self.x[-1] + d * math.cos(yaw), self.y[-1] + d * math.sin(yaw), yaw, 0.0)
+        i = bisect.bisect_right(self.s, s) - 1
+        i = min(i, self.n - 2)
+        frac = (s - self.s[i]) / (self.s[i + 1] - self.s[i])
+        return (
+            self.x[i] + frac * (self.x[i + 1] - self.x[i]),
+            self.y[i] + frac * (self.y[i + 1] - self.y[i]),
+            self.yaw[i] + frac * (self.yaw[i + 1] - self.yaw[i]),
+            self.kappa[i] + frac * (self.kappa[i + 1] - self.kappa[i]),
+        )
+
+
+class TrackingController:
+    """Shared machinery: projection, speed profile and PI loop, steering limit.
+
+    Subclasses implement :meth:`steering`. The steering output is clipped to
+    ``steer_limit`` (by default the angle of the path curvature limit,
+    ``atan(L * kappa_max)``, so the executed curvature never exceeds ``kappa_max``;
+    the actuator's own 30° limit is wider).
+
+    Parameters
+    ----------
+    vehicle : VehicleParams
+        The car (wheelbase, limits).
+    speed : SpeedConfig
+        Longitudinal profile and PI gains.
+    steer_limit : float, optional
+        Largest steering angle the controller commands, radians.
+
+    Attributes
+    ----------
+    cte, heading_error, s, v_ref : float
+        Diagnostics of the last call (rear axle, left positive; yaw - path yaw).
+    """
+
+    name = "tracking"
+
+    def __init__(
+        self,
+        vehicle: VehicleParams | None = None,
+        speed: SpeedConfig | None = None,
+        steer_limit: float | None = None,
+    ) -> None:
+        self.vehicle = vehicle or VehicleParams()
+        self.speed_config = speed or SpeedConfig()
+        limit = self.vehicle.steer_for_kappa_max if steer_limit is None else steer_limit
+        require_positive("controller.steer_limit", limit)
+        self.steer_limit = min(float(limit), self.vehicle.max_steer)
+        self.projector: PathProjector | None = None
+        self.speed = SpeedController(self.speed_config)
+        self.profile: SpeedProfile | None = None
+        self.cte = self.heading_error = self.s = self.v_ref = 0.0
+
+    @property
+    def arrived(self) -> bool:
+        """True once the car has stopped at the end of the path."""
+        return self.speed.arrived
+
+    def reset(self, path: Path, v_start: float = 0.0) -> None:
+        """Start tracking ``path`` from speed ``v_start``."""
+        self.projector = PathProjector(path)
+        p = self.projector
+        self.profile = SpeedProfile(
+            np.asarray(p.s), np.asarray(p.kappa), self.speed_config, v_start
+        )
+        self.speed.reset(self.profile)
+        self.cte = self.heading_error = self.s = self.v_ref = 0.0
+        self._reset_steering()
+
+    def _reset_steering(self) -> None:
+        """Clear steering-controller state (override when there is some)."""
+
+    def control(self, state: VehicleState) -> tuple[float, float]:
+        """``(acceleration, steering)`` for ``state``; see :class:`Controller`."""
+        p = self.projector
+        if p is None:
+            raise RuntimeError(f"{type(self).__name__}.control called before reset")
+        proj = p.project(state.x, state.y)
+        self.s = proj.s
+        self.cte = proj.cte
+        self.heading_error = wrap(state.yaw - proj.yaw)
+        accel = self.speed.control(proj.s, state.speed, state.t)
+        self.v_ref = self.speed.v_ref
+        steer = self.steering(state, proj)
+        limit = self.steer_limit
+        return accel, (limit if steer > limit else -limit if steer < -limit else steer)
+
+    def steering(self, state: VehicleState, proj: Projection) -> float:
+        """Steering angle for ``state`` given its rear-axle projection ``proj``."""
+        raise NotImplementedError

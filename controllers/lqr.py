@@ -1,0 +1,113 @@
+"""LQR on the linearised path-error dynamics (python-control) plus curvature feed-forward."""
+
+from __future__ import annotations
+
+import math
+
+import control
+import numpy as np
+from rrtdrive.controllers.base import Projection, TrackingController, VehicleState
+from rrtdrive.controllers.speed import SpeedConfig
+
+from rrtdrive.types import VehicleParams, require_positive
+
+__all__ = ["LQR", "lateral_error_model", "design_gain"]
+
+
+def lateral_error_model() -> tuple[np.ndarray, np.ndarray]:
+    """The linearised lateral-error dynamics of the rear axle, in arc length.
+
+    States ``x = [e, e_psi]``: the rear axle's signed offset from the path (left
+    positive) and ``yaw - path_yaw``. Input ``u = tan(delta) / L - kappa``, the
+    curvature the car drives beyond the path's. Linearised about the path
+    (``sin e_psi ~ e_psi``, ``kappa e ~ 0``) and written per metre travelled::
+
+        de/ds     = e_psi
+        de_psi/ds = u
+
+    Writing the model over distance rather than time makes one gain fit every
+    speed: the errors decay over metres, the natural scale for a path.
+
+    Returns
+    -------
+    A, B : numpy.ndarray
+        ``(2, 2)`` and ``(2, 1)``.
+    """
+    return np.array([[0.0, 1.0], [0.0, 0.0]]), np.array([[0.0], [1.0]])
+
+
+def design_gain(q_e: float, q_psi: float, r: float) -> np.ndarray:
+    """The LQR state-feedback gain ``K`` (``u = -K x``) from :func:`control.lqr`.
+
+    Parameters
+    ----------
+    q_e, q_psi : float
+        State weights on the lateral error (1/m^2) and the heading error (1/rad^2).
+    r : float
+        Input weight on the curvature correction (m^2).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape ``(2,)``.
+
+    Examples
+    --------
+    >>> design_gain(1.0, 1.0, 16.0).round(3).tolist()
+    [0.25, 0.75]
+    """
+    require_positive("lqr.q_e", q_e)
+    require_positive("lqr.r", r)
+    if not (q_psi >= 0 and math.isfinite(q_psi)):
+        raise ValueError(f"lqr.q_psi: must be >= 0, got {q_psi}")
+    A, B = lateral_error_model()
+    K, _, _ = control.lqr(A, B, np.diag([q_e, q_psi]), np.array([[r]]))
+    return np.asarray(K, dtype=float).reshape(2)
+
+
+class LQR(TrackingController):
+    """Steering ``tan(delta) = L (kappa_path - K [e, e_psi])``.
+
+    The feed-forward ``kappa_path`` keeps the car on a curve; the LQR term pulls the
+    errors to zero. Gains from :func:`design_gain`.
+
+    Parameters
+    ----------
+    vehicle : VehicleParams, optional
+        The car.
+    speed : SpeedConfig, optional
+        Longitudinal profile and PI gains.
+    q_e, q_psi, r : float
+        LQR weights (see :func:`design_gain`).
+    steer_limit : float, optional
+        Largest commanded steering angle (default: the curvature limit's).
+
+    Examples
+    --------
+    >>> from rrtdrive.types import Path
+    >>> xs = np.linspace(0.0, 20.0, 81)
+    >>> c = LQR()
+    >>> c.reset(Path(np.column_stack([xs, 0 * xs, 0 * xs, 0 * xs]), np.zeros((0, 2))))
+    >>> c.control(VehicleState(0.0, 0.5, 0.0, 1.0))[1] < 0.0
+    True
+    """
+
+    name = "lqr"
+
+    def __init__(
+        self,
+        vehicle: VehicleParams | None = None,
+        speed: SpeedConfig | None = None,
+        q_e: float = 1.0,
+        q_psi: float = 1.0,
+        r: float = 4.0,
+        steer_limit: float | None = None,
+    ) -> None:
+        super().__init__(vehicle, speed, steer_limit)
+        self.gain = design_gain(q_e, q_psi, r)
+        self._k_e, self._k_psi = float(self.gain[0]), float(self.gain[1])
+
+    def steering(self, state: VehicleState, proj: Projection) -> float:
+        """LQR steering angle with curvature feed-forward."""
+        u = -(self._k_e * proj.cte + self._k_psi * self.heading_error)
+        return math.atan(self.vehicle.wheelbase * (proj.kappa + u))

@@ -1,0 +1,190 @@
+"""Longitudinal control: a curvature-limited speed profile v(s) and a PI loop that tracks it.
+
+The profile obeys ``v(s) <= sqrt(a_lat_max / |kappa(s)|)`` and ``v(s) <= v_max``,
+rises no faster than ``accel`` and falls no faster than ``decel`` (forward and
+backward passes over arc length), and reaches zero at the end of the path. The
+loop adds the profile's own acceleration ``v dv/ds`` as a feed-forward to a PI
+correction on the speed error, and holds the car once it has stopped at the goal.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rrtdrive.types import InputError, require_finite, require_positive
+
+__all__ = ["SpeedConfig", "SpeedProfile", "SpeedController"]
+
+
+@dataclass(frozen=True)
+class SpeedConfig:
+    """Tunables of the speed profile and its PI loop.
+
+    Parameters
+    ----------
+    v_max : float
+        Speed cap in m/s.
+    a_lat_max : float
+        Lateral-acceleration cap in m/s^2 (sets ``v <= sqrt(a_lat_max / |kappa|)``).
+    accel : float
+        Largest acceleration of the profile in m/s^2.
+    decel : float
+        Largest deceleration of the profile in m/s^2 (positive number).
+    v_launch : float
+        Speed the profile starts from when the car is at rest, so it gets going.
+    kp, ki : float
+        PI gains on the speed error (1/s and 1/s^2).
+    a_min, a_max : float
+        Limits of the commanded acceleration in m/s^2 (``a_min`` < 0 < ``a_max``).
+    stop_distance : float
+        The car counts as arrived when it is this close to the end (metres) ...
+    stop_speed : float
+        ... and slower than this (m/s); from then on it is held at rest.
+    """
+
+    v_max: float = 3.0
+    a_lat_max: float = 1.5
+    accel: float = 1.0
+    decel: float = 1.0
+    v_launch: float = 0.5
+    kp: float = 2.0
+    ki: float = 0.3
+    a_min: float = -4.0
+    a_max: float = 2.0
+    stop_distance: float = 0.05
+    stop_speed: float = 0.05
+
+    def __post_init__(self) -> None:
+        for name in ("v_max", "a_lat_max", "accel", "decel", "stop_distance", "stop_speed"):
+            require_positive(f"speed.{name}", getattr(self, name))
+        for name in ("v_launch", "kp", "ki", "a_min", "a_max"):
+            require_finite(f"speed.{name}", getattr(self, name))
+        if self.v_launch < 0 or self.kp < 0 or self.ki < 0:
+            raise InputError("speed.v_launch, speed.kp, speed.ki: must be >= 0")
+        if not self.a_min < 0 < self.a_max:
+            raise InputError(
+                f"speed.a_min/a_max: need a_min < 0 < a_max, got {self.a_min}, {self.a_max}"
+            )
+
+
+class SpeedProfile:
+    """The admissible speed along a path, sampled at its arc lengths.
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        Cumulative arc length of the samples (increasing, starting at 0).
+    kappa : numpy.ndarray
+        Path curvature at the samples.
+    config : SpeedConfig
+        Limits.
+    v_start : float
+        Speed at the start of the path.
+
+    Examples
+    --------
+    >>> s = np.linspace(0.0, 20.0, 81)
+    >>> prof = SpeedProfile(s, np.zeros_like(s), SpeedConfig(v_max=3.0), v_start=0.0)
+    >>> float(prof.v[-1]), bool(prof.v.max() <= 3.0)
+    (0.0, True)
+    """
+
+    def __init__(
+        self, s: np.ndarray, kappa: np.ndarray, config: SpeedConfig, v_start: float = 0.0
+    ) -> None:
+        s = np.asarray(s, dtype=float)
+        kappa = np.abs(np.asarray(kappa, dtype=float))
+        with np.errstate(divide="ignore"):
+            v_curve = np.sqrt(config.a_lat_max / np.maximum(kappa, 1e-12))
+        v = np.minimum(v_curve, config.v_max)
+        ds = np.diff(s)
+        v[0] = min(v[0], max(v_start, config.v_launch))
+        for i in range(1, len(v)):
+            v[i] = min(v[i], math.sqrt(v[i - 1] ** 2 + 2.0 * config.accel * ds[i - 1]))
+        v[-1] = 0.0
+        for i in range(len(v) - 2, -1, -1):
+            v[i] = min(v[i], math.sqrt(v[i + 1] ** 2 + 2.0 * config.decel * ds[i]))
+        self.s = s
+        self.v = v
+        self.v_curve = v_curve
+        # Profile acceleration dv/dt = d(v^2/2)/ds on each interval.
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a = np.where(ds > 0, np.diff(v**2) / (2.0 * np.maximum(ds, 1e-12)), 0.0)
+        self.a = np.append(a, 0.0)
+        self._s = s.tolist()
+        self._v = v.tolist()
+        self._a = self.a.tolist()
+        self.length = float(s[-1])
+        self.config = config
+
+    def at(self, s: float) -> tuple[float, float]:
+        """``(v_ref, a_ref)`` at arc length ``s`` (0 speed past the end)."""
+        if s >= self.length:
+            return 0.0, 0.0
+        if s <= 0.0:
+            return self._v[0], self._a[0]
+        i = bisect.bisect_right(self._s, s) - 1
+        frac = (s - self._s[i]) / (self._s[i + 1] - self._s[i])
+        return self._v[i] + frac * (self._v[i + 1] - self._v[i]), self._a[i]
+
+
+class SpeedController:
+    """PI tracking of a :class:`SpeedProfile` with a stop at the end of the path.
+
+    Parameters
+    ----------
+    config : SpeedConfig
+        Gains and limits.
+    """
+
+    def __init__(self, config: SpeedConfig) -> None:
+        self.config = config
+        self.profile: SpeedProfile | None = None
+        self.integral = 0.0
+        self.last_t: float | None = None
+        self.arrived = False
+        self.v_ref = 0.0
+
+    def reset(self, profile: SpeedProfile) -> None:
+        """Track ``profile`` from scratch."""
+        self.profile = profile
+        self.integral = 0.0
+        self.last_t = None
+        self.arrived = False
+        self.v_ref = 0.0
+
+    def control(self, s: float, speed: float, t: float) -> float:
+        """Acceleration command for the car at arc length ``s`` with ``speed`` at time ``t``."""
+        cfg = self.config
+        profile = self.profile
+        if profile is None:
+            raise RuntimeError("SpeedController.control called before reset")
+        dt = 0.0 if self.last_t is None else max(0.0, t - self.last_t)
+        self.last_t = t
+        remaining = profile.length - s
+        if self.arrived or (remaining <= cfg.stop_distance and abs(speed) <= cfg.stop_speed):
+            # At the goal: hold the car at rest.
+            self.arrived = True
+            self.v_ref = 0.0
+            return self._clip(-speed / dt if dt > 0 else -cfg.kp * speed)
+        v_ref, a_ref = profile.at(s)
+        if remaining <= 0.0:
+            # Past the end: brake to a stop now.
+            self.v_ref = 0.0
+            return self._clip(-speed / dt if dt > 0 else cfg.a_min)
+        self.v_ref = v_ref
+        if remaining < 2.0 and speed > 0.0:
+            # Final approach: the constant deceleration that stops exactly at the end.
+            a_ref = min(a_ref, -speed * speed / (2.0 * remaining))
+        err = v_ref - speed
+        self.integral += err * dt
+        limit = cfg.a_max / cfg.ki if cfg.ki > 0 else 0.0
+        self.integral = min(max(self.integral, -limit), limit)
+        return self._clip(a_ref + cfg.kp * err + cfg.ki * self.integral)
+
+    def _clip(self, a: float) -> float:
+        return min(max(a, self.config.a_min), self.config.a_max)
