@@ -97,7 +97,7 @@ def test_malformed_json_and_nan_literals(tmp_path):
         load_map(bad)
     nan = tmp_path / "nan.json"
     nan.write_text(json.dumps(_base()).replace("5.0, 5.0, 0.0", "5.0, NaN, 0.0"))
-    with pytest.raises(InputError, match="non-finite"):
+    with pytest.raises(InputError, match="start: must be finite"):
         load_map(nan)
     with pytest.raises(InputError, match="cannot read"):
         load_map(tmp_path / "missing.json")

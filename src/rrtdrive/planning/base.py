@@ -280,7 +280,8 @@ def resample_polyline(points: np.ndarray, spacing: float) -> tuple[np.ndarray, n
     """
     p = np.asarray(points, dtype=float)
     seg = np.hypot(*np.diff(p, axis=0).T)
-    pieces = np.maximum(1, np.ceil(seg / spacing - 1e-9).astype(np.int64))
+    # A hair over the exact ratio so that rounding (e.g. in JSON) never pushes a gap past spacing.
+    pieces = np.maximum(1, np.ceil(seg / spacing * (1 + 1e-5)).astype(np.int64))
     owner = np.repeat(np.arange(len(seg)), pieces)
     first = np.repeat(np.cumsum(pieces) - pieces, pieces)
     frac = (np.arange(len(owner)) - first) / np.repeat(pieces, pieces)
