@@ -40,7 +40,8 @@ def test_tight_turn_is_caught():
     r = 4.0  # kappa 0.25 > 1/6
     t = np.linspace(0.0, math.pi / 2, 40)
     samples = np.column_stack([10 + r * np.sin(t), 20 - r * np.cos(t), t, np.full_like(t, 1 / r)])
-    m = Map("tight", (0.0, 0.0, 40.0, 40.0), (), Pose(10.0, 16.0, 0.0), Pose(14.0, 20.0, math.pi / 2))
+    start, goal = Pose(10.0, 16.0, 0.0), Pose(14.0, 20.0, math.pi / 2)
+    m = Map("tight", (0.0, 0.0, 40.0, 40.0), (), start, goal)
     check = verify_path(m, Path(samples, samples[:, :2]))
     assert not check.curvature_ok
 
