@@ -1,0 +1,205 @@
+"""Classic RRT-Connect (Kuffner & LaValle, 2000): the second baseline of the paper (Sec. 4.1).
+
+Two trees grow, one from the start and one from the goal. Each iteration
+extends one tree a step towards a random sample; if that adds a node, the other
+tree greedily steps towards the new node until it reaches it or is trapped.
+Then the trees swap roles.
+
+Edges are tested in the direction the car drives them: start-tree edges from
+parent to child, goal-tree edges from child to parent (towards the goal).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rrtdrive.planning.base import (
+    GrowingTree,
+    PlanningProblem,
+    Stopwatch,
+    failure,
+    precheck,
+    register_planner,
+    step_towards,
+)
+from rrtdrive.planning.rrt import (
+    EdgeTester,
+    SampleSource,
+    budget_message,
+    check_flag,
+    check_probability,
+    check_step,
+    solved_result,
+)
+from rrtdrive.types import Budget, PlanResult, PlanStatus
+
+__all__ = ["RRTConnectPlanner"]
+
+#: Outcomes of one extension.
+_TRAPPED, _ADVANCED, _REACHED = 0, 1, 2
+
+
+class _Side:
+    """One tree with the direction its edges are driven in."""
+
+    def __init__(self, tree: GrowingTree, towards_root: bool, edges: EdgeTester) -> None:
+        self.tree = tree
+        self.towards_root = towards_root
+        self.edges = edges
+
+    def extend(self, q: np.ndarray, step: float) -> tuple[int, int]:
+        """Step from the nearest node towards ``q``; return (outcome, new node index or -1)."""
+        tree = self.tree
+        i = tree.nearest(q)
+        return self.extend_from(i, q, step)
+
+    def extend_from(self, i: int, q: np.ndarray, step: float) -> tuple[int, int]:
+        """Step from node ``i`` towards ``q``; return (outcome, new node index or -1)."""
+        tree = self.tree
+        a = tree.nodes[i].copy()
+        new, reached = step_towards(a, q, step)
+        if math.dist(a, new) < 1e-9:
+            return _TRAPPED, -1
+        if not self.towards_root:
+            ok = self.edges.edge(a, new)
+        elif i == 0:
+            # The car drives new -> root, and the goal tree's root is the goal.
+            ok = self.edges.goal_edge(new)
+        else:
+            ok = self.edges.edge(new, a)
+        if not ok:
+            return _TRAPPED, -1
+        j = tree.add(new, i)
+        return (_REACHED if reached else _ADVANCED), j
+
+
+@register_planner("rrt-connect")
+class RRTConnectPlanner:
+    """Bidirectional RRT with greedy connection (Kuffner & LaValle, 2000).
+
+    Parameters
+    ----------
+    step : float
+        Extension length in metres, for the extend and each connect step (paper: 5 m).
+    goal_bias : float
+        Probability of sampling the other tree's root instead of a random point, in
+        ``[0, 1)``; 0 (classic RRT-Connect) by default.
+    reject_samples : bool
+        Sample only where the car can stand and that is not provably cut off from
+        the start (see :class:`~rrtdrive.planning.rrt.SampleSource`).
+    exact_goal_edge : bool
+        Confirm an edge into the goal by the exact body test when the fast test fails.
+
+    Examples
+    --------
+    >>> from rrtdrive.maps import builtin_map
+    >>> from rrtdrive.planning.base import PlanningProblem
+    >>> problem = PlanningProblem.from_map(builtin_map("overtake"))
+    >>> result = RRTConnectPlanner().solve(problem, np.random.default_rng(0), Budget())
+    >>> result.success, len(result.trees)
+    (True, 2)
+    """
+
+    name = "rrt-connect"
+
+    def __init__(
+        self,
+        step: float = 5.0,
+        goal_bias: float = 0.0,
+        reject_samples: bool = True,
+        exact_goal_edge: bool = True,
+    ) -> None:
+        self.step = check_step(step)
+        self.goal_bias = check_probability("planner.goal_bias", goal_bias)
+        self.reject_samples = check_flag("planner.reject_samples", reject_samples)
+        self.exact_goal_edge = check_flag("planner.exact_goal_edge", exact_goal_edge)
+
+    def __repr__(self) -> str:
+        return f"RRTConnectPlanner(step={self.step})"
+
+    def solve(
+        self, problem: PlanningProblem, rng: np.random.Generator, budget: Budget
+    ) -> PlanResult:
+        """Grow a start tree and a goal tree until they meet or the budget ends.
+
+        Parameters
+        ----------
+        problem : PlanningProblem
+            Map, checker, start and goal.
+        rng : numpy.random.Generator
+            The only source of randomness.
+        budget : Budget
+            Iteration and time limits; each connect loop also stops when time is up.
+
+        Returns
+        -------
+        PlanResult
+            Solved with the raw path through both trees, or a failure with both trees.
+        """
+        watch = Stopwatch(budget)
+        early = precheck(problem, self.name, watch)
+        if early is not None:
+            return early
+        checker = problem.checker
+        start, goal = problem.start.xy, problem.goal.xy
+        edges = EdgeTester(checker, goal, self.exact_goal_edge)
+        start_side = _Side(GrowingTree(start), towards_root=False, edges=edges)
+        goal_side = _Side(GrowingTree(goal), towards_root=True, edges=edges)
+        step = self.step
+        samples = SampleSource(problem, self.reject_samples)
+        connect_steps = 0
+        meeting: tuple[int, int] | None = None  # (start-tree node, goal-tree node)
+
+        # A start within one step of the goal connects at once (the first extend would too).
+        if math.dist(start, goal) <= step and edges.goal_edge(start):
+            meeting = (0, 0)
+
+        a_side, b_side = start_side, goal_side
+        iterations = 0
+        while meeting is None and iterations < budget.max_iterations and not watch.expired():
+            iterations += 1
+            if rng.random() < self.goal_bias:
+                q = b_side.tree.nodes[0].copy()
+            else:
+                q = samples.draw(rng)
+            outcome, new = a_side.extend(q, step)
+            if outcome != _TRAPPED:
+                target = a_side.tree.nodes[new].copy()
+                # Greedy connect of the other tree towards the new node.
+                i = b_side.tree.nearest(target)
+                while True:
+                    connect_steps += 1
+                    outcome_b, j = b_side.extend_from(i, target, step)
+                    if outcome_b != _ADVANCED or watch.expired():
+                        break
+                    i = j
+                if outcome_b == _REACHED:
+                    meeting = (new, j) if a_side is start_side else (j, new)
+                    break
+            a_side, b_side = b_side, a_side
+
+        stats = {
+            **edges.stats(),
+            "connect_steps": connect_steps,
+        }
+        trees = (start_side.tree.freeze(), goal_side.tree.freeze())
+        if meeting is None:
+            return failure(
+                self.name,
+                PlanStatus.NO_PATH_IN_BUDGET,
+                watch,
+                budget_message(iterations, watch, budget, sum(len(t) for t in trees)),
+                trees=trees,
+                iterations=iterations,
+                stats=stats,
+            )
+        head = start_side.tree.branch(meeting[0])[::-1]
+        tail = goal_side.tree.branch(meeting[1])
+        if meeting == (0, 0):
+            raw = np.vstack([start, goal])
+        else:
+            # Both trees hold the meeting point; keep one copy.
+            raw = np.vstack([head, tail[1:]])
+        return solved_result(self.name, raw, trees, iterations, watch, stats)
