@@ -200,6 +200,8 @@ class EgoVehicle(Vehicle):
             v1 = self.MAX_SPEED
         elif v1 < self.MIN_SPEED:
             v1 = self.MIN_SPEED
+        if abs(v1) < 1e-9:
+            v1 = 0.0
         if v0 * v1 < 0.0 or (v0 != 0.0 and v1 == 0.0):
             # The speed reaches zero within the step: the car stops there.
             ds = 0.5 * v0 * abs(v0 / accel) if accel != 0.0 else 0.0

@@ -1,0 +1,338 @@
+"""The closed loop: plan, then track the path in highway-env at the simulation frequency.
+
+:func:`run_episode` builds a scenario's scene, plans (or takes a given plan),
+drives the ego car with a controller once per simulation step and returns an
+:class:`Episode`: the plan, the path and the logged trajectory, nothing else.
+Metrics come from :func:`rrtdrive.evaluation.evaluate`; videos replay an episode
+(:mod:`rrtdrive.sim.video`). Everything random is drawn from the episode seed,
+so an episode is a pure function of its arguments.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from rrtdrive.controllers import SpeedConfig, TrackingController, VehicleState, make_controller
+from rrtdrive.sim.ego import EgoVehicle
+from rrtdrive.sim.scenes import Scenario, SimConfig, build_env, make_scenario, scenario_rngs
+from rrtdrive.types import Budget, InputError, Path, PlanResult
+
+__all__ = ["EpisodeConfig", "Episode", "DriveLog", "run_episode", "drive", "plan_scenario"]
+
+logger = logging.getLogger(__name__)
+
+DEFAULT_PLANNER = "improved-rrt-connect"
+
+
+@dataclass(frozen=True)
+class EpisodeConfig:
+    """Everything about an episode besides the scenario, planner, controller and seed.
+
+    Parameters
+    ----------
+    sim : SimConfig
+        Simulation frequency (the control rate) and frame size.
+    speed : SpeedConfig, optional
+        Speed profile and PI gains; by default the controllers' defaults with the
+        scenario's ``v_max``.
+    controller_options : Mapping
+        Extra keyword arguments for the controller (gains).
+    budget : Budget
+        Planning budget.
+    max_time_s : float, optional
+        Time limit of the drive; by default the scenario's.
+    stop_on_crash : bool
+        End the episode at highway-env's first ``crashed``.
+    """
+
+    sim: SimConfig = field(default_factory=SimConfig)
+    speed: SpeedConfig | None = None
+    controller_options: Mapping[str, Any] = field(default_factory=dict)
+    budget: Budget = field(default_factory=Budget)
+    max_time_s: float | None = None
+    stop_on_crash: bool = True
+
+    def __post_init__(self) -> None:
+        if self.max_time_s is not None and not (
+            math.isfinite(self.max_time_s) and self.max_time_s > 0
+        ):
+            raise InputError(f"episode.max_time_s: must be > 0, got {self.max_time_s!r}")
+
+
+@dataclass(frozen=True, eq=False)
+class DriveLog:
+    """The logged trajectory of one drive.
+
+    Attributes
+    ----------
+    dt : float
+        Simulation step in seconds.
+    t : numpy.ndarray
+        Times, shape ``(N + 1,)``, starting at 0.
+    states : numpy.ndarray
+        Rear-axle ``[x, y, yaw, speed]`` at each time, ``(N + 1, 4)``.
+    controls : numpy.ndarray
+        Applied ``[acceleration, steering]`` over each step, ``(N, 2)``.
+    crashed : numpy.ndarray
+        highway-env's ``crashed`` flag of the ego at each time, ``(N + 1,)``.
+    others : numpy.ndarray
+        Body-centre ``[x, y, heading, speed]`` of every other vehicle, ``(N + 1, K, 4)``.
+    other_sizes : numpy.ndarray
+        ``[length, width]`` of every other vehicle, ``(K, 2)``.
+    arrived : bool
+        The controller stopped the car at the end of the path.
+    wall_time_s : float
+        Wall time of the loop.
+    """
+
+    dt: float
+    t: np.ndarray
+    states: np.ndarray
+    controls: np.ndarray
+    crashed: np.ndarray
+    others: np.ndarray
+    other_sizes: np.ndarray
+    arrived: bool
+    wall_time_s: float
+
+    @property
+    def steps(self) -> int:
+        """Number of simulation steps."""
+        return len(self.controls)
+
+    @classmethod
+    def empty(cls, dt: float) -> DriveLog:
+        """A drive that never started."""
+        return cls(
+            dt, np.zeros(0), np.zeros((0, 4)), np.zeros((0, 2)), np.zeros(0, dtype=bool),
+            np.zeros((0, 0, 4)), np.zeros((0, 2)), False, 0.0,
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Episode:
+    """One closed-loop episode: what was asked, what was planned, what happened.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The task (map with start and goal, seed, success terms).
+    planner, controller : str
+        Names.
+    seed : int
+        Episode seed.
+    plan : PlanResult or None
+        The planner's result (``None`` when a path was given directly).
+    path : Path
+        The path that was tracked (empty when planning failed).
+    log : DriveLog
+        The trajectory.
+    status : str
+        ``"arrived"``, ``"crashed"``, ``"timeout"`` or ``"plan_failed"``.
+    message : str
+        Human-readable detail.
+    config : EpisodeConfig
+        The resolved configuration.
+    """
+
+    scenario: Scenario
+    planner: str
+    controller: str
+    seed: int
+    plan: PlanResult | None
+    path: Path
+    log: DriveLog
+    status: str
+    message: str
+    config: EpisodeConfig
+
+
+def plan_scenario(
+    scenario: Scenario, planner: str, seed: int, budget: Budget | None = None
+) -> PlanResult:
+    """Plan the scenario's query with the registered planner ``planner``.
+
+    The planner's generator is the episode seed's planner stream.
+    """
+    from rrtdrive.planning import PlanningProblem, make_planner
+
+    _, plan_rng, _ = scenario_rngs(seed)
+    return make_planner(planner).solve(
+        PlanningProblem.from_map(scenario.map), plan_rng, budget or Budget()
+    )
+
+
+def drive(
+    env: Any,
+    path: Path,
+    controller: TrackingController,
+    max_time_s: float,
+    stop_on_crash: bool = True,
+) -> DriveLog:
+    """Track ``path`` with ``controller`` in a highway-env environment until done.
+
+    The controller runs once per simulation step: each step sets the ego's action,
+    lets every other vehicle act (``road.act``) and advances the physics
+    (``road.step(dt)``), exactly as highway-env's own ``_simulate`` does.
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        A reset highway-env environment whose controlled vehicle is an :class:`EgoVehicle`.
+    path : Path
+        Rear-axle path to track.
+    controller : TrackingController
+        Reset here on ``path``.
+    max_time_s : float
+        Time limit.
+    stop_on_crash : bool
+        Stop at highway-env's first ``crashed``.
+
+    Returns
+    -------
+    DriveLog
+    """
+    u = env.unwrapped
+    road = u.road
+    ego = u.vehicle
+    if not isinstance(ego, EgoVehicle):
+        raise InputError("env: the controlled vehicle must be an EgoVehicle (see attach_ego)")
+    dt = 1.0 / u.config["simulation_frequency"]
+    controller.reset(path, v_start=ego.speed)
+    others = [v for v in road.vehicles if v is not ego]
+    n_max = int(math.ceil(max_time_s / dt - 1e-9))
+    rear = ego.rear
+    states = [(rear[0], rear[1], rear[2], ego.speed)]
+    controls: list[tuple[float, float]] = []
+    crashed = [ego.crashed]
+    other_log = [[(v.position[0], v.position[1], v.heading, v.speed) for v in others]]
+    action = ego.action
+    arrived = False
+    t = 0.0
+    wall0 = time.perf_counter()
+    for _ in range(n_max):
+        r = ego.rear
+        accel, steer = controller.control(VehicleState(r[0], r[1], r[2], ego.speed, ego.steer, t))
+        action["acceleration"] = accel
+        action["steering"] = steer
+        road.act()
+        road.step(dt)
+        u.time += dt
+        u.steps += 1
+        t += dt
+        r = ego.rear
+        states.append((r[0], r[1], r[2], ego.speed))
+        controls.append((ego.accel, ego.steer))
+        crashed.append(ego.crashed)
+        if others:
+            other_log.append([(v.position[0], v.position[1], v.heading, v.speed) for v in others])
+        if ego.crashed and stop_on_crash:
+            break
+        if controller.arrived and ego.speed == 0.0:
+            arrived = True
+            break
+    wall = time.perf_counter() - wall0
+    n = len(states)
+    if not others:
+        other_arr = np.zeros((n, 0, 4))
+    else:
+        other_arr = np.asarray(other_log, dtype=float)
+    return DriveLog(
+        dt=dt,
+        t=np.arange(n) * dt,
+        states=np.asarray(states, dtype=float),
+        controls=np.asarray(controls, dtype=float).reshape(-1, 2),
+        crashed=np.asarray(crashed, dtype=bool),
+        others=other_arr,
+        other_sizes=np.asarray([(v.LENGTH, v.WIDTH) for v in others], dtype=float).reshape(-1, 2),
+        arrived=arrived,
+        wall_time_s=wall,
+    )
+
+
+def run_episode(
+    scenario: str | Scenario,
+    planner: str | PlanResult | Path = DEFAULT_PLANNER,
+    controller: str = "pure-pursuit",
+    seed: int = 0,
+    config: EpisodeConfig | None = None,
+) -> Episode:
+    """Plan and drive one episode; deterministic for a given seed.
+
+    Parameters
+    ----------
+    scenario : str or Scenario
+        ``"parking"``, ``"overtake"`` (built for ``seed``) or a ready :class:`Scenario`.
+    planner : str, PlanResult or Path
+        A registered planner name, or a plan/path to track as given.
+    controller : str
+        ``"pure-pursuit"``, ``"stanley"`` or ``"lqr"``.
+    seed : int
+        Episode seed: start jitter, goal choice, planner and simulator streams.
+    config : EpisodeConfig, optional
+        Frequency, speed profile, gains, budget, time limit.
+
+    Returns
+    -------
+    Episode
+
+    Examples
+    --------
+    >>> ep = run_episode("overtake", planner=my_path, controller="lqr", seed=1)  # doctest: +SKIP
+    >>> evaluate(ep).success  # doctest: +SKIP
+    True
+    """
+    config = config or EpisodeConfig()
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InputError(f"seed: need an integer >= 0, got {seed!r}")
+    seed = int(seed)
+    scen = make_scenario(scenario, seed) if isinstance(scenario, str) else scenario
+    if not isinstance(scen, Scenario):
+        raise InputError(f"scenario: expected a name or a Scenario, got {scenario!r}")
+    speed = config.speed or SpeedConfig(v_max=scen.v_max)
+    ctrl = make_controller(
+        controller, vehicle=scen.vehicle, speed=speed, **dict(config.controller_options)
+    )
+    plan: PlanResult | None
+    if isinstance(planner, str):
+        plan = plan_scenario(scen, planner, seed, config.budget)
+        planner_name = planner
+        path = plan.path
+    elif isinstance(planner, PlanResult):
+        plan, planner_name, path = planner, planner.planner, planner.path
+    elif isinstance(planner, Path):
+        plan, planner_name, path = None, "given", planner
+    else:
+        raise InputError(f"planner: expected a name, a PlanResult or a Path, got {planner!r}")
+    dt = config.sim.dt
+    if plan is not None and not plan.success:
+        return Episode(
+            scen, planner_name, controller, seed, plan, Path.empty(), DriveLog.empty(dt),
+            "plan_failed", f"planning failed ({plan.status.value}): {plan.message}", config,
+        )
+    if len(path) < 2:
+        return Episode(
+            scen, planner_name, controller, seed, plan, path, DriveLog.empty(dt),
+            "plan_failed", "the path has fewer than two samples", config,
+        )
+    env = build_env(scen, config.sim)
+    try:
+        max_time = config.max_time_s or scen.max_time_s
+        log = drive(env, path, ctrl, max_time, config.stop_on_crash)
+    finally:
+        env.close()
+    if log.crashed[-1]:
+        status, message = "crashed", f"highway-env reported a crash at t = {log.t[-1]:.2f} s"
+    elif log.arrived:
+        status, message = "arrived", f"stopped at the end of the path at t = {log.t[-1]:.2f} s"
+    else:
+        status, message = "timeout", f"not stopped at the goal within {max_time:g} s"
+    logger.info("episode %s/%s/%s seed %d: %s", scen.name, planner_name, controller, seed, status)
+    return Episode(scen, planner_name, controller, seed, plan, path, log, status, message, config)

@@ -1,0 +1,404 @@
+"""Scenarios and the highway-env scenes built from them.
+
+A :class:`Scenario` is plain data: the map (with this episode's start and goal),
+the seed and what success means. :func:`build_env` turns it into a highway-env
+environment (:class:`SceneEnv`) whose road objects are exactly the map's
+rectangles and whose controlled vehicle is an :class:`~rrtdrive.sim.ego.EgoVehicle`.
+
+* ``parking`` - the ``parking_lot`` map: every parked car and block becomes a solid
+  highway-env :class:`~highway_env.vehicle.objects.Obstacle` of exactly its size and
+  pose, walls close the bounds, each spot is drawn as a lane. The ego starts at the
+  entrance with a seeded jitter and must stop nose-in in a seeded free spot.
+* ``overtake`` - the ``overtake`` map as a highway-env two-way road: the ego lane
+  (y = 44, driving +x) and the oncoming lane (y = 48), road edges as solid
+  obstacles, a stopped highway-env vehicle at the map's car. The ego must pass it,
+  return to its lane and stop at the goal.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from highway_env.envs.common.abstract import AbstractEnv
+from highway_env.road.lane import LineType, StraightLane
+from highway_env.road.road import Road, RoadNetwork
+from highway_env.vehicle.graphics import VehicleGraphics
+from highway_env.vehicle.kinematics import Vehicle
+from highway_env.vehicle.objects import Obstacle as HwObstacle
+
+from rrtdrive.maps import (
+    LANE_WIDTH,
+    PARKING_EMPTY_SPOTS,
+    PARKING_ROW_CENTRES,
+    PARKING_SPOT_DEPTH,
+    PARKING_SPOT_WIDTH,
+    Map,
+    Obstacle,
+    overtake_map,
+    parking_goal_pose,
+    parking_lot_map,
+    parking_spots,
+)
+from rrtdrive.sim.ego import EgoVehicle
+from rrtdrive.types import InputError, Pose, VehicleParams, require_positive
+
+__all__ = [
+    "SCENARIOS",
+    "Scenario",
+    "SimConfig",
+    "SceneEnv",
+    "make_scenario",
+    "build_env",
+    "scenario_rngs",
+]
+
+SCENARIOS = ("parking", "overtake")
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """How the simulator runs and draws.
+
+    Parameters
+    ----------
+    simulation_frequency : int
+        Steps per second of highway-env's physics; the controller runs at this rate.
+    screen_width, screen_height : int
+        Rendered frame size in pixels (0 picks the scenario's default).
+    scaling : float
+        Pixels per metre (0 picks the scenario's default).
+    """
+
+    simulation_frequency: int = 20
+    screen_width: int = 0
+    screen_height: int = 0
+    scaling: float = 0.0
+
+    def __post_init__(self) -> None:
+        f = self.simulation_frequency
+        if isinstance(f, bool) or not isinstance(f, int) or f < 15:
+            raise InputError(f"sim.simulation_frequency: need an integer >= 15 Hz, got {f!r}")
+        for name in ("screen_width", "screen_height"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
+                raise InputError(f"sim.{name}: need an integer >= 0, got {v!r}")
+        if not (self.scaling >= 0 and math.isfinite(self.scaling)):
+            raise InputError(f"sim.scaling: need a number >= 0, got {self.scaling!r}")
+
+    @property
+    def dt(self) -> float:
+        """Simulation step in seconds."""
+        return 1.0 / self.simulation_frequency
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """One episode's task, as plain data.
+
+    Attributes
+    ----------
+    name : str
+        ``"parking"``, ``"overtake"`` or ``"custom"``.
+    map : Map
+        The map with this episode's start and goal (rear-axle poses).
+    seed : int
+        The seed the start jitter and the goal were drawn from.
+    vehicle_obstacles : tuple of int
+        Indices of map obstacles that the scene makes highway-env vehicles.
+    spot : tuple of int or None
+        Parking: the ``(row, side, index)`` of the goal spot.
+    lead_index : int or None
+        Overtake: index of the stopped car among the map's obstacles.
+    lane_y : float or None
+        Overtake: centre line of the ego lane.
+    lane_width : float
+        Overtake: lane width in metres.
+    v_max : float
+        Speed cap for the episode in m/s.
+    max_time_s : float
+        Time allowed before the episode counts as failed.
+    walls : bool
+        Whether the scene closes the bounds with walls.
+    """
+
+    name: str
+    map: Map
+    seed: int
+    vehicle_obstacles: tuple[int, ...] = ()
+    spot: tuple[int, int, int] | None = None
+    lead_index: int | None = None
+    lane_y: float | None = None
+    lane_width: float = LANE_WIDTH
+    v_max: float = 3.0
+    max_time_s: float = 120.0
+    walls: bool = True
+
+    def __post_init__(self) -> None:
+        require_positive("scenario.v_max", self.v_max)
+        require_positive("scenario.max_time_s", self.max_time_s)
+
+    @property
+    def start(self) -> Pose:
+        """Rear-axle start pose."""
+        return self.map.start
+
+    @property
+    def goal(self) -> Pose:
+        """Rear-axle goal pose."""
+        return self.map.goal
+
+    @property
+    def vehicle(self) -> VehicleParams:
+        """The car."""
+        return self.map.vehicle
+
+
+def scenario_rngs(seed: int) -> tuple[np.random.Generator, np.random.Generator, int]:
+    """Independent streams for one episode: scenario draws, planner, simulator seed."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InputError(f"seed: need an integer >= 0, got {seed!r}")
+    scen, plan, sim = np.random.SeedSequence(int(seed)).spawn(3)
+    return (
+        np.random.default_rng(scen),
+        np.random.default_rng(plan),
+        int(sim.generate_state(1)[0]),
+    )
+
+
+def make_scenario(
+    name: str,
+    seed: int = 0,
+    *,
+    spot: tuple[int, int, int] | None = None,
+    jitter: tuple[float, float, float] = (1.0, 0.5, math.radians(5.0)),
+    vehicle: VehicleParams | None = None,
+) -> Scenario:
+    """Build the scenario ``name`` for ``seed``.
+
+    Parameters
+    ----------
+    name : str
+        ``"parking"`` or ``"overtake"``.
+    seed : int
+        Seeds the start jitter and (parking) the choice of the free spot.
+    spot : tuple of int, optional
+        Parking: force this ``(row, side, index)`` spot (must be empty).
+    jitter : tuple of float
+        Half-ranges of the uniform start jitter in x, y (metres) and yaw (radians).
+    vehicle : VehicleParams, optional
+        The car.
+
+    Returns
+    -------
+    Scenario
+
+    Examples
+    --------
+    >>> s = make_scenario("parking", 3)
+    >>> s.spot in PARKING_EMPTY_SPOTS, s == make_scenario("parking", 3)
+    (True, True)
+    """
+    rng, _, _ = scenario_rngs(seed)
+    if len(jitter) != 3 or any(not (j >= 0 and math.isfinite(j)) for j in jitter):
+        raise InputError(f"jitter: need three finite numbers >= 0, got {jitter!r}")
+    vehicle = vehicle or VehicleParams()
+    dx, dy, dyaw = (float(rng.uniform(-j, j)) if j > 0 else 0.0 for j in jitter)
+    if name == "parking":
+        base = dataclasses.replace(parking_lot_map(), vehicle=vehicle)
+        spots = sorted(PARKING_EMPTY_SPOTS)
+        if spot is None:
+            spot = spots[int(rng.integers(len(spots)))]
+        elif tuple(spot) not in PARKING_EMPTY_SPOTS:
+            raise InputError(f"spot: {spot!r} is not an empty spot; choose from {spots}")
+        spot = tuple(int(v) for v in spot)  # type: ignore[assignment]
+        start = Pose(base.start.x + dx, base.start.y + dy, base.start.yaw + dyaw)
+        goal = parking_goal_pose(*spot, vehicle=vehicle)  # type: ignore[misc]
+        m = base.with_query(start=start, goal=goal)
+        return Scenario(
+            "parking", m, int(seed), spot=spot, v_max=3.0, max_time_s=120.0, walls=True
+        )
+    if name == "overtake":
+        if spot is not None:
+            raise InputError("spot: only the parking scenario has spots")
+        base = dataclasses.replace(overtake_map(), vehicle=vehicle)
+        start = Pose(base.start.x + dx, base.start.y + 0.3 * dy, base.start.yaw + dyaw)
+        m = base.with_query(start=start)
+        lead = _car_like(m.obstacles, vehicle)
+        return Scenario(
+            "overtake", m, int(seed), vehicle_obstacles=tuple(lead), lead_index=lead[0],
+            lane_y=base.start.y, v_max=8.0, max_time_s=60.0, walls=False,
+        )
+    raise InputError(f"scenario: unknown scenario {name!r}; choose from {list(SCENARIOS)}")
+
+
+def _car_like(obstacles: tuple[Obstacle, ...], vehicle: VehicleParams) -> list[int]:
+    out = [
+        i for i, o in enumerate(obstacles)
+        if abs(o.size[0] - vehicle.length) < 1e-6 and abs(o.size[1] - vehicle.width) < 1e-6
+    ]
+    if not out:
+        raise InputError("scenario: the overtake map has no car-sized obstacle")
+    return out
+
+
+# ----------------------------------------------------------------------------- env
+
+
+class SceneEnv(AbstractEnv):
+    """A highway-env environment whose scene is built from a :class:`Scenario`.
+
+    Configure with ``{"scenario": Scenario, ...}``. The controlled vehicle is an
+    :class:`EgoVehicle` at the scenario's start. Stepping it through ``env.step``
+    works (continuous action, normalised acceleration and steering), but the
+    closed-loop runner drives the road directly at the simulation frequency.
+    """
+
+    @classmethod
+    def default_config(cls) -> dict:
+        """highway-env configuration defaults for rrtdrive scenes."""
+        config = super().default_config()
+        vehicle = VehicleParams()
+        config.update(
+            {
+                "observation": {"type": "Kinematics", "vehicles_count": 5},
+                "action": {
+                    "type": "ContinuousAction",
+                    "acceleration_range": [-4.0, 2.0],
+                    "steering_range": [-vehicle.max_steer, vehicle.max_steer],
+                },
+                "simulation_frequency": 20,
+                "policy_frequency": 20,
+                "duration": 120.0,
+                "screen_width": 600,
+                "screen_height": 600,
+                "centering_position": [0.5, 0.5],
+                "scaling": 6.0,
+                "scenario": None,
+            }
+        )
+        return config
+
+    def _reset(self) -> None:
+        scenario = self.config["scenario"]
+        if scenario is None:
+            scenario = make_scenario("parking", 0)
+            self.config["scenario"] = scenario
+        self.road = _build_road(scenario, self.np_random, self.config["show_trajectories"])
+        ego = EgoVehicle(self.road, scenario.start, 0.0, scenario.vehicle)
+        ego.color = VehicleGraphics.EGO_COLOR
+        self.road.vehicles.insert(0, ego)
+        self.controlled_vehicles = [ego]
+
+    def _reward(self, action: object) -> float:
+        return 0.0
+
+    def _is_terminated(self) -> bool:
+        return bool(self.vehicle.crashed)
+
+    def _is_truncated(self) -> bool:
+        return bool(self.time >= self.config["duration"])
+
+
+def _rect_object(road: Road, o: Obstacle) -> HwObstacle:
+    """A solid highway-env obstacle of exactly ``o``'s rectangle (length >= width for drawing)."""
+    length, width, yaw = o.size[0], o.size[1], o.yaw
+    if width > length:  # highway-env draws on a length x length canvas
+        length, width, yaw = width, length, yaw + math.pi / 2
+    obj = HwObstacle(road, list(o.center), heading=yaw)
+    obj.LENGTH, obj.WIDTH = length, width
+    obj.diagonal = math.hypot(length, width)
+    return obj
+
+
+def _rect_vehicle(road: Road, o: Obstacle) -> Vehicle:
+    """A stopped highway-env vehicle of exactly ``o``'s rectangle."""
+    v = Vehicle(road, list(o.center), heading=o.yaw, speed=0.0)
+    v.LENGTH, v.WIDTH = o.size
+    v.diagonal = math.hypot(*o.size)
+    return v
+
+
+def _build_road(scenario: Scenario, np_random: np.random.Generator, history: bool) -> Road:
+    net = RoadNetwork()
+    m = scenario.map
+    if scenario.name == "overtake":
+        y0 = float(scenario.lane_y)  # type: ignore[arg-type]
+        w = scenario.lane_width
+        x0, x1 = m.bounds[0], m.bounds[2]
+        c, s = LineType.CONTINUOUS_LINE, LineType.STRIPED
+        net.add_lane("a", "b", StraightLane([x0, y0], [x1, y0], w, (c, s), speed_limit=20))
+        net.add_lane("b", "a", StraightLane([x1, y0 + w], [x0, y0 + w], w, (c, LineType.NONE)))
+    elif scenario.name == "parking":
+        # One lane per spot, drawn with solid lines like highway-env's parking-v0.
+        lt = (LineType.CONTINUOUS, LineType.CONTINUOUS)
+        for r, side, i, x, _y in parking_spots():
+            yc = PARKING_ROW_CENTRES[r]
+            outer = yc - PARKING_SPOT_DEPTH if side == 0 else yc + PARKING_SPOT_DEPTH
+            net.add_lane(
+                f"r{r}s{side}", f"{i}",
+                StraightLane([x, outer], [x, yc], PARKING_SPOT_WIDTH, lt, speed_limit=5),
+            )
+    else:
+        xmin, ymin, xmax, ymax = m.bounds
+        net.add_lane("a", "b", StraightLane([xmin, ymin], [xmax, ymin], line_types=(0, 0)))
+    road = Road(network=net, np_random=np_random, record_history=history)
+    vehicle_ids = set(scenario.vehicle_obstacles)
+    for i, o in enumerate(m.obstacles):
+        if i in vehicle_ids:
+            road.vehicles.append(_rect_vehicle(road, o))
+        else:
+            road.objects.append(_rect_object(road, o))
+    if scenario.walls:
+        xmin, ymin, xmax, ymax = m.bounds
+        t = 1.0
+        for wall in (
+            Obstacle(((xmin + xmax) / 2, ymin - t / 2), (xmax - xmin + 2 * t, t)),
+            Obstacle(((xmin + xmax) / 2, ymax + t / 2), (xmax - xmin + 2 * t, t)),
+            Obstacle((xmin - t / 2, (ymin + ymax) / 2), (ymax - ymin, t), math.pi / 2),
+            Obstacle((xmax + t / 2, (ymin + ymax) / 2), (ymax - ymin, t), math.pi / 2),
+        ):
+            road.objects.append(_rect_object(road, wall))
+    return road
+
+
+def build_env(
+    scenario: Scenario, sim: SimConfig | None = None, render: bool = False
+) -> SceneEnv:
+    """The highway-env environment of ``scenario``, reset with the scenario's simulator seed.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        What to build.
+    sim : SimConfig, optional
+        Frequency and frame size.
+    render : bool
+        Create it with ``render_mode="rgb_array"`` (only when recording: drawing is costly).
+
+    Returns
+    -------
+    SceneEnv
+        Reset and ready; ``env.unwrapped.vehicle`` is the :class:`EgoVehicle`.
+    """
+    sim = sim or SimConfig()
+    if scenario.name == "overtake":
+        size, scaling, centering = (900, 300), 8.0, [0.35, 0.5]
+    else:
+        size, scaling, centering = (640, 640), 6.0, [0.5, 0.5]
+    config = {
+        "scenario": scenario,
+        "simulation_frequency": sim.simulation_frequency,
+        "policy_frequency": sim.simulation_frequency,
+        "duration": scenario.max_time_s,
+        "screen_width": sim.screen_width or size[0],
+        "screen_height": sim.screen_height or size[1],
+        "scaling": sim.scaling or scaling,
+        "centering_position": centering,
+    }
+    env = SceneEnv(config=config, render_mode="rgb_array" if render else None)
+    _, _, sim_seed = scenario_rngs(scenario.seed)
+    env.reset(seed=sim_seed)
+    return env
