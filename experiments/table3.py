@@ -27,12 +27,12 @@ from pathlib import Path as FsPath
 
 import matplotlib.pyplot as plt
 import numpy as np
-from rrtdrive.planning.postprocess import prune
 from scipy import stats
 
 from rrtdrive.maps import builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.planning.base import polyline_curvature
+from rrtdrive.planning.postprocess import prune
 from rrtdrive.plotting import draw_map, draw_path, draw_trees, plot_curvature, save_figure
 from rrtdrive.types import Budget
 from rrtdrive.verify import verify_path
@@ -71,7 +71,8 @@ def run_one(name: str, problem: PlanningProblem, seed: int, budget: Budget) -> t
         raw = result.raw_path
         row["length_m"] = polyline_length(raw)
         row["max_curvature"] = float(np.abs(polyline_curvature(raw)).max())
-        pruned = prune(raw, problem.checker)
+        kept = prune(raw, problem.checker)
+        pruned = raw if kept is None else raw[kept]
         row["pruned_length_m"] = polyline_length(pruned)
         row["pruned_max_curvature"] = float(np.abs(polyline_curvature(pruned)).max())
     return row, result
