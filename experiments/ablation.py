@@ -64,8 +64,13 @@ def evaluate(planner: ImprovedRRTConnect, problem: PlanningProblem, runs: int,
 
 
 def table(title: str, header: str, rows: list[tuple[str, dict[str, float]]]) -> list[str]:
-    lines = [f"### {title}", "", f"| {header} | success | verified | mean length [m] "
-             "| median time [ms] | mean nodes | mean max κ [1/m] |", "|---|---|---|---|---|---|---|"]
+    lines = [
+        f"### {title}",
+        "",
+        f"| {header} | success | verified | mean length [m] "
+        "| median time [ms] | mean nodes | mean max κ [1/m] |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for label, s in rows:
         lines.append(
             f"| {label} | {100 * s['success_rate']:.0f} % | {100 * s['verified_rate']:.0f} % | "
