@@ -157,12 +157,12 @@ def exact_edge_free(
     a: np.ndarray,
     b: np.ndarray,
     spacing: float = EXACT_EDGE_SPACING,
-    chunk: int = 32,
+    stride: int = 8,
 ) -> bool:
     """Exact body test at poses at most ``spacing`` apart along a->b, heading along the edge.
 
-    Poses are tested in chunks from ``b`` backwards, so a blocked edge is usually
-    rejected after the first chunk.
+    Coarse to fine: every ``stride``-th pose from ``b`` backwards first (a blocked
+    edge is nearly always caught there), then the poses in between.
 
     Parameters
     ----------
@@ -172,8 +172,8 @@ def exact_edge_free(
         Edge end points ``(x, y)``.
     spacing : float
         Largest distance between tested poses.
-    chunk : int
-        Poses per call of the checker.
+    stride : int
+        Spacing, in poses, of the coarse first pass.
 
     Returns
     -------
@@ -189,7 +189,11 @@ def exact_edge_free(
     t = np.linspace(1.0, 0.0, n + 1)
     yaw = np.full(n + 1, math.atan2(d[1], d[0]))
     poses = np.column_stack([a[0] + t * d[0], a[1] + t * d[1], yaw])
-    return all(bool(checker.poses_free(poses[i : i + chunk]).all()) for i in range(0, n + 1, chunk))
+    coarse = np.zeros(n + 1, dtype=bool)
+    coarse[::stride] = True
+    if not checker.poses_free(poses[coarse]).all():
+        return False
+    return bool(checker.poses_free(poses[~coarse]).all())
 
 
 _LABELS: weakref.WeakKeyDictionary[CollisionChecker, np.ndarray] = weakref.WeakKeyDictionary()
