@@ -1,0 +1,1 @@
+"""Gymnasium environments of rrtdrive (installed as ``rrtdrive.envs``)."""
