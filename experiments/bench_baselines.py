@@ -188,12 +188,14 @@ def markdown(report: dict) -> str:
     ]
     rs = report["runs"].get("rrt-star")
     if rs:
-        n450 = sum(1 for r in rs if r["nodes"] == report["settings"]["rrt-star"]["max_nodes"])
-        lines.append(
-            f"RRT*: {n450}/{len(rs)} runs stopped at exactly "
-            f"{report['settings']['rrt-star']['max_nodes']} nodes (the others grew on until "
-            "the goal was connected)."
-        )
+        cap = report["settings"]["rrt-star"]["max_nodes"]
+        exact = [r["planning_time_s"] for r in rs if r["success"] and r["nodes"] == cap]
+        line = f"RRT*: {len(exact)}/{len(rs)} runs stopped at exactly {cap} nodes"
+        if len(exact) < len(rs):
+            line += " (the others grew on until the goal was connected, or failed)"
+        if exact:
+            line += f"; their median time {statistics.median(exact) * 1e3:.1f} ms"
+        lines.append(line + ".")
         lines.append("")
     return "\n".join(lines)
 
