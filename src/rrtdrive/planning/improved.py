@@ -1,0 +1,666 @@
+"""The improved RRT-Connect of Li, Huang & Pan (2023), paper Sec. 3, with guaranteed drivable paths.
+
+Tree growth (Sec. 3.1): bidirectional RRT-Connect with
+
+* **direct connection** – a free straight start->goal edge skips the growth;
+* **obtuse-angle parent choice** (Eq. 11, Table 1) – the nearest node whose angle
+  between its parent and the sample is obtuse, else the nearest node; the roots get
+  virtual parents one step behind the start and one step beyond the goal along
+  their headings;
+* **adaptive step** – the greedy connect takes a first step ``p``, then ``2p``;
+* **adaptive obstacle expansion** – rectangles whose envelope circles keep a gap
+  ``L2 > L_min`` to every other obstacle (and to the map boundary) grow by ``a`` in
+  length and width, in a second checker used for tree growth only.
+
+Post-processing (Sec. 3.2, :mod:`rrtdrive.planning.postprocess`): pruning,
+sharp-angle repair, control-point supplement, a clamped uniform B-spline and the
+guarantee loop (headings at both ends, ``|kappa| <= kappa_max``, exact body clear
+of the *original* map).
+
+Every component is switchable by name, see :data:`COMPONENTS`::
+
+    ImprovedRRTConnect()                                  # everything on
+    ImprovedRRTConnect(disable=("obtuse_parent",))        # ablation by name
+    ImprovedRRTConnect(adaptive_step=False, step=4.0)     # or any config field
+    ImprovedRRTConnect(ImprovedConfig(prune=False))       # or a whole config
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+from rrtdrive.collision import CollisionChecker
+from rrtdrive.maps import Obstacle
+from rrtdrive.planning.base import (
+    GrowingTree,
+    PlanningProblem,
+    Stopwatch,
+    failure,
+    precheck,
+    register_planner,
+    sample_point,
+)
+from rrtdrive.planning.postprocess import SmoothingConfig, make_drivable
+from rrtdrive.types import (
+    Budget,
+    InputError,
+    Path,
+    PlanResult,
+    PlanStatus,
+    Tree,
+    require_finite,
+    require_positive,
+)
+
+__all__ = [
+    "COMPONENTS",
+    "ImprovedConfig",
+    "ImprovedRRTConnect",
+    "ObtuseTree",
+    "expand_obstacles",
+    "envelope_gaps",
+    "expanded_checker",
+    "default_expansion_lmin",
+]
+
+#: Names of the switchable components, for ablations and the CLI.
+COMPONENTS: tuple[str, ...] = (
+    "direct_connect",
+    "obtuse_parent",
+    "adaptive_step",
+    "obstacle_expansion",
+    "prune",
+    "sharp_repair",
+    "supplement",
+)
+
+NAME = "improved-rrt-connect"
+
+
+@dataclass(frozen=True)
+class ImprovedConfig:
+    """Parameters of :class:`ImprovedRRTConnect`, validated on construction.
+
+    Parameters
+    ----------
+    step : float
+        Unit step ``p`` in metres (paper: 5 m).
+    direct_connect, obtuse_parent, adaptive_step : bool
+        Components of :data:`COMPONENTS` (tree growth); all on by default.
+    obstacle_expansion, prune, sharp_repair, supplement : bool
+        Components of :data:`COMPONENTS` (expansion and post-processing); all on.
+    expansion_a : float
+        Growth ``a`` of an expanded rectangle's length and width in metres.
+    expansion_lmin : float or None
+        ``L_min`` in metres; ``None`` means :func:`default_expansion_lmin`
+        (``W + 2 margin + sqrt(2) a``, 3.41 m for the paper's car), the smallest
+        value that never narrows a gap the car's edge test could pass through.
+    spline_degree : int
+        2 (paper) or 3.
+    supplement_delta : float
+        Eq. 16 threshold ``delta`` in metres.
+    supplement_n : float
+        Eq. 16 distance multiple ``N`` in ``(0, 1)``.
+    max_postprocess_attempts : int
+        Tree paths tried before giving up with ``POSTPROCESS_FAILED``; after a
+        failed post-processing the trees are grown afresh.
+    max_repair_rounds : int
+        Fit-check-repair rounds per tree path.
+
+    Examples
+    --------
+    >>> ImprovedConfig(step=4.0).step
+    4.0
+    >>> ImprovedConfig(step=-1.0)
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: planner.step: must be > 0, got -1.0
+    """
+
+    step: float = 5.0
+    direct_connect: bool = True
+    obtuse_parent: bool = True
+    adaptive_step: bool = True
+    obstacle_expansion: bool = True
+    prune: bool = True
+    sharp_repair: bool = True
+    supplement: bool = True
+    expansion_a: float = 1.0
+    expansion_lmin: float | None = None
+    spline_degree: int = 2
+    supplement_delta: float = 5.66
+    supplement_n: float = 0.5
+    max_postprocess_attempts: int = 6
+    max_repair_rounds: int = 24
+
+    def __post_init__(self) -> None:
+        require_positive("planner.step", self.step)
+        for name in COMPONENTS:
+            value = getattr(self, name)
+            if not isinstance(value, bool):
+                raise InputError(f"planner.{name}: expected true or false, got {value!r}")
+        require_finite("planner.expansion_a", self.expansion_a)
+        if self.expansion_a < 0:
+            raise InputError(f"planner.expansion_a: must be >= 0, got {self.expansion_a!r}")
+        if self.expansion_lmin is not None:
+            require_finite("planner.expansion_lmin", self.expansion_lmin)
+            if self.expansion_lmin < 0:
+                raise InputError(
+                    f"planner.expansion_lmin: must be >= 0, got {self.expansion_lmin!r}"
+                )
+        if isinstance(self.spline_degree, bool) or self.spline_degree not in (2, 3):
+            raise InputError(f"planner.spline_degree: must be 2 or 3, got {self.spline_degree!r}")
+        require_positive("planner.supplement_delta", self.supplement_delta)
+        require_finite("planner.supplement_n", self.supplement_n)
+        if not 0.0 < self.supplement_n < 1.0:
+            raise InputError(f"planner.supplement_n: must lie in (0, 1), got {self.supplement_n!r}")
+        for name in ("max_postprocess_attempts", "max_repair_rounds"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise InputError(f"planner.{name}: must be a positive integer, got {value!r}")
+
+    def without(self, *components: str) -> ImprovedConfig:
+        """A copy with the named components switched off.
+
+        Examples
+        --------
+        >>> ImprovedConfig().without("prune", "supplement").prune
+        False
+        """
+        for name in components:
+            if name not in COMPONENTS:
+                raise InputError(
+                    f"planner.disable: unknown component {name!r}; choose from {list(COMPONENTS)}"
+                )
+        return dataclasses.replace(self, **{name: False for name in components})
+
+
+# ----------------------------------------------------------------------------- expansion
+
+
+def default_expansion_lmin(width: float, margin: float, a: float) -> float:
+    """Default ``L_min = W + 2 margin + sqrt(2) a``.
+
+    Growing a rectangle by ``a`` in length and width moves each of its points by
+    at most ``a / sqrt(2)`` (a corner, diagonally), so two grown neighbours lose at
+    most ``sqrt(2) a`` of their gap. A pair whose envelope circles are more than
+    ``L_min`` apart (and so the rectangles too) keeps a gap above ``W + 2 margin``,
+    the width of the swept disc of the edge test: no gap the car could use is closed.
+
+    Examples
+    --------
+    >>> round(default_expansion_lmin(1.8, 0.1, 1.0), 3)
+    3.414
+    """
+    return width + 2.0 * margin + math.sqrt(2.0) * a
+
+
+def envelope_gaps(
+    obstacles: Iterable[Obstacle], bounds: Iterable[float] | None = None
+) -> np.ndarray:
+    """``L2`` of each obstacle: the smallest gap between its envelope circle and any other's.
+
+    The envelope circle is centred on the rectangle with radius half its diagonal.
+    When ``bounds`` are given, the map boundary counts as an obstacle too (the gap
+    from the circle to each side of the bounds box), so expansion never closes a
+    passage along the map's edge.
+
+    Returns
+    -------
+    numpy.ndarray
+        One gap per obstacle (``inf`` for a lone obstacle without bounds).
+
+    Examples
+    --------
+    >>> obs = [Obstacle((0.0, 0.0), (6.0, 8.0)), Obstacle((20.0, 0.0), (6.0, 8.0))]
+    >>> envelope_gaps(obs).tolist()
+    [10.0, 10.0]
+    """
+    obs = list(obstacles)
+    if not obs:
+        return np.zeros(0)
+    c = np.array([o.center for o in obs], dtype=float)
+    r = np.array([math.hypot(*o.size) / 2.0 for o in obs])
+    d = np.hypot(c[:, None, 0] - c[None, :, 0], c[:, None, 1] - c[None, :, 1])
+    gap = d - r[:, None] - r[None, :]
+    np.fill_diagonal(gap, np.inf)
+    out = gap.min(axis=1)
+    if bounds is not None:
+        xmin, ymin, xmax, ymax = (float(b) for b in bounds)
+        wall = (
+            np.minimum.reduce([c[:, 0] - xmin, xmax - c[:, 0], c[:, 1] - ymin, ymax - c[:, 1]]) - r
+        )
+        out = np.minimum(out, wall)
+    return out
+
+
+def expand_obstacles(
+    obstacles: Iterable[Obstacle],
+    a: float,
+    lmin: float,
+    bounds: Iterable[float] | None = None,
+) -> tuple[tuple[Obstacle, ...], np.ndarray]:
+    """Adaptive obstacle expansion (paper Sec. 3.1.4): grow by ``a`` where ``L2 > L_min``.
+
+    Parameters
+    ----------
+    obstacles : iterable of Obstacle
+        The map's rectangles.
+    a : float
+        Growth of length and width in metres.
+    lmin : float
+        Smallest allowed passing distance ``L_min``.
+    bounds : iterable of float, optional
+        Map bounds; the boundary then counts as an obstacle (see :func:`envelope_gaps`).
+
+    Returns
+    -------
+    obstacles : tuple of Obstacle
+        The rectangles, grown or as they were, in the same order.
+    grown : numpy.ndarray
+        Boolean flag per rectangle.
+
+    Examples
+    --------
+    >>> obs = [Obstacle((0.0, 0.0), (6.0, 8.0)), Obstacle((20.0, 0.0), (6.0, 8.0))]
+    >>> new, grown = expand_obstacles(obs, 1.0, 3.4)
+    >>> new[0].size, grown.tolist()
+    ((7.0, 9.0), [True, True])
+    """
+    obs = list(obstacles)
+    gaps = envelope_gaps(obs, bounds)
+    grown = gaps > lmin
+    out = tuple(o.grown(a) if g else o for o, g in zip(obs, grown.tolist(), strict=True))
+    return out, grown
+
+
+_EXPANDED: dict[tuple[object, ...], tuple[CollisionChecker | None, int]] = {}
+
+
+def expanded_checker(
+    checker: CollisionChecker, a: float, lmin: float
+) -> tuple[CollisionChecker | None, int]:
+    """The checker of the expanded obstacles, built once per map and parameters.
+
+    Returns ``(None, 0)`` when no obstacle grows (the original checker serves).
+    The cache is module level, keyed by the bounds, obstacles, car, checker
+    configuration, ``a`` and ``L_min``.
+    """
+    key = (
+        checker.bounds,
+        checker.obstacles,
+        checker.vehicle,
+        checker.config,
+        float(a),
+        float(lmin),
+    )
+    hit = _EXPANDED.get(key)
+    if hit is not None:
+        return hit
+    new, grown = expand_obstacles(checker.obstacles, a, lmin, checker.bounds)
+    count = int(grown.sum())
+    result: tuple[CollisionChecker | None, int]
+    if count == 0 or a == 0.0:
+        result = (None, 0)
+    else:
+        result = (CollisionChecker(checker.bounds, new, checker.vehicle, checker.config), count)
+    if len(_EXPANDED) > 16:
+        _EXPANDED.clear()
+    _EXPANDED[key] = result
+    return result
+
+
+# ----------------------------------------------------------------------------- tree
+
+
+class ObtuseTree(GrowingTree):
+    """A :class:`GrowingTree` that keeps each node's parent position for Eq. 11.
+
+    ``choose_parent(q)`` returns the nearest node whose angle (parent, node, q) is
+    obtuse -- ``D(q_i, q) + D(q_i, q_k) < D(q_k, q)`` with squared distances -- or
+    the nearest node when none is obtuse (Table 1). Vectorised over the tree.
+
+    Examples
+    --------
+    >>> t = ObtuseTree(np.array([0.0, 0.0]), virtual_parent=np.array([-5.0, 0.0]))
+    >>> a = t.add(np.array([0.0, 5.0]), 0)
+    >>> t.choose_parent(np.array([1.0, 3.0]))  # node 1 is nearer but acute; the root is obtuse
+    0
+    """
+
+    def __init__(
+        self, root: np.ndarray, capacity: int = 256, virtual_parent: np.ndarray | None = None
+    ) -> None:
+        super().__init__(root, capacity, virtual_parent)
+        self.ppos = np.empty((capacity, 2))
+        self.ppos[0] = virtual_parent if virtual_parent is not None else (np.nan, np.nan)
+        vp = self.ppos[0]
+        self.dpar = np.empty(capacity)
+        self.dpar[0] = float((vp[0] - root[0]) ** 2 + (vp[1] - root[1]) ** 2)
+
+    def add(self, point: np.ndarray, parent: int, cost: float | None = None) -> int:
+        """Append ``point`` with ``parent``; return its index."""
+        if self.size == len(self.ppos):
+            self.ppos = np.concatenate([self.ppos, np.empty_like(self.ppos)])
+            self.dpar = np.concatenate([self.dpar, np.empty_like(self.dpar)])
+        i = super().add(point, parent, cost)
+        p = self.nodes[parent]
+        self.ppos[i] = p
+        self.dpar[i] = (point[0] - p[0]) ** 2 + (point[1] - p[1]) ** 2
+        return i
+
+    def choose_parent(self, q: np.ndarray, obtuse: bool = True) -> int:
+        """Node to extend towards ``q``: Eq. 11 when ``obtuse``, else the nearest."""
+        n = self.size
+        d = self.nodes[:n] - q
+        d_rand = np.einsum("ij,ij->i", d, d)
+        if not obtuse:
+            return int(np.argmin(d_rand))
+        e = self.ppos[:n] - q
+        d_kr = np.einsum("ij,ij->i", e, e)
+        ok = d_rand + self.dpar[:n] < d_kr  # NaN (no parent) compares False
+        if ok.any():
+            return int(np.argmin(np.where(ok, d_rand, np.inf)))
+        return int(np.argmin(d_rand))
+
+
+# ----------------------------------------------------------------------------- planner
+
+
+@register_planner(NAME)
+class ImprovedRRTConnect:
+    """Improved RRT-Connect (paper Sec. 3) returning only drivable, verified paths.
+
+    Parameters
+    ----------
+    config : ImprovedConfig, optional
+        Full configuration; keyword ``options`` override its fields.
+    disable : iterable of str, optional
+        Components of :data:`COMPONENTS` to switch off.
+    **options
+        Any :class:`ImprovedConfig` field, e.g. ``step=4.0`` or ``prune=False``.
+
+    Raises
+    ------
+    InputError
+        For an unknown option or component, or an invalid value (the message names it).
+
+    Examples
+    --------
+    >>> from rrtdrive.maps import builtin_map
+    >>> from rrtdrive.planning.base import PlanningProblem
+    >>> from rrtdrive.types import Budget
+    >>> planner = ImprovedRRTConnect(disable=("obstacle_expansion",))
+    >>> res = planner.solve(PlanningProblem.from_map(builtin_map("overtake")),
+    ...                     np.random.default_rng(0), Budget())
+    >>> res.success, bool(res.path.max_curvature <= 1 / 6)
+    (True, True)
+    """
+
+    name = NAME
+
+    def __init__(
+        self,
+        config: ImprovedConfig | None = None,
+        *,
+        disable: Iterable[str] = (),
+        **options: object,
+    ) -> None:
+        base = config or ImprovedConfig()
+        if not isinstance(base, ImprovedConfig):
+            raise InputError(
+                f"planner.config: expected an ImprovedConfig, got {type(base).__name__}"
+            )
+        fields = {f.name for f in dataclasses.fields(ImprovedConfig)}
+        unknown = sorted(set(options) - fields)
+        if unknown:
+            raise InputError(
+                f"planner.{unknown[0]}: unknown option for {NAME}; allowed {sorted(fields)}"
+            )
+        if isinstance(disable, str):
+            disable = (disable,)
+        cfg = dataclasses.replace(base, **options) if options else base
+        self.config = cfg.without(*disable)
+
+    def __repr__(self) -> str:
+        return f"ImprovedRRTConnect({self.config!r})"
+
+    # ------------------------------------------------------------------ solve
+
+    def solve(
+        self, problem: PlanningProblem, rng: np.random.Generator, budget: Budget
+    ) -> PlanResult:
+        """Plan from ``problem.start`` to ``problem.goal``; never returns ``None``.
+
+        Parameters
+        ----------
+        problem : PlanningProblem
+            Map, checker, start and goal.
+        rng : numpy.random.Generator
+            The only source of randomness.
+        budget : Budget
+            Iteration and wall-time limits (both enforced).
+
+        Returns
+        -------
+        PlanResult
+            ``SOLVED`` with a verified path, or a failure status with a message.
+        """
+        watch = Stopwatch(budget)
+        early = precheck(problem, NAME, watch)
+        if early is not None:
+            return early
+        cfg = self.config
+        checker = problem.checker
+        start, goal = problem.start, problem.goal
+        p = cfg.step
+        smoothing = SmoothingConfig(
+            kappa_max=problem.vehicle.kappa_max,
+            degree=cfg.spline_degree,
+            prune=cfg.prune,
+            sharp_repair=cfg.sharp_repair,
+            supplement=cfg.supplement,
+            supplement_delta=cfg.supplement_delta,
+            supplement_n=cfg.supplement_n,
+            heading_leg=p,
+            max_rounds=cfg.max_repair_rounds,
+        )
+        stats: dict[str, float] = {
+            "iterations": 0.0,
+            "postprocess_time_s": 0.0,
+            "postprocess_attempts": 0.0,
+            "repair_rounds": 0.0,
+            "direct_connection": 0.0,
+            "expanded_obstacles": 0.0,
+            "expansion_used": 0.0,
+        }
+        s_xy = np.array([start.x, start.y])
+        g_xy = np.array([goal.x, goal.y])
+        hs = np.array([math.cos(start.yaw), math.sin(start.yaw)])
+        hg = np.array([math.cos(goal.yaw), math.sin(goal.yaw)])
+        root_trees = (Tree(s_xy[None, :], np.array([-1])), Tree(g_xy[None, :], np.array([-1])))
+        last_message = ""
+        last_raw: np.ndarray | None = None
+
+        def finish(raw: np.ndarray, trees: tuple[Tree, ...], iterations: int) -> PlanResult | None:
+            nonlocal last_message, last_raw
+            t0 = time.perf_counter()
+            res = make_drivable(raw, start, goal, checker, smoothing)
+            stats["postprocess_time_s"] += time.perf_counter() - t0
+            stats["postprocess_attempts"] += 1
+            stats["repair_rounds"] += res.rounds
+            last_raw = raw
+            if not res.ok:
+                last_message = res.message
+                return None
+            stats["iterations"] = float(iterations)
+            stats["key_points"] = float(len(res.key_points))
+            stats["control_points"] = float(len(res.control_points))
+            stats["max_curvature"] = res.max_curvature
+            stats.update(res.stats)
+            nodes = sum(len(t) for t in trees)
+            stats["nodes"] = float(nodes)
+            stats["planning_time_s"] = watch.elapsed()
+            return PlanResult(
+                status=PlanStatus.SOLVED,
+                planner=NAME,
+                path=Path(res.samples, res.control_points),
+                raw_path=raw,
+                trees=trees,
+                nodes=nodes,
+                iterations=iterations,
+                planning_time_s=stats["planning_time_s"],
+                message=(
+                    f"solved: {len(res.key_points)} key points, {len(res.control_points)} "
+                    f"control points, {res.rounds} fit round(s)"
+                ),
+                stats=stats,
+            )
+
+        # 1. Direct connection (Sec. 3.1.1).
+        if cfg.direct_connect and checker.edge_free(s_xy.tolist(), g_xy.tolist()):
+            stats["direct_connection"] = 1.0
+            out = finish(np.vstack([s_xy, g_xy]), root_trees, 0)
+            if out is not None:
+                return out
+
+        # 2. Growth checker with the expanded obstacles (Sec. 3.1.4).
+        grow = checker
+        if cfg.obstacle_expansion and cfg.expansion_a > 0:
+            lmin = cfg.expansion_lmin
+            if lmin is None:
+                lmin = default_expansion_lmin(
+                    problem.vehicle.width, checker.config.margin, cfg.expansion_a
+                )
+            expanded, count = expanded_checker(checker, cfg.expansion_a, lmin)
+            stats["expanded_obstacles"] = float(count)
+            if expanded is not None and (
+                expanded.pose_free(start.as_tuple()) and expanded.pose_free(goal.as_tuple())
+            ):
+                grow = expanded
+                stats["expansion_used"] = 1.0
+        edge_free = grow.edge_free
+        bounds = problem.bounds
+
+        iterations = 0
+        total_nodes = 0
+        trees: tuple[Tree, ...] = root_trees
+        while stats["postprocess_attempts"] < cfg.max_postprocess_attempts:
+            ts = ObtuseTree(s_xy, virtual_parent=s_xy - p * hs)
+            tg = ObtuseTree(g_xy, virtual_parent=g_xy + p * hg)
+            found: np.ndarray | None = None
+            ta, tb = ts, tg
+            while iterations < budget.max_iterations:
+                if watch.expired():
+                    break
+                iterations += 1
+                q_rand = sample_point(rng, bounds)
+                i_near = ta.choose_parent(q_rand, cfg.obtuse_parent)
+                q_new, i_new = self._extend(ta, ta is ts, i_near, q_rand, p, edge_free)
+                if i_new >= 0:
+                    j = self._connect(tb, tb is ts, q_new, p, cfg, edge_free, watch)
+                    if j >= 0:
+                        i_s, i_g = (i_new, j) if ta is ts else (j, i_new)
+                        found = np.vstack([ts.branch(i_s)[::-1], tg.branch(i_g)[1:]])
+                        break
+                ta, tb = tb, ta
+            trees = (ts.freeze(), tg.freeze())
+            total_nodes += len(ts) + len(tg)
+            stats["nodes"] = float(total_nodes)
+            if found is None:
+                break
+            out = finish(found, trees, iterations)
+            if out is not None:
+                out.stats["nodes_all_attempts"] = float(total_nodes)
+                return out
+
+        stats["iterations"] = float(iterations)
+        if stats["postprocess_attempts"] > 0 and last_message:
+            return failure(
+                NAME,
+                PlanStatus.POSTPROCESS_FAILED,
+                watch,
+                f"{last_message} (after {int(stats['postprocess_attempts'])} tree path(s))",
+                trees=trees,
+                iterations=iterations,
+                raw_path=last_raw,
+                stats=stats,
+            )
+        reason = "time" if watch.expired() else "iteration"
+        return failure(
+            NAME,
+            PlanStatus.NO_PATH_IN_BUDGET,
+            watch,
+            f"no path within the {reason} budget ({iterations} iterations, "
+            f"{watch.elapsed():.3f} s)",
+            trees=trees,
+            iterations=iterations,
+            stats=stats,
+        )
+
+    # ------------------------------------------------------------------ growth steps
+
+    @staticmethod
+    def _extend(
+        tree: ObtuseTree,
+        is_start: bool,
+        i_near: int,
+        target: np.ndarray,
+        p: float,
+        edge_free: object,
+    ) -> tuple[np.ndarray, int]:
+        """One step of ``p`` from node ``i_near`` towards ``target``; the new index or -1."""
+        a = tree.nodes[i_near]
+        dx, dy = target[0] - a[0], target[1] - a[1]
+        dist = math.hypot(dx, dy)
+        if dist < 1e-9:
+            return a, -1
+        if dist <= p:
+            q = target.copy()
+        else:
+            q = np.array([a[0] + dx * p / dist, a[1] + dy * p / dist])
+        al, ql = a.tolist(), q.tolist()
+        free = edge_free(al, ql) if is_start else edge_free(ql, al)  # type: ignore[operator]
+        if not free:
+            return q, -1
+        return q, tree.add(q, i_near)
+
+    @staticmethod
+    def _connect(
+        tree: ObtuseTree,
+        is_start: bool,
+        target: np.ndarray,
+        p: float,
+        cfg: ImprovedConfig,
+        edge_free: object,
+        watch: Stopwatch,
+    ) -> int:
+        """Greedy connect towards ``target`` with the adaptive step; index of ``target`` or -1."""
+        j = tree.choose_parent(target, cfg.obtuse_parent)
+        step = p
+        tx, ty = float(target[0]), float(target[1])
+        while True:
+            a = tree.nodes[j]
+            ax, ay = float(a[0]), float(a[1])
+            dx, dy = tx - ax, ty - ay
+            dist = math.hypot(dx, dy)
+            if dist < 1e-9:
+                return j
+            reached = dist <= step
+            q = (tx, ty) if reached else (ax + dx * step / dist, ay + dy * step / dist)
+            free = edge_free((ax, ay), q) if is_start else edge_free(q, (ax, ay))  # type: ignore[operator]
+            if not free:
+                return -1
+            j = tree.add(np.array(q), j)
+            if reached:
+                return j
+            if cfg.adaptive_step:
+                step = 2.0 * p
+            if watch.expired():
+                return -1

@@ -1,0 +1,1150 @@
+"""Post-processing of a tree path into a drivable B-spline (paper Sec. 3.2; SPEC §3 items 5–9).
+
+The steps are small functions over arrays and a collision checker, so each can
+be tested and switched off on its own:
+
+* :func:`prune` – keep the farthest later node with a free edge (Sec. 3.2.1, step 1);
+* :func:`repair_sharp_angles` – Eq. 12 with the Douglas–Peucker choice of ``q_t``
+  (Sec. 3.2.1, step 2);
+* :func:`supplement` – control-point supplement (Sec. 3.2.3, Eq. 16);
+* :func:`fit_bspline`, :func:`clamped_uniform_knots`, :func:`sample_spline`,
+  :func:`curvature` – the clamped uniform B-spline (Sec. 3.2.2, Eqs. 13–15);
+* :func:`fillet_points` – control points of a curvature-bounded corner;
+* :func:`make_drivable` – the guarantee of SPEC §3 item 9: headings at both ends,
+  ``|kappa| <= kappa_max`` everywhere and an exactly collision-free body, with a
+  bounded repair loop that ends in an honest failure rather than an unsafe path.
+
+All points are rear-axle positions; a segment ``a -> b`` is driven with the
+heading along it, which is what ``checker.edge_free(a, b)`` tests.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import NamedTuple, Protocol
+
+import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+from scipy.interpolate import BSpline
+
+from rrtdrive.types import InputError, Pose, require_positive, wrap_angle
+
+__all__ = [
+    "EdgeChecker",
+    "PathChecker",
+    "prune",
+    "is_sharp",
+    "sharp_flags",
+    "repair_sharp_angles",
+    "supplement",
+    "clamped_uniform_knots",
+    "fit_bspline",
+    "curvature",
+    "spline_curvature",
+    "quadratic_span_max_curvature",
+    "parameter_grid",
+    "sample_spline",
+    "Fillet",
+    "fillet_points",
+    "SmoothingConfig",
+    "SmoothingResult",
+    "make_drivable",
+]
+
+logger = logging.getLogger(__name__)
+
+
+class EdgeChecker(Protocol):
+    """Anything with the fast edge test of :class:`~rrtdrive.collision.CollisionChecker`."""
+
+    def edge_free(self, a: Sequence[float], b: Sequence[float]) -> bool:
+        """True when the car driving straight from ``a`` to ``b`` is clear."""
+        ...
+
+
+class PathChecker(EdgeChecker, Protocol):
+    """An edge checker that also has the exact sampled-path test."""
+
+    def path_free(self, samples: np.ndarray, spacing: float = 0.1) -> tuple[bool, np.ndarray]:
+        """Exact body test along ``samples``; returns ``(ok, bad segment indices)``."""
+        ...
+
+
+# ----------------------------------------------------------------------------- pruning
+
+
+def prune(points: np.ndarray, checker: EdgeChecker, keep: Sequence[int] = ()) -> np.ndarray | None:
+    """Shortcut a polyline: from each kept node jump to the farthest later node with a free edge.
+
+    Paper Sec. 3.2.1, step 1. Starting at the first node, the edge to every later
+    node is tried from the last one backwards; the first free one becomes the next
+    node, until the last node is reached. Indices in ``keep`` are never skipped
+    (each stretch between kept nodes is pruned on its own).
+
+    Parameters
+    ----------
+    points : numpy.ndarray
+        Polyline ``(N, 2)`` in driving order.
+    checker : EdgeChecker
+        Provides ``edge_free(a, b)``.
+    keep : sequence of int, optional
+        Indices that must stay (the ends always stay).
+
+    Returns
+    -------
+    numpy.ndarray or None
+        Increasing indices into ``points`` whose consecutive edges are all free,
+        or ``None`` when some node has no free edge to any later node of its stretch.
+
+    Examples
+    --------
+    >>> class Open:
+    ...     def edge_free(self, a, b):
+    ...         return True
+    >>> prune(np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 0.0]]), Open()).tolist()
+    [0, 2]
+    """
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
+    n = len(pts)
+    if n == 0:
+        return np.zeros(0, dtype=np.int64)
+    if n == 1:
+        return np.zeros(1, dtype=np.int64)
+    plist = pts.tolist()
+    edge_free = checker.edge_free
+    anchors = sorted({0, n - 1, *(int(k) for k in keep if 0 <= int(k) < n)})
+    out = [0]
+    for first, last in zip(anchors[:-1], anchors[1:], strict=True):
+        i = first
+        while i < last:
+            a = plist[i]
+            for j in range(last, i, -1):
+                if edge_free(a, plist[j]):
+                    break
+            else:
+                return None
+            out.append(j)
+            i = j
+    return np.asarray(out, dtype=np.int64)
+
+
+# ----------------------------------------------------------------------------- sharp angles
+
+
+def is_sharp(prev: Sequence[float], point: Sequence[float], nxt: Sequence[float]) -> bool:
+    """Eq. 12: the angle at ``point`` is at most 90 degrees (``a + b >= c`` in squared lengths).
+
+    Examples
+    --------
+    >>> is_sharp((0, 0), (1, 0), (1, 1)), is_sharp((0, 0), (1, 0), (2, 0.5))
+    (True, False)
+    """
+    ax, ay = point[0] - nxt[0], point[1] - nxt[1]
+    bx, by = point[0] - prev[0], point[1] - prev[1]
+    cx, cy = nxt[0] - prev[0], nxt[1] - prev[1]
+    return ax * ax + ay * ay + bx * bx + by * by >= cx * cx + cy * cy
+
+
+def sharp_flags(points: np.ndarray) -> np.ndarray:
+    """Eq. 12 at every interior vertex (vectorised); the two ends are never sharp.
+
+    Examples
+    --------
+    >>> sharp_flags(np.array([[0, 0], [1, 0], [1, 1], [3, 2]])).tolist()
+    [False, True, False, False]
+    """
+    p = np.asarray(points, dtype=float).reshape(-1, 2)
+    out = np.zeros(len(p), dtype=bool)
+    if len(p) < 3:
+        return out
+    a = np.sum((p[1:-1] - p[2:]) ** 2, axis=1)
+    b = np.sum((p[1:-1] - p[:-2]) ** 2, axis=1)
+    c = np.sum((p[2:] - p[:-2]) ** 2, axis=1)
+    out[1:-1] = a + b >= c
+    return out
+
+
+def _segment_distances(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance from each point to the segment a-b (the Douglas-Peucker chord distance)."""
+    ab = b - a
+    denom = float(ab @ ab)
+    rel = points - a
+    t = np.zeros(len(points)) if denom == 0.0 else np.clip(rel @ ab / denom, 0.0, 1.0)
+    return np.hypot(*(rel - t[:, None] * ab).T)
+
+
+def repair_sharp_angles(raw: np.ndarray, key: np.ndarray, checker: EdgeChecker) -> np.ndarray:
+    """Insert raw tree-path nodes next to sharp key points (paper Sec. 3.2.1, step 2; SPEC item 6).
+
+    For each interior key point ``q_i`` from the start towards the goal that is
+    sharp by :func:`is_sharp`, the raw nodes strictly between ``q_{i-1}`` and
+    ``q_i`` are tried in order of decreasing distance from the segment
+    ``q_{i-1} q_i``; a node ``q_t`` is inserted when ``q_{i-1} -> q_t`` and
+    ``q_t -> q_i`` are free and the angles at ``q_t`` and at ``q_i`` are obtuse.
+    If none fits, the raw nodes between ``q_i`` and ``q_{i+1}`` are tried the same
+    way (distance from ``q_i q_{i+1}``, inserted after ``q_i``). If none fits
+    either, the point is kept as it is.
+
+    Parameters
+    ----------
+    raw : numpy.ndarray
+        The raw tree path ``(N, 2)``.
+    key : numpy.ndarray
+        Increasing indices into ``raw`` of the current key points (e.g. from
+        :func:`prune`), including both ends.
+    checker : EdgeChecker
+        Provides ``edge_free(a, b)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The new increasing key indices.
+
+    Examples
+    --------
+    >>> class Open:
+    ...     def edge_free(self, a, b):
+    ...         return True
+    >>> raw = np.array([[0, 0], [2, 0], [4, 0.5], [5, 2], [4.5, 4.5], [0, 4]])
+    >>> repair_sharp_angles(raw, np.array([0, 3, 5]), Open()).tolist()
+    [0, 3, 4, 5]
+    """
+    raw = np.asarray(raw, dtype=float).reshape(-1, 2)
+    idx = [int(k) for k in key]
+    edge_free = checker.edge_free
+    plist = raw.tolist()
+    i = 1
+    while i < len(idx) - 1:
+        q_prev, q, q_next = plist[idx[i - 1]], plist[idx[i]], plist[idx[i + 1]]
+        if not is_sharp(q_prev, q, q_next):
+            i += 1
+            continue
+        inserted = False
+        # Nodes between q_{i-1} and q_i, farthest from that segment first.
+        cands = np.arange(idx[i - 1] + 1, idx[i])
+        if len(cands):
+            d = _segment_distances(raw[cands], raw[idx[i - 1]], raw[idx[i]])
+            for t in cands[np.argsort(-d, kind="stable")].tolist():
+                qt = plist[t]
+                if (
+                    not is_sharp(q_prev, qt, q)
+                    and not is_sharp(qt, q, q_next)
+                    and edge_free(q_prev, qt)
+                    and edge_free(qt, q)
+                ):
+                    idx.insert(i, t)
+                    i += 1  # q_i moved one place on
+                    inserted = True
+                    break
+        if not inserted:
+            cands = np.arange(idx[i] + 1, idx[i + 1])
+            if len(cands):
+                d = _segment_distances(raw[cands], raw[idx[i]], raw[idx[i + 1]])
+                for t in cands[np.argsort(-d, kind="stable")].tolist():
+                    qt = plist[t]
+                    if (
+                        not is_sharp(q_prev, q, qt)
+                        and not is_sharp(q, qt, q_next)
+                        and edge_free(q, qt)
+                        and edge_free(qt, q_next)
+                    ):
+                        idx.insert(i + 1, t)
+                        i += 1  # skip the inserted point: its angle is obtuse
+                        break
+        i += 1
+    return np.asarray(idx, dtype=np.int64)
+
+
+# ----------------------------------------------------------------------------- supplement
+
+
+def _fractions(n: float) -> list[float]:
+    """Interpolation fractions N, 2N, ... strictly below 1."""
+    out = []
+    k = 1
+    while k * n < 1.0 - 1e-9:
+        out.append(k * n)
+        k += 1
+    return out
+
+
+def supplement(points: np.ndarray, delta: float = 5.66, n: float = 0.5) -> np.ndarray:
+    """Control-point supplement (paper Sec. 3.2.3, Eq. 16).
+
+    Every leg whose squared length is at least ``delta**2`` gets points by linear
+    interpolation at the fractions ``N, 2N, ...`` below 1 (for ``N = 0.5``, one
+    midpoint). Shorter legs are left alone.
+
+    Parameters
+    ----------
+    points : numpy.ndarray
+        Control polygon ``(M, 2)``.
+    delta : float
+        Distance threshold in metres (paper: 5.66, the diagonal of a 4 x 4 cell).
+    n : float
+        Distance multiple in ``(0, 1)`` (paper: 0.5).
+
+    Returns
+    -------
+    numpy.ndarray
+        The supplemented polygon.
+
+    Examples
+    --------
+    >>> supplement(np.array([[0.0, 0.0], [10.0, 0.0], [12.0, 0.0]])).tolist()
+    [[0.0, 0.0], [5.0, 0.0], [10.0, 0.0], [12.0, 0.0]]
+    """
+    p = np.asarray(points, dtype=float).reshape(-1, 2)
+    if len(p) < 2:
+        return p.copy()
+    fr = np.asarray(_fractions(n))
+    out = [p[:1]]
+    d2 = np.sum(np.diff(p, axis=0) ** 2, axis=1)
+    for i in range(len(p) - 1):
+        if d2[i] >= delta * delta and len(fr):
+            out.append(p[i] + fr[:, None] * (p[i + 1] - p[i]))
+        out.append(p[i + 1 : i + 2])
+    return np.concatenate(out)
+
+
+# ----------------------------------------------------------------------------- B-spline
+
+
+def clamped_uniform_knots(n_ctrl: int, degree: int) -> np.ndarray:
+    """The knot vector of Eq. 15: ends repeated ``k + 1`` times, uniform interior on [0, 1].
+
+    Parameters
+    ----------
+    n_ctrl : int
+        Number of control points ``n + 1``; must exceed ``degree``.
+    degree : int
+        Spline degree ``k``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``n_ctrl + degree + 1`` knots.
+
+    Examples
+    --------
+    >>> clamped_uniform_knots(5, 2).tolist()
+    [0.0, 0.0, 0.0, 0.3333333333333333, 0.6666666666666666, 1.0, 1.0, 1.0]
+    """
+    if n_ctrl <= degree:
+        raise ValueError(f"a degree-{degree} B-spline needs more than {degree} control points")
+    interior = np.arange(1, n_ctrl - degree) / (n_ctrl - degree)
+    return np.concatenate([np.zeros(degree + 1), interior, np.ones(degree + 1)])
+
+
+def fit_bspline(control_points: np.ndarray, degree: int = 2) -> BSpline:
+    """The clamped uniform B-spline with the given control points (Eqs. 13–15).
+
+    Examples
+    --------
+    >>> spl = fit_bspline(np.array([[0.0, 0.0], [5.0, 0.0], [5.0, 5.0]]))
+    >>> spl(0.0).tolist(), spl(1.0).tolist()
+    ([0.0, 0.0], [5.0, 5.0])
+    """
+    c = np.asarray(control_points, dtype=float).reshape(-1, 2)
+    return BSpline(clamped_uniform_knots(len(c), degree), c, degree)
+
+
+def curvature(d1: np.ndarray, d2: np.ndarray) -> np.ndarray:
+    """Signed curvature ``(x'y'' - y'x'') / (x'^2 + y'^2)^1.5`` from first and second derivatives.
+
+    Examples
+    --------
+    >>> t = np.array([0.3])
+    >>> d1 = np.column_stack([-2 * np.sin(t), 2 * np.cos(t)])   # circle of radius 2
+    >>> d2 = np.column_stack([-2 * np.cos(t), -2 * np.sin(t)])
+    >>> curvature(d1, d2).round(12).tolist()
+    [0.5]
+    """
+    d1 = np.asarray(d1, dtype=float).reshape(-1, 2)
+    d2 = np.asarray(d2, dtype=float).reshape(-1, 2)
+    cross = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+    speed2 = d1[:, 0] ** 2 + d1[:, 1] ** 2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k = cross / speed2**1.5
+    return np.where(speed2 > 0.0, k, np.inf)
+
+
+def spline_curvature(spline: BSpline, u: np.ndarray) -> np.ndarray:
+    """Curvature of a planar spline at parameters ``u`` (see :func:`curvature`)."""
+    u = np.asarray(u, dtype=float)
+    return curvature(spline(u, nu=1), spline(u, nu=2))
+
+
+def quadratic_span_max_curvature(control_points: np.ndarray) -> np.ndarray:
+    """Exact largest ``|kappa|`` of each span of a clamped uniform quadratic B-spline.
+
+    With a uniform interior knot vector every span is a quadratic Bézier curve
+    ``(A, B, C)``: ``(P0, P1, mid(P1, P2))`` first, ``(mid(P_{i-1}, P_i), P_i,
+    mid(P_i, P_{i+1}))`` inside and ``(mid(P_{n-2}, P_{n-1}), P_{n-1}, P_n)`` last.
+    With ``u = B - A`` and ``v = C - B`` the cross product of the derivatives is
+    the constant ``4 u x v``, so the curvature peaks where the speed ``2|(1-t)u +
+    t v|`` is least: ``max |kappa| = |u x v| / (2 d^3)`` with ``d`` the distance from
+    the origin to the segment ``[u, v]``.
+
+    Parameters
+    ----------
+    control_points : numpy.ndarray
+        ``(M, 2)`` with ``M >= 3``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(M - 2,)``; span ``j`` belongs to control point ``j + 1``.
+
+    Examples
+    --------
+    >>> quadratic_span_max_curvature(np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]])).round(4)
+    array([0.1414])
+    """
+    p = np.asarray(control_points, dtype=float).reshape(-1, 2)
+    m = len(p)
+    if m < 3:
+        return np.zeros(0)
+    mid = 0.5 * (p[:-1] + p[1:])
+    a = mid[:-1].copy()
+    c = mid[1:].copy()
+    a[0] = p[0]
+    c[-1] = p[-1]
+    b = p[1:-1]
+    u = b - a
+    v = c - b
+    cross = np.abs(u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])
+    w = v - u
+    ww = np.sum(w * w, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.clip(-np.sum(u * w, axis=1) / ww, 0.0, 1.0)
+    t = np.where(ww > 0.0, t, 0.0)
+    closest = u + t[:, None] * w
+    d = np.hypot(closest[:, 0], closest[:, 1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k = cross / (2.0 * d**3)
+    return np.where(d > 1e-12, k, np.where(cross > 0.0, np.inf, 0.0))
+
+
+def parameter_grid(spline: BSpline, spacing: float) -> np.ndarray:
+    """Parameters at which consecutive points of ``spline`` are at most ``spacing`` apart.
+
+    Each knot span gets uniform parameters, as many as its speed bound needs: by
+    the convex-hull property the speed is at most the largest derivative control
+    point ``k (P_{i+1} - P_i) / (t_{i+k+1} - t_{i+1})`` acting on the span, so a
+    parameter step ``spacing / bound`` never moves more than ``spacing`` along the
+    curve. Both ends are included.
+    """
+    t, c, k = spline.t, np.asarray(spline.c), spline.k
+    n = len(c)
+    q = k * np.diff(c, axis=0) / (t[k + 1 : n + k] - t[1:n])[:, None]
+    qn = np.hypot(q[:, 0], q[:, 1])
+    bound = sliding_window_view(qn, k).max(axis=1)  # spans m = k .. n-1
+    lo, hi = t[k:n], t[k + 1 : n + 1]
+    width = hi - lo
+    counts = np.where(width > 0, np.maximum(1, np.ceil(bound * width / spacing)), 0).astype(
+        np.int64
+    )
+    total = int(counts.sum())
+    owner = np.repeat(np.arange(len(counts)), counts)
+    first = np.repeat(np.cumsum(counts) - counts, counts)
+    frac = (np.arange(total) - first) / np.repeat(np.maximum(counts, 1), counts)
+    u = lo[owner] + frac * width[owner]
+    return np.append(u, t[n])
+
+
+def sample_spline(spline: BSpline, spacing: float = 0.25) -> tuple[np.ndarray, np.ndarray]:
+    """Rows ``[x, y, yaw, kappa]`` along ``spline`` at most ``spacing`` apart, and their parameters.
+
+    Examples
+    --------
+    >>> spl = fit_bspline(np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]))
+    >>> rows, u = sample_spline(spl, 0.25)
+    >>> bool(np.all(np.hypot(*np.diff(rows[:, :2], axis=0).T) <= 0.25))
+    True
+    """
+    u = parameter_grid(spline, spacing)
+    xy = spline(u)
+    d1 = spline(u, nu=1)
+    d2 = spline(u, nu=2)
+    yaw = np.arctan2(d1[:, 1], d1[:, 0])
+    return np.column_stack([xy, yaw, curvature(d1, d2)]), u
+
+
+# ----------------------------------------------------------------------------- fillets
+
+
+class Fillet(NamedTuple):
+    """Control points that round one polygon corner (see :func:`fillet_points`).
+
+    Attributes
+    ----------
+    vertices : numpy.ndarray
+        ``(m, 2)`` vertices of the polygon circumscribing the arc.
+    tangent : float
+        Distance from the corner to the arc's tangent points, ``R tan(theta/2)``.
+    half : float
+        Half the side of the circumscribing polygon, ``R tan(phi/2)``.
+    """
+
+    vertices: np.ndarray
+    tangent: float
+    half: float
+
+    @property
+    def reach(self) -> float:
+        """Distance from the corner to each guard point, ``tangent + half``."""
+        return self.tangent + self.half
+
+
+def fillet_points(
+    corner: Sequence[float],
+    u_in: Sequence[float],
+    u_out: Sequence[float],
+    radius: float,
+    max_angle: float = math.radians(15.0),
+) -> Fillet:
+    """Control points that turn a polygon corner into a curvature-bounded quadratic B-spline piece.
+
+    The corner's deflection ``theta`` is split into ``m = ceil(theta / max_angle)``
+    equal turns ``phi``; the vertices circumscribe the arc of ``radius`` tangent to
+    both legs. Add one guard point on each leg at :attr:`Fillet.reach` from the
+    corner; a degree-2 clamped uniform B-spline then runs straight along the
+    incoming leg up to the tangent point, through ``m`` parabolic pieces, each with
+    ``max |kappa| = 1 / (R cos(phi/2))`` (:func:`quadratic_span_max_curvature`),
+    and straight along the outgoing leg. A straight corner gives the corner alone
+    with ``tangent = half = 0``; a reversal gives ``tangent = inf``.
+
+    Parameters
+    ----------
+    corner : sequence of float
+        The corner ``(x, y)``.
+    u_in, u_out : sequence of float
+        Unit directions of the incoming and outgoing legs (driving direction).
+    radius : float
+        Arc radius ``R`` in metres.
+    max_angle : float
+        Largest turn per vertex in radians.
+
+    Returns
+    -------
+    Fillet
+
+    Examples
+    --------
+    >>> f = fillet_points((0.0, 0.0), (1.0, 0.0), (0.0, 1.0), 6.0, math.radians(30.0))
+    >>> len(f.vertices), round(f.tangent, 3), round(f.reach, 3)
+    (3, 6.0, 7.608)
+    """
+    cx, cy = float(corner[0]), float(corner[1])
+    ax, ay = float(u_in[0]), float(u_in[1])
+    bx, by = float(u_out[0]), float(u_out[1])
+    cross = ax * by - ay * bx
+    dot = ax * bx + ay * by
+    theta = math.atan2(abs(cross), dot)
+    if theta < 1e-9:
+        return Fillet(np.array([[cx, cy]]), 0.0, 0.0)
+    if theta > math.pi - 1e-6:
+        return Fillet(np.array([[cx, cy]]), math.inf, 0.0)
+    m = max(1, math.ceil(theta / max_angle - 1e-9))
+    phi = theta / m
+    sign = 1.0 if cross > 0 else -1.0
+    half = radius * math.tan(phi / 2.0)
+    tangent = radius * math.tan(theta / 2.0)
+    verts = np.empty((m, 2))
+    vx, vy = cx - (tangent - half) * ax, cy - (tangent - half) * ay
+    verts[0] = (vx, vy)
+    heading = math.atan2(ay, ax)
+    for j in range(1, m):
+        heading += sign * phi
+        vx += 2.0 * half * math.cos(heading)
+        vy += 2.0 * half * math.sin(heading)
+        verts[j] = (vx, vy)
+    # The last vertex lies on the outgoing leg; snap it there against rounding.
+    verts[m - 1] = (cx + (tangent - half) * bx, cy + (tangent - half) * by)
+    return Fillet(verts, tangent, half)
+
+
+# ----------------------------------------------------------------------------- guarantee
+
+
+@dataclass(frozen=True)
+class SmoothingConfig:
+    """Tunables of the post-processor.
+
+    Parameters
+    ----------
+    kappa_max : float
+        Largest admissible curvature in 1/m (the car's ``kappa_max``).
+    degree : int
+        B-spline degree, 2 (paper) or 3.
+    prune, sharp_repair, supplement : bool
+        Switch the paper's steps on or off.
+    supplement_delta, supplement_n : float
+        Eq. 16 threshold ``delta`` (m) and distance multiple ``N``.
+    heading_leg : float
+        Initial length of the straight legs along the start and goal headings (m);
+        they grow when the turn after them needs more room.
+    sample_spacing : float
+        Largest arc-length gap between output samples (m).
+    check_spacing : float
+        Largest gap between the poses given to the exact body test (m).
+    kappa_safety : float
+        Fillets are designed for ``kappa_safety * kappa_max``.
+    fillet_max_angle : float
+        Largest turn per fillet vertex (radians).
+    max_rounds : int
+        Largest number of fit-check-repair rounds.
+    """
+
+    kappa_max: float = 1.0 / 6.0
+    degree: int = 2
+    prune: bool = True
+    sharp_repair: bool = True
+    supplement: bool = True
+    supplement_delta: float = 5.66
+    supplement_n: float = 0.5
+    heading_leg: float = 5.0
+    sample_spacing: float = 0.25
+    check_spacing: float = 0.1
+    kappa_safety: float = 0.97
+    fillet_max_angle: float = math.radians(15.0)
+    max_rounds: int = 30
+
+    def __post_init__(self) -> None:
+        for name in (
+            "kappa_max",
+            "supplement_delta",
+            "heading_leg",
+            "sample_spacing",
+            "check_spacing",
+        ):
+            require_positive(f"smoothing.{name}", getattr(self, name))
+        if self.degree not in (2, 3):
+            raise InputError(f"smoothing.degree: must be 2 or 3, got {self.degree!r}")
+        if not 0.0 < self.supplement_n < 1.0:
+            raise InputError(
+                f"smoothing.supplement_n: must lie in (0, 1), got {self.supplement_n!r}"
+            )
+        if not 0.0 < self.kappa_safety <= 1.0:
+            raise InputError(
+                f"smoothing.kappa_safety: must lie in (0, 1], got {self.kappa_safety!r}"
+            )
+        if not 0.0 < self.fillet_max_angle <= math.pi / 2:
+            raise InputError("smoothing.fillet_max_angle: must lie in (0, pi/2]")
+        if (
+            isinstance(self.max_rounds, bool)
+            or not isinstance(self.max_rounds, int)
+            or self.max_rounds < 1
+        ):
+            raise InputError(
+                f"smoothing.max_rounds: must be a positive integer, got {self.max_rounds!r}"
+            )
+
+
+@dataclass(frozen=True, eq=False)
+class SmoothingResult:
+    """Outcome of :func:`make_drivable`.
+
+    Attributes
+    ----------
+    ok : bool
+        True when ``samples`` meet every guarantee.
+    samples : numpy.ndarray
+        ``(N, 4)`` rows ``[x, y, yaw, kappa]`` (empty when not ok).
+    control_points : numpy.ndarray
+        The final B-spline control points ``(M, 2)``.
+    key_points : numpy.ndarray
+        The key polygon after pruning, sharp-angle repair, heading legs and repairs.
+    rounds : int
+        Fit-check rounds used (1 when the first fit passed).
+    max_curvature : float
+        Largest ``|kappa|`` of the curve (exact per span for degree 2, dense samples for 3).
+    message : str
+        Why it failed, or an empty string.
+    stats : dict
+        Counters for the planner's statistics.
+    """
+
+    ok: bool
+    samples: np.ndarray
+    control_points: np.ndarray
+    key_points: np.ndarray
+    rounds: int
+    max_curvature: float
+    message: str = ""
+    stats: dict[str, float] = field(default_factory=dict)
+
+
+def _unit(dx: float, dy: float) -> tuple[float, float, float]:
+    n = math.hypot(dx, dy)
+    if n < 1e-12:
+        return 0.0, 0.0, 0.0
+    return dx / n, dy / n, n
+
+
+# Moves tried, in order, for a corner whose rounded piece still collides, each from
+# the corner's original place: "back" moves it back along its outgoing line (the
+# outgoing straight starts earlier), "ahead" along its incoming line (the incoming
+# straight lasts longer), "out"/"in" along the bisector. Heading-leg corners move
+# only along their ray (the start's ahead, the goal's back).
+_MOVES: tuple[tuple[str, float], ...] = (
+    ("back", 1.5),
+    ("ahead", 1.5),
+    ("out", 1.0),
+    ("back", 3.0),
+    ("ahead", 3.0),
+    ("out", 2.0),
+    ("back", 5.0),
+    ("ahead", 5.0),
+    ("out", 3.5),
+    ("in", 1.0),
+    ("back", 8.0),
+    ("ahead", 8.0),
+    ("back", 12.0),
+    ("ahead", 12.0),
+)
+_RADIUS_STEPS = (1.0, 1.6)
+_END_GAP = 0.05
+
+
+class _Smoother:
+    """State of one :func:`make_drivable` call: the key polygon and each corner's treatment."""
+
+    def __init__(
+        self, raw: np.ndarray, start: Pose, goal: Pose, checker: PathChecker, cfg: SmoothingConfig
+    ) -> None:
+        self.raw = raw
+        self.start = start
+        self.goal = goal
+        self.checker = checker
+        self.cfg = cfg
+        self.s = np.array([start.x, start.y])
+        self.g = np.array([goal.x, goal.y])
+        self.hs = np.array([math.cos(start.yaw), math.sin(start.yaw)])
+        self.hg = np.array([math.cos(goal.yaw), math.sin(goal.yaw)])
+        # Smallest fillet radius: max |kappa| = 1 / (R cos(phi/2)) <= safety * kappa_max.
+        self.r_design = 1.0 / (
+            cfg.kappa_max * cfg.kappa_safety * math.cos(cfg.fillet_max_angle / 2.0)
+        )
+        self.rounds = 0
+        self.merges = 0
+        self.moves = 0
+        self.pts: list[np.ndarray] = []
+
+    # ------------------------------------------------------------- key polygon
+
+    def key_polygon(self, d_s: float, d_g: float) -> str | None:
+        """Build the key polygon with heading legs ``d_s``, ``d_g``; a reason on failure."""
+        cfg, edge = self.cfg, self.checker.edge_free
+        s1 = self.s + d_s * self.hs
+        g1 = self.g - d_g * self.hg
+        aug = np.vstack([self.s, s1, self.raw[1:-1], g1, self.g])
+        n = len(aug)
+        if not edge(self.s.tolist(), s1.tolist()):
+            return f"the start heading leg of {d_s:.2f} m is blocked"
+        if not edge(g1.tolist(), self.g.tolist()):
+            return f"the goal heading leg of {d_g:.2f} m is blocked"
+        if cfg.prune:
+            key = prune(aug, self.checker, keep=(1, n - 2))
+            if key is None:
+                return "a heading-leg point has no free edge to the tree path"
+        else:
+            key = np.arange(n)
+            if not all(edge(aug[i].tolist(), aug[i + 1].tolist()) for i in range(n - 1)):
+                return "a heading-leg point has no free edge to the tree path"
+        if cfg.sharp_repair:
+            key = repair_sharp_angles(aug, key, self.checker)
+        self.pts = [aug[k].copy() for k in key.tolist()]
+        self.origin = [p.copy() for p in self.pts]
+        self.kind = ["start", "start_leg"] + ["node"] * (len(key) - 4) + ["goal_leg", "goal"]
+        self.radius = [0.0] * len(key)
+        self.attempt = [0] * len(key)
+        self.d_s, self.d_g = d_s, d_g
+        return None
+
+    def heading_reach(self) -> tuple[float, float]:
+        """Guard reach the design fillets at the start- and goal-leg corners need."""
+        p = self.pts
+        out = []
+        for c in (1, len(p) - 2):
+            ux, uy, _ = _unit(*(p[c] - p[c - 1]))
+            vx, vy, _ = _unit(*(p[c + 1] - p[c]))
+            f = fillet_points(p[c], (ux, uy), (vx, vy), self.r_design, self.cfg.fillet_max_angle)
+            out.append(f.reach)
+        return out[0], out[1]
+
+    # ------------------------------------------------------------- control points
+
+    def control_points(self) -> tuple[np.ndarray, np.ndarray, list[int]]:
+        """Control points, the key corner owning each, and the legs too short for their fillets."""
+        pts, cfg = self.pts, self.cfg
+        n = len(pts)
+        dirs: list[tuple[float, float]] = []
+        lengths: list[float] = []
+        for i in range(n - 1):
+            ux, uy, length = _unit(pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1])
+            dirs.append((ux, uy))
+            lengths.append(length)
+        corner_pts: list[np.ndarray] = [pts[0][None, :]]
+        reach = [0.0] * n
+        for c in range(1, n - 1):
+            if self.radius[c] > 0.0:
+                f = fillet_points(
+                    pts[c], dirs[c - 1], dirs[c], self.radius[c], cfg.fillet_max_angle
+                )
+                r = f.reach
+                if r > 0.0 and math.isfinite(r):
+                    (ax, ay), (bx, by) = dirs[c - 1], dirs[c]
+                    guard_in = (pts[c][0] - r * ax, pts[c][1] - r * ay)
+                    guard_out = (pts[c][0] + r * bx, pts[c][1] + r * by)
+                    corner_pts.append(np.vstack([guard_in, f.vertices, guard_out]))
+                else:
+                    corner_pts.append(f.vertices)
+                reach[c] = r
+            else:
+                corner_pts.append(pts[c][None, :])
+        corner_pts.append(pts[-1][None, :])
+        conflicts: list[int] = []
+        fr = _fractions(cfg.supplement_n)
+        chunks: list[np.ndarray] = [corner_pts[0]]
+        owners: list[np.ndarray] = [np.zeros(1, dtype=np.int64)]
+        for i in range(n - 1):
+            if i > 0:
+                chunks.append(corner_pts[i])
+                owners.append(np.full(len(corner_pts[i]), i, dtype=np.int64))
+            s0, s1 = reach[i], lengths[i] - reach[i + 1]
+            need = _END_GAP if (i == 0 and reach[1] > 0) or (i == n - 2 and reach[i] > 0) else 0.0
+            if s1 - s0 < need - 1e-9:
+                conflicts.append(i)
+                continue
+            if cfg.supplement and s1 - s0 >= cfg.supplement_delta and fr:
+                ux, uy = dirs[i]
+                f_arr = np.asarray(fr)
+                along = s0 + f_arr * (s1 - s0)
+                chunks.append(np.column_stack([pts[i][0] + along * ux, pts[i][1] + along * uy]))
+                near = np.where(f_arr < 0.5, max(i, 1), min(i + 1, n - 2))
+                owners.append(near.astype(np.int64))
+        chunks.append(corner_pts[-1])
+        owners.append(np.full(1, n - 1, dtype=np.int64))
+        ctrl = np.concatenate(chunks)
+        own = np.concatenate(owners)
+        keep = np.ones(len(ctrl), dtype=bool)
+        keep[1:] = np.hypot(*np.diff(ctrl, axis=0).T) > 1e-9  # merged guards
+        return ctrl[keep], own[keep], conflicts
+
+    # ------------------------------------------------------------- checking
+
+    def curvature_check(
+        self, ctrl: np.ndarray, owner: np.ndarray
+    ) -> tuple[list[int], float, BSpline]:
+        """Corners whose pieces exceed ``kappa_max``, the largest ``|kappa|``, and the spline."""
+        cfg = self.cfg
+        spl = fit_bspline(ctrl, cfg.degree)
+        if cfg.degree == 2:
+            span_k = quadratic_span_max_curvature(ctrl)
+            bad = np.flatnonzero(span_k > cfg.kappa_max)
+            return self._owners(owner, bad), float(span_k.max(initial=0.0)), spl
+        # Degree 3: a dense parameter grid (spacing / 8) between the output samples.
+        u = parameter_grid(spl, cfg.sample_spacing / 8.0)
+        k = np.abs(spline_curvature(spl, u))
+        n_int = len(ctrl) - cfg.degree
+        span = np.minimum((u * n_int).astype(np.int64), n_int - 1)
+        return self._owners(owner, np.unique(span[k > cfg.kappa_max])), float(k.max()), spl
+
+    def collision_check(self, spl: BSpline, owner: np.ndarray) -> tuple[list[int], np.ndarray]:
+        """Corners whose pieces collide, and the dense rows (spacing <= check_spacing)."""
+        cfg = self.cfg
+        dense, u = sample_spline(spl, min(cfg.sample_spacing / 3.0, cfg.check_spacing))
+        dense[0, :2] = self.s
+        dense[-1, :2] = self.g
+        dense[0, 2] = wrap_angle(self.start.yaw)
+        dense[-1, 2] = wrap_angle(self.goal.yaw)
+        free, bad_seg = self.checker.path_free(dense, spacing=cfg.check_spacing)
+        if free:
+            return [], dense
+        n_int = len(spl.c) - cfg.degree
+        span = np.minimum((u * n_int).astype(np.int64), n_int - 1)
+        hit = np.unique(
+            np.concatenate([span[bad_seg], span[np.minimum(bad_seg + 1, len(span) - 1)]])
+        )
+        return self._owners(owner, hit), dense
+
+    def _owners(self, owner: np.ndarray, spans: np.ndarray) -> list[int]:
+        """Key corners whose control points shape the given knot spans."""
+        k = self.cfg.degree
+        last = len(self.pts) - 2
+        out: set[int] = set()
+        for j in np.asarray(spans, dtype=np.int64).tolist():
+            # Degree 2: span j is the Bezier piece of control point j + 1; degree 3:
+            # control points j .. j + 3 act on span j.
+            window = owner[j + 1 : j + 2] if k == 2 else owner[j : j + k + 1]
+            out.update(min(max(int(c), 1), last) for c in window.tolist())
+        return sorted(out)
+
+    # ------------------------------------------------------------- repairs
+
+    def _free(self, a: np.ndarray, b: np.ndarray) -> bool:
+        return self.checker.edge_free(a.tolist(), b.tolist())
+
+    def _place(self, c: int, new: np.ndarray) -> bool:
+        """Put corner ``c`` at ``new`` when both adjacent legs stay free."""
+        if not (self._free(self.pts[c - 1], new) and self._free(new, self.pts[c + 1])):
+            return False
+        self.pts[c] = new
+        self.moves += 1
+        return True
+
+    def _move(self, c: int, direction: str, dist: float) -> bool:
+        o, prev, nxt = self.origin[c], self.pts[c - 1], self.pts[c + 1]
+        kind = self.kind[c]
+        if kind == "start_leg":
+            if direction != "ahead":
+                return False
+            return self._place(c, o + dist * self.hs)
+        if kind == "goal_leg":
+            if direction != "back":
+                return False
+            return self._place(c, o - dist * self.hg)
+        uix, uiy, _ = _unit(*(o - prev))
+        uox, uoy, _ = _unit(*(nxt - o))
+        if direction == "back":
+            d = np.array([-uox, -uoy])
+        elif direction == "ahead":
+            d = np.array([uix, uiy])
+        else:
+            bx, by, norm = _unit(uix - uox, uiy - uoy)
+            if norm == 0.0:
+                return False
+            d = np.array([bx, by]) * (1.0 if direction == "out" else -1.0)
+        return self._place(c, o + dist * d)
+
+    def advance(self, c: int) -> bool:
+        """Next treatment for corner ``c``: plain -> fillets -> moves; False when exhausted."""
+        while True:
+            self.attempt[c] += 1
+            a = self.attempt[c]
+            if a <= len(_RADIUS_STEPS):
+                self.radius[c] = self.r_design * _RADIUS_STEPS[a - 1]
+                return True
+            m = a - len(_RADIUS_STEPS) - 1
+            if m >= len(_MOVES):
+                return False
+            if self._move(c, *_MOVES[m]):
+                self.radius[c] = self.r_design
+                return True
+
+    def merge(self, i: int) -> bool:
+        """Replace corners ``i`` and ``i + 1`` by the crossing of their outer legs, if free."""
+        p, kind = self.pts, self.kind
+        if kind[i] == "start_leg" and kind[i + 1] == "goal_leg":
+            return False
+        a0, a1, b0, b1 = p[i - 1], p[i], p[i + 1], p[i + 2]
+        uax, uay, la = _unit(*(a1 - a0))
+        ubx, uby, lb = _unit(*(b1 - b0))
+        det = uax * uby - uay * ubx
+        if abs(det) < 1e-9:
+            return False
+        dx, dy = b0[0] - a1[0], b0[1] - a1[1]
+        s = (dx * uby - dy * ubx) / det
+        t = (uax * dy - uay * dx) / det
+        if s <= -la + 0.5 or t <= -lb + 0.5 or s > 60.0 or t > 60.0:
+            return False
+        y = np.array([a1[0] + s * uax, a1[1] + s * uay])
+        if not (self._free(a0, y) and self._free(y, b1)):
+            return False
+        new_kind = kind[i] if kind[i] == "start_leg" else kind[i + 1]
+        p[i : i + 2] = [y]
+        kind[i : i + 2] = [new_kind]
+        self.origin[i : i + 2] = [y.copy()]
+        self.radius[i : i + 2] = [self.r_design]
+        self.attempt[i : i + 2] = [1]
+        self.merges += 1
+        return True
+
+    def fix_conflict(self, leg: int) -> bool:
+        """Make leg ``leg`` long enough for the fillets at its ends."""
+        n = len(self.pts)
+        corners = [c for c in (leg, leg + 1) if 0 < c < n - 1 and self.radius[c] > 0.0]
+        # 1. Wider-than-design fillets shrink first.
+        shrunk = False
+        for c in corners:
+            if self.radius[c] > self.r_design * (1.0 + 1e-9):
+                self.radius[c] = self.r_design
+                shrunk = True
+        if shrunk:
+            return True
+        # 2. Heading legs grow to fit their fillet.
+        if leg == 0 or leg == n - 2:
+            c = 1 if leg == 0 else n - 2
+            ray, end = (self.hs, self.s) if leg == 0 else (-self.hg, self.g)
+            f = fillet_points(
+                self.pts[c],
+                _unit(*(self.pts[c] - self.pts[c - 1]))[:2],
+                _unit(*(self.pts[c + 1] - self.pts[c]))[:2],
+                self.radius[c],
+                self.cfg.fillet_max_angle,
+            )
+            length = float(np.hypot(*(self.pts[c] - end)))
+            if math.isfinite(f.reach) and self._place(
+                c, end + (f.reach + 0.5 + 0.1 * length) * ray
+            ):
+                self.origin[c] = self.pts[c].copy()
+                return True
+        # 3. Merge the two corners into one.
+        if 0 < leg < n - 2 and self.merge(leg):
+            return True
+        if leg == 0 and n > 4 and self.merge(1):
+            return True
+        if leg == n - 2 and n > 4 and self.merge(n - 3):
+            return True
+        # 4. Move one of them.
+        for c in sorted(corners, key=lambda c: -self.radius[c]):
+            if self.attempt[c] < len(_RADIUS_STEPS):
+                self.attempt[c] = len(_RADIUS_STEPS)
+            if self.advance(c):
+                return True
+        return False
+
+
+def make_drivable(
+    raw: np.ndarray,
+    start: Pose,
+    goal: Pose,
+    checker: PathChecker,
+    config: SmoothingConfig | None = None,
+) -> SmoothingResult:
+    """Turn a collision-free tree path into a drivable, curvature-bounded B-spline path.
+
+    The chain (SPEC §3 items 5–9): straight legs along the start and goal headings
+    are added (their points survive the pruning; they lengthen when the turn after
+    them needs room), the path is pruned (:func:`prune`), sharp angles are repaired
+    (:func:`repair_sharp_angles`), legs are supplemented by :func:`supplement`'s
+    rule and the control points are fitted by a clamped uniform B-spline. Then
+    the guarantee loop: the curvature is checked (exactly per span for degree 2,
+    on a dense parameter grid for degree 3), then the exact body at poses at most
+    ``check_spacing`` apart. Each key corner whose piece of curve breaks a limit
+    gets its next treatment: a fillet of the design radius (:func:`fillet_points`),
+    a wider one, then moves of the corner, each only when both new legs are free.
+    Legs too short for their fillets grow (heading legs), merge their corners into
+    one, or move one. When the rounds or a corner's options run out, the result
+    is not ok and says why -- it never carries an unchecked path.
+
+    Parameters
+    ----------
+    raw : numpy.ndarray
+        Tree path ``(K, 2)`` from the start position to the goal position, every
+        edge free for ``checker.edge_free`` in driving order.
+    start, goal : Pose
+        Rear-axle poses; the path leaves along ``start.yaw`` and arrives along ``goal.yaw``.
+    checker : PathChecker
+        The original map's checker (``edge_free`` and ``path_free``).
+    config : SmoothingConfig, optional
+        Tunables.
+
+    Returns
+    -------
+    SmoothingResult
+
+    Examples
+    --------
+    >>> from rrtdrive.maps import builtin_map
+    >>> from rrtdrive.collision import CollisionChecker
+    >>> m = builtin_map("overtake")
+    >>> res = make_drivable(np.array([[5.0, 44.0], [40.0, 48.0], [92.0, 44.0]]),
+    ...                     m.start, m.goal, CollisionChecker.for_map(m))
+    >>> res.ok, bool(res.max_curvature <= 1 / 6)
+    (True, True)
+    """
+    cfg = config or SmoothingConfig()
+    raw = np.asarray(raw, dtype=float).reshape(-1, 2)
+    empty = np.zeros((0, 4))
+
+    def fail(
+        msg: str, sm: _Smoother | None = None, ctrl: np.ndarray | None = None
+    ) -> SmoothingResult:
+        key = np.array(sm.pts) if sm is not None and sm.pts else np.zeros((0, 2))
+        return SmoothingResult(
+            False,
+            empty,
+            np.zeros((0, 2)) if ctrl is None else ctrl,
+            key,
+            0 if sm is None else sm.rounds,
+            math.inf,
+            f"post-processing failed: {msg}",
+        )
+
+    if len(raw) < 2:
+        return fail("the tree path needs at least two points")
+    sm = _Smoother(raw, start, goal, checker, cfg)
+    straight = float(np.hypot(*(sm.g - sm.s)))
+    reason = "no heading legs fit"
+    built = False
+    for d in (cfg.heading_leg, cfg.heading_leg / 2.0, cfg.heading_leg / 4.0, 0.5):
+        d = min(d, 0.45 * straight) if straight > 0 else d
+        if d <= 0.05:
+            continue
+        why = sm.key_polygon(d, d)
+        if why is None:
+            built = True
+            break
+        reason = why
+    if not built:
+        return fail(reason)
+    # Lengthen the heading legs to what the turns after them need (a few re-prunes).
+    for _ in range(3):
+        reach_s, reach_g = sm.heading_reach()
+        want_s = reach_s + 0.5 if math.isfinite(reach_s) and reach_s + _END_GAP > sm.d_s else sm.d_s
+        want_g = reach_g + 0.5 if math.isfinite(reach_g) and reach_g + _END_GAP > sm.d_g else sm.d_g
+        if want_s == sm.d_s and want_g == sm.d_g:
+            break
+        saved = (sm.pts, sm.origin, sm.kind, sm.radius, sm.attempt, sm.d_s, sm.d_g)
+        if sm.key_polygon(want_s, want_g) is not None:
+            sm.pts, sm.origin, sm.kind, sm.radius, sm.attempt, sm.d_s, sm.d_g = saved
+            break
+
+    ctrl = np.zeros((0, 2))
+    message = f"no drivable curve within {cfg.max_rounds} repair rounds"
+    while sm.rounds < cfg.max_rounds:
+        sm.rounds += 1
+        ctrl, owner, conflicts = sm.control_points()
+        if conflicts:
+            if not sm.fix_conflict(conflicts[0]):
+                c = conflicts[0]
+                message = (
+                    f"the turns at ({sm.pts[c][0]:.1f}, {sm.pts[c][1]:.1f}) and "
+                    f"({sm.pts[c + 1][0]:.1f}, {sm.pts[c + 1][1]:.1f}) are too close for the car"
+                )
+                break
+            continue
+        if len(ctrl) <= cfg.degree:
+            message = "too few control points"
+            break
+        bad, max_k, spl = sm.curvature_check(ctrl, owner)
+        what = "curvature"
+        if not bad:
+            bad, dense = sm.collision_check(spl, owner)
+            what = "collision"
+            if not bad:
+                samples = dense[::3]
+                if (len(dense) - 1) % 3:
+                    samples = np.vstack([samples, dense[-1:]])
+                stats = {
+                    "fillets": float(sum(r > 0 for r in sm.radius)),
+                    "merges": float(sm.merges),
+                    "moves": float(sm.moves),
+                }
+                return SmoothingResult(
+                    True, samples, ctrl, np.array(sm.pts), sm.rounds, max_k, "", stats
+                )
+        stuck = [c for c in bad if not sm.advance(c)]
+        if stuck:
+            c = stuck[0]
+            message = (
+                f"could not repair a {what} violation near ({sm.pts[c][0]:.1f}, {sm.pts[c][1]:.1f})"
+            )
+            break
+    return fail(message, sm, ctrl)
