@@ -20,7 +20,6 @@ from rrtdrive.controllers.lqr import LQR
 from rrtdrive.controllers.pure_pursuit import PurePursuit
 from rrtdrive.controllers.speed import SpeedConfig, SpeedController, SpeedProfile
 from rrtdrive.controllers.stanley import Stanley
-
 from rrtdrive.types import InputError
 
 __all__ = [

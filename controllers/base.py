@@ -14,8 +14,8 @@ from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
-from rrtdrive.controllers.speed import SpeedConfig, SpeedController, SpeedProfile
 
+from rrtdrive.controllers.speed import SpeedConfig, SpeedController, SpeedProfile
 from rrtdrive.types import InputError, Path, VehicleParams, require_finite, require_positive
 
 __all__ = [

@@ -6,9 +6,9 @@ import math
 
 import control
 import numpy as np
+
 from rrtdrive.controllers.base import Projection, TrackingController, VehicleState
 from rrtdrive.controllers.speed import SpeedConfig
-
 from rrtdrive.types import VehicleParams, require_positive
 
 __all__ = ["LQR", "lateral_error_model", "design_gain"]

@@ -6,7 +6,6 @@ import math
 
 from rrtdrive.controllers.base import Projection, TrackingController, VehicleState
 from rrtdrive.controllers.speed import SpeedConfig
-
 from rrtdrive.types import InputError, VehicleParams, require_positive
 
 __all__ = ["PurePursuit"]

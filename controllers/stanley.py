@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
 from rrtdrive.controllers.base import (
     PathProjector,
     Projection,
@@ -13,7 +14,6 @@ from rrtdrive.controllers.base import (
     wrap,
 )
 from rrtdrive.controllers.speed import SpeedConfig
-
 from rrtdrive.types import Path, VehicleParams, require_finite, require_positive
 
 __all__ = ["Stanley", "front_axle_path"]

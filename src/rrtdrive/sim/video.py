@@ -1,0 +1,219 @@
+"""Headless MP4 of an episode: the scene, the planned path, the driven trace and a read-out.
+
+The video only reads an :class:`~rrtdrive.sim.runner.Episode`: it rebuilds the
+scene with ``render_mode="rgb_array"`` (no display needed; do not set
+``SDL_VIDEODRIVER=dummy``, which makes highway-env draw nothing), puts every
+vehicle at its logged pose frame by frame, draws with highway-env's own graphics
+plus the path and trace, flips the image so that +y points up (highway-env draws
+y downwards) and writes the frames through imageio-ffmpeg into a temporary file
+that is renamed when complete.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from pathlib import Path as FsPath
+from typing import Any
+
+import numpy as np
+
+from rrtdrive.sim.runner import Episode
+from rrtdrive.sim.scenes import SimConfig, build_env
+from rrtdrive.types import InputError, Pose
+
+__all__ = ["render_frames", "write_video", "frame_is_blank"]
+
+PATH_COLOR = (40, 90, 255)
+TRACE_COLOR = (255, 60, 40)
+GOAL_COLOR = (0, 160, 0)
+TEXT_COLOR = (20, 20, 20)
+PANEL_COLOR = (255, 255, 255)
+
+
+class _Camera:
+    """A fixed point for highway-env's viewer to centre on (it reads ``.position``)."""
+
+    def __init__(self, x: float, y: float) -> None:
+        self.position = np.array([x, y], dtype=float)
+
+
+def frame_is_blank(frame: np.ndarray, min_std: float = 5.0) -> bool:
+    """True when an RGB frame is (nearly) one flat colour."""
+    return float(np.asarray(frame, dtype=float).std()) < min_std
+
+
+def _camera_for(episode: Episode) -> tuple[tuple[int, int], float, _Camera]:
+    m = episode.scenario.map
+    if episode.scenario.name == "overtake":
+        lane_y = episode.scenario.lane_y or (m.bounds[1] + m.bounds[3]) / 2
+        return (960, 320), 9.0, _Camera((m.bounds[0] + m.bounds[2]) / 2, lane_y + 2.0)
+    # The whole map, square.
+    centre = _Camera((m.bounds[0] + m.bounds[2]) / 2, (m.bounds[1] + m.bounds[3]) / 2)
+    return (640, 640), 6.0, centre
+
+
+def render_frames(
+    episode: Episode, stride: int = 1, sim: SimConfig | None = None
+) -> Any:
+    """Yield RGB frames (``H x W x 3`` uint8) of the episode, one every ``stride`` steps.
+
+    Parameters
+    ----------
+    episode : Episode
+        A driven episode (at least one logged state).
+    stride : int
+        Steps between frames.
+    sim : SimConfig, optional
+        Frame size and scaling overrides.
+
+    Yields
+    ------
+    numpy.ndarray
+        One frame.
+    """
+    if not os.environ.get("XDG_RUNTIME_DIR"):
+        # SDL complains on stderr without it; a private empty folder silences it.
+        os.environ["XDG_RUNTIME_DIR"] = tempfile.mkdtemp(prefix="rrtdrive-sdl-")
+    import pygame
+    from highway_env.road.graphics import RoadGraphics
+
+    from rrtdrive.evaluation import tracking_errors
+
+    log = episode.log
+    if len(log.states) == 0:
+        raise InputError("video: the episode has no trajectory (planning failed?)")
+    if isinstance(stride, bool) or not isinstance(stride, int) or stride < 1:
+        raise InputError(f"stride: need an integer >= 1, got {stride!r}")
+    size, scaling, camera = _camera_for(episode)
+    sim = sim or SimConfig(simulation_frequency=int(round(1.0 / log.dt)))
+    sim = SimConfig(
+        simulation_frequency=sim.simulation_frequency,
+        screen_width=sim.screen_width or size[0],
+        screen_height=sim.screen_height or size[1],
+        scaling=sim.scaling or scaling,
+    )
+    env = build_env(episode.scenario, sim, render=True)
+    try:
+        u = env.unwrapped
+        u.config["centering_position"] = [0.5, 0.5]
+        env.render()  # creates highway-env's offscreen viewer
+        viewer = u.viewer
+        viewer.observer_vehicle = camera
+        surface = viewer.sim_surface
+        road = u.road
+        ego = u.vehicle
+        others = [v for v in road.vehicles if v is not ego]
+        vehicle = episode.scenario.vehicle
+        path_xy = episode.path.xy
+        cte = (
+            tracking_errors(episode.path, log.states[:, :3])[0]
+            if len(episode.path) >= 2 else np.zeros(len(log.states))
+        )
+        font = pygame.font.Font(None, 22)
+        goal = episode.scenario.goal
+        indices = list(range(0, len(log.states), stride))
+        if indices[-1] != len(log.states) - 1:
+            indices.append(len(log.states) - 1)  # always show the final state
+        for k in indices:
+            x, y, yaw, v = log.states[k]
+            steer = float(log.controls[k - 1, 1]) if k > 0 else 0.0
+            ego.set_pose(Pose(x, y, yaw), speed=v)
+            ego.action = {"acceleration": 0.0, "steering": steer}
+            ego.crashed = bool(log.crashed[k])
+            if bool(log.crashed[k]):
+                ego.color = (255, 100, 100)
+            for j, other in enumerate(others):
+                if j < log.others.shape[1]:
+                    ox, oy, oh, ov = log.others[k, j]
+                    other.position = np.array([ox, oy])
+                    other.heading, other.speed = float(oh), float(ov)
+            surface.move_display_window_to(viewer.window_position())
+            RoadGraphics.display(road, surface)
+            if len(path_xy) >= 2:
+                pygame.draw.lines(
+                    surface, PATH_COLOR, False, [surface.vec2pix(p) for p in path_xy], 2
+                )
+            gx, gy = surface.vec2pix((goal.x, goal.y))
+            pygame.draw.circle(surface, GOAL_COLOR, (gx, gy), max(3, surface.pix(0.4)), 2)
+            RoadGraphics.display_road_objects(road, surface, offscreen=True)
+            RoadGraphics.display_traffic(
+                road, surface, simulation_frequency=sim.simulation_frequency, offscreen=True
+            )
+            if k >= 1:
+                trace = [surface.vec2pix(p) for p in log.states[: k + 1, :2]]
+                pygame.draw.lines(surface, TRACE_COLOR, False, trace, 2)
+            frame = pygame.transform.flip(surface, False, True)
+            kappa = math.tan(steer) / vehicle.wheelbase
+            lines = [
+                f"t {log.t[k]:5.2f} s   v {v:4.2f} m/s",
+                f"kappa {kappa:+.3f} 1/m (max {vehicle.kappa_max:.3f})",
+                f"cte {cte[k]:+.3f} m   {episode.controller}",
+            ]
+            panel_h = 8 + 20 * len(lines)
+            pygame.draw.rect(frame, PANEL_COLOR, (6, 6, 290, panel_h))
+            pygame.draw.rect(frame, TEXT_COLOR, (6, 6, 290, panel_h), 1)
+            for i, text in enumerate(lines):
+                frame.blit(font.render(text, True, TEXT_COLOR), (12, 11 + 20 * i))
+            yield np.ascontiguousarray(np.moveaxis(pygame.surfarray.array3d(frame), 0, 1))
+    finally:
+        env.close()
+
+
+def write_video(
+    episode: Episode,
+    target: str | os.PathLike[str],
+    fps: float | None = None,
+    stride: int = 1,
+) -> int:
+    """Write the episode as an MP4 (H.264) through imageio-ffmpeg; return the frame count.
+
+    The file appears only when complete: frames go to a temporary file in the
+    same folder, renamed at the end (removed on any error).
+
+    Parameters
+    ----------
+    episode : Episode
+        A driven episode.
+    target : str or os.PathLike
+        Output ``.mp4`` file.
+    fps : float, optional
+        Frames per second (default: real time, ``simulation_frequency / stride``).
+    stride : int
+        Steps between frames.
+
+    Returns
+    -------
+    int
+        Number of frames written.
+    """
+    import imageio.v2 as imageio
+
+    out = FsPath(target)
+    if out.suffix.lower() != ".mp4":
+        raise InputError(f"--video: the file must end in .mp4, got {str(target)!r}")
+    if not out.parent.exists():
+        raise InputError(f"--video: folder {str(out.parent)!r} does not exist")
+    fps = fps or (1.0 / episode.log.dt) / stride
+    if not (math.isfinite(fps) and fps > 0):
+        raise InputError(f"fps: must be > 0, got {fps!r}")
+    fd, tmp = tempfile.mkstemp(prefix=f".{out.stem}.", suffix=".mp4", dir=out.parent)
+    os.close(fd)
+    count = 0
+    try:
+        writer = imageio.get_writer(
+            tmp, format="FFMPEG", mode="I", fps=fps, codec="libx264", quality=7,
+            macro_block_size=16, ffmpeg_log_level="error",
+        )
+        try:
+            for frame in render_frames(episode, stride):
+                writer.append_data(frame)
+                count += 1
+        finally:
+            writer.close()
+        os.replace(tmp, out)
+    except BaseException:
+        FsPath(tmp).unlink(missing_ok=True)
+        raise
+    return count

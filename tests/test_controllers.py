@@ -1,0 +1,206 @@
+"""Controllers on the kinematic bicycle: sign conventions, steady state, convergence, speed."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from rrtdrive.controllers import (
+    LQR,
+    Controller,
+    PathProjector,
+    PurePursuit,
+    SpeedConfig,
+    SpeedController,
+    SpeedProfile,
+    Stanley,
+    VehicleState,
+    make_controller,
+)
+from rrtdrive.controllers.lqr import design_gain, lateral_error_model
+from rrtdrive.controllers.stanley import front_axle_path
+from rrtdrive.types import InputError, Path, VehicleParams
+from rrtdrive.vehicle import bicycle_step
+
+NAMES = ["pure-pursuit", "stanley", "lqr"]
+V = VehicleParams()
+
+
+def straight_path(length: float = 60.0, step: float = 0.1) -> Path:
+    xs = np.arange(0.0, length + 1e-9, step)
+    return Path(np.column_stack([xs, 0 * xs, 0 * xs, 0 * xs]), np.zeros((0, 2)))
+
+
+def circle_path(radius: float, angle: float = 2 * math.pi, step: float = 0.1) -> Path:
+    """Counter-clockwise circle from (0, 0) heading +x, centre (0, radius)."""
+    th = np.linspace(0.0, angle, int(angle * radius / step) + 1)
+    x, y = radius * np.sin(th), radius * (1 - np.cos(th))
+    return Path(np.column_stack([x, y, th, np.full_like(th, 1 / radius)]), np.zeros((0, 2)))
+
+
+def simulate(ctrl, path: Path, x0, speed: float = 2.0, dt: float = 0.05, steps: int = 600):
+    """Track with the exact bicycle at constant speed (no highway-env here)."""
+    ctrl.reset(path, v_start=speed)
+    x, y, yaw = x0
+    out = []
+    for k in range(steps):
+        _, steer = ctrl.control(VehicleState(x, y, yaw, speed, 0.0, k * dt))
+        out.append((x, y, yaw, steer))
+        x, y, yaw = bicycle_step((x, y, yaw), speed, steer, dt, V.wheelbase)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_protocol_and_factory(name):
+    c = make_controller(name)
+    assert isinstance(c, Controller)
+    assert c.name == name
+
+
+def test_factory_rejects_bad_input():
+    with pytest.raises(InputError, match="controller"):
+        make_controller("mpc")
+    with pytest.raises(InputError, match="controller"):
+        make_controller("lqr", gain=3)
+    with pytest.raises(InputError, match="pure_pursuit"):
+        PurePursuit(ld_min=-1.0)
+
+
+@pytest.mark.parametrize("name", NAMES)
+@pytest.mark.parametrize(
+    ("y", "yaw", "expect"),
+    [
+        (0.5, 0.0, -1),  # left of the path: steer right
+        (-0.5, 0.0, +1),  # right of the path: steer left
+        (0.0, 0.2, -1),  # pointing left of the path: steer right
+        (0.0, -0.2, +1),  # pointing right: steer left
+    ],
+)
+def test_sign_conventions(name, y, yaw, expect):
+    c = make_controller(name)
+    c.reset(straight_path())
+    _, steer = c.control(VehicleState(5.0, y, yaw, 2.0))
+    assert math.copysign(1.0, steer) == expect
+    assert steer != 0.0
+
+
+def test_stanley_uses_the_front_axle():
+    c = Stanley()
+    c.reset(straight_path())
+    # Rear axle 0.3 m right of the path, heading 0.2 rad left: the front axle is
+    # 0.3 - L sin(0.2) ~ 0.2 m *left* of the path, so Stanley's cross-track term
+    # alone pushes right; heading term pushes right too.
+    c.control(VehicleState(5.0, -0.3, 0.2, 2.0))
+    assert c.front_cte == pytest.approx(-0.3 + V.wheelbase * math.sin(0.2), abs=1e-6)
+    assert c.cte == pytest.approx(-0.3, abs=1e-9)
+
+
+def test_front_axle_path_is_the_front_wheel_trace():
+    p = circle_path(8.0, math.pi / 2)
+    f = front_axle_path(p, V.wheelbase)
+    # Front axle radius about the circle's centre: sqrt(R^2 + L^2).
+    r = np.hypot(f.samples[:, 0], f.samples[:, 1] - 8.0)
+    assert np.allclose(r, math.hypot(8.0, V.wheelbase))
+    assert np.allclose(f.samples[:, 2] - p.samples[:, 2], math.atan(V.wheelbase / 8.0))
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_steady_state_on_a_circle_is_the_curvature_angle(name):
+    radius = 8.0
+    c = make_controller(name)
+    c.reset(circle_path(radius))
+    th = 1.0
+    state = VehicleState(radius * math.sin(th), radius * (1 - math.cos(th)), th, 2.0)
+    _, steer = c.control(state)
+    assert steer == pytest.approx(math.atan(V.wheelbase / radius), abs=0.01)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_converges_from_an_offset(name):
+    traj = simulate(make_controller(name), straight_path(80.0), (0.0, 1.0, 0.0), steps=500)
+    # After 30 m the rear axle is on the path and aligned.
+    late = traj[traj[:, 0] > 30.0]
+    assert np.max(np.abs(late[:, 1])) < 0.05
+    assert np.max(np.abs(late[:, 2])) < 0.02
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_tracks_a_circle_at_the_curvature_limit(name):
+    radius = 1.0 / V.kappa_max
+    # Stay short of the path's end (past it the path runs straight on).
+    path = circle_path(radius, 1.9 * math.pi)
+    steps = int(1.75 * math.pi * radius / (2.0 * 0.05))
+    traj = simulate(make_controller(name), path, (0.0, 0.0, 0.0), steps=steps)
+    r = np.hypot(traj[:, 0], traj[:, 1] - radius)
+    assert np.max(np.abs(r - radius)) < 0.15
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_steering_never_exceeds_the_curvature_limit(name):
+    traj = simulate(make_controller(name), straight_path(), (0.0, 3.0, 1.0), steps=300)
+    kappa = np.tan(np.abs(traj[:, 3])) / V.wheelbase
+    assert np.all(kappa <= V.kappa_max + 1e-12)
+    assert np.max(kappa) == pytest.approx(V.kappa_max)  # it did saturate
+
+
+def test_lqr_gain_comes_from_control_lqr():
+    import control
+
+    A, B = lateral_error_model()
+    K = design_gain(1.0, 1.0, 4.0)
+    K_ref, _, _ = control.lqr(A, B, np.diag([1.0, 1.0]), np.array([[4.0]]))
+    assert np.allclose(K, np.asarray(K_ref).ravel())
+    # Double integrator: K = [sqrt(q_e/r), sqrt(q_psi/r + 2 sqrt(q_e/r))].
+    assert K == pytest.approx([0.5, math.sqrt(0.25 + 1.0)])
+    closed = A - B @ K.reshape(1, 2)
+    assert np.all(np.linalg.eigvals(closed).real < 0)
+    assert LQR(q_e=2.0, r=8.0).gain == pytest.approx(design_gain(2.0, 1.0, 8.0))
+
+
+def test_projector_on_an_arc():
+    p = PathProjector(circle_path(10.0, math.pi))
+    pr = p.project(0.0, -0.4)  # below the start: cte negative (right of the path)
+    assert pr.cte == pytest.approx(-0.4, abs=1e-6)
+    x, y, yaw, kappa = p.point_at(10.0 * math.pi / 2)
+    assert (x, y) == pytest.approx((10.0, 10.0), abs=1e-3)
+    assert yaw == pytest.approx(math.pi / 2, abs=1e-3) and kappa == pytest.approx(0.1)
+    # Past the end: straight extension.
+    x, y, yaw, kappa = p.point_at(p.length + 2.0)
+    assert (x, y) == pytest.approx((-2.0, 20.0), abs=1e-3) and kappa == 0.0
+    with pytest.raises(InputError, match="path"):
+        PathProjector(Path(np.zeros((1, 4)), np.zeros((0, 2))))
+
+
+def test_speed_profile_limits():
+    cfg = SpeedConfig(v_max=5.0, a_lat_max=1.5, accel=1.0, decel=0.8)
+    path = circle_path(6.0, math.pi)
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(path.xy, axis=0).T))])
+    kappa = np.where((s > 5.0) & (s < 12.0), 1 / 6.0, 0.0)
+    prof = SpeedProfile(s, kappa, cfg, v_start=0.0)
+    v = prof.v
+    assert v[-1] == 0.0 and np.all(v <= cfg.v_max + 1e-12)
+    assert np.all(v[kappa > 0] <= math.sqrt(1.5 * 6.0) + 1e-9)
+    dv2 = np.diff(v**2) / (2 * np.diff(s))
+    assert np.all(dv2 <= cfg.accel + 1e-9) and np.all(dv2 >= -cfg.decel - 1e-9)
+    with pytest.raises(InputError, match="speed.v_max"):
+        SpeedConfig(v_max=0.0)
+
+
+def test_speed_loop_stops_at_the_end():
+    cfg = SpeedConfig(v_max=3.0)
+    s = np.linspace(0.0, 30.0, 301)
+    ctrl = SpeedController(cfg)
+    ctrl.reset(SpeedProfile(s, np.zeros_like(s), cfg))
+    pos, v, dt = 0.0, 0.0, 0.05
+    for k in range(2000):
+        a = ctrl.control(pos, v, k * dt)
+        v1 = max(0.0, v + a * dt)
+        pos += 0.5 * (v + v1) * dt
+        v = v1
+        if ctrl.arrived and v == 0.0:
+            break
+    assert ctrl.arrived
+    assert abs(pos - 30.0) < 0.05
+    assert v == 0.0
