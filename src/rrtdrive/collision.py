@@ -108,6 +108,7 @@ class CollisionChecker:
         self._clearance = (field - self.grid_error).astype(np.float64)
         self._clearance_list = self._clearance.tolist()
         self._occupied = occupied
+        self._labels: np.ndarray | None = None
         self._union = shapely.union_all([o.polygon() for o in self.obstacles])
         shapely.prepare(self._union)
         self._inside = shapely.box(*self.bounds)
@@ -402,10 +403,15 @@ class CollisionChecker:
         labels, _ = ndimage.label(kept, structure=np.ones((3, 3), dtype=bool))
         return labels, slack
 
+    @property
+    def component_labels(self) -> np.ndarray:
+        """The labels of :meth:`reachable_components`, computed once per checker."""
+        if self._labels is None:
+            self._labels, _ = self.reachable_components()
+        return self._labels
+
     def provably_disconnected(self, a: Sequence[float], b: Sequence[float]) -> bool:
         """True when no collision-free motion can take the rear axle from ``a`` to ``b``."""
-        if not hasattr(self, "_labels"):
-            self._labels, _ = self.reachable_components()
         la = self._label_at(a)
         lb = self._label_at(b)
         return la == 0 or lb == 0 or la != lb
@@ -415,4 +421,4 @@ class CollisionChecker:
         j = int(math.floor((p[1] - self._origin[1]) * self._inv_h))
         if not (0 <= i < self._shape[0] and 0 <= j < self._shape[1]):
             return 0
-        return int(self._labels[i, j])
+        return int(self.component_labels[i, j])

@@ -196,7 +196,6 @@ def exact_edge_free(
     return bool(checker.poses_free(poses[~coarse]).all())
 
 
-_LABELS: weakref.WeakKeyDictionary[CollisionChecker, np.ndarray] = weakref.WeakKeyDictionary()
 _CELLS: weakref.WeakKeyDictionary[CollisionChecker, dict[int, np.ndarray]] = (
     weakref.WeakKeyDictionary()
 )
@@ -223,10 +222,7 @@ def free_cells(checker: CollisionChecker, start: tuple[float, float]) -> np.ndar
     numpy.ndarray
         Indices into ``checker.clearance_grid.ravel()``; empty if the start is in no component.
     """
-    labels = _LABELS.get(checker)
-    if labels is None:
-        labels, _ = checker.reachable_components()
-        _LABELS[checker] = labels
+    labels = checker.component_labels
     origin, h = checker.grid_origin, checker.resolution
     i = int(math.floor((start[0] - origin[0]) / h))
     j = int(math.floor((start[1] - origin[1]) / h))
