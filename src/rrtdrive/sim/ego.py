@@ -50,6 +50,11 @@ def centre_to_rear_axle(
     return Pose(x - d * math.cos(heading), y - d * math.sin(heading), heading)
 
 
+def _wrap(yaw: float) -> float:
+    """``yaw`` itself when already in [-pi, pi), else wrapped (no rounding of in-range values)."""
+    return float(yaw) if -math.pi <= yaw < math.pi else float(wrap_angle(yaw))
+
+
 class EgoVehicle(Vehicle):
     """A highway-env vehicle that moves by the rear-axle bicycle model.
 
@@ -96,7 +101,7 @@ class EgoVehicle(Vehicle):
         self.params = vehicle or VehicleParams()
         self._lane_dirty = False
         self._offset = self.params.length / 2.0 - self.params.rear_overhang
-        self.rear = [pose.x, pose.y, float(wrap_angle(pose.yaw))]
+        self.rear = [pose.x, pose.y, _wrap(pose.yaw)]
         centre = rear_axle_to_centre(pose, self.params)
         super().__init__(road, centre, pose.yaw, speed)
         # Per-instance size: drawn and collided with at the true dimensions.
@@ -162,7 +167,7 @@ class EgoVehicle(Vehicle):
 
     def set_pose(self, pose: Pose, speed: float | None = None) -> None:
         """Place the car (rear axle at ``pose``) and optionally set its speed."""
-        self.rear = [pose.x, pose.y, float(wrap_angle(pose.yaw))]
+        self.rear = [pose.x, pose.y, _wrap(pose.yaw)]
         if speed is not None:
             self.speed = float(speed)
         self._sync()
