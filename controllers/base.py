@@ -160,29 +160,30 @@ class PathProjector:
         ex, ey = dx - t * self.ux[i], dy - t * self.uy[i]
         return ex * ex + ey * ey
 
-    def nearest_segment(self, px: float, py: float, window: int = 40) -> int:
-        """Index of the segment nearest to ``(px, py)`` near the last match.
+    def nearest_segment(self, px: float, py: float) -> int:
+        """Index of the segment nearest to ``(px, py)``, by local descent from the last match.
 
-        Searches ``window`` segments ahead of and a few behind the last match, so
-        progress is continuous even where the path comes back near itself.
+        Walks forward while the next segment is at least as near, else backward while
+        the previous one is nearer: a few evaluations per control step, and progress
+        stays continuous even where the path comes back near itself.
         """
-        lo = max(0, self.hint - 4)
-        hi = min(self.n - 1, self.hint + window)
-        best, best_d = lo, math.inf
-        for i in range(lo, hi):
-            dd = self._seg_dist2(i, px, py)
-            if dd < best_d:
-                best, best_d = i, dd
-        # If the best is at the window's far edge, keep walking while it improves.
-        while best == hi - 1 and hi < self.n - 1:
-            dd = self._seg_dist2(hi, px, py)
-            if dd <= best_d:
-                best, best_d = hi, dd
-                hi += 1
-            else:
+        i = self.hint
+        last = self.n - 2
+        d = self._seg_dist2(i, px, py)
+        moved = False
+        while i < last:
+            dn = self._seg_dist2(i + 1, px, py)
+            if dn > d:
                 break
-        self.hint = best
-        return best
+            i, d, moved = i + 1, dn, True
+        if not moved:
+            while i > 0:
+                dp = self._seg_dist2(i - 1, px, py)
+                if dp >= d:
+                    break
+                i, d = i - 1, dp
+        self.hint = i
+        return i
 
     def project(self, px: float, py: float) -> Projection:
         """Foot point of ``(px, py)`` on the path (with straight extensions at the ends)."""
