@@ -233,6 +233,12 @@ def build_parser() -> argparse.ArgumentParser:
         cli_simulate = None
     if cli_simulate is not None:
         cli_simulate.add_parser(sub)
+    try:
+        from rrtdrive.bench import cli_bench
+    except ImportError:
+        cli_bench = None
+    if cli_bench is not None:
+        cli_bench.add_parser(sub)
     return parser
 
 

@@ -1,0 +1,382 @@
+"""Where runs execute: local worker processes, or a Ray cluster.
+
+Both backends take run specs and yield :class:`Outcome` objects as runs finish,
+in completion order; the caller (the single writer) stores them. A run whose
+worker crashes (dies, raises, or exceeds the run timeout) is retried
+``retries`` times and then reported as failed, so the bench records an error
+row instead of stopping.
+
+The local backend manages its own processes (``spawn`` start method, one task
+at a time per worker over a pipe) rather than a ``concurrent.futures`` pool:
+a dead worker is then attributed to exactly the run it held, and only that run
+is retried. Workers exit when the main process goes away (their pipe closes),
+so a killed bench leaves no process writing anywhere.
+"""
+
+from __future__ import annotations
+
+import logging
+import multiprocessing as mp
+import os
+import signal
+import sys
+import time
+import traceback
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
+from multiprocessing.connection import Connection, wait
+from typing import Any
+
+from rrtdrive.bench.grid import RunSpec
+from rrtdrive.bench.worker import execute_run
+from rrtdrive.types import InputError
+
+__all__ = ["Outcome", "Executor", "LocalBackend", "RayBackend", "default_workers"]
+
+logger = logging.getLogger(__name__)
+
+#: A function from a run spec to its row; must be importable by name (spawn, Ray).
+Executor = Callable[[RunSpec], dict[str, Any]]
+
+#: Environment for worker processes: one BLAS/OpenMP thread each, so N workers use N cores.
+_WORKER_ENV = {
+    "OMP_NUM_THREADS": "1",
+    "OPENBLAS_NUM_THREADS": "1",
+    "MKL_NUM_THREADS": "1",
+    "NUMEXPR_NUM_THREADS": "1",
+}
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """A finished run: its row, or the error of its last attempt.
+
+    Attributes
+    ----------
+    spec : RunSpec
+        The run.
+    row : dict or None
+        The executor's row when an attempt succeeded.
+    error : str or None
+        Why the last attempt failed (when ``row`` is ``None``).
+    attempts : int
+        Attempts made, including the successful one.
+    """
+
+    spec: RunSpec
+    row: dict[str, Any] | None
+    error: str | None
+    attempts: int
+
+
+def default_workers() -> int:
+    """One worker per usable core."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _call(executor: Executor, spec: RunSpec) -> tuple[str, Any]:
+    """Run ``executor(spec)``; never raise: ``("ok", row)`` or ``("error", message)``."""
+    try:
+        return ("ok", executor(spec))
+    except Exception as exc:  # noqa: BLE001 - any failure of a run is data for its row
+        tb = traceback.extract_tb(exc.__traceback__)
+        where = f" at {tb[-1].filename}:{tb[-1].lineno}" if tb else ""
+        return ("error", f"{type(exc).__name__}: {exc}{where}")
+
+
+def _worker_main(conn: Connection, executor: Executor) -> None:
+    """Body of a local worker process: receive specs, send results, until told to stop."""
+    # Ctrl-C goes to the whole terminal process group: let the main process handle it.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    while True:
+        try:
+            msg = conn.recv()
+        except (EOFError, OSError):
+            break  # the main process is gone
+        if msg is None:
+            break
+        task_id, spec = msg
+        result = _call(executor, spec)
+        try:
+            conn.send((task_id, result))
+        except (BrokenPipeError, OSError):
+            break
+    sys.stdout.flush()
+    sys.stderr.flush()
+    # Skip interpreter teardown (nanobind's leak report, atexit handlers of the parent's modules).
+    os._exit(0)
+
+
+@dataclass
+class _Slot:
+    proc: Any
+    conn: Connection
+    task: tuple[int, RunSpec, int] | None = None  # (task id, spec, attempt number)
+    started: float = 0.0
+
+
+class LocalBackend:
+    """Runs on local worker processes.
+
+    Parameters
+    ----------
+    workers : int
+        Number of processes.
+    executor : callable
+        Module-level function ``RunSpec -> dict`` (default :func:`execute_run`).
+    retries : int
+        Extra attempts of a crashed run.
+    run_timeout_s : float
+        A run taking longer is killed with its worker and counts as a crashed attempt.
+    """
+
+    name = "local"
+
+    def __init__(
+        self,
+        workers: int,
+        executor: Executor = execute_run,
+        retries: int = 1,
+        run_timeout_s: float = 600.0,
+    ) -> None:
+        if workers < 1:
+            raise InputError(f"workers: must be >= 1, got {workers}")
+        self.workers = workers
+        self.executor = executor
+        self.retries = retries
+        self.run_timeout_s = run_timeout_s
+        self._ctx = mp.get_context("spawn")
+
+    def describe(self) -> str:
+        """Human-readable backend description."""
+        return f"{self.workers} local worker process{'es' if self.workers != 1 else ''}"
+
+    def _start(self) -> _Slot:
+        parent, child = self._ctx.Pipe(duplex=True)
+        saved = {k: os.environ.get(k) for k in _WORKER_ENV}
+        os.environ.update(_WORKER_ENV)
+        try:
+            proc = self._ctx.Process(
+                target=_worker_main, args=(child, self.executor), daemon=True,
+                name="rrtdrive-bench-worker",
+            )
+            proc.start()
+        finally:
+            for k, v in saved.items():
+                if v is None:
+                    os.environ.pop(k, None)
+                else:
+                    os.environ[k] = v
+        child.close()
+        return _Slot(proc, parent)
+
+    @staticmethod
+    def _stop(slot: _Slot, kill: bool = False) -> None:
+        try:
+            if kill:
+                slot.proc.kill()
+            else:
+                slot.conn.send(None)
+        except (OSError, ValueError):
+            pass
+        slot.conn.close()
+
+    def run(self, specs: Iterable[RunSpec]) -> Iterator[Outcome]:
+        """Execute ``specs``; yield one :class:`Outcome` per spec as runs finish."""
+        queue: deque[tuple[int, RunSpec, int]] = deque(
+            (i, s, 1) for i, s in enumerate(specs)
+        )
+        if not queue:
+            return
+        slots = [self._start() for _ in range(min(self.workers, len(queue)))]
+        try:
+            yield from self._loop(queue, slots)
+        finally:
+            for slot in slots:
+                self._stop(slot, kill=slot.task is not None)
+            deadline = time.monotonic() + 5.0
+            for slot in slots:
+                slot.proc.join(max(0.0, deadline - time.monotonic()))
+                if slot.proc.is_alive():
+                    slot.proc.kill()
+                    slot.proc.join(1.0)
+
+    def _loop(
+        self, queue: deque[tuple[int, RunSpec, int]], slots: list[_Slot]
+    ) -> Iterator[Outcome]:
+        busy = 0
+        while queue or busy:
+            for slot in slots:
+                if slot.task is None and queue:
+                    task = queue.popleft()
+                    try:
+                        slot.conn.send((task[0], task[1]))
+                    except (BrokenPipeError, OSError):
+                        queue.appendleft(task)
+                        continue  # its sentinel will report the death below
+                    slot.task, slot.started = task, time.monotonic()
+                    busy += 1
+            waitables: list[Any] = []
+            for slot in slots:
+                waitables.append(slot.conn)
+                waitables.append(slot.proc.sentinel)
+            now = time.monotonic()
+            timeouts = [
+                slot.started + self.run_timeout_s - now for slot in slots if slot.task is not None
+            ]
+            timeout = max(0.0, min(timeouts)) if timeouts else None
+            ready = set(wait(waitables, timeout=timeout))
+            for k, slot in enumerate(slots):
+                failure: str | None = None
+                if slot.conn in ready:
+                    try:
+                        task_id, (status, payload) = slot.conn.recv()
+                    except (EOFError, OSError):
+                        failure = "worker process died"
+                    else:
+                        task = slot.task
+                        assert task is not None and task[0] == task_id
+                        slot.task = None
+                        busy -= 1
+                        if status == "ok":
+                            yield Outcome(task[1], payload, None, task[2])
+                        else:
+                            yield from self._failed(queue, task, payload)
+                        continue
+                elif slot.proc.sentinel in ready:
+                    failure = f"worker process died (exit code {slot.proc.exitcode})"
+                elif slot.task is not None and (
+                    time.monotonic() - slot.started > self.run_timeout_s
+                ):
+                    failure = f"run exceeded the run timeout of {self.run_timeout_s:g} s"
+                if failure is None:
+                    continue
+                slot.proc.join(0.1)
+                if slot.proc.is_alive():
+                    slot.proc.kill()
+                    slot.proc.join(5.0)
+                if slot.proc.exitcode is not None and slot.proc.exitcode < 0:
+                    failure += f" (signal {-slot.proc.exitcode})"
+                slot.conn.close()
+                task = slot.task
+                slots[k] = self._start()
+                if task is not None:
+                    busy -= 1
+                    logger.warning("%s: %s", task[1].describe(), failure)
+                    yield from self._failed(queue, task, failure)
+
+    def _failed(
+        self, queue: deque[tuple[int, RunSpec, int]], task: tuple[int, RunSpec, int], error: str
+    ) -> Iterator[Outcome]:
+        task_id, spec, attempt = task
+        if attempt <= self.retries:
+            queue.append((task_id, spec, attempt + 1))
+            return
+        yield Outcome(spec, None, error, attempt)
+
+
+def _ray_call(executor: Executor, spec: RunSpec) -> tuple[str, Any]:
+    """The Ray task: the same never-raising wrapper as the local workers."""
+    return _call(executor, spec)
+
+
+class RayBackend:
+    """Runs as Ray tasks, on a local Ray or a cluster.
+
+    Parameters
+    ----------
+    address : str
+        ``""`` for ``ray.init()`` (a new local Ray, or ``RAY_ADDRESS``), else the
+        address for ``ray.init(address=...)`` (``"auto"``, ``"ray://head:10001"``).
+        When Ray is already initialised in this process, that session is used.
+    executor : callable
+        Module-level function ``RunSpec -> dict``; it must be importable on the
+        cluster's workers (install rrtdrive there).
+    retries : int
+        Extra attempts of a crashed run (Ray's ``max_retries`` for dead workers,
+        and a resubmission for a run that raised).
+    max_in_flight : int, optional
+        Largest number of submitted, unfinished tasks (default twice the
+        cluster's CPUs).
+    """
+
+    name = "ray"
+
+    def __init__(
+        self,
+        address: str = "",
+        executor: Executor = execute_run,
+        retries: int = 1,
+        max_in_flight: int | None = None,
+    ) -> None:
+        try:
+            import ray
+        except ImportError:
+            raise InputError(
+                "ray: the Ray backend needs Ray; install it with pip install 'rrtdrive[ray]'"
+            ) from None
+        self._ray = ray
+        self._owns_session = False
+        if not ray.is_initialized():
+            try:
+                if address:
+                    ray.init(address=address, log_to_driver=False)
+                else:
+                    ray.init(log_to_driver=False)
+            except (ConnectionError, ValueError, RuntimeError) as exc:
+                raise InputError(f"ray: cannot connect to {address or 'Ray'}: {exc}") from None
+            self._owns_session = True
+        self.executor = executor
+        self.retries = retries
+        cpus = int(ray.cluster_resources().get("CPU", 1))
+        self.max_in_flight = max_in_flight or max(1, 2 * cpus)
+        self._cpus = cpus
+        self._remote = ray.remote(num_cpus=1, max_retries=retries)(_ray_call)
+
+    def describe(self) -> str:
+        """Human-readable backend description."""
+        return f"Ray ({self._cpus} CPUs, up to {self.max_in_flight} runs in flight)"
+
+    def close(self) -> None:
+        """Shut Ray down if this backend started it."""
+        if self._owns_session:
+            self._ray.shutdown()
+            self._owns_session = False
+
+    def run(self, specs: Iterable[RunSpec]) -> Iterator[Outcome]:
+        """Execute ``specs``; yield one :class:`Outcome` per spec as runs finish."""
+        ray = self._ray
+        queue: deque[tuple[RunSpec, int]] = deque((s, 1) for s in specs)
+        in_flight: dict[Any, tuple[RunSpec, int]] = {}
+        try:
+            while queue or in_flight:
+                while queue and len(in_flight) < self.max_in_flight:
+                    spec, attempt = queue.popleft()
+                    in_flight[self._remote.remote(self.executor, spec)] = (spec, attempt)
+                done, _ = ray.wait(list(in_flight), num_returns=1)
+                for ref in done:
+                    spec, attempt = in_flight.pop(ref)
+                    try:
+                        status, payload = ray.get(ref)
+                    except Exception as exc:  # noqa: BLE001 - worker died after Ray's retries
+                        yield Outcome(
+                            spec, None, f"{type(exc).__name__}: {exc}".splitlines()[0],
+                            attempt + self.retries,
+                        )
+                        continue
+                    if status == "ok":
+                        yield Outcome(spec, payload, None, attempt)
+                    elif attempt <= self.retries:
+                        queue.append((spec, attempt + 1))
+                    else:
+                        yield Outcome(spec, None, payload, attempt)
+        finally:
+            for ref in in_flight:
+                try:
+                    ray.cancel(ref, force=True)
+                except Exception:  # noqa: BLE001,S110 - best effort on the way out
+                    pass

@@ -1,0 +1,161 @@
+"""The ``rrtdrive bench`` subcommand.
+
+Wiring in ``rrtdrive.cli``::
+
+    from rrtdrive.bench import cli_bench
+    cli_bench.add_parser(subparsers)   # sets func=cli_bench.run
+
+Exit codes: 0 when every run of the grid has a result row, 1 when some runs
+ended as error rows (crashed twice), 2 on bad input (one line on stderr).
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+from typing import Any
+
+from rrtdrive.types import InputError
+
+__all__ = ["add_parser", "run", "config_from_args"]
+
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def _int_arg(text: str) -> int:
+    # Range checks are the config's, so TOML and flags report alike (naming the field).
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+
+
+def _float_arg(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add ``bench`` to an argparse subparsers object and return its parser."""
+    p = subparsers.add_parser(
+        "bench",
+        help="run a grid of maps/scenarios x planners x controllers x seeds in parallel",
+        description="Run every combination of maps (planning only) or scenarios (closed loop), "
+        "planners, controllers and seeds on local processes or a Ray cluster. One JSON line "
+        "per run goes to OUT/runs.jsonl as it finishes; a re-run resumes without redoing "
+        "finished runs. Writes OUT/summary.md, OUT/summary.csv and plots. Lists are "
+        "comma-separated or repeated flags; flags override --config. Exit 0 when every run "
+        "has a result, 1 when some runs crashed twice (error rows), 2 on bad input.",
+    )
+    p.add_argument("--config", metavar="FILE.toml", help="read the bench from a TOML file")
+    p.add_argument(
+        "--maps", action="append", metavar="NAMES",
+        help="maps for planning-only runs: built-in names or .json files",
+    )
+    p.add_argument(
+        "--scenarios", action="append", metavar="NAMES",
+        help="closed-loop scenarios (parking, overtake)",
+    )
+    p.add_argument(
+        "--planners", action="append", metavar="NAMES",
+        help="planners, including OMPL rows such as ompl-r2-rrtconnect, ompl-rs-bitstar "
+        "(default: improved-rrt-connect)",
+    )
+    p.add_argument(
+        "--controllers", action="append", metavar="NAMES",
+        help="controllers for scenario runs: pure-pursuit, stanley, lqr (default: pure-pursuit)",
+    )
+    p.add_argument("--seeds", type=_int_arg, metavar="N", help="seeds 0..N-1 (default 10)")
+    p.add_argument(
+        "--workers", type=_int_arg, metavar="N",
+        help="local worker processes (default: one per core); with --ray, runs in flight",
+    )
+    p.add_argument("--out", metavar="DIR", help="output folder (default: bench)")
+    p.add_argument(
+        "--ray", nargs="?", const="", default=None, metavar="ADDRESS",
+        help="run on Ray: no ADDRESS starts a local Ray (or uses RAY_ADDRESS); "
+        "'auto' or 'ray://host:10001' connects to a cluster",
+    )
+    p.add_argument(
+        "--max-time", dest="max_time_s", type=_float_arg, metavar="S",
+        help="planning time budget per run in seconds (default 5)",
+    )
+    p.add_argument(
+        "--max-iterations", type=_int_arg, metavar="N",
+        help="planning iteration budget per run (default 20000)",
+    )
+    p.add_argument(
+        "--run-timeout", dest="run_timeout_s", type=_float_arg, metavar="S",
+        help="kill a run after S seconds; it counts as a crash (default 600)",
+    )
+    p.add_argument(
+        "--retries", type=_int_arg, metavar="N",
+        help="attempts after a crash before an error row is recorded (default 1)",
+    )
+    p.add_argument(
+        "--retry-errors", action="store_true",
+        help="run the grid's stored error rows again (they are replaced)",
+    )
+    p.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    p.add_argument("--quiet", action="store_true", help="no progress line")
+    p.set_defaults(func=run)
+    return p
+
+
+def config_from_args(args: argparse.Namespace) -> Any:
+    """The :class:`~rrtdrive.bench.grid.BenchConfig` of parsed arguments (flags over TOML)."""
+    from rrtdrive.bench.grid import config_from_mapping, load_toml
+
+    values: dict[str, Any] = load_toml(args.config) if args.config else {}
+    flags = {
+        "maps": args.maps,
+        "scenarios": args.scenarios,
+        "planners": args.planners,
+        "controllers": args.controllers,
+        "seeds": args.seeds,
+        "workers": args.workers,
+        "out": args.out,
+        "ray": args.ray,
+        "max_time_s": args.max_time_s,
+        "max_iterations": args.max_iterations,
+        "run_timeout_s": args.run_timeout_s,
+        "retries": args.retries,
+    }
+    for k, v in flags.items():
+        if v is not None:
+            values[k] = v
+    if args.no_plots:
+        values["plots"] = False
+    return config_from_mapping(values)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the ``bench`` subcommand; return the exit code."""
+    try:
+        return _run(args)
+    except InputError as exc:
+        print(f"rrtdrive bench: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+def _run(args: argparse.Namespace) -> int:
+    from rrtdrive.bench.core import run_bench
+
+    cfg = config_from_args(args)
+    command = "rrtdrive " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    report = run_bench(
+        cfg,
+        progress=None if args.quiet else sys.stderr,
+        retry_errors=args.retry_errors,
+        command=command,
+    )
+    print(
+        f"bench: {report.total} runs ({report.skipped} resumed, {report.executed} run now, "
+        f"{report.errors} errors) on {report.backend}"
+        + (f"; {report.throughput:.2f} runs/s" if report.executed else "")
+    )
+    print(f"results: {cfg.out}/runs.jsonl; summary: {cfg.out}/summary.md, {cfg.out}/summary.csv")
+    return EXIT_FAILED if report.errors else EXIT_OK

@@ -1,0 +1,257 @@
+"""Run a bench: expand the grid, skip finished runs, execute the rest, store, summarise."""
+
+from __future__ import annotations
+
+import json
+import logging
+import platform
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from pathlib import Path as FsPath
+from typing import Any, TextIO
+
+from rrtdrive.bench.backends import Executor, LocalBackend, RayBackend, default_workers
+from rrtdrive.bench.grid import BenchConfig, RunSpec, expand
+from rrtdrive.bench.store import ResultStore, row_key
+from rrtdrive.bench.summary import summarise_rows, write_plots, write_summary
+from rrtdrive.bench.worker import error_row, execute_run
+
+__all__ = ["BenchReport", "Progress", "run_bench", "grid_rows"]
+
+logger = logging.getLogger(__name__)
+
+
+class Progress:
+    """A one-line progress report with rate and ETA on a stream (stderr by default).
+
+    On a terminal the line is redrawn in place; otherwise a line is printed at
+    most every ``interval_s`` seconds and at the end.
+
+    Parameters
+    ----------
+    total : int
+        Runs to do in this session.
+    stream : file-like, optional
+        Where to write (default ``sys.stderr``); ``None`` disables output.
+    interval_s : float
+        Smallest time between lines when the stream is not a terminal.
+    """
+
+    def __init__(self, total: int, stream: TextIO | None = None, interval_s: float = 10.0) -> None:
+        self.total = total
+        self.done = 0
+        self.errors = 0
+        self.stream = stream
+        self.tty = bool(stream is not None and getattr(stream, "isatty", lambda: False)())
+        self.interval_s = interval_s
+        self.t0 = time.perf_counter()
+        self._last = -1e9
+
+    def line(self) -> str:
+        """The current progress line."""
+        elapsed = time.perf_counter() - self.t0
+        rate = self.done / elapsed if elapsed > 0 else 0.0
+        left = self.total - self.done
+        eta = _clock(left / rate) if rate > 0 else "?"
+        pct = 100.0 * self.done / self.total if self.total else 100.0
+        err = f", {self.errors} errors" if self.errors else ""
+        return (
+            f"bench {self.done}/{self.total} ({pct:.0f}%) {rate:.2f} runs/s "
+            f"elapsed {_clock(elapsed)} ETA {eta}{err}"
+        )
+
+    def update(self, n: int = 1, error: bool = False) -> None:
+        """Count ``n`` finished runs and redraw."""
+        self.done += n
+        self.errors += int(error)
+        if self.stream is None:
+            return
+        now = time.perf_counter()
+        if self.tty:
+            self.stream.write("\r" + self.line() + "\x1b[K")
+            self.stream.flush()
+        elif now - self._last >= self.interval_s or self.done == self.total:
+            self.stream.write(self.line() + "\n")
+            self.stream.flush()
+            self._last = now
+
+    def close(self) -> None:
+        """End the line."""
+        if self.stream is not None and self.tty:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def _clock(seconds: float) -> str:
+    s = int(round(seconds))
+    h, rem = divmod(s, 3600)
+    m, s = divmod(rem, 60)
+    return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
+
+
+@dataclass(frozen=True)
+class BenchReport:
+    """What a bench did.
+
+    Attributes
+    ----------
+    total : int
+        Runs in the grid.
+    skipped : int
+        Runs already stored before this session (resumed).
+    executed : int
+        Runs finished in this session (rows written).
+    errors : int
+        Error rows among the grid's rows.
+    run_wall_s : float
+        Wall time of the execution phase (workers start to last row).
+    backend : str
+        Where the runs executed.
+    files : tuple of str
+        Files written (results, config, summary, plots).
+    """
+
+    total: int
+    skipped: int
+    executed: int
+    errors: int
+    run_wall_s: float
+    backend: str
+    files: tuple[str, ...]
+
+    @property
+    def throughput(self) -> float:
+        """Runs per second in this session's execution phase."""
+        return self.executed / self.run_wall_s if self.run_wall_s > 0 else float("nan")
+
+
+def grid_rows(cfg: BenchConfig, store: ResultStore) -> list[dict[str, Any]]:
+    """The stored rows of ``cfg``'s grid, one per key (the first stored), in grid order."""
+    wanted = {s.key: i for i, s in enumerate(expand(cfg))}
+    found: dict[tuple[str, int], dict[str, Any]] = {}
+    for row in store.rows():
+        key = row_key(row)
+        if key in wanted and key not in found:
+            found[key] = row
+    return [found[k] for k in sorted(found, key=wanted.__getitem__)]
+
+
+def run_bench(
+    cfg: BenchConfig,
+    *,
+    executor: Executor = execute_run,
+    progress: TextIO | None = None,
+    retry_errors: bool = False,
+    command: str | None = None,
+    on_row: Callable[[dict[str, Any]], None] | None = None,
+) -> BenchReport:
+    """Run every missing run of ``cfg``'s grid, then write the summary and plots.
+
+    Rows go to ``cfg.out/runs.jsonl`` as runs finish (flushed and fsynced), so
+    an interrupted bench resumes where it stopped: runs whose ``(config_hash,
+    seed)`` is stored are not run again.
+
+    Parameters
+    ----------
+    cfg : BenchConfig
+        The bench.
+    executor : callable
+        Module-level ``RunSpec -> row`` function (tests inject faults through it).
+    progress : file-like, optional
+        Stream for the progress line (``None``: silent).
+    retry_errors : bool
+        Drop the grid's stored error rows first, so those runs are tried again.
+    command : str, optional
+        The command line, recorded in ``bench_config.json``.
+    on_row : callable, optional
+        Called with each stored row (after it is on disk).
+
+    Returns
+    -------
+    BenchReport
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> cfg = BenchConfig(maps=("overtake",), planners=("rrt-connect",), seeds=2, workers=1,
+    ...                   out=tempfile.mkdtemp(), plots=False)
+    >>> run_bench(cfg).total
+    2
+    """
+    from rrtdrive.maps import write_text_atomic
+
+    specs = expand(cfg)
+    out = FsPath(cfg.out)
+    files: list[str] = []
+    with ResultStore(out) as store:
+        if retry_errors:
+            keys = {row_key(r) for r in grid_rows(cfg, store) if r.get("status") == "error"}
+            dropped = store.drop(k for k in keys if k is not None)
+            if dropped:
+                logger.info("dropped %d error rows to run them again", dropped)
+        done = store.done_keys()
+        todo: list[RunSpec] = [s for s in specs if s.key not in done]
+        skipped = len(specs) - len(todo)
+        meta = {
+            "command": command,
+            "started_at": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+            "config": cfg.to_json(),
+            "seeds": list(range(cfg.seeds)),
+            "runs": len(specs),
+            "already_done": skipped,
+            "python": platform.python_version(),
+            "machine": f"{platform.system()} {platform.machine()}",
+        }
+        write_text_atomic(out / "bench_config.json", json.dumps(meta, indent=1) + "\n")
+        backend: LocalBackend | RayBackend
+        if cfg.ray is not None:
+            backend = RayBackend(
+                cfg.ray, executor=executor, retries=cfg.retries, max_in_flight=cfg.workers
+            )
+        else:
+            backend = LocalBackend(
+                min(cfg.workers or default_workers(), max(1, len(todo))),
+                executor=executor, retries=cfg.retries, run_timeout_s=cfg.run_timeout_s,
+            )
+        if progress is not None:
+            progress.write(
+                f"bench: {len(specs)} runs in the grid, {skipped} already in "
+                f"{store.path}, {len(todo)} to run on {backend.describe()}\n"
+            )
+            progress.flush()
+        bar = Progress(len(todo), progress)
+        executed = 0
+        t0 = time.perf_counter()
+        try:
+            for outcome in backend.run(todo):
+                if outcome.row is not None:
+                    row = dict(outcome.row)
+                    row["attempts"] = outcome.attempts
+                else:
+                    error = outcome.error or "unknown error"
+                    row = error_row(outcome.spec, error, outcome.attempts)
+                store.append(row)
+                executed += 1
+                bar.update(error=outcome.row is None)
+                if on_row is not None:
+                    on_row(row)
+        finally:
+            bar.close()
+            if isinstance(backend, RayBackend):
+                backend.close()
+        run_wall = time.perf_counter() - t0
+        rows = grid_rows(cfg, store)
+        files.append(str(store.path))
+    files.append(str(out / "bench_config.json"))
+    groups = summarise_rows(rows)
+    title = f"Bench summary ({len(rows)} runs, seeds 0–{cfg.seeds - 1})"
+    files += [str(p) for p in write_summary(groups, out, title)]
+    if cfg.plots:
+        files += [str(p) for p in write_plots(rows, out)]
+    errors = sum(1 for r in rows if r.get("status") == "error")
+    return BenchReport(
+        total=len(specs), skipped=skipped, executed=executed, errors=errors,
+        run_wall_s=run_wall, backend=backend.describe(), files=tuple(files),
+    )

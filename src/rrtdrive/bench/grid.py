@@ -1,0 +1,424 @@
+"""The bench grid: its configuration (flags or TOML), validation, expansion and run keys.
+
+A bench is the product of
+
+- planning-only runs: ``maps × planners × seeds`` (no controller), and
+- closed-loop runs: ``scenarios × planners × controllers × seeds``.
+
+Each run is a :class:`RunSpec`. Its *configuration hash* covers everything that
+defines the run except the seed (kind, map content or scenario name, planner,
+controller, budget), so ``(config_hash, seed)`` identifies a run across
+interrupted and repeated benches.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import importlib.util
+import json
+import math
+import os
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path as FsPath
+from typing import Any
+
+from rrtdrive.types import InputError
+
+__all__ = [
+    "BenchConfig",
+    "RunSpec",
+    "CONFIG_KEYS",
+    "expand",
+    "load_toml",
+    "config_from_mapping",
+    "map_digest",
+    "SCHEMA",
+]
+
+#: Version of the row schema and of the hashed fields; bump to invalidate old rows.
+SCHEMA = 1
+
+#: Keys accepted in a TOML bench file (the same names as the ``BenchConfig`` fields).
+CONFIG_KEYS = (
+    "maps",
+    "scenarios",
+    "planners",
+    "controllers",
+    "seeds",
+    "workers",
+    "out",
+    "max_time_s",
+    "max_iterations",
+    "run_timeout_s",
+    "retries",
+    "ray",
+    "plots",
+)
+
+
+def _names(field_name: str, value: object) -> tuple[str, ...]:
+    """Normalise a list of names: strings, comma-separated allowed, de-duplicated in order."""
+    if isinstance(value, str):
+        value = [value]
+    if not isinstance(value, (list, tuple)):
+        raise InputError(f"{field_name}: expected a list of names, got {value!r}")
+    out: list[str] = []
+    for item in value:
+        if not isinstance(item, str):
+            raise InputError(f"{field_name}: expected names (strings), got {item!r}")
+        for part in item.split(","):
+            part = part.strip()
+            if not part:
+                continue
+            if part not in out:
+                out.append(part)
+    return tuple(out)
+
+
+def _int(field_name: str, value: object, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise InputError(f"{field_name}: expected an integer >= {minimum}, got {value!r}")
+    if value < minimum:
+        raise InputError(f"{field_name}: must be >= {minimum}, got {value}")
+    return int(value)
+
+
+def _positive(field_name: str, value: object) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InputError(f"{field_name}: expected a number > 0, got {value!r}")
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(f"{field_name}: must be a finite number > 0, got {value!r}")
+    return float(value)
+
+
+def map_digest(spec: str) -> str:
+    """A short digest of the map ``spec`` resolves to (content and car), for run keys.
+
+    Raises
+    ------
+    InputError
+        When ``spec`` is neither a built-in map nor a readable map file.
+    """
+    from rrtdrive.maps import resolve_map
+
+    m = resolve_map(spec)
+    payload = {"map": m.to_json(), "vehicle": dataclasses.asdict(m.vehicle)}
+    text = json.dumps(payload, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def ompl_available() -> bool:
+    """True when the optional ``ompl`` package can be imported."""
+    return importlib.util.find_spec("ompl") is not None
+
+
+@dataclass(frozen=True)
+class BenchConfig:
+    """A bench: the grid, its budgets and where and how it runs.
+
+    Parameters
+    ----------
+    maps : tuple of str
+        Built-in map names or map ``.json`` files for planning-only runs.
+    scenarios : tuple of str
+        Closed-loop scenarios (``parking``, ``overtake``).
+    planners : tuple of str
+        Registered planner names, including the OMPL rows (``ompl-r2-rrtconnect`` …).
+    controllers : tuple of str
+        Controllers for scenario runs (ignored by planning-only runs).
+    seeds : int
+        Seeds ``0 … seeds-1`` for every cell of the grid.
+    workers : int, optional
+        Local worker processes (default: one per core); with Ray, the largest
+        number of runs in flight.
+    out : str
+        Output folder: ``runs.jsonl``, ``bench_config.json``, the summary and plots.
+    max_time_s, max_iterations : float, int
+        Planning budget of every run.
+    run_timeout_s : float
+        A run that takes longer is killed and counts as a crashed attempt.
+    retries : int
+        Extra attempts of a crashed run before it is recorded as an error row.
+    ray : str, optional
+        ``None`` for local processes; ``""`` for ``ray.init()`` (a local Ray or
+        ``RAY_ADDRESS``); otherwise the address given to ``ray.init``.
+    plots : bool
+        Write the summary plots.
+
+    Examples
+    --------
+    >>> cfg = BenchConfig(maps=("overtake",), planners=("rrt-connect",), seeds=3)
+    >>> len(expand(cfg))
+    3
+    """
+
+    maps: tuple[str, ...] = ()
+    scenarios: tuple[str, ...] = ()
+    planners: tuple[str, ...] = ("improved-rrt-connect",)
+    controllers: tuple[str, ...] = ("pure-pursuit",)
+    seeds: int = 10
+    workers: int | None = None
+    out: str = "bench"
+    max_time_s: float = 5.0
+    max_iterations: int = 20_000
+    run_timeout_s: float = 600.0
+    retries: int = 1
+    ray: str | None = None
+    plots: bool = True
+    map_digests: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        for name in ("maps", "scenarios", "planners", "controllers"):
+            set_(self, name, _names(name, getattr(self, name)))
+        set_(self, "seeds", _int("seeds", self.seeds, 1))
+        if self.workers is not None:
+            set_(self, "workers", _int("workers", self.workers, 1))
+        if not isinstance(self.out, (str, os.PathLike)) or not str(self.out):
+            raise InputError(f"out: expected a folder name, got {self.out!r}")
+        set_(self, "out", str(self.out))
+        set_(self, "max_time_s", _positive("max_time_s", self.max_time_s))
+        set_(self, "max_iterations", _int("max_iterations", self.max_iterations, 1))
+        set_(self, "run_timeout_s", _positive("run_timeout_s", self.run_timeout_s))
+        set_(self, "retries", _int("retries", self.retries, 0))
+        if self.ray is not None and not isinstance(self.ray, str):
+            raise InputError(f"ray: expected an address string, got {self.ray!r}")
+        if not isinstance(self.plots, bool):
+            raise InputError(f"plots: expected true or false, got {self.plots!r}")
+        if not self.maps and not self.scenarios:
+            raise InputError("maps/scenarios: give at least one map or one scenario")
+        if not self.planners:
+            raise InputError("planners: give at least one planner")
+        self._check_names()
+
+    def _check_names(self) -> None:
+        import rrtdrive.bench.ompl_planners  # noqa: F401  (registers the OMPL rows)
+        from rrtdrive.planning import PLANNERS
+
+        for p in self.planners:
+            if p not in PLANNERS:
+                raise InputError(f"planners: unknown planner {p!r}; choose from {sorted(PLANNERS)}")
+            if p.startswith("ompl-") and not ompl_available():
+                raise InputError(
+                    f"planners: {p!r} needs OMPL; install it with pip install 'rrtdrive[ompl]'"
+                )
+        digests = dict(self.map_digests)
+        for m in self.maps:
+            if m not in digests:
+                try:
+                    digests[m] = map_digest(m)
+                except InputError as exc:
+                    raise InputError(f"maps: {m!r}: {exc}") from None
+        object.__setattr__(self, "map_digests", digests)
+        if self.scenarios:
+            from rrtdrive.sim.scenes import SCENARIOS
+
+            for s in self.scenarios:
+                if s not in SCENARIOS:
+                    raise InputError(
+                        f"scenarios: unknown scenario {s!r}; choose from {list(SCENARIOS)}"
+                    )
+            from rrtdrive.controllers import CONTROLLERS
+
+            if not self.controllers:
+                raise InputError("controllers: scenario runs need at least one controller")
+            for c in self.controllers:
+                if c not in CONTROLLERS:
+                    raise InputError(
+                        f"controllers: unknown controller {c!r}; choose from {sorted(CONTROLLERS)}"
+                    )
+
+    @property
+    def runs(self) -> int:
+        """Number of runs in the grid."""
+        per_seed = len(self.maps) * len(self.planners) + len(self.scenarios) * len(
+            self.planners
+        ) * len(self.controllers)
+        return per_seed * self.seeds
+
+    def to_json(self) -> dict[str, Any]:
+        """The resolved configuration as a JSON-ready dict."""
+        out = {k: getattr(self, k) for k in CONFIG_KEYS}
+        for k in ("maps", "scenarios", "planners", "controllers"):
+            out[k] = list(out[k])
+        out["map_digests"] = dict(self.map_digests)
+        out["schema"] = SCHEMA
+        return out
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run of the grid: what to plan (and drive) with which seed.
+
+    Attributes
+    ----------
+    kind : str
+        ``"plan"`` (planning only) or ``"episode"`` (closed loop).
+    target : str
+        The map spec (kind ``plan``) or the scenario name (kind ``episode``).
+    planner : str
+        Registered planner name.
+    controller : str or None
+        Controller name; ``None`` for planning-only runs.
+    seed : int
+        Run seed.
+    max_time_s, max_iterations : float, int
+        Planning budget.
+    config_hash : str
+        Hash of every field above but the seed (and of the map's content).
+    """
+
+    kind: str
+    target: str
+    planner: str
+    controller: str | None
+    seed: int
+    max_time_s: float
+    max_iterations: int
+    config_hash: str
+
+    @property
+    def key(self) -> tuple[str, int]:
+        """``(config_hash, seed)``: the identity of the run across benches."""
+        return (self.config_hash, self.seed)
+
+    def describe(self) -> str:
+        """Short human-readable label."""
+        parts = [self.target, self.planner] + ([self.controller] if self.controller else [])
+        return "/".join(parts) + f" seed {self.seed}"
+
+
+def config_hash(payload: Mapping[str, Any]) -> str:
+    """Stable 16-hex-digit SHA-256 of a JSON-able mapping (sorted keys).
+
+    Examples
+    --------
+    >>> config_hash({"a": 1, "b": 2}) == config_hash({"b": 2, "a": 1})
+    True
+    """
+    text = json.dumps(payload, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def expand(cfg: BenchConfig) -> list[RunSpec]:
+    """Every run of the grid, seed-major so a partial bench covers every cell.
+
+    Parameters
+    ----------
+    cfg : BenchConfig
+        The bench.
+
+    Returns
+    -------
+    list of RunSpec
+    """
+    cells: list[tuple[str, str, str, str | None, str]] = []
+    for m in cfg.maps:
+        for p in cfg.planners:
+            h = config_hash(_hash_payload(cfg, "plan", m, p, None))
+            cells.append(("plan", m, p, None, h))
+    for s in cfg.scenarios:
+        for p in cfg.planners:
+            for c in cfg.controllers:
+                h = config_hash(_hash_payload(cfg, "episode", s, p, c))
+                cells.append(("episode", s, p, c, h))
+    return [
+        RunSpec(kind, target, p, c, seed, cfg.max_time_s, cfg.max_iterations, h)
+        for seed in range(cfg.seeds)
+        for kind, target, p, c, h in cells
+    ]
+
+
+def _hash_payload(
+    cfg: BenchConfig, kind: str, target: str, planner: str, controller: str | None
+) -> dict[str, Any]:
+    payload: dict[str, Any] = {
+        "schema": SCHEMA,
+        "kind": kind,
+        "planner": planner,
+        "controller": controller,
+        "max_time_s": cfg.max_time_s,
+        "max_iterations": cfg.max_iterations,
+    }
+    if kind == "plan":
+        # The map's content, not its spelling: a changed file is a new configuration.
+        payload["map_digest"] = cfg.map_digests[target]
+    else:
+        payload["scenario"] = target
+    return payload
+
+
+def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Read a TOML bench file and check its keys.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file.
+
+    Returns
+    -------
+    dict
+        The keys of :data:`CONFIG_KEYS` that the file sets.
+
+    Raises
+    ------
+    InputError
+        For a missing or malformed file or an unknown key (named in the message).
+    """
+    try:
+        import tomllib  # type: ignore[import-not-found]
+    except ModuleNotFoundError:  # Python 3.10
+        try:
+            import tomli as tomllib  # type: ignore[no-redef]
+        except ModuleNotFoundError:
+            raise InputError(
+                "config: reading TOML needs Python >= 3.11 or the tomli package"
+            ) from None
+    p = FsPath(path)
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(f"config: no such file {str(p)!r}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"config: cannot read {str(p)!r}: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"config: malformed TOML in {str(p)!r}: {exc}") from None
+    if "bench" in data and isinstance(data["bench"], dict) and len(data) == 1:
+        data = data["bench"]  # a [bench] table is accepted too
+    unknown = sorted(set(data) - set(CONFIG_KEYS))
+    if unknown:
+        raise InputError(
+            f"config: unknown key {unknown[0]!r} in {str(p)!r}; "
+            f"allowed keys: {', '.join(CONFIG_KEYS)}"
+        )
+    if "ray" in data:
+        ray = data["ray"]
+        if ray is True:
+            data["ray"] = ""
+        elif ray is False:
+            data["ray"] = None
+        elif not isinstance(ray, str):
+            raise InputError(f"ray: expected true, false or an address, got {ray!r}")
+    return data
+
+
+def config_from_mapping(values: Mapping[str, Any]) -> BenchConfig:
+    """Build a :class:`BenchConfig` from a mapping of :data:`CONFIG_KEYS` (``None`` = default).
+
+    Raises
+    ------
+    InputError
+        For an unknown key or an invalid value.
+    """
+    unknown = sorted(set(values) - set(CONFIG_KEYS))
+    if unknown:
+        raise InputError(f"config: unknown key {unknown[0]!r}")
+    return BenchConfig(**{k: v for k, v in values.items() if v is not None})
+
+
+def grid_keys(specs: Iterable[RunSpec]) -> set[tuple[str, int]]:
+    """The run keys of ``specs``."""
+    return {s.key for s in specs}

@@ -1,0 +1,415 @@
+"""Bench summary: mean, std and 95 % confidence interval per group, as CSV, markdown and plots.
+
+A group is one cell of the grid: ``(kind, map or scenario, planner, controller)``.
+For every numeric or boolean metric of its rows (``None`` values skipped, so the
+length of failed plans does not count) the summary gives ``n``, the mean, the
+sample standard deviation and a 95 % interval: Student's t for numbers, the
+Wilson score interval for rates (booleans). Error rows (crashed runs) are
+counted per group and left out of every metric.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path as FsPath
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "Stat",
+    "GroupSummary",
+    "summarise_rows",
+    "describe",
+    "wilson_interval",
+    "to_csv",
+    "to_markdown",
+    "write_summary",
+    "write_plots",
+]
+
+#: Row fields that identify a run or carry text; never summarised.
+_ID_FIELDS = {
+    "config_hash", "seed", "kind", "map", "scenario", "planner", "controller", "status",
+    "message", "error", "worker", "finished_at", "map_name", "plan_status", "max_time_s",
+    "max_iterations", "attempts", "kappa_max", "simulation_frequency",
+}
+
+#: Metrics shown in the markdown tables (the CSV has every metric).
+_MD_COLUMNS = {
+    "plan": (
+        ("success", "success", 1.0, "{:.0%}"),
+        ("verified", "verified", 1.0, "{:.0%}"),
+        ("length_m", "length [m]", 1.0, "{:.2f}"),
+        ("planning_time_s", "time [ms]", 1e3, "{:.1f}"),
+        ("max_curvature", "max κ [1/m]", 1.0, "{:.3f}"),
+        ("nodes", "nodes", 1.0, "{:.0f}"),
+    ),
+    "episode": (
+        ("success", "success", 1.0, "{:.0%}"),
+        ("collision", "collision", 1.0, "{:.0%}"),
+        ("cte_rms_m", "CTE rms [m]", 1.0, "{:.3f}"),
+        ("path_length_m", "path [m]", 1.0, "{:.1f}"),
+        ("executed_max_curvature", "exec. max κ", 1.0, "{:.3f}"),
+        ("max_lateral_accel", "max a_lat", 1.0, "{:.2f}"),
+        ("time_to_goal_s", "time to goal [s]", 1.0, "{:.1f}"),
+        ("planning_time_s", "plan time [ms]", 1e3, "{:.1f}"),
+    ),
+}
+
+
+@dataclass(frozen=True)
+class Stat:
+    """Summary of one metric over a group.
+
+    Attributes
+    ----------
+    n : int
+        Number of values (``None`` skipped).
+    mean, std : float
+        Mean and sample standard deviation (NaN for ``n < 2``).
+    ci_low, ci_high : float
+        95 % confidence interval of the mean (Wilson for rates).
+    rate : bool
+        The metric is boolean (mean = rate).
+    """
+
+    n: int
+    mean: float
+    std: float
+    ci_low: float
+    ci_high: float
+    rate: bool
+
+
+@dataclass(frozen=True)
+class GroupSummary:
+    """All metrics of one cell of the grid.
+
+    Attributes
+    ----------
+    kind : str
+        ``"plan"`` or ``"episode"``.
+    target : str
+        Map spec or scenario name.
+    planner : str
+        Planner name.
+    controller : str or None
+        Controller name (``None`` for planning-only runs).
+    runs : int
+        Rows in the group, error rows included.
+    errors : int
+        Error rows (crashed runs).
+    stats : dict
+        Metric name -> :class:`Stat`.
+    """
+
+    kind: str
+    target: str
+    planner: str
+    controller: str | None
+    runs: int
+    errors: int
+    stats: Mapping[str, Stat]
+
+    @property
+    def label(self) -> str:
+        """``target / planner [/ controller]``."""
+        parts = [self.target, self.planner] + ([self.controller] if self.controller else [])
+        return " / ".join(parts)
+
+
+def _t975(dof: int) -> float:
+    from scipy.stats import t
+
+    return float(t.ppf(0.975, dof))
+
+
+def wilson_interval(successes: float, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
+    """95 % Wilson score interval of a rate.
+
+    Examples
+    --------
+    >>> lo, hi = wilson_interval(10, 10)
+    >>> round(lo, 3), hi
+    (0.722, 1.0)
+    """
+    if n == 0:
+        return (math.nan, math.nan)
+    p = successes / n
+    denom = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
+def describe(values: Sequence[float], rate: bool = False) -> Stat:
+    """Mean, std and 95 % CI of ``values`` (Wilson interval when ``rate``).
+
+    Examples
+    --------
+    >>> s = describe([1.0, 2.0, 3.0])
+    >>> s.mean, s.std, round(s.ci_low, 3), round(s.ci_high, 3)
+    (2.0, 1.0, -0.484, 4.484)
+    """
+    x = np.asarray(values, dtype=float)
+    n = len(x)
+    if n == 0:
+        return Stat(0, math.nan, math.nan, math.nan, math.nan, rate)
+    mean = float(x.mean())
+    std = float(x.std(ddof=1)) if n > 1 else math.nan
+    if rate:
+        lo, hi = wilson_interval(float(x.sum()), n)
+    elif n > 1:
+        half = _t975(n - 1) * std / math.sqrt(n)
+        lo, hi = mean - half, mean + half
+    else:
+        lo = hi = math.nan
+    return Stat(n, mean, std, lo, hi, rate)
+
+
+def _group_key(row: Mapping[str, Any]) -> tuple[str, str, str, str | None]:
+    kind = row.get("kind", "plan")
+    target = row.get("map") if kind == "plan" else row.get("scenario")
+    return (str(kind), str(target), str(row.get("planner")), row.get("controller"))
+
+
+def summarise_rows(rows: Iterable[Mapping[str, Any]]) -> list[GroupSummary]:
+    """Group rows by grid cell and summarise every metric.
+
+    Parameters
+    ----------
+    rows : iterable of dict
+        Result rows (as stored in ``runs.jsonl``).
+
+    Returns
+    -------
+    list of GroupSummary
+        In the order the groups first appear.
+    """
+    groups: dict[tuple[str, str, str, str | None], list[Mapping[str, Any]]] = {}
+    for row in rows:
+        groups.setdefault(_group_key(row), []).append(row)
+    out = []
+    for (kind, target, planner, controller), members in groups.items():
+        ok = [r for r in members if r.get("status") != "error"]
+        metrics: dict[str, list[float]] = {}
+        is_rate: dict[str, bool] = {}
+        for r in ok:
+            for k, v in r.items():
+                if k in _ID_FIELDS or v is None:
+                    continue
+                if isinstance(v, bool):
+                    metrics.setdefault(k, []).append(float(v))
+                    is_rate[k] = is_rate.get(k, True)
+                elif isinstance(v, (int, float)) and math.isfinite(v):
+                    metrics.setdefault(k, []).append(float(v))
+                    is_rate[k] = False
+        stats = {k: describe(v, rate=is_rate[k]) for k, v in metrics.items()}
+        out.append(
+            GroupSummary(kind, target, planner, controller, len(members),
+                         len(members) - len(ok), stats)
+        )
+    return out
+
+
+def _num(x: float) -> str:
+    return "" if not math.isfinite(x) else f"{x:.6g}"
+
+
+def to_csv(groups: Sequence[GroupSummary]) -> str:
+    """Long-format CSV: one line per group and metric."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["kind", "map", "scenario", "planner", "controller", "runs", "errors",
+                "metric", "n", "mean", "std", "ci95_low", "ci95_high"])
+    for g in groups:
+        for name in sorted(g.stats):
+            s = g.stats[name]
+            w.writerow([
+                g.kind, g.target if g.kind == "plan" else "",
+                g.target if g.kind == "episode" else "", g.planner, g.controller or "",
+                g.runs, g.errors, name, s.n, _num(s.mean), _num(s.std), _num(s.ci_low),
+                _num(s.ci_high),
+            ])
+    return buf.getvalue()
+
+
+def _cell(s: Stat | None, scale: float, fmt: str) -> str:
+    if s is None or s.n == 0:
+        return "–"
+    if s.rate:
+        return f"{fmt.format(s.mean)} [{fmt.format(s.ci_low)}, {fmt.format(s.ci_high)}]"
+    mean = fmt.format(s.mean * scale)
+    if s.n < 2:
+        return mean
+    return (
+        f"{mean} ± {fmt.format(s.std * scale)} "
+        f"[{fmt.format(s.ci_low * scale)}, {fmt.format(s.ci_high * scale)}]"
+    )
+
+
+def to_markdown(groups: Sequence[GroupSummary], title: str = "Bench summary") -> str:
+    """Markdown tables (planning-only and closed-loop): mean ± std [95 % CI] per group."""
+    lines = [f"# {title}", ""]
+    lines.append(
+        "Cells: mean ± std [95 % CI] over the runs with a value (Student's t); rates "
+        "with the Wilson 95 % interval. Lengths and curvatures only of successful runs."
+    )
+    for kind, heading in (("plan", "Planning only"), ("episode", "Closed loop")):
+        gs = [g for g in groups if g.kind == kind]
+        if not gs:
+            continue
+        cols = _MD_COLUMNS[kind]
+        first = "map" if kind == "plan" else "scenario"
+        lines += ["", f"## {heading}", ""]
+        head = [first, "planner"] + (["controller"] if kind == "episode" else [])
+        head += ["runs", "errors"] + [c[1] for c in cols]
+        lines.append("| " + " | ".join(head) + " |")
+        lines.append("|" + "---|" * len(head))
+        for g in gs:
+            cells = [g.target, g.planner] + ([g.controller or ""] if kind == "episode" else [])
+            cells += [str(g.runs), str(g.errors)]
+            cells += [_cell(g.stats.get(k), scale, fmt) for k, _, scale, fmt in cols]
+            lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def write_summary(
+    groups: Sequence[GroupSummary], out: str | FsPath, title: str = "Bench summary"
+) -> list[FsPath]:
+    """Write ``summary.csv`` and ``summary.md`` into ``out`` atomically; return their paths."""
+    from rrtdrive.maps import write_text_atomic
+
+    out = FsPath(out)
+    paths = [out / "summary.csv", out / "summary.md"]
+    write_text_atomic(paths[0], to_csv(groups))
+    write_text_atomic(paths[1], to_markdown(groups, title))
+    return paths
+
+
+def _values(rows: Iterable[Mapping[str, Any]], key: str) -> list[float]:
+    return [
+        float(r[key]) for r in rows
+        if isinstance(r.get(key), (int, float)) and not isinstance(r.get(key), bool)
+        and math.isfinite(r[key])
+    ]
+
+
+def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[FsPath]:
+    """Box plots of length and time, success bars and curvature histograms, as PNGs in ``out``.
+
+    Parameters
+    ----------
+    rows : sequence of dict
+        Result rows of the bench (error rows are skipped).
+    out : str or path-like
+        Folder.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    from rrtdrive.plotting import save_figure
+
+    out = FsPath(out)
+    groups: dict[str, list[Mapping[str, Any]]] = {}
+    for r in rows:
+        if r.get("status") == "error":
+            continue
+        kind, target, planner, controller = _group_key(r)
+        label = " / ".join([target, planner] + ([controller] if controller else []))
+        groups.setdefault(label, []).append(r)
+    if not groups:
+        return []
+    labels = list(groups)
+    height = max(3.0, 0.35 * len(labels) + 1.5)
+    written: list[FsPath] = []
+
+    def box(filename: str, keys: tuple[str, ...], xlabel: str, scale: float = 1.0) -> None:
+        data, names = [], []
+        for lab in labels:
+            vals: list[float] = []
+            for k in keys:
+                vals += _values(groups[lab], k)
+            if vals:
+                data.append(np.asarray(vals) * scale)
+                names.append(lab)
+        if not data:
+            return
+        fig = Figure(figsize=(8, max(3.0, 0.35 * len(names) + 1.5)), layout="constrained")
+        ax = fig.add_subplot()
+        ax.boxplot(data, vert=False, showmeans=True)
+        lo = min(float(np.min(d)) for d in data)
+        hi = max(float(np.max(d)) for d in data)
+        if lo > 0 and hi / lo > 100:
+            ax.set_xscale("log")
+        ax.set_yticks(range(1, len(names) + 1), names, fontsize=8)
+        ax.invert_yaxis()
+        ax.set_xlabel(xlabel)
+        ax.grid(axis="x", alpha=0.3)
+        save_figure(fig, out / filename)
+        written.append(out / filename)
+
+    box("box_length.png", ("length_m", "path_length_m"), "path length [m] (successful runs)")
+    box("box_time.png", ("planning_time_s",), "planning time [ms]", 1e3)
+
+    # Success rates with Wilson intervals.
+    fig = Figure(figsize=(8, height), layout="constrained")
+    ax = fig.add_subplot()
+    rates, lo, hi = [], [], []
+    for lab in labels:
+        vals = [bool(r.get("success")) for r in groups[lab]]
+        s = describe([float(v) for v in vals], rate=True)
+        rates.append(s.mean)
+        lo.append(max(0.0, s.mean - s.ci_low))
+        hi.append(max(0.0, s.ci_high - s.mean))
+    y = np.arange(len(labels))
+    ax.barh(y, rates, xerr=[lo, hi], capsize=3, color="tab:green", alpha=0.8)
+    ax.set_yticks(y, labels, fontsize=8)
+    ax.invert_yaxis()
+    ax.set_xlim(0, 1.05)
+    ax.set_xlabel("success rate (95 % Wilson interval)")
+    save_figure(fig, out / "success.png")
+    written.append(out / "success.png")
+
+    # Curvature: histograms of each run's largest path curvature, one panel per planner.
+    by_planner: dict[str, list[float]] = {}
+    for r in rows:
+        if r.get("status") == "error":
+            continue
+        vals = _values([r], "max_curvature") + _values([r], "path_max_curvature")
+        by_planner.setdefault(str(r.get("planner")), []).extend(vals)
+    by_planner = {k: v for k, v in by_planner.items() if v}
+    kmax = next((r.get("kappa_max") for r in rows if r.get("kappa_max")), None)
+    if by_planner:
+        n = len(by_planner)
+        ncols = min(3, n)
+        nrows = math.ceil(n / ncols)
+        fig = Figure(figsize=(3.4 * ncols, 2.6 * nrows + 0.6), layout="constrained")
+        axes = fig.subplots(nrows, ncols, squeeze=False, sharex=True)
+        everything = np.concatenate([np.asarray(v) for v in by_planner.values()])
+        top = max(float(everything.max()), float(kmax or 0.0)) * 1.05 or 1.0
+        bins = np.linspace(0.0, top, 40)
+        for ax, (planner, vals) in zip(axes.flat, by_planner.items(), strict=False):
+            ax.hist(vals, bins=bins, color="tab:blue", alpha=0.75)
+            if kmax:
+                ax.axvline(float(kmax), color="k", linestyle="--", linewidth=1)
+            ax.set_title(planner, fontsize=9)
+        for ax in list(axes.flat)[n:]:
+            ax.set_visible(False)
+        fig.supxlabel("largest path curvature of a run [1/m] (dashed: κ_max)")
+        fig.supylabel("runs")
+        save_figure(fig, out / "curvature_hist.png")
+        written.append(out / "curvature_hist.png")
+    return written

@@ -1,0 +1,163 @@
+"""What one worker does for one run: plan (or plan and drive) and return the metrics row.
+
+Everything here is a module-level function so that spawned processes and Ray
+workers can import it. Maps are resolved once per process and their checkers
+are cached by :meth:`rrtdrive.planning.PlanningProblem.from_map`, so a worker
+pays the distance-field construction once per map.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import socket
+import time
+from datetime import datetime, timezone
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from rrtdrive.bench.grid import RunSpec
+
+if TYPE_CHECKING:  # pragma: no cover
+    from rrtdrive.maps import Map
+
+__all__ = ["execute_run", "base_row", "error_row"]
+
+
+@functools.lru_cache(maxsize=32)
+def _map(spec: str) -> Map:
+    from rrtdrive.maps import resolve_map
+
+    return resolve_map(spec)
+
+
+def base_row(spec: RunSpec) -> dict[str, Any]:
+    """The identifying fields every row starts with."""
+    row: dict[str, Any] = {
+        "config_hash": spec.config_hash,
+        "seed": spec.seed,
+        "kind": spec.kind,
+        "map": spec.target if spec.kind == "plan" else None,
+        "scenario": spec.target if spec.kind == "episode" else None,
+        "planner": spec.planner,
+        "controller": spec.controller,
+        "max_time_s": spec.max_time_s,
+        "max_iterations": spec.max_iterations,
+    }
+    return row
+
+
+def error_row(spec: RunSpec, message: str, attempts: int) -> dict[str, Any]:
+    """The row recorded for a run that crashed on every attempt."""
+    row = base_row(spec)
+    row.update(
+        {
+            "status": "error",
+            "success": False,
+            "error": message,
+            "attempts": attempts,
+            "finished_at": _now(),
+        }
+    )
+    return row
+
+
+def _now() -> str:
+    return datetime.now(timezone.utc).isoformat(timespec="milliseconds")
+
+
+def execute_run(spec: RunSpec) -> dict[str, Any]:
+    """Run one grid cell with one seed and return its row (identifiers and every metric).
+
+    Planning-only runs record ``success``, ``status``, ``length_m``,
+    ``max_curvature``, ``nodes``, ``iterations``, ``planning_time_s``, ``message``
+    and ``verified`` (:func:`rrtdrive.verify.verify_path` on successful paths,
+    ``None`` otherwise). Scenario runs record every metric of
+    :func:`rrtdrive.evaluation.evaluate` plus ``verified`` for the planned path.
+
+    Parameters
+    ----------
+    spec : RunSpec
+        The run.
+
+    Returns
+    -------
+    dict
+        The row, JSON-ready apart from non-finite floats.
+
+    Examples
+    --------
+    >>> from rrtdrive.bench.grid import BenchConfig, expand
+    >>> spec = expand(BenchConfig(maps=("overtake",), planners=("rrt-connect",), seeds=1))[0]
+    >>> execute_run(spec)["success"]
+    True
+    """
+    t0 = time.perf_counter()
+    if spec.kind == "plan":
+        metrics = _plan_metrics(spec)
+    elif spec.kind == "episode":
+        metrics = _episode_metrics(spec)
+    else:
+        raise ValueError(f"kind: unknown run kind {spec.kind!r}")
+    row = base_row(spec)
+    row.update(metrics)
+    row.update(
+        {
+            "error": None,
+            "wall_time_s": time.perf_counter() - t0,
+            "worker": f"{socket.gethostname()}:{os.getpid()}",
+            "finished_at": _now(),
+        }
+    )
+    return row
+
+
+def _plan_metrics(spec: RunSpec) -> dict[str, Any]:
+    import rrtdrive.bench.ompl_planners  # noqa: F401  (registers the OMPL rows)
+    from rrtdrive.planning import PlanningProblem, make_planner
+    from rrtdrive.types import Budget
+    from rrtdrive.verify import verify_path
+
+    m = _map(spec.target)
+    problem = PlanningProblem.from_map(m)
+    planner = make_planner(spec.planner)
+    budget = Budget(max_iterations=spec.max_iterations, max_time_s=spec.max_time_s)
+    result = planner.solve(problem, np.random.default_rng(spec.seed), budget)
+    ok = result.success
+    return {
+        "map_name": m.name,
+        "success": ok,
+        "status": result.status.value,
+        "length_m": result.path.length if ok else None,
+        "max_curvature": result.path.max_curvature if ok else None,
+        "kappa_max": m.vehicle.kappa_max,
+        "nodes": int(result.nodes),
+        "iterations": int(result.iterations),
+        "planning_time_s": float(result.planning_time_s),
+        "verified": bool(verify_path(m, result.path).ok) if ok else None,
+        "message": result.message,
+    }
+
+
+def _episode_metrics(spec: RunSpec) -> dict[str, Any]:
+    import rrtdrive.bench.ompl_planners  # noqa: F401  (registers the OMPL rows)
+    from rrtdrive.evaluation import evaluate
+    from rrtdrive.sim.runner import EpisodeConfig, run_episode
+    from rrtdrive.types import Budget
+    from rrtdrive.verify import verify_path
+
+    config = EpisodeConfig(
+        budget=Budget(max_iterations=spec.max_iterations, max_time_s=spec.max_time_s)
+    )
+    assert spec.controller is not None
+    episode = run_episode(spec.target, spec.planner, spec.controller, spec.seed, config)
+    report = evaluate(episode).to_json()
+    for k in ("scenario", "planner", "controller", "seed"):
+        report.pop(k, None)
+    plan_ok = episode.plan is not None and episode.plan.success
+    report["plan_status"] = episode.plan.status.value if episode.plan is not None else None
+    report["verified"] = (
+        bool(verify_path(episode.scenario.map, episode.path).ok) if plan_ok else None
+    )
+    return report
