@@ -248,19 +248,20 @@ class LocalBackend:
                             yield from self._failed(queue, task, payload)
                         continue
                 elif slot.proc.sentinel in ready:
-                    failure = f"worker process died (exit code {slot.proc.exitcode})"
+                    failure = "worker process died"
                 elif slot.task is not None and (
                     time.monotonic() - slot.started > self.run_timeout_s
                 ):
                     failure = f"run exceeded the run timeout of {self.run_timeout_s:g} s"
                 if failure is None:
                     continue
-                slot.proc.join(0.1)
+                if failure == "worker process died":
+                    slot.proc.join(2.0)  # its pipe can close just before it can be reaped
+                    if slot.proc.exitcode is not None:
+                        failure += f" (exit code {slot.proc.exitcode})"
                 if slot.proc.is_alive():
                     slot.proc.kill()
                     slot.proc.join(5.0)
-                if slot.proc.exitcode is not None and slot.proc.exitcode < 0:
-                    failure += f" (signal {-slot.proc.exitcode})"
                 slot.conn.close()
                 task = slot.task
                 slots[k] = self._start()

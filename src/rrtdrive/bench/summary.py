@@ -349,7 +349,10 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
             return
         fig = Figure(figsize=(8, max(3.0, 0.35 * len(names) + 1.5)), layout="constrained")
         ax = fig.add_subplot()
-        ax.boxplot(data, vert=False, showmeans=True)
+        try:
+            ax.boxplot(data, orientation="horizontal", showmeans=True)
+        except TypeError:  # matplotlib < 3.10
+            ax.boxplot(data, vert=False, showmeans=True)
         lo = min(float(np.min(d)) for d in data)
         hi = max(float(np.max(d)) for d in data)
         if lo > 0 and hi / lo > 100:

@@ -1,0 +1,379 @@
+"""Tests of ``rrtdrive bench``: config, run keys, the JSONL store, local runs, crash retry,
+SIGKILL resume, the summary and the OMPL rows."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rrtdrive.bench import BenchConfig, ResultStore, expand, run_bench
+from rrtdrive.bench.core import grid_rows
+from rrtdrive.bench.grid import config_from_mapping, load_toml
+from rrtdrive.bench.summary import describe, summarise_rows, to_csv, to_markdown, wilson_interval
+from rrtdrive.bench.worker import execute_run
+from rrtdrive.cli import main
+from rrtdrive.maps import builtin_map, save_map
+from rrtdrive.types import InputError
+
+FAST = ("rrt-connect", "rrt-star")
+
+# ----------------------------------------------------------------------------- fault injection
+# Module-level executors: the spawned workers import this module by name to find them.
+
+
+def crashing_executor(spec):
+    """Seed 1 crashes its worker on the first attempt only; seed 2 always; seed 3 raises."""
+    marker_dir = Path(os.environ["RRTDRIVE_TEST_MARKERS"])
+    if spec.seed == 1:
+        marker = marker_dir / f"{spec.config_hash}-{spec.seed}"
+        if not marker.exists():
+            marker.write_text("crashed once")
+            os._exit(3)
+    if spec.seed == 2:
+        os._exit(4)
+    if spec.seed == 3:
+        raise RuntimeError("boom")
+    return execute_run(spec)
+
+
+def sleeping_executor(spec):
+    """Seed 0 hangs past any run timeout."""
+    if spec.seed == 0:
+        time.sleep(60)
+    return execute_run(spec)
+
+
+# ----------------------------------------------------------------------------- config
+
+
+def test_config_validation_names_the_field():
+    cases = [
+        (dict(maps=("nowhere",)), "maps"),
+        (dict(maps=("overtake",), planners=("bogus",)), "planners"),
+        (dict(scenarios=("moon",)), "scenarios"),
+        (dict(scenarios=("overtake",), controllers=("pid",)), "controllers"),
+        (dict(maps=("overtake",), seeds=0), "seeds"),
+        (dict(maps=("overtake",), workers=0), "workers"),
+        (dict(maps=("overtake",), max_time_s=-1.0), "max_time_s"),
+        (dict(maps=("overtake",), seeds=True), "seeds"),
+        (dict(), "maps/scenarios"),
+    ]
+    for kwargs, field in cases:
+        with pytest.raises(InputError, match=f"^{field}"):
+            BenchConfig(**kwargs)
+
+
+def test_toml_config(tmp_path):
+    good = tmp_path / "b.toml"
+    good.write_text(
+        'maps = ["overtake", "parking_lot"]\nplanners = ["rrt-connect"]\nseeds = 4\n'
+        'workers = 2\nout = "x"\nray = false\n'
+    )
+    cfg = config_from_mapping(load_toml(good))
+    assert cfg.maps == ("overtake", "parking_lot") and cfg.seeds == 4 and cfg.ray is None
+    assert cfg.runs == 8 and len(expand(cfg)) == 8
+    bad = tmp_path / "bad.toml"
+    bad.write_text("maps = [overtake\n")
+    with pytest.raises(InputError, match="^config: malformed TOML"):
+        load_toml(bad)
+    unknown = tmp_path / "unknown.toml"
+    unknown.write_text('maps = ["overtake"]\nseedz = 3\n')
+    with pytest.raises(InputError, match="^config: unknown key 'seedz'"):
+        load_toml(unknown)
+    with pytest.raises(InputError, match="^config: no such file"):
+        load_toml(tmp_path / "missing.toml")
+    wrong_type = tmp_path / "wt.toml"
+    wrong_type.write_text('maps = ["overtake"]\nseeds = "ten"\n')
+    with pytest.raises(InputError, match="^seeds"):
+        config_from_mapping(load_toml(wrong_type))
+
+
+def test_cli_bad_input_exit_2(tmp_path, capsys):
+    for argv in (
+        ["bench", "--maps", "overtake", "--seeds", "0", "--out", str(tmp_path)],
+        ["bench", "--maps", "overtake", "--workers", "0", "--out", str(tmp_path)],
+        ["bench", "--maps", "overtake", "--planners", "nope", "--out", str(tmp_path)],
+        ["bench", "--maps", "atlantis", "--out", str(tmp_path)],
+        ["bench", "--scenarios", "moon", "--out", str(tmp_path)],
+        ["bench", "--scenarios", "overtake", "--controllers", "pid", "--out", str(tmp_path)],
+        ["bench", "--config", str(tmp_path / "none.toml")],
+    ):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("rrtdrive bench: error:") and "\n" not in err
+        assert "Traceback" not in err
+
+
+def test_run_keys_are_stable_and_cover_the_config(tmp_path):
+    cfg = BenchConfig(maps=("overtake", "parking_lot"), planners=FAST, seeds=3)
+    specs = expand(cfg)
+    assert len(specs) == cfg.runs == 12
+    assert len({s.key for s in specs}) == 12
+    assert [s.seed for s in specs[:4]] == [0, 0, 0, 0]  # seed-major
+    again = expand(BenchConfig(maps=("parking_lot", "overtake"), planners=FAST[::-1], seeds=3))
+    assert {s.key for s in again} == {s.key for s in specs}
+    other_budget = expand(
+        BenchConfig(maps=("overtake", "parking_lot"), planners=FAST, seeds=3, max_time_s=2.0)
+    )
+    assert not {s.key for s in other_budget} & {s.key for s in specs}
+    # A map file: its content, not its name, is in the key.
+    f = tmp_path / "m.json"
+    save_map(builtin_map("overtake"), f)
+    (a,) = expand(BenchConfig(maps=(str(f),), planners=("rrt",), seeds=1))
+    m = builtin_map("overtake")
+    save_map(m.with_query(goal=type(m.goal)(m.goal.x - 5.0, m.goal.y, m.goal.yaw)), f)
+    (b,) = expand(BenchConfig(maps=(str(f),), planners=("rrt",), seeds=1))
+    assert a.config_hash != b.config_hash
+
+
+# ----------------------------------------------------------------------------- store
+
+
+def test_store_append_resume_and_partial_tail(tmp_path):
+    with ResultStore(tmp_path) as s:
+        s.append({"config_hash": "h", "seed": 0, "x": float("nan")})
+        s.append({"config_hash": "h", "seed": 1, "x": 1.5})
+        with pytest.raises(ValueError):
+            s.append({"config_hash": "h", "seed": 1})
+        with pytest.raises(InputError, match="^out: another bench"):
+            ResultStore(tmp_path)
+    # A writer killed mid-line leaves a partial tail: it is cut on open.
+    with open(tmp_path / "runs.jsonl", "a") as fh:
+        fh.write('{"config_hash": "h", "seed": 2, "x"')
+    with ResultStore(tmp_path) as s:
+        assert s.done_keys() == {("h", 0), ("h", 1)}
+        s.append({"config_hash": "h", "seed": 2, "x": 2})
+        rows = list(s.rows())
+        assert [r["seed"] for r in rows] == [0, 1, 2] and rows[0]["x"] is None
+        assert s.drop([("h", 1)]) == 1
+        assert s.done_keys() == {("h", 0), ("h", 2)}
+        s.append({"config_hash": "h", "seed": 1})
+    lines = (tmp_path / "runs.jsonl").read_text().splitlines()
+    assert len(lines) == 3 and all(json.loads(line) for line in lines)
+    with pytest.raises(InputError, match="^out"):
+        ResultStore(tmp_path / "runs.jsonl")
+
+
+# ----------------------------------------------------------------------------- local runs
+
+
+def test_local_bench_rows_resume_and_summary(tmp_path):
+    cfg = BenchConfig(
+        maps=("overtake", "no_path"), planners=("rrt-connect", "improved-rrt-connect"),
+        seeds=3, workers=2, out=str(tmp_path), max_time_s=2.0,
+    )
+    report = run_bench(cfg, command="test")
+    assert (report.total, report.skipped, report.executed, report.errors) == (12, 0, 12, 0)
+    lines = (tmp_path / "runs.jsonl").read_text().splitlines()
+    rows = [json.loads(line) for line in lines]
+    assert len(rows) == 12
+    assert Counter((r["config_hash"], r["seed"]) for r in rows) == Counter(
+        s.key for s in expand(cfg)
+    )
+    for r in rows:
+        for k in ("map", "planner", "controller", "seed", "success", "status", "length_m",
+                  "max_curvature", "nodes", "iterations", "planning_time_s", "verified"):
+            assert k in r
+        assert r["controller"] is None and r["scenario"] is None and r["error"] is None
+        if r["map"] == "overtake":
+            assert r["success"] and r["length_m"] > 80
+            assert r["verified"] is (r["planner"] == "improved-rrt-connect")
+        else:
+            assert not r["success"] and r["status"] == "proven_unreachable"
+            assert r["verified"] is None and r["length_m"] is None
+    # Re-running does nothing, and the files are there.
+    again = run_bench(cfg)
+    assert (again.skipped, again.executed) == (12, 0)
+    assert len((tmp_path / "runs.jsonl").read_text().splitlines()) == 12
+    for name in ("summary.md", "summary.csv", "bench_config.json", "box_length.png",
+                 "box_time.png", "success.png", "curvature_hist.png"):
+        assert (tmp_path / name).stat().st_size > 0, name
+    meta = json.loads((tmp_path / "bench_config.json").read_text())
+    assert meta["config"]["seeds"] == 3 and meta["seeds"] == [0, 1, 2]
+    md = (tmp_path / "summary.md").read_text()
+    assert "| overtake | improved-rrt-connect | 3 | 0 | 100%" in md
+    table = list(csv.DictReader(io.StringIO((tmp_path / "summary.csv").read_text())))
+    succ = [t for t in table if t["map"] == "no_path" and t["metric"] == "success"]
+    assert len(succ) == 2 and all(float(t["mean"]) == 0.0 for t in succ)
+    # More seeds later: only the new ones run.
+    more = run_bench(BenchConfig(**{**_kw(cfg), "seeds": 4}))
+    assert (more.skipped, more.executed) == (12, 4)
+
+
+def _kw(cfg):
+    return {k: getattr(cfg, k) for k in ("maps", "scenarios", "planners", "controllers",
+                                         "workers", "out", "max_time_s", "plots")}
+
+
+def test_crashed_run_is_retried_once_then_recorded(tmp_path, monkeypatch):
+    markers = tmp_path / "markers"
+    markers.mkdir()
+    monkeypatch.setenv("RRTDRIVE_TEST_MARKERS", str(markers))
+    cfg = BenchConfig(
+        maps=("overtake",), planners=("rrt-connect",), seeds=5, workers=2,
+        out=str(tmp_path / "out"), plots=False,
+    )
+    report = run_bench(cfg, executor=crashing_executor)
+    assert (report.executed, report.errors) == (5, 2)
+    with ResultStore(cfg.out, lock=False) as store:
+        rows = {r["seed"]: r for r in grid_rows(cfg, store)}
+    assert sorted(rows) == [0, 1, 2, 3, 4]
+    assert rows[0]["success"] and rows[0]["attempts"] == 1
+    assert rows[1]["success"] and rows[1]["attempts"] == 2  # crashed once, then succeeded
+    assert rows[2]["status"] == "error" and rows[2]["attempts"] == 2
+    assert "worker process died (exit code 4)" in rows[2]["error"]
+    assert rows[3]["status"] == "error" and rows[3]["error"].startswith("RuntimeError: boom")
+    # The summary counts error rows apart.
+    (g,) = summarise_rows(rows.values())
+    assert (g.runs, g.errors, g.stats["success"].n) == (5, 2, 3)
+    # --retry-errors runs them again (still failing: replaced, not duplicated).
+    again = run_bench(cfg, executor=crashing_executor, retry_errors=True)
+    assert (again.executed, again.errors) == (2, 2)
+    lines = (Path(cfg.out) / "runs.jsonl").read_text().splitlines()
+    assert sorted(json.loads(x)["seed"] for x in lines) == [0, 1, 2, 3, 4]
+
+
+def test_run_timeout_kills_the_worker(tmp_path):
+    cfg = BenchConfig(
+        maps=("overtake",), planners=("rrt-connect",), seeds=2, workers=2, retries=0,
+        run_timeout_s=3.0, out=str(tmp_path), plots=False,
+    )
+    report = run_bench(cfg, executor=sleeping_executor)
+    assert (report.executed, report.errors) == (2, 1)
+    with ResultStore(tmp_path, lock=False) as store:
+        rows = {r["seed"]: r for r in grid_rows(cfg, store)}
+    assert "run timeout" in rows[0]["error"] and rows[1]["success"]
+
+
+def test_sigkill_mid_bench_then_resume(tmp_path):
+    out = tmp_path / "out"
+    argv = [
+        sys.executable, "-m", "rrtdrive", "bench", "--maps", "parking_lot,overtake",
+        "--planners", ",".join(FAST), "--seeds", "40", "--workers", "2", "--out", str(out),
+        "--no-plots", "--quiet",
+    ]
+    cfg = BenchConfig(maps=("parking_lot", "overtake"), planners=FAST, seeds=40)
+    keys = Counter(s.key for s in expand(cfg))
+    proc = subprocess.Popen(argv, start_new_session=True, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    results = out / "runs.jsonl"
+    deadline = time.monotonic() + 60
+    try:
+        while time.monotonic() < deadline:
+            if results.exists() and results.read_bytes().count(b"\n") >= 10:
+                break
+            time.sleep(0.01)
+        os.killpg(proc.pid, signal.SIGKILL)  # the bench and its workers
+    finally:
+        proc.wait(10)
+    assert proc.returncode == -signal.SIGKILL
+    first = [json.loads(x) for x in results.read_text().splitlines()]
+    assert 10 <= len(first) < len(keys), "the kill must land mid-bench"
+    # As if killed inside a write: a partial last line.
+    with open(results, "a") as fh:
+        fh.write('{"config_hash": "' + first[0]["config_hash"])
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert f"{len(first)} resumed" in done.stdout
+    rows = [json.loads(x) for x in results.read_text().splitlines()]
+    assert Counter((r["config_hash"], r["seed"]) for r in rows) == keys  # each exactly once
+    assert all(r["error"] is None for r in rows)
+
+
+@pytest.mark.skipif(
+    os.environ.get("RRTDRIVE_SKIP_SIM") == "1", reason="closed loop disabled"
+)
+def test_tiny_closed_loop_bench(tmp_path):
+    cfg = BenchConfig(
+        scenarios=("overtake",), planners=("rrt-connect",), controllers=("pure-pursuit",),
+        seeds=1, workers=1, out=str(tmp_path), plots=True,
+    )
+    report = run_bench(cfg)
+    assert (report.executed, report.errors) == (1, 0)
+    (row,) = [json.loads(x) for x in (tmp_path / "runs.jsonl").read_text().splitlines()]
+    assert row["scenario"] == "overtake" and row["map"] is None
+    assert row["controller"] == "pure-pursuit" and row["kind"] == "episode"
+    for k in ("success", "collision", "cte_rms_m", "time_to_goal_s", "max_lateral_accel",
+              "planning_time_s", "verified", "status"):
+        assert k in row
+    assert "## Closed loop" in (tmp_path / "summary.md").read_text()
+
+
+# ----------------------------------------------------------------------------- summary
+
+
+def test_statistics():
+    s = describe([1.0, 2.0, 3.0, 4.0])
+    assert s.n == 4 and s.mean == 2.5 and s.std == pytest.approx(np.std([1, 2, 3, 4], ddof=1))
+    half = 3.182446305284263 * s.std / 2  # t(0.975, 3)
+    assert (s.ci_low, s.ci_high) == (pytest.approx(2.5 - half), pytest.approx(2.5 + half))
+    lo, hi = wilson_interval(5, 10)
+    assert lo == pytest.approx(0.2366, abs=1e-4) and hi == pytest.approx(0.7634, abs=1e-4)
+    one = describe([7.0])
+    assert one.mean == 7.0 and np.isnan(one.std) and np.isnan(one.ci_low)
+    rows = [
+        {"kind": "plan", "map": "m", "planner": "p", "controller": None, "seed": i,
+         "config_hash": "h", "success": i < 3, "length_m": (10.0 + i) if i < 3 else None,
+         "status": "solved" if i < 3 else "no_path_in_budget"}
+        for i in range(4)
+    ]
+    (g,) = summarise_rows(rows)
+    assert g.stats["success"].rate and g.stats["success"].mean == 0.75
+    assert g.stats["length_m"].n == 3 and g.stats["length_m"].mean == 11.0
+    assert "seed" not in g.stats
+    assert "| m | p | 4 | 0 | 75%" in to_markdown([g])
+    assert to_csv([g]).splitlines()[0].startswith("kind,map,scenario,planner,controller")
+
+
+# ----------------------------------------------------------------------------- OMPL
+
+
+def test_ompl_planners_are_listed_and_validated():
+    from rrtdrive.bench.ompl_planners import OMPL_PLANNERS
+    from rrtdrive.planning import PLANNERS, make_planner
+
+    assert {"ompl-r2-rrtconnect", "ompl-rs-bitstar", "ompl-r2-informed-rrtstar",
+            "ompl-rs-rrtstar"} <= set(OMPL_PLANNERS) <= set(PLANNERS)
+    with pytest.raises(InputError, match="^planner"):
+        make_planner("ompl-r2-rrtconnect", step=3.0)
+
+
+def test_ompl_rows_on_the_same_map_and_checker():
+    pytest.importorskip("ompl")
+    from rrtdrive.planning import PlanningProblem, make_planner
+    from rrtdrive.types import Budget
+    from rrtdrive.verify import verify_path
+
+    m = builtin_map("overtake")
+    problem = PlanningProblem.from_map(m)
+    for name in ("ompl-r2-rrtconnect", "ompl-rs-rrtconnect", "ompl-r2-bitstar"):
+        planner = make_planner(name)
+        a = planner.solve(problem, np.random.default_rng(3), Budget(max_time_s=3.0))
+        b = planner.solve(problem, np.random.default_rng(3), Budget(max_time_s=3.0))
+        assert a.success and a.planner == name, a.message
+        assert np.array_equal(a.path.samples, b.path.samples)  # seeded
+        gaps = np.hypot(*np.diff(a.path.xy, axis=0).T)
+        assert gaps.max() <= 0.25 + 1e-6
+        assert np.allclose(a.path.xy[0], m.start.xy) and np.allclose(a.path.xy[-1], m.goal.xy)
+        assert isinstance(verify_path(m, a.path).ok, bool)
+    rs = make_planner("ompl-rs-rrtconnect").solve(
+        problem, np.random.default_rng(0), Budget(max_time_s=3.0)
+    )
+    # Reeds–Shepp curves respect the turning radius (up to sampling noise).
+    assert rs.path.max_curvature <= m.vehicle.kappa_max * 1.02
+    unreachable = PlanningProblem.from_map(builtin_map("no_path"))
+    fail = make_planner("ompl-r2-rrtconnect").solve(
+        unreachable, np.random.default_rng(0), Budget(max_time_s=0.3)
+    )
+    assert not fail.success and fail.status.value == "no_path_in_budget"
