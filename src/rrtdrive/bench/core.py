@@ -237,11 +237,11 @@ def run_bench(
                 bar.update(error=outcome.row is None)
                 if on_row is not None:
                     on_row(row)
+            run_wall = time.perf_counter() - t0
         finally:
             bar.close()
             if isinstance(backend, RayBackend):
                 backend.close()
-        run_wall = time.perf_counter() - t0
         rows = grid_rows(cfg, store)
         files.append(str(store.path))
     files.append(str(out / "bench_config.json"))
