@@ -244,6 +244,20 @@ def test_crashed_run_is_retried_once_then_recorded(tmp_path, monkeypatch):
     assert sorted(json.loads(x)["seed"] for x in lines) == [0, 1, 2, 3, 4]
 
 
+def test_map_file_travels_with_the_run(tmp_path):
+    f = tmp_path / "mine.json"
+    save_map(builtin_map("overtake"), f)
+    cfg = BenchConfig(
+        maps=(str(f),), planners=("rrt-connect",), seeds=2, workers=1,
+        out=str(tmp_path / "out"), plots=False,
+    )
+    f.unlink()  # workers (maybe on other machines) get the content, not the path
+    report = run_bench(cfg)
+    assert (report.executed, report.errors) == (2, 0)
+    rows = [json.loads(x) for x in (tmp_path / "out" / "runs.jsonl").read_text().splitlines()]
+    assert all(r["success"] and r["map"] == str(f) for r in rows)
+
+
 def test_run_timeout_kills_the_worker(tmp_path):
     cfg = BenchConfig(
         maps=("overtake",), planners=("rrt-connect",), seeds=2, workers=2, retries=0,
@@ -260,10 +274,10 @@ def test_sigkill_mid_bench_then_resume(tmp_path):
     out = tmp_path / "out"
     argv = [
         sys.executable, "-m", "rrtdrive", "bench", "--maps", "parking_lot,overtake",
-        "--planners", ",".join(FAST), "--seeds", "40", "--workers", "2", "--out", str(out),
+        "--planners", ",".join(FAST), "--seeds", "30", "--workers", "2", "--out", str(out),
         "--no-plots", "--quiet",
     ]
-    cfg = BenchConfig(maps=("parking_lot", "overtake"), planners=FAST, seeds=40)
+    cfg = BenchConfig(maps=("parking_lot", "overtake"), planners=FAST, seeds=30)
     keys = Counter(s.key for s in expand(cfg))
     proc = subprocess.Popen(argv, start_new_session=True, stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL)

@@ -93,20 +93,29 @@ def _positive(field_name: str, value: object) -> float:
     return float(value)
 
 
-def map_digest(spec: str) -> str:
+def map_digest(spec: str) -> tuple[str, str | None]:
     """A short digest of the map ``spec`` resolves to (content and car), for run keys.
+
+    Returns
+    -------
+    digest : str
+        16 hex digits.
+    content : str or None
+        The map's JSON text for a map file (runs carry it, so workers on other
+        machines need no copy of the file); ``None`` for a built-in map.
 
     Raises
     ------
     InputError
         When ``spec`` is neither a built-in map nor a readable map file.
     """
-    from rrtdrive.maps import resolve_map
+    from rrtdrive.maps import BUILTIN_MAPS, resolve_map
 
     m = resolve_map(spec)
     payload = {"map": m.to_json(), "vehicle": dataclasses.asdict(m.vehicle)}
     text = json.dumps(payload, sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+    content = None if spec in BUILTIN_MAPS else json.dumps(m.to_json())
+    return hashlib.sha256(text.encode()).hexdigest()[:16], content
 
 
 def ompl_available() -> bool:
@@ -168,6 +177,9 @@ class BenchConfig:
     ray: str | None = None
     plots: bool = True
     map_digests: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
+    map_contents: Mapping[str, str | None] = field(
+        default_factory=dict, compare=False, repr=False
+    )
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -204,14 +216,15 @@ class BenchConfig:
                 raise InputError(
                     f"planners: {p!r} needs OMPL; install it with pip install 'rrtdrive[ompl]'"
                 )
-        digests = dict(self.map_digests)
+        digests, contents = dict(self.map_digests), dict(self.map_contents)
         for m in self.maps:
-            if m not in digests:
+            if m not in digests or m not in contents:
                 try:
-                    digests[m] = map_digest(m)
+                    digests[m], contents[m] = map_digest(m)
                 except InputError as exc:
                     raise InputError(f"maps: {m!r}: {exc}") from None
         object.__setattr__(self, "map_digests", digests)
+        object.__setattr__(self, "map_contents", contents)
         if self.scenarios:
             from rrtdrive.sim.scenes import SCENARIOS
 
@@ -268,6 +281,9 @@ class RunSpec:
         Planning budget.
     config_hash : str
         Hash of every field above but the seed (and of the map's content).
+    map_json : str or None
+        The map as JSON text for a map file (``None``: ``target`` is a built-in name
+        or a scenario).
     """
 
     kind: str
@@ -278,6 +294,7 @@ class RunSpec:
     max_time_s: float
     max_iterations: int
     config_hash: str
+    map_json: str | None = None
 
     @property
     def key(self) -> tuple[str, int]:
@@ -325,7 +342,10 @@ def expand(cfg: BenchConfig) -> list[RunSpec]:
                 h = config_hash(_hash_payload(cfg, "episode", s, p, c))
                 cells.append(("episode", s, p, c, h))
     return [
-        RunSpec(kind, target, p, c, seed, cfg.max_time_s, cfg.max_iterations, h)
+        RunSpec(
+            kind, target, p, c, seed, cfg.max_time_s, cfg.max_iterations, h,
+            cfg.map_contents.get(target) if kind == "plan" else None,
+        )
         for seed in range(cfg.seeds)
         for kind, target, p, c, h in cells
     ]

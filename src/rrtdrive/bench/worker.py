@@ -26,9 +26,13 @@ __all__ = ["execute_run", "base_row", "error_row"]
 
 
 @functools.lru_cache(maxsize=32)
-def _map(spec: str) -> Map:
-    from rrtdrive.maps import resolve_map
+def _map(spec: str, content: str | None = None) -> Map:
+    import json
 
+    from rrtdrive.maps import map_from_json, resolve_map
+
+    if content is not None:
+        return map_from_json(json.loads(content))
     return resolve_map(spec)
 
 
@@ -119,7 +123,7 @@ def _plan_metrics(spec: RunSpec) -> dict[str, Any]:
     from rrtdrive.types import Budget
     from rrtdrive.verify import verify_path
 
-    m = _map(spec.target)
+    m = _map(spec.target, spec.map_json)
     problem = PlanningProblem.from_map(m)
     planner = make_planner(spec.planner)
     budget = Budget(max_iterations=spec.max_iterations, max_time_s=spec.max_time_s)
