@@ -135,6 +135,10 @@ class SpeedProfile:
 class SpeedController:
     """PI tracking of a :class:`SpeedProfile` with a stop at the end of the path.
 
+    Setting :attr:`stop_at` (an arc length) adds a stop line: the reference is
+    capped by ``sqrt(2 decel (stop_at - s))`` and the car is held there until the
+    attribute is cleared.
+
     Parameters
     ----------
     config : SpeedConfig
@@ -148,6 +152,7 @@ class SpeedController:
         self.last_t: float | None = None
         self.arrived = False
         self.v_ref = 0.0
+        self.stop_at: float | None = None
 
     def reset(self, profile: SpeedProfile) -> None:
         """Track ``profile`` from scratch."""
@@ -156,6 +161,7 @@ class SpeedController:
         self.last_t = None
         self.arrived = False
         self.v_ref = 0.0
+        self.stop_at = None
 
     def control(self, s: float, speed: float, t: float) -> float:
         """Acceleration command for the car at arc length ``s`` with ``speed`` at time ``t``."""
@@ -176,6 +182,16 @@ class SpeedController:
             # Past the end: brake to a stop now.
             self.v_ref = 0.0
             return self._clip(-speed / dt if dt > 0 else cfg.a_min)
+        if self.stop_at is not None:
+            # A stop line (for example: wait for oncoming traffic) caps the profile.
+            d = self.stop_at - s
+            if d <= cfg.stop_distance:
+                self.v_ref = 0.0
+                return self._clip(-speed / dt if dt > 0 else cfg.a_min)
+            v_cap = math.sqrt(2.0 * cfg.decel * d)
+            if v_cap < v_ref:
+                v_ref = v_cap
+                a_ref = -speed * speed / (2.0 * d) if speed > 0.0 else 0.0
         self.v_ref = v_ref
         if remaining < 2.0 and speed > 0.0:
             # Final approach: the constant deceleration that stops exactly at the end.

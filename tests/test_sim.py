@@ -298,3 +298,22 @@ def test_cli_failed_episode_exits_1(capsys):
     assert _cli(["parking", "--planner", "rrt", "--plan-time", "0.001", "--json", "-"]) == 1
     data = json.loads(capsys.readouterr().out)
     assert data["success"] is False and data["status"] == "plan_failed"
+
+
+@needs_improved
+def test_overtake_waits_for_oncoming_traffic():
+    scen = make_scenario("overtake", 0, oncoming=1)
+    assert len(scen.oncoming) == 1
+    assert scen.oncoming == make_scenario("overtake", 0, oncoming=1).oncoming
+    ep = run_episode(scen, IMPROVED, "lqr", 0)
+    r = evaluate(ep)
+    assert r.success, ep.message
+    assert not r.collision_highway_env and not r.collision_footprint
+    oncoming = ep.log.others[:, 1, :]  # [lead car, oncoming car]
+    assert oncoming[0, 0] > oncoming[-1, 0]  # it drove towards -x
+    # The ego stayed in its lane until the oncoming car had passed the stopped car.
+    lead_x = scen.map.obstacles[scen.lead_index].center[0]
+    out = np.flatnonzero(ep.log.states[:, 1] > scen.lane_y + 1.0)
+    assert len(out) and oncoming[out[0], 0] < lead_x
+    with pytest.raises(InputError, match="oncoming"):
+        make_scenario("parking", 0, oncoming=1)

@@ -86,6 +86,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--plan-time", type=_positive_float, default=5.0,
         help="planning time budget in seconds (default 5)",
     )
+    p.add_argument(
+        "--oncoming", type=_nonneg_int, default=0,
+        help="overtake: number of oncoming cars, 0-10 (default 0: only the stopped car)",
+    )
     p.add_argument("--json", metavar="FILE|-", help="write the metrics as JSON ('-' for stdout)")
     p.add_argument("--video", metavar="FILE.mp4", help="write a headless MP4 of the episode")
     p.add_argument(
@@ -135,7 +139,7 @@ def _run(args: argparse.Namespace) -> int:
     from rrtdrive.evaluation import evaluate
     from rrtdrive.planning import PLANNERS
     from rrtdrive.sim.runner import EpisodeConfig, run_episode
-    from rrtdrive.sim.scenes import SCENARIOS, SimConfig
+    from rrtdrive.sim.scenes import SCENARIOS, SimConfig, make_scenario
     from rrtdrive.types import Budget
 
     if args.scenario not in SCENARIOS:
@@ -163,10 +167,12 @@ def _run(args: argparse.Namespace) -> int:
         max_time_s=args.max_time,
     )
     t0 = time.perf_counter()
-    episode = run_episode(args.scenario, args.planner, args.controller, args.seed, config)
+    oncoming = getattr(args, "oncoming", 0) or 0
+    scenario = make_scenario(args.scenario, args.seed, oncoming=oncoming)
+    episode = run_episode(scenario, args.planner, args.controller, args.seed, config)
     report = evaluate(episode)
     total = time.perf_counter() - t0
-    extra: dict[str, Any] = {"total_time_s": round(total, 6)}
+    extra: dict[str, Any] = {"total_time_s": round(total, 6), "oncoming": oncoming}
     if args.video:
         if episode.log.steps == 0:
             extra["video"] = None

@@ -22,6 +22,7 @@ import numpy as np
 from rrtdrive.controllers import SpeedConfig, TrackingController, VehicleState, make_controller
 from rrtdrive.sim.ego import EgoVehicle
 from rrtdrive.sim.scenes import Scenario, SimConfig, build_env, make_scenario, scenario_rngs
+from rrtdrive.sim.traffic import OncomingGate, conflict_zone
 from rrtdrive.types import Budget, InputError, Path, PlanResult
 
 __all__ = ["EpisodeConfig", "Episode", "DriveLog", "run_episode", "drive", "plan_scenario"]
@@ -175,6 +176,8 @@ def drive(
     controller: TrackingController,
     max_time_s: float,
     stop_on_crash: bool = True,
+    gate: OncomingGate | None = None,
+    gate_cars: list[Any] | None = None,
 ) -> DriveLog:
     """Track ``path`` with ``controller`` in a highway-env environment until done.
 
@@ -194,6 +197,10 @@ def drive(
         Time limit.
     stop_on_crash : bool
         Stop at highway-env's first ``crashed``.
+    gate : OncomingGate, optional
+        Holds the car before the oncoming lane until there is a gap.
+    gate_cars : list, optional
+        The oncoming vehicles the gate watches.
 
     Returns
     -------
@@ -219,6 +226,8 @@ def drive(
     wall0 = time.perf_counter()
     for _ in range(n_max):
         r = ego.rear
+        if gate is not None:
+            controller.speed.stop_at = gate.stop_line(controller.s, ego.speed, gate_cars or [])
         accel, steer = controller.control(VehicleState(r[0], r[1], r[2], ego.speed, ego.steer, t))
         action["acceleration"] = accel
         action["steering"] = steer
@@ -323,9 +332,16 @@ def run_episode(
             "plan_failed", "the path has fewer than two samples", config,
         )
     env = build_env(scen, config.sim)
+    gate, cars = None, None
+    if scen.oncoming and scen.lane_y is not None:
+        zone = conflict_zone(path, scen.lane_y, scen.lane_width, scen.vehicle)
+        if zone is not None:
+            ego = env.unwrapped.vehicle
+            cars = [v for v in env.unwrapped.road.vehicles if v is not ego and v.speed > 0]
+            gate = OncomingGate(zone, (path.arc_length(), path.samples[:, 3]), speed)
     try:
         max_time = config.max_time_s or scen.max_time_s
-        log = drive(env, path, ctrl, max_time, config.stop_on_crash)
+        log = drive(env, path, ctrl, max_time, config.stop_on_crash, gate, cars)
     finally:
         env.close()
     if log.crashed[-1]:

@@ -25,6 +25,7 @@ import numpy as np
 from highway_env.envs.common.abstract import AbstractEnv
 from highway_env.road.lane import LineType, StraightLane
 from highway_env.road.road import Road, RoadNetwork
+from highway_env.vehicle.behavior import IDMVehicle
 from highway_env.vehicle.graphics import VehicleGraphics
 from highway_env.vehicle.kinematics import Vehicle
 from highway_env.vehicle.objects import Obstacle as HwObstacle
@@ -50,6 +51,7 @@ __all__ = [
     "Scenario",
     "SimConfig",
     "SceneEnv",
+    "OncomingCar",
     "make_scenario",
     "build_env",
     "scenario_rngs",
@@ -122,6 +124,9 @@ class Scenario:
         Time allowed before the episode counts as failed.
     walls : bool
         Whether the scene closes the bounds with walls.
+    oncoming : tuple of (float, float)
+        Overtake: ``(x, speed)`` of each oncoming car (body centre, m/s) at the start;
+        they drive -x in the oncoming lane as highway-env IDM vehicles.
     """
 
     name: str
@@ -135,6 +140,7 @@ class Scenario:
     v_max: float = 3.0
     max_time_s: float = 120.0
     walls: bool = True
+    oncoming: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
         require_positive("scenario.v_max", self.v_max)
@@ -175,6 +181,7 @@ def make_scenario(
     spot: tuple[int, int, int] | None = None,
     jitter: tuple[float, float, float] = (1.0, 0.5, math.radians(5.0)),
     vehicle: VehicleParams | None = None,
+    oncoming: int = 0,
 ) -> Scenario:
     """Build the scenario ``name`` for ``seed``.
 
@@ -190,6 +197,9 @@ def make_scenario(
         Half-ranges of the uniform start jitter in x, y (metres) and yaw (radians).
     vehicle : VehicleParams, optional
         The car.
+    oncoming : int
+        Overtake: number of oncoming cars (seeded positions 90-140 m apart beyond
+        the road's end, speeds 6-9 m/s). The ego waits for a gap before pulling out.
 
     Returns
     -------
@@ -204,6 +214,10 @@ def make_scenario(
     rng, _, _ = scenario_rngs(seed)
     if len(jitter) != 3 or any(not (j >= 0 and math.isfinite(j)) for j in jitter):
         raise InputError(f"jitter: need three finite numbers >= 0, got {jitter!r}")
+    if isinstance(oncoming, bool) or not isinstance(oncoming, int) or not 0 <= oncoming <= 10:
+        raise InputError(f"oncoming: need an integer in 0..10, got {oncoming!r}")
+    if oncoming and name != "overtake":
+        raise InputError("oncoming: only the overtake scenario has oncoming traffic")
     vehicle = vehicle or VehicleParams()
     dx, dy, dyaw = (float(rng.uniform(-j, j)) if j > 0 else 0.0 for j in jitter)
     if name == "parking":
@@ -227,9 +241,15 @@ def make_scenario(
         start = Pose(base.start.x + dx, base.start.y + 0.3 * dy, base.start.yaw + dyaw)
         m = base.with_query(start=start)
         lead = _car_like(m.obstacles, vehicle)
+        cars = []
+        x = m.bounds[2]
+        for _ in range(oncoming):
+            x += float(rng.uniform(90.0, 140.0))
+            cars.append((x, float(rng.uniform(6.0, 9.0))))
         return Scenario(
             "overtake", m, int(seed), vehicle_obstacles=tuple(lead), lead_index=lead[0],
-            lane_y=base.start.y, v_max=8.0, max_time_s=60.0, walls=False,
+            lane_y=base.start.y, v_max=8.0, max_time_s=60.0 + 15.0 * oncoming, walls=False,
+            oncoming=tuple(cars),
         )
     raise InputError(f"scenario: unknown scenario {name!r}; choose from {list(SCENARIOS)}")
 
@@ -302,6 +322,39 @@ class SceneEnv(AbstractEnv):
         return bool(self.time >= self.config["duration"])
 
 
+class OncomingCar(IDMVehicle):
+    """highway-env's IDM car that keeps its lane and reacts to vehicles only.
+
+    Stock IDM also brakes for static road objects next to its lane (it would stop
+    for the road-edge walls of the overtake road, whose centres lie within its
+    lane's margin); this one follows the nearest *vehicle* ahead in its lane -
+    including the ego when it overtakes - and ignores the walls.
+    """
+
+    def act(self, action: dict | str | None = None) -> None:
+        """IDM longitudinal control behind the nearest vehicle ahead in the lane."""
+        if self.crashed:
+            return
+        self.follow_road()
+        steering = float(
+            np.clip(
+                self.steering_control(self.target_lane_index),
+                -self.MAX_STEERING_ANGLE, self.MAX_STEERING_ANGLE,
+            )
+        )
+        lane = self.lane
+        s = lane.local_coordinates(self.position)[0]
+        front, best = None, math.inf
+        for v in self.road.vehicles:
+            if v is self:
+                continue
+            sv, lat = lane.local_coordinates(v.position)
+            if lane.on_lane(v.position, sv, lat, margin=1) and s <= sv < best:
+                front, best = v, sv
+        accel = float(np.clip(self.acceleration(self, front, None), -self.ACC_MAX, self.ACC_MAX))
+        Vehicle.act(self, {"steering": steering, "acceleration": accel})
+
+
 def _rect_object(road: Road, o: Obstacle) -> HwObstacle:
     """A solid highway-env obstacle of exactly ``o``'s rectangle (length >= width for drawing)."""
     length, width, yaw = o.size[0], o.size[1], o.yaw
@@ -330,7 +383,11 @@ def _build_road(scenario: Scenario, np_random: np.random.Generator, history: boo
         x0, x1 = m.bounds[0], m.bounds[2]
         c, s = LineType.CONTINUOUS_LINE, LineType.STRIPED
         net.add_lane("a", "b", StraightLane([x0, y0], [x1, y0], w, (c, s), speed_limit=20))
-        net.add_lane("b", "a", StraightLane([x1, y0 + w], [x0, y0 + w], w, (c, LineType.NONE)))
+        # The oncoming lane runs on beyond the map so oncoming cars have a lane to arrive on.
+        far = 20.0 * (x1 - x0)
+        net.add_lane(
+            "b", "a", StraightLane([x1 + far, y0 + w], [x0 - far, y0 + w], w, (c, LineType.NONE))
+        )
     elif scenario.name == "parking":
         # One lane per spot, drawn with solid lines like highway-env's parking-v0.
         lt = (LineType.CONTINUOUS, LineType.CONTINUOUS)
@@ -351,6 +408,16 @@ def _build_road(scenario: Scenario, np_random: np.random.Generator, history: boo
             road.vehicles.append(_rect_vehicle(road, o))
         else:
             road.objects.append(_rect_object(road, o))
+    for x, speed in scenario.oncoming:
+        lane_index = ("b", "a", 0)
+        lane = net.get_lane(lane_index)
+        car = OncomingCar(
+            road, lane.position(lane.local_coordinates([x, 0.0])[0], 0.0), lane.heading_at(0.0),
+            speed, target_lane_index=lane_index, target_speed=speed, enable_lane_change=False,
+        )
+        car.LENGTH, car.WIDTH = scenario.vehicle.length, scenario.vehicle.width
+        car.diagonal = math.hypot(car.LENGTH, car.WIDTH)
+        road.vehicles.append(car)
     if scenario.walls:
         xmin, ymin, xmax, ymax = m.bounds
         t = 1.0
