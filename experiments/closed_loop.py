@@ -5,9 +5,10 @@ Usage::
     python experiments/closed_loop.py --seeds 50 --jobs 2 --out results \
         --doc docs/closed_loop.md --figures docs/figures
 
-For every scenario (``parking``, ``overtake``), controller (pure pursuit,
-Stanley, LQR) and seed 0..seeds-1: plan, drive in highway-env at the simulation
-frequency, evaluate (:func:`rrtdrive.evaluation.evaluate`). Writes
+For every scenario (``parking``, ``overtake`` with the stopped car,
+``overtake-oncoming`` with ``--oncoming`` oncoming cars as well), controller (pure
+pursuit, Stanley, LQR) and seed 0..seeds-1: plan, drive in highway-env at the
+simulation frequency, evaluate (:func:`rrtdrive.evaluation.evaluate`). Writes
 ``OUT/closed_loop.json`` (every report, the summaries, the resolved settings and
 the command) and ``OUT/closed_loop.md``; with ``--doc`` the same table and a few
 frames (PNG) of seed 0 for the docs.
@@ -27,18 +28,27 @@ from pathlib import Path as FsPath
 from rrtdrive.evaluation import EpisodeReport, evaluate, summarise
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim.runner import DEFAULT_PLANNER, EpisodeConfig, run_episode
-from rrtdrive.sim.scenes import SimConfig
+from rrtdrive.sim.scenes import Scenario, SimConfig, make_scenario
 from rrtdrive.types import VehicleParams
 
-SCENARIOS = ("parking", "overtake")
+SCENARIOS = ("parking", "overtake", "overtake-oncoming")
 CONTROLLERS = ("pure-pursuit", "stanley", "lqr")
 
 
-def run_one(job: tuple[str, str, str, int, int]) -> dict:
-    scenario, planner, controller, seed, hz = job
+def scenario_for(label: str, seed: int, oncoming: int) -> Scenario:
+    """``overtake-oncoming`` is the overtake scenario with ``oncoming`` oncoming cars."""
+    if label == "overtake-oncoming":
+        return make_scenario("overtake", seed, oncoming=oncoming)
+    return make_scenario(label, seed)
+
+
+def run_one(job: tuple[str, str, str, int, int, int]) -> dict:
+    label, planner, controller, seed, hz, oncoming = job
     cfg = EpisodeConfig(sim=SimConfig(simulation_frequency=hz))
-    ep = run_episode(scenario, planner, controller, seed, cfg)
-    return evaluate(ep).to_json()
+    ep = run_episode(scenario_for(label, seed, oncoming), planner, controller, seed, cfg)
+    out = evaluate(ep).to_json()
+    out["scenario"] = label
+    return out
 
 
 def _fmt(v: float | None, digits: int = 3) -> str:
@@ -71,22 +81,24 @@ def table(summaries: dict[str, dict]) -> str:
     return head + "\n".join(rows) + "\n"
 
 
-def save_frames(figures: FsPath, planner: str, hz: int) -> list[str]:
+def save_frames(figures: FsPath, planner: str, hz: int, oncoming: int) -> list[str]:
     import imageio.v2 as imageio
 
     from rrtdrive.sim.video import render_frames
 
     names = []
-    for scenario, controller in (("parking", "pure-pursuit"), ("overtake", "lqr")):
+    cases = (("parking", "pure-pursuit"), ("overtake", "lqr"), ("overtake-oncoming", "stanley"))
+    for scenario, controller in cases:
         ep = run_episode(
-            scenario, planner, controller, 0, EpisodeConfig(sim=SimConfig(simulation_frequency=hz))
+            scenario_for(scenario, 0, oncoming), planner, controller, 0,
+            EpisodeConfig(sim=SimConfig(simulation_frequency=hz)),
         )
         if ep.log.steps == 0:
             continue
         n = len(ep.log.states)
-        stride = max(1, (n - 1) // 2)
+        stride = max(1, (n - 1) // 3) if scenario == "overtake-oncoming" else max(1, (n - 1) // 2)
         for i, frame in enumerate(render_frames(ep, stride=stride)):
-            if i > 2:
+            if i > 3:
                 break
             name = f"closed_loop_{scenario}_{i}.png"
             imageio.imwrite(figures / name, frame)
@@ -98,6 +110,9 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--seeds", type=int, default=50)
     ap.add_argument("--scenarios", default=",".join(SCENARIOS))
+    ap.add_argument(
+        "--oncoming", type=int, default=2, help="oncoming cars in overtake-oncoming (default 2)"
+    )
     ap.add_argument("--controllers", default=",".join(CONTROLLERS))
     ap.add_argument("--planner", default=DEFAULT_PLANNER)
     ap.add_argument("--frequency", type=int, default=20)
@@ -109,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
     scenarios = args.scenarios.split(",")
     controllers = args.controllers.split(",")
     jobs = [
-        (s, args.planner, c, seed, args.frequency)
+        (s, args.planner, c, seed, args.frequency, args.oncoming)
         for s in scenarios for c in controllers for seed in range(args.seeds)
     ]
     t0 = time.perf_counter()
@@ -139,6 +154,7 @@ def main(argv: list[str] | None = None) -> int:
         "controllers": controllers,
         "planner": args.planner,
         "simulation_frequency": args.frequency,
+        "oncoming": args.oncoming,
         "episode_config": "EpisodeConfig() defaults (speed: SpeedConfig(v_max=scenario.v_max))",
         "python": platform.python_version(),
         "wall_time_s": round(time.perf_counter() - t0, 1),
@@ -166,7 +182,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.doc:
         figures = FsPath(args.figures)
         figures.mkdir(parents=True, exist_ok=True)
-        names = save_frames(figures, args.planner, args.frequency)
+        names = save_frames(figures, args.planner, args.frequency, args.oncoming)
         rel = os.path.relpath(figures, FsPath(args.doc).parent)
         pics = "".join(f"![{n}]({rel}/{n})\n" for n in names)
         write_text_atomic(FsPath(args.doc), md + "\n## Frames (seed 0)\n\n" + pics)
