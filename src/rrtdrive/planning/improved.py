@@ -69,6 +69,11 @@ __all__ = [
     "expanded_checker",
     "default_expansion_lmin",
     "passage_cells",
+    "extend",
+    "fast_edge_test",
+    "greedy_connect",
+    "link",
+    "link_candidates",
 ]
 
 #: Names of the switchable components, for ablations and the CLI.
@@ -337,15 +342,17 @@ _PASSAGES: weakref.WeakKeyDictionary[CollisionChecker, dict[int, np.ndarray]] = 
 
 
 def passage_cells(
-    checker: CollisionChecker, start: Sequence[float], width: float = 1.0
+    checker: CollisionChecker, start: Sequence[float], width: float = 0.6
 ) -> np.ndarray:
     """Centres of the grid cells on the centre lines of narrow passages reachable from ``start``.
 
     A cell qualifies when its clearance is a local maximum across some grid
-    direction (a ridge of the distance field, i.e. the medial axis) and lies
-    between the edge test's radius ``W/2 + margin`` and that plus ``width``: an
-    edge through it can pass, but only just. Wide aisles, the gaps between
-    parked cars (too narrow) and open space do not qualify. Beyond the paper;
+    direction (a ridge of the distance field, i.e. the medial axis) with walls
+    on both sides (one clearance away along that direction the clearance nearly
+    vanishes) and lies between the edge test's radius ``W/2 + margin`` and that
+    plus ``width``: an edge through it can pass, but only just. Wide aisles, the
+    gaps between parked cars (too narrow), convex corners and open space do not
+    qualify. Beyond the paper;
     medial-axis sampling after Wilmarth, Amato & Stiller (ICRA 1999). Cached per
     checker and start component.
 
@@ -384,15 +391,30 @@ def passage_cells(
         return cached
     cl = checker.clearance_grid
     nx, ny = cl.shape
+    band = (cl >= checker.edge_radius) & (cl <= checker.edge_radius + width)
+    if label:
+        band &= labels == label
     ridge = np.zeros(cl.shape, dtype=bool)
     inner = cl[1:-1, 1:-1]
     for di, dj in ((1, 0), (0, 1), (1, 1), (1, -1)):
+        # A local maximum of the clearance across direction (di, dj) ...
         a = cl[1 + di : nx - 1 + di, 1 + dj : ny - 1 + dj]
         b = cl[1 - di : nx - 1 - di, 1 - dj : ny - 1 - dj]
-        ridge[1:-1, 1:-1] |= (inner >= a) & (inner >= b) & (inner > np.minimum(a, b))
-    ridge &= (cl >= checker.edge_radius) & (cl <= checker.edge_radius + width)
-    if label:
-        ridge &= labels == label
+        peak = np.zeros(cl.shape, dtype=bool)
+        peak[1:-1, 1:-1] = (inner >= a) & (inner >= b) & (inner > np.minimum(a, b))
+        cand = np.argwhere(peak & band)
+        if len(cand) == 0:
+            continue
+        # ... with walls on both sides: one clearance away, either way, the
+        # clearance nearly vanishes (it does not beside a convex corner).
+        c = cl[cand[:, 0], cand[:, 1]]
+        k = np.round(c / (math.hypot(di, dj) * h)).astype(np.int64)
+        both = np.ones(len(cand), dtype=bool)
+        for sgn in (1, -1):
+            ii = np.clip(cand[:, 0] + sgn * k * di, 0, nx - 1)
+            jj = np.clip(cand[:, 1] + sgn * k * dj, 0, ny - 1)
+            both &= cl[ii, jj] <= 0.3 * c
+        ridge[cand[both, 0], cand[both, 1]] = True
     ij = np.argwhere(ridge)
     cells = origin + (ij + 0.5) * h
     xmin, ymin, xmax, ymax = checker.bounds
@@ -403,15 +425,18 @@ def passage_cells(
     return cells
 
 
-# ----------------------------------------------------------------------------- tree
+# ----------------------------------------------------------------------------- tree growth
+
+EdgeFree = Callable[[Sequence[float], Sequence[float]], bool]
 
 
 class ObtuseTree(GrowingTree):
     """A :class:`GrowingTree` that keeps each node's parent position for Eq. 11.
 
-    ``choose_parent(q)`` returns the nearest node whose angle (parent, node, q) is
-    obtuse -- ``D(q_i, q) + D(q_i, q_k) < D(q_k, q)`` with squared distances -- or
-    the nearest node when none is obtuse (Table 1). Vectorised over the tree.
+    :meth:`choose_parent` returns the nearest node whose angle (parent, node, q)
+    is obtuse -- ``D(q_i, q) + D(q_i, q_k) < D(q_k, q)`` with ``D`` the squared
+    distance -- or the nearest node when none is obtuse (Table 1). The root's
+    parent is the ``virtual_parent`` (none: the root is never obtuse).
 
     Examples
     --------
@@ -425,36 +450,252 @@ class ObtuseTree(GrowingTree):
         self, root: np.ndarray, capacity: int = 256, virtual_parent: np.ndarray | None = None
     ) -> None:
         super().__init__(root, capacity, virtual_parent)
-        self.ppos = np.empty((capacity, 2))
-        self.ppos[0] = virtual_parent if virtual_parent is not None else (np.nan, np.nan)
-        vp = self.ppos[0]
+        vp = (np.nan, np.nan) if virtual_parent is None else tuple(virtual_parent)
+        # Columns [x, y, parent x, parent y] (rows of a (4, capacity) array, so
+        # each is contiguous): one subtraction serves both distances of Eq. 11.
+        self._cols = np.empty((4, capacity))
+        self._cols[:, 0] = (root[0], root[1], vp[0], vp[1])
         self.dpar = np.empty(capacity)
-        self.dpar[0] = float((vp[0] - root[0]) ** 2 + (vp[1] - root[1]) ** 2)
+        self.dpar[0] = (vp[0] - root[0]) ** 2 + (vp[1] - root[1]) ** 2
+        self._q4 = np.empty((4, 1))
+
+    @property
+    def ppos(self) -> np.ndarray:
+        """Parent position of every node (the root's virtual parent), shape ``(size, 2)``."""
+        return self._cols[2:, : self.size].T
 
     def add(self, point: np.ndarray, parent: int, cost: float | None = None) -> int:
         """Append ``point`` with ``parent``; return its index."""
-        if self.size == len(self.ppos):
-            self.ppos = np.concatenate([self.ppos, np.empty_like(self.ppos)])
+        if self.size == self._cols.shape[1]:
+            self._cols = np.concatenate([self._cols, np.empty_like(self._cols)], axis=1)
             self.dpar = np.concatenate([self.dpar, np.empty_like(self.dpar)])
         i = super().add(point, parent, cost)
-        p = self.nodes[parent]
-        self.ppos[i] = p
-        self.dpar[i] = (point[0] - p[0]) ** 2 + (point[1] - p[1]) ** 2
+        px, py = self.nodes[parent].tolist()
+        x, y = float(point[0]), float(point[1])
+        self._cols[:, i] = (x, y, px, py)
+        self.dpar[i] = (x - px) ** 2 + (y - py) ** 2
         return i
 
     def choose_parent(self, q: np.ndarray, obtuse: bool = True) -> int:
-        """Node to extend towards ``q``: Eq. 11 when ``obtuse``, else the nearest."""
+        """Node to extend towards ``q``: Eq. 11 / Table 1 when ``obtuse``, else the nearest."""
+        q4 = self._q4
+        q4[0, 0] = q4[2, 0] = q[0]
+        q4[1, 0] = q4[3, 0] = q[1]
         n = self.size
-        d = self.nodes[:n] - q
-        d_rand = np.einsum("ij,ij->i", d, d)
+        t = self._cols[:, :n] - q4
+        t *= t
+        d_rand = t[0] + t[1]
         if not obtuse:
-            return int(np.argmin(d_rand))
-        e = self.ppos[:n] - q
-        d_kr = np.einsum("ij,ij->i", e, e)
-        ok = d_rand + self.dpar[:n] < d_kr  # NaN (no parent) compares False
-        if ok.any():
-            return int(np.argmin(np.where(ok, d_rand, np.inf)))
-        return int(np.argmin(d_rand))
+            return int(d_rand.argmin())
+        # NaN (a root without parent) compares False: never obtuse.
+        w = np.where(d_rand + self.dpar[:n] < t[2] + t[3], d_rand, np.inf)
+        i = int(w.argmin())
+        if w[i] == np.inf:
+            i = int(d_rand.argmin())
+        return i
+
+
+def fast_edge_test(checker: CollisionChecker) -> EdgeFree:
+    """``checker.edge_free`` preceded by a one-lookup rejection at the far end of its capsule.
+
+    The checker's sphere tracing ends by testing the far end of the capsule
+    (``front_extent - e`` beyond ``b``, ``e = sqrt(r^2 - (W/2)^2)``), so an edge
+    whose far end has too little room is rejected by both; testing that point
+    first answers most colliding tree extensions with one clearance lookup.
+    The rejection only ever says "not free", and every "free" comes from
+    ``edge_free`` itself, so the test is never less safe than the checker's.
+
+    Examples
+    --------
+    >>> from rrtdrive.maps import builtin_map
+    >>> from rrtdrive.planning.base import cached_checker
+    >>> c = cached_checker(builtin_map("overtake"))
+    >>> test = fast_edge_test(c)
+    >>> test((5.0, 44.0), (30.0, 44.0)), test((30.0, 44.0), (46.0, 44.0))
+    (True, False)
+    """
+    r = checker.edge_radius
+    half_w = checker.vehicle.width / 2.0
+    front = checker.vehicle.front_extent - math.sqrt(max(r * r - half_w * half_w, 0.0))
+    limit = r + checker.config.min_trace_step
+    clearance = checker.clearance
+    edge_free = checker.edge_free
+
+    def test(a: Sequence[float], b: Sequence[float]) -> bool:
+        dx, dy = b[0] - a[0], b[1] - a[1]
+        length = math.hypot(dx, dy)
+        if length > 1e-9:
+            f = front / length
+            if clearance(b[0] + dx * f, b[1] + dy * f) < limit:
+                return False
+        return edge_free(a, b)
+
+    return test
+
+
+def _edge(edge_free: EdgeFree, towards_root: bool, a: Sequence[float], b: Sequence[float]) -> bool:
+    """Test the tree edge between parent ``a`` and child ``b`` in its driving direction."""
+    return edge_free(b, a) if towards_root else edge_free(a, b)
+
+
+def extend(
+    tree: ObtuseTree,
+    towards_root: bool,
+    i_near: int,
+    target: np.ndarray,
+    step: float,
+    edge_free: EdgeFree,
+) -> int:
+    """One step of at most ``step`` from node ``i_near`` towards ``target``.
+
+    Parameters
+    ----------
+    tree : ObtuseTree
+        The tree to grow.
+    towards_root : bool
+        True for the goal tree, whose edges are driven from child to parent.
+    i_near : int
+        Node to grow from.
+    target : numpy.ndarray
+        Point to grow towards.
+    step : float
+        Largest edge length ``p``.
+    edge_free : callable
+        ``edge_free(a, b)`` of the growth checker.
+
+    Returns
+    -------
+    int
+        Index of the new node, or -1 when the edge collides.
+    """
+    ax, ay = tree.nodes[i_near].tolist()
+    dx, dy = float(target[0]) - ax, float(target[1]) - ay
+    dist = math.hypot(dx, dy)
+    if dist < 1e-9:
+        return -1
+    f = 1.0 if dist <= step else step / dist
+    q = (ax + dx * f, ay + dy * f)
+    if not _edge(edge_free, towards_root, (ax, ay), q):
+        return -1
+    return tree.add(np.array(q), i_near)
+
+
+def greedy_connect(
+    tree: ObtuseTree,
+    towards_root: bool,
+    target: np.ndarray,
+    step: float,
+    edge_free: EdgeFree,
+    *,
+    obtuse: bool = True,
+    adaptive: bool = True,
+    expired: Callable[[], bool] | None = None,
+) -> int:
+    """Greedy connect of RRT-Connect with the adaptive step (paper Sec. 3.1.3).
+
+    From the node chosen by :meth:`ObtuseTree.choose_parent` the tree steps
+    straight towards ``target``: the first step is ``p``, every further step
+    ``2p`` while it neither collides nor reaches the target (``p`` throughout when
+    not ``adaptive``). A collision ends the loop.
+
+    Returns
+    -------
+    int
+        Index of the node at ``target``, or -1 when trapped.
+
+    Examples
+    --------
+    >>> t = ObtuseTree(np.array([0.0, 0.0]))
+    >>> greedy_connect(t, False, np.array([30.0, 0.0]), 5.0, lambda a, b: True)
+    4
+    >>> t.nodes[: len(t), 0].tolist()   # steps of 5, 10, 10, then the last 5
+    [0.0, 5.0, 15.0, 25.0, 30.0]
+    """
+    j = tree.choose_parent(target, obtuse)
+    tx, ty = float(target[0]), float(target[1])
+    p = step
+    while True:
+        ax, ay = tree.nodes[j].tolist()
+        dx, dy = tx - ax, ty - ay
+        dist = math.hypot(dx, dy)
+        if dist < 1e-9:
+            return j
+        reached = dist <= p
+        q = (tx, ty) if reached else (ax + dx * p / dist, ay + dy * p / dist)
+        if not _edge(edge_free, towards_root, (ax, ay), q):
+            return -1
+        j = tree.add(np.array(q), j)
+        if reached:
+            return j
+        if adaptive:
+            p = 2.0 * step
+        if expired is not None and expired():
+            return -1
+
+
+def link_candidates(
+    tree: ObtuseTree, q: np.ndarray, step: float, *, obtuse: bool = True, candidates: int = 8
+) -> np.ndarray:
+    """Nodes to try for :func:`link`: the ``candidates`` nearest within ``4 step``, nearest first.
+
+    With ``obtuse`` the obtuse ones (Eq. 11) come first.
+    """
+    d = tree.sq_dists(q)
+    near = np.flatnonzero(d <= (4.0 * step) ** 2)
+    if len(near) == 0:
+        return near
+    if len(near) > candidates:
+        near = near[np.argpartition(d[near], candidates)[:candidates]]
+    near = near[np.argsort(d[near])]
+    if obtuse and len(near) > 1:
+        e = tree.ppos[near] - q
+        ok = d[near] + tree.dpar[near] < np.einsum("ij,ij->i", e, e)
+        near = near[np.argsort(~ok, kind="stable")]
+    return near
+
+
+def link(
+    tree: ObtuseTree,
+    towards_root: bool,
+    q: np.ndarray,
+    step: float,
+    edge_free: EdgeFree,
+    *,
+    obtuse: bool = True,
+    candidates: int = 8,
+    order: np.ndarray | None = None,
+) -> int:
+    """Join ``q`` by one straight free edge from one of the nearest nodes (passage sampling).
+
+    The nodes of :func:`link_candidates` (or ``order``) are tried in turn; the
+    first free edge is stored as pieces of at most ``step`` (each a part of the
+    free edge's swept capsule, hence free).
+
+    Returns
+    -------
+    int
+        Index of the node at ``q``, or -1 when no candidate has a free edge.
+
+    Examples
+    --------
+    >>> t = ObtuseTree(np.array([0.0, 0.0]))
+    >>> link(t, False, np.array([12.0, 0.0]), 5.0, lambda a, b: True)
+    3
+    """
+    if order is None:
+        order = link_candidates(tree, q, step, obtuse=obtuse, candidates=candidates)
+    qx, qy = float(q[0]), float(q[1])
+    for i in order.tolist():
+        a = tree.nodes[i].copy()
+        ax, ay = a.tolist()
+        if not _edge(edge_free, towards_root, (ax, ay), (qx, qy)):
+            continue
+        pieces = max(1, math.ceil(math.hypot(qx - ax, qy - ay) / step - 1e-9))
+        j = i
+        for m in range(1, pieces + 1):
+            j = tree.add(a + (q - a) * (m / pieces), j)
+        return j
+    return -1
 
 
 # ----------------------------------------------------------------------------- planner
@@ -499,7 +740,7 @@ class ImprovedRRTConnect:
         disable: Iterable[str] = (),
         **options: object,
     ) -> None:
-        base = config or ImprovedConfig()
+        base = config if config is not None else ImprovedConfig()
         if not isinstance(base, ImprovedConfig):
             raise InputError(
                 f"planner.config: expected an ImprovedConfig, got {type(base).__name__}"
@@ -512,13 +753,11 @@ class ImprovedRRTConnect:
             )
         if isinstance(disable, str):
             disable = (disable,)
-        cfg = dataclasses.replace(base, **options) if options else base
+        cfg = dataclasses.replace(base, **options) if options else base  # type: ignore[arg-type]
         self.config = cfg.without(*disable)
 
     def __repr__(self) -> str:
         return f"ImprovedRRTConnect({self.config!r})"
-
-    # ------------------------------------------------------------------ solve
 
     def solve(
         self, problem: PlanningProblem, rng: np.random.Generator, budget: Budget
@@ -532,12 +771,18 @@ class ImprovedRRTConnect:
         rng : numpy.random.Generator
             The only source of randomness.
         budget : Budget
-            Iteration and wall-time limits (both enforced).
+            Iteration and wall-time limits (both enforced for the growth; each
+            post-processing is bounded by ``max_repair_rounds``).
 
         Returns
         -------
         PlanResult
             ``SOLVED`` with a verified path, or a failure status with a message.
+            ``stats`` holds ``nodes``, ``iterations``, ``growth_time_s``,
+            ``postprocess_time_s``, ``postprocess_attempts``, ``repair_rounds``,
+            ``direct_connection``, ``expanded_obstacles``, ``expansion_used`` and,
+            when solved, ``key_points``, ``control_points``, ``max_curvature``,
+            ``fillets``, ``merges`` and ``moves``.
         """
         watch = Stopwatch(budget)
         early = precheck(problem, NAME, watch)
@@ -559,7 +804,9 @@ class ImprovedRRTConnect:
             max_rounds=cfg.max_repair_rounds,
         )
         stats: dict[str, float] = {
+            "nodes": 0.0,
             "iterations": 0.0,
+            "growth_time_s": 0.0,
             "postprocess_time_s": 0.0,
             "postprocess_attempts": 0.0,
             "repair_rounds": 0.0,
@@ -571,7 +818,6 @@ class ImprovedRRTConnect:
         g_xy = np.array([goal.x, goal.y])
         hs = np.array([math.cos(start.yaw), math.sin(start.yaw)])
         hg = np.array([math.cos(goal.yaw), math.sin(goal.yaw)])
-        root_trees = (Tree(s_xy[None, :], np.array([-1])), Tree(g_xy[None, :], np.array([-1])))
         last_message = ""
         last_raw: np.ndarray | None = None
 
@@ -592,8 +838,8 @@ class ImprovedRRTConnect:
             stats["max_curvature"] = res.max_curvature
             stats.update(res.stats)
             nodes = sum(len(t) for t in trees)
-            stats["nodes"] = float(nodes)
-            stats["planning_time_s"] = watch.elapsed()
+            elapsed = watch.elapsed()
+            stats["growth_time_s"] = elapsed - stats["postprocess_time_s"]
             return PlanResult(
                 status=PlanStatus.SOLVED,
                 planner=NAME,
@@ -602,7 +848,7 @@ class ImprovedRRTConnect:
                 trees=trees,
                 nodes=nodes,
                 iterations=iterations,
-                planning_time_s=stats["planning_time_s"],
+                planning_time_s=elapsed,
                 message=(
                     f"solved: {len(res.key_points)} key points, {len(res.control_points)} "
                     f"control points, {res.rounds} fit round(s)"
@@ -611,13 +857,15 @@ class ImprovedRRTConnect:
             )
 
         # 1. Direct connection (Sec. 3.1.1).
+        roots = (Tree(s_xy[None, :], np.array([-1])), Tree(g_xy[None, :], np.array([-1])))
         if cfg.direct_connect and checker.edge_free(s_xy.tolist(), g_xy.tolist()):
             stats["direct_connection"] = 1.0
-            out = finish(np.vstack([s_xy, g_xy]), root_trees, 0)
+            stats["nodes"] = 2.0
+            out = finish(np.vstack([s_xy, g_xy]), roots, 0)
             if out is not None:
                 return out
 
-        # 2. Growth checker with the expanded obstacles (Sec. 3.1.4).
+        # 2. The growth checker with the expanded obstacles (Sec. 3.1.4).
         grow = checker
         if cfg.obstacle_expansion and cfg.expansion_a > 0:
             lmin = cfg.expansion_lmin
@@ -632,41 +880,53 @@ class ImprovedRRTConnect:
             ):
                 grow = expanded
                 stats["expansion_used"] = 1.0
-        edge_free = grow.edge_free
+        edge_free = fast_edge_test(grow)
+        samples = SampleSource(problem, reject=True)
+        passages: np.ndarray | None = None
+        if cfg.passage_sampling and cfg.passage_bias > 0:
+            passages = passage_cells(grow, (start.x, start.y))
+            if len(passages) == 0:
+                passages = None
 
+        # 3. Bidirectional growth; a tree path that cannot be made drivable
+        #    starts a fresh pair of trees (up to max_postprocess_attempts).
         iterations = 0
         total_nodes = 0
-        src = SampleSource(problem, reject=True)
-        passages = passage_cells(checker, (start.x, start.y)) if cfg.passage_sampling else None
-        if passages is not None and len(passages) == 0:
-            passages = None
-        trees: tuple[Tree, ...] = root_trees
+        trees: tuple[Tree, ...] = roots
         while stats["postprocess_attempts"] < cfg.max_postprocess_attempts:
             ts = ObtuseTree(s_xy, virtual_parent=s_xy - p * hs)
             tg = ObtuseTree(g_xy, virtual_parent=g_xy + p * hg)
             found: np.ndarray | None = None
             ta, tb = ts, tg
-            while iterations < budget.max_iterations:
-                if watch.expired():
-                    break
+            while iterations < budget.max_iterations and not watch.expired():
                 iterations += 1
                 if passages is not None and rng.random() < cfg.passage_bias:
-                    # Beyond the paper: a point on a narrow passage's centre line, joined
-                    # straight to both trees (see passage_cells).
+                    # Beyond the paper: a point on a narrow passage's centre line,
+                    # joined straight to both trees; the iteration goes on with a
+                    # regular sample when that fails.
                     q = passages[rng.integers(len(passages))]
-                    ja = self._link(ts, True, q, p, cfg.obtuse_parent, edge_free)
-                    if ja < 0:
-                        continue
-                    jb = self._link(tg, False, q, p, cfg.obtuse_parent, edge_free)
-                    if jb >= 0:
-                        found = np.vstack([ts.branch(ja)[::-1], tg.branch(jb)[1:]])
-                        break
-                    continue
-                q_rand = src.draw(rng)
+                    near_g = link_candidates(tg, q, p, obtuse=cfg.obtuse_parent)
+                    near_s = (
+                        link_candidates(ts, q, p, obtuse=cfg.obtuse_parent)
+                        if len(near_g)
+                        else near_g
+                    )
+                    if len(near_s):
+                        i_s = link(ts, False, q, p, edge_free, order=near_s)
+                        if i_s >= 0:
+                            i_g = link(tg, True, q, p, edge_free, order=near_g)
+                            if i_g >= 0:
+                                found = np.vstack([ts.branch(i_s)[::-1], tg.branch(i_g)[1:]])
+                                break
+                q_rand = samples.draw(rng)
                 i_near = ta.choose_parent(q_rand, cfg.obtuse_parent)
-                q_new, i_new = self._extend(ta, ta is ts, i_near, q_rand, p, edge_free)
+                i_new = extend(ta, ta is tg, i_near, q_rand, p, edge_free)
                 if i_new >= 0:
-                    j = self._connect(tb, tb is ts, q_new, p, cfg, edge_free, watch)
+                    j = greedy_connect(
+                        tb, tb is tg, ta.nodes[i_new], p, edge_free,
+                        obtuse=cfg.obtuse_parent, adaptive=cfg.adaptive_step,
+                        expired=watch.expired,
+                    )  # fmt: skip
                     if j >= 0:
                         i_s, i_g = (i_new, j) if ta is ts else (j, i_new)
                         found = np.vstack([ts.branch(i_s)[::-1], tg.branch(i_g)[1:]])
@@ -679,10 +939,10 @@ class ImprovedRRTConnect:
                 break
             out = finish(found, trees, iterations)
             if out is not None:
-                out.stats["nodes_all_attempts"] = float(total_nodes)
                 return out
 
         stats["iterations"] = float(iterations)
+        stats["growth_time_s"] = watch.elapsed() - stats["postprocess_time_s"]
         if stats["postprocess_attempts"] > 0 and last_message:
             return failure(
                 NAME,
@@ -705,100 +965,3 @@ class ImprovedRRTConnect:
             iterations=iterations,
             stats=stats,
         )
-
-    # ------------------------------------------------------------------ growth steps
-
-    @staticmethod
-    def _link(
-        tree: ObtuseTree,
-        is_start: bool,
-        q: np.ndarray,
-        p: float,
-        obtuse: bool,
-        edge_free: Callable[[Sequence[float], Sequence[float]], bool],
-        candidates: int = 8,
-    ) -> int:
-        """Join ``q`` by a straight free edge from one of the nearest nodes; its index or -1.
-
-        The ``candidates`` nearest nodes within ``4 p`` are tried, the obtuse ones
-        (Eq. 11) first when ``obtuse``; the edge is stored as steps of at most ``p``
-        (each a piece of a free edge, hence free).
-        """
-        d = tree.sq_dists(q)
-        order = np.argsort(d)[:candidates]
-        order = order[d[order] <= (4.0 * p) ** 2]
-        if obtuse and len(order) > 1:
-            e = tree.ppos[order] - q
-            ok = d[order] + tree.dpar[order] < np.einsum("ij,ij->i", e, e)
-            order = order[np.argsort(~ok, kind="stable")]
-        ql = (float(q[0]), float(q[1]))
-        for i in order.tolist():
-            a = tree.nodes[i].copy()
-            al = (float(a[0]), float(a[1]))
-            if not (edge_free(al, ql) if is_start else edge_free(ql, al)):
-                continue
-            pieces = max(1, math.ceil(math.sqrt(d[i]) / p - 1e-9))
-            j = i
-            for m in range(1, pieces + 1):
-                j = tree.add(a + (q - a) * (m / pieces), j)
-            return j
-        return -1
-
-    @staticmethod
-    def _extend(
-        tree: ObtuseTree,
-        is_start: bool,
-        i_near: int,
-        target: np.ndarray,
-        p: float,
-        edge_free: object,
-    ) -> tuple[np.ndarray, int]:
-        """One step of ``p`` from node ``i_near`` towards ``target``; the new index or -1."""
-        a = tree.nodes[i_near]
-        dx, dy = target[0] - a[0], target[1] - a[1]
-        dist = math.hypot(dx, dy)
-        if dist < 1e-9:
-            return a, -1
-        if dist <= p:
-            q = target.copy()
-        else:
-            q = np.array([a[0] + dx * p / dist, a[1] + dy * p / dist])
-        al, ql = a.tolist(), q.tolist()
-        free = edge_free(al, ql) if is_start else edge_free(ql, al)  # type: ignore[operator]
-        if not free:
-            return q, -1
-        return q, tree.add(q, i_near)
-
-    @staticmethod
-    def _connect(
-        tree: ObtuseTree,
-        is_start: bool,
-        target: np.ndarray,
-        p: float,
-        cfg: ImprovedConfig,
-        edge_free: object,
-        watch: Stopwatch,
-    ) -> int:
-        """Greedy connect towards ``target`` with the adaptive step; index of ``target`` or -1."""
-        j = tree.choose_parent(target, cfg.obtuse_parent)
-        step = p
-        tx, ty = float(target[0]), float(target[1])
-        while True:
-            a = tree.nodes[j]
-            ax, ay = float(a[0]), float(a[1])
-            dx, dy = tx - ax, ty - ay
-            dist = math.hypot(dx, dy)
-            if dist < 1e-9:
-                return j
-            reached = dist <= step
-            q = (tx, ty) if reached else (ax + dx * step / dist, ay + dy * step / dist)
-            free = edge_free((ax, ay), q) if is_start else edge_free(q, (ax, ay))  # type: ignore[operator]
-            if not free:
-                return -1
-            j = tree.add(np.array(q), j)
-            if reached:
-                return j
-            if cfg.adaptive_step:
-                step = 2.0 * p
-            if watch.expired():
-                return -1

@@ -22,11 +22,13 @@ from __future__ import annotations
 
 import logging
 import math
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple, Protocol
 
 import numpy as np
+import shapely
 from numpy.lib.stride_tricks import sliding_window_view
 from scipy.interpolate import BSpline
 
@@ -89,7 +91,9 @@ def prune(points: np.ndarray, checker: EdgeChecker, keep: Sequence[int] = ()) ->
     points : numpy.ndarray
         Polyline ``(N, 2)`` in driving order.
     checker : EdgeChecker
-        Provides ``edge_free(a, b)``.
+        Provides ``edge_free(a, b)``; if it also has ``blocked_from(a, bs)`` (a
+        boolean array, True where the edge ``a -> b`` is proven to collide), those
+        edges are skipped without calling ``edge_free``. The result is the same.
     keep : sequence of int, optional
         Indices that must stay (the ends always stay).
 
@@ -115,13 +119,18 @@ def prune(points: np.ndarray, checker: EdgeChecker, keep: Sequence[int] = ()) ->
         return np.zeros(1, dtype=np.int64)
     plist = pts.tolist()
     edge_free = checker.edge_free
+    screen = getattr(checker, "blocked_from", None)
     anchors = sorted({0, n - 1, *(int(k) for k in keep if 0 <= int(k) < n)})
     out = [0]
     for first, last in zip(anchors[:-1], anchors[1:], strict=True):
         i = first
         while i < last:
             a = plist[i]
+            # An optional exact screen: edges proven to collide are skipped.
+            skip = screen(pts[i], pts[i + 2 : last + 1]) if screen and last > i + 1 else None
             for j in range(last, i, -1):
+                if skip is not None and j >= i + 2 and skip[j - i - 2]:
+                    continue
                 if edge_free(a, plist[j]):
                     break
             else:
@@ -432,27 +441,48 @@ def quadratic_span_max_curvature(control_points: np.ndarray) -> np.ndarray:
 def parameter_grid(spline: BSpline, spacing: float) -> np.ndarray:
     """Parameters at which consecutive points of ``spline`` are at most ``spacing`` apart.
 
-    Each knot span gets uniform parameters, as many as its speed bound needs: by
-    the convex-hull property the speed is at most the largest derivative control
-    point ``k (P_{i+1} - P_i) / (t_{i+k+1} - t_{i+1})`` acting on the span, so a
-    parameter step ``spacing / bound`` never moves more than ``spacing`` along the
-    curve. Both ends are included.
+    The derivative of a B-spline is a B-spline of degree ``k - 1`` with control
+    points ``Q_i = k (P_{i+1} - P_i) / (t_{i+k+1} - t_{i+1})``, so on each knot span
+    the speed is bounded: by the largest ``|Q_i|`` acting on the span (convex hull)
+    and, for degree 2, by the linear interpolation of the two ``|Q_i|`` (the
+    derivative is linear there). Parameters are placed so that the integral of
+    the bound between neighbours is at most ``spacing``, which bounds the arc
+    length between them. Both ends are included.
+
+    Examples
+    --------
+    >>> spl = fit_bspline(np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]))
+    >>> u = parameter_grid(spl, 0.5)
+    >>> bool(np.hypot(*np.diff(spl(u), axis=0).T).max() <= 0.5), u[0], u[-1]
+    (True, np.float64(0.0), np.float64(1.0))
     """
     t, c, k = spline.t, np.asarray(spline.c), spline.k
     n = len(c)
     q = k * np.diff(c, axis=0) / (t[k + 1 : n + k] - t[1:n])[:, None]
     qn = np.hypot(q[:, 0], q[:, 1])
-    bound = sliding_window_view(qn, k).max(axis=1)  # spans m = k .. n-1
     lo, hi = t[k:n], t[k + 1 : n + 1]
     width = hi - lo
-    counts = np.where(width > 0, np.maximum(1, np.ceil(bound * width / spacing)), 0).astype(
-        np.int64
-    )
-    total = int(counts.sum())
+    if k == 2:
+        a, b = qn[:-1], qn[1:]  # speed bound at either end of each span, linear between
+        total = width * 0.5 * (a + b)
+    else:
+        a = b = sliding_window_view(qn, k).max(axis=1)
+        total = width * a
+    counts = np.where(width > 0, np.maximum(1, np.ceil(total / spacing)), 0).astype(np.int64)
     owner = np.repeat(np.arange(len(counts)), counts)
     first = np.repeat(np.cumsum(counts) - counts, counts)
-    frac = (np.arange(total) - first) / np.repeat(np.maximum(counts, 1), counts)
-    u = lo[owner] + frac * width[owner]
+    frac = (np.arange(int(counts.sum())) - first) / np.repeat(np.maximum(counts, 1), counts)
+    # Invert the bound's integral S(x) = w (a x + (b - a) x^2 / 2) at the fractions of S(1).
+    aa, bb, w = a[owner], b[owner], width[owner]
+    target = frac * 0.5 * (aa + bb)
+    slope = bb - aa
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = np.where(
+            np.abs(slope) > 1e-12 * np.maximum(aa + bb, 1e-300),
+            (np.sqrt(np.maximum(aa * aa + 2.0 * slope * target, 0.0)) - aa) / slope,
+            frac,
+        )
+    u = lo[owner] + np.clip(x, 0.0, 1.0) * w
     return np.append(u, t[n])
 
 
@@ -711,6 +741,59 @@ _RADIUS_STEPS = (1.0, 1.6)
 _END_GAP = 0.05
 
 
+_UNIONS: weakref.WeakKeyDictionary[object, shapely.Geometry] = weakref.WeakKeyDictionary()
+
+
+def _obstacle_union(checker: object) -> shapely.Geometry | None:
+    """The prepared union of the checker's obstacles, cached per checker (None if unknown)."""
+    obstacles = getattr(checker, "obstacles", None)
+    if obstacles is None:
+        return None
+    try:
+        union = _UNIONS.get(checker)
+    except TypeError:  # not weak-referenceable
+        return None
+    if union is None:
+        union = shapely.union_all([o.polygon() for o in obstacles])
+        shapely.prepare(union)
+        _UNIONS[checker] = union
+    return union
+
+
+class _EdgeCache:
+    """Memoised ``edge_free``: the key polygon is rebuilt from the same tree nodes several times.
+
+    With the checker's obstacles known, :meth:`blocked_from` proves collisions in
+    bulk: an edge whose centre line meets an obstacle cannot be free, because the
+    swept capsule of ``edge_free`` contains its centre line.
+    """
+
+    def __init__(self, checker: EdgeChecker) -> None:
+        self._edge_free = checker.edge_free
+        self._known: dict[tuple[float, float, float, float], bool] = {}
+        self.checks = 0
+        self._union = _obstacle_union(checker)
+        if self._union is None:
+            self.blocked_from = None  # type: ignore[assignment]
+
+    def blocked_from(self, a: np.ndarray, bs: np.ndarray) -> np.ndarray:
+        """True where the centre line ``a -> b`` crosses an obstacle (so the edge collides)."""
+        if len(bs) == 0 or self._union.is_empty:
+            return np.zeros(len(bs), dtype=bool)
+        coords = np.empty((len(bs), 2, 2))
+        coords[:, 0] = a
+        coords[:, 1] = bs
+        return shapely.intersects(self._union, shapely.linestrings(coords))
+
+    def edge_free(self, a: Sequence[float], b: Sequence[float]) -> bool:
+        key = (a[0], a[1], b[0], b[1])
+        hit = self._known.get(key)
+        if hit is None:
+            self.checks += 1
+            hit = self._known[key] = bool(self._edge_free(a, b))
+        return hit
+
+
 class _Smoother:
     """State of one :func:`make_drivable` call: the key polygon and each corner's treatment."""
 
@@ -721,6 +804,7 @@ class _Smoother:
         self.start = start
         self.goal = goal
         self.checker = checker
+        self.edges = _EdgeCache(checker)
         self.cfg = cfg
         self.s = np.array([start.x, start.y])
         self.g = np.array([goal.x, goal.y])
@@ -739,7 +823,7 @@ class _Smoother:
 
     def key_polygon(self, d_s: float, d_g: float) -> str | None:
         """Build the key polygon with heading legs ``d_s``, ``d_g``; a reason on failure."""
-        cfg, edge = self.cfg, self.checker.edge_free
+        cfg, edge = self.cfg, self.edges.edge_free
         s1 = self.s + d_s * self.hs
         g1 = self.g - d_g * self.hg
         aug = np.vstack([self.s, s1, self.raw[1:-1], g1, self.g])
@@ -749,7 +833,7 @@ class _Smoother:
         if not edge(g1.tolist(), self.g.tolist()):
             return f"the goal heading leg of {d_g:.2f} m is blocked"
         if cfg.prune:
-            key = prune(aug, self.checker, keep=(1, n - 2))
+            key = prune(aug, self.edges, keep=(1, n - 2))
             if key is None:
                 return "a heading-leg point has no free edge to the tree path"
         else:
@@ -757,7 +841,7 @@ class _Smoother:
             if not all(edge(aug[i].tolist(), aug[i + 1].tolist()) for i in range(n - 1)):
                 return "a heading-leg point has no free edge to the tree path"
         if cfg.sharp_repair:
-            key = repair_sharp_angles(aug, key, self.checker)
+            key = repair_sharp_angles(aug, key, self.edges)
         self.pts = [aug[k].copy() for k in key.tolist()]
         self.origin = [p.copy() for p in self.pts]
         self.kind = ["start", "start_leg"] + ["node"] * (len(key) - 4) + ["goal_leg", "goal"]
@@ -888,7 +972,7 @@ class _Smoother:
     # ------------------------------------------------------------- repairs
 
     def _free(self, a: np.ndarray, b: np.ndarray) -> bool:
-        return self.checker.edge_free(a.tolist(), b.tolist())
+        return self.edges.edge_free(a.tolist(), b.tolist())
 
     def _place(self, c: int, new: np.ndarray) -> bool:
         """Put corner ``c`` at ``new`` when both adjacent legs stay free."""
@@ -1136,6 +1220,7 @@ def make_drivable(
                     "fillets": float(sum(r > 0 for r in sm.radius)),
                     "merges": float(sm.merges),
                     "moves": float(sm.moves),
+                    "edge_checks": float(sm.edges.checks),
                 }
                 return SmoothingResult(
                     True, samples, ctrl, np.array(sm.pts), sm.rounds, max_k, "", stats
