@@ -24,7 +24,9 @@ The machine is shared, so every trial also records the CPU time that *other*
 processes used during it (``/proc/stat`` busy time minus this process and its
 workers): a trial with much foreign CPU ran on fewer than its cores. With
 ``--quiet-load L`` the script waits (up to ``--quiet-wait`` s) for the 1-minute load
-average to fall below L before each trial.
+average to fall below L before each trial, and with ``--max-foreign F`` a trial in
+which other processes took more than the share F of the machine's CPU is
+discarded (kept in the JSON, marked) and repeated, up to ``--attempts`` times.
 
 Writes ``OUT/bench_scaling.json`` (every trial, the command, the machine) and
 ``OUT/bench_scaling.md``.
@@ -120,24 +122,37 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quiet-load", type=float, default=None,
                         help="wait for the 1-min load average to drop below this")
     parser.add_argument("--quiet-wait", type=float, default=300.0)
+    parser.add_argument("--max-foreign", type=float, default=None,
+                        help="repeat a trial in which other processes took more than this "
+                        "share of the CPU")
+    parser.add_argument("--attempts", type=int, default=3)
     args = parser.parse_args(argv)
     grids = [g.strip() for g in args.grids.split(",") if g.strip()]
     for g in grids:
         if g not in GRIDS:
             parser.error(f"--grids: unknown grid {g!r}; choose from {sorted(GRIDS)}")
     trials: list[dict] = []
+    discarded: list[dict] = []
     for g in grids:
         for rep in range(args.repeats):
             for workers in (1, 2):
-                t = trial(g, workers, args.quiet_load, args.quiet_wait)
-                t["repeat"] = rep
-                trials.append(t)
-                print(
-                    f"{g:12s} rep {rep} {workers} worker(s): {t['runs']} runs in "
-                    f"{t['run_wall_s']:.1f} s = {t['throughput_runs_per_s']:.2f} runs/s "
-                    f"(foreign CPU {t['foreign_cpu_s']:.1f} s, load {t['load_before']:.2f})",
-                    file=sys.stderr,
-                )
+                for attempt in range(args.attempts):
+                    t = trial(g, workers, args.quiet_load, args.quiet_wait)
+                    t["repeat"] = rep
+                    ok = args.max_foreign is None or t["foreign_cpu_share"] <= args.max_foreign
+                    print(
+                        f"{g:12s} rep {rep} {workers} worker(s): {t['runs']} runs in "
+                        f"{t['run_wall_s']:.1f} s = {t['throughput_runs_per_s']:.2f} runs/s "
+                        f"(foreign CPU {t['foreign_cpu_s']:.1f} s = "
+                        f"{100 * t['foreign_cpu_share']:.0f} %, load {t['load_before']:.2f})"
+                        + ("" if ok else " -> discarded, machine busy"),
+                        file=sys.stderr,
+                    )
+                    if ok or attempt == args.attempts - 1:
+                        t["accepted_with_foreign_load"] = not ok
+                        trials.append(t)
+                        break
+                    discarded.append(t)
     summary = {}
     for g in grids:
         tp = {
@@ -162,6 +177,7 @@ def main(argv: list[str] | None = None) -> int:
                   for g in grids},
         "summary": summary,
         "trials": trials,
+        "discarded_trials": discarded,
     }
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -197,6 +213,12 @@ def main(argv: list[str] | None = None) -> int:
             f"{100 * t['success_rate']:.0f} % | {t['own_cpu_s']:.1f} | "
             f"{t['foreign_cpu_s']:.1f} | {t['load_before']:.2f} |"
         )
+    if discarded:
+        lines += [
+            "",
+            f"{len(discarded)} trial(s) discarded because other processes took more than "
+            f"{100 * args.max_foreign:.0f} % of the CPU (in the JSON).",
+        ]
     text = "\n".join(lines) + "\n"
     write_text_atomic(out / "bench_scaling.md", text)
     print(text)

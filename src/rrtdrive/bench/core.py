@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import platform
@@ -216,27 +217,30 @@ def run_bench(
                 executor=executor, retries=cfg.retries, run_timeout_s=cfg.run_timeout_s,
             )
         if progress is not None:
+            where = f"{len(todo)} to run on {backend.describe()}" if todo else "nothing to run"
             progress.write(
                 f"bench: {len(specs)} runs in the grid, {skipped} already in "
-                f"{store.path}, {len(todo)} to run on {backend.describe()}\n"
+                f"{store.path}, {where}\n"
             )
             progress.flush()
         bar = Progress(len(todo), progress)
         executed = 0
         t0 = time.perf_counter()
         try:
-            for outcome in backend.run(todo):
-                if outcome.row is not None:
-                    row = dict(outcome.row)
-                    row["attempts"] = outcome.attempts
-                else:
-                    error = outcome.error or "unknown error"
-                    row = error_row(outcome.spec, error, outcome.attempts)
-                store.append(row)
-                executed += 1
-                bar.update(error=outcome.row is None)
-                if on_row is not None:
-                    on_row(row)
+            # closing(): an interrupt stops the workers at once, not at garbage collection.
+            with contextlib.closing(backend.run(todo)) as outcomes:
+                for outcome in outcomes:
+                    if outcome.row is not None:
+                        row = dict(outcome.row)
+                        row["attempts"] = outcome.attempts
+                    else:
+                        error = outcome.error or "unknown error"
+                        row = error_row(outcome.spec, error, outcome.attempts)
+                    store.append(row)
+                    executed += 1
+                    bar.update(error=outcome.row is None)
+                    if on_row is not None:
+                        on_row(row)
             run_wall = time.perf_counter() - t0
         finally:
             bar.close()

@@ -32,6 +32,7 @@ searches to its time budget.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import time
@@ -236,12 +237,7 @@ class OmplPlanner:
 
 
 def _with_nodes(result: PlanResult, nodes: int) -> PlanResult:
-    return PlanResult(
-        status=result.status, planner=result.planner, path=result.path,
-        raw_path=result.raw_path, trees=result.trees, nodes=nodes,
-        iterations=result.iterations, planning_time_s=result.planning_time_s,
-        message=result.message, stats=result.stats,
-    )
+    return dataclasses.replace(result, nodes=nodes)
 
 
 def _states(path: Any, r2: bool) -> np.ndarray:
