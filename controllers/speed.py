@@ -44,6 +44,9 @@ class SpeedConfig:
         The car counts as arrived when it is this close to the end (metres) ...
     stop_speed : float
         ... and slower than this (m/s); from then on it is held at rest.
+    jerk_max : float
+        Largest rate of rise of the acceleration command in m/s^3 (smooth starts);
+        braking is never rate-limited.
     """
 
     v_max: float = 3.0
@@ -57,9 +60,12 @@ class SpeedConfig:
     a_max: float = 2.0
     stop_distance: float = 0.05
     stop_speed: float = 0.05
+    jerk_max: float = 5.0
 
     def __post_init__(self) -> None:
-        for name in ("v_max", "a_lat_max", "accel", "decel", "stop_distance", "stop_speed"):
+        for name in (
+            "v_max", "a_lat_max", "accel", "decel", "stop_distance", "stop_speed", "jerk_max"
+        ):
             require_positive(f"speed.{name}", getattr(self, name))
         for name in ("v_launch", "kp", "ki", "a_min", "a_max"):
             require_finite(f"speed.{name}", getattr(self, name))
@@ -153,6 +159,7 @@ class SpeedController:
         self.arrived = False
         self.v_ref = 0.0
         self.stop_at: float | None = None
+        self.last_a = 0.0
 
     def reset(self, profile: SpeedProfile) -> None:
         """Track ``profile`` from scratch."""
@@ -162,6 +169,7 @@ class SpeedController:
         self.arrived = False
         self.v_ref = 0.0
         self.stop_at = None
+        self.last_a = 0.0
 
     def control(self, s: float, speed: float, t: float) -> float:
         """Acceleration command for the car at arc length ``s`` with ``speed`` at time ``t``."""
@@ -176,31 +184,57 @@ class SpeedController:
             # At the goal: hold the car at rest.
             self.arrived = True
             self.v_ref = 0.0
-            return self._clip(-speed / dt if dt > 0 else -cfg.kp * speed)
+            return self._hold(speed, dt)
         v_ref, a_ref = profile.at(s)
         if remaining <= 0.0:
-            # Past the end: brake to a stop now.
+            # Past the end: brake to a stop within a few centimetres.
             self.v_ref = 0.0
-            return self._clip(-speed / dt if dt > 0 else cfg.a_min)
+            return self._brake(speed, dt, 0.05)
         if self.stop_at is not None:
             # A stop line (for example: wait for oncoming traffic) caps the profile.
             d = self.stop_at - s
             if d <= cfg.stop_distance:
                 self.v_ref = 0.0
-                return self._clip(-speed / dt if dt > 0 else cfg.a_min)
+                return self._brake(speed, dt, max(d, 0.05))
             v_cap = math.sqrt(2.0 * cfg.decel * d)
             if v_cap < v_ref:
                 v_ref = v_cap
-                a_ref = -speed * speed / (2.0 * d) if speed > 0.0 else 0.0
+                a_ref = -speed * speed / (2.0 * max(d, cfg.stop_distance)) if speed > 0 else 0.0
         self.v_ref = v_ref
         if remaining < 2.0 and speed > 0.0:
             # Final approach: the constant deceleration that stops exactly at the end.
-            a_ref = min(a_ref, -speed * speed / (2.0 * remaining))
+            a_ref = min(a_ref, -speed * speed / (2.0 * max(remaining, cfg.stop_distance)))
         err = v_ref - speed
         self.integral += err * dt
         limit = cfg.a_max / cfg.ki if cfg.ki > 0 else 0.0
         self.integral = min(max(self.integral, -limit), limit)
-        return self._clip(a_ref + cfg.kp * err + cfg.ki * self.integral)
+        return self._limit(a_ref + cfg.kp * err + cfg.ki * self.integral, dt)
 
-    def _clip(self, a: float) -> float:
-        return min(max(a, self.config.a_min), self.config.a_max)
+    def _hold(self, speed: float, dt: float) -> float:
+        """Keep a (nearly) stopped car at rest: cancel the residual speed, no more."""
+        if speed == 0.0:
+            a = 0.0
+        else:
+            a = -speed / dt if dt > 0 else -self.config.kp * speed
+        a = min(max(a, self.config.a_min), self.config.a_max)
+        self.last_a = a
+        return a
+
+    def _brake(self, speed: float, dt: float, distance: float) -> float:
+        """Stop within ``distance``: the constant deceleration ``v^2 / 2d``, held once stopped."""
+        if abs(speed) <= self.config.stop_speed:
+            return self._hold(speed, dt)
+        a = -speed * abs(speed) / (2.0 * distance)
+        a = min(max(a, self.config.a_min), self.config.a_max)
+        self.last_a = a
+        return a
+
+    def _limit(self, a: float, dt: float) -> float:
+        """Clip to the acceleration limits; a rising command rises at most ``jerk_max``."""
+        cfg = self.config
+        a = min(max(a, cfg.a_min), cfg.a_max)
+        rise = self.last_a + cfg.jerk_max * dt
+        if a > rise:
+            a = rise
+        self.last_a = a
+        return a
