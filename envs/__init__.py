@@ -1,1 +1,42 @@
-"""Gymnasium environments of rrtdrive (installed as ``rrtdrive.envs``)."""
+"""Gymnasium environments of rrtdrive (installed as ``rrtdrive.envs``).
+
+Importing this package (``import rrtdrive`` does) registers one gymnasium id per
+scenario; nothing else happens. The registration uses entry-point strings, so
+highway-env and pygame load only when an environment is made::
+
+    import gymnasium as gym
+    import rrtdrive  # registers rrtdrive/Parking-v0, rrtdrive/Overtake-v0
+
+    env = gym.make("rrtdrive/Parking-v0", controller="lqr", residual=True)
+
+``gym.make("rrtdrive:rrtdrive/Parking-v0")`` imports rrtdrive by itself. The
+environment is :class:`rrtdrive.envs.drive_env.DriveEnv`; the MP4 recorder is
+:class:`rrtdrive.envs.video.RecordMP4`. See ``docs/gym.md``.
+"""
+
+from __future__ import annotations
+
+from gymnasium.envs.registration import register, registry
+
+__all__ = ["ENV_IDS", "ENTRY_POINT", "register_envs"]
+
+ENTRY_POINT = "rrtdrive.envs.drive_env:DriveEnv"
+
+#: Registered id -> scenario name of :func:`rrtdrive.sim.scenes.make_scenario`.
+#: A new scenario is one more line here (``tests/test_envs.py`` checks that every
+#: name in ``rrtdrive.sim.scenes.SCENARIOS`` has an id).
+ENV_IDS: dict[str, str] = {
+    "rrtdrive/Parking-v0": "parking",
+    "rrtdrive/Overtake-v0": "overtake",
+    # "rrtdrive/OvertakeTraffic-v0": "overtake-traffic",  # once sim.scenes has the scenario
+}
+
+
+def register_envs() -> None:
+    """Register every id of :data:`ENV_IDS` with gymnasium (idempotent)."""
+    for env_id, scenario in ENV_IDS.items():
+        if env_id not in registry:
+            register(id=env_id, entry_point=ENTRY_POINT, kwargs={"scenario": scenario})
+
+
+register_envs()

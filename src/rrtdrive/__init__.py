@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 from rrtdrive.collision import CheckerConfig, CollisionChecker
+
+# Importing rrtdrive.envs registers the gymnasium ids (rrtdrive/Parking-v0, ...) with
+# entry-point strings: neither highway-env nor pygame is imported here.
+from rrtdrive.envs import ENV_IDS
 from rrtdrive.maps import BUILTIN_MAPS, Map, Obstacle, builtin_map, load_map, resolve_map, save_map
 from rrtdrive.types import (
     Budget,
@@ -22,6 +26,7 @@ __all__ = [
     "Budget",
     "CheckerConfig",
     "CollisionChecker",
+    "ENV_IDS",
     "InputError",
     "Map",
     "Obstacle",
