@@ -396,7 +396,7 @@ def quadratic_span_max_curvature(control_points: np.ndarray) -> np.ndarray:
     With ``u = B - A`` and ``v = C - B`` the cross product of the derivatives is
     the constant ``4 u x v``, so the curvature peaks where the speed ``2|(1-t)u +
     t v|`` is least: ``max |kappa| = |u x v| / (2 d^3)`` with ``d`` the distance from
-    the origin to the segment ``[u, v]``.
+    the origin to the segment ``[u, v]``; ``inf`` where the speed vanishes (a cusp).
 
     Parameters
     ----------
@@ -435,7 +435,8 @@ def quadratic_span_max_curvature(control_points: np.ndarray) -> np.ndarray:
     d = np.hypot(closest[:, 0], closest[:, 1])
     with np.errstate(divide="ignore", invalid="ignore"):
         k = cross / (2.0 * d**3)
-    return np.where(d > 1e-12, k, np.where(cross > 0.0, np.inf, 0.0))
+    # d = 0: the speed vanishes inside the span, a cusp (e.g. a reversal): not drivable.
+    return np.where(d > 1e-12, k, np.inf)
 
 
 def parameter_grid(spline: BSpline, spacing: float) -> np.ndarray:
@@ -942,16 +943,23 @@ class _Smoother:
     def collision_check(self, spl: BSpline, owner: np.ndarray) -> tuple[list[int], np.ndarray]:
         """Corners whose pieces collide, and the dense rows (spacing <= check_spacing)."""
         cfg = self.cfg
-        dense, u = sample_spline(spl, min(cfg.sample_spacing / 3.0, cfg.check_spacing))
+        step = min(cfg.sample_spacing / 3.0, cfg.check_spacing)
+        dense, u = sample_spline(spl, step)
         dense[0, :2] = self.s
         dense[-1, :2] = self.g
         dense[0, 2] = wrap_angle(self.start.yaw)
         dense[-1, 2] = wrap_angle(self.goal.yaw)
+        n_int = len(spl.c) - cfg.degree
+        span = np.minimum((u * n_int).astype(np.int64), n_int - 1)
+        # Backstop against cusps: between samples at most `step` apart the heading
+        # of a curve with |kappa| <= kappa_max turns by at most kappa_max * step.
+        turn = np.abs(wrap_angle(np.diff(dense[:, 2])))
+        jump = np.flatnonzero(turn > cfg.kappa_max * step * 1.05 + 1e-9)
+        if len(jump):
+            return self._owners(owner, np.unique(span[jump])), dense
         free, bad_seg = self.checker.path_free(dense, spacing=cfg.check_spacing)
         if free:
             return [], dense
-        n_int = len(spl.c) - cfg.degree
-        span = np.minimum((u * n_int).astype(np.int64), n_int - 1)
         hit = np.unique(
             np.concatenate([span[bad_seg], span[np.minimum(bad_seg + 1, len(span) - 1)]])
         )
