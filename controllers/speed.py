@@ -205,13 +205,18 @@ class SpeedController:
             # Final approach: the constant deceleration that stops exactly at the end.
             a_ref = min(a_ref, -speed * speed / (2.0 * max(remaining, cfg.stop_distance)))
         err = v_ref - speed
-        self.integral += err * dt
-        limit = cfg.a_max / cfg.ki if cfg.ki > 0 else 0.0
-        self.integral = min(max(self.integral, -limit), limit)
-        return self._limit(a_ref + cfg.kp * err + cfg.ki * self.integral, dt)
+        trial = self.integral + err * dt
+        raw = a_ref + cfg.kp * err + cfg.ki * trial
+        a = self._limit(raw, dt)
+        if a == raw:
+            # Conditional integration (anti-windup): only while the command is not limited.
+            limit = cfg.a_max / cfg.ki if cfg.ki > 0 else 0.0
+            self.integral = min(max(trial, -limit), limit)
+        return a
 
     def _hold(self, speed: float, dt: float) -> float:
         """Keep a (nearly) stopped car at rest: cancel the residual speed, no more."""
+        self.integral = 0.0
         if speed == 0.0:
             a = 0.0
         else:
@@ -224,6 +229,7 @@ class SpeedController:
         """Stop within ``distance``: the constant deceleration ``v^2 / 2d``, held once stopped."""
         if abs(speed) <= self.config.stop_speed:
             return self._hold(speed, dt)
+        self.integral = 0.0
         a = -speed * abs(speed) / (2.0 * distance)
         a = min(max(a, self.config.a_min), self.config.a_max)
         self.last_a = a
