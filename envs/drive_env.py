@@ -72,6 +72,8 @@ class RewardWeights:
       speed errors after the step, times the step's duration ``T`` in seconds (so
       the sums do not depend on the control rate);
     * ``collision = -w_collision`` on the step highway-env reports a crash;
+    * ``off_path = -w_off_path`` on the step the rear axle ends more than
+      ``max_cte`` from the path (the episode ends there);
     * ``success = +w_success`` on the last step when the evaluators call the
       episode a success.
 
@@ -87,6 +89,8 @@ class RewardWeights:
         Per (m/s)^2 s of squared error against the speed profile.
     collision : float
         Penalty of a crash.
+    off_path : float
+        Penalty of leaving the path by more than ``max_cte``.
     success : float
         Bonus of a successful episode.
     """
@@ -96,6 +100,7 @@ class RewardWeights:
     heading: float = 1.0
     speed: float = 0.1
     collision: float = 50.0
+    off_path: float = 50.0
     success: float = 50.0
 
     def __post_init__(self) -> None:
@@ -198,10 +203,12 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
     ``residual=True`` the command is the controller's plus the action mapped the
     same way and multiplied by ``residual_scale``, clipped to the same limits.
 
-    **Episode end**: terminated on highway-env's first crash, or on arrival: with
-    ``residual=True`` when the controller has stopped the car at the end of the
-    path (the runner's rule), otherwise when the rear axle is stopped (|v| <= 0.1
-    m/s) within 0.5 m and 10° of the goal. Truncated at the scenario's time limit.
+    **Episode end**: terminated on highway-env's first crash (status
+    ``"crashed"``), when the rear axle is more than ``max_cte`` from the path
+    (``"off_path"``), or on arrival (``"arrived"``): with ``residual=True`` when
+    the controller has stopped the car at the end of the path (the runner's rule),
+    otherwise when the rear axle is stopped (|v| <= 0.1 m/s) within 0.5 m and 10°
+    of the goal. Truncated at the scenario's time limit (``"timeout"``).
 
     Parameters
     ----------
@@ -226,6 +233,9 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         Physics and control rate in Hz (>= 15).
     max_time_s : float, optional
         Time limit of an episode (default: the scenario's, 120 s parking, 60 s overtake).
+    max_cte : float, optional
+        End the episode when the rear axle is farther than this from the path
+        (metres; ``None``: never).
     reward : RewardWeights or mapping, optional
         Reward weights (see :class:`RewardWeights`).
     scenario_options : mapping, optional
@@ -272,6 +282,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         action_repeat: int = 1,
         simulation_frequency: int = 20,
         max_time_s: float | None = None,
+        max_cte: float | None = 10.0,
         reward: RewardWeights | Mapping[str, float] | None = None,
         scenario_options: Mapping[str, Any] | None = None,
         controller_options: Mapping[str, Any] | None = None,
@@ -308,6 +319,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         self.action_repeat = _require_int("action_repeat", action_repeat, 1, 1000)
         self.sim_config = SimConfig(simulation_frequency=simulation_frequency)
         self.max_time_s = None if max_time_s is None else _require_number("max_time_s", max_time_s)
+        self.max_cte = None if max_cte is None else _require_number("max_cte", max_cte)
         self.weights = RewardWeights.from_any(reward)
         self.scenario_options = _require_mapping("scenario_options", scenario_options)
         self.controller_options = _require_mapping("controller_options", controller_options)
@@ -593,9 +605,13 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             "heading": -w.heading * psi * psi * span,
             "speed": -w.speed * (v - v_ref) ** 2 * span,
             "collision": -w.collision if self._status == "crashed" else 0.0,
+            "off_path": 0.0,
             "success": 0.0,
         }
-        terminated = self._status in ("crashed", "arrived")
+        if not self._status and self.max_cte is not None and abs(e) > self.max_cte:
+            self._status = "off_path"
+            terms["off_path"] = -w.off_path
+        terminated = self._status in ("crashed", "arrived", "off_path")
         truncated = not terminated and self._k >= self._n_max
         info: dict[str, Any] = {
             "episode_seed": self.episode_seed,
@@ -745,6 +761,8 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         t_end = float(log.t[-1])
         if self._status == "crashed":
             message = f"highway-env reported a crash at t = {t_end:.2f} s"
+        elif self._status == "off_path":
+            message = f"left the path by more than {self.max_cte:g} m at t = {t_end:.2f} s"
         elif self._status == "arrived":
             where = "the end of the path" if self.residual else "the goal"
             message = f"stopped at {where} at t = {t_end:.2f} s"

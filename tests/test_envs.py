@@ -1,0 +1,316 @@
+"""The gymnasium environments: registration, check_env, vector envs, determinism, residual mode."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import subprocess
+import sys
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import rrtdrive
+from rrtdrive.controllers import VehicleState, make_controller
+from rrtdrive.envs import ENV_IDS
+from rrtdrive.envs.drive_env import DriveEnv, RewardWeights, observation_names
+from rrtdrive.evaluation import evaluate
+from rrtdrive.sim.runner import run_episode
+from rrtdrive.sim.scenes import SCENARIOS
+from rrtdrive.sim.video import frame_is_blank
+from rrtdrive.types import InputError
+
+# Wall-clock fields and the controller label differ by construction.
+NOT_COMPARED = {"wall_time_s", "planning_time_s", "controller"}
+
+
+def run_to_end(env, policy, **reset_kwargs):
+    obs, info = env.reset(**reset_kwargs)
+    total, steps = 0.0, 0
+    while True:
+        obs, reward, terminated, truncated, info = env.step(policy(obs))
+        total += reward
+        steps += 1
+        if terminated or truncated:
+            return obs, total, steps, info
+
+
+def zero(_obs):
+    return np.zeros(2, dtype=np.float32)
+
+
+def test_import_registers_ids_without_highway_env_or_pygame():
+    code = (
+        "import sys, gymnasium as gym, rrtdrive\n"
+        "ids = [k for k in gym.registry if k.startswith('rrtdrive/')]\n"
+        "assert sorted(ids) == sorted(rrtdrive.ENV_IDS), ids\n"
+        "bad = [m for m in sys.modules if m.split('.')[0] in ('highway_env', 'pygame')]\n"
+        "assert not bad, bad\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_every_scenario_has_an_env_id():
+    # Adding a scenario to sim.scenes.SCENARIOS needs one line in envs/__init__.py: ENV_IDS.
+    assert sorted(ENV_IDS.values()) == sorted(SCENARIOS)
+    for env_id, scenario in ENV_IDS.items():
+        spec = gym.spec(env_id)
+        assert spec.entry_point == "rrtdrive.envs.drive_env:DriveEnv"
+        assert spec.kwargs == {"scenario": scenario}
+
+
+@pytest.mark.parametrize("env_id", sorted(ENV_IDS))
+@pytest.mark.parametrize("residual", [False, True])
+def test_check_env(env_id, residual):
+    env = gym.make(env_id, render_mode="rgb_array", residual=residual)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(env.unwrapped)
+    env.close()
+    assert not [str(w.message) for w in caught if "gymnasium" in w.filename.replace("\\", "/")]
+
+
+def test_spaces_and_observation_layout():
+    env = gym.make("rrtdrive/Overtake-v0", n_ref_points=4, ref_spacing=2.0)
+    assert env.action_space == gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
+    assert env.observation_space.shape == (6 + 3 * 4,)
+    assert env.observation_space.dtype == np.float32
+    assert len(observation_names(4)) == 18
+    obs, info = env.reset(seed=0)
+    assert obs.dtype == np.float32 and obs in env.observation_space
+    u = env.unwrapped
+    scen = u._scenario
+    # At the start: at rest, on the path, the goal a path length away, points ahead.
+    assert obs[0] == 0.0 and abs(obs[2]) < 1e-3 and abs(obs[3]) < 1e-3
+    assert obs[5] == pytest.approx(u.path.length, rel=1e-4)
+    assert info["path_length_m"] == pytest.approx(u.path.length)
+    ref = obs[6:14].reshape(4, 2)
+    assert np.allclose(ref[:, 0], [2.0, 4.0, 6.0, 8.0], atol=0.05)  # straight ahead first
+    assert np.all(np.abs(obs[14:18]) <= scen.vehicle.kappa_max + 1e-6)
+    env.close()
+
+
+@pytest.mark.parametrize("mode", ["sync", "async"])
+def test_make_vec(mode):
+    envs = gym.make_vec(
+        "rrtdrive/Overtake-v0", num_envs=2, vectorization_mode=mode, residual=True, max_time_s=0.3
+    )
+    try:
+        obs, info = envs.reset(seed=3)
+        assert obs.shape == (2, envs.single_observation_space.shape[0])
+        assert obs.dtype == np.float32
+        assert info["episode_seed"][0] != info["episode_seed"][1]
+        ended = False
+        for _ in range(8):  # 0.3 s = 6 steps at 20 Hz, then the autoreset step
+            obs, reward, terminated, truncated, info = envs.step(np.zeros((2, 2), np.float32))
+            assert obs.shape[0] == 2 and reward.shape == (2,)
+            if truncated.any():
+                ended = True
+                assert list(info["status"][truncated]) == ["timeout"] * int(truncated.sum())
+                assert np.all(np.isfinite(info["metrics"]["cte_rms_m"][truncated]))
+                assert not info["is_success"][truncated].any()
+        assert ended
+    finally:
+        envs.close()
+
+
+def test_deterministic_for_a_seed():
+    def rollout(seed):
+        env = gym.make("rrtdrive/Parking-v0")
+        env.action_space.seed(seed)
+        out = [env.reset(seed=seed)]
+        for _ in range(40):
+            obs, r, te, tr, info = env.step(env.action_space.sample())
+            out.append((obs, r, te, tr, info))
+            if te or tr:
+                break
+        env.close()
+        return out
+
+    a, b = rollout(7), rollout(7)
+    assert len(a) == len(b)
+    for x, y in zip(a, b, strict=True):
+        assert gym.utils.env_checker.data_equivalence(x, y, exact=True)
+    c = rollout(8)
+    assert c[0][1]["episode_seed"] != a[0][1]["episode_seed"]
+
+
+def test_observations_are_fresh_arrays():
+    env = gym.make("rrtdrive/Overtake-v0")
+    obs0, _ = env.reset(seed=0)
+    obs1 = env.step(zero(None))[0]
+    obs2 = env.step(zero(None))[0]
+    assert not np.shares_memory(obs0, obs1) and not np.shares_memory(obs1, obs2)
+    env.close()
+
+
+@pytest.mark.parametrize(
+    "scenario,controller",
+    [("overtake", "pure-pursuit"), ("overtake", "stanley"), ("overtake", "lqr"),
+     ("parking", "lqr")],
+)
+def test_zero_residual_reproduces_plain_controller(scenario, controller):
+    env = DriveEnv(scenario, controller=controller, residual=True)
+    _, total, steps, info = run_to_end(env, zero, options={"episode_seed": 5})
+    plain = evaluate(run_episode(scenario, controller=controller, seed=5))
+    mine = dataclasses.asdict(env.report)
+    ref = dataclasses.asdict(plain)
+    assert {k: v for k, v in mine.items() if k not in NOT_COMPARED} == {
+        k: v for k, v in ref.items() if k not in NOT_COMPARED
+    }
+    assert plain.success and info["is_success"] and info["status"] == "arrived"
+    assert steps == plain.steps
+    # The trajectories are the same arrays, bit for bit.
+    ep = run_episode(scenario, controller=controller, seed=5)
+    assert np.array_equal(env.episode.log.states, ep.log.states)
+    assert np.array_equal(env.episode.log.controls, ep.log.controls)
+    # info["metrics"] is the report, NaN where a metric does not apply.
+    for k, v in mine.items():
+        got = info["metrics"][k]
+        assert (got == v) or (v is None and (got is None or math.isnan(got)))
+    env.close()
+
+
+def test_reward_terms_add_up_and_success_bonus():
+    weights = RewardWeights(progress=2.0, success=7.0)
+    env = DriveEnv("overtake", residual=True, reward={"progress": 2.0, "success": 7.0})
+    assert env.weights == weights
+    obs, info = env.reset(options={"episode_seed": 1})
+    total_progress = 0.0
+    while True:
+        obs, reward, terminated, truncated, info = env.step(zero(obs))
+        terms = info["reward_terms"]
+        assert set(terms) == {
+            "progress", "cte", "heading", "speed", "collision", "off_path", "success"
+        }
+        assert reward == pytest.approx(sum(terms.values()))
+        assert terms["cte"] <= 0 and terms["heading"] <= 0 and terms["speed"] <= 0
+        total_progress += terms["progress"]
+        if terminated or truncated:
+            break
+    assert terms["success"] == 7.0 and terms["collision"] == 0.0
+    # Progress sums to the path length, less the few centimetres short of the goal.
+    assert total_progress == pytest.approx(2.0 * env.path.length, abs=2.0 * 0.1)
+    env.close()
+
+
+def test_direct_mode_drives_to_the_goal_with_controller_commands():
+    env = DriveEnv("overtake")
+    obs, info = env.reset(options={"episode_seed": 2})
+    assert info["episode_seed"] == 2
+    ctrl = make_controller("lqr", speed=env._speed)
+    ctrl.reset(env.path)
+    while True:
+        ego = env._ego
+        x, y, yaw = ego.rear
+        t = info.get("time_s", 0.0)
+        accel, steer = ctrl.control(VehicleState(x, y, yaw, ego.speed, ego.steer, t))
+        action = np.array(
+            [accel / env._a_max if accel >= 0 else accel / -env._a_min, steer / env._steer_limit],
+            dtype=np.float32,
+        )
+        obs, reward, terminated, truncated, info = env.step(action)
+        if terminated or truncated:
+            break
+    assert info["status"] == "arrived" and info["is_success"]
+    assert env.report.controller == "agent"
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step(np.zeros(2))
+    env.close()
+
+
+def test_leaving_the_path_ends_the_episode():
+    env = DriveEnv("overtake", max_cte=2.0)
+    _, total, steps, info = run_to_end(
+        env, lambda obs: np.array([1.0, 1.0], np.float32), options={"episode_seed": 0}
+    )
+    assert info["status"] in ("off_path", "crashed")
+    assert info["reward_terms"]["off_path"] == -50.0 or info["reward_terms"]["collision"] == -50.0
+    assert not info["is_success"]
+    env.close()
+
+
+def test_render_draws_the_scene_and_the_path(tmp_path):
+    env = gym.make("rrtdrive/Parking-v0", render_mode="rgb_array", residual=True)
+    env.reset(seed=4)
+    for _ in range(60):
+        env.step(zero(None))
+    frame = env.render()
+    assert frame.shape == (640, 640, 3) and frame.dtype == np.uint8
+    assert not frame_is_blank(frame)
+    px = frame.reshape(-1, 3).astype(int)
+    assert np.any((px[:, 2] > 200) & (px[:, 0] < 80) & (px[:, 1] < 120))  # path (40, 90, 255)
+    assert np.any((px[:, 0] > 200) & (px[:, 1] < 90) & (px[:, 2] < 90))  # trace (255, 60, 40)
+    assert frame is not env.render()
+    env.close()
+    plain = gym.make("rrtdrive/Overtake-v0")
+    plain.reset(seed=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert plain.render() is None
+    plain.close()
+
+
+@pytest.mark.parametrize(
+    "kwargs,field",
+    [
+        ({"scenario": "nowhere"}, "scenario"),
+        ({"planner": "astar"}, "planner"),
+        ({"controller": "mpc"}, "controller"),
+        ({"residual": 1}, "residual"),
+        ({"residual_scale": 0.0}, "residual_scale"),
+        ({"n_ref_points": 0}, "n_ref_points"),
+        ({"ref_spacing": float("nan")}, "ref_spacing"),
+        ({"action_repeat": 1.5}, "action_repeat"),
+        ({"simulation_frequency": 5}, "simulation_frequency"),
+        ({"max_time_s": -1.0}, "max_time_s"),
+        ({"max_cte": 0}, "max_cte"),
+        ({"reward": {"progess": 1.0}}, "reward.progess"),
+        ({"reward": {"cte": -1.0}}, "reward.cte"),
+        ({"scenario_options": {"colour": 1}}, "scenario_options"),
+        ({"scenario_options": {"oncoming": 2}, "scenario": "parking"}, "oncoming"),
+        ({"speed_options": {"v_max": 0.0}}, "speed.v_max"),
+        ({"speed_options": {"vmax": 1.0}}, "speed_options"),
+        ({"controller_options": {"gain": 1.0}}, "controller"),
+        ({"seed_range": (5, 5)}, "seed_range"),
+        ({"render_mode": "human"}, "render_mode"),
+    ],
+)
+def test_bad_options_name_the_field(kwargs, field):
+    kwargs = {"scenario": "overtake", **kwargs}
+    with pytest.raises(InputError, match=field.replace(".", r"\.")):
+        DriveEnv(**kwargs)
+
+
+def test_bad_reset_options_and_actions():
+    env = DriveEnv("overtake")
+    with pytest.raises(InputError, match=r"options\.seed"):
+        env.reset(options={"seed": 1})
+    with pytest.raises(InputError, match=r"options\.episode_seed"):
+        env.reset(options={"episode_seed": -1})
+    env.reset(seed=0)
+    with pytest.raises(InputError, match="action"):
+        env.step(np.array([0.0, np.nan]))
+    with pytest.raises(InputError, match="action"):
+        env.step(np.zeros(3))
+    env.close()
+    env.close()  # closing twice is fine
+
+
+def test_package_exports_the_ids():
+    assert rrtdrive.ENV_IDS is ENV_IDS
+    assert "rrtdrive/Parking-v0" in gym.registry and "rrtdrive/Overtake-v0" in gym.registry
+
+
+def test_short_ppo_run_completes():
+    sb3 = pytest.importorskip("stable_baselines3")
+    env = gym.make("rrtdrive/Overtake-v0", residual=True, max_time_s=3.0)
+    model = sb3.PPO("MlpPolicy", env, n_steps=64, batch_size=32, n_epochs=1, seed=0, device="cpu")
+    model.learn(total_timesteps=128)
+    obs, _ = env.reset(seed=1)
+    action, _ = model.predict(obs, deterministic=True)
+    assert action.shape == (2,) and env.action_space.contains(action.astype(np.float32))
+    env.close()
