@@ -6,8 +6,10 @@ the ego may enter the stretch of path where its body intrudes into the oncoming
 lane (the *conflict zone*). Until it is committed, it holds the ego at a stop
 line before the zone unless every oncoming car either has already passed the
 zone or reaches it only after the ego, starting from rest at the stop line, has
-left it again, with a time margin. Once the ego passes the stop line it is
-committed (the gate never stops it in the other lane).
+left it again, with a time margin. Once the ego passes the stop line, or can no
+longer stop comfortably before it while released, it is committed (the gate
+never stops it in the other lane). A released gap is revoked only when half of
+the margin is gone (hysteresis, no stop-and-go at the line).
 """
 
 from __future__ import annotations
@@ -96,6 +98,8 @@ class OncomingGate:
         self.s_stop = max(0.0, zone.s_in - stop_gap)
         self.margin_s = margin_s
         self.committed = False
+        self.released = False
+        self.decel = speed.decel
         self.waiting_steps = 0
         s, kappa = profile_kappa
         # Time to drive from the stop line (at rest) to the end of the zone.
@@ -128,7 +132,9 @@ class OncomingGate:
             return None
         to_line = max(0.0, self.s_stop - s)
         t_line = to_line / max(speed, 1.0)
-        t_out = t_line + self.crossing_time + self.margin_s
+        # Hysteresis: once released, a gap is only revoked when half the margin is gone.
+        margin = 0.5 * self.margin_s if self.released else self.margin_s
+        t_out = t_line + self.crossing_time + margin
         for car in cars:
             v = max(float(car.speed), 0.0)
             rear = float(car.position[0]) + car.LENGTH / 2.0
@@ -141,6 +147,11 @@ class OncomingGate:
             if t_arrive <= t_out:
                 break
         else:
+            self.released = True
+            if speed * speed / (2.0 * self.decel) >= to_line and speed > 0.5:
+                # Past the point where a comfortable stop before the line is possible.
+                self.committed = True
             return None
+        self.released = False
         self.waiting_steps += 1
         return self.s_stop
