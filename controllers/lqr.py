@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 
 import control
@@ -9,7 +10,7 @@ import numpy as np
 
 from rrtdrive.controllers.base import Projection, TrackingController, VehicleState
 from rrtdrive.controllers.speed import SpeedConfig
-from rrtdrive.types import VehicleParams, require_positive
+from rrtdrive.types import InputError, VehicleParams, require_positive
 
 __all__ = ["LQR", "lateral_error_model", "design_gain"]
 
@@ -59,10 +60,18 @@ def design_gain(q_e: float, q_psi: float, r: float) -> np.ndarray:
     require_positive("lqr.q_e", q_e)
     require_positive("lqr.r", r)
     if not (q_psi >= 0 and math.isfinite(q_psi)):
-        raise ValueError(f"lqr.q_psi: must be >= 0, got {q_psi}")
+        raise InputError(f"lqr.q_psi: must be a finite number >= 0, got {q_psi!r}")
+    return np.array(_design_gain(float(q_e), float(q_psi), float(r)))
+
+
+@functools.lru_cache(maxsize=64)
+def _design_gain(q_e: float, q_psi: float, r: float) -> tuple[float, float]:
+    # Cached: the gain depends on the weights only, and a LAPACK call per episode
+    # would wake OpenBLAS's worker threads, which then spin on the other core.
     A, B = lateral_error_model()
     K, _, _ = control.lqr(A, B, np.diag([q_e, q_psi]), np.array([[r]]))
-    return np.asarray(K, dtype=float).reshape(2)
+    k = np.asarray(K, dtype=float).reshape(2)
+    return (float(k[0]), float(k[1]))
 
 
 class LQR(TrackingController):
