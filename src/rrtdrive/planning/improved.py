@@ -436,7 +436,10 @@ class ObtuseTree(GrowingTree):
     :meth:`choose_parent` returns the nearest node whose angle (parent, node, q)
     is obtuse -- ``D(q_i, q) + D(q_i, q_k) < D(q_k, q)`` with ``D`` the squared
     distance -- or the nearest node when none is obtuse (Table 1). The root's
-    parent is the ``virtual_parent`` (none: the root is never obtuse).
+    parent is the ``virtual_parent``; a root that has one is only ever chosen
+    when its angle is obtuse, so the tree leaves the start (enters the goal)
+    along its heading, the purpose of the virtual parents (SPEC §3 item 2). A
+    root without one is never obtuse but may be the nearest.
 
     Examples
     --------
@@ -477,7 +480,10 @@ class ObtuseTree(GrowingTree):
         return i
 
     def choose_parent(self, q: np.ndarray, obtuse: bool = True) -> int:
-        """Node to extend towards ``q``: Eq. 11 / Table 1 when ``obtuse``, else the nearest."""
+        """Node to extend towards ``q``: Eq. 11 / Table 1 when ``obtuse``, else the nearest.
+
+        Returns -1 when only a root with a virtual parent qualifies and its angle is acute.
+        """
         q4 = self._q4
         q4[0, 0] = q4[2, 0] = q[0]
         q4[1, 0] = q4[3, 0] = q[1]
@@ -488,10 +494,16 @@ class ObtuseTree(GrowingTree):
         if not obtuse:
             return int(d_rand.argmin())
         # NaN (a root without parent) compares False: never obtuse.
-        w = np.where(d_rand + self.dpar[:n] < t[2] + t[3], d_rand, np.inf)
+        ok = d_rand + self.dpar[:n] < t[2] + t[3]
+        w = np.where(ok, d_rand, np.inf)
         i = int(w.argmin())
         if w[i] == np.inf:
+            if self.virtual_parent is not None:
+                # A root with a virtual parent grows only along its heading.
+                d_rand[0] = np.inf
             i = int(d_rand.argmin())
+            if d_rand[i] == np.inf:
+                return -1
         return i
 
 
@@ -533,6 +545,21 @@ def fast_edge_test(checker: CollisionChecker) -> EdgeFree:
     return test
 
 
+def _rooted(
+    inner: EdgeFree, at_roots: EdgeFree, start: tuple[float, float], goal: tuple[float, float]
+) -> EdgeFree:
+    """``at_roots`` for edges with an end exactly at the start or goal, ``inner`` otherwise."""
+    sx, sy = start
+    gx, gy = goal
+
+    def test(a: Sequence[float], b: Sequence[float]) -> bool:
+        if (a[0] == sx and a[1] == sy) or (b[0] == gx and b[1] == gy):
+            return at_roots(a, b)
+        return inner(a, b)
+
+    return test
+
+
 def _edge(edge_free: EdgeFree, towards_root: bool, a: Sequence[float], b: Sequence[float]) -> bool:
     """Test the tree edge between parent ``a`` and child ``b`` in its driving direction."""
     return edge_free(b, a) if towards_root else edge_free(a, b)
@@ -568,6 +595,8 @@ def extend(
     int
         Index of the new node, or -1 when the edge collides.
     """
+    if i_near < 0:
+        return -1
     ax, ay = tree.nodes[i_near].tolist()
     dx, dy = float(target[0]) - ax, float(target[1]) - ay
     dist = math.hypot(dx, dy)
@@ -612,6 +641,8 @@ def greedy_connect(
     [0.0, 5.0, 15.0, 25.0, 30.0]
     """
     j = tree.choose_parent(target, obtuse)
+    if j < 0:
+        return -1
     tx, ty = float(target[0]), float(target[1])
     p = step
     while True:
@@ -647,9 +678,12 @@ def link_candidates(
     if len(near) > candidates:
         near = near[np.argpartition(d[near], candidates)[:candidates]]
     near = near[np.argsort(d[near])]
-    if obtuse and len(near) > 1:
+    if obtuse:
         e = tree.ppos[near] - q
         ok = d[near] + tree.dpar[near] < np.einsum("ij,ij->i", e, e)
+        if tree.virtual_parent is not None:
+            keep = (near != 0) | ok  # the root only along its heading
+            near, ok = near[keep], ok[keep]
         near = near[np.argsort(~ok, kind="stable")]
     return near
 
@@ -856,9 +890,17 @@ class ImprovedRRTConnect:
                 stats=stats,
             )
 
-        # 1. Direct connection (Sec. 3.1.1).
+        # 1. Direct connection (Sec. 3.1.1): the straight edge is free and both
+        #    headings point along it (within 90 degrees), so that the curve need
+        #    not turn back.
         roots = (Tree(s_xy[None, :], np.array([-1])), Tree(g_xy[None, :], np.array([-1])))
-        if cfg.direct_connect and checker.edge_free(s_xy.tolist(), g_xy.tolist()):
+        chord = g_xy - s_xy
+        headings_allow = float(hs @ chord) > 0.0 and float(hg @ chord) > 0.0
+        if (
+            cfg.direct_connect
+            and headings_allow
+            and checker.edge_free(s_xy.tolist(), g_xy.tolist())
+        ):
             stats["direct_connection"] = 1.0
             stats["nodes"] = 2.0
             out = finish(np.vstack([s_xy, g_xy]), roots, 0)
@@ -881,6 +923,12 @@ class ImprovedRRTConnect:
                 grow = expanded
                 stats["expansion_used"] = 1.0
         edge_free = fast_edge_test(grow)
+        if grow is not checker:
+            # Edges at the roots are checked on the map itself: the expansion is to keep
+            # the tree off obstacles on its way, never to shut the start or goal in.
+            edge_free = _rooted(
+                edge_free, fast_edge_test(checker), (start.x, start.y), (goal.x, goal.y)
+            )
         samples = SampleSource(problem, reject=True)
         passages: np.ndarray | None = None
         if cfg.passage_sampling and cfg.passage_bias > 0:

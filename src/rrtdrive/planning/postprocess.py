@@ -20,6 +20,7 @@ heading along it, which is what ``checker.edge_free(a, b)`` tests.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import weakref
@@ -78,13 +79,32 @@ class PathChecker(EdgeChecker, Protocol):
 # ----------------------------------------------------------------------------- pruning
 
 
-def prune(points: np.ndarray, checker: EdgeChecker, keep: Sequence[int] = ()) -> np.ndarray | None:
+def _turn(ax: float, ay: float, bx: float, by: float) -> float:
+    """Deflection in radians between directions ``a`` and ``b`` (0 when either is zero)."""
+    return abs(math.atan2(ax * by - ay * bx, ax * bx + ay * by))
+
+
+def prune(
+    points: np.ndarray,
+    checker: EdgeChecker,
+    keep: Sequence[int] = (),
+    *,
+    max_turn: float | None = None,
+    start_heading: Sequence[float] | None = None,
+    end_heading: Sequence[float] | None = None,
+) -> np.ndarray | None:
     """Shortcut a polyline: from each kept node jump to the farthest later node with a free edge.
 
     Paper Sec. 3.2.1, step 1. Starting at the first node, the edge to every later
     node is tried from the last one backwards; the first free one becomes the next
     node, until the last node is reached. Indices in ``keep`` are never skipped
     (each stretch between kept nodes is pruned on its own).
+
+    With ``max_turn`` (beyond the paper) a jump must also not turn the path by more
+    than ``max_turn`` at the node it leaves (the direction into the first node is
+    ``start_heading``, when given) nor, when it lands on the last node, against
+    ``end_heading``; when no free jump keeps to the limit, the farthest free one is
+    taken. The post-processor uses it to avoid hairpins that no car can drive.
 
     Parameters
     ----------
@@ -96,6 +116,10 @@ def prune(points: np.ndarray, checker: EdgeChecker, keep: Sequence[int] = ()) ->
         edges are skipped without calling ``edge_free``. The result is the same.
     keep : sequence of int, optional
         Indices that must stay (the ends always stay).
+    max_turn : float, optional
+        Largest turn in radians at a kept node; ``None`` (the paper) for no limit.
+    start_heading, end_heading : sequence of float, optional
+        Directions into the first and out of the last node, for ``max_turn``.
 
     Returns
     -------
@@ -108,8 +132,11 @@ def prune(points: np.ndarray, checker: EdgeChecker, keep: Sequence[int] = ()) ->
     >>> class Open:
     ...     def edge_free(self, a, b):
     ...         return True
-    >>> prune(np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 0.0]]), Open()).tolist()
-    [0, 2]
+    >>> pts = np.array([[0.0, 0.0], [10.0, 0.0], [12.0, 3.0], [10.0, 6.0], [0.0, 6.0]])
+    >>> prune(pts, Open()).tolist()
+    [0, 4]
+    >>> prune(pts, Open(), max_turn=math.radians(60), start_heading=(1.0, 0.0)).tolist()
+    [0, 3, 4]
     """
     pts = np.asarray(points, dtype=float).reshape(-1, 2)
     n = len(pts)
@@ -122,20 +149,42 @@ def prune(points: np.ndarray, checker: EdgeChecker, keep: Sequence[int] = ()) ->
     screen = getattr(checker, "blocked_from", None)
     anchors = sorted({0, n - 1, *(int(k) for k in keep if 0 <= int(k) < n)})
     out = [0]
+    into = tuple(start_heading) if start_heading is not None else (0.0, 0.0)
     for first, last in zip(anchors[:-1], anchors[1:], strict=True):
         i = first
         while i < last:
             a = plist[i]
             # An optional exact screen: edges proven to collide are skipped.
             skip = screen(pts[i], pts[i + 2 : last + 1]) if screen and last > i + 1 else None
+            fallback = -1
             for j in range(last, i, -1):
                 if skip is not None and j >= i + 2 and skip[j - i - 2]:
                     continue
-                if edge_free(a, plist[j]):
+                if not edge_free(a, plist[j]):
+                    continue
+                if max_turn is None:
+                    break
+                if fallback < 0:
+                    fallback = j
+                dx, dy = plist[j][0] - a[0], plist[j][1] - a[1]
+                ok = _turn(into[0], into[1], dx, dy) <= max_turn
+                if ok and j == last:
+                    # Landing on a kept node: its way on is known (the next kept node).
+                    if j == n - 1:
+                        after = end_heading
+                    else:
+                        nxt = anchors[anchors.index(j) + 1]
+                        after = (plist[nxt][0] - plist[j][0], plist[nxt][1] - plist[j][1])
+                    if after is not None:
+                        ok = _turn(dx, dy, after[0], after[1]) <= max_turn
+                if ok:
                     break
             else:
-                return None
+                if fallback < 0:
+                    return None
+                j = fallback
             out.append(j)
+            into = (plist[j][0] - a[0], plist[j][1] - a[1])
             i = j
     return np.asarray(out, dtype=np.int64)
 
@@ -739,6 +788,10 @@ _MOVES: tuple[tuple[str, float], ...] = (
     ("ahead", 12.0),
 )
 _RADIUS_STEPS = (1.0, 1.6)
+# Turn limit of the hairpin-avoiding pruning (second attempt and un-pruning).
+_UNPRUNE_TURN = math.radians(100.0)
+# Moving a heading corner or lengthening its leg may not sharpen its turn beyond this.
+_HAIRPIN = math.radians(135.0)
 _END_GAP = 0.05
 
 
@@ -815,15 +868,22 @@ class _Smoother:
         self.r_design = 1.0 / (
             cfg.kappa_max * cfg.kappa_safety * math.cos(cfg.fillet_max_angle / 2.0)
         )
+        self.max_turn: float | None = None
         self.rounds = 0
         self.merges = 0
         self.moves = 0
+        self.drops = 0
+        self.unprunes = 0
         self.pts: list[np.ndarray] = []
 
     # ------------------------------------------------------------- key polygon
 
     def key_polygon(self, d_s: float, d_g: float) -> str | None:
-        """Build the key polygon with heading legs ``d_s``, ``d_g``; a reason on failure."""
+        """Build the key polygon with heading legs ``d_s``, ``d_g``; a reason on failure.
+
+        With ``self.max_turn`` set, the pruning avoids turns above it (a second
+        attempt after the paper's pure pruning has failed).
+        """
         cfg, edge = self.cfg, self.edges.edge_free
         s1 = self.s + d_s * self.hs
         g1 = self.g - d_g * self.hg
@@ -834,7 +894,14 @@ class _Smoother:
         if not edge(g1.tolist(), self.g.tolist()):
             return f"the goal heading leg of {d_g:.2f} m is blocked"
         if cfg.prune:
-            key = prune(aug, self.edges, keep=(1, n - 2))
+            key = prune(
+                aug,
+                self.edges,
+                keep=(1, n - 2),
+                max_turn=self.max_turn,
+                start_heading=self.hs,
+                end_heading=self.hg,
+            )
             if key is None:
                 return "a heading-leg point has no free edge to the tree path"
         else:
@@ -848,8 +915,29 @@ class _Smoother:
         self.kind = ["start", "start_leg"] + ["node"] * (len(key) - 4) + ["goal_leg", "goal"]
         self.radius = [0.0] * len(key)
         self.attempt = [0] * len(key)
+        self.raw_idx = key.tolist()  # index into self.aug (kept through moves)
+        self.aug = aug
+        self.unpruned: set[tuple[int, int]] = set()
         self.d_s, self.d_g = d_s, d_g
         return None
+
+    def snapshot(self) -> dict[str, object]:
+        """The key-polygon state, for :meth:`restore`."""
+        names = ("pts", "origin", "kind", "radius", "attempt", "raw_idx", "aug", "unpruned")
+        return {k: getattr(self, k) for k in (*names, "d_s", "d_g")}
+
+    def restore(self, state: dict[str, object]) -> None:
+        """Go back to a :meth:`snapshot`."""
+        for k, v in state.items():
+            setattr(self, k, v)
+
+    def heading_turns(self) -> tuple[float, float]:
+        """Deflections at the start- and goal-leg corners (radians)."""
+        p = self.pts
+        return (
+            self._deflection(p[0], p[1], p[2]),
+            self._deflection(p[-3], p[-2], p[-1]),
+        )
 
     def heading_reach(self) -> tuple[float, float]:
         """Guard reach the design fillets at the start- and goal-leg corners need."""
@@ -859,8 +947,16 @@ class _Smoother:
             ux, uy, _ = _unit(*(p[c] - p[c - 1]))
             vx, vy, _ = _unit(*(p[c + 1] - p[c]))
             f = fillet_points(p[c], (ux, uy), (vx, vy), self.r_design, self.cfg.fillet_max_angle)
-            out.append(f.reach)
+            out.append(self._reach(f))
         return out[0], out[1]
+
+    def _reach(self, f: Fillet) -> float:
+        """Distance from a corner to its outermost guard.
+
+        One guard per side for degree 2, two for degree 3 (a cubic piece spans
+        four control points).
+        """
+        return f.reach + 2.0 * f.half * (self.cfg.degree - 2)
 
     # ------------------------------------------------------------- control points
 
@@ -881,12 +977,13 @@ class _Smoother:
                 f = fillet_points(
                     pts[c], dirs[c - 1], dirs[c], self.radius[c], cfg.fillet_max_angle
                 )
-                r = f.reach
+                r = self._reach(f)
                 if r > 0.0 and math.isfinite(r):
-                    (ax, ay), (bx, by) = dirs[c - 1], dirs[c]
-                    guard_in = (pts[c][0] - r * ax, pts[c][1] - r * ay)
-                    guard_out = (pts[c][0] + r * bx, pts[c][1] + r * by)
-                    corner_pts.append(np.vstack([guard_in, f.vertices, guard_out]))
+                    u_in, u_out = np.asarray(dirs[c - 1]), np.asarray(dirs[c])
+                    at = f.reach + 2.0 * f.half * np.arange(cfg.degree - 1)  # guard distances
+                    guards_in = pts[c] - at[::-1, None] * u_in
+                    guards_out = pts[c] + at[:, None] * u_out
+                    corner_pts.append(np.vstack([guards_in, f.vertices, guards_out]))
                 else:
                     corner_pts.append(f.vertices)
                 reach[c] = r
@@ -994,13 +1091,16 @@ class _Smoother:
         o, prev, nxt = self.origin[c], self.pts[c - 1], self.pts[c + 1]
         kind = self.kind[c]
         if kind == "start_leg":
-            if direction != "ahead":
+            # Along the start ray, and only while its turn does not become a hairpin.
+            new = o + dist * self.hs
+            if direction != "ahead" or not self._turn_ok(c, new):
                 return False
-            return self._place(c, o + dist * self.hs)
+            return self._place(c, new)
         if kind == "goal_leg":
-            if direction != "back":
+            new = o - dist * self.hg
+            if direction != "back" or not self._turn_ok(c, new):
                 return False
-            return self._place(c, o - dist * self.hg)
+            return self._place(c, new)
         uix, uiy, _ = _unit(*(o - prev))
         uox, uoy, _ = _unit(*(nxt - o))
         if direction == "back":
@@ -1024,10 +1124,77 @@ class _Smoother:
                 return True
             m = a - len(_RADIUS_STEPS) - 1
             if m >= len(_MOVES):
-                return False
+                return self.unprune(c) or self.drop(c)
             if self._move(c, *_MOVES[m]):
                 self.radius[c] = self.r_design
                 return True
+
+    def _turn_ok(self, c: int, new: np.ndarray) -> bool:
+        """Moving corner ``c`` to ``new`` keeps its turn below max(now, the hairpin limit)."""
+        p = self.pts
+        now = self._deflection(p[c - 1], p[c], p[c + 1])
+        return self._deflection(p[c - 1], new, p[c + 1]) <= max(now, _HAIRPIN)
+
+    def _deflection(self, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> float:
+        ux, uy, _ = _unit(*(b - a))
+        vx, vy, _ = _unit(*(c - b))
+        return math.atan2(abs(ux * vy - uy * vx), ux * vx + uy * vy)
+
+    def drop(self, c: int) -> bool:
+        """Remove tree corner ``c`` when the edge joining its neighbours is free.
+
+        Refused when it would leave a neighbour with a hairpin (a turn above 150
+        degrees), which no fillet could round.
+        """
+        p = self.pts
+        if self.kind[c] != "node" or not self._free(p[c - 1], p[c + 1]):
+            return False
+        limit = math.radians(150.0)
+        if c - 2 >= 0 and self._deflection(p[c - 2], p[c - 1], p[c + 1]) > limit:
+            return False
+        if c + 2 < len(p) and self._deflection(p[c - 1], p[c + 1], p[c + 2]) > limit:
+            return False
+        for seq in self._lists():
+            del seq[c]
+        self.drops += 1
+        return True
+
+    def _lists(self) -> tuple[list, ...]:
+        return (self.pts, self.kind, self.origin, self.radius, self.attempt, self.raw_idx)
+
+    def unprune(self, c: int) -> bool:
+        """Put back tree-path nodes between the neighbours of corner ``c`` (once per stretch)."""
+        i0, i1 = self.raw_idx[c - 1], self.raw_idx[c + 1]
+        if i0 < 0 or i1 < 0 or i1 - i0 < 3 or (i0, i1) in self.unpruned:
+            return False
+        self.unpruned.add((i0, i1))
+        n_aug = len(self.aug)
+        p = self.pts
+        into = p[c - 1] - p[c - 2] if c >= 2 else self.hs
+        after = p[c + 2] - p[c + 1] if c + 2 < len(p) else self.hg
+        # The heading points (augmented indices 1 and n - 2) always stay.
+        anchors = [k - i0 for k in (1, n_aug - 2) if i0 < k < i1]
+        sub = prune(
+            self.aug[i0 : i1 + 1],
+            self.edges,
+            keep=anchors,
+            max_turn=_UNPRUNE_TURN,
+            start_heading=into,
+            end_heading=after,
+        )
+        if sub is None or len(sub) <= 2:
+            return False
+        idx = [i0 + int(k) for k in sub[1:-1]]
+        new_pts = [self.aug[k].copy() for k in idx]
+        kinds = ["start_leg" if k == 1 else "goal_leg" if k == n_aug - 2 else "node" for k in idx]
+        self.pts[c : c + 1] = new_pts
+        self.kind[c : c + 1] = kinds
+        self.origin[c : c + 1] = [q.copy() for q in new_pts]
+        self.radius[c : c + 1] = [0.0] * len(idx)
+        self.attempt[c : c + 1] = [0] * len(idx)
+        self.raw_idx[c : c + 1] = idx
+        self.unprunes += 1
+        return True
 
     def merge(self, i: int) -> bool:
         """Replace corners ``i`` and ``i + 1`` by the crossing of their outer legs, if free."""
@@ -1050,6 +1217,9 @@ class _Smoother:
             return False
         new_kind = kind[i] if kind[i] == "start_leg" else kind[i + 1]
         p[i : i + 2] = [y]
+        self.raw_idx[i : i + 2] = [
+            self.raw_idx[i] if new_kind == "start_leg" else self.raw_idx[i + 1]
+        ]
         kind[i : i + 2] = [new_kind]
         self.origin[i : i + 2] = [y.copy()]
         self.radius[i : i + 2] = [self.r_design]
@@ -1081,9 +1251,10 @@ class _Smoother:
                 self.cfg.fillet_max_angle,
             )
             length = float(np.hypot(*(self.pts[c] - end)))
-            if math.isfinite(f.reach) and self._place(
-                c, end + (f.reach + 0.5 + 0.1 * length) * ray
-            ):
+            new_length = self._reach(f) + 0.5 + 0.1 * length
+            new = end + new_length * ray
+            # Only while the turn at the heading point does not become a hairpin.
+            if math.isfinite(f.reach) and self._turn_ok(c, new) and self._place(c, new):
                 self.origin[c] = self.pts[c].copy()
                 return True
         # 3. Merge the two corners into one.
@@ -1093,7 +1264,16 @@ class _Smoother:
             return True
         if leg == n - 2 and n > 4 and self.merge(n - 3):
             return True
-        # 4. Move one of them.
+        # 4. Put back the tree nodes around a hairpin, or drop one of the corners.
+        for c in corners:
+            if self._deflection(self.pts[c - 1], self.pts[c], self.pts[c + 1]) > math.radians(
+                120.0
+            ) and self.unprune(c):
+                return True
+        for c in corners:
+            if self.drop(c):
+                return True
+        # 5. Move one of them.
         for c in sorted(corners, key=lambda c: -self.radius[c]):
             if self.attempt[c] < len(_RADIUS_STEPS):
                 self.attempt[c] = len(_RADIUS_STEPS)
@@ -1120,10 +1300,12 @@ def make_drivable(
     on a dense parameter grid for degree 3), then the exact body at poses at most
     ``check_spacing`` apart. Each key corner whose piece of curve breaks a limit
     gets its next treatment: a fillet of the design radius (:func:`fillet_points`),
-    a wider one, then moves of the corner, each only when both new legs are free.
-    Legs too short for their fillets grow (heading legs), merge their corners into
-    one, or move one. When the rounds or a corner's options run out, the result
-    is not ok and says why -- it never carries an unchecked path.
+    a wider one, then moves of the corner, each only when both new legs are free,
+    and last its removal when the edge joining its neighbours is free. Legs too
+    short for their fillets grow (heading legs), merge their corners into one
+    (the crossing of the outer legs), drop one, or move one. When the rounds or a
+    corner's options run out, the result is not ok and says why -- it never
+    carries an unchecked path.
 
     Parameters
     ----------
@@ -1171,7 +1353,26 @@ def make_drivable(
 
     if len(raw) < 2:
         return fail("the tree path needs at least two points")
-    sm = _Smoother(raw, start, goal, checker, cfg)
+    rounds = 0
+    message = "no heading legs fit"
+    sm: _Smoother | None = None
+    ctrl: np.ndarray | None = None
+    # The paper's pruning first; if that cannot be made drivable, a pruning that
+    # avoids hairpins (turns above 100 degrees) gets its own round budget.
+    for max_turn in (None, _UNPRUNE_TURN) if cfg.prune else (None,):
+        sm = _Smoother(raw, start, goal, checker, cfg)
+        sm.max_turn = max_turn
+        res, message, ctrl = _drive(sm)
+        rounds += sm.rounds
+        if res is not None:
+            return dataclasses.replace(res, rounds=rounds)
+    failed = fail(message, sm, ctrl)
+    return dataclasses.replace(failed, rounds=rounds)
+
+
+def _drive(sm: _Smoother) -> tuple[SmoothingResult | None, str, np.ndarray | None]:
+    """One attempt of :func:`make_drivable` with the smoother's pruning setting."""
+    cfg = sm.cfg
     straight = float(np.hypot(*(sm.g - sm.s)))
     reason = "no heading legs fit"
     built = False
@@ -1185,17 +1386,22 @@ def make_drivable(
             break
         reason = why
     if not built:
-        return fail(reason)
+        return None, reason, None
     # Lengthen the heading legs to what the turns after them need (a few re-prunes).
     for _ in range(3):
         reach_s, reach_g = sm.heading_reach()
-        want_s = reach_s + 0.5 if math.isfinite(reach_s) and reach_s + _END_GAP > sm.d_s else sm.d_s
-        want_g = reach_g + 0.5 if math.isfinite(reach_g) and reach_g + _END_GAP > sm.d_g else sm.d_g
+        cap = 4.0 * sm.r_design  # a turn needing more is a hairpin: left to the repairs
+        want_s = reach_s + 0.5 if reach_s + _END_GAP > sm.d_s and reach_s < cap else sm.d_s
+        want_g = reach_g + 0.5 if reach_g + _END_GAP > sm.d_g and reach_g < cap else sm.d_g
         if want_s == sm.d_s and want_g == sm.d_g:
             break
-        saved = (sm.pts, sm.origin, sm.kind, sm.radius, sm.attempt, sm.d_s, sm.d_g)
-        if sm.key_polygon(want_s, want_g) is not None:
-            sm.pts, sm.origin, sm.kind, sm.radius, sm.attempt, sm.d_s, sm.d_g = saved
+        saved = sm.snapshot()
+        before = sm.heading_turns()
+        if sm.key_polygon(want_s, want_g) is not None or any(
+            t > max(b, _HAIRPIN) for t, b in zip(sm.heading_turns(), before, strict=True)
+        ):
+            # Blocked, or the longer leg overshoots the next turn into a hairpin.
+            sm.restore(saved)
             break
 
     ctrl = np.zeros((0, 2))
@@ -1204,11 +1410,18 @@ def make_drivable(
         sm.rounds += 1
         ctrl, owner, conflicts = sm.control_points()
         if conflicts:
-            if not sm.fix_conflict(conflicts[0]):
-                c = conflicts[0]
+            # From the last leg backwards, so that merges and drops keep the
+            # indices of the legs still to fix.
+            failed = None
+            for leg in sorted(conflicts, reverse=True):
+                if leg + 1 < len(sm.pts) and not sm.fix_conflict(leg):
+                    failed = leg
+                    break
+            if failed is not None:
+                a, b = sm.pts[failed], sm.pts[failed + 1]
                 message = (
-                    f"the turns at ({sm.pts[c][0]:.1f}, {sm.pts[c][1]:.1f}) and "
-                    f"({sm.pts[c + 1][0]:.1f}, {sm.pts[c + 1][1]:.1f}) are too close for the car"
+                    f"the turns at ({a[0]:.1f}, {a[1]:.1f}) and ({b[0]:.1f}, {b[1]:.1f}) "
+                    "are too close for the car"
                 )
                 break
             continue
@@ -1228,16 +1441,21 @@ def make_drivable(
                     "fillets": float(sum(r > 0 for r in sm.radius)),
                     "merges": float(sm.merges),
                     "moves": float(sm.moves),
+                    "drops": float(sm.drops),
+                    "unprunes": float(sm.unprunes),
                     "edge_checks": float(sm.edges.checks),
                 }
-                return SmoothingResult(
+                ok = SmoothingResult(
                     True, samples, ctrl, np.array(sm.pts), sm.rounds, max_k, "", stats
                 )
-        stuck = [c for c in bad if not sm.advance(c)]
-        if stuck:
-            c = stuck[0]
-            message = (
-                f"could not repair a {what} violation near ({sm.pts[c][0]:.1f}, {sm.pts[c][1]:.1f})"
-            )
+                return ok, "", ctrl
+        stuck = None
+        for c in sorted(bad, reverse=True):  # drops keep the smaller indices
+            here = sm.pts[c].copy()
+            if not sm.advance(c):
+                stuck = here
+                break
+        if stuck is not None:
+            message = f"could not repair a {what} violation near ({stuck[0]:.1f}, {stuck[1]:.1f})"
             break
-    return fail(message, sm, ctrl)
+    return None, message, ctrl
