@@ -1040,8 +1040,13 @@ class _Smoother:
     def collision_check(self, spl: BSpline, owner: np.ndarray) -> tuple[list[int], np.ndarray]:
         """Corners whose pieces collide, and the dense rows (spacing <= check_spacing)."""
         cfg = self.cfg
-        step = min(cfg.sample_spacing / 3.0, cfg.check_spacing)
-        dense, u = sample_spline(spl, step)
+        # Poses at most check_spacing apart (every `stride`-th is an output sample).
+        self.stride = max(1, int(cfg.sample_spacing / cfg.check_spacing + 1e-9))
+        step = min(cfg.check_spacing, cfg.sample_spacing / self.stride)
+        u = parameter_grid(spl, step)
+        d1 = spl(u, nu=1)
+        dense = np.column_stack([spl(u), np.arctan2(d1[:, 1], d1[:, 0]), np.zeros(len(u))])
+        self.dense_u = u
         dense[0, :2] = self.s
         dense[-1, :2] = self.g
         dense[0, 2] = wrap_angle(self.start.yaw)
@@ -1434,9 +1439,12 @@ def _drive(sm: _Smoother) -> tuple[SmoothingResult | None, str, np.ndarray | Non
             bad, dense = sm.collision_check(spl, owner)
             what = "collision"
             if not bad:
-                samples = dense[::3]
-                if (len(dense) - 1) % 3:
-                    samples = np.vstack([samples, dense[-1:]])
+                pick = np.arange(0, len(dense), sm.stride)
+                if pick[-1] != len(dense) - 1:
+                    pick = np.append(pick, len(dense) - 1)
+                samples = dense[pick]
+                uu = sm.dense_u[pick]
+                samples[:, 3] = curvature(spl(uu, nu=1), spl(uu, nu=2))
                 stats = {
                     "fillets": float(sum(r > 0 for r in sm.radius)),
                     "merges": float(sm.merges),
