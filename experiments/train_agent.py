@@ -71,9 +71,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--residual-scale", type=float, default=0.25)
     p.add_argument("--w-cte", type=float, default=100.0, help="reward weight, 1/(m^2 s)")
     p.add_argument("--w-heading", type=float, default=10.0, help="reward weight, 1/(rad^2 s)")
-    p.add_argument("--w-speed", type=float, default=0.1, help="reward weight, s/m^2")
+    p.add_argument("--w-speed", type=float, default=5.0, help="reward weight, s/m^2")
     p.add_argument("--n-steps", type=int, default=512, help="PPO rollout length per env")
     p.add_argument("--log-std-init", type=float, default=-1.0)
+    p.add_argument("--gamma", type=float, default=0.99)
     p.add_argument("--out", default="results/train_agent")
     p.add_argument("--video", action="store_true", help="MP4 of the agent on the first eval seed")
     args = p.parse_args(argv)
@@ -135,10 +136,10 @@ def main(argv: list[str] | None = None) -> int:
         env_id, n_envs=args.envs, seed=args.seed, vec_env_cls=DummyVecEnv,
         env_kwargs={**kwargs, "seed_range": (0, TRAIN_SEED_HI)},
     )
-    train_env = VecNormalize(train_env, norm_obs=True, norm_reward=True, gamma=0.99)
+    train_env = VecNormalize(train_env, norm_obs=True, norm_reward=True, gamma=args.gamma)
     model = PPO(
         "MlpPolicy", train_env, seed=args.seed, device="cpu", n_steps=args.n_steps,
-        batch_size=256, n_epochs=10, learning_rate=3e-4, gamma=0.99, gae_lambda=0.95,
+        batch_size=256, n_epochs=10, learning_rate=3e-4, gamma=args.gamma, gae_lambda=0.95,
         policy_kwargs={"log_std_init": args.log_std_init, "net_arch": [64, 64]}, verbose=0,
     )
     t0 = time.perf_counter()
