@@ -230,6 +230,7 @@ class LocalBackend:
             ]
             timeout = max(0.0, min(timeouts)) if timeouts else None
             ready = set(wait(waitables, timeout=timeout))
+            retired: list[int] = []
             for k, slot in enumerate(slots):
                 failure: str | None = None
                 if slot.conn in ready:
@@ -264,11 +265,18 @@ class LocalBackend:
                     slot.proc.join(5.0)
                 slot.conn.close()
                 task = slot.task
+                if task is None and not queue:
+                    retired.append(k)  # an idle worker died and nothing waits: no replacement
+                    continue
                 slots[k] = self._start()
                 if task is not None:
                     busy -= 1
                     logger.warning("%s: %s", task[1].describe(), failure)
                     yield from self._failed(queue, task, failure)
+            for k in reversed(retired):
+                del slots[k]
+            if not slots and (queue or busy):  # pragma: no cover - every worker died idle
+                slots.append(self._start())
 
     def _failed(
         self, queue: deque[tuple[int, RunSpec, int]], task: tuple[int, RunSpec, int], error: str
