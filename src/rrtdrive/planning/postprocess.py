@@ -766,27 +766,18 @@ def _unit(dx: float, dy: float) -> tuple[float, float, float]:
     return dx / n, dy / n, n
 
 
-# Moves tried, in order, for a corner whose rounded piece still collides, each from
-# the corner's original place: "back" moves it back along its outgoing line (the
-# outgoing straight starts earlier), "ahead" along its incoming line (the incoming
-# straight lasts longer), "out"/"in" along the bisector. Heading-leg corners move
+# Moves tried, in order, for a corner whose rounded piece still collides (or whose
+# legs are too short), each from the corner's original place: "back" moves it back
+# along its outgoing line (the outgoing straight starts earlier), "ahead" on along
+# its incoming line (the incoming straight lasts longer), "behind" back along its
+# incoming line (the turn starts earlier), "out"/"in" along the bisector. Heading-leg corners move
 # only along their ray (the start's ahead, the goal's back).
 _MOVES: tuple[tuple[str, float], ...] = (
-    ("back", 1.5),
-    ("ahead", 1.5),
-    ("out", 1.0),
-    ("back", 3.0),
-    ("ahead", 3.0),
-    ("out", 2.0),
-    ("back", 5.0),
-    ("ahead", 5.0),
-    ("out", 3.5),
-    ("in", 1.0),
-    ("back", 8.0),
-    ("ahead", 8.0),
-    ("back", 12.0),
-    ("ahead", 12.0),
-)
+    ("back", 1.5), ("ahead", 1.5), ("behind", 2.0), ("out", 1.0),
+    ("back", 3.0), ("ahead", 3.0), ("behind", 4.0), ("out", 2.0),
+    ("back", 5.0), ("ahead", 5.0), ("behind", 7.0), ("out", 3.5), ("in", 1.0),
+    ("back", 8.0), ("ahead", 8.0), ("behind", 10.0), ("back", 12.0), ("ahead", 12.0),
+)  # fmt: skip
 _RADIUS_STEPS = (1.0, 1.6)
 # Turn limit of the hairpin-avoiding pruning (second attempt and un-pruning).
 _UNPRUNE_TURN = math.radians(100.0)
@@ -918,12 +909,23 @@ class _Smoother:
         self.raw_idx = key.tolist()  # index into self.aug (kept through moves)
         self.aug = aug
         self.unpruned: set[tuple[int, int]] = set()
+        self.grown: dict[int, int] = {}
         self.d_s, self.d_g = d_s, d_g
         return None
 
     def snapshot(self) -> dict[str, object]:
         """The key-polygon state, for :meth:`restore`."""
-        names = ("pts", "origin", "kind", "radius", "attempt", "raw_idx", "aug", "unpruned")
+        names = (
+            "pts",
+            "origin",
+            "kind",
+            "radius",
+            "attempt",
+            "raw_idx",
+            "aug",
+            "unpruned",
+            "grown",
+        )
         return {k: getattr(self, k) for k in (*names, "d_s", "d_g")}
 
     def restore(self, state: dict[str, object]) -> None:
@@ -1112,6 +1114,10 @@ class _Smoother:
             d = np.array([-uox, -uoy])
         elif direction == "ahead":
             d = np.array([uix, uiy])
+        elif direction == "behind":
+            if dist >= 0.9 * float(np.hypot(*(o - prev))):
+                return False
+            d = np.array([-uix, -uiy])
         else:
             bx, by, norm = _unit(uix - uox, uiy - uoy)
             if norm == 0.0:
@@ -1232,6 +1238,60 @@ class _Smoother:
         self.merges += 1
         return True
 
+    def _leg_fits(self, leg: int) -> bool:
+        """Whether leg ``leg`` is long enough for the fillets at both its ends."""
+        p, n = self.pts, len(self.pts)
+        need = 0.0
+        for c in (leg, leg + 1):
+            if 0 < c < n - 1 and self.radius[c] > 0.0:
+                u = _unit(*(p[c] - p[c - 1]))[:2]
+                v = _unit(*(p[c + 1] - p[c]))[:2]
+                f = fillet_points(p[c], u, v, self.radius[c], self.cfg.fillet_max_angle)
+                need += self._reach(f)
+        gap = _END_GAP if leg in (0, n - 2) else 0.0
+        return need + gap <= float(np.hypot(*(p[leg + 1] - p[leg])))
+
+    def stretch(self, leg: int) -> bool:
+        """Lengthen leg ``leg`` by moving a tree corner next to it along its other leg.
+
+        The corner before the leg moves back along its incoming line, the one after
+        it on along its outgoing line, until the fillets fit (edges checked).
+        """
+        p, n = self.pts, len(self.pts)
+        moves: list[tuple[int, np.ndarray]] = []
+        if leg == n - 2:
+            # The goal leg: the turn at the goal-leg point eases when the corner
+            # before it turns earlier.
+            if n - 3 > 0 and self.kind[n - 3] == "node":
+                back = _unit(*(p[n - 4] - p[n - 3]))[:2]
+                moves += [(n - 3, np.asarray(back) * d) for d in (3.0, 6.0, 10.0)]
+        elif leg == 0:
+            if n > 3 and self.kind[2] == "node":
+                on = _unit(*(p[3] - p[2]))[:2]
+                moves += [(2, np.asarray(on) * d) for d in (3.0, 6.0, 10.0)]
+        else:
+            length = float(np.hypot(*(p[leg + 1] - p[leg])))
+            for c, other in ((leg, leg - 1), (leg + 1, leg + 2)):
+                if self.kind[c] != "node" or self.radius[c] <= 0.0:
+                    continue
+                away = _unit(*(p[other] - p[c]))[:2]
+                moves += [(c, np.asarray(away) * d) for d in (0.5 * length, length, 2.0 * length)]
+        for c, delta in moves:
+            if c <= 0 or c >= n - 1:
+                continue
+            if float(np.hypot(*delta)) >= 0.9 * float(
+                np.hypot(*(p[c - 1 if c == leg else c + 1] - p[c]))
+            ):
+                continue
+            old = p[c].copy()
+            if not self._place(c, old + delta):
+                continue
+            if self._leg_fits(leg) or (leg == n - 2 and self._leg_fits(leg - 1)):
+                self.origin[c] = p[c].copy()
+                return True
+            p[c] = old
+        return False
+
     def fix_conflict(self, leg: int) -> bool:
         """Make leg ``leg`` long enough for the fillets at its ends."""
         n = len(self.pts)
@@ -1244,9 +1304,12 @@ class _Smoother:
                 shrunk = True
         if shrunk:
             return True
-        # 2. Heading legs grow to fit their fillet.
-        if leg == 0 or leg == n - 2:
-            c = 1 if leg == 0 else n - 2
+        # 2. Heading legs grow to fit their fillet (twice at most: beyond that the
+        #    turn after them has to change).
+        heading = 1 if leg == 0 else n - 2 if leg == n - 2 else -1
+        if heading > 0 and self.grown.get(heading, 0) < 2:
+            c = heading
+            self.grown[c] = self.grown.get(c, 0) + 1
             ray, end = (self.hs, self.s) if leg == 0 else (-self.hg, self.g)
             f = fillet_points(
                 self.pts[c],
@@ -1262,14 +1325,17 @@ class _Smoother:
             if math.isfinite(f.reach) and self._turn_ok(c, new) and self._place(c, new):
                 self.origin[c] = self.pts[c].copy()
                 return True
-        # 3. Merge the two corners into one.
+        # 3. Stretch the leg: move a corner next to it along its other leg.
+        if self.stretch(leg):
+            return True
+        # 4. Merge the two corners into one.
         if 0 < leg < n - 2 and self.merge(leg):
             return True
         if leg == 0 and n > 4 and self.merge(1):
             return True
         if leg == n - 2 and n > 4 and self.merge(n - 3):
             return True
-        # 4. Put back the tree nodes around a hairpin, or drop one of the corners.
+        # 5. Put back the tree nodes around a hairpin, or drop one of the corners.
         for c in corners:
             if self._deflection(self.pts[c - 1], self.pts[c], self.pts[c + 1]) > math.radians(
                 120.0
@@ -1278,7 +1344,11 @@ class _Smoother:
         for c in corners:
             if self.drop(c):
                 return True
-        # 5. Move one of them.
+        # 6. Move one of them; at a heading leg also the tree corner next to it.
+        if heading > 0:
+            near = 2 if heading == 1 else n - 3
+            if self.kind[near] == "node" and self.radius[near] > 0.0:
+                corners.append(near)
         for c in sorted(corners, key=lambda c: -self.radius[c]):
             if self.attempt[c] < len(_RADIUS_STEPS):
                 self.attempt[c] = len(_RADIUS_STEPS)
