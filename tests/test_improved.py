@@ -480,7 +480,7 @@ def test_all_components_off_still_gives_a_valid_path():
     assert_valid_path(solve(m, 0, disable=COMPONENTS), m)
 
 
-@pytest.mark.parametrize("name", ["overtake", "narrow_gap"])
+@pytest.mark.parametrize("name", ["overtake", "parking_lot", "narrow_gap"])
 def test_degree_3_splines(name):
     m = builtin_map(name)
     for seed in range(2):

@@ -585,7 +585,7 @@ def fillet_points(
     u_in: Sequence[float],
     u_out: Sequence[float],
     radius: float,
-    max_angle: float = math.radians(15.0),
+    max_angle: float = math.radians(10.0),
 ) -> Fillet:
     """Control points that turn a polygon corner into a curvature-bounded quadratic B-spline piece.
 
@@ -691,7 +691,7 @@ class SmoothingConfig:
     sample_spacing: float = 0.25
     check_spacing: float = 0.1
     kappa_safety: float = 0.97
-    fillet_max_angle: float = math.radians(15.0)
+    fillet_max_angle: float = math.radians(10.0)
     max_rounds: int = 30
 
     def __post_init__(self) -> None:
