@@ -817,6 +817,7 @@ class _EdgeCache:
         self._edge_free = checker.edge_free
         self._known: dict[tuple[float, float, float, float], bool] = {}
         self.checks = 0
+        self._screens: dict[tuple[float, float, bytes], np.ndarray] = {}
         self._union = _obstacle_union(checker)
         if self._union is None:
             self.blocked_from = None  # type: ignore[assignment]
@@ -825,10 +826,14 @@ class _EdgeCache:
         """True where the centre line ``a -> b`` crosses an obstacle (so the edge collides)."""
         if len(bs) == 0 or self._union.is_empty:
             return np.zeros(len(bs), dtype=bool)
-        coords = np.empty((len(bs), 2, 2))
-        coords[:, 0] = a
-        coords[:, 1] = bs
-        return shapely.intersects(self._union, shapely.linestrings(coords))
+        key = (float(a[0]), float(a[1]), bs.tobytes())
+        hit = self._screens.get(key)
+        if hit is None:
+            coords = np.empty((len(bs), 2, 2))
+            coords[:, 0] = a
+            coords[:, 1] = bs
+            hit = self._screens[key] = shapely.intersects(self._union, shapely.linestrings(coords))
+        return hit
 
     def edge_free(self, a: Sequence[float], b: Sequence[float]) -> bool:
         key = (a[0], a[1], b[0], b[1])
@@ -860,6 +865,7 @@ class _Smoother:
             cfg.kappa_max * cfg.kappa_safety * math.cos(cfg.fillet_max_angle / 2.0)
         )
         self.max_turn: float | None = None
+        self._fillets: dict[tuple[float, ...], Fillet] = {}
         self.rounds = 0
         self.merges = 0
         self.moves = 0
@@ -976,9 +982,12 @@ class _Smoother:
         reach = [0.0] * n
         for c in range(1, n - 1):
             if self.radius[c] > 0.0:
-                f = fillet_points(
-                    pts[c], dirs[c - 1], dirs[c], self.radius[c], cfg.fillet_max_angle
-                )
+                key = (*pts[c].tolist(), *dirs[c - 1], *dirs[c], self.radius[c])
+                f = self._fillets.get(key)
+                if f is None:
+                    f = self._fillets[key] = fillet_points(
+                        pts[c], dirs[c - 1], dirs[c], self.radius[c], cfg.fillet_max_angle
+                    )
                 r = self._reach(f)
                 if r > 0.0 and math.isfinite(r):
                     u_in, u_out = np.asarray(dirs[c - 1]), np.asarray(dirs[c])
