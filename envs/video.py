@@ -32,6 +32,12 @@ from rrtdrive.types import InputError
 __all__ = ["RecordMP4", "record_episode"]
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def _even_frame(frame: Any) -> np.ndarray:
     """``frame`` as contiguous uint8 RGB, padded by edge pixels to even sides (H.264 needs them)."""
     f = np.asarray(frame)
@@ -144,6 +150,7 @@ class RecordMP4(gym.Wrapper):
             return None
         try:
             writer.close()
+            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes it private (0600)
             os.replace(tmp, target)
         except BaseException:
             tmp.unlink(missing_ok=True)

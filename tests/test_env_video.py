@@ -44,6 +44,7 @@ def test_records_an_agent_episode_as_mp4(tmp_path):
     assert meta["fps"] == 5.0
     assert frames[0].shape == (320, 960, 3)
     assert not frame_is_blank(frames[len(frames) // 2])
+    assert video.stat().st_mode & 0o044  # readable by others, as any new file (umask)
     assert np.abs(frames[0].astype(int) - frames[-1].astype(int)).sum() > 0  # the car moved
 
 

@@ -174,6 +174,21 @@ def test_zero_residual_reproduces_plain_controller(scenario, controller):
     env.close()
 
 
+def test_zero_residual_reproduces_plain_controller_with_oncoming_traffic():
+    # The gate that holds the car for a gap in the oncoming lane works as in the runner.
+    from rrtdrive.sim.scenes import make_scenario
+
+    env = DriveEnv("overtake", controller="lqr", residual=True, scenario_options={"oncoming": 2})
+    _, _, steps, info = run_to_end(env, zero, options={"episode_seed": 3})
+    ep = run_episode(make_scenario("overtake", 3, oncoming=2), controller="lqr", seed=3)
+    assert env.episode.log.others.shape[1] == ep.log.others.shape[1] == 3
+    assert np.array_equal(env.episode.log.states, ep.log.states)
+    assert np.array_equal(env.episode.log.others, ep.log.others)
+    assert info["status"] == ep.status == "arrived"
+    assert env._gate.waiting_steps > 0  # the car did wait for a gap
+    env.close()
+
+
 def test_reward_terms_add_up_and_success_bonus():
     weights = RewardWeights(progress=2.0, success=7.0)
     env = DriveEnv("overtake", residual=True, reward={"progress": 2.0, "success": 7.0})
