@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 from collections.abc import Callable
 from pathlib import Path as FsPath
 from typing import Any
@@ -27,15 +26,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from rrtdrive.atomic import publish, temp_beside
 from rrtdrive.types import InputError
 
 __all__ = ["RecordMP4", "record_episode"]
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def _even_frame(frame: Any) -> np.ndarray:
@@ -119,11 +113,8 @@ class RecordMP4(gym.Wrapper):
         import imageio.v2 as imageio
 
         self._target = self.folder / f"{self.name_prefix}-{self._episode:04d}.mp4"
-        fd, tmp = tempfile.mkstemp(
-            prefix=f".{self._target.stem}.", suffix=".mp4", dir=self.folder
-        )
-        os.close(fd)
-        self._tmp = FsPath(tmp)
+        tmp = temp_beside(self._target)
+        self._tmp = tmp
         self._writer = imageio.get_writer(
             tmp, format="FFMPEG", mode="I", fps=self.fps, codec="libx264",
             quality=self.quality, macro_block_size=2, ffmpeg_log_level="error",
@@ -150,8 +141,7 @@ class RecordMP4(gym.Wrapper):
             return None
         try:
             writer.close()
-            os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes it private (0600)
-            os.replace(tmp, target)
+            publish(tmp, target)
         except BaseException:
             tmp.unlink(missing_ok=True)
             raise

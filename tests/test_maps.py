@@ -131,3 +131,14 @@ def test_map_is_hashable_and_equal():
     a, b = builtin_map("overtake"), builtin_map("overtake")
     assert a == b and hash(a) == hash(b)
     assert isinstance(a, Map)
+
+
+def test_saved_files_get_ordinary_permissions(tmp_path):
+    import os
+
+    mask = os.umask(0o022)
+    try:
+        save_map(builtin_map("overtake"), tmp_path / "o.json")
+    finally:
+        os.umask(mask)
+    assert (tmp_path / "o.json").stat().st_mode & 0o777 == 0o644

@@ -16,7 +16,6 @@ import dataclasses
 import json
 import math
 import os
-import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path as FsPath
@@ -24,6 +23,7 @@ from pathlib import Path as FsPath
 import numpy as np
 import shapely
 
+from rrtdrive.atomic import write_text_atomic
 from rrtdrive.types import InputError, Pose, VehicleParams, require_finite, require_positive
 from rrtdrive.vehicle import footprint_polygon
 
@@ -279,19 +279,6 @@ def load_map(path: str | os.PathLike[str], vehicle: VehicleParams | None = None)
 def save_map(m: Map, path: str | os.PathLike[str]) -> None:
     """Write ``m`` as JSON atomically (temporary file, then rename)."""
     write_text_atomic(path, json.dumps(m.to_json(), indent=2) + "\n")
-
-
-def write_text_atomic(path: str | os.PathLike[str], text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file in the same folder and a rename."""
-    target = FsPath(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or ".")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, target)
-    except BaseException:
-        FsPath(tmp).unlink(missing_ok=True)
-        raise
 
 
 # ----------------------------------------------------------------------------- built-ins

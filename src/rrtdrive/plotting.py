@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import os
-import tempfile
 from collections.abc import Sequence
 from pathlib import Path as FsPath
 
@@ -20,6 +19,7 @@ from matplotlib.figure import Figure  # noqa: E402
 from matplotlib.patches import Polygon as PolygonPatch  # noqa: E402
 from matplotlib.patches import Rectangle  # noqa: E402
 
+from rrtdrive.atomic import atomic_target  # noqa: E402
 from rrtdrive.maps import Map  # noqa: E402
 from rrtdrive.types import Path, PlanResult, Pose, Tree, VehicleParams  # noqa: E402
 from rrtdrive.vehicle import footprint_corners  # noqa: E402
@@ -129,15 +129,9 @@ def plot_curvature(path: Path, kappa_max: float, ax: Axes | None = None) -> Figu
 
 def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: int = 110) -> None:
     """Save ``fig`` atomically (temporary file in the same folder, then rename) and close it."""
-    target = FsPath(path)
-    suffix = target.suffix or ".png"
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.stem}.", suffix=suffix, dir=target.parent or ".")
-    os.close(fd)
+    suffix = FsPath(path).suffix or ".png"
     try:
-        fig.savefig(tmp, dpi=dpi)
-        os.replace(tmp, target)
-    except BaseException:
-        FsPath(tmp).unlink(missing_ok=True)
-        raise
+        with atomic_target(path, suffix) as tmp:
+            fig.savefig(tmp, dpi=dpi)
     finally:
         plt.close(fig)
