@@ -188,3 +188,16 @@ def test_scalar_fast_pose_test_equals_vectorised(parking_checker, pose):
     assert parking_checker.pose_free_fast(*pose) == bool(
         parking_checker.poses_free_fast(np.array([pose]))[0]
     )
+
+
+@given(pose=poses, clearance=st.sampled_from([0.05, 0.2, 0.5]))
+def test_exact_test_with_clearance_agrees_with_shapely_distance(
+    parking_lot, parking_checker, pose, clearance
+):
+    body = reference_body(*pose)
+    xmin, ymin, xmax, ymax = parking_lot.bounds
+    inner = shapely.box(xmin + clearance, ymin + clearance, xmax - clearance, ymax - clearance)
+    union = shapely.union_all([shapely.Polygon(o.corners()) for o in parking_lot.obstacles])
+    want = inner.contains(body) and union.distance(body) > clearance
+    got = bool(parking_checker.poses_free(np.array([pose]), clearance)[0])
+    assert got == want

@@ -267,13 +267,15 @@ class CollisionChecker:
                 return False
         return True
 
-    def poses_free_fast(self, poses: np.ndarray) -> np.ndarray:
+    def poses_free_fast(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
         """Conservative vectorised body test: three covering discs per pose.
 
         Parameters
         ----------
         poses : numpy.ndarray
             ``(N, 3)`` rear-axle poses.
+        clearance : float
+            Extra distance the body must keep from obstacles and bounds.
 
         Returns
         -------
@@ -287,12 +289,12 @@ class CollisionChecker:
             [p[:, None, 0] + c[:, None] * off[None, :], p[:, None, 1] + s[:, None] * off[None, :]],
             axis=-1,
         ).reshape(-1, 2)
-        ok = self.clearances(centres) >= self.disc_radius
+        ok = self.clearances(centres) >= self.disc_radius + clearance
         return ok.reshape(len(p), len(off)).all(axis=1)
 
     # ------------------------------------------------------------------ exact test
 
-    def poses_free(self, poses: np.ndarray) -> np.ndarray:
+    def poses_free(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
         """Exact body-rectangle test at each pose (agrees with shapely).
 
         Poses cleared by the conservative disc screen are free; the rest are
@@ -302,18 +304,21 @@ class CollisionChecker:
         ----------
         poses : numpy.ndarray
             ``(N, 3)`` rear-axle poses.
+        clearance : float
+            Distance the body must keep from every obstacle and from the bounds
+            (0: it may not touch them).
 
         Returns
         -------
         numpy.ndarray
-            Boolean ``(N,)``: True where the body rectangle touches no obstacle
-            and lies inside the bounds.
+            Boolean ``(N,)``: True where the body rectangle keeps ``clearance``
+            from every obstacle and lies inside the bounds shrunk by it.
         """
         p = np.asarray(poses, dtype=float).reshape(-1, 3)
-        free = self.poses_free_fast(p)
+        free = self.poses_free_fast(p, clearance)
         unsure = np.flatnonzero(~free)
         if len(unsure):
-            free[unsure] = self._exact(p[unsure])
+            free[unsure] = self._exact(p[unsure], clearance)
         return free
 
     def pose_free(self, pose: Sequence[float]) -> bool:
@@ -323,14 +328,24 @@ class CollisionChecker:
             return True
         return bool(self._exact(np.array([[x, y, yaw]]))[0])
 
-    def _exact(self, poses: np.ndarray) -> np.ndarray:
+    def _exact(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
         rects = shapely.polygons(footprint_corners(poses, self.vehicle))
-        inside = shapely.contains(self._inside, rects)
+        if clearance > 0.0:
+            xmin, ymin, xmax, ymax = self.bounds
+            region = shapely.box(xmin + clearance, ymin + clearance, xmax - clearance,
+                                 ymax - clearance)
+            inside = shapely.contains(region, rects)
+        else:
+            inside = shapely.contains(self._inside, rects)
         if self._union.is_empty:
             return inside
+        if clearance > 0.0:
+            return inside & ~shapely.dwithin(self._union, rects, clearance)
         return inside & ~shapely.intersects(self._union, rects)
 
-    def path_free(self, samples: np.ndarray, spacing: float = 0.1) -> tuple[bool, np.ndarray]:
+    def path_free(
+        self, samples: np.ndarray, spacing: float = 0.1, clearance: float = 0.0
+    ) -> tuple[bool, np.ndarray]:
         """Exact test of a sampled path, densified to poses at most ``spacing`` apart.
 
         Parameters
@@ -339,6 +354,8 @@ class CollisionChecker:
             ``(N, >=3)`` rows ``x, y, yaw, ...``.
         spacing : float
             Largest distance between tested poses.
+        clearance : float
+            Distance the body must keep from obstacles and bounds (see :meth:`poses_free`).
 
         Returns
         -------
@@ -351,7 +368,7 @@ class CollisionChecker:
         if len(s) == 0:
             return False, np.zeros(0, dtype=np.int64)
         if len(s) == 1:
-            ok = bool(self.poses_free(s)[0])
+            ok = bool(self.poses_free(s, clearance)[0])
             return ok, np.zeros(0 if ok else 1, dtype=np.int64)
         seg = np.hypot(*np.diff(s[:, :2], axis=0).T)
         pieces = np.maximum(1, np.ceil(seg / spacing).astype(np.int64))
@@ -369,7 +386,7 @@ class CollisionChecker:
         )
         dense = np.vstack([dense, s[-1:]])
         owner = np.append(owner, len(seg) - 1)
-        free = self.poses_free(dense)
+        free = self.poses_free(dense, clearance)
         bad = np.unique(owner[~free])
         return bool(free.all()), bad
 
