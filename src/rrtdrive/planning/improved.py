@@ -826,8 +826,9 @@ class ImprovedRRTConnect:
             ``stats`` holds ``nodes``, ``iterations``, ``growth_time_s``,
             ``postprocess_time_s``, ``postprocess_attempts``, ``repair_rounds``,
             ``direct_connection``, ``expanded_obstacles``, ``expansion_used`` and,
-            when solved, ``key_points``, ``control_points``, ``max_curvature``,
-            ``fillets``, ``merges`` and ``moves``.
+            when solved, ``key_points``, ``control_points``, ``max_curvature``
+            (exact, of the whole curve) and the repair counters ``fillets``,
+            ``merges``, ``moves``, ``drops``, ``unprunes`` and ``edge_checks``.
         """
         watch = Stopwatch(budget)
         early = precheck(problem, NAME, watch)
