@@ -201,3 +201,15 @@ def test_exact_test_with_clearance_agrees_with_shapely_distance(
     want = inner.contains(body) and union.distance(body) > clearance
     got = bool(parking_checker.poses_free(np.array([pose]), clearance)[0])
     assert got == want
+
+
+@given(pose=poses)
+def test_body_clearance_matches_shapely(parking_lot, parking_checker, pose):
+    body = reference_body(*pose)
+    box = shapely.box(*parking_lot.bounds)
+    union = shapely.union_all([shapely.Polygon(o.corners()) for o in parking_lot.obstacles])
+    if not box.contains(body) or union.intersects(body):
+        want = 0.0
+    else:
+        want = min(box.exterior.distance(body), union.distance(body))
+    assert parking_checker.body_clearance(pose) == pytest.approx(want, abs=1e-9)

@@ -328,6 +328,19 @@ class CollisionChecker:
             return True
         return bool(self._exact(np.array([[x, y, yaw]]))[0])
 
+    def body_clearance(self, pose: Sequence[float]) -> float:
+        """Exact distance from the body at ``pose`` to the nearest obstacle or the bounds.
+
+        Zero when the body touches or overlaps an obstacle or leaves the bounds.
+        """
+        rect = shapely.Polygon(footprint_corners(np.asarray(pose, dtype=float)[:3], self.vehicle))
+        if not self._inside.contains(rect):
+            return 0.0
+        to_bounds = self._inside.exterior.distance(rect)
+        if self._union.is_empty:
+            return float(to_bounds)
+        return float(min(to_bounds, self._union.distance(rect)))
+
     def _exact(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
         rects = shapely.polygons(footprint_corners(poses, self.vehicle))
         if clearance > 0.0:

@@ -65,6 +65,7 @@ from rrtdrive.types import (
     Path,
     PlanResult,
     PlanStatus,
+    Pose,
     Tree,
     require_finite,
     require_positive,
@@ -138,6 +139,12 @@ class ImprovedConfig:
         failed post-processing the trees are grown afresh.
     max_repair_rounds : int
         Fit-check-repair rounds per tree path.
+    body_clearance : float
+        Distance in metres the car's body must keep from every obstacle along
+        the final path (exact test), so that tracking error and a simulator's
+        look-ahead collision test have room. Capped per query at the clearance
+        the start and goal poses themselves have, so a car parked close to a
+        wall can still leave and arrive.
 
     Examples
     --------
@@ -166,6 +173,7 @@ class ImprovedConfig:
     supplement_n: float = 0.5
     max_postprocess_attempts: int = 6
     max_repair_rounds: int = 24
+    body_clearance: float = 0.15
 
     def __post_init__(self) -> None:
         require_positive("planner.step", self.step)
@@ -191,6 +199,11 @@ class ImprovedConfig:
         require_finite("planner.supplement_n", self.supplement_n)
         if not 0.0 < self.supplement_n < 1.0:
             raise InputError(f"planner.supplement_n: must lie in (0, 1), got {self.supplement_n!r}")
+        require_finite("planner.body_clearance", self.body_clearance)
+        if self.body_clearance < 0:
+            raise InputError(
+                f"planner.body_clearance: must be >= 0, got {self.body_clearance!r}"
+            )
         for name in ("max_postprocess_attempts", "max_repair_rounds"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
@@ -213,6 +226,20 @@ class ImprovedConfig:
 
 
 # ----------------------------------------------------------------------------- expansion
+
+
+def endpoint_capped_clearance(
+    checker: CollisionChecker, start: Pose, goal: Pose, wanted: float
+) -> float:
+    """``wanted``, lowered to the exact body clearance of the start or goal pose if smaller.
+
+    A path cannot keep more room than its own end poses have; asking for it
+    would make a car parked near a wall unplannable.
+    """
+    if wanted <= 0.0:
+        return 0.0
+    have = min(checker.body_clearance(start.as_tuple()), checker.body_clearance(goal.as_tuple()))
+    return max(0.0, min(wanted, have * 0.999))
 
 
 def default_expansion_lmin(width: float, margin: float, a: float) -> float:
@@ -848,6 +875,7 @@ class ImprovedRRTConnect:
             supplement_n=cfg.supplement_n,
             heading_leg=p,
             max_rounds=cfg.max_repair_rounds,
+            clearance=endpoint_capped_clearance(checker, start, goal, cfg.body_clearance),
         )
         stats: dict[str, float] = {
             "nodes": 0.0,

@@ -81,7 +81,9 @@ class EdgeChecker(Protocol):
 class PathChecker(EdgeChecker, Protocol):
     """An edge checker that also has the exact sampled-path test."""
 
-    def path_free(self, samples: np.ndarray, spacing: float = 0.1) -> tuple[bool, np.ndarray]:
+    def path_free(
+        self, samples: np.ndarray, spacing: float = 0.1, clearance: float = 0.0
+    ) -> tuple[bool, np.ndarray]:
         """Exact body test along ``samples``; returns ``(ok, bad segment indices)``."""
         ...
 
@@ -688,6 +690,8 @@ class SmoothingConfig:
         Largest turn per fillet vertex (radians).
     max_rounds : int
         Largest number of fit-check-repair rounds.
+    clearance : float
+        Distance the body must keep from obstacles along the curve (exact test).
     """
 
     kappa_max: float = 1.0 / 6.0
@@ -703,6 +707,7 @@ class SmoothingConfig:
     kappa_safety: float = 0.97
     fillet_max_angle: float = math.radians(10.0)
     max_rounds: int = 30
+    clearance: float = 0.0
 
     def __post_init__(self) -> None:
         for name in (
@@ -1080,7 +1085,9 @@ class _Smoother:
         jump = np.flatnonzero(turn > cfg.kappa_max * step * 1.05 + 1e-9)
         if len(jump):
             return self._owners(owner, np.unique(span[jump])), dense
-        free, bad_seg = self.checker.path_free(dense, spacing=cfg.check_spacing)
+        free, bad_seg = self.checker.path_free(
+            dense, spacing=cfg.check_spacing, clearance=cfg.clearance
+        )
         if free:
             return [], dense
         hit = np.unique(
