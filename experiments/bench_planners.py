@@ -139,6 +139,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, default=20)
     parser.add_argument("--cap", type=float, default=5.0, help="OMPL time cap per run [s]")
     parser.add_argument("--out", default="results")
+    parser.add_argument("--doc", default="docs/bench_planners.md", help="markdown page for docs/")
     args = parser.parse_args(argv)
     try:
         from ompl import util as ou
@@ -198,6 +199,7 @@ def main(argv: list[str] | None = None) -> int:
         )
     text = "\n".join(lines) + "\n"
     write_text_atomic(out / f"bench_planners_{args.map}.md", text)
+    write_text_atomic(Path(args.doc), text)
     print(text)
     return 0
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import platform
 import statistics
 import sys
@@ -37,6 +38,7 @@ from rrtdrive.plotting import draw_map, draw_path, draw_trees, plot_curvature, s
 from rrtdrive.types import Budget
 from rrtdrive.verify import verify_path
 
+FIGURE_LINK = "@@FIGURES@@/"
 PLANNERS = ("rrt", "rrt-connect", "rrt-star", "improved-rrt-connect")
 LABELS = {
     "rrt": "RRT",
@@ -147,6 +149,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="results")
     parser.add_argument("--figures", default="docs/figures")
     parser.add_argument("--max-time", type=float, default=10.0, help="time budget per run [s]")
+    parser.add_argument("--doc", default="docs/table3.md", help="markdown page for docs/")
     args = parser.parse_args(argv)
     out, fig_dir = FsPath(args.out), FsPath(args.figures)
     out.mkdir(parents=True, exist_ok=True)
@@ -242,10 +245,14 @@ def main(argv: list[str] | None = None) -> int:
             f"{'–' if g is None else f'{100 * g:.0f} %'}.",
             "",
         ]
-        md += [f"![{w}](../docs/figures/{w})" for w in written] + [""]
+        md += [f"![{w}]({FIGURE_LINK}{w})" for w in written] + [""]
     write_text_atomic(out / "table3.json", json.dumps(report, indent=1) + "\n")
-    write_text_atomic(out / "table3.md", "\n".join(md))
-    print("\n".join(md))
+    text = "\n".join(md)
+    write_text_atomic(out / "table3.md", text.replace(FIGURE_LINK, "../docs/figures/"))
+    doc = FsPath(args.doc)
+    rel = os.path.relpath(fig_dir, doc.parent).replace(os.sep, "/") + "/"
+    write_text_atomic(doc, text.replace(FIGURE_LINK, rel))
+    print(text)
     return 0
 
 
