@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from rrtdrive.atomic import publish, temp_beside
 from rrtdrive.sim.runner import Episode
 from rrtdrive.sim.scenes import SimConfig, build_env
 from rrtdrive.types import InputError, Pose
@@ -198,8 +199,7 @@ def write_video(
     fps = fps or (1.0 / episode.log.dt) / stride
     if not (math.isfinite(fps) and fps > 0):
         raise InputError(f"fps: must be > 0, got {fps!r}")
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.stem}.", suffix=".mp4", dir=out.parent)
-    os.close(fd)
+    tmp = temp_beside(out)
     count = 0
     try:
         writer = imageio.get_writer(
@@ -212,8 +212,8 @@ def write_video(
                 count += 1
         finally:
             writer.close()
-        os.replace(tmp, out)
+        publish(tmp, out)
     except BaseException:
-        FsPath(tmp).unlink(missing_ok=True)
+        tmp.unlink(missing_ok=True)
         raise
     return count
