@@ -100,6 +100,7 @@ class CollisionChecker:
         ny = int(math.ceil((ymax - ymin) / h)) + 2 * n_pad
         self._shape = (nx, ny)
         self._inv_h = 1.0 / h
+        self._ox, self._oy = float(self._origin[0]), float(self._origin[1])
         occupied = self._rasterise(nx, ny)
         # Distance from each cell centre to the nearest occupied cell centre.
         field = ndimage.distance_transform_edt(~occupied) * h
@@ -178,9 +179,13 @@ class CollisionChecker:
         Negative or ``-inf`` means possibly inside an obstacle. Scalar and fast
         (about a microsecond); use :meth:`clearances` for many points.
         """
-        i = int((x - self._origin[0]) * self._inv_h)
-        j = int((y - self._origin[1]) * self._inv_h)
-        if x < self._origin[0] or y < self._origin[1] or i >= self._shape[0] or j >= self._shape[1]:
+        ox, oy = self._ox, self._oy
+        if x < ox or y < oy:
+            return -math.inf
+        i = int((x - ox) * self._inv_h)
+        j = int((y - oy) * self._inv_h)
+        nx, ny = self._shape
+        if i >= nx or j >= ny:
             return -math.inf
         return self._clearance_list[i][j]
 
@@ -215,9 +220,20 @@ class CollisionChecker:
         if length < 1e-12:
             return clearance(ax, ay) - radius >= 0.0
         ux, uy = dx / length, dy / length
+        # clearance() inlined (the same arithmetic): this loop is the planners' hot spot.
+        ox, oy, inv_h = self._ox, self._oy, self._inv_h
+        nx, ny = self._shape
+        grid = self._clearance_list
         t = 0.0
         while True:
-            room = clearance(ax + ux * t, ay + uy * t) - radius
+            x, y = ax + ux * t, ay + uy * t
+            if x < ox or y < oy:
+                return False
+            i = int((x - ox) * inv_h)
+            j = int((y - oy) * inv_h)
+            if i >= nx or j >= ny:
+                return False
+            room = grid[i][j] - radius
             if room < min_step:
                 return False
             if t >= length:
