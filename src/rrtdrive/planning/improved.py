@@ -493,12 +493,24 @@ class ObtuseTree(GrowingTree):
         super().__init__(root, capacity, virtual_parent)
         vp = (np.nan, np.nan) if virtual_parent is None else tuple(virtual_parent)
         # Columns [x, y, parent x, parent y] (rows of a (4, capacity) array, so
-        # each is contiguous): one subtraction serves both distances of Eq. 11.
+        # each is contiguous), for :attr:`ppos` and :func:`link_candidates`.
         self._cols = np.empty((4, capacity))
         self._cols[:, 0] = (root[0], root[1], vp[0], vp[1])
         self.dpar = np.empty(capacity)
         self.dpar[0] = (vp[0] - root[0]) ** 2 + (vp[1] - root[1]) ** 2
-        self._q4 = np.empty((4, 1))
+        # Eq. 11 as two linear forms in (q_x, q_y, 1), so that one matrix product
+        # per query gives both (see choose_parent):
+        #   row 0:  |x_i|^2 - 2 x_i.q        (|x_i - q|^2 less the constant |q|^2)
+        #   row 1:  v_i.q - v_i.x_i,  v_i = x_i - x_k  (> 0 exactly when obtuse)
+        # since D(q_i,q) + D(q_i,q_k) < D(q_k,q)  <=>  (q_i - q_k).(q - q_i) > 0.
+        self._forms = np.empty((2, capacity, 3))
+        self._set_forms(0, float(root[0]), float(root[1]), float(vp[0]), float(vp[1]))
+        self._q3 = np.ones(3)
+
+    def _set_forms(self, i: int, x: float, y: float, px: float, py: float) -> None:
+        vx, vy = x - px, y - py  # NaN for a root without a parent: never obtuse
+        self._forms[0, i] = (-2.0 * x, -2.0 * y, x * x + y * y)
+        self._forms[1, i] = (vx, vy, -(vx * x + vy * y))
 
     @property
     def ppos(self) -> np.ndarray:
@@ -510,11 +522,13 @@ class ObtuseTree(GrowingTree):
         if self.size == self._cols.shape[1]:
             self._cols = np.concatenate([self._cols, np.empty_like(self._cols)], axis=1)
             self.dpar = np.concatenate([self.dpar, np.empty_like(self.dpar)])
+            self._forms = np.concatenate([self._forms, np.empty_like(self._forms)], axis=1)
         i = super().add(point, parent, cost)
         px, py = self.nodes[parent].tolist()
         x, y = float(point[0]), float(point[1])
         self._cols[:, i] = (x, y, px, py)
         self.dpar[i] = (x - px) ** 2 + (y - py) ** 2
+        self._set_forms(i, x, y, px, py)
         return i
 
     def choose_parent(self, q: np.ndarray, obtuse: bool = True) -> int:
@@ -522,25 +536,22 @@ class ObtuseTree(GrowingTree):
 
         Returns -1 when only a root with a virtual parent qualifies and its angle is acute.
         """
-        q4 = self._q4
-        q4[0, 0] = q4[2, 0] = q[0]
-        q4[1, 0] = q4[3, 0] = q[1]
-        n = self.size
-        t = self._cols[:, :n] - q4
-        t *= t
-        d_rand = t[0] + t[1]
+        q3 = self._q3
+        q3[0] = q[0]
+        q3[1] = q[1]
+        r = self._forms[:, : self.size] @ q3
+        near = r[0]
         if not obtuse:
-            return int(d_rand.argmin())
+            return int(near.argmin())
         # NaN (a root without parent) compares False: never obtuse.
-        ok = d_rand + self.dpar[:n] < t[2] + t[3]
-        w = np.where(ok, d_rand, np.inf)
+        w = np.where(r[1] > 0.0, near, np.inf)
         i = int(w.argmin())
         if w[i] == np.inf:
             if self.virtual_parent is not None:
                 # A root with a virtual parent grows only along its heading.
-                d_rand[0] = np.inf
-            i = int(d_rand.argmin())
-            if d_rand[i] == np.inf:
+                near[0] = np.inf
+            i = int(near.argmin())
+            if near[i] == np.inf:
                 return -1
         return i
 
