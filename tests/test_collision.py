@@ -213,3 +213,45 @@ def test_body_clearance_matches_shapely(parking_lot, parking_checker, pose):
     else:
         want = min(box.exterior.distance(body), union.distance(body))
     assert parking_checker.body_clearance(pose) == pytest.approx(want, abs=1e-9)
+
+
+@given(pose=poses, clearance=st.sampled_from([0.0, 0.15, 0.5]))
+def test_exact_tests_disc_screens_are_conservative(parking_lot, parking_checker, pose, clearance):
+    # Each screen of poses_free (three, then six discs, no margin) only ever clears
+    # poses whose body keeps the clearance by shapely's distance.
+    body = reference_body(*pose)
+    xmin, ymin, xmax, ymax = parking_lot.bounds
+    inner = shapely.box(xmin + clearance, ymin + clearance, xmax - clearance, ymax - clearance)
+    union = shapely.union_all([shapely.Polygon(o.corners()) for o in parking_lot.obstacles])
+    p = np.array([pose])
+    for offsets, radius in parking_checker._screens:
+        if parking_checker._discs_clear(p, offsets, radius + clearance)[0]:
+            assert inner.contains(body) and union.distance(body) > clearance
+
+
+def test_far_end_first_edge_test_gives_the_walks_answers(parking_checker):
+    # The sphere tracing looks at the far end first; the answers are those of a
+    # plain walk from the near end.
+    def walk(a, b, radius):
+        ax, ay = a
+        dx, dy = b[0] - ax, b[1] - ay
+        length = math.hypot(dx, dy)
+        ux, uy = dx / length, dy / length
+        t = 0.0
+        while True:
+            room = parking_checker.clearance(ax + ux * t, ay + uy * t) - radius
+            if room < parking_checker.config.min_trace_step:
+                return False
+            if t >= length:
+                return True
+            t = min(t + room, length)
+
+    rng = np.random.default_rng(11)
+    seen = set()
+    for _ in range(2000):
+        a = rng.uniform(-2, 102, 2)
+        b = a + rng.normal(0, 6, 2)
+        got = parking_checker.segment_clear(a, b, 1.0)
+        assert got == walk(tuple(a), tuple(b), 1.0)
+        seen.add(got)
+    assert seen == {True, False}
