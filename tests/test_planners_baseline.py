@@ -333,3 +333,13 @@ def test_samples_are_useful_and_deterministic(problems):
     plain = SampleSource(problem, reject=False)
     pts = np.array([plain.draw(rng_a) for _ in range(600)])
     assert pts.min() >= 0.0 and pts.max() <= 100.0 and pts[:, 1].std() > 20.0
+
+
+def test_sample_source_draw_xy_is_draw_as_a_list():
+    problem = PlanningProblem.from_map(builtin_map("parking_lot"))
+    a, b = SampleSource(problem, reject=True), SampleSource(problem, reject=True)
+    ra, rb = np.random.default_rng(4), np.random.default_rng(4)
+    for k in range(600):  # past a batch boundary, mixing both kinds
+        q = a.draw(ra)
+        got = b.draw_xy(rb) if k % 3 else b.draw(rb).tolist()
+        assert isinstance(got, list) and got == q.tolist()

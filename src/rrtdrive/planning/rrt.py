@@ -279,6 +279,7 @@ class SampleSource:
         if self._cells is not None and len(self._cells) == 0:
             self._cells = None
         self._buffer = np.empty((0, 2))
+        self._list: list[list[float]] = []
         self._pos = 0
 
     def _refill(self, rng: np.random.Generator) -> None:
@@ -288,6 +289,7 @@ class SampleSource:
             flat = self._cells[rng.integers(len(self._cells), size=self.batch)]
             ij = np.column_stack([flat // self._ny, flat % self._ny])
             self._buffer = self._origin + (ij + rng.random((self.batch, 2))) * self._h
+        self._list = self._buffer.tolist()
         self._pos = 0
 
     def draw(self, rng: np.random.Generator) -> np.ndarray:
@@ -295,6 +297,17 @@ class SampleSource:
         if self._pos == len(self._buffer):
             self._refill(rng)
         q = self._buffer[self._pos].copy()
+        self._pos += 1
+        return q
+
+    def draw_xy(self, rng: np.random.Generator) -> list[float]:
+        """:meth:`draw` as a fresh list ``[x, y]`` of floats (cheaper in scalar loops).
+
+        Both draw from one stream: mixing them gives the same points in the same order.
+        """
+        if self._pos == len(self._buffer):
+            self._refill(rng)
+        q = self._list[self._pos]
         self._pos += 1
         return q
 
