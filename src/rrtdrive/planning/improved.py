@@ -517,15 +517,24 @@ class ObtuseTree(GrowingTree):
         """Parent position of every node (the root's virtual parent), shape ``(size, 2)``."""
         return self._cols[2:, : self.size].T
 
-    def add(self, point: np.ndarray, parent: int, cost: float | None = None) -> int:
-        """Append ``point`` with ``parent``; return its index."""
-        if self.size == self._cols.shape[1]:
+    def add(self, point: Sequence[float], parent: int, cost: float | None = None) -> int:
+        """Append ``point`` (any ``(x, y)`` sequence) with ``parent``; return its index."""
+        i = self.size
+        if i == len(self.nodes):
+            self.nodes = np.concatenate([self.nodes, np.empty_like(self.nodes)])
+            self.parents = np.concatenate([self.parents, np.empty_like(self.parents)])
+            self.cost = np.concatenate([self.cost, np.empty_like(self.cost)])
             self._cols = np.concatenate([self._cols, np.empty_like(self._cols)], axis=1)
             self.dpar = np.concatenate([self.dpar, np.empty_like(self.dpar)])
             self._forms = np.concatenate([self._forms, np.empty_like(self._forms)], axis=1)
-        i = super().add(point, parent, cost)
-        px, py = self.nodes[parent].tolist()
         x, y = float(point[0]), float(point[1])
+        px, py = self.nodes[parent].tolist()
+        if cost is None:
+            cost = float(self.cost[parent]) + math.hypot(x - px, y - py)
+        self.nodes[i] = (x, y)
+        self.parents[i] = parent
+        self.cost[i] = cost
+        self.size = i + 1
         self._cols[:, i] = (x, y, px, py)
         self.dpar[i] = (x - px) ** 2 + (y - py) ** 2
         self._set_forms(i, x, y, px, py)
@@ -557,14 +566,11 @@ class ObtuseTree(GrowingTree):
 
 
 def fast_edge_test(checker: CollisionChecker) -> EdgeFree:
-    """``checker.edge_free`` preceded by a one-lookup rejection at the far end of its capsule.
+    """The growth's edge test: ``checker.edge_free`` itself.
 
-    The checker's sphere tracing ends by testing the far end of the capsule
-    (``front_extent - e`` beyond ``b``, ``e = sqrt(r^2 - (W/2)^2)``), so an edge
-    whose far end has too little room is rejected by both; testing that point
-    first answers most colliding tree extensions with one clearance lookup.
-    The rejection only ever says "not free", and every "free" comes from
-    ``edge_free`` itself, so the test is never less safe than the checker's.
+    The checker's sphere tracing looks at the far end of its capsule first, so
+    most colliding tree extensions are answered with one clearance lookup; every
+    answer is the checker's own, so the test is exactly as safe.
 
     Examples
     --------
@@ -575,23 +581,7 @@ def fast_edge_test(checker: CollisionChecker) -> EdgeFree:
     >>> test((5.0, 44.0), (30.0, 44.0)), test((30.0, 44.0), (46.0, 44.0))
     (True, False)
     """
-    r = checker.edge_radius
-    half_w = checker.vehicle.width / 2.0
-    front = checker.vehicle.front_extent - math.sqrt(max(r * r - half_w * half_w, 0.0))
-    limit = r + checker.config.min_trace_step
-    clearance = checker.clearance
-    edge_free = checker.edge_free
-
-    def test(a: Sequence[float], b: Sequence[float]) -> bool:
-        dx, dy = b[0] - a[0], b[1] - a[1]
-        length = math.hypot(dx, dy)
-        if length > 1e-9:
-            f = front / length
-            if clearance(b[0] + dx * f, b[1] + dy * f) < limit:
-                return False
-        return edge_free(a, b)
-
-    return test
+    return checker.edge_free
 
 
 def _rooted(
@@ -655,7 +645,7 @@ def extend(
     q = (ax + dx * f, ay + dy * f)
     if not _edge(edge_free, towards_root, (ax, ay), q):
         return -1
-    return tree.add(np.array(q), i_near)
+    return tree.add(q, i_near)
 
 
 def greedy_connect(
@@ -704,7 +694,7 @@ def greedy_connect(
         q = (tx, ty) if reached else (ax + dx * p / dist, ay + dy * p / dist)
         if not _edge(edge_free, towards_root, (ax, ay), q):
             return -1
-        j = tree.add(np.array(q), j)
+        j = tree.add(q, j)
         if reached:
             return j
         if adaptive:
@@ -1017,7 +1007,7 @@ class ImprovedRRTConnect:
                             if i_g >= 0:
                                 found = np.vstack([ts.branch(i_s)[::-1], tg.branch(i_g)[1:]])
                                 break
-                q_rand = samples.draw(rng)
+                q_rand = samples.draw_xy(rng)
                 i_near = ta.choose_parent(q_rand, cfg.obtuse_parent)
                 i_new = extend(ta, ta is tg, i_near, q_rand, p, edge_free)
                 if i_new >= 0:
