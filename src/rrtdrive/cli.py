@@ -8,13 +8,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
 import numpy as np
 
+from rrtdrive.cli_args import nonneg_int, positive_float, positive_int
 from rrtdrive.types import Budget, InputError, PlanResult, Pose
 
 __all__ = ["main", "plan_to_json", "parse_pose"]
@@ -133,36 +133,6 @@ def _cmd_maps(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be > 0, got {value}")
-    return value
-
-
-def _nonneg_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {value}")
-    return value
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not math.isfinite(value) or value <= 0:
-        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text}")
-    return value
-
-
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand."""
     from rrtdrive.planning import PLANNERS
@@ -196,7 +166,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAME",
         help=f"one of {', '.join(sorted(PLANNERS))} (default: {default_planner})",
     )
-    plan.add_argument("--seed", type=_nonneg_int, default=0, help="random seed (default 0)")
+    plan.add_argument("--seed", type=nonneg_int, default=0, help="random seed (default 0)")
     plan.add_argument(
         "--step", type=float, default=None, help="tree step in metres (planner default)"
     )
@@ -208,12 +178,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     plan.add_argument(
         "--max-iterations",
-        type=_positive_int,
+        type=positive_int,
         default=20_000,
         help="iteration budget (default 20000)",
     )
     plan.add_argument(
-        "--max-time", type=_positive_float, default=5.0, help="time budget in seconds (default 5)"
+        "--max-time", type=positive_float, default=5.0, help="time budget in seconds (default 5)"
     )
     plan.add_argument("--json", metavar="FILE|-", help="write the result as JSON ('-' for stdout)")
     plan.add_argument("--plot", metavar="FILE.png", help="draw map, trees and path to a PNG")

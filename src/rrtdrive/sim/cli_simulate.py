@@ -13,44 +13,17 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import time
 from typing import Any
 
+from rrtdrive.cli_args import int_at_least, nonneg_int, positive_float
 from rrtdrive.types import InputError
 
 __all__ = ["add_parser", "run", "episode_json"]
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 CONTROLLER_NAMES = ("pure-pursuit", "stanley", "lqr")
-
-
-def _nonneg_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return value
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
-    return value
-
-
-def _frequency(text: str) -> int:
-    value = _nonneg_int(text)
-    if value < 15:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 15 (Hz), got {text!r}")
-    return value
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -73,27 +46,27 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--controller", default="pure-pursuit", metavar="NAME",
         help=f"one of {', '.join(CONTROLLER_NAMES)} (default: pure-pursuit)",
     )
-    p.add_argument("--seed", type=_nonneg_int, default=0, help="episode seed (default 0)")
+    p.add_argument("--seed", type=nonneg_int, default=0, help="episode seed (default 0)")
     p.add_argument(
-        "--frequency", type=_frequency, default=20,
+        "--frequency", type=int_at_least(15, 'Hz'), default=20,
         help="simulation and control frequency in Hz, >= 15 (default 20)",
     )
     p.add_argument(
-        "--max-time", type=_positive_float, default=None,
+        "--max-time", type=positive_float, default=None,
         help="time limit of the drive in seconds (default: the scenario's)",
     )
     p.add_argument(
-        "--plan-time", type=_positive_float, default=5.0,
+        "--plan-time", type=positive_float, default=5.0,
         help="planning time budget in seconds (default 5)",
     )
     p.add_argument(
-        "--oncoming", type=_nonneg_int, default=0,
+        "--oncoming", type=nonneg_int, default=0,
         help="overtake: number of oncoming cars, 0-10 (default 0: only the stopped car)",
     )
     p.add_argument("--json", metavar="FILE|-", help="write the metrics as JSON ('-' for stdout)")
     p.add_argument("--video", metavar="FILE.mp4", help="write a headless MP4 of the episode")
     p.add_argument(
-        "--video-stride", type=_nonneg_int, default=1,
+        "--video-stride", type=nonneg_int, default=1,
         help="simulation steps per video frame (default 1: every step)",
     )
     p.set_defaults(func=run)
