@@ -108,6 +108,7 @@ class CollisionChecker:
         self.grid_error = h * math.sqrt(2.0) + 1e-9
         self._clearance = (field - self.grid_error).astype(np.float64)
         self._clearance_list = self._clearance.tolist()
+        self._clearance_flat = self._clearance.ravel()
         self._occupied = occupied
         self._labels: np.ndarray | None = None
         self._union = shapely.union_all([o.polygon() for o in self.obstacles])
@@ -116,6 +117,8 @@ class CollisionChecker:
         shapely.prepare(self._inside)
         self.edge_radius = vehicle.width / 2.0 + self.config.margin
         self._cap_inset = math.sqrt(self.edge_radius**2 - (vehicle.width / 2.0) ** 2)
+        self._cap_back = vehicle.rear_overhang - self._cap_inset
+        self._cap_front = vehicle.front_extent - self._cap_inset
         self._disc_offsets, disc_radius = cover_discs(vehicle, 3)
         self._disc_offsets_list = [float(o) for o in self._disc_offsets]
         self.disc_radius = disc_radius + self.config.margin
@@ -198,15 +201,21 @@ class CollisionChecker:
     def clearances(self, points: np.ndarray) -> np.ndarray:
         """Vectorised :meth:`clearance` for points of shape ``(N, 2)``."""
         p = np.asarray(points, dtype=float).reshape(-1, 2)
-        idx = np.floor((p - self._origin) * self._inv_h).astype(np.int64)
+        g = (p - self._origin) * self._inv_h
+        # Truncation equals floor where g >= 0, the only cells looked up.
+        with np.errstate(invalid="ignore"):
+            idx = g.astype(np.int64)
         ok = (
-            (idx[:, 0] >= 0)
-            & (idx[:, 1] >= 0)
+            (g[:, 0] >= 0.0)
+            & (g[:, 1] >= 0.0)
             & (idx[:, 0] < self._shape[0])
             & (idx[:, 1] < self._shape[1])
         )
+        flat = idx[:, 0] * self._shape[1] + idx[:, 1]
+        if ok.all():
+            return self._clearance_flat[flat]
         out = np.full(len(p), -np.inf)
-        out[ok] = self._clearance[idx[ok, 0], idx[ok, 1]]
+        out[ok] = self._clearance_flat[flat[ok]]
         return out
 
     # ------------------------------------------------------------------ fast tests
@@ -274,8 +283,7 @@ class CollisionChecker:
             reach = math.hypot(self.vehicle.front_extent, self.vehicle.width / 2)
             return self.clearance(ax, ay) - reach - self.config.margin >= 0.0
         ux, uy = dx / length, dy / length
-        back = self.vehicle.rear_overhang - self._cap_inset
-        front = self.vehicle.front_extent - self._cap_inset
+        back, front = self._cap_back, self._cap_front
         return self.segment_clear(
             (ax - ux * back, ay - uy * back),
             (ax + dx + ux * front, ay + dy + uy * front),
@@ -438,6 +446,11 @@ class CollisionChecker:
             return ok, np.zeros(0 if ok else 1, dtype=np.int64)
         seg = np.hypot(*np.diff(s[:, :2], axis=0).T)
         pieces = np.maximum(1, np.ceil(seg / spacing).astype(np.int64))
+        if pieces.max() == 1:
+            # Dense enough already: the poses themselves (what the interpolation gives).
+            free = self.poses_free(s, clearance)
+            owner = np.minimum(np.arange(len(s)), len(seg) - 1)
+            return bool(free.all()), np.unique(owner[~free])
         owner = np.repeat(np.arange(len(seg)), pieces)
         first = np.repeat(np.cumsum(pieces) - pieces, pieces)
         frac = (np.arange(len(owner)) - first) / np.repeat(pieces, pieces)
