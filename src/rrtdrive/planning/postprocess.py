@@ -880,7 +880,7 @@ class _Smoother:
             cfg.kappa_max * cfg.kappa_safety * math.cos(cfg.fillet_max_angle / 2.0)
         )
         self.max_turn: float | None = None
-        self._fillets: dict[tuple[float, ...], Fillet] = {}
+        self._fillets: dict[tuple[float, ...], tuple[Fillet, list[list[float]]]] = {}
         self.rounds = 0
         self.merges = 0
         self.moves = 0
@@ -985,7 +985,9 @@ class _Smoother:
 
     def control_points(self) -> tuple[np.ndarray, np.ndarray, list[int]]:
         """Control points, the key corner owning each, and the legs too short for their fillets."""
-        pts, cfg = self.pts, self.cfg
+        cfg = self.cfg
+        # Plain floats throughout (the polygon is small; numpy per corner costs more).
+        pts = [p.tolist() for p in self.pts]
         n = len(pts)
         dirs: list[tuple[float, float]] = []
         lengths: list[float] = []
@@ -993,37 +995,43 @@ class _Smoother:
             ux, uy, length = _unit(pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1])
             dirs.append((ux, uy))
             lengths.append(length)
-        corner_pts: list[np.ndarray] = [pts[0][None, :]]
+        guard_steps = range(cfg.degree - 1)
+        corner_pts: list[list[list[float]]] = [[pts[0]]]
         reach = [0.0] * n
         for c in range(1, n - 1):
+            cx, cy = pts[c]
             if self.radius[c] > 0.0:
-                key = (*pts[c].tolist(), *dirs[c - 1], *dirs[c], self.radius[c])
-                f = self._fillets.get(key)
-                if f is None:
-                    f = self._fillets[key] = fillet_points(
+                key = (cx, cy, *dirs[c - 1], *dirs[c], self.radius[c])
+                hit = self._fillets.get(key)
+                if hit is None:
+                    f = fillet_points(
                         pts[c], dirs[c - 1], dirs[c], self.radius[c], cfg.fillet_max_angle
                     )
+                    hit = self._fillets[key] = (f, f.vertices.tolist())
+                f, verts = hit
                 r = self._reach(f)
                 if r > 0.0 and math.isfinite(r):
-                    u_in, u_out = np.asarray(dirs[c - 1]), np.asarray(dirs[c])
-                    at = f.reach + 2.0 * f.half * np.arange(cfg.degree - 1)  # guard distances
-                    guards_in = pts[c] - at[::-1, None] * u_in
-                    guards_out = pts[c] + at[:, None] * u_out
-                    corner_pts.append(np.vstack([guards_in, f.vertices, guards_out]))
+                    (uix, uiy), (uox, uoy) = dirs[c - 1], dirs[c]
+                    at = [f.reach + 2.0 * f.half * k for k in guard_steps]  # guard distances
+                    corner_pts.append(
+                        [[cx - d * uix, cy - d * uiy] for d in reversed(at)]
+                        + verts
+                        + [[cx + d * uox, cy + d * uoy] for d in at]
+                    )
                 else:
-                    corner_pts.append(f.vertices)
+                    corner_pts.append(verts)
                 reach[c] = r
             else:
-                corner_pts.append(pts[c][None, :])
-        corner_pts.append(pts[-1][None, :])
+                corner_pts.append([pts[c]])
+        corner_pts.append([pts[-1]])
         conflicts: list[int] = []
         fr = _fractions(cfg.supplement_n)
-        chunks: list[np.ndarray] = [corner_pts[0]]
-        owners: list[np.ndarray] = [np.zeros(1, dtype=np.int64)]
+        ctrl: list[list[float]] = [pts[0]]
+        own: list[int] = [0]
         for i in range(n - 1):
             if i > 0:
-                chunks.append(corner_pts[i])
-                owners.append(np.full(len(corner_pts[i]), i, dtype=np.int64))
+                ctrl += corner_pts[i]
+                own += [i] * len(corner_pts[i])
             s0, s1 = reach[i], lengths[i] - reach[i + 1]
             need = _END_GAP if (i == 0 and reach[1] > 0) or (i == n - 2 and reach[i] > 0) else 0.0
             if s1 - s0 < need - 1e-9:
@@ -1031,18 +1039,18 @@ class _Smoother:
                 continue
             if cfg.supplement and s1 - s0 >= cfg.supplement_delta and fr:
                 ux, uy = dirs[i]
-                f_arr = np.asarray(fr)
-                along = s0 + f_arr * (s1 - s0)
-                chunks.append(np.column_stack([pts[i][0] + along * ux, pts[i][1] + along * uy]))
-                near = np.where(f_arr < 0.5, max(i, 1), min(i + 1, n - 2))
-                owners.append(near.astype(np.int64))
-        chunks.append(corner_pts[-1])
-        owners.append(np.full(1, n - 1, dtype=np.int64))
-        ctrl = np.concatenate(chunks)
-        own = np.concatenate(owners)
-        keep = np.ones(len(ctrl), dtype=bool)
-        keep[1:] = np.hypot(*np.diff(ctrl, axis=0).T) > 1e-9  # merged guards
-        return ctrl[keep], own[keep], conflicts
+                px, py = pts[i]
+                for f_k in fr:
+                    along = s0 + f_k * (s1 - s0)
+                    ctrl.append([px + along * ux, py + along * uy])
+                    own.append(max(i, 1) if f_k < 0.5 else min(i + 1, n - 2))
+        ctrl.append(pts[-1])
+        own.append(n - 1)
+        ctrl_a = np.array(ctrl)
+        own_a = np.array(own, dtype=np.int64)
+        keep = np.ones(len(ctrl_a), dtype=bool)
+        keep[1:] = np.hypot(*np.diff(ctrl_a, axis=0).T) > 1e-9  # merged guards
+        return ctrl_a[keep], own_a[keep], conflicts
 
     # ------------------------------------------------------------- checking
 
