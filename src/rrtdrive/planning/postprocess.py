@@ -418,8 +418,10 @@ def fit_bspline(control_points: np.ndarray, degree: int = 2) -> BSpline:
     >>> spl(0.0).tolist(), spl(1.0).tolist()
     ([0.0, 0.0], [5.0, 5.0])
     """
-    c = np.asarray(control_points, dtype=float).reshape(-1, 2)
-    return BSpline(clamped_uniform_knots(len(c), degree), c, degree)
+    c = np.ascontiguousarray(np.asarray(control_points, dtype=float).reshape(-1, 2))
+    # The knots are valid by construction (clamped_uniform_knots raises for too few
+    # control points), so scipy's checks are skipped.
+    return BSpline.construct_fast(clamped_uniform_knots(len(c), degree), c, degree)
 
 
 def curvature(d1: np.ndarray, d2: np.ndarray) -> np.ndarray:
@@ -887,6 +889,8 @@ class _Smoother:
         self.drops = 0
         self.unprunes = 0
         self.pts: list[np.ndarray] = []
+        # Bezier pieces (bytes of their three points) whose body test passed.
+        self._free_pieces: set[bytes] = set()
 
     # ------------------------------------------------------------- key polygon
 
@@ -1093,15 +1097,51 @@ class _Smoother:
         jump = np.flatnonzero(turn > cfg.kappa_max * step * 1.05 + 1e-9)
         if len(jump):
             return self._owners(owner, np.unique(span[jump])), dense
-        free, bad_seg = self.checker.path_free(
-            dense, spacing=cfg.check_spacing, clearance=cfg.clearance
-        )
+        free, bad_seg = self._body_check(spl, dense, span)
         if free:
             return [], dense
         hit = np.unique(
             np.concatenate([span[bad_seg], span[np.minimum(bad_seg + 1, len(span) - 1)]])
         )
         return self._owners(owner, hit), dense
+
+    def _body_check(
+        self, spl: BSpline, dense: np.ndarray, span: np.ndarray
+    ) -> tuple[bool, np.ndarray]:
+        """``checker.path_free`` of the dense poses, skipping pieces already proven free.
+
+        A piece of a clamped uniform quadratic B-spline is the Bezier curve of
+        three points derived from its control points alone
+        (:func:`quadratic_span_max_curvature`), so a piece whose three points
+        were checked free in an earlier round of this call is the same curve,
+        already checked at poses at most ``check_spacing`` apart; its poses are
+        not tested again. Everything else is tested exactly as by ``path_free``
+        (the dense poses are already that close, which is checked).
+        """
+        cfg = self.cfg
+        poses_free = getattr(self.checker, "poses_free", None)
+        chord = np.hypot(*np.diff(dense[:, :2], axis=0).T)
+        if cfg.degree != 2 or poses_free is None or not chord.max() <= cfg.check_spacing:
+            return self.checker.path_free(
+                dense, spacing=cfg.check_spacing, clearance=cfg.clearance
+            )
+        c = np.asarray(spl.c, dtype=float)
+        mid = 0.5 * (c[:-1] + c[1:])
+        a, b, e = mid[:-1].copy(), c[1:-1], mid[1:].copy()
+        a[0], e[-1] = c[0], c[-1]
+        keys = [row.tobytes() for row in np.hstack([a, b, e])]
+        known = np.array([k in self._free_pieces for k in keys], dtype=bool)
+        todo = np.flatnonzero(~known[span])
+        ok = np.ones(len(dense), dtype=bool)
+        if len(todo):
+            ok[todo] = poses_free(dense[todo, :3], cfg.clearance)
+        bad_pose = np.flatnonzero(~ok)
+        failed = set(span[bad_pose].tolist())
+        for j in np.unique(span[todo]).tolist():
+            if j not in failed:
+                self._free_pieces.add(keys[j])
+        # As path_free: pose i stands for segment i (the last pose for the last one).
+        return len(bad_pose) == 0, np.unique(np.minimum(bad_pose, len(dense) - 2))
 
     def _owners(self, owner: np.ndarray, spans: np.ndarray) -> list[int]:
         """Key corners whose control points shape the given knot spans."""
