@@ -10,6 +10,7 @@ shapely polygons, so its answers agree with shapely.
 
 from __future__ import annotations
 
+import array
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -107,7 +108,10 @@ class CollisionChecker:
         # The point-to-centre error (h/sqrt2) plus the rasterisation error (h/sqrt2).
         self.grid_error = h * math.sqrt(2.0) + 1e-9
         self._clearance = (field - self.grid_error).astype(np.float64)
-        self._clearance_list = self._clearance.tolist()
+        # A flat array of C doubles for the scalar lookups: compact in memory, so
+        # the walks along edges miss the cache far less than nested lists would.
+        self._clearance_cells = array.array("d")
+        self._clearance_cells.frombytes(np.ascontiguousarray(self._clearance).tobytes())
         self._clearance_flat = self._clearance.ravel()
         self._occupied = occupied
         self._labels: np.ndarray | None = None
@@ -196,7 +200,7 @@ class CollisionChecker:
         nx, ny = self._shape
         if i >= nx or j >= ny:
             return -math.inf
-        return self._clearance_list[i][j]
+        return self._clearance_cells[i * ny + j]
 
     def clearances(self, points: np.ndarray) -> np.ndarray:
         """Vectorised :meth:`clearance` for points of shape ``(N, 2)``."""
@@ -239,7 +243,7 @@ class CollisionChecker:
         # clearance() inlined (the same arithmetic): this loop is the planners' hot spot.
         ox, oy, inv_h = self._ox, self._oy, self._inv_h
         nx, ny = self._shape
-        grid = self._clearance_list
+        grid = self._clearance_cells
         # The far end first (the very point the walk ends on, so the answer is the
         # same): most colliding tree extensions end inside an obstacle.
         x, y = ax + ux * length, ay + uy * length
@@ -247,7 +251,7 @@ class CollisionChecker:
             return False
         i = int((x - ox) * inv_h)
         j = int((y - oy) * inv_h)
-        if i >= nx or j >= ny or grid[i][j] - radius < min_step:
+        if i >= nx or j >= ny or grid[i * ny + j] - radius < min_step:
             return False
         t = 0.0
         while True:
@@ -258,7 +262,7 @@ class CollisionChecker:
             j = int((y - oy) * inv_h)
             if i >= nx or j >= ny:
                 return False
-            room = grid[i][j] - radius
+            room = grid[i * ny + j] - radius
             if room < min_step:
                 return False
             if t >= length:
