@@ -407,19 +407,26 @@ class CollisionChecker:
         return float(min(to_bounds, self._union.distance(rect)))
 
     def _exact(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
-        rects = shapely.polygons(footprint_corners(poses, self.vehicle))
+        corners = footprint_corners(poses, self.vehicle)
+        # Inside the bounds box shrunk by the clearance: both are convex and the box
+        # is axis-aligned, so that is all four corners inside, compared exactly.
+        xmin, ymin, xmax, ymax = self.bounds
         if clearance > 0.0:
-            xmin, ymin, xmax, ymax = self.bounds
-            region = shapely.box(xmin + clearance, ymin + clearance, xmax - clearance,
-                                 ymax - clearance)
-            inside = shapely.contains(region, rects)
-        else:
-            inside = shapely.contains(self._inside, rects)
+            xmin, ymin, xmax, ymax = (
+                xmin + clearance, ymin + clearance, xmax - clearance, ymax - clearance
+            )
+        x, y = corners[..., 0], corners[..., 1]
+        inside = ((x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax)).all(axis=1)
         if self._union.is_empty:
             return inside
-        if clearance > 0.0:
-            return inside & ~shapely.dwithin(self._union, rects, clearance)
-        return inside & ~shapely.intersects(self._union, rects)
+        test = np.flatnonzero(inside)
+        if len(test):
+            rects = shapely.polygons(corners[test])
+            if clearance > 0.0:
+                inside[test] = ~shapely.dwithin(self._union, rects, clearance)
+            else:
+                inside[test] = ~shapely.intersects(self._union, rects)
+        return inside
 
     def path_free(
         self, samples: np.ndarray, spacing: float = 0.1, clearance: float = 0.0
