@@ -254,6 +254,23 @@ class CollisionChecker:
         if i >= nx or j >= ny or grid[i * ny + j] - radius < min_step:
             return False
         t = 0.0
+        # Both ends at least a cell inside the grid: so is every point between
+        # (rounding moves them by far less), and the walk needs no bounds checks.
+        h = self.config.resolution
+        lo_x, lo_y, hi_x, hi_y = ox + h, oy + h, ox + (nx - 1) * h, oy + (ny - 1) * h
+        if lo_x <= ax <= hi_x and lo_x <= x <= hi_x and lo_y <= ay <= hi_y and lo_y <= y <= hi_y:
+            while True:
+                room = (
+                    grid[int((ax + ux * t - ox) * inv_h) * ny + int((ay + uy * t - oy) * inv_h)]
+                    - radius
+                )
+                if room < min_step:
+                    return False
+                if t >= length:
+                    return True
+                t += room
+                if t > length:
+                    t = length
         while True:
             x, y = ax + ux * t, ay + uy * t
             if x < ox or y < oy:
