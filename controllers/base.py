@@ -291,6 +291,22 @@ class TrackingController:
         self.cte = self.heading_error = self.s = self.v_ref = 0.0
         self._reset_steering()
 
+    def retarget(self, path: Path, v_start: float) -> None:
+        """Switch to ``path`` while driving, keeping the speed loop's and steering's state.
+
+        For a re-planned path stitched onto the current one at the car's position
+        (receding-horizon planning): the projection and the speed profile (from
+        ``v_start``) are rebuilt, but the PI integral, the last acceleration
+        command (the jerk limit) and any steering memory carry on, so the commands
+        do not jump when the reference is continuous. :meth:`reset` starts afresh.
+        """
+        self.projector = PathProjector(path)
+        p = self.projector
+        self.profile = SpeedProfile(
+            np.asarray(p.s), np.asarray(p.kappa), self.speed_config, v_start
+        )
+        self.speed.retarget(self.profile)
+
     def _reset_steering(self) -> None:
         """Clear steering-controller state (override when there is some)."""
 

@@ -143,7 +143,9 @@ class SpeedController:
 
     Setting :attr:`stop_at` (an arc length) adds a stop line: the reference is
     capped by ``sqrt(2 decel (stop_at - s))`` and the car is held there until the
-    attribute is cleared.
+    attribute is cleared. Setting :attr:`accel_cap` (m/s^2) caps the command, for
+    example by a car-following law (IDM) behind a slower car; while it binds, the
+    integral is frozen (the same anti-windup as the other limits).
 
     Parameters
     ----------
@@ -159,7 +161,18 @@ class SpeedController:
         self.arrived = False
         self.v_ref = 0.0
         self.stop_at: float | None = None
+        self.accel_cap: float | None = None
         self.last_a = 0.0
+
+    def retarget(self, profile: SpeedProfile) -> None:
+        """Track ``profile`` from now on, keeping the loop's state (integral, last command).
+
+        For a path that continues the current one (stitched at the car's position),
+        so that the command does not jump; :meth:`reset` starts from scratch.
+        """
+        self.profile = profile
+        self.arrived = False
+        self.stop_at = None
 
     def reset(self, profile: SpeedProfile) -> None:
         """Track ``profile`` from scratch."""
@@ -169,6 +182,7 @@ class SpeedController:
         self.arrived = False
         self.v_ref = 0.0
         self.stop_at = None
+        self.accel_cap = None
         self.last_a = 0.0
 
     def control(self, s: float, speed: float, t: float) -> float:
@@ -207,7 +221,8 @@ class SpeedController:
         err = v_ref - speed
         trial = self.integral + err * dt
         raw = a_ref + cfg.kp * err + cfg.ki * trial
-        a = self._limit(raw, dt)
+        cap = self.accel_cap
+        a = self._limit(raw if cap is None or raw <= cap else cap, dt)
         if a == raw:
             # Conditional integration (anti-windup): only while the command is not limited.
             limit = cfg.a_max / cfg.ki if cfg.ki > 0 else 0.0

@@ -5,7 +5,7 @@ scenario; nothing else happens. The registration uses entry-point strings, so
 highway-env and pygame load only when an environment is made::
 
     import gymnasium as gym
-    import rrtdrive  # registers rrtdrive/Parking-v0, rrtdrive/Overtake-v0
+    import rrtdrive  # registers rrtdrive/Parking-v0, Overtake-v0, OvertakeTraffic-v0
 
     env = gym.make("rrtdrive/Parking-v0", controller="lqr", residual=True)
 
@@ -28,7 +28,7 @@ ENTRY_POINT = "rrtdrive.envs.drive_env:DriveEnv"
 ENV_IDS: dict[str, str] = {
     "rrtdrive/Parking-v0": "parking",
     "rrtdrive/Overtake-v0": "overtake",
-    # "rrtdrive/OvertakeTraffic-v0": "overtake-traffic",  # once sim.scenes has the scenario
+    "rrtdrive/OvertakeTraffic-v0": "overtake-traffic",
 }
 
 

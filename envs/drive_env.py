@@ -41,10 +41,25 @@ from rrtdrive.envs.render import SceneRenderer, view_for
 from rrtdrive.evaluation import EpisodeReport, EvalConfig, evaluate
 from rrtdrive.planning import PLANNERS
 from rrtdrive.sim.ego import EgoVehicle
-from rrtdrive.sim.runner import DEFAULT_PLANNER, DriveLog, Episode, EpisodeConfig, plan_scenario
-from rrtdrive.sim.scenes import SCENARIOS, Scenario, SimConfig, build_env, make_scenario
+from rrtdrive.sim.runner import (
+    DEFAULT_PLANNER,
+    TRAFFIC_PLANNER,
+    DriveLog,
+    Episode,
+    EpisodeConfig,
+    plan_scenario,
+    traffic_speed_config,
+)
+from rrtdrive.sim.scenes import (
+    SCENARIOS,
+    Scenario,
+    SimConfig,
+    build_env,
+    make_scenario,
+    scenario_rngs,
+)
 from rrtdrive.sim.traffic import OncomingGate, conflict_zone
-from rrtdrive.types import Budget, InputError, Path, PlanResult, wrap_angle
+from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, wrap_angle
 
 __all__ = ["DriveEnv", "RewardWeights", "observation_names", "OBS_CLIP"]
 
@@ -252,7 +267,15 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         Reward weights (see :class:`RewardWeights`).
     scenario_options : mapping, optional
         Keyword arguments of :func:`~rrtdrive.sim.scenes.make_scenario` (``jitter``,
-        ``spot``, ``oncoming``).
+        ``spot``, ``oncoming``; ``density``, ``lead_speed``, ``lead_model`` for
+        ``overtake-traffic``).
+    replan_options : mapping, optional
+        ``overtake-traffic``: :class:`~rrtdrive.sim.replanning.ReplanConfig` fields.
+        The reference path is then re-planned in the loop
+        (:class:`~rrtdrive.sim.replanning.TrafficDriver`, the runner's driver): the
+        observation follows the current reference, the residual is added to the
+        driver's command, progress is counted across reference switches, and the
+        episode ends (``"completed"``) when the overtake is complete.
     controller_options : mapping, optional
         Controller gains.
     speed_options : mapping, optional
@@ -297,6 +320,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         max_cte: float | None = 10.0,
         reward: RewardWeights | Mapping[str, float] | None = None,
         scenario_options: Mapping[str, Any] | None = None,
+        replan_options: Mapping[str, Any] | None = None,
         controller_options: Mapping[str, Any] | None = None,
         speed_options: Mapping[str, Any] | None = None,
         budget: Budget | None = None,
@@ -334,6 +358,17 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         self.max_cte = None if max_cte is None else _require_number("max_cte", max_cte)
         self.weights = RewardWeights.from_any(reward)
         self.scenario_options = _require_mapping("scenario_options", scenario_options)
+        self.replan_options = _require_mapping("replan_options", replan_options)
+        self._replan = None
+        if scenario == "overtake-traffic":
+            from rrtdrive.sim.replanning import ReplanConfig
+
+            try:
+                self._replan = ReplanConfig(**self.replan_options)
+            except TypeError as exc:
+                raise InputError(f"replan_options: {exc}") from None
+        elif self.replan_options:
+            raise InputError("replan_options: only the overtake-traffic scenario re-plans")
         self.controller_options = _require_mapping("controller_options", controller_options)
         self.speed_options = _require_mapping("speed_options", speed_options)
         if budget is None:
@@ -387,6 +422,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
 
         self.episode: Episode | None = None
         self.report: EpisodeReport | None = None
+        self._driver: Any = None
         self.episode_seed: int | None = None
         self.path: Path | None = None
         self._sim: Any = None
@@ -403,7 +439,11 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             raise InputError(f"scenario_options: {exc}") from None
 
     def _speed_config(self, scenario: Scenario) -> SpeedConfig:
-        options = {"v_max": scenario.v_max, **self.speed_options}
+        base = {"v_max": scenario.v_max}
+        if scenario.is_traffic:
+            t = traffic_speed_config(scenario)
+            base = {"v_max": t.v_max, "accel": t.accel, "a_lat_max": t.a_lat_max}
+        options = {**base, **self.speed_options}
         try:
             return SpeedConfig(**options)
         except TypeError as exc:
@@ -417,9 +457,13 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
     def _start_episode(self, seed: int) -> PlanResult:
         """Build, plan and set up the episode of ``seed``; return the plan (maybe failed)."""
         scen = self._make_scenario(seed)
-        plan = plan_scenario(scen, self.planner_name, seed, self.budget)
-        if not plan.success or len(plan.path) < 2:
-            return plan
+        driver = None
+        if scen.is_traffic:
+            plan = None
+        else:
+            plan = plan_scenario(scen, self.planner_name, seed, self.budget)
+            if not plan.success or len(plan.path) < 2:
+                return plan
         speed = self._speed_config(scen)
         ctrl = self._make_controller(scen, speed)
         if self._sim is not None:
@@ -427,15 +471,29 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         sim = build_env(scen, self.sim_config)
         u = sim.unwrapped
         ego = u.vehicle
+        if scen.is_traffic:
+            # Receding-horizon re-planning in the loop, as in the runner.
+            from rrtdrive.sim.replanning import TrafficDriver
+
+            _, plan_rng, _ = scenario_rngs(seed)
+            driver = TrafficDriver(sim, scen, ctrl, speed, self._replan, plan_rng)
+            driver.start()
+            first = driver.references[-1][1]
+            plan = PlanResult(
+                PlanStatus.SOLVED, TRAFFIC_PLANNER, first, first.xy, (), 0, 0, 0.0,
+                "lane reference; re-planned in the loop",
+            )
         path = plan.path
         gate, cars = None, None
-        if scen.oncoming and scen.lane_y is not None:
+        if scen.oncoming and scen.lane_y is not None and driver is None:
             # As the runner: hold the controller before the oncoming lane until a gap.
             zone = conflict_zone(path, scen.lane_y, scen.lane_width, scen.vehicle)
             if zone is not None:
                 cars = [v for v in u.road.vehicles if v is not ego and v.speed > 0]
                 gate = OncomingGate(zone, (path.arc_length(), path.samples[:, 3]), speed)
-        ctrl.reset(path, v_start=ego.speed)
+        if driver is None:
+            ctrl.reset(path, v_start=ego.speed)
+        self._driver = driver
         self._sim, self._ego, self._road = sim, ego, u.road
         self._scenario, self._plan, self._speed, self._ctrl = scen, plan, speed, ctrl
         self._gate, self._gate_cars = gate, cars
@@ -446,7 +504,10 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         self._n_max = int(math.ceil(self._max_time / self._dt - 1e-9))
         self._projector = PathProjector(path)
         p = self._projector
-        self._profile = SpeedProfile(np.asarray(p.s), np.asarray(p.kappa), speed, ego.speed)
+        if driver is not None:
+            self._profile = ctrl.profile
+        else:
+            self._profile = SpeedProfile(np.asarray(p.s), np.asarray(p.kappa), speed, ego.speed)
         self._others = [v for v in u.road.vehicles if v is not ego]
         r = ego.rear
         self._states: list[tuple[float, float, float, float]] = [(r[0], r[1], r[2], ego.speed)]
@@ -565,12 +626,28 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         act = ego.action
         steps = 0
         s_before = self._s
+        carried = 0.0  # progress on references that were replaced during this step
+        driver = self._driver
         wall0 = time.perf_counter()
         for _ in range(self.action_repeat):
             if self._k >= self._n_max:
                 break
             r = ego.rear
-            if self.residual:
+            if driver is not None:
+                n_refs = len(driver.references)
+                c_accel, c_steer = driver.control(self._t)
+                if len(driver.references) != n_refs:
+                    carried += self._clipped_s(r) - s_before
+                    self._use_reference(driver.references[-1][1])
+                    s_before = self._clipped_s(r)
+                if not self.residual:
+                    accel, steer = d_accel, d_steer
+                elif ctrl.arrived or ctrl.s >= ctrl.projector.length:
+                    accel, steer = c_accel, c_steer
+                else:
+                    accel = min(max(c_accel + d_accel, a_lo), a_hi)
+                    steer = min(max(c_steer + d_steer, -lim), lim)
+            elif self.residual:
                 if self._gate is not None:
                     ctrl.speed.stop_at = self._gate.stop_line(
                         ctrl.s, ego.speed, self._gate_cars or []
@@ -605,7 +682,11 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             if ego.crashed:
                 self._status = "crashed"
                 break
-            if self._arrived():
+            if driver is not None:
+                if self._overtaken():
+                    self._status = "completed"
+                    break
+            elif self._arrived():
                 self._status = "arrived"
                 break
         self._wall += time.perf_counter() - wall0
@@ -617,7 +698,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         span = steps * dt
         e, psi, v, v_ref = (float(self._obs64[i]) for i in (2, 3, 0, 4))
         terms = {
-            "progress": w.progress * (s_after - s_before),
+            "progress": w.progress * (carried + s_after - s_before),
             "cte": -w.cte * e * e * span,
             "heading": -w.heading * psi * psi * span,
             "speed": -w.speed * (v - v_ref) ** 2 * span,
@@ -628,7 +709,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         if not self._status and self.max_cte is not None and abs(e) > self.max_cte:
             self._status = "off_path"
             terms["off_path"] = -w.off_path
-        terminated = self._status in ("crashed", "arrived", "off_path")
+        terminated = self._status in ("crashed", "arrived", "off_path", "completed")
         truncated = not terminated and self._k >= self._n_max
         info: dict[str, Any] = {
             "episode_seed": self.episode_seed,
@@ -671,8 +752,13 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         scen = self._scenario
         key = (scen.map.bounds, scen.lane_y)
         if self._renderer is None or self._renderer_key != key:
-            self._renderer = SceneRenderer(*view_for(scen.map.bounds, scen.lane_y))
+            if scen.is_traffic:  # a long road: a window that follows the ego
+                self._renderer = SceneRenderer((960, 320), 8.0, (0.0, 0.0))
+            else:
+                self._renderer = SceneRenderer(*view_for(scen.map.bounds, scen.lane_y))
             self._renderer_key = key
+        if scen.is_traffic:
+            self._renderer.centre = np.array([self._ego.rear[0] + 25.0, scen.lane_y + 2.0])
         obs = self._obs64
         k = self.n_ref_points
         x, y, yaw, _ = self._states[-1]
@@ -709,6 +795,30 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         super().close()
 
     # ------------------------------------------------------------------ internals
+
+    def _use_reference(self, path: Path) -> None:
+        """A re-planned reference took over (``overtake-traffic``)."""
+        self.path = path
+        self._projector = PathProjector(path)
+        self._profile = self._ctrl.profile  # the driver's controller rebuilt it for this path
+
+    def _clipped_s(self, rear: Any) -> float:
+        """Arc length of the rear axle's projection on the current reference, clipped to it."""
+        proj = self._projector.project(rear[0], rear[1])
+        return min(max(proj.s, 0.0), self._projector.length)
+
+    def _overtaken(self) -> bool:
+        from rrtdrive.sim.replanning import overtake_complete
+
+        driver = self._driver
+        lead = driver.lead
+        if lead is None:
+            return False
+        x, y, yaw = self._ego.rear
+        return overtake_complete(
+            (x, y, yaw), (lead.position[0], lead.position[1]), lead.LENGTH, driver.lane_y,
+            driver.lane_width, driver.vehicle, driver.config.complete_gap_m,
+        )
 
     def _arrived(self) -> bool:
         ego = self._ego
@@ -772,7 +882,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             other_sizes=np.asarray(
                 [(v.LENGTH, v.WIDTH) for v in self._others], dtype=float
             ).reshape(-1, 2),
-            arrived=self._status == "arrived",
+            arrived=self._status in ("arrived", "completed"),
             wall_time_s=self._wall,
         )
         t_end = float(log.t[-1])
@@ -783,6 +893,10 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         elif self._status == "arrived":
             where = "the end of the path" if self.residual else "the goal"
             message = f"stopped at {where} at t = {t_end:.2f} s"
+        elif self._status == "completed":
+            message = f"overtake complete at t = {t_end:.2f} s"
+        elif self._driver is not None:
+            message = f"no overtake within {self._max_time:g} s (followed the lead car)"
         else:
             message = f"not stopped at the goal within {self._max_time:g} s"
         config = EpisodeConfig(
@@ -791,8 +905,15 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             controller_options=dict(self.controller_options),
             budget=self.budget,
             max_time_s=self._max_time,
+            replan=self._replan,
         )
         label = f"{self.controller_name}+residual" if self.residual else "agent"
+        if self._driver is not None:
+            traffic = self._driver.finish(t_end if self._status == "completed" else None)
+            return Episode(
+                self._scenario, TRAFFIC_PLANNER, label, int(self.episode_seed or 0), None,
+                traffic.executed, log, self._status, message, config, traffic,
+            )
         return Episode(
             self._scenario, self.planner_name, label, int(self.episode_seed or 0), self._plan,
             self.path, log, self._status, message, config,  # type: ignore[arg-type]

@@ -10,12 +10,13 @@ so an episode is a pure function of its arguments.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -25,11 +26,16 @@ from rrtdrive.sim.scenes import Scenario, SimConfig, build_env, make_scenario, s
 from rrtdrive.sim.traffic import OncomingGate, conflict_zone
 from rrtdrive.types import Budget, InputError, Path, PlanResult
 
+if TYPE_CHECKING:  # pragma: no cover
+    from rrtdrive.sim.replanning import ReplanConfig, TrafficLog
+
 __all__ = ["EpisodeConfig", "Episode", "DriveLog", "run_episode", "drive", "plan_scenario"]
 
 logger = logging.getLogger(__name__)
 
 DEFAULT_PLANNER = "improved-rrt-connect"
+#: The planner label of ``overtake-traffic`` episodes (the improved RRT-Connect in space-time).
+TRAFFIC_PLANNER = "spacetime-rrt-connect"
 
 
 @dataclass(frozen=True)
@@ -51,6 +57,9 @@ class EpisodeConfig:
         Time limit of the drive; by default the scenario's.
     stop_on_crash : bool
         End the episode at highway-env's first ``crashed``.
+    replan : ReplanConfig, optional
+        ``overtake-traffic``: re-planning settings
+        (:class:`rrtdrive.sim.replanning.ReplanConfig`; default its defaults).
     """
 
     sim: SimConfig = field(default_factory=SimConfig)
@@ -59,6 +68,7 @@ class EpisodeConfig:
     budget: Budget = field(default_factory=Budget)
     max_time_s: float | None = None
     stop_on_crash: bool = True
+    replan: ReplanConfig | None = None
 
     def __post_init__(self) -> None:
         if self.max_time_s is not None and not (
@@ -136,11 +146,16 @@ class Episode:
     log : DriveLog
         The trajectory.
     status : str
-        ``"arrived"``, ``"crashed"``, ``"timeout"`` or ``"plan_failed"``.
+        ``"arrived"``, ``"crashed"``, ``"timeout"`` or ``"plan_failed"``; for
+        ``overtake-traffic`` ``"completed"`` (the overtake is done), ``"crashed"``
+        or ``"timeout"``.
     message : str
         Human-readable detail.
     config : EpisodeConfig
         The resolved configuration.
+    traffic : TrafficLog or None
+        ``overtake-traffic``: the re-planner's log (cycles, references, modes); the
+        ``path`` is then the reference actually tracked, stitched from the plans.
     """
 
     scenario: Scenario
@@ -153,6 +168,7 @@ class Episode:
     status: str
     message: str
     config: EpisodeConfig
+    traffic: TrafficLog | None = None
 
 
 def plan_scenario(
@@ -305,6 +321,8 @@ def run_episode(
     scen = make_scenario(scenario, seed) if isinstance(scenario, str) else scenario
     if not isinstance(scen, Scenario):
         raise InputError(f"scenario: expected a name or a Scenario, got {scenario!r}")
+    if scen.is_traffic:
+        return _run_traffic(scen, planner, controller, seed, config)
     speed = config.speed or SpeedConfig(v_max=scen.v_max)
     ctrl = make_controller(
         controller, vehicle=scen.vehicle, speed=speed, **dict(config.controller_options)
@@ -352,3 +370,49 @@ def run_episode(
         status, message = "timeout", f"not stopped at the goal within {max_time:g} s"
     logger.info("episode %s/%s/%s seed %d: %s", scen.name, planner_name, controller, seed, status)
     return Episode(scen, planner_name, controller, seed, plan, path, log, status, message, config)
+
+
+def traffic_speed_config(scenario: Scenario) -> SpeedConfig:
+    """Speed profile of ``overtake-traffic``: its cap, 1.5 m/s^2 to speed up, 2 m/s^2 lateral."""
+    return SpeedConfig(v_max=scenario.v_max, accel=1.5, a_lat_max=2.0)
+
+
+def _run_traffic(
+    scen: Scenario, planner: object, controller: str, seed: int, config: EpisodeConfig
+) -> Episode:
+    """An ``overtake-traffic`` episode: receding-horizon space-time re-planning in the loop."""
+    from rrtdrive.sim.replanning import ReplanConfig, drive_traffic
+
+    if planner not in (DEFAULT_PLANNER, TRAFFIC_PLANNER):
+        raise InputError(
+            f"planner: overtake-traffic re-plans with the improved RRT-Connect in space-time "
+            f"({DEFAULT_PLANNER!r}); got {planner!r}"
+        )
+    replan = config.replan or ReplanConfig()
+    if not isinstance(replan, ReplanConfig):
+        raise InputError(f"episode.replan: expected a ReplanConfig, got {replan!r}")
+    speed = config.speed or traffic_speed_config(scen)
+    ctrl = make_controller(
+        controller, vehicle=scen.vehicle, speed=speed, **dict(config.controller_options)
+    )
+    _, plan_rng, _ = scenario_rngs(seed)
+    env = build_env(scen, config.sim)
+    max_time = config.max_time_s or scen.max_time_s
+    try:
+        log, traffic, status = drive_traffic(
+            env, scen, ctrl, speed, replan, plan_rng, max_time, config.stop_on_crash
+        )
+    finally:
+        env.close()
+    if status == "crashed":
+        message = f"highway-env reported a crash at t = {log.t[-1]:.2f} s"
+    elif status == "completed":
+        message = f"overtake complete at t = {log.t[-1]:.2f} s"
+    else:
+        message = f"no overtake within {max_time:g} s (followed the lead car)"
+    resolved = dataclasses.replace(config, speed=speed, replan=replan)
+    logger.info("episode %s/%s seed %d: %s", scen.name, controller, seed, status)
+    return Episode(
+        scen, TRAFFIC_PLANNER, controller, seed, None, traffic.executed, log, status, message,
+        resolved, traffic,
+    )

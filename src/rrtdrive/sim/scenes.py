@@ -13,6 +13,12 @@ rectangles and whose controlled vehicle is an :class:`~rrtdrive.sim.ego.EgoVehic
   (y = 44, driving +x) and the oncoming lane (y = 48), road edges as solid
   obstacles, a stopped highway-env vehicle at the map's car. The ego must pass it,
   return to its lane and stop at the goal.
+* ``overtake-traffic`` - a long two-way road (same lanes) with a slow *moving* lead
+  car in the ego lane (highway-env IDM or constant speed) and a seeded stream of
+  oncoming IDM cars (speeds and gaps drawn per seed, mean gap from the density in
+  cars per km). The ego overtakes with receding-horizon space-time re-planning
+  (:mod:`rrtdrive.sim.replanning`) and is done once it is back in its lane ahead
+  of the lead car.
 """
 
 from __future__ import annotations
@@ -55,9 +61,20 @@ __all__ = [
     "make_scenario",
     "build_env",
     "scenario_rngs",
+    "TRAFFIC_DENSITIES",
+    "LEAD_MODELS",
+    "traffic_map",
 ]
 
-SCENARIOS = ("parking", "overtake")
+SCENARIOS = ("parking", "overtake", "overtake-traffic")
+
+#: Named oncoming-traffic densities of ``overtake-traffic`` (cars per km of oncoming lane).
+TRAFFIC_DENSITIES: dict[str, float] = {"low": 4.0, "default": 7.0, "high": 10.0}
+#: How the lead car of ``overtake-traffic`` drives.
+LEAD_MODELS = ("idm", "constant")
+#: Road of ``overtake-traffic``: length in metres and the ego's start x.
+TRAFFIC_ROAD_LENGTH = 1500.0
+TRAFFIC_START_X = 5.0
 
 
 @dataclass(frozen=True)
@@ -127,6 +144,16 @@ class Scenario:
     oncoming : tuple of (float, float)
         Overtake: ``(x, speed)`` of each oncoming car (body centre, m/s) at the start;
         they drive -x in the oncoming lane as highway-env IDM vehicles.
+    lead : tuple of (float, float) or None
+        ``overtake-traffic``: ``(x, speed)`` of the moving lead car's body centre in
+        the ego lane (the first vehicle of the scene after the ego).
+    lead_model : str
+        ``overtake-traffic``: ``"idm"`` (highway-env IDM, keeps its lane, follows the
+        vehicle ahead) or ``"constant"`` (a plain highway-env vehicle at constant speed).
+    density : float or None
+        ``overtake-traffic``: oncoming cars per km (mean gap ``1000 / density`` m).
+    ego_speed : float
+        Initial speed of the ego in m/s.
     """
 
     name: str
@@ -141,10 +168,26 @@ class Scenario:
     max_time_s: float = 120.0
     walls: bool = True
     oncoming: tuple[tuple[float, float], ...] = ()
+    lead: tuple[float, float] | None = None
+    lead_model: str = "idm"
+    density: float | None = None
+    ego_speed: float = 0.0
 
     def __post_init__(self) -> None:
         require_positive("scenario.v_max", self.v_max)
         require_positive("scenario.max_time_s", self.max_time_s)
+        if self.lead_model not in LEAD_MODELS:
+            raise InputError(
+                f"lead_model: unknown lead model {self.lead_model!r}; "
+                f"choose from {list(LEAD_MODELS)}"
+            )
+        if not (math.isfinite(self.ego_speed) and self.ego_speed >= 0):
+            raise InputError(f"scenario.ego_speed: must be >= 0, got {self.ego_speed!r}")
+
+    @property
+    def is_traffic(self) -> bool:
+        """True for the moving-traffic scenario (re-planning instead of one plan)."""
+        return self.name == "overtake-traffic"
 
     @property
     def start(self) -> Pose:
@@ -182,13 +225,16 @@ def make_scenario(
     jitter: tuple[float, float, float] = (1.0, 0.5, math.radians(5.0)),
     vehicle: VehicleParams | None = None,
     oncoming: int = 0,
+    density: float | str | None = None,
+    lead_speed: float | None = None,
+    lead_model: str | None = None,
 ) -> Scenario:
     """Build the scenario ``name`` for ``seed``.
 
     Parameters
     ----------
     name : str
-        ``"parking"`` or ``"overtake"``.
+        ``"parking"``, ``"overtake"`` or ``"overtake-traffic"``.
     seed : int
         Seeds the start jitter and (parking) the choice of the free spot.
     spot : tuple of int, optional
@@ -200,6 +246,16 @@ def make_scenario(
     oncoming : int
         Overtake: number of oncoming cars (seeded positions 90-140 m apart beyond
         the road's end, speeds 6-9 m/s). The ego waits for a gap before pulling out.
+    density : float or str, optional
+        ``overtake-traffic``: oncoming cars per km, or a name of
+        :data:`TRAFFIC_DENSITIES` (default ``"default"``, 7 per km). Gaps between
+        oncoming cars are 25 m plus an exponential draw (mean gap ``1000 / density``),
+        speeds uniform in 6-9 m/s.
+    lead_speed : float, optional
+        ``overtake-traffic``: speed of the lead car in m/s (default 4, below the
+        ego's 11 m/s cap). The ego starts at this speed, 20-30 m behind it.
+    lead_model : str, optional
+        ``overtake-traffic``: ``"idm"`` (default) or ``"constant"``.
 
     Returns
     -------
@@ -217,7 +273,13 @@ def make_scenario(
     if isinstance(oncoming, bool) or not isinstance(oncoming, int) or not 0 <= oncoming <= 10:
         raise InputError(f"oncoming: need an integer in 0..10, got {oncoming!r}")
     if oncoming and name != "overtake":
-        raise InputError("oncoming: only the overtake scenario has oncoming traffic")
+        raise InputError("oncoming: only the overtake scenario has a count of oncoming cars")
+    if name != "overtake-traffic":
+        for label, value in (
+            ("density", density), ("lead_speed", lead_speed), ("lead_model", lead_model)
+        ):
+            if value is not None:
+                raise InputError(f"{label}: only the overtake-traffic scenario has it")
     vehicle = vehicle or VehicleParams()
     dx, dy, dyaw = (float(rng.uniform(-j, j)) if j > 0 else 0.0 for j in jitter)
     if name == "parking":
@@ -251,7 +313,79 @@ def make_scenario(
             lane_y=base.start.y, v_max=8.0, max_time_s=60.0 + 15.0 * oncoming, walls=False,
             oncoming=tuple(cars),
         )
+    if name == "overtake-traffic":
+        if spot is not None:
+            raise InputError("spot: only the parking scenario has spots")
+        dens = _density(density)
+        v_lead = 4.0 if lead_speed is None else lead_speed
+        require_positive("lead_speed", v_lead)
+        v_max = 11.0
+        if v_lead >= v_max - 2.0:
+            raise InputError(
+                f"lead_speed: must be below {v_max - 2.0:g} m/s (the ego's cap is {v_max:g}), "
+                f"got {v_lead!r}"
+            )
+        model = "idm" if lead_model is None else lead_model
+        if model not in LEAD_MODELS:
+            raise InputError(
+                f"lead_model: unknown lead model {model!r}; choose from {list(LEAD_MODELS)}"
+            )
+        start = Pose(TRAFFIC_START_X + dx, 44.0 + 0.3 * dy, 0.4 * dyaw)
+        m = traffic_map(vehicle, start)
+        centre_offset = vehicle.length / 2.0 - vehicle.rear_overhang
+        lead_x = start.x + centre_offset + float(rng.uniform(20.0, 30.0))
+        mean_gap = 1000.0 / dens
+        gap_min = 25.0
+        cars = []
+        x = start.x + 40.0 + float(rng.uniform(0.0, mean_gap))
+        while x < start.x + 1300.0:
+            cars.append((x, float(rng.uniform(6.0, 9.0))))
+            x += gap_min + float(rng.exponential(max(mean_gap - gap_min, 1.0)))
+        return Scenario(
+            "overtake-traffic", m, int(seed), lane_y=44.0, v_max=v_max, max_time_s=90.0,
+            walls=False, oncoming=tuple(cars), lead=(lead_x, float(v_lead)), lead_model=model,
+            density=dens, ego_speed=float(v_lead),
+        )
     raise InputError(f"scenario: unknown scenario {name!r}; choose from {list(SCENARIOS)}")
+
+
+def _density(density: float | str | None) -> float:
+    """Oncoming cars per km from a number or a name of :data:`TRAFFIC_DENSITIES`."""
+    if density is None:
+        return TRAFFIC_DENSITIES["default"]
+    if isinstance(density, str):
+        if density in TRAFFIC_DENSITIES:
+            return TRAFFIC_DENSITIES[density]
+        try:
+            density = float(density)
+        except ValueError:
+            raise InputError(
+                f"density: expected cars per km or one of {sorted(TRAFFIC_DENSITIES)}, "
+                f"got {density!r}"
+            ) from None
+    require_positive("density", density)
+    if density > 30.0:
+        raise InputError(f"density: at most 30 cars per km, got {density!r}")
+    return float(density)
+
+
+def traffic_map(vehicle: VehicleParams | None = None, start: Pose | None = None) -> Map:
+    """The road of ``overtake-traffic`` as a map: two 4 m lanes along x, the edges as bounds.
+
+    The bounds are the road (x in [0, 1500], y in [42, 50]) and act as walls; the
+    ego lane is centred on y = 44 (driving +x), the oncoming lane on y = 48. No
+    static obstacles: the lead car and the oncoming cars move. The goal is the far
+    end of the ego lane (the episode ends earlier, when the overtake is complete).
+    """
+    vehicle = vehicle or VehicleParams()
+    return Map(
+        "overtake-traffic",
+        (0.0, 42.0, TRAFFIC_ROAD_LENGTH, 42.0 + 2 * LANE_WIDTH),
+        (),
+        start or Pose(TRAFFIC_START_X, 44.0, 0.0),
+        Pose(TRAFFIC_ROAD_LENGTH - 10.0, 44.0, 0.0),
+        vehicle,
+    )
 
 
 def _car_like(obstacles: tuple[Obstacle, ...], vehicle: VehicleParams) -> list[int]:
@@ -307,7 +441,7 @@ class SceneEnv(AbstractEnv):
             scenario = make_scenario("parking", 0)
             self.config["scenario"] = scenario
         self.road = _build_road(scenario, self.np_random, self.config["show_trajectories"])
-        ego = EgoVehicle(self.road, scenario.start, 0.0, scenario.vehicle)
+        ego = EgoVehicle(self.road, scenario.start, scenario.ego_speed, scenario.vehicle)
         ego.color = VehicleGraphics.EGO_COLOR
         self.road.vehicles.insert(0, ego)
         self.controlled_vehicles = [ego]
@@ -345,9 +479,21 @@ class OncomingCar(IDMVehicle):
         lane = self.lane
         s = lane.local_coordinates(self.position)[0]
         front, best = None, math.inf
+        straight = isinstance(lane, StraightLane)
+        if straight:
+            # A cheap scalar screen first (with a little slack, so it never drops a
+            # vehicle the exact test below would keep): long roads carry many cars.
+            sx, sy = float(lane.start[0]), float(lane.start[1])
+            ux, uy = float(lane.direction[0]), float(lane.direction[1])
+            reach = lane.width / 2.0 + 1.0 + 1e-6
         for v in self.road.vehicles:
             if v is self:
                 continue
+            if straight:
+                dx, dy = float(v.position[0]) - sx, float(v.position[1]) - sy
+                along = dx * ux + dy * uy
+                if abs(dy * ux - dx * uy) > reach or along < s - 1e-6 or along > best + 1e-6:
+                    continue
             sv, lat = lane.local_coordinates(v.position)
             if lane.on_lane(v.position, sv, lat, margin=1) and s <= sv < best:
                 front, best = v, sv
@@ -377,7 +523,7 @@ def _rect_vehicle(road: Road, o: Obstacle) -> Vehicle:
 def _build_road(scenario: Scenario, np_random: np.random.Generator, history: bool) -> Road:
     net = RoadNetwork()
     m = scenario.map
-    if scenario.name == "overtake":
+    if scenario.name in ("overtake", "overtake-traffic"):
         y0 = float(scenario.lane_y)  # type: ignore[arg-type]
         w = scenario.lane_width
         x0, x1 = m.bounds[0], m.bounds[2]
@@ -402,6 +548,22 @@ def _build_road(scenario: Scenario, np_random: np.random.Generator, history: boo
         xmin, ymin, xmax, ymax = m.bounds
         net.add_lane("a", "b", StraightLane([xmin, ymin], [xmax, ymin], line_types=(0, 0)))
     road = Road(network=net, np_random=np_random, record_history=history)
+    if scenario.lead is not None:
+        # The moving lead car first (the first vehicle after the ego in every log).
+        x, speed = scenario.lead
+        lane_index = ("a", "b", 0)
+        lane = net.get_lane(lane_index)
+        pos = lane.position(lane.local_coordinates([x, 0.0])[0], 0.0)
+        if scenario.lead_model == "idm":
+            lead: Vehicle = OncomingCar(
+                road, pos, lane.heading_at(0.0), speed, target_lane_index=lane_index,
+                target_speed=speed, enable_lane_change=False,
+            )
+        else:
+            lead = Vehicle(road, pos, lane.heading_at(0.0), speed)
+        lead.LENGTH, lead.WIDTH = scenario.vehicle.length, scenario.vehicle.width
+        lead.diagonal = math.hypot(lead.LENGTH, lead.WIDTH)
+        road.vehicles.append(lead)
     vehicle_ids = set(scenario.vehicle_obstacles)
     for i, o in enumerate(m.obstacles):
         if i in vehicle_ids:
@@ -451,7 +613,7 @@ def build_env(
         Reset and ready; ``env.unwrapped.vehicle`` is the :class:`EgoVehicle`.
     """
     sim = sim or SimConfig()
-    if scenario.name == "overtake":
+    if scenario.name in ("overtake", "overtake-traffic"):
         size, scaling, centering = (900, 300), 8.0, [0.35, 0.5]
     else:
         size, scaling, centering = (640, 640), 6.0, [0.5, 0.5]

@@ -47,6 +47,9 @@ def frame_is_blank(frame: np.ndarray, min_std: float = 5.0) -> bool:
 
 def _camera_for(episode: Episode) -> tuple[tuple[int, int], float, _Camera]:
     m = episode.scenario.map
+    if episode.scenario.is_traffic:
+        # A long road: a window that follows the ego (moved every frame).
+        return (960, 320), 8.0, _Camera(0.0, (episode.scenario.lane_y or 44.0) + 2.0)
     if episode.scenario.name == "overtake":
         lane_y = episode.scenario.lane_y or (m.bounds[1] + m.bounds[3]) / 2
         return (960, 320), 9.0, _Camera((m.bounds[0] + m.bounds[2]) / 2, lane_y + 2.0)
@@ -108,6 +111,8 @@ def render_frames(
         others = [v for v in road.vehicles if v is not ego]
         vehicle = episode.scenario.vehicle
         path_xy = episode.path.xy
+        traffic = episode.traffic
+        follow = episode.scenario.is_traffic
         cte = (
             tracking_errors(episode.path, log.states[:, :3])[0]
             if len(episode.path) >= 2 else np.zeros(len(log.states))
@@ -130,21 +135,30 @@ def render_frames(
                     ox, oy, oh, ov = log.others[k, j]
                     other.position = np.array([ox, oy])
                     other.heading, other.speed = float(oh), float(ov)
+            if follow:
+                camera.position[0] = x + 30.0
             surface.move_display_window_to(viewer.window_position())
             RoadGraphics.display(road, surface)
+            if traffic is not None:
+                # The reference tracked at this moment (re-planned in the loop), near the view.
+                ref = traffic.reference_at(float(log.t[k])).xy
+                path_xy = ref[(ref[:, 0] > x - 60.0) & (ref[:, 0] < x + 120.0)]
             if len(path_xy) >= 2:
                 pygame.draw.lines(
                     surface, PATH_COLOR, False, [surface.vec2pix(p) for p in path_xy], 2
                 )
-            gx, gy = surface.vec2pix((goal.x, goal.y))
-            pygame.draw.circle(surface, GOAL_COLOR, (gx, gy), max(3, surface.pix(0.4)), 2)
+            if not follow:
+                gx, gy = surface.vec2pix((goal.x, goal.y))
+                pygame.draw.circle(surface, GOAL_COLOR, (gx, gy), max(3, surface.pix(0.4)), 2)
             RoadGraphics.display_road_objects(road, surface, offscreen=True)
             RoadGraphics.display_traffic(
                 road, surface, simulation_frequency=sim.simulation_frequency, offscreen=True
             )
             if k >= 1:
-                trace = [surface.vec2pix(p) for p in log.states[: k + 1, :2]]
-                pygame.draw.lines(surface, TRACE_COLOR, False, trace, 2)
+                first = max(0, k - 600) if follow else 0
+                trace = [surface.vec2pix(p) for p in log.states[first : k + 1, :2]]
+                if len(trace) >= 2:
+                    pygame.draw.lines(surface, TRACE_COLOR, False, trace, 2)
             frame = pygame.transform.flip(surface, False, True)
             kappa = math.tan(steer) / vehicle.wheelbase
             lines = [
@@ -152,6 +166,9 @@ def render_frames(
                 f"kappa {kappa:+.3f} 1/m (max {vehicle.kappa_max:.3f})",
                 f"cte {cte[k]:+.3f} m   {episode.controller}",
             ]
+            if traffic is not None:
+                mode = [m for tm, m in traffic.modes if tm <= log.t[k] + 1e-9]
+                lines.append(f"mode {mode[-1] if mode else 'follow'}")
             panel_h = 8 + 20 * len(lines)
             pygame.draw.rect(frame, PANEL_COLOR, (6, 6, 290, panel_h))
             pygame.draw.rect(frame, TEXT_COLOR, (6, 6, 290, panel_h), 1)
