@@ -50,6 +50,7 @@ from rrtdrive.planning.improved import ImprovedConfig, ImprovedRRTConnect
 from rrtdrive.types import (
     Budget,
     InputError,
+    Path,
     PlanResult,
     PlanStatus,
     Pose,
@@ -562,6 +563,10 @@ class SpaceTimeChecker:
         Extra half-width of the time band in :meth:`path_free`, so that a path that
         passes here also passes a final check with slightly different timing (the
         controller's own profile, from the car's current speed).
+    deadline : float, optional
+        A :func:`time.perf_counter` value after which every test answers "not
+        free", so that a planner running on this checker (its post-processing is
+        bounded by rounds, not time) gives up within a wall-time budget.
     """
 
     def __init__(
@@ -573,6 +578,7 @@ class SpaceTimeChecker:
         speed: tuple[float, float, float, float, float] = (10.0, 1.0, 1.0, 1.5, 0.5),
         spacing: float = 0.5,
         slack_s: float = 0.2,
+        deadline: float | None = None,
     ) -> None:
         self.static = static
         self.prediction = prediction
@@ -583,7 +589,15 @@ class SpaceTimeChecker:
         self.spacing = float(spacing)
         require_finite("spacetime.slack_s", slack_s)
         self.slack_s = max(float(slack_s), 0.0)
+        self.deadline = deadline
+        self.expired = False
         self.dynamic_checks = 0
+
+    def _late(self) -> bool:
+        """True (and remembered) once the deadline has passed."""
+        if self.deadline is not None and not self.expired:
+            self.expired = time.perf_counter() >= self.deadline
+        return self.expired
 
     def __getattr__(self, name: str) -> Any:
         # Only called for attributes not found here: the static checker's.
@@ -616,7 +630,7 @@ class SpaceTimeChecker:
 
     def edge_free(self, a: Sequence[float], b: Sequence[float]) -> bool:
         """Static edge test, then the body along the edge against traffic at its arrival times."""
-        if not self.static.edge_free(a, b):
+        if self._late() or not self.static.edge_free(a, b):
             return False
         if len(self.prediction) == 0:
             return True
@@ -632,7 +646,7 @@ class SpaceTimeChecker:
 
     def pose_free(self, pose: Sequence[float]) -> bool:
         """Exact static body test and the traffic test at the pose's arrival time."""
-        if not self.static.pose_free(pose):
+        if self._late() or not self.static.pose_free(pose):
             return False
         p = np.asarray(pose, dtype=float)[:3]
         return bool(self.clear_of_traffic(p[None, :])[0])
@@ -640,11 +654,15 @@ class SpaceTimeChecker:
     def poses_free(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
         """:meth:`CollisionChecker.poses_free` and the traffic test at nominal arrival times."""
         p = np.asarray(poses, dtype=float).reshape(-1, 3)
+        if self._late():
+            return np.zeros(len(p), dtype=bool)
         return self.static.poses_free(p, clearance) & self.clear_of_traffic(p)
 
     def poses_free_fast(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
         """:meth:`CollisionChecker.poses_free_fast` and the traffic test (conservative)."""
         p = np.asarray(poses, dtype=float).reshape(-1, 3)
+        if self._late():
+            return np.zeros(len(p), dtype=bool)
         return self.static.poses_free_fast(p, clearance) & self.clear_of_traffic(p)
 
     def path_times(self, samples: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -682,8 +700,10 @@ class SpaceTimeChecker:
         bad : numpy.ndarray
             Indices of segments ``i -> i+1`` with a colliding pose.
         """
-        ok, bad = self.static.path_free(samples, spacing=spacing, clearance=clearance)
         smp = np.asarray(samples, dtype=float)
+        if self._late():
+            return False, np.arange(max(len(smp) - 1, 0), dtype=np.int64)
+        ok, bad = self.static.path_free(samples, spacing=spacing, clearance=clearance)
         if len(self.prediction) == 0 or len(smp) == 0:
             return ok, bad
         t, _ = self.path_times(smp)
@@ -715,6 +735,10 @@ class SpaceTimeProblem:
         Buffers.
     speed : tuple of float
         ``(v_max, accel, decel, a_lat_max, v_launch)`` of the controller's profile.
+    deadline : float, optional
+        :func:`time.perf_counter` value at which the whole query (growth and
+        post-processing) gives up (see :class:`SpaceTimeChecker`); ``None``: only
+        the budget's limits apply.
     """
 
     map: Map
@@ -722,6 +746,7 @@ class SpaceTimeProblem:
     timing: ArrivalTiming
     safety: SafetyConfig = field(default_factory=SafetyConfig)
     speed: tuple[float, float, float, float, float] = (10.0, 1.0, 1.0, 1.5, 0.5)
+    deadline: float | None = None
 
     @property
     def start(self) -> Pose:
@@ -758,6 +783,8 @@ class SpaceTimePlan:
         Calls of the traffic test.
     wall_time_s : float
         Wall time of the whole query.
+    deadline_hit : bool
+        The problem's deadline passed during the query (the result is then a failure).
     """
 
     result: PlanResult
@@ -766,6 +793,7 @@ class SpaceTimePlan:
     tree_times: tuple[np.ndarray, ...]
     dynamic_checks: int
     wall_time_s: float
+    deadline_hit: bool = False
 
     @property
     def success(self) -> bool:
@@ -833,7 +861,8 @@ class SpaceTimeRRTConnect(ImprovedRRTConnect):
         """The space-time checker of ``problem`` (static part cached per road)."""
         static = cached_checker(problem.map)
         return SpaceTimeChecker(
-            static, problem.prediction, problem.timing, problem.safety, problem.speed
+            static, problem.prediction, problem.timing, problem.safety, problem.speed,
+            deadline=problem.deadline,
         )
 
     def solve_spacetime(
@@ -867,6 +896,13 @@ class SpaceTimeRRTConnect(ImprovedRRTConnect):
         res = ImprovedRRTConnect.solve(self, inner, rng, budget)
         tree_times = tuple(checker.timing.band(t.nodes)[0] for t in res.trees)
         times = speeds = np.zeros(0)
+        if checker.expired:
+            res = dataclasses.replace(
+                res,
+                status=PlanStatus.NO_PATH_IN_BUDGET,
+                path=Path.empty(),
+                message=f"deadline passed ({res.message})",
+            )
         if res.success:
             times, speeds = checker.path_times(res.path.samples)
             hit = checker.conflicts(res.path.samples[:, :3], times, times, 0.25)
@@ -880,7 +916,8 @@ class SpaceTimeRRTConnect(ImprovedRRTConnect):
                 )
                 times = speeds = np.zeros(0)
         return SpaceTimePlan(
-            res, times, speeds, tree_times, checker.dynamic_checks, time.perf_counter() - t0
+            res, times, speeds, tree_times, checker.dynamic_checks, time.perf_counter() - t0,
+            checker.expired,
         )
 
     def solve(

@@ -37,7 +37,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "the simulation frequency, and report the evaluators' metrics. Exit 0 when the "
         "episode succeeds, 1 when it fails, 2 on bad input.",
     )
-    p.add_argument("scenario", metavar="SCENARIO", help="parking or overtake")
+    p.add_argument(
+        "scenario", metavar="SCENARIO", help="parking, overtake or overtake-traffic"
+    )
     p.add_argument(
         "--planner", default=DEFAULT_PLANNER, metavar="NAME",
         help=f"registered planner (default: {DEFAULT_PLANNER})",
@@ -62,6 +64,30 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument(
         "--oncoming", type=nonneg_int, default=0,
         help="overtake: number of oncoming cars, 0-10 (default 0: only the stopped car)",
+    )
+    traffic = p.add_argument_group(
+        "overtake-traffic",
+        "a slow moving lead car and a stream of oncoming cars; the ego re-plans in the loop",
+    )
+    traffic.add_argument(
+        "--density", default=None, metavar="D",
+        help="oncoming cars per km, or low / default / high (default: default, 10 per km)",
+    )
+    traffic.add_argument(
+        "--lead-speed", type=positive_float, default=None, metavar="V",
+        help="lead car speed in m/s (default 4)",
+    )
+    traffic.add_argument(
+        "--lead-model", default=None, metavar="NAME",
+        help="lead car driver: idm (default) or constant",
+    )
+    traffic.add_argument(
+        "--replan-rate", type=positive_float, default=None, metavar="HZ",
+        help="re-planning rate, 2-5 Hz (default 4); the cycle budget is one period",
+    )
+    traffic.add_argument(
+        "--predictor", default=None, metavar="NAME",
+        help="constant-velocity (default) or lane-following (highway-env's)",
     )
     p.add_argument("--json", metavar="FILE|-", help="write the metrics as JSON ('-' for stdout)")
     p.add_argument("--video", metavar="FILE.mp4", help="write a headless MP4 of the episode")
@@ -134,18 +160,44 @@ def _run(args: argparse.Namespace) -> int:
     _validate_output(args.video, ".mp4", "--video")
     _validate_output(args.json, "", "--json")
     stride = getattr(args, "video_stride", 1) or 1
+    traffic_opts = {
+        "density": getattr(args, "density", None),
+        "lead_speed": getattr(args, "lead_speed", None),
+        "lead_model": getattr(args, "lead_model", None),
+    }
+    replan_opts = {
+        k: v
+        for k, v in (
+            ("rate_hz", getattr(args, "replan_rate", None)),
+            ("predictor", getattr(args, "predictor", None)),
+        )
+        if v is not None
+    }
+    replan = None
+    if args.scenario == "overtake-traffic":
+        from rrtdrive.sim.replanning import ReplanConfig
+
+        replan = ReplanConfig(**replan_opts)
+    elif replan_opts:
+        flag = "--replan-rate" if "rate_hz" in replan_opts else "--predictor"
+        raise InputError(f"{flag}: only the overtake-traffic scenario re-plans")
     config = EpisodeConfig(
         sim=SimConfig(simulation_frequency=args.frequency),
         budget=Budget(max_time_s=args.plan_time),
         max_time_s=args.max_time,
+        replan=replan,
     )
     t0 = time.perf_counter()
     oncoming = getattr(args, "oncoming", 0) or 0
-    scenario = make_scenario(args.scenario, args.seed, oncoming=oncoming)
+    scenario = make_scenario(args.scenario, args.seed, oncoming=oncoming, **traffic_opts)
     episode = run_episode(scenario, args.planner, args.controller, args.seed, config)
     report = evaluate(episode)
     total = time.perf_counter() - t0
     extra: dict[str, Any] = {"total_time_s": round(total, 6), "oncoming": oncoming}
+    if scenario.is_traffic:
+        extra["density_per_km"] = scenario.density
+        extra["lead_speed"] = scenario.lead[1] if scenario.lead else None
+        extra["lead_model"] = scenario.lead_model
     if args.video:
         if episode.log.steps == 0:
             extra["video"] = None
@@ -171,10 +223,10 @@ def _run(args: argparse.Namespace) -> int:
         except OSError as exc:
             raise InputError(f"--json: cannot write {args.json}: {exc.strerror}") from None
     if args.json != "-":
-        verdict = "success" if report.success else f"failed ({episode.status})"
+        verdict = "success" if report.success else f"{report.outcome} ({episode.status})"
         cte = "n/a" if report.cte_rms_m is None else f"{report.cte_rms_m:.3f} m"
         print(
-            f"{args.scenario} seed {args.seed} {args.planner}/{args.controller}: {verdict}; "
+            f"{args.scenario} seed {args.seed} {episode.planner}/{args.controller}: {verdict}; "
             f"cte rms {cte}; {report.steps} steps, {report.duration_s:.2f} s simulated",
             file=sys.stdout,
         )

@@ -139,9 +139,10 @@ class ReplanConfig:
         Tree-growth iterations per plan (the deterministic budget; the wall-time
         budget only binds on a slow machine).
     wall_limit : bool
-        Also stop the tree growth at the wall-time budget. Off, an episode depends
-        on its seed only, however slow the machine (tests); on, a cycle never
-        overruns because of the growth (experiments).
+        Hold each cycle to its wall-time budget: the tree growth stops at its share
+        and every check fails at 90 % of the budget (the plan is then dropped, as
+        one that came too late). Off, an episode depends on its seed only, however
+        slow the machine (tests); on, no cycle overruns (experiments).
     postprocess_reserve : float
         Share of the cycle budget kept for the post-processing when ``wall_limit``.
     predictor : str
@@ -292,7 +293,8 @@ class ReplanRecord:
         but the current one kept), ``"no_goal"`` (no cut-in point within reach),
         ``"no_gap"`` (the oncoming lane is taken where the ego would have to be
         beside the lead car: no plan can exist, the planner did not run),
-        ``"no_plan"`` (the planner found no safe path), ``"rejected"`` (its stitched
+        ``"no_plan"`` (the planner found no safe path), ``"late"`` (the cycle's
+        wall-time budget ran out before a plan was verified), ``"rejected"`` (its stitched
         reference failed the final check), ``"abandoned"`` (an unsafe plan was
         dropped for following), ``"unsafe_kept"`` (no alternative to an unsafe plan).
     wall_time_s : float
@@ -305,6 +307,8 @@ class ReplanRecord:
         Cut-in point (rear axle x) aimed at.
     message : str
         The planner's message.
+    deadline_hit : bool
+        The planner ran into the cycle's deadline (outcome ``"late"``).
     """
 
     t: float
@@ -317,6 +321,7 @@ class ReplanRecord:
     nodes: int
     goal_x: float | None
     message: str
+    deadline_hit: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -707,7 +712,7 @@ class TrafficDriver:
         goal_x = self._cut_in_x(timing, float(start[0]), pred)
         outcome, message = "no_goal", "no cut-in point within reach"
         plan_time, iters, nodes = 0.0, 0, 0
-        accepted = False
+        accepted = late = False
         if goal_x is not None and not self._gap_open(timing, float(start[0]), goal_x, pred):
             outcome, message = "no_gap", "the oncoming lane is taken beside the lead car"
         elif goal_x is not None:
@@ -717,6 +722,8 @@ class TrafficDriver:
                 iters, nodes = plan.result.iterations, plan.result.nodes
             if cand is None:
                 outcome = "no_plan" if plan is None or not plan.success else "rejected"
+                if plan is not None and plan.deadline_hit:
+                    outcome, late = "late", True
             else:
                 path, check_end, goal_index = cand
                 ok, t_end, why = self._validate(path, check_end, pred)
@@ -744,7 +751,7 @@ class TrafficDriver:
                 outcome = "unsafe_kept"
         record = ReplanRecord(
             t, trigger, mode, outcome, time.perf_counter() - wall0, plan_time, iters, nodes,
-            goal_x, message,
+            goal_x, message, late,
         )
         self.records.append(record)
         logger.debug("replan t=%.2f %s %s -> %s (%s)", t, trigger, mode, outcome, message)
@@ -786,13 +793,16 @@ class TrafficDriver:
         problem = SpaceTimeProblem(
             window, local, timing.shifted(-x_off), cfg.safety, self._speed_tuple()
         )
+        deadline = None
+        left = 1e6
         if cfg.wall_limit:
             # Tree growth may use what is left of the cycle minus a reserve for the
-            # post-processing (bounded by its repair rounds, not by time).
+            # post-processing; at the deadline every check fails, so that a long
+            # post-processing gives up too, leaving a little time for the final check.
             spent = time.perf_counter() - wall0
             left = max(cfg.cycle_budget_s * (1.0 - cfg.postprocess_reserve) - spent, 1e-3)
-        else:
-            left = 1e6
+            deadline = wall0 + 0.9 * cfg.cycle_budget_s
+        problem = dataclasses.replace(problem, deadline=deadline)
         plan = self.planner.solve_spacetime(
             problem, self.rng, Budget(max_iterations=cfg.max_iterations, max_time_s=left)
         )

@@ -69,7 +69,7 @@ __all__ = [
 SCENARIOS = ("parking", "overtake", "overtake-traffic")
 
 #: Named oncoming-traffic densities of ``overtake-traffic`` (cars per km of oncoming lane).
-TRAFFIC_DENSITIES: dict[str, float] = {"low": 4.0, "default": 7.0, "high": 10.0}
+TRAFFIC_DENSITIES: dict[str, float] = {"low": 5.0, "default": 10.0, "high": 20.0}
 #: How the lead car of ``overtake-traffic`` drives.
 LEAD_MODELS = ("idm", "constant")
 #: Road of ``overtake-traffic``: length in metres and the ego's start x.
@@ -248,7 +248,7 @@ def make_scenario(
         the road's end, speeds 6-9 m/s). The ego waits for a gap before pulling out.
     density : float or str, optional
         ``overtake-traffic``: oncoming cars per km, or a name of
-        :data:`TRAFFIC_DENSITIES` (default ``"default"``, 7 per km). Gaps between
+        :data:`TRAFFIC_DENSITIES` (default ``"default"``, 10 per km). Gaps between
         oncoming cars are 25 m plus an exponential draw (mean gap ``1000 / density``),
         speeds uniform in 6-9 m/s.
     lead_speed : float, optional
