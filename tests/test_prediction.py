@@ -76,18 +76,24 @@ def test_plain_vehicle_falls_back_to_constant_velocity():
     assert states.shape == (1, 4) and sizes[0].tolist() == [car.LENGTH, car.WIDTH]
 
 
-def test_speed_bound_predicts_a_braked_car_at_its_target_speed(traffic_env):
+def test_speed_bound_adds_the_target_speed_for_a_braked_car(traffic_env):
     u = traffic_env.unwrapped
     car = [v for v in u.road.vehicles if isinstance(v, OncomingCar)][2]
     target = float(car.target_speed)
+    assert predict([car]).alt is None  # at its target speed: one hypothesis
     car.speed = target - 3.0  # braked
     for method in PREDICTORS:
-        fast = predict([car], method, horizon=2.0)
+        both = predict([car], method, horizon=2.0)
         slow = predict([car], method, horizon=2.0, speed_bound=False)
-        moved_fast = abs(fast.poses[0, -1, 0] - fast.poses[0, 0, 0])
-        moved_slow = abs(slow.poses[0, -1, 0] - slow.poses[0, 0, 0])
+        assert slow.alt is None and np.allclose(both.poses, slow.poses)
+        moved_now = abs(both.poses[0, -1, 0] - both.poses[0, 0, 0])
+        moved_fast = abs(both.alt[0, -1, 0] - both.alt[0, 0, 0])
+        assert moved_now == pytest.approx(2.0 * (target - 3.0), rel=1e-6)
         assert moved_fast == pytest.approx(2.0 * target, rel=1e-6)
-        assert moved_slow == pytest.approx(2.0 * (target - 3.0), rel=1e-6)
+        shifted = both.shifted(5.0)
+        assert np.allclose(shifted.alt[..., 0], both.alt[..., 0] + 5.0)
+        assert both.select(np.array([True])).alt is not None
+        assert both.x_range()[0, 0] == pytest.approx(both.alt[0, :, 0].min())
     car.speed = target
 
 

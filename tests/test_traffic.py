@@ -155,6 +155,20 @@ def test_conflicts_are_in_space_and_time():
     assert traffic_conflicts(at[:1], two, two, car, late, V)[0]
 
 
+def test_a_second_speed_hypothesis_is_swept_too():
+    safety = SafetyConfig(0.3, 0.0, 0.2, 0.0)
+    slow = Prediction.constant_velocity(np.array([[0.0, 0.0, 0.0, 3.0]]), [(4.3, 1.8)], 8.0)
+    fast = Prediction.constant_velocity(np.array([[0.0, 0.0, 0.0, 6.0]]), [(4.3, 1.8)], 8.0)
+    both = Prediction(slow.times, slow.poses, slow.sizes, alt=fast.poses)
+    at = np.array([[18.0 - 1.255, 0.0, 0.0]] * 2)  # body centred on x = 18
+    t = np.array([3.0, 6.0])  # the fast car is there at 3 s, the slow one at 6 s
+    assert traffic_conflicts(at, t, t, slow, safety, V).tolist() == [False, True]
+    assert traffic_conflicts(at, t, t, fast, safety, V).tolist() == [True, False]
+    assert traffic_conflicts(at, t, t, both, safety, V).tolist() == [True, True]
+    with pytest.raises(InputError, match="alt"):
+        Prediction(slow.times, slow.poses, slow.sizes, alt=np.zeros((2, 3)))
+
+
 def test_profile_times_follow_the_controllers_speed_profile():
     path = lane_path(0.0, 200.0, 44.0)
     s = path.arc_length()

@@ -90,6 +90,10 @@ class Prediction:
         ``(K, 2)`` body ``length, width``.
     method : str
         Name of the predictor that made it.
+    alt : numpy.ndarray or None
+        ``(K, T, 3)`` a second hypothesis for the same vehicles (for example at
+        another speed), or ``None``. The conflict test sweeps each vehicle's body
+        over *both* hypotheses: it must be safe whichever comes true.
 
     Examples
     --------
@@ -102,6 +106,7 @@ class Prediction:
     poses: np.ndarray
     sizes: np.ndarray
     method: str = "constant-velocity"
+    alt: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         t = np.asarray(self.times, dtype=float).reshape(-1)
@@ -118,7 +123,15 @@ class Prediction:
             )
         if not (np.all(np.isfinite(p)) and np.all(np.isfinite(s)) and np.all(s > 0)):
             raise InputError("prediction: poses must be finite and sizes positive")
-        for name, arr in (("times", t), ("poses", p), ("sizes", s)):
+        arrays = [("times", t), ("poses", p), ("sizes", s)]
+        if self.alt is not None:
+            a = np.asarray(self.alt, dtype=float)
+            if a.shape != p.shape or not np.all(np.isfinite(a)):
+                raise InputError(
+                    f"prediction.alt: need finite poses of shape {p.shape}, got {a.shape}"
+                )
+            arrays.append(("alt", a))
+        for name, arr in arrays:
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
 
@@ -172,14 +185,21 @@ class Prediction:
 
     def select(self, keep: np.ndarray) -> Prediction:
         """Only the vehicles where ``keep`` is True (or whose indices are given)."""
-        return Prediction(self.times, self.poses[keep], self.sizes[keep], self.method)
+        alt = None if self.alt is None else self.alt[keep]
+        return Prediction(self.times, self.poses[keep], self.sizes[keep], self.method, alt)
 
     def shifted(self, dx: float, dy: float = 0.0) -> Prediction:
         """The same prediction with every position moved by ``(dx, dy)`` (a change of frame)."""
-        poses = self.poses.copy()
-        poses[..., 0] += dx
-        poses[..., 1] += dy
-        return Prediction(self.times, poses, self.sizes, self.method)
+        moved = []
+        for arr in (self.poses, self.alt):
+            if arr is None:
+                moved.append(None)
+                continue
+            arr = arr.copy()
+            arr[..., 0] += dx
+            arr[..., 1] += dy
+            moved.append(arr)
+        return Prediction(self.times, moved[0], self.sizes, self.method, moved[1])
 
     def poses_at(self, t: np.ndarray) -> np.ndarray:
         """Body-centre poses at times ``t`` (seconds from the prediction), shape ``(K, N, 3)``.
@@ -196,6 +216,8 @@ class Prediction:
     def x_range(self) -> np.ndarray:
         """``(K, 2)`` smallest and largest centre x each vehicle reaches over the horizon."""
         x = self.poses[..., 0]
+        if self.alt is not None:
+            x = np.concatenate([x, self.alt[..., 0]], axis=1)
         return np.stack([x.min(axis=1), x.max(axis=1)], axis=1)
 
 
@@ -445,8 +467,8 @@ def traffic_conflicts(
     The ego body is covered by three discs (grown by ``spacing / 2``); each other
     vehicle by the capsule around its centre line from its rear bumper at
     ``t_lo - margin(t_lo)`` to its front bumper at ``t_hi + margin(t_hi)``
-    (radius half its width). A pose conflicts when a disc comes within
-    ``buffer(t_hi)`` of a capsule.
+    (radius half its width), over both hypotheses when the prediction has an
+    ``alt``. A pose conflicts when a disc comes within ``buffer(t_hi)`` of a capsule.
 
     Parameters
     ----------
@@ -492,10 +514,14 @@ def traffic_conflicts(
     dy = p[:, 1:2] + s[:, None] * offsets[None, :]
     sizes = pred.sizes
     track = pred.poses
+    alt = pred.alt
     step = pred.step
     grow = radius + 0.5 * spacing + float(safety.buffer(float(t_hi.max())))
     # Screen: each vehicle's box over the whole time span against the discs' box.
-    span = _poses_at(track, step, np.array([max(float(lo.min()), 0.0), float(hi.max())]))
+    ends = np.array([max(float(lo.min()), 0.0), float(hi.max())])
+    span = _poses_at(track, step, ends)
+    if alt is not None:
+        span = np.concatenate([span, _poses_at(alt, step, ends)], axis=1)
     reach = grow + 0.5 * (sizes[:, 0] + sizes[:, 1])
     keep = (
         (span[:, :, 0].max(axis=1) + reach >= dx.min())
@@ -507,17 +533,23 @@ def traffic_conflicts(
         return np.zeros(n, dtype=bool)
     if not keep.all():
         track, sizes = track[keep], sizes[keep]
+        alt = None if alt is None else alt[keep]
     a_pose = _poses_at(track, step, lo)  # (K, N, 3)
     b_pose = _poses_at(track, step, hi)
     ux, uy = np.cos(b_pose[..., 2]), np.sin(b_pose[..., 2])  # (K, N)
     half_len = (sizes[:, 0] / 2.0)[:, None]
-    ddx = b_pose[..., 0] - a_pose[..., 0]
-    ddy = b_pose[..., 1] - a_pose[..., 1]
-    sign = np.where(ddx * ux + ddy * uy >= 0.0, half_len, -half_len)
-    ax = a_pose[..., 0] - sign * ux
-    ay = a_pose[..., 1] - sign * uy
-    abx = b_pose[..., 0] + sign * ux - ax
-    aby = b_pose[..., 1] + sign * uy - ay
+    # Extent along the heading of every predicted centre in the band (both hypotheses).
+    ox, oy = a_pose[..., 0], a_pose[..., 1]
+    along = [np.zeros_like(ox), (b_pose[..., 0] - ox) * ux + (b_pose[..., 1] - oy) * uy]
+    if alt is not None:
+        for other in (_poses_at(alt, step, lo), _poses_at(alt, step, hi)):
+            along.append((other[..., 0] - ox) * ux + (other[..., 1] - oy) * uy)
+    first = np.minimum.reduce(along) - half_len
+    last = np.maximum.reduce(along) + half_len
+    ax = ox + first * ux
+    ay = oy + first * uy
+    abx = (last - first) * ux
+    aby = (last - first) * uy
     ab2 = np.maximum(abx * abx + aby * aby, 1e-12)[..., None]  # (K, N, 1)
     apx = dx[None, :, :] - ax[..., None]  # (K, N, M)
     apy = dy[None, :, :] - ay[..., None]

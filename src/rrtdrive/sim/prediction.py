@@ -11,10 +11,11 @@ Two predictors, both returning a :class:`rrtdrive.planning.spacetime.Prediction`
   constant velocity.
 
 With ``speed_bound=True`` (the default) a vehicle that has an IDM target speed
-above its current speed is predicted at the target speed: such a car was braked
-(by the ego in its lane, or by a slower car ahead) and will speed up again, so
-its current speed would make it arrive later than it can. A car never drives
-faster than its target, so the bound keeps the prediction on the early side.
+above its current speed gets two hypotheses: its current speed and its target
+speed (:attr:`~rrtdrive.planning.spacetime.Prediction.alt`). Such a car was braked
+(by the ego in its lane, or by a slower car ahead): it may speed up again, up to
+its target (an IDM car never drives faster), or stay slow; the conflict test
+sweeps its body over both, so a plan must be safe whether it arrives early or late.
 """
 
 from __future__ import annotations
@@ -68,7 +69,8 @@ def predict(
     horizon, step : float
         Horizon and grid step in seconds.
     speed_bound : bool
-        Predict a car slower than its IDM target speed at the target speed.
+        A car slower than its IDM target speed is predicted at its current speed
+        and, as the second hypothesis (``alt``), at its target speed.
 
     Returns
     -------
@@ -89,7 +91,25 @@ def predict(
     require_positive("prediction.step", step)
     vehicles = list(vehicles)
     states, sizes = vehicle_states(vehicles)
-    states[:, 3] = [_bound(v, speed_bound) for v in vehicles]
+    bounds = np.array([_bound(v, speed_bound) for v in vehicles], dtype=float).reshape(-1)
+    main = _predict(vehicles, states, sizes, method, horizon, step)
+    if not np.any(bounds > states[:, 3] + 1e-9):
+        return main
+    fast_states = states.copy()
+    fast_states[:, 3] = bounds
+    fast = _predict(vehicles, fast_states, sizes, method, horizon, step)
+    return Prediction(main.times, main.poses, sizes, main.method, fast.poses)
+
+
+def _predict(
+    vehicles: list[Any],
+    states: np.ndarray,
+    sizes: np.ndarray,
+    method: str,
+    horizon: float,
+    step: float,
+) -> Prediction:
+    """One hypothesis: every vehicle at the speed in ``states``."""
     cv = Prediction.constant_velocity(states, sizes, horizon, step)
     if method == "constant-velocity" or not vehicles:
         return cv
@@ -101,10 +121,13 @@ def predict(
         if fn is None or lane is None or not hasattr(v, "route"):
             continue  # a plain Vehicle: its own prediction is zero steering, i.e. constant velocity
         speed = float(v.speed)
-        # highway-env predicts at the current speed; scaling time predicts at the bound.
-        scale = states[k, 3] / speed if speed > 1e-6 else 0.0
-        if speed <= 1e-6 and states[k, 3] > 1e-6:
-            continue  # starting from rest: no route speed to scale, keep constant velocity
+        if speed <= 1e-6:
+            if states[k, 3] > 1e-6:
+                continue  # from rest: no route speed to scale, keep constant velocity
+            scale = 0.0
+        else:
+            # highway-env predicts at the current speed; scaling time predicts at another.
+            scale = states[k, 3] / speed
         positions, headings = fn(times * scale)
         poses[k, :, :2] = np.asarray(positions, dtype=float).reshape(-1, 2)
         poses[k, :, 2] = np.asarray(headings, dtype=float)
