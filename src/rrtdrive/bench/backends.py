@@ -211,15 +211,7 @@ class LocalBackend:
         busy = 0
         while queue or busy:
             for slot in slots:
-                if slot.task is None and queue:
-                    task = queue.popleft()
-                    try:
-                        slot.conn.send((task[0], task[1]))
-                    except (BrokenPipeError, OSError):
-                        queue.appendleft(task)
-                        continue  # its sentinel will report the death below
-                    slot.task, slot.started = task, time.monotonic()
-                    busy += 1
+                busy += self._assign(slot, queue)
             waitables: list[Any] = []
             for slot in slots:
                 waitables.append(slot.conn)
@@ -243,6 +235,9 @@ class LocalBackend:
                         assert task is not None and task[0] == task_id
                         slot.task = None
                         busy -= 1
+                        # Hand the worker its next run before the caller stores this one,
+                        # so storing (JSON, fsync) never leaves a worker idle.
+                        busy += self._assign(slot, queue)
                         if status == "ok":
                             yield Outcome(task[1], payload, None, task[2])
                         else:
@@ -277,6 +272,20 @@ class LocalBackend:
                 del slots[k]
             if not slots and (queue or busy):  # pragma: no cover - every worker died idle
                 slots.append(self._start())
+
+    @staticmethod
+    def _assign(slot: _Slot, queue: deque[tuple[int, RunSpec, int]]) -> int:
+        """Send the next queued run to an idle worker; return 1 if one was sent."""
+        if slot.task is not None or not queue:
+            return 0
+        task = queue.popleft()
+        try:
+            slot.conn.send((task[0], task[1]))
+        except (BrokenPipeError, OSError):
+            queue.appendleft(task)
+            return 0  # its sentinel reports the death
+        slot.task, slot.started = task, time.monotonic()
+        return 1
 
     def _failed(
         self, queue: deque[tuple[int, RunSpec, int]], task: tuple[int, RunSpec, int], error: str
