@@ -28,6 +28,12 @@ average to fall below L before each trial, and with ``--max-foreign F`` a trial 
 which other processes took more than the share F of the machine's CPU is
 discarded (kept in the JSON, marked) and repeated, up to ``--attempts`` times.
 
+``--probe`` first measures the machine's own ceiling without any bench code: a
+fixed Python/numpy loop in one process alone, then in two processes at once (on a
+VM, two vCPUs need not give twice the work). Each trial also records the time to
+its first row (worker start-up and first checker) and the sum of the runs' own
+wall times (equal for 1 and 2 workers when the cores do not slow each other).
+
 Writes ``OUT/bench_scaling.json`` (every trial, the command, the machine) and
 ``OUT/bench_scaling.md``.
 """
@@ -74,15 +80,59 @@ def own_cpu_seconds() -> float:
     return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
 
 
-def wait_quiet(limit: float | None, max_wait: float) -> float:
+def busy_share(window_s: float = 2.0) -> float:
+    """Share of the machine's CPU that was busy over the next ``window_s`` seconds."""
+    b0, t0 = busy_seconds(), time.perf_counter()
+    time.sleep(window_s)
+    return (busy_seconds() - b0) / ((time.perf_counter() - t0) * (os.cpu_count() or 1))
+
+
+def wait_quiet(limit: float | None, max_wait: float, idle_limit: float = 0.05) -> float:
+    """Wait (up to ``max_wait`` s) for load average < ``limit`` and a nearly idle CPU."""
     load = os.getloadavg()[0]
     if limit is None:
         return load
     t0 = time.monotonic()
-    while load > limit and time.monotonic() - t0 < max_wait:
-        time.sleep(5.0)
+    while time.monotonic() - t0 < max_wait:
         load = os.getloadavg()[0]
+        if load <= limit and busy_share() <= idle_limit:
+            break
+        time.sleep(3.0)
     return load
+
+
+def _burn(seconds: float) -> float:
+    """A fixed mixed Python/numpy workload; returns its wall time."""
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    t0 = time.perf_counter()
+    acc = 0.0
+    for _ in range(int(seconds * 95_000)):  # about 10 us an iteration
+        a = rng.random((64, 2))
+        acc += float(np.hypot(*a.T).sum())
+        for i in range(300):
+            acc += i * 1e-9
+    return time.perf_counter() - t0
+
+
+def cpu_probe(seconds: float = 3.0) -> dict:
+    """The VM's own ceiling: one busy process alone vs two at once (no bench code)."""
+    import multiprocessing as mp
+
+    ctx = mp.get_context("spawn")
+    with ctx.Pool(2) as pool:
+        pool.map(_burn, [0.2, 0.2])  # warm both processes
+        alone = pool.apply(_burn, (seconds,))
+        t0 = time.perf_counter()
+        both = pool.map(_burn, [seconds, seconds])
+        wall = time.perf_counter() - t0
+    return {
+        "one_process_s": alone,
+        "two_processes_each_s": both,
+        "two_processes_wall_s": wall,
+        "parallel_speedup": 2 * alone / wall,
+    }
 
 
 def trial(grid: str, workers: int, quiet: float | None, quiet_wait: float) -> dict:
@@ -90,7 +140,13 @@ def trial(grid: str, workers: int, quiet: float | None, quiet_wait: float) -> di
     with tempfile.TemporaryDirectory(prefix=f"bench_scaling_{grid}_{workers}w_") as tmp:
         cfg = BenchConfig(**GRIDS[grid], workers=workers, out=tmp, plots=True)
         busy0, own0, t0 = busy_seconds(), own_cpu_seconds(), time.perf_counter()
-        report = run_bench(cfg)
+        first: list[float] = []
+
+        def on_row(_row: dict) -> None:
+            if not first:
+                first.append(time.perf_counter() - t0)
+
+        report = run_bench(cfg, on_row=on_row)
         total = time.perf_counter() - t0
         busy1, own1 = busy_seconds(), own_cpu_seconds()
         rows = [json.loads(x) for x in (Path(tmp) / "runs.jsonl").read_text().splitlines()]
@@ -107,6 +163,7 @@ def trial(grid: str, workers: int, quiet: float | None, quiet_wait: float) -> di
         "summary_and_plots_s": total - report.run_wall_s,
         "success_rate": sum(bool(r.get("success")) for r in rows) / len(rows),
         "sum_of_run_wall_s": sum(r.get("wall_time_s") or 0.0 for r in rows),
+        "first_row_s": first[0] if first else None,
         "own_cpu_s": own1 - own0,
         "foreign_cpu_s": foreign,
         "foreign_cpu_share": foreign / (total * (os.cpu_count() or 1)),
@@ -126,6 +183,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="repeat a trial in which other processes took more than this "
                         "share of the CPU")
     parser.add_argument("--attempts", type=int, default=3)
+    parser.add_argument("--probe", action="store_true",
+                        help="first measure the machine's own 1 vs 2 process speed-up")
     args = parser.parse_args(argv)
     grids = [g.strip() for g in args.grids.split(",") if g.strip()]
     for g in grids:
@@ -133,6 +192,12 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(f"--grids: unknown grid {g!r}; choose from {sorted(GRIDS)}")
     trials: list[dict] = []
     discarded: list[dict] = []
+    probes: list[dict] = []
+    if args.probe:
+        wait_quiet(args.quiet_load, args.quiet_wait)
+        probes.append(cpu_probe())
+        print(f"cpu probe: two processes at once run {probes[-1]['parallel_speedup']:.2f}x "
+              "one alone", file=sys.stderr)
     for g in grids:
         for rep in range(args.repeats):
             for workers in (1, 2):
@@ -176,6 +241,7 @@ def main(argv: list[str] | None = None) -> int:
         "grids": {g: {k: list(v) if isinstance(v, tuple) else v for k, v in GRIDS[g].items()}
                   for g in grids},
         "summary": summary,
+        "cpu_probe": probes,
         "trials": trials,
         "discarded_trials": discarded,
     }
@@ -197,19 +263,27 @@ def main(argv: list[str] | None = None) -> int:
             f"**{s['ratio_of_medians']:.2f}** | "
             + ", ".join(f"{r:.2f}" for r in s["ratio_per_repeat"]) + " |"
         )
+    for p in probes:
+        lines += [
+            "",
+            f"Machine ceiling (no bench code): a mixed Python/numpy loop takes "
+            f"{p['one_process_s']:.2f} s alone; two copies at once take "
+            f"{p['two_processes_wall_s']:.2f} s: **{p['parallel_speedup']:.2f}x** throughput.",
+        ]
     lines += [
         "",
         "Every trial (execution phase = worker start to last row; foreign CPU = CPU time "
         "of other processes on the machine during the trial):",
         "",
-        "| grid | rep | workers | run wall [s] | runs/s | summary+plots [s] | success | "
-        "own CPU [s] | foreign CPU [s] | load before |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| grid | rep | workers | run wall [s] | runs/s | first row [s] | sum of run times [s] "
+        "| summary+plots [s] | success | own CPU [s] | foreign CPU [s] | load before |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for t in trials:
         lines.append(
             f"| {t['grid']} | {t['repeat']} | {t['workers']} | {t['run_wall_s']:.1f} | "
-            f"{t['throughput_runs_per_s']:.2f} | {t['summary_and_plots_s']:.1f} | "
+            f"{t['throughput_runs_per_s']:.2f} | {t['first_row_s']:.1f} | "
+            f"{t['sum_of_run_wall_s']:.1f} | {t['summary_and_plots_s']:.1f} | "
             f"{100 * t['success_rate']:.0f} % | {t['own_cpu_s']:.1f} | "
             f"{t['foreign_cpu_s']:.1f} | {t['load_before']:.2f} |"
         )
