@@ -196,8 +196,9 @@ def _require_mapping(name: str, value: Any) -> dict[str, Any]:
 class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
     """Drive a planned, curvature-bounded path in highway-env.
 
-    Registered as ``rrtdrive/Parking-v0`` and ``rrtdrive/Overtake-v0``; keyword
-    arguments of ``gym.make`` reach this constructor.
+    Registered as ``rrtdrive/Parking-v0``, ``rrtdrive/Overtake-v0`` and
+    ``rrtdrive/OvertakeTraffic-v0`` (re-planned in the loop, see ``replan_options``);
+    keyword arguments of ``gym.make`` reach this constructor.
 
     **Observation** (``float32``, shape ``(6 + 3 K,)``, SI units, ego frame = rear
     axle, x forward, y left):
@@ -235,12 +236,13 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
     (``"off_path"``), or on arrival (``"arrived"``): with ``residual=True`` when
     the controller has stopped the car at the end of the path (the runner's rule),
     otherwise when the rear axle is stopped (|v| <= 0.1 m/s) within 0.5 m and 10°
-    of the goal. Truncated at the scenario's time limit (``"timeout"``).
+    of the goal; ``overtake-traffic`` instead ends (``"completed"``) when the
+    overtake is complete. Truncated at the scenario's time limit (``"timeout"``).
 
     Parameters
     ----------
     scenario : str
-        Scenario name (``parking``, ``overtake``).
+        Scenario name (``parking``, ``overtake``, ``overtake-traffic``).
     planner : str
         Registered planner that plans each episode's path.
     controller : str
