@@ -119,6 +119,24 @@ def test_overtake_scene_matches_the_overtake_map():
     env.close()
 
 
+@pytest.mark.parametrize("name", ["parking", "overtake"])
+def test_static_objects_get_the_lane_highway_env_would_find(name):
+    # The scenes memoise the closest-lane search for static objects; every object
+    # must still carry what highway-env's own search returns on its road, in every
+    # build (first and cached) and for another seed's scene.
+    for seed in (0, 0, 3):
+        u = build_env(make_scenario(name, seed)).unwrapped
+        net = u.road.network
+        placed = [o for o in u.road.objects] + [
+            v for v in u.road.vehicles if type(v) is Vehicle and v.speed == 0.0
+        ]
+        assert placed
+        for o in placed:
+            assert o.road is u.road
+            assert o.lane_index == net.get_closest_lane_index(o.position, o.heading)
+            assert o.lane is net.get_lane(o.lane_index)
+
+
 # ----------------------------------------------------------------------------- runner
 
 

@@ -501,20 +501,55 @@ class OncomingCar(IDMVehicle):
         Vehicle.act(self, {"steering": steering, "acceleration": accel})
 
 
-def _rect_object(road: Road, o: Obstacle) -> HwObstacle:
+#: Closest lane of a static object, by (network signature, position, heading). highway-env
+#: searches every lane for every object it places (parking: 146 objects x 144 spot lanes,
+#: 50 ms a build); the scenes reuse a handful of networks and positions, so each pair is
+#: looked up once per process with highway-env's own search, and the result is the same.
+_LANE_CACHE: dict[tuple[object, ...], tuple[str, str, int]] = {}
+_LANE_CACHE_MAX = 100_000
+
+
+def _network_key(net: RoadNetwork) -> tuple[object, ...]:
+    """A hashable description of every lane of ``net`` (what the closest-lane search reads)."""
+    key: list[object] = []
+    for a, ends in net.graph.items():
+        for b, lanes in ends.items():
+            for i, lane in enumerate(lanes):
+                key.append((a, b, i, type(lane).__name__, tuple(lane.start), tuple(lane.end),
+                            lane.width))
+    return tuple(key)
+
+
+def _attach(obj: HwObstacle | Vehicle, road: Road, net_key: tuple[object, ...]) -> None:
+    """Put an object built with ``road=None`` on ``road``, with the lane highway-env would find."""
+    key = (net_key, float(obj.position[0]), float(obj.position[1]), float(obj.heading))
+    lane_index = _LANE_CACHE.get(key)
+    if lane_index is None:
+        lane_index = road.network.get_closest_lane_index(obj.position, obj.heading)
+        if len(_LANE_CACHE) >= _LANE_CACHE_MAX:
+            _LANE_CACHE.clear()
+        _LANE_CACHE[key] = lane_index
+    obj.road = road
+    obj.lane_index = lane_index
+    obj.lane = road.network.get_lane(lane_index)
+
+
+def _rect_object(road: Road, o: Obstacle, net_key: tuple[object, ...]) -> HwObstacle:
     """A solid highway-env obstacle of exactly ``o``'s rectangle (length >= width for drawing)."""
     length, width, yaw = o.size[0], o.size[1], o.yaw
     if width > length:  # highway-env draws on a length x length canvas
         length, width, yaw = width, length, yaw + math.pi / 2
-    obj = HwObstacle(road, list(o.center), heading=yaw)
+    obj = HwObstacle(None, list(o.center), heading=yaw)
+    _attach(obj, road, net_key)
     obj.LENGTH, obj.WIDTH = length, width
     obj.diagonal = math.hypot(length, width)
     return obj
 
 
-def _rect_vehicle(road: Road, o: Obstacle) -> Vehicle:
+def _rect_vehicle(road: Road, o: Obstacle, net_key: tuple[object, ...]) -> Vehicle:
     """A stopped highway-env vehicle of exactly ``o``'s rectangle."""
-    v = Vehicle(road, list(o.center), heading=o.yaw, speed=0.0)
+    v = Vehicle(None, list(o.center), heading=o.yaw, speed=0.0)
+    _attach(v, road, net_key)
     v.LENGTH, v.WIDTH = o.size
     v.diagonal = math.hypot(*o.size)
     return v
@@ -565,11 +600,12 @@ def _build_road(scenario: Scenario, np_random: np.random.Generator, history: boo
         lead.diagonal = math.hypot(lead.LENGTH, lead.WIDTH)
         road.vehicles.append(lead)
     vehicle_ids = set(scenario.vehicle_obstacles)
+    net_key = _network_key(net)
     for i, o in enumerate(m.obstacles):
         if i in vehicle_ids:
-            road.vehicles.append(_rect_vehicle(road, o))
+            road.vehicles.append(_rect_vehicle(road, o, net_key))
         else:
-            road.objects.append(_rect_object(road, o))
+            road.objects.append(_rect_object(road, o, net_key))
     for x, speed in scenario.oncoming:
         lane_index = ("b", "a", 0)
         lane = net.get_lane(lane_index)
@@ -589,7 +625,7 @@ def _build_road(scenario: Scenario, np_random: np.random.Generator, history: boo
             Obstacle((xmin - t / 2, (ymin + ymax) / 2), (ymax - ymin, t), math.pi / 2),
             Obstacle((xmax + t / 2, (ymin + ymax) / 2), (ymax - ymin, t), math.pi / 2),
         ):
-            road.objects.append(_rect_object(road, wall))
+            road.objects.append(_rect_object(road, wall, net_key))
     return road
 
 
