@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 
@@ -11,6 +12,7 @@ import highway_env  # noqa: F401 - registers the stock environments
 import numpy as np
 import pytest
 import shapely
+from highway_env.road.road import Road
 from highway_env.vehicle.kinematics import Vehicle
 from highway_env.vehicle.objects import Landmark
 from highway_env.vehicle.objects import Obstacle as HwObstacle
@@ -21,8 +23,9 @@ from rrtdrive.planning import PLANNERS, PlanningProblem, make_planner
 from rrtdrive.sim import cli_simulate
 from rrtdrive.sim.ego import EgoVehicle
 from rrtdrive.sim.extract import attach_ego, map_from_env
+from rrtdrive.sim.replanning import ReplanConfig
 from rrtdrive.sim.runner import EpisodeConfig, drive, run_episode
-from rrtdrive.sim.scenes import SimConfig, build_env, make_scenario
+from rrtdrive.sim.scenes import SceneRoad, SimConfig, build_env, make_scenario
 from rrtdrive.types import Budget, InputError, Path
 
 IMPROVED = "improved-rrt-connect"
@@ -135,6 +138,61 @@ def test_static_objects_get_the_lane_highway_env_would_find(name):
             assert o.road is u.road
             assert o.lane_index == net.get_closest_lane_index(o.position, o.heading)
             assert o.lane is net.get_lane(o.lane_index)
+
+
+def _stock_and_screened(monkeypatch, run):
+    """``run()`` with the scenes' screened collision step and with highway-env's own."""
+    screened = run()
+    with monkeypatch.context() as m:
+        m.setattr(SceneRoad, "step", Road.step)  # the reference: highway-env's Road.step
+        stock = run()
+    return screened, stock
+
+
+def _same_drive(a, b):
+    assert a.status == b.status
+    for name in ("states", "controls", "crashed", "others"):
+        assert np.array_equal(getattr(a.log, name), getattr(b.log, name)), name
+
+
+@pytest.mark.parametrize(
+    "case",
+    ["parking", "parking_into_object", "into_stopped_car", "into_moving_lead", "oncoming_traffic"],
+)
+def test_screened_collision_step_drives_exactly_like_highway_env(monkeypatch, case):
+    if case == "parking":
+        if IMPROVED not in PLANNERS:
+            pytest.skip("planner not registered")
+        def run():
+            return run_episode("parking", IMPROVED, "pure-pursuit", 4)
+    elif case == "parking_into_object":
+        scen = make_scenario("parking", 1)
+        st = scen.start
+        d = np.arange(0.0, 120.0, 0.1)  # through the wall at x = 100
+        ahead = np.column_stack([st.x + d * math.cos(st.yaw), st.y + d * math.sin(st.yaw),
+                                 np.full_like(d, st.yaw), 0 * d])
+        def run():
+            return run_episode(scen, Path(ahead, np.zeros((0, 2))), "stanley", 1)
+    elif case == "into_stopped_car":
+        scen = make_scenario("overtake", 0, jitter=(0.0, 0.0, 0.0))
+        x = np.arange(scen.start.x, 92.0, 0.1)
+        straight = Path(np.column_stack([x, np.full_like(x, scen.lane_y), 0 * x, 0 * x]),
+                        np.zeros((0, 2)))
+        def run():
+            return run_episode(scen, straight, "lqr", 0)
+    else:
+        density = "high" if case == "oncoming_traffic" else "low"
+        scen = make_scenario("overtake-traffic", 5, density=density)
+        cfg = EpisodeConfig(max_time_s=12.0, replan=ReplanConfig(wall_limit=False))
+        if case == "into_moving_lead":
+            # A lead car standing 6 m ahead: the ego runs into it.
+            scen = dataclasses.replace(scen, lead=(scen.start.x + 6.0, 0.0))
+        def run():
+            return run_episode(scen, IMPROVED, "pure-pursuit", 5, cfg)
+    screened, stock = _stock_and_screened(monkeypatch, run)
+    _same_drive(screened, stock)
+    if case in ("parking_into_object", "into_stopped_car", "into_moving_lead"):
+        assert stock.status == "crashed"
 
 
 # ----------------------------------------------------------------------------- runner

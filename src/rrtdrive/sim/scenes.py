@@ -57,6 +57,7 @@ __all__ = [
     "Scenario",
     "SimConfig",
     "SceneEnv",
+    "SceneRoad",
     "OncomingCar",
     "make_scenario",
     "build_env",
@@ -401,6 +402,54 @@ def _car_like(obstacles: tuple[Obstacle, ...], vehicle: VehicleParams) -> list[i
 # ----------------------------------------------------------------------------- env
 
 
+#: Up to this many collision pairs a step, ``SceneRoad`` uses ``Road.step`` as it is.
+_FEW_PAIRS = 16
+
+
+def _centres_and_diagonals(items: list) -> tuple[np.ndarray, np.ndarray]:
+    if not items:
+        return np.zeros((0, 2)), np.zeros(0)
+    return (
+        np.array([o.position for o in items], dtype=float).reshape(-1, 2),
+        np.array([o.diagonal for o in items], dtype=float),
+    )
+
+
+class SceneRoad(Road):
+    """highway-env's ``Road`` with the same collision handling, minus calls that do nothing.
+
+    ``Road.step`` calls ``handle_collisions`` for every pair of vehicles and every
+    vehicle-object pair: 146 calls a step in the parking scene, 90 % of an episode's
+    time. A call whose pair fails highway-env's own spherical pre-check (centres
+    further apart than the half diagonals plus ``speed * dt``) changes nothing, so
+    those pairs are screened out here with one vectorised distance test (kept with a
+    1e-9 m margin so that no pair highway-env would examine is dropped); the others
+    are handled by highway-env in the same order.
+    """
+
+    def step(self, dt: float) -> None:
+        """Step every vehicle, then handle the collisions of the pairs that may touch."""
+        vehicles, objects = self.vehicles, self.objects
+        n = len(vehicles)
+        if n * (n - 1) // 2 + n * len(objects) <= _FEW_PAIRS:
+            super().step(dt)  # a few pairs: the screen would cost more than it saves
+            return
+        for vehicle in vehicles:
+            vehicle.step(dt)
+        v_pos, v_diag = _centres_and_diagonals(vehicles)
+        o_pos, o_diag = _centres_and_diagonals(objects)
+        for i, vehicle in enumerate(vehicles):
+            own = vehicle.diagonal / 2 + vehicle.speed * dt + 1e-9
+            if i + 1 < len(vehicles):
+                d = np.hypot(*(v_pos[i + 1 :] - v_pos[i]).T)
+                for k in np.flatnonzero(d <= own + v_diag[i + 1 :] / 2):
+                    vehicle.handle_collisions(vehicles[i + 1 + k], dt)
+            if objects:
+                d = np.hypot(*(o_pos - v_pos[i]).T)
+                for k in np.flatnonzero(d <= own + o_diag / 2):
+                    vehicle.handle_collisions(objects[k], dt)
+
+
 class SceneEnv(AbstractEnv):
     """A highway-env environment whose scene is built from a :class:`Scenario`.
 
@@ -582,7 +631,7 @@ def _build_road(scenario: Scenario, np_random: np.random.Generator, history: boo
     else:
         xmin, ymin, xmax, ymax = m.bounds
         net.add_lane("a", "b", StraightLane([xmin, ymin], [xmax, ymin], line_types=(0, 0)))
-    road = Road(network=net, np_random=np_random, record_history=history)
+    road = SceneRoad(network=net, np_random=np_random, record_history=history)
     if scenario.lead is not None:
         # The moving lead car first (the first vehicle after the ego in every log).
         x, speed = scenario.lead
