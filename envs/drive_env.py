@@ -40,11 +40,11 @@ from rrtdrive.controllers import (
 from rrtdrive.envs.render import SceneRenderer, view_for
 from rrtdrive.evaluation import EpisodeReport, EvalConfig, evaluate
 from rrtdrive.planning import PLANNERS
+from rrtdrive.sim.drivelog import DriveRecorder
 from rrtdrive.sim.ego import EgoVehicle
 from rrtdrive.sim.runner import (
     DEFAULT_PLANNER,
     TRAFFIC_PLANNER,
-    DriveLog,
     Episode,
     EpisodeConfig,
     plan_scenario,
@@ -510,12 +510,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             self._profile = ctrl.profile
         else:
             self._profile = SpeedProfile(np.asarray(p.s), np.asarray(p.kappa), speed, ego.speed)
-        self._others = [v for v in u.road.vehicles if v is not ego]
-        r = ego.rear
-        self._states: list[tuple[float, float, float, float]] = [(r[0], r[1], r[2], ego.speed)]
-        self._controls: list[tuple[float, float]] = []
-        self._crashed: list[bool] = [bool(ego.crashed)]
-        self._other_log = [self._other_states()]
+        self._rec = DriveRecorder(self._sim, self._dt)
         self._k = 0
         self._t = 0.0
         self._wall = 0.0
@@ -526,9 +521,6 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         self._obs64 = self._observe64()
         self._s = self._progress_s()
         return plan
-
-    def _other_states(self) -> list[tuple[float, float, float, float]]:
-        return [(v.position[0], v.position[1], v.heading, v.speed) for v in self._others]
 
     # ------------------------------------------------------------------ gym API
 
@@ -623,9 +615,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         d_steer = a1 * self._steer_limit
         a_lo, a_hi, lim = self._a_min, self._a_max, self._steer_limit
 
-        ego, road, ctrl, dt = self._ego, self._road, self._ctrl, self._dt
-        u = self._sim.unwrapped
-        act = ego.action
+        ego, ctrl, dt = self._ego, self._ctrl, self._dt
         steps = 0
         s_before = self._s
         carried = 0.0  # progress on references that were replaced during this step
@@ -666,21 +656,10 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
                     steer = min(max(c_steer + d_steer, -lim), lim)
             else:
                 accel, steer = d_accel, d_steer
-            act["acceleration"] = accel
-            act["steering"] = steer
-            road.act()
-            road.step(dt)
-            u.time += dt
-            u.steps += 1
+            self._rec.step(accel, steer)
             self._t += dt
             self._k += 1
             steps += 1
-            r = ego.rear
-            self._states.append((r[0], r[1], r[2], ego.speed))
-            self._controls.append((ego.accel, ego.steer))
-            self._crashed.append(bool(ego.crashed))
-            if self._others:
-                self._other_log.append(self._other_states())
             if ego.crashed:
                 self._status = "crashed"
                 break
@@ -763,7 +742,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             self._renderer.centre = np.array([self._ego.rear[0] + 25.0, scen.lane_y + 2.0])
         obs = self._obs64
         k = self.n_ref_points
-        x, y, yaw, _ = self._states[-1]
+        x, y, yaw, _ = self._rec.states[-1]
         c, s = math.cos(yaw), math.sin(yaw)
         ref = obs[6 : 6 + 2 * k].reshape(k, 2)
         ref_world = np.column_stack(
@@ -782,7 +761,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             self.sim_config.simulation_frequency,
             self.path.xy,  # type: ignore[union-attr]
             (scen.goal.x, scen.goal.y),
-            [st[:2] for st in self._states],
+            [st[:2] for st in self._rec.states],
             ref_world,
             lines,
         )
@@ -869,24 +848,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _finish(self) -> Episode:
         """The finished episode as the runner would return it."""
-        n = len(self._states)
-        if self._others:
-            others = np.asarray(self._other_log, dtype=float)
-        else:
-            others = np.zeros((n, 0, 4))
-        log = DriveLog(
-            dt=self._dt,
-            t=np.arange(n) * self._dt,
-            states=np.asarray(self._states, dtype=float),
-            controls=np.asarray(self._controls, dtype=float).reshape(-1, 2),
-            crashed=np.asarray(self._crashed, dtype=bool),
-            others=others,
-            other_sizes=np.asarray(
-                [(v.LENGTH, v.WIDTH) for v in self._others], dtype=float
-            ).reshape(-1, 2),
-            arrived=self._status in ("arrived", "completed"),
-            wall_time_s=self._wall,
-        )
+        log = self._rec.log(self._status in ("arrived", "completed"), self._wall)
         t_end = float(log.t[-1])
         if self._status == "crashed":
             message = f"highway-env reported a crash at t = {t_end:.2f} s"

@@ -57,6 +57,7 @@ from rrtdrive.planning.spacetime import (
     SpaceTimeRRTConnect,
     traffic_conflicts,
 )
+from rrtdrive.sim.drivelog import DriveRecorder
 from rrtdrive.sim.prediction import PREDICTORS, predict
 from rrtdrive.types import Budget, InputError, Path, Pose, require_finite, require_positive
 from rrtdrive.vehicle import footprint_corners
@@ -850,23 +851,14 @@ def drive_traffic(
     status : str
         ``"completed"``, ``"crashed"`` or ``"timeout"``.
     """
-    from rrtdrive.sim.runner import DriveLog
-
     u = env.unwrapped
-    road = u.road
     ego = u.vehicle
     dt = 1.0 / u.config["simulation_frequency"]
     driver = TrafficDriver(env, scenario, controller, speed, config, rng)
     driver.start()
-    others = driver.others
     lead = driver.lead
     n_max = int(math.ceil(max_time_s / dt - 1e-9))
-    rear = ego.rear
-    states = [(rear[0], rear[1], rear[2], ego.speed)]
-    controls: list[tuple[float, float]] = []
-    crashed = [ego.crashed]
-    other_log = [[(v.position[0], v.position[1], v.heading, v.speed) for v in others]]
-    action = ego.action
+    rec = DriveRecorder(env, dt)
     status = "timeout"
     completion: float | None = None
     t = 0.0
@@ -878,19 +870,9 @@ def drive_traffic(
         accel, steer = driver.control(t)
         if len(driver.records) != n_rec:
             plan_wall += time.perf_counter() - c0
-        action["acceleration"] = accel
-        action["steering"] = steer
-        road.act()
-        road.step(dt)
-        u.time += dt
-        u.steps += 1
+        rec.step(accel, steer)
         t += dt
         r = ego.rear
-        states.append((r[0], r[1], r[2], ego.speed))
-        controls.append((ego.accel, ego.steer))
-        crashed.append(ego.crashed)
-        if others:
-            other_log.append([(v.position[0], v.position[1], v.heading, v.speed) for v in others])
         if ego.crashed:
             status = "crashed"
             if stop_on_crash:
@@ -902,18 +884,5 @@ def drive_traffic(
             status = "completed"
             completion = t
             break
-    wall = time.perf_counter() - wall0 - plan_wall
-    n = len(states)
-    other_arr = np.asarray(other_log, dtype=float) if others else np.zeros((n, 0, 4))
-    log = DriveLog(
-        dt=dt,
-        t=np.arange(n) * dt,
-        states=np.asarray(states, dtype=float),
-        controls=np.asarray(controls, dtype=float).reshape(-1, 2),
-        crashed=np.asarray(crashed, dtype=bool),
-        others=other_arr,
-        other_sizes=np.asarray([(v.LENGTH, v.WIDTH) for v in others], dtype=float).reshape(-1, 2),
-        arrived=status == "completed",
-        wall_time_s=wall,
-    )
+    log = rec.log(status == "completed", time.perf_counter() - wall0 - plan_wall)
     return log, driver.finish(completion), status

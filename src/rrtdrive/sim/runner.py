@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rrtdrive.controllers import SpeedConfig, TrackingController, VehicleState, make_controller
+from rrtdrive.sim.drivelog import DriveLog, DriveRecorder
 from rrtdrive.sim.ego import EgoVehicle
 from rrtdrive.sim.scenes import Scenario, SimConfig, build_env, make_scenario, scenario_rngs
 from rrtdrive.sim.traffic import OncomingGate, conflict_zone
@@ -75,56 +76,6 @@ class EpisodeConfig:
             math.isfinite(self.max_time_s) and self.max_time_s > 0
         ):
             raise InputError(f"episode.max_time_s: must be > 0, got {self.max_time_s!r}")
-
-
-@dataclass(frozen=True, eq=False)
-class DriveLog:
-    """The logged trajectory of one drive.
-
-    Attributes
-    ----------
-    dt : float
-        Simulation step in seconds.
-    t : numpy.ndarray
-        Times, shape ``(N + 1,)``, starting at 0.
-    states : numpy.ndarray
-        Rear-axle ``[x, y, yaw, speed]`` at each time, ``(N + 1, 4)``.
-    controls : numpy.ndarray
-        Applied ``[acceleration, steering]`` over each step, ``(N, 2)``.
-    crashed : numpy.ndarray
-        highway-env's ``crashed`` flag of the ego at each time, ``(N + 1,)``.
-    others : numpy.ndarray
-        Body-centre ``[x, y, heading, speed]`` of every other vehicle, ``(N + 1, K, 4)``.
-    other_sizes : numpy.ndarray
-        ``[length, width]`` of every other vehicle, ``(K, 2)``.
-    arrived : bool
-        The controller stopped the car at the end of the path.
-    wall_time_s : float
-        Wall time of the loop.
-    """
-
-    dt: float
-    t: np.ndarray
-    states: np.ndarray
-    controls: np.ndarray
-    crashed: np.ndarray
-    others: np.ndarray
-    other_sizes: np.ndarray
-    arrived: bool
-    wall_time_s: float
-
-    @property
-    def steps(self) -> int:
-        """Number of simulation steps."""
-        return len(self.controls)
-
-    @classmethod
-    def empty(cls, dt: float) -> DriveLog:
-        """A drive that never started."""
-        return cls(
-            dt, np.zeros(0), np.zeros((0, 4)), np.zeros((0, 2)), np.zeros(0, dtype=bool),
-            np.zeros((0, 0, 4)), np.zeros((0, 2)), False, 0.0,
-        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -223,20 +174,13 @@ def drive(
     DriveLog
     """
     u = env.unwrapped
-    road = u.road
     ego = u.vehicle
     if not isinstance(ego, EgoVehicle):
         raise InputError("env: the controlled vehicle must be an EgoVehicle (see attach_ego)")
     dt = 1.0 / u.config["simulation_frequency"]
     controller.reset(path, v_start=ego.speed)
-    others = [v for v in road.vehicles if v is not ego]
     n_max = int(math.ceil(max_time_s / dt - 1e-9))
-    rear = ego.rear
-    states = [(rear[0], rear[1], rear[2], ego.speed)]
-    controls: list[tuple[float, float]] = []
-    crashed = [ego.crashed]
-    other_log = [[(v.position[0], v.position[1], v.heading, v.speed) for v in others]]
-    action = ego.action
+    rec = DriveRecorder(env, dt)
     arrived = False
     t = 0.0
     wall0 = time.perf_counter()
@@ -244,42 +188,14 @@ def drive(
         r = ego.rear
         if gate is not None:
             controller.speed.stop_at = gate.stop_line(controller.s, ego.speed, gate_cars or [])
-        accel, steer = controller.control(VehicleState(r[0], r[1], r[2], ego.speed, ego.steer, t))
-        action["acceleration"] = accel
-        action["steering"] = steer
-        road.act()
-        road.step(dt)
-        u.time += dt
-        u.steps += 1
+        rec.step(*controller.control(VehicleState(r[0], r[1], r[2], ego.speed, ego.steer, t)))
         t += dt
-        r = ego.rear
-        states.append((r[0], r[1], r[2], ego.speed))
-        controls.append((ego.accel, ego.steer))
-        crashed.append(ego.crashed)
-        if others:
-            other_log.append([(v.position[0], v.position[1], v.heading, v.speed) for v in others])
         if ego.crashed and stop_on_crash:
             break
         if controller.arrived and ego.speed == 0.0:
             arrived = True
             break
-    wall = time.perf_counter() - wall0
-    n = len(states)
-    if not others:
-        other_arr = np.zeros((n, 0, 4))
-    else:
-        other_arr = np.asarray(other_log, dtype=float)
-    return DriveLog(
-        dt=dt,
-        t=np.arange(n) * dt,
-        states=np.asarray(states, dtype=float),
-        controls=np.asarray(controls, dtype=float).reshape(-1, 2),
-        crashed=np.asarray(crashed, dtype=bool),
-        others=other_arr,
-        other_sizes=np.asarray([(v.LENGTH, v.WIDTH) for v in others], dtype=float).reshape(-1, 2),
-        arrived=arrived,
-        wall_time_s=wall,
-    )
+    return rec.log(arrived, time.perf_counter() - wall0)
 
 
 def run_episode(
