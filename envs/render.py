@@ -95,6 +95,10 @@ class SceneRenderer:
         self.surface.scaling = self.scaling
         self.surface.centering_position = [0.5, 0.5]
         self._font: Any = None
+        # The lanes drawn for (network, camera centre): copied into the next frames of
+        # the same road and view instead of redrawn (144 spot lanes in the parking lot).
+        self._background: Any = None
+        self._background_key: tuple[Any, tuple[float, float]] | None = None
 
     def _text_font(self) -> Any:
         pygame = self._pygame
@@ -139,7 +143,13 @@ class SceneRenderer:
 
         surface = self.surface
         surface.move_display_window_to(self.centre)
-        RoadGraphics.display(road, surface)
+        key = (road.network, (float(self.centre[0]), float(self.centre[1])))
+        cached = self._background_key
+        if cached is not None and cached[0] is key[0] and cached[1] == key[1]:
+            surface.blit(self._background, (0, 0))
+        else:
+            RoadGraphics.display(road, surface)
+            self._background, self._background_key = surface.copy(), key
         if len(path_xy) >= 2:
             pygame.draw.lines(surface, PATH_COLOR, False, [surface.vec2pix(p) for p in path_xy], 2)
         gx, gy = surface.vec2pix(goal_xy)

@@ -259,7 +259,13 @@ def test_render_draws_the_scene_and_the_path(tmp_path):
     px = frame.reshape(-1, 3).astype(int)
     assert np.any((px[:, 2] > 200) & (px[:, 0] < 80) & (px[:, 1] < 120))  # path (40, 90, 255)
     assert np.any((px[:, 0] > 200) & (px[:, 1] < 90) & (px[:, 2] < 90))  # trace (255, 60, 40)
-    assert frame is not env.render()
+    again = env.render()  # the lanes come from the renderer's cached background now
+    assert again is not frame and np.array_equal(again, frame)
+    env.step(zero(None))
+    moved = env.render()
+    assert not np.array_equal(moved, frame)
+    env.reset(seed=5)  # a new road: its lanes are drawn again, not the old copy
+    assert not frame_is_blank(env.render())
     env.close()
     plain = gym.make("rrtdrive/Overtake-v0")
     plain.reset(seed=0)

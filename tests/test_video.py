@@ -45,6 +45,25 @@ def test_frames_are_real_and_not_blank(episode, tmp_path):
     assert frame_is_blank(np.zeros((10, 10, 3), np.uint8))
 
 
+@pytest.mark.parametrize("name", ["overtake", "parking"])
+def test_reused_background_gives_the_same_pixels(episode, name):
+    # With a fixed camera the lanes are drawn once; every frame must equal a frame
+    # drawn from scratch (the path, goal, objects, cars and trace still on top).
+    if name == "parking":
+        scen = make_scenario("parking", 2)
+        st = scen.start
+        d = np.arange(0.0, 12.0, 0.1)
+        ahead = np.column_stack([st.x + d * np.cos(st.yaw), st.y + d * np.sin(st.yaw),
+                                 np.full_like(d, st.yaw), 0 * d])
+        episode = run_episode(scen, Path(ahead, np.zeros((0, 2))), "pure-pursuit", 2)
+    fast = list(render_frames(episode, stride=40))
+    slow = list(render_frames(episode, stride=40, reuse_background=False))
+    assert len(fast) == len(slow) >= 3
+    for a, b in zip(fast, slow, strict=True):
+        assert np.array_equal(a, b)
+    assert not np.array_equal(fast[0], fast[-1])  # the car moved between frames
+
+
 def test_write_video_atomically(episode, tmp_path):
     out = tmp_path / "ep.mp4"
     n = write_video(episode, out, stride=20)
