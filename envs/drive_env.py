@@ -152,7 +152,12 @@ class RewardWeights:
         return cls(**dict(value))
 
 
-def observation_names(n_ref_points: int) -> list[str]:
+#: Per observed vehicle: present (1/0), then its body centre and velocity relative to
+#: the ego's rear axle, in the ego frame.
+VEHICLE_FEATURES = ("present", "dx", "dy", "dvx", "dvy")
+
+
+def observation_names(n_ref_points: int, n_vehicles: int = 0) -> list[str]:
     """Names of the observation entries, in order.
 
     Examples
@@ -160,11 +165,15 @@ def observation_names(n_ref_points: int) -> list[str]:
     >>> observation_names(2)
     ['speed', 'steer', 'cte', 'heading_err', 'v_ref', 'dist_to_goal', 'ref_x_1', 'ref_y_1', \
 'ref_x_2', 'ref_y_2', 'ref_kappa_1', 'ref_kappa_2']
+    >>> observation_names(1, n_vehicles=1)[-5:]
+    ['veh_present_1', 'veh_dx_1', 'veh_dy_1', 'veh_dvx_1', 'veh_dvy_1']
     """
     names = ["speed", "steer", "cte", "heading_err", "v_ref", "dist_to_goal"]
     for i in range(1, n_ref_points + 1):
         names += [f"ref_x_{i}", f"ref_y_{i}"]
     names += [f"ref_kappa_{i}" for i in range(1, n_ref_points + 1)]
+    for j in range(1, n_vehicles + 1):
+        names += [f"veh_{f}_{j}" for f in VEHICLE_FEATURES]
     return names
 
 
@@ -200,8 +209,8 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
     ``rrtdrive/OvertakeTraffic-v0`` (re-planned in the loop, see ``replan_options``);
     keyword arguments of ``gym.make`` reach this constructor.
 
-    **Observation** (``float32``, shape ``(6 + 3 K,)``, SI units, ego frame = rear
-    axle, x forward, y left):
+    **Observation** (``float32``, shape ``(6 + 3 K + 5 M,)``, SI units, ego frame =
+    rear axle, x forward, y left):
 
     ====================  ==========================================================
     index                 entry
@@ -216,6 +225,11 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
                           every ``ref_spacing`` metres of arc ahead of the rear
                           axle's projection (held at the path's end)
     6 + 2K .. 5 + 3K      path curvature at those points (1/m)
+    6 + 3K .. 5 + 3K + 5M the M nearest other vehicles within ``vehicle_range``
+                          (by distance from the rear axle to their body centre,
+                          nearest first), 5 entries each: present (1, or 0 for an
+                          empty slot, all zeros), body centre ``dx, dy`` (m) and
+                          velocity ``dvx, dvy`` relative to the ego's (m/s)
     ====================  ==========================================================
 
     Distances are clipped to +-1000 m and curvatures to +-10 1/m (the Box bounds);
@@ -253,6 +267,10 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         Residual mode: fraction of the full command range the action spans.
     n_ref_points : int
         Number K of reference points in the observation.
+    n_vehicles : int
+        Number M of other vehicles in the observation (0: none, the default).
+    vehicle_range : float
+        Vehicles further than this from the rear axle (m) are not observed.
     ref_spacing : float
         Arc length between reference points, metres.
     action_repeat : int
@@ -316,6 +334,8 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         residual_scale: float = 0.25,
         n_ref_points: int = 10,
         ref_spacing: float = 1.5,
+        n_vehicles: int = 0,
+        vehicle_range: float = 100.0,
         action_repeat: int = 1,
         simulation_frequency: int = 20,
         max_time_s: float | None = None,
@@ -354,6 +374,8 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         self.residual_scale = _require_number("residual_scale", residual_scale)
         self.n_ref_points = _require_int("n_ref_points", n_ref_points, 1, 200)
         self.ref_spacing = _require_number("ref_spacing", ref_spacing)
+        self.n_vehicles = _require_int("n_vehicles", n_vehicles, 0, 50)
+        self.vehicle_range = _require_number("vehicle_range", vehicle_range)
         self.action_repeat = _require_int("action_repeat", action_repeat, 1, 1000)
         self.sim_config = SimConfig(simulation_frequency=simulation_frequency)
         self.max_time_s = None if max_time_s is None else _require_number("max_time_s", max_time_s)
@@ -408,6 +430,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
                 [EgoVehicle.MIN_SPEED, -max_steer, -big, -math.pi, 0.0, -big],
                 np.full(2 * k, -big),
                 np.full(k, -KAPPA_CLIP),
+                np.tile([0.0, -big, -big, -big, -big], self.n_vehicles),
             ]
         ).astype(np.float32)
         high = np.concatenate(
@@ -415,6 +438,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
                 [EgoVehicle.MAX_SPEED, max_steer, big, math.pi, big, big],
                 np.full(2 * k, big),
                 np.full(k, KAPPA_CLIP),
+                np.tile([1.0, big, big, big, big], self.n_vehicles),
             ]
         ).astype(np.float32)
         self.observation_space = spaces.Box(low, high, dtype=np.float32)
@@ -826,7 +850,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         proj = p.project(x, y)
         self._proj_s = proj.s
         k = self.n_ref_points
-        out = np.empty(6 + 3 * k)
+        out = np.zeros(6 + 3 * k + 5 * self.n_vehicles)
         out[0] = ego.speed
         out[1] = ego.steer
         out[2] = proj.cte
@@ -841,7 +865,30 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             out[6 + 2 * i] = c * dx + s * dy
             out[7 + 2 * i] = -s * dx + c * dy
             out[6 + 2 * k + i] = kappa
+        if self.n_vehicles:
+            self._observe_vehicles(out[6 + 3 * k :], x, y, c, s)
         return np.clip(out, self._low64, self._high64)
+
+    def _observe_vehicles(
+        self, out: np.ndarray, x: float, y: float, c: float, s: float
+    ) -> None:
+        """Fill ``out`` (zeros, ``5 M``) with the nearest other vehicles, ego frame."""
+        others = self._rec.others
+        if not others:
+            return
+        ego = self._ego
+        pos = np.array([v.position for v in others], dtype=float).reshape(-1, 2)
+        dist = np.hypot(pos[:, 0] - x, pos[:, 1] - y)
+        order = [i for i in np.argsort(dist, kind="stable") if dist[i] <= self.vehicle_range]
+        evx, evy = ego.speed * math.cos(ego.heading), ego.speed * math.sin(ego.heading)
+        for j, i in enumerate(order[: self.n_vehicles]):
+            v = others[i]
+            dx, dy = pos[i, 0] - x, pos[i, 1] - y
+            dvx = v.speed * math.cos(v.heading) - evx
+            dvy = v.speed * math.sin(v.heading) - evy
+            out[5 * j : 5 * j + 5] = (
+                1.0, c * dx + s * dy, -s * dx + c * dy, c * dvx + s * dvy, -s * dvx + c * dvy
+            )
 
     def _obs32(self) -> np.ndarray:
         return self._obs64.astype(np.float32)  # a fresh array every call

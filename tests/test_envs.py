@@ -93,6 +93,65 @@ def test_spaces_and_observation_layout():
     env.close()
 
 
+def _vehicles_from_log(log, k, m, rng):
+    """The vehicle part of the observation after step k, from the episode's log alone."""
+    x, y, yaw, v = log.states[k]
+    c, s = np.cos(yaw), np.sin(yaw)
+    out = np.zeros((m, 5))
+    others = log.others[k]
+    d = np.hypot(others[:, 0] - x, others[:, 1] - y)
+    order = [i for i in np.argsort(d, kind="stable") if d[i] <= rng][:m]
+    for j, i in enumerate(order):
+        ox, oy, oh, ov = others[i]
+        dvx, dvy = ov * np.cos(oh) - v * np.cos(yaw), ov * np.sin(oh) - v * np.sin(yaw)
+        dx, dy = ox - x, oy - y
+        out[j] = (1.0, c * dx + s * dy, -s * dx + c * dy, c * dvx + s * dvy, -s * dvx + c * dvy)
+    return out.reshape(-1)
+
+
+def test_observation_of_other_vehicles():
+    m, k = 3, 2
+    env = gym.make("rrtdrive/OvertakeTraffic-v0", n_ref_points=k, n_vehicles=m,
+                   vehicle_range=60.0, residual=True, max_time_s=4.0)
+    assert env.observation_space.shape == (6 + 3 * k + 5 * m,)
+    names = observation_names(k, m)
+    assert len(names) == 6 + 3 * k + 5 * m and names[6 + 3 * k] == "veh_present_1"
+    obs, _ = env.reset(seed=3)
+    seen = [obs]
+    done = False
+    while not done:
+        obs, _, terminated, truncated, _ = env.step(np.zeros(2, np.float32))
+        assert obs in env.observation_space
+        seen.append(obs)
+        done = terminated or truncated
+    log = env.unwrapped.episode.log
+    assert log.others.shape[1] >= m  # the lead car and oncoming cars exist
+    for step, o in enumerate(seen):
+        expect = _vehicles_from_log(log, step, m, 60.0).astype(np.float32)
+        assert np.allclose(o[6 + 3 * k :], expect, atol=1e-4), step
+    first = seen[0][6 + 3 * k :].reshape(m, 5)
+    assert first[0, 0] == 1.0 and first[0, 1] > 0  # the lead car ahead, nearest
+    env.close()
+    # No other vehicles (parking: parked cars are obstacles): every slot empty.
+    park = gym.make("rrtdrive/Parking-v0", n_vehicles=2)
+    obs, _ = park.reset(seed=0)
+    assert obs.shape == (6 + 30 + 10,) and not obs[36:].any()
+    park.close()
+    with pytest.raises(InputError, match="n_vehicles"):
+        gym.make("rrtdrive/Overtake-v0", n_vehicles=-1)
+    with pytest.raises(InputError, match="vehicle_range"):
+        gym.make("rrtdrive/Overtake-v0", n_vehicles=1, vehicle_range=0.0)
+
+
+def test_check_env_with_vehicles():
+    env = gym.make("rrtdrive/OvertakeTraffic-v0", n_vehicles=4, residual=True)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(env.unwrapped)
+    env.close()
+    assert not [str(w.message) for w in caught if "gymnasium" in w.filename.replace("\\", "/")]
+
+
 @pytest.mark.parametrize("mode", ["sync", "async"])
 def test_make_vec(mode):
     envs = gym.make_vec(
