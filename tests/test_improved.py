@@ -13,6 +13,7 @@ from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import Map, Obstacle, builtin_map
 from rrtdrive.planning import make_planner
 from rrtdrive.planning.base import PlanningProblem, cached_checker
+from rrtdrive.planning.dubins import shortest_dubins
 from rrtdrive.planning.improved import (
     COMPONENTS,
     ImprovedConfig,
@@ -473,6 +474,41 @@ def test_each_component_can_be_switched_off(component):
     for seed in range(2):
         res = solve(m, seed, disable=(component,))
         assert_valid_path(res, m)
+
+
+OPEN = (0.0, 0.0, 60.0, 40.0)
+
+
+@pytest.mark.parametrize(
+    "goal", [(30, 20, math.pi), (30, 20, math.pi / 2), (30, 30, math.pi), (5, 20, math.pi)]
+)
+def test_dubins_fallback_turns_round_in_open_space(goal):
+    # Goals behind or across the start heading: the tree paths' straight legs cannot
+    # turn round in the room the corners leave, the Dubins fallback can.
+    m = Map("open", OPEN, (), Pose(10, 20, 0), Pose(*goal))
+    res = solve(m, 0)
+    assert_valid_path(res, m)
+    assert res.stats["dubins_fallback"] == 1.0 and "Dubins fallback" in res.message
+    assert res.path.length == pytest.approx(
+        shortest_dubins(m.start, m.goal, 1.05 / KAPPA).length, rel=0.01
+    )
+    without = solve(m, 0, disable=("dubins_fallback",))
+    assert without.status is PlanStatus.POSTPROCESS_FAILED
+
+
+def test_dubins_fallback_never_returns_a_colliding_path():
+    # A wall across the loops every Dubins word would drive: the fallback must fail
+    # honestly rather than return one.
+    wall = Obstacle((30.0, 8.0), (50.0, 1.0))
+    m = Map("walled", OPEN, (wall,), Pose(10, 20, 0), Pose(30, 20, math.pi))
+    res = solve(m, 0, budget=Budget(max_iterations=3000, max_time_s=5.0))
+    if res.success:
+        assert_valid_path(res, m)
+    else:
+        assert res.path.samples.shape == (0, 4)
+    assert ImprovedRRTConnect(dubins_radius_factor=1.2).config.dubins_radius_factor == 1.2
+    with pytest.raises(InputError, match="dubins_radius_factor"):
+        ImprovedRRTConnect(dubins_radius_factor=0.9)
 
 
 def test_all_components_off_still_gives_a_valid_path():

@@ -57,6 +57,7 @@ from rrtdrive.planning.base import (
     precheck,
     register_planner,
 )
+from rrtdrive.planning.dubins import dubins_paths
 from rrtdrive.planning.postprocess import SmoothingConfig, make_drivable
 from rrtdrive.planning.rrt import SampleSource
 from rrtdrive.types import (
@@ -73,6 +74,7 @@ from rrtdrive.types import (
 
 __all__ = [
     "COMPONENTS",
+    "dubins_fallback",
     "ImprovedConfig",
     "ImprovedRRTConnect",
     "ObtuseTree",
@@ -98,6 +100,7 @@ COMPONENTS: tuple[str, ...] = (
     "sharp_repair",
     "supplement",
     "passage_sampling",
+    "dubins_fallback",
 )
 
 NAME = "improved-rrt-connect"
@@ -120,6 +123,17 @@ class ImprovedConfig:
         point on a narrow passage's centre line (:func:`passage_cells`) and joins
         both trees to it by straight free edges. On by default (the tree growth of
         the paper alone rarely threads a gap barely wider than the car).
+    dubins_fallback : bool
+        Beyond the paper: when no tree path can be made drivable (or the trees
+        never meet), try the shortest Dubins paths from the start pose to the goal
+        pose (turning radius ``dubins_radius_factor / kappa_max``) and return the
+        first that the exact body test clears with the body clearance. Solves goals
+        that need a U-turn or a sharp approach in open space, which the tree paths
+        with their straight legs cannot. On by default; it never runs when the
+        paper's pipeline succeeds.
+    dubins_radius_factor : float
+        Turning radius of the fallback's arcs as a multiple of ``1 / kappa_max``
+        (>= 1; default 1.05, a little room for tracking).
     passage_bias : float
         Share of iterations that sample passages, in ``[0, 1)``.
     expansion_a : float
@@ -165,6 +179,8 @@ class ImprovedConfig:
     sharp_repair: bool = True
     supplement: bool = True
     passage_sampling: bool = True
+    dubins_fallback: bool = True
+    dubins_radius_factor: float = 1.05
     passage_bias: float = 0.1
     expansion_a: float = 1.0
     expansion_lmin: float | None = None
@@ -182,6 +198,11 @@ class ImprovedConfig:
             if not isinstance(value, bool):
                 raise InputError(f"planner.{name}: expected true or false, got {value!r}")
         require_finite("planner.passage_bias", self.passage_bias)
+        require_finite("planner.dubins_radius_factor", self.dubins_radius_factor)
+        if self.dubins_radius_factor < 1.0:
+            raise InputError(
+                f"planner.dubins_radius_factor: must be >= 1, got {self.dubins_radius_factor!r}"
+            )
         if not 0.0 <= self.passage_bias < 1.0:
             raise InputError(f"planner.passage_bias: must lie in [0, 1), got {self.passage_bias!r}")
         require_finite("planner.expansion_a", self.expansion_a)
@@ -774,6 +795,47 @@ def link(
 # ----------------------------------------------------------------------------- planner
 
 
+def dubins_fallback(
+    checker: CollisionChecker,
+    start: Pose,
+    goal: Pose,
+    radius: float,
+    clearance: float,
+    sample_spacing: float = 0.25,
+    check_spacing: float = 0.1,
+) -> tuple[Path, str] | None:
+    """The shortest Dubins path from ``start`` to ``goal`` that the exact body test clears.
+
+    Parameters
+    ----------
+    checker : CollisionChecker
+        The map's checker (exact test, with ``clearance``).
+    start, goal : Pose
+        Rear-axle poses.
+    radius : float
+        Turning radius of the arcs in metres.
+    clearance : float
+        Body clearance to keep (the planner's, capped at the end poses' own).
+    sample_spacing, check_spacing : float
+        Spacing of the returned samples and of the poses tested.
+
+    Returns
+    -------
+    (Path, str) or None
+        The path (rows ``x, y, yaw, kappa``; waypoints at the segment junctions)
+        and its word, or ``None`` when every word collides.
+    """
+    for cand in dubins_paths(start, goal, radius):
+        dense = cand.sample(check_spacing)
+        if not bool(np.all(checker.poses_free(dense[:, :3], clearance=clearance))):
+            continue
+        samples = cand.sample(sample_spacing)
+        samples[-1, :3] = (goal.x, goal.y, goal.yaw)  # exact end (integration error ~1e-12)
+        joints = cand.joints()
+        return Path(samples, np.asarray(joints)), cand.word
+    return None
+
+
 @register_planner(NAME)
 class ImprovedRRTConnect:
     """Improved RRT-Connect (paper Sec. 3) returning only drivable, verified paths.
@@ -1032,6 +1094,33 @@ class ImprovedRRTConnect:
 
         stats["iterations"] = float(iterations)
         stats["growth_time_s"] = watch.elapsed() - stats["postprocess_time_s"]
+        if cfg.dubins_fallback:
+            t0 = time.perf_counter()
+            fallback = dubins_fallback(
+                checker, start, goal, cfg.dubins_radius_factor / problem.vehicle.kappa_max,
+                smoothing.clearance,
+            )
+            stats["dubins_time_s"] = time.perf_counter() - t0
+            if fallback is not None:
+                path, word = fallback
+                stats["dubins_fallback"] = 1.0
+                stats["max_curvature"] = float(np.abs(path.samples[:, 3]).max())
+                why = last_message or "the trees did not meet"
+                return PlanResult(
+                    status=PlanStatus.SOLVED,
+                    planner=NAME,
+                    path=path,
+                    raw_path=last_raw if last_raw is not None else np.vstack([s_xy, g_xy]),
+                    trees=trees,
+                    nodes=int(stats["nodes"]),
+                    iterations=iterations,
+                    planning_time_s=watch.elapsed(),
+                    message=(
+                        f"solved by the Dubins fallback ({word}, {path.length:.1f} m); "
+                        f"the tree paths failed: {why}"
+                    ),
+                    stats=stats,
+                )
         if stats["postprocess_attempts"] > 0 and last_message:
             return failure(
                 NAME,

@@ -1394,9 +1394,15 @@ class _Smoother:
             )
             length = float(np.hypot(*(self.pts[c] - end)))
             new_length = self._reach(f) + 0.5 + 0.1 * length
-            new = end + new_length * ray
-            # Only while the turn at the heading point does not become a hairpin.
-            if math.isfinite(f.reach) and self._turn_ok(c, new) and self._place(c, new):
+            # Only while the fillet fits at all and the turn at the heading point
+            # does not become a hairpin.
+            new = end + new_length * ray if math.isfinite(new_length) else None
+            if (
+                new is not None
+                and math.isfinite(f.reach)
+                and self._turn_ok(c, new)
+                and self._place(c, new)
+            ):
                 self.origin[c] = self.pts[c].copy()
                 return True
         # 3. Stretch the leg: move a corner next to it along its other leg.

@@ -836,7 +836,9 @@ class SpaceTimePlan:
 #: Components that rely on the static obstacles alone and are off in space-time:
 #: the expanded checker is built from the static rectangles (it would lose the
 #: traffic) and passage sampling looks for narrow static passages (a road has none).
-STATIC_ONLY = ("obstacle_expansion", "passage_sampling")
+#: The Dubins fallback is off too: it checks poses without the tree's arrival
+#: times, and on a road a lane change never needs to turn round.
+STATIC_ONLY = ("obstacle_expansion", "passage_sampling", "dubins_fallback")
 
 
 class SpaceTimeRRTConnect(ImprovedRRTConnect):
@@ -852,8 +854,9 @@ class SpaceTimeRRTConnect(ImprovedRRTConnect):
     Parameters
     ----------
     config : ImprovedConfig, optional
-        As for the improved planner; ``obstacle_expansion`` and
-        ``passage_sampling`` default to off (:data:`STATIC_ONLY`).
+        As for the improved planner; ``obstacle_expansion``,
+        ``passage_sampling`` and ``dubins_fallback`` default to off
+        (:data:`STATIC_ONLY`).
     disable : iterable of str, optional
         Components to switch off.
     **options

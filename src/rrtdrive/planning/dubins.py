@@ -1,0 +1,227 @@
+"""Dubins paths: the shortest forward paths of bounded curvature between two poses.
+
+Used by the improved planner as a last resort (``dubins_fallback``): when its tree
+paths cannot be made drivable, for example a goal that needs a U-turn or a sharp
+approach in open space, the shortest Dubins path from the start pose to the goal
+pose is tried, and accepted only when the exact body test clears it.
+
+The six words (LSL, RSR, LSR, RSL, RLR, LRL) follow Shkel & Lumelsky (2001) in
+the normalised frame (turning radius 1, the start at the origin, the goal on the
+x axis). No well-kept Python package provides them (OMPL's ``DubinsStateSpace``
+needs the optional ``ompl`` extra; the tests compare against it when installed),
+so they are written here; every candidate is integrated segment by segment and
+kept only when it ends at the goal pose, so a wrong formula cannot return a path
+that does not connect.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rrtdrive.types import InputError, Pose
+
+__all__ = ["DubinsPath", "dubins_paths", "shortest_dubins"]
+
+_TWO_PI = 2.0 * math.pi
+#: Segment types: +1 left turn, -1 right turn, 0 straight.
+_WORDS: dict[str, tuple[int, int, int]] = {
+    "LSL": (1, 0, 1),
+    "RSR": (-1, 0, -1),
+    "LSR": (1, 0, -1),
+    "RSL": (-1, 0, 1),
+    "RLR": (-1, 1, -1),
+    "LRL": (1, -1, 1),
+}
+
+
+def _mod2pi(a: float) -> float:
+    return a % _TWO_PI
+
+
+@dataclass(frozen=True)
+class DubinsPath:
+    """One Dubins word from ``start`` with turning radius ``radius``.
+
+    Attributes
+    ----------
+    start : Pose
+        Rear-axle start pose.
+    word : str
+        ``"LSL"``, ``"RSR"``, ``"LSR"``, ``"RSL"``, ``"RLR"`` or ``"LRL"``.
+    lengths : tuple of float
+        Arc lengths of the three segments in metres.
+    radius : float
+        Turning radius of the arcs in metres.
+    """
+
+    start: Pose
+    word: str
+    lengths: tuple[float, float, float]
+    radius: float
+
+    @property
+    def length(self) -> float:
+        """Total length in metres."""
+        return float(sum(self.lengths))
+
+    def sample(self, spacing: float) -> np.ndarray:
+        """Rows ``[x, y, yaw, kappa]`` at most ``spacing`` apart, both ends included.
+
+        Positions are exact on the arcs and lines (closed-form integration); the
+        curvature of a row is that of the segment it lies on (at a junction, of the
+        segment that starts there).
+        """
+        if not spacing > 0:
+            raise InputError(f"spacing: must be > 0, got {spacing!r}")
+        rows = []
+        x, y, yaw = self.start.x, self.start.y, self.start.yaw
+        for turn, seg in zip(_WORDS[self.word], self.lengths, strict=True):
+            if seg <= 0.0:
+                continue
+            n = max(1, math.ceil(seg / spacing))
+            u = np.arange(n) * (seg / n)  # the segment's own end is the next one's start
+            kappa = turn / self.radius
+            if turn == 0:
+                xs, ys = x + u * math.cos(yaw), y + u * math.sin(yaw)
+                yaws = np.full(n, yaw)
+            else:
+                yaws = yaw + u * kappa
+                xs = x + (np.sin(yaws) - math.sin(yaw)) / kappa
+                ys = y - (np.cos(yaws) - math.cos(yaw)) / kappa
+            rows.append(np.column_stack([xs, ys, yaws, np.full(n, kappa)]))
+            x, y, yaw = _advance(x, y, yaw, turn, seg, self.radius)
+        if not rows:  # a path of length 0: start and end are the same pose
+            rows.append(np.array([[x, y, yaw, 0.0]]))
+        rows.append(np.array([[x, y, yaw, 0.0]]))
+        out = np.vstack(rows)
+        out[:, 2] = (out[:, 2] + math.pi) % _TWO_PI - math.pi
+        return out
+
+    def joints(self) -> np.ndarray:
+        """Positions ``(4, 2)``: the start, the two segment junctions and the end."""
+        x, y, yaw = self.start.x, self.start.y, self.start.yaw
+        out = [(x, y)]
+        for turn, seg in zip(_WORDS[self.word], self.lengths, strict=True):
+            x, y, yaw = _advance(x, y, yaw, turn, seg, self.radius)
+            out.append((x, y))
+        return np.array(out)
+
+    def end(self) -> tuple[float, float, float]:
+        """Pose ``(x, y, yaw)`` at the end of the path (yaw unwrapped)."""
+        x, y, yaw = self.start.x, self.start.y, self.start.yaw
+        for turn, seg in zip(_WORDS[self.word], self.lengths, strict=True):
+            x, y, yaw = _advance(x, y, yaw, turn, seg, self.radius)
+        return x, y, yaw
+
+
+def _advance(
+    x: float, y: float, yaw: float, turn: int, seg: float, radius: float
+) -> tuple[float, float, float]:
+    if turn == 0:
+        return x + seg * math.cos(yaw), y + seg * math.sin(yaw), yaw
+    kappa = turn / radius
+    yaw1 = yaw + seg * kappa
+    return (
+        x + (math.sin(yaw1) - math.sin(yaw)) / kappa,
+        y - (math.cos(yaw1) - math.cos(yaw)) / kappa,
+        yaw1,
+    )
+
+
+def _normalised(word: str, a: float, b: float, d: float) -> tuple[float, float, float] | None:
+    """Segment lengths (radius 1) of ``word`` from heading ``a`` to ``b`` over distance ``d``."""
+    sa, sb, ca, cb = math.sin(a), math.sin(b), math.cos(a), math.cos(b)
+    cab = math.cos(a - b)
+    if word == "LSL":
+        p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb)
+        if p2 < 0:
+            return None
+        tmp = math.atan2(cb - ca, d + sa - sb)
+        return _mod2pi(tmp - a), math.sqrt(p2), _mod2pi(b - tmp)
+    if word == "RSR":
+        p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa)
+        if p2 < 0:
+            return None
+        tmp = math.atan2(ca - cb, d - sa + sb)
+        return _mod2pi(a - tmp), math.sqrt(p2), _mod2pi(tmp - b)
+    if word == "LSR":
+        p2 = -2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb)
+        if p2 < 0:
+            return None
+        p = math.sqrt(p2)
+        tmp = math.atan2(-ca - cb, d + sa + sb) - math.atan2(-2.0, p)
+        return _mod2pi(tmp - a), p, _mod2pi(tmp - b)
+    if word == "RSL":
+        p2 = -2.0 + d * d + 2.0 * cab - 2.0 * d * (sa + sb)
+        if p2 < 0:
+            return None
+        p = math.sqrt(p2)
+        tmp = math.atan2(ca + cb, d - sa - sb) - math.atan2(2.0, p)
+        return _mod2pi(a - tmp), p, _mod2pi(b - tmp)
+    if word == "RLR":
+        tmp = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0
+        if abs(tmp) > 1.0:
+            return None
+        p = _mod2pi(_TWO_PI - math.acos(tmp))
+        t = _mod2pi(a - math.atan2(ca - cb, d - sa + sb) + p / 2.0)
+        return t, p, _mod2pi(a - b - t + p)
+    # LRL
+    tmp = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa)) / 8.0
+    if abs(tmp) > 1.0:
+        return None
+    p = _mod2pi(_TWO_PI - math.acos(tmp))
+    t = _mod2pi(-a + math.atan2(-ca + cb, d + sa - sb) + p / 2.0)
+    return t, p, _mod2pi(b - a - t + p)
+
+
+def dubins_paths(start: Pose, goal: Pose, radius: float, tol: float = 1e-6) -> list[DubinsPath]:
+    """Every Dubins word that joins ``start`` to ``goal``, shortest first.
+
+    Parameters
+    ----------
+    start, goal : Pose
+        Rear-axle poses (forward driving from ``start`` to ``goal``).
+    radius : float
+        Turning radius of the arcs in metres (> 0).
+    tol : float
+        A candidate is kept only when its integrated end lies within ``tol`` metres
+        and ``tol`` radians of ``goal``.
+
+    Returns
+    -------
+    list of DubinsPath
+
+    Examples
+    --------
+    >>> paths = dubins_paths(Pose(0.0, 0.0, 0.0), Pose(10.0, 0.0, 0.0), 2.0)
+    >>> paths[0].word, round(paths[0].length, 6)
+    ('LSL', 10.0)
+    """
+    if not (math.isfinite(radius) and radius > 0):
+        raise InputError(f"radius: must be > 0, got {radius!r}")
+    dx, dy = goal.x - start.x, goal.y - start.y
+    d = math.hypot(dx, dy) / radius
+    theta = math.atan2(dy, dx) if d > 0 else 0.0
+    a = _mod2pi(start.yaw - theta)
+    b = _mod2pi(goal.yaw - theta)
+    out = []
+    for word in _WORDS:
+        seg = _normalised(word, a, b, d)
+        if seg is None:
+            continue
+        path = DubinsPath(start, word, (seg[0] * radius, seg[1] * radius, seg[2] * radius), radius)
+        x, y, yaw = path.end()
+        dyaw = (yaw - goal.yaw + math.pi) % _TWO_PI - math.pi
+        if math.hypot(x - goal.x, y - goal.y) <= tol * max(1.0, radius) and abs(dyaw) <= tol:
+            out.append(path)
+    out.sort(key=lambda p: p.length)
+    return out
+
+
+def shortest_dubins(start: Pose, goal: Pose, radius: float) -> DubinsPath | None:
+    """The shortest of :func:`dubins_paths`, or ``None`` (never for valid input)."""
+    paths = dubins_paths(start, goal, radius)
+    return paths[0] if paths else None

@@ -1,0 +1,81 @@
+"""Dubins paths: endpoints, curvature, lengths, against OMPL when it is installed."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rrtdrive.planning.dubins import dubins_paths, shortest_dubins
+from rrtdrive.types import InputError, Pose
+
+coord = st.floats(-40.0, 40.0, allow_nan=False)
+angle = st.floats(-math.pi, math.pi, allow_nan=False)
+radius = st.floats(1.0, 12.0, allow_nan=False)
+
+
+def _wrap(a):
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+@settings(max_examples=200, deadline=None)
+@given(coord, coord, angle, coord, coord, angle, radius)
+def test_shortest_path_joins_the_poses_with_bounded_curvature(x0, y0, a0, x1, y1, a1, r):
+    start, goal = Pose(x0, y0, a0), Pose(x1, y1, a1)
+    paths = dubins_paths(start, goal, r)
+    assert paths, "a Dubins path exists between any two poses"
+    best = paths[0]
+    assert [p.length for p in paths] == sorted(p.length for p in paths)
+    assert best.length >= math.hypot(x1 - x0, y1 - y0) - 1e-9
+    s = best.sample(0.2)
+    # Both ends, headings included; samples at most 0.2 m apart.
+    assert np.allclose(s[0, :3], [x0, y0, _wrap(a0)], atol=1e-9)
+    assert math.hypot(s[-1, 0] - x1, s[-1, 1] - y1) < 1e-6 * max(1.0, r)
+    assert abs(_wrap(s[-1, 2] - a1)) < 1e-6
+    gaps = np.hypot(*np.diff(s[:, :2], axis=0).T)
+    assert gaps.max() <= 0.2 + 1e-9
+    # Curvature is 0 or +-1/r, and the polyline's length is the path's (chords of arcs).
+    assert np.all(np.isclose(np.abs(s[:, 3]), 1.0 / r) | (s[:, 3] == 0.0))
+    # A chord of an arc step of at most 0.2 m is shorter by at most (0.2 / r)^2 / 24.
+    assert best.length * (1 - (0.2 / r) ** 2 / 24) - 1e-6 <= gaps.sum() <= best.length + 1e-6
+    # The heading of each sample points along the motion to the next one.
+    mid = (s[1:, :2] - s[:-1, :2])
+    moving = np.hypot(*mid.T) > 1e-6
+    chord = np.arctan2(mid[:, 1], mid[:, 0])
+    # On an arc the chord turns by half the step's angle, asin(chord * kappa / 2).
+    k = s[:-1, 3]
+    yaw_mid = s[:-1, 2] + np.sign(k) * np.arcsin(np.clip(gaps * np.abs(k) / 2, 0.0, 1.0))
+    assert np.all(np.abs(_wrap(chord - yaw_mid))[moving] < 1e-6)
+
+
+def test_known_lengths():
+    # Straight ahead: the line itself.
+    p = shortest_dubins(Pose(0, 0, 0), Pose(10, 0, 0), 2.0)
+    assert p.length == pytest.approx(10.0) and p.lengths[0] == pytest.approx(0.0)
+    # A half circle to the left: pi r.
+    p = shortest_dubins(Pose(0, 0, 0), Pose(0, 4, math.pi), 2.0)
+    assert p.length == pytest.approx(2 * math.pi) and p.word in ("LSL", "LRL")
+    # Turning round in place needs more than a half circle's width: longer than pi r.
+    p = shortest_dubins(Pose(0, 0, 0), Pose(0, 0, math.pi), 2.0)
+    assert p.length > 2 * math.pi
+    with pytest.raises(InputError, match="radius"):
+        dubins_paths(Pose(0, 0, 0), Pose(1, 0, 0), 0.0)
+    with pytest.raises(InputError, match="spacing"):
+        p.sample(0.0)
+
+
+def test_lengths_match_ompl():
+    ob = pytest.importorskip("ompl.base")
+    rng = np.random.default_rng(7)
+    r = 6.0
+    space = ob.DubinsStateSpace(r)
+    a, b = space.allocState(), space.allocState()
+    for _ in range(500):
+        s = Pose(*rng.uniform(-30, 30, 2), rng.uniform(-math.pi, math.pi))
+        g = Pose(*rng.uniform(-30, 30, 2), rng.uniform(-math.pi, math.pi))
+        a.setX(s.x), a.setY(s.y), a.setYaw(s.yaw)
+        b.setX(g.x), b.setY(g.y), b.setYaw(g.yaw)
+        assert shortest_dubins(s, g, r).length == pytest.approx(space.distance(a, b), abs=1e-6)
