@@ -31,6 +31,7 @@ from rrtdrive.planning.improved import (
 )
 from rrtdrive.types import Budget, InputError, PlanStatus, Pose, Tree
 from rrtdrive.vehicle import footprint_corners
+from rrtdrive.verify import verify_path
 
 KAPPA = 1.0 / 6.0
 BUDGET = Budget()
@@ -494,6 +495,17 @@ def test_dubins_fallback_turns_round_in_open_space(goal):
     )
     without = solve(m, 0, disable=("dubins_fallback",))
     assert without.status is PlanStatus.POSTPROCESS_FAILED
+
+
+def test_dubins_tail_rescues_a_goal_facing_into_a_parking_row():
+    # A goal across the aisle's direction with no room for the tree path's last
+    # corner: the fallback keeps the tree path to a node and ends in a Dubins tail.
+    m = dataclasses.replace(builtin_map("parking_lot"), goal=Pose(32.973, 78.843, -1.2366))
+    assert solve(m, 0, disable=("dubins_fallback",)).status is PlanStatus.POSTPROCESS_FAILED
+    res = solve(m, 0)
+    assert_valid_path(res, m)
+    assert "Dubins fallback (tree path to" in res.message
+    assert verify_path(m, res.path).ok
 
 
 def test_dubins_fallback_never_returns_a_colliding_path():

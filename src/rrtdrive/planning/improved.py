@@ -57,7 +57,7 @@ from rrtdrive.planning.base import (
     precheck,
     register_planner,
 )
-from rrtdrive.planning.dubins import dubins_paths
+from rrtdrive.planning.dubins import DubinsPath, dubins_paths
 from rrtdrive.planning.postprocess import SmoothingConfig, make_drivable
 from rrtdrive.planning.rrt import SampleSource
 from rrtdrive.types import (
@@ -795,16 +795,42 @@ def link(
 # ----------------------------------------------------------------------------- planner
 
 
+def _free_dubins(
+    checker: CollisionChecker,
+    start: Pose,
+    goal: Pose,
+    radius: float,
+    clearance: float,
+    check_spacing: float,
+) -> DubinsPath | None:
+    """The shortest Dubins word from ``start`` to ``goal`` whose body stays clear."""
+    for cand in dubins_paths(start, goal, radius):
+        dense = cand.sample(check_spacing)
+        if bool(np.all(checker.poses_free(dense[:, :3], clearance=clearance))):
+            return cand
+    return None
+
+
 def dubins_fallback(
     checker: CollisionChecker,
     start: Pose,
     goal: Pose,
     radius: float,
     clearance: float,
+    raw_paths: Sequence[np.ndarray] = (),
+    smoothing: SmoothingConfig | None = None,
+    expired: Callable[[], bool] | None = None,
     sample_spacing: float = 0.25,
     check_spacing: float = 0.1,
 ) -> tuple[Path, str] | None:
-    """The shortest Dubins path from ``start`` to ``goal`` that the exact body test clears.
+    """A drivable path that ends in a Dubins path, when the tree paths alone fail.
+
+    First the shortest Dubins path from ``start`` to ``goal`` that the exact body
+    test clears. Then, for each tree path in ``raw_paths`` and each of its nodes
+    from the last but one backwards, a *tail*: the node, with the heading of the
+    tree edge into it, is joined to ``goal`` by a clear Dubins path, and the tree
+    path up to the node is made drivable by :func:`make_drivable` with that pose
+    as its goal; the two meet at the node with the same position and heading.
 
     Parameters
     ----------
@@ -813,26 +839,50 @@ def dubins_fallback(
     start, goal : Pose
         Rear-axle poses.
     radius : float
-        Turning radius of the arcs in metres.
+        Turning radius of the Dubins arcs in metres.
     clearance : float
         Body clearance to keep (the planner's, capped at the end poses' own).
+    raw_paths : sequence of numpy.ndarray
+        Tree paths ``(K, 2)`` whose post-processing failed, for tails.
+    smoothing : SmoothingConfig, optional
+        Post-processing settings for the tree part of a tail; no tails without it.
+    expired : callable, optional
+        Stops the search for tails when it returns True.
     sample_spacing, check_spacing : float
         Spacing of the returned samples and of the poses tested.
 
     Returns
     -------
     (Path, str) or None
-        The path (rows ``x, y, yaw, kappa``; waypoints at the segment junctions)
-        and its word, or ``None`` when every word collides.
+        The path (rows ``x, y, yaw, kappa``; waypoints: the control points of the
+        tree part, then the Dubins segment junctions) and a description, or
+        ``None`` when nothing fits.
     """
-    for cand in dubins_paths(start, goal, radius):
-        dense = cand.sample(check_spacing)
-        if not bool(np.all(checker.poses_free(dense[:, :3], clearance=clearance))):
-            continue
-        samples = cand.sample(sample_spacing)
+    direct = _free_dubins(checker, start, goal, radius, clearance, check_spacing)
+    if direct is not None:
+        samples = direct.sample(sample_spacing)
         samples[-1, :3] = (goal.x, goal.y, goal.yaw)  # exact end (integration error ~1e-12)
-        joints = cand.joints()
-        return Path(samples, np.asarray(joints)), cand.word
+        return Path(samples, direct.joints()), direct.word
+    if smoothing is None:
+        return None
+    for raw in raw_paths:
+        for i in range(len(raw) - 2, 0, -1):
+            if expired is not None and expired():
+                return None
+            yaw = math.atan2(raw[i, 1] - raw[i - 1, 1], raw[i, 0] - raw[i - 1, 0])
+            joint = Pose(float(raw[i, 0]), float(raw[i, 1]), yaw)
+            tail = _free_dubins(checker, joint, goal, radius, clearance, check_spacing)
+            if tail is None:
+                continue
+            head = make_drivable(raw[: i + 1], start, joint, checker, smoothing)
+            if not head.ok:
+                continue
+            rest = tail.sample(sample_spacing)
+            rest[-1, :3] = (goal.x, goal.y, goal.yaw)
+            samples = np.vstack([head.samples, rest[1:]])
+            waypoints = np.vstack([head.control_points, tail.joints()[1:]])
+            where = f"({joint.x:.1f}, {joint.y:.1f})"
+            return Path(samples, waypoints), f"tree path to {where} + {tail.word}"
     return None
 
 
@@ -957,6 +1007,7 @@ class ImprovedRRTConnect:
         hg = np.array([math.cos(goal.yaw), math.sin(goal.yaw)])
         last_message = ""
         last_raw: np.ndarray | None = None
+        failed_raws: list[np.ndarray] = []
 
         def finish(raw: np.ndarray, trees: tuple[Tree, ...], iterations: int) -> PlanResult | None:
             nonlocal last_message, last_raw
@@ -968,6 +1019,7 @@ class ImprovedRRTConnect:
             last_raw = raw
             if not res.ok:
                 last_message = res.message
+                failed_raws.append(raw)
                 return None
             stats["iterations"] = float(iterations)
             stats["key_points"] = float(len(res.key_points))
@@ -1098,7 +1150,7 @@ class ImprovedRRTConnect:
             t0 = time.perf_counter()
             fallback = dubins_fallback(
                 checker, start, goal, cfg.dubins_radius_factor / problem.vehicle.kappa_max,
-                smoothing.clearance,
+                smoothing.clearance, failed_raws[::-1], smoothing, watch.expired,
             )
             stats["dubins_time_s"] = time.perf_counter() - t0
             if fallback is not None:
@@ -1116,7 +1168,7 @@ class ImprovedRRTConnect:
                     iterations=iterations,
                     planning_time_s=watch.elapsed(),
                     message=(
-                        f"solved by the Dubins fallback ({word}, {path.length:.1f} m); "
+                        f"solved by the Dubins fallback ({word}; {path.length:.1f} m); "
                         f"the tree paths failed: {why}"
                     ),
                     stats=stats,
