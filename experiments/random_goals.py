@@ -1,17 +1,20 @@
-"""The improved planner on random goal poses, with and without the Dubins fallback.
+"""The improved planner on random goal (or start) poses, with and without the Dubins fallback.
 
 Usage::
 
     python experiments/random_goals.py --map parking_lot --goals 100 --out results
+    python experiments/random_goals.py --map parking_lot --goals 100 --vary start --out results
 
-Draws ``--goals`` goal poses uniformly over the map (position and heading, seeded by
+Draws ``--goals`` poses uniformly over the map (position and heading, seeded by
 ``--seed``), keeps those where the car's body is free, and plans from the map's
-start to each with ``improved-rrt-connect`` twice: as shipped and with
-``dubins_fallback`` off (the paper's pipeline alone). Every solved path is checked
+start to each (``--vary start``: from each to the map's goal) with
+``improved-rrt-connect`` twice: as shipped and with ``dubins_fallback`` off (the
+paper's pipeline alone). Every solved path is checked
 by the independent :func:`rrtdrive.verify.verify_path`. A forward-only car cannot
 reach every free pose (a car nose-first against a wall can only have reversed
 there), so the share solved is a lower bound of what is reachable, not a rate
-against a known answer. Writes ``OUT/random_goals_MAP.json`` and ``.md``.
+against a known answer. Writes ``OUT/random_goals_MAP.json`` and ``.md``
+(``random_starts_MAP`` with ``--vary start``).
 """
 
 from __future__ import annotations
@@ -34,8 +37,8 @@ from rrtdrive.types import Budget, InputError, Pose
 from rrtdrive.verify import verify_path
 
 
-def draw_goals(map_name: str, count: int, seed: int) -> list[Pose]:
-    """``count`` seeded goal poses where the body is free and the map accepts them."""
+def draw_goals(map_name: str, count: int, seed: int, field: str = "goal") -> list[Pose]:
+    """``count`` seeded poses where the body is free and the map accepts them as ``field``."""
     base = builtin_map(map_name)
     checker = cached_checker(base)
     rng = np.random.default_rng(seed)
@@ -47,7 +50,7 @@ def draw_goals(map_name: str, count: int, seed: int) -> list[Pose]:
         if not checker.pose_free(pose.as_tuple()):
             continue
         try:
-            dataclasses.replace(base, goal=pose)
+            dataclasses.replace(base, **{field: pose})
         except InputError:
             continue
         goals.append(pose)
@@ -60,6 +63,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--goals", type=int, default=100)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--max-time", type=float, default=5.0)
+    ap.add_argument("--vary", choices=("goal", "start"), default="goal")
     ap.add_argument("--out", default="results")
     args = ap.parse_args(argv)
     if args.goals < 1:
@@ -68,10 +72,10 @@ def main(argv: list[str] | None = None) -> int:
     budget = Budget(max_time_s=args.max_time)
     arms = {"with fallback": (), "paper pipeline (fallback off)": ("dubins_fallback",)}
     rows = []
-    for k, goal in enumerate(draw_goals(args.map, args.goals, args.seed)):
-        m = dataclasses.replace(base, goal=goal)
+    for k, pose in enumerate(draw_goals(args.map, args.goals, args.seed, args.vary)):
+        m = dataclasses.replace(base, **{args.vary: pose})
         problem = PlanningProblem.from_map(m)
-        row = {"goal": goal.as_tuple()}
+        row = {args.vary: pose.as_tuple()}
         for arm, disable in arms.items():
             res = ImprovedRRTConnect(disable=disable).solve(
                 problem, np.random.default_rng(0), budget
@@ -84,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
                 "length_m": res.path.length if res.success else None,
             }
         rows.append(row)
-        print(f"goal {k + 1}/{args.goals}", file=sys.stderr, end="\r")
+        print(f"{args.vary} {k + 1}/{args.goals}", file=sys.stderr, end="\r")
     print(file=sys.stderr)
     summary = {}
     for arm in arms:
@@ -105,17 +109,19 @@ def main(argv: list[str] | None = None) -> int:
     )
     out = FsPath(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    stem = f"random_goals_{args.map}"
+    stem = f"random_{args.vary}s_{args.map}"
     write_text_atomic(out / f"{stem}.json", json.dumps(
-        {"command": command, "map": args.map, "seed": args.seed, "summary": summary,
+        {"command": command, "map": args.map, "seed": args.seed, "vary": args.vary,
+         "summary": summary,
          "rows": rows}, indent=1) + "\n")
     lines = [
-        f"# Random goal poses on `{args.map}`: improved RRT-Connect with and without the "
-        "Dubins fallback", "",
+        f"# Random {args.vary} poses on `{args.map}`: improved RRT-Connect with and without "
+        "the Dubins fallback", "",
         f"Command: `{command}`  ",
-        f"{args.goals} goal poses drawn uniformly (position and heading, seed {args.seed}) "
-        "where the body is free; start = the map's; planner seed 0; every solved path "
-        "checked by `verify_path`.", "",
+        f"{args.goals} {args.vary} poses drawn uniformly (position and heading, seed "
+        f"{args.seed}) where the body is free; "
+        f"{'start' if args.vary == 'goal' else 'goal'} = the map's; planner seed 0; every "
+        "solved path checked by `verify_path`.", "",
         "| planner | solved | verified | solved by the fallback | other outcomes "
         "| median time of the solved [ms] |",
         "|---|---|---|---|---|---|",

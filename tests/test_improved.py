@@ -508,6 +508,17 @@ def test_dubins_tail_rescues_a_goal_facing_into_a_parking_row():
     assert verify_path(m, res.path).ok
 
 
+def test_dubins_lead_rescues_a_start_facing_across_the_aisle():
+    # The mirror image: a Dubins path from the start to a tree node, then the tree path.
+    start = Pose(20.34552406761496, 26.23133404418495, 1.573087632505973)
+    m = dataclasses.replace(builtin_map("parking_lot"), start=start)
+    assert solve(m, 0, disable=("dubins_fallback",)).status is PlanStatus.POSTPROCESS_FAILED
+    res = solve(m, 0)
+    assert_valid_path(res, m)
+    assert "+ tree path from" in res.message
+    assert verify_path(m, res.path).ok
+
+
 def test_dubins_fallback_never_returns_a_colliding_path():
     # A wall across the loops every Dubins word would drive: the fallback must fail
     # honestly rather than return one.

@@ -831,6 +831,9 @@ def dubins_fallback(
     tree edge into it, is joined to ``goal`` by a clear Dubins path, and the tree
     path up to the node is made drivable by :func:`make_drivable` with that pose
     as its goal; the two meet at the node with the same position and heading.
+    Last, the mirror image, a *lead*: a clear Dubins path from ``start`` to a node
+    (with the heading of the tree edge out of it, nodes in driving order), then the
+    tree path from there made drivable.
 
     Parameters
     ----------
@@ -883,6 +886,24 @@ def dubins_fallback(
             waypoints = np.vstack([head.control_points, tail.joints()[1:]])
             where = f"({joint.x:.1f}, {joint.y:.1f})"
             return Path(samples, waypoints), f"tree path to {where} + {tail.word}"
+    for raw in raw_paths:
+        for i in range(1, len(raw) - 1):
+            if expired is not None and expired():
+                return None
+            yaw = math.atan2(raw[i + 1, 1] - raw[i, 1], raw[i + 1, 0] - raw[i, 0])
+            joint = Pose(float(raw[i, 0]), float(raw[i, 1]), yaw)
+            lead = _free_dubins(checker, start, joint, radius, clearance, check_spacing)
+            if lead is None:
+                continue
+            rest = make_drivable(raw[i:], joint, goal, checker, smoothing)
+            if not rest.ok:
+                continue
+            first = lead.sample(sample_spacing)
+            first[-1, :3] = (joint.x, joint.y, joint.yaw)
+            samples = np.vstack([first[:-1], rest.samples])
+            waypoints = np.vstack([lead.joints()[:-1], rest.control_points])
+            where = f"({joint.x:.1f}, {joint.y:.1f})"
+            return Path(samples, waypoints), f"{lead.word} + tree path from {where}"
     return None
 
 
