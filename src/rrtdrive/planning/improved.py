@@ -1199,7 +1199,8 @@ class ImprovedRRTConnect:
                 NAME,
                 PlanStatus.POSTPROCESS_FAILED,
                 watch,
-                f"{last_message} (after {int(stats['postprocess_attempts'])} tree path(s))",
+                f"{last_message} (after {int(stats['postprocess_attempts'])} tree path(s)"
+                + ("; no clear Dubins path, tail or lead either)" if cfg.dubins_fallback else ")"),
                 trees=trees,
                 iterations=iterations,
                 raw_path=last_raw,
