@@ -44,37 +44,9 @@ def ompl_run(kind: str, planner_name: str, problem: PlanningProblem, seed: int, 
     from ompl import geometric as og
     from ompl import util as ou
 
-    checker, m = problem.checker, problem.map
-    xmin, ymin, xmax, ymax = m.bounds
-    if kind == "r2":
-        space = ob.RealVectorStateSpace(2)
-    else:
-        space = ob.DubinsStateSpace(problem.vehicle.min_turning_radius)
-    bounds = ob.RealVectorBounds(2)
-    bounds.setLow(0, xmin)
-    bounds.setLow(1, ymin)
-    bounds.setHigh(0, xmax)
-    bounds.setHigh(1, ymax)
-    space.setBounds(bounds)
-    ss = og.SimpleSetup(space)
-    if kind == "r2":
-        clearance, radius = checker.clearance, checker.edge_radius
-        ss.setStateValidityChecker(lambda s: clearance(s[0], s[1]) >= radius)
-    else:
-        free = checker.pose_free_fast
-        ss.setStateValidityChecker(lambda s: free(s.getX(), s.getY(), s.getYaw()))
-    si = ss.getSpaceInformation()
-    si.setStateValidityCheckingResolution(0.25 / space.getMaximumExtent())
-    start, goal = space.allocState(), space.allocState()
-    if kind == "r2":
-        start[0], start[1] = problem.start.x, problem.start.y
-        goal[0], goal[1] = problem.goal.x, problem.goal.y
-    else:
-        for st, pose in ((start, problem.start), (goal, problem.goal)):
-            st.setX(pose.x)
-            st.setY(pose.y)
-            st.setYaw(pose.yaw)
-    ss.setStartAndGoalStates(start, goal)
+    from rrtdrive.bench.ompl_planners import simple_setup
+
+    ss, si = simple_setup(problem, kind)
     # OMPL takes a seed only before its first random number in a process, so OMPL
     # rows are not reproducible seed by seed here; ours are.
     ou.RNG.setSeed(seed + 1)

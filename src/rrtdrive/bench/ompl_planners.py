@@ -50,7 +50,7 @@ from rrtdrive.planning.base import (
 )
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, wrap_angle
 
-__all__ = ["OmplPlanner", "OMPL_PLANNERS", "SPACES", "ALGORITHMS"]
+__all__ = ["OmplPlanner", "OMPL_PLANNERS", "SPACES", "ALGORITHMS", "simple_setup"]
 
 #: Space short names.
 SPACES = ("r2", "rs")
@@ -84,6 +84,64 @@ def _ompl() -> tuple[Any, Any, Any]:
         ) from None
     ou.setLogLevel(ou.LogLevel.LOG_NONE)
     return ob, og, ou
+
+
+def simple_setup(problem: PlanningProblem, space_kind: str) -> tuple[Any, Any]:
+    """OMPL's ``SimpleSetup`` for ``problem`` on rrtdrive's checker, start and goal set.
+
+    Parameters
+    ----------
+    problem : PlanningProblem
+        Map, checker, start and goal.
+    space_kind : str
+        ``"r2"`` (``RealVectorStateSpace(2)``, valid where the clearance reaches the
+        edge test's capsule radius), ``"rs"`` (``ReedsSheppStateSpace``) or
+        ``"dubins"`` (``DubinsStateSpace``), both with the car's minimum turning
+        radius and valid where the body's covering discs are clear. Motions are
+        checked every 0.25 m.
+
+    Returns
+    -------
+    ss, si
+        The ``SimpleSetup`` (no planner yet) and its ``SpaceInformation``.
+    """
+    ob, og, _ = _ompl()
+    checker = problem.checker
+    r2 = space_kind == "r2"
+    if r2:
+        space = ob.RealVectorStateSpace(2)
+    elif space_kind == "rs":
+        space = ob.ReedsSheppStateSpace(problem.vehicle.min_turning_radius)
+    elif space_kind == "dubins":
+        space = ob.DubinsStateSpace(problem.vehicle.min_turning_radius)
+    else:
+        raise InputError(f"space: expected r2, rs or dubins, got {space_kind!r}")
+    xmin, ymin, xmax, ymax = problem.bounds
+    bounds = ob.RealVectorBounds(2)
+    bounds.setLow(0, xmin)
+    bounds.setLow(1, ymin)
+    bounds.setHigh(0, xmax)
+    bounds.setHigh(1, ymax)
+    space.setBounds(bounds)
+    ss = og.SimpleSetup(space)
+    if r2:
+        clearance, radius = checker.clearance, checker.edge_radius
+        ss.setStateValidityChecker(lambda s: clearance(s[0], s[1]) >= radius)
+    else:
+        free = checker.pose_free_fast
+        ss.setStateValidityChecker(lambda s: free(s.getX(), s.getY(), s.getYaw()))
+    si = ss.getSpaceInformation()
+    si.setStateValidityCheckingResolution(_SPACING / space.getMaximumExtent())
+    start, goal = space.allocState(), space.allocState()
+    for st, pose in ((start, problem.start), (goal, problem.goal)):
+        if r2:
+            st[0], st[1] = pose.x, pose.y
+        else:
+            st.setX(pose.x)
+            st.setY(pose.y)
+            st.setYaw(pose.yaw)
+    ss.setStartAndGoalStates(start, goal)
+    return ss, si
 
 
 @dataclass(frozen=True)
@@ -158,35 +216,7 @@ class OmplPlanner:
                 self.name, PlanStatus.INVALID_GOAL, watch, "goal: the car's body collides there"
             )
         r2 = self.space == "r2"
-        if r2:
-            space = ob.RealVectorStateSpace(2)
-        else:
-            space = ob.ReedsSheppStateSpace(problem.vehicle.min_turning_radius)
-        xmin, ymin, xmax, ymax = problem.bounds
-        bounds = ob.RealVectorBounds(2)
-        bounds.setLow(0, xmin)
-        bounds.setLow(1, ymin)
-        bounds.setHigh(0, xmax)
-        bounds.setHigh(1, ymax)
-        space.setBounds(bounds)
-        ss = og.SimpleSetup(space)
-        if r2:
-            clearance, radius = checker.clearance, checker.edge_radius
-            ss.setStateValidityChecker(lambda s: clearance(s[0], s[1]) >= radius)
-        else:
-            free = checker.pose_free_fast
-            ss.setStateValidityChecker(lambda s: free(s.getX(), s.getY(), s.getYaw()))
-        si = ss.getSpaceInformation()
-        si.setStateValidityCheckingResolution(_SPACING / space.getMaximumExtent())
-        start, goal = space.allocState(), space.allocState()
-        for st, pose in ((start, problem.start), (goal, problem.goal)):
-            if r2:
-                st[0], st[1] = pose.x, pose.y
-            else:
-                st.setX(pose.x)
-                st.setY(pose.y)
-                st.setYaw(pose.yaw)
-        ss.setStartAndGoalStates(start, goal)
+        ss, si = simple_setup(problem, self.space)
         ou.RNG.setSeed(int(rng.integers(1, 2**31 - 1)))  # before the planner is built
         planner = getattr(og, ALGORITHMS[self.algorithm])(si)
         range_m = self.range_m if self.range_m is not None else _DEFAULT_RANGE.get(self.algorithm)
