@@ -127,6 +127,24 @@ def test_custom_map_file_and_plot(capsys, tmp_path):
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
 
 
+def test_u_turn_on_an_open_map_file(capsys, tmp_path):
+    # A user's own map: a goal behind the start, facing back. Solved (the Dubins
+    # fallback), and --disable dubins_fallback gives the paper pipeline's honest failure.
+    f = tmp_path / "field.json"
+    f.write_text(json.dumps({
+        "name": "field", "bounds": [0, 0, 60, 40], "obstacles": [],
+        "start": [10, 20, 0], "goal": [30, 20, 3.14159265],
+    }))
+    code, out, _ = run(capsys, "plan", str(f), "--json", "-")
+    res = json.loads(out)
+    assert code == 0 and res["success"] and "Dubins fallback" in res["message"]
+    xy = np.array(res["path"])[:, :2]
+    assert np.allclose(xy[0], [10, 20]) and np.allclose(xy[-1], [30, 20])
+    assert xy[:, 0].max() > 32.0  # it loops beyond the goal to turn round
+    code, out, _ = run(capsys, "plan", str(f), "--disable", "dubins_fallback", "--json", "-")
+    assert code == 1 and json.loads(out)["status"] == "postprocess_failed"
+
+
 def test_json_to_file_is_atomic(capsys, tmp_path):
     target = tmp_path / "r.json"
     code, _, _ = run(capsys, "plan", "overtake", "--planner", "rrt", "--json", str(target))
