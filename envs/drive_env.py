@@ -59,7 +59,15 @@ from rrtdrive.sim.scenes import (
     scenario_rngs,
 )
 from rrtdrive.sim.traffic import OncomingGate, conflict_zone
-from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, wrap_angle
+from rrtdrive.types import (
+    Budget,
+    InputError,
+    Path,
+    PlanResult,
+    PlanStatus,
+    require_int,
+    wrap_angle,
+)
 
 __all__ = ["DriveEnv", "RewardWeights", "observation_names", "OBS_CLIP"]
 
@@ -175,15 +183,6 @@ def observation_names(n_ref_points: int, n_vehicles: int = 0) -> list[str]:
     for j in range(1, n_vehicles + 1):
         names += [f"veh_{f}_{j}" for f in VEHICLE_FEATURES]
     return names
-
-
-def _require_int(name: str, value: Any, lo: int, hi: int | None = None) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise InputError(f"{name}: expected an integer, got {value!r}")
-    if value < lo or (hi is not None and value > hi):
-        rng = f">= {lo}" if hi is None else f"in {lo}..{hi}"
-        raise InputError(f"{name}: must be {rng}, got {value!r}")
-    return int(value)
 
 
 def _require_number(name: str, value: Any, *, positive: bool = True) -> float:
@@ -372,11 +371,11 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         self.controller_name = controller
         self.residual = residual
         self.residual_scale = _require_number("residual_scale", residual_scale)
-        self.n_ref_points = _require_int("n_ref_points", n_ref_points, 1, 200)
+        self.n_ref_points = require_int("n_ref_points", n_ref_points, 1, 200)
         self.ref_spacing = _require_number("ref_spacing", ref_spacing)
-        self.n_vehicles = _require_int("n_vehicles", n_vehicles, 0, 50)
+        self.n_vehicles = require_int("n_vehicles", n_vehicles, 0, 50)
         self.vehicle_range = _require_number("vehicle_range", vehicle_range)
-        self.action_repeat = _require_int("action_repeat", action_repeat, 1, 1000)
+        self.action_repeat = require_int("action_repeat", action_repeat, 1, 1000)
         self.sim_config = SimConfig(simulation_frequency=simulation_frequency)
         self.max_time_s = None if max_time_s is None else _require_number("max_time_s", max_time_s)
         self.max_cte = None if max_cte is None else _require_number("max_cte", max_cte)
@@ -585,7 +584,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
                 )
         requested = opts.get("episode_seed")
         if requested is not None:
-            s = _require_int("options.episode_seed", requested, 0)
+            s = require_int("options.episode_seed", requested, 0)
             plan = self._start_episode(s)
             if not plan.success or self._over:
                 raise RuntimeError(

@@ -52,6 +52,45 @@ def require_positive(name: str, value: float) -> None:
         raise InputError(f"{name}: must be > 0, got {value!r}")
 
 
+def require_int(name: str, value: object, minimum: int = 1, maximum: int | None = None) -> int:
+    """Raise :class:`InputError` naming ``name`` unless ``value`` is an integer in range.
+
+    Booleans are rejected (``True`` is an ``int`` to Python, never to a user).
+
+    Parameters
+    ----------
+    name : str
+        Field name used in the error message.
+    value : object
+        The value to check.
+    minimum, maximum : int
+        Inclusive bounds (``maximum=None``: no upper bound).
+
+    Returns
+    -------
+    int
+        ``value`` as a plain ``int``.
+
+    Examples
+    --------
+    >>> require_int("runs", 3)
+    3
+    >>> require_int("runs", 0)
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: runs: must be an integer >= 1, got 0
+    """
+    if (
+        isinstance(value, (bool, np.bool_))
+        or not isinstance(value, (int, np.integer))
+        or value < minimum
+        or (maximum is not None and value > maximum)
+    ):
+        bound = f">= {minimum}" if maximum is None else f"in {minimum}..{maximum}"
+        raise InputError(f"{name}: must be an integer {bound}, got {value!r}")
+    return int(value)
+
+
 def wrap_angle(angle: float | np.ndarray) -> float | np.ndarray:
     """Wrap an angle (or an array of angles) to [-pi, pi)."""
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
@@ -263,12 +302,7 @@ class Budget:
     max_time_s: float = 5.0
 
     def __post_init__(self) -> None:
-        if isinstance(self.max_iterations, bool) or not isinstance(self.max_iterations, int):
-            raise InputError(
-                f"budget.max_iterations: expected an integer, got {self.max_iterations!r}"
-            )
-        if self.max_iterations <= 0:
-            raise InputError(f"budget.max_iterations: must be > 0, got {self.max_iterations}")
+        require_int("budget.max_iterations", self.max_iterations)
         require_positive("budget.max_time_s", self.max_time_s)
 
 

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path as FsPath
 from typing import Any
 
-from rrtdrive.types import InputError
+from rrtdrive.types import InputError, require_int
 
 __all__ = [
     "BenchConfig",
@@ -75,14 +75,6 @@ def _names(field_name: str, value: object) -> tuple[str, ...]:
             if part not in out:
                 out.append(part)
     return tuple(out)
-
-
-def _int(field_name: str, value: object, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise InputError(f"{field_name}: expected an integer >= {minimum}, got {value!r}")
-    if value < minimum:
-        raise InputError(f"{field_name}: must be >= {minimum}, got {value}")
-    return int(value)
 
 
 def _positive(field_name: str, value: object) -> float:
@@ -185,16 +177,16 @@ class BenchConfig:
         set_ = object.__setattr__
         for name in ("maps", "scenarios", "planners", "controllers"):
             set_(self, name, _names(name, getattr(self, name)))
-        set_(self, "seeds", _int("seeds", self.seeds, 1))
+        set_(self, "seeds", require_int("seeds", self.seeds, 1))
         if self.workers is not None:
-            set_(self, "workers", _int("workers", self.workers, 1))
+            set_(self, "workers", require_int("workers", self.workers, 1))
         if not isinstance(self.out, (str, os.PathLike)) or not str(self.out):
             raise InputError(f"out: expected a folder name, got {self.out!r}")
         set_(self, "out", str(self.out))
         set_(self, "max_time_s", _positive("max_time_s", self.max_time_s))
-        set_(self, "max_iterations", _int("max_iterations", self.max_iterations, 1))
+        set_(self, "max_iterations", require_int("max_iterations", self.max_iterations, 1))
         set_(self, "run_timeout_s", _positive("run_timeout_s", self.run_timeout_s))
-        set_(self, "retries", _int("retries", self.retries, 0))
+        set_(self, "retries", require_int("retries", self.retries, 0))
         if self.ray is not None and not isinstance(self.ray, str):
             raise InputError(f"ray: expected an address string, got {self.ray!r}")
         if not isinstance(self.plots, bool):

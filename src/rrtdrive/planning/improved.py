@@ -69,6 +69,7 @@ from rrtdrive.types import (
     Pose,
     Tree,
     require_finite,
+    require_int,
     require_positive,
 )
 
@@ -226,9 +227,7 @@ class ImprovedConfig:
                 f"planner.body_clearance: must be >= 0, got {self.body_clearance!r}"
             )
         for name in ("max_postprocess_attempts", "max_repair_rounds"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise InputError(f"planner.{name}: must be a positive integer, got {value!r}")
+            require_int(f"planner.{name}", getattr(self, name))
 
     def without(self, *components: str) -> ImprovedConfig:
         """A copy with the named components switched off.

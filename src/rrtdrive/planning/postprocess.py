@@ -43,7 +43,7 @@ import shapely
 from numpy.lib.stride_tricks import sliding_window_view
 from scipy.interpolate import BSpline
 
-from rrtdrive.types import InputError, Pose, require_positive, wrap_angle
+from rrtdrive.types import InputError, Pose, require_int, require_positive, wrap_angle
 
 __all__ = [
     "EdgeChecker",
@@ -732,14 +732,7 @@ class SmoothingConfig:
             )
         if not 0.0 < self.fillet_max_angle <= math.pi / 2:
             raise InputError("smoothing.fillet_max_angle: must lie in (0, pi/2]")
-        if (
-            isinstance(self.max_rounds, bool)
-            or not isinstance(self.max_rounds, int)
-            or self.max_rounds < 1
-        ):
-            raise InputError(
-                f"smoothing.max_rounds: must be a positive integer, got {self.max_rounds!r}"
-            )
+        require_int("smoothing.max_rounds", self.max_rounds)
 
 
 @dataclass(frozen=True, eq=False)

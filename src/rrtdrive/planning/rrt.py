@@ -30,6 +30,7 @@ from rrtdrive.types import (
     PlanStatus,
     Tree,
     require_finite,
+    require_int,
     require_positive,
 )
 
@@ -73,11 +74,7 @@ def check_count(name: str, value: int) -> int:
     >>> check_count("planner.max_nodes", 450)
     450
     """
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise InputError(f"{name}: expected an integer, got {value!r}")
-    if value <= 0:
-        raise InputError(f"{name}: must be > 0, got {value!r}")
-    return int(value)
+    return require_int(name, value)
 
 
 def check_flag(name: str, value: bool) -> bool:

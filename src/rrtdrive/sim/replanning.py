@@ -59,7 +59,15 @@ from rrtdrive.planning.spacetime import (
 )
 from rrtdrive.sim.drivelog import DriveRecorder
 from rrtdrive.sim.prediction import PREDICTORS, predict
-from rrtdrive.types import Budget, InputError, Path, Pose, require_finite, require_positive
+from rrtdrive.types import (
+    Budget,
+    InputError,
+    Path,
+    Pose,
+    require_finite,
+    require_int,
+    require_positive,
+)
 from rrtdrive.vehicle import footprint_corners
 
 __all__ = [
@@ -217,14 +225,7 @@ class ReplanConfig:
             raise InputError(f"replan.rate_hz: must lie in [2, 5] Hz, got {self.rate_hz!r}")
         if self.budget_s is not None:
             require_positive("replan.budget_s", self.budget_s)
-        if (
-            isinstance(self.max_iterations, bool)
-            or not isinstance(self.max_iterations, int)
-            or self.max_iterations < 1
-        ):
-            raise InputError(
-                f"replan.max_iterations: must be a positive integer, got {self.max_iterations!r}"
-            )
+        require_int("replan.max_iterations", self.max_iterations)
         if not isinstance(self.wall_limit, bool):
             raise InputError(f"replan.wall_limit: expected true or false, got {self.wall_limit!r}")
         require_finite("replan.postprocess_reserve", self.postprocess_reserve)
@@ -251,14 +252,7 @@ class ReplanConfig:
                 raise InputError(f"replan.{name}: must be >= 0, got {value!r}")
         if self.horizon_s < 2.0:
             raise InputError(f"replan.horizon_s: must be >= 2 s, got {self.horizon_s!r}")
-        if (
-            isinstance(self.check_every, bool)
-            or not isinstance(self.check_every, int)
-            or self.check_every < 1
-        ):
-            raise InputError(
-                f"replan.check_every: must be a positive integer, got {self.check_every!r}"
-            )
+        require_int("replan.check_every", self.check_every)
         if not isinstance(self.safety, SafetyConfig):
             raise InputError("replan.safety: expected a SafetyConfig")
         if not isinstance(self.idm, IDMConfig):

@@ -50,7 +50,7 @@ from rrtdrive.maps import (
     parking_spots,
 )
 from rrtdrive.sim.ego import EgoVehicle
-from rrtdrive.types import InputError, Pose, VehicleParams, require_positive
+from rrtdrive.types import InputError, Pose, VehicleParams, require_int, require_positive
 
 __all__ = [
     "SCENARIOS",
@@ -98,13 +98,9 @@ class SimConfig:
     scaling: float = 0.0
 
     def __post_init__(self) -> None:
-        f = self.simulation_frequency
-        if isinstance(f, bool) or not isinstance(f, int) or f < 15:
-            raise InputError(f"sim.simulation_frequency: need an integer >= 15 Hz, got {f!r}")
+        require_int("sim.simulation_frequency", self.simulation_frequency, 15)
         for name in ("screen_width", "screen_height"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < 0:
-                raise InputError(f"sim.{name}: need an integer >= 0, got {v!r}")
+            require_int(f"sim.{name}", getattr(self, name), 0)
         if not (self.scaling >= 0 and math.isfinite(self.scaling)):
             raise InputError(f"sim.scaling: need a number >= 0, got {self.scaling!r}")
 
@@ -271,8 +267,7 @@ def make_scenario(
     rng, _, _ = scenario_rngs(seed)
     if len(jitter) != 3 or any(not (j >= 0 and math.isfinite(j)) for j in jitter):
         raise InputError(f"jitter: need three finite numbers >= 0, got {jitter!r}")
-    if isinstance(oncoming, bool) or not isinstance(oncoming, int) or not 0 <= oncoming <= 10:
-        raise InputError(f"oncoming: need an integer in 0..10, got {oncoming!r}")
+    require_int("oncoming", oncoming, 0, 10)
     if oncoming and name != "overtake":
         raise InputError("oncoming: only the overtake scenario has a count of oncoming cars")
     if name != "overtake-traffic":

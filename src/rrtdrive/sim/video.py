@@ -22,7 +22,7 @@ import numpy as np
 from rrtdrive.atomic import publish, temp_beside
 from rrtdrive.sim.runner import Episode
 from rrtdrive.sim.scenes import SimConfig, build_env
-from rrtdrive.types import InputError, Pose
+from rrtdrive.types import InputError, Pose, require_int
 
 __all__ = ["render_frames", "write_video", "frame_is_blank"]
 
@@ -96,8 +96,7 @@ def render_frames(
     log = episode.log
     if len(log.states) == 0:
         raise InputError("video: the episode has no trajectory (planning failed?)")
-    if isinstance(stride, bool) or not isinstance(stride, int) or stride < 1:
-        raise InputError(f"stride: need an integer >= 1, got {stride!r}")
+    require_int("stride", stride)
     size, scaling, camera = _camera_for(episode)
     sim = sim or SimConfig(simulation_frequency=int(round(1.0 / log.dt)))
     sim = SimConfig(
