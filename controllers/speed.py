@@ -45,8 +45,24 @@ class SpeedConfig:
     stop_speed : float
         ... and slower than this (m/s); from then on it is held at rest.
     jerk_max : float
-        Largest rate of rise of the acceleration command in m/s^3 (smooth starts);
-        braking is never rate-limited.
+        Largest rate of rise of the acceleration command in m/s^3 (smooth starts).
+    jerk_brake_max : float or None
+        Largest rate of *fall* of the command in m/s^3 (smooth braking onsets);
+        ``None``: falls are not limited. Never applies while
+        :attr:`SpeedController.accel_cap` binds (a car-following law must be able to
+        brake at once) nor to the stop past the end of the path.
+    stop_taper : bool
+        The stop at the end of the path brakes with a deceleration that fades
+        linearly to zero (the constant-jerk stop through the remaining distance
+        ``d``: ``a = -2 v^2 / (3 d)``), starting where that law asks for at least
+        ``taper_start`` of ``decel`` within the last 2 m, and holds the car once it
+        is slower than ``taper_stop_speed``; so braking does not end with a jump at
+        standstill. ``False``: the constant ``-v^2 / (2 d)`` of the last 2 m and the
+        hold below ``stop_speed``.
+    taper_start : float
+        See ``stop_taper``; in ``(0, 1]``.
+    taper_stop_speed : float
+        See ``stop_taper`` (m/s).
     """
 
     v_max: float = 3.0
@@ -61,16 +77,28 @@ class SpeedConfig:
     stop_distance: float = 0.05
     stop_speed: float = 0.05
     jerk_max: float = 5.0
+    jerk_brake_max: float | None = 5.0
+    stop_taper: bool = True
+    taper_start: float = 0.75
+    taper_stop_speed: float = 0.01
 
     def __post_init__(self) -> None:
         for name in (
-            "v_max", "a_lat_max", "accel", "decel", "stop_distance", "stop_speed", "jerk_max"
+            "v_max", "a_lat_max", "accel", "decel", "stop_distance", "stop_speed", "jerk_max",
+            "taper_stop_speed",
         ):
             require_positive(f"speed.{name}", getattr(self, name))
         for name in ("v_launch", "kp", "ki", "a_min", "a_max"):
             require_finite(f"speed.{name}", getattr(self, name))
         if self.v_launch < 0 or self.kp < 0 or self.ki < 0:
             raise InputError("speed.v_launch, speed.kp, speed.ki: must be >= 0")
+        if self.jerk_brake_max is not None:
+            require_positive("speed.jerk_brake_max", self.jerk_brake_max)
+        if not isinstance(self.stop_taper, bool):
+            raise InputError(f"speed.stop_taper: expected true or false, got {self.stop_taper!r}")
+        require_finite("speed.taper_start", self.taper_start)
+        if not 0.0 < self.taper_start <= 1.0:
+            raise InputError(f"speed.taper_start: must lie in (0, 1], got {self.taper_start!r}")
         if not self.a_min < 0 < self.a_max:
             raise InputError(
                 f"speed.a_min/a_max: need a_min < 0 < a_max, got {self.a_min}, {self.a_max}"
@@ -163,6 +191,7 @@ class SpeedController:
         self.stop_at: float | None = None
         self.accel_cap: float | None = None
         self.last_a = 0.0
+        self.tapering = False
 
     def retarget(self, profile: SpeedProfile) -> None:
         """Track ``profile`` from now on, keeping the loop's state (integral, last command).
@@ -173,6 +202,7 @@ class SpeedController:
         self.profile = profile
         self.arrived = False
         self.stop_at = None
+        self.tapering = False
 
     def reset(self, profile: SpeedProfile) -> None:
         """Track ``profile`` from scratch."""
@@ -184,6 +214,7 @@ class SpeedController:
         self.stop_at = None
         self.accel_cap = None
         self.last_a = 0.0
+        self.tapering = False
 
     def control(self, s: float, speed: float, t: float) -> float:
         """Acceleration command for the car at arc length ``s`` with ``speed`` at time ``t``."""
@@ -194,7 +225,8 @@ class SpeedController:
         dt = 0.0 if self.last_t is None else max(0.0, t - self.last_t)
         self.last_t = t
         remaining = profile.length - s
-        if self.arrived or (remaining <= cfg.stop_distance and abs(speed) <= cfg.stop_speed):
+        stop_speed = cfg.taper_stop_speed if cfg.stop_taper else cfg.stop_speed
+        if self.arrived or (remaining <= cfg.stop_distance and abs(speed) <= stop_speed):
             # At the goal: hold the car at rest.
             self.arrived = True
             self.v_ref = 0.0
@@ -216,13 +248,26 @@ class SpeedController:
                 a_ref = -speed * speed / (2.0 * max(d, cfg.stop_distance)) if speed > 0 else 0.0
         self.v_ref = v_ref
         if remaining < 2.0 and speed > 0.0:
-            # Final approach: the constant deceleration that stops exactly at the end.
-            a_ref = min(a_ref, -speed * speed / (2.0 * max(remaining, cfg.stop_distance)))
+            if cfg.stop_taper:
+                # The constant-jerk stop through the remaining distance: a state feedback
+                # whose solution from any (v, d) is that stop, its deceleration fading
+                # to 0 at the end. It starts once it asks for a real deceleration (a car
+                # slower than the profile would otherwise creep to the end).
+                a_stop = -2.0 * speed * speed / (3.0 * max(remaining, 1e-3))
+                if self.tapering or a_stop <= -cfg.taper_start * cfg.decel:
+                    self.tapering = True
+                    self.v_ref = 0.0
+                    self.integral = 0.0
+                    return self._limit(a_stop, dt, cfg.jerk_brake_max)
+            else:
+                # Final approach: the constant deceleration that stops exactly at the end.
+                a_ref = min(a_ref, -speed * speed / (2.0 * max(remaining, cfg.stop_distance)))
         err = v_ref - speed
         trial = self.integral + err * dt
         raw = a_ref + cfg.kp * err + cfg.ki * trial
         cap = self.accel_cap
-        a = self._limit(raw if cap is None or raw <= cap else cap, dt)
+        capped = cap is not None and raw > cap
+        a = self._limit(cap if capped else raw, dt, None if capped else cfg.jerk_brake_max)
         if a == raw:
             # Conditional integration (anti-windup): only while the command is not limited.
             limit = cfg.a_max / cfg.ki if cfg.ki > 0 else 0.0
@@ -250,12 +295,14 @@ class SpeedController:
         self.last_a = a
         return a
 
-    def _limit(self, a: float, dt: float) -> float:
-        """Clip to the acceleration limits; a rising command rises at most ``jerk_max``."""
+    def _limit(self, a: float, dt: float, fall_jerk: float | None = None) -> float:
+        """Clip to the acceleration limits; rises at most ``jerk_max``, falls ``fall_jerk``."""
         cfg = self.config
         a = min(max(a, cfg.a_min), cfg.a_max)
         rise = self.last_a + cfg.jerk_max * dt
         if a > rise:
             a = rise
+        if fall_jerk is not None:
+            a = max(a, self.last_a - fall_jerk * dt)
         self.last_a = a
         return a

@@ -18,6 +18,7 @@ simulate``; the report is in ``info["metrics"]`` and on
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Mapping
@@ -466,8 +467,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
     def _speed_config(self, scenario: Scenario) -> SpeedConfig:
         base = {"v_max": scenario.v_max}
         if scenario.is_traffic:
-            t = traffic_speed_config(scenario)
-            base = {"v_max": t.v_max, "accel": t.accel, "a_lat_max": t.a_lat_max}
+            base = dataclasses.asdict(traffic_speed_config(scenario))
         options = {**base, **self.speed_options}
         try:
             return SpeedConfig(**options)

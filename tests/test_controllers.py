@@ -204,3 +204,52 @@ def test_speed_loop_stops_at_the_end():
     assert ctrl.arrived
     assert abs(pos - 30.0) < 0.05
     assert v == 0.0
+
+
+def _drive_straight(cfg: SpeedConfig, length: float = 30.0, dt: float = 0.05):
+    """Point-mass run of the speed loop on a straight profile: positions, commands."""
+    s = np.linspace(0.0, length, int(length * 10) + 1)
+    ctrl = SpeedController(cfg)
+    ctrl.reset(SpeedProfile(s, np.zeros_like(s), cfg))
+    pos, v, cmds = 0.0, 0.0, []
+    for k in range(4000):
+        a = ctrl.control(pos, v, k * dt)
+        cmds.append(a)
+        v1 = max(0.0, v + a * dt)
+        pos += 0.5 * (v + v1) * dt
+        v = v1
+        if ctrl.arrived and v == 0.0 and a == 0.0:
+            break
+    return ctrl, pos, np.array(cmds)
+
+
+def test_default_braking_is_jerk_limited_and_the_stop_tapers():
+    dt = 0.05
+    ctrl, pos, cmds = _drive_straight(SpeedConfig(v_max=3.0), dt=dt)
+    assert ctrl.arrived and abs(pos - 30.0) < 0.05
+    jerk = np.abs(np.diff(cmds)) / dt
+    assert jerk.max() <= 5.0 + 1e-6  # rises (jerk_max) and falls (jerk_brake_max) alike
+    assert cmds.min() < -0.9  # it did brake
+    # The old stop: constant deceleration to standstill, then the hold's jump.
+    old = SpeedConfig(v_max=3.0, jerk_brake_max=None, stop_taper=False)
+    ctrl, pos, cmds = _drive_straight(old, dt=dt)
+    assert ctrl.arrived and abs(pos - 30.0) < 0.05
+    assert (np.abs(np.diff(cmds)) / dt).max() > 15.0
+    with pytest.raises(InputError, match="speed.jerk_brake_max"):
+        SpeedConfig(jerk_brake_max=0.0)
+    with pytest.raises(InputError, match="speed.taper_start"):
+        SpeedConfig(taper_start=0.0)
+
+
+def test_a_following_cap_brakes_at_once():
+    # A car-following law (accel_cap) must not wait for the comfort jerk limit.
+    cfg = SpeedConfig(v_max=5.0)
+    s = np.linspace(0.0, 100.0, 1001)
+    ctrl = SpeedController(cfg)
+    ctrl.reset(SpeedProfile(s, np.zeros_like(s), cfg, v_start=5.0))
+    ctrl.control(10.0, 5.0, 0.0)
+    ctrl.accel_cap = -3.5
+    assert ctrl.control(10.25, 5.0, 0.05) == pytest.approx(-3.5)
+    ctrl.accel_cap = None
+    a = ctrl.control(10.5, 4.8, 0.10)  # released: rises at most jerk_max * dt
+    assert a <= -3.5 + cfg.jerk_max * 0.05 + 1e-9

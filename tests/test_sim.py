@@ -215,6 +215,17 @@ def test_episode_with_a_given_path_is_deterministic_and_successful():
     assert r.steps == len(a.log.controls) and r.steps > 300
 
 
+@needs_improved
+@pytest.mark.parametrize("name", ["parking", "overtake"])
+def test_episode_jerk_stays_within_the_comfort_limits(name):
+    # Jerk-limited braking and the tapered stop: the step-to-step jerk of the applied
+    # command (longitudinal and lateral together) stays near the 5 m/s^3 limits.
+    ep = run_episode(name, IMPROVED, "pure-pursuit", 2)
+    r = evaluate(ep)
+    assert r.success and r.goal_position_err_m < 0.1
+    assert r.max_jerk < 6.0
+
+
 def test_frequency_is_configurable_and_validated():
     scen = make_scenario("overtake", 0, jitter=(0.0, 0.0, 0.0))
     path = lane_change_path(scen.start.as_tuple(), scen.lane_y)

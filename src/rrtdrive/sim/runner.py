@@ -289,8 +289,16 @@ def run_episode(
 
 
 def traffic_speed_config(scenario: Scenario) -> SpeedConfig:
-    """Speed profile of ``overtake-traffic``: its cap, 1.5 m/s^2 to speed up, 2 m/s^2 lateral."""
-    return SpeedConfig(v_max=scenario.v_max, accel=1.5, a_lat_max=2.0)
+    """Speed profile of ``overtake-traffic``: its cap, 1.5 m/s^2 to speed up, 2 m/s^2 lateral.
+
+    Braking is not jerk-limited here and the path-end stop is the constant-deceleration
+    one (``jerk_brake_max=None``, ``stop_taper=False``): the re-planner's space-time
+    checks time plans by the speed profile itself, and the traffic results
+    (docs/traffic.md) were measured with these settings.
+    """
+    return SpeedConfig(
+        v_max=scenario.v_max, accel=1.5, a_lat_max=2.0, jerk_brake_max=None, stop_taper=False
+    )
 
 
 def _run_traffic(
