@@ -535,6 +535,10 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             self._profile = SpeedProfile(np.asarray(p.s), np.asarray(p.kappa), speed, ego.speed)
         self._rec = DriveRecorder(self._sim, self._dt)
         self._k = 0
+        # The last applied and the controller's last acceleration command (both start
+        # at the speed loop's 0, SpeedController.last_a).
+        self._applied_accel = 0.0
+        self._controller_accel = 0.0
         self._t = 0.0
         self._wall = 0.0
         self._status = ""
@@ -636,7 +640,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             a1 *= self.residual_scale
         d_accel = a0 * self._a_max if a0 >= 0.0 else a0 * -self._a_min
         d_steer = a1 * self._steer_limit
-        a_lo, a_hi, lim = self._a_min, self._a_max, self._steer_limit
+        lim = self._steer_limit
 
         ego, ctrl, dt = self._ego, self._ctrl, self._dt
         steps = 0
@@ -659,8 +663,9 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
                     accel, steer = d_accel, d_steer
                 elif ctrl.arrived or ctrl.s >= ctrl.projector.length:
                     accel, steer = c_accel, c_steer
+                    self._controller_accel = c_accel
                 else:
-                    accel = min(max(c_accel + d_accel, a_lo), a_hi)
+                    accel = self._residual_accel(c_accel, d_accel, dt)
                     steer = min(max(c_steer + d_steer, -lim), lim)
             elif self.residual:
                 if self._gate is not None:
@@ -674,12 +679,14 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
                     # Holding at the goal or braking past the end: the controller alone,
                     # so that a biased residual cannot keep the car creeping forever.
                     accel, steer = c_accel, c_steer
+                    self._controller_accel = c_accel
                 else:
-                    accel = min(max(c_accel + d_accel, a_lo), a_hi)
+                    accel = self._residual_accel(c_accel, d_accel, dt)
                     steer = min(max(c_steer + d_steer, -lim), lim)
             else:
                 accel, steer = d_accel, d_steer
             self._rec.step(accel, steer)
+            self._applied_accel = accel
             self._t += dt
             self._k += 1
             steps += 1
@@ -888,6 +895,25 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             out[5 * j : 5 * j + 5] = (
                 1.0, c * dx + s * dy, -s * dx + c * dy, c * dvx + s * dvy, -s * dvx + c * dvy
             )
+
+    def _residual_accel(self, c_accel: float, d_accel: float, dt: float) -> float:
+        """The controller's acceleration plus the residual, within the speed loop's limits.
+
+        Besides the acceleration range, the sum may rise (fall) from the last applied
+        command by at most ``jerk_max`` (``jerk_brake_max``) per second, or by as much
+        as the controller's own command changed since its last one when that is more
+        (its hold at the goal, a following cap): the residual cannot add a jerk the
+        speed loop would not, and a zero residual is the controller's command exactly.
+        """
+        cfg = self._speed
+        prev = self._applied_accel
+        change = c_accel - self._controller_accel
+        self._controller_accel = c_accel
+        hi = min(self._a_max, prev + max(change, cfg.jerk_max * dt))
+        lo = self._a_min
+        if cfg.jerk_brake_max is not None:
+            lo = max(lo, prev + min(change, -cfg.jerk_brake_max * dt))
+        return min(max(c_accel + d_accel, lo), hi)
 
     def _obs32(self) -> np.ndarray:
         return self._obs64.astype(np.float32)  # a fresh array every call

@@ -394,3 +394,23 @@ def test_short_ppo_run_completes():
     action, _ = model.predict(obs, deterministic=True)
     assert action.shape == (2,) and env.action_space.contains(action.astype(np.float32))
     env.close()
+
+
+def test_residual_cannot_add_jerk():
+    # A bang-bang residual on the acceleration: the summed command still rises and
+    # falls by at most the speed loop's 5 m/s^3 (the residual is clipped to the rate
+    # limits around the last applied command).
+    env = gym.make("rrtdrive/Parking-v0", residual=True, residual_scale=1.0, max_time_s=8.0)
+    env.reset(seed=3)
+    done, k = False, 0
+    while not done:
+        action = np.array([1.0 if k % 2 else -1.0, 0.0], np.float32)
+        _, _, terminated, truncated, _ = env.step(action)
+        done, k = terminated or truncated, k + 1
+    log = env.unwrapped.episode.log
+    accel = log.controls[:, 0]
+    jerk = np.abs(np.diff(accel)) / log.dt
+    assert jerk.max() <= 5.0 + 1e-6
+    # The residual did move the command: from rest the controller alone speeds up.
+    assert accel[0] == pytest.approx(-0.25) and np.any(accel < -0.2)
+    env.close()
