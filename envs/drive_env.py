@@ -240,7 +240,9 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
     m/s^2 by default, so 0 means coasting); steering ``d * steer_limit`` with
     ``steer_limit = atan(L kappa_max)`` (22.7°, the car's curvature limit). With
     ``residual=True`` the command is the controller's plus the action mapped the
-    same way and multiplied by ``residual_scale``, clipped to the same limits;
+    same way and multiplied by ``residual_scale``, clipped to the same limits and,
+    for the acceleration, to the speed loop's jerk limits around the last applied
+    command (:meth:`_residual_accel`);
     once the controller holds the car at the end of the path, or brakes past it,
     the residual no longer applies (so a zero action is the plain controller, and
     no residual can keep the car from coming to rest at the goal).
