@@ -642,7 +642,6 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             a1 *= self.residual_scale
         d_accel = a0 * self._a_max if a0 >= 0.0 else a0 * -self._a_min
         d_steer = a1 * self._steer_limit
-        lim = self._steer_limit
 
         ego, ctrl, dt = self._ego, self._ctrl, self._dt
         steps = 0
@@ -663,12 +662,8 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
                     s_before = self._clipped_s(r)
                 if not self.residual:
                     accel, steer = d_accel, d_steer
-                elif ctrl.arrived or ctrl.s >= ctrl.projector.length:
-                    accel, steer = c_accel, c_steer
-                    self._controller_accel = c_accel
                 else:
-                    accel = self._residual_accel(c_accel, d_accel, dt)
-                    steer = min(max(c_steer + d_steer, -lim), lim)
+                    accel, steer = self._residual_command(c_accel, c_steer, d_accel, d_steer)
             elif self.residual:
                 if self._gate is not None:
                     ctrl.speed.stop_at = self._gate.stop_line(
@@ -677,14 +672,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
                 c_accel, c_steer = ctrl.control(
                     VehicleState(r[0], r[1], r[2], ego.speed, ego.steer, self._t)
                 )
-                if ctrl.arrived or ctrl.s >= ctrl.projector.length:
-                    # Holding at the goal or braking past the end: the controller alone,
-                    # so that a biased residual cannot keep the car creeping forever.
-                    accel, steer = c_accel, c_steer
-                    self._controller_accel = c_accel
-                else:
-                    accel = self._residual_accel(c_accel, d_accel, dt)
-                    steer = min(max(c_steer + d_steer, -lim), lim)
+                accel, steer = self._residual_command(c_accel, c_steer, d_accel, d_steer)
             else:
                 accel, steer = d_accel, d_steer
             self._rec.step(accel, steer)
@@ -897,6 +885,20 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             out[5 * j : 5 * j + 5] = (
                 1.0, c * dx + s * dy, -s * dx + c * dy, c * dvx + s * dvy, -s * dvx + c * dvy
             )
+
+    def _residual_command(
+        self, c_accel: float, c_steer: float, d_accel: float, d_steer: float
+    ) -> tuple[float, float]:
+        """Residual mode: the controller's command plus the residual, as applied."""
+        ctrl = self._ctrl
+        if ctrl.arrived or ctrl.s >= ctrl.projector.length:
+            # Holding at the goal or braking past the end: the controller alone,
+            # so that a biased residual cannot keep the car creeping forever.
+            self._controller_accel = c_accel
+            return c_accel, c_steer
+        lim = self._steer_limit
+        accel = self._residual_accel(c_accel, d_accel, self._dt)
+        return accel, min(max(c_steer + d_steer, -lim), lim)
 
     def _residual_accel(self, c_accel: float, d_accel: float, dt: float) -> float:
         """The controller's acceleration plus the residual, within the speed loop's limits.
