@@ -161,6 +161,9 @@ class RewardWeights:
         return cls(**dict(value))
 
 
+#: Residual mode: the residual fades out linearly over this many metres before the goal.
+RESIDUAL_FADE_M = 1.0
+
 #: Per observed vehicle: present (1/0), then its body centre and velocity relative to
 #: the ego's rear axle, in the ego frame.
 VEHICLE_FEATURES = ("present", "dx", "dy", "dvx", "dvy")
@@ -896,9 +899,12 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             # so that a biased residual cannot keep the car creeping forever.
             self._controller_accel = c_accel
             return c_accel, c_steer
+        # The residual fades out over the last RESIDUAL_FADE_M of the path, so that the
+        # hand-over to the controller's hold at the goal does not jump the command.
+        fade = min(1.0, (ctrl.projector.length - ctrl.s) / RESIDUAL_FADE_M)
         lim = self._steer_limit
-        accel = self._residual_accel(c_accel, d_accel, self._dt)
-        return accel, min(max(c_steer + d_steer, -lim), lim)
+        accel = self._residual_accel(c_accel, fade * d_accel, self._dt)
+        return accel, min(max(c_steer + fade * d_steer, -lim), lim)
 
     def _residual_accel(self, c_accel: float, d_accel: float, dt: float) -> float:
         """The controller's acceleration plus the residual, within the speed loop's limits.
