@@ -16,6 +16,7 @@ that does not connect.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -55,12 +56,17 @@ class DubinsPath:
         Arc lengths of the three segments in metres.
     radius : float
         Turning radius of the arcs in metres.
+    goal : Pose, optional
+        The pose the word was solved for (:func:`dubins_paths` sets it after checking
+        that the word reaches it); the last sample is then exactly this pose rather
+        than the integrated end (which differs by ~1e-12).
     """
 
     start: Pose
     word: str
     lengths: tuple[float, float, float]
     radius: float
+    goal: Pose | None = None
 
     @property
     def length(self) -> float:
@@ -95,6 +101,8 @@ class DubinsPath:
             x, y, yaw = _advance(x, y, yaw, turn, seg, self.radius)
         if not rows:  # a path of length 0: start and end are the same pose
             rows.append(np.array([[x, y, yaw, 0.0]]))
+        if self.goal is not None:
+            x, y, yaw = self.goal.x, self.goal.y, self.goal.yaw
         rows.append(np.array([[x, y, yaw, 0.0]]))
         out = np.vstack(rows)
         out[:, 2] = (out[:, 2] + math.pi) % _TWO_PI - math.pi
@@ -216,7 +224,7 @@ def dubins_paths(start: Pose, goal: Pose, radius: float, tol: float = 1e-6) -> l
         x, y, yaw = path.end()
         dyaw = (yaw - goal.yaw + math.pi) % _TWO_PI - math.pi
         if math.hypot(x - goal.x, y - goal.y) <= tol * max(1.0, radius) and abs(dyaw) <= tol:
-            out.append(path)
+            out.append(dataclasses.replace(path, goal=goal))
     out.sort(key=lambda p: p.length)
     return out
 

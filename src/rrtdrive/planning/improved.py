@@ -845,11 +845,11 @@ def dubins_fallback(
     clearance : float
         Body clearance to keep (the planner's, capped at the end poses' own).
     raw_paths : sequence of numpy.ndarray
-        Tree paths ``(K, 2)`` whose post-processing failed, for tails.
+        Tree paths ``(K, 2)`` whose post-processing failed, for tails and leads.
     smoothing : SmoothingConfig, optional
-        Post-processing settings for the tree part of a tail; no tails without it.
+        Post-processing settings for the tree part; no tails or leads without it.
     expired : callable, optional
-        Stops the search for tails when it returns True.
+        Stops the search for tails and leads when it returns True.
     sample_spacing, check_spacing : float
         Spacing of the returned samples and of the poses tested.
 
@@ -862,9 +862,7 @@ def dubins_fallback(
     """
     direct = _free_dubins(checker, start, goal, radius, clearance, check_spacing)
     if direct is not None:
-        samples = direct.sample(sample_spacing)
-        samples[-1, :3] = (goal.x, goal.y, goal.yaw)  # exact end (integration error ~1e-12)
-        return Path(samples, direct.joints()), direct.word
+        return Path(direct.sample(sample_spacing), direct.joints()), direct.word
     if smoothing is None:
         return None
     for raw in raw_paths:
@@ -879,9 +877,7 @@ def dubins_fallback(
             head = make_drivable(raw[: i + 1], start, joint, checker, smoothing)
             if not head.ok:
                 continue
-            rest = tail.sample(sample_spacing)
-            rest[-1, :3] = (goal.x, goal.y, goal.yaw)
-            samples = np.vstack([head.samples, rest[1:]])
+            samples = np.vstack([head.samples, tail.sample(sample_spacing)[1:]])
             waypoints = np.vstack([head.control_points, tail.joints()[1:]])
             where = f"({joint.x:.1f}, {joint.y:.1f})"
             return Path(samples, waypoints), f"tree path to {where} + {tail.word}"
@@ -897,9 +893,7 @@ def dubins_fallback(
             rest = make_drivable(raw[i:], joint, goal, checker, smoothing)
             if not rest.ok:
                 continue
-            first = lead.sample(sample_spacing)
-            first[-1, :3] = (joint.x, joint.y, joint.yaw)
-            samples = np.vstack([first[:-1], rest.samples])
+            samples = np.vstack([lead.sample(sample_spacing)[:-1], rest.samples])
             waypoints = np.vstack([lead.joints()[:-1], rest.control_points])
             where = f"({joint.x:.1f}, {joint.y:.1f})"
             return Path(samples, waypoints), f"{lead.word} + tree path from {where}"
