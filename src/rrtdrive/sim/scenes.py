@@ -435,7 +435,7 @@ class SceneRoad(Road):
         o_pos, o_diag = _centres_and_diagonals(objects)
         for i, vehicle in enumerate(vehicles):
             own = vehicle.diagonal / 2 + vehicle.speed * dt + 1e-9
-            if i + 1 < len(vehicles):
+            if i + 1 < n:
                 d = np.hypot(*(v_pos[i + 1 :] - v_pos[i]).T)
                 for k in np.flatnonzero(d <= own + v_diag[i + 1 :] / 2):
                     vehicle.handle_collisions(vehicles[i + 1 + k], dt)
