@@ -1,0 +1,52 @@
+"""The CommonRoad judge (optional extra): skipped without commonroad-drivability-checker."""
+
+import numpy as np
+import pytest
+
+pytest.importorskip("commonroad_dc.feasibility.feasibility_checker")
+
+from rrtdrive.commonroad_judge import judge_trajectory  # noqa: E402
+from rrtdrive.types import VehicleParams  # noqa: E402
+from rrtdrive.vehicle import bicycle_step  # noqa: E402
+
+DT = 0.05
+
+
+def _drive(steer, accel):
+    veh = VehicleParams()
+    s = [(0.0, 0.0, 0.0, 0.0)]
+    for d, a in zip(steer, accel, strict=True):
+        x, y, yaw, v = s[-1]
+        v1 = v + a * DT
+        x, y, yaw = bicycle_step((x, y, yaw), 0.5 * (v + v1), d, DT, veh.wheelbase)
+        s.append((x, y, yaw, v1))
+    return np.arange(len(s)) * DT, np.array(s)
+
+
+def test_slow_steering_ramp_is_feasible_and_models_agree():
+    n = 200
+    steer = np.clip(np.arange(n) * DT * 0.3, 0.0, 0.3)  # 0.3 rad/s < 0.4
+    accel = np.r_[np.full(40, 1.0), np.zeros(n - 40)]
+    verdict = judge_trajectory(*_drive(steer, accel), steer, accel)
+    assert verdict.feasible and verdict.first_infeasible_step is None
+    assert verdict.max_steer_rate == pytest.approx(0.3)
+    # CommonRoad integrates the steering inside a step, we hold it: a few cm over 60 m.
+    assert verdict.max_position_drift_m < 0.05
+
+
+def test_steering_jump_is_rejected_at_its_step():
+    n = 120
+    steer = np.r_[np.zeros(50), np.full(n - 50, 0.3)]
+    accel = np.r_[np.full(40, 1.0), np.zeros(n - 40)]
+    verdict = judge_trajectory(*_drive(steer, accel), steer, accel)
+    assert not verdict.feasible
+    assert verdict.first_infeasible_step == 50
+    assert verdict.max_steer_rate == pytest.approx(0.3 / DT)
+
+
+def test_the_limit_is_a_parameter():
+    n = 120
+    steer = np.clip(np.arange(n) * DT * 0.3, 0.0, 0.3)
+    accel = np.r_[np.full(40, 1.0), np.zeros(n - 40)]
+    t, states = _drive(steer, accel)
+    assert not judge_trajectory(t, states, steer, accel, steer_rate_limit=0.2).feasible
