@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import Map, Obstacle, builtin_map
 from rrtdrive.planning.base import cached_checker
-from rrtdrive.planning.postprocess import (
+from rrtdrive.planning.smoothing import (
     SmoothingConfig,
     clamped_uniform_knots,
     curvature,
