@@ -51,7 +51,9 @@ class Repairer:
         Tunables.
     """
 
-    def __init__(self, poly: KeyPolygon, ends: Ends, edges: EdgeCache, cfg: SmoothingConfig):
+    def __init__(
+        self, poly: KeyPolygon, ends: Ends, edges: EdgeCache, cfg: SmoothingConfig
+    ) -> None:
         self.poly = poly
         self.ends = ends
         self.edges = edges
