@@ -33,7 +33,7 @@ from scipy import stats
 from rrtdrive.maps import builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.planning.base import polyline_curvature
-from rrtdrive.planning.postprocess import prune
+from rrtdrive.planning.smoothing import prune
 from rrtdrive.plotting import draw_map, draw_path, draw_trees, plot_curvature, save_figure
 from rrtdrive.types import Budget
 from rrtdrive.verify import verify_path

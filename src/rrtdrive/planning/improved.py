@@ -20,7 +20,7 @@ Tree growth (Sec. 3.1): bidirectional RRT-Connect with
 Samples are uniform over the free cells reachable from the start (the
 baselines' :class:`~rrtdrive.planning.rrt.SampleSource`).
 
-Post-processing (Sec. 3.2, :mod:`rrtdrive.planning.postprocess`): pruning,
+Post-processing (Sec. 3.2, :mod:`rrtdrive.planning.smoothing`): pruning,
 sharp-angle repair, control-point supplement, a clamped uniform B-spline and the
 guarantee loop (headings at both ends, ``|kappa| <= kappa_max``, exact body clear
 of the *original* map). A tree path that cannot be made drivable is dropped and
@@ -58,8 +58,8 @@ from rrtdrive.planning.base import (
     register_planner,
 )
 from rrtdrive.planning.dubins import DubinsPath, dubins_paths
-from rrtdrive.planning.postprocess import SmoothingConfig, make_drivable
 from rrtdrive.planning.rrt import SampleSource
+from rrtdrive.planning.smoothing import SmoothingConfig, make_drivable
 from rrtdrive.types import (
     Budget,
     InputError,

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import Map, Obstacle, builtin_map
 from rrtdrive.planning.base import cached_checker
-from rrtdrive.planning.postprocess import (
+from rrtdrive.planning.smoothing import (
     SmoothingConfig,
     clamped_uniform_knots,
     curvature,
@@ -527,3 +527,84 @@ def test_smoothing_config_validation_names_the_field():
         SmoothingConfig(supplement_n=1.0)
     with pytest.raises(InputError, match="smoothing.kappa_max"):
         SmoothingConfig(kappa_max=0.0)
+
+
+def test_repair_constants_are_validated_config_fields_with_the_old_values():
+    cfg = SmoothingConfig()
+    assert cfg.radius_steps == (1.0, 1.6) and len(cfg.corner_moves) == 18
+    assert cfg.corner_moves[0] == ("back", 1.5) and cfg.corner_moves[-1] == ("ahead", 12.0)
+    assert cfg.unprune_turn == math.radians(100.0) and cfg.hairpin_turn == math.radians(135.0)
+    assert cfg.unprune_hairpin_turn == math.radians(120.0)
+    assert cfg.drop_hairpin_turn == math.radians(150.0) and cfg.end_gap == 0.05
+    assert cfg.design_radius == pytest.approx(1.0 / (KAPPA * 0.97 * math.cos(math.radians(5.0))))
+    for kwargs, name in (
+        ({"radius_steps": ()}, "radius_steps"),
+        ({"radius_steps": (1.0, -1.0)}, "radius_steps"),
+        ({"corner_moves": (("sideways", 1.0),)}, "corner_moves"),
+        ({"corner_moves": (("back", 0.0),)}, "corner_moves"),
+        ({"hairpin_turn": 4.0}, "hairpin_turn"),
+        ({"unprune_turn": 0.0}, "unprune_turn"),
+        ({"end_gap": -0.1}, "end_gap"),
+    ):
+        with pytest.raises(InputError, match=f"smoothing.{name}"):
+            SmoothingConfig(**kwargs)
+
+
+def test_without_corner_moves_a_colliding_corner_fails_honestly_or_is_dropped():
+    # No moves: treatments are the fillet radii, then un-pruning or dropping.
+    m = builtin_map("overtake")
+    checker = cached_checker(m)
+    raw = np.array([[5.0, 44.0], [30.0, 44.0], [42.0, 48.0], [60.0, 48.0], [92.0, 44.0]])
+    res = make_drivable(raw, m.start, m.goal, checker, SmoothingConfig(corner_moves=()))
+    if res.ok:
+        check_guarantees(res, m.start, m.goal, checker)
+        assert res.stats["moves"] == 0
+    else:
+        assert res.message.startswith("post-processing failed")
+
+
+# ----------------------------------------------------------------------------- seams
+
+
+def test_checker_view_caches_the_obstacle_union_per_checker(parking_lot):
+    from rrtdrive.planning.smoothing.checks import CheckerView, EdgeCache, edge_screen
+
+    checker = CollisionChecker.for_map(parking_lot)
+    union = CheckerView(checker).obstacle_union()
+    assert union is CheckerView(checker).obstacle_union()
+    assert union.equals(shapely.union_all([o.polygon() for o in checker.obstacles]))
+    edges = EdgeCache(CheckerView(checker))
+    assert edge_screen(edges) is not None
+    # Without obstacles there is no screen, and prune still works on the edge test alone.
+    bare = EdgeCache(CheckerView(NoScreen(checker)))
+    assert CheckerView(NoScreen(checker)).obstacle_union() is None
+    assert edge_screen(bare) is None and CheckerView(NoScreen(checker)).poses_free() is None
+    a, b = [5.0, 6.0], [11.5, 6.0]
+    assert bare.edge_free(a, b) == checker.edge_free(a, b)
+    assert bare.edge_free(a, b) and bare.checks == 1  # memoised
+
+
+def test_repairs_report_whether_they_changed_the_polygon():
+    from rrtdrive.planning.smoothing.checks import CheckerView, EdgeCache
+    from rrtdrive.planning.smoothing.corners import CornerKind, Ends, build_key_polygon
+    from rrtdrive.planning.smoothing.repair import Repairer
+
+    ends = Ends.of(Pose(0.0, 0.0, 0.0), Pose(40.0, 20.0, 0.0))
+    raw = np.array([[0.0, 0.0], [20.0, 0.0], [20.0, 20.0], [40.0, 20.0]])
+    edges = EdgeCache(CheckerView(Open()))
+    cfg = SmoothingConfig(prune=False, sharp_repair=False)  # every tree node stays a corner
+    poly = build_key_polygon(raw, ends, 5.0, 5.0, edges, cfg, None)
+    assert not isinstance(poly, str)
+    assert [c.kind for c in poly.corners] == [
+        CornerKind.START, CornerKind.START_LEG, CornerKind.NODE, CornerKind.NODE,
+        CornerKind.GOAL_LEG, CornerKind.GOAL,
+    ]  # fmt: skip
+    assert [c.raw_index for c in poly.corners] == list(range(6))
+    rep = Repairer(poly, ends, edges, cfg)
+    n = len(poly)
+    assert not rep.drop(1)  # a heading-leg point is never dropped
+    assert rep.advance(2) and poly.corners[2].radius == pytest.approx(cfg.design_radius)
+    assert rep.advance(2) and poly.corners[2].radius == pytest.approx(1.6 * cfg.design_radius)
+    assert rep.shrink_wide_fillets(1) and poly.corners[2].radius == cfg.design_radius
+    assert not rep.shrink_wide_fillets(1)
+    assert rep.drop(2) and len(poly) == n - 1 and rep.drops == 1

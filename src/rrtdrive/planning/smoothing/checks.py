@@ -1,0 +1,136 @@
+"""Every access the smoothing code makes to a collision checker, in one place.
+
+The post-processor needs ``edge_free`` and ``path_free`` and uses three optional
+extras when a checker has them: ``blocked_from`` (a bulk screen of edges proven to
+collide), ``obstacles`` (for the prepared obstacle union behind that screen) and
+``poses_free`` (the exact body test of single poses). The probes for them live
+here alone, so that an explicit checker contract can replace them in one edit.
+"""
+
+from __future__ import annotations
+
+import weakref
+from collections.abc import Callable, Sequence
+from typing import Protocol
+
+import numpy as np
+import shapely
+
+__all__ = ["EdgeChecker", "PathChecker", "CheckerView", "EdgeCache", "edge_screen"]
+
+
+class EdgeChecker(Protocol):
+    """Anything with the fast edge test of :class:`~rrtdrive.collision.CollisionChecker`."""
+
+    def edge_free(self, a: Sequence[float], b: Sequence[float]) -> bool:
+        """True when the car driving straight from ``a`` to ``b`` is clear."""
+        ...
+
+
+class PathChecker(EdgeChecker, Protocol):
+    """An edge checker that also has the exact sampled-path test."""
+
+    def path_free(
+        self, samples: np.ndarray, spacing: float = 0.1, clearance: float = 0.0
+    ) -> tuple[bool, np.ndarray]:
+        """Exact body test along ``samples``; returns ``(ok, bad segment indices)``."""
+        ...
+
+
+#: ``blocked_from(a, bs)``: True where the edge ``a -> b`` is proven to collide.
+Screen = Callable[[np.ndarray, np.ndarray], np.ndarray]
+#: ``poses_free(poses, clearance)``: True where the body at a pose is clear.
+PosesFree = Callable[[np.ndarray, float], np.ndarray]
+
+
+def edge_screen(checker: object) -> Screen | None:
+    """The checker's optional ``blocked_from`` screen, or None when it has none."""
+    return getattr(checker, "blocked_from", None)
+
+
+_UNIONS: weakref.WeakKeyDictionary[object, shapely.Geometry] = weakref.WeakKeyDictionary()
+
+
+def _obstacle_union(checker: object) -> shapely.Geometry | None:
+    """The prepared union of the checker's obstacles, cached per checker (None if unknown)."""
+    obstacles = getattr(checker, "obstacles", None)
+    if obstacles is None:
+        return None
+    try:
+        union = _UNIONS.get(checker)
+    except TypeError:  # not weak-referenceable
+        return None
+    if union is None:
+        union = shapely.union_all([o.polygon() for o in obstacles])
+        shapely.prepare(union)
+        _UNIONS[checker] = union
+    return union
+
+
+class CheckerView:
+    """The smoother's view of a :class:`PathChecker` and its optional extras.
+
+    Parameters
+    ----------
+    checker : PathChecker
+        The original map's checker.
+    """
+
+    def __init__(self, checker: PathChecker) -> None:
+        self.checker = checker
+        self.edge_free = checker.edge_free
+
+    def obstacle_union(self) -> shapely.Geometry | None:
+        """The prepared union of the checker's obstacles (cached per checker), or None."""
+        return _obstacle_union(self.checker)
+
+    def poses_free(self) -> PosesFree | None:
+        """The checker's exact single-pose body test, or None when it has none."""
+        return getattr(self.checker, "poses_free", None)
+
+    def path_free(
+        self, samples: np.ndarray, spacing: float, clearance: float
+    ) -> tuple[bool, np.ndarray]:
+        """The checker's exact body test along ``samples``."""
+        return self.checker.path_free(samples, spacing=spacing, clearance=clearance)
+
+
+class EdgeCache:
+    """Memoised ``edge_free``: the key polygon is rebuilt from the same tree nodes several times.
+
+    With the checker's obstacles known, :meth:`blocked_from` proves collisions in
+    bulk: an edge whose centre line meets an obstacle cannot be free, because the
+    swept capsule of ``edge_free`` contains its centre line.
+    """
+
+    def __init__(self, view: CheckerView) -> None:
+        self._edge_free = view.edge_free
+        self._known: dict[tuple[float, float, float, float], bool] = {}
+        self.checks = 0
+        self._screens: dict[tuple[float, float, bytes], np.ndarray] = {}
+        self._union = view.obstacle_union()
+        if self._union is None:
+            # No obstacles known: no screen, so :func:`edge_screen` finds none.
+            self.blocked_from = None  # type: ignore[assignment]
+
+    def blocked_from(self, a: np.ndarray, bs: np.ndarray) -> np.ndarray:
+        """True where the centre line ``a -> b`` crosses an obstacle (so the edge collides)."""
+        if len(bs) == 0 or self._union.is_empty:
+            return np.zeros(len(bs), dtype=bool)
+        key = (float(a[0]), float(a[1]), bs.tobytes())
+        hit = self._screens.get(key)
+        if hit is None:
+            coords = np.empty((len(bs), 2, 2))
+            coords[:, 0] = a
+            coords[:, 1] = bs
+            hit = self._screens[key] = shapely.intersects(self._union, shapely.linestrings(coords))
+        return hit
+
+    def edge_free(self, a: Sequence[float], b: Sequence[float]) -> bool:
+        """Memoised ``checker.edge_free(a, b)``; ``a`` and ``b`` as plain float pairs."""
+        key = (a[0], a[1], b[0], b[1])
+        hit = self._known.get(key)
+        if hit is None:
+            self.checks += 1
+            hit = self._known[key] = bool(self._edge_free(a, b))
+        return hit

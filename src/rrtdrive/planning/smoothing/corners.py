@@ -1,0 +1,227 @@
+"""The key polygon: one :class:`Corner` record per key point, built from the tree path.
+
+The polygon runs start -> start-leg point -> tree corners -> goal-leg point ->
+goal. The two leg points lie on the start and goal heading rays, so the curve
+leaves and arrives along the given headings. Each corner carries its own repair
+state (fillet radius, treatment count) so that inserting or deleting a corner
+moves everything about it at once.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rrtdrive.planning.smoothing.checks import EdgeCache
+from rrtdrive.planning.smoothing.config import SmoothingConfig
+from rrtdrive.planning.smoothing.fillet import fillet_points, outer_reach
+from rrtdrive.planning.smoothing.operations import prune, repair_sharp_angles
+from rrtdrive.types import Pose
+
+__all__ = [
+    "CornerKind",
+    "Corner",
+    "Ends",
+    "KeyPolygon",
+    "build_key_polygon",
+    "unit",
+    "deflection",
+    "kind_of",
+]
+
+
+class CornerKind(enum.Enum):
+    """The role of a key point in the polygon."""
+
+    START = "start"
+    START_LEG = "start_leg"
+    NODE = "node"
+    GOAL_LEG = "goal_leg"
+    GOAL = "goal"
+
+
+# A mutable record: the repairs move corners and change their treatment in place.
+@dataclass(eq=False)
+class Corner:
+    """One key point of the polygon and its repair state.
+
+    Attributes
+    ----------
+    point : numpy.ndarray
+        Where the corner is now ``(2,)``.
+    origin : numpy.ndarray
+        Where moves start from ``(2,)`` (its place when it entered the polygon,
+        or after a move that is kept).
+    kind : CornerKind
+        Start, heading-leg point, tree node or goal.
+    raw_index : int
+        Index into the augmented path (:attr:`KeyPolygon.aug`) it came from.
+    radius : float
+        Fillet radius in m; 0 for a plain corner.
+    attempt : int
+        Treatments used so far (:meth:`~rrtdrive.planning.smoothing.repair.Repairer.advance`).
+    """
+
+    point: np.ndarray
+    origin: np.ndarray
+    kind: CornerKind
+    raw_index: int
+    radius: float = 0.0
+    attempt: int = 0
+
+    @classmethod
+    def at(cls, point: np.ndarray, kind: CornerKind, raw_index: int) -> Corner:
+        """A fresh, plain corner at a copy of ``point``."""
+        p = point.copy()
+        return cls(p, p.copy(), kind, raw_index)
+
+
+@dataclass(frozen=True, eq=False)
+class Ends:
+    """Start and goal positions and heading directions of one smoothing call."""
+
+    start: Pose
+    goal: Pose
+    s: np.ndarray
+    g: np.ndarray
+    hs: np.ndarray
+    hg: np.ndarray
+
+    @classmethod
+    def of(cls, start: Pose, goal: Pose) -> Ends:
+        """The ends of a path from ``start`` to ``goal``."""
+        return cls(
+            start,
+            goal,
+            np.array([start.x, start.y]),
+            np.array([goal.x, goal.y]),
+            np.array([math.cos(start.yaw), math.sin(start.yaw)]),
+            np.array([math.cos(goal.yaw), math.sin(goal.yaw)]),
+        )
+
+
+@dataclass(eq=False)
+class KeyPolygon:
+    """The corners and the bookkeeping of the repairs on them.
+
+    Attributes
+    ----------
+    corners : list of Corner
+        In driving order, start first and goal last.
+    aug : numpy.ndarray
+        The augmented path: start, start-leg point, interior tree nodes,
+        goal-leg point, goal.
+    d_s, d_g : float
+        Lengths of the start and goal heading legs it was built with (m).
+    unpruned : set of (int, int)
+        Stretches of ``aug`` (first, last index) already un-pruned once.
+    grown : dict
+        How often each heading corner's leg was grown to fit its fillet.
+    """
+
+    corners: list[Corner]
+    aug: np.ndarray
+    d_s: float
+    d_g: float
+    unpruned: set[tuple[int, int]] = field(default_factory=set)
+    grown: dict[int, int] = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.corners)
+
+    def points(self) -> list[np.ndarray]:
+        """The corner positions, in order."""
+        return [c.point for c in self.corners]
+
+    def heading_turns(self) -> tuple[float, float]:
+        """Deflections at the start- and goal-leg corners (radians)."""
+        p = self.points()
+        return deflection(p[0], p[1], p[2]), deflection(p[-3], p[-2], p[-1])
+
+    def heading_reach(self, radius: float, cfg: SmoothingConfig) -> tuple[float, float]:
+        """Guard reach that fillets of ``radius`` at the start- and goal-leg corners need."""
+        p = self.points()
+        out = []
+        for c in (1, len(p) - 2):
+            ux, uy, _ = unit(*(p[c] - p[c - 1]))
+            vx, vy, _ = unit(*(p[c + 1] - p[c]))
+            f = fillet_points(p[c], (ux, uy), (vx, vy), radius, cfg.fillet_max_angle)
+            out.append(outer_reach(f, cfg.degree))
+        return out[0], out[1]
+
+
+def unit(dx: float, dy: float) -> tuple[float, float, float]:
+    """Unit vector and length of ``(dx, dy)``; all zero for a (near) zero vector."""
+    n = math.hypot(dx, dy)
+    if n < 1e-12:
+        return 0.0, 0.0, 0.0
+    return dx / n, dy / n, n
+
+
+def deflection(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> float:
+    """Turn in radians at ``b`` of the polyline ``a -> b -> c``."""
+    ux, uy, _ = unit(*(b - a))
+    vx, vy, _ = unit(*(c - b))
+    return math.atan2(abs(ux * vy - uy * vx), ux * vx + uy * vy)
+
+
+def build_key_polygon(
+    raw: np.ndarray,
+    ends: Ends,
+    d_s: float,
+    d_g: float,
+    edges: EdgeCache,
+    cfg: SmoothingConfig,
+    max_turn: float | None,
+) -> KeyPolygon | str:
+    """The key polygon with heading legs ``d_s``, ``d_g``, or the reason it cannot be built.
+
+    The tree path gets a point on each heading ray, is pruned (keeping those
+    points; with ``max_turn`` avoiding turns above it) and sharp-angle repaired.
+    """
+    edge = edges.edge_free
+    s1 = ends.s + d_s * ends.hs
+    g1 = ends.g - d_g * ends.hg
+    aug = np.vstack([ends.s, s1, raw[1:-1], g1, ends.g])
+    n = len(aug)
+    if not edge(ends.s.tolist(), s1.tolist()):
+        return f"the start heading leg of {d_s:.2f} m is blocked"
+    if not edge(g1.tolist(), ends.g.tolist()):
+        return f"the goal heading leg of {d_g:.2f} m is blocked"
+    if cfg.prune:
+        key = prune(
+            aug,
+            edges,
+            keep=(1, n - 2),
+            max_turn=max_turn,
+            start_heading=ends.hs,
+            end_heading=ends.hg,
+        )
+        if key is None:
+            return "a heading-leg point has no free edge to the tree path"
+    else:
+        key = np.arange(n)
+        if not all(edge(aug[i].tolist(), aug[i + 1].tolist()) for i in range(n - 1)):
+            return "a heading-leg point has no free edge to the tree path"
+    if cfg.sharp_repair:
+        key = repair_sharp_angles(aug, key, edges)
+    idx = key.tolist()
+    kinds = (
+        [CornerKind.START, CornerKind.START_LEG]
+        + [CornerKind.NODE] * (len(idx) - 4)
+        + [CornerKind.GOAL_LEG, CornerKind.GOAL]
+    )
+    corners = [Corner.at(aug[k], kind, k) for k, kind in zip(idx, kinds, strict=True)]
+    return KeyPolygon(corners, aug, d_s, d_g)
+
+
+def kind_of(raw_index: int, n_aug: int) -> CornerKind:
+    """The kind of an interior corner taken from ``aug[raw_index]``."""
+    if raw_index == 1:
+        return CornerKind.START_LEG
+    if raw_index == n_aug - 2:
+        return CornerKind.GOAL_LEG
+    return CornerKind.NODE
