@@ -1,33 +1,23 @@
 """Offscreen frames of a live rrtdrive scene: highway-env's graphics plus the planned path.
 
-:class:`SceneRenderer` owns one pygame surface and draws onto it with
-highway-env's own :class:`~highway_env.road.graphics.RoadGraphics` (lanes, road
-objects, vehicles), then the planned path, the goal, the driven trace and the
-reference points the agent observes; it flips the image so that +y points up
-(highway-env draws y downwards) and adds a read-out. No display is needed: do
-not set ``SDL_VIDEODRIVER=dummy`` (highway-env then draws nothing).
-
-It does not go through highway-env's ``EnvViewer``, whose ``close`` calls
-``pygame.quit()`` and would break every other renderer in the process.
+:class:`SceneRenderer` draws, through the shared
+:class:`~rrtdrive.sim.render.SceneCanvas` (lanes, path, goal, objects and parked
+cars drawn once per camera; moving vehicles every frame), the driven trace and
+the reference points the agent observes, flipped so that +y points up, with a
+read-out. No display is needed: do not set ``SDL_VIDEODRIVER=dummy`` (highway-env
+then draws nothing).
 """
 
 from __future__ import annotations
 
-import os
-import tempfile
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-__all__ = ["SceneRenderer", "view_for"]
+from rrtdrive.sim.render import REF_COLOR, TRACE_COLOR, SceneCanvas
 
-PATH_COLOR = (40, 90, 255)
-TRACE_COLOR = (255, 60, 40)
-REF_COLOR = (255, 150, 0)
-GOAL_COLOR = (0, 160, 0)
-TEXT_COLOR = (20, 20, 20)
-PANEL_COLOR = (255, 255, 255)
+__all__ = ["SceneRenderer", "view_for"]
 
 
 def view_for(
@@ -66,7 +56,7 @@ def view_for(
 
 
 class SceneRenderer:
-    """Draws frames of a highway-env road with the path, trace and read-out.
+    """Draws frames of a highway-env road with the path, trace, reference points and read-out.
 
     Parameters
     ----------
@@ -75,39 +65,36 @@ class SceneRenderer:
     scaling : float
         Pixels per metre.
     centre : tuple of float
-        World point at the centre of the frame (the camera is fixed).
+        World point at the centre of the frame; set the attribute ``centre`` to move
+        the camera.
+    reuse_static : bool
+        Reuse the static layer between frames (see :class:`~rrtdrive.sim.render.SceneCanvas`).
     """
 
     def __init__(
-        self, size: tuple[int, int], scaling: float, centre: tuple[float, float]
+        self,
+        size: tuple[int, int],
+        scaling: float,
+        centre: tuple[float, float],
+        reuse_static: bool = True,
     ) -> None:
-        if not os.environ.get("XDG_RUNTIME_DIR"):
-            # SDL complains on stderr without it; a private empty folder silences it.
-            os.environ["XDG_RUNTIME_DIR"] = tempfile.mkdtemp(prefix="rrtdrive-sdl-")
-        import pygame
-        from highway_env.road.graphics import WorldSurface
+        self.canvas = SceneCanvas(size, scaling, centre, reuse_static=reuse_static)
+        self.size = self.canvas.size
+        self.scaling = self.canvas.scaling
 
-        self.size = (int(size[0]), int(size[1]))
-        self.scaling = float(scaling)
-        self.centre = np.array(centre, dtype=float)
-        self._pygame = pygame
-        self.surface = WorldSurface(self.size, 0, pygame.Surface(self.size))
-        self.surface.scaling = self.scaling
-        self.surface.centering_position = [0.5, 0.5]
-        self._font: Any = None
-        # The lanes drawn for (network, camera centre): copied into the next frames of
-        # the same road and view instead of redrawn (144 spot lanes in the parking lot).
-        self._background: Any = None
-        self._background_key: tuple[Any, tuple[float, float]] | None = None
+    @property
+    def centre(self) -> np.ndarray:
+        """World point at the centre of the frame."""
+        return self.canvas.centre
 
-    def _text_font(self) -> Any:
-        pygame = self._pygame
-        if not pygame.font.get_init():  # someone called pygame.quit(): start again
-            pygame.font.init()
-            self._font = None
-        if self._font is None:
-            self._font = pygame.font.Font(None, 22)
-        return self._font
+    @centre.setter
+    def centre(self, value: Any) -> None:
+        self.canvas.centre = np.array(value, dtype=float)
+
+    @property
+    def surface(self) -> Any:
+        """The world surface drawn on (highway-env's ``WorldSurface``)."""
+        return self.canvas.surface
 
     def frame(
         self,
@@ -138,39 +125,8 @@ class SceneRenderer:
         lines : sequence of str
             Read-out text, one line each.
         """
-        pygame = self._pygame
-        from highway_env.road.graphics import RoadGraphics
-
-        surface = self.surface
-        surface.move_display_window_to(self.centre)
-        key = (road.network, (float(self.centre[0]), float(self.centre[1])))
-        cached = self._background_key
-        if cached is not None and cached[0] is key[0] and cached[1] == key[1]:
-            surface.blit(self._background, (0, 0))
-        else:
-            RoadGraphics.display(road, surface)
-            self._background, self._background_key = surface.copy(), key
-        if len(path_xy) >= 2:
-            pygame.draw.lines(surface, PATH_COLOR, False, [surface.vec2pix(p) for p in path_xy], 2)
-        gx, gy = surface.vec2pix(goal_xy)
-        pygame.draw.circle(surface, GOAL_COLOR, (gx, gy), max(3, surface.pix(0.4)), 2)
-        RoadGraphics.display_road_objects(road, surface, offscreen=True)
-        RoadGraphics.display_traffic(
-            road, surface, simulation_frequency=simulation_frequency, offscreen=True
-        )
-        if len(trace_xy) >= 2:
-            pygame.draw.lines(
-                surface, TRACE_COLOR, False, [surface.vec2pix(p) for p in trace_xy], 2
-            )
-        for p in ref_xy:
-            pygame.draw.circle(surface, REF_COLOR, surface.vec2pix(p), 2)
-        image = pygame.transform.flip(surface, False, True)
-        if lines:
-            font = self._text_font()
-            width = 12 + max(font.size(text)[0] for text in lines)
-            panel_h = 8 + 20 * len(lines)
-            pygame.draw.rect(image, PANEL_COLOR, (6, 6, width, panel_h))
-            pygame.draw.rect(image, TEXT_COLOR, (6, 6, width, panel_h), 1)
-            for i, text in enumerate(lines):
-                image.blit(font.render(text, True, TEXT_COLOR), (12, 11 + 20 * i))
-        return np.ascontiguousarray(np.moveaxis(pygame.surfarray.array3d(image), 0, 1))
+        canvas = self.canvas
+        canvas.draw(road, simulation_frequency, path_xy, goal_xy)
+        canvas.polyline(trace_xy, TRACE_COLOR)
+        canvas.dots(ref_xy, REF_COLOR, 2)
+        return canvas.frame(lines)

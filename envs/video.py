@@ -3,9 +3,10 @@
 :class:`RecordMP4` wraps any gymnasium environment made with
 ``render_mode="rgb_array"``; it renders after ``reset`` and after every ``step``
 and writes each recorded episode to its own MP4 (H.264) when the episode ends
-(or at the next ``reset`` or ``close`` for an unfinished one). Frames go to a
-temporary file in the target folder that is renamed when complete, so a file
-that exists is whole. :func:`record_episode` runs one episode of a policy
+(or at the next ``reset`` or ``close`` for an unfinished one). A writer thread
+encodes while the episode runs (:class:`~rrtdrive.sim.mp4.Mp4Writer`); frames go
+to a temporary file in the target folder that is renamed when complete, so a
+file that exists is whole. :func:`record_episode` runs one episode of a policy
 through it.
 
 Examples
@@ -26,7 +27,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from rrtdrive.atomic import publish, temp_beside
+from rrtdrive.sim.mp4 import Mp4Writer
 from rrtdrive.types import InputError
 
 __all__ = ["RecordMP4", "record_episode"]
@@ -102,22 +103,16 @@ class RecordMP4(gym.Wrapper):
         self.quality = quality
         self.written: list[FsPath] = []
         self._episode = -1
-        self._writer: Any = None
-        self._tmp: FsPath | None = None
+        self._writer: Mp4Writer | None = None
         self._target: FsPath | None = None
         self._shape: tuple[int, ...] | None = None
 
     # ------------------------------------------------------------------ writer
 
     def _open(self) -> None:
-        import imageio.v2 as imageio
-
         self._target = self.folder / f"{self.name_prefix}-{self._episode:04d}.mp4"
-        tmp = temp_beside(self._target)
-        self._tmp = tmp
-        self._writer = imageio.get_writer(
-            tmp, format="FFMPEG", mode="I", fps=self.fps, codec="libx264",
-            quality=self.quality, macro_block_size=2, ffmpeg_log_level="error",
+        self._writer = Mp4Writer(
+            self._target, self.fps, quality=self.quality, macro_block_size=2
         )
         self._shape = None
 
@@ -131,32 +126,24 @@ class RecordMP4(gym.Wrapper):
             raise InputError(
                 f"render: frame size changed within an episode ({self._shape} -> {frame.shape})"
             )
-        self._writer.append_data(frame)
+        # Encoded later by the writer thread: a copy, in case the env reuses its buffer.
+        self._writer.append(frame.copy())
 
     def _finish(self) -> FsPath | None:
         """Close the current video and move it into place; return its path."""
-        writer, tmp, target = self._writer, self._tmp, self._target
-        self._writer = self._tmp = self._target = None
-        if writer is None or tmp is None or target is None:
+        writer, target = self._writer, self._target
+        self._writer = self._target = None
+        if writer is None or target is None:
             return None
-        try:
-            writer.close()
-            publish(tmp, target)
-        except BaseException:
-            tmp.unlink(missing_ok=True)
-            raise
+        writer.close()
         self.written.append(target)
         return target
 
     def _abort(self) -> None:
-        writer, tmp = self._writer, self._tmp
-        self._writer = self._tmp = self._target = None
+        writer = self._writer
+        self._writer = self._target = None
         if writer is not None:
-            try:
-                writer.close()
-            finally:
-                if tmp is not None:
-                    tmp.unlink(missing_ok=True)
+            writer.abort()
 
     # ------------------------------------------------------------------ gym API
 

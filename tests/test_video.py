@@ -11,7 +11,7 @@ import pytest
 from rrtdrive.sim.runner import run_episode
 from rrtdrive.sim.scenes import make_scenario
 from rrtdrive.sim.video import frame_is_blank, render_frames, write_video
-from rrtdrive.types import InputError, Path
+from rrtdrive.types import InputError, Path, Pose
 
 
 @pytest.fixture(scope="module")
@@ -83,3 +83,70 @@ def test_video_rejects_bad_targets(episode, tmp_path):
         write_video(episode, tmp_path / "missing" / "x.mp4")
     with pytest.raises(InputError, match="stride"):
         list(render_frames(episode, stride=0))
+
+
+def _canvas_pair(scen):
+    from rrtdrive.envs.render import view_for
+    from rrtdrive.sim.render import SceneCanvas
+    from rrtdrive.sim.scenes import build_env
+
+    env = build_env(scen)
+    view = view_for(scen.map.bounds, scen.lane_y)
+    return env, SceneCanvas(*view), SceneCanvas(*view, reuse_static=False)
+
+
+def test_static_layer_redraws_parked_cars_under_the_ego_and_follows_changes():
+    # The ego on top of the stopped car of the overtake scene (a highway-env vehicle drawn
+    # after the ego), then an obstacle hit: every frame equals highway-env's full redraw.
+    from rrtdrive.sim.render import is_parked
+
+    scen = make_scenario("overtake", 0)
+    env, fast, scratch = _canvas_pair(scen)
+    try:
+        road, ego = env.unwrapped.road, env.unwrapped.vehicle
+        parked = [v for v in road.vehicles if is_parked(v)]
+        assert parked and all(road.vehicles.index(p) > road.vehicles.index(ego) for p in parked)
+        poses = [scen.start] + [Pose(p.position[0] + 1.0, p.position[1], p.heading + 0.4)
+                                for p in parked[:3]]
+        goal = (scen.goal.x, scen.goal.y)
+        path = np.array([[scen.start.x, scen.start.y], [scen.goal.x, scen.goal.y]])
+        frames = []
+        for i, pose in enumerate(poses + poses[:1]):
+            ego.set_pose(pose, speed=0.5)
+            if i == len(poses):
+                road.objects[0].crashed = True  # a hit obstacle turns red: redraw the layer
+            for canvas in (fast, scratch):
+                canvas.draw(road, 20, path, goal)
+            a = fast.frame(["x"])
+            assert np.array_equal(a, scratch.frame(["x"]))
+            frames.append(a)
+        assert not np.array_equal(frames[0], frames[-1])  # the red obstacle shows
+        assert fast.static_draws == 2 and fast.static_reuses == len(poses) - 1
+    finally:
+        env.close()
+
+
+def test_write_video_reports_progress(episode, tmp_path):
+    seen = []
+    n = write_video(episode, tmp_path / "p.mp4", stride=50, progress=lambda *a: seen.append(a))
+    assert seen == [(i, n) for i in range(1, n + 1)]
+
+
+def test_mp4_writer_errors_surface_and_leave_no_file(tmp_path):
+    from rrtdrive.sim.mp4 import Mp4Writer
+
+    out = tmp_path / "bad.mp4"
+    w = Mp4Writer(out, fps=10)
+    w.append(np.zeros((32, 32, 3), np.uint8))
+    w.append(np.zeros((48, 32, 3), np.uint8))  # a different size: imageio refuses it
+    with pytest.raises(ValueError, match="same size"):
+        for _ in range(20):  # the writer thread's error comes back on a later call
+            w.append(np.zeros((32, 32, 3), np.uint8))
+        w.close()
+    w.abort()
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(InputError, match="fps"):
+        Mp4Writer(out, fps=0)
+    with Mp4Writer(out, fps=10) as ok:
+        ok.append(np.full((32, 32, 3), 90, np.uint8))
+    assert [p.name for p in tmp_path.iterdir()] == ["bad.mp4"] and ok.frames == 1

@@ -207,7 +207,15 @@ def _run(args: argparse.Namespace) -> int:
         else:
             from rrtdrive.sim.video import write_video
 
-            frames = write_video(episode, args.video, stride=stride)
+            def progress(done: int, total: int) -> None:
+                # One line on stderr, rewritten in place on a terminal, else every 10 %.
+                tty = sys.stderr.isatty()
+                if tty or done == total or done % max(1, total // 10) == 0:
+                    end = "\n" if done == total or not tty else ""
+                    print(f"\rrrtdrive simulate: video {done}/{total} frames", end=end,
+                          file=sys.stderr, flush=True)
+
+            frames = write_video(episode, args.video, stride=stride, progress=progress)
             extra["video"] = args.video
             extra["video_frames"] = frames
     data = episode_json(report, extra)

@@ -1,0 +1,161 @@
+"""An MP4 (H.264) file encoded while the caller renders, and published only when whole.
+
+:class:`Mp4Writer` hands frames through a bounded queue to a writer thread that
+feeds imageio-ffmpeg (which runs ffmpeg as a subprocess): the caller draws the
+next frame while ffmpeg encodes the last ones, and the queue bound keeps at most
+a few frames in memory. Frames go to a temporary file beside the target that is
+renamed on :meth:`Mp4Writer.close` (removed by :meth:`Mp4Writer.abort` or on an
+error), so a file that exists is complete.
+
+Examples
+--------
+>>> import numpy as np, tempfile, pathlib
+>>> out = pathlib.Path(tempfile.mkdtemp()) / "grey.mp4"
+>>> with Mp4Writer(out, fps=10) as writer:
+...     for _ in range(3):
+...         writer.append(np.full((64, 64, 3), 128, np.uint8))
+>>> out.exists(), writer.frames
+(True, 3)
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import queue
+import threading
+from pathlib import Path as FsPath
+from types import TracebackType
+from typing import Any
+
+import numpy as np
+
+from rrtdrive.atomic import publish, temp_beside
+from rrtdrive.types import InputError
+
+__all__ = ["Mp4Writer"]
+
+_STOP = object()
+
+
+class Mp4Writer:
+    """Encode RGB frames to an MP4 file in a writer thread.
+
+    Parameters
+    ----------
+    target : str or os.PathLike
+        The ``.mp4`` file to create (its folder must exist).
+    fps : float
+        Frames per second.
+    quality : int
+        imageio-ffmpeg quality, 0-10.
+    macro_block_size : int
+        Frame sides are padded to multiples of this (imageio-ffmpeg; H.264 needs 2).
+    queue_size : int
+        Frames that may wait for the encoder; :meth:`append` blocks beyond that.
+
+    Attributes
+    ----------
+    frames : int
+        Frames handed to :meth:`append` so far.
+    """
+
+    def __init__(
+        self,
+        target: str | os.PathLike[str],
+        fps: float,
+        quality: int = 7,
+        macro_block_size: int = 16,
+        queue_size: int = 8,
+    ) -> None:
+        import imageio.v2 as imageio
+
+        if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not (
+            math.isfinite(fps) and fps > 0
+        ):
+            raise InputError(f"fps: must be a number > 0, got {fps!r}")
+        if isinstance(queue_size, bool) or not isinstance(queue_size, int) or queue_size < 1:
+            raise InputError(f"queue_size: need an integer >= 1, got {queue_size!r}")
+        self.target = FsPath(target)
+        self.frames = 0
+        self._tmp = temp_beside(self.target)
+        try:
+            self._writer = imageio.get_writer(
+                self._tmp, format="FFMPEG", mode="I", fps=fps, codec="libx264",
+                quality=quality, macro_block_size=macro_block_size, ffmpeg_log_level="error",
+            )
+        except BaseException:
+            self._tmp.unlink(missing_ok=True)
+            raise
+        self._queue: queue.Queue[Any] = queue.Queue(maxsize=queue_size)
+        self._error: BaseException | None = None
+        self._done = False
+        self._thread = threading.Thread(target=self._run, name="rrtdrive-mp4", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        # Keep taking frames after a failure so that a blocked append() wakes up.
+        while True:
+            item = self._queue.get()
+            if item is _STOP:
+                return
+            if self._error is None:
+                try:
+                    self._writer.append_data(item)
+                except BaseException as exc:  # re-raised in the caller's thread
+                    self._error = exc
+
+    def append(self, frame: np.ndarray) -> None:
+        """Queue one ``H x W x 3`` uint8 frame; it is encoded later, so do not modify it."""
+        if self._done:
+            raise RuntimeError("Mp4Writer.append: the writer is closed")
+        if self._error is not None:
+            raise self._error
+        self._queue.put(frame)
+        self.frames += 1
+
+    def _stop(self) -> None:
+        self._done = True
+        self._queue.put(_STOP)
+        self._thread.join()
+
+    def close(self) -> FsPath:
+        """Encode the queued frames, close ffmpeg and move the file into place; return it."""
+        if self._done:
+            return self.target
+        try:
+            self._stop()
+            if self._error is not None:
+                raise self._error
+            self._writer.close()
+            publish(self._tmp, self.target)
+        except BaseException:
+            self._tmp.unlink(missing_ok=True)
+            raise
+        return self.target
+
+    def abort(self) -> None:
+        """Stop without publishing: the temporary file is removed (idempotent)."""
+        try:
+            if not self._done:
+                self._stop()
+            self._writer.close()
+        finally:
+            self._tmp.unlink(missing_ok=True)
+
+    def __enter__(self) -> Mp4Writer:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        if exc_type is None:
+            self.close()
+        else:
+            try:
+                self.abort()
+            except Exception:  # the original error matters more than a failed clean-up
+                pass
