@@ -12,9 +12,11 @@ from hypothesis import strategies as st
 from rrtdrive.maps import Map, Obstacle, builtin_map
 from rrtdrive.planning import PLANNERS, make_planner
 from rrtdrive.planning.base import Planner, PlanningProblem
-from rrtdrive.planning.rrt import RRTPlanner, SampleSource, exact_edge_free
+from rrtdrive.planning.edges import exact_edge_free
+from rrtdrive.planning.rrt import RRTPlanner
 from rrtdrive.planning.rrt_connect import RRTConnectPlanner
 from rrtdrive.planning.rrt_star import RRTStarPlanner
+from rrtdrive.planning.sampling import SampleSource
 from rrtdrive.types import Budget, InputError, PlanResult, PlanStatus, Pose, VehicleParams
 
 BASELINES = ("rrt", "rrt-connect", "rrt-star")
