@@ -31,7 +31,8 @@ Every component is switchable by name, see :data:`COMPONENTS`::
     ImprovedRRTConnect()                                  # everything on
     ImprovedRRTConnect(disable=("obtuse_parent",))        # ablation by name
     ImprovedRRTConnect(adaptive_step=False, step=4.0)     # or any config field
-    ImprovedRRTConnect(ImprovedConfig(prune=False))       # or a whole config
+    ImprovedRRTConnect(smoothing={"degree": 3})           # post-processor fields
+    ImprovedRRTConnect(ImprovedConfig(step=4.0))          # or a whole config
 
 Through the registry: ``make_planner("improved-rrt-connect", disable=["prune"])``.
 
@@ -43,7 +44,13 @@ fallback) and :mod:`.planner` (:class:`ImprovedRRTConnect`).
 
 from __future__ import annotations
 
-from rrtdrive.planning.improved.config import COMPONENTS, ImprovedConfig
+from rrtdrive.planning.improved.config import (
+    COMPONENTS,
+    PER_QUERY_SMOOTHING,
+    SMOOTHING_COMPONENTS,
+    ImprovedConfig,
+    default_smoothing,
+)
 from rrtdrive.planning.improved.expansion import (
     default_expansion_lmin,
     endpoint_capped_clearance,
@@ -66,7 +73,10 @@ from rrtdrive.planning.improved.planner import NAME, ImprovedRRTConnect
 
 __all__ = [
     "COMPONENTS",
+    "SMOOTHING_COMPONENTS",
+    "PER_QUERY_SMOOTHING",
     "NAME",
+    "default_smoothing",
     "dubins_fallback",
     "EdgeFree",
     "ImprovedConfig",

@@ -33,7 +33,7 @@ from rrtdrive.planning.improved.growth import (
     rooted_edge_test,
 )
 from rrtdrive.planning.improved.passages import passage_cells
-from rrtdrive.planning.postprocess import SmoothingConfig, make_drivable
+from rrtdrive.planning.postprocess import make_drivable
 from rrtdrive.planning.result import run_query, solved
 from rrtdrive.planning.sampling import SampleSource
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Tree
@@ -54,7 +54,10 @@ class ImprovedRRTConnect:
     disable : iterable of str, optional
         Components of :data:`COMPONENTS` to switch off.
     **options
-        Any :class:`ImprovedConfig` field, e.g. ``step=4.0`` or ``prune=False``.
+        Any :class:`ImprovedConfig` field, e.g. ``step=4.0`` or ``adaptive_step=False``;
+        ``smoothing`` may be a mapping of :class:`SmoothingConfig` fields applied
+        over the config's own, e.g. ``smoothing={"degree": 3, "prune": False}``
+        (see :meth:`ImprovedConfig.with_options`).
 
     Raises
     ------
@@ -87,15 +90,9 @@ class ImprovedRRTConnect:
             raise InputError(
                 f"planner.config: expected an ImprovedConfig, got {type(base).__name__}"
             )
-        fields = {f.name for f in dataclasses.fields(ImprovedConfig)}
-        unknown = sorted(set(options) - fields)
-        if unknown:
-            raise InputError(
-                f"planner.{unknown[0]}: unknown option for {NAME}; allowed {sorted(fields)}"
-            )
+        cfg = base.with_options(options) if options else base
         if isinstance(disable, str):
             disable = (disable,)
-        cfg = dataclasses.replace(base, **options) if options else base  # type: ignore[arg-type]
         self.config = cfg.without(*disable)
 
     def __repr__(self) -> str:
@@ -114,7 +111,7 @@ class ImprovedRRTConnect:
             The only source of randomness.
         budget : Budget
             Iteration and wall-time limits (both enforced for the growth; each
-            post-processing is bounded by ``max_repair_rounds``).
+            post-processing is bounded by ``smoothing.max_rounds``).
 
         Returns
         -------
@@ -142,16 +139,11 @@ class _Query:
         self.watch = watch
         self.checker = checker = problem.checker
         self.start, self.goal = start, goal = problem.start, problem.goal
-        self.smoothing = SmoothingConfig(
+        # The config's post-processor with the query's PER_QUERY_SMOOTHING fields.
+        self.smoothing = dataclasses.replace(
+            cfg.smoothing,
             kappa_max=problem.vehicle.kappa_max,
-            degree=cfg.spline_degree,
-            prune=cfg.prune,
-            sharp_repair=cfg.sharp_repair,
-            supplement=cfg.supplement,
-            supplement_delta=cfg.supplement_delta,
-            supplement_n=cfg.supplement_n,
             heading_leg=cfg.step,
-            max_rounds=cfg.max_repair_rounds,
             clearance=endpoint_capped_clearance(checker, start, goal, cfg.body_clearance),
         )
         self.stats: dict[str, float] = {
