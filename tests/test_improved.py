@@ -517,6 +517,12 @@ def test_dubins_fallback_turns_round_in_open_space(goal):
     res = solve(m, 0)
     assert_valid_path(res, m)
     assert res.stats["dubins_fallback"] == 1.0 and "Dubins fallback" in res.message
+    # A solved result says what solved it; why no tree path was used is a neutral note.
+    assert res.message.startswith("solved by the Dubins fallback (")
+    assert "failed" not in res.message
+    assert "no tree path could be made drivable (" in res.message or (
+        "the trees did not meet" in res.message
+    )
     assert res.path.length == pytest.approx(
         shortest_dubins(m.start, m.goal, 1.05 / KAPPA).length, rel=0.01
     )
@@ -532,6 +538,7 @@ def test_dubins_tail_rescues_a_goal_facing_into_a_parking_row():
     res = solve(m, 0)
     assert_valid_path(res, m)
     assert "Dubins fallback (tree path to" in res.message
+    assert "failed" not in res.message
     assert verify_path(m, res.path).ok
 
 
@@ -543,6 +550,7 @@ def test_dubins_lead_rescues_a_start_facing_across_the_aisle():
     res = solve(m, 0)
     assert_valid_path(res, m)
     assert "+ tree path from" in res.message
+    assert "failed" not in res.message
     assert verify_path(m, res.path).ok
 
 

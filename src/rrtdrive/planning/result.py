@@ -10,14 +10,23 @@ tree path), :func:`search_result` (that, or the out-of-budget failure) or
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
 
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, polyline_path, precheck
-from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Tree
+from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Tree, wrap_angle
 
-__all__ = ["Search", "run_query", "solved", "solved_result", "search_result", "budget_message"]
+__all__ = [
+    "Search",
+    "run_query",
+    "solved",
+    "solved_result",
+    "search_result",
+    "budget_message",
+    "baseline_caveat",
+]
 
 #: The body of a planner's query: runs with the started stopwatch once the precheck passed.
 Search = Callable[[Stopwatch], PlanResult]
@@ -88,8 +97,38 @@ def solved(
     )
 
 
+def baseline_caveat(path: Path, problem: PlanningProblem) -> str:
+    """What a baseline's solved path does not guarantee: its curvature and end headings.
+
+    The baselines return the raw tree path, with corners and whatever headings
+    its first and last edges have; the note gives its largest (Menger) curvature
+    as a multiple of the car's ``kappa_max`` and its heading errors at both ends.
+
+    Examples
+    --------
+    >>> from rrtdrive.maps import builtin_map
+    >>> from rrtdrive.planning.base import polyline_path
+    >>> problem = PlanningProblem.from_map(builtin_map("overtake"))
+    >>> path = polyline_path(np.array([[5.0, 44.0], [50.0, 48.0], [92.0, 44.0]]))
+    >>> baseline_caveat(path, problem).split(": ")[1]
+    'max curvature 0.0 x kappa_max, heading error 5 deg at the start, 5 deg at the goal'
+    """
+    samples = path.samples
+    ratio = path.max_curvature / problem.vehicle.kappa_max
+    if len(samples):
+        start_err = abs(math.degrees(wrap_angle(samples[0, 2] - problem.start.yaw)))
+        goal_err = abs(math.degrees(wrap_angle(samples[-1, 2] - problem.goal.yaw)))
+    else:
+        start_err = goal_err = math.nan
+    return (
+        f"baselines ignore curvature and headings: max curvature {ratio:.1f} x kappa_max, "
+        f"heading error {start_err:.0f} deg at the start, {goal_err:.0f} deg at the goal"
+    )
+
+
 def solved_result(
     planner: str,
+    problem: PlanningProblem,
     raw_path: np.ndarray,
     trees: tuple[Tree, ...],
     iterations: int,
@@ -102,6 +141,8 @@ def solved_result(
     ----------
     planner : str
         Registered planner name.
+    problem : PlanningProblem
+        The query (for the message's :func:`baseline_caveat`).
     raw_path : numpy.ndarray
         ``(K, 2)`` tree path; first row the start, last row the goal.
     trees : tuple of Tree
@@ -116,23 +157,20 @@ def solved_result(
     Returns
     -------
     PlanResult
+        Its message counts nodes, iterations and the raw length, then says what
+        the path does not guarantee (:func:`baseline_caveat`).
     """
     raw = np.array(raw_path, dtype=float).reshape(-1, 2)
     raw.setflags(write=False)
     length = float(np.sum(np.hypot(*np.diff(raw, axis=0).T)))
     stats = {**stats, "raw_length_m": length, "waypoints": len(raw)}
     nodes = sum(len(t) for t in trees)
-    return solved(
-        planner,
-        watch,
-        polyline_path(raw),
-        raw,
-        trees,
-        iterations,
-        f"solved: {nodes} nodes, {iterations} iterations, raw path {length:.1f} m",
-        stats,
-        nodes=nodes,
+    path = polyline_path(raw)
+    message = (
+        f"solved: {nodes} nodes, {iterations} iterations, raw path {length:.1f} m; "
+        + baseline_caveat(path, problem)
     )
+    return solved(planner, watch, path, raw, trees, iterations, message, stats, nodes=nodes)
 
 
 def budget_message(iterations: int, watch: Stopwatch, budget: Budget, nodes: int) -> str:
@@ -149,6 +187,7 @@ def budget_message(iterations: int, watch: Stopwatch, budget: Budget, nodes: int
 
 def search_result(
     planner: str,
+    problem: PlanningProblem,
     raw_path: np.ndarray | None,
     trees: tuple[Tree, ...],
     iterations: int,
@@ -162,6 +201,8 @@ def search_result(
     ----------
     planner : str
         Registered planner name.
+    problem : PlanningProblem
+        The query.
     raw_path : numpy.ndarray or None
         The tree path found, ``None`` when the budget ended first.
     trees : tuple of Tree
@@ -189,4 +230,4 @@ def search_result(
             iterations=iterations,
             stats=stats,
         )
-    return solved_result(planner, raw_path, trees, iterations, watch, stats)
+    return solved_result(planner, problem, raw_path, trees, iterations, watch, stats)

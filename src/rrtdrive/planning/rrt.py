@@ -136,4 +136,5 @@ class RRTPlanner:
                 goal_index = tree.add(goal, j)
         stats = {**edges.stats()}
         raw = tree.branch(goal_index)[::-1] if goal_index >= 0 else None
-        return search_result(self.name, raw, (tree.freeze(),), iterations, watch, budget, stats)
+        trees = (tree.freeze(),)
+        return search_result(self.name, problem, raw, trees, iterations, watch, budget, stats)

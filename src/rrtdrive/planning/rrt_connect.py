@@ -182,7 +182,7 @@ class RRTConnectPlanner:
         }
         trees = (start_side.tree.freeze(), goal_side.tree.freeze())
         if meeting is None:
-            return search_result(self.name, None, trees, iterations, watch, budget, stats)
+            return search_result(self.name, problem, None, trees, iterations, watch, budget, stats)
         head = start_side.tree.branch(meeting[0])[::-1]
         tail = goal_side.tree.branch(meeting[1])
         if meeting == (0, 0):
@@ -190,4 +190,4 @@ class RRTConnectPlanner:
         else:
             # Both trees hold the meeting point; keep one copy.
             raw = np.vstack([head, tail[1:]])
-        return search_result(self.name, raw, trees, iterations, watch, budget, stats)
+        return search_result(self.name, problem, raw, trees, iterations, watch, budget, stats)

@@ -220,7 +220,7 @@ class RRTStarPlanner:
         stats = {**edges.stats(), "rewires": rewires}
         if not goal_links:
             trees = (tree.freeze(),)
-            return search_result(self.name, None, trees, iterations, watch, budget, stats)
+            return search_result(self.name, problem, None, trees, iterations, watch, budget, stats)
         links = np.array(goal_links)
         total = tree.cost[links] + np.hypot(tree.nodes[links, 0] - gx, tree.nodes[links, 1] - gy)
         best = int(links[np.argmin(total)])
@@ -228,7 +228,8 @@ class RRTStarPlanner:
         stats["goal_links"] = len(goal_links)
         stats["path_cost_m"] = float(tree.cost[goal_index])
         raw = tree.branch(goal_index)[::-1]
-        return search_result(self.name, raw, (tree.freeze(),), iterations, watch, budget, stats)
+        trees = (tree.freeze(),)
+        return search_result(self.name, problem, raw, trees, iterations, watch, budget, stats)
 
 
 def _shift_subtree(cost: np.ndarray, children: list[list[int]], root: int, delta: float) -> None:

@@ -328,12 +328,14 @@ class _Query:
         path, word = found
         stats["dubins_fallback"] = 1.0
         stats["max_curvature"] = float(np.abs(path.samples[:, 3]).max())
-        why = self.last_message or "the trees did not meet"
+        if self.last_message:
+            # make_drivable's messages open with "post-processing failed: "; the query did not.
+            reason = self.last_message.removeprefix("post-processing failed: ")
+            note = f"no tree path could be made drivable ({reason})"
+        else:
+            note = "the trees did not meet within the budget"
         raw = self.last_raw if self.last_raw is not None else np.vstack([self.s_xy, self.g_xy])
-        message = (
-            f"solved by the Dubins fallback ({word}; {path.length:.1f} m); "
-            f"the tree paths failed: {why}"
-        )
+        message = f"solved by the Dubins fallback ({word}; {path.length:.1f} m); {note}"
         return solved(
             NAME, watch, path, raw, self.trees, self.iterations, message, stats,
             nodes=int(stats["nodes"]),
