@@ -30,7 +30,7 @@ import numpy as np
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import resolve_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem, make_planner
-from rrtdrive.planning.rrt import free_cells
+from rrtdrive.planning.sampling import free_cells
 from rrtdrive.types import Budget
 
 BASELINES = ("rrt", "rrt-connect", "rrt-star")

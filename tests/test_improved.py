@@ -16,6 +16,7 @@ from rrtdrive.planning.base import PlanningProblem, cached_checker
 from rrtdrive.planning.dubins import shortest_dubins
 from rrtdrive.planning.improved import (
     COMPONENTS,
+    SMOOTHING_COMPONENTS,
     ImprovedConfig,
     ImprovedRRTConnect,
     ObtuseTree,
@@ -29,6 +30,8 @@ from rrtdrive.planning.improved import (
     link,
     passage_cells,
 )
+from rrtdrive.planning.improved.config import default_smoothing
+from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, InputError, PlanStatus, Pose, Tree
 from rrtdrive.vehicle import footprint_corners
 from rrtdrive.verify import verify_path
@@ -98,19 +101,39 @@ def solve(m: Map, seed: int = 0, budget: Budget = BUDGET, **options):
 
 def test_components_are_boolean_config_fields_on_by_default():
     fields = {f.name: f for f in dataclasses.fields(ImprovedConfig)}
-    assert set(COMPONENTS) <= set(fields)
+    smoothing_fields = {f.name for f in dataclasses.fields(SmoothingConfig)}
+    assert set(SMOOTHING_COMPONENTS) <= smoothing_fields
+    assert set(COMPONENTS) - set(SMOOTHING_COMPONENTS) <= set(fields)
     cfg = ImprovedConfig()
-    assert all(getattr(cfg, name) is True for name in COMPONENTS)
+    assert all(cfg.enabled(name) is True for name in COMPONENTS)
+    assert all(getattr(cfg.smoothing, name) is True for name in SMOOTHING_COMPONENTS)
+
+
+def test_the_post_processor_settings_are_one_smoothing_config():
+    # No copies of SmoothingConfig's fields: the planner's defaults are one SmoothingConfig.
+    fields = {f.name for f in dataclasses.fields(ImprovedConfig)}
+    smoothing_fields = {f.name for f in dataclasses.fields(SmoothingConfig)}
+    assert fields & smoothing_fields == set()
+    assert ImprovedConfig().smoothing == SmoothingConfig(max_rounds=24) == default_smoothing()
+    planner = ImprovedRRTConnect(smoothing={"degree": 3, "max_rounds": 8})
+    assert planner.config.smoothing == SmoothingConfig(degree=3, max_rounds=8)
+    custom = SmoothingConfig(supplement_n=0.4)
+    assert ImprovedRRTConnect(smoothing=custom).config.smoothing is custom
+    assert ImprovedRRTConnect(ImprovedConfig(smoothing=custom)).config.smoothing is custom
 
 
 def test_components_can_be_disabled_by_name_or_keyword():
     assert ImprovedRRTConnect(disable=("obtuse_parent",)).config.obtuse_parent is False
-    assert ImprovedRRTConnect(disable="prune").config.prune is False
+    assert ImprovedRRTConnect(disable="prune").config.smoothing.prune is False
     assert ImprovedRRTConnect(adaptive_step=False).config.adaptive_step is False
     planner = make_planner("improved-rrt-connect", disable=["supplement", "sharp_repair"])
-    assert planner.config.supplement is False and planner.config.sharp_repair is False
+    assert planner.config.smoothing.supplement is False
+    assert planner.config.smoothing.sharp_repair is False
     assert ImprovedConfig().without(*COMPONENTS) == ImprovedConfig(
-        **{name: False for name in COMPONENTS}
+        **{name: False for name in COMPONENTS if name not in SMOOTHING_COMPONENTS},
+        smoothing=SmoothingConfig(
+            max_rounds=24, **{name: False for name in SMOOTHING_COMPONENTS}
+        ),
     )
 
 
@@ -119,14 +142,18 @@ def test_components_can_be_disabled_by_name_or_keyword():
     [
         ({"step": 0.0}, "planner.step"),
         ({"step": float("nan")}, "planner.step"),
-        ({"prune": "yes"}, "planner.prune"),
-        ({"spline_degree": 4}, "planner.spline_degree"),
-        ({"supplement_n": 1.0}, "planner.supplement_n"),
-        ({"supplement_delta": -1.0}, "planner.supplement_delta"),
+        ({"smoothing": {"prune": "yes"}}, "planner.smoothing.prune"),
+        ({"smoothing": {"degree": 4}}, "planner.smoothing.degree"),
+        ({"smoothing": {"supplement_n": 1.0}}, "planner.smoothing.supplement_n"),
+        ({"smoothing": {"supplement_delta": -1.0}}, "planner.smoothing.supplement_delta"),
+        ({"smoothing": {"bogus": 1}}, "planner.smoothing.bogus"),
+        ({"smoothing": {"clearance": 0.3}}, "planner.smoothing.clearance"),
+        ({"smoothing": 3}, "planner.smoothing"),
         ({"expansion_a": -1.0}, "planner.expansion_a"),
         ({"expansion_lmin": float("inf")}, "planner.expansion_lmin"),
         ({"passage_bias": 1.0}, "planner.passage_bias"),
-        ({"max_repair_rounds": 0}, "planner.max_repair_rounds"),
+        ({"smoothing": {"max_rounds": 0}}, "planner.smoothing.max_rounds"),
+        ({"max_repair_rounds": 8}, "planner.max_repair_rounds"),
         ({"bogus": 1}, "planner.bogus"),
         ({"disable": ("nope",)}, "planner.disable"),
     ],
@@ -490,6 +517,12 @@ def test_dubins_fallback_turns_round_in_open_space(goal):
     res = solve(m, 0)
     assert_valid_path(res, m)
     assert res.stats["dubins_fallback"] == 1.0 and "Dubins fallback" in res.message
+    # A solved result says what solved it; why no tree path was used is a neutral note.
+    assert res.message.startswith("solved by the Dubins fallback (")
+    assert "failed" not in res.message
+    assert "no tree path could be made drivable (" in res.message or (
+        "the trees did not meet" in res.message
+    )
     assert res.path.length == pytest.approx(
         shortest_dubins(m.start, m.goal, 1.05 / KAPPA).length, rel=0.01
     )
@@ -505,6 +538,7 @@ def test_dubins_tail_rescues_a_goal_facing_into_a_parking_row():
     res = solve(m, 0)
     assert_valid_path(res, m)
     assert "Dubins fallback (tree path to" in res.message
+    assert "failed" not in res.message
     assert verify_path(m, res.path).ok
 
 
@@ -516,6 +550,7 @@ def test_dubins_lead_rescues_a_start_facing_across_the_aisle():
     res = solve(m, 0)
     assert_valid_path(res, m)
     assert "+ tree path from" in res.message
+    assert "failed" not in res.message
     assert verify_path(m, res.path).ok
 
 
@@ -543,7 +578,7 @@ def test_all_components_off_still_gives_a_valid_path():
 def test_degree_3_splines(name):
     m = builtin_map(name)
     for seed in range(2):
-        assert_valid_path(solve(m, seed, spline_degree=3), m)
+        assert_valid_path(solve(m, seed, smoothing={"degree": 3}), m)
 
 
 def test_direct_connection_skips_growth():

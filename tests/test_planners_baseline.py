@@ -11,11 +11,22 @@ from hypothesis import strategies as st
 
 from rrtdrive.maps import Map, Obstacle, builtin_map
 from rrtdrive.planning import PLANNERS, make_planner
-from rrtdrive.planning.base import Planner, PlanningProblem
-from rrtdrive.planning.rrt import RRTPlanner, SampleSource, exact_edge_free
+from rrtdrive.planning.base import Planner, PlanningProblem, Stopwatch, failure
+from rrtdrive.planning.edges import exact_edge_free
+from rrtdrive.planning.result import run_query, search_result
+from rrtdrive.planning.rrt import RRTPlanner
 from rrtdrive.planning.rrt_connect import RRTConnectPlanner
 from rrtdrive.planning.rrt_star import RRTStarPlanner
-from rrtdrive.types import Budget, InputError, PlanResult, PlanStatus, Pose, VehicleParams
+from rrtdrive.planning.sampling import SampleSource
+from rrtdrive.types import (
+    Budget,
+    InputError,
+    PlanResult,
+    PlanStatus,
+    Pose,
+    VehicleParams,
+    wrap_angle,
+)
 
 BASELINES = ("rrt", "rrt-connect", "rrt-star")
 MAPS = ("parking_lot", "overtake", "narrow_gap")
@@ -343,3 +354,59 @@ def test_sample_source_draw_xy_is_draw_as_a_list():
         q = a.draw(ra)
         got = b.draw_xy(rb) if k % 3 else b.draw(rb).tolist()
         assert isinstance(got, list) and got == q.tolist()
+
+
+# ----------------------------------------------------------------------------- shared seams
+
+
+def test_run_query_answers_the_precheck_without_searching(problems):
+    calls = []
+
+    def search(watch):
+        calls.append(watch)
+        return failure("demo", PlanStatus.NO_PATH_IN_BUDGET, watch, "searched")
+
+    walled = PlanningProblem.from_map(builtin_map("no_path"))
+    assert run_query("demo", walled, BUDGET, search).status is PlanStatus.PROVEN_UNREACHABLE
+    assert calls == []
+    res = run_query("demo", problems["overtake"], BUDGET, search)
+    assert res.message == "searched" and len(calls) == 1 and isinstance(calls[0], Stopwatch)
+
+
+def test_search_result_without_a_path_is_out_of_budget(problems):
+    watch = Stopwatch(BUDGET)
+    res = search_result("demo", problems["overtake"], None, (), 7, watch, BUDGET, {"x": 1.0})
+    assert res.status is PlanStatus.NO_PATH_IN_BUDGET and res.iterations == 7
+    assert f"iteration budget of {BUDGET.max_iterations} spent" in res.message
+    assert res.stats == {"x": 1.0}
+
+
+@pytest.mark.parametrize("name", BASELINES)
+def test_solved_message_says_curvature_and_headings_are_ignored(name, problems):
+    # The raw tree path has corners and the headings of its end edges: "solved" must not
+    # read as drivable. The message gives max curvature / kappa_max and the heading errors.
+    problem = problems["parking_lot"]
+    res = run(name, problem, 0)
+    assert res.success
+    kappa_max = problem.vehicle.kappa_max
+    ratio = res.path.max_curvature / kappa_max
+    assert "baselines ignore curvature and headings" in res.message
+    assert f"max curvature {ratio:.1f} x kappa_max" in res.message
+    err = [
+        abs(math.degrees(wrap_angle(res.path.samples[k, 2] - pose.yaw)))
+        for k, pose in ((0, problem.start), (-1, problem.goal))
+    ]
+    assert f"heading error {err[0]:.0f} deg at the start, {err[1]:.0f} deg at the goal" in (
+        res.message
+    )
+
+
+@pytest.mark.parametrize("name", BASELINES)
+def test_solved_message_reports_a_reversed_goal_heading(name):
+    # Straight ahead to a goal that faces back: a straight raw path, 180 degrees off at the goal.
+    m = Map("open", (0.0, 0.0, 60.0, 40.0), (), Pose(10.0, 20.0, 0.0), Pose(13.0, 20.0, math.pi))
+    res = run(name, PlanningProblem.from_map(m), 0)
+    assert res.success
+    assert res.message.endswith(
+        "max curvature 0.0 x kappa_max, heading error 0 deg at the start, 180 deg at the goal"
+    )

@@ -19,21 +19,14 @@ from rrtdrive.planning.base import (
     GrowingTree,
     PlanningProblem,
     Stopwatch,
-    failure,
-    precheck,
     register_planner,
     step_towards,
 )
-from rrtdrive.planning.rrt import (
-    EdgeTester,
-    SampleSource,
-    budget_message,
-    check_flag,
-    check_probability,
-    check_step,
-    solved_result,
-)
-from rrtdrive.types import Budget, PlanResult, PlanStatus
+from rrtdrive.planning.edges import EdgeTester
+from rrtdrive.planning.options import check_flag, check_probability, check_step
+from rrtdrive.planning.result import run_query, search_result
+from rrtdrive.planning.sampling import SampleSource
+from rrtdrive.types import Budget, PlanResult
 
 __all__ = ["RRTConnectPlanner"]
 
@@ -88,7 +81,7 @@ class RRTConnectPlanner:
         ``[0, 1)``; 0 (classic RRT-Connect) by default.
     reject_samples : bool
         Sample only where the car can stand and that is not provably cut off from
-        the start (see :class:`~rrtdrive.planning.rrt.SampleSource`).
+        the start (see :class:`~rrtdrive.planning.sampling.SampleSource`).
     exact_goal_edge : bool
         Confirm an edge into the goal by the exact body test when the fast test fails.
 
@@ -138,10 +131,13 @@ class RRTConnectPlanner:
         PlanResult
             Solved with the raw path through both trees, or a failure with both trees.
         """
-        watch = Stopwatch(budget)
-        early = precheck(problem, self.name, watch)
-        if early is not None:
-            return early
+        return run_query(
+            self.name, problem, budget, lambda watch: self._search(problem, rng, budget, watch)
+        )
+
+    def _search(
+        self, problem: PlanningProblem, rng: np.random.Generator, budget: Budget, watch: Stopwatch
+    ) -> PlanResult:
         checker = problem.checker
         start, goal = problem.start.xy, problem.goal.xy
         edges = EdgeTester(checker, goal, self.exact_goal_edge)
@@ -186,15 +182,7 @@ class RRTConnectPlanner:
         }
         trees = (start_side.tree.freeze(), goal_side.tree.freeze())
         if meeting is None:
-            return failure(
-                self.name,
-                PlanStatus.NO_PATH_IN_BUDGET,
-                watch,
-                budget_message(iterations, watch, budget, sum(len(t) for t in trees)),
-                trees=trees,
-                iterations=iterations,
-                stats=stats,
-            )
+            return search_result(self.name, problem, None, trees, iterations, watch, budget, stats)
         head = start_side.tree.branch(meeting[0])[::-1]
         tail = goal_side.tree.branch(meeting[1])
         if meeting == (0, 0):
@@ -202,4 +190,4 @@ class RRTConnectPlanner:
         else:
             # Both trees hold the meeting point; keep one copy.
             raw = np.vstack([head, tail[1:]])
-        return solved_result(self.name, raw, trees, iterations, watch, stats)
+        return search_result(self.name, problem, raw, trees, iterations, watch, budget, stats)

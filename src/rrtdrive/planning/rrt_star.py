@@ -23,22 +23,14 @@ from rrtdrive.planning.base import (
     GrowingTree,
     PlanningProblem,
     Stopwatch,
-    failure,
-    precheck,
     register_planner,
     step_towards,
 )
-from rrtdrive.planning.rrt import (
-    EdgeTester,
-    SampleSource,
-    budget_message,
-    check_count,
-    check_flag,
-    check_probability,
-    check_step,
-    solved_result,
-)
-from rrtdrive.types import Budget, InputError, PlanResult, PlanStatus, require_positive
+from rrtdrive.planning.edges import EdgeTester
+from rrtdrive.planning.options import check_count, check_flag, check_probability, check_step
+from rrtdrive.planning.result import run_query, search_result
+from rrtdrive.planning.sampling import SampleSource
+from rrtdrive.types import Budget, InputError, PlanResult, require_positive
 
 __all__ = ["RRTStarPlanner"]
 
@@ -72,7 +64,7 @@ class RRTStarPlanner:
         the default is ``rewire_radius``; ``step`` gives the strict one-step rule.
     reject_samples : bool
         Sample only where the car can stand and that is not provably cut off from
-        the start (see :class:`~rrtdrive.planning.rrt.SampleSource`).
+        the start (see :class:`~rrtdrive.planning.sampling.SampleSource`).
     exact_goal_edge : bool
         Confirm an edge into the goal by the exact body test when the fast test fails.
 
@@ -139,10 +131,13 @@ class RRTStarPlanner:
         PlanResult
             Solved with the best raw tree path, or a failure with the tree.
         """
-        watch = Stopwatch(budget)
-        early = precheck(problem, self.name, watch)
-        if early is not None:
-            return early
+        return run_query(
+            self.name, problem, budget, lambda watch: self._search(problem, rng, budget, watch)
+        )
+
+    def _search(
+        self, problem: PlanningProblem, rng: np.random.Generator, budget: Budget, watch: Stopwatch
+    ) -> PlanResult:
         start, goal = problem.start.xy, problem.goal.xy
         gx, gy = float(goal[0]), float(goal[1])
         edges = EdgeTester(problem.checker, goal, self.exact_goal_edge)
@@ -224,15 +219,8 @@ class RRTStarPlanner:
 
         stats = {**edges.stats(), "rewires": rewires}
         if not goal_links:
-            return failure(
-                self.name,
-                PlanStatus.NO_PATH_IN_BUDGET,
-                watch,
-                budget_message(iterations, watch, budget, len(tree)),
-                trees=(tree.freeze(),),
-                iterations=iterations,
-                stats=stats,
-            )
+            trees = (tree.freeze(),)
+            return search_result(self.name, problem, None, trees, iterations, watch, budget, stats)
         links = np.array(goal_links)
         total = tree.cost[links] + np.hypot(tree.nodes[links, 0] - gx, tree.nodes[links, 1] - gy)
         best = int(links[np.argmin(total)])
@@ -240,7 +228,8 @@ class RRTStarPlanner:
         stats["goal_links"] = len(goal_links)
         stats["path_cost_m"] = float(tree.cost[goal_index])
         raw = tree.branch(goal_index)[::-1]
-        return solved_result(self.name, raw, (tree.freeze(),), iterations, watch, stats)
+        trees = (tree.freeze(),)
+        return search_result(self.name, problem, raw, trees, iterations, watch, budget, stats)
 
 
 def _shift_subtree(cost: np.ndarray, children: list[list[int]], root: int, delta: float) -> None:

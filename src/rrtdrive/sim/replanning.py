@@ -418,7 +418,7 @@ class TrafficDriver:
         self.speed = speed
         self.config = config
         self.rng = rng
-        options = {"max_postprocess_attempts": 2, "max_repair_rounds": 8}
+        options = {"max_postprocess_attempts": 2, "smoothing": {"max_rounds": 8}}
         options.update(config.planner_options)
         self.planner = SpaceTimeRRTConnect(**options)
         self.plan_vehicle = dataclasses.replace(

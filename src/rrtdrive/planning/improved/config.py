@@ -1,0 +1,254 @@
+"""Configuration of the improved RRT-Connect: :class:`ImprovedConfig` and its component names."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+from rrtdrive.planning.smoothing import SmoothingConfig
+from rrtdrive.types import InputError, require_finite, require_int, require_positive
+
+__all__ = [
+    "COMPONENTS",
+    "SMOOTHING_COMPONENTS",
+    "PER_QUERY_SMOOTHING",
+    "ImprovedConfig",
+    "default_smoothing",
+]
+
+#: Names of the switchable components, for ablations and the CLI.
+COMPONENTS: tuple[str, ...] = (
+    "direct_connect",
+    "obtuse_parent",
+    "adaptive_step",
+    "obstacle_expansion",
+    "prune",
+    "sharp_repair",
+    "supplement",
+    "passage_sampling",
+    "dubins_fallback",
+)
+
+#: The components that are switches of the post-processor: fields of ``ImprovedConfig.smoothing``.
+SMOOTHING_COMPONENTS: tuple[str, ...] = ("prune", "sharp_repair", "supplement")
+
+#: Fields of :class:`SmoothingConfig` the planner sets per query: the car's ``kappa_max``,
+#: the step ``p`` as ``heading_leg`` and the capped ``body_clearance`` as ``clearance``.
+PER_QUERY_SMOOTHING: tuple[str, ...] = ("kappa_max", "heading_leg", "clearance")
+
+
+def default_smoothing() -> SmoothingConfig:
+    """The planner's post-processing defaults: :class:`SmoothingConfig` with 24 repair rounds.
+
+    Examples
+    --------
+    >>> default_smoothing().max_rounds, default_smoothing().degree
+    (24, 2)
+    """
+    return SmoothingConfig(max_rounds=24)
+
+
+@dataclass(frozen=True)
+class ImprovedConfig:
+    """Parameters of :class:`ImprovedRRTConnect`, validated on construction.
+
+    Parameters
+    ----------
+    step : float
+        Unit step ``p`` in metres (paper: 5 m).
+    direct_connect, obtuse_parent, adaptive_step : bool
+        Components of :data:`COMPONENTS` (tree growth); all on by default.
+    obstacle_expansion : bool
+        Component of :data:`COMPONENTS` (obstacle expansion); on by default.
+    passage_sampling : bool
+        Beyond the paper: with probability ``passage_bias`` an iteration samples a
+        point on a narrow passage's centre line (:func:`passage_cells`) and joins
+        both trees to it by straight free edges. On by default (the tree growth of
+        the paper alone rarely threads a gap barely wider than the car).
+    dubins_fallback : bool
+        Beyond the paper: when no tree path can be made drivable (or the trees
+        never meet), try the shortest Dubins paths from the start pose to the goal
+        pose (turning radius ``dubins_radius_factor / kappa_max``) and return the
+        first that the exact body test clears with the body clearance. Solves goals
+        that need a U-turn or a sharp approach in open space, which the tree paths
+        with their straight legs cannot. On by default; it never runs when the
+        paper's pipeline succeeds.
+    dubins_radius_factor : float
+        Turning radius of the fallback's arcs as a multiple of ``1 / kappa_max``
+        (>= 1; default 1.05, a little room for tracking).
+    passage_bias : float
+        Share of iterations that sample passages, in ``[0, 1)``.
+    expansion_a : float
+        Growth ``a`` of an expanded rectangle's length and width in metres.
+    expansion_lmin : float or None
+        ``L_min`` in metres; ``None`` means :func:`default_expansion_lmin`
+        (``W + 2 margin + sqrt(2) a``, 3.41 m for the paper's car), the smallest
+        value that never narrows a gap the car's edge test could pass through.
+    max_postprocess_attempts : int
+        Tree paths tried before giving up with ``POSTPROCESS_FAILED``; after a
+        failed post-processing the trees are grown afresh.
+    body_clearance : float
+        Distance in metres the car's body must keep from every obstacle along
+        the final path (exact test), so that tracking error and a simulator's
+        look-ahead collision test have room. Capped per query at the clearance
+        the start and goal poses themselves have, so a car parked close to a
+        wall can still leave and arrive.
+    smoothing : SmoothingConfig
+        The post-processor (Sec. 3.2, :func:`default_smoothing`): the components
+        ``prune``, ``sharp_repair`` and ``supplement`` (:data:`SMOOTHING_COMPONENTS`),
+        the spline ``degree`` (2, paper, or 3), Eq. 16's ``supplement_delta`` and
+        ``supplement_n``, ``max_rounds`` fit-check-repair rounds per tree path (24)
+        and the sampling and fillet settings. Its :data:`PER_QUERY_SMOOTHING`
+        fields are set per query and must keep their defaults here.
+
+    Examples
+    --------
+    >>> ImprovedConfig(step=4.0).step
+    4.0
+    >>> ImprovedConfig(step=-1.0)
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: planner.step: must be > 0, got -1.0
+    >>> ImprovedConfig().without("prune").smoothing.prune
+    False
+    """
+
+    step: float = 5.0
+    direct_connect: bool = True
+    obtuse_parent: bool = True
+    adaptive_step: bool = True
+    obstacle_expansion: bool = True
+    passage_sampling: bool = True
+    dubins_fallback: bool = True
+    dubins_radius_factor: float = 1.05
+    passage_bias: float = 0.1
+    expansion_a: float = 1.0
+    expansion_lmin: float | None = None
+    max_postprocess_attempts: int = 6
+    body_clearance: float = 0.15
+    smoothing: SmoothingConfig = field(default_factory=default_smoothing)
+
+    def __post_init__(self) -> None:
+        require_positive("planner.step", self.step)
+        if not isinstance(self.smoothing, SmoothingConfig):
+            kind = type(self.smoothing).__name__
+            raise InputError(f"planner.smoothing: expected a SmoothingConfig, got {kind}")
+        for name in COMPONENTS:
+            value = self.enabled(name)
+            if not isinstance(value, bool):
+                raise InputError(f"planner.{_path(name)}: expected true or false, got {value!r}")
+        untouched = SmoothingConfig()
+        for name in PER_QUERY_SMOOTHING:
+            if getattr(self.smoothing, name) != getattr(untouched, name):
+                raise InputError(
+                    f"planner.smoothing.{name}: set per query (from the car, planner.step and "
+                    f"planner.body_clearance); leave it at its default"
+                )
+        require_finite("planner.passage_bias", self.passage_bias)
+        require_finite("planner.dubins_radius_factor", self.dubins_radius_factor)
+        if self.dubins_radius_factor < 1.0:
+            raise InputError(
+                f"planner.dubins_radius_factor: must be >= 1, got {self.dubins_radius_factor!r}"
+            )
+        if not 0.0 <= self.passage_bias < 1.0:
+            raise InputError(f"planner.passage_bias: must lie in [0, 1), got {self.passage_bias!r}")
+        require_finite("planner.expansion_a", self.expansion_a)
+        if self.expansion_a < 0:
+            raise InputError(f"planner.expansion_a: must be >= 0, got {self.expansion_a!r}")
+        if self.expansion_lmin is not None:
+            require_finite("planner.expansion_lmin", self.expansion_lmin)
+            if self.expansion_lmin < 0:
+                raise InputError(
+                    f"planner.expansion_lmin: must be >= 0, got {self.expansion_lmin!r}"
+                )
+        require_finite("planner.body_clearance", self.body_clearance)
+        if self.body_clearance < 0:
+            raise InputError(
+                f"planner.body_clearance: must be >= 0, got {self.body_clearance!r}"
+            )
+        require_int("planner.max_postprocess_attempts", self.max_postprocess_attempts)
+
+    def enabled(self, component: str) -> bool:
+        """Whether the named component of :data:`COMPONENTS` is on.
+
+        Examples
+        --------
+        >>> ImprovedConfig().enabled("prune"), ImprovedConfig(obtuse_parent=False).enabled(
+        ...     "obtuse_parent")
+        (True, False)
+        """
+        _check_components((component,))
+        owner = self.smoothing if component in SMOOTHING_COMPONENTS else self
+        return getattr(owner, component)
+
+    def without(self, *components: str) -> ImprovedConfig:
+        """A copy with the named components switched off.
+
+        Examples
+        --------
+        >>> cfg = ImprovedConfig().without("prune", "obtuse_parent")
+        >>> cfg.smoothing.prune, cfg.obtuse_parent
+        (False, False)
+        """
+        _check_components(components)
+        mine = {name: False for name in components if name not in SMOOTHING_COMPONENTS}
+        theirs = {name: False for name in components if name in SMOOTHING_COMPONENTS}
+        if theirs:
+            mine["smoothing"] = dataclasses.replace(self.smoothing, **theirs)
+        return dataclasses.replace(self, **mine)
+
+    def with_options(self, options: Mapping[str, object]) -> ImprovedConfig:
+        """A copy with config fields replaced; ``smoothing`` may be a mapping of its fields.
+
+        A mapping is applied over this config's :attr:`smoothing`, so
+        ``{"smoothing": {"max_rounds": 8}}`` changes only the rounds. Errors name
+        the option, e.g. ``planner.smoothing.degree``.
+
+        Examples
+        --------
+        >>> cfg = ImprovedConfig().with_options({"step": 4.0, "smoothing": {"degree": 3}})
+        >>> cfg.step, cfg.smoothing.degree, cfg.smoothing.max_rounds
+        (4.0, 3, 24)
+        """
+        fields = {f.name for f in dataclasses.fields(ImprovedConfig)}
+        unknown = sorted(set(options) - fields)
+        if unknown:
+            raise InputError(
+                f"planner.{unknown[0]}: unknown option for improved-rrt-connect; "
+                f"allowed {sorted(fields)}"
+            )
+        changes = dict(options)
+        smoothing = changes.get("smoothing")
+        if isinstance(smoothing, Mapping):
+            changes["smoothing"] = _smoothing_with(self.smoothing, smoothing)
+        return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
+
+
+def _path(component: str) -> str:
+    """Where a component lives in the config, for error messages."""
+    return f"smoothing.{component}" if component in SMOOTHING_COMPONENTS else component
+
+
+def _check_components(components: tuple[str, ...]) -> None:
+    for name in components:
+        if name not in COMPONENTS:
+            raise InputError(
+                f"planner.disable: unknown component {name!r}; choose from {list(COMPONENTS)}"
+            )
+
+
+def _smoothing_with(base: SmoothingConfig, changes: Mapping[str, object]) -> SmoothingConfig:
+    """``base`` with ``changes``; errors name ``planner.smoothing.<field>``."""
+    fields = {f.name for f in dataclasses.fields(SmoothingConfig)}
+    unknown = sorted(set(changes) - fields)
+    if unknown:
+        raise InputError(
+            f"planner.smoothing.{unknown[0]}: unknown field of SmoothingConfig; "
+            f"allowed {sorted(fields)}"
+        )
+    try:
+        return dataclasses.replace(base, **changes)  # type: ignore[arg-type]
+    except InputError as exc:
+        # SmoothingConfig names its fields "smoothing.<field>"; say whose they are.
+        raise InputError(f"planner.{exc}") from None

@@ -1,0 +1,166 @@
+"""Adaptive obstacle expansion (paper Sec. 3.1.4) and the end poses' clearance cap."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+import numpy as np
+
+from rrtdrive.collision import CollisionChecker
+from rrtdrive.maps import Obstacle
+from rrtdrive.types import Pose
+
+__all__ = [
+    "default_expansion_lmin",
+    "endpoint_capped_clearance",
+    "envelope_gaps",
+    "expand_obstacles",
+    "expanded_checker",
+]
+
+
+def endpoint_capped_clearance(
+    checker: CollisionChecker, start: Pose, goal: Pose, wanted: float
+) -> float:
+    """``wanted``, lowered to the exact body clearance of the start or goal pose if smaller.
+
+    A path cannot keep more room than its own end poses have; asking for it
+    would make a car parked near a wall unplannable.
+    """
+    if wanted <= 0.0:
+        return 0.0
+    have = min(checker.body_clearance(start.as_tuple()), checker.body_clearance(goal.as_tuple()))
+    return max(0.0, min(wanted, have * 0.999))
+
+
+def default_expansion_lmin(width: float, margin: float, a: float) -> float:
+    """Default ``L_min = W + 2 margin + sqrt(2) a``.
+
+    Growing a rectangle by ``a`` in length and width moves each of its points by
+    at most ``a / sqrt(2)`` (a corner, diagonally), so two grown neighbours lose at
+    most ``sqrt(2) a`` of their gap. A pair whose envelope circles are more than
+    ``L_min`` apart (and so the rectangles too) keeps a gap above ``W + 2 margin``,
+    the width of the swept disc of the edge test: no gap the car could use is closed.
+
+    Examples
+    --------
+    >>> round(default_expansion_lmin(1.8, 0.1, 1.0), 3)
+    3.414
+    """
+    return width + 2.0 * margin + math.sqrt(2.0) * a
+
+
+def envelope_gaps(
+    obstacles: Iterable[Obstacle], bounds: Iterable[float] | None = None
+) -> np.ndarray:
+    """``L2`` of each obstacle: the smallest gap between its envelope circle and any other's.
+
+    The envelope circle is centred on the rectangle with radius half its diagonal.
+    When ``bounds`` are given, the map boundary counts as an obstacle too (the gap
+    from the circle to each side of the bounds box), so expansion never closes a
+    passage along the map's edge.
+
+    Returns
+    -------
+    numpy.ndarray
+        One gap per obstacle (``inf`` for a lone obstacle without bounds).
+
+    Examples
+    --------
+    >>> obs = [Obstacle((0.0, 0.0), (6.0, 8.0)), Obstacle((20.0, 0.0), (6.0, 8.0))]
+    >>> envelope_gaps(obs).tolist()
+    [10.0, 10.0]
+    """
+    obs = list(obstacles)
+    if not obs:
+        return np.zeros(0)
+    c = np.array([o.center for o in obs], dtype=float)
+    r = np.array([math.hypot(*o.size) / 2.0 for o in obs])
+    d = np.hypot(c[:, None, 0] - c[None, :, 0], c[:, None, 1] - c[None, :, 1])
+    gap = d - r[:, None] - r[None, :]
+    np.fill_diagonal(gap, np.inf)
+    out = gap.min(axis=1)
+    if bounds is not None:
+        xmin, ymin, xmax, ymax = (float(b) for b in bounds)
+        wall = (
+            np.minimum.reduce([c[:, 0] - xmin, xmax - c[:, 0], c[:, 1] - ymin, ymax - c[:, 1]]) - r
+        )
+        out = np.minimum(out, wall)
+    return out
+
+
+def expand_obstacles(
+    obstacles: Iterable[Obstacle],
+    a: float,
+    lmin: float,
+    bounds: Iterable[float] | None = None,
+) -> tuple[tuple[Obstacle, ...], np.ndarray]:
+    """Adaptive obstacle expansion (paper Sec. 3.1.4): grow by ``a`` where ``L2 > L_min``.
+
+    Parameters
+    ----------
+    obstacles : iterable of Obstacle
+        The map's rectangles.
+    a : float
+        Growth of length and width in metres.
+    lmin : float
+        Smallest allowed passing distance ``L_min``.
+    bounds : iterable of float, optional
+        Map bounds; the boundary then counts as an obstacle (see :func:`envelope_gaps`).
+
+    Returns
+    -------
+    obstacles : tuple of Obstacle
+        The rectangles, grown or as they were, in the same order.
+    grown : numpy.ndarray
+        Boolean flag per rectangle.
+
+    Examples
+    --------
+    >>> obs = [Obstacle((0.0, 0.0), (6.0, 8.0)), Obstacle((20.0, 0.0), (6.0, 8.0))]
+    >>> new, grown = expand_obstacles(obs, 1.0, 3.4)
+    >>> new[0].size, grown.tolist()
+    ((7.0, 9.0), [True, True])
+    """
+    obs = list(obstacles)
+    gaps = envelope_gaps(obs, bounds)
+    grown = gaps > lmin
+    out = tuple(o.grown(a) if g else o for o, g in zip(obs, grown.tolist(), strict=True))
+    return out, grown
+
+
+_EXPANDED: dict[tuple[object, ...], tuple[CollisionChecker | None, int]] = {}
+
+
+def expanded_checker(
+    checker: CollisionChecker, a: float, lmin: float
+) -> tuple[CollisionChecker | None, int]:
+    """The checker of the expanded obstacles, built once per map and parameters.
+
+    Returns ``(None, 0)`` when no obstacle grows (the original checker serves).
+    The cache is module level, keyed by the bounds, obstacles, car, checker
+    configuration, ``a`` and ``L_min``.
+    """
+    key = (
+        checker.bounds,
+        checker.obstacles,
+        checker.vehicle,
+        checker.config,
+        float(a),
+        float(lmin),
+    )
+    hit = _EXPANDED.get(key)
+    if hit is not None:
+        return hit
+    new, grown = expand_obstacles(checker.obstacles, a, lmin, checker.bounds)
+    count = int(grown.sum())
+    result: tuple[CollisionChecker | None, int]
+    if count == 0 or a == 0.0:
+        result = (None, 0)
+    else:
+        result = (CollisionChecker(checker.bounds, new, checker.vehicle, checker.config), count)
+    if len(_EXPANDED) > 16:
+        _EXPANDED.clear()
+    _EXPANDED[key] = result
+    return result

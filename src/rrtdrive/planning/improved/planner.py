@@ -1,0 +1,372 @@
+"""The improved RRT-Connect planner: one query as a sequence of named steps.
+
+:class:`ImprovedRRTConnect` runs the shared preamble
+(:func:`~rrtdrive.planning.result.run_query`), then :class:`_Query`: the direct
+connection, the growth checker, the passage cells, the growth and smoothing of
+up to ``max_postprocess_attempts`` tree paths, the Dubins fallback, and the
+failure.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Iterable
+
+import numpy as np
+
+from rrtdrive.collision import CollisionChecker
+from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register_planner
+from rrtdrive.planning.improved.config import ImprovedConfig
+from rrtdrive.planning.improved.expansion import (
+    default_expansion_lmin,
+    endpoint_capped_clearance,
+    expanded_checker,
+)
+from rrtdrive.planning.improved.fallback import dubins_fallback
+from rrtdrive.planning.improved.growth import (
+    EdgeFree,
+    ObtuseTree,
+    fast_edge_test,
+    grow_until_meet,
+    rooted_edge_test,
+)
+from rrtdrive.planning.improved.passages import passage_cells
+from rrtdrive.planning.result import run_query, solved
+from rrtdrive.planning.sampling import SampleSource
+from rrtdrive.planning.smoothing import make_drivable
+from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Tree
+
+__all__ = ["NAME", "ImprovedRRTConnect"]
+
+NAME = "improved-rrt-connect"
+
+
+@register_planner(NAME)
+class ImprovedRRTConnect:
+    """Improved RRT-Connect (paper Sec. 3) returning only drivable, verified paths.
+
+    Parameters
+    ----------
+    config : ImprovedConfig, optional
+        Full configuration; keyword ``options`` override its fields.
+    disable : iterable of str, optional
+        Components of :data:`COMPONENTS` to switch off.
+    **options
+        Any :class:`ImprovedConfig` field, e.g. ``step=4.0`` or ``adaptive_step=False``;
+        ``smoothing`` may be a mapping of :class:`SmoothingConfig` fields applied
+        over the config's own, e.g. ``smoothing={"degree": 3, "prune": False}``
+        (see :meth:`ImprovedConfig.with_options`).
+
+    Raises
+    ------
+    InputError
+        For an unknown option or component, or an invalid value (the message names it).
+
+    Examples
+    --------
+    >>> from rrtdrive.maps import builtin_map
+    >>> from rrtdrive.planning.base import PlanningProblem
+    >>> from rrtdrive.types import Budget
+    >>> planner = ImprovedRRTConnect(disable=("obstacle_expansion",))
+    >>> res = planner.solve(PlanningProblem.from_map(builtin_map("overtake")),
+    ...                     np.random.default_rng(0), Budget())
+    >>> res.success, bool(res.path.max_curvature <= 1 / 6)
+    (True, True)
+    """
+
+    name = NAME
+
+    def __init__(
+        self,
+        config: ImprovedConfig | None = None,
+        *,
+        disable: Iterable[str] = (),
+        **options: object,
+    ) -> None:
+        base = config if config is not None else ImprovedConfig()
+        if not isinstance(base, ImprovedConfig):
+            raise InputError(
+                f"planner.config: expected an ImprovedConfig, got {type(base).__name__}"
+            )
+        cfg = base.with_options(options) if options else base
+        if isinstance(disable, str):
+            disable = (disable,)
+        self.config = cfg.without(*disable)
+
+    def __repr__(self) -> str:
+        return f"ImprovedRRTConnect({self.config!r})"
+
+    def solve(
+        self, problem: PlanningProblem, rng: np.random.Generator, budget: Budget
+    ) -> PlanResult:
+        """Plan from ``problem.start`` to ``problem.goal``; never returns ``None``.
+
+        Parameters
+        ----------
+        problem : PlanningProblem
+            Map, checker, start and goal.
+        rng : numpy.random.Generator
+            The only source of randomness.
+        budget : Budget
+            Iteration and wall-time limits (both enforced for the growth; each
+            post-processing is bounded by ``smoothing.max_rounds``).
+
+        Returns
+        -------
+        PlanResult
+            ``SOLVED`` with a verified path, or a failure status with a message.
+            ``stats`` holds ``nodes``, ``iterations``, ``growth_time_s``,
+            ``postprocess_time_s``, ``postprocess_attempts``, ``repair_rounds``,
+            ``direct_connection``, ``expanded_obstacles``, ``expansion_used`` and,
+            when solved, ``key_points``, ``control_points``, ``max_curvature``
+            (exact, of the whole curve) and the repair counters ``fillets``,
+            ``merges``, ``moves``, ``drops``, ``unprunes`` and ``edge_checks``.
+        """
+        config = self.config
+        return run_query(
+            NAME, problem, budget, lambda watch: _Query(problem, config, watch).run(rng, budget)
+        )
+
+
+class _Query:
+    """Working state of one query: its settings, counters and the tree paths tried."""
+
+    def __init__(self, problem: PlanningProblem, cfg: ImprovedConfig, watch: Stopwatch) -> None:
+        self.problem = problem
+        self.cfg = cfg
+        self.watch = watch
+        self.checker = checker = problem.checker
+        self.start, self.goal = start, goal = problem.start, problem.goal
+        # The config's post-processor with the query's PER_QUERY_SMOOTHING fields.
+        self.smoothing = dataclasses.replace(
+            cfg.smoothing,
+            kappa_max=problem.vehicle.kappa_max,
+            heading_leg=cfg.step,
+            clearance=endpoint_capped_clearance(checker, start, goal, cfg.body_clearance),
+        )
+        self.stats: dict[str, float] = {
+            "nodes": 0.0,
+            "iterations": 0.0,
+            "growth_time_s": 0.0,
+            "postprocess_time_s": 0.0,
+            "postprocess_attempts": 0.0,
+            "repair_rounds": 0.0,
+            "direct_connection": 0.0,
+            "expanded_obstacles": 0.0,
+            "expansion_used": 0.0,
+        }
+        self.s_xy = np.array([start.x, start.y])
+        self.g_xy = np.array([goal.x, goal.y])
+        self.hs = np.array([math.cos(start.yaw), math.sin(start.yaw)])
+        self.hg = np.array([math.cos(goal.yaw), math.sin(goal.yaw)])
+        self.last_message = ""
+        self.last_raw: np.ndarray | None = None
+        self.failed_raws: list[np.ndarray] = []
+        self.iterations = 0
+        self.trees: tuple[Tree, ...] = (
+            Tree(self.s_xy[None, :], np.array([-1])),
+            Tree(self.g_xy[None, :], np.array([-1])),
+        )
+
+    def run(self, rng: np.random.Generator, budget: Budget) -> PlanResult:
+        """The steps in order; the first that solves the query ends it."""
+        out = self.direct_connection()
+        if out is not None:
+            return out
+        grow, edge_free = self.growth_edge_test()
+        samples = SampleSource(self.problem, reject=True)
+        out = self.grow_and_smooth(rng, budget, edge_free, samples, self.passages(grow))
+        if out is not None:
+            return out
+        self.stats["iterations"] = float(self.iterations)
+        self.stats["growth_time_s"] = self.watch.elapsed() - self.stats["postprocess_time_s"]
+        if self.cfg.dubins_fallback:
+            out = self.fallback()
+            if out is not None:
+                return out
+        return self.failure()
+
+    def smooth(
+        self, raw: np.ndarray, trees: tuple[Tree, ...], iterations: int
+    ) -> PlanResult | None:
+        """Post-process one tree path (Sec. 3.2); the solved result, or ``None`` on failure."""
+        stats = self.stats
+        t0 = time.perf_counter()
+        res = make_drivable(raw, self.start, self.goal, self.checker, self.smoothing)
+        stats["postprocess_time_s"] += time.perf_counter() - t0
+        stats["postprocess_attempts"] += 1
+        stats["repair_rounds"] += res.rounds
+        self.last_raw = raw
+        if not res.ok:
+            self.last_message = res.message
+            self.failed_raws.append(raw)
+            return None
+        stats["iterations"] = float(iterations)
+        stats["key_points"] = float(len(res.key_points))
+        stats["control_points"] = float(len(res.control_points))
+        stats["max_curvature"] = res.max_curvature
+        stats.update(res.stats)
+        elapsed = self.watch.elapsed()
+        stats["growth_time_s"] = elapsed - stats["postprocess_time_s"]
+        message = (
+            f"solved: {len(res.key_points)} key points, {len(res.control_points)} "
+            f"control points, {res.rounds} fit round(s)"
+        )
+        path = Path(res.samples, res.control_points)
+        return solved(
+            NAME, self.watch, path, raw, trees, iterations, message, stats,
+            planning_time_s=elapsed,
+        )  # fmt: skip
+
+    def direct_connection(self) -> PlanResult | None:
+        """Direct connection (Sec. 3.1.1): smooth the straight start-goal edge if it serves.
+
+        It serves when it is free and both headings point along it (within 90
+        degrees), so that the curve need not turn back.
+        """
+        s_xy, g_xy = self.s_xy, self.g_xy
+        chord = g_xy - s_xy
+        headings_allow = float(self.hs @ chord) > 0.0 and float(self.hg @ chord) > 0.0
+        if not (
+            self.cfg.direct_connect
+            and headings_allow
+            and self.checker.edge_free(s_xy.tolist(), g_xy.tolist())
+        ):
+            return None
+        self.stats["direct_connection"] = 1.0
+        self.stats["nodes"] = 2.0
+        return self.smooth(np.vstack([s_xy, g_xy]), self.trees, 0)
+
+    def growth_edge_test(self) -> tuple[CollisionChecker, EdgeFree]:
+        """The growth checker and its edge test (Sec. 3.1.4).
+
+        The checker of the expanded obstacles when both end poses are free in it;
+        its edge test checks edges at the roots on the map itself.
+        """
+        cfg, checker, stats = self.cfg, self.checker, self.stats
+        start, goal = self.start, self.goal
+        grow = checker
+        if cfg.obstacle_expansion and cfg.expansion_a > 0:
+            lmin = cfg.expansion_lmin
+            if lmin is None:
+                lmin = default_expansion_lmin(
+                    self.problem.vehicle.width, checker.config.margin, cfg.expansion_a
+                )
+            expanded, count = expanded_checker(checker, cfg.expansion_a, lmin)
+            stats["expanded_obstacles"] = float(count)
+            if expanded is not None and (
+                expanded.pose_free(start.as_tuple()) and expanded.pose_free(goal.as_tuple())
+            ):
+                grow = expanded
+                stats["expansion_used"] = 1.0
+        edge_free = fast_edge_test(grow)
+        if grow is not checker:
+            # Edges at the roots are checked on the map itself: the expansion is to keep
+            # the tree off obstacles on its way, never to shut the start or goal in.
+            edge_free = rooted_edge_test(
+                edge_free, fast_edge_test(checker), (start.x, start.y), (goal.x, goal.y)
+            )
+        return grow, edge_free
+
+    def passages(self, grow: CollisionChecker) -> np.ndarray | None:
+        """The passage cells of the growth checker, ``None`` when off or there are none."""
+        cfg = self.cfg
+        if not (cfg.passage_sampling and cfg.passage_bias > 0):
+            return None
+        cells = passage_cells(grow, (self.start.x, self.start.y))
+        return cells if len(cells) else None
+
+    def grow_and_smooth(
+        self,
+        rng: np.random.Generator,
+        budget: Budget,
+        edge_free: EdgeFree,
+        samples: SampleSource,
+        passages: np.ndarray | None,
+    ) -> PlanResult | None:
+        """Grow a pair of trees until they meet, then smooth their tree path.
+
+        A tree path that cannot be made drivable starts a fresh pair of trees (up
+        to ``max_postprocess_attempts``).
+        """
+        cfg, stats, p = self.cfg, self.stats, self.cfg.step
+        total_nodes = 0
+        while stats["postprocess_attempts"] < cfg.max_postprocess_attempts:
+            ts = ObtuseTree(self.s_xy, virtual_parent=self.s_xy - p * self.hs)
+            tg = ObtuseTree(self.g_xy, virtual_parent=self.g_xy + p * self.hg)
+            found, self.iterations = grow_until_meet(
+                ts, tg, samples, rng, edge_free,
+                step=p, obtuse=cfg.obtuse_parent, adaptive=cfg.adaptive_step,
+                passages=passages, passage_bias=cfg.passage_bias,
+                iterations=self.iterations, max_iterations=budget.max_iterations,
+                expired=self.watch.expired,
+            )  # fmt: skip
+            self.trees = (ts.freeze(), tg.freeze())
+            total_nodes += len(ts) + len(tg)
+            stats["nodes"] = float(total_nodes)
+            if found is None:
+                return None
+            out = self.smooth(found, self.trees, self.iterations)
+            if out is not None:
+                return out
+        return None
+
+    def fallback(self) -> PlanResult | None:
+        """Beyond the paper: the Dubins fallback over the failed tree paths, newest first."""
+        stats, watch = self.stats, self.watch
+        t0 = time.perf_counter()
+        found = dubins_fallback(
+            self.checker, self.start, self.goal,
+            self.cfg.dubins_radius_factor / self.problem.vehicle.kappa_max,
+            self.smoothing.clearance, self.failed_raws[::-1], self.smoothing, watch.expired,
+        )  # fmt: skip
+        stats["dubins_time_s"] = time.perf_counter() - t0
+        if found is None:
+            return None
+        path, word = found
+        stats["dubins_fallback"] = 1.0
+        stats["max_curvature"] = float(np.abs(path.samples[:, 3]).max())
+        if self.last_message:
+            # make_drivable's messages open with "post-processing failed: "; the query did not.
+            reason = self.last_message.removeprefix("post-processing failed: ")
+            note = f"no tree path could be made drivable ({reason})"
+        else:
+            note = "the trees did not meet within the budget"
+        raw = self.last_raw if self.last_raw is not None else np.vstack([self.s_xy, self.g_xy])
+        message = f"solved by the Dubins fallback ({word}; {path.length:.1f} m); {note}"
+        return solved(
+            NAME, watch, path, raw, self.trees, self.iterations, message, stats,
+            nodes=int(stats["nodes"]),
+        )  # fmt: skip
+
+    def failure(self) -> PlanResult:
+        """The honest failure: post-processing failed, or no path within the budget."""
+        stats, watch, iterations = self.stats, self.watch, self.iterations
+        if stats["postprocess_attempts"] > 0 and self.last_message:
+            tail = ")"
+            if self.cfg.dubins_fallback:
+                tail = "; no clear Dubins path, tail or lead either)"
+            return failure(
+                NAME,
+                PlanStatus.POSTPROCESS_FAILED,
+                watch,
+                f"{self.last_message} (after {int(stats['postprocess_attempts'])} tree path(s)"
+                + tail,
+                trees=self.trees,
+                iterations=iterations,
+                raw_path=self.last_raw,
+                stats=stats,
+            )
+        reason = "time" if watch.expired() else "iteration"
+        return failure(
+            NAME,
+            PlanStatus.NO_PATH_IN_BUDGET,
+            watch,
+            f"no path within the {reason} budget ({iterations} iterations, "
+            f"{watch.elapsed():.3f} s)",
+            trees=self.trees,
+            iterations=iterations,
+            stats=stats,
+        )

@@ -1,0 +1,46 @@
+"""Validation of the baselines' keyword options; errors name the option."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rrtdrive.types import InputError, require_finite, require_int, require_positive
+
+__all__ = ["check_probability", "check_count", "check_flag", "check_step"]
+
+def check_probability(name: str, value: float) -> float:
+    """Return ``value`` as a float in ``[0, 1)`` or raise :class:`InputError` naming ``name``.
+
+    Examples
+    --------
+    >>> check_probability("planner.goal_bias", 0.05)
+    0.05
+    """
+    require_finite(name, value)
+    if not 0.0 <= value < 1.0:
+        raise InputError(f"{name}: must be in [0, 1), got {value!r}")
+    return float(value)
+
+
+def check_count(name: str, value: int) -> int:
+    """Return ``value`` if it is an integer > 0, else raise :class:`InputError` naming ``name``.
+
+    Examples
+    --------
+    >>> check_count("planner.max_nodes", 450)
+    450
+    """
+    return require_int(name, value)
+
+
+def check_flag(name: str, value: bool) -> bool:
+    """Return ``value`` if it is a bool, else raise :class:`InputError` naming ``name``."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise InputError(f"{name}: expected true or false, got {value!r}")
+    return bool(value)
+
+
+def check_step(value: float) -> float:
+    """Validate the ``planner.step`` option (metres, > 0)."""
+    require_positive("planner.step", value)
+    return float(value)

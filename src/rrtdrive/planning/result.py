@@ -1,0 +1,233 @@
+"""The preamble and epilogue every planner shares: stopwatch, precheck and result building.
+
+A planner's ``solve`` is ``run_query(name, problem, budget, search)``: the
+stopwatch starts, :func:`~rrtdrive.planning.base.precheck` answers an invalid
+start or goal or a provably unreachable goal, and only then does ``search``
+run. A search ends in :func:`solved`, :func:`solved_result` (a baseline's raw
+tree path), :func:`search_result` (that, or the out-of-budget failure) or
+:func:`~rrtdrive.planning.base.failure`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, polyline_path, precheck
+from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Tree, wrap_angle
+
+__all__ = [
+    "Search",
+    "run_query",
+    "solved",
+    "solved_result",
+    "search_result",
+    "budget_message",
+    "baseline_caveat",
+]
+
+#: The body of a planner's query: runs with the started stopwatch once the precheck passed.
+Search = Callable[[Stopwatch], PlanResult]
+
+
+def run_query(planner: str, problem: PlanningProblem, budget: Budget, search: Search) -> PlanResult:
+    """Start the stopwatch, fail early on a hopeless query, else return ``search(watch)``.
+
+    Parameters
+    ----------
+    planner : str
+        Registered planner name, for the result.
+    problem : PlanningProblem
+        The query.
+    budget : Budget
+        Its limits; the stopwatch enforces the time limit.
+    search : callable
+        ``search(watch) -> PlanResult``, the planner's own work.
+
+    Returns
+    -------
+    PlanResult
+        The precheck's failure, or what ``search`` returns.
+
+    Examples
+    --------
+    >>> from rrtdrive.maps import builtin_map
+    >>> problem = PlanningProblem.from_map(builtin_map("no_path"))
+    >>> run_query("demo", problem, Budget(), lambda watch: None).status.value
+    'proven_unreachable'
+    """
+    watch = Stopwatch(budget)
+    early = precheck(problem, planner, watch)
+    if early is not None:
+        return early
+    return search(watch)
+
+
+def solved(
+    planner: str,
+    watch: Stopwatch,
+    path: Path,
+    raw_path: np.ndarray,
+    trees: tuple[Tree, ...],
+    iterations: int,
+    message: str,
+    stats: dict[str, float],
+    *,
+    nodes: int | None = None,
+    planning_time_s: float | None = None,
+) -> PlanResult:
+    """A :attr:`PlanStatus.SOLVED` result.
+
+    ``nodes`` defaults to the size of ``trees``; ``planning_time_s`` to the
+    stopwatch's elapsed time now.
+    """
+    return PlanResult(
+        status=PlanStatus.SOLVED,
+        planner=planner,
+        path=path,
+        raw_path=raw_path,
+        trees=trees,
+        nodes=sum(len(t) for t in trees) if nodes is None else nodes,
+        iterations=iterations,
+        planning_time_s=watch.elapsed() if planning_time_s is None else planning_time_s,
+        message=message,
+        stats=stats,
+    )
+
+
+def baseline_caveat(path: Path, problem: PlanningProblem) -> str:
+    """What a baseline's solved path does not guarantee: its curvature and end headings.
+
+    The baselines return the raw tree path, with corners and whatever headings
+    its first and last edges have; the note gives its largest (Menger) curvature
+    as a multiple of the car's ``kappa_max`` and its heading errors at both ends.
+
+    Examples
+    --------
+    >>> from rrtdrive.maps import builtin_map
+    >>> from rrtdrive.planning.base import polyline_path
+    >>> problem = PlanningProblem.from_map(builtin_map("overtake"))
+    >>> path = polyline_path(np.array([[5.0, 44.0], [50.0, 48.0], [92.0, 44.0]]))
+    >>> baseline_caveat(path, problem).split(": ")[1]
+    'max curvature 0.0 x kappa_max, heading error 5 deg at the start, 5 deg at the goal'
+    """
+    samples = path.samples
+    ratio = path.max_curvature / problem.vehicle.kappa_max
+    if len(samples):
+        start_err = abs(math.degrees(wrap_angle(samples[0, 2] - problem.start.yaw)))
+        goal_err = abs(math.degrees(wrap_angle(samples[-1, 2] - problem.goal.yaw)))
+    else:
+        start_err = goal_err = math.nan
+    return (
+        f"baselines ignore curvature and headings: max curvature {ratio:.1f} x kappa_max, "
+        f"heading error {start_err:.0f} deg at the start, {goal_err:.0f} deg at the goal"
+    )
+
+
+def solved_result(
+    planner: str,
+    problem: PlanningProblem,
+    raw_path: np.ndarray,
+    trees: tuple[Tree, ...],
+    iterations: int,
+    watch: Stopwatch,
+    stats: dict[str, float],
+) -> PlanResult:
+    """A :attr:`PlanStatus.SOLVED` result for a raw tree path from start to goal.
+
+    Parameters
+    ----------
+    planner : str
+        Registered planner name.
+    problem : PlanningProblem
+        The query (for the message's :func:`baseline_caveat`).
+    raw_path : numpy.ndarray
+        ``(K, 2)`` tree path; first row the start, last row the goal.
+    trees : tuple of Tree
+        Frozen search trees.
+    iterations : int
+        Sampling iterations used.
+    watch : Stopwatch
+        The query's stopwatch.
+    stats : dict
+        Planner statistics; the raw path length is added as ``raw_length_m``.
+
+    Returns
+    -------
+    PlanResult
+        Its message counts nodes, iterations and the raw length, then says what
+        the path does not guarantee (:func:`baseline_caveat`).
+    """
+    raw = np.array(raw_path, dtype=float).reshape(-1, 2)
+    raw.setflags(write=False)
+    length = float(np.sum(np.hypot(*np.diff(raw, axis=0).T)))
+    stats = {**stats, "raw_length_m": length, "waypoints": len(raw)}
+    nodes = sum(len(t) for t in trees)
+    path = polyline_path(raw)
+    message = (
+        f"solved: {nodes} nodes, {iterations} iterations, raw path {length:.1f} m; "
+        + baseline_caveat(path, problem)
+    )
+    return solved(planner, watch, path, raw, trees, iterations, message, stats, nodes=nodes)
+
+
+def budget_message(iterations: int, watch: Stopwatch, budget: Budget, nodes: int) -> str:
+    """The failure message of a search that ran out of budget."""
+    if watch.expired():
+        limit = f"time budget of {budget.max_time_s:g} s spent"
+    else:
+        limit = f"iteration budget of {budget.max_iterations} spent"
+    return (
+        f"no path found within the budget: {limit} "
+        f"({iterations} iterations, {watch.elapsed():.3f} s, {nodes} nodes)"
+    )
+
+
+def search_result(
+    planner: str,
+    problem: PlanningProblem,
+    raw_path: np.ndarray | None,
+    trees: tuple[Tree, ...],
+    iterations: int,
+    watch: Stopwatch,
+    budget: Budget,
+    stats: dict[str, float],
+) -> PlanResult:
+    """The end of a baseline search: :func:`solved_result`, or out of budget when no path.
+
+    Parameters
+    ----------
+    planner : str
+        Registered planner name.
+    problem : PlanningProblem
+        The query.
+    raw_path : numpy.ndarray or None
+        The tree path found, ``None`` when the budget ended first.
+    trees : tuple of Tree
+        Frozen search trees.
+    iterations : int
+        Sampling iterations used.
+    watch : Stopwatch
+        The query's stopwatch.
+    budget : Budget
+        The query's limits (named in the failure message).
+    stats : dict
+        Planner statistics.
+
+    Returns
+    -------
+    PlanResult
+    """
+    if raw_path is None:
+        return failure(
+            planner,
+            PlanStatus.NO_PATH_IN_BUDGET,
+            watch,
+            budget_message(iterations, watch, budget, sum(len(t) for t in trees)),
+            trees=trees,
+            iterations=iterations,
+            stats=stats,
+        )
+    return solved_result(planner, problem, raw_path, trees, iterations, watch, stats)

@@ -1,0 +1,130 @@
+"""Uniform samples over the free cells reachable from the start, shared by every tree planner."""
+
+from __future__ import annotations
+
+import math
+import weakref
+
+import numpy as np
+
+from rrtdrive.collision import CollisionChecker
+from rrtdrive.planning.base import PlanningProblem
+
+__all__ = ["SampleSource", "free_cells"]
+
+
+_CELLS: weakref.WeakKeyDictionary[CollisionChecker, dict[int, np.ndarray]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def free_cells(checker: CollisionChecker, start: tuple[float, float]) -> np.ndarray:
+    """Flat indices of the grid cells where the rear axle can stand, connected to ``start``.
+
+    A cell qualifies when its clearance admits the car with some heading (the
+    test of :meth:`~rrtdrive.collision.CollisionChecker.point_free`) and it lies
+    in the start's component of
+    :meth:`~rrtdrive.collision.CollisionChecker.reachable_components`. Cached
+    per checker and component.
+
+    Parameters
+    ----------
+    checker : CollisionChecker
+        The map's checker.
+    start : tuple of float
+        Start position ``(x, y)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Indices into ``checker.clearance_grid.ravel()``; empty if the start is in no component.
+    """
+    labels = checker.component_labels
+    origin, h = checker.grid_origin, checker.resolution
+    i = int(math.floor((start[0] - origin[0]) / h))
+    j = int(math.floor((start[1] - origin[1]) / h))
+    inside = 0 <= i < labels.shape[0] and 0 <= j < labels.shape[1]
+    label = int(labels[i, j]) if inside else 0
+    per_label = _CELLS.setdefault(checker, {})
+    cells = per_label.get(label)
+    if cells is None:
+        if label == 0:
+            cells = np.zeros(0, dtype=np.int64)
+        else:
+            vehicle = checker.vehicle
+            stand = checker.clearance_grid >= min(vehicle.rear_overhang, vehicle.width / 2.0)
+            cells = np.flatnonzero(stand & (labels == label))
+        per_label[label] = cells
+    return cells
+
+
+class SampleSource:
+    """Uniform samples over the map, optionally only where they can be useful.
+
+    With ``reject`` (the default in every baseline), samples are uniform over
+    the points where the car can stand with some heading
+    (:meth:`~rrtdrive.collision.CollisionChecker.point_free`) and that are not
+    provably disconnected from the start
+    (:meth:`~rrtdrive.collision.CollisionChecker.provably_disconnected`), such
+    as the land beside a walled road. Both tests are constant on the checker's
+    grid cells, so instead of rejecting draws this picks a uniform random cell
+    among the accepted ones and a uniform point inside it: the same distribution
+    as rejection sampling, without the wasted draws. Without ``reject``, samples
+    are uniform in the bounds, as :func:`~rrtdrive.planning.base.sample_point`.
+    Numbers are drawn from ``rng`` in batches, so results depend only on the seed.
+
+    Parameters
+    ----------
+    problem : PlanningProblem
+        The query.
+    reject : bool
+        Sample only useful points (see above).
+    batch : int
+        Points drawn from the generator at once.
+    """
+
+    def __init__(self, problem: PlanningProblem, reject: bool, batch: int = 256) -> None:
+        checker = problem.checker
+        self.batch = batch
+        self._h = checker.resolution
+        self._origin = checker.grid_origin
+        self._ny = checker.clearance_grid.shape[1]
+        xmin, ymin, xmax, ymax = problem.bounds
+        self._low = np.array([xmin, ymin])
+        self._span = np.array([xmax - xmin, ymax - ymin])
+        self._cells = free_cells(checker, problem.start.as_tuple()[:2]) if reject else None
+        if self._cells is not None and len(self._cells) == 0:
+            self._cells = None
+        self._buffer = np.empty((0, 2))
+        self._list: list[list[float]] = []
+        self._pos = 0
+
+    def _refill(self, rng: np.random.Generator) -> None:
+        if self._cells is None:
+            self._buffer = self._low + rng.random((self.batch, 2)) * self._span
+        else:
+            flat = self._cells[rng.integers(len(self._cells), size=self.batch)]
+            ij = np.column_stack([flat // self._ny, flat % self._ny])
+            self._buffer = self._origin + (ij + rng.random((self.batch, 2))) * self._h
+        self._list = self._buffer.tolist()
+        self._pos = 0
+
+    def draw(self, rng: np.random.Generator) -> np.ndarray:
+        """One sample point ``(x, y)`` (a fresh array)."""
+        if self._pos == len(self._buffer):
+            self._refill(rng)
+        q = self._buffer[self._pos].copy()
+        self._pos += 1
+        return q
+
+    def draw_xy(self, rng: np.random.Generator) -> list[float]:
+        """:meth:`draw` as a fresh list ``[x, y]`` of floats (cheaper in scalar loops).
+
+        Both draw from one stream: mixing them gives the same points in the same order.
+        """
+        if self._pos == len(self._buffer):
+            self._refill(rng)
+        q = self._list[self._pos]
+        self._pos += 1
+        return q
+
