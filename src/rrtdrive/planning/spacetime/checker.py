@@ -14,7 +14,8 @@ from rrtdrive.maps import Obstacle
 from rrtdrive.planning.spacetime.conflicts import traffic_conflicts
 from rrtdrive.planning.spacetime.prediction import Prediction
 from rrtdrive.planning.spacetime.safety import SafetyConfig
-from rrtdrive.planning.spacetime.timing import ArrivalTiming, profile_times, yaw_curvature
+from rrtdrive.planning.spacetime.timing import ArrivalTiming, yaw_curvature
+from rrtdrive.speed_profile import profile_times
 from rrtdrive.types import VehicleParams, require_finite, require_positive
 from rrtdrive.vehicle import cover_discs
 

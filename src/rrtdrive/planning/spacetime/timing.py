@@ -1,4 +1,7 @@
-"""When the ego is where: nominal arrival times of tree nodes, exact times along a path."""
+"""When the ego is where: nominal arrival times of tree nodes, exact times along a path.
+
+The exact times come from :func:`rrtdrive.speed_profile.profile_times` (re-exported).
+"""
 
 from __future__ import annotations
 
@@ -9,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rrtdrive.speed_profile import profile_times
 from rrtdrive.types import InputError, require_finite, require_positive
 
 __all__ = ["ArrivalTiming", "profile_times", "yaw_curvature"]
@@ -97,59 +101,6 @@ class ArrivalTiming:
     def shifted(self, dx: float, dy: float = 0.0) -> ArrivalTiming:
         """The same timing in a frame moved by ``(dx, dy)``."""
         return dataclasses.replace(self, origin=(self.origin[0] + dx, self.origin[1] + dy))
-
-
-def profile_times(
-    s: np.ndarray,
-    kappa: np.ndarray,
-    v0: float,
-    v_max: float,
-    accel: float,
-    decel: float,
-    a_lat_max: float,
-    v_launch: float = 0.5,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Speeds and arrival times along a path from the speed-profile rules, without a final stop.
-
-    The same rules as :class:`rrtdrive.controllers.SpeedProfile` (``v <= v_max``,
-    ``v <= sqrt(a_lat_max / |kappa|)``, rising at most ``accel``, falling at most
-    ``decel``, starting from ``max(v0, v_launch)``), for a path that goes on past
-    its last sample, computed in closed form: the forward pass
-    ``v_i^2 = min(cap_i^2, v_{i-1}^2 + 2 a ds)`` is ``2 a s_i + cummin(cap_j^2 - 2 a s_j)``.
-
-    Parameters
-    ----------
-    s : numpy.ndarray
-        Arc length of the samples, increasing from 0.
-    kappa : numpy.ndarray
-        Curvature at the samples.
-    v0, v_max, accel, decel, a_lat_max, v_launch : float
-        Start speed and profile limits.
-
-    Returns
-    -------
-    t, v : numpy.ndarray
-        Arrival time (0 at the first sample) and speed at each sample.
-
-    Examples
-    --------
-    >>> s = np.linspace(0.0, 8.0, 81)
-    >>> t, v = profile_times(s, 0 * s, 0.0, 10.0, 1.0, 1.0, 1.5, v_launch=0.0)
-    >>> round(float(t[-1]), 3), round(float(v[-1]), 3)  # 8 m from rest at 1 m/s^2
-    (4.0, 4.0)
-    """
-    s = np.asarray(s, dtype=float)
-    k = np.abs(np.asarray(kappa, dtype=float))
-    with np.errstate(divide="ignore"):
-        cap2 = np.minimum(a_lat_max / np.maximum(k, 1e-12), v_max * v_max)
-    cap2[0] = min(cap2[0], max(v0, v_launch) ** 2)
-    v2 = 2.0 * accel * s + np.minimum.accumulate(cap2 - 2.0 * accel * s)
-    back = (v2 + 2.0 * decel * s)[::-1]
-    v2 = np.minimum(v2, np.minimum.accumulate(back)[::-1] - 2.0 * decel * s)
-    v = np.sqrt(np.maximum(v2, 0.0))
-    mean = np.maximum(0.5 * (v[1:] + v[:-1]), 0.05)
-    t = np.concatenate([[0.0], np.cumsum(np.diff(s) / mean)])
-    return t, v
 
 
 def yaw_curvature(samples: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
