@@ -28,6 +28,10 @@ __all__ = ["CollisionChecker"]
 class CollisionChecker:
     """Collision queries against one map's obstacles and bounds for one car.
 
+    Implements :class:`rrtdrive.checking.Checker`. The grid-derived data lives on
+    :attr:`grid` (a :class:`~rrtdrive.collision.grid.GridCache`), built lazily and
+    timed in :attr:`setup_time_s`.
+
     Parameters
     ----------
     bounds : sequence of float
