@@ -1,5 +1,8 @@
 """Longitudinal control: a curvature-limited speed profile v(s) and a PI loop that tracks it.
 
+The profile itself is :class:`rrtdrive.speed_profile.SpeedProfile` (shared with
+space-time planning), re-exported here.
+
 The profile obeys ``v(s) <= sqrt(a_lat_max / |kappa(s)|)`` and ``v(s) <= v_max``,
 rises no faster than ``accel`` and falls no faster than ``decel`` (forward and
 backward passes over arc length), and reaches zero at the end of the path. The
@@ -9,12 +12,10 @@ correction on the speed error, and holds the car once it has stopped at the goal
 
 from __future__ import annotations
 
-import bisect
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
+from rrtdrive.speed_profile import SpeedProfile
 from rrtdrive.types import InputError, require_finite, require_positive
 
 __all__ = ["SpeedConfig", "SpeedProfile", "SpeedController"]
@@ -103,67 +104,6 @@ class SpeedConfig:
             raise InputError(
                 f"speed.a_min/a_max: need a_min < 0 < a_max, got {self.a_min}, {self.a_max}"
             )
-
-
-class SpeedProfile:
-    """The admissible speed along a path, sampled at its arc lengths.
-
-    Parameters
-    ----------
-    s : numpy.ndarray
-        Cumulative arc length of the samples (increasing, starting at 0).
-    kappa : numpy.ndarray
-        Path curvature at the samples.
-    config : SpeedConfig
-        Limits.
-    v_start : float
-        Speed at the start of the path.
-
-    Examples
-    --------
-    >>> s = np.linspace(0.0, 20.0, 81)
-    >>> prof = SpeedProfile(s, np.zeros_like(s), SpeedConfig(v_max=3.0), v_start=0.0)
-    >>> float(prof.v[-1]), bool(prof.v.max() <= 3.0)
-    (0.0, True)
-    """
-
-    def __init__(
-        self, s: np.ndarray, kappa: np.ndarray, config: SpeedConfig, v_start: float = 0.0
-    ) -> None:
-        s = np.asarray(s, dtype=float)
-        kappa = np.abs(np.asarray(kappa, dtype=float))
-        with np.errstate(divide="ignore"):
-            v_curve = np.sqrt(config.a_lat_max / np.maximum(kappa, 1e-12))
-        v = np.minimum(v_curve, config.v_max)
-        ds = np.diff(s)
-        v[0] = min(v[0], max(v_start, config.v_launch))
-        for i in range(1, len(v)):
-            v[i] = min(v[i], math.sqrt(v[i - 1] ** 2 + 2.0 * config.accel * ds[i - 1]))
-        v[-1] = 0.0
-        for i in range(len(v) - 2, -1, -1):
-            v[i] = min(v[i], math.sqrt(v[i + 1] ** 2 + 2.0 * config.decel * ds[i]))
-        self.s = s
-        self.v = v
-        self.v_curve = v_curve
-        # Profile acceleration dv/dt = d(v^2/2)/ds on each interval.
-        with np.errstate(divide="ignore", invalid="ignore"):
-            a = np.where(ds > 0, np.diff(v**2) / (2.0 * np.maximum(ds, 1e-12)), 0.0)
-        self.a = np.append(a, 0.0)
-        self._s = s.tolist()
-        self._v = v.tolist()
-        self._a = self.a.tolist()
-        self.length = float(s[-1])
-        self.config = config
-
-    def at(self, s: float) -> tuple[float, float]:
-        """``(v_ref, a_ref)`` at arc length ``s`` (0 speed past the end)."""
-        if s >= self.length:
-            return 0.0, 0.0
-        if s <= 0.0:
-            return self._v[0], self._a[0]
-        i = bisect.bisect_right(self._s, s) - 1
-        frac = (s - self._s[i]) / (self._s[i + 1] - self._s[i])
-        return self._v[i] + frac * (self._v[i + 1] - self._v[i]), self._a[i]
 
 
 class SpeedController:

@@ -1,63 +1,36 @@
-"""One collision checker per map: a fast conservative swept-disc test and an exact body test.
+"""The collision checker of one map and car: fast conservative tests and an exact body test.
 
-The fast tests read a clearance field: the Euclidean distance transform
-(:func:`scipy.ndimage.distance_transform_edt`) of a fine occupancy grid. The grid
-is built so that its error is bounded and subtracted (see :attr:`grid_error`),
-which keeps every fast answer conservative: a colliding edge or pose is never
-called free. The exact test confirms what the fast screen cannot clear with
-shapely polygons, so its answers agree with shapely.
+It implements :class:`rrtdrive.checking.Checker`; the grid-derived data it
+serves (connectivity labels, sampler cells, passage cells, the obstacle union)
+lives on its :class:`~rrtdrive.collision.grid.GridCache`.
 """
 
 from __future__ import annotations
 
 import array
 import math
+import time
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 import shapely
 from scipy import ndimage
 
+from rrtdrive.collision.config import CheckerConfig
+from rrtdrive.collision.grid import GridCache, rasterise
 from rrtdrive.maps import Map, Obstacle
-from rrtdrive.types import VehicleParams, require_positive
+from rrtdrive.types import VehicleParams
 from rrtdrive.vehicle import cover_discs, footprint_corners
 
-__all__ = ["CollisionChecker", "CheckerConfig"]
-
-
-@dataclass(frozen=True)
-class CheckerConfig:
-    """Tunables of the checker.
-
-    Parameters
-    ----------
-    resolution : float
-        Grid cell size in metres.
-    margin : float
-        Extra clearance in metres required by the fast tests beyond the car's size.
-    pad : float
-        Occupied border in metres outside the bounds (the bounds act as walls).
-    min_trace_step : float
-        Smallest step of the sphere tracing along an edge; a step this small means
-        the swept disc is grazing an obstacle, which is reported as a collision.
-    """
-
-    resolution: float = 0.1
-    margin: float = 0.1
-    pad: float = 1.0
-    min_trace_step: float = 0.02
-
-    def __post_init__(self) -> None:
-        require_positive("checker.resolution", self.resolution)
-        require_positive("checker.pad", self.pad)
-        require_positive("checker.min_trace_step", self.min_trace_step)
-        if not (self.margin >= 0 and math.isfinite(self.margin)):
-            raise ValueError(f"checker.margin: must be >= 0, got {self.margin}")
+__all__ = ["CollisionChecker"]
 
 
 class CollisionChecker:
     """Collision queries against one map's obstacles and bounds for one car.
+
+    Implements :class:`rrtdrive.checking.Checker`. The grid-derived data lives on
+    :attr:`grid` (a :class:`~rrtdrive.collision.grid.GridCache`), built lazily and
+    timed in :attr:`setup_time_s`.
 
     Parameters
     ----------
@@ -92,6 +65,7 @@ class CollisionChecker:
         self.obstacles = tuple(obstacles)
         self.vehicle = vehicle
         self.config = config or CheckerConfig()
+        t_setup = time.perf_counter()
         h = self.config.resolution
         # Cells are aligned with the bounds, so every point outside lies in an occupied cell.
         n_pad = int(math.ceil(self.config.pad / h))
@@ -102,7 +76,7 @@ class CollisionChecker:
         self._shape = (nx, ny)
         self._inv_h = 1.0 / h
         self._ox, self._oy = float(self._origin[0]), float(self._origin[1])
-        occupied = self._rasterise(nx, ny)
+        occupied = rasterise(self.bounds, self.obstacles, self._origin, h, nx, ny)
         # Distance from each cell centre to the nearest occupied cell centre.
         field = ndimage.distance_transform_edt(~occupied) * h
         # The point-to-centre error (h/sqrt2) plus the rasterisation error (h/sqrt2).
@@ -114,12 +88,15 @@ class CollisionChecker:
         self._clearance_cells.frombytes(np.ascontiguousarray(self._clearance).tobytes())
         self._clearance_flat = self._clearance.ravel()
         self._occupied = occupied
-        self._labels: np.ndarray | None = None
-        self._union = shapely.union_all([o.polygon() for o in self.obstacles])
-        shapely.prepare(self._union)
+        self.edge_radius = vehicle.width / 2.0 + self.config.margin
+        self.grid = GridCache(
+            self._clearance, self._origin, h, self.grid_error, vehicle, self.bounds,
+            self.obstacles, self.edge_radius, time.perf_counter() - t_setup,
+        )
+        # The exact tests need the union at once: built (and timed) by the cache.
+        self._union = self.grid.obstacle_union
         self._inside = shapely.box(*self.bounds)
         shapely.prepare(self._inside)
-        self.edge_radius = vehicle.width / 2.0 + self.config.margin
         self._cap_inset = math.sqrt(self.edge_radius**2 - (vehicle.width / 2.0) ** 2)
         self._cap_back = vehicle.rear_overhang - self._cap_inset
         self._cap_front = vehicle.front_extent - self._cap_inset
@@ -141,35 +118,6 @@ class CollisionChecker:
         return cls(m.bounds, m.obstacles, vehicle or m.vehicle, config)
 
     # ------------------------------------------------------------------ grid
-
-    def _rasterise(self, nx: int, ny: int) -> np.ndarray:
-        h = self.config.resolution
-        xs = self._origin[0] + h * (np.arange(nx) + 0.5)
-        ys = self._origin[1] + h * (np.arange(ny) + 0.5)
-        xmin, ymin, xmax, ymax = self.bounds
-        occupied = np.zeros((nx, ny), dtype=bool)
-        occupied[(xs < xmin) | (xs > xmax), :] = True
-        occupied[:, (ys < ymin) | (ys > ymax)] = True
-        # A cell is occupied when its centre lies in the rectangle grown by h/sqrt2 on
-        # every side: a superset of every cell that touches the rectangle.
-        grow = h / math.sqrt(2.0)
-        for o in self.obstacles:
-            corners = o.corners()
-            lo = np.floor((corners.min(axis=0) - grow - self._origin) / h).astype(int) - 1
-            hi = np.ceil((corners.max(axis=0) + grow - self._origin) / h).astype(int) + 1
-            i0, j0 = max(lo[0], 0), max(lo[1], 0)
-            i1, j1 = min(hi[0], nx), min(hi[1], ny)
-            if i0 >= i1 or j0 >= j1:
-                continue
-            gx, gy = np.meshgrid(xs[i0:i1] - o.center[0], ys[j0:j1] - o.center[1], indexing="ij")
-            c, s = math.cos(o.yaw), math.sin(o.yaw)
-            along = c * gx + s * gy
-            across = -s * gx + c * gy
-            inside = (np.abs(along) <= o.size[0] / 2 + grow) & (
-                np.abs(across) <= o.size[1] / 2 + grow
-            )
-            occupied[i0:i1, j0:j1] |= inside
-        return occupied
 
     @property
     def clearance_grid(self) -> np.ndarray:
@@ -516,33 +464,45 @@ class CollisionChecker:
         slack : float
             Upper-bound slack used.
         """
-        h = self.config.resolution
-        # Field measures distance to occupied centres; an occupied centre lies within
-        # h of the true obstacle (grown by h/sqrt2 per side), and any point of a cell
-        # is within h/sqrt2 of its centre.
-        slack = h + h / math.sqrt(2.0)
-        r = min(self.vehicle.rear_overhang, self.vehicle.width / 2.0)
-        upper = self._clearance + self.grid_error + slack
-        kept = upper >= r
-        labels, _ = ndimage.label(kept, structure=np.ones((3, 3), dtype=bool))
-        return labels, slack
+        return self.grid.reachable_components()
 
     @property
     def component_labels(self) -> np.ndarray:
         """The labels of :meth:`reachable_components`, computed once per checker."""
-        if self._labels is None:
-            self._labels, _ = self.reachable_components()
-        return self._labels
+        return self.grid.component_labels
 
     def provably_disconnected(self, a: Sequence[float], b: Sequence[float]) -> bool:
-        """True when no collision-free motion can take the rear axle from ``a`` to ``b``."""
-        la = self._label_at(a)
-        lb = self._label_at(b)
+        """True when no collision-free motion can take the rear axle from ``a`` to ``b``.
+
+        Conservative in the safe direction: True is a proof (by
+        :meth:`reachable_components`); False proves nothing.
+        """
+        la = self.grid.label_at(a)
+        lb = self.grid.label_at(b)
         return la == 0 or lb == 0 or la != lb
 
-    def _label_at(self, p: Sequence[float]) -> int:
-        i = int(math.floor((p[0] - self._origin[0]) * self._inv_h))
-        j = int(math.floor((p[1] - self._origin[1]) * self._inv_h))
-        if not (0 <= i < self._shape[0] and 0 <= j < self._shape[1]):
-            return 0
-        return int(self.component_labels[i, j])
+    # ------------------------------------------------------------------ cached grid data
+
+    def free_cells(self, start: Sequence[float]) -> np.ndarray:
+        """Flat indices of the cells where the rear axle can stand, connected to ``start``.
+
+        See :meth:`rrtdrive.collision.grid.GridCache.free_cells` (cached per component).
+        """
+        return self.grid.free_cells(start)
+
+    def passage_cells(self, start: Sequence[float], width: float = 0.6) -> np.ndarray:
+        """``(K, 2)`` centres of narrow-passage cells reachable from ``start``.
+
+        See :meth:`rrtdrive.collision.grid.GridCache.passage_cells` (cached).
+        """
+        return self.grid.passage_cells(start, width)
+
+    @property
+    def obstacle_union(self) -> shapely.Geometry:
+        """The prepared shapely union of the obstacles (empty geometry when there are none)."""
+        return self._union
+
+    @property
+    def setup_time_s(self) -> float:
+        """Seconds spent building grid data so far: the field at construction plus lazy builds."""
+        return self.grid.setup_time_s

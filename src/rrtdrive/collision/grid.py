@@ -1,0 +1,298 @@
+"""The checker's occupancy grid and the data derived from it, built once per checker.
+
+:func:`rasterise` marks the cells an obstacle or the outside may touch;
+:class:`GridCache` owns the clearance field made from it and lazily builds, caches
+and times what planners derive from that field: connectivity labels, the cells a
+sampler may draw from, narrow-passage cells, and the prepared obstacle union.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+
+import numpy as np
+import shapely
+from scipy import ndimage
+
+from rrtdrive.maps import Obstacle
+from rrtdrive.types import VehicleParams
+
+__all__ = ["rasterise", "GridCache"]
+
+
+def rasterise(
+    bounds: tuple[float, ...],
+    obstacles: Sequence[Obstacle],
+    origin: np.ndarray,
+    resolution: float,
+    nx: int,
+    ny: int,
+) -> np.ndarray:
+    """Occupancy of an ``(nx, ny)`` grid of cells of size ``resolution`` from ``origin``.
+
+    Cells outside ``bounds`` are occupied, and so is every cell that touches an
+    obstacle (a superset: conservative).
+
+    Parameters
+    ----------
+    bounds : tuple of float
+        ``(xmin, ymin, xmax, ymax)``.
+    obstacles : sequence of Obstacle
+        Oriented rectangles.
+    origin : numpy.ndarray
+        World position of the grid's lower-left corner.
+    resolution : float
+        Cell size in metres.
+    nx, ny : int
+        Grid shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        Boolean ``(nx, ny)``.
+    """
+    h = resolution
+    xs = origin[0] + h * (np.arange(nx) + 0.5)
+    ys = origin[1] + h * (np.arange(ny) + 0.5)
+    xmin, ymin, xmax, ymax = bounds
+    occupied = np.zeros((nx, ny), dtype=bool)
+    occupied[(xs < xmin) | (xs > xmax), :] = True
+    occupied[:, (ys < ymin) | (ys > ymax)] = True
+    # A cell is occupied when its centre lies in the rectangle grown by h/sqrt2 on
+    # every side: a superset of every cell that touches the rectangle.
+    grow = h / math.sqrt(2.0)
+    for o in obstacles:
+        corners = o.corners()
+        lo = np.floor((corners.min(axis=0) - grow - origin) / h).astype(int) - 1
+        hi = np.ceil((corners.max(axis=0) + grow - origin) / h).astype(int) + 1
+        i0, j0 = max(lo[0], 0), max(lo[1], 0)
+        i1, j1 = min(hi[0], nx), min(hi[1], ny)
+        if i0 >= i1 or j0 >= j1:
+            continue
+        gx, gy = np.meshgrid(xs[i0:i1] - o.center[0], ys[j0:j1] - o.center[1], indexing="ij")
+        c, s = math.cos(o.yaw), math.sin(o.yaw)
+        along = c * gx + s * gy
+        across = -s * gx + c * gy
+        inside = (np.abs(along) <= o.size[0] / 2 + grow) & (
+            np.abs(across) <= o.size[1] / 2 + grow
+        )
+        occupied[i0:i1, j0:j1] |= inside
+    return occupied
+
+
+class GridCache:
+    """Grid-derived data of one checker, each piece built on first use and kept.
+
+    Every build is timed into :attr:`setup_time_s`, so a planner can report the
+    set-up of a map apart from its planning time.
+
+    Parameters
+    ----------
+    clearance : numpy.ndarray
+        ``(nx, ny)`` lower bound of the distance to the nearest obstacle at each
+        cell centre (the checker's field, error already subtracted).
+    origin : numpy.ndarray
+        World position of the grid's lower-left corner.
+    resolution : float
+        Cell size in metres.
+    grid_error : float
+        The error subtracted from the field (added back for upper bounds).
+    vehicle : VehicleParams
+        The car.
+    bounds : tuple of float
+        ``(xmin, ymin, xmax, ymax)``.
+    obstacles : sequence of Obstacle
+        The map's obstacles (for the union).
+    edge_radius : float
+        Radius of the checker's swept-capsule edge test, metres.
+    setup_time_s : float
+        Seconds already spent building the field (counted in :attr:`setup_time_s`).
+    """
+
+    def __init__(
+        self,
+        clearance: np.ndarray,
+        origin: np.ndarray,
+        resolution: float,
+        grid_error: float,
+        vehicle: VehicleParams,
+        bounds: tuple[float, ...],
+        obstacles: Sequence[Obstacle],
+        edge_radius: float,
+        setup_time_s: float = 0.0,
+    ) -> None:
+        self.clearance = clearance
+        self.origin = origin
+        self.resolution = float(resolution)
+        self._inv_h = 1.0 / resolution
+        self.shape = clearance.shape
+        self.grid_error = grid_error
+        self.vehicle = vehicle
+        self.bounds = bounds
+        self.obstacles = tuple(obstacles)
+        self.edge_radius = edge_radius
+        self.setup_time_s = float(setup_time_s)
+        self._labels: np.ndarray | None = None
+        self._union: shapely.Geometry | None = None
+        self._free: dict[int, np.ndarray] = {}
+        self._passages: dict[tuple[int, float], np.ndarray] = {}
+
+    # ------------------------------------------------------------------ connectivity
+
+    def reachable_components(self) -> tuple[np.ndarray, float]:
+        """Label the cells the rear axle could ever occupy (see the checker's method)."""
+        h = self.resolution
+        # Field measures distance to occupied centres; an occupied centre lies within
+        # h of the true obstacle (grown by h/sqrt2 per side), and any point of a cell
+        # is within h/sqrt2 of its centre.
+        slack = h + h / math.sqrt(2.0)
+        r = min(self.vehicle.rear_overhang, self.vehicle.width / 2.0)
+        upper = self.clearance + self.grid_error + slack
+        kept = upper >= r
+        labels, _ = ndimage.label(kept, structure=np.ones((3, 3), dtype=bool))
+        return labels, slack
+
+    @property
+    def component_labels(self) -> np.ndarray:
+        """The labels of :meth:`reachable_components`, computed once."""
+        if self._labels is None:
+            t0 = time.perf_counter()
+            self._labels, _ = self.reachable_components()
+            self.setup_time_s += time.perf_counter() - t0
+        return self._labels
+
+    def label_at(self, p: Sequence[float]) -> int:
+        """Component label of the cell holding point ``p`` (0: none, or outside the grid)."""
+        i = int(math.floor((p[0] - self.origin[0]) * self._inv_h))
+        j = int(math.floor((p[1] - self.origin[1]) * self._inv_h))
+        if not (0 <= i < self.shape[0] and 0 <= j < self.shape[1]):
+            return 0
+        return int(self.component_labels[i, j])
+
+    def _start_label(self, start: Sequence[float]) -> int:
+        # Divides by h where label_at multiplies by 1/h: kept as the samplers had it,
+        # so the cells they draw from stay bit-identical.
+        labels = self.component_labels
+        origin, h = self.origin, self.resolution
+        i = int(math.floor((start[0] - origin[0]) / h))
+        j = int(math.floor((start[1] - origin[1]) / h))
+        inside = 0 <= i < labels.shape[0] and 0 <= j < labels.shape[1]
+        return int(labels[i, j]) if inside else 0
+
+    # ------------------------------------------------------------------ sampling support
+
+    def free_cells(self, start: Sequence[float]) -> np.ndarray:
+        """Flat indices of the cells where the rear axle can stand, connected to ``start``.
+
+        A cell qualifies when its clearance admits the car with some heading (the
+        checker's ``point_free`` test) and it lies in the start's component of
+        :meth:`reachable_components`. Cached per component.
+
+        Parameters
+        ----------
+        start : sequence of float
+            Start position ``(x, y)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Indices into ``clearance.ravel()``; empty if the start is in no component.
+        """
+        label = self._start_label(start)
+        cells = self._free.get(label)
+        if cells is None:
+            t0 = time.perf_counter()
+            if label == 0:
+                cells = np.zeros(0, dtype=np.int64)
+            else:
+                vehicle = self.vehicle
+                stand = self.clearance >= min(vehicle.rear_overhang, vehicle.width / 2.0)
+                cells = np.flatnonzero(stand & (self.component_labels == label))
+            self._free[label] = cells
+            self.setup_time_s += time.perf_counter() - t0
+        return cells
+
+    def passage_cells(self, start: Sequence[float], width: float = 0.6) -> np.ndarray:
+        """Centres of the cells on the centre lines of narrow passages reachable from ``start``.
+
+        A cell qualifies when its clearance is a local maximum across some grid
+        direction (a ridge of the distance field, i.e. the medial axis) with walls
+        on both sides (one clearance away along that direction the clearance nearly
+        vanishes) and lies between the edge test's radius ``W/2 + margin`` and that
+        plus ``width``: an edge through it can pass, but only just. Medial-axis
+        sampling after Wilmarth, Amato & Stiller (ICRA 1999). Cached per start
+        component and width.
+
+        Parameters
+        ----------
+        start : sequence of float
+            A point of the component to keep (the start position).
+        width : float
+            How much wider than the edge test a passage may be, in metres.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(K, 2)`` cell centres (possibly empty).
+        """
+        label = self._start_label(start)
+        key = (label, float(width))
+        cached = self._passages.get(key)
+        if cached is not None:
+            return cached
+        t0 = time.perf_counter()
+        labels = self.component_labels
+        origin, h = self.origin, self.resolution
+        cl = self.clearance
+        nx, ny = cl.shape
+        band = (cl >= self.edge_radius) & (cl <= self.edge_radius + width)
+        if label:
+            band &= labels == label
+        ridge = np.zeros(cl.shape, dtype=bool)
+        inner = cl[1:-1, 1:-1]
+        for di, dj in ((1, 0), (0, 1), (1, 1), (1, -1)):
+            # A local maximum of the clearance across direction (di, dj) ...
+            a = cl[1 + di : nx - 1 + di, 1 + dj : ny - 1 + dj]
+            b = cl[1 - di : nx - 1 - di, 1 - dj : ny - 1 - dj]
+            peak = np.zeros(cl.shape, dtype=bool)
+            peak[1:-1, 1:-1] = (inner >= a) & (inner >= b) & (inner > np.minimum(a, b))
+            cand = np.argwhere(peak & band)
+            if len(cand) == 0:
+                continue
+            # ... with walls on both sides: one clearance away, either way, the
+            # clearance nearly vanishes (it does not beside a convex corner).
+            c = cl[cand[:, 0], cand[:, 1]]
+            k = np.round(c / (math.hypot(di, dj) * h)).astype(np.int64)
+            both = np.ones(len(cand), dtype=bool)
+            for sgn in (1, -1):
+                ii = np.clip(cand[:, 0] + sgn * k * di, 0, nx - 1)
+                jj = np.clip(cand[:, 1] + sgn * k * dj, 0, ny - 1)
+                both &= cl[ii, jj] <= 0.3 * c
+            ridge[cand[both, 0], cand[both, 1]] = True
+        ij = np.argwhere(ridge)
+        cells = origin + (ij + 0.5) * h
+        xmin, ymin, xmax, ymax = self.bounds
+        cells = cells[
+            (cells[:, 0] > xmin)
+            & (cells[:, 0] < xmax)
+            & (cells[:, 1] > ymin)
+            & (cells[:, 1] < ymax)
+        ]
+        self._passages[key] = cells
+        self.setup_time_s += time.perf_counter() - t0
+        return cells
+
+    # ------------------------------------------------------------------ geometry
+
+    @property
+    def obstacle_union(self) -> shapely.Geometry:
+        """The prepared shapely union of the obstacles (empty geometry when there are none)."""
+        if self._union is None:
+            t0 = time.perf_counter()
+            union = shapely.union_all([o.polygon() for o in self.obstacles])
+            shapely.prepare(union)
+            self._union = union
+            self.setup_time_s += time.perf_counter() - t0
+        return self._union

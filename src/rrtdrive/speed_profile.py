@@ -1,0 +1,223 @@
+"""The speed profile v(s) along a path, and the arrival times it gives.
+
+The rules, in one place: ``v(s) <= v_max``, ``v(s) <= sqrt(a_lat_max / |kappa(s)|)``
+(the lateral-acceleration cap), the first sample no faster than
+``max(v_start, v_launch)``, rising at most ``accel`` and falling at most ``decel``
+over arc length (forward and backward passes on ``v^2``), and optionally a stop
+at the end. Arrival times integrate ``ds / v`` with the mean speed of each
+interval.
+
+Two users: the controllers track :class:`SpeedProfile` (which stops at the end of
+its path), and space-time planning times whole paths with :func:`profile_times`
+(the path goes on past its last sample, so no stop). Both start from the same
+caps (:func:`speed_caps_squared`). Their passes are still two arithmetic forms of
+the same recurrence: the controller's a loop over ``v``, the planner's a closed
+form over ``v^2`` (``v_i^2 = 2 a s_i + cummin_j(cap_j^2 - 2 a s_j)``, fifty to a
+hundred times faster on long paths). They agree to rounding (about 1e-14 m/s), not
+bit for bit, so one cannot replace the other without changing recorded
+behaviour; the choice is left to a deliberate, behaviour-changing change.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from typing import Protocol
+
+import numpy as np
+
+__all__ = ["SpeedLimits", "speed_caps_squared", "SpeedProfile", "profile_times", "arrival_times"]
+
+
+class SpeedLimits(Protocol):
+    """The limits a speed profile obeys (``rrtdrive.controllers.SpeedConfig`` has them)."""
+
+    @property
+    def v_max(self) -> float:
+        """Speed cap in m/s."""
+        ...
+
+    @property
+    def a_lat_max(self) -> float:
+        """Lateral-acceleration cap in m/s^2."""
+        ...
+
+    @property
+    def accel(self) -> float:
+        """Largest acceleration along the path in m/s^2."""
+        ...
+
+    @property
+    def decel(self) -> float:
+        """Largest deceleration along the path in m/s^2 (positive)."""
+        ...
+
+    @property
+    def v_launch(self) -> float:
+        """Speed the profile starts from when the car is at rest, m/s."""
+        ...
+
+
+def speed_caps_squared(
+    kappa: np.ndarray, v_max: float, a_lat_max: float, v_first: float
+) -> np.ndarray:
+    """Squared speed caps: ``min(a_lat_max / |kappa|, v_max^2)``, the first also ``v_first^2``.
+
+    Parameters
+    ----------
+    kappa : numpy.ndarray
+        Path curvature at the samples (1/m, any sign).
+    v_max, a_lat_max : float
+        Speed cap (m/s) and lateral-acceleration cap (m/s^2).
+    v_first : float
+        Cap of the first sample (m/s): ``max(v_start, v_launch)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N,)`` caps on ``v^2`` in m^2/s^2 (a new array).
+
+    Examples
+    --------
+    >>> speed_caps_squared(np.array([0.0, 0.5, 0.0]), 3.0, 2.0, 1.0).tolist()
+    [1.0, 4.0, 9.0]
+    """
+    k = np.abs(np.asarray(kappa, dtype=float))
+    with np.errstate(divide="ignore"):
+        cap2 = np.minimum(a_lat_max / np.maximum(k, 1e-12), v_max * v_max)
+    cap2[0] = min(cap2[0], v_first**2)
+    return cap2
+
+
+def arrival_times(s: np.ndarray, v: np.ndarray, v_floor: float = 0.05) -> np.ndarray:
+    """Arrival time at each sample (0 at the first) driving speeds ``v`` at arc lengths ``s``.
+
+    Each interval is driven at the mean of its end speeds, at least ``v_floor`` m/s
+    (so a stop does not take forever).
+
+    Examples
+    --------
+    >>> arrival_times(np.array([0.0, 1.0, 3.0]), np.array([1.0, 1.0, 3.0])).tolist()
+    [0.0, 1.0, 2.0]
+    """
+    s = np.asarray(s, dtype=float)
+    v = np.asarray(v, dtype=float)
+    mean = np.maximum(0.5 * (v[1:] + v[:-1]), v_floor)
+    return np.concatenate([[0.0], np.cumsum(np.diff(s) / mean)])
+
+
+def profile_times(
+    s: np.ndarray,
+    kappa: np.ndarray,
+    v0: float,
+    v_max: float,
+    accel: float,
+    decel: float,
+    a_lat_max: float,
+    v_launch: float = 0.5,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Speeds and arrival times along a path from the speed-profile rules, without a final stop.
+
+    The same rules as :class:`SpeedProfile` (``v <= v_max``,
+    ``v <= sqrt(a_lat_max / |kappa|)``, rising at most ``accel``, falling at most
+    ``decel``, starting from ``max(v0, v_launch)``), for a path that goes on past
+    its last sample, computed in closed form: the forward pass
+    ``v_i^2 = min(cap_i^2, v_{i-1}^2 + 2 a ds)`` is ``2 a s_i + cummin(cap_j^2 - 2 a s_j)``.
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        Arc length of the samples, increasing from 0.
+    kappa : numpy.ndarray
+        Curvature at the samples.
+    v0, v_max, accel, decel, a_lat_max, v_launch : float
+        Start speed and profile limits.
+
+    Returns
+    -------
+    t, v : numpy.ndarray
+        Arrival time (0 at the first sample) and speed at each sample.
+
+    Examples
+    --------
+    >>> s = np.linspace(0.0, 8.0, 81)
+    >>> t, v = profile_times(s, 0 * s, 0.0, 10.0, 1.0, 1.0, 1.5, v_launch=0.0)
+    >>> round(float(t[-1]), 3), round(float(v[-1]), 3)  # 8 m from rest at 1 m/s^2
+    (4.0, 4.0)
+    """
+    s = np.asarray(s, dtype=float)
+    cap2 = speed_caps_squared(kappa, v_max, a_lat_max, max(v0, v_launch))
+    v2 = 2.0 * accel * s + np.minimum.accumulate(cap2 - 2.0 * accel * s)
+    back = (v2 + 2.0 * decel * s)[::-1]
+    v2 = np.minimum(v2, np.minimum.accumulate(back)[::-1] - 2.0 * decel * s)
+    v = np.sqrt(np.maximum(v2, 0.0))
+    return arrival_times(s, v), v
+
+
+class SpeedProfile:
+    """The admissible speed along a path, sampled at its arc lengths, stopping at its end.
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        Cumulative arc length of the samples (increasing, starting at 0).
+    kappa : numpy.ndarray
+        Path curvature at the samples.
+    config : SpeedLimits
+        Limits (for example ``rrtdrive.controllers.SpeedConfig``).
+    v_start : float
+        Speed at the start of the path.
+
+    Examples
+    --------
+    >>> from rrtdrive.controllers import SpeedConfig
+    >>> s = np.linspace(0.0, 20.0, 81)
+    >>> prof = SpeedProfile(s, np.zeros_like(s), SpeedConfig(v_max=3.0), v_start=0.0)
+    >>> float(prof.v[-1]), bool(prof.v.max() <= 3.0)
+    (0.0, True)
+    """
+
+    def __init__(
+        self, s: np.ndarray, kappa: np.ndarray, config: SpeedLimits, v_start: float = 0.0
+    ) -> None:
+        s = np.asarray(s, dtype=float)
+        kappa = np.abs(np.asarray(kappa, dtype=float))
+        with np.errstate(divide="ignore"):
+            v_curve = np.sqrt(config.a_lat_max / np.maximum(kappa, 1e-12))
+        # The square root of the shared caps is min(v_curve, v_max) bit for bit (sqrt is
+        # monotone and correctly rounded, and sqrt(v*v) == v); the first sample's cap is
+        # applied on v, as the controllers always had it.
+        v = np.sqrt(speed_caps_squared(kappa, config.v_max, config.a_lat_max, math.inf))
+        v[0] = min(v[0], max(v_start, config.v_launch))
+        ds = np.diff(s)
+        for i in range(1, len(v)):
+            v[i] = min(v[i], math.sqrt(v[i - 1] ** 2 + 2.0 * config.accel * ds[i - 1]))
+        v[-1] = 0.0
+        for i in range(len(v) - 2, -1, -1):
+            v[i] = min(v[i], math.sqrt(v[i + 1] ** 2 + 2.0 * config.decel * ds[i]))
+        self.s = s
+        self.v = v
+        self.v_curve = v_curve
+        # Profile acceleration dv/dt = d(v^2/2)/ds on each interval.
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a = np.where(ds > 0, np.diff(v**2) / (2.0 * np.maximum(ds, 1e-12)), 0.0)
+        self.a = np.append(a, 0.0)
+        self._s = s.tolist()
+        self._v = v.tolist()
+        self._a = self.a.tolist()
+        self.length = float(s[-1])
+        self.config = config
+
+    def at(self, s: float) -> tuple[float, float]:
+        """``(v_ref, a_ref)`` at arc length ``s`` (0 speed past the end)."""
+        if s >= self.length:
+            return 0.0, 0.0
+        if s <= 0.0:
+            return self._v[0], self._a[0]
+        i = bisect.bisect_right(self._s, s) - 1
+        frac = (s - self._s[i]) / (self._s[i + 1] - self._s[i])
+        return self._v[i] + frac * (self._v[i + 1] - self._v[i]), self._a[i]
+
+    def times(self) -> np.ndarray:
+        """Arrival time at each sample (0 at the first; see :func:`arrival_times`)."""
+        return arrival_times(self.s, self.v)
