@@ -30,7 +30,6 @@ import numpy as np
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import resolve_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem, make_planner
-from rrtdrive.planning.sampling import free_cells
 from rrtdrive.types import Budget
 
 BASELINES = ("rrt", "rrt-connect", "rrt-star")
@@ -221,7 +220,7 @@ def main(argv: list[str] | None = None) -> int:
     problem = PlanningProblem.from_map(m, checker=checker)
     t0 = time.perf_counter()
     checker.provably_disconnected(problem.start.xy, problem.goal.xy)
-    free_cells(checker, problem.start.as_tuple()[:2])
+    checker.free_cells(problem.start.as_tuple()[:2])
     lazy_s = time.perf_counter() - t0
 
     budget = Budget(max_iterations=args.max_iterations, max_time_s=args.max_time)

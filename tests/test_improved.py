@@ -28,7 +28,6 @@ from rrtdrive.planning.improved import (
     fast_edge_test,
     greedy_connect,
     link,
-    passage_cells,
 )
 from rrtdrive.planning.improved.config import default_smoothing
 from rrtdrive.planning.smoothing import SmoothingConfig
@@ -352,11 +351,11 @@ def test_fast_edge_test_agrees_with_the_checker(parking_checker):
 
 def test_passage_cells_lie_in_the_narrow_gap_and_not_in_open_space():
     m = builtin_map("narrow_gap")
-    cells = passage_cells(cached_checker(m), (m.start.x, m.start.y))
+    cells = cached_checker(m).passage_cells((m.start.x, m.start.y))
     in_gap = (np.abs(cells[:, 0] - 50.0) < 1.0) & (np.abs(cells[:, 1] - 50.0) < 0.3)
     assert in_gap.sum() >= 10
     empty = Map("empty", (0.0, 0.0, 100.0, 100.0), (), Pose(10, 50, 0), Pose(90, 50, 0))
-    open_cells = passage_cells(CollisionChecker.for_map(empty), (10.0, 50.0))
+    open_cells = CollisionChecker.for_map(empty).passage_cells((10.0, 50.0))
     assert not ((np.abs(open_cells - 50.0) < 40.0).all(axis=1)).any()
 
 

@@ -21,6 +21,7 @@ answer False where the static checker answers True, never the reverse.
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
@@ -33,7 +34,7 @@ if TYPE_CHECKING:
     from rrtdrive.maps import Obstacle
     from rrtdrive.types import VehicleParams
 
-__all__ = ["PoseValidityChecker", "MotionValidator", "Checker"]
+__all__ = ["PoseValidityChecker", "MotionValidator", "Checker", "implements"]
 
 
 @runtime_checkable
@@ -208,3 +209,36 @@ class Checker(PoseValidityChecker, MotionValidator, Protocol):
         Passages at most ``width`` metres wider than the edge test needs. Cached.
         """
         ...
+
+
+def implements(obj: object, protocol: type) -> bool:
+    """True when ``obj`` defines every member of ``protocol`` (without calling any of them).
+
+    ``isinstance`` on a runtime-checkable Protocol evaluates every property on Python
+    3.11 (``hasattr``), which would build lazy grid data as a side effect; this looks
+    the members up statically instead.
+
+    Examples
+    --------
+    >>> from rrtdrive.collision import CollisionChecker
+    >>> from rrtdrive.maps import builtin_map
+    >>> checker = CollisionChecker.for_map(builtin_map("overtake"))
+    >>> implements(checker, Checker), implements(object(), MotionValidator)
+    (True, False)
+    """
+    members = {
+        name
+        for klass in protocol.__mro__
+        if klass not in (object, Protocol) and getattr(klass, "_is_protocol", False)
+        for name in (*vars(klass), *getattr(klass, "__annotations__", {}))
+        if not name.startswith("_")
+    }
+    return all(_has_static(obj, name) for name in members)
+
+
+def _has_static(obj: object, name: str) -> bool:
+    try:
+        inspect.getattr_static(obj, name)
+    except AttributeError:
+        return False
+    return True

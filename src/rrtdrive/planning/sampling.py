@@ -2,60 +2,11 @@
 
 from __future__ import annotations
 
-import math
-import weakref
-
 import numpy as np
 
-from rrtdrive.collision import CollisionChecker
 from rrtdrive.planning.base import PlanningProblem
 
-__all__ = ["SampleSource", "free_cells"]
-
-
-_CELLS: weakref.WeakKeyDictionary[CollisionChecker, dict[int, np.ndarray]] = (
-    weakref.WeakKeyDictionary()
-)
-
-
-def free_cells(checker: CollisionChecker, start: tuple[float, float]) -> np.ndarray:
-    """Flat indices of the grid cells where the rear axle can stand, connected to ``start``.
-
-    A cell qualifies when its clearance admits the car with some heading (the
-    test of :meth:`~rrtdrive.collision.CollisionChecker.point_free`) and it lies
-    in the start's component of
-    :meth:`~rrtdrive.collision.CollisionChecker.reachable_components`. Cached
-    per checker and component.
-
-    Parameters
-    ----------
-    checker : CollisionChecker
-        The map's checker.
-    start : tuple of float
-        Start position ``(x, y)``.
-
-    Returns
-    -------
-    numpy.ndarray
-        Indices into ``checker.clearance_grid.ravel()``; empty if the start is in no component.
-    """
-    labels = checker.component_labels
-    origin, h = checker.grid_origin, checker.resolution
-    i = int(math.floor((start[0] - origin[0]) / h))
-    j = int(math.floor((start[1] - origin[1]) / h))
-    inside = 0 <= i < labels.shape[0] and 0 <= j < labels.shape[1]
-    label = int(labels[i, j]) if inside else 0
-    per_label = _CELLS.setdefault(checker, {})
-    cells = per_label.get(label)
-    if cells is None:
-        if label == 0:
-            cells = np.zeros(0, dtype=np.int64)
-        else:
-            vehicle = checker.vehicle
-            stand = checker.clearance_grid >= min(vehicle.rear_overhang, vehicle.width / 2.0)
-            cells = np.flatnonzero(stand & (labels == label))
-        per_label[label] = cells
-    return cells
+__all__ = ["SampleSource"]
 
 
 class SampleSource:
@@ -92,7 +43,7 @@ class SampleSource:
         xmin, ymin, xmax, ymax = problem.bounds
         self._low = np.array([xmin, ymin])
         self._span = np.array([xmax - xmin, ymax - ymin])
-        self._cells = free_cells(checker, problem.start.as_tuple()[:2]) if reject else None
+        self._cells = checker.free_cells(problem.start.as_tuple()[:2]) if reject else None
         if self._cells is not None and len(self._cells) == 0:
             self._cells = None
         self._buffer = np.empty((0, 2))

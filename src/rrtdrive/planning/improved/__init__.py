@@ -37,7 +37,7 @@ Every component is switchable by name, see :data:`COMPONENTS`::
 Through the registry: ``make_planner("improved-rrt-connect", disable=["prune"])``.
 
 Modules: :mod:`.config` (:class:`ImprovedConfig`, :data:`COMPONENTS`),
-:mod:`.expansion` (obstacle expansion), :mod:`.passages` (passage cells),
+:mod:`.expansion` (obstacle expansion), passage cells from the checker's grid cache,
 :mod:`.growth` (the obtuse tree and its growth), :mod:`.fallback` (the Dubins
 fallback) and :mod:`.planner` (:class:`ImprovedRRTConnect`).
 """
@@ -68,7 +68,6 @@ from rrtdrive.planning.improved.growth import (
     link,
     link_candidates,
 )
-from rrtdrive.planning.improved.passages import passage_cells
 from rrtdrive.planning.improved.planner import NAME, ImprovedRRTConnect
 
 __all__ = [
@@ -87,7 +86,6 @@ __all__ = [
     "expanded_checker",
     "default_expansion_lmin",
     "endpoint_capped_clearance",
-    "passage_cells",
     "extend",
     "fast_edge_test",
     "greedy_connect",

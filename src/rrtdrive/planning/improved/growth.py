@@ -415,7 +415,7 @@ def grow_until_meet(
     obtuse, adaptive : bool
         The obtuse-parent and adaptive-step components.
     passages : numpy.ndarray or None
-        Passage cells (:func:`~rrtdrive.planning.improved.passages.passage_cells`).
+        Passage cells (:meth:`rrtdrive.collision.CollisionChecker.passage_cells`).
     passage_bias : float
         Share of iterations that try a passage cell first.
     iterations : int

@@ -32,7 +32,6 @@ from rrtdrive.planning.improved.growth import (
     grow_until_meet,
     rooted_edge_test,
 )
-from rrtdrive.planning.improved.passages import passage_cells
 from rrtdrive.planning.result import run_query, solved
 from rrtdrive.planning.sampling import SampleSource
 from rrtdrive.planning.smoothing import make_drivable
@@ -275,7 +274,7 @@ class _Query:
         cfg = self.cfg
         if not (cfg.passage_sampling and cfg.passage_bias > 0):
             return None
-        cells = passage_cells(grow, (self.start.x, self.start.y))
+        cells = grow.passage_cells((self.start.x, self.start.y))
         return cells if len(cells) else None
 
     def grow_and_smooth(

@@ -1,20 +1,20 @@
 """Every access the smoothing code makes to a collision checker, in one place.
 
-The post-processor needs ``edge_free`` and ``path_free`` and uses three optional
-extras when a checker has them: ``blocked_from`` (a bulk screen of edges proven to
-collide), ``obstacles`` (for the prepared obstacle union behind that screen) and
-``poses_free`` (the exact body test of single poses). The probes for them live
-here alone, so that an explicit checker contract can replace them in one edit.
+The post-processor needs a motion validator (``edge_free`` and ``path_free``); when the
+checker implements the whole :class:`~rrtdrive.checking.Checker` contract it also uses
+the checker's prepared obstacle union (behind a bulk screen of edges proven to collide)
+and its exact batch body test ``poses_free``.
 """
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Callable, Sequence
 from typing import Protocol
 
 import numpy as np
 import shapely
+
+from rrtdrive.checking import Checker, PoseValidityChecker, implements
 
 __all__ = ["EdgeChecker", "PathChecker", "CheckerView", "EdgeCache", "edge_screen"]
 
@@ -48,25 +48,6 @@ def edge_screen(checker: object) -> Screen | None:
     return getattr(checker, "blocked_from", None)
 
 
-_UNIONS: weakref.WeakKeyDictionary[object, shapely.Geometry] = weakref.WeakKeyDictionary()
-
-
-def _obstacle_union(checker: object) -> shapely.Geometry | None:
-    """The prepared union of the checker's obstacles, cached per checker (None if unknown)."""
-    obstacles = getattr(checker, "obstacles", None)
-    if obstacles is None:
-        return None
-    try:
-        union = _UNIONS.get(checker)
-    except TypeError:  # not weak-referenceable
-        return None
-    if union is None:
-        union = shapely.union_all([o.polygon() for o in obstacles])
-        shapely.prepare(union)
-        _UNIONS[checker] = union
-    return union
-
-
 class CheckerView:
     """The smoother's view of a :class:`PathChecker` and its optional extras.
 
@@ -81,12 +62,17 @@ class CheckerView:
         self.edge_free = checker.edge_free
 
     def obstacle_union(self) -> shapely.Geometry | None:
-        """The prepared union of the checker's obstacles (cached per checker), or None."""
-        return _obstacle_union(self.checker)
+        """The prepared union of the obstacles (cached on the checker), or None.
+
+        None when the checker does not implement the whole
+        :class:`~rrtdrive.checking.Checker` contract (a bare motion validator).
+        """
+        return self.checker.obstacle_union if implements(self.checker, Checker) else None
 
     def poses_free(self) -> PosesFree | None:
-        """The checker's exact single-pose body test, or None when it has none."""
-        return getattr(self.checker, "poses_free", None)
+        """The exact batch body test of a :class:`~rrtdrive.checking.PoseValidityChecker`."""
+        checker = self.checker
+        return checker.poses_free if implements(checker, PoseValidityChecker) else None
 
     def path_free(
         self, samples: np.ndarray, spacing: float, clearance: float
