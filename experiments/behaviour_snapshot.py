@@ -15,7 +15,8 @@ budgets alone):
   pure-pursuit, stanley, lqr, plus a SHA-256 of each episode's logged states and
   commands.
 
-Timing fields (``planning_time_s``, ``wall_time_s``, re-plan cycle times) are dropped.
+Timing fields (``planning_time_s``, ``wall_time_s``, re-plan cycle times) are dropped,
+and wall times quoted in messages are masked.
 Exit code 0 when ``--compare`` finds every entry equal, 1 otherwise (each difference
 is printed).
 """
@@ -25,6 +26,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
+import re
 import sys
 from pathlib import Path
 
@@ -52,8 +54,15 @@ TIMING_KEYS = {
 NO_WALL_LIMIT_S = 1e6
 
 
+#: Wall times quoted inside messages, e.g. "(20000 iterations, 6.664 s, 8268 nodes)".
+_SECONDS = re.compile(r"\b\d+\.\d+ s\b")
+
+
 def _drop_timing(d: dict) -> dict:
-    return {k: v for k, v in d.items() if k not in TIMING_KEYS}
+    out = {k: v for k, v in d.items() if k not in TIMING_KEYS}
+    if isinstance(out.get("message"), str):
+        out["message"] = _SECONDS.sub("<t> s", out["message"])
+    return out
 
 
 def plan_entries() -> dict[str, dict]:
