@@ -31,6 +31,7 @@ from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import resolve_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.planning.rrt import free_cells
+from rrtdrive.stats import describe as stat_describe
 from rrtdrive.types import Budget
 
 BASELINES = ("rrt", "rrt-connect", "rrt-star")
@@ -95,12 +96,8 @@ def describe(values: list[float]) -> dict[str, float]:
     """Median, mean, min and max (NaN when empty)."""
     if not values:
         return {"median": math.nan, "mean": math.nan, "min": math.nan, "max": math.nan}
-    return {
-        "median": statistics.median(values),
-        "mean": statistics.fmean(values),
-        "min": min(values),
-        "max": max(values),
-    }
+    s = stat_describe(values)
+    return {"median": s.median, "mean": s.mean, "min": s.min, "max": s.max}
 
 
 def run_planner(name: str, problem: PlanningProblem, seeds: list[int], budget: Budget) -> list:

@@ -218,3 +218,19 @@ def test_success_terms_of_a_clean_overtake(overtake):
     terms = success_terms(_episode(overtake, path, states, np.zeros((len(x) - 1, 2))))
     assert terms.success and terms.lead_required and terms.outcome == "success"
     assert terms.passed_lead and terms.back_in_lane and terms.in_time and not terms.collision
+
+
+def test_summarise_intervals(overtake):
+    from rrtdrive.stats import wilson_interval
+
+    path = _lane_path(overtake)
+    x = np.arange(overtake.start.x, 92.0 + 1e-9, 0.2)
+    y = np.where((x > 30) & (x < 70), overtake.lane_y + 4.0, overtake.lane_y)
+    states = np.column_stack([x, y, 0 * x, np.append(np.full(len(x) - 1, 3.0), 0.0)])
+    r = evaluate(_episode(overtake, path, states, np.zeros((len(x) - 1, 2))))
+    s = summarise([r, r, r])
+    assert s["success_rate_ci95"] == list(wilson_interval(3, 3))
+    lo, hi = s["cte_max_m_ci95"]
+    assert lo == hi == pytest.approx(4.0)  # identical values: a point interval
+    assert s["ttc_min_s_min"] is None and s["replan_time_max_s_ci95"] is None
+    assert summarise([r])["cte_rms_m_ci95"] is None

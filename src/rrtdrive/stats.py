@@ -111,6 +111,8 @@ def wilson_interval(successes: float, n: int) -> tuple[float, float]:
 
 
 def _t_interval(x: np.ndarray, mean: float, std: float) -> tuple[float, float]:
+    if std == 0.0:
+        return (mean, mean)  # scipy would compute 0 * inf
     lo, hi = scipy.stats.t.interval(
         CONFIDENCE, len(x) - 1, loc=mean, scale=std / math.sqrt(len(x))
     )

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from rrtdrive.evaluation.report import SIGNED_FIELDS
 from rrtdrive.stats import Stat, describe, wilson_interval
 
 __all__ = [
@@ -44,8 +45,8 @@ _ID_FIELDS = {
 
 #: Metrics that can be negative (Student's t interval); every other number is a
 #: non-negative quantity (time, length, count, error magnitude) and gets a bootstrap
-#: interval that cannot go below zero.
-SIGNED_METRICS = frozenset({"progress_m", "final_speed"})
+#: interval that cannot go below zero. Plan rows have no signed metric.
+SIGNED_METRICS = SIGNED_FIELDS
 
 #: Metrics shown in the markdown tables (the CSV has every metric).
 _MD_COLUMNS = {
