@@ -234,3 +234,31 @@ def test_summarise_intervals(overtake):
     assert lo == hi == pytest.approx(4.0)  # identical values: a point interval
     assert s["ttc_min_s_min"] is None and s["replan_time_max_s_ci95"] is None
     assert summarise([r])["cte_rms_m_ci95"] is None
+
+
+def test_success_terms_say_which_term_failed(overtake):
+    from dataclasses import replace
+
+    from rrtdrive.evaluation import failure_reason, success_terms
+
+    path = _lane_path(overtake)
+    x = np.arange(overtake.start.x, 92.0 + 1e-9, 0.2)
+    y = np.where((x > 30) & (x < 70), overtake.lane_y + 4.0, overtake.lane_y)
+    states = np.column_stack([x, y, 0 * x, np.append(np.full(len(x) - 1, 3.0), 0.0)])
+    ep = _episode(overtake, path, states, np.zeros((len(x) - 1, 2)))
+    terms = success_terms(ep)
+    assert terms.success and terms.lead_required and terms.outcome == "success"
+    r = evaluate(ep)
+    assert failure_reason(r) is None
+    bad = replace(r, success=False, reached_goal=False, goal_heading_err_rad=math.radians(12.0),
+                  outcome="failed")
+    assert failure_reason(bad) == "arrived, but the heading error 12.0 deg exceeds 10 deg"
+    far = replace(bad, goal_position_err_m=0.62, stopped=False, final_speed=0.3)
+    assert failure_reason(far) == (
+        "arrived, but the position error 0.62 m exceeds 0.5 m; the heading error 12.0 deg "
+        "exceeds 10 deg; the final speed 0.30 m/s exceeds 0.1 m/s"
+    )
+    crash = replace(r, success=False, collision=True, collision_footprint=True,
+                    status="timeout", outcome="collision")
+    assert failure_reason(crash) == "timeout, but a collision reported by the footprint judge"
+

@@ -24,6 +24,7 @@ from rrtdrive.evaluation.metrics import METRICS, Metric, MetricContext, evaluate
 from rrtdrive.evaluation.report import OUTCOMES, EpisodeReport, EvalConfig, Outcome
 from rrtdrive.evaluation.success import (
     SuccessTerms,
+    failure_reason,
     overtake_complete,
     success_terms,
 )
@@ -54,6 +55,7 @@ __all__ = [
     "Outcome",
     "SuccessTerms",
     "success_terms",
+    "failure_reason",
     "METRICS",
     "Metric",
     "MetricContext",

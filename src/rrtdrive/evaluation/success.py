@@ -16,14 +16,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rrtdrive.evaluation.collisions import footprint_collisions
-from rrtdrive.evaluation.report import EvalConfig, Outcome
+from rrtdrive.evaluation.report import EpisodeReport, EvalConfig, Outcome
 from rrtdrive.types import wrap_angle
 from rrtdrive.vehicle import footprint_corners
 
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.sim.runner import Episode
 
-__all__ = ["SuccessTerms", "success_terms", "overtake_complete"]
+__all__ = ["SuccessTerms", "success_terms", "overtake_complete", "failure_reason"]
 
 
 @dataclass(frozen=True)
@@ -181,3 +181,79 @@ def overtake_complete(
     ahead = corners[:, 0].min() >= float(lead_centre[0]) + lead_length / 2.0 + gap
     return in_lane and aligned and bool(ahead)
 
+
+def failure_reason(report: EpisodeReport, config: EvalConfig | None = None) -> str | None:
+    """Which success condition failed, and by how much (``None`` for a success).
+
+    The reason starts with the episode's status, then every failed term, for
+    example ``"arrived, but the heading error 12.0 deg exceeds 10 deg"``. An
+    ``overtake-traffic`` report is recognised by its missing goal errors.
+
+    Parameters
+    ----------
+    report : EpisodeReport
+        From :func:`rrtdrive.evaluation.evaluate` (with the same ``config``).
+    config : EvalConfig, optional
+        The thresholds the report was judged with.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> r = evaluate(run_episode("parking", seed=0))  # doctest: +SKIP
+    >>> failure_reason(r)  # doctest: +SKIP
+    'arrived, but the heading error 12.0 deg exceeds 10 deg'
+    """
+    if report.success:
+        return None
+    cfg = config or EvalConfig()
+    status = report.status
+    if report.steps == 0:
+        return f"{status}: {report.message}" if report.message else status
+    traffic = report.goal_position_err_m is None
+    why: list[str] = []
+    judges = [
+        name for name, hit in (
+            ("highway-env", report.collision_highway_env),
+            ("the footprint judge", report.collision_footprint),
+        ) if hit
+    ]
+    if judges:
+        why.append(f"a collision reported by {' and '.join(judges)}")
+    if traffic:
+        if not report.reached_goal:
+            missing = [
+                text for text, ok in (
+                    ("past the lead car", report.passed_lead),
+                    ("back in the lane", report.back_in_lane),
+                ) if ok is False
+            ]
+            detail = f" (not {' and not '.join(missing)})" if missing else ""
+            why.append(f"the overtake is not complete{detail}")
+        if status != "completed" and not judges:
+            why.append(f"no completed overtake within {report.duration_s:.1f} s")
+    else:
+        pos, head = report.goal_position_err_m, report.goal_heading_err_rad
+        if pos is not None and pos > cfg.goal_tol_m:
+            why.append(f"the position error {pos:.2f} m exceeds {cfg.goal_tol_m:g} m")
+        if head is not None and head > cfg.goal_tol_rad:
+            why.append(
+                f"the heading error {math.degrees(head):.1f} deg exceeds "
+                f"{math.degrees(cfg.goal_tol_rad):g} deg"
+            )
+        if not report.stopped and report.final_speed is not None:
+            why.append(
+                f"the final speed {abs(report.final_speed):.2f} m/s exceeds "
+                f"{cfg.stop_speed:g} m/s"
+            )
+        if report.passed_lead is False:
+            why.append("the body is not past the stopped car")
+        if report.back_in_lane is False:
+            why.append("the body is not back in the ego lane")
+        if status != "arrived" and not judges:
+            why.append(f"the car did not arrive within {report.duration_s:.1f} s")
+    if not why:
+        why.append("no success term failed, yet the episode is not a success")
+    return f"{status}, but " + "; ".join(why)
