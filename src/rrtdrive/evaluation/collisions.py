@@ -116,9 +116,17 @@ def box_corners(cx: np.ndarray, cy: np.ndarray, h: np.ndarray, length: np.ndarra
 def boxes_intersect(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Whether convex quadrilaterals ``(..., 4, 2)`` intersect (shapely); touching counts.
 
-    The leading shapes of ``a`` and ``b`` broadcast against each other.
+    The leading shapes of ``a`` and ``b`` broadcast against each other. Only pairs
+    whose circumscribed circles meet go to shapely (the others cannot intersect).
     """
-    return np.asarray(shapely.intersects(shapely.polygons(a), shapely.polygons(b)), dtype=bool)
+    a, b = np.broadcast_arrays(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
+    ca, cb = a.mean(axis=-2), b.mean(axis=-2)
+    ra = np.max(np.linalg.norm(a - ca[..., None, :], axis=-1), axis=-1)
+    rb = np.max(np.linalg.norm(b - cb[..., None, :], axis=-1), axis=-1)
+    near = np.linalg.norm(ca - cb, axis=-1) <= (ra + rb) * (1.0 + 1e-9) + 1e-9
+    out = np.zeros(a.shape[:-2], dtype=bool)
+    out[near] = shapely.intersects(shapely.polygons(a[near]), shapely.polygons(b[near]))
+    return out
 
 
 def ego_centres(states: np.ndarray, vehicle: Any) -> tuple[np.ndarray, np.ndarray]:
