@@ -30,6 +30,7 @@ import numpy as np
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import resolve_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem, make_planner
+from rrtdrive.stats import describe as stat_describe
 from rrtdrive.types import Budget
 
 BASELINES = ("rrt", "rrt-connect", "rrt-star")
@@ -94,12 +95,8 @@ def describe(values: list[float]) -> dict[str, float]:
     """Median, mean, min and max (NaN when empty)."""
     if not values:
         return {"median": math.nan, "mean": math.nan, "min": math.nan, "max": math.nan}
-    return {
-        "median": statistics.median(values),
-        "mean": statistics.fmean(values),
-        "min": min(values),
-        "max": max(values),
-    }
+    s = stat_describe(values)
+    return {"median": s.median, "mean": s.mean, "min": s.min, "max": s.max}
 
 
 def run_planner(name: str, problem: PlanningProblem, seeds: list[int], budget: Budget) -> list:

@@ -28,13 +28,13 @@ from pathlib import Path as FsPath
 
 import matplotlib.pyplot as plt
 import numpy as np
-from scipy import stats
 
 from rrtdrive.maps import builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.planning.base import polyline_curvature
 from rrtdrive.planning.smoothing import prune
 from rrtdrive.plotting import draw_map, draw_path, draw_trees, plot_curvature, save_figure
+from rrtdrive.stats import describe as stat_describe
 from rrtdrive.types import Budget
 from rrtdrive.verify import verify_path
 
@@ -84,10 +84,9 @@ def describe(values: list[float]) -> dict[str, float]:
     vals = [v for v in values if v is not None and not math.isnan(v)]
     if not vals:
         return {"mean": float("nan"), "std": float("nan"), "ci95": float("nan"), "n": 0}
-    mean = statistics.fmean(vals)
-    std = statistics.stdev(vals) if len(vals) > 1 else 0.0
-    half = stats.t.ppf(0.975, len(vals) - 1) * std / math.sqrt(len(vals)) if len(vals) > 1 else 0.0
-    return {"mean": mean, "std": std, "ci95": float(half), "n": len(vals)}
+    s = stat_describe(vals)  # Student's t, as the paper's table
+    std, half = (s.std, s.ci_high - s.mean) if s.n > 1 else (0.0, 0.0)
+    return {"mean": s.mean, "std": std, "ci95": float(half), "n": s.n}
 
 
 def fmt(d: dict[str, float], digits: int = 2, scale: float = 1.0) -> str:

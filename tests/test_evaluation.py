@@ -163,3 +163,102 @@ def test_config_validation():
         EvalConfig(goal_tol_m=0.0)
     with pytest.raises(InputError, match="reports"):
         summarise([])
+
+
+# ------------------------------------------------------------------ seams of the package
+
+
+def test_the_metric_table_fills_every_report_field():
+    from dataclasses import fields
+
+    from rrtdrive.evaluation import METRICS, EpisodeReport
+
+    assert set(METRICS) == {f.name for f in fields(EpisodeReport)}
+
+
+def test_outcome_is_an_enum_with_the_json_strings(overtake):
+    import json
+
+    from rrtdrive.evaluation import OUTCOMES, EpisodeReport, Outcome
+
+    assert OUTCOMES == ("success", "collision", "safe_following", "failed")
+    log = DriveLog.empty(DT)
+    ep = Episode(overtake, "rrt", "lqr", 0, None, Path.empty(), log, "plan_failed", "x",
+                 EpisodeConfig())
+    r = evaluate(ep)
+    assert r.outcome is Outcome.FAILED and r.outcome == "failed" and f"{r.outcome}" == "failed"
+    js = r.to_json()
+    assert type(js["outcome"]) is str and json.loads(json.dumps(js))["outcome"] == "failed"
+    back = EpisodeReport(**js)  # read back from JSON
+    assert back.outcome is Outcome.FAILED
+    with pytest.raises(InputError, match="outcome"):
+        EpisodeReport(**{**js, "outcome": "won"})
+
+
+def test_boxes_intersect_with_shapely():
+    from rrtdrive.evaluation.collisions import box_corners, boxes_intersect
+
+    z = np.zeros(4)
+    a = box_corners(z, z, z, np.full(4, 2.0), np.full(4, 2.0))
+    b = box_corners(np.array([1.5, 2.0, 2.5, 2.1]), z, np.array([0.0, 0.0, 0.0, math.pi / 4]),
+                    np.full(4, 2.0), np.full(4, 2.0))
+    # Overlapping, touching (counts), apart, and a rotated box whose corner reaches in.
+    assert boxes_intersect(a, b).tolist() == [True, True, False, True]
+    assert boxes_intersect(a[:1][:, None], b[None]).shape == (1, 4)
+
+
+
+def test_success_terms_of_a_clean_overtake(overtake):
+    from rrtdrive.evaluation import success_terms
+
+    path = _lane_path(overtake)
+    x = np.arange(overtake.start.x, 92.0 + 1e-9, 0.2)
+    y = np.where((x > 30) & (x < 70), overtake.lane_y + 4.0, overtake.lane_y)
+    states = np.column_stack([x, y, 0 * x, np.append(np.full(len(x) - 1, 3.0), 0.0)])
+    terms = success_terms(_episode(overtake, path, states, np.zeros((len(x) - 1, 2))))
+    assert terms.success and terms.lead_required and terms.outcome == "success"
+    assert terms.passed_lead and terms.back_in_lane and terms.in_time and not terms.collision
+
+
+def test_summarise_intervals(overtake):
+    from rrtdrive.stats import wilson_interval
+
+    path = _lane_path(overtake)
+    x = np.arange(overtake.start.x, 92.0 + 1e-9, 0.2)
+    y = np.where((x > 30) & (x < 70), overtake.lane_y + 4.0, overtake.lane_y)
+    states = np.column_stack([x, y, 0 * x, np.append(np.full(len(x) - 1, 3.0), 0.0)])
+    r = evaluate(_episode(overtake, path, states, np.zeros((len(x) - 1, 2))))
+    s = summarise([r, r, r])
+    assert s["success_rate_ci95"] == list(wilson_interval(3, 3))
+    lo, hi = s["cte_max_m_ci95"]
+    assert lo == hi == pytest.approx(4.0)  # identical values: a point interval
+    assert s["ttc_min_s_min"] is None and s["replan_time_max_s_ci95"] is None
+    assert summarise([r])["cte_rms_m_ci95"] is None
+
+
+def test_success_terms_say_which_term_failed(overtake):
+    from dataclasses import replace
+
+    from rrtdrive.evaluation import failure_reason, success_terms
+
+    path = _lane_path(overtake)
+    x = np.arange(overtake.start.x, 92.0 + 1e-9, 0.2)
+    y = np.where((x > 30) & (x < 70), overtake.lane_y + 4.0, overtake.lane_y)
+    states = np.column_stack([x, y, 0 * x, np.append(np.full(len(x) - 1, 3.0), 0.0)])
+    ep = _episode(overtake, path, states, np.zeros((len(x) - 1, 2)))
+    terms = success_terms(ep)
+    assert terms.success and terms.lead_required and terms.outcome == "success"
+    r = evaluate(ep)
+    assert failure_reason(r) is None
+    bad = replace(r, success=False, reached_goal=False, goal_heading_err_rad=math.radians(12.0),
+                  outcome="failed")
+    assert failure_reason(bad) == "arrived, but the heading error 12.0 deg exceeds 10 deg"
+    far = replace(bad, goal_position_err_m=0.62, stopped=False, final_speed=0.3)
+    assert failure_reason(far) == (
+        "arrived, but the position error 0.62 m exceeds 0.5 m; the heading error 12.0 deg "
+        "exceeds 10 deg; the final speed 0.30 m/s exceeds 0.1 m/s"
+    )
+    crash = replace(r, success=False, collision=True, collision_footprint=True,
+                    status="timeout", outcome="collision")
+    assert failure_reason(crash) == "timeout, but a collision reported by the footprint judge"
+

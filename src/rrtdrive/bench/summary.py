@@ -3,9 +3,10 @@
 A group is one cell of the grid: ``(kind, map or scenario, planner, controller)``.
 For every numeric or boolean metric of its rows (``None`` values skipped, so the
 length of failed plans does not count) the summary gives ``n``, the mean, the
-sample standard deviation and a 95 % interval: Student's t for numbers, the
-Wilson score interval for rates (booleans). Error rows (crashed runs) are
-counted per group and left out of every metric.
+sample standard deviation and a 95 % interval (:func:`rrtdrive.stats.describe`):
+the Wilson score interval for rates (booleans), a bootstrap interval for
+non-negative quantities, Student's t for the signed ones (:data:`SIGNED_METRICS`).
+Error rows (crashed runs) are counted per group and left out of every metric.
 """
 
 from __future__ import annotations
@@ -19,6 +20,9 @@ from pathlib import Path as FsPath
 from typing import Any
 
 import numpy as np
+
+from rrtdrive.evaluation.report import SIGNED_FIELDS
+from rrtdrive.stats import Stat, describe, wilson_interval
 
 __all__ = [
     "Stat",
@@ -38,6 +42,11 @@ _ID_FIELDS = {
     "message", "error", "worker", "finished_at", "map_name", "plan_status", "max_time_s",
     "max_iterations", "attempts", "kappa_max", "simulation_frequency",
 }
+
+#: Metrics that can be negative (Student's t interval); every other number is a
+#: non-negative quantity (time, length, count, error magnitude) and gets a bootstrap
+#: interval that cannot go below zero. Plan rows have no signed metric.
+SIGNED_METRICS = SIGNED_FIELDS
 
 #: Metrics shown in the markdown tables (the CSV has every metric).
 _MD_COLUMNS = {
@@ -60,30 +69,6 @@ _MD_COLUMNS = {
         ("planning_time_s", "plan time [ms]", 1e3, "{:.1f}"),
     ),
 }
-
-
-@dataclass(frozen=True)
-class Stat:
-    """Summary of one metric over a group.
-
-    Attributes
-    ----------
-    n : int
-        Number of values (``None`` skipped).
-    mean, std : float
-        Mean and sample standard deviation (NaN for ``n < 2``).
-    ci_low, ci_high : float
-        95 % confidence interval of the mean (Wilson for rates).
-    rate : bool
-        The metric is boolean (mean = rate).
-    """
-
-    n: int
-    mean: float
-    std: float
-    ci_low: float
-    ci_high: float
-    rate: bool
 
 
 @dataclass(frozen=True)
@@ -123,55 +108,6 @@ class GroupSummary:
         return " / ".join(parts)
 
 
-def _t975(dof: int) -> float:
-    from scipy.stats import t
-
-    return float(t.ppf(0.975, dof))
-
-
-def wilson_interval(successes: float, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
-    """95 % Wilson score interval of a rate.
-
-    Examples
-    --------
-    >>> lo, hi = wilson_interval(10, 10)
-    >>> round(lo, 3), hi
-    (0.722, 1.0)
-    """
-    if n == 0:
-        return (math.nan, math.nan)
-    p = successes / n
-    denom = 1 + z * z / n
-    centre = (p + z * z / (2 * n)) / denom
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
-    return (max(0.0, centre - half), min(1.0, centre + half))
-
-
-def describe(values: Sequence[float], rate: bool = False) -> Stat:
-    """Mean, std and 95 % CI of ``values`` (Wilson interval when ``rate``).
-
-    Examples
-    --------
-    >>> s = describe([1.0, 2.0, 3.0])
-    >>> s.mean, s.std, round(s.ci_low, 3), round(s.ci_high, 3)
-    (2.0, 1.0, -0.484, 4.484)
-    """
-    x = np.asarray(values, dtype=float)
-    n = len(x)
-    if n == 0:
-        return Stat(0, math.nan, math.nan, math.nan, math.nan, rate)
-    mean = float(x.mean())
-    std = float(x.std(ddof=1)) if n > 1 else math.nan
-    if rate:
-        lo, hi = wilson_interval(float(x.sum()), n)
-    elif n > 1:
-        half = _t975(n - 1) * std / math.sqrt(n)
-        lo, hi = mean - half, mean + half
-    else:
-        lo = hi = math.nan
-    return Stat(n, mean, std, lo, hi, rate)
-
-
 def _group_key(row: Mapping[str, Any]) -> tuple[str, str, str, str | None]:
     kind = row.get("kind", "plan")
     target = row.get("map") if kind == "plan" else row.get("scenario")
@@ -209,7 +145,10 @@ def summarise_rows(rows: Iterable[Mapping[str, Any]]) -> list[GroupSummary]:
                 elif isinstance(v, (int, float)) and math.isfinite(v):
                     metrics.setdefault(k, []).append(float(v))
                     is_rate[k] = False
-        stats = {k: describe(v, rate=is_rate[k]) for k, v in metrics.items()}
+        stats = {
+            k: describe(v, rate=is_rate[k], nonnegative=k not in SIGNED_METRICS)
+            for k, v in metrics.items()
+        }
         out.append(
             GroupSummary(kind, target, planner, controller, len(members),
                          len(members) - len(ok), stats)
@@ -257,8 +196,9 @@ def to_markdown(groups: Sequence[GroupSummary], title: str = "Bench summary") ->
     """Markdown tables (planning-only and closed-loop): mean ± std [95 % CI] per group."""
     lines = [f"# {title}", ""]
     lines.append(
-        "Cells: mean ± std [95 % CI] over the runs with a value (Student's t); rates "
-        "with the Wilson 95 % interval. Lengths and curvatures only of successful runs."
+        "Cells: mean ± std [95 % CI] over the runs with a value (bootstrap interval "
+        "for non-negative quantities, Student's t for signed ones); rates with the "
+        "Wilson 95 % interval. Lengths and curvatures only of successful runs."
     )
     for kind, heading in (("plan", "Planning only"), ("episode", "Closed loop")):
         gs = [g for g in groups if g.kind == kind]

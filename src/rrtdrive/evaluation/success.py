@@ -1,0 +1,259 @@
+"""The success decision of an episode, per scenario kind, in one function.
+
+:func:`success_terms` computes every term of ``docs/metrics.md`` (Success,
+Outcome) from the final logged state: goal reached (or, for ``overtake-traffic``,
+the overtake complete: :func:`overtake_complete`), stopped, in time, no
+collision, and for ``overtake`` passed the lead car and back in the lane.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from rrtdrive.evaluation.collisions import footprint_collisions
+from rrtdrive.evaluation.report import EpisodeReport, EvalConfig, Outcome
+from rrtdrive.types import wrap_angle
+from rrtdrive.vehicle import footprint_corners
+
+if TYPE_CHECKING:  # pragma: no cover
+    from rrtdrive.sim.runner import Episode
+
+__all__ = ["SuccessTerms", "success_terms", "overtake_complete", "failure_reason"]
+
+
+@dataclass(frozen=True)
+class SuccessTerms:
+    """The terms of the success decision of one episode.
+
+    Attributes
+    ----------
+    reached_goal : bool
+        Goal pose within tolerance (``overtake-traffic``: the overtake complete).
+    stopped : bool
+        Final speed at most ``stop_speed`` (always true for ``overtake-traffic``).
+    in_time : bool
+        Ended as the scenario should (``"arrived"``; ``"completed"`` for traffic).
+    collision : bool
+        Either collision judge reported one.
+    passed_lead, back_in_lane : bool or None
+        Road scenarios only (``None`` for parking or an episode that did not drive).
+    lead_required : bool
+        ``passed_lead`` and ``back_in_lane`` are part of success (``overtake``).
+    goal_position_err_m, goal_heading_err_rad : float or None
+        Final errors to the goal pose (``None`` for ``overtake-traffic``).
+    success : bool
+        All required terms hold.
+    outcome : Outcome
+        Success, collision, safe following or failed.
+    """
+
+    reached_goal: bool
+    stopped: bool
+    in_time: bool
+    collision: bool
+    passed_lead: bool | None
+    back_in_lane: bool | None
+    lead_required: bool
+    goal_position_err_m: float | None
+    goal_heading_err_rad: float | None
+    success: bool
+    outcome: Outcome
+
+
+def success_terms(
+    episode: Episode, config: EvalConfig | None = None, collision: bool | None = None
+) -> SuccessTerms:
+    """Decide whether an episode succeeded, and why not.
+
+    Parameters
+    ----------
+    episode : Episode
+        A driven (or failed-to-plan) episode.
+    config : EvalConfig, optional
+        Thresholds.
+    collision : bool, optional
+        Whether either collision judge reported one; computed when not given.
+
+    Returns
+    -------
+    SuccessTerms
+
+    Examples
+    --------
+    >>> success_terms(run_episode("parking", seed=0)).outcome  # doctest: +SKIP
+    <Outcome.SUCCESS: 'success'>
+    """
+    cfg = config or EvalConfig()
+    log = episode.log
+    if log.steps == 0:
+        return SuccessTerms(
+            reached_goal=False, stopped=False, in_time=False, collision=False,
+            passed_lead=None, back_in_lane=None, lead_required=False,
+            goal_position_err_m=None, goal_heading_err_rad=None, success=False,
+            outcome=Outcome.FAILED,
+        )
+    scen = episode.scenario
+    vehicle = scen.vehicle
+    if collision is None:
+        collision = bool(np.any(log.crashed)) or footprint_collisions(
+            episode, cfg.footprint_spacing
+        )
+    final = log.states[-1]
+    goal = scen.goal
+    pos_err = math.hypot(final[0] - goal.x, final[1] - goal.y)
+    head_err = abs(float(wrap_angle(final[2] - goal.yaw)))
+    stopped = abs(final[3]) <= cfg.stop_speed
+    reached = pos_err <= cfg.goal_tol_m and head_err <= cfg.goal_tol_rad
+    passed_lead = back_in_lane = None
+    lead_required = False
+    pos_err_out: float | None = pos_err
+    head_err_out: float | None = head_err
+    in_time = episode.status == "arrived"
+    if scen.is_traffic:
+        # Success is the overtake itself: back in the lane, aligned, ahead of the moving lead.
+        lead, (lead_len, _w) = log.others[-1, 0], log.other_sizes[0]
+        body = footprint_corners(final[:3], vehicle)
+        passed_lead = bool(body[:, 0].min() > lead[0] + lead_len / 2.0)
+        back_in_lane = bool(np.all(np.abs(body[:, 1] - scen.lane_y) <= scen.lane_width / 2.0))
+        gap = episode.traffic.config.complete_gap_m if episode.traffic is not None else 0.0
+        reached = overtake_complete(
+            final[:3], lead[:2], lead_len, scen.lane_y, scen.lane_width, vehicle, gap
+        )
+        stopped = True  # an overtake ends on the move
+        in_time = episode.status == "completed"
+        pos_err_out = head_err_out = None
+    elif scen.lead_index is not None and scen.lane_y is not None:
+        lead = scen.map.obstacles[scen.lead_index]
+        body = footprint_corners(final[:3], vehicle)
+        passed_lead = bool(body[:, 0].min() > lead.corners()[:, 0].max())
+        half = scen.lane_width / 2.0
+        back_in_lane = bool(
+            np.all(np.abs(body[:, 1] - scen.lane_y) <= half)
+        )
+        lead_required = True
+    extra_ok = bool(passed_lead and back_in_lane) if lead_required else True
+    success = bool(reached and stopped and in_time and not collision and extra_ok)
+    if success:
+        outcome = Outcome.SUCCESS
+    elif collision:
+        outcome = Outcome.COLLISION
+    elif scen.is_traffic and episode.status == "timeout":
+        outcome = Outcome.SAFE_FOLLOWING
+    else:
+        outcome = Outcome.FAILED
+    return SuccessTerms(
+        reached_goal=bool(reached), stopped=bool(stopped), in_time=in_time,
+        collision=bool(collision), passed_lead=passed_lead, back_in_lane=back_in_lane,
+        lead_required=lead_required, goal_position_err_m=pos_err_out,
+        goal_heading_err_rad=head_err_out, success=success, outcome=outcome,
+    )
+
+
+def overtake_complete(
+    ego_rear: Sequence[float],
+    lead_centre: Sequence[float],
+    lead_length: float,
+    lane_y: float,
+    lane_width: float,
+    vehicle: Any,
+    gap: float,
+) -> bool:
+    """Back in the ego lane (all body corners), aligned within 10°, ``gap`` ahead of the lead.
+
+    The completion test of ``overtake-traffic``: every corner of the ego's body lies
+    within the ego lane, its heading is within 10° of the lane's, and its rear
+    bumper is at least ``gap`` metres beyond the lead car's front bumper.
+
+    Examples
+    --------
+    >>> from rrtdrive.types import VehicleParams
+    >>> overtake_complete((30.0, 44.0, 0.0), (20.0, 44.0), 4.3, 44.0, 4.0, VehicleParams(), 2.0)
+    True
+    """
+    corners = footprint_corners(np.asarray(ego_rear, dtype=float)[:3], vehicle)
+    in_lane = bool(np.all(np.abs(corners[:, 1] - lane_y) <= lane_width / 2.0))
+    aligned = abs(math.remainder(float(ego_rear[2]), 2.0 * math.pi)) <= math.radians(10.0)
+    ahead = corners[:, 0].min() >= float(lead_centre[0]) + lead_length / 2.0 + gap
+    return in_lane and aligned and bool(ahead)
+
+
+def failure_reason(report: EpisodeReport, config: EvalConfig | None = None) -> str | None:
+    """Which success condition failed, and by how much (``None`` for a success).
+
+    The reason starts with the episode's status, then every failed term, for
+    example ``"arrived, but the heading error 12.0 deg exceeds 10 deg"``. An
+    ``overtake-traffic`` report is recognised by its missing goal errors.
+
+    Parameters
+    ----------
+    report : EpisodeReport
+        From :func:`rrtdrive.evaluation.evaluate` (with the same ``config``).
+    config : EvalConfig, optional
+        The thresholds the report was judged with.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> r = evaluate(run_episode("parking", seed=0))  # doctest: +SKIP
+    >>> failure_reason(r)  # doctest: +SKIP
+    'arrived, but the heading error 12.0 deg exceeds 10 deg'
+    """
+    if report.success:
+        return None
+    cfg = config or EvalConfig()
+    status = report.status
+    if report.steps == 0:
+        return f"{status}: {report.message}" if report.message else status
+    traffic = report.goal_position_err_m is None
+    why: list[str] = []
+    judges = [
+        name for name, hit in (
+            ("highway-env", report.collision_highway_env),
+            ("the footprint judge", report.collision_footprint),
+        ) if hit
+    ]
+    if judges:
+        why.append(f"a collision reported by {' and '.join(judges)}")
+    if traffic:
+        if not report.reached_goal:
+            missing = [
+                text for text, ok in (
+                    ("past the lead car", report.passed_lead),
+                    ("back in the lane", report.back_in_lane),
+                ) if ok is False
+            ]
+            detail = f" (not {' and not '.join(missing)})" if missing else ""
+            why.append(f"the overtake is not complete{detail}")
+        if status != "completed" and not judges:
+            why.append(f"no completed overtake within {report.duration_s:.1f} s")
+    else:
+        pos, head = report.goal_position_err_m, report.goal_heading_err_rad
+        if pos is not None and pos > cfg.goal_tol_m:
+            why.append(f"the position error {pos:.2f} m exceeds {cfg.goal_tol_m:g} m")
+        if head is not None and head > cfg.goal_tol_rad:
+            why.append(
+                f"the heading error {math.degrees(head):.1f} deg exceeds "
+                f"{math.degrees(cfg.goal_tol_rad):g} deg"
+            )
+        if not report.stopped and report.final_speed is not None:
+            why.append(
+                f"the final speed {abs(report.final_speed):.2f} m/s exceeds "
+                f"{cfg.stop_speed:g} m/s"
+            )
+        if report.passed_lead is False:
+            why.append("the body is not past the stopped car")
+        if report.back_in_lane is False:
+            why.append("the body is not back in the ego lane")
+        if status != "arrived" and not judges:
+            why.append(f"the car did not arrive within {report.duration_s:.1f} s")
+    if not why:
+        why.append("no success term failed, yet the episode is not a success")
+    return f"{status}, but " + "; ".join(why)
