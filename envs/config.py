@@ -10,6 +10,7 @@ speed-loop settings and the tracking controller.
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
@@ -42,6 +43,23 @@ def _require_mapping(name: str, value: Any) -> dict[str, Any]:
     if not isinstance(value, Mapping):
         raise InputError(f"{name}: expected a mapping, got {value!r}")
     return dict(value)
+
+
+def _check_fields(name: str, options: Mapping[str, Any], cls: type) -> None:
+    """Raise naming ``name.key`` for a key that is not an init field of dataclass ``cls``."""
+    known = [f.name for f in fields(cls) if f.init]
+    for key in options:
+        if key not in known:
+            raise InputError(
+                f"{name}.{key}: unknown field of {cls.__name__}; choose from {known}"
+            )
+
+
+#: The arguments of make_scenario that scenario_options may set (all but name, seed).
+_SCENARIO_PARAMS = {
+    k: p for k, p in inspect.signature(make_scenario).parameters.items()
+    if k not in ("name", "seed")
+}
 
 
 @dataclass(frozen=True)
@@ -185,6 +203,7 @@ class DriveEnvConfig:
         if scenario == "overtake-traffic":
             from rrtdrive.sim.replanning import ReplanConfig
 
+            _check_fields("replan_options", self.replan_options, ReplanConfig)  # type: ignore[arg-type]
             try:
                 replan = ReplanConfig(**self.replan_options)
             except TypeError as exc:
@@ -255,9 +274,30 @@ class DriveEnvConfig:
 
     def scenario_for(self, seed: int) -> Scenario:
         """The scenario of episode seed ``seed`` with ``scenario_options``."""
+        options: dict[str, Any] = self.scenario_options  # type: ignore[assignment]
+        for key in options:
+            if key not in _SCENARIO_PARAMS:
+                raise InputError(
+                    f"scenario_options.{key}: unknown option of make_scenario; "
+                    f"choose from {list(_SCENARIO_PARAMS)}"
+                )
         try:
-            return make_scenario(self.scenario, seed, **self.scenario_options)  # type: ignore[arg-type]
+            return make_scenario(self.scenario, seed, **options)
+        except InputError as exc:
+            # make_scenario names the argument ("spot: ..."); say where it came from.
+            raise InputError(f"scenario_options.{exc}") from None
         except TypeError as exc:
+            # A value of the wrong shape failed inside make_scenario: find which one.
+            for key, value in options.items():
+                try:
+                    make_scenario(self.scenario, seed, **{key: value})
+                except TypeError as one:
+                    expected = _SCENARIO_PARAMS[key].annotation
+                    raise InputError(
+                        f"scenario_options.{key}: expected {expected}, got {value!r} ({one})"
+                    ) from None
+                except InputError:
+                    pass
             raise InputError(f"scenario_options: {exc}") from None
 
     def speed_for(self, scenario: Scenario) -> SpeedConfig:
@@ -265,6 +305,7 @@ class DriveEnvConfig:
         base = {"v_max": scenario.v_max}
         if scenario.is_traffic:
             base = dataclasses.asdict(traffic_speed_config(scenario))
+        _check_fields("speed_options", self.speed_options, SpeedConfig)  # type: ignore[arg-type]
         options = {**base, **self.speed_options}  # type: ignore[dict-item]
         try:
             return SpeedConfig(**options)

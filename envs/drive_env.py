@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import fields
 from typing import Any
 
@@ -36,6 +37,7 @@ from rrtdrive.controllers import PathProjector, SpeedProfile, VehicleState
 from rrtdrive.envs.action import ResidualMixer, action_command
 from rrtdrive.envs.config import DriveEnvConfig, _require_mapping
 from rrtdrive.envs.observation import OBS_CLIP, ObservationLayout, observation_names
+from rrtdrive.envs.reference_speed import following_speed, stop_line_speed
 from rrtdrive.envs.render import SceneRenderer, view_for
 from rrtdrive.envs.reward import RewardWeights, state_terms
 from rrtdrive.evaluation import EpisodeReport, EvalConfig, evaluate
@@ -77,7 +79,10 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
     1                     steering angle applied in the last step (rad, left > 0)
     2                     cross-track error of the rear axle (m, left of the path > 0)
     3                     heading error, yaw minus path heading (rad, in [-pi, pi])
-    4                     reference speed of the speed profile here (m/s)
+    4                     reference speed ``v_ref`` (m/s): the speed profile here,
+                          capped by a stop line of the speed loop and by the
+                          car-following speed behind a slower car
+                          (:mod:`rrtdrive.envs.reference_speed`)
     5                     distance to the goal along the path (m, < 0 once past it)
     6 .. 5 + 2K           next K reference points ``x_1, y_1, ..., x_K, y_K`` (m),
                           every ``ref_spacing`` metres of arc ahead of the rear
@@ -551,11 +556,34 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def _observe64(self) -> np.ndarray:
         """The observation in float64 (clipped to the Box bounds); sets ``_proj_s``."""
-        profile = self._profile
         obs, self._proj_s = self._layout.observe(
-            self._ego, self._projector, lambda s: profile.at(s)[0], self._rec.others
+            self._ego, self._projector, self._v_ref_at(), self._rec.others
         )
         return obs
+
+    def _v_ref_at(self) -> Callable[[float], float]:
+        """The reference speed at an arc length: what the car is asked to drive now.
+
+        The speed profile, capped by the speed loop's stop line (the oncoming gate)
+        and, while the traffic driver follows a slower car, by the speed its IDM
+        settles to at the current gap (:mod:`rrtdrive.envs.reference_speed`).
+        """
+        profile, speed = self._profile, self._speed
+        stop_at = self._ctrl.speed.stop_at
+        cap = math.inf
+        driver = self._driver
+        if driver is not None and driver.mode == "follow":
+            # The driver's own gap measure, the one its IDM cap uses (read-only).
+            lead = driver._lead_gap()
+            if lead is not None:
+                gap, closing = lead
+                v_lead = self._ego.speed - closing
+                cap = following_speed(driver.config.idm, driver.speed.v_max, gap, v_lead)
+
+        def v_ref_at(s: float) -> float:
+            return min(stop_line_speed(profile.at(s)[0], s, stop_at, speed), cap)
+
+        return v_ref_at
 
     def _obs32(self) -> np.ndarray:
         return self._obs64.astype(np.float32)  # a fresh array every call

@@ -49,7 +49,8 @@ class RewardWeights:
     heading : float
         Per rad^2 s of squared heading error.
     speed : float
-        Per (m/s)^2 s of squared error against the speed profile.
+        Per (m/s)^2 s of squared error against ``v_ref``, the observed reference
+        speed (the profile, capped by a stop line and by car following).
     collision : float
         Penalty of a crash.
     off_path : float

@@ -358,6 +358,15 @@ def test_render_draws_the_scene_and_the_path(tmp_path):
         ({"scenario_options": {"oncoming": 2}, "scenario": "parking"}, "oncoming"),
         ({"speed_options": {"v_max": 0.0}}, "speed.v_max"),
         ({"speed_options": {"vmax": 1.0}}, "speed_options"),
+        ({"speed_options": {"vmax": 1.0}}, "speed_options.vmax: unknown field"),
+        ({"scenario_options": {"colour": 1}}, "scenario_options.colour: unknown option"),
+        ({"scenario_options": {"spot": 999}, "scenario": "parking"},
+         "scenario_options.spot: expected tuple"),
+        ({"scenario_options": {"spot": (9, 9, 9)}, "scenario": "parking"},
+         "scenario_options.spot"),
+        ({"replan_options": {"rate": 1}, "scenario": "overtake-traffic"},
+         "replan_options.rate: unknown field"),
+        ({"residul": True}, "residul: unknown option"),
         ({"controller_options": {"gain": 1.0}}, "controller"),
         ({"seed_range": (5, 5)}, "seed_range"),
         ({"render_mode": "human"}, "render_mode"),
@@ -482,3 +491,44 @@ def test_observation_layout_bounds_and_names():
     assert lay.high[6 + 6] == KAPPA_CLIP and lay.high[6 + 9] == 1.0
     with pytest.raises(InputError, match="n_vehicles"):
         ObservationLayout(3, 1.0, -1, 50.0, 0.5)
+
+
+def test_following_and_stop_line_speeds():
+    from rrtdrive.controllers import SpeedConfig
+    from rrtdrive.envs.reference_speed import following_speed, stop_line_speed
+    from rrtdrive.sim.replanning import IDMConfig
+
+    idm = IDMConfig()
+    # At the IDM's equilibrium gap behind a 4 m/s lead, its speed is the lead's.
+    s_eq = (idm.min_gap + 4.0 * idm.time_headway) / math.sqrt(1.0 - (4.0 / 11.0) ** idm.delta)
+    assert following_speed(idm, 11.0, s_eq, 4.0) == pytest.approx(4.0, abs=1e-6)
+    assert following_speed(idm, 11.0, 2 * s_eq, 4.0) > 4.0
+    assert following_speed(idm, 11.0, s_eq / 2, 4.0) < 4.0
+    assert following_speed(idm, 11.0, idm.min_gap, 4.0) == 0.0
+    cfg = SpeedConfig(v_max=5.0)
+    assert stop_line_speed(3.0, 0.0, None, cfg) == 3.0
+    assert stop_line_speed(3.0, 9.0, 10.0, cfg) == pytest.approx(min(3.0, math.sqrt(2 * cfg.decel)))
+    assert stop_line_speed(3.0, 10.0, 10.0, cfg) == 0.0
+
+
+def test_traffic_reward_does_not_punish_following():
+    # Issue #15 bug 2: v_ref ignored the car-following cap, so a successful zero-residual
+    # episode that rightly followed the 4 m/s lead returned -1311 (speed term -1471).
+    env = DriveEnv("overtake-traffic", residual=True, replan_options={"wall_limit": False})
+    env.reset(options={"episode_seed": 0})
+    total, speed_term, following = 0.0, 0.0, []
+    while True:
+        mode = env._driver.mode
+        _, reward, terminated, truncated, info = env.step(zero(None))
+        total += reward
+        speed_term += info["reward_terms"]["speed"]
+        if mode == "follow" and env._driver.mode == "follow" and info["time_s"] > 8.0:
+            following.append((info["speed"], info["v_ref"]))
+        if terminated or truncated:
+            break
+    assert info["status"] == "completed" and info["is_success"]
+    assert speed_term > -25.0
+    assert total > 50.0
+    # Behind the lead, v_ref is about its 4 m/s, not the profile's 11 m/s.
+    assert following and all(abs(v - v_ref) < 0.5 for v, v_ref in following)
+    env.close()
