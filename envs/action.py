@@ -8,6 +8,18 @@ The action ``[a, d]`` in ``[-1, 1]^2`` maps to an acceleration (``a a_max`` abov
 controller's command within the speed loop's acceleration and jerk limits and
 fades it out over the last :data:`RESIDUAL_FADE_M` of the path, so that a zero
 action is the plain controller exactly.
+
+The action is a ``float32`` Box ``[-1, 1]^2``. Acceleration ``a * a_max``
+for ``a >= 0`` and ``a * |a_min|`` below (the speed loop's limits, 2 and -4
+m/s^2 by default, so 0 means coasting); steering ``d * steer_limit`` with
+``steer_limit = atan(L kappa_max)`` (22.7°, the car's curvature limit). With
+``residual=True`` the command is the controller's plus the action mapped the
+same way and multiplied by ``residual_scale``, clipped to the same limits and,
+for the acceleration, to the speed loop's jerk limits around the last applied
+command (:meth:`ResidualMixer.accel`);
+once the controller holds the car at the end of the path, or brakes past it,
+the residual no longer applies (so a zero action is the plain controller, and
+no residual can keep the car from coming to rest at the goal).
 """
 
 from __future__ import annotations

@@ -70,45 +70,14 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
     keyword arguments of ``gym.make`` reach this constructor.
 
     **Observation** (``float32``, shape ``(6 + 3 K + 5 M,)``, SI units, ego frame =
-    rear axle, x forward, y left):
+    rear axle, x forward, y left): the car's state against the path, K reference
+    points ahead with their curvatures, the M nearest other vehicles; the entries
+    are listed in :mod:`rrtdrive.envs.observation` and by :func:`observation_names`.
 
-    ====================  ==========================================================
-    index                 entry
-    ====================  ==========================================================
-    0                     speed ``v`` (m/s)
-    1                     steering angle applied in the last step (rad, left > 0)
-    2                     cross-track error of the rear axle (m, left of the path > 0)
-    3                     heading error, yaw minus path heading (rad, in [-pi, pi])
-    4                     reference speed ``v_ref`` (m/s): the speed profile here,
-                          capped by a stop line of the speed loop and by the
-                          car-following speed behind a slower car
-                          (:mod:`rrtdrive.envs.reference_speed`)
-    5                     distance to the goal along the path (m, < 0 once past it)
-    6 .. 5 + 2K           next K reference points ``x_1, y_1, ..., x_K, y_K`` (m),
-                          every ``ref_spacing`` metres of arc ahead of the rear
-                          axle's projection (held at the path's end)
-    6 + 2K .. 5 + 3K      path curvature at those points (1/m)
-    6 + 3K .. 5 + 3K + 5M the M nearest other vehicles within ``vehicle_range``
-                          (by distance from the rear axle to their body centre,
-                          nearest first), 5 entries each: present (1, or 0 for an
-                          empty slot, all zeros), body centre ``dx, dy`` (m) and
-                          velocity ``dvx, dvy`` relative to the ego's (m/s)
-    ====================  ==========================================================
-
-    Distances are clipped to +-1000 m and curvatures to +-10 1/m (the Box bounds);
-    :func:`observation_names` lists the entries.
-
-    **Action** (``float32``, ``[-1, 1]^2``): ``[a, d]``. Acceleration ``a * a_max``
-    for ``a >= 0`` and ``a * |a_min|`` below (the speed loop's limits, 2 and -4
-    m/s^2 by default, so 0 means coasting); steering ``d * steer_limit`` with
-    ``steer_limit = atan(L kappa_max)`` (22.7°, the car's curvature limit). With
-    ``residual=True`` the command is the controller's plus the action mapped the
-    same way and multiplied by ``residual_scale``, clipped to the same limits and,
-    for the acceleration, to the speed loop's jerk limits around the last applied
-    command (:meth:`rrtdrive.envs.action.ResidualMixer.accel`);
-    once the controller holds the car at the end of the path, or brakes past it,
-    the residual no longer applies (so a zero action is the plain controller, and
-    no residual can keep the car from coming to rest at the goal).
+    **Action** (``float32``, ``[-1, 1]^2``): ``[a, d]``, an acceleration and a
+    steering angle over the car's command range, or with ``residual=True`` a
+    correction of the controller's command (a zero action is the plain
+    controller); see :mod:`rrtdrive.envs.action`.
 
     **Episode end**: terminated on highway-env's first crash (status
     ``"crashed"``), when the rear axle is more than ``max_cte`` from the path

@@ -6,6 +6,32 @@ ahead with their curvatures, and the M nearest other vehicles
 (:func:`observation_names` lists them; ``docs/gym.md`` describes each).
 :class:`ObservationLayout` holds the sizes and the Box bounds and computes the
 vector from the live scene.
+
+====================  ==========================================================
+index                 entry
+====================  ==========================================================
+0                     speed ``v`` (m/s)
+1                     steering angle applied in the last step (rad, left > 0)
+2                     cross-track error of the rear axle (m, left of the path > 0)
+3                     heading error, yaw minus path heading (rad, in [-pi, pi])
+4                     reference speed ``v_ref`` (m/s): the speed profile here,
+                      capped by a stop line of the speed loop and by the
+                      car-following speed behind a slower car
+                      (:mod:`rrtdrive.envs.reference_speed`)
+5                     distance to the goal along the path (m, < 0 once past it)
+6 .. 5 + 2K           next K reference points ``x_1, y_1, ..., x_K, y_K`` (m),
+                      every ``ref_spacing`` metres of arc ahead of the rear
+                      axle's projection (held at the path's end)
+6 + 2K .. 5 + 3K      path curvature at those points (1/m)
+6 + 3K .. 5 + 3K + 5M the M nearest other vehicles within ``vehicle_range``
+                      (by distance from the rear axle to their body centre,
+                      nearest first), 5 entries each: present (1, or 0 for an
+                      empty slot, all zeros), body centre ``dx, dy`` (m) and
+                      velocity ``dvx, dvy`` relative to the ego's (m/s)
+====================  ==========================================================
+
+Distances are clipped to +-1000 m and curvatures to +-10 1/m (the Box bounds);
+:func:`observation_names` lists the entries' names.
 """
 
 from __future__ import annotations
