@@ -10,7 +10,10 @@ highway-env and pygame load only when an environment is made::
     env = gym.make("rrtdrive/Parking-v0", controller="lqr", residual=True)
 
 ``gym.make("rrtdrive:rrtdrive/Parking-v0")`` imports rrtdrive by itself. The
-environment is :class:`rrtdrive.envs.drive_env.DriveEnv`; the MP4 recorder is
+environment is :class:`rrtdrive.envs.drive_env.DriveEnv`, its options
+:class:`rrtdrive.envs.config.DriveEnvConfig`; the observation, action and reward
+are in :mod:`~rrtdrive.envs.observation`, :mod:`~rrtdrive.envs.action` and
+:mod:`~rrtdrive.envs.reward`. The MP4 recorder is
 :class:`rrtdrive.envs.video.RecordMP4`. See ``docs/gym.md``.
 """
 

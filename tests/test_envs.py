@@ -16,7 +16,10 @@ from gymnasium.utils.env_checker import check_env
 import rrtdrive
 from rrtdrive.controllers import VehicleState, make_controller
 from rrtdrive.envs import ENV_IDS
-from rrtdrive.envs.drive_env import DriveEnv, RewardWeights, observation_names
+from rrtdrive.envs.config import DriveEnvConfig
+from rrtdrive.envs.drive_env import DriveEnv
+from rrtdrive.envs.observation import observation_names
+from rrtdrive.envs.reward import RewardWeights
 from rrtdrive.evaluation import evaluate
 from rrtdrive.sim.runner import run_episode
 from rrtdrive.sim.scenes import SCENARIOS
@@ -277,13 +280,14 @@ def test_direct_mode_drives_to_the_goal_with_controller_commands():
     assert info["episode_seed"] == 2
     ctrl = make_controller("lqr", speed=env._speed)
     ctrl.reset(env.path)
+    lim = env.config.limits
     while True:
         ego = env._ego
         x, y, yaw = ego.rear
         t = info.get("time_s", 0.0)
         accel, steer = ctrl.control(VehicleState(x, y, yaw, ego.speed, ego.steer, t))
         action = np.array(
-            [accel / env._a_max if accel >= 0 else accel / -env._a_min, steer / env._steer_limit],
+            [accel / lim.a_max if accel >= 0 else accel / -lim.a_min, steer / lim.steer_limit],
             dtype=np.float32,
         )
         obs, reward, terminated, truncated, info = env.step(action)
@@ -354,6 +358,15 @@ def test_render_draws_the_scene_and_the_path(tmp_path):
         ({"scenario_options": {"oncoming": 2}, "scenario": "parking"}, "oncoming"),
         ({"speed_options": {"v_max": 0.0}}, "speed.v_max"),
         ({"speed_options": {"vmax": 1.0}}, "speed_options"),
+        ({"speed_options": {"vmax": 1.0}}, "speed_options.vmax: unknown field"),
+        ({"scenario_options": {"colour": 1}}, "scenario_options.colour: unknown option"),
+        ({"scenario_options": {"spot": 999}, "scenario": "parking"},
+         "scenario_options.spot: expected tuple"),
+        ({"scenario_options": {"spot": (9, 9, 9)}, "scenario": "parking"},
+         "scenario_options.spot"),
+        ({"replan_options": {"rate": 1}, "scenario": "overtake-traffic"},
+         "replan_options.rate: unknown field"),
+        ({"residul": True}, "residul: unknown option"),
         ({"controller_options": {"gain": 1.0}}, "controller"),
         ({"seed_range": (5, 5)}, "seed_range"),
         ({"render_mode": "human"}, "render_mode"),
@@ -413,4 +426,109 @@ def test_residual_cannot_add_jerk():
     assert jerk.max() <= 5.0 + 1e-6
     # The residual did move the command: from rest the controller alone speeds up.
     assert accel[0] == pytest.approx(-0.25) and np.any(accel < -0.2)
+    env.close()
+
+
+def test_unknown_option_names_the_key():
+    with pytest.raises(InputError, match="residul: unknown option"):
+        gym.make("rrtdrive/Overtake-v0", residul=True)
+    with pytest.raises(InputError, match="residul"):
+        DriveEnvConfig.from_options("overtake", residul=True)
+
+
+def test_config_is_frozen_validated_and_reaches_the_env():
+    cfg = DriveEnvConfig.from_options("overtake", residual=True, reward={"cte": 100.0})
+    assert cfg.reward == RewardWeights(cte=100.0) and cfg.budget is not None
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        cfg.residual = False  # type: ignore[misc]
+    env = gym.make("rrtdrive/Overtake-v0", config=cfg, n_ref_points=3)
+    u = env.unwrapped
+    assert u.config == cfg.with_options(n_ref_points=3) and u.weights.cte == 100.0
+    assert env.observation_space.shape == (6 + 3 * 3,)
+    env.close()
+    with pytest.raises(InputError, match="scenario"):
+        DriveEnv("parking", config=cfg)
+    with pytest.raises(InputError, match="n_ref_points"):
+        cfg.with_options(n_ref_points=0)
+    assert DriveEnv(config=cfg).config.scenario == "overtake"
+
+
+def test_action_mapping_and_zero_residual_mixer():
+    from rrtdrive.controllers import SpeedConfig
+    from rrtdrive.envs.action import CommandLimits, ResidualMixer, action_command
+
+    lim = CommandLimits(a_min=-4.0, a_max=2.0, steer_limit=0.4)
+    assert action_command([1.0, -1.0], lim) == (2.0, -0.4)
+    assert action_command([-1.0, 5.0], lim) == (-4.0, 0.4)  # clipped to [-1, 1] first
+    assert action_command([0.5, 0.5], lim, scale=0.5) == (0.5, 0.1)
+    with pytest.raises(InputError, match="action"):
+        action_command([0.0], lim)
+
+    class Ctrl:  # the three attributes the mixer reads
+        arrived, s = False, 0.0
+
+        class projector:  # noqa: N801
+            length = 10.0
+
+    mixer = ResidualMixer(lim, SpeedConfig(), 0.05)
+    for c in (0.0, 0.2, 0.25, -1.0, 1.9):
+        got = mixer.command(Ctrl, c, 0.1, 0.0, 0.0)
+        assert got == (c, 0.1)  # a zero residual is the controller's command exactly
+        mixer.applied(got[0])
+    mixer.applied(0.0)
+    a, _ = mixer.command(Ctrl, 0.0, 0.0, 2.0, 0.0)
+    assert a == pytest.approx(SpeedConfig().jerk_max * 0.05)  # the jerk limit binds
+
+
+def test_observation_layout_bounds_and_names():
+    from rrtdrive.envs.observation import KAPPA_CLIP, OBS_CLIP, ObservationLayout
+
+    lay = ObservationLayout(3, 1.0, 2, 50.0, 0.5)
+    assert lay.size == len(lay.names()) == 6 + 9 + 10 == lay.low.shape[0]
+    assert lay.names() == observation_names(3, 2)
+    assert lay.low.dtype == lay.high.dtype == np.float32
+    assert lay.high[1] == np.float32(0.5) and lay.high[2] == OBS_CLIP
+    assert lay.high[6 + 6] == KAPPA_CLIP and lay.high[6 + 9] == 1.0
+    with pytest.raises(InputError, match="n_vehicles"):
+        ObservationLayout(3, 1.0, -1, 50.0, 0.5)
+
+
+def test_following_and_stop_line_speeds():
+    from rrtdrive.controllers import SpeedConfig
+    from rrtdrive.envs.reference_speed import following_speed, stop_line_speed
+    from rrtdrive.sim.replanning import IDMConfig
+
+    idm = IDMConfig()
+    # At the IDM's equilibrium gap behind a 4 m/s lead, its speed is the lead's.
+    s_eq = (idm.min_gap + 4.0 * idm.time_headway) / math.sqrt(1.0 - (4.0 / 11.0) ** idm.delta)
+    assert following_speed(idm, 11.0, s_eq, 4.0) == pytest.approx(4.0, abs=1e-6)
+    assert following_speed(idm, 11.0, 2 * s_eq, 4.0) > 4.0
+    assert following_speed(idm, 11.0, s_eq / 2, 4.0) < 4.0
+    assert following_speed(idm, 11.0, idm.min_gap, 4.0) == 0.0
+    cfg = SpeedConfig(v_max=5.0)
+    assert stop_line_speed(3.0, 0.0, None, cfg) == 3.0
+    assert stop_line_speed(3.0, 9.0, 10.0, cfg) == pytest.approx(min(3.0, math.sqrt(2 * cfg.decel)))
+    assert stop_line_speed(3.0, 10.0, 10.0, cfg) == 0.0
+
+
+def test_traffic_reward_does_not_punish_following():
+    # Issue #15 bug 2: v_ref ignored the car-following cap, so a successful zero-residual
+    # episode that rightly followed the 4 m/s lead returned -1311 (speed term -1471).
+    env = DriveEnv("overtake-traffic", residual=True, replan_options={"wall_limit": False})
+    env.reset(options={"episode_seed": 0})
+    total, speed_term, following = 0.0, 0.0, []
+    while True:
+        mode = env._driver.mode
+        _, reward, terminated, truncated, info = env.step(zero(None))
+        total += reward
+        speed_term += info["reward_terms"]["speed"]
+        if mode == "follow" and env._driver.mode == "follow" and info["time_s"] > 8.0:
+            following.append((info["speed"], info["v_ref"]))
+        if terminated or truncated:
+            break
+    assert info["status"] == "completed" and info["is_success"]
+    assert speed_term > -25.0
+    assert total > 50.0
+    # Behind the lead, v_ref is about its 4 m/s, not the profile's 11 m/s.
+    assert following and all(abs(v - v_ref) < 0.5 for v, v_ref in following)
     env.close()

@@ -1,0 +1,319 @@
+"""Options of :class:`~rrtdrive.envs.drive_env.DriveEnv`: one frozen, validated dataclass.
+
+The keyword arguments of ``gym.make("rrtdrive/...", ...)`` become a
+:class:`DriveEnvConfig` (:meth:`DriveEnvConfig.from_options`); an unknown key or a
+bad value raises :class:`~rrtdrive.types.InputError` naming the field. The config
+also builds what each episode needs from its options: the scenario of a seed, its
+speed-loop settings and the tracking controller.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import inspect
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+import numpy as np
+
+from rrtdrive.controllers import CONTROLLERS, SpeedConfig, TrackingController, make_controller
+from rrtdrive.envs.action import CommandLimits
+from rrtdrive.envs.reward import RewardWeights
+from rrtdrive.planning import PLANNERS
+from rrtdrive.sim.runner import DEFAULT_PLANNER, traffic_speed_config
+from rrtdrive.sim.scenes import SCENARIOS, Scenario, SimConfig, make_scenario
+from rrtdrive.types import Budget, InputError, require_int
+
+__all__ = ["DriveEnvConfig"]
+
+
+def _require_number(name: str, value: Any, *, positive: bool = True) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InputError(f"{name}: expected a number, got {value!r}")
+    if not math.isfinite(value) or (positive and value <= 0):
+        raise InputError(f"{name}: must be a finite number > 0, got {value!r}")
+    return float(value)
+
+
+def _require_mapping(name: str, value: Any) -> dict[str, Any]:
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping):
+        raise InputError(f"{name}: expected a mapping, got {value!r}")
+    return dict(value)
+
+
+def _check_fields(name: str, options: Mapping[str, Any], cls: type) -> None:
+    """Raise naming ``name.key`` for a key that is not an init field of dataclass ``cls``."""
+    known = [f.name for f in fields(cls) if f.init]
+    for key in options:
+        if key not in known:
+            raise InputError(
+                f"{name}.{key}: unknown field of {cls.__name__}; choose from {known}"
+            )
+
+
+#: The arguments of make_scenario that scenario_options may set (all but name, seed).
+_SCENARIO_PARAMS = {
+    k: p for k, p in inspect.signature(make_scenario).parameters.items()
+    if k not in ("name", "seed")
+}
+
+
+@dataclass(frozen=True)
+class DriveEnvConfig:
+    """The options of a :class:`~rrtdrive.envs.drive_env.DriveEnv` (``gym.make`` kwargs).
+
+    Every field is validated on construction; the mappings are copied.
+
+    Parameters
+    ----------
+    scenario : str
+        Scenario name (``parking``, ``overtake``, ``overtake-traffic``).
+    planner : str
+        Registered planner that plans each episode's path.
+    controller : str
+        ``pure-pursuit``, ``stanley`` or ``lqr``: the controller of residual mode.
+    residual : bool
+        The action is a correction added to the controller's command.
+    residual_scale : float
+        Residual mode: fraction of the full command range the action spans.
+    n_ref_points : int
+        Number K of reference points in the observation.
+    ref_spacing : float
+        Arc length between reference points, metres.
+    n_vehicles : int
+        Number M of other vehicles in the observation (0: none, the default).
+    vehicle_range : float
+        Vehicles further than this from the rear axle (m) are not observed.
+    action_repeat : int
+        Simulation steps per environment step (the controller still runs every
+        simulation step; the agent's action is held).
+    simulation_frequency : int
+        Physics and control rate in Hz (>= 15).
+    max_time_s : float, optional
+        Time limit of an episode (default: the scenario's, 120 s parking, 60 s overtake).
+    max_cte : float, optional
+        End the episode when the rear axle is farther than this from the path
+        (metres; ``None``: never).
+    reward : RewardWeights or mapping, optional
+        Reward weights (see :class:`~rrtdrive.envs.reward.RewardWeights`); stored
+        as :class:`~rrtdrive.envs.reward.RewardWeights`.
+    scenario_options : mapping, optional
+        Keyword arguments of :func:`~rrtdrive.sim.scenes.make_scenario` (``jitter``,
+        ``spot``, ``oncoming``; ``density``, ``lead_speed``, ``lead_model`` for
+        ``overtake-traffic``).
+    replan_options : mapping, optional
+        ``overtake-traffic``: :class:`~rrtdrive.sim.replanning.ReplanConfig` fields.
+        The reference path is then re-planned in the loop
+        (:class:`~rrtdrive.sim.replanning.TrafficDriver`, the runner's driver): the
+        observation follows the current reference, the residual is added to the
+        driver's command, progress is counted across reference switches, and the
+        episode ends (``"completed"``) when the overtake is complete.
+    controller_options : mapping, optional
+        Controller gains.
+    speed_options : mapping, optional
+        :class:`~rrtdrive.controllers.SpeedConfig` fields (``v_max`` defaults to the
+        scenario's).
+    budget : Budget, optional
+        Planning budget per episode (``None``: ``Budget()``).
+    seed_range : tuple of int
+        Episode seeds are drawn uniformly from ``[lo, hi)`` with the env's
+        ``np_random`` unless ``reset(options={"episode_seed": n})`` names one.
+
+    Attributes
+    ----------
+    replan : ReplanConfig or None
+        ``overtake-traffic``: the re-planning settings from ``replan_options``.
+    limits : CommandLimits
+        The command range of the action (the speed loop's acceleration limits and
+        the controller's steering limit).
+    max_steer : float
+        The car's steering limit (rad), the bound of the observed steering angle.
+
+    Examples
+    --------
+    >>> cfg = DriveEnvConfig.from_options("overtake", residual=True, reward={"cte": 100.0})
+    >>> cfg.residual, cfg.reward.cte, cfg.sim_config.simulation_frequency
+    (True, 100.0, 20)
+    >>> DriveEnvConfig.from_options("overtake", residul=True)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: residul: unknown option; choose from ['scenario', ...]
+    """
+
+    scenario: str = "parking"
+    planner: str = DEFAULT_PLANNER
+    controller: str = "pure-pursuit"
+    residual: bool = False
+    residual_scale: float = 0.25
+    n_ref_points: int = 10
+    ref_spacing: float = 1.5
+    n_vehicles: int = 0
+    vehicle_range: float = 100.0
+    action_repeat: int = 1
+    simulation_frequency: int = 20
+    max_time_s: float | None = None
+    max_cte: float | None = 10.0
+    reward: RewardWeights | Mapping[str, float] | None = None
+    scenario_options: Mapping[str, Any] | None = None
+    replan_options: Mapping[str, Any] | None = None
+    controller_options: Mapping[str, Any] | None = None
+    speed_options: Mapping[str, Any] | None = None
+    budget: Budget | None = None
+    seed_range: tuple[int, int] = (0, 2**31 - 1)
+    replan: Any = field(init=False, repr=False, compare=False)
+    limits: CommandLimits = field(init=False, repr=False, compare=False)
+    max_steer: float = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        def put(name: str, value: Any) -> None:
+            object.__setattr__(self, name, value)
+
+        scenario, planner, controller = self.scenario, self.planner, self.controller
+        if not isinstance(scenario, str) or scenario not in SCENARIOS:
+            raise InputError(f"scenario: unknown scenario {scenario!r}; choose from {SCENARIOS}")
+        if not isinstance(planner, str) or planner not in PLANNERS:
+            raise InputError(
+                f"planner: unknown planner {planner!r}; choose from {sorted(PLANNERS)}"
+            )
+        if not isinstance(controller, str) or controller not in CONTROLLERS:
+            raise InputError(
+                f"controller: unknown controller {controller!r}; choose from {sorted(CONTROLLERS)}"
+            )
+        if not isinstance(self.residual, bool):
+            raise InputError(f"residual: expected True or False, got {self.residual!r}")
+        put("residual_scale", _require_number("residual_scale", self.residual_scale))
+        put("n_ref_points", require_int("n_ref_points", self.n_ref_points, 1, 200))
+        put("ref_spacing", _require_number("ref_spacing", self.ref_spacing))
+        put("n_vehicles", require_int("n_vehicles", self.n_vehicles, 0, 50))
+        put("vehicle_range", _require_number("vehicle_range", self.vehicle_range))
+        put("action_repeat", require_int("action_repeat", self.action_repeat, 1, 1000))
+        put("simulation_frequency", self.sim_config.simulation_frequency)
+        if self.max_time_s is not None:
+            put("max_time_s", _require_number("max_time_s", self.max_time_s))
+        if self.max_cte is not None:
+            put("max_cte", _require_number("max_cte", self.max_cte))
+        put("reward", RewardWeights.from_any(self.reward))
+        put("scenario_options", _require_mapping("scenario_options", self.scenario_options))
+        put("replan_options", _require_mapping("replan_options", self.replan_options))
+        replan = None
+        if scenario == "overtake-traffic":
+            from rrtdrive.sim.replanning import ReplanConfig
+
+            _check_fields("replan_options", self.replan_options, ReplanConfig)  # type: ignore[arg-type]
+            try:
+                replan = ReplanConfig(**self.replan_options)
+            except TypeError as exc:
+                raise InputError(f"replan_options: {exc}") from None
+        elif self.replan_options:
+            raise InputError("replan_options: only the overtake-traffic scenario re-plans")
+        put("replan", replan)
+        put("controller_options", _require_mapping("controller_options", self.controller_options))
+        put("speed_options", _require_mapping("speed_options", self.speed_options))
+        budget = Budget() if self.budget is None else self.budget
+        if not isinstance(budget, Budget):
+            raise InputError(f"budget: expected a rrtdrive.Budget, got {budget!r}")
+        put("budget", budget)
+        seed_range = self.seed_range
+        if (
+            not isinstance(seed_range, (tuple, list))
+            or len(seed_range) != 2
+            or any(isinstance(v, bool) or not isinstance(v, (int, np.integer)) for v in seed_range)
+            or not 0 <= seed_range[0] < seed_range[1] <= 2**63
+        ):
+            raise InputError(f"seed_range: need integers 0 <= lo < hi <= 2**63, got {seed_range!r}")
+        put("seed_range", (int(seed_range[0]), int(seed_range[1])))
+
+        # Validate the options once, on a scenario and controller of seed 0.
+        probe = self.scenario_for(0)
+        speed = self.speed_for(probe)
+        probe_ctrl = self.controller_for(probe, speed)
+        put("limits", CommandLimits(speed.a_min, speed.a_max, probe_ctrl.steer_limit))
+        put("max_steer", probe.vehicle.max_steer)
+
+    # ------------------------------------------------------------------ construction
+
+    @classmethod
+    def option_names(cls) -> list[str]:
+        """The options (``gym.make`` keyword arguments besides ``render_mode``)."""
+        return [f.name for f in fields(cls) if f.init]
+
+    @classmethod
+    def from_options(cls, scenario: str = "parking", **options: Any) -> DriveEnvConfig:
+        """The config of ``gym.make`` keyword arguments.
+
+        Raises
+        ------
+        InputError
+            For an unknown option (naming it) or a bad value (naming the field).
+        """
+        cls._check_keys(options)
+        return cls(scenario=scenario, **options)
+
+    def with_options(self, **options: Any) -> DriveEnvConfig:
+        """A copy with some options replaced (validated again)."""
+        self._check_keys(options)
+        return dataclasses.replace(self, **options) if options else self
+
+    @classmethod
+    def _check_keys(cls, options: Mapping[str, Any]) -> None:
+        known = cls.option_names()
+        for key in options:
+            if key not in known:
+                raise InputError(f"{key}: unknown option; choose from {known}")
+
+    # ------------------------------------------------------------------ per episode
+
+    @property
+    def sim_config(self) -> SimConfig:
+        """The simulation settings (:class:`~rrtdrive.sim.scenes.SimConfig`)."""
+        return SimConfig(simulation_frequency=self.simulation_frequency)
+
+    def scenario_for(self, seed: int) -> Scenario:
+        """The scenario of episode seed ``seed`` with ``scenario_options``."""
+        options: dict[str, Any] = self.scenario_options  # type: ignore[assignment]
+        for key in options:
+            if key not in _SCENARIO_PARAMS:
+                raise InputError(
+                    f"scenario_options.{key}: unknown option of make_scenario; "
+                    f"choose from {list(_SCENARIO_PARAMS)}"
+                )
+        try:
+            return make_scenario(self.scenario, seed, **options)
+        except InputError as exc:
+            # make_scenario names the argument ("spot: ..."); say where it came from.
+            raise InputError(f"scenario_options.{exc}") from None
+        except TypeError as exc:
+            # A value of the wrong shape failed inside make_scenario: find which one.
+            for key, value in options.items():
+                try:
+                    make_scenario(self.scenario, seed, **{key: value})
+                except TypeError as one:
+                    expected = _SCENARIO_PARAMS[key].annotation
+                    raise InputError(
+                        f"scenario_options.{key}: expected {expected}, got {value!r} ({one})"
+                    ) from None
+                except InputError:
+                    pass
+            raise InputError(f"scenario_options: {exc}") from None
+
+    def speed_for(self, scenario: Scenario) -> SpeedConfig:
+        """The speed loop's settings for ``scenario`` with ``speed_options``."""
+        base = {"v_max": scenario.v_max}
+        if scenario.is_traffic:
+            base = dataclasses.asdict(traffic_speed_config(scenario))
+        _check_fields("speed_options", self.speed_options, SpeedConfig)  # type: ignore[arg-type]
+        options = {**base, **self.speed_options}  # type: ignore[dict-item]
+        try:
+            return SpeedConfig(**options)
+        except TypeError as exc:
+            raise InputError(f"speed_options: {exc}") from None
+
+    def controller_for(self, scenario: Scenario, speed: SpeedConfig) -> TrackingController:
+        """The tracking controller for ``scenario`` with ``controller_options``."""
+        return make_controller(
+            self.controller, vehicle=scenario.vehicle, speed=speed, **self.controller_options
+        )

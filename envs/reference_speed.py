@@ -1,0 +1,81 @@
+"""The reference speed ``v_ref`` the gym env observes and rewards against.
+
+``v_ref`` is the speed the car is actually asked to drive: the speed profile at
+the rear axle's projection, capped by a stop line the speed loop holds (the
+oncoming-traffic gate) and, while the traffic driver follows a slower car, by the
+speed its car-following law (IDM) settles to at the current gap. Without these
+caps a car that rightly follows a 4 m/s lead would be punished for not driving
+the 11 m/s of the profile (issue #15).
+"""
+
+from __future__ import annotations
+
+import math
+
+from rrtdrive.controllers import SpeedConfig
+
+__all__ = ["following_speed", "stop_line_speed"]
+
+#: Bisection steps of :func:`following_speed` (the bracket [0, v0] shrinks 2^-40).
+_BISECT_STEPS = 40
+
+
+def stop_line_speed(v_ref: float, s: float, stop_at: float | None, speed: SpeedConfig) -> float:
+    """``v_ref`` capped by the speed loop's stop line at arc length ``stop_at``.
+
+    As :meth:`~rrtdrive.controllers.SpeedController.control`: 0 within
+    ``stop_distance`` of the line, else at most ``sqrt(2 decel (stop_at - s))``.
+
+    Examples
+    --------
+    >>> cfg = SpeedConfig(v_max=5.0, decel=1.0)
+    >>> stop_line_speed(5.0, 0.0, None, cfg), stop_line_speed(5.0, 10.0, 12.0, cfg)
+    (5.0, 2.0)
+    >>> stop_line_speed(5.0, 12.0, 12.0, cfg)
+    0.0
+    """
+    if stop_at is None:
+        return v_ref
+    d = stop_at - s
+    if d <= speed.stop_distance:
+        return 0.0
+    return min(v_ref, math.sqrt(2.0 * speed.decel * d))
+
+
+def following_speed(idm: object, v0: float, gap: float, v_lead: float) -> float:
+    """The speed at which the car-following law asks for no acceleration.
+
+    The ``v`` in ``[0, v0]`` with ``idm.accel_for(v, v0, gap, v - v_lead) = 0``
+    (found by bisection): ``v_lead`` at the law's equilibrium gap, more when the
+    gap is larger, less when it is smaller; 0 within the standstill gap.
+
+    Parameters
+    ----------
+    idm : IDMConfig
+        The law (:class:`~rrtdrive.sim.replanning.IDMConfig`, its ``accel_for``).
+    v0 : float
+        Desired (free-road) speed, m/s.
+    gap : float
+        Bumper-to-bumper gap to the lead car, m.
+    v_lead : float
+        The lead car's speed along the ego's heading, m/s.
+
+    Examples
+    --------
+    >>> from rrtdrive.sim.replanning import IDMConfig
+    >>> idm = IDMConfig()
+    >>> v = following_speed(idm, 11.0, 10.0, 4.0)  # about the desired gap behind 4 m/s
+    >>> round(v, 2), round(following_speed(idm, 11.0, 500.0, 4.0), 2)
+    (3.97, 10.98)
+    """
+    accel_for = idm.accel_for  # type: ignore[attr-defined]
+    if accel_for(0.0, v0, gap, -v_lead) <= 0.0:
+        return 0.0
+    lo, hi = 0.0, v0
+    for _ in range(_BISECT_STEPS):
+        mid = 0.5 * (lo + hi)
+        if accel_for(mid, v0, gap, mid - v_lead) > 0.0:
+            lo = mid
+        else:
+            hi = mid
+    return lo
