@@ -18,9 +18,10 @@ from typing import Any
 
 from rrtdrive.types import InputError
 
-__all__ = ["add_parser", "run", "config_from_args"]
+__all__ = ["HELP", "add_parser", "run", "config_from_args"]
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+HELP = "run a grid of maps/scenarios x planners x controllers x seeds in parallel"
 
 
 def _int_arg(text: str) -> int:
@@ -42,7 +43,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``bench`` to an argparse subparsers object and return its parser."""
     p = subparsers.add_parser(
         "bench",
-        help="run a grid of maps/scenarios x planners x controllers x seeds in parallel",
+        help=HELP,
         description="Run every combination of maps (planning only) or scenarios (closed loop), "
         "planners, controllers and seeds on local processes or a Ray cluster. One JSON line "
         "per run goes to OUT/runs.jsonl as it finishes; a re-run resumes without redoing "
