@@ -222,6 +222,12 @@ def test_maps_export_creates_the_folder(capsys, tmp_path):
     assert code == 0 and len(list(out.glob("*.json"))) == 4
 
 
+def test_failed_plan_json_has_null_length_and_curvature(capsys):
+    code, out, _ = run(capsys, "plan", "no_path", "--planner", "rrt-connect", "--json", "-")
+    data = json.loads(out)
+    assert code == 1 and data["length_m"] is None and data["max_curvature"] is None
+
+
 def test_bad_obstacle_field_named_by_its_file_path(capsys, tmp_path):
     f = _write_map(tmp_path, obstacles=[{"center": [10, 10], "size": [0, 1]}])
     code, _, err = run(capsys, "plan", f)

@@ -66,8 +66,9 @@ def plan_to_json(result: PlanResult, seed: int, map_name: str) -> dict[str, obje
         "seed": seed,
         "path": np.round(result.path.samples, 6).tolist(),
         "waypoints": np.round(result.path.waypoints, 6).tolist(),
-        "length_m": round(result.path.length, 6),
-        "max_curvature": round(result.path.max_curvature, 6),
+        # A failed plan has no path to measure: null, as in bench rows, not 0.0.
+        "length_m": round(result.path.length, 6) if result.success else None,
+        "max_curvature": round(result.path.max_curvature, 6) if result.success else None,
         "nodes": result.nodes,
         "iterations": result.iterations,
         "planning_time_s": result.planning_time_s,
