@@ -40,3 +40,23 @@ def test_table3_into_elsewhere_leaves_docs_untouched(tmp_path):
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert (tmp_path / "table3.md").is_file() and (tmp_path / "table3.json").is_file()
     assert _docs_digest() == before
+
+
+README = ROOT / "README.md"
+
+
+@pytest.mark.skipif(not README.is_file(), reason="needs the repository's README.md")
+def test_readme_lists_every_disable_component():
+    from rrtdrive.planning.improved import COMPONENTS
+
+    text = README.read_text()
+    for name in COMPONENTS:
+        assert f"`{name}`" in text, name
+
+
+@pytest.mark.skipif(not (ROOT / ".ci" / "run").is_file(), reason="needs .ci/run")
+def test_readme_test_command_is_the_ci_one():
+    ci = (ROOT / ".ci" / "run").read_text()
+    install = re.search(r'pip install --quiet "([^"]+)"', ci).group(1)
+    assert "python -m pytest -q tests" in ci
+    assert f'pip install "{install}" && python -m pytest -q tests' in README.read_text()
