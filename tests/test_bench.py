@@ -452,3 +452,28 @@ def test_bench_help_lists_overtake_traffic(capsys):
     with pytest.raises(SystemExit):
         main(["bench", "--help"])
     assert "overtake-traffic" in capsys.readouterr().out
+
+
+def _drive(x, y, yaw, v, kappa, ds, n):
+    out = []
+    for _ in range(n):
+        x, y, yaw = x + v * ds * np.cos(yaw), y + v * ds * np.sin(yaw), yaw + v * ds * kappa
+        out.append((x, y, yaw))
+    return out, (x, y, yaw)
+
+
+def test_reeds_shepp_curvature_ignores_cusps():
+    from rrtdrive.bench.ompl_planners import _gear_curvature
+
+    # Forward on a left arc (κ = 0.2) to a cusp between samples, then reverse steering
+    # right (yaw keeps turning): the step across the cusp is ~0 m long in the plane.
+    fwd, cusp = _drive(0.0, 0.0, 0.0, 1.0, 0.2, 0.01, 493)
+    fwd = fwd[::10]  # samples 0.1 m apart, the last 0.03 m before the cusp
+    rev, _ = _drive(*cusp, -1.0, -0.2, 0.01, 300)
+    rev = rev[2::10]  # the first 0.03 m after it
+    states = np.array(fwd + rev)
+    d = np.diff(states[:, :2], axis=0)
+    naive = np.abs(np.diff(states[:, 2]) / np.hypot(*d.T)).max()
+    assert naive > 0.5  # what the bench reported as the path's max curvature
+    kappa = _gear_curvature(states)
+    assert np.abs(kappa).max() == pytest.approx(0.2, abs=0.01)

@@ -162,7 +162,7 @@ def metrics_block(data: dict[str, Any]) -> list[str]:
         f"  comfort    max lateral accel {_fmt(data.get('max_lateral_accel'), '.2f', ' m/s²')}, "
         f"max jerk {_fmt(data.get('max_jerk'), '.2f', ' m/s³')}",
     ]
-    if data.get("reached_goal") is not None:
+    if data.get("goal_position_err_m") is not None:
         lines.append(
             f"  goal       position error {_fmt(data.get('goal_position_err_m'), '.3f', ' m')}, "
             f"heading error {_deg(data.get('goal_heading_err_rad'))}"
@@ -175,10 +175,12 @@ def metrics_block(data: dict[str, Any]) -> list[str]:
             f"{_fmt(data.get('replan_time_median_s'), '.3f', ' s')}), "
             f"{data.get('collisions_vehicles', 0)} collisions with cars"
         )
+    planning = data.get("planning_time_s")
     lines.append(
         f"  time       {_fmt(data.get('duration_s'), '.2f', ' s')} simulated in "
-        f"{data.get('steps')} steps; planning {_fmt(data.get('planning_time_s'), '.3f', ' s')}, "
-        f"total {_fmt(data.get('total_time_s'), '.2f', ' s')}"
+        f"{data.get('steps')} steps; "
+        + ("" if planning is None else f"planning {planning:.3f} s, ")
+        + f"total {_fmt(data.get('total_time_s'), '.2f', ' s')}"
     )
     return lines
 
