@@ -311,3 +311,8 @@ def test_simulate_deterministic_prints_a_metrics_block(capsys):
     assert "success" in lines[0]
     for word in ("tracking", "path", "comfort", "time"):
         assert any(line.strip().startswith(word) for line in lines[1:]), out
+
+
+def test_simulate_help_imports_no_simulator():
+    heavy, planning = _modules_after("simulate", "--help")
+    assert heavy == "[]" and planning == "False False"

@@ -37,9 +37,10 @@ DEFAULT_PLAN_TIME_S = 5.0
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Add ``simulate`` to an argparse subparsers object and return its parser."""
-    from rrtdrive.sim.runner import DEFAULT_PLANNER
+    """Add ``simulate`` to an argparse subparsers object and return its parser.
 
+    Imports nothing of the simulator: ``rrtdrive simulate --help`` stays fast.
+    """
     p = subparsers.add_parser(
         "simulate",
         help=HELP,
@@ -51,8 +52,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "scenario", metavar="SCENARIO", help="parking, overtake or overtake-traffic"
     )
     p.add_argument(
-        "--planner", default=DEFAULT_PLANNER, metavar="NAME",
-        help=f"registered planner (default: {DEFAULT_PLANNER})",
+        "--planner", default=None, metavar="NAME",
+        help="registered planner (default: the runner's DEFAULT_PLANNER, "
+        "improved-rrt-connect)",
     )
     p.add_argument(
         "--controller", default="pure-pursuit", metavar="NAME",
@@ -188,7 +190,7 @@ def metrics_block(data: dict[str, Any]) -> list[str]:
 def _run(args: argparse.Namespace) -> int:
     from rrtdrive.evaluation import evaluate
     from rrtdrive.planning import PLANNERS
-    from rrtdrive.sim.runner import EpisodeConfig, run_episode
+    from rrtdrive.sim.runner import DEFAULT_PLANNER, EpisodeConfig, run_episode
     from rrtdrive.sim.scenes import SCENARIOS, SimConfig, make_scenario
     from rrtdrive.types import Budget
 
@@ -201,6 +203,8 @@ def _run(args: argparse.Namespace) -> int:
             f"--controller: unknown controller {args.controller!r}; "
             f"choose from {', '.join(CONTROLLER_NAMES)}"
         )
+    if args.planner is None:
+        args.planner = DEFAULT_PLANNER
     if args.planner not in PLANNERS:
         raise InputError(
             f"--planner: unknown planner {args.planner!r}; "
