@@ -2,7 +2,7 @@
 
 Usage::
 
-    python experiments/ablation.py --runs 20 --out results
+    python experiments/ablation.py --runs 20 --out results --doc docs/ablation.md
 
 Part 1 switches off each component of ``rrtdrive.planning.improved.COMPONENTS``
 in turn (and none) on ``parking_lot``, ``overtake`` and ``narrow_gap``: success,
@@ -86,7 +86,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--maps", default="parking_lot,overtake,narrow_gap")
     parser.add_argument("--out", default="results")
     parser.add_argument("--max-time", type=float, default=5.0)
-    parser.add_argument("--doc", default="docs/ablation.md", help="markdown page for docs/")
+    parser.add_argument(
+        "--doc", default=None, help="also write this markdown page (docs/ablation.md for the docs)"
+    )
     args = parser.parse_args(argv)
     budget = Budget(max_iterations=20_000, max_time_s=args.max_time)
     command = "python experiments/ablation.py " + " ".join(sys.argv[1:] if argv is None else argv)
@@ -123,7 +125,8 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(out / "ablation.json", json.dumps(report, indent=1) + "\n")
     write_text_atomic(out / "ablation.md", "\n".join(md))
-    write_text_atomic(FsPath(args.doc), "\n".join(md))
+    if args.doc:  # docs/ changes only when asked
+        write_text_atomic(FsPath(args.doc), "\n".join(md))
     print("\n".join(md))
     return 0
 

@@ -119,7 +119,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default="results")
     ap.add_argument("--doc", default=None, help="also write this markdown page (with frames)")
-    ap.add_argument("--figures", default="docs/figures")
+    ap.add_argument(
+        "--figures", default=None, help="with --doc: write seed 0's frames here and show them"
+    )
     args = ap.parse_args(argv)
     scenarios = args.scenarios.split(",")
     controllers = args.controllers.split(",")
@@ -180,12 +182,15 @@ def main(argv: list[str] | None = None) -> int:
     write_text_atomic(out / "closed_loop.md", md)
     print(table(summaries))
     if args.doc:
-        figures = FsPath(args.figures)
-        figures.mkdir(parents=True, exist_ok=True)
-        names = save_frames(figures, args.planner, args.frequency, args.oncoming)
-        rel = os.path.relpath(figures, FsPath(args.doc).parent)
-        pics = "".join(f"![{n}]({rel}/{n})\n" for n in names)
-        write_text_atomic(FsPath(args.doc), md + "\n## Frames (seed 0)\n\n" + pics)
+        page = md
+        if args.figures:  # frames only into a folder that was named
+            figures = FsPath(args.figures)
+            figures.mkdir(parents=True, exist_ok=True)
+            names = save_frames(figures, args.planner, args.frequency, args.oncoming)
+            rel = os.path.relpath(figures, FsPath(args.doc).parent)
+            pics = "".join(f"![{n}]({rel}/{n})\n" for n in names)
+            page += "\n## Frames (seed 0)\n\n" + pics
+        write_text_atomic(FsPath(args.doc), page)
     return 0
 
 

@@ -1,6 +1,6 @@
-"""Draw every built-in map to docs/figures/map_<name>.png.
+"""Draw every built-in map to OUT/map_<name>.png.
 
-Usage: python experiments/map_figures.py [--out docs/figures]
+Usage: python experiments/map_figures.py [--out docs/figures]   (default: results/figures)
 """
 
 from __future__ import annotations
@@ -16,7 +16,9 @@ from rrtdrive.plotting import draw_map, save_figure
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--out", default="docs/figures", help="output folder")
+    parser.add_argument(
+        "--out", default="results/figures", help="output folder (docs/figures for the docs)"
+    )
     args = parser.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

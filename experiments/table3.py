@@ -2,7 +2,8 @@
 
 Usage::
 
-    python experiments/table3.py --runs 20 --out results --figures docs/figures
+    python experiments/table3.py --runs 20 --out results \
+        --doc docs/table3.md --figures docs/figures
 
 For each map and planner, seeds 0..runs-1: node count, path length, planning
 time, maximum curvature and success, as mean ± std and 95 % confidence interval
@@ -146,11 +147,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--runs", type=int, default=20, help="seeds per planner and map")
     parser.add_argument("--maps", default="parking_lot,overtake")
     parser.add_argument("--out", default="results")
-    parser.add_argument("--figures", default="docs/figures")
+    parser.add_argument(
+        "--figures", default=None,
+        help="figure folder (default: OUT/figures; docs/figures for the docs)",
+    )
     parser.add_argument("--max-time", type=float, default=10.0, help="time budget per run [s]")
-    parser.add_argument("--doc", default="docs/table3.md", help="markdown page for docs/")
+    parser.add_argument(
+        "--doc", default=None, help="also write this markdown page (docs/table3.md for the docs)"
+    )
     args = parser.parse_args(argv)
-    out, fig_dir = FsPath(args.out), FsPath(args.figures)
+    # Nothing under docs/ changes unless asked: --doc and --figures name those targets.
+    out = FsPath(args.out)
+    fig_dir = FsPath(args.figures) if args.figures else out / "figures"
     out.mkdir(parents=True, exist_ok=True)
     fig_dir.mkdir(parents=True, exist_ok=True)
     budget = Budget(max_iterations=100_000, max_time_s=args.max_time)
@@ -247,10 +255,9 @@ def main(argv: list[str] | None = None) -> int:
         md += [f"![{w}]({FIGURE_LINK}{w})" for w in written] + [""]
     write_text_atomic(out / "table3.json", json.dumps(report, indent=1) + "\n")
     text = "\n".join(md)
-    write_text_atomic(out / "table3.md", text.replace(FIGURE_LINK, "../docs/figures/"))
-    doc = FsPath(args.doc)
-    rel = os.path.relpath(fig_dir, doc.parent).replace(os.sep, "/") + "/"
-    write_text_atomic(doc, text.replace(FIGURE_LINK, rel))
+    for page in (out / "table3.md", *([FsPath(args.doc)] if args.doc else [])):
+        rel = os.path.relpath(fig_dir, page.parent).replace(os.sep, "/") + "/"
+        write_text_atomic(page, text.replace(FIGURE_LINK, rel))
     print(text)
     return 0
 

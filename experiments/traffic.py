@@ -42,7 +42,11 @@ DENSITIES = ("low", "default", "high")
 
 
 def episode_config(args: argparse.Namespace) -> EpisodeConfig:
-    return EpisodeConfig(replan=ReplanConfig(rate_hz=args.rate, predictor=args.predictor))
+    # --deterministic: no wall-clock cuts of a cycle, so an episode depends on its seed alone.
+    replan = ReplanConfig(
+        rate_hz=args.rate, predictor=args.predictor, wall_limit=not args.deterministic
+    )
+    return EpisodeConfig(replan=replan)
 
 
 def run_one(job: tuple) -> dict:
@@ -221,6 +225,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", default="results")
     ap.add_argument("--tag", default="", help="suffix of the output names (variants)")
     ap.add_argument("--figures", default=None, help="write the tight-case video and frames here")
+    ap.add_argument("--deterministic", action="store_true",
+                    help="re-plan without wall-time cuts (as rrtdrive simulate --deterministic)")
     args = ap.parse_args(argv)
     densities = args.densities.split(",")
     for d in densities:

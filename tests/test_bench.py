@@ -391,3 +391,89 @@ def test_ompl_rows_on_the_same_map_and_checker():
         unreachable, np.random.default_rng(0), Budget(max_time_s=0.3)
     )
     assert not fail.success and fail.status.value == "no_path_in_budget"
+
+
+# ----------------------------------------------------------------------------- issue 15
+
+UNGUARDED_SCRIPT = """
+from rrtdrive.bench import BenchConfig, run_bench
+
+cfg = BenchConfig(maps=("overtake",), planners=("rrt-connect",), seeds=3, workers=2,
+                  out={out!r}, plots=False)
+report = run_bench(cfg)
+print("finished", report.errors)
+"""
+
+
+def test_workers_dying_at_startup_are_an_error_not_error_rows(tmp_path):
+    # docs/bench.md's old snippet: no `if __name__ == "__main__":`, so every spawned
+    # worker re-runs the script and dies while bootstrapping.
+    script = tmp_path / "bench_script.py"
+    out = tmp_path / "out"
+    script.write_text(UNGUARDED_SCRIPT.format(out=str(out)))
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          cwd=tmp_path, timeout=300, check=False)
+    assert proc.returncode != 0
+    assert "finished" not in proc.stdout
+    assert "WorkerStartupError" in proc.stderr and "__main__" in proc.stderr
+    runs = out / "runs.jsonl"
+    assert not runs.exists() or runs.read_text().strip() == ""  # no rows for unstarted runs
+    # The guarded script (the corrected doc) then runs every run from scratch.
+    body = UNGUARDED_SCRIPT.format(out=str(out)).strip().splitlines()
+    guarded = "\n".join(body[:1] + ["", 'if __name__ == "__main__":']
+                        + ["    " + line for line in body[1:] if line])
+    script.write_text(guarded + "\n")
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          cwd=tmp_path, timeout=300, check=False)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "finished 0" in proc.stdout
+    assert len(runs.read_text().splitlines()) == 3
+
+
+def test_deterministic_bench_config():
+    cfg = BenchConfig(scenarios=("overtake-traffic",), seeds=1, deterministic=True)
+    (spec,) = expand(cfg)
+    assert spec.deterministic and spec.max_time_s >= 1e6
+    plain = BenchConfig(scenarios=("overtake-traffic",), seeds=1)
+    assert expand(plain)[0].config_hash != spec.config_hash  # a different run
+    with pytest.raises(InputError, match="max_time_s"):
+        BenchConfig(maps=("overtake",), max_time_s=2.0, deterministic=True)
+    with pytest.raises(InputError, match="deterministic"):
+        BenchConfig(maps=("overtake",), deterministic="yes")
+
+
+def test_cli_bench_deterministic_rejects_max_time(capsys):
+    assert main(["bench", "--maps", "overtake", "--deterministic", "--max-time", "2"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--max-time" in err[0]
+
+
+def test_bench_help_lists_overtake_traffic(capsys):
+    with pytest.raises(SystemExit):
+        main(["bench", "--help"])
+    assert "overtake-traffic" in capsys.readouterr().out
+
+
+def _drive(x, y, yaw, v, kappa, ds, n):
+    out = []
+    for _ in range(n):
+        x, y, yaw = x + v * ds * np.cos(yaw), y + v * ds * np.sin(yaw), yaw + v * ds * kappa
+        out.append((x, y, yaw))
+    return out, (x, y, yaw)
+
+
+def test_reeds_shepp_curvature_ignores_cusps():
+    from rrtdrive.bench.ompl_planners import _gear_curvature
+
+    # Forward on a left arc (κ = 0.2) to a cusp between samples, then reverse steering
+    # right (yaw keeps turning): the step across the cusp is ~0 m long in the plane.
+    fwd, cusp = _drive(0.0, 0.0, 0.0, 1.0, 0.2, 0.01, 493)
+    fwd = fwd[::10]  # samples 0.1 m apart, the last 0.03 m before the cusp
+    rev, _ = _drive(*cusp, -1.0, -0.2, 0.01, 300)
+    rev = rev[2::10]  # the first 0.03 m after it
+    states = np.array(fwd + rev)
+    d = np.diff(states[:, :2], axis=0)
+    naive = np.abs(np.diff(states[:, 2]) / np.hypot(*d.T)).max()
+    assert naive > 0.5  # what the bench reported as the path's max curvature
+    kappa = _gear_curvature(states)
+    assert np.abs(kappa).max() == pytest.approx(0.2, abs=0.01)

@@ -169,3 +169,150 @@ def test_console_script_help_and_exit_codes():
                           text=True, check=False)
     assert proc.returncode == 1
     assert "unreachable" in proc.stdout
+
+
+# ----------------------------------------------------------------------------- issue 15
+
+
+def test_map_file_not_utf8_one_line_exit_2(capsys, tmp_path):
+    f = tmp_path / "latin1.json"
+    f.write_bytes('{"name": "Stra\xdfe"}'.encode("latin-1"))
+    code, _, err = run(capsys, "plan", str(f))
+    _one_line_error(code, err, "not a UTF-8 text file")
+
+
+def test_plot_suffix_checked_before_planning(capsys, tmp_path):
+    target = tmp_path / "r.json"
+    code, _, err = run(capsys, "plan", "overtake", "--json", str(target),
+                       "--plot", str(tmp_path / "out.txt"))
+    _one_line_error(code, err, "--plot")
+    assert not target.exists()  # rejected before planning: nothing written
+
+
+def test_disable_names_the_improved_planner(capsys):
+    code, _, err = run(capsys, "plan", "overtake", "--planner", "rrt", "--disable", "prune")
+    _one_line_error(code, err, "--disable")
+    assert "improved" in err and "unexpected keyword" not in err
+
+
+@pytest.mark.parametrize("flag", ["--start", "--goal"])
+def test_negative_pose_after_a_space(capsys, flag):
+    # "-5,44,0" is the value, not an option: the map's bounds check names the pose.
+    code, _, err = run(capsys, "plan", "overtake", flag, "-5,44,0")
+    _one_line_error(code, err, flag.lstrip("-"))
+    assert "expected one argument" not in err
+
+
+def test_negative_pose_accepted(capsys, tmp_path):
+    f = tmp_path / "field.json"
+    f.write_text(json.dumps({
+        "name": "field", "bounds": [-50, -20, 50, 20], "obstacles": [],
+        "start": [0, 0, 0], "goal": [30, 0, 0],
+    }))
+    code, out, _ = run(capsys, "plan", str(f), "--planner", "rrt-connect",
+                       "--start", "-5,-2,0", "--json", "-")
+    data = json.loads(out)
+    assert code == 0 and data["success"]
+    assert np.allclose(data["path"][0][:2], [-5, -2])
+
+
+def test_maps_export_creates_the_folder(capsys, tmp_path):
+    out = tmp_path / "a" / "b"
+    code, _, _ = run(capsys, "maps", "--export", str(out))
+    assert code == 0 and len(list(out.glob("*.json"))) == 4
+
+
+def test_failed_plan_json_has_null_length_and_curvature(capsys):
+    code, out, _ = run(capsys, "plan", "no_path", "--planner", "rrt-connect", "--json", "-")
+    data = json.loads(out)
+    assert code == 1 and data["length_m"] is None and data["max_curvature"] is None
+
+
+def test_bad_obstacle_field_named_by_its_file_path(capsys, tmp_path):
+    f = _write_map(tmp_path, obstacles=[{"center": [10, 10], "size": [0, 1]}])
+    code, _, err = run(capsys, "plan", f)
+    _one_line_error(code, err, "obstacles[0].size")
+    assert "obstacle.size" not in err
+
+
+def test_command_help_lines_match_their_modules():
+    from rrtdrive.bench import cli_bench
+    from rrtdrive.cli import COMMANDS
+    from rrtdrive.sim import cli_simulate
+
+    helps = {c.name: c.help for c in COMMANDS}
+    assert helps["simulate"] == cli_simulate.HELP and helps["bench"] == cli_bench.HELP
+
+
+def _modules_after(*argv):
+    # A fresh interpreter: which heavy libraries did the command import?
+    code = (
+        "import sys\n"
+        "from rrtdrive.cli import main\n"
+        "try:\n"
+        f"    main({list(argv)!r})\n"
+        "except SystemExit:\n"
+        "    pass\n"
+        "heavy = ('highway_env', 'control', 'matplotlib', 'pygame', 'scipy.signal', 'ray')\n"
+        "print(sorted(m for m in heavy if m in sys.modules))\n"
+        "print('rrtdrive.planning' in sys.modules, 'rrtdrive.collision' in sys.modules)\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True)
+    heavy, light = proc.stdout.strip().splitlines()[-2:]
+    return heavy, light
+
+
+@pytest.mark.parametrize("argv", [["--version"], ["--help"], ["maps"]])
+def test_startup_imports_no_planner_or_simulator(argv):
+    heavy, planning = _modules_after(*argv)
+    assert heavy == "[]"
+    assert planning == "False False"  # not even the planners or the collision checker
+
+
+def test_plan_imports_no_simulator_controller_or_plotting(tmp_path):
+    heavy, planning = _modules_after("plan", "overtake", "--planner", "rrt", "--json",
+                                     str(tmp_path / "r.json"))
+    assert heavy == "[]" and planning.startswith("True")
+
+
+def test_simulate_video_stride_zero_rejected(capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["simulate", "parking", "--video", "x.mp4", "--video-stride", "0"])
+    _one_line_error(info.value.code, capsys.readouterr().err, "--video-stride")
+
+
+def test_simulate_unwritable_video_folder_fails_before_the_episode(capsys, tmp_path,
+                                                                  monkeypatch):
+    import time
+
+    import rrtdrive.cli_args as cli_args
+
+    def refuse(target, suffix=None):
+        raise PermissionError(13, "Permission denied")
+
+    # Root ignores mode bits, so a read-only folder is played by the probe file failing.
+    monkeypatch.setattr(cli_args, "temp_beside", refuse)
+    t0 = time.perf_counter()
+    code, _, err = run(capsys, "simulate", "parking", "--video", str(tmp_path / "v.mp4"))
+    _one_line_error(code, err, "--video")
+    assert "Permission denied" in err and time.perf_counter() - t0 < 10.0
+
+
+def test_simulate_deterministic_conflicts_with_plan_time(capsys):
+    code, _, err = run(capsys, "simulate", "parking", "--deterministic", "--plan-time", "2")
+    _one_line_error(code, err, "--plan-time")
+
+
+def test_simulate_deterministic_prints_a_metrics_block(capsys):
+    code, out, _ = run(capsys, "simulate", "overtake", "--seed", "3", "--deterministic")
+    assert code == 0
+    lines = out.splitlines()
+    assert "success" in lines[0]
+    for word in ("tracking", "path", "comfort", "time"):
+        assert any(line.strip().startswith(word) for line in lines[1:]), out
+
+
+def test_simulate_help_imports_no_simulator():
+    heavy, planning = _modules_after("simulate", "--help")
+    assert heavy == "[]" and planning == "False False"

@@ -2,24 +2,52 @@
 
 from __future__ import annotations
 
-from rrtdrive.collision import CheckerConfig, CollisionChecker
+import importlib
+from typing import TYPE_CHECKING
 
 # Importing rrtdrive.envs registers the gymnasium ids (rrtdrive/Parking-v0, ...) with
 # entry-point strings: neither highway-env nor pygame is imported here.
 from rrtdrive.envs import ENV_IDS
-from rrtdrive.maps import BUILTIN_MAPS, Map, Obstacle, builtin_map, load_map, resolve_map, save_map
-from rrtdrive.types import (
-    Budget,
-    InputError,
-    Path,
-    PlanResult,
-    PlanStatus,
-    Pose,
-    Tree,
-    VehicleParams,
-)
+
+if TYPE_CHECKING:
+    from rrtdrive.collision import CheckerConfig, CollisionChecker
+    from rrtdrive.maps import (
+        BUILTIN_MAPS,
+        Map,
+        Obstacle,
+        builtin_map,
+        load_map,
+        resolve_map,
+        save_map,
+    )
+    from rrtdrive.types import (
+        Budget,
+        InputError,
+        Path,
+        PlanResult,
+        PlanStatus,
+        Pose,
+        Tree,
+        VehicleParams,
+    )
 
 __version__ = "0.1.0"
+
+# The other public names load on first use (PEP 562): the collision checker pulls in
+# scipy.ndimage, and `rrtdrive --version` should not pay for it.
+_LAZY: dict[str, str] = {
+    "CheckerConfig": "rrtdrive.collision",
+    "CollisionChecker": "rrtdrive.collision",
+    **dict.fromkeys(
+        ("BUILTIN_MAPS", "Map", "Obstacle", "builtin_map", "load_map", "resolve_map", "save_map"),
+        "rrtdrive.maps",
+    ),
+    **dict.fromkeys(
+        ("Budget", "InputError", "Path", "PlanResult", "PlanStatus", "Pose", "Tree",
+         "VehicleParams"),
+        "rrtdrive.types",
+    ),
+}
 
 __all__ = [
     "BUILTIN_MAPS",
@@ -41,3 +69,16 @@ __all__ = [
     "resolve_map",
     "save_map",
 ]
+
+
+def __getattr__(name: str) -> object:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'rrtdrive' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later look-ups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))

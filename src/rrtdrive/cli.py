@@ -1,25 +1,40 @@
-"""The ``rrtdrive`` command line: ``plan``, ``maps`` and (when available) ``simulate``.
+"""The ``rrtdrive`` command line: ``plan``, ``maps``, ``simulate`` and ``bench``.
 
 Exit codes: 0 success, 1 planning or episode failure, 2 bad input (one line on
 stderr, no traceback).
+
+Start-up is kept short: only the chosen subcommand's parser is built, so
+``rrtdrive --help``, ``--version`` and ``maps`` import no planner, simulator,
+controller or plotting code, and ``plan`` imports plotting only for ``--plot``.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import sys
-from collections.abc import Sequence
-from typing import NoReturn
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any, NoReturn
 
 import numpy as np
 
-from rrtdrive.cli_args import nonneg_int, positive_float, positive_int
+from rrtdrive.cli_args import (
+    join_negative_values,
+    nonneg_int,
+    positive_float,
+    positive_int,
+    validate_output,
+)
 from rrtdrive.types import Budget, InputError, PlanResult, Pose
 
-__all__ = ["main", "plan_to_json", "parse_pose"]
+__all__ = ["COMMANDS", "build_parser", "main", "plan_to_json", "parse_pose"]
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+
+#: Suffixes ``plan --plot`` can write (matplotlib's Agg formats we promise).
+PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -51,8 +66,9 @@ def plan_to_json(result: PlanResult, seed: int, map_name: str) -> dict[str, obje
         "seed": seed,
         "path": np.round(result.path.samples, 6).tolist(),
         "waypoints": np.round(result.path.waypoints, 6).tolist(),
-        "length_m": round(result.path.length, 6),
-        "max_curvature": round(result.path.max_curvature, 6),
+        # A failed plan has no path to measure: null, as in bench rows, not 0.0.
+        "length_m": round(result.path.length, 6) if result.success else None,
+        "max_curvature": round(result.path.max_curvature, 6) if result.success else None,
         "nodes": result.nodes,
         "iterations": result.iterations,
         "planning_time_s": result.planning_time_s,
@@ -73,10 +89,28 @@ def _write_output(target: str, text: str) -> None:
             raise InputError(f"--json: cannot write {target}: {exc.strerror}") from None
 
 
+def _takes_option(factory: Callable[..., object], name: str) -> bool:
+    import inspect
+
+    try:
+        return name in inspect.signature(factory).parameters
+    except (TypeError, ValueError):  # no signature to read: let the factory decide
+        return True
+
+
 def _cmd_plan(args: argparse.Namespace) -> int:
     from rrtdrive.maps import resolve_map
-    from rrtdrive.planning import PlanningProblem, make_planner
+    from rrtdrive.planning import PLANNERS, PlanningProblem, make_planner
 
+    validate_output(args.json, "--json")
+    validate_output(args.plot, "--plot", PLOT_SUFFIXES, allow_stdout=False)
+    if args.disable and args.planner in PLANNERS:
+        takes = sorted(n for n in PLANNERS if _takes_option(PLANNERS[n], "disable"))
+        if args.planner not in takes:
+            raise InputError(
+                f"--disable: applies to the improved planner only ({', '.join(takes)}), "
+                f"not {args.planner!r}"
+            )
     m = resolve_map(args.map)
     start = parse_pose(args.start, "--start") if args.start else None
     goal = parse_pose(args.goal, "--goal") if args.goal else None
@@ -125,40 +159,64 @@ def _cmd_maps(args: argparse.Namespace) -> int:
         )
         if args.export:
             out = Path(args.export)
-            if not out.is_dir():
-                raise InputError(f"--export: {out} is not a folder")
+            try:
+                out.mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                raise InputError(f"--export: cannot create folder {out}: {exc.strerror}") from None
             save_map(m, out / f"{name}.json")
             line += f"  -> {out / (name + '.json')}"
         print(line)
     return EXIT_OK
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser with every subcommand."""
+@dataclass(frozen=True)
+class Command:
+    """A subcommand: its one-line help and where its full parser is built.
+
+    ``module:function`` is imported only when the subcommand is run (or its own
+    ``--help`` is asked for); the function receives the subparsers object.
+    """
+
+    name: str
+    help: str
+    builder: str
+
+
+#: Every subcommand, in ``rrtdrive --help`` order.
+COMMANDS: tuple[Command, ...] = (
+    Command("plan", "plan a path on a map", "rrtdrive.cli:add_plan_parser"),
+    Command("maps", "list the built-in maps", "rrtdrive.cli:add_maps_parser"),
+    Command(
+        "simulate",
+        "plan and drive one closed-loop episode in highway-env",
+        "rrtdrive.sim.cli_simulate:add_parser",
+    ),
+    Command(
+        "bench",
+        "run a grid of maps/scenarios x planners x controllers x seeds in parallel",
+        "rrtdrive.bench.cli_bench:add_parser",
+    ),
+)
+
+
+def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
+    """Add ``plan`` to an argparse subparsers object and return its parser."""
     from rrtdrive.planning import PLANNERS
-
-    parser = _Parser(
-        prog="rrtdrive",
-        description="Plan curvature-bounded car paths with an improved RRT-Connect and drive "
-        "them closed-loop in highway-env.",
-    )
-    from rrtdrive import __version__
-
-    parser.add_argument("--version", action="version", version=f"rrtdrive {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    sub.required = True
 
     default_planner = (
         "improved-rrt-connect" if "improved-rrt-connect" in PLANNERS else "rrt-connect"
     )
     plan = sub.add_parser(
         "plan",
-        help="plan a path on a map",
+        help=_command("plan").help,
         description="Plan a path from the map's start to its goal (or --start/--goal). "
         "Exit 0 when solved, 1 when no path was found, 2 on bad input.",
     )
     plan.add_argument("map", help="a built-in map name (see `rrtdrive maps`) or a map .json file")
-    plan.add_argument("--start", metavar="X,Y,YAW", help="override the start pose (yaw in rad)")
+    plan.add_argument(
+        "--start", metavar="X,Y,YAW",
+        help="override the start pose (yaw in rad); negative values work: --start -5,6,0",
+    )
     plan.add_argument("--goal", metavar="X,Y,YAW", help="override the goal pose (yaw in rad)")
     plan.add_argument(
         "--planner",
@@ -174,7 +232,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--disable",
         action="append",
         metavar="COMPONENT",
-        help="switch off a component of the improved planner (repeatable), for ablation",
+        help="switch off a component of the improved planner (repeatable), for ablation; "
+        "improved-rrt-connect only",
     )
     plan.add_argument(
         "--max-iterations",
@@ -186,35 +245,109 @@ def build_parser() -> argparse.ArgumentParser:
         "--max-time", type=positive_float, default=5.0, help="time budget in seconds (default 5)"
     )
     plan.add_argument("--json", metavar="FILE|-", help="write the result as JSON ('-' for stdout)")
-    plan.add_argument("--plot", metavar="FILE.png", help="draw map, trees and path to a PNG")
+    plan.add_argument(
+        "--plot", metavar="FILE.png",
+        help="draw map, trees and path to a figure (.png, .pdf or .svg)",
+    )
     plan.set_defaults(func=_cmd_plan)
+    return plan
 
+
+def add_maps_parser(sub: Any) -> argparse.ArgumentParser:
+    """Add ``maps`` to an argparse subparsers object and return its parser."""
     maps = sub.add_parser(
         "maps",
-        help="list the built-in maps",
+        help=_command("maps").help,
         description="List the built-in maps; --export writes them as JSON files.",
     )
-    maps.add_argument("--export", metavar="DIR", help="write each built-in map to DIR/NAME.json")
+    maps.add_argument(
+        "--export", metavar="DIR",
+        help="write each built-in map to DIR/NAME.json (DIR is created if missing)",
+    )
     maps.set_defaults(func=_cmd_maps)
+    return maps
 
+
+def _command(name: str) -> Command:
+    return next(c for c in COMMANDS if c.name == name)
+
+
+def _add_full_parser(sub: Any, command: Command) -> argparse.ArgumentParser:
+    module_name, function = command.builder.split(":")
     try:
-        from rrtdrive.sim import cli_simulate
-    except ImportError:
-        cli_simulate = None
-    if cli_simulate is not None:
-        cli_simulate.add_parser(sub)
-    try:
-        from rrtdrive.bench import cli_bench
-    except ImportError:
-        cli_bench = None
-    if cli_bench is not None:
-        cli_bench.add_parser(sub)
-    return parser
+        module = importlib.import_module(module_name)
+    except ImportError as exc:  # e.g. highway-env missing from a partial install
+        raise InputError(f"{command.name}: not available ({exc})") from None
+    return getattr(module, function)(sub)
+
+
+def _build(
+    command: str | None, all_in_full: bool = False
+) -> tuple[argparse.ArgumentParser, argparse.ArgumentParser | None]:
+    parser = _Parser(
+        prog="rrtdrive",
+        description="Plan curvature-bounded car paths with an improved RRT-Connect and drive "
+        "them closed-loop in highway-env.",
+    )
+    from rrtdrive import __version__
+
+    parser.add_argument("--version", action="version", version=f"rrtdrive {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+    chosen = None
+    for c in COMMANDS:
+        if all_in_full or c.name == command:
+            full = _add_full_parser(sub, c)
+            if c.name == command:
+                chosen = full
+        else:
+            # Listed in --help, never parsed: main builds the chosen command in full.
+            sub.add_parser(c.name, help=c.help, add_help=False)
+    return parser, chosen
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The argument parser: every subcommand in full, or only ``command`` in full.
+
+    Parameters
+    ----------
+    command : str, optional
+        Build only this subcommand's arguments (the others are listed in ``--help``
+        but have none); ``None`` builds all of them, which imports every subsystem.
+    """
+    return _build(command, all_in_full=command is None)[0]
+
+
+def _command_in(argv: Sequence[str]) -> str | None:
+    # The top-level parser has only flags without values, so the first word is the command.
+    names = {c.name for c in COMMANDS}
+    for token in argv:
+        if not token.startswith("-"):
+            return token if token in names else None
+    return None
+
+
+def _value_options(parser: argparse.ArgumentParser) -> set[str]:
+    return {
+        opt
+        for action in parser._actions  # argparse offers no public list of its options
+        if action.nargs is None and action.option_strings
+        for opt in action.option_strings
+        if opt.startswith("--")
+    }
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI; return the exit code."""
-    parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    command = _command_in(argv)
+    try:
+        parser, chosen = _build(command)
+    except InputError as exc:
+        print(f"rrtdrive {command}: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    if chosen is not None:
+        argv = join_negative_values(argv, _value_options(chosen))
     args = parser.parse_args(argv)
     try:
         return int(args.func(args))

@@ -4,9 +4,25 @@ from __future__ import annotations
 
 import argparse
 import math
-from collections.abc import Callable
+import os
+import re
+from collections.abc import Callable, Collection, Sequence
+from pathlib import Path
 
-__all__ = ["int_at_least", "nonneg_int", "positive_float", "positive_int"]
+from rrtdrive.atomic import temp_beside
+from rrtdrive.types import InputError
+
+__all__ = [
+    "int_at_least",
+    "join_negative_values",
+    "nonneg_int",
+    "positive_float",
+    "positive_int",
+    "validate_output",
+]
+
+# "-5", "-5,6,0", "-.5,1e-3,0": a value, not an option (argparse only knows plain numbers).
+_NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)[\d.,eE+\-]*$")
 
 
 def int_at_least(low: int, unit: str = "") -> Callable[[str], int]:
@@ -40,3 +56,68 @@ def positive_float(text: str) -> float:
     if not (math.isfinite(value) and value > 0):
         raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
     return value
+
+
+def join_negative_values(argv: Sequence[str], value_options: Collection[str]) -> list[str]:
+    """Glue ``--start -5,6,0`` into ``--start=-5,6,0`` so argparse takes it as the value.
+
+    Only options in ``value_options`` (those that take one value) are joined, and only
+    with a following token that reads as numbers.
+
+    Examples
+    --------
+    >>> join_negative_values(["plan", "m", "--start", "-5,6,0"], {"--start"})
+    ['plan', 'm', '--start=-5,6,0']
+    >>> join_negative_values(["--start", "-x"], {"--start"})
+    ['--start', '-x']
+    """
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        token = argv[i]
+        if token == "--":  # everything after is positional: leave it alone
+            out.extend(argv[i:])
+            break
+        nxt = argv[i + 1] if i + 1 < len(argv) else None
+        if token in value_options and nxt is not None and _NEGATIVE_VALUE.match(nxt):
+            out.append(f"{token}={nxt}")
+            i += 2
+        else:
+            out.append(token)
+            i += 1
+    return out
+
+
+def validate_output(
+    target: str | None, flag: str, suffixes: Collection[str] = (), allow_stdout: bool = True
+) -> None:
+    """Raise :class:`InputError` naming ``flag`` unless ``target`` can be written.
+
+    Checked before any work is done: the suffix (one of ``suffixes`` when given), an
+    existing, writable folder, and that the target is not itself a folder. ``None``
+    (the option not given) and ``"-"`` (stdout, when ``allow_stdout``) pass.
+    """
+    if target is None:
+        return
+    if target == "-":
+        if allow_stdout:
+            return
+        raise InputError(f"{flag}: needs a file name, not '-'")
+    out = Path(target)
+    if suffixes and out.suffix.lower() not in suffixes:
+        want = " or ".join(sorted(s for s in suffixes if s))
+        raise InputError(f"{flag}: the file must end in {want}, got {target!r}")
+    parent = out.parent if str(out.parent) else Path(".")
+    if not parent.is_dir():
+        raise InputError(f"{flag}: folder {str(parent)!r} does not exist")
+    if out.is_dir():
+        raise InputError(f"{flag}: {target!r} is a folder")
+    if out.exists() and not os.access(out, os.W_OK):
+        raise InputError(f"{flag}: cannot write {target!r} (permission denied)")
+    # The folder's mode bits do not tell (root, read-only mounts): try a file beside it.
+    try:
+        temp_beside(out).unlink()
+    except OSError as exc:
+        raise InputError(
+            f"{flag}: cannot write into folder {str(parent)!r}: {exc.strerror}"
+        ) from None

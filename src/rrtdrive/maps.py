@@ -239,7 +239,10 @@ def map_from_json(data: object, vehicle: VehicleParams | None = None) -> Map:
         try:
             obstacles.append(Obstacle(item["center"], item["size"], item.get("yaw", 0.0)))
         except InputError as exc:
-            raise InputError(f"obstacles[{i}].{exc}") from None
+            # The Obstacle names its own fields "obstacle.center" ...; here the file's
+            # path to the field is "obstacles[i].center".
+            field = str(exc).removeprefix("obstacle.")
+            raise InputError(f"obstacles[{i}].{field}") from None
     return Map(
         name=str(data.get("name", "map")),
         bounds=data["bounds"],
@@ -268,6 +271,10 @@ def load_map(path: str | os.PathLike[str], vehicle: VehicleParams | None = None)
         text = FsPath(path).read_text(encoding="utf-8")
     except OSError as exc:
         raise InputError(f"map: cannot read {path}: {exc.strerror}") from None
+    except UnicodeDecodeError as exc:
+        raise InputError(
+            f"map: {path} is not a UTF-8 text file (byte {exc.start}: {exc.reason})"
+        ) from None
     try:
         # NaN/Infinity literals parse to floats so that validation names the field they sit in.
         data = json.loads(text, parse_constant=float)

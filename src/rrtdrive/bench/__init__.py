@@ -18,6 +18,7 @@ Examples
 from __future__ import annotations
 
 from rrtdrive.bench import ompl_planners as _ompl_planners  # noqa: F401  (registers OMPL rows)
+from rrtdrive.bench.backends import WorkerStartupError
 from rrtdrive.bench.core import BenchReport, run_bench
 from rrtdrive.bench.grid import BenchConfig, RunSpec, expand, load_toml
 from rrtdrive.bench.store import ResultStore
@@ -32,4 +33,5 @@ __all__ = [
     "load_toml",
     "run_bench",
     "summarise_rows",
+    "WorkerStartupError",
 ]

@@ -11,6 +11,13 @@ at a time per worker over a pipe) rather than a ``concurrent.futures`` pool:
 a dead worker is then attributed to exactly the run it held, and only that run
 is retried. Workers exit when the main process goes away (their pipe closes),
 so a killed bench leaves no process writing anywhere.
+
+A worker says it is ready before it is given a run. One that dies (or hangs)
+before that never held a run: it is replaced without costing any run an
+attempt, and when workers keep dying at start-up (typically a script that runs
+a bench without ``if __name__ == "__main__":``, which every spawned worker
+re-executes) the bench stops with :class:`WorkerStartupError` instead of
+writing error rows for runs that never started.
 """
 
 from __future__ import annotations
@@ -32,7 +39,14 @@ from rrtdrive.bench.grid import RunSpec
 from rrtdrive.bench.worker import execute_run
 from rrtdrive.types import InputError
 
-__all__ = ["Outcome", "Executor", "LocalBackend", "RayBackend", "default_workers"]
+__all__ = [
+    "Outcome",
+    "Executor",
+    "LocalBackend",
+    "RayBackend",
+    "WorkerStartupError",
+    "default_workers",
+]
 
 logger = logging.getLogger(__name__)
 
@@ -46,6 +60,23 @@ _WORKER_ENV = {
     "MKL_NUM_THREADS": "1",
     "NUMEXPR_NUM_THREADS": "1",
 }
+
+
+#: A worker's first message: it imported everything and waits for runs.
+_READY = "ready"
+
+#: Why spawned workers die before they start, in the error's words.
+_MAIN_GUARD_HINT = (
+    "a script that starts a bench must do so under `if __name__ == \"__main__\":` "
+    "(every worker process re-imports the script; see docs/bench.md)"
+)
+
+
+class WorkerStartupError(RuntimeError):
+    """Local worker processes die (or hang) before they can take a run.
+
+    Nothing ran, so no row was written for the runs still to do.
+    """
 
 
 @dataclass(frozen=True)
@@ -92,6 +123,10 @@ def _worker_main(conn: Connection, executor: Executor) -> None:
     """Body of a local worker process: receive specs, send results, until told to stop."""
     # Ctrl-C goes to the whole terminal process group: let the main process handle it.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        conn.send(_READY)
+    except (BrokenPipeError, OSError):
+        os._exit(0)  # the main process is gone already
     while True:
         try:
             msg = conn.recv()
@@ -116,7 +151,8 @@ class _Slot:
     proc: Any
     conn: Connection
     task: tuple[int, RunSpec, int] | None = None  # (task id, spec, attempt number)
-    started: float = 0.0
+    started: float = 0.0  # of its run, or (until ready) of the process
+    ready: bool = False  # said so: it may be given runs
 
 
 class LocalBackend:
@@ -132,6 +168,14 @@ class LocalBackend:
         Extra attempts of a crashed run.
     run_timeout_s : float
         A run taking longer is killed with its worker and counts as a crashed attempt.
+    startup_timeout_s : float
+        A worker not ready after this long counts as dead at start-up.
+
+    Raises
+    ------
+    WorkerStartupError
+        From :meth:`run`, when more workers than ``workers`` die at start-up in a
+        row (no worker became ready in between).
     """
 
     name = "local"
@@ -142,6 +186,7 @@ class LocalBackend:
         executor: Executor = execute_run,
         retries: int = 1,
         run_timeout_s: float = 600.0,
+        startup_timeout_s: float = 120.0,
     ) -> None:
         if workers < 1:
             raise InputError(f"workers: must be >= 1, got {workers}")
@@ -149,6 +194,7 @@ class LocalBackend:
         self.executor = executor
         self.retries = retries
         self.run_timeout_s = run_timeout_s
+        self.startup_timeout_s = startup_timeout_s
         self._ctx = mp.get_context("spawn")
 
     def describe(self) -> str:
@@ -172,7 +218,7 @@ class LocalBackend:
                 else:
                     os.environ[k] = v
         child.close()
-        return _Slot(proc, parent)
+        return _Slot(proc, parent, started=time.monotonic())
 
     @staticmethod
     def _stop(slot: _Slot, kill: bool = False) -> None:
@@ -209,6 +255,7 @@ class LocalBackend:
         self, queue: deque[tuple[int, RunSpec, int]], slots: list[_Slot]
     ) -> Iterator[Outcome]:
         busy = 0
+        startup_deaths = 0  # in a row, since a worker last became ready
         while queue or busy:
             for slot in slots:
                 busy += self._assign(slot, queue)
@@ -219,7 +266,7 @@ class LocalBackend:
             now = time.monotonic()
             timeouts = [
                 slot.started + self.run_timeout_s - now for slot in slots if slot.task is not None
-            ]
+            ] + [slot.started + self.startup_timeout_s - now for slot in slots if not slot.ready]
             timeout = max(0.0, min(timeouts)) if timeouts else None
             ready = set(wait(waitables, timeout=timeout))
             retired: list[int] = []
@@ -227,10 +274,15 @@ class LocalBackend:
                 failure: str | None = None
                 if slot.conn in ready:
                     try:
-                        task_id, (status, payload) = slot.conn.recv()
+                        msg = slot.conn.recv()
                     except (EOFError, OSError):
                         failure = "worker process died"
                     else:
+                        if msg == _READY:
+                            slot.ready, startup_deaths = True, 0
+                            busy += self._assign(slot, queue)
+                            continue
+                        task_id, (status, payload) = msg
                         task = slot.task
                         assert task is not None and task[0] == task_id
                         slot.task = None
@@ -249,6 +301,8 @@ class LocalBackend:
                     time.monotonic() - slot.started > self.run_timeout_s
                 ):
                     failure = f"run exceeded the run timeout of {self.run_timeout_s:g} s"
+                elif not slot.ready and time.monotonic() - slot.started > self.startup_timeout_s:
+                    failure = f"worker process not ready after {self.startup_timeout_s:g} s"
                 if failure is None:
                     continue
                 if failure == "worker process died":
@@ -260,6 +314,16 @@ class LocalBackend:
                     slot.proc.join(5.0)
                 slot.conn.close()
                 task = slot.task
+                if not slot.ready:
+                    # It never held a run: no attempt is charged, but a pattern is an error.
+                    startup_deaths += 1
+                    logger.warning("bench worker died at start-up: %s", failure)
+                    if startup_deaths > self.workers:
+                        raise WorkerStartupError(
+                            f"bench: {startup_deaths} worker processes in a row died at "
+                            f"start-up before running anything ({failure}); "
+                            f"{_MAIN_GUARD_HINT}"
+                        )
                 if task is None and not queue:
                     retired.append(k)  # an idle worker died and nothing waits: no replacement
                     continue
@@ -276,7 +340,7 @@ class LocalBackend:
     @staticmethod
     def _assign(slot: _Slot, queue: deque[tuple[int, RunSpec, int]]) -> int:
         """Send the next queued run to an idle worker; return 1 if one was sent."""
-        if slot.task is not None or not queue:
+        if slot.task is not None or not slot.ready or not queue:
             return 0
         task = queue.popleft()
         try:

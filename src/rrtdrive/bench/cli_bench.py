@@ -6,7 +6,8 @@ Wiring in ``rrtdrive.cli``::
     cli_bench.add_parser(subparsers)   # sets func=cli_bench.run
 
 Exit codes: 0 when every run of the grid has a result row, 1 when some runs
-ended as error rows (crashed twice), 2 on bad input (one line on stderr).
+ended as error rows (crashed twice) or the worker processes could not start,
+2 on bad input (one line on stderr).
 """
 
 from __future__ import annotations
@@ -18,9 +19,10 @@ from typing import Any
 
 from rrtdrive.types import InputError
 
-__all__ = ["add_parser", "run", "config_from_args"]
+__all__ = ["HELP", "add_parser", "run", "config_from_args"]
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
+HELP = "run a grid of maps/scenarios x planners x controllers x seeds in parallel"
 
 
 def _int_arg(text: str) -> int:
@@ -42,7 +44,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``bench`` to an argparse subparsers object and return its parser."""
     p = subparsers.add_parser(
         "bench",
-        help="run a grid of maps/scenarios x planners x controllers x seeds in parallel",
+        help=HELP,
         description="Run every combination of maps (planning only) or scenarios (closed loop), "
         "planners, controllers and seeds on local processes or a Ray cluster. One JSON line "
         "per run goes to OUT/runs.jsonl as it finishes; a re-run resumes without redoing "
@@ -57,7 +59,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--scenarios", action="append", metavar="NAMES",
-        help="closed-loop scenarios (parking, overtake)",
+        help="closed-loop scenarios (parking, overtake, overtake-traffic)",
     )
     p.add_argument(
         "--planners", action="append", metavar="NAMES",
@@ -99,6 +101,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--retry-errors", action="store_true",
         help="run the grid's stored error rows again (they are replaced)",
     )
+    p.add_argument(
+        "--deterministic", action="store_true",
+        help="wall-clock limits off: planning stops on --max-iterations only and "
+        "overtake-traffic re-plans without cutting cycles at their time budget, so rows "
+        "depend on the seed alone (not with --max-time)",
+    )
     p.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(func=run)
@@ -129,6 +137,10 @@ def config_from_args(args: argparse.Namespace) -> Any:
             values[k] = v
     if args.no_plots:
         values["plots"] = False
+    if getattr(args, "deterministic", False):
+        if args.max_time_s is not None:
+            raise InputError("--max-time: --deterministic turns the planning time limit off")
+        values["deterministic"] = True
     return config_from_mapping(values)
 
 
@@ -142,16 +154,21 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from rrtdrive.bench.backends import WorkerStartupError
     from rrtdrive.bench.core import run_bench
 
     cfg = config_from_args(args)
     command = "rrtdrive " + " ".join(shlex.quote(a) for a in sys.argv[1:])
-    report = run_bench(
-        cfg,
-        progress=None if args.quiet else sys.stderr,
-        retry_errors=args.retry_errors,
-        command=command,
-    )
+    try:
+        report = run_bench(
+            cfg,
+            progress=None if args.quiet else sys.stderr,
+            retry_errors=args.retry_errors,
+            command=command,
+        )
+    except WorkerStartupError as exc:
+        print(f"rrtdrive bench: error: {exc}", file=sys.stderr)
+        return EXIT_FAILED
     print(
         f"bench: {report.total} runs ({report.skipped} resumed, {report.executed} run now, "
         f"{report.errors} errors) on {report.backend}"

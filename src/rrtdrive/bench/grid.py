@@ -55,7 +55,11 @@ CONFIG_KEYS = (
     "retries",
     "ray",
     "plots",
+    "deterministic",
 )
+
+#: The planning time budget of a deterministic bench: never reached (iterations bind).
+NO_WALL_LIMIT_S = 1e6
 
 
 def _names(field_name: str, value: object) -> tuple[str, ...]:
@@ -147,6 +151,11 @@ class BenchConfig:
         ``RAY_ADDRESS``); otherwise the address given to ``ray.init``.
     plots : bool
         Write the summary plots.
+    deterministic : bool
+        Wall-clock limits off: the planning budget is ``max_iterations`` alone
+        (``max_time_s`` becomes :data:`NO_WALL_LIMIT_S`; giving both is an error) and
+        overtake-traffic's re-planning cycles are not cut at their time budget, so a
+        run depends on its seed only, not on the machine's load.
 
     Examples
     --------
@@ -168,6 +177,7 @@ class BenchConfig:
     retries: int = 1
     ray: str | None = None
     plots: bool = True
+    deterministic: bool = False
     map_digests: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
     map_contents: Mapping[str, str | None] = field(
         default_factory=dict, compare=False, repr=False
@@ -183,6 +193,16 @@ class BenchConfig:
         if not isinstance(self.out, (str, os.PathLike)) or not str(self.out):
             raise InputError(f"out: expected a folder name, got {self.out!r}")
         set_(self, "out", str(self.out))
+        if not isinstance(self.deterministic, bool):
+            raise InputError(
+                f"deterministic: expected true or false, got {self.deterministic!r}"
+            )
+        if self.deterministic:
+            if self.max_time_s not in (5.0, NO_WALL_LIMIT_S):  # 5.0: the field's default
+                raise InputError(
+                    "max_time_s: a deterministic bench has no planning time limit; drop it"
+                )
+            set_(self, "max_time_s", NO_WALL_LIMIT_S)
         set_(self, "max_time_s", _positive("max_time_s", self.max_time_s))
         set_(self, "max_iterations", require_int("max_iterations", self.max_iterations, 1))
         set_(self, "run_timeout_s", _positive("run_timeout_s", self.run_timeout_s))
@@ -276,6 +296,8 @@ class RunSpec:
     map_json : str or None
         The map as JSON text for a map file (``None``: ``target`` is a built-in name
         or a scenario).
+    deterministic : bool
+        Re-planning without wall-time cuts (the planning budget is in ``max_time_s``).
     """
 
     kind: str
@@ -287,6 +309,7 @@ class RunSpec:
     max_iterations: int
     config_hash: str
     map_json: str | None = None
+    deterministic: bool = False
 
     @property
     def key(self) -> tuple[str, int]:
@@ -337,6 +360,7 @@ def expand(cfg: BenchConfig) -> list[RunSpec]:
         RunSpec(
             kind, target, p, c, seed, cfg.max_time_s, cfg.max_iterations, h,
             cfg.map_contents.get(target) if kind == "plan" else None,
+            cfg.deterministic,
         )
         for seed in range(cfg.seeds)
         for kind, target, p, c, h in cells
@@ -354,6 +378,8 @@ def _hash_payload(
         "max_time_s": cfg.max_time_s,
         "max_iterations": cfg.max_iterations,
     }
+    if cfg.deterministic:  # only then: earlier benches' run keys stay valid
+        payload["deterministic"] = True
     if kind == "plan":
         # The map's content, not its spelling: a changed file is a new configuration.
         payload["map_digest"] = cfg.map_digests[target]

@@ -22,8 +22,9 @@ of infinity), and every solution is simplified with OMPL's ``simplifySolution`` 
 the remaining budget. The returned path is sampled at most 0.25 m apart: R²
 polylines as the baselines' raw paths (headings along the segments, Menger
 curvature at the corners), Reeds–Shepp curves with their own headings and the
-curvature d(yaw)/ds. A Reeds–Shepp path may reverse; rrtdrive's guarantees are for
-forward paths, so the bench's ``verified`` column will say so.
+curvature d(yaw)/ds within each gear segment (a cusp is not a curvature). A
+Reeds–Shepp path may reverse; rrtdrive's guarantees are for forward paths, so the
+bench's ``verified`` column will say so.
 
 Before the search, as for rrtdrive's planners, an invalid start or goal body
 ends the query; OMPL gets no connectivity proof, so on an unreachable goal it
@@ -284,19 +285,58 @@ def _states(path: Any, r2: bool) -> np.ndarray:
 
 
 def _curve_path(states: np.ndarray, waypoints: np.ndarray) -> Path:
-    """A :class:`Path` from densely interpolated Reeds–Shepp states; κ = d(yaw)/ds."""
+    """A :class:`Path` from densely interpolated Reeds–Shepp states; κ = d(yaw)/ds per gear.
+
+    At a cusp the car stops and reverses: the step across it is short in the plane
+    but turns the yaw of both sides, so d(yaw)/ds there is no curvature of the
+    path. κ is computed within each gear segment (forward or reverse run); the two
+    steps at each gear change take the value of their segment's nearest inner step.
+    """
     xy = states[:, :2]
     keep = np.concatenate([[True], np.hypot(*np.diff(xy, axis=0).T) > 1e-9])
     states = states[keep]
-    ds = np.hypot(*np.diff(states[:, :2], axis=0).T)
-    dyaw = wrap_angle(np.diff(states[:, 2]))
-    kappa = np.zeros(len(states))
-    if len(ds):
-        seg = np.where(ds > 1e-9, dyaw / np.maximum(ds, 1e-12), 0.0)
-        kappa[:-1] = seg
-        kappa[-1] = seg[-1]
+    kappa = _gear_curvature(states)
     samples = np.column_stack([states[:, :3], kappa])
     return Path(samples, waypoints)
+
+
+def _gear_curvature(states: np.ndarray) -> np.ndarray:
+    """Per-sample κ of ``(N, 3)`` ``x, y, yaw`` states, ignoring the steps at cusps.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 1.0, 11)
+    >>> arc = np.column_stack([np.sin(t) * 5, 5 - np.cos(t) * 5, t])  # κ = 0.2, forward
+    >>> bool(np.allclose(_gear_curvature(arc), 0.2, atol=1e-3))
+    True
+    """
+    n = len(states)
+    kappa = np.zeros(n)
+    if n < 2:
+        return kappa
+    d = np.diff(states[:, :2], axis=0)
+    ds = np.hypot(*d.T)
+    dyaw = wrap_angle(np.diff(states[:, 2]))
+    mid_yaw = states[:-1, 2] + 0.5 * dyaw
+    gear = np.where(d[:, 0] * np.cos(mid_yaw) + d[:, 1] * np.sin(mid_yaw) >= 0.0, 1, -1)
+    seg = np.where(ds > 1e-9, dyaw / np.maximum(ds, 1e-12), 0.0)
+    change = np.flatnonzero(gear[1:] != gear[:-1])  # a cusp lies in step i or i + 1
+    if len(change):
+        bad = np.zeros(len(seg), dtype=bool)
+        bad[change] = bad[change + 1] = True
+        good, idx = np.flatnonzero(~bad), np.flatnonzero(bad)
+        if len(good):
+            # Each dropped step takes its nearest kept step's value: the last forward
+            # step looks back, the first reverse step ahead (its own gear run).
+            pos = np.searchsorted(good, idx)
+            left = good[np.clip(pos - 1, 0, len(good) - 1)]
+            right = good[np.clip(pos, 0, len(good) - 1)]
+            seg[idx] = seg[np.where(np.abs(idx - left) <= np.abs(right - idx), left, right)]
+        else:
+            seg[:] = 0.0
+    kappa[:-1] = seg
+    kappa[-1] = seg[-1]
+    return kappa
 
 
 def _register() -> None:

@@ -17,22 +17,33 @@ import sys
 import time
 from typing import Any
 
-from rrtdrive.cli_args import int_at_least, nonneg_int, positive_float
+from rrtdrive.cli_args import (
+    int_at_least,
+    nonneg_int,
+    positive_float,
+    positive_int,
+    validate_output,
+)
 from rrtdrive.types import InputError
 
-__all__ = ["add_parser", "run", "episode_json"]
+__all__ = ["add_parser", "run", "episode_json", "metrics_block", "HELP", "NO_WALL_LIMIT_S"]
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 CONTROLLER_NAMES = ("pure-pursuit", "stanley", "lqr")
+HELP = "plan and drive one closed-loop episode in highway-env"
+#: ``--deterministic``'s planning time budget: never reached, the iteration budget binds.
+NO_WALL_LIMIT_S = 1e6
+DEFAULT_PLAN_TIME_S = 5.0
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
-    """Add ``simulate`` to an argparse subparsers object and return its parser."""
-    from rrtdrive.sim.runner import DEFAULT_PLANNER
+    """Add ``simulate`` to an argparse subparsers object and return its parser.
 
+    Imports nothing of the simulator: ``rrtdrive simulate --help`` stays fast.
+    """
     p = subparsers.add_parser(
         "simulate",
-        help="plan and drive one closed-loop episode in highway-env",
+        help=HELP,
         description="Plan a path for SCENARIO, track it in highway-env with a controller at "
         "the simulation frequency, and report the evaluators' metrics. Exit 0 when the "
         "episode succeeds, 1 when it fails, 2 on bad input.",
@@ -41,8 +52,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "scenario", metavar="SCENARIO", help="parking, overtake or overtake-traffic"
     )
     p.add_argument(
-        "--planner", default=DEFAULT_PLANNER, metavar="NAME",
-        help=f"registered planner (default: {DEFAULT_PLANNER})",
+        "--planner", default=None, metavar="NAME",
+        help="registered planner (default: the runner's DEFAULT_PLANNER, "
+        "improved-rrt-connect)",
     )
     p.add_argument(
         "--controller", default="pure-pursuit", metavar="NAME",
@@ -58,8 +70,14 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="time limit of the drive in seconds (default: the scenario's)",
     )
     p.add_argument(
-        "--plan-time", type=positive_float, default=5.0,
-        help="planning time budget in seconds (default 5)",
+        "--plan-time", type=positive_float, default=None,
+        help=f"planning time budget in seconds (default {DEFAULT_PLAN_TIME_S:g})",
+    )
+    p.add_argument(
+        "--deterministic", action="store_true",
+        help="wall-clock limits off: planning stops on its iteration budget only and "
+        "overtake-traffic's re-planning cycles are not cut at their time budget, so an "
+        "episode depends on its seed alone, not on the machine's speed",
     )
     p.add_argument(
         "--oncoming", type=nonneg_int, default=0,
@@ -92,7 +110,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--json", metavar="FILE|-", help="write the metrics as JSON ('-' for stdout)")
     p.add_argument("--video", metavar="FILE.mp4", help="write a headless MP4 of the episode")
     p.add_argument(
-        "--video-stride", type=nonneg_int, default=1,
+        "--video-stride", type=positive_int, default=1,
         help="simulation steps per video frame (default 1: every step)",
     )
     p.set_defaults(func=run)
@@ -119,25 +137,60 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
 
 
-def _validate_output(target: str | None, suffix: str, flag: str) -> None:
-    from pathlib import Path
+def _fmt(value: Any, spec: str, unit: str = "") -> str:
+    return "n/a" if value is None else f"{value:{spec}}{unit}"
 
-    if target is None or target == "-":
-        return
-    out = Path(target)
-    if suffix and out.suffix.lower() != suffix:
-        raise InputError(f"{flag}: the file must end in {suffix}, got {target!r}")
-    parent = out.parent if str(out.parent) else Path(".")
-    if not parent.is_dir():
-        raise InputError(f"{flag}: folder {str(parent)!r} does not exist")
-    if out.is_dir():
-        raise InputError(f"{flag}: {target!r} is a folder")
+
+def _deg(value: Any) -> str:
+    import math
+
+    return "n/a" if value is None else f"{math.degrees(value):.2f}°"
+
+
+def metrics_block(data: dict[str, Any]) -> list[str]:
+    """The few metrics a person reads first, as indented lines (from ``episode_json``).
+
+    Every metric is in ``--json``; docs/metrics.md defines them.
+    """
+    lines = [
+        f"  {data.get('message', '')}",
+        f"  tracking   cte rms {_fmt(data.get('cte_rms_m'), '.3f', ' m')}, "
+        f"max {_fmt(data.get('cte_max_m'), '.3f', ' m')}; heading error rms "
+        f"{_deg(data.get('heading_err_rms_rad'))}, max {_deg(data.get('heading_err_max_rad'))}",
+        f"  path       {_fmt(data.get('path_length_m'), '.2f', ' m')}, max curvature "
+        f"{_fmt(data.get('path_max_curvature'), '.4f')} (bound "
+        f"{_fmt(data.get('kappa_max'), '.4f')}), executed "
+        f"{_fmt(data.get('executed_max_curvature'), '.4f')} 1/m",
+        f"  comfort    max lateral accel {_fmt(data.get('max_lateral_accel'), '.2f', ' m/s²')}, "
+        f"max jerk {_fmt(data.get('max_jerk'), '.2f', ' m/s³')}",
+    ]
+    if data.get("goal_position_err_m") is not None:
+        lines.append(
+            f"  goal       position error {_fmt(data.get('goal_position_err_m'), '.3f', ' m')}, "
+            f"heading error {_deg(data.get('goal_heading_err_rad'))}"
+        )
+    if data.get("replans") is not None:
+        lines.append(
+            f"  traffic    min distance {_fmt(data.get('min_distance_m'), '.2f', ' m')}, "
+            f"min ttc {_fmt(data.get('ttc_min_s'), '.2f', ' s')}, "
+            f"{data.get('replans')} re-plans (median "
+            f"{_fmt(data.get('replan_time_median_s'), '.3f', ' s')}), "
+            f"{data.get('collisions_vehicles', 0)} collisions with cars"
+        )
+    planning = data.get("planning_time_s")
+    lines.append(
+        f"  time       {_fmt(data.get('duration_s'), '.2f', ' s')} simulated in "
+        f"{data.get('steps')} steps; "
+        + ("" if planning is None else f"planning {planning:.3f} s, ")
+        + f"total {_fmt(data.get('total_time_s'), '.2f', ' s')}"
+    )
+    return lines
 
 
 def _run(args: argparse.Namespace) -> int:
     from rrtdrive.evaluation import evaluate
     from rrtdrive.planning import PLANNERS
-    from rrtdrive.sim.runner import EpisodeConfig, run_episode
+    from rrtdrive.sim.runner import DEFAULT_PLANNER, EpisodeConfig, run_episode
     from rrtdrive.sim.scenes import SCENARIOS, SimConfig, make_scenario
     from rrtdrive.types import Budget
 
@@ -150,6 +203,8 @@ def _run(args: argparse.Namespace) -> int:
             f"--controller: unknown controller {args.controller!r}; "
             f"choose from {', '.join(CONTROLLER_NAMES)}"
         )
+    if args.planner is None:
+        args.planner = DEFAULT_PLANNER
     if args.planner not in PLANNERS:
         raise InputError(
             f"--planner: unknown planner {args.planner!r}; "
@@ -157,9 +212,14 @@ def _run(args: argparse.Namespace) -> int:
         )
     if args.video is not None and args.video == "-":
         raise InputError("--video: needs a file name ending in .mp4")
-    _validate_output(args.video, ".mp4", "--video")
-    _validate_output(args.json, "", "--json")
-    stride = getattr(args, "video_stride", 1) or 1
+    # Before the episode runs: a bad target should not cost a whole episode.
+    validate_output(args.video, "--video", (".mp4",), allow_stdout=False)
+    validate_output(args.json, "--json")
+    deterministic = bool(getattr(args, "deterministic", False))
+    plan_time = getattr(args, "plan_time", None)
+    if deterministic and plan_time is not None:
+        raise InputError("--plan-time: --deterministic turns the planning time limit off")
+    stride = getattr(args, "video_stride", 1)
     traffic_opts = {
         "density": getattr(args, "density", None),
         "lead_speed": getattr(args, "lead_speed", None),
@@ -177,13 +237,17 @@ def _run(args: argparse.Namespace) -> int:
     if args.scenario == "overtake-traffic":
         from rrtdrive.sim.replanning import ReplanConfig
 
+        if deterministic:
+            replan_opts["wall_limit"] = False
         replan = ReplanConfig(**replan_opts)
     elif replan_opts:
         flag = "--replan-rate" if "rate_hz" in replan_opts else "--predictor"
         raise InputError(f"{flag}: only the overtake-traffic scenario re-plans")
     config = EpisodeConfig(
         sim=SimConfig(simulation_frequency=args.frequency),
-        budget=Budget(max_time_s=args.plan_time),
+        budget=Budget(
+            max_time_s=NO_WALL_LIMIT_S if deterministic else plan_time or DEFAULT_PLAN_TIME_S
+        ),
         max_time_s=args.max_time,
         replan=replan,
     )
@@ -193,7 +257,11 @@ def _run(args: argparse.Namespace) -> int:
     episode = run_episode(scenario, args.planner, args.controller, args.seed, config)
     report = evaluate(episode)
     total = time.perf_counter() - t0
-    extra: dict[str, Any] = {"total_time_s": round(total, 6), "oncoming": oncoming}
+    extra: dict[str, Any] = {
+        "total_time_s": round(total, 6),
+        "oncoming": oncoming,
+        "deterministic": deterministic,
+    }
     if scenario.is_traffic:
         extra["density_per_km"] = scenario.density
         extra["lead_speed"] = scenario.lead[1] if scenario.lead else None
@@ -238,4 +306,5 @@ def _run(args: argparse.Namespace) -> int:
             f"cte rms {cte}; {report.steps} steps, {report.duration_s:.2f} s simulated",
             file=sys.stdout,
         )
+        print("\n".join(metrics_block(data)), file=sys.stdout)
     return EXIT_OK if report.success else EXIT_FAILED
