@@ -43,22 +43,18 @@ from rrtdrive.evaluation import EpisodeReport, EvalConfig, evaluate
 from rrtdrive.planning import PLANNERS
 from rrtdrive.sim.drivelog import DriveRecorder
 from rrtdrive.sim.ego import EgoVehicle
-from rrtdrive.sim.runner import (
+from rrtdrive.sim.episode import Episode
+from rrtdrive.sim.runner import EpisodeConfig
+from rrtdrive.sim.scenes import SimConfig, build_env, scenario_rngs
+from rrtdrive.sim.tasks import (
     DEFAULT_PLANNER,
+    SCENARIOS,
     TRAFFIC_PLANNER,
-    Episode,
-    EpisodeConfig,
+    make_scenario,
     plan_scenario,
     traffic_speed_config,
 )
-from rrtdrive.sim.scenes import (
-    SCENARIOS,
-    Scenario,
-    SimConfig,
-    build_env,
-    make_scenario,
-    scenario_rngs,
-)
+from rrtdrive.sim.tasks import Task as Scenario
 from rrtdrive.sim.traffic import OncomingGate, conflict_zone
 from rrtdrive.types import (
     Budget,
@@ -503,7 +499,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         ego = u.vehicle
         if scen.is_traffic:
             # Receding-horizon re-planning in the loop, as in the runner.
-            from rrtdrive.sim.replanning import TrafficDriver
+            from rrtdrive.sim.traffic_driver import TrafficDriver
 
             _, plan_rng, _ = scenario_rngs(seed)
             driver = TrafficDriver(sim, scen, ctrl, speed, self._replan, plan_rng)
@@ -812,7 +808,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         return min(max(proj.s, 0.0), self._projector.length)
 
     def _overtaken(self) -> bool:
-        from rrtdrive.sim.replanning import overtake_complete
+        from rrtdrive.sim.tasks import overtake_complete
 
         driver = self._driver
         lead = driver.lead

@@ -31,21 +31,13 @@ from rrtdrive.planning.spacetime import (
     profile_times,
     traffic_conflicts,
 )
-from rrtdrive.sim.replanning import IDMConfig, ReplanConfig, TrafficDriver, lane_path
-from rrtdrive.sim.runner import (
-    DriveLog,
-    Episode,
-    EpisodeConfig,
-    run_episode,
-    traffic_speed_config,
-)
-from rrtdrive.sim.scenes import (
-    TRAFFIC_DENSITIES,
-    OncomingCar,
-    build_env,
-    make_scenario,
-    scenario_rngs,
-)
+from rrtdrive.sim.episode import DriveLog, Episode
+from rrtdrive.sim.follower import IDMConfig
+from rrtdrive.sim.replanning import ReplanConfig, lane_path
+from rrtdrive.sim.runner import EpisodeConfig, run_episode
+from rrtdrive.sim.scenes import OncomingCar, build_env, scenario_rngs
+from rrtdrive.sim.tasks import TRAFFIC_DENSITIES, make_scenario, traffic_speed_config
+from rrtdrive.sim.traffic_driver import TrafficDriver
 from rrtdrive.types import Budget, InputError, Pose, VehicleParams
 
 V = VehicleParams()

@@ -20,7 +20,7 @@ from rrtdrive.types import InputError, Path, require_positive, wrap_angle
 from rrtdrive.vehicle import footprint_corners
 
 if TYPE_CHECKING:  # pragma: no cover
-    from rrtdrive.sim.runner import Episode
+    from rrtdrive.sim.episode import Episode
 
 __all__ = [
     "EvalConfig",

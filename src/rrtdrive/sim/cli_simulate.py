@@ -28,7 +28,7 @@ CONTROLLER_NAMES = ("pure-pursuit", "stanley", "lqr")
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``simulate`` to an argparse subparsers object and return its parser."""
-    from rrtdrive.sim.runner import DEFAULT_PLANNER
+    from rrtdrive.sim.tasks import DEFAULT_PLANNER
 
     p = subparsers.add_parser(
         "simulate",
@@ -138,7 +138,8 @@ def _run(args: argparse.Namespace) -> int:
     from rrtdrive.evaluation import evaluate
     from rrtdrive.planning import PLANNERS
     from rrtdrive.sim.runner import EpisodeConfig, run_episode
-    from rrtdrive.sim.scenes import SCENARIOS, SimConfig, make_scenario
+    from rrtdrive.sim.scenes import SimConfig
+    from rrtdrive.sim.tasks import SCENARIOS, make_scenario
     from rrtdrive.types import Budget
 
     if args.scenario not in SCENARIOS:
@@ -194,10 +195,7 @@ def _run(args: argparse.Namespace) -> int:
     report = evaluate(episode)
     total = time.perf_counter() - t0
     extra: dict[str, Any] = {"total_time_s": round(total, 6), "oncoming": oncoming}
-    if scenario.is_traffic:
-        extra["density_per_km"] = scenario.density
-        extra["lead_speed"] = scenario.lead[1] if scenario.lead else None
-        extra["lead_model"] = scenario.lead_model
+    extra.update(scenario.describe())
     if args.video:
         if episode.log.steps == 0:
             extra["video"] = None

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from rrtdrive.atomic import publish, temp_beside
-from rrtdrive.sim.runner import Episode
+from rrtdrive.sim.episode import Episode
 from rrtdrive.sim.scenes import SimConfig, build_env
 from rrtdrive.types import InputError, Pose, require_int
 
@@ -46,16 +46,9 @@ def frame_is_blank(frame: np.ndarray, min_std: float = 5.0) -> bool:
 
 
 def _camera_for(episode: Episode) -> tuple[tuple[int, int], float, _Camera]:
-    m = episode.scenario.map
-    if episode.scenario.is_traffic:
-        # A long road: a window that follows the ego (moved every frame).
-        return (960, 320), 8.0, _Camera(0.0, (episode.scenario.lane_y or 44.0) + 2.0)
-    if episode.scenario.name == "overtake":
-        lane_y = episode.scenario.lane_y or (m.bounds[1] + m.bounds[3]) / 2
-        return (960, 320), 9.0, _Camera((m.bounds[0] + m.bounds[2]) / 2, lane_y + 2.0)
-    # The whole map, square.
-    centre = _Camera((m.bounds[0] + m.bounds[2]) / 2, (m.bounds[1] + m.bounds[3]) / 2)
-    return (640, 640), 6.0, centre
+    # The task frames itself (a long road: a window that follows the ego, moved every frame).
+    view = episode.scenario.camera()
+    return view.size, view.scaling, _Camera(*view.centre)
 
 
 def render_frames(
