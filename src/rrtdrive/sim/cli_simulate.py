@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from typing import Any
@@ -119,6 +120,53 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_BAD_INPUT
 
 
+def failure_reason(report: Any, config: Any = None) -> str:
+    """Why an episode that was not a success failed: its status and each unmet condition.
+
+    Parameters
+    ----------
+    report : EpisodeReport
+        From :func:`rrtdrive.evaluation.evaluate`.
+    config : EvalConfig, optional
+        The thresholds the report was evaluated with (default the defaults).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as R
+    >>> failure_reason(R(status="arrived", collision=False, goal_position_err_m=0.1,
+    ...                  goal_heading_err_rad=0.21, stopped=True, passed_lead=None,
+    ...                  back_in_lane=None, reached_goal=False))
+    'arrived but heading error 12.0 deg > 10 deg'
+    """
+    from rrtdrive.evaluation import EvalConfig
+
+    cfg = config or EvalConfig()
+    why = []
+    if report.collision:
+        why.append("a collision")
+    pos, head = report.goal_position_err_m, report.goal_heading_err_rad
+    if pos is not None and pos > cfg.goal_tol_m:
+        why.append(f"position error {pos:.2f} m > {cfg.goal_tol_m:g} m")
+    if head is not None and head > cfg.goal_tol_rad:
+        why.append(
+            f"heading error {math.degrees(head):.1f} deg > {math.degrees(cfg.goal_tol_rad):g} deg"
+        )
+    if pos is None and not report.reached_goal and report.status == "completed":
+        why.append("the overtake is not complete")
+    if not report.stopped:
+        why.append(f"not stopped (above {cfg.stop_speed:g} m/s)")
+    if report.passed_lead is False:
+        why.append("the lead car not passed")
+    if report.back_in_lane is False:
+        why.append("not back in the lane")
+    status = str(report.status)
+    if not why:
+        return status
+    # "arrived but ...": the drive ended as it should, a success condition did not hold.
+    joiner = " but " if status in ("arrived", "completed") else ": "
+    return status + joiner + ", ".join(why)
+
+
 def _validate_output(target: str | None, suffix: str, flag: str) -> None:
     from pathlib import Path
 
@@ -221,7 +269,7 @@ def _run(args: argparse.Namespace) -> int:
         except OSError as exc:
             raise InputError(f"--json: cannot write {args.json}: {exc.strerror}") from None
     if args.json != "-":
-        verdict = "success" if report.success else f"{report.outcome} ({episode.status})"
+        verdict = "success" if report.success else f"{report.outcome} ({failure_reason(report)})"
         cte = "n/a" if report.cte_rms_m is None else f"{report.cte_rms_m:.3f} m"
         print(
             f"{args.scenario} seed {args.seed} {episode.planner}/{args.controller}: {verdict}; "
