@@ -307,6 +307,21 @@ class TrackingController:
         )
         self.speed.retarget(self.profile)
 
+    def hold_at(self, s: float | None) -> None:
+        """Stop at arc length ``s`` and wait there, or drive on when ``None``.
+
+        A stop line for the speed loop (an oncoming-traffic gate); it stays until
+        changed, and :meth:`reset` / :meth:`retarget` clear it.
+        """
+        self.speed.stop_at = s
+
+    def cap_accel(self, accel: float | None) -> None:
+        """Cap the acceleration command at ``accel`` m/s^2 (``None``: no cap).
+
+        For a car-following law; it stays until changed and :meth:`reset` clears it.
+        """
+        self.speed.accel_cap = accel
+
     def _reset_steering(self) -> None:
         """Clear steering-controller state (override when there is some)."""
 

@@ -94,6 +94,15 @@ class Stanley(TrackingController):
         super().reset(path, v_start)
         self.front = PathProjector(front_axle_path(path, self.vehicle.wheelbase))
 
+    def retarget(self, path: Path, v_start: float) -> None:
+        """Switch to ``path`` while driving: the front-axle trace is rebuilt with the rest.
+
+        Without it the steering would keep following the front-axle trace of the
+        first path (issue #15: Stanley crashed in every re-planned overtake).
+        """
+        super().retarget(path, v_start)
+        self.front = PathProjector(front_axle_path(path, self.vehicle.wheelbase))
+
     def steering(self, state: VehicleState, proj: Projection) -> float:
         """Stanley steering angle."""
         L = self.vehicle.wheelbase

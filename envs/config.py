@@ -22,8 +22,14 @@ from rrtdrive.controllers import CONTROLLERS, SpeedConfig, TrackingController, m
 from rrtdrive.envs.action import CommandLimits
 from rrtdrive.envs.reward import RewardWeights
 from rrtdrive.planning import PLANNERS
-from rrtdrive.sim.runner import DEFAULT_PLANNER, traffic_speed_config
-from rrtdrive.sim.scenes import SCENARIOS, Scenario, SimConfig, make_scenario
+from rrtdrive.sim.scenes import SimConfig
+from rrtdrive.sim.tasks import (
+    DEFAULT_PLANNER,
+    SCENARIOS,
+    make_scenario,
+    traffic_speed_config,
+)
+from rrtdrive.sim.tasks import Task as Scenario
 from rrtdrive.types import Budget, InputError, require_int
 
 __all__ = ["DriveEnvConfig"]

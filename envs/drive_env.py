@@ -42,13 +42,10 @@ from rrtdrive.envs.render import SceneRenderer, view_for
 from rrtdrive.envs.reward import RewardWeights, state_terms
 from rrtdrive.evaluation import EpisodeReport, EvalConfig, evaluate
 from rrtdrive.sim.drivelog import DriveRecorder
-from rrtdrive.sim.runner import (
-    TRAFFIC_PLANNER,
-    Episode,
-    EpisodeConfig,
-    plan_scenario,
-)
+from rrtdrive.sim.episode import Episode
+from rrtdrive.sim.runner import EpisodeConfig
 from rrtdrive.sim.scenes import build_env, scenario_rngs
+from rrtdrive.sim.tasks import TRAFFIC_PLANNER, plan_scenario
 from rrtdrive.sim.traffic import OncomingGate, conflict_zone
 from rrtdrive.types import InputError, Path, PlanResult, PlanStatus, require_int, wrap_angle
 
@@ -196,7 +193,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         ego = u.vehicle
         if scen.is_traffic:
             # Receding-horizon re-planning in the loop, as in the runner.
-            from rrtdrive.sim.replanning import TrafficDriver
+            from rrtdrive.sim.traffic_driver import TrafficDriver
 
             _, plan_rng, _ = scenario_rngs(seed)
             driver = TrafficDriver(sim, scen, ctrl, speed, cfg.replan, plan_rng)
@@ -494,7 +491,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         return min(max(proj.s, 0.0), self._projector.length)
 
     def _overtaken(self) -> bool:
-        from rrtdrive.sim.replanning import overtake_complete
+        from rrtdrive.sim.tasks import overtake_complete
 
         driver = self._driver
         lead = driver.lead

@@ -34,8 +34,9 @@ import numpy as np
 
 from rrtdrive.controllers import SpeedConfig, make_controller
 from rrtdrive.maps import write_text_atomic
-from rrtdrive.sim.runner import DEFAULT_PLANNER, drive, run_episode
+from rrtdrive.sim.runner import drive, run_episode
 from rrtdrive.sim.scenes import SimConfig, build_env
+from rrtdrive.sim.tasks import DEFAULT_PLANNER
 
 SCENARIOS = ("parking", "overtake")
 CONTROLLERS = ("pure-pursuit", "stanley", "lqr")

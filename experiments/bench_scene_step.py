@@ -35,8 +35,9 @@ from highway_env.road.road import Road
 
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim import scenes
+from rrtdrive.sim.episode import Episode
 from rrtdrive.sim.replanning import ReplanConfig
-from rrtdrive.sim.runner import Episode, EpisodeConfig, run_episode
+from rrtdrive.sim.runner import EpisodeConfig, run_episode
 from rrtdrive.sim.scenes import SceneRoad
 
 CASES: dict[str, tuple[str, EpisodeConfig | None]] = {

@@ -27,8 +27,10 @@ from pathlib import Path as FsPath
 
 from rrtdrive.evaluation import EpisodeReport, evaluate, summarise
 from rrtdrive.maps import write_text_atomic
-from rrtdrive.sim.runner import DEFAULT_PLANNER, EpisodeConfig, run_episode
-from rrtdrive.sim.scenes import Scenario, SimConfig, make_scenario
+from rrtdrive.sim.runner import EpisodeConfig, run_episode
+from rrtdrive.sim.scenes import SimConfig
+from rrtdrive.sim.tasks import DEFAULT_PLANNER, make_scenario
+from rrtdrive.sim.tasks import Task as Scenario
 from rrtdrive.types import VehicleParams
 
 SCENARIOS = ("parking", "overtake", "overtake-oncoming")

@@ -35,8 +35,8 @@ import numpy as np
 from rrtdrive.evaluation import TTC_LEAST_MIN_S, EpisodeReport, evaluate, summarise
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim.replanning import ReplanConfig
-from rrtdrive.sim.runner import EpisodeConfig, run_episode, traffic_speed_config
-from rrtdrive.sim.scenes import TRAFFIC_DENSITIES, make_scenario
+from rrtdrive.sim.runner import EpisodeConfig, run_episode
+from rrtdrive.sim.tasks import TRAFFIC_DENSITIES, make_scenario, traffic_speed_config
 
 DENSITIES = ("low", "default", "high")
 

@@ -253,3 +253,19 @@ def test_a_following_cap_brakes_at_once():
     ctrl.accel_cap = None
     a = ctrl.control(10.5, 4.8, 0.10)  # released: rises at most jerk_max * dt
     assert a <= -3.5 + cfg.jerk_max * 0.05 + 1e-9
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_retarget_steers_along_the_new_path(name):
+    # Re-planning switches paths while driving: every controller must steer along the
+    # new one (Stanley used to keep its front-axle trace of the first path).
+    xs = np.linspace(0.0, 40.0, 161)
+    first = Path(np.column_stack([xs, 0 * xs, 0 * xs, 0 * xs]), np.zeros((0, 2)))
+    second = Path(np.column_stack([xs, 0 * xs + 3.0, 0 * xs, 0 * xs]), np.zeros((0, 2)))
+    fresh = make_controller(name)
+    fresh.reset(second, v_start=2.0)
+    switched = make_controller(name)
+    switched.reset(first, v_start=2.0)
+    switched.retarget(second, 2.0)
+    state = VehicleState(5.0, 3.0, 0.0, 2.0)
+    assert switched.control(state)[1] == pytest.approx(fresh.control(state)[1], abs=1e-12)

@@ -11,7 +11,8 @@ from highway_env.road.road import Road, RoadNetwork
 from highway_env.vehicle.kinematics import Vehicle
 
 from rrtdrive.sim.ego import EgoVehicle, centre_to_rear_axle, rear_axle_to_centre
-from rrtdrive.sim.scenes import build_env, make_scenario
+from rrtdrive.sim.scenes import build_env
+from rrtdrive.sim.tasks import make_scenario
 from rrtdrive.types import Pose, VehicleParams
 from rrtdrive.vehicle import footprint_corners
 

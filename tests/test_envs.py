@@ -22,7 +22,7 @@ from rrtdrive.envs.observation import observation_names
 from rrtdrive.envs.reward import RewardWeights
 from rrtdrive.evaluation import evaluate
 from rrtdrive.sim.runner import run_episode
-from rrtdrive.sim.scenes import SCENARIOS
+from rrtdrive.sim.tasks import SCENARIOS
 from rrtdrive.sim.video import frame_is_blank
 from rrtdrive.types import InputError
 
@@ -238,7 +238,7 @@ def test_zero_residual_reproduces_plain_controller(scenario, controller):
 
 def test_zero_residual_reproduces_plain_controller_with_oncoming_traffic():
     # The gate that holds the car for a gap in the oncoming lane works as in the runner.
-    from rrtdrive.sim.scenes import make_scenario
+    from rrtdrive.sim.tasks import make_scenario
 
     env = DriveEnv("overtake", controller="lqr", residual=True, scenario_options={"oncoming": 2})
     _, _, steps, info = run_to_end(env, zero, options={"episode_seed": 3})

@@ -14,8 +14,9 @@ from rrtdrive.evaluation import (
     summarise,
     tracking_errors,
 )
-from rrtdrive.sim.runner import DriveLog, Episode, EpisodeConfig
-from rrtdrive.sim.scenes import make_scenario
+from rrtdrive.sim.episode import DriveLog, Episode
+from rrtdrive.sim.runner import EpisodeConfig
+from rrtdrive.sim.tasks import make_scenario
 from rrtdrive.types import InputError, Path, VehicleParams
 
 V = VehicleParams()

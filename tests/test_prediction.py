@@ -11,7 +11,8 @@ from highway_env.vehicle.kinematics import Vehicle
 
 from rrtdrive.planning.spacetime import Prediction
 from rrtdrive.sim.prediction import PREDICTORS, predict, vehicle_states
-from rrtdrive.sim.scenes import OncomingCar, build_env, make_scenario
+from rrtdrive.sim.scenes import OncomingCar, build_env
+from rrtdrive.sim.tasks import make_scenario
 from rrtdrive.types import InputError
 
 

@@ -25,7 +25,8 @@ from rrtdrive.sim.ego import EgoVehicle
 from rrtdrive.sim.extract import attach_ego, map_from_env
 from rrtdrive.sim.replanning import ReplanConfig
 from rrtdrive.sim.runner import EpisodeConfig, drive, run_episode
-from rrtdrive.sim.scenes import SceneRoad, SimConfig, build_env, make_scenario
+from rrtdrive.sim.scenes import SceneRoad, SimConfig, build_env
+from rrtdrive.sim.tasks import make_scenario
 from rrtdrive.types import Budget, InputError, Path
 
 IMPROVED = "improved-rrt-connect"

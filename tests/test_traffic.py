@@ -31,21 +31,13 @@ from rrtdrive.planning.spacetime import (
     profile_times,
     traffic_conflicts,
 )
-from rrtdrive.sim.replanning import IDMConfig, ReplanConfig, TrafficDriver, lane_path
-from rrtdrive.sim.runner import (
-    DriveLog,
-    Episode,
-    EpisodeConfig,
-    run_episode,
-    traffic_speed_config,
-)
-from rrtdrive.sim.scenes import (
-    TRAFFIC_DENSITIES,
-    OncomingCar,
-    build_env,
-    make_scenario,
-    scenario_rngs,
-)
+from rrtdrive.sim.episode import DriveLog, Episode
+from rrtdrive.sim.follower import IDMConfig
+from rrtdrive.sim.replanning import ReplanConfig, lane_path
+from rrtdrive.sim.runner import EpisodeConfig, run_episode
+from rrtdrive.sim.scenes import OncomingCar, build_env, scenario_rngs
+from rrtdrive.sim.tasks import TRAFFIC_DENSITIES, make_scenario, traffic_speed_config
+from rrtdrive.sim.traffic_driver import TrafficDriver
 from rrtdrive.types import Budget, InputError, Pose, VehicleParams
 
 V = VehicleParams()
@@ -481,3 +473,14 @@ def test_video_follows_the_ego_and_draws_the_current_reference(overtaken):
         green = (f[..., 1] > 150) & (f[..., 0] < 120) & (f[..., 2] < 120)
         assert blue.sum() > 100  # the reference ahead is in view
         assert green.sum() > 50  # so is the ego (highway-env's green)
+
+
+@pytest.mark.parametrize("controller", ["pure-pursuit", "stanley", "lqr"])
+def test_every_controller_overtakes_in_traffic_without_a_collision(controller):
+    # Re-planning retargets the controller on every accepted plan: each controller
+    # must follow the new reference (Stanley crashed in every episode before).
+    scen = make_scenario("overtake-traffic", 4, density="low")
+    ep = run_episode(scen, controller=controller, seed=4, config=SEEDED)
+    r = evaluate(ep)
+    assert not r.collision, ep.message
+    assert ep.status == "completed" and r.success, ep.message

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from rrtdrive.sim.runner import run_episode
-from rrtdrive.sim.scenes import make_scenario
+from rrtdrive.sim.tasks import make_scenario
 from rrtdrive.sim.video import frame_is_blank, render_frames, write_video
 from rrtdrive.types import InputError, Path, Pose
 

@@ -238,7 +238,7 @@ class BenchConfig:
         object.__setattr__(self, "map_digests", digests)
         object.__setattr__(self, "map_contents", contents)
         if self.scenarios:
-            from rrtdrive.sim.scenes import SCENARIOS
+            from rrtdrive.sim.tasks import SCENARIOS
 
             for s in self.scenarios:
                 if s not in SCENARIOS:

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
-    from rrtdrive.sim.runner import DriveLog
+    from rrtdrive.sim.episode import DriveLog
 
 __all__ = [
     "executed_curvature",

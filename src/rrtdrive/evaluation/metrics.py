@@ -34,7 +34,7 @@ from rrtdrive.evaluation.traffic_metrics import (
 )
 
 if TYPE_CHECKING:  # pragma: no cover
-    from rrtdrive.sim.runner import Episode
+    from rrtdrive.sim.episode import Episode
 
 __all__ = ["Metric", "MetricContext", "METRICS", "evaluate", "replan_stats"]
 

@@ -21,7 +21,7 @@ from rrtdrive.types import wrap_angle
 from rrtdrive.vehicle import footprint_corners
 
 if TYPE_CHECKING:  # pragma: no cover
-    from rrtdrive.sim.runner import Episode
+    from rrtdrive.sim.episode import Episode
 
 __all__ = ["SuccessTerms", "success_terms", "overtake_complete", "failure_reason"]
 

@@ -25,7 +25,7 @@ from rrtdrive.evaluation.collisions import (
 from rrtdrive.evaluation.tracking import project_s
 
 if TYPE_CHECKING:  # pragma: no cover
-    from rrtdrive.sim.runner import Episode
+    from rrtdrive.sim.episode import Episode
 
 __all__ = [
     "TTC_HORIZON_S",

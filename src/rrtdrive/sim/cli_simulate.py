@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from typing import Any
@@ -142,7 +143,6 @@ def _fmt(value: Any, spec: str, unit: str = "") -> str:
 
 
 def _deg(value: Any) -> str:
-    import math
 
     return "n/a" if value is None else f"{math.degrees(value):.2f}°"
 
@@ -188,10 +188,11 @@ def metrics_block(data: dict[str, Any]) -> list[str]:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from rrtdrive.evaluation import evaluate
+    from rrtdrive.evaluation import evaluate, failure_reason
     from rrtdrive.planning import PLANNERS
-    from rrtdrive.sim.runner import DEFAULT_PLANNER, EpisodeConfig, run_episode
-    from rrtdrive.sim.scenes import SCENARIOS, SimConfig, make_scenario
+    from rrtdrive.sim.runner import EpisodeConfig, run_episode
+    from rrtdrive.sim.scenes import SimConfig
+    from rrtdrive.sim.tasks import DEFAULT_PLANNER, SCENARIOS, make_scenario
     from rrtdrive.types import Budget
 
     if args.scenario not in SCENARIOS:
@@ -262,10 +263,7 @@ def _run(args: argparse.Namespace) -> int:
         "oncoming": oncoming,
         "deterministic": deterministic,
     }
-    if scenario.is_traffic:
-        extra["density_per_km"] = scenario.density
-        extra["lead_speed"] = scenario.lead[1] if scenario.lead else None
-        extra["lead_model"] = scenario.lead_model
+    extra.update(scenario.describe())
     if args.video:
         if episode.log.steps == 0:
             extra["video"] = None
@@ -299,7 +297,7 @@ def _run(args: argparse.Namespace) -> int:
         except OSError as exc:
             raise InputError(f"--json: cannot write {args.json}: {exc.strerror}") from None
     if args.json != "-":
-        verdict = "success" if report.success else f"{report.outcome} ({episode.status})"
+        verdict = "success" if report.success else f"{report.outcome} ({failure_reason(report)})"
         cte = "n/a" if report.cte_rms_m is None else f"{report.cte_rms_m:.3f} m"
         print(
             f"{args.scenario} seed {args.seed} {episode.planner}/{args.controller}: {verdict}; "

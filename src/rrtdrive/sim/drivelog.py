@@ -1,70 +1,21 @@
 """One drive in highway-env, step by step: apply the ego's command, step the road, log.
 
 :class:`DriveRecorder` is the single place where a command is applied to the ego
-and a simulation step is taken and recorded; the closed-loop runner
-(:func:`rrtdrive.sim.runner.drive`), the re-planning loop
-(:func:`rrtdrive.sim.replanning.drive_traffic`) and the gymnasium environment all
-drive through it, so their logs agree to the bit for the same commands.
+and a simulation step is taken and recorded; the episode loop
+(:class:`rrtdrive.sim.loop.EpisodeLoop`, used by every episode kind) and the
+gymnasium environment drive through it, so their logs agree to the bit for the
+same commands. The log it returns is :class:`rrtdrive.sim.episode.DriveLog`.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-__all__ = ["DriveLog", "DriveRecorder"]
+from rrtdrive.sim.episode import DriveLog
 
-
-@dataclass(frozen=True, eq=False)
-class DriveLog:
-    """The logged trajectory of one drive.
-
-    Attributes
-    ----------
-    dt : float
-        Simulation step in seconds.
-    t : numpy.ndarray
-        Times, shape ``(N + 1,)``, starting at 0.
-    states : numpy.ndarray
-        Rear-axle ``[x, y, yaw, speed]`` at each time, ``(N + 1, 4)``.
-    controls : numpy.ndarray
-        Applied ``[acceleration, steering]`` over each step, ``(N, 2)``.
-    crashed : numpy.ndarray
-        highway-env's ``crashed`` flag of the ego at each time, ``(N + 1,)``.
-    others : numpy.ndarray
-        Body-centre ``[x, y, heading, speed]`` of every other vehicle, ``(N + 1, K, 4)``.
-    other_sizes : numpy.ndarray
-        ``[length, width]`` of every other vehicle, ``(K, 2)``.
-    arrived : bool
-        The controller stopped the car at the end of the path.
-    wall_time_s : float
-        Wall time of the loop.
-    """
-
-    dt: float
-    t: np.ndarray
-    states: np.ndarray
-    controls: np.ndarray
-    crashed: np.ndarray
-    others: np.ndarray
-    other_sizes: np.ndarray
-    arrived: bool
-    wall_time_s: float
-
-    @property
-    def steps(self) -> int:
-        """Number of simulation steps."""
-        return len(self.controls)
-
-    @classmethod
-    def empty(cls, dt: float) -> DriveLog:
-        """A drive that never started."""
-        return cls(
-            dt, np.zeros(0), np.zeros((0, 4)), np.zeros((0, 2)), np.zeros(0, dtype=bool),
-            np.zeros((0, 0, 4)), np.zeros((0, 2)), False, 0.0,
-        )
+__all__ = ["DriveRecorder"]
 
 
 class DriveRecorder:

@@ -19,9 +19,9 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
+from rrtdrive.sim.episode import Episode
 from rrtdrive.sim.mp4 import Mp4Writer
 from rrtdrive.sim.render import TRACE_COLOR, SceneCanvas
-from rrtdrive.sim.runner import Episode
 from rrtdrive.sim.scenes import SimConfig, build_env
 from rrtdrive.types import InputError, Pose, require_int
 
@@ -44,16 +44,9 @@ def frame_is_blank(frame: np.ndarray, min_std: float = 5.0) -> bool:
 
 
 def _camera_for(episode: Episode) -> tuple[tuple[int, int], float, _Camera]:
-    m = episode.scenario.map
-    if episode.scenario.is_traffic:
-        # A long road: a window that follows the ego (moved every frame).
-        return (960, 320), 8.0, _Camera(0.0, (episode.scenario.lane_y or 44.0) + 2.0)
-    if episode.scenario.name == "overtake":
-        lane_y = episode.scenario.lane_y or (m.bounds[1] + m.bounds[3]) / 2
-        return (960, 320), 9.0, _Camera((m.bounds[0] + m.bounds[2]) / 2, lane_y + 2.0)
-    # The whole map, square.
-    centre = _Camera((m.bounds[0] + m.bounds[2]) / 2, (m.bounds[1] + m.bounds[3]) / 2)
-    return (640, 640), 6.0, centre
+    # The task frames itself (a long road: a window that follows the ego, moved every frame).
+    view = episode.scenario.camera()
+    return view.size, view.scaling, _Camera(*view.centre)
 
 
 def frame_indices(episode: Episode, stride: int = 1) -> list[int]:
@@ -133,7 +126,7 @@ def render_frames(
         vehicle = episode.scenario.vehicle
         path_xy = episode.path.xy
         traffic = episode.traffic
-        follow = episode.scenario.is_traffic
+        follow = episode.scenario.camera().follow
         cte = (
             tracking_errors(episode.path, log.states[:, :3])[0]
             if len(episode.path) >= 2 else np.zeros(len(log.states))

@@ -1,0 +1,182 @@
+"""An episode as plain data: what was asked, what was planned, what happened.
+
+:class:`Episode` and its :class:`DriveLog` are what the evaluators
+(:mod:`rrtdrive.evaluation`) and the video (:mod:`rrtdrive.sim.video`) read;
+nothing here imports highway-env. :class:`EpisodeStatus` is the one list of
+episode outcomes and :func:`end_message` the one place their messages are written.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:  # pragma: no cover
+    from rrtdrive.sim.replanning import TrafficLog
+    from rrtdrive.sim.runner import EpisodeConfig
+    from rrtdrive.sim.tasks import Task
+    from rrtdrive.types import Path, PlanResult
+
+__all__ = [
+    "EpisodeStatus",
+    "DriveLog",
+    "Episode",
+    "end_message",
+    "plan_failed_message",
+    "SHORT_PATH_MESSAGE",
+]
+
+
+class EpisodeStatus(enum.StrEnum):
+    """How an episode ended (the values are the JSON strings).
+
+    ``ARRIVED``: stopped at the end of the tracked path; ``COMPLETED``: the
+    ``overtake-traffic`` overtake is done; ``CRASHED``: highway-env reported a crash;
+    ``TIMEOUT``: neither within the time limit; ``PLAN_FAILED``: nothing to drive.
+    """
+
+    ARRIVED = "arrived"
+    COMPLETED = "completed"
+    CRASHED = "crashed"
+    TIMEOUT = "timeout"
+    PLAN_FAILED = "plan_failed"
+
+
+#: The message of an episode that has fewer than two path samples to track.
+SHORT_PATH_MESSAGE = "the path has fewer than two samples"
+
+
+def plan_failed_message(status: str, detail: str) -> str:
+    """The message of an episode whose planner failed with ``status`` (and ``detail``)."""
+    return f"planning failed ({status}): {detail}"
+
+
+def end_message(
+    status: EpisodeStatus, t_end: float, max_time_s: float, success: EpisodeStatus
+) -> str:
+    """The message of an episode that ended with ``status`` at ``t_end``.
+
+    Parameters
+    ----------
+    status : EpisodeStatus
+        How it ended (not ``PLAN_FAILED``).
+    t_end : float
+        Simulation time of the last step, seconds.
+    max_time_s : float
+        The time limit.
+    success : EpisodeStatus
+        The task's success status (``ARRIVED`` or ``COMPLETED``): it words the timeout.
+
+    Examples
+    --------
+    >>> end_message(EpisodeStatus.CRASHED, 3.0, 60.0, EpisodeStatus.ARRIVED)
+    'highway-env reported a crash at t = 3.00 s'
+    """
+    if status is EpisodeStatus.CRASHED:
+        return f"highway-env reported a crash at t = {t_end:.2f} s"
+    if status is EpisodeStatus.ARRIVED:
+        return f"stopped at the end of the path at t = {t_end:.2f} s"
+    if status is EpisodeStatus.COMPLETED:
+        return f"overtake complete at t = {t_end:.2f} s"
+    if success is EpisodeStatus.COMPLETED:
+        return f"no overtake within {max_time_s:g} s (followed the lead car)"
+    return f"not stopped at the goal within {max_time_s:g} s"
+
+
+@dataclass(frozen=True, eq=False)
+class DriveLog:
+    """The logged trajectory of one drive.
+
+    Attributes
+    ----------
+    dt : float
+        Simulation step in seconds.
+    t : numpy.ndarray
+        Times, shape ``(N + 1,)``, starting at 0.
+    states : numpy.ndarray
+        Rear-axle ``[x, y, yaw, speed]`` at each time, ``(N + 1, 4)``.
+    controls : numpy.ndarray
+        Applied ``[acceleration, steering]`` over each step, ``(N, 2)``.
+    crashed : numpy.ndarray
+        highway-env's ``crashed`` flag of the ego at each time, ``(N + 1,)``.
+    others : numpy.ndarray
+        Body-centre ``[x, y, heading, speed]`` of every other vehicle, ``(N + 1, K, 4)``.
+    other_sizes : numpy.ndarray
+        ``[length, width]`` of every other vehicle, ``(K, 2)``.
+    arrived : bool
+        The task's success rule held at the end (the controller stopped the car at
+        the end of the path; ``overtake-traffic``: the overtake was complete).
+    wall_time_s : float
+        Wall time of the loop (``overtake-traffic``: without the re-planning cycles).
+    """
+
+    dt: float
+    t: np.ndarray
+    states: np.ndarray
+    controls: np.ndarray
+    crashed: np.ndarray
+    others: np.ndarray
+    other_sizes: np.ndarray
+    arrived: bool
+    wall_time_s: float
+
+    @property
+    def steps(self) -> int:
+        """Number of simulation steps."""
+        return len(self.controls)
+
+    @classmethod
+    def empty(cls, dt: float) -> DriveLog:
+        """A drive that never started."""
+        return cls(
+            dt, np.zeros(0), np.zeros((0, 4)), np.zeros((0, 2)), np.zeros(0, dtype=bool),
+            np.zeros((0, 0, 4)), np.zeros((0, 2)), False, 0.0,
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Episode:
+    """One closed-loop episode: what was asked, what was planned, what happened.
+
+    Attributes
+    ----------
+    scenario : Task
+        The task (map with start and goal, seed, success terms); one of the classes
+        of :mod:`rrtdrive.sim.tasks`.
+    planner, controller : str
+        Names.
+    seed : int
+        Episode seed.
+    plan : PlanResult or None
+        The planner's result (``None`` when a path was given directly).
+    path : Path
+        The path that was tracked (empty when planning failed).
+    log : DriveLog
+        The trajectory.
+    status : EpisodeStatus
+        ``arrived``, ``crashed``, ``timeout`` or ``plan_failed``; for
+        ``overtake-traffic`` ``completed`` (the overtake is done), ``crashed``
+        or ``timeout``. Compares equal to its string value.
+    message : str
+        Human-readable detail.
+    config : EpisodeConfig
+        The resolved configuration.
+    traffic : TrafficLog or None
+        ``overtake-traffic``: the re-planner's log (cycles, references, modes); the
+        ``path`` is then the reference actually tracked, stitched from the plans.
+    """
+
+    scenario: Task
+    planner: str
+    controller: str
+    seed: int
+    plan: PlanResult | None
+    path: Path
+    log: DriveLog
+    status: EpisodeStatus
+    message: str
+    config: EpisodeConfig
+    traffic: TrafficLog | None = None

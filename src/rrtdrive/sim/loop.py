@@ -1,0 +1,257 @@
+"""The one episode loop: a driver's command each step, highway-env's physics, the task's end rule.
+
+Every episode - a planned path tracked in parking or overtake, the receding-horizon
+re-planner of ``overtake-traffic``, and (next) the gymnasium environment - runs
+through :class:`EpisodeLoop`. One step:
+
+1. the caller passes the command ``(acceleration, steering)`` (usually
+   ``driver.command(loop.t)``; the gym env may add a residual to it);
+2. :class:`~rrtdrive.sim.drivelog.DriveRecorder` applies it to the ego, lets every
+   other vehicle act, steps the road by ``dt`` and logs the result;
+3. the loop ends the episode at highway-env's first ``crashed`` (when
+   ``stop_on_crash``), when the end rule's :meth:`EndRule.reached` holds, or at the
+   time limit.
+
+API (for the gym env)::
+
+    loop = EpisodeLoop(env, driver, task, max_time_s, stop_on_crash=True)
+    driver.start()                      # once, before the first command
+    while not loop.done:
+        accel, steer = driver.command(loop.t)
+        loop.step(accel, steer)         # -> EpisodeStatus or None while running
+    loop.status, loop.message, loop.log()
+
+or ``loop.run()``, which starts the driver and does exactly that. ``loop.t`` is the
+simulation time (the sum of the ``dt`` steps), ``loop.steps`` the step count,
+``loop.crashed`` whether the ego crashed at the last step, ``loop.reached``
+whether the end rule held. A driver is anything with ``start()`` and
+``command(t)`` (:class:`Driver`); :class:`PathTracker` is a tracking controller on a
+fixed path (with the optional oncoming-traffic gate), the traffic re-planner
+(:class:`rrtdrive.sim.traffic_driver.TrafficDriver`) is another. An end rule
+(:class:`EndRule`) is a task of :mod:`rrtdrive.sim.tasks`, or
+:data:`STOP_AT_PATH_END` for a bare environment.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from typing import Any, Protocol, runtime_checkable
+
+from rrtdrive.controllers import TrackingController, VehicleState
+from rrtdrive.sim.drivelog import DriveRecorder
+from rrtdrive.sim.ego import EgoVehicle
+from rrtdrive.sim.episode import DriveLog, EpisodeStatus, end_message
+from rrtdrive.sim.traffic import OncomingGate
+from rrtdrive.types import InputError, Path, require_finite
+
+__all__ = [
+    "Driver",
+    "EndRule",
+    "PathTracker",
+    "StopAtPathEnd",
+    "STOP_AT_PATH_END",
+    "EpisodeLoop",
+]
+
+
+@runtime_checkable
+class Driver(Protocol):
+    """Produces the ego's command once per simulation step."""
+
+    def start(self) -> None:
+        """Get ready to drive (called once, before the first :meth:`command`)."""
+        ...
+
+    def command(self, t: float) -> tuple[float, float]:
+        """``(acceleration m/s^2, steering rad)`` for the step starting at time ``t``."""
+        ...
+
+
+class EndRule(Protocol):
+    """When an episode has succeeded (a task of :mod:`rrtdrive.sim.tasks` is one)."""
+
+    @property
+    def success_status(self) -> EpisodeStatus:
+        """The status of an episode that ends by :meth:`reached`."""
+        ...
+
+    def reached(self, ego: EgoVehicle, driver: Any) -> bool:
+        """True when the episode is over because the task is done (checked each step)."""
+        ...
+
+
+class StopAtPathEnd:
+    """The end rule of path tracking: the controller has stopped the car at the path's end."""
+
+    @property
+    def success_status(self) -> EpisodeStatus:
+        """``ARRIVED``."""
+        return EpisodeStatus.ARRIVED
+
+    def reached(self, ego: EgoVehicle, driver: Any) -> bool:
+        """The driver's controller arrived and the car stands still."""
+        return bool(driver.arrived) and ego.speed == 0.0
+
+
+#: The end rule of a plain path-tracking drive (:func:`rrtdrive.sim.runner.drive`).
+STOP_AT_PATH_END = StopAtPathEnd()
+
+
+class PathTracker:
+    """A tracking controller on a fixed path, optionally held by the oncoming-traffic gate.
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        The reset highway-env scene (its controlled vehicle is the ego).
+    controller : TrackingController
+        Reset on ``path`` by :meth:`start`.
+    path : Path
+        Rear-axle path to track.
+    gate : OncomingGate, optional
+        Holds the car before the oncoming lane until there is a gap.
+    gate_cars : sequence, optional
+        The oncoming vehicles the gate watches.
+    """
+
+    def __init__(
+        self,
+        env: Any,
+        controller: TrackingController,
+        path: Path,
+        gate: OncomingGate | None = None,
+        gate_cars: Sequence[Any] | None = None,
+    ) -> None:
+        self.ego = env.unwrapped.vehicle
+        self.controller = controller
+        self.path = path
+        self.gate = gate
+        self.gate_cars = list(gate_cars or [])
+        #: Wall time spent planning inside :meth:`command` (none: the path is given).
+        self.planning_wall_s = 0.0
+
+    @property
+    def arrived(self) -> bool:
+        """The controller has stopped the car at the end of the path."""
+        return self.controller.arrived
+
+    def start(self) -> None:
+        """Reset the controller on the path from the ego's current speed."""
+        self.controller.reset(self.path, v_start=self.ego.speed)
+
+    def command(self, t: float) -> tuple[float, float]:
+        """The controller's command at time ``t`` (after the gate sets its stop line)."""
+        ego, ctrl = self.ego, self.controller
+        r = ego.rear
+        if self.gate is not None:
+            ctrl.hold_at(self.gate.stop_line(ctrl.s, ego.speed, self.gate_cars))
+        return ctrl.control(VehicleState(r[0], r[1], r[2], ego.speed, ego.steer, t))
+
+
+class EpisodeLoop:
+    """Steps one episode: apply a command, record, ask the end rule (see the module docs).
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        A reset highway-env environment whose controlled vehicle is an
+        :class:`~rrtdrive.sim.ego.EgoVehicle`.
+    driver : Driver
+        What :meth:`run` takes commands from; the end rule may read it (the path
+        tracker's ``arrived``, the re-planner's lead car).
+    rule : EndRule
+        The task (or :data:`STOP_AT_PATH_END`).
+    max_time_s : float
+        Time limit; the episode has at most ``ceil(max_time_s / dt)`` steps.
+    stop_on_crash : bool
+        End the episode at highway-env's first ``crashed``.
+    """
+
+    def __init__(
+        self,
+        env: Any,
+        driver: Driver,
+        rule: EndRule,
+        max_time_s: float,
+        stop_on_crash: bool = True,
+    ) -> None:
+        u = env.unwrapped
+        ego = u.vehicle
+        if not isinstance(ego, EgoVehicle):
+            raise InputError("env: the controlled vehicle must be an EgoVehicle (see attach_ego)")
+        require_finite("max_time_s", max_time_s)
+        self.env = env
+        self.ego = ego
+        self.driver = driver
+        self.rule = rule
+        self.max_time_s = float(max_time_s)
+        self.stop_on_crash = stop_on_crash
+        self.dt = 1.0 / u.config["simulation_frequency"]
+        self.max_steps = int(math.ceil(max_time_s / self.dt - 1e-9))
+        self.t = 0.0
+        self.steps = 0
+        self.crashed = False
+        self.reached = False
+        self.done = self.max_steps <= 0
+        self._recorder: DriveRecorder | None = None
+        self._wall0 = 0.0
+
+    def _begin(self) -> DriveRecorder:
+        if self._recorder is None:
+            self._recorder = DriveRecorder(self.env, self.dt)
+            self._wall0 = time.perf_counter()
+        return self._recorder
+
+    def step(self, accel: float, steer: float) -> EpisodeStatus | None:
+        """Apply ``(accel, steer)`` for one step; the final status once the episode is over.
+
+        Raises
+        ------
+        RuntimeError
+            When the episode is already over.
+        """
+        if self.done:
+            raise RuntimeError("EpisodeLoop.step: the episode is over")
+        self._begin().step(accel, steer)
+        self.t += self.dt
+        self.steps += 1
+        ego = self.ego
+        self.crashed = bool(ego.crashed)
+        if self.crashed and self.stop_on_crash:
+            self.done = True
+        elif self.rule.reached(ego, self.driver):
+            self.reached = self.done = True
+        elif self.steps >= self.max_steps:
+            self.done = True
+        return self.status if self.done else None
+
+    def run(self) -> DriveLog:
+        """Start the driver and step it until the episode is over; the log."""
+        self.driver.start()
+        self._begin()
+        while not self.done:
+            self.step(*self.driver.command(self.t))
+        return self.log()
+
+    @property
+    def status(self) -> EpisodeStatus:
+        """Crashed (at the last step), the rule's success status, else timeout."""
+        if self.crashed:
+            return EpisodeStatus.CRASHED
+        if self.reached:
+            return self.rule.success_status
+        return EpisodeStatus.TIMEOUT
+
+    @property
+    def message(self) -> str:
+        """Human-readable detail of :attr:`status`."""
+        t_end = self.steps * self.dt  # the log's last time (``DriveLog.t[-1]``)
+        return end_message(self.status, t_end, self.max_time_s, self.rule.success_status)
+
+    def log(self) -> DriveLog:
+        """The drive so far (the wall time excludes the driver's planning time)."""
+        rec = self._begin()
+        wall = time.perf_counter() - self._wall0 - getattr(self.driver, "planning_wall_s", 0.0)
+        return rec.log(self.reached, wall)

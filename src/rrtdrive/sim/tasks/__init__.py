@@ -1,0 +1,183 @@
+"""Tasks: one class per scenario kind, each with only its own fields and rules.
+
+* :class:`ParkingTask` (``parking``) - the ``parking_lot`` map: every parked car
+  and block becomes a solid highway-env obstacle of exactly its size and pose,
+  walls close the bounds, each spot is drawn as a lane. The ego starts at the
+  entrance with a seeded jitter and must stop nose-in in a seeded free spot.
+* :class:`OvertakeTask` (``overtake``) - the ``overtake`` map as a highway-env
+  two-way road: the ego lane (y = 44, driving +x) and the oncoming lane (y = 48),
+  road edges as solid obstacles, a stopped highway-env vehicle at the map's car.
+  The ego must pass it, return to its lane and stop at the goal.
+* :class:`OvertakeTrafficTask` (``overtake-traffic``) - a long two-way road with a
+  slow *moving* lead car and a seeded stream of oncoming IDM cars; the ego
+  overtakes with receding-horizon space-time re-planning and is done once it is
+  back in its lane ahead of the lead car.
+* :class:`CustomTask` (``custom``) - any map, planned and tracked to its goal.
+
+:func:`make_scenario` builds a task by name for a seed. Every task has the same
+methods (:class:`Task`): ``build_road`` (its highway-env road), ``scene_view`` and
+``camera`` (how the live scene and the video frame it), ``resolve`` /
+``reference`` / ``make_driver`` / ``outcome`` (how an episode of it is driven) and
+``success_status`` / ``reached`` (when it is done), so nothing else needs to ask
+which kind a task is.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from rrtdrive.sim.scenes import scenario_rngs
+from rrtdrive.sim.tasks.base import (
+    DEFAULT_PLANNER,
+    PathTask,
+    Reference,
+    Task,
+    TaskKind,
+    VideoCamera,
+    plan_scenario,
+)
+from rrtdrive.sim.tasks.custom import CustomTask
+from rrtdrive.sim.tasks.overtake import OvertakeTask
+from rrtdrive.sim.tasks.overtake_traffic import (
+    LEAD_MODELS,
+    TRAFFIC_DENSITIES,
+    TRAFFIC_PLANNER,
+    OvertakeTrafficTask,
+    overtake_complete,
+    traffic_map,
+    traffic_speed_config,
+)
+from rrtdrive.sim.tasks.parking import ParkingTask
+from rrtdrive.types import InputError, VehicleParams, require_int
+
+__all__ = [
+    "SCENARIOS",
+    "TASKS",
+    "Task",
+    "TaskKind",
+    "PathTask",
+    "ParkingTask",
+    "OvertakeTask",
+    "OvertakeTrafficTask",
+    "CustomTask",
+    "Reference",
+    "VideoCamera",
+    "make_scenario",
+    "plan_scenario",
+    "DEFAULT_PLANNER",
+    "TRAFFIC_PLANNER",
+    "TRAFFIC_DENSITIES",
+    "LEAD_MODELS",
+    "traffic_map",
+    "traffic_speed_config",
+    "overtake_complete",
+]
+
+#: The tasks :func:`make_scenario` builds by name.
+TASKS: dict[str, type[ParkingTask] | type[OvertakeTask] | type[OvertakeTrafficTask]] = {
+    TaskKind.PARKING.value: ParkingTask,
+    TaskKind.OVERTAKE.value: OvertakeTask,
+    TaskKind.OVERTAKE_TRAFFIC.value: OvertakeTrafficTask,
+}
+#: Names of the built-in scenarios.
+SCENARIOS = tuple(TASKS)
+
+#: Why an option of one kind is refused by another (the messages name the option).
+_NOT_HERE = {
+    "spot": "spot: only the parking scenario has spots",
+    "oncoming": "oncoming: only the overtake scenario has a count of oncoming cars",
+    "density": "density: only the overtake-traffic scenario has it",
+    "lead_speed": "lead_speed: only the overtake-traffic scenario has it",
+    "lead_model": "lead_model: only the overtake-traffic scenario has it",
+}
+
+
+def _jitter(jitter: object) -> tuple[float, float, float]:
+    try:
+        values = tuple(jitter)  # type: ignore[call-overload]
+        ok = len(values) == 3 and all(
+            not isinstance(j, bool) and j >= 0 and math.isfinite(j) for j in values
+        )
+    except TypeError:
+        ok = False
+    if not ok:
+        raise InputError(
+            f"jitter: need three finite numbers >= 0 (x, y in metres, yaw in radians), "
+            f"got {jitter!r}"
+        )
+    return values  # type: ignore[return-value]
+
+
+def make_scenario(name: str, seed: int = 0, **options: Any) -> Task:
+    """Build the task ``name`` for ``seed``.
+
+    Parameters
+    ----------
+    name : str
+        ``"parking"``, ``"overtake"`` or ``"overtake-traffic"``.
+    seed : int
+        Seeds the start jitter and (parking) the choice of the free spot.
+    **options
+        ``jitter`` (three half-ranges of the uniform start jitter in x, y (metres) and
+        yaw (radians), default ``(1.0, 0.5, radians(5))``) and ``vehicle`` (a
+        :class:`~rrtdrive.types.VehicleParams`) for every kind, and per kind:
+
+        - parking: ``spot``, force this ``(row, side, index)`` spot (must be empty);
+        - overtake: ``oncoming``, the number of oncoming cars (seeded positions
+          90-140 m apart beyond the road's end, speeds 6-9 m/s; the ego waits for a
+          gap before pulling out);
+        - overtake-traffic: ``density``, oncoming cars per km or a name of
+          :data:`TRAFFIC_DENSITIES` (default ``"default"``, 10 per km; gaps are 25 m
+          plus an exponential draw, speeds uniform in 6-9 m/s); ``lead_speed``, the
+          lead car's speed in m/s (default 4, below the ego's 11 m/s cap; the ego
+          starts at this speed, 20-30 m behind it); ``lead_model``, ``"idm"``
+          (default) or ``"constant"``.
+
+        An option of another kind may be given as ``None`` (``oncoming`` as 0).
+
+    Returns
+    -------
+    Task
+
+    Raises
+    ------
+    InputError
+        Naming the option, for an unknown name or option, an option of another kind,
+        or a value of the wrong shape.
+
+    Examples
+    --------
+    >>> from rrtdrive.maps import PARKING_EMPTY_SPOTS
+    >>> s = make_scenario("parking", 3)
+    >>> s.spot in PARKING_EMPTY_SPOTS, s == make_scenario("parking", 3)
+    (True, True)
+    >>> make_scenario("parking", 0, spot=999)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: spot: expected (row, side, index), three integers, got 999; ...
+    """
+    rng, _, _ = scenario_rngs(seed)
+    jitter = _jitter(options.pop("jitter", (1.0, 0.5, math.radians(5.0))))
+    vehicle = options.pop("vehicle", None)
+    if vehicle is not None and not isinstance(vehicle, VehicleParams):
+        raise InputError(f"vehicle: expected a VehicleParams, got {type(vehicle).__name__}")
+    for key in options:
+        if key not in _NOT_HERE:
+            known = ["jitter", "vehicle", *_NOT_HERE]
+            raise InputError(f"{key}: unknown scenario option; choose from {known}")
+    if "oncoming" in options:
+        options["oncoming"] = require_int("oncoming", options["oncoming"], 0, 10)
+    cls = TASKS.get(name)
+    own = cls.OPTIONS if cls is not None else ()
+    for key, value in list(options.items()):
+        if key in own:
+            continue
+        if value is not None and not (key == "oncoming" and value == 0):
+            raise InputError(_NOT_HERE[key])
+        del options[key]
+    if cls is None:
+        raise InputError(f"scenario: unknown scenario {name!r}; choose from {list(SCENARIOS)}")
+    vehicle = vehicle or VehicleParams()
+    offset = tuple(float(rng.uniform(-j, j)) if j > 0 else 0.0 for j in jitter)
+    return cls.create(seed, rng, offset, vehicle, **options)  # type: ignore[arg-type]

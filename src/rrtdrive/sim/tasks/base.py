@@ -1,0 +1,315 @@
+"""What every task is: the base class, its kind, its views, and planning its query.
+
+A task is one episode's job as plain data (a frozen dataclass: the map with this
+episode's start and goal, the seed, the speed cap and time limit, and the fields
+of its kind) plus the methods where the kinds differ: the highway-env road it
+builds, how its scene and video are framed, the driver it needs, and when it is
+done. One subclass per kind (:mod:`rrtdrive.sim.tasks`); nothing outside the
+classes asks which kind a task is.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+
+from rrtdrive.controllers import SpeedConfig, TrackingController
+from rrtdrive.maps import LANE_WIDTH, Map
+from rrtdrive.planning import PlanningProblem, make_planner
+from rrtdrive.sim.episode import SHORT_PATH_MESSAGE, EpisodeStatus, plan_failed_message
+from rrtdrive.sim.loop import STOP_AT_PATH_END, Driver, PathTracker
+from rrtdrive.sim.scenes import SceneView, scenario_rngs
+from rrtdrive.types import (
+    Budget,
+    InputError,
+    Path,
+    PlanResult,
+    Pose,
+    VehicleParams,
+    require_positive,
+)
+
+if TYPE_CHECKING:  # pragma: no cover
+    from highway_env.road.road import Road
+
+    from rrtdrive.sim.ego import EgoVehicle
+    from rrtdrive.sim.replanning import TrafficLog
+    from rrtdrive.sim.runner import EpisodeConfig
+
+__all__ = [
+    "TaskKind",
+    "Task",
+    "PathTask",
+    "VideoCamera",
+    "Reference",
+    "DEFAULT_PLANNER",
+    "plan_scenario",
+]
+
+#: The planner of a task when none is named.
+DEFAULT_PLANNER = "improved-rrt-connect"
+
+
+class TaskKind(enum.StrEnum):
+    """The kinds of task (the value is the scenario name in JSON and on the command line)."""
+
+    PARKING = "parking"
+    OVERTAKE = "overtake"
+    OVERTAKE_TRAFFIC = "overtake-traffic"
+    CUSTOM = "custom"
+
+
+@dataclass(frozen=True)
+class VideoCamera:
+    """How the video frames a task (:func:`rrtdrive.sim.video.render_frames`).
+
+    Attributes
+    ----------
+    size : tuple of int
+        Frame ``(width, height)`` in pixels.
+    scaling : float
+        Pixels per metre.
+    centre : tuple of float
+        The point the camera looks at (at the start, when it follows the ego).
+    follow : bool
+        The camera moves with the ego (a long road).
+    """
+
+    size: tuple[int, int]
+    scaling: float
+    centre: tuple[float, float]
+    follow: bool = False
+
+
+@dataclass(frozen=True, eq=False)
+class Reference:
+    """What a task drives along, before the drive: the plan, or why there is nothing to drive.
+
+    Attributes
+    ----------
+    plan : PlanResult or None
+        The planner's result (``None`` for a given path, or when the task re-plans
+        while driving).
+    planner : str
+        The planner's name (``"given"`` for a given path).
+    path : Path or None
+        The path to track (``None`` when the task plans while driving).
+    failure : str or None
+        Why the episode cannot start (the message of a ``plan_failed`` episode).
+    """
+
+    plan: PlanResult | None
+    planner: str
+    path: Path | None
+    failure: str | None = None
+
+
+def plan_scenario(
+    scenario: Task, planner: str, seed: int, budget: Budget | None = None
+) -> PlanResult:
+    """Plan the task's query with the registered planner ``planner``.
+
+    The planner's generator is the episode seed's planner stream.
+    """
+    _, plan_rng, _ = scenario_rngs(seed)
+    return make_planner(planner).solve(
+        PlanningProblem.from_map(scenario.map), plan_rng, budget or Budget()
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Task:
+    """One episode's task, as plain data; subclassed once per kind.
+
+    Parameters
+    ----------
+    map : Map
+        The map with this episode's start and goal (rear-axle poses).
+    seed : int
+        The seed the start jitter and the goal were drawn from.
+    v_max : float
+        Speed cap for the episode in m/s.
+    max_time_s : float
+        Time allowed before the episode counts as failed.
+
+    Notes
+    -----
+    The class attributes ``lane_y``, ``lane_width``, ``lead_index``, ``oncoming``,
+    ``lead``, ``ego_speed`` and ``is_traffic`` are the defaults of fields that only
+    some kinds have (a kind that has one declares it as a field); they are here for
+    readers that do not ask the task yet (the evaluators, the gym env).
+    """
+
+    kind: ClassVar[TaskKind]
+    lane_y: ClassVar[float | None] = None
+    lane_width: ClassVar[float] = LANE_WIDTH
+    lead_index: ClassVar[int | None] = None
+    oncoming: ClassVar[tuple[tuple[float, float], ...]] = ()
+    lead: ClassVar[tuple[float, float] | None] = None
+    ego_speed: ClassVar[float] = 0.0
+    #: True for the moving-traffic kind (kept for readers that still test it).
+    is_traffic: ClassVar[bool] = False
+
+    map: Map
+    seed: int
+    v_max: float = 3.0
+    max_time_s: float = 120.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.map, Map):
+            raise InputError(f"scenario.map: expected a Map, got {type(self.map).__name__}")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)):
+            raise InputError(f"scenario.seed: need an integer >= 0, got {self.seed!r}")
+        if self.seed < 0:
+            raise InputError(f"scenario.seed: need an integer >= 0, got {self.seed!r}")
+        require_positive("scenario.v_max", self.v_max)
+        require_positive("scenario.max_time_s", self.max_time_s)
+
+    # ------------------------------------------------------------------ data
+
+    @property
+    def name(self) -> str:
+        """The kind's name (``"parking"``, ``"overtake"``, ``"overtake-traffic"``, ``"custom"``)."""
+        return self.kind.value
+
+    @property
+    def start(self) -> Pose:
+        """Rear-axle start pose."""
+        return self.map.start
+
+    @property
+    def goal(self) -> Pose:
+        """Rear-axle goal pose."""
+        return self.map.goal
+
+    @property
+    def vehicle(self) -> VehicleParams:
+        """The car."""
+        return self.map.vehicle
+
+    def describe(self) -> dict[str, Any]:
+        """Kind-specific settings worth reporting next to the metrics (JSON-ready)."""
+        return {}
+
+    # ------------------------------------------------------------------ scene
+
+    def build_road(self, np_random: np.random.Generator, history: bool) -> Road:
+        """The highway-env road of this task (lanes, obstacles, other vehicles)."""
+        raise NotImplementedError
+
+    def scene_view(self) -> SceneView:
+        """Default frame of the live scene: the whole map in a square window."""
+        return SceneView((640, 640), 6.0, (0.5, 0.5))
+
+    def camera(self) -> VideoCamera:
+        """How the video frames this task: the whole map, square."""
+        b = self.map.bounds
+        return VideoCamera((640, 640), 6.0, ((b[0] + b[2]) / 2, (b[1] + b[3]) / 2))
+
+    # ------------------------------------------------------------------ episode
+
+    @property
+    def success_status(self) -> EpisodeStatus:
+        """The status of an episode that ends by :meth:`reached`."""
+        raise NotImplementedError
+
+    def reached(self, ego: EgoVehicle, driver: Any) -> bool:
+        """True when the task is done (the episode loop asks after every step)."""
+        raise NotImplementedError
+
+    def resolve(self, config: EpisodeConfig) -> tuple[SpeedConfig, EpisodeConfig]:
+        """The speed profile settings of the drive and the configuration the episode records."""
+        raise NotImplementedError
+
+    def reference(self, planner: object, seed: int, budget: Budget) -> Reference:
+        """What to drive along: plan with ``planner`` (a name), or take a given plan or path."""
+        raise NotImplementedError
+
+    def make_driver(
+        self,
+        env: Any,
+        controller: TrackingController,
+        reference: Reference,
+        speed: SpeedConfig,
+        config: EpisodeConfig,
+        seed: int,
+    ) -> Driver:
+        """The driver of this task in the built scene ``env``."""
+        raise NotImplementedError
+
+    def outcome(self, driver: Any, reference: Reference, completion_time: float | None
+                ) -> tuple[Path, TrafficLog | None]:
+        """After the drive: the path the episode records as tracked, and the re-planner's log."""
+        raise NotImplementedError
+
+
+@dataclass(frozen=True, kw_only=True)
+class PathTask(Task):
+    """A task driven by tracking one planned path to its end and stopping there.
+
+    Done when the controller has stopped the car at the end of the path.
+    """
+
+    @property
+    def success_status(self) -> EpisodeStatus:
+        """``ARRIVED``."""
+        return STOP_AT_PATH_END.success_status
+
+    def reached(self, ego: EgoVehicle, driver: Any) -> bool:
+        """The controller arrived at the end of the path and the car stands still."""
+        return STOP_AT_PATH_END.reached(ego, driver)
+
+    def resolve(self, config: EpisodeConfig) -> tuple[SpeedConfig, EpisodeConfig]:
+        """The given speed settings, else the defaults with this task's cap; ``config`` as is."""
+        return config.speed or SpeedConfig(v_max=self.v_max), config
+
+    def reference(self, planner: object, seed: int, budget: Budget) -> Reference:
+        """Plan with the registered planner ``planner``, or take a given plan or path.
+
+        Raises
+        ------
+        InputError
+            When ``planner`` is none of a name, a :class:`PlanResult` or a :class:`Path`.
+        """
+        plan: PlanResult | None
+        if isinstance(planner, str):
+            plan = plan_scenario(self, planner, seed, budget)
+            name, path = planner, plan.path
+        elif isinstance(planner, PlanResult):
+            plan, name, path = planner, planner.planner, planner.path
+        elif isinstance(planner, Path):
+            plan, name, path = None, "given", planner
+        else:
+            raise InputError(
+                f"planner: expected a name, a PlanResult or a Path, got {planner!r}"
+            )
+        if plan is not None and not plan.success:
+            return Reference(
+                plan, name, Path.empty(), plan_failed_message(plan.status.value, plan.message)
+            )
+        if len(path) < 2:
+            return Reference(plan, name, path, SHORT_PATH_MESSAGE)
+        return Reference(plan, name, path)
+
+    def make_driver(
+        self,
+        env: Any,
+        controller: TrackingController,
+        reference: Reference,
+        speed: SpeedConfig,
+        config: EpisodeConfig,
+        seed: int,
+    ) -> Driver:
+        """A :class:`~rrtdrive.sim.loop.PathTracker` on the reference path."""
+        assert reference.path is not None
+        return PathTracker(env, controller, reference.path)
+
+    def outcome(self, driver: Any, reference: Reference, completion_time: float | None
+                ) -> tuple[Path, TrafficLog | None]:
+        """The planned path; no re-planning log."""
+        assert reference.path is not None
+        return reference.path, None
+

@@ -1,0 +1,507 @@
+"""The traffic re-planner: overtaking a moving car against oncoming traffic, re-planning as it goes.
+
+:class:`TrafficDriver` drives the ego of an ``overtake-traffic`` scene once per
+simulation step. It is in one of two modes:
+
+* ``follow`` - the reference is the centre line of the ego lane; the speed loop is
+  capped by an IDM car-following law behind the lead car (:class:`IDMConfig`).
+* ``overtake`` - the reference is a space-time plan: the improved RRT-Connect on
+  a :class:`~rrtdrive.planning.spacetime.SpaceTimeChecker`, clear of the road edges
+  and of every predicted vehicle at the ego's arrival times, from the ego's lane
+  behind the lead car to its lane ahead of it.
+
+**Re-planning.** At a fixed rate (``rate_hz``, 2-5 Hz) and whenever the current
+plan fails its safety check (run every control step with fresh predictions),
+the driver predicts the other vehicles (:mod:`rrtdrive.sim.prediction`), picks a
+cut-in point ahead of the lead car's predicted position, and plans from a
+*stitch point*: the pose on the current reference that the ego reaches once the
+planning budget has elapsed. The new reference is the current one up to the
+stitch point, then the plan, then the lane; so the controller sees a continuous
+reference and never waits on the planner (a plan that took the whole budget
+would take over exactly where this one does). A plan is accepted only when the
+whole stitched reference, timed by the controller's own speed profile from the
+ego's current speed, passes the space-time check up to the cut-in point and a
+little beyond, within the prediction horizon. In ``overtake`` mode a new plan
+replaces the current one only when the current one became unsafe or the new one
+finishes at least ``improve_s`` sooner.
+
+**No safe overtake.** When nothing passes, the ego keeps following (or keeps a
+plan that is still safe) and tries again at the next cycle: an unchecked plan is
+never driven. If a plan becomes unsafe while the body is still in the ego's own
+lane, the driver abandons it and returns to following; once the body is in the
+oncoming lane it re-plans every step until a safe plan is found.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from rrtdrive.controllers import SpeedConfig, SpeedProfile, TrackingController, VehicleState
+from rrtdrive.maps import Map
+from rrtdrive.planning.base import cached_checker
+from rrtdrive.planning.spacetime import (
+    ArrivalTiming,
+    Prediction,
+    SpaceTimeProblem,
+    SpaceTimeRRTConnect,
+    traffic_conflicts,
+)
+from rrtdrive.sim.follower import lead_gap
+from rrtdrive.sim.prediction import predict
+from rrtdrive.sim.replanning import SPACING, ReplanConfig, ReplanRecord, TrafficLog, lane_path
+from rrtdrive.types import Budget, InputError, Path, Pose
+from rrtdrive.vehicle import footprint_corners
+
+__all__ = ["TrafficDriver"]
+
+logger = logging.getLogger(__name__)
+
+
+class TrafficDriver:
+    """Drives the ego of an ``overtake-traffic`` scene: follow, plan, overtake, re-plan.
+
+    Parameters
+    ----------
+    env : gymnasium.Env
+        A reset highway-env scene (:func:`rrtdrive.sim.scenes.build_env`).
+    scenario : Scenario
+        Its scenario (lane, lead car, road bounds).
+    controller : TrackingController
+        The path tracker (reset here).
+    speed : SpeedConfig
+        The controller's speed-profile settings (the planner times plans with them).
+    config : ReplanConfig
+        Re-planning settings.
+    rng : numpy.random.Generator
+        The planner's only source of randomness.
+    """
+
+    def __init__(
+        self,
+        env: Any,
+        scenario: Any,
+        controller: TrackingController,
+        speed: SpeedConfig,
+        config: ReplanConfig,
+        rng: np.random.Generator,
+    ) -> None:
+        u = env.unwrapped
+        self.road = u.road
+        self.ego = u.vehicle
+        self.scenario = scenario
+        self.vehicle = scenario.vehicle
+        self.others = [v for v in self.road.vehicles if v is not self.ego]
+        self.lead = self.others[0] if scenario.lead is not None and self.others else None
+        self.lane_y = float(scenario.lane_y)
+        self.lane_width = float(scenario.lane_width)
+        self.road_bounds = scenario.map.bounds
+        self.controller = controller
+        self.speed = speed
+        self.config = config
+        self.rng = rng
+        options = {"max_postprocess_attempts": 2, "smoothing": {"max_rounds": 8}}
+        options.update(config.planner_options)
+        self.planner = SpaceTimeRRTConnect(**options)
+        self.plan_vehicle = dataclasses.replace(
+            self.vehicle,
+            min_turning_radius=max(config.turning_radius_m, self.vehicle.min_turning_radius),
+        )
+        # The static part of every plan window (the road between its edges) is built
+        # once here, like a map loaded before driving, not inside a planning cycle.
+        _, ymin, _, ymax = self.road_bounds
+        longest = config.max_plan_length_m + config.check_beyond_m + 45.0
+        for length in np.arange(20.0, longest, 20.0):
+            window = Map(
+                "traffic-window", (0.0, ymin, float(length), ymax), (),
+                Pose(5.0, self.lane_y, 0.0), Pose(float(length) - 5.0, self.lane_y, 0.0),
+                self.plan_vehicle,
+            )
+            cached_checker(window).component_labels  # noqa: B018 - warm the cache
+        self.mode = "follow"
+        self.records: list[ReplanRecord] = []
+        self.references: list[tuple[float, Path]] = []
+        self.modes: list[tuple[float, str]] = []
+        self.unsafe_steps = 0
+        self._executed: list[np.ndarray] = []
+        self._steps = 0
+        self._next_replan = 0.0
+        self._path: Path | None = None
+        self._times: np.ndarray = np.zeros(0)
+        self._check_end = 0
+        self._goal_time = math.inf
+        self._goal_s = math.inf
+        #: Wall time of the control steps that ran a re-planning cycle (the loop
+        #: reports its own wall time without it).
+        self.planning_wall_s = 0.0
+
+    # ------------------------------------------------------------------ helpers
+
+    def _speed_tuple(self) -> tuple[float, float, float, float, float]:
+        c = self.speed
+        return (c.v_max, c.accel, c.decel, c.a_lat_max, c.v_launch)
+
+    def _predict(self) -> Prediction:
+        c = self.config
+        return predict(self.others, c.predictor, c.horizon_s, c.prediction_step, c.speed_bound)
+
+    def _set_mode(self, t: float, mode: str) -> None:
+        if mode != self.mode or not self.modes:
+            self.modes.append((t, mode))
+        self.mode = mode
+
+    def _switch(self, t: float, path: Path, cut_index: int) -> None:
+        """Track ``path`` from now on (it starts at the ego's projection on the current one)."""
+        if self._path is not None:
+            self._executed.append(self.controller.projector.samples[:cut_index])  # type: ignore[union-attr]
+        self._path = path
+        self.references.append((t, path))
+        self.controller.retarget(path, self.ego.speed)
+        profile = self.controller.profile
+        v = np.maximum(0.5 * (profile.v[1:] + profile.v[:-1]), 0.05)  # type: ignore[union-attr]
+        self._times = np.concatenate([[0.0], np.cumsum(np.diff(profile.s) / v)])  # type: ignore[union-attr]
+        self._proj_s = np.asarray(self.controller.projector.s)  # type: ignore[union-attr]
+
+    def _projection(self) -> tuple[int, float]:
+        """Index of the sample at or behind the ego's projection on the current path, and its s."""
+        proj = self.controller.projector.project(self.ego.rear[0], self.ego.rear[1])  # type: ignore[union-attr]
+        return proj.index, proj.s
+
+    def _lead_gap(self) -> tuple[float, float] | None:
+        """Bumper gap to, and closing speed on, the nearest same-direction car ahead in the lane."""
+        return lead_gap(self.ego, self.others, self.vehicle)
+
+    def _lane_reference(self, t: float) -> None:
+        """Switch to the lane centre line from the ego's position on."""
+        cut, _ = self._projection() if self._path is not None else (0, 0.0)
+        x0 = self.ego.rear[0]
+        x1 = min(x0 + self.config.lane_extension_m, self._x_end())
+        self._switch(t, lane_path(x0, x1, self.lane_y), cut)
+        self._check_end = 0
+        self._goal_time = math.inf
+        self._goal_s = math.inf
+
+    def _x_end(self) -> float:
+        return self.road_bounds[2] - 1.0
+
+    # ------------------------------------------------------------------ public
+
+    def start(self) -> None:
+        """Start in ``follow`` mode on the lane centre line."""
+        self.controller.reset(
+            lane_path(self.ego.rear[0], self.ego.rear[0] + 1.0, self.lane_y), v_start=self.ego.speed
+        )
+        self._set_mode(0.0, "follow")
+        self._lane_reference(0.0)
+        self._executed.clear()
+
+    def command(self, t: float) -> tuple[float, float]:
+        """:meth:`control`, timing the steps that re-plan (the loop's ``Driver`` API)."""
+        n_rec = len(self.records)
+        c0 = time.perf_counter()
+        out = self.control(t)
+        if len(self.records) != n_rec:
+            self.planning_wall_s += time.perf_counter() - c0
+        return out
+
+    def control(self, t: float) -> tuple[float, float]:
+        """The ``(acceleration, steering)`` command for this simulation step at time ``t``."""
+        cfg = self.config
+        if t + 1e-9 >= self._next_replan:
+            self._next_replan += cfg.period_s
+            while self._next_replan <= t + 1e-9:
+                self._next_replan += cfg.period_s
+            self.replan(t, "periodic")
+        elif self.mode == "overtake" and self._steps % cfg.check_every == 0:
+            if not self.current_safe():
+                self.unsafe_steps += 1
+                self.replan(t, "unsafe")
+        self._steps += 1
+        if self.mode == "overtake":
+            _, s_now = self._projection()
+            if s_now >= self._goal_s:
+                self._set_mode(t, "follow")  # back in the lane past the cut-in point
+        if self.mode == "follow":
+            _, s_now = self._projection()
+            if self.controller.projector.length - s_now < 0.6 * cfg.lane_extension_m:  # type: ignore[union-attr]
+                self._lane_reference(t)
+        ego = self.ego
+        cap = None
+        if self.mode == "follow":
+            lead = self._lead_gap()
+            if lead is not None:
+                cap = cfg.idm.accel_for(ego.speed, self.speed.v_max, lead[0], lead[1])
+        self.controller.cap_accel(cap)
+        r = ego.rear
+        return self.controller.control(VehicleState(r[0], r[1], r[2], ego.speed, ego.steer, t))
+
+    def finish(self, completion_time: float | None) -> TrafficLog:
+        """The log of the episode (call once at the end; ``completion_time`` of the overtake)."""
+        pieces = list(self._executed)
+        if self._path is not None:
+            i, _ = self._projection()
+            pieces.append(self.controller.projector.samples[: i + 2])  # type: ignore[union-attr]
+        samples = np.concatenate(pieces) if pieces else np.zeros((0, 4))
+        if len(samples) > 1:
+            keep = np.concatenate([[True], np.hypot(*np.diff(samples[:, :2], axis=0).T) > 1e-9])
+            samples = samples[keep]
+        return TrafficLog(
+            tuple(self.records), tuple(self.references), Path(samples, np.zeros((0, 2))),
+            tuple(self.modes), self.unsafe_steps, completion_time, self.config,
+        )
+
+    # ------------------------------------------------------------------ safety
+
+    def _in_own_lane(self) -> bool:
+        corners = footprint_corners(np.asarray(self.ego.rear, dtype=float), self.vehicle)
+        return bool(np.all(corners[:, 1] <= self.lane_y + self.lane_width / 2.0))
+
+    def current_safe(self, prediction: Prediction | None = None) -> bool:
+        """True when the rest of the current plan (to its check end) is clear of the traffic."""
+        if self._check_end <= 0 or self._path is None:
+            return True
+        i0, s_now = self._projection()
+        if i0 >= self._check_end:
+            return True
+        t_now = float(np.interp(s_now, self._proj_s, self._times))
+        samples = self.controller.projector.samples  # type: ignore[union-attr]
+        idx = np.arange(i0, self._check_end + 1)
+        times = self._times[idx] - t_now
+        horizon = self.config.horizon_s
+        keep = times <= horizon
+        pred = prediction if prediction is not None else self._predict()
+        hit = traffic_conflicts(
+            samples[idx[keep], :3], times[keep], times[keep], pred, self.config.safety,
+            self.vehicle, SPACING,
+        )
+        return not bool(hit.any())
+
+    def _validate(
+        self, path: Path, check_end: int, prediction: Prediction
+    ) -> tuple[bool, float, str]:
+        """Check a candidate reference (starting at the ego) timed by the controller's profile.
+
+        Returns
+        -------
+        ok : bool
+        t_end : float
+            Seconds until the ego reaches sample ``check_end``.
+        why : str
+        """
+        s = path.arc_length()
+        profile = SpeedProfile(s, path.samples[:, 3], self.speed, self.ego.speed)
+        v = np.maximum(0.5 * (profile.v[1:] + profile.v[:-1]), 0.05)
+        times = np.concatenate([[0.0], np.cumsum(np.diff(s) / v)])
+        if times[check_end] > self.config.horizon_s:
+            return False, float(times[check_end]), "the plan ends beyond the prediction horizon"
+        idx = np.arange(0, check_end + 1)
+        hit = traffic_conflicts(
+            path.samples[idx, :3], times[idx], times[idx], prediction, self.config.safety,
+            self.vehicle, SPACING,
+        )
+        if hit.any():
+            x, y = path.samples[int(np.flatnonzero(hit)[0]), :2]
+            return False, float(times[check_end]), f"conflict at ({x:.1f}, {y:.1f})"
+        return True, float(times[check_end]), ""
+
+    # ------------------------------------------------------------------ planning
+
+    def _cut_in_x(
+        self, timing: ArrivalTiming, x_start: float, prediction: Prediction
+    ) -> float | None:
+        """Nearest rear-axle x for the cut-in: far enough ahead of the lead by then."""
+        cfg = self.config
+        xs = x_start + np.arange(12.0, cfg.max_plan_length_m + 1e-9, 1.0)
+        if self.lead is None or len(prediction) == 0:
+            return float(xs[min(len(xs) - 1, 18)])
+        pts = np.column_stack([xs, np.full(len(xs), self.lane_y)])
+        _, t_hi = timing.band(pts)
+        t_check = t_hi + cfg.safety.margin(t_hi)
+        lead = prediction.poses_at(t_check)[0]  # the lead is the first vehicle
+        v_lead = float(self.lead.speed)
+        need = (
+            lead[:, 0]
+            + self.lead.LENGTH / 2.0
+            + cfg.cut_in_gap_m
+            + cfg.cut_in_headway_s * v_lead
+            + self.vehicle.rear_overhang
+        )
+        ok = xs >= need
+        if not ok.any():
+            return None
+        x = float(xs[int(np.argmax(ok))]) + cfg.goal_slack_m
+        if x > x_start + cfg.max_plan_length_m or x > self._x_end() - 20.0:
+            return None
+        _, t_goal = timing.band(np.array([[x, self.lane_y]]))
+        if float(t_goal[0]) > cfg.horizon_s - 1.0:
+            return None
+        return x
+
+    def _gap_open(
+        self, timing: ArrivalTiming, x_start: float, goal_x: float, prediction: Prediction
+    ) -> bool:
+        """A necessary condition for any overtake: the oncoming lane is free beside the lead.
+
+        Where the lead car blocks the ego lane at the ego's nominal arrival times,
+        the ego must be laterally clear of it, i.e. in the oncoming lane; if an
+        oncoming car is predicted there and then, no plan can pass the checks.
+        """
+        if self.lead is None or len(prediction) < 2:
+            return True
+        xs = np.arange(x_start, goal_x + 1e-9, 0.5)
+        lane = np.column_stack([xs, np.full(len(xs), self.lane_y), np.zeros(len(xs))])
+        t_lo, t_hi = timing.band(lane[:, :2])
+        safety = self.config.safety
+        blocked = traffic_conflicts(
+            lane, t_lo, t_hi, prediction.select(np.array([0])), safety, self.vehicle, 0.5
+        )
+        if not blocked.any():
+            return True
+        out = lane[blocked].copy()
+        out[:, 1] = self.lane_y + 0.7 * self.lane_width
+        rest = prediction.select(np.arange(1, len(prediction)))
+        hit = traffic_conflicts(
+            out, t_lo[blocked], t_hi[blocked], rest, safety, self.vehicle, 0.5
+        )
+        return not bool(hit.any())
+
+    def replan(self, t: float, trigger: str) -> ReplanRecord:
+        """One re-planning cycle at simulation time ``t``; returns (and logs) its record."""
+        wall0 = time.perf_counter()
+        cfg = self.config
+        mode = self.mode
+        pred = self._predict()
+        current_ok = True
+        if mode == "overtake":
+            current_ok = trigger == "periodic" and self.current_safe(pred)
+        i0, s_now = self._projection()
+        ego = self.ego
+        samples = self.controller.projector.samples  # type: ignore[union-attr]
+        s_path = self._proj_s
+        d_stitch = max(ego.speed * cfg.cycle_budget_s + 1.0, 1.5)
+        i_stitch = min(int(np.searchsorted(s_path, s_now + d_stitch)), len(s_path) - 2)
+        start = samples[i_stitch]
+        timing = ArrivalTiming(
+            0.0, float(ego.speed), self.speed.v_max, self.speed.accel,
+            (float(ego.rear[0]), float(ego.rear[1])),
+        )
+        goal_x = self._cut_in_x(timing, float(start[0]), pred)
+        outcome, message = "no_goal", "no cut-in point within reach"
+        plan_time, iters, nodes = 0.0, 0, 0
+        accepted = late = False
+        if goal_x is not None and not self._gap_open(timing, float(start[0]), goal_x, pred):
+            outcome, message = "no_gap", "the oncoming lane is taken beside the lead car"
+        elif goal_x is not None:
+            plan, message, cand = self._plan(i0, i_stitch, goal_x, timing, pred, wall0)
+            plan_time = plan.wall_time_s if plan is not None else 0.0
+            if plan is not None:
+                iters, nodes = plan.result.iterations, plan.result.nodes
+            if cand is None:
+                outcome = "no_plan" if plan is None or not plan.success else "rejected"
+                if plan is not None and plan.deadline_hit:
+                    outcome, late = "late", True
+            else:
+                path, check_end, goal_index = cand
+                ok, t_end, why = self._validate(path, check_end, pred)
+                if not ok:
+                    outcome, message = "rejected", why
+                elif (
+                    mode == "overtake"
+                    and current_ok
+                    and t + t_end > self._goal_time - cfg.improve_s
+                ):
+                    outcome = "kept"
+                else:
+                    self._switch(t, path, i0)
+                    self._check_end = check_end
+                    self._goal_time = t + t_end
+                    self._goal_s = float(self._proj_s[min(goal_index, len(self._proj_s) - 1)])
+                    self._set_mode(t, "overtake")
+                    outcome, accepted = "overtake", True
+        if not accepted and mode == "overtake" and not current_ok:
+            if self._in_own_lane():
+                self._set_mode(t, "follow")
+                self._lane_reference(t)
+                outcome = "abandoned"
+            else:
+                outcome = "unsafe_kept"
+        record = ReplanRecord(
+            t, trigger, mode, outcome, time.perf_counter() - wall0, plan_time, iters, nodes,
+            goal_x, message, late,
+        )
+        self.records.append(record)
+        logger.debug("replan t=%.2f %s %s -> %s (%s)", t, trigger, mode, outcome, message)
+        return record
+
+    def _plan(
+        self,
+        i0: int,
+        i_stitch: int,
+        goal_x: float,
+        timing: ArrivalTiming,
+        pred: Prediction,
+        wall0: float,
+    ) -> tuple[Any, str, tuple[Path, int, int] | None]:
+        """Plan from the stitch sample ``i_stitch`` to the cut-in point; the stitched candidate.
+
+        ``i0`` is the sample at the ego's projection: the candidate starts there.
+        """
+        cfg = self.config
+        samples = self.controller.projector.samples  # type: ignore[union-attr]
+        start = samples[i_stitch]
+        x_off = float(start[0]) - 5.0
+        length = math.ceil((goal_x - x_off + cfg.check_beyond_m + 5.0) / 20.0) * 20.0
+        _, ymin, _, ymax = self.road_bounds
+        goal = Pose(goal_x - x_off, self.lane_y, 0.0)
+        try:
+            window = Map(
+                "traffic-window", (0.0, ymin, length, ymax), (),
+                Pose(float(start[0]) - x_off, float(start[1]), float(start[2])), goal,
+                self.plan_vehicle,
+            )
+        except InputError as exc:
+            return None, f"no plan window: {exc}", None
+        local = pred.shifted(-x_off)
+        if len(local):
+            xr = local.x_range()
+            near = (xr[:, 1] >= -20.0) & (xr[:, 0] <= length + 20.0)
+            local = local.select(near)
+        problem = SpaceTimeProblem(
+            window, local, timing.shifted(-x_off), cfg.safety, self._speed_tuple()
+        )
+        deadline = None
+        left = 1e6
+        if cfg.wall_limit:
+            # Tree growth may use what is left of the cycle minus a reserve for the
+            # post-processing; at the deadline every check fails, so that a long
+            # post-processing gives up too, leaving a little time for the final check.
+            spent = time.perf_counter() - wall0
+            left = max(cfg.cycle_budget_s * (1.0 - cfg.postprocess_reserve) - spent, 1e-3)
+            deadline = wall0 + 0.9 * cfg.cycle_budget_s
+        problem = dataclasses.replace(problem, deadline=deadline)
+        plan = self.planner.solve_spacetime(
+            problem, self.rng, Budget(max_iterations=cfg.max_iterations, max_time_s=left)
+        )
+        if not plan.success:
+            return plan, plan.result.message, None
+        local_path = plan.result.path.samples.copy()
+        local_path[:, 0] += x_off
+        # Stitch: current reference from the ego to the stitch pose, the plan, then the lane.
+        x_goal = float(local_path[-1, 0])
+        lane = lane_path(
+            x_goal, min(x_goal + cfg.lane_extension_m, self._x_end()), self.lane_y
+        ).samples
+        stitched = np.concatenate([samples[i0:i_stitch], local_path, lane[1:]])
+        keep = np.concatenate([[True], np.hypot(*np.diff(stitched[:, :2], axis=0).T) > 1e-9])
+        stitched = stitched[keep]
+        path = Path(stitched, plan.result.path.waypoints + np.array([x_off, 0.0]))
+        goal_index = (i_stitch - i0) + len(local_path) - 1
+        s = path.arc_length()
+        goal_index = min(goal_index, len(s) - 1)
+        check_end = int(np.searchsorted(s, s[goal_index] + cfg.check_beyond_m))
+        return plan, plan.result.message, (path, min(check_end, len(s) - 1), goal_index)
