@@ -45,6 +45,7 @@ SEEDS = range(5)
 #: Fields that measure wall time: they differ from run to run.
 TIMING_KEYS = {
     "planning_time_s",
+    "setup_time_s",
     "wall_time_s",
     "replan_time_median_s",
     "replan_time_max_s",

@@ -327,11 +327,15 @@ class PlanResult:
     iterations : int
         Sampling iterations used.
     planning_time_s : float
-        Wall time of the query.
+        Wall time of the query, per-map set-up excluded.
     message : str
         Human-readable reason on failure, or a short summary.
     stats : dict
         Extra per-planner statistics (floats and ints).
+    setup_time_s : float
+        Wall time of the per-map set-up this query triggered (connectivity labels,
+        sampling cells, expanded obstacles, passage cells), outside ``planning_time_s``
+        and outside the budget; 0 when the map's checker had it all already.
     """
 
     status: PlanStatus
@@ -344,6 +348,7 @@ class PlanResult:
     planning_time_s: float
     message: str = ""
     stats: dict[str, float] = field(default_factory=dict)
+    setup_time_s: float = 0.0
 
     @property
     def success(self) -> bool:

@@ -139,6 +139,7 @@ def _plan_metrics(spec: RunSpec) -> dict[str, Any]:
         "nodes": int(result.nodes),
         "iterations": int(result.iterations),
         "planning_time_s": float(result.planning_time_s),
+        "setup_time_s": float(result.setup_time_s),
         "verified": bool(verify_path(m, result.path).ok) if ok else None,
         "message": result.message,
     }

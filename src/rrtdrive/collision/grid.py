@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Hashable, Sequence
+from typing import Any, TypeVar
 
 import numpy as np
 import shapely
@@ -18,6 +19,8 @@ from scipy import ndimage
 
 from rrtdrive.maps import Obstacle
 from rrtdrive.types import VehicleParams
+
+T = TypeVar("T")
 
 __all__ = ["rasterise", "GridCache"]
 
@@ -138,6 +141,19 @@ class GridCache:
         self._union: shapely.Geometry | None = None
         self._free: dict[int, np.ndarray] = {}
         self._passages: dict[tuple[int, float], np.ndarray] = {}
+        self._derived: dict[Hashable, Any] = {}
+
+    def derived(self, key: Hashable, build: Callable[[], T]) -> T:
+        """Data a planner derives from this map (e.g. an expanded-obstacle checker), built once.
+
+        ``build()`` runs on the first call with ``key`` and is timed into
+        :attr:`setup_time_s`; later calls return the same object.
+        """
+        if key not in self._derived:
+            t0 = time.perf_counter()
+            self._derived[key] = build()
+            self.setup_time_s += time.perf_counter() - t0
+        return self._derived[key]
 
     # ------------------------------------------------------------------ connectivity
 

@@ -130,37 +130,21 @@ def expand_obstacles(
     return out, grown
 
 
-_EXPANDED: dict[tuple[object, ...], tuple[CollisionChecker | None, int]] = {}
-
-
 def expanded_checker(
     checker: CollisionChecker, a: float, lmin: float
 ) -> tuple[CollisionChecker | None, int]:
-    """The checker of the expanded obstacles, built once per map and parameters.
+    """The checker of the expanded obstacles, built once per map checker and parameters.
 
     Returns ``(None, 0)`` when no obstacle grows (the original checker serves).
-    The cache is module level, keyed by the bounds, obstacles, car, checker
-    configuration, ``a`` and ``L_min``.
+    Kept on the map checker's grid cache (:meth:`rrtdrive.collision.GridCache.derived`),
+    so building it counts as per-map set-up.
     """
-    key = (
-        checker.bounds,
-        checker.obstacles,
-        checker.vehicle,
-        checker.config,
-        float(a),
-        float(lmin),
-    )
-    hit = _EXPANDED.get(key)
-    if hit is not None:
-        return hit
-    new, grown = expand_obstacles(checker.obstacles, a, lmin, checker.bounds)
-    count = int(grown.sum())
-    result: tuple[CollisionChecker | None, int]
-    if count == 0 or a == 0.0:
-        result = (None, 0)
-    else:
-        result = (CollisionChecker(checker.bounds, new, checker.vehicle, checker.config), count)
-    if len(_EXPANDED) > 16:
-        _EXPANDED.clear()
-    _EXPANDED[key] = result
-    return result
+
+    def build() -> tuple[CollisionChecker | None, int]:
+        new, grown = expand_obstacles(checker.obstacles, a, lmin, checker.bounds)
+        count = int(grown.sum())
+        if count == 0 or a == 0.0:
+            return None, 0
+        return CollisionChecker(checker.bounds, new, checker.vehicle, checker.config), count
+
+    return checker.grid.derived(("expanded_checker", float(a), float(lmin)), build)

@@ -123,19 +123,21 @@ class ImprovedRRTConnect:
             (exact, of the whole curve) and the repair counters ``fillets``,
             ``merges``, ``moves``, ``drops``, ``unprunes`` and ``edge_checks``.
         """
-        config = self.config
+        query = _Query(problem, self.config)
         return run_query(
-            NAME, problem, budget, lambda watch: _Query(problem, config, watch).run(rng, budget)
+            NAME, problem, budget, lambda watch: query.run(rng, budget, watch), query.prepare
         )
 
 
 class _Query:
     """Working state of one query: its settings, counters and the tree paths tried."""
 
-    def __init__(self, problem: PlanningProblem, cfg: ImprovedConfig, watch: Stopwatch) -> None:
+    def __init__(self, problem: PlanningProblem, cfg: ImprovedConfig) -> None:
         self.problem = problem
         self.cfg = cfg
-        self.watch = watch
+        self.watch: Stopwatch | None = None
+        self._growth: tuple[CollisionChecker, EdgeFree, np.ndarray | None] | None = None
+        self._growth_stats: dict[str, float] = {}
         self.checker = checker = problem.checker
         self.start, self.goal = start, goal = problem.start, problem.goal
         # The config's post-processor with the query's PER_QUERY_SMOOTHING fields.
@@ -169,14 +171,30 @@ class _Query:
             Tree(self.g_xy[None, :], np.array([-1])),
         )
 
-    def run(self, rng: np.random.Generator, budget: Budget) -> PlanResult:
+    def prepare(self) -> None:
+        """Per-map set-up before the stopwatch starts: the growth checker and its passages.
+
+        Both are cached on the map's checker, so only a map's first query pays for them.
+        """
+        before = dict(self.stats)
+        grow, edge_free = self.growth_edge_test()
+        self._growth = (grow, edge_free, self.passages(grow))
+        # The expansion counters describe the growth: they count once the query grows trees.
+        self._growth_stats = {k: self.stats[k] for k in ("expanded_obstacles", "expansion_used")}
+        self.stats.update({k: before[k] for k in self._growth_stats})
+
+    def run(self, rng: np.random.Generator, budget: Budget, watch: Stopwatch) -> PlanResult:
         """The steps in order; the first that solves the query ends it."""
+        self.watch = watch
         out = self.direct_connection()
         if out is not None:
             return out
-        grow, edge_free = self.growth_edge_test()
+        if self._growth is None:
+            self.prepare()
+        _, edge_free, passages = self._growth
+        self.stats.update(self._growth_stats)
         samples = SampleSource(self.problem, reject=True)
-        out = self.grow_and_smooth(rng, budget, edge_free, samples, self.passages(grow))
+        out = self.grow_and_smooth(rng, budget, edge_free, samples, passages)
         if out is not None:
             return out
         self.stats["iterations"] = float(self.iterations)
