@@ -165,7 +165,9 @@ def make_scenario(name: str, seed: int = 0, **options: Any) -> Task:
     for key in options:
         if key not in _NOT_HERE:
             known = ["jitter", "vehicle", *_NOT_HERE]
-            raise InputError(f"{key}: unknown scenario option; choose from {known}")
+            raise InputError(
+                f"scenario_options: unknown option {key!r}; choose from {known}"
+            )
     if "oncoming" in options:
         options["oncoming"] = require_int("oncoming", options["oncoming"], 0, 10)
     cls = TASKS.get(name)
