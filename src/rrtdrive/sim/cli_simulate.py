@@ -111,6 +111,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--json", metavar="FILE|-", help="write the metrics as JSON ('-' for stdout)")
     p.add_argument("--video", metavar="FILE.mp4", help="write a headless MP4 of the episode")
     p.add_argument(
+        "--trajectory", metavar="FILE.csv",
+        help="write the executed trajectory, one row per simulation step: "
+        "t,x,y,yaw,speed,steer,accel,gear (rear axle, applied steering and acceleration)",
+    )
+    p.add_argument(
         "--video-stride", type=positive_int, default=1,
         help="simulation steps per video frame (default 1: every step)",
     )
@@ -216,6 +221,7 @@ def _run(args: argparse.Namespace) -> int:
     # Before the episode runs: a bad target should not cost a whole episode.
     validate_output(args.video, "--video", (".mp4",), allow_stdout=False)
     validate_output(args.json, "--json")
+    validate_output(args.trajectory, "--trajectory", (".csv",), allow_stdout=False)
     deterministic = bool(getattr(args, "deterministic", False))
     plan_time = getattr(args, "plan_time", None)
     if deterministic and plan_time is not None:
@@ -286,6 +292,16 @@ def _run(args: argparse.Namespace) -> int:
             extra["video_frames"] = frames
     data = episode_json(report, extra)
     text = json.dumps(data, indent=2) + "\n"
+    if args.trajectory:
+        from rrtdrive.maps import write_text_atomic
+        from rrtdrive.sim.episode import trajectory_csv
+
+        try:
+            write_text_atomic(args.trajectory, trajectory_csv(episode))
+        except OSError as exc:
+            raise InputError(
+                f"--trajectory: cannot write {args.trajectory}: {exc.strerror}"
+            ) from None
     if args.json == "-":
         sys.stdout.write(text)
         sys.stdout.flush()

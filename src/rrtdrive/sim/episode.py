@@ -21,6 +21,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.types import Path, PlanResult
 
 __all__ = [
+    "TRAJECTORY_COLUMNS",
+    "trajectory_csv",
     "EpisodeStatus",
     "DriveLog",
     "Episode",
@@ -180,3 +182,41 @@ class Episode:
     message: str
     config: EpisodeConfig
     traffic: TrafficLog | None = None
+
+    def trajectory(self) -> np.ndarray:
+        """The executed trajectory for an outside judge, one row per simulation step.
+
+        Columns :data:`TRAJECTORY_COLUMNS`: ``t, x, y, yaw, speed, steer, accel, gear``
+        - time, rear-axle position and heading, signed speed, the front-wheel angle
+        and acceleration applied from that time to the next step, and the gear
+        (+1 forward, -1 reverse, from the applied speed's sign; +1 at standstill).
+        The last row is the final state: it keeps the last steering angle and has
+        zero acceleration. Shape ``(N + 1, 8)`` (empty when nothing was driven).
+        """
+        log = self.log
+        n = len(log.states)
+        if n == 0:
+            return np.zeros((0, len(TRAJECTORY_COLUMNS)))
+        steer = np.zeros(n)
+        accel = np.zeros(n)
+        if log.steps:
+            steer[:-1] = log.controls[:, 1]
+            steer[-1] = log.controls[-1, 1]
+            accel[:-1] = log.controls[:, 0]
+        speed = log.states[:, 3]
+        gear = np.where(speed < 0.0, -1.0, 1.0)
+        return np.column_stack([log.t, log.states[:, :3], speed, steer, accel, gear])
+
+
+#: Header of :meth:`Episode.trajectory` and ``rrtdrive simulate --trajectory``.
+TRAJECTORY_COLUMNS = ("t", "x", "y", "yaw", "speed", "steer", "accel", "gear")
+
+
+def trajectory_csv(episode: Episode) -> str:
+    """:meth:`Episode.trajectory` as CSV text, header ``t,x,y,yaw,speed,steer,accel,gear``."""
+    rows = episode.trajectory()
+    lines = [",".join(TRAJECTORY_COLUMNS)]
+    lines += [
+        ",".join(f"{v:.9g}" for v in row[:-1]) + f",{int(row[-1])}" for row in rows
+    ]
+    return "\n".join(lines) + "\n"

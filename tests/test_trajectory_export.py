@@ -1,0 +1,48 @@
+"""The executed trajectory for outside judges: Episode.trajectory() and simulate --trajectory."""
+
+import csv
+
+import numpy as np
+import pytest
+
+from rrtdrive.cli import main
+from rrtdrive.sim.episode import TRAJECTORY_COLUMNS, trajectory_csv
+from rrtdrive.sim.runner import run_episode
+from rrtdrive.vehicle import bicycle_step
+
+
+@pytest.fixture(scope="module")
+def episode():
+    return run_episode("overtake", controller="lqr", seed=2)
+
+
+def test_trajectory_rows_are_the_logged_states_and_applied_commands(episode):
+    traj = episode.trajectory()
+    log = episode.log
+    assert traj.shape == (len(log.states), len(TRAJECTORY_COLUMNS))
+    assert np.array_equal(traj[:, 0], log.t)
+    assert np.array_equal(traj[:, 1:5], log.states)
+    assert np.array_equal(traj[:-1, 5:7], log.controls[:, ::-1])
+    assert set(np.unique(traj[:, 7])) <= {-1.0, 1.0}
+    # The rows are a trajectory of the rear-axle bicycle model: each pose follows from
+    # the previous one with the logged speed and the applied steering.
+    L = episode.scenario.vehicle.wheelbase
+    k = len(traj) // 2
+    x, y, yaw = bicycle_step(tuple(traj[k, 1:4]), traj[k + 1, 4], traj[k, 5], log.dt, L)
+    assert np.allclose([x, y], traj[k + 1, 1:3], atol=1e-6)
+
+
+def test_csv_has_the_header_and_one_row_per_state(episode):
+    rows = list(csv.reader(trajectory_csv(episode).splitlines()))
+    assert rows[0] == list(TRAJECTORY_COLUMNS)
+    assert len(rows) == len(episode.log.states) + 1
+    assert np.allclose(np.array(rows[1:], dtype=float), episode.trajectory(), atol=1e-6)
+
+
+def test_cli_writes_the_trajectory_and_rejects_a_bad_suffix(tmp_path, capsys):
+    out = tmp_path / "run.csv"
+    assert main(["simulate", "overtake", "--seed", "2", "--trajectory", str(out)]) == 0
+    assert out.read_text().splitlines()[0] == "t,x,y,yaw,speed,steer,accel,gear"
+    assert main(["simulate", "overtake", "--trajectory", str(tmp_path / "run.txt")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--trajectory" in err[0]
