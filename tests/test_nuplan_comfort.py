@@ -2,7 +2,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rrtdrive.nuplan_comfort import COMFORT_BOUNDS, nuplan_comfort
+from rrtdrive.evaluation.nuplan_comfort import COMFORT_BOUNDS, nuplan_comfort
 
 T = np.arange(0.0, 12.0, 0.05)
 
@@ -47,3 +47,27 @@ def test_heading_wrap_does_not_spike_yaw_rate():
     yaw = np.angle(np.exp(1j * (0.3 * T + 3.0)))  # wraps through +-pi
     c = nuplan_comfort(T, yaw, np.full_like(T, 2.0), 1.255)
     assert np.isclose(c.yaw_rate_abs_max, 0.3, rtol=1e-6)
+
+
+def test_episode_report_carries_the_drivability_figures():
+    from rrtdrive.evaluation import EvalConfig, evaluate
+    from rrtdrive.sim.runner import run_episode
+
+    ep = run_episode("overtake", controller="stanley", seed=1)
+    report = evaluate(ep)
+    v = ep.scenario.vehicle
+    direct = nuplan_comfort(
+        ep.log.t, ep.log.states[:, 2], ep.log.states[:, 3], v.length / 2 - v.rear_overhang
+    )
+    assert report.nuplan_comfortable == direct.comfortable
+    assert report.nuplan_yaw_rate_abs_max == direct.yaw_rate_abs_max
+    # Sharpness from the path samples, computed independently.
+    s = ep.path.samples
+    d = np.arctan(v.wheelbase * s[:, 3])
+    ds = np.hypot(np.diff(s[:, 0]), np.diff(s[:, 1]))
+    keep = ds > 1e-9
+    assert np.isclose(report.path_max_sharpness, np.max(np.abs(np.diff(d))[keep] / ds[keep]))
+    # The share of steps over the steering-rate limit falls as the limit rises.
+    loose = evaluate(ep, EvalConfig(steer_rate_limit=100.0))
+    assert loose.steering_rate_over_limit_share == 0.0
+    assert 0.0 <= report.steering_rate_over_limit_share <= 1.0

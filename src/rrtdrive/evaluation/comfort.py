@@ -54,3 +54,21 @@ def steering_rate(log: DriveLog) -> np.ndarray:
     steer = log.controls[:, 1]
     steer_prev = np.concatenate([[0.0], steer[:-1]])
     return np.abs(steer - steer_prev) / log.dt
+
+
+def path_sharpness(path: Any, wheelbase: float) -> float | None:
+    """Largest ``|d delta / ds|`` of a path (rad/m), ``delta = atan(L kappa)``.
+
+    The steering angle the path asks for changes at this rate per metre; a car
+    with steering rate ``r`` follows it at up to ``r / sharpness`` m/s. ``None``
+    for a path of fewer than two samples.
+    """
+    samples = np.asarray(path.samples, dtype=float)
+    if len(samples) < 2:
+        return None
+    ds = np.hypot(*np.diff(samples[:, :2], axis=0).T)
+    delta = np.arctan(wheelbase * samples[:, 3])
+    keep = ds > 1e-9  # a repeated row (a cusp) has no length to change over
+    if not np.any(keep):
+        return 0.0
+    return float(np.max(np.abs(np.diff(delta))[keep] / ds[keep]))

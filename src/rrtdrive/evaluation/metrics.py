@@ -23,6 +23,7 @@ from rrtdrive.evaluation.collisions import (
     map_collision,
     vehicle_collisions,
 )
+from rrtdrive.evaluation.nuplan_comfort import NuplanComfort, nuplan_comfort
 from rrtdrive.evaluation.report import EpisodeReport, EvalConfig
 from rrtdrive.evaluation.success import SuccessTerms, success_terms
 from rrtdrive.evaluation.tracking import tracking_errors
@@ -111,6 +112,15 @@ class MetricContext:
         if not self.episode.log.others.size:
             return None
         return time_to_collision(self.episode, [c[0] for c in self.at_fault])
+
+    @cached_property
+    def nuplan(self) -> NuplanComfort:
+        """NuPlan's comfort figures of the driven trajectory."""
+        ep = self.episode
+        v = ep.scenario.vehicle
+        return nuplan_comfort(
+            ep.log.t, ep.log.states[:, 2], ep.log.states[:, 3], v.length / 2.0 - v.rear_overhang
+        )
 
     @cached_property
     def replan(self) -> dict[str, Any]:
@@ -234,6 +244,23 @@ METRICS: Mapping[str, Metric] = MappingProxyType({
     "replan_budget_s": _replan("replan_budget_s"),
     "replans_over_budget": _replan("replans_over_budget"),
     "unsafe_steps": _replan("unsafe_steps"),
+    # The actuator and nuPlan's ego_is_comfortable (docs/metrics.md, "Drivability").
+    "steering_rate_over_limit_share": Metric(
+        lambda ep, ctx: float(
+            np.mean(comfort.steering_rate(ep.log) > ctx.config.steer_rate_limit + 1e-9)
+        )
+    ),
+    "path_max_sharpness": _always(
+        lambda ep, ctx: comfort.path_sharpness(ep.path, ep.scenario.vehicle.wheelbase)
+    ),
+    "nuplan_comfortable": Metric(lambda ep, ctx: ctx.nuplan.comfortable),
+    "nuplan_lon_accel_min": Metric(lambda ep, ctx: ctx.nuplan.lon_accel_min),
+    "nuplan_lon_accel_max": Metric(lambda ep, ctx: ctx.nuplan.lon_accel_max),
+    "nuplan_lat_accel_abs_max": Metric(lambda ep, ctx: ctx.nuplan.lat_accel_abs_max),
+    "nuplan_lon_jerk_abs_max": Metric(lambda ep, ctx: ctx.nuplan.lon_jerk_abs_max),
+    "nuplan_jerk_abs_max": Metric(lambda ep, ctx: ctx.nuplan.jerk_abs_max),
+    "nuplan_yaw_rate_abs_max": Metric(lambda ep, ctx: ctx.nuplan.yaw_rate_abs_max),
+    "nuplan_yaw_accel_abs_max": Metric(lambda ep, ctx: ctx.nuplan.yaw_accel_abs_max),
 })
 
 

@@ -63,6 +63,9 @@ class EvalConfig:
         The exact footprint judge checks poses at most this far apart (metres).
     kappa_tol : float
         Relative tolerance of the executed-curvature limit check.
+    steer_rate_limit : float
+        Steering-rate limit of the executed-steering figures (rad/s at the front
+        wheels; CommonRoad's 0.4 by default).
     """
 
     goal_tol_m: float = 0.5
@@ -70,9 +73,12 @@ class EvalConfig:
     stop_speed: float = 0.1
     footprint_spacing: float = 0.1
     kappa_tol: float = 1e-9
+    steer_rate_limit: float = 0.4
 
     def __post_init__(self) -> None:
-        for name in ("goal_tol_m", "goal_tol_rad", "stop_speed", "footprint_spacing"):
+        for name in (
+            "goal_tol_m", "goal_tol_rad", "stop_speed", "footprint_spacing", "steer_rate_limit"
+        ):
             require_positive(f"eval.{name}", getattr(self, name))
         if not (self.kappa_tol >= 0 and math.isfinite(self.kappa_tol)):
             raise InputError(f"eval.kappa_tol: must be >= 0, got {self.kappa_tol!r}")
@@ -136,6 +142,16 @@ class EpisodeReport:
     replan_budget_s: float | None = None
     replans_over_budget: int | None = None
     unsafe_steps: int | None = None
+    steering_rate_over_limit_share: float | None = None
+    path_max_sharpness: float | None = None
+    nuplan_comfortable: bool | None = None
+    nuplan_lon_accel_min: float | None = None
+    nuplan_lon_accel_max: float | None = None
+    nuplan_lat_accel_abs_max: float | None = None
+    nuplan_lon_jerk_abs_max: float | None = None
+    nuplan_jerk_abs_max: float | None = None
+    nuplan_yaw_rate_abs_max: float | None = None
+    nuplan_yaw_accel_abs_max: float | None = None
 
     def __post_init__(self) -> None:
         # Reports read back from JSON carry the outcome as its string.
