@@ -18,13 +18,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import multiprocessing as mp
 import os
 import platform
 import sys
 import time
 from pathlib import Path as FsPath
 
+from rrtdrive.bench.backends import parallel_map
 from rrtdrive.evaluation import EpisodeReport, evaluate, summarise
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim.runner import EpisodeConfig, run_episode
@@ -133,12 +133,13 @@ def main(argv: list[str] | None = None) -> int:
     ]
     t0 = time.perf_counter()
     reports: list[dict] = []
-    with mp.get_context("spawn").Pool(max(1, args.jobs)) as pool:
-        for i, rep in enumerate(pool.imap(run_one, jobs, chunksize=2), 1):
-            reports.append(rep)
-            if i % 10 == 0 or i == len(jobs):
-                print(f"\r{i}/{len(jobs)} episodes, {time.perf_counter() - t0:.0f} s",
-                      end="", file=sys.stderr, flush=True)
+
+    def progress(i: int, total: int) -> None:
+        if i % 10 == 0 or i == total:
+            print(f"\r{i}/{total} episodes, {time.perf_counter() - t0:.0f} s",
+                  end="", file=sys.stderr, flush=True)
+
+    reports = parallel_map(run_one, jobs, args.jobs, progress)
     print(file=sys.stderr)
     summaries: dict[str, dict] = {}
     fields = set(EpisodeReport.__dataclass_fields__)

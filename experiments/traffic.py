@@ -20,7 +20,6 @@ import argparse
 import dataclasses
 import json
 import math
-import multiprocessing as mp
 import pickle
 import platform
 import shutil
@@ -32,6 +31,7 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
+from rrtdrive.bench.backends import parallel_map
 from rrtdrive.evaluation import TTC_LEAST_MIN_S, EpisodeReport, evaluate, summarise
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim.replanning import ReplanConfig
@@ -239,22 +239,23 @@ def main(argv: list[str] | None = None) -> int:
         for d in densities for seed in range(args.seeds)
     ]
     t0 = time.perf_counter()
-    reports: list[dict] = []
+
+    def progress(i: int, total: int) -> None:
+        if i % 10 == 0 or i == total:
+            print(f"\r{i}/{total} episodes, {time.perf_counter() - t0:.0f} s",
+                  end="", file=sys.stderr, flush=True)
+
+    reports = parallel_map(run_one, jobs, args.jobs, progress)
     best: dict | None = None
-    with mp.get_context("spawn").Pool(max(1, args.jobs)) as pool:
-        for i, rep in enumerate(pool.imap(run_one, jobs, chunksize=1), 1):
-            reports.append(rep)
-            if rep["kept"]:
-                # The tightest success so far stays (smallest nuPlan TTC, then distance).
-                if best is None or _tightness(rep) < _tightness(best):
-                    if best is not None:
-                        FsPath(best["kept"]).unlink()
-                    best = rep
-                else:
-                    FsPath(rep["kept"]).unlink()
-            if i % 10 == 0 or i == len(jobs):
-                print(f"\r{i}/{len(jobs)} episodes, {time.perf_counter() - t0:.0f} s",
-                      end="", file=sys.stderr, flush=True)
+    for rep in reports:  # in job order, so a tie keeps the lower seed
+        if rep["kept"]:
+            # The tightest success stays (smallest nuPlan TTC, then distance).
+            if best is None or _tightness(rep) < _tightness(best):
+                if best is not None:
+                    FsPath(best["kept"]).unlink()
+                best = rep
+            else:
+                FsPath(rep["kept"]).unlink()
     print(file=sys.stderr)
     budget = config.replan.cycle_budget_s  # type: ignore[union-attr]
     summaries = {

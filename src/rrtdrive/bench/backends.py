@@ -40,6 +40,7 @@ from rrtdrive.bench.worker import execute_run
 from rrtdrive.types import InputError
 
 __all__ = [
+    "parallel_map",
     "Outcome",
     "Executor",
     "LocalBackend",
@@ -462,3 +463,52 @@ class RayBackend:
                     ray.cancel(ref, force=True)
                 except Exception:  # noqa: BLE001,S110 - best effort on the way out
                     pass
+
+
+def parallel_map(
+    fn: Callable[[Any], dict[str, Any]],
+    items: Iterable[Any],
+    workers: int,
+    progress: Callable[[int, int], None] | None = None,
+    run_timeout_s: float = 3600.0,
+) -> list[dict[str, Any]]:
+    """``[fn(item) for item in items]`` on the bench's local worker processes, in order.
+
+    For experiment scripts: the same spawned, single-threaded workers, crash handling
+    and start-up checks as ``rrtdrive bench`` (:class:`LocalBackend`), without a
+    result store. ``fn`` must be a module-level function and ``items`` picklable.
+
+    Parameters
+    ----------
+    fn : callable
+        ``item -> row``.
+    items : iterable
+        The work.
+    workers : int
+        Worker processes.
+    progress : callable, optional
+        Called with ``(done, total)`` after every finished item.
+    run_timeout_s : float
+        An item taking longer is killed and retried once, then reported.
+
+    Returns
+    -------
+    list of dict
+        The rows, in the order of ``items``.
+
+    Raises
+    ------
+    RuntimeError
+        When an item failed on every attempt (its error in the message).
+    """
+    work = list(items)
+    backend = LocalBackend(max(1, workers), executor=fn, run_timeout_s=run_timeout_s)
+    index = {id(item): i for i, item in enumerate(work)}
+    rows: list[dict[str, Any] | None] = [None] * len(work)
+    for done, outcome in enumerate(backend.run(work), 1):
+        if outcome.row is None:
+            raise RuntimeError(f"{outcome.spec!r} failed: {outcome.error}")
+        rows[index[id(outcome.spec)]] = outcome.row
+        if progress is not None:
+            progress(done, len(work))
+    return [row for row in rows if row is not None]
