@@ -142,6 +142,11 @@ class VehicleParams:
         Minimum turning radius of the rear axle in metres; the binding path limit.
     max_steer : float
         Actuator limit of the front-wheel angle in radians.
+    max_steer_rate : float or None
+        Largest rate of the front-wheel angle in rad/s (CommonRoad's vehicles: 0.4):
+        the simulated ego's steering angle slews toward the command at no more than
+        this. ``None`` or ``inf``: the angle follows the command at once (today's
+        default, see docs/metrics.md "Drivability").
 
     Examples
     --------
@@ -155,10 +160,21 @@ class VehicleParams:
     wheelbase: float = 2.51
     min_turning_radius: float = 6.0
     max_steer: float = math.radians(30.0)
+    max_steer_rate: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("length", "width", "wheelbase", "min_turning_radius", "max_steer"):
             require_positive(f"vehicle.{name}", getattr(self, name))
+        rate = self.max_steer_rate
+        if rate is not None and (
+            isinstance(rate, bool)
+            or not isinstance(rate, (int, float))
+            or math.isnan(rate)
+            or rate <= 0
+        ):
+            raise InputError(
+                f"vehicle.max_steer_rate: must be > 0 rad/s, inf or None, got {rate!r}"
+            )
         if self.wheelbase >= self.length:
             raise InputError(
                 f"vehicle.wheelbase: must be shorter than the length {self.length}, "

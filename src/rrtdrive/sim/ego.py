@@ -60,6 +60,9 @@ class EgoVehicle(Vehicle):
 
     The action dictionary is highway-env's: ``{"acceleration": a, "steering": delta}``
     with ``delta`` the front-wheel angle in radians, clipped to ``vehicle.max_steer``.
+    With ``vehicle.max_steer_rate`` set, the steering angle is part of the state and
+    moves toward the command by at most ``max_steer_rate * dt`` per step (a rate-limited
+    actuator; the car starts with straight wheels).
     Over one step of length ``dt`` the acceleration and the steering angle are held;
     the speed changes linearly (stopping at zero rather than reversing within a
     step) and the rear axle follows the exact circular arc of curvature
@@ -198,6 +201,10 @@ class EgoVehicle(Vehicle):
         """
         self.clip_actions()
         steer = self.action["steering"]
+        rate = self.params.max_steer_rate
+        if rate is not None and math.isfinite(rate):
+            reach = rate * dt
+            steer = min(max(steer, self.steer - reach), self.steer + reach)
         accel = self.action["acceleration"]
         v0 = self.speed
         v1 = v0 + accel * dt
