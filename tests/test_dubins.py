@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.dubins import dubins_paths, shortest_dubins
 from rrtdrive.types import InputError, Pose
 
@@ -17,8 +18,7 @@ angle = st.floats(-math.pi, math.pi, allow_nan=False)
 radius = st.floats(1.0, 12.0, allow_nan=False)
 
 
-def _wrap(a):
-    return (a + math.pi) % (2 * math.pi) - math.pi
+_wrap = wrap_angle
 
 
 @settings(max_examples=200, deadline=None)

@@ -9,11 +9,11 @@ import pytest
 
 from rrtdrive.evaluation import (
     EvalConfig,
-    densify_poses,
     evaluate,
     summarise,
     tracking_errors,
 )
+from rrtdrive.geometry import densify
 from rrtdrive.sim.episode import DriveLog, Episode
 from rrtdrive.sim.runner import EpisodeConfig
 from rrtdrive.sim.tasks import make_scenario
@@ -67,7 +67,8 @@ def test_tracking_errors_signed_and_heading():
 
 
 def test_densify():
-    d = densify_poses(np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.2]]), 0.1)
+    poses = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.2]])
+    d = densify(poses, 0.1, angle_column=2, abs_slack=1e-9).points
     assert len(d) == 11 and np.max(np.diff(d[:, 0])) <= 0.1 + 1e-12
     assert d[5, 2] == pytest.approx(0.1)
 
@@ -197,12 +198,13 @@ def test_outcome_is_an_enum_with_the_json_strings(overtake):
 
 
 def test_boxes_intersect_with_shapely():
-    from rrtdrive.evaluation.collisions import box_corners, boxes_intersect
+    from rrtdrive.evaluation.collisions import boxes_intersect
+    from rrtdrive.geometry import box_corners
 
     z = np.zeros(4)
-    a = box_corners(z, z, z, np.full(4, 2.0), np.full(4, 2.0))
+    a = box_corners(z, z, z, -1.0, 1.0, 1.0)  # centred 2 m x 2 m boxes
     b = box_corners(np.array([1.5, 2.0, 2.5, 2.1]), z, np.array([0.0, 0.0, 0.0, math.pi / 4]),
-                    np.full(4, 2.0), np.full(4, 2.0))
+                    -1.0, 1.0, 1.0)
     # Overlapping, touching (counts), apart, and a rotated box whose corner reaches in.
     assert boxes_intersect(a, b).tolist() == [True, True, False, True]
     assert boxes_intersect(a[:1][:, None], b[None]).shape == (1, 4)

@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.maps import Map, Obstacle, builtin_map
 from rrtdrive.planning import PLANNERS, make_planner
 from rrtdrive.planning.base import Planner, PlanningProblem, Stopwatch, failure
@@ -25,7 +26,6 @@ from rrtdrive.types import (
     PlanStatus,
     Pose,
     VehicleParams,
-    wrap_angle,
 )
 
 BASELINES = ("rrt", "rrt-connect", "rrt-star")

@@ -24,6 +24,7 @@ import numpy as np
 import shapely
 
 from rrtdrive.atomic import write_text_atomic
+from rrtdrive.geometry import box_corners
 from rrtdrive.types import InputError, Pose, VehicleParams, require_finite, require_positive
 from rrtdrive.vehicle import footprint_polygon
 
@@ -58,14 +59,11 @@ class Obstacle:
         object.__setattr__(self, "yaw", float(self.yaw))
 
     def corners(self) -> np.ndarray:
-        """The four corners, shape ``(4, 2)``, counter-clockwise."""
+        """The four corners, shape ``(4, 2)``, counter-clockwise from rear-right."""
         half_l, half_w = self.size[0] / 2.0, self.size[1] / 2.0
-        local = np.array(
-            [[-half_l, -half_w], [half_l, -half_w], [half_l, half_w], [-half_l, half_w]]
+        return box_corners(
+            self.center[0], self.center[1], self.yaw, -half_l, half_l, half_w, rotate_first=True
         )
-        c, s = math.cos(self.yaw), math.sin(self.yaw)
-        rot = np.array([[c, -s], [s, c]])
-        return local @ rot.T + np.asarray(self.center)
 
     def polygon(self) -> shapely.Polygon:
         """The rectangle as a shapely polygon."""

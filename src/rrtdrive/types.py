@@ -12,6 +12,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+# Re-exported for callers not yet switched to rrtdrive.geometry (sim/, envs/, bench/).
+from rrtdrive.geometry import wrap_angle  # noqa: F401
+
 __all__ = [
     "InputError",
     "Pose",
@@ -89,11 +92,6 @@ def require_int(name: str, value: object, minimum: int = 1, maximum: int | None 
         bound = f">= {minimum}" if maximum is None else f"in {minimum}..{maximum}"
         raise InputError(f"{name}: must be an integer {bound}, got {value!r}")
     return int(value)
-
-
-def wrap_angle(angle: float | np.ndarray) -> float | np.ndarray:
-    """Wrap an angle (or an array of angles) to [-pi, pi)."""
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import shapely
 
+from rrtdrive.geometry import box_corners
 from rrtdrive.types import VehicleParams
 
 __all__ = ["footprint_corners", "footprint_polygon", "bicycle_step", "cover_discs"]
@@ -36,12 +37,9 @@ def footprint_corners(poses: np.ndarray, vehicle: VehicleParams) -> np.ndarray:
     p = np.asarray(poses, dtype=float)
     single = p.ndim == 1
     p = p.reshape(-1, 3)
-    back, front, half_w = -vehicle.rear_overhang, vehicle.front_extent, vehicle.width / 2.0
-    local = np.array([[back, -half_w], [front, -half_w], [front, half_w], [back, half_w]])
-    c, s = np.cos(p[:, 2]), np.sin(p[:, 2])
-    x = p[:, None, 0] + c[:, None] * local[None, :, 0] - s[:, None] * local[None, :, 1]
-    y = p[:, None, 1] + s[:, None] * local[None, :, 0] + c[:, None] * local[None, :, 1]
-    out = np.stack([x, y], axis=-1)
+    out = box_corners(
+        p[:, 0], p[:, 1], p[:, 2], -vehicle.rear_overhang, vehicle.front_extent, vehicle.width / 2.0
+    )
     return out[0] if single else out
 
 

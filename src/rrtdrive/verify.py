@@ -1,8 +1,9 @@
 """An independent check of a planned path's guarantees, for tests and experiments.
 
-It shares no code with the planner or the checker: the body is a shapely
-polygon built here, curvature is the discrete three-point (Menger) curvature of
-the samples, and headings are compared at the ends.
+It shares no code with the planner or the checker (only the angle wrap and the
+densifier of :mod:`rrtdrive.geometry`): the body is a shapely polygon built
+here, curvature is the discrete three-point (Menger) curvature of the samples,
+and headings are compared at the ends.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
+from rrtdrive.geometry import densify, wrap_angle
 from rrtdrive.maps import Map
 from rrtdrive.types import Path
 
@@ -89,15 +91,7 @@ def verify_path(
     xy = s[:, :2]
     gaps = np.hypot(*np.diff(xy, axis=0).T)
     # Dense poses: heading from the samples' own yaw column, interpolated.
-    dense = []
-    for i in range(len(s) - 1):
-        n = max(1, int(math.ceil(gaps[i] / pose_spacing)))
-        dyaw = (s[i + 1, 2] - s[i, 2] + math.pi) % (2 * math.pi) - math.pi
-        for k in range(n):
-            t = k / n
-            dense.append((s[i, 0] + t * (s[i + 1, 0] - s[i, 0]),
-                          s[i, 1] + t * (s[i + 1, 1] - s[i, 1]), s[i, 2] + t * dyaw))
-    dense.append(tuple(s[-1, :3]))
+    dense = densify(s[:, :3], pose_spacing, angle_column=2).points
     bodies = [_body(x, y, yaw, v.length, v.width, v.rear_overhang) for x, y, yaw in dense]
     region = shapely.box(*m.bounds)
     obstacles = shapely.union_all([shapely.Polygon(o.corners()) for o in m.obstacles])
@@ -121,8 +115,8 @@ def verify_path(
     # kappa_max the chord deviates from the tangent by under 0.7 degrees.
     start_dir = math.atan2(*(xy[1] - xy[0])[::-1])
     goal_dir = math.atan2(*(xy[-1] - xy[-2])[::-1])
-    err_s = abs((start_dir - m.start.yaw + math.pi) % (2 * math.pi) - math.pi)
-    err_g = abs((goal_dir - m.goal.yaw + math.pi) % (2 * math.pi) - math.pi)
+    err_s = abs(wrap_angle(start_dir - m.start.yaw))
+    err_g = abs(wrap_angle(goal_dir - m.goal.yaw))
     endpoints_ok = bool(
         np.allclose(xy[0], (m.start.x, m.start.y), atol=1e-6)
         and np.allclose(xy[-1], (m.goal.x, m.goal.y), atol=1e-6)

@@ -18,6 +18,7 @@ from scipy import ndimage
 
 from rrtdrive.collision.config import CheckerConfig
 from rrtdrive.collision.grid import GridCache, rasterise
+from rrtdrive.geometry import densify
 from rrtdrive.maps import Map, Obstacle
 from rrtdrive.types import VehicleParams
 from rrtdrive.vehicle import cover_discs, footprint_corners
@@ -420,29 +421,14 @@ class CollisionChecker:
         if len(s) == 1:
             ok = bool(self.poses_free(s, clearance)[0])
             return ok, np.zeros(0 if ok else 1, dtype=np.int64)
-        seg = np.hypot(*np.diff(s[:, :2], axis=0).T)
-        pieces = np.maximum(1, np.ceil(seg / spacing).astype(np.int64))
-        if pieces.max() == 1:
+        dense = densify(s, spacing, angle_column=2)
+        if dense.pieces.max() == 1:
             # Dense enough already: the poses themselves (what the interpolation gives).
             free = self.poses_free(s, clearance)
-            owner = np.minimum(np.arange(len(s)), len(seg) - 1)
+            owner = np.minimum(np.arange(len(s)), len(dense.pieces) - 1)
             return bool(free.all()), np.unique(owner[~free])
-        owner = np.repeat(np.arange(len(seg)), pieces)
-        first = np.repeat(np.cumsum(pieces) - pieces, pieces)
-        frac = (np.arange(len(owner)) - first) / np.repeat(pieces, pieces)
-        a, b = s[owner], s[owner + 1]
-        dyaw = (b[:, 2] - a[:, 2] + np.pi) % (2 * np.pi) - np.pi
-        dense = np.column_stack(
-            [
-                a[:, 0] + frac * (b[:, 0] - a[:, 0]),
-                a[:, 1] + frac * (b[:, 1] - a[:, 1]),
-                a[:, 2] + frac * dyaw,
-            ]
-        )
-        dense = np.vstack([dense, s[-1:]])
-        owner = np.append(owner, len(seg) - 1)
-        free = self.poses_free(dense, clearance)
-        bad = np.unique(owner[~free])
+        free = self.poses_free(dense.points, clearance)
+        bad = np.unique(dense.segment[~free])
         return bool(free.all()), bad
 
     # ------------------------------------------------------------------ connectivity

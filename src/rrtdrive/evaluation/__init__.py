@@ -17,7 +17,6 @@ from __future__ import annotations
 
 from rrtdrive.evaluation.collisions import (
     COLLISION_STOPPED_SPEED,
-    densify_poses,
     vehicle_collisions,
 )
 from rrtdrive.evaluation.metrics import METRICS, Metric, MetricContext, evaluate
@@ -46,7 +45,6 @@ __all__ = [
     "evaluate",
     "summarise",
     "tracking_errors",
-    "densify_poses",
     "time_to_collision",
     "vehicle_collisions",
     "min_vehicle_distance",

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import shapely
 
-from rrtdrive.types import wrap_angle
+from rrtdrive.geometry import box_corners, densify
 from rrtdrive.vehicle import footprint_corners
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -21,10 +21,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = [
     "COLLISION_STOPPED_SPEED",
-    "densify_poses",
     "map_collision",
     "footprint_collisions",
-    "box_corners",
     "boxes_intersect",
     "ego_centres",
     "relative_angles",
@@ -36,28 +34,6 @@ __all__ = [
 COLLISION_STOPPED_SPEED = 5e-2
 
 
-def densify_poses(poses: np.ndarray, spacing: float) -> np.ndarray:
-    """Linear interpolation of ``(N, 3)`` poses so consecutive ones are at most ``spacing`` apart.
-
-    Examples
-    --------
-    >>> densify_poses(np.array([[0.0, 0, 0], [1.0, 0, 0]]), 0.25).shape
-    (5, 3)
-    """
-    p = np.asarray(poses, dtype=float).reshape(-1, 3)
-    if len(p) < 2:
-        return p
-    step = np.hypot(*np.diff(p[:, :2], axis=0).T)
-    pieces = np.maximum(1, np.ceil(step / spacing - 1e-9).astype(np.int64))
-    owner = np.repeat(np.arange(len(step)), pieces)
-    first = np.repeat(np.cumsum(pieces) - pieces, pieces)
-    frac = (np.arange(len(owner)) - first) / np.repeat(pieces, pieces)
-    a, b = p[owner], p[owner + 1]
-    dyaw = wrap_angle(b[:, 2] - a[:, 2])
-    out = np.column_stack([a[:, :2] + frac[:, None] * (b[:, :2] - a[:, :2]), a[:, 2] + frac * dyaw])
-    return np.vstack([out, p[-1:]])
-
-
 def map_collision(episode: Episode, spacing: float) -> bool:
     """Exact body rectangle of every (densified) logged pose against the map and its bounds."""
     from rrtdrive.planning.base import cached_checker
@@ -65,7 +41,8 @@ def map_collision(episode: Episode, spacing: float) -> bool:
     states = episode.log.states
     if len(states) == 0:
         return False
-    dense = densify_poses(states[:, :3], spacing)
+    # abs_slack: an exact multiple of the spacing gains no extra piece through rounding.
+    dense = densify(states[:, :3], spacing, angle_column=2, abs_slack=1e-9).points
     return not bool(np.all(cached_checker(episode.scenario.map).poses_free(dense)))
 
 
@@ -87,30 +64,11 @@ def footprint_collisions(episode: Episode, spacing: float, map_hit: bool | None 
     ego_polys = shapely.polygons(footprint_corners(states[:, :3], vehicle))
     for k, (length, width) in enumerate(episode.log.other_sizes):
         o = others[:, k, :]
-        c, s_ = np.cos(o[:, 2]), np.sin(o[:, 2])
         hl, hw = length / 2.0, width / 2.0
-        local = np.array([[-hl, -hw], [hl, -hw], [hl, hw], [-hl, hw]])
-        x = o[:, None, 0] + c[:, None] * local[None, :, 0] - s_[:, None] * local[None, :, 1]
-        y = o[:, None, 1] + s_[:, None] * local[None, :, 0] + c[:, None] * local[None, :, 1]
-        polys = shapely.polygons(np.stack([x, y], axis=-1))
+        polys = shapely.polygons(box_corners(o[:, 0], o[:, 1], o[:, 2], -hl, hl, hw))
         if bool(np.any(shapely.intersects(ego_polys, polys))):
             return True
     return False
-
-
-def box_corners(cx: np.ndarray, cy: np.ndarray, h: np.ndarray, length: np.ndarray,
-                 width: np.ndarray) -> np.ndarray:
-    """Corners ``(..., 4, 2)`` of centred oriented boxes.
-
-    In nuPlan's ``OrientedBox`` order: front-left, rear-left, rear-right, front-right.
-    """
-    c, s = np.cos(h), np.sin(h)
-    hl, hw = length / 2.0, width / 2.0
-    lx = np.stack([hl, -hl, -hl, hl], axis=-1) * np.ones_like(cx)[..., None]
-    ly = np.stack([hw, hw, -hw, -hw], axis=-1) * np.ones_like(cx)[..., None]
-    x = cx[..., None] + c[..., None] * lx - s[..., None] * ly
-    y = cy[..., None] + s[..., None] * lx + c[..., None] * ly
-    return np.stack([x, y], axis=-1)
 
 
 def boxes_intersect(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -189,13 +147,12 @@ def vehicle_collisions(episode: Episode) -> list[tuple[int, int, str, bool]]:
     vehicle = episode.scenario.vehicle
     ex, ey = ego_centres(states, vehicle)
     n, k = others.shape[:2]
-    ego_box = box_corners(
-        ex, ey, states[:, 2], np.full(n, vehicle.length), np.full(n, vehicle.width)
-    )
+    half_l = vehicle.length / 2.0
+    ego_box = box_corners(ex, ey, states[:, 2], -half_l, half_l, vehicle.width / 2.0)
     sizes = log.other_sizes
     boxes = box_corners(
         others[..., 0], others[..., 1], others[..., 2],
-        np.broadcast_to(sizes[:, 0], (n, k)), np.broadcast_to(sizes[:, 1], (n, k)),
+        -sizes[:, 0] / 2.0, sizes[:, 0] / 2.0, sizes[:, 1] / 2.0,
     )
     hit = boxes_intersect(ego_box[:, None], boxes)
     if not hit.any():
@@ -213,7 +170,7 @@ def vehicle_collisions(episode: Episode) -> list[tuple[int, int, str, bool]]:
             kind, fault = "active_rear", False
         elif bool(
             shapely.intersects(
-                shapely.linestrings(ego_box[i, [0, 3]]), shapely.polygons(boxes[i, j])
+                shapely.linestrings(ego_box[i, [1, 2]]), shapely.polygons(boxes[i, j])
             )
         ):
             kind, fault = "active_front", True

@@ -17,7 +17,7 @@ import numpy as np
 
 from rrtdrive.evaluation.collisions import footprint_collisions
 from rrtdrive.evaluation.report import EpisodeReport, EvalConfig, Outcome
-from rrtdrive.types import wrap_angle
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.vehicle import footprint_corners
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -177,7 +177,7 @@ def overtake_complete(
     """
     corners = footprint_corners(np.asarray(ego_rear, dtype=float)[:3], vehicle)
     in_lane = bool(np.all(np.abs(corners[:, 1] - lane_y) <= lane_width / 2.0))
-    aligned = abs(math.remainder(float(ego_rear[2]), 2.0 * math.pi)) <= math.radians(10.0)
+    aligned = abs(wrap_angle(float(ego_rear[2]))) <= math.radians(10.0)
     ahead = corners[:, 0].min() >= float(lead_centre[0]) + lead_length / 2.0 + gap
     return in_lane and aligned and bool(ahead)
 

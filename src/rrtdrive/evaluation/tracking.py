@@ -1,18 +1,25 @@
 """Tracking errors: the logged rear axle against the tracked path's polyline.
 
 :func:`tracking_errors` gives the signed cross-track and heading errors;
-:func:`project_s` the arc length of the nearest path point (for progress).
+:func:`distinct_samples` the path polyline that both they and progress project onto
+(:func:`rrtdrive.geometry.project_to_polyline`).
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from rrtdrive.types import InputError, Path, wrap_angle
+from rrtdrive.geometry import project_to_polyline, wrap_angle
+from rrtdrive.types import InputError, Path
 
-__all__ = ["tracking_errors", "project_s"]
+__all__ = ["distinct_samples", "tracking_errors"]
+
+
+def distinct_samples(path: Path) -> np.ndarray:
+    """The path's samples with consecutive repeated positions dropped (projection needs them)."""
+    s = np.asarray(path.samples, dtype=float)
+    keep = np.concatenate([[True], np.hypot(*np.diff(s[:, :2], axis=0).T) > 1e-9])
+    return s[keep]
 
 
 def tracking_errors(
@@ -47,49 +54,17 @@ def tracking_errors(
     >>> round(float(cte[0]), 6), round(float(he[0]), 6)
     (-0.3, 0.1)
     """
-    s = np.asarray(path.samples, dtype=float)
-    keep = np.concatenate([[True], np.hypot(*np.diff(s[:, :2], axis=0).T) > 1e-9])
-    s = s[keep]
+    s = distinct_samples(path)
     if len(s) < 2:
         raise InputError("path: need at least two distinct samples to measure tracking errors")
-    a = s[:-1, :2]
     d = np.diff(s[:, :2], axis=0)
-    seg_len2 = np.einsum("ij,ij->i", d, d)
     yaw = np.unwrap(s[:, 2])
     p = np.asarray(poses, dtype=float).reshape(-1, 3)
-    cte = np.empty(len(p))
-    herr = np.empty(len(p))
-    for lo in range(0, len(p), chunk):
-        q = p[lo : lo + chunk, :2]
-        rel = q[:, None, :] - a[None, :, :]
-        t = np.clip(np.einsum("nmj,mj->nm", rel, d) / seg_len2[None, :], 0.0, 1.0)
-        foot = a[None, :, :] + t[..., None] * d[None, :, :]
-        dist2 = np.sum((q[:, None, :] - foot) ** 2, axis=-1)
-        j = np.argmin(dist2, axis=1)
-        rows = np.arange(len(q))
-        off = q - foot[rows, j]
-        cross = d[j, 0] * off[:, 1] - d[j, 1] * off[:, 0]
-        dist = np.sqrt(dist2[rows, j])
-        cte[lo : lo + len(q)] = np.where(cross < 0, -dist, dist)
-        tj = t[rows, j]
-        path_yaw = yaw[j] + tj * (yaw[j + 1] - yaw[j])
-        herr[lo : lo + len(q)] = wrap_angle(p[lo : lo + len(q), 2] - path_yaw)
+    proj = project_to_polyline(s[:, :2], p[:, :2], chunk)
+    j, tj = proj.segment, proj.fraction
+    off = p[:, :2] - proj.foot
+    cross = d[j, 0] * off[:, 1] - d[j, 1] * off[:, 0]
+    cte = np.where(cross < 0, -proj.distance, proj.distance)
+    path_yaw = yaw[j] + tj * (yaw[j + 1] - yaw[j])
+    herr = wrap_angle(p[:, 2] - path_yaw)
     return cte, herr
-
-
-
-def project_s(path: Path, points: np.ndarray) -> np.ndarray:
-    """Arc length of the nearest point of the path polyline to each point."""
-    s = np.asarray(path.samples, dtype=float)
-    keep = np.concatenate([[True], np.hypot(*np.diff(s[:, :2], axis=0).T) > 1e-9])
-    xy = s[keep, :2]
-    arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
-    a, d = xy[:-1], np.diff(xy, axis=0)
-    len2 = np.einsum("ij,ij->i", d, d)
-    out = []
-    for q in np.asarray(points, dtype=float).reshape(-1, 2):
-        t = np.clip(np.einsum("ij,ij->i", q - a, d) / len2, 0.0, 1.0)
-        foot = a + t[:, None] * d
-        j = int(np.argmin(np.sum((q - foot) ** 2, axis=1)))
-        out.append(arc[j] + t[j] * math.sqrt(len2[j]))
-    return np.array(out)

@@ -16,13 +16,13 @@ import shapely
 
 from rrtdrive.evaluation.collisions import (
     between_lanes,
-    box_corners,
     boxes_intersect,
     ego_centres,
     relative_angles,
     vehicle_collisions,
 )
-from rrtdrive.evaluation.tracking import project_s
+from rrtdrive.evaluation.tracking import distinct_samples
+from rrtdrive.geometry import box_corners, project_to_polyline
 
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.sim.episode import Episode
@@ -108,12 +108,12 @@ def time_to_collision(
     if len(ii):
         t = times[None, :]
         h = states[ii, 2][:, None]
+        half_l = vehicle.length / 2.0
         e_box = box_corners(
             ex[ii][:, None] + v[ii][:, None] * np.cos(h) * t,
             ey[ii][:, None] + v[ii][:, None] * np.sin(h) * t,
             np.broadcast_to(h, (len(ii), len(times))),
-            np.full((len(ii), len(times)), vehicle.length),
-            np.full((len(ii), len(times)), vehicle.width),
+            -half_l, half_l, vehicle.width / 2.0,
         )
         o = others[ii, jj]
         oh = o[:, 2][:, None]
@@ -121,8 +121,7 @@ def time_to_collision(
             o[:, 0][:, None] + o[:, 3][:, None] * np.cos(oh) * t,
             o[:, 1][:, None] + o[:, 3][:, None] * np.sin(oh) * t,
             np.broadcast_to(oh, (len(ii), len(times))),
-            np.broadcast_to(sizes[jj, 0][:, None], (len(ii), len(times))),
-            np.broadcast_to(sizes[jj, 1][:, None], (len(ii), len(times))),
+            -sizes[jj, 0][:, None] / 2.0, sizes[jj, 0][:, None] / 2.0, sizes[jj, 1][:, None] / 2.0,
         )
         hit = boxes_intersect(e_box, o_box)
         first = np.where(hit.any(axis=1), times[np.argmax(hit, axis=1)], np.inf)
@@ -152,12 +151,12 @@ def min_vehicle_distance(episode: Episode) -> float | None:
     # Only pairs that could beat the best upper bound (their centre distance) matter.
     ii, jj = np.nonzero(lower <= centre.min())
     ego = shapely.polygons(
-        box_corners(ex[ii], ey[ii], states[ii, 2], np.full(len(ii), vehicle.length),
-                     np.full(len(ii), vehicle.width))
+        box_corners(ex[ii], ey[ii], states[ii, 2], -vehicle.length / 2.0, vehicle.length / 2.0,
+                    vehicle.width / 2.0)
     )
     oth = shapely.polygons(
-        box_corners(others[ii, jj, 0], others[ii, jj, 1], others[ii, jj, 2], sizes[jj, 0],
-                     sizes[jj, 1])
+        box_corners(others[ii, jj, 0], others[ii, jj, 1], others[ii, jj, 2],
+                    -sizes[jj, 0] / 2.0, sizes[jj, 0] / 2.0, sizes[jj, 1] / 2.0)
     )
     return float(np.min(shapely.distance(ego, oth)))
 
@@ -170,5 +169,5 @@ def progress(episode: Episode) -> float | None:
     path = episode.path
     if len(path) < 2:
         return None
-    s_ends = project_s(path, episode.log.states[[0, -1], :2])
+    s_ends = project_to_polyline(distinct_samples(path)[:, :2], episode.log.states[[0, -1], :2]).s
     return float(s_ends[1] - s_ends[0])

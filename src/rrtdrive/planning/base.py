@@ -11,6 +11,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from rrtdrive.collision import CheckerConfig, CollisionChecker
+from rrtdrive.geometry import densify
 from rrtdrive.maps import Map
 from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Pose, Tree, VehicleParams
 
@@ -23,7 +24,6 @@ __all__ = [
     "failure",
     "polyline_path",
     "polyline_curvature",
-    "resample_polyline",
 ]
 
 
@@ -268,29 +268,6 @@ def polyline_curvature(points: np.ndarray) -> np.ndarray:
     return k
 
 
-def resample_polyline(points: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]:
-    """Points along a polyline at most ``spacing`` apart, keeping every vertex.
-
-    Returns
-    -------
-    samples : numpy.ndarray
-        ``(N, 2)`` positions.
-    vertex_index : numpy.ndarray
-        Index into ``samples`` of each input vertex.
-    """
-    p = np.asarray(points, dtype=float)
-    seg = np.hypot(*np.diff(p, axis=0).T)
-    # A hair over the exact ratio so that rounding (e.g. in JSON) never pushes a gap past spacing.
-    pieces = np.maximum(1, np.ceil(seg / spacing * (1 + 1e-5)).astype(np.int64))
-    owner = np.repeat(np.arange(len(seg)), pieces)
-    first = np.repeat(np.cumsum(pieces) - pieces, pieces)
-    frac = (np.arange(len(owner)) - first) / np.repeat(pieces, pieces)
-    out = p[owner] + frac[:, None] * (p[owner + 1] - p[owner])
-    out = np.vstack([out, p[-1:]])
-    vertex_index = np.concatenate([[0], np.cumsum(pieces)])
-    return out, vertex_index
-
-
 def polyline_path(points: np.ndarray, spacing: float = 0.25) -> Path:
     """A :class:`Path` along a raw polyline: headings along segments, Menger curvature at vertices.
 
@@ -300,7 +277,9 @@ def polyline_path(points: np.ndarray, spacing: float = 0.25) -> Path:
     p = np.asarray(points, dtype=float)
     if len(p) < 2:
         return Path(np.column_stack([p, np.zeros((len(p), 2))]), p)
-    xy, vertex_index = resample_polyline(p, spacing)
+    # A hair over the exact ratio so that rounding (e.g. in JSON) never pushes a gap past spacing.
+    dense = densify(p, spacing, rel_slack=1e-5)
+    xy, vertex_index = dense.points, dense.vertex_index
     seg_yaw = np.arctan2(*np.diff(p, axis=0).T[::-1])
     owner = np.searchsorted(vertex_index, np.arange(len(xy)), side="right") - 1
     yaw = seg_yaw[np.minimum(owner, len(seg_yaw) - 1)]

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.types import InputError, Pose
 
 __all__ = ["DubinsPath", "dubins_paths", "shortest_dubins"]
@@ -105,7 +106,7 @@ class DubinsPath:
             x, y, yaw = self.goal.x, self.goal.y, self.goal.yaw
         rows.append(np.array([[x, y, yaw, 0.0]]))
         out = np.vstack(rows)
-        out[:, 2] = (out[:, 2] + math.pi) % _TWO_PI - math.pi
+        out[:, 2] = wrap_angle(out[:, 2])
         return out
 
     def joints(self) -> np.ndarray:
@@ -222,7 +223,7 @@ def dubins_paths(start: Pose, goal: Pose, radius: float, tol: float = 1e-6) -> l
             continue
         path = DubinsPath(start, word, (seg[0] * radius, seg[1] * radius, seg[2] * radius), radius)
         x, y, yaw = path.end()
-        dyaw = (yaw - goal.yaw + math.pi) % _TWO_PI - math.pi
+        dyaw = wrap_angle(yaw - goal.yaw)
         if math.hypot(x - goal.x, y - goal.y) <= tol * max(1.0, radius) and abs(dyaw) <= tol:
             out.append(dataclasses.replace(path, goal=goal))
     out.sort(key=lambda p: p.length)

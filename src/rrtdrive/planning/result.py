@@ -17,8 +17,9 @@ from collections.abc import Callable
 
 import numpy as np
 
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, polyline_path, precheck
-from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Tree, wrap_angle
+from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Tree
 
 __all__ = [
     "Search",

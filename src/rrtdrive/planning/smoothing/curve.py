@@ -17,6 +17,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.interpolate import BSpline
 
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.smoothing.bspline import (
     curvature,
     fit_bspline,
@@ -29,7 +30,6 @@ from rrtdrive.planning.smoothing.config import SmoothingConfig
 from rrtdrive.planning.smoothing.corners import Corner, Ends, unit
 from rrtdrive.planning.smoothing.fillet import Fillet, fillet_points, outer_reach
 from rrtdrive.planning.smoothing.operations import supplement_fractions
-from rrtdrive.types import wrap_angle
 
 __all__ = ["CurveFitter"]
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.speed_profile import profile_times
 from rrtdrive.types import InputError, require_finite, require_positive
 
@@ -113,7 +114,7 @@ def yaw_curvature(samples: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     s = np.concatenate([[0.0], np.cumsum(ds)])
     if samples.shape[1] >= 4 and np.any(samples[:, 3] != 0.0):
         return s, samples[:, 3].copy()
-    dyaw = (np.diff(samples[:, 2]) + math.pi) % (2.0 * math.pi) - math.pi
+    dyaw = wrap_angle(np.diff(samples[:, 2]))
     k_seg = np.where(ds > 1e-9, dyaw / np.maximum(ds, 1e-9), 0.0)
     kappa = np.zeros(len(s))
     if len(k_seg):
