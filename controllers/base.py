@@ -16,6 +16,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from rrtdrive.controllers.speed import SpeedConfig, SpeedController, SpeedProfile
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.types import InputError, Path, VehicleParams, require_finite, require_positive
 
 __all__ = [
@@ -24,16 +25,7 @@ __all__ = [
     "Projection",
     "PathProjector",
     "TrackingController",
-    "wrap",
 ]
-
-_TWO_PI = 2.0 * math.pi
-
-
-def wrap(angle: float) -> float:
-    """Wrap one angle to [-pi, pi) (scalar, no numpy)."""
-    return (angle + math.pi) % _TWO_PI - math.pi
-
 
 @dataclass(frozen=True)
 class VehicleState:
@@ -333,7 +325,7 @@ class TrackingController:
         proj = p.project(state.x, state.y)
         self.s = proj.s
         self.cte = proj.cte
-        self.heading_error = wrap(state.yaw - proj.yaw)
+        self.heading_error = wrap_angle(state.yaw - proj.yaw)
         accel = self.speed.control(proj.s, state.speed, state.t)
         self.v_ref = self.speed.v_ref
         steer = self.steering(state, proj)

@@ -11,9 +11,9 @@ from rrtdrive.controllers.base import (
     Projection,
     TrackingController,
     VehicleState,
-    wrap,
 )
 from rrtdrive.controllers.speed import SpeedConfig
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.types import Path, VehicleParams, require_finite, require_positive
 
 __all__ = ["Stanley", "front_axle_path"]
@@ -110,5 +110,5 @@ class Stanley(TrackingController):
         self.front.reset_hint(proj.index)  # type: ignore[union-attr]
         fp = self.front.project(fx, fy)  # type: ignore[union-attr]
         self.front_cte = fp.cte
-        psi = wrap(fp.yaw - state.yaw)
+        psi = wrap_angle(fp.yaw - state.yaw)
         return psi + math.atan2(-self.k * fp.cte, self.k_soft + abs(state.speed))

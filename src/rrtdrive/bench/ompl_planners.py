@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.base import (
     PLANNERS,
     PlanningProblem,
@@ -49,7 +50,7 @@ from rrtdrive.planning.base import (
     failure,
     polyline_path,
 )
-from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, wrap_angle
+from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus
 
 __all__ = ["OmplPlanner", "OMPL_PLANNERS", "SPACES", "ALGORITHMS", "simple_setup"]
 

@@ -18,7 +18,8 @@ import numpy as np
 from highway_env.road.road import Road
 from highway_env.vehicle.kinematics import Vehicle
 
-from rrtdrive.types import Pose, VehicleParams, wrap_angle
+from rrtdrive.geometry import wrap_angle
+from rrtdrive.types import Pose, VehicleParams
 from rrtdrive.vehicle import bicycle_step
 
 __all__ = ["EgoVehicle", "centre_to_rear_axle", "rear_axle_to_centre"]
@@ -226,7 +227,7 @@ class EgoVehicle(Vehicle):
                 self.params.wheelbase,
             )
             if yaw > math.pi or yaw < -math.pi:
-                yaw = (yaw + math.pi) % (2.0 * math.pi) - math.pi
+                yaw = wrap_angle(yaw)
             self.rear = [x, y, yaw]
         self.speed = v1
         self.steer = steer
