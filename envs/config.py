@@ -25,9 +25,10 @@ from rrtdrive.planning import PLANNERS
 from rrtdrive.sim.scenes import SimConfig
 from rrtdrive.sim.tasks import (
     DEFAULT_PLANNER,
+    REPLANNING_SCENARIOS,
     SCENARIOS,
+    TASKS,
     make_scenario,
-    traffic_speed_config,
 )
 from rrtdrive.sim.tasks import Task as Scenario
 from rrtdrive.types import Budget, InputError, require_int
@@ -206,16 +207,17 @@ class DriveEnvConfig:
         put("scenario_options", _require_mapping("scenario_options", self.scenario_options))
         put("replan_options", _require_mapping("replan_options", self.replan_options))
         replan = None
-        if scenario == "overtake-traffic":
-            from rrtdrive.sim.replanning import ReplanConfig
-
-            _check_fields("replan_options", self.replan_options, ReplanConfig)  # type: ignore[arg-type]
+        replan_config = TASKS[scenario].REPLAN_CONFIG  # None: the task plans once
+        if replan_config is not None:
+            _check_fields("replan_options", self.replan_options, replan_config)  # type: ignore[arg-type]
             try:
-                replan = ReplanConfig(**self.replan_options)
+                replan = replan_config(**self.replan_options)
             except TypeError as exc:
                 raise InputError(f"replan_options: {exc}") from None
         elif self.replan_options:
-            raise InputError("replan_options: only the overtake-traffic scenario re-plans")
+            raise InputError(
+                f"replan_options: only the {' or '.join(REPLANNING_SCENARIOS)} scenario re-plans"
+            )
         put("replan", replan)
         put("controller_options", _require_mapping("controller_options", self.controller_options))
         put("speed_options", _require_mapping("speed_options", self.speed_options))
@@ -307,10 +309,12 @@ class DriveEnvConfig:
             raise InputError(f"scenario_options: {exc}") from None
 
     def speed_for(self, scenario: Scenario) -> SpeedConfig:
-        """The speed loop's settings for ``scenario`` with ``speed_options``."""
-        base = {"v_max": scenario.v_max}
-        if scenario.is_traffic:
-            base = dataclasses.asdict(traffic_speed_config(scenario))
+        """The speed loop's settings for ``scenario`` with ``speed_options``.
+
+        The task's default settings (:meth:`~rrtdrive.sim.tasks.Task.default_speed`)
+        with the options replacing some of their fields.
+        """
+        base = dataclasses.asdict(scenario.default_speed())
         _check_fields("speed_options", self.speed_options, SpeedConfig)  # type: ignore[arg-type]
         options = {**base, **self.speed_options}  # type: ignore[dict-item]
         try:

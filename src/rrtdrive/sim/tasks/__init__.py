@@ -18,8 +18,10 @@
 methods (:class:`Task`): ``build_road`` (its highway-env road), ``scene_view`` and
 ``camera`` (how the live scene and the video frame it), ``resolve`` /
 ``reference`` / ``make_driver`` / ``outcome`` (how an episode of it is driven) and
-``success_status`` / ``reached`` (when it is done), so nothing else needs to ask
-which kind a task is.
+``success_status`` / ``reached`` / ``end_message`` / ``agent_end_rule`` (when it is
+done, and how that is worded), ``success_part`` (its terms of the evaluators'
+success decision), ``default_speed`` and ``REPLAN_CONFIG`` (its speed profile and
+re-planning settings), so nothing else needs to ask which kind a task is.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from rrtdrive.sim.tasks.base import (
     DEFAULT_PLANNER,
     PathTask,
     Reference,
+    SuccessPart,
     Task,
     TaskKind,
     VideoCamera,
@@ -62,7 +65,9 @@ __all__ = [
     "OvertakeTrafficTask",
     "CustomTask",
     "Reference",
+    "SuccessPart",
     "VideoCamera",
+    "REPLANNING_SCENARIOS",
     "make_scenario",
     "plan_scenario",
     "DEFAULT_PLANNER",
@@ -82,6 +87,9 @@ TASKS: dict[str, type[ParkingTask] | type[OvertakeTask] | type[OvertakeTrafficTa
 }
 #: Names of the built-in scenarios.
 SCENARIOS = tuple(TASKS)
+#: Names of the built-in scenarios that re-plan while driving (their tasks have a
+#: ``REPLAN_CONFIG``).
+REPLANNING_SCENARIOS = tuple(name for name, cls in TASKS.items() if cls.REPLAN_CONFIG)
 
 #: Why an option of one kind is refused by another (the messages name the option).
 _NOT_HERE = {
