@@ -69,6 +69,7 @@ __all__ = [
     "VideoCamera",
     "REPLANNING_SCENARIOS",
     "make_scenario",
+    "SCENARIO_OPTIONS",
     "plan_scenario",
     "DEFAULT_PLANNER",
     "TRAFFIC_PLANNER",
@@ -99,6 +100,8 @@ _NOT_HERE = {
     "lead_speed": "lead_speed: only the overtake-traffic scenario has it",
     "lead_model": "lead_model: only the overtake-traffic scenario has it",
 }
+#: The keyword options of :func:`make_scenario` (every kind's, and ``jitter``, ``vehicle``).
+SCENARIO_OPTIONS = ("jitter", "vehicle", *_NOT_HERE)
 
 
 def _jitter(jitter: object) -> tuple[float, float, float]:
@@ -163,7 +166,7 @@ def make_scenario(name: str, seed: int = 0, **options: Any) -> Task:
     >>> make_scenario("parking", 0, spot=999)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    rrtdrive.types.InputError: spot: expected (row, side, index), three integers, got 999; ...
+    rrtdrive.types.InputError: spot: expected tuple (row, side, index) of three integers, ...
     """
     rng, _, _ = scenario_rngs(seed)
     jitter = _jitter(options.pop("jitter", (1.0, 0.5, math.radians(5.0))))
@@ -172,7 +175,7 @@ def make_scenario(name: str, seed: int = 0, **options: Any) -> Task:
         raise InputError(f"vehicle: expected a VehicleParams, got {type(vehicle).__name__}")
     for key in options:
         if key not in _NOT_HERE:
-            known = ["jitter", "vehicle", *_NOT_HERE]
+            known = list(SCENARIO_OPTIONS)
             raise InputError(f"{key}: unknown scenario option; choose from {known}")
     if "oncoming" in options:
         options["oncoming"] = require_int("oncoming", options["oncoming"], 0, 10)
