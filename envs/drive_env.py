@@ -1,13 +1,15 @@
 """The gymnasium environment: drive a planned path in highway-env, as an agent.
 
-Each episode builds a scenario (:func:`rrtdrive.sim.scenes.make_scenario`) for an
-*episode seed*, plans its path (:func:`rrtdrive.sim.runner.plan_scenario`), builds
-the highway-env scene (:func:`rrtdrive.sim.scenes.build_env`) and then steps it
-exactly like the closed-loop runner (:func:`rrtdrive.sim.runner.drive`): once per
-simulation step it sets the ego's acceleration and steering, lets the other
-vehicles act and advances the physics. The agent's action sets those two numbers
-directly, or - with ``residual=True`` - is added to a tracking controller's
-command, so that a zero action reproduces the plain controller exactly.
+Each episode builds a task (:func:`rrtdrive.sim.tasks.make_scenario`) for an
+*episode seed*, takes its reference (:meth:`~rrtdrive.sim.tasks.Task.reference`:
+plans its path, or nothing when it re-plans while driving), builds the
+highway-env scene (:func:`rrtdrive.sim.scenes.build_env`) and the task's driver
+(:meth:`~rrtdrive.sim.tasks.Task.make_driver`), and steps the one episode loop
+of the runner (:class:`rrtdrive.sim.loop.EpisodeLoop`): once per simulation step
+it sets the ego's acceleration and steering, lets the other vehicles act and
+advances the physics. The agent's action sets those two numbers directly, or -
+with ``residual=True`` - is added to the driver's command, so that a zero action
+reproduces the plain controller exactly.
 
 At the end of an episode the logged trajectory is scored by
 :func:`rrtdrive.evaluation.evaluate`, the same evaluators as ``rrtdrive
