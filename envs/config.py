@@ -10,7 +10,6 @@ speed-loop settings and the tracking controller.
 from __future__ import annotations
 
 import dataclasses
-import inspect
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
@@ -25,9 +24,11 @@ from rrtdrive.planning import PLANNERS
 from rrtdrive.sim.scenes import SimConfig
 from rrtdrive.sim.tasks import (
     DEFAULT_PLANNER,
+    REPLANNING_SCENARIOS,
+    SCENARIO_OPTIONS,
     SCENARIOS,
+    TASKS,
     make_scenario,
-    traffic_speed_config,
 )
 from rrtdrive.sim.tasks import Task as Scenario
 from rrtdrive.types import Budget, InputError, require_int
@@ -59,13 +60,6 @@ def _check_fields(name: str, options: Mapping[str, Any], cls: type) -> None:
             raise InputError(
                 f"{name}.{key}: unknown field of {cls.__name__}; choose from {known}"
             )
-
-
-#: The arguments of make_scenario that scenario_options may set (all but name, seed).
-_SCENARIO_PARAMS = {
-    k: p for k, p in inspect.signature(make_scenario).parameters.items()
-    if k not in ("name", "seed")
-}
 
 
 @dataclass(frozen=True)
@@ -206,16 +200,17 @@ class DriveEnvConfig:
         put("scenario_options", _require_mapping("scenario_options", self.scenario_options))
         put("replan_options", _require_mapping("replan_options", self.replan_options))
         replan = None
-        if scenario == "overtake-traffic":
-            from rrtdrive.sim.replanning import ReplanConfig
-
-            _check_fields("replan_options", self.replan_options, ReplanConfig)  # type: ignore[arg-type]
+        replan_config = TASKS[scenario].REPLAN_CONFIG  # None: the task plans once
+        if replan_config is not None:
+            _check_fields("replan_options", self.replan_options, replan_config)  # type: ignore[arg-type]
             try:
-                replan = ReplanConfig(**self.replan_options)
+                replan = replan_config(**self.replan_options)
             except TypeError as exc:
                 raise InputError(f"replan_options: {exc}") from None
         elif self.replan_options:
-            raise InputError("replan_options: only the overtake-traffic scenario re-plans")
+            raise InputError(
+                f"replan_options: only the {' or '.join(REPLANNING_SCENARIOS)} scenario re-plans"
+            )
         put("replan", replan)
         put("controller_options", _require_mapping("controller_options", self.controller_options))
         put("speed_options", _require_mapping("speed_options", self.speed_options))
@@ -282,10 +277,10 @@ class DriveEnvConfig:
         """The scenario of episode seed ``seed`` with ``scenario_options``."""
         options: dict[str, Any] = self.scenario_options  # type: ignore[assignment]
         for key in options:
-            if key not in _SCENARIO_PARAMS:
+            if key not in SCENARIO_OPTIONS:
                 raise InputError(
                     f"scenario_options.{key}: unknown option of make_scenario; "
-                    f"choose from {list(_SCENARIO_PARAMS)}"
+                    f"choose from {list(SCENARIO_OPTIONS)}"
                 )
         try:
             return make_scenario(self.scenario, seed, **options)
@@ -298,19 +293,20 @@ class DriveEnvConfig:
                 try:
                     make_scenario(self.scenario, seed, **{key: value})
                 except TypeError as one:
-                    expected = _SCENARIO_PARAMS[key].annotation
                     raise InputError(
-                        f"scenario_options.{key}: expected {expected}, got {value!r} ({one})"
+                        f"scenario_options.{key}: bad value {value!r} ({one})"
                     ) from None
                 except InputError:
                     pass
             raise InputError(f"scenario_options: {exc}") from None
 
     def speed_for(self, scenario: Scenario) -> SpeedConfig:
-        """The speed loop's settings for ``scenario`` with ``speed_options``."""
-        base = {"v_max": scenario.v_max}
-        if scenario.is_traffic:
-            base = dataclasses.asdict(traffic_speed_config(scenario))
+        """The speed loop's settings for ``scenario`` with ``speed_options``.
+
+        The task's default settings (:meth:`~rrtdrive.sim.tasks.Task.default_speed`)
+        with the options replacing some of their fields.
+        """
+        base = dataclasses.asdict(scenario.default_speed())
         _check_fields("speed_options", self.speed_options, SpeedConfig)  # type: ignore[arg-type]
         options = {**base, **self.speed_options}  # type: ignore[dict-item]
         try:

@@ -1,13 +1,15 @@
 """The gymnasium environment: drive a planned path in highway-env, as an agent.
 
-Each episode builds a scenario (:func:`rrtdrive.sim.scenes.make_scenario`) for an
-*episode seed*, plans its path (:func:`rrtdrive.sim.runner.plan_scenario`), builds
-the highway-env scene (:func:`rrtdrive.sim.scenes.build_env`) and then steps it
-exactly like the closed-loop runner (:func:`rrtdrive.sim.runner.drive`): once per
-simulation step it sets the ego's acceleration and steering, lets the other
-vehicles act and advances the physics. The agent's action sets those two numbers
-directly, or - with ``residual=True`` - is added to a tracking controller's
-command, so that a zero action reproduces the plain controller exactly.
+Each episode builds a task (:func:`rrtdrive.sim.tasks.make_scenario`) for an
+*episode seed*, takes its reference (:meth:`~rrtdrive.sim.tasks.Task.reference`:
+plans its path, or nothing when it re-plans while driving), builds the
+highway-env scene (:func:`rrtdrive.sim.scenes.build_env`) and the task's driver
+(:meth:`~rrtdrive.sim.tasks.Task.make_driver`), and steps the one episode loop
+of the runner (:class:`rrtdrive.sim.loop.EpisodeLoop`): once per simulation step
+it sets the ego's acceleration and steering, lets the other vehicles act and
+advances the physics. The agent's action sets those two numbers directly, or -
+with ``residual=True`` - is added to the driver's command, so that a zero action
+reproduces the plain controller exactly.
 
 At the end of an episode the logged trajectory is scored by
 :func:`rrtdrive.evaluation.evaluate`, the same evaluators as ``rrtdrive
@@ -33,21 +35,20 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from rrtdrive.controllers import PathProjector, SpeedProfile, VehicleState
+from rrtdrive.controllers import PathProjector
 from rrtdrive.envs.action import ResidualMixer, action_command
 from rrtdrive.envs.config import DriveEnvConfig, _require_mapping
 from rrtdrive.envs.observation import OBS_CLIP, ObservationLayout, observation_names
-from rrtdrive.envs.reference_speed import following_speed, stop_line_speed
+from rrtdrive.envs.reference_speed import following_cap, stop_line_speed
 from rrtdrive.envs.render import SceneRenderer, view_for
 from rrtdrive.envs.reward import RewardWeights, state_terms
 from rrtdrive.evaluation import EpisodeReport, EvalConfig, evaluate
-from rrtdrive.sim.drivelog import DriveRecorder
-from rrtdrive.sim.episode import Episode
+from rrtdrive.sim.episode import Episode, EpisodeStatus
+from rrtdrive.sim.loop import EndRule, EpisodeLoop
 from rrtdrive.sim.runner import EpisodeConfig
-from rrtdrive.sim.scenes import build_env, scenario_rngs
-from rrtdrive.sim.tasks import TRAFFIC_PLANNER, plan_scenario
-from rrtdrive.sim.traffic import OncomingGate, conflict_zone
-from rrtdrive.types import InputError, Path, PlanResult, PlanStatus, require_int, wrap_angle
+from rrtdrive.sim.scenes import build_env
+from rrtdrive.sim.tasks import Reference
+from rrtdrive.types import InputError, Path, require_int
 
 # RewardWeights, observation_names and OBS_CLIP are re-exported from their modules,
 # where they lived before the split.
@@ -169,77 +170,63 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         self._sim: Any = None
         self._renderer: SceneRenderer | None = None
         self._renderer_key: tuple[Any, ...] | None = None
-        self._over = True
+        #: The episode loop of the current episode (``None`` before the first reset).
+        self._loop: EpisodeLoop | None = None
 
     # ------------------------------------------------------------------ setup
 
-    def _start_episode(self, seed: int) -> PlanResult:
-        """Build, plan and set up the episode of ``seed``; return the plan (maybe failed)."""
+    def _start_episode(self, seed: int) -> Reference:
+        """Build, plan and set up the episode of ``seed``; its reference (maybe failed).
+
+        The episode runs on the one episode loop (:class:`~rrtdrive.sim.loop.EpisodeLoop`)
+        with the task's driver, as :func:`~rrtdrive.sim.runner.run_episode` does; the
+        end rule is the task's (the runner's) when a controller drives or the task
+        re-plans, else the task's rule for an agent (stopped at the goal).
+        """
         cfg = self.config
-        scen = cfg.scenario_for(seed)
-        driver = None
-        if scen.is_traffic:
-            plan = None
-        else:
-            plan = plan_scenario(scen, cfg.planner, seed, cfg.budget)
-            if not plan.success or len(plan.path) < 2:
-                return plan
-        speed = cfg.speed_for(scen)
-        ctrl = cfg.controller_for(scen, speed)
+        task = cfg.scenario_for(seed)
+        ref = task.reference(cfg.planner, seed, cfg.budget)
+        if ref.failure is not None:
+            return ref
+        speed = cfg.speed_for(task)
+        ctrl = cfg.controller_for(task, speed)
         if self._sim is not None:
             self._sim.close()
-        sim = build_env(scen, self.sim_config)
-        u = sim.unwrapped
-        ego = u.vehicle
-        if scen.is_traffic:
-            # Receding-horizon re-planning in the loop, as in the runner.
-            from rrtdrive.sim.traffic_driver import TrafficDriver
-
-            _, plan_rng, _ = scenario_rngs(seed)
-            driver = TrafficDriver(sim, scen, ctrl, speed, cfg.replan, plan_rng)
-            driver.start()
-            first = driver.references[-1][1]
-            plan = PlanResult(
-                PlanStatus.SOLVED, TRAFFIC_PLANNER, first, first.xy, (), 0, 0, 0.0,
-                "lane reference; re-planned in the loop",
-            )
-        path = plan.path
-        gate, cars = None, None
-        if scen.oncoming and scen.lane_y is not None and driver is None:
-            # As the runner: hold the controller before the oncoming lane until a gap.
-            zone = conflict_zone(path, scen.lane_y, scen.lane_width, scen.vehicle)
-            if zone is not None:
-                cars = [v for v in u.road.vehicles if v is not ego and v.speed > 0]
-                gate = OncomingGate(zone, (path.arc_length(), path.samples[:, 3]), speed)
-        if driver is None:
-            ctrl.reset(path, v_start=ego.speed)
-        self._driver = driver
-        self._sim, self._ego, self._road = sim, ego, u.road
-        self._scenario, self._plan, self._speed, self._ctrl = scen, plan, speed, ctrl
-        self._gate, self._gate_cars = gate, cars
-        self.path = path
-        self.episode_seed = seed
-        self._dt = self.sim_config.dt
-        self._max_time = cfg.max_time_s or scen.max_time_s
-        self._n_max = int(math.ceil(self._max_time / self._dt - 1e-9))
-        self._projector = PathProjector(path)
-        p = self._projector
-        if driver is not None:
-            self._profile = ctrl.profile
+        sim = build_env(task, self.sim_config)
+        max_time = cfg.max_time_s or task.max_time_s
+        episode_config = EpisodeConfig(
+            sim=self.sim_config,
+            speed=speed,
+            controller_options=dict(cfg.controller_options),  # type: ignore[arg-type]
+            budget=cfg.budget,  # type: ignore[arg-type]
+            max_time_s=max_time,
+            replan=cfg.replan,
+        )
+        driver = task.make_driver(sim, ctrl, ref, speed, episode_config, seed)
+        if cfg.residual:
+            rule: EndRule = task
         else:
-            self._profile = SpeedProfile(np.asarray(p.s), np.asarray(p.kappa), speed, ego.speed)
-        self._rec = DriveRecorder(self._sim, self._dt)
-        self._k = 0
+            e = self.eval_config
+            rule = task.agent_end_rule(e.goal_tol_m, e.goal_tol_rad, e.stop_speed)
+        driver.start()
+        loop = EpisodeLoop(sim, driver, rule, max_time, stop_on_crash=True)
+        self._sim, self._ego, self._road = sim, sim.unwrapped.vehicle, sim.unwrapped.road
+        self._scenario, self._reference, self._speed, self._ctrl = task, ref, speed, ctrl
+        self._driver, self._loop, self._episode_config = driver, loop, episode_config
+        # The agent alone drives a fixed path; a driver that plans its reference
+        # while driving runs every step even when its command is not applied.
+        self._runs_driver = cfg.residual or ref.plans_while_driving
+        self.episode_seed = seed
+        self._dt = loop.dt
+        self._rec = loop.recorder
         self._mixer = ResidualMixer(cfg.limits, speed, self._dt)
-        self._t = 0.0
         self._wall = 0.0
-        self._status = ""
-        self._over = False
         self.episode = None
         self.report = None
+        self._use_reference(driver.path)  # type: ignore[attr-defined]
         self._obs64 = self._observe64()
         self._s = self._progress_s()
-        return plan
+        return ref
 
     # ------------------------------------------------------------------ gym API
 
@@ -271,7 +258,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             ``MAX_PLAN_ATTEMPTS`` drawn seeds in a row).
         """
         super().reset(seed=seed)
-        self._over = True  # until an episode is set up
+        self._loop = None  # until an episode is set up
         opts = _require_mapping("options", options)
         for key in opts:
             if key not in _RESET_OPTIONS:
@@ -281,23 +268,22 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         requested = opts.get("episode_seed")
         if requested is not None:
             s = require_int("options.episode_seed", requested, 0)
-            plan = self._start_episode(s)
-            if not plan.success or self._over:
+            ref = self._start_episode(s)
+            if ref.failure is not None:
                 raise RuntimeError(
-                    f"options.episode_seed: planning failed for episode seed {s} "
-                    f"({plan.status.value}): {plan.message}"
+                    f"options.episode_seed: no path for episode seed {s}: {ref.failure}"
                 )
         else:
             lo, hi = self.config.seed_range
             for _ in range(MAX_PLAN_ATTEMPTS):
                 s = int(self.np_random.integers(lo, hi))
-                plan = self._start_episode(s)
-                if plan.success and not self._over:
+                ref = self._start_episode(s)
+                if ref.failure is None:
                     break
             else:
                 raise RuntimeError(
-                    f"planning failed for {MAX_PLAN_ATTEMPTS} episode seeds in a row "
-                    f"(last {s}, {plan.status.value}): {plan.message}"
+                    f"no path for {MAX_PLAN_ATTEMPTS} episode seeds in a row "
+                    f"(last {s}: {ref.failure})"
                 )
         info = {
             "episode_seed": self.episode_seed,
@@ -320,7 +306,8 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             end also ``status``, ``is_success`` and ``metrics`` (the evaluators'
             report as a dict, ``NaN`` for a metric that does not apply).
         """
-        if self._sim is None or self._over:
+        loop = self._loop
+        if self._sim is None or loop is None or loop.done:
             raise RuntimeError("DriveEnv.step: call reset() first (the episode is over)")
         cfg = self.config
         residual = cfg.residual
@@ -336,46 +323,21 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         driver = self._driver
         wall0 = time.perf_counter()
         for _ in range(cfg.action_repeat):
-            if self._k >= self._n_max:
+            if loop.done:
                 break
-            r = ego.rear
-            if driver is not None:
-                n_refs = len(driver.references)
-                c_accel, c_steer = driver.control(self._t)
-                if len(driver.references) != n_refs:
+            accel, steer = d_accel, d_steer
+            if self._runs_driver:
+                r = ego.rear
+                c_accel, c_steer = driver.command(loop.t)
+                if driver.path is not self.path:  # a re-planned reference took over
                     carried += self._clipped_s(r) - s_before
-                    self._use_reference(driver.references[-1][1])
+                    self._use_reference(driver.path)
                     s_before = self._clipped_s(r)
-                if not residual:
-                    accel, steer = d_accel, d_steer
-                else:
+                if residual:
                     accel, steer = mixer.command(ctrl, c_accel, c_steer, d_accel, d_steer)
-            elif residual:
-                if self._gate is not None:
-                    ctrl.speed.stop_at = self._gate.stop_line(
-                        ctrl.s, ego.speed, self._gate_cars or []
-                    )
-                c_accel, c_steer = ctrl.control(
-                    VehicleState(r[0], r[1], r[2], ego.speed, ego.steer, self._t)
-                )
-                accel, steer = mixer.command(ctrl, c_accel, c_steer, d_accel, d_steer)
-            else:
-                accel, steer = d_accel, d_steer
-            self._rec.step(accel, steer)
+            loop.step(accel, steer)
             mixer.applied(accel)
-            self._t += dt
-            self._k += 1
             steps += 1
-            if ego.crashed:
-                self._status = "crashed"
-                break
-            if driver is not None:
-                if self._overtaken():
-                    self._status = "completed"
-                    break
-            elif self._arrived():
-                self._status = "arrived"
-                break
         self._wall += time.perf_counter() - wall0
 
         self._obs64 = self._observe64()
@@ -386,16 +348,24 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         e, psi, v, v_ref = (float(self._obs64[i]) for i in (2, 3, 0, 4))
         terms = state_terms(
             w, progress_m=carried + s_after - s_before, cte=e, heading_err=psi, speed=v,
-            v_ref=v_ref, span_s=span, crashed=self._status == "crashed",
+            v_ref=v_ref, span_s=span, crashed=loop.crashed,
         )
-        if not self._status and cfg.max_cte is not None and abs(e) > cfg.max_cte:
-            self._status = "off_path"
+        if (
+            not (loop.crashed or loop.reached)
+            and cfg.max_cte is not None
+            and abs(e) > cfg.max_cte
+        ):
+            loop.stop(
+                EpisodeStatus.OFF_PATH,
+                f"left the path by more than {cfg.max_cte:g} m at t = {loop.steps * dt:.2f} s",
+            )
             terms["off_path"] = -w.off_path
-        terminated = self._status in ("crashed", "arrived", "off_path", "completed")
-        truncated = not terminated and self._k >= self._n_max
+        over = loop.done
+        truncated = over and loop.status is EpisodeStatus.TIMEOUT
+        terminated = over and not truncated
         info: dict[str, Any] = {
             "episode_seed": self.episode_seed,
-            "time_s": self._t,
+            "time_s": loop.t,
             "cte_m": e,
             "heading_err_rad": psi,
             "speed": v,
@@ -404,15 +374,12 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             "steer": float(ego.steer),
             "crashed": bool(ego.crashed),
         }
-        if terminated or truncated:
-            if not terminated:
-                self._status = "timeout"
-            self._over = True
+        if over:
             self.episode = self._finish()
             self.report = evaluate(self.episode, self.eval_config)
             if self.report.success:
                 terms["success"] = w.success
-            info["status"] = self._status
+            info["status"] = loop.status.value
             info["is_success"] = bool(self.report.success)
             info["metrics"] = _metrics_dict(self.report)
         info["reward_terms"] = terms
@@ -429,18 +396,19 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         """
         if self.render_mode != "rgb_array":
             return None
-        if self._sim is None:
+        if self._sim is None or self._loop is None:
             raise RuntimeError("DriveEnv.render: call reset() first")
         scen = self._scenario
+        camera = scen.camera()
         key = (scen.map.bounds, scen.lane_y)
         if self._renderer is None or self._renderer_key != key:
-            if scen.is_traffic:  # a long road: a window that follows the ego
-                self._renderer = SceneRenderer((960, 320), 8.0, (0.0, 0.0))
+            if camera.follow:  # a long road: a window that follows the ego
+                self._renderer = SceneRenderer(camera.size, camera.scaling, camera.centre)
             else:
                 self._renderer = SceneRenderer(*view_for(scen.map.bounds, scen.lane_y))
             self._renderer_key = key
-        if scen.is_traffic:
-            self._renderer.centre = np.array([self._ego.rear[0] + 25.0, scen.lane_y + 2.0])
+        if camera.follow:
+            self._renderer.centre = np.array([self._ego.rear[0] + 25.0, camera.centre[1]])
         obs = self._obs64
         k = self.config.n_ref_points
         x, y, yaw, _ = self._rec.states[-1]
@@ -454,7 +422,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         cfg = self.config
         mode = f"{cfg.controller} + residual" if cfg.residual else "agent"
         lines = [
-            f"t {self._t:5.2f} s   v {obs[0]:4.2f} m/s (ref {obs[4]:4.2f})",
+            f"t {self._loop.t:5.2f} s   v {obs[0]:4.2f} m/s (ref {obs[4]:4.2f})",
             f"kappa {kappa:+.3f} 1/m (max {vehicle.kappa_max:.3f})",
             f"cte {obs[2]:+.3f} m   {mode}",
         ]
@@ -474,7 +442,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             self._sim.close()
             self._sim = None
         self._renderer = None
-        self._over = True
+        self._loop = None
         super().close()
 
     # ------------------------------------------------------------------ internals
@@ -489,32 +457,6 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         """Arc length of the rear axle's projection on the current reference, clipped to it."""
         proj = self._projector.project(rear[0], rear[1])
         return min(max(proj.s, 0.0), self._projector.length)
-
-    def _overtaken(self) -> bool:
-        from rrtdrive.sim.tasks import overtake_complete
-
-        driver = self._driver
-        lead = driver.lead
-        if lead is None:
-            return False
-        x, y, yaw = self._ego.rear
-        return overtake_complete(
-            (x, y, yaw), (lead.position[0], lead.position[1]), lead.LENGTH, driver.lane_y,
-            driver.lane_width, driver.vehicle, driver.config.complete_gap_m,
-        )
-
-    def _arrived(self) -> bool:
-        ego = self._ego
-        if self.config.residual:
-            return bool(self._ctrl.arrived and ego.speed == 0.0)
-        goal = self._scenario.goal
-        x, y, yaw = ego.rear
-        cfg = self.eval_config
-        return bool(
-            abs(ego.speed) <= cfg.stop_speed
-            and math.hypot(x - goal.x, y - goal.y) <= cfg.goal_tol_m
-            and abs(float(wrap_angle(yaw - goal.yaw))) <= cfg.goal_tol_rad
-        )
 
     def _progress_s(self) -> float:
         """Arc length of the rear axle's projection, clipped to the path."""
@@ -536,15 +478,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         """
         profile, speed = self._profile, self._speed
         stop_at = self._ctrl.speed.stop_at
-        cap = math.inf
-        driver = self._driver
-        if driver is not None and driver.mode == "follow":
-            # The driver's own gap measure, the one its IDM cap uses (read-only).
-            lead = driver._lead_gap()
-            if lead is not None:
-                gap, closing = lead
-                v_lead = self._ego.speed - closing
-                cap = following_speed(driver.config.idm, driver.speed.v_max, gap, v_lead)
+        cap = following_cap(self._driver, self._ego.speed)
 
         def v_ref_at(s: float) -> float:
             return min(stop_line_speed(profile.at(s)[0], s, stop_at, speed), cap)
@@ -555,41 +489,17 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         return self._obs64.astype(np.float32)  # a fresh array every call
 
     def _finish(self) -> Episode:
-        """The finished episode as the runner would return it."""
-        cfg = self.config
-        log = self._rec.log(self._status in ("arrived", "completed"), self._wall)
-        t_end = float(log.t[-1])
-        if self._status == "crashed":
-            message = f"highway-env reported a crash at t = {t_end:.2f} s"
-        elif self._status == "off_path":
-            message = f"left the path by more than {cfg.max_cte:g} m at t = {t_end:.2f} s"
-        elif self._status == "arrived":
-            where = "the end of the path" if cfg.residual else "the goal"
-            message = f"stopped at {where} at t = {t_end:.2f} s"
-        elif self._status == "completed":
-            message = f"overtake complete at t = {t_end:.2f} s"
-        elif self._driver is not None:
-            message = f"no overtake within {self._max_time:g} s (followed the lead car)"
-        else:
-            message = f"not stopped at the goal within {self._max_time:g} s"
-        config = EpisodeConfig(
-            sim=self.sim_config,
-            speed=self._speed,
-            controller_options=dict(cfg.controller_options),  # type: ignore[arg-type]
-            budget=cfg.budget,  # type: ignore[arg-type]
-            max_time_s=self._max_time,
-            replan=cfg.replan,
+        """The finished episode as the runner would return it, from the loop's log."""
+        cfg, loop, task, ref = self.config, self._loop, self._scenario, self._reference
+        assert loop is not None
+        log = loop.log(self._wall)
+        path, traffic = task.outcome(
+            self._driver, ref, float(log.t[-1]) if loop.reached else None
         )
         label = f"{cfg.controller}+residual" if cfg.residual else "agent"
-        if self._driver is not None:
-            traffic = self._driver.finish(t_end if self._status == "completed" else None)
-            return Episode(
-                self._scenario, TRAFFIC_PLANNER, label, int(self.episode_seed or 0), None,
-                traffic.executed, log, self._status, message, config, traffic,
-            )
         return Episode(
-            self._scenario, cfg.planner, label, int(self.episode_seed or 0), self._plan,
-            self.path, log, self._status, message, config,  # type: ignore[arg-type]
+            task, ref.planner, label, int(self.episode_seed or 0), ref.plan, path, log,
+            loop.status, loop.message, self._episode_config, traffic,
         )
 
 

@@ -11,10 +11,11 @@ the 11 m/s of the profile (issue #15).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from rrtdrive.controllers import SpeedConfig
 
-__all__ = ["following_speed", "stop_line_speed"]
+__all__ = ["following_cap", "following_speed", "stop_line_speed"]
 
 #: Bisection steps of :func:`following_speed` (the bracket [0, v0] shrinks 2^-40).
 _BISECT_STEPS = 40
@@ -79,3 +80,29 @@ def following_speed(idm: object, v0: float, gap: float, v_lead: float) -> float:
         else:
             hi = mid
     return lo
+
+
+def following_cap(driver: Any, ego_speed: float) -> float:
+    """The car-following cap of ``v_ref`` while ``driver`` follows a car; else infinity.
+
+    A driver that follows (the traffic driver in its ``follow`` mode, with a car
+    ahead in the lane: its :meth:`lead_gap`) is capped at :func:`following_speed`
+    for its IDM at the current gap; a driver without car following (a path
+    tracker) is not capped.
+
+    Parameters
+    ----------
+    driver : Driver
+        The episode's driver (:class:`~rrtdrive.sim.traffic_driver.TrafficDriver`
+        or :class:`~rrtdrive.sim.loop.PathTracker`).
+    ego_speed : float
+        The ego's speed, m/s.
+    """
+    if getattr(driver, "mode", None) != "follow":
+        return math.inf
+    # The driver's own gap measure, the one its IDM cap uses (read-only).
+    lead = driver.lead_gap()
+    if lead is None:
+        return math.inf
+    gap, closing = lead
+    return following_speed(driver.config.idm, driver.speed.v_max, gap, ego_speed - closing)

@@ -247,7 +247,7 @@ def test_zero_residual_reproduces_plain_controller_with_oncoming_traffic():
     assert np.array_equal(env.episode.log.states, ep.log.states)
     assert np.array_equal(env.episode.log.others, ep.log.others)
     assert info["status"] == ep.status == "arrived"
-    assert env._gate.waiting_steps > 0  # the car did wait for a gap
+    assert env._driver.gate.waiting_steps > 0  # the car did wait for a gap
     env.close()
 
 

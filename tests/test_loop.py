@@ -59,3 +59,42 @@ def test_time_limit_and_the_bare_path_rule():
     assert loop.status is EpisodeStatus.TIMEOUT and not log.arrived
     assert log.steps == loop.max_steps == 40
     assert loop.message == "not stopped at the goal within 2 s"
+
+
+def test_stop_ends_the_episode_with_the_callers_status():
+    env, task, tracker, loop = _setup(length=200.0)
+    try:
+        tracker.start()
+        assert loop.recorder.states[0][0] == pytest.approx(task.start.x)
+        for _ in range(3):
+            loop.step(*tracker.command(loop.t))
+        assert loop.stop(EpisodeStatus.OFF_PATH, "left the path") is EpisodeStatus.OFF_PATH
+        assert loop.done and loop.status is EpisodeStatus.OFF_PATH
+        assert loop.message == "left the path"
+        assert loop.log(wall_time_s=1.5).wall_time_s == 1.5 and loop.log().steps == 3
+        with pytest.raises(RuntimeError, match="over"):
+            loop.step(0.0, 0.0)
+    finally:
+        env.close()
+
+
+def test_stop_at_goal_rule_and_the_agent_rule_of_the_tasks():
+    from rrtdrive.sim.loop import StopAtGoal
+
+    task = make_scenario("overtake", 0, jitter=(0.0, 0.0, 0.0))
+    rule = task.agent_end_rule(0.5, 0.2, 0.1)
+    assert isinstance(rule, StopAtGoal) and rule.goal == task.goal
+    assert rule.end_message(EpisodeStatus.ARRIVED, 2.0, 60.0) == "stopped at the goal at t = 2.00 s"
+    assert rule.end_message(EpisodeStatus.TIMEOUT, 2.0, 60.0) == (
+        "not stopped at the goal within 60 s"
+    )
+    traffic = make_scenario("overtake-traffic", 0)
+    assert traffic.agent_end_rule(0.5, 0.2, 0.1) is traffic  # no controller in its rule
+    env = build_env(task)
+    try:
+        ego = env.unwrapped.vehicle
+        assert not rule.reached(ego, None)  # at the start, far from the goal
+        ego.set_pose(task.goal, speed=0.0)
+        assert rule.reached(ego, None)
+    finally:
+        env.close()

@@ -121,7 +121,7 @@ def test_overtake_complete_as_a_task_rule():
 
 def test_status_values_and_messages_are_the_json_strings():
     assert [s.value for s in EpisodeStatus] == [
-        "arrived", "completed", "crashed", "timeout", "plan_failed"
+        "arrived", "completed", "crashed", "timeout", "plan_failed", "off_path"
     ]
     assert EpisodeStatus.CRASHED == "crashed" and json.dumps(EpisodeStatus.TIMEOUT) == '"timeout"'
     assert end_message(EpisodeStatus.TIMEOUT, 1.0, 90.0, EpisodeStatus.COMPLETED) == (
@@ -130,3 +130,33 @@ def test_status_values_and_messages_are_the_json_strings():
     assert end_message(EpisodeStatus.TIMEOUT, 1.0, 60.0, EpisodeStatus.ARRIVED) == (
         "not stopped at the goal within 60 s"
     )
+
+
+def test_the_task_says_its_speed_replanning_and_success_terms():
+    from rrtdrive.controllers import SpeedConfig
+    from rrtdrive.sim.replanning import ReplanConfig
+    from rrtdrive.sim.tasks import REPLANNING_SCENARIOS, TASKS, SuccessPart, traffic_speed_config
+
+    park, over, traffic = (make_scenario(n, 0) for n in ("parking", "overtake", "overtake-traffic"))
+    assert park.default_speed() == SpeedConfig(v_max=park.v_max)
+    assert traffic.default_speed() == traffic_speed_config(traffic)
+    assert TASKS["parking"].REPLAN_CONFIG is None and traffic.REPLAN_CONFIG is ReplanConfig
+    assert REPLANNING_SCENARIOS == ("overtake-traffic",)
+    assert not hasattr(park, "is_traffic")
+    assert SuccessPart() == SuccessPart(None, None, False, None, False, True, False)
+
+
+def test_no_kind_switches_outside_the_tasks():
+    import pathlib
+
+    root = pathlib.Path(__file__).resolve().parents[1]
+    # The gym env, the evaluators and the simulation ask the task (bench/ is not covered yet).
+    pkg = root / "src" / "rrtdrive"
+    files = [*(pkg / "sim").rglob("*.py"), *(pkg / "evaluation").rglob("*.py"),
+             *(root / "envs").glob("*.py")]
+    needles = ("is_traffic", '== "overtake-traffic"', '== "parking"', "scenario.name ==")
+    hits = [
+        f"{f.relative_to(root)}: {n}" for f in files if "tasks" not in f.parts
+        for n in needles if n in f.read_text()
+    ]
+    assert not hits

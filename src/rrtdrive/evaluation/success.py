@@ -98,7 +98,6 @@ def success_terms(
             outcome=Outcome.FAILED,
         )
     scen = episode.scenario
-    vehicle = scen.vehicle
     if collision is None:
         collision = bool(np.any(log.crashed)) or footprint_collisions(
             episode, cfg.footprint_spacing
@@ -109,40 +108,25 @@ def success_terms(
     head_err = abs(float(wrap_angle(final[2] - goal.yaw)))
     stopped = abs(final[3]) <= cfg.stop_speed
     reached = pos_err <= cfg.goal_tol_m and head_err <= cfg.goal_tol_rad
-    passed_lead = back_in_lane = None
-    lead_required = False
-    pos_err_out: float | None = pos_err
-    head_err_out: float | None = head_err
-    in_time = episode.status == "arrived"
-    if scen.is_traffic:
-        # Success is the overtake itself: back in the lane, aligned, ahead of the moving lead.
-        lead, (lead_len, _w) = log.others[-1, 0], log.other_sizes[0]
-        body = footprint_corners(final[:3], vehicle)
-        passed_lead = bool(body[:, 0].min() > lead[0] + lead_len / 2.0)
-        back_in_lane = bool(np.all(np.abs(body[:, 1] - scen.lane_y) <= scen.lane_width / 2.0))
-        gap = episode.traffic.config.complete_gap_m if episode.traffic is not None else 0.0
-        reached = overtake_complete(
-            final[:3], lead[:2], lead_len, scen.lane_y, scen.lane_width, vehicle, gap
-        )
-        stopped = True  # an overtake ends on the move
-        in_time = episode.status == "completed"
-        pos_err_out = head_err_out = None
-    elif scen.lead_index is not None and scen.lane_y is not None:
-        lead = scen.map.obstacles[scen.lead_index]
-        body = footprint_corners(final[:3], vehicle)
-        passed_lead = bool(body[:, 0].min() > lead.corners()[:, 0].max())
-        half = scen.lane_width / 2.0
-        back_in_lane = bool(
-            np.all(np.abs(body[:, 1] - scen.lane_y) <= half)
-        )
-        lead_required = True
+    # The kind-specific terms come from the task (the lead car, the lane, what "reached" is).
+    part = scen.success_part(episode)
+    if part.reached_goal is not None:
+        reached = part.reached_goal
+    if part.ends_moving:
+        stopped = True
+    in_time = episode.status == scen.success_status
+    pos_err_out: float | None = pos_err if part.goal_errors else None
+    head_err_out: float | None = head_err if part.goal_errors else None
+    passed_lead, back_in_lane, lead_required = (
+        part.passed_lead, part.back_in_lane, part.lead_required
+    )
     extra_ok = bool(passed_lead and back_in_lane) if lead_required else True
     success = bool(reached and stopped and in_time and not collision and extra_ok)
     if success:
         outcome = Outcome.SUCCESS
     elif collision:
         outcome = Outcome.COLLISION
-    elif scen.is_traffic and episode.status == "timeout":
+    elif part.timeout_is_following and episode.status == "timeout":
         outcome = Outcome.SAFE_FOLLOWING
     else:
         outcome = Outcome.FAILED

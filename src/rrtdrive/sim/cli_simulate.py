@@ -197,7 +197,13 @@ def _run(args: argparse.Namespace) -> int:
     from rrtdrive.planning import PLANNERS
     from rrtdrive.sim.runner import EpisodeConfig, run_episode
     from rrtdrive.sim.scenes import SimConfig
-    from rrtdrive.sim.tasks import DEFAULT_PLANNER, SCENARIOS, make_scenario
+    from rrtdrive.sim.tasks import (
+        DEFAULT_PLANNER,
+        REPLANNING_SCENARIOS,
+        SCENARIOS,
+        TASKS,
+        make_scenario,
+    )
     from rrtdrive.types import Budget
 
     if args.scenario not in SCENARIOS:
@@ -241,15 +247,16 @@ def _run(args: argparse.Namespace) -> int:
         if v is not None
     }
     replan = None
-    if args.scenario == "overtake-traffic":
-        from rrtdrive.sim.replanning import ReplanConfig
-
+    replan_config = TASKS[args.scenario].REPLAN_CONFIG  # None: the task plans once
+    if replan_config is not None:
         if deterministic:
             replan_opts["wall_limit"] = False
-        replan = ReplanConfig(**replan_opts)
+        replan = replan_config(**replan_opts)
     elif replan_opts:
         flag = "--replan-rate" if "rate_hz" in replan_opts else "--predictor"
-        raise InputError(f"{flag}: only the overtake-traffic scenario re-plans")
+        raise InputError(
+            f"{flag}: only the {' or '.join(REPLANNING_SCENARIOS)} scenario re-plans"
+        )
     config = EpisodeConfig(
         sim=SimConfig(simulation_frequency=args.frequency),
         budget=Budget(

@@ -37,7 +37,8 @@ class EpisodeStatus(enum.StrEnum):
 
     ``ARRIVED``: stopped at the end of the tracked path; ``COMPLETED``: the
     ``overtake-traffic`` overtake is done; ``CRASHED``: highway-env reported a crash;
-    ``TIMEOUT``: neither within the time limit; ``PLAN_FAILED``: nothing to drive.
+    ``TIMEOUT``: neither within the time limit; ``PLAN_FAILED``: nothing to drive;
+    ``OFF_PATH``: the gym env's agent left the path by more than its limit.
     """
 
     ARRIVED = "arrived"
@@ -45,6 +46,7 @@ class EpisodeStatus(enum.StrEnum):
     CRASHED = "crashed"
     TIMEOUT = "timeout"
     PLAN_FAILED = "plan_failed"
+    OFF_PATH = "off_path"
 
 
 #: The message of an episode that has fewer than two path samples to track.

@@ -1,8 +1,9 @@
 """The one episode loop: a driver's command each step, highway-env's physics, the task's end rule.
 
 Every episode - a planned path tracked in parking or overtake, the receding-horizon
-re-planner of ``overtake-traffic``, and (next) the gymnasium environment - runs
-through :class:`EpisodeLoop`. One step:
+re-planner of ``overtake-traffic``, and the gymnasium environment
+(:class:`rrtdrive.envs.drive_env.DriveEnv`) - runs through :class:`EpisodeLoop`.
+One step:
 
 1. the caller passes the command ``(acceleration, steering)`` (usually
    ``driver.command(loop.t)``; the gym env may add a residual to it);
@@ -10,7 +11,8 @@ through :class:`EpisodeLoop`. One step:
    other vehicle act, steps the road by ``dt`` and logs the result;
 3. the loop ends the episode at highway-env's first ``crashed`` (when
    ``stop_on_crash``), when the end rule's :meth:`EndRule.reached` holds, or at the
-   time limit.
+   time limit; a caller with a rule of its own checked between steps (the gym
+   env's off-path limit) ends it with :meth:`EpisodeLoop.stop`.
 
 API (for the gym env)::
 
@@ -21,15 +23,19 @@ API (for the gym env)::
         loop.step(accel, steer)         # -> EpisodeStatus or None while running
     loop.status, loop.message, loop.log()
 
-or ``loop.run()``, which starts the driver and does exactly that. ``loop.t`` is the
+or ``loop.run()``, which starts the driver and does exactly that. ``loop.recorder``
+is the live record (states and other vehicles so far, for an observation).
+``loop.t`` is the
 simulation time (the sum of the ``dt`` steps), ``loop.steps`` the step count,
 ``loop.crashed`` whether the ego crashed at the last step, ``loop.reached``
 whether the end rule held. A driver is anything with ``start()`` and
 ``command(t)`` (:class:`Driver`); :class:`PathTracker` is a tracking controller on a
 fixed path (with the optional oncoming-traffic gate), the traffic re-planner
 (:class:`rrtdrive.sim.traffic_driver.TrafficDriver`) is another. An end rule
-(:class:`EndRule`) is a task of :mod:`rrtdrive.sim.tasks`, or
-:data:`STOP_AT_PATH_END` for a bare environment.
+(:class:`EndRule`) is a task of :mod:`rrtdrive.sim.tasks`,
+:data:`STOP_AT_PATH_END` for a bare environment, or :class:`StopAtGoal` for an
+agent that drives without a tracking controller; the rule also words the end
+(:meth:`EndRule.end_message`).
 """
 
 from __future__ import annotations
@@ -44,7 +50,7 @@ from rrtdrive.sim.drivelog import DriveRecorder
 from rrtdrive.sim.ego import EgoVehicle
 from rrtdrive.sim.episode import DriveLog, EpisodeStatus, end_message
 from rrtdrive.sim.traffic import OncomingGate
-from rrtdrive.types import InputError, Path, require_finite
+from rrtdrive.types import InputError, Path, Pose, require_finite, wrap_angle
 
 __all__ = [
     "Driver",
@@ -52,6 +58,7 @@ __all__ = [
     "PathTracker",
     "StopAtPathEnd",
     "STOP_AT_PATH_END",
+    "StopAtGoal",
     "EpisodeLoop",
 ]
 
@@ -81,6 +88,10 @@ class EndRule(Protocol):
         """True when the episode is over because the task is done (checked each step)."""
         ...
 
+    def end_message(self, status: EpisodeStatus, t_end: float, max_time_s: float) -> str:
+        """The message of an episode that ended with ``status`` at ``t_end``."""
+        ...
+
 
 class StopAtPathEnd:
     """The end rule of path tracking: the controller has stopped the car at the path's end."""
@@ -93,6 +104,56 @@ class StopAtPathEnd:
     def reached(self, ego: EgoVehicle, driver: Any) -> bool:
         """The driver's controller arrived and the car stands still."""
         return bool(driver.arrived) and ego.speed == 0.0
+
+    def end_message(self, status: EpisodeStatus, t_end: float, max_time_s: float) -> str:
+        """:func:`~rrtdrive.sim.episode.end_message` with this rule's success status."""
+        return end_message(status, t_end, max_time_s, self.success_status)
+
+
+class StopAtGoal:
+    """The end rule of an agent's drive: the rear axle stands still at the goal pose.
+
+    For a drive without a tracking controller that could say it arrived (the gym
+    env's direct mode); the tolerances are the evaluators' success thresholds.
+
+    Parameters
+    ----------
+    goal : Pose
+        Rear-axle goal pose.
+    tol_m : float
+        Largest distance of the rear axle from the goal, metres.
+    tol_rad : float
+        Largest heading error, radians.
+    stop_speed : float
+        Largest speed that counts as standing still, m/s.
+    """
+
+    def __init__(self, goal: Pose, tol_m: float, tol_rad: float, stop_speed: float) -> None:
+        self.goal = goal
+        self.tol_m = float(tol_m)
+        self.tol_rad = float(tol_rad)
+        self.stop_speed = float(stop_speed)
+
+    @property
+    def success_status(self) -> EpisodeStatus:
+        """``ARRIVED``."""
+        return EpisodeStatus.ARRIVED
+
+    def reached(self, ego: EgoVehicle, driver: Any) -> bool:
+        """Stopped within the tolerances of the goal pose."""
+        goal = self.goal
+        x, y, yaw = ego.rear
+        return bool(
+            abs(ego.speed) <= self.stop_speed
+            and math.hypot(x - goal.x, y - goal.y) <= self.tol_m
+            and abs(float(wrap_angle(yaw - goal.yaw))) <= self.tol_rad
+        )
+
+    def end_message(self, status: EpisodeStatus, t_end: float, max_time_s: float) -> str:
+        """As :func:`~rrtdrive.sim.episode.end_message`, arrival worded as "at the goal"."""
+        if status is EpisodeStatus.ARRIVED:
+            return f"stopped at the goal at t = {t_end:.2f} s"
+        return end_message(status, t_end, max_time_s, self.success_status)
 
 
 #: The end rule of a plain path-tracking drive (:func:`rrtdrive.sim.runner.drive`).
@@ -197,6 +258,7 @@ class EpisodeLoop:
         self.done = self.max_steps <= 0
         self._recorder: DriveRecorder | None = None
         self._wall0 = 0.0
+        self._stopped: tuple[EpisodeStatus, str] | None = None
 
     def _begin(self) -> DriveRecorder:
         if self._recorder is None:
@@ -227,6 +289,28 @@ class EpisodeLoop:
             self.done = True
         return self.status if self.done else None
 
+    def stop(self, status: EpisodeStatus, message: str) -> EpisodeStatus:
+        """End the episode now, by a rule the caller checks between steps; ``status``.
+
+        For example the gym env's off-path limit. It may override a timeout of the
+        last step, but not a crash or a reached end rule.
+
+        Raises
+        ------
+        RuntimeError
+            When the ego crashed or the end rule held.
+        """
+        if self.crashed or self.reached:
+            raise RuntimeError(f"EpisodeLoop.stop: the episode already ended ({self.status})")
+        self._stopped = (status, message)
+        self.done = True
+        return status
+
+    @property
+    def recorder(self) -> DriveRecorder:
+        """The live record of the drive (starts it: the wall clock runs from here)."""
+        return self._begin()
+
     def run(self) -> DriveLog:
         """Start the driver and step it until the episode is over; the log."""
         self.driver.start()
@@ -237,7 +321,9 @@ class EpisodeLoop:
 
     @property
     def status(self) -> EpisodeStatus:
-        """Crashed (at the last step), the rule's success status, else timeout."""
+        """Crashed (at the last step), the rule's success status, a :meth:`stop`, else timeout."""
+        if self._stopped is not None:
+            return self._stopped[0]
         if self.crashed:
             return EpisodeStatus.CRASHED
         if self.reached:
@@ -247,11 +333,24 @@ class EpisodeLoop:
     @property
     def message(self) -> str:
         """Human-readable detail of :attr:`status`."""
+        if self._stopped is not None:
+            return self._stopped[1]
         t_end = self.steps * self.dt  # the log's last time (``DriveLog.t[-1]``)
-        return end_message(self.status, t_end, self.max_time_s, self.rule.success_status)
+        return self.rule.end_message(self.status, t_end, self.max_time_s)
 
-    def log(self) -> DriveLog:
-        """The drive so far (the wall time excludes the driver's planning time)."""
+    def log(self, wall_time_s: float | None = None) -> DriveLog:
+        """The drive so far.
+
+        Parameters
+        ----------
+        wall_time_s : float, optional
+            The wall time to record; by default the time since the drive started,
+            less the driver's planning time (a caller that waits between steps, the
+            gym env, times its own steps).
+        """
         rec = self._begin()
-        wall = time.perf_counter() - self._wall0 - getattr(self.driver, "planning_wall_s", 0.0)
-        return rec.log(self.reached, wall)
+        if wall_time_s is None:
+            wall_time_s = (
+                time.perf_counter() - self._wall0 - getattr(self.driver, "planning_wall_s", 0.0)
+            )
+        return rec.log(self.reached, wall_time_s)

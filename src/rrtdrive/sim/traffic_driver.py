@@ -172,8 +172,12 @@ class TrafficDriver:
         proj = self.controller.projector.project(self.ego.rear[0], self.ego.rear[1])  # type: ignore[union-attr]
         return proj.index, proj.s
 
-    def _lead_gap(self) -> tuple[float, float] | None:
-        """Bumper gap to, and closing speed on, the nearest same-direction car ahead in the lane."""
+    def lead_gap(self) -> tuple[float, float] | None:
+        """Bumper gap to, and closing speed on, the nearest same-direction car ahead in the lane.
+
+        The gap measure of the driver's car-following cap (the gym env's reference
+        speed reads it too); ``None`` without such a car.
+        """
         return lead_gap(self.ego, self.others, self.vehicle)
 
     def _lane_reference(self, t: float) -> None:
@@ -190,6 +194,11 @@ class TrafficDriver:
         return self.road_bounds[2] - 1.0
 
     # ------------------------------------------------------------------ public
+
+    @property
+    def path(self) -> Path | None:
+        """The reference tracked now, the newest of :attr:`references` (``None`` before start)."""
+        return self._path
 
     def start(self) -> None:
         """Start in ``follow`` mode on the lane centre line."""
@@ -233,7 +242,7 @@ class TrafficDriver:
         ego = self.ego
         cap = None
         if self.mode == "follow":
-            lead = self._lead_gap()
+            lead = self.lead_gap()
             if lead is not None:
                 cap = cfg.idm.accel_for(ego.speed, self.speed.v_max, lead[0], lead[1])
         self.controller.cap_accel(cap)

@@ -18,8 +18,10 @@
 methods (:class:`Task`): ``build_road`` (its highway-env road), ``scene_view`` and
 ``camera`` (how the live scene and the video frame it), ``resolve`` /
 ``reference`` / ``make_driver`` / ``outcome`` (how an episode of it is driven) and
-``success_status`` / ``reached`` (when it is done), so nothing else needs to ask
-which kind a task is.
+``success_status`` / ``reached`` / ``end_message`` / ``agent_end_rule`` (when it is
+done, and how that is worded), ``success_part`` (its terms of the evaluators'
+success decision), ``default_speed`` and ``REPLAN_CONFIG`` (its speed profile and
+re-planning settings), so nothing else needs to ask which kind a task is.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from rrtdrive.sim.tasks.base import (
     DEFAULT_PLANNER,
     PathTask,
     Reference,
+    SuccessPart,
     Task,
     TaskKind,
     VideoCamera,
@@ -62,8 +65,11 @@ __all__ = [
     "OvertakeTrafficTask",
     "CustomTask",
     "Reference",
+    "SuccessPart",
     "VideoCamera",
+    "REPLANNING_SCENARIOS",
     "make_scenario",
+    "SCENARIO_OPTIONS",
     "plan_scenario",
     "DEFAULT_PLANNER",
     "TRAFFIC_PLANNER",
@@ -82,6 +88,9 @@ TASKS: dict[str, type[ParkingTask] | type[OvertakeTask] | type[OvertakeTrafficTa
 }
 #: Names of the built-in scenarios.
 SCENARIOS = tuple(TASKS)
+#: Names of the built-in scenarios that re-plan while driving (their tasks have a
+#: ``REPLAN_CONFIG``).
+REPLANNING_SCENARIOS = tuple(name for name, cls in TASKS.items() if cls.REPLAN_CONFIG)
 
 #: Why an option of one kind is refused by another (the messages name the option).
 _NOT_HERE = {
@@ -91,6 +100,8 @@ _NOT_HERE = {
     "lead_speed": "lead_speed: only the overtake-traffic scenario has it",
     "lead_model": "lead_model: only the overtake-traffic scenario has it",
 }
+#: The keyword options of :func:`make_scenario` (every kind's, and ``jitter``, ``vehicle``).
+SCENARIO_OPTIONS = ("jitter", "vehicle", *_NOT_HERE)
 
 
 def _jitter(jitter: object) -> tuple[float, float, float]:
@@ -155,7 +166,7 @@ def make_scenario(name: str, seed: int = 0, **options: Any) -> Task:
     >>> make_scenario("parking", 0, spot=999)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    rrtdrive.types.InputError: spot: expected (row, side, index), three integers, got 999; ...
+    rrtdrive.types.InputError: spot: expected tuple (row, side, index) of three integers, ...
     """
     rng, _, _ = scenario_rngs(seed)
     jitter = _jitter(options.pop("jitter", (1.0, 0.5, math.radians(5.0))))
@@ -164,10 +175,8 @@ def make_scenario(name: str, seed: int = 0, **options: Any) -> Task:
         raise InputError(f"vehicle: expected a VehicleParams, got {type(vehicle).__name__}")
     for key in options:
         if key not in _NOT_HERE:
-            known = ["jitter", "vehicle", *_NOT_HERE]
-            raise InputError(
-                f"scenario_options: unknown option {key!r}; choose from {known}"
-            )
+            known = list(SCENARIO_OPTIONS)
+            raise InputError(f"{key}: unknown scenario option; choose from {known}")
     if "oncoming" in options:
         options["oncoming"] = require_int("oncoming", options["oncoming"], 0, 10)
     cls = TASKS.get(name)

@@ -19,8 +19,13 @@ import numpy as np
 from rrtdrive.controllers import SpeedConfig, TrackingController
 from rrtdrive.maps import LANE_WIDTH, Map
 from rrtdrive.planning import PlanningProblem, make_planner
-from rrtdrive.sim.episode import SHORT_PATH_MESSAGE, EpisodeStatus, plan_failed_message
-from rrtdrive.sim.loop import STOP_AT_PATH_END, Driver, PathTracker
+from rrtdrive.sim.episode import (
+    SHORT_PATH_MESSAGE,
+    EpisodeStatus,
+    end_message,
+    plan_failed_message,
+)
+from rrtdrive.sim.loop import STOP_AT_PATH_END, Driver, EndRule, PathTracker, StopAtGoal
 from rrtdrive.sim.scenes import SceneView, scenario_rngs
 from rrtdrive.types import (
     Budget,
@@ -36,7 +41,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from highway_env.road.road import Road
 
     from rrtdrive.sim.ego import EgoVehicle
-    from rrtdrive.sim.replanning import TrafficLog
+    from rrtdrive.sim.episode import Episode
+    from rrtdrive.sim.replanning import ReplanConfig, TrafficLog
     from rrtdrive.sim.runner import EpisodeConfig
 
 __all__ = [
@@ -45,6 +51,7 @@ __all__ = [
     "PathTask",
     "VideoCamera",
     "Reference",
+    "SuccessPart",
     "DEFAULT_PLANNER",
     "plan_scenario",
 ]
@@ -106,6 +113,44 @@ class Reference:
     path: Path | None
     failure: str | None = None
 
+    @property
+    def plans_while_driving(self) -> bool:
+        """No path ahead of the drive: the driver plans its reference while driving."""
+        return self.path is None and self.failure is None
+
+
+@dataclass(frozen=True)
+class SuccessPart:
+    """The kind-specific part of an episode's success decision.
+
+    :func:`rrtdrive.evaluation.success.success_terms` computes the common terms
+    (goal pose, stopped, in time, collision) and asks the task
+    (:meth:`Task.success_part`) for these.
+
+    Attributes
+    ----------
+    passed_lead, back_in_lane : bool or None
+        The body is past the lead car and back in the ego lane (road kinds only).
+    lead_required : bool
+        ``passed_lead`` and ``back_in_lane`` are part of success.
+    reached_goal : bool or None
+        The task's own "goal reached" (``None``: the goal pose within tolerance).
+    ends_moving : bool
+        The task ends on the move: standing still is not required.
+    goal_errors : bool
+        The final errors to the goal pose are reported.
+    timeout_is_following : bool
+        A timeout without a collision is safe following (the ego stayed behind the lead).
+    """
+
+    passed_lead: bool | None = None
+    back_in_lane: bool | None = None
+    lead_required: bool = False
+    reached_goal: bool | None = None
+    ends_moving: bool = False
+    goal_errors: bool = True
+    timeout_is_following: bool = False
+
 
 def plan_scenario(
     scenario: Task, planner: str, seed: int, budget: Budget | None = None
@@ -138,9 +183,9 @@ class Task:
     Notes
     -----
     The class attributes ``lane_y``, ``lane_width``, ``lead_index``, ``oncoming``,
-    ``lead``, ``ego_speed`` and ``is_traffic`` are the defaults of fields that only
-    some kinds have (a kind that has one declares it as a field); they are here for
-    readers that do not ask the task yet (the evaluators, the gym env).
+    ``lead`` and ``ego_speed`` are the defaults of fields that only some kinds have
+    (a kind that has one declares it as a field); they are here for readers that
+    do not ask the task yet (the collision judge, the scene builder).
     """
 
     kind: ClassVar[TaskKind]
@@ -150,8 +195,9 @@ class Task:
     oncoming: ClassVar[tuple[tuple[float, float], ...]] = ()
     lead: ClassVar[tuple[float, float] | None] = None
     ego_speed: ClassVar[float] = 0.0
-    #: True for the moving-traffic kind (kept for readers that still test it).
-    is_traffic: ClassVar[bool] = False
+    #: The re-planning settings' type of a kind that re-plans while driving (``None``:
+    #: the path is planned once, before the drive).
+    REPLAN_CONFIG: ClassVar[type[ReplanConfig] | None] = None
 
     map: Map
     seed: int
@@ -220,6 +266,26 @@ class Task:
         """True when the task is done (the episode loop asks after every step)."""
         raise NotImplementedError
 
+    def end_message(self, status: EpisodeStatus, t_end: float, max_time_s: float) -> str:
+        """The message of an episode of this task that ended with ``status`` at ``t_end``."""
+        return end_message(status, t_end, max_time_s, self.success_status)
+
+    def agent_end_rule(self, tol_m: float, tol_rad: float, stop_speed: float) -> EndRule:
+        """When an episode is done that an agent drives without a tracking controller.
+
+        The task itself (its rule does not depend on a controller); a path task
+        overrides this. The arguments are the evaluators' goal tolerances.
+        """
+        return self
+
+    def success_part(self, episode: Episode) -> SuccessPart:
+        """The kind-specific success terms of a driven ``episode`` of this task (none here)."""
+        return SuccessPart()
+
+    def default_speed(self) -> SpeedConfig:
+        """The speed profile settings of this task when none are given: its cap."""
+        return SpeedConfig(v_max=self.v_max)
+
     def resolve(self, config: EpisodeConfig) -> tuple[SpeedConfig, EpisodeConfig]:
         """The speed profile settings of the drive and the configuration the episode records."""
         raise NotImplementedError
@@ -262,9 +328,13 @@ class PathTask(Task):
         """The controller arrived at the end of the path and the car stands still."""
         return STOP_AT_PATH_END.reached(ego, driver)
 
+    def agent_end_rule(self, tol_m: float, tol_rad: float, stop_speed: float) -> EndRule:
+        """Stopped at the goal pose within the tolerances (no controller says it arrived)."""
+        return StopAtGoal(self.goal, tol_m, tol_rad, stop_speed)
+
     def resolve(self, config: EpisodeConfig) -> tuple[SpeedConfig, EpisodeConfig]:
         """The given speed settings, else the defaults with this task's cap; ``config`` as is."""
-        return config.speed or SpeedConfig(v_max=self.v_max), config
+        return config.speed or self.default_speed(), config
 
     def reference(self, planner: object, seed: int, budget: Budget) -> Reference:
         """Plan with the registered planner ``planner``, or take a given plan or path.

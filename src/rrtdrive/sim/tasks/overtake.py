@@ -14,11 +14,13 @@ from rrtdrive.controllers import SpeedConfig, TrackingController
 from rrtdrive.maps import LANE_WIDTH, Obstacle, overtake_map
 from rrtdrive.sim.loop import Driver, PathTracker
 from rrtdrive.sim.scenes import SceneView, populate_road, two_way_network
-from rrtdrive.sim.tasks.base import PathTask, Reference, TaskKind, VideoCamera
+from rrtdrive.sim.tasks.base import PathTask, Reference, SuccessPart, TaskKind, VideoCamera
 from rrtdrive.sim.traffic import OncomingGate, conflict_zone
 from rrtdrive.types import InputError, Path, Pose, VehicleParams, require_int
+from rrtdrive.vehicle import footprint_corners
 
 if TYPE_CHECKING:  # pragma: no cover
+    from rrtdrive.sim.episode import Episode
     from rrtdrive.sim.runner import EpisodeConfig
 
 __all__ = ["OvertakeTask"]
@@ -122,6 +124,16 @@ class OvertakeTask(PathTask):
         m = self.map
         lane_y = self.lane_y or (m.bounds[1] + m.bounds[3]) / 2
         return VideoCamera((960, 320), 9.0, ((m.bounds[0] + m.bounds[2]) / 2, lane_y + 2.0))
+
+    def success_part(self, episode: Episode) -> SuccessPart:
+        """Past the stopped car (all body corners beyond its front) and back in the ego lane."""
+        final = episode.log.states[-1]
+        lead = self.map.obstacles[self.lead_index]
+        body = footprint_corners(final[:3], self.vehicle)
+        passed_lead = bool(body[:, 0].min() > lead.corners()[:, 0].max())
+        half = self.lane_width / 2.0
+        back_in_lane = bool(np.all(np.abs(body[:, 1] - self.lane_y) <= half))
+        return SuccessPart(passed_lead=passed_lead, back_in_lane=back_in_lane, lead_required=True)
 
     def oncoming_gate(
         self, env: Any, path: Path, speed: SpeedConfig

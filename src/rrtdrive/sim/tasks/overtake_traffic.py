@@ -24,13 +24,21 @@ from rrtdrive.maps import LANE_WIDTH, Map
 from rrtdrive.sim.episode import EpisodeStatus
 from rrtdrive.sim.replanning import ReplanConfig, TrafficLog
 from rrtdrive.sim.scenes import SceneView, populate_road, scenario_rngs, two_way_network
-from rrtdrive.sim.tasks.base import DEFAULT_PLANNER, Reference, Task, TaskKind, VideoCamera
+from rrtdrive.sim.tasks.base import (
+    DEFAULT_PLANNER,
+    Reference,
+    SuccessPart,
+    Task,
+    TaskKind,
+    VideoCamera,
+)
 from rrtdrive.sim.traffic_driver import TrafficDriver
 from rrtdrive.types import Budget, InputError, Path, Pose, VehicleParams, require_positive
 from rrtdrive.vehicle import footprint_corners
 
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.sim.ego import EgoVehicle
+    from rrtdrive.sim.episode import Episode
     from rrtdrive.sim.runner import EpisodeConfig
 
 __all__ = [
@@ -161,7 +169,7 @@ class OvertakeTrafficTask(Task):
     """
 
     kind: ClassVar[TaskKind] = TaskKind.OVERTAKE_TRAFFIC
-    is_traffic: ClassVar[bool] = True
+    REPLAN_CONFIG: ClassVar[type[ReplanConfig] | None] = ReplanConfig
     OPTIONS: ClassVar[tuple[str, ...]] = ("density", "lead_speed", "lead_model")
 
     lane_y: float = 44.0
@@ -280,6 +288,29 @@ class OvertakeTrafficTask(Task):
             driver.config.complete_gap_m,
         )
 
+    def success_part(self, episode: Episode) -> SuccessPart:
+        """The overtake itself: back in the lane, aligned, ahead of the moving lead car.
+
+        It ends on the move and has no goal pose to report; a timeout without a
+        collision is safe following.
+        """
+        log = episode.log
+        final = log.states[-1]
+        lead, (lead_len, _w) = log.others[-1, 0], log.other_sizes[0]
+        body = footprint_corners(final[:3], self.vehicle)
+        passed_lead = bool(body[:, 0].min() > lead[0] + lead_len / 2.0)
+        back_in_lane = bool(np.all(np.abs(body[:, 1] - self.lane_y) <= self.lane_width / 2.0))
+        gap = episode.traffic.config.complete_gap_m if episode.traffic is not None else 0.0
+        reached = self.overtake_complete(final[:3], lead[:2], lead_len, gap)
+        return SuccessPart(
+            passed_lead=passed_lead, back_in_lane=back_in_lane, reached_goal=reached,
+            ends_moving=True, goal_errors=False, timeout_is_following=True,
+        )
+
+    def default_speed(self) -> SpeedConfig:
+        """:func:`traffic_speed_config`."""
+        return traffic_speed_config(self)
+
     def resolve(self, config: EpisodeConfig) -> tuple[SpeedConfig, EpisodeConfig]:
         """The traffic speed settings and the re-planning defaults, recorded in the config.
 
@@ -291,7 +322,7 @@ class OvertakeTrafficTask(Task):
         replan = config.replan or ReplanConfig()
         if not isinstance(replan, ReplanConfig):
             raise InputError(f"episode.replan: expected a ReplanConfig, got {replan!r}")
-        speed = config.speed or traffic_speed_config(self)
+        speed = config.speed or self.default_speed()
         return speed, dataclasses.replace(config, speed=speed, replan=replan)
 
     def reference(self, planner: object, seed: int, budget: Budget) -> Reference:

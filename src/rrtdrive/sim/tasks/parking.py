@@ -34,7 +34,7 @@ def parse_spot(spot: object) -> tuple[int, int, int]:
         isinstance(v, bool) or not isinstance(v, (int, np.integer)) for v in values
     ):
         raise InputError(
-            f"spot: expected (row, side, index), three integers, got {spot!r}; "
+            f"spot: expected tuple (row, side, index) of three integers, got {spot!r}; "
             f"choose from {spots}"
         )
     if values not in PARKING_EMPTY_SPOTS:
