@@ -44,8 +44,9 @@ from typing import Any
 import numpy as np
 
 from rrtdrive.controllers import PathProjector
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.sim.ego import EgoVehicle
-from rrtdrive.types import InputError, require_int, wrap_angle
+from rrtdrive.types import InputError, require_int
 
 __all__ = [
     "KAPPA_CLIP",

@@ -12,9 +12,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-# Re-exported for callers not yet switched to rrtdrive.geometry (sim/, envs/, bench/).
-from rrtdrive.geometry import wrap_angle  # noqa: F401
-
 __all__ = [
     "InputError",
     "Pose",

@@ -146,8 +146,10 @@ def _plan_metrics(spec: RunSpec) -> dict[str, Any]:
 
 
 def _replan_config(spec: RunSpec) -> Any:
-    # A deterministic bench re-plans without wall-time cuts (only overtake-traffic re-plans).
-    if not (spec.deterministic and spec.target == "overtake-traffic"):
+    # A deterministic bench re-plans without wall-time cuts (in the tasks that re-plan).
+    from rrtdrive.sim.tasks import REPLANNING_SCENARIOS
+
+    if not (spec.deterministic and spec.target in REPLANNING_SCENARIOS):
         return None
     from rrtdrive.sim.replanning import ReplanConfig
 

@@ -24,7 +24,6 @@ from rrtdrive.evaluation.report import OUTCOMES, EpisodeReport, EvalConfig, Outc
 from rrtdrive.evaluation.success import (
     SuccessTerms,
     failure_reason,
-    overtake_complete,
     success_terms,
 )
 from rrtdrive.evaluation.summary import summarise
@@ -48,7 +47,6 @@ __all__ = [
     "time_to_collision",
     "vehicle_collisions",
     "min_vehicle_distance",
-    "overtake_complete",
     "OUTCOMES",
     "Outcome",
     "SuccessTerms",

@@ -2,28 +2,26 @@
 
 :func:`success_terms` computes every term of ``docs/metrics.md`` (Success,
 Outcome) from the final logged state: goal reached (or, for ``overtake-traffic``,
-the overtake complete: :func:`overtake_complete`), stopped, in time, no
+the overtake complete: :meth:`rrtdrive.sim.tasks.OvertakeTrafficTask.reached`), stopped, in time, no
 collision, and for ``overtake`` passed the lead car and back in the lane.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from rrtdrive.evaluation.collisions import footprint_collisions
 from rrtdrive.evaluation.report import EpisodeReport, EvalConfig, Outcome
 from rrtdrive.geometry import wrap_angle
-from rrtdrive.vehicle import footprint_corners
 
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.sim.episode import Episode
 
-__all__ = ["SuccessTerms", "success_terms", "overtake_complete", "failure_reason"]
+__all__ = ["SuccessTerms", "success_terms", "failure_reason"]
 
 
 @dataclass(frozen=True)
@@ -136,34 +134,6 @@ def success_terms(
         lead_required=lead_required, goal_position_err_m=pos_err_out,
         goal_heading_err_rad=head_err_out, success=success, outcome=outcome,
     )
-
-
-def overtake_complete(
-    ego_rear: Sequence[float],
-    lead_centre: Sequence[float],
-    lead_length: float,
-    lane_y: float,
-    lane_width: float,
-    vehicle: Any,
-    gap: float,
-) -> bool:
-    """Back in the ego lane (all body corners), aligned within 10°, ``gap`` ahead of the lead.
-
-    The completion test of ``overtake-traffic``: every corner of the ego's body lies
-    within the ego lane, its heading is within 10° of the lane's, and its rear
-    bumper is at least ``gap`` metres beyond the lead car's front bumper.
-
-    Examples
-    --------
-    >>> from rrtdrive.types import VehicleParams
-    >>> overtake_complete((30.0, 44.0, 0.0), (20.0, 44.0), 4.3, 44.0, 4.0, VehicleParams(), 2.0)
-    True
-    """
-    corners = footprint_corners(np.asarray(ego_rear, dtype=float)[:3], vehicle)
-    in_lane = bool(np.all(np.abs(corners[:, 1] - lane_y) <= lane_width / 2.0))
-    aligned = abs(wrap_angle(float(ego_rear[2]))) <= math.radians(10.0)
-    ahead = corners[:, 0].min() >= float(lead_centre[0]) + lead_length / 2.0 + gap
-    return in_lane and aligned and bool(ahead)
 
 
 def failure_reason(report: EpisodeReport, config: EvalConfig | None = None) -> str | None:

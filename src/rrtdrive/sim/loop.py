@@ -46,11 +46,12 @@ from collections.abc import Sequence
 from typing import Any, Protocol, runtime_checkable
 
 from rrtdrive.controllers import TrackingController, VehicleState
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.sim.drivelog import DriveRecorder
 from rrtdrive.sim.ego import EgoVehicle
 from rrtdrive.sim.episode import DriveLog, EpisodeStatus, end_message
 from rrtdrive.sim.traffic import OncomingGate
-from rrtdrive.types import InputError, Path, Pose, require_finite, wrap_angle
+from rrtdrive.types import InputError, Path, Pose, require_finite
 
 __all__ = [
     "Driver",
