@@ -63,7 +63,8 @@ class EgoVehicle(Vehicle):
     with ``delta`` the front-wheel angle in radians, clipped to ``vehicle.max_steer``.
     With ``vehicle.max_steer_rate`` set, the steering angle is part of the state and
     moves toward the command by at most ``max_steer_rate * dt`` per step (a rate-limited
-    actuator; the car starts with straight wheels).
+    actuator; the car starts with straight wheels), turning linearly within the step as
+    CommonRoad's kinematic single-track model integrates it.
     Over one step of length ``dt`` the acceleration and the steering angle are held;
     the speed changes linearly (stopping at zero rather than reversing within a
     step) and the rear axle follows the exact circular arc of curvature
@@ -192,6 +193,18 @@ class EgoVehicle(Vehicle):
         self.action["steering"] = min(max(float(self.action["steering"]), -limit), limit)
         self.action["acceleration"] = float(self.action["acceleration"])
 
+    #: Sub-steps of a step in which the rate-limited steering angle moves.
+    RAMP_SUBSTEPS = 8
+
+    def _ramped_step(
+        self, pose: tuple[float, float, float], ds: float, steer0: float, steer1: float
+    ) -> tuple[float, float, float]:
+        n = self.RAMP_SUBSTEPS
+        for i in range(n):
+            delta = steer0 + (steer1 - steer0) * (i + 0.5) / n
+            pose = bicycle_step(pose, ds / n, delta, 1.0, self.params.wheelbase)
+        return pose
+
     def step(self, dt: float) -> None:
         """Advance the rear-axle model exactly by ``dt`` seconds.
 
@@ -203,7 +216,8 @@ class EgoVehicle(Vehicle):
         self.clip_actions()
         steer = self.action["steering"]
         rate = self.params.max_steer_rate
-        if rate is not None and math.isfinite(rate):
+        slewing = rate is not None and math.isfinite(rate)
+        if slewing:
             reach = rate * dt
             steer = min(max(steer, self.steer - reach), self.steer + reach)
         accel = self.action["acceleration"]
@@ -222,10 +236,13 @@ class EgoVehicle(Vehicle):
         else:
             ds = 0.5 * (v0 + v1) * dt
         if ds != 0.0:
-            x, y, yaw = bicycle_step(
-                (self.rear[0], self.rear[1], self.rear[2]), ds / dt, steer, dt,
-                self.params.wheelbase,
-            )
+            pose = (self.rear[0], self.rear[1], self.rear[2])
+            if not slewing or steer == self.steer:
+                x, y, yaw = bicycle_step(pose, ds / dt, steer, dt, self.params.wheelbase)
+            else:
+                # A slewing actuator turns the wheels during the step (as CommonRoad's KS
+                # model integrates it): exact arcs over sub-steps at the ramp's midpoints.
+                x, y, yaw = self._ramped_step(pose, ds, self.steer, steer)
             if yaw > math.pi or yaw < -math.pi:
                 yaw = wrap_angle(yaw)
             self.rear = [x, y, yaw]
