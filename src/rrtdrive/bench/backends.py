@@ -503,12 +503,15 @@ def parallel_map(
     """
     work = list(items)
     backend = LocalBackend(max(1, workers), executor=fn, run_timeout_s=run_timeout_s)
-    index = {id(item): i for i, item in enumerate(work)}
+    # The backend hands back the very item objects; one object may stand twice in ``items``.
+    slots: dict[int, list[int]] = {}
+    for i, item in enumerate(work):
+        slots.setdefault(id(item), []).append(i)
     rows: list[dict[str, Any] | None] = [None] * len(work)
     for done, outcome in enumerate(backend.run(work), 1):
         if outcome.row is None:
             raise RuntimeError(f"{outcome.spec!r} failed: {outcome.error}")
-        rows[index[id(outcome.spec)]] = outcome.row
+        rows[slots[id(outcome.spec)].pop(0)] = outcome.row
         if progress is not None:
             progress(done, len(work))
     return [row for row in rows if row is not None]

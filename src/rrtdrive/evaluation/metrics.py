@@ -114,6 +114,11 @@ class MetricContext:
         return time_to_collision(self.episode, [c[0] for c in self.at_fault])
 
     @cached_property
+    def steering_rates(self) -> np.ndarray:
+        """Executed steering rate of every step (:func:`comfort.steering_rate`)."""
+        return comfort.steering_rate(self.episode.log)
+
+    @cached_property
     def nuplan(self) -> NuplanComfort:
         """NuPlan's comfort figures of the driven trajectory."""
         ep = self.episode
@@ -230,7 +235,7 @@ METRICS: Mapping[str, Metric] = MappingProxyType({
     "max_lateral_accel": Metric(lambda ep, ctx: float(np.max(np.abs(ctx.lateral)))),
     "max_long_accel": Metric(lambda ep, ctx: float(np.max(np.abs(ep.log.controls[:, 0])))),
     "max_jerk": Metric(lambda ep, ctx: comfort.max_jerk(ep.log, ctx.lateral)),
-    "max_steering_rate": Metric(lambda ep, ctx: float(np.max(comfort.steering_rate(ep.log)))),
+    "max_steering_rate": Metric(lambda ep, ctx: float(np.max(ctx.steering_rates))),
     "final_speed": Metric(lambda ep, ctx: float(ep.log.states[-1, 3])),
     # Other vehicles and progress.
     "progress_m": Metric(lambda ep, ctx: progress(ep)),
@@ -246,9 +251,7 @@ METRICS: Mapping[str, Metric] = MappingProxyType({
     "unsafe_steps": _replan("unsafe_steps"),
     # The actuator and nuPlan's ego_is_comfortable (docs/metrics.md, "Drivability").
     "steering_rate_over_limit_share": Metric(
-        lambda ep, ctx: float(
-            np.mean(comfort.steering_rate(ep.log) > ctx.config.steer_rate_limit + 1e-9)
-        )
+        lambda ep, ctx: float(np.mean(ctx.steering_rates > ctx.config.steer_rate_limit + 1e-9))
     ),
     "path_max_sharpness": _always(
         lambda ep, ctx: comfort.path_sharpness(ep.path, ep.scenario.vehicle.wheelbase)

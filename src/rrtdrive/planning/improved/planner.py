@@ -176,12 +176,8 @@ class _Query:
 
         Both are cached on the map's checker, so only a map's first query pays for them.
         """
-        before = dict(self.stats)
-        grow, edge_free = self.growth_edge_test()
+        grow, edge_free, self._growth_stats = self.growth_edge_test()
         self._growth = (grow, edge_free, self.passages(grow))
-        # The expansion counters describe the growth: they count once the query grows trees.
-        self._growth_stats = {k: self.stats[k] for k in ("expanded_obstacles", "expansion_used")}
-        self.stats.update({k: before[k] for k in self._growth_stats})
 
     def run(self, rng: np.random.Generator, budget: Budget, watch: Stopwatch) -> PlanResult:
         """The steps in order; the first that solves the query ends it."""
@@ -192,6 +188,7 @@ class _Query:
         if self._growth is None:
             self.prepare()
         _, edge_free, passages = self._growth
+        # The expansion counters describe the growth: they count once the query grows trees.
         self.stats.update(self._growth_stats)
         samples = SampleSource(self.problem, reject=True)
         out = self.grow_and_smooth(rng, budget, edge_free, samples, passages)
@@ -256,13 +253,15 @@ class _Query:
         self.stats["nodes"] = 2.0
         return self.smooth(np.vstack([s_xy, g_xy]), self.trees, 0)
 
-    def growth_edge_test(self) -> tuple[CollisionChecker, EdgeFree]:
-        """The growth checker and its edge test (Sec. 3.1.4).
+    def growth_edge_test(self) -> tuple[CollisionChecker, EdgeFree, dict[str, float]]:
+        """The growth checker, its edge test (Sec. 3.1.4) and the expansion counters.
 
         The checker of the expanded obstacles when both end poses are free in it;
-        its edge test checks edges at the roots on the map itself.
+        its edge test checks edges at the roots on the map itself. The counters are
+        ``expanded_obstacles`` and ``expansion_used`` (both 0 without expansion).
         """
-        cfg, checker, stats = self.cfg, self.checker, self.stats
+        cfg, checker = self.cfg, self.checker
+        stats = {"expanded_obstacles": 0.0, "expansion_used": 0.0}
         start, goal = self.start, self.goal
         grow = checker
         if cfg.obstacle_expansion and cfg.expansion_a > 0:
@@ -285,7 +284,7 @@ class _Query:
             edge_free = rooted_edge_test(
                 edge_free, fast_edge_test(checker), (start.x, start.y), (goal.x, goal.y)
             )
-        return grow, edge_free
+        return grow, edge_free, stats
 
     def passages(self, grow: CollisionChecker) -> np.ndarray | None:
         """The passage cells of the growth checker, ``None`` when off or there are none."""
