@@ -28,7 +28,7 @@ def test_plan_json_success_and_deterministic(capsys):
                 "planning_time_s", "setup_time_s", "message"):
         assert key in first
     path = np.array(first["path"])
-    assert path.shape[1] == 4
+    assert path.shape[1] == 5 and np.all(path[:, 4] == 1)
     assert np.hypot(*np.diff(path[:, :2], axis=0).T).max() <= 0.25 + 1e-6
     m = builtin_map("parking_lot")
     np.testing.assert_allclose(path[0, :2], [m.start.x, m.start.y], atol=1e-6)
