@@ -85,3 +85,17 @@ def test_segments_partition_the_rows(gears):
     for (a, _), (c, _) in zip(segs[:-1], segs[1:], strict=True):
         assert p.gears[a] != p.gears[c]
     assert p.is_forward_only == all(g == 1 for g in gears)
+
+
+def test_problem_reverse_is_a_validated_bool():
+    from rrtdrive.maps import builtin_map
+    from rrtdrive.planning import PlanningProblem
+
+    m = builtin_map("parking_lot")
+    assert PlanningProblem.from_map(m).reverse is False
+    p = PlanningProblem.from_map(m, reverse=True)
+    assert p.reverse is True
+    with pytest.raises(InputError, match="reverse"):
+        PlanningProblem(m, p.checker, m.start, m.goal, m.vehicle, reverse="yes")
+    with pytest.raises(InputError, match="reverse"):
+        PlanningProblem(m, p.checker, m.start, m.goal, m.vehicle, reverse=1)
