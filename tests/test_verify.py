@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
+import pytest
+import shapely
 
 from rrtdrive.maps import Map, Obstacle
-from rrtdrive.types import Path, Pose
-from rrtdrive.verify import verify_path
+from rrtdrive.types import InputError, Path, Pose
+from rrtdrive.verify import path_from_json, verify_path
 
 
 def _arc_map() -> tuple[Map, Path]:
@@ -52,3 +55,117 @@ def test_wrong_goal_heading_and_sparse_samples_are_caught():
     assert not verify_path(turned, p).headings_ok
     sparse = Path(p.samples[::3], p.waypoints)
     assert not verify_path(m, sparse).spacing_ok
+
+
+# ----------------------------------------------------------------------------- gears
+
+KAPPA = 0.125  # the reverse arc's steering curvature, below 1/6
+
+
+def _reverse_map(obstacles=()) -> tuple[Map, Path]:
+    """Forward 5 m from (10, 10, 0), cusp, reverse a quarter circle steering left to (7, 18)."""
+    xs = np.linspace(10.0, 15.0, 26)
+    fwd = np.column_stack([xs, np.full(26, 10.0), np.zeros(26), np.zeros(26), np.ones(26)])
+    s = np.linspace(0.0, (math.pi / 2) / KAPPA, 64)  # about 0.2 m apart
+    # Reversing, the yaw turns by -kappa per metre; the car travels along yaw + pi.
+    yaw = -KAPPA * s
+    x = 15.0 - np.sin(KAPPA * s) / KAPPA
+    y = 10.0 + (1.0 - np.cos(KAPPA * s)) / KAPPA
+    back = np.column_stack([x, y, yaw, np.full_like(s, KAPPA), -np.ones_like(s)])
+    goal = Pose(float(x[-1]), float(y[-1]), float(yaw[-1]))
+    m = Map("reverse", (0.0, 0.0, 40.0, 40.0), tuple(obstacles), Pose(10.0, 10.0, 0.0), goal)
+    return m, Path(np.vstack([fwd, back]), np.zeros((0, 2)))
+
+
+def _shapely_hit(m: Map, p: Path) -> bool:
+    """Ground truth at the rows: nose-yaw bodies built here against the obstacles."""
+    v = m.vehicle
+    obstacles = [shapely.Polygon(o.corners()) for o in m.obstacles]
+    for x, y, yaw in p.samples[:, :3]:
+        c, s = math.cos(yaw), math.sin(yaw)
+        local = [(-v.rear_overhang, -v.width / 2), (v.front_extent, -v.width / 2),
+                 (v.front_extent, v.width / 2), (-v.rear_overhang, v.width / 2)]
+        body = shapely.Polygon([(x + c * a - s * b, y + s * a + c * b) for a, b in local])
+        if any(body.intersects(o) for o in obstacles):
+            return True
+    return False
+
+
+def test_reverse_path_passes_per_segment():
+    m, p = _reverse_map()
+    assert p.cusps.tolist() == [26] and p.segments() == [(0, 26), (26, 90)]
+    np.testing.assert_allclose(m.goal.as_tuple(), (7.0, 18.0, -math.pi / 2), atol=1e-9)
+    check = verify_path(m, p)
+    assert check.ok, check
+    assert check.cusps == 1 and check.cusps_ok and check.travel_ok
+    # Curvature within the segments only: across the cusp the corner would be sharp.
+    assert abs(check.max_discrete_curvature - KAPPA) < 0.005
+    assert check.travel_heading_err_deg < 0.5
+
+
+def test_reverse_body_is_drawn_along_the_nose():
+    # Behind the goal in its direction of travel: a body along the direction of travel
+    # would reach it (its front 3.4 m up), the real body (nose down) keeps 1.1 m.
+    m, p = _reverse_map([Obstacle((7.0, 20.5), (1.0, 1.0))])
+    assert not _shapely_hit(m, p)
+    assert verify_path(m, p).collision_free
+    # Beside the front at the cusp: both must see it.
+    m, p = _reverse_map([Obstacle((17.5, 10.8), (1.0, 0.6))])
+    assert _shapely_hit(m, p)
+    check = verify_path(m, p)
+    assert not check.collision_free and not check.ok
+
+
+def test_reverse_yaw_along_the_travel_is_caught():
+    m, p = _reverse_map()
+    s = p.samples.copy()
+    s[26:, 2] += math.pi  # yaw of the direction of travel instead of the nose
+    check = verify_path(m, Path(s, p.waypoints))
+    assert not check.travel_ok and not check.ok
+    assert check.travel_heading_err_deg > 170.0
+
+
+def test_reverse_segment_labelled_forward_is_caught():
+    m, p = _reverse_map()
+    s = p.samples.copy()
+    s[:, 4] = 1.0  # no cusp: the arc "driven forward" runs against its yaw
+    check = verify_path(m, Path(s, p.waypoints))
+    assert check.cusps == 0 and not check.travel_ok and not check.ok
+
+
+def test_jumping_cusp_is_caught():
+    m, p = _reverse_map()
+    s = p.samples.copy()
+    s[26:, 1] += 0.1  # the reverse leg starts 0.1 m off the cusp: within the spacing
+    jumped = Map("reverse", m.bounds, (), m.start, Pose(m.goal.x, m.goal.y + 0.1, m.goal.yaw))
+    check = verify_path(jumped, Path(s, p.waypoints))
+    assert check.spacing_ok and check.endpoints_ok and check.travel_ok
+    assert not check.cusps_ok and not check.ok
+    s = p.samples.copy()
+    s[26, 2] += 0.3  # the car turned on the spot at the cusp
+    assert not verify_path(m, Path(s, p.waypoints)).cusps_ok
+
+
+def test_reverse_goal_pose_is_exact():
+    m, p = _reverse_map()
+    turned = Map("reverse", m.bounds, (), m.start, Pose(m.goal.x, m.goal.y, m.goal.yaw + 0.2))
+    check = verify_path(turned, p)
+    assert not check.headings_ok and check.goal_heading_err_deg > 10.0
+    moved = Map("reverse", m.bounds, (), m.start, Pose(m.goal.x + 0.05, m.goal.y, m.goal.yaw))
+    assert not verify_path(moved, p).endpoints_ok
+
+
+def test_path_from_json_reads_four_or_five_columns():
+    m, p = _reverse_map()
+    data = json.loads(json.dumps({"path": np.round(p.samples, 9).tolist(), "waypoints": []}))
+    back = path_from_json(data)
+    np.testing.assert_allclose(back.samples, p.samples, atol=1e-9)
+    assert verify_path(m, back).ok
+    _, arc = _arc_map()
+    old = path_from_json({"path": arc.samples[:, :4].tolist(), "waypoints": [[0, 0], [1, 1]]})
+    assert old.is_forward_only and old.samples.shape == (len(arc), 5) and len(old.waypoints) == 2
+    assert path_from_json([]).samples.shape == (0, 5)
+    with pytest.raises(InputError, match="path"):
+        path_from_json([[0, 0, 0, 0], [0, 0, 0, 0, 1]])
+    with pytest.raises(InputError, match="path.gear"):
+        path_from_json([[0, 0, 0, 0, 0], [0.2, 0, 0, 0, 0]])

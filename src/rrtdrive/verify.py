@@ -3,12 +3,19 @@
 It shares no code with the planner or the checker (only the angle wrap and the
 densifier of :mod:`rrtdrive.geometry`): the body is a shapely polygon built
 here, curvature is the discrete three-point (Menger) curvature of the samples,
-and headings are compared at the ends.
+and the direction of travel comes from the sample chords.
+
+A path with gears is checked per gear segment, never across a cusp: a cusp is
+where the car stops and changes gear, so the chord across it means nothing and
+the segments on either side are two separate drives. Each segment's direction
+of travel is its chords' direction, the nose yaw in gear +1 and the nose yaw
+plus pi in gear -1; the body is drawn along the nose yaw in both gears.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,14 +23,49 @@ import shapely
 
 from rrtdrive.geometry import densify, wrap_angle
 from rrtdrive.maps import Map
-from rrtdrive.types import Path
+from rrtdrive.types import InputError, Path
 
-__all__ = ["PathCheck", "verify_path"]
+__all__ = ["PathCheck", "verify_path", "path_from_json"]
+
+_CUSP_TOL_M = 1e-6  # a cusp repeats the position (to the JSON's 6 decimals)
 
 
 @dataclass(frozen=True)
 class PathCheck:
-    """Outcome of :func:`verify_path`; ``ok`` is True when every guarantee holds."""
+    """Outcome of :func:`verify_path`; ``ok`` is True when every guarantee holds.
+
+    Attributes
+    ----------
+    ok : bool
+        Every check below passed.
+    collision_free : bool
+        Every dense body pose lies inside the bounds and clear of the obstacles.
+    curvature_ok : bool
+        The discrete curvature of every gear segment is at most κ_max (plus slack).
+    headings_ok : bool
+        The direction of travel at the start and at the goal matches their yaw
+        (gear-corrected: a path may leave the start or reach the goal in reverse).
+    endpoints_ok : bool
+        The first and last positions are the start's and the goal's.
+    spacing_ok : bool
+        Consecutive samples are at most the allowed spacing apart.
+    max_discrete_curvature : float
+        Largest discrete curvature over the segments, 1/m.
+    start_heading_err_deg, goal_heading_err_deg : float
+        Direction of travel (gear-corrected) against the start and goal yaw.
+    max_spacing_m : float
+        Largest gap between consecutive samples.
+    cusps_ok : bool
+        Every gear change repeats the position and the yaw of the row before it.
+    cusps : int
+        Number of gear changes.
+    travel_ok : bool
+        Along every segment the direction of travel matches the rows' yaw
+        (``travel_heading_err_deg`` within the heading tolerance).
+    travel_heading_err_deg : float
+        Largest angle between a chord's direction of travel and the rows' yaw
+        (plus pi in reverse), over all segments.
+    """
 
     ok: bool
     collision_free: bool
@@ -35,6 +77,10 @@ class PathCheck:
     start_heading_err_deg: float
     goal_heading_err_deg: float
     max_spacing_m: float
+    cusps_ok: bool = True
+    cusps: int = 0
+    travel_ok: bool = True
+    travel_heading_err_deg: float = 0.0
 
 
 def _menger(xy: np.ndarray) -> np.ndarray:
@@ -55,6 +101,28 @@ def _body(x: float, y: float, yaw: float, length: float, width: float, back: flo
     return shapely.Polygon(pts)
 
 
+def _segment_curvature(xy: np.ndarray) -> float:
+    """Largest Menger curvature over points about 0.5 m apart (less noise than adjacent samples)."""
+    gaps = np.hypot(*np.diff(xy, axis=0).T)
+    keep = [0]
+    acc = 0.0
+    for i, g in enumerate(gaps, start=1):
+        acc += g
+        if acc >= 0.5:
+            keep.append(i)
+            acc = 0.0
+    if keep[-1] != len(xy) - 1:
+        keep.append(len(xy) - 1)
+    return float(_menger(xy[keep]).max()) if len(keep) >= 3 else 0.0
+
+
+def _travel_directions(seg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Chord direction of travel of a segment's non-zero steps, and those steps' indices."""
+    d = np.diff(seg[:, :2], axis=0)
+    moving = np.flatnonzero(np.hypot(*d.T) > 1e-9)
+    return np.arctan2(d[moving, 1], d[moving, 0]), moving
+
+
 def verify_path(
     m: Map,
     path: Path,
@@ -70,62 +138,94 @@ def verify_path(
     m : Map
         The map (obstacles, bounds, start, goal, car).
     path : Path
-        The planned path.
+        The planned path, forward-only or with gear changes.
     pose_spacing : float
         Poses are tested at most this far apart (interpolated between samples).
     max_sample_spacing : float
         Largest allowed gap between consecutive samples.
     heading_tol_deg : float
-        Allowed heading error at the start and the goal.
+        Allowed angle between the direction of travel and the yaw: at the start
+        and the goal against their poses, along the path against the rows' yaw.
     curvature_tol : float
         Slack on κ_max for the discrete curvature of 0.25 m samples.
 
     Returns
     -------
     PathCheck
+
+    Examples
+    --------
+    >>> from rrtdrive.types import Pose
+    >>> xs = np.arange(0.0, 5.01, 0.25)
+    >>> fwd = np.column_stack([10 + xs, 0 * xs + 10, 0 * xs, 0 * xs, 1 + 0 * xs])
+    >>> back = fwd[::-1].copy()
+    >>> back[:, 4] = -1.0
+    >>> m = Map("open", (0.0, 0.0, 30.0, 30.0), (), Pose(10, 10, 0), Pose(10, 10, 0))
+    >>> check = verify_path(m, Path(np.vstack([fwd, back]), np.zeros((0, 2))))
+    >>> check.ok, check.cusps
+    (True, 1)
     """
     v = m.vehicle
     s = path.samples
     if len(s) < 2:
-        return PathCheck(False, False, False, False, False, False, math.inf, 180.0, 180.0, math.inf)
+        return PathCheck(
+            False, False, False, False, False, False, math.inf, 180.0, 180.0, math.inf,
+            cusps_ok=False, cusps=0, travel_ok=False, travel_heading_err_deg=180.0,
+        )
     xy = s[:, :2]
     gaps = np.hypot(*np.diff(xy, axis=0).T)
-    # Dense poses: heading from the samples' own yaw column, interpolated.
-    dense = densify(s[:, :3], pose_spacing, angle_column=2).points
-    bodies = [_body(x, y, yaw, v.length, v.width, v.rear_overhang) for x, y, yaw in dense]
+    cusps = path.cusps
+    cusps_ok = bool(
+        np.all(np.hypot(*(xy[cusps] - xy[cusps - 1]).T) <= _CUSP_TOL_M)
+        and np.all(np.abs(wrap_angle(s[cusps, 2] - s[cusps - 1, 2])) <= math.radians(1e-3))
+    )
     region = shapely.box(*m.bounds)
     obstacles = shapely.union_all([shapely.Polygon(o.corners()) for o in m.obstacles])
+    bodies = []
+    max_k = 0.0
+    travel_err = 0.0
+    first_dir = last_dir = math.nan
+    for a, b in path.segments():
+        seg = s[a:b]
+        gear = seg[0, 4]
+        # The body along the nose yaw (interpolated between the rows) in either gear.
+        bodies += [
+            _body(x, y, yaw, v.length, v.width, v.rear_overhang)
+            for x, y, yaw in densify(seg[:, :3], pose_spacing, angle_column=2).points
+        ]
+        if len(seg) < 2:
+            continue
+        max_k = max(max_k, _segment_curvature(seg[:, :2]))
+        direction, moving = _travel_directions(seg)
+        if not len(moving):
+            continue
+        nose = direction if gear > 0 else direction + math.pi
+        # A chord runs parallel to the tangent at its midpoint: compare with the mean yaw.
+        mid_yaw = seg[moving, 2] + 0.5 * wrap_angle(seg[moving + 1, 2] - seg[moving, 2])
+        travel_err = max(travel_err, float(np.max(np.abs(wrap_angle(nose - mid_yaw)))))
+        if math.isnan(first_dir):
+            first_dir = float(nose[0])
+        last_dir = float(nose[-1])
     collision_free = bool(
-        all(region.contains(b) for b in bodies)
+        all(region.contains(body) for body in bodies)
         and not np.any(shapely.intersects(obstacles, np.array(bodies, dtype=object)))
     )
-    # Discrete curvature over points about 0.5 m apart (less noise than adjacent samples).
-    keep = [0]
-    acc = 0.0
-    for i, g in enumerate(gaps, start=1):
-        acc += g
-        if acc >= 0.5:
-            keep.append(i)
-            acc = 0.0
-    if keep[-1] != len(xy) - 1:
-        keep.append(len(xy) - 1)
-    kappa = _menger(xy[keep]) if len(keep) >= 3 else np.zeros(1)
-    max_k = float(kappa.max()) if len(kappa) else 0.0
-    # Chord of the first and last sample gaps: at most 0.25 m long, so even at
+    # Chords of the first and last moving steps: at most 0.25 m long, so even at
     # kappa_max the chord deviates from the tangent by under 0.7 degrees.
-    start_dir = math.atan2(*(xy[1] - xy[0])[::-1])
-    goal_dir = math.atan2(*(xy[-1] - xy[-2])[::-1])
-    err_s = abs(wrap_angle(start_dir - m.start.yaw))
-    err_g = abs(wrap_angle(goal_dir - m.goal.yaw))
+    err_s = abs(wrap_angle(first_dir - m.start.yaw)) if not math.isnan(first_dir) else math.pi
+    err_g = abs(wrap_angle(last_dir - m.goal.yaw)) if not math.isnan(last_dir) else math.pi
     endpoints_ok = bool(
         np.allclose(xy[0], (m.start.x, m.start.y), atol=1e-6)
         and np.allclose(xy[-1], (m.goal.x, m.goal.y), atol=1e-6)
     )
     curvature_ok = max_k <= v.kappa_max + curvature_tol
-    headings_ok = math.degrees(max(err_s, err_g)) <= heading_tol_deg
+    tol = math.radians(heading_tol_deg)
+    headings_ok = max(err_s, err_g) <= tol
+    travel_ok = travel_err <= tol
     spacing_ok = float(gaps.max()) <= max_sample_spacing + 1e-6
     return PathCheck(
-        ok=collision_free and curvature_ok and headings_ok and endpoints_ok and spacing_ok,
+        ok=collision_free and curvature_ok and headings_ok and endpoints_ok and spacing_ok
+        and cusps_ok and travel_ok,
         collision_free=collision_free,
         curvature_ok=curvature_ok,
         headings_ok=headings_ok,
@@ -135,4 +235,55 @@ def verify_path(
         start_heading_err_deg=math.degrees(err_s),
         goal_heading_err_deg=math.degrees(err_g),
         max_spacing_m=float(gaps.max()),
+        cusps_ok=cusps_ok,
+        cusps=len(cusps),
+        travel_ok=travel_ok,
+        travel_heading_err_deg=math.degrees(travel_err),
     )
+
+
+def path_from_json(data: Mapping[str, object] | Sequence[Sequence[float]]) -> Path:
+    """The :class:`Path` of a ``rrtdrive plan`` JSON object, or of its list of rows.
+
+    Rows with 4 numbers (``[x, y, yaw, kappa]``, JSON written before gears) are
+    forward rows; rows with 5 carry their gear.
+
+    Parameters
+    ----------
+    data : dict or list
+        The parsed plan JSON (its ``"path"`` and ``"waypoints"``) or the rows alone.
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    InputError
+        Naming ``path`` when the rows are not all 4 or all 5 numbers.
+
+    Examples
+    --------
+    >>> path_from_json({"path": [[0, 0, 0, 0], [0.25, 0, 0, 0]], "waypoints": []}).gears.tolist()
+    [1, 1]
+    >>> path_from_json([[0, 0, 0, 0, -1], [-0.25, 0, 0, 0, -1]]).is_forward_only
+    False
+    """
+    if isinstance(data, Mapping):
+        rows, waypoints = data.get("path"), data.get("waypoints") or []
+    else:
+        rows, waypoints = data, []
+    if not isinstance(rows, Sequence) or isinstance(rows, str):
+        raise InputError(f"path: expected a list of rows, got {type(rows).__name__}")
+    widths = {len(r) if isinstance(r, Sequence) else -1 for r in rows}
+    if widths - {4, 5} or len(widths) > 1:
+        raise InputError(
+            f"path: rows must all be [x, y, yaw, kappa] or [x, y, yaw, kappa, gear], "
+            f"got row lengths {sorted(widths)}"
+        )
+    try:
+        samples = np.array(rows, dtype=float).reshape(len(rows), widths.pop() if rows else 5)
+        wp = np.array(waypoints, dtype=float).reshape(-1, 2)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"path: rows must be numbers ({exc})") from None
+    return Path(samples, wp)
