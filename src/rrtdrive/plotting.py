@@ -28,6 +28,7 @@ __all__ = [
     "draw_map",
     "draw_trees",
     "draw_path",
+    "draw_gear_path",
     "draw_pose",
     "plot_plan",
     "plot_curvature",
@@ -95,15 +96,52 @@ def draw_path(
         ax.plot(xy[:, 0], xy[:, 1], color=colour, lw=lw, label=label, marker=marker, ms=4)
 
 
+def draw_gear_path(
+    ax: Axes,
+    path: Path,
+    forward: str = "tab:orange",
+    reverse: str = "tab:cyan",
+    lw: float = 2.0,
+    label: str = "path",
+) -> None:
+    """Draw a path's gear segments: forward solid, reverse dashed in another colour, cusps as x.
+
+    The legend gets one entry per kind present: ``"<label>"`` (``"<label>, forward"``
+    when the path reverses), ``"<label>, reverse (dashed)"`` and ``"cusp (gear change)"``.
+    """
+    reverses = not path.is_forward_only
+    seen: set[str] = set()
+    for a, b in path.segments():
+        xy = path.xy[a:b]
+        if path.gears[a] > 0:
+            kind, colour, ls = (f"{label}, forward" if reverses else label), forward, "-"
+        else:
+            kind, colour, ls = f"{label}, reverse (dashed)", reverse, "--"
+        ax.plot(
+            xy[:, 0], xy[:, 1], color=colour, lw=lw, ls=ls,
+            label=None if kind in seen else kind,
+        )
+        seen.add(kind)
+    cusps = path.cusps
+    if len(cusps):
+        ax.plot(
+            path.xy[cusps, 0], path.xy[cusps, 1], "X", color="black", ms=8, mew=0.5,
+            mfc="yellow", ls="none", label=f"cusp (gear change, {len(cusps)})", zorder=5,
+        )
+
+
 def plot_plan(m: Map, result: PlanResult, title: str | None = None) -> Figure:
-    """The map, the trees, the raw tree path, the waypoints and the final path of one result."""
+    """The map, the trees, the raw tree path, the waypoints and the final path of one result.
+
+    The path is drawn by :func:`draw_gear_path`: reverse segments dashed, cusps marked.
+    """
     fig, ax = plt.subplots(figsize=(7.5, 7.5))
     draw_map(ax, m)
     draw_trees(ax, result.trees)
     draw_path(ax, result.raw_path, "tab:gray", "raw tree path", lw=1.0)
     if len(result.path):
         draw_path(ax, result.path.waypoints, "tab:olive", "waypoints", lw=0.8, marker="o")
-        draw_path(ax, result.path.xy, "tab:orange", "path")
+        draw_gear_path(ax, result.path)
     status = "solved" if result.success else result.status.value
     ax.set_title(title or f"{m.name}: {result.planner} ({status}, {result.nodes} nodes)")
     ax.legend(loc="upper right", fontsize=8)
@@ -112,11 +150,25 @@ def plot_plan(m: Map, result: PlanResult, title: str | None = None) -> Figure:
 
 
 def plot_curvature(path: Path, kappa_max: float, ax: Axes | None = None) -> Figure:
-    """Curvature against normalised path length (the paper's Figs. 14 and 16)."""
+    """Curvature against normalised path length (the paper's Figs. 14 and 16).
+
+    Reverse segments are dashed in another colour, cusps dotted vertical lines.
+    """
     fig = ax.figure if ax is not None else plt.figure(figsize=(7, 3))
     ax = ax or fig.add_subplot(111)
     s = path.arc_length()
-    ax.plot(s / max(s[-1], 1e-9), path.samples[:, 3], color="tab:blue", label="κ(s)")
+    u = s / max(s[-1], 1e-9) if len(s) else s
+    reverses = not path.is_forward_only
+    for i, (a, b) in enumerate(path.segments()):
+        fwd = path.gears[a] > 0
+        label = ("κ(s)" if not reverses else "κ(s), forward") if fwd else "κ(s), reverse (dashed)"
+        first = all(path.gears[c] != path.gears[a] for c, _ in path.segments()[:i])
+        ax.plot(
+            u[a:b], path.samples[a:b, 3], color="tab:blue" if fwd else "tab:cyan",
+            ls="-" if fwd else "--", label=label if first else None,
+        )
+    for c in path.cusps:
+        ax.axvline(u[c], color="0.5", lw=0.8, ls=":", label="cusp" if c == path.cusps[0] else None)
     for sign in (1, -1):
         ax.axhline(
             sign * kappa_max, color="tab:red", ls="--", lw=1.0, label="±κ_max" if sign > 0 else None

@@ -1,0 +1,63 @@
+"""Figures render headless (Agg); reverse segments and cusps are drawn apart."""
+
+from __future__ import annotations
+
+import math
+
+import matplotlib.image as mpimg
+import numpy as np
+
+from rrtdrive.maps import Map
+from rrtdrive.plotting import plot_curvature, plot_plan, save_figure
+from rrtdrive.types import Path, PlanResult, PlanStatus, Pose
+
+
+def _reverse_result() -> tuple[Map, PlanResult]:
+    xs = np.linspace(10.0, 15.0, 26)
+    fwd = np.column_stack([xs, np.full(26, 10.0), np.zeros(26), np.zeros(26), np.ones(26)])
+    k = 0.125
+    s = np.linspace(0.0, (math.pi / 2) / k, 64)
+    back = np.column_stack([
+        15.0 - np.sin(k * s) / k, 10.0 + (1.0 - np.cos(k * s)) / k, -k * s,
+        np.full_like(s, k), -np.ones_like(s),
+    ])
+    path = Path(np.vstack([fwd, back]), np.array([[10.0, 10.0], [15.0, 10.0], [7.0, 18.0]]))
+    m = Map("reverse", (0.0, 0.0, 40.0, 40.0), (), Pose(10.0, 10.0, 0.0),
+            Pose(7.0, 18.0, -math.pi / 2))
+    result = PlanResult(PlanStatus.SOLVED, "hand-made", path, path.waypoints, (), 0, 0, 0.0)
+    return m, result
+
+
+def test_reverse_path_figure_renders(tmp_path):
+    m, result = _reverse_result()
+    fig = plot_plan(m, result)
+    ax = fig.axes[0]
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "path, forward" in labels and "path, reverse (dashed)" in labels
+    assert any(t.startswith("cusp") for t in labels)
+    styles = {line.get_label(): line.get_linestyle() for line in ax.get_lines()}
+    assert styles["path, forward"] == "-" and styles["path, reverse (dashed)"] == "--"
+    colours = {line.get_label(): line.get_color() for line in ax.get_lines()}
+    assert colours["path, forward"] != colours["path, reverse (dashed)"]
+    cusp = next(line for line in ax.get_lines() if line.get_label().startswith("cusp"))
+    np.testing.assert_allclose(np.column_stack(cusp.get_data()), [[15.0, 10.0]])
+    out = tmp_path / "reverse.png"
+    save_figure(fig, out)
+    image = mpimg.imread(out)
+    assert image.shape[0] > 100 and image[..., :3].std() > 0.01  # not blank
+
+    fig = plot_curvature(result.path, 1 / 6)
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert "κ(s), reverse (dashed)" in labels and "cusp" in labels
+    save_figure(fig, tmp_path / "kappa.png")
+
+
+def test_forward_path_keeps_one_path_entry(tmp_path):
+    m, result = _reverse_result()
+    fwd = Path(result.path.samples[:26, :4], result.path.waypoints)
+    m = Map("fwd", m.bounds, (), m.start, Pose(15.0, 10.0, 0.0))
+    result = PlanResult(PlanStatus.SOLVED, "hand-made", fwd, fwd.waypoints, (), 0, 0, 0.0)
+    fig = plot_plan(m, result)
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert "path" in labels and not any("reverse" in t or "cusp" in t for t in labels)
+    save_figure(fig, tmp_path / "fwd.png")
