@@ -115,6 +115,12 @@ class PathProjector:
                 f"path: need at least two samples [x, y, yaw, kappa, gear], got {samples.shape}"
             )
         require_finite("path", *samples.ravel().tolist())
+        if not path.is_forward_only:  # every closed loop (runner, re-planner, gym env) gets here
+            n = len(path.cusps)
+            what = f"has {n} gear change{'s' if n != 1 else ''}" if n else "is driven in reverse"
+            raise InputError(
+                f"path: {what}; driving in reverse is not supported yet (issue #14)"
+            )
         xy = samples[:, :2]
         seg = np.hypot(*np.diff(xy, axis=0).T)
         keep = np.concatenate([[True], seg > 1e-9])  # drop repeated samples
