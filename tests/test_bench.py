@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 import os
 import signal
 import subprocess
@@ -386,6 +387,16 @@ def test_ompl_rows_on_the_same_map_and_checker():
     )
     # Reeds–Shepp curves respect the turning radius (up to sampling noise).
     assert rs.path.max_curvature <= m.vehicle.kappa_max * 1.02
+    # In the parking lot they reverse: gear rows that the independent check accepts.
+    lot = builtin_map("parking_lot")
+    for seed in (0, 1):
+        rs = make_planner("ompl-rs-rrtconnect").solve(
+            PlanningProblem.from_map(lot), np.random.default_rng(seed), Budget(max_time_s=5.0)
+        )
+        assert rs.success, rs.message
+        check = verify_path(lot, rs.path)
+        assert check.ok and check.cusps == len(rs.path.cusps) >= 1, check
+        assert rs.path.max_curvature <= lot.vehicle.kappa_max * 1.001
     unreachable = PlanningProblem.from_map(builtin_map("no_path"))
     fail = make_planner("ompl-r2-rrtconnect").solve(
         unreachable, np.random.default_rng(0), Budget(max_time_s=0.3)
@@ -462,18 +473,56 @@ def _drive(x, y, yaw, v, kappa, ds, n):
     return out, (x, y, yaw)
 
 
-def test_reeds_shepp_curvature_ignores_cusps():
-    from rrtdrive.bench.ompl_planners import _gear_curvature
+def test_reeds_shepp_gear_rows_split_at_the_cusp():
+    from rrtdrive.bench.ompl_planners import gear_rows
+    from rrtdrive.types import Path
 
-    # Forward on a left arc (κ = 0.2) to a cusp between samples, then reverse steering
-    # right (yaw keeps turning): the step across the cusp is ~0 m long in the plane.
-    fwd, cusp = _drive(0.0, 0.0, 0.0, 1.0, 0.2, 0.01, 493)
-    fwd = fwd[::10]  # samples 0.1 m apart, the last 0.03 m before the cusp
+    # Forward on a left arc (κ = 0.2) to a cusp, then reverse steering right,
+    # κ = tan δ / L = -0.2: the yaw keeps turning left (by -κ per metre travelled).
+    fwd, cusp = _drive(0.0, 0.0, 0.0, 1.0, 0.2, 0.01, 490)
     rev, _ = _drive(*cusp, -1.0, -0.2, 0.01, 300)
-    rev = rev[2::10]  # the first 0.03 m after it
-    states = np.array(fwd + rev)
+    states = np.array([(0.0, 0.0, 0.0)] + fwd[9::10] + rev[9::10])  # the cusp is a sample
     d = np.diff(states[:, :2], axis=0)
     naive = np.abs(np.diff(states[:, 2]) / np.hypot(*d.T)).max()
-    assert naive > 0.5  # what the bench reported as the path's max curvature
-    kappa = _gear_curvature(states)
-    assert np.abs(kappa).max() == pytest.approx(0.2, abs=0.01)
+    rows = gear_rows(states)
+    path = Path(rows, np.zeros((0, 2)))
+    assert path.cusps.tolist() == [50] and path.segments() == [(0, 50), (50, 81)]
+    np.testing.assert_array_equal(rows[49, :3], rows[50, :3])  # the cusp row repeats
+    assert path.gears[:50].tolist() == [1] * 50 and path.gears[50:].tolist() == [-1] * 31
+    np.testing.assert_allclose(rows[:50, 3], 0.2, atol=1e-3)
+    np.testing.assert_allclose(rows[50:, 3], -0.2, atol=1e-3)
+    assert naive < 0.25  # no step across the cusp here; the OMPL sampler inserts it
+
+
+@pytest.mark.parametrize("goal", [(0.0, 3.0, 0.0), (-4.0, 1.0, 2.5), (2.0, 0.0, math.pi)])
+def test_reeds_shepp_cusps_are_found_on_the_curve(goal):
+    pytest.importorskip("ompl")
+    from ompl import base as ob
+    from ompl import geometric as og
+
+    from rrtdrive.bench.ompl_planners import reeds_shepp_path
+    from rrtdrive.maps import Map
+    from rrtdrive.types import Pose
+    from rrtdrive.verify import verify_path
+
+    space = ob.ReedsSheppStateSpace(6.0)
+    bounds = ob.RealVectorBounds(2)
+    bounds.setLow(-50.0)
+    bounds.setHigh(50.0)
+    space.setBounds(bounds)
+    si = ob.SpaceInformation(space)
+    a, b = space.allocState(), space.allocState()
+    a.setX(0.0), a.setY(0.0), a.setYaw(0.0)
+    b.setX(goal[0]), b.setY(goal[1]), b.setYaw(goal[2])
+    solution = og.PathGeometric(si, a, b)
+    path = reeds_shepp_path(space, solution, np.zeros((0, 2)))
+    m = Map("open", (-50.0, -50.0, 50.0, 50.0), (), Pose(0.0, 0.0, 0.0), Pose(*goal))
+    check = verify_path(m, path)
+    assert len(path.cusps) >= 1 and check.ok, check
+    assert path.length == pytest.approx(space.distance(a, b), rel=1e-4)
+    assert np.abs(path.samples[:, 3]).max() <= 1 / 6 + 1e-4
+    for a_, b_ in path.segments():  # the bicycle: yaw turns by gear * kappa per metre
+        seg = path.samples[a_:b_]
+        ds = np.hypot(*np.diff(seg[:, :2], axis=0).T)
+        dyaw = np.diff(np.unwrap(seg[:, 2]))
+        np.testing.assert_allclose(dyaw, seg[:-1, 4] * seg[:-1, 3] * ds, atol=1e-6)

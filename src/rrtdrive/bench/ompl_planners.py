@@ -21,10 +21,11 @@ at 0.25 m. The optimising planners stop at their first solution (a cost threshol
 of infinity), and every solution is simplified with OMPL's ``simplifySolution`` in
 the remaining budget. The returned path is sampled at most 0.25 m apart: R²
 polylines as the baselines' raw paths (headings along the segments, Menger
-curvature at the corners), Reeds–Shepp curves with their own headings and the
-curvature d(yaw)/ds within each gear segment (a cusp is not a curvature). A
-Reeds–Shepp path may reverse; rrtdrive's guarantees are for forward paths, so the
-bench's ``verified`` column will say so.
+curvature at the corners), Reeds–Shepp curves as gear rows
+``[x, y, yaw, kappa, gear]`` (:func:`reeds_shepp_path`): the gear from the
+direction of travel against the yaw, each cusp found on the curve and its row
+repeated, κ = gear · d(yaw)/ds within each gear segment (a cusp is not a
+curvature), so :func:`rrtdrive.verify.verify_path` checks them segment by segment.
 
 Before the search, as for rrtdrive's planners, an invalid start or goal body
 ends the query; OMPL gets no connectivity proof, so on an unreachable goal it
@@ -52,7 +53,15 @@ from rrtdrive.planning.base import (
 )
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus
 
-__all__ = ["OmplPlanner", "OMPL_PLANNERS", "SPACES", "ALGORITHMS", "simple_setup"]
+__all__ = [
+    "OmplPlanner",
+    "OMPL_PLANNERS",
+    "SPACES",
+    "ALGORITHMS",
+    "simple_setup",
+    "reeds_shepp_path",
+    "gear_rows",
+]
 
 #: Space short names.
 SPACES = ("r2", "rs")
@@ -251,9 +260,7 @@ class OmplPlanner:
         if r2:
             path = polyline_path(vertices[:, :2], _SPACING)
         else:
-            length = float(solution.length())
-            solution.interpolate(max(2, int(math.ceil(length / (0.4 * _SPACING))) + 1))
-            path = _curve_path(_states(solution, r2), vertices[:, :2])
+            path = reeds_shepp_path(ss.getStateSpace(), solution, vertices[:, :2])
         return PlanResult(
             status=PlanStatus.SOLVED,
             planner=self.name,
@@ -285,59 +292,125 @@ def _states(path: Any, r2: bool) -> np.ndarray:
     return out
 
 
-def _curve_path(states: np.ndarray, waypoints: np.ndarray) -> Path:
-    """A :class:`Path` from densely interpolated Reeds–Shepp states; κ = d(yaw)/ds per gear.
+def reeds_shepp_path(space: Any, solution: Any, waypoints: np.ndarray) -> Path:
+    """The gear rows of an OMPL Reeds–Shepp solution, sampled at most 0.1 m apart.
 
-    At a cusp the car stops and reverses: the step across it is short in the plane
-    but turns the yaw of both sides, so d(yaw)/ds there is no curvature of the
-    path. κ is computed within each gear segment (forward or reverse run); the two
-    steps at each gear change take the value of their segment's nearest inner step.
+    Each curve between consecutive solution states is sampled by
+    ``space.interpolate``, and at each sample the car's motion (a micrometre either
+    way along the curve) is along its yaw or against it; where that differs between
+    two samples a cusp lies between them, found by bisection on the curve and
+    inserted, so the cusp row repeats exactly. A cusp at a solution state is a
+    sample already.
+
+    Parameters
+    ----------
+    space : ompl.base.ReedsSheppStateSpace
+        The solution's space.
+    solution : ompl.geometric.PathGeometric
+        The (simplified) solution, not interpolated.
+    waypoints : numpy.ndarray
+        ``(M, 2)`` kept as the path's waypoints.
+
+    Returns
+    -------
+    Path
+        Rows ``[x, y, yaw, kappa, gear]`` by :func:`gear_rows`.
     """
-    xy = states[:, :2]
-    keep = np.concatenate([[True], np.hypot(*np.diff(xy, axis=0).T) > 1e-9])
-    states = states[keep]
-    kappa = _gear_curvature(states)
-    samples = np.column_stack([states[:, :3], kappa])
-    return Path(samples, waypoints)
+    tmp = space.allocState()
+
+    def at(a: Any, b: Any, f: float) -> tuple[float, float, float]:
+        space.interpolate(a, b, min(1.0, max(0.0, f)), tmp)
+        return (tmp.getX(), tmp.getY(), tmp.getYaw())
+
+    pieces: list[np.ndarray] = []
+    for i in range(solution.getStateCount() - 1):
+        a, b = solution.getState(i), solution.getState(i + 1)
+        length = float(space.distance(a, b))
+        if length < 1e-9:
+            continue
+        fractions = list(np.linspace(0.0, 1.0, max(2, math.ceil(length / _DENSE)) + 1))
+        eps = 1e-6 / length  # a micrometre along the curve
+        curve = functools.partial(at, a, b)
+        gears = [_motion_gear(curve, f, eps) for f in fractions]
+        cusps = [
+            _bisect_cusp(curve, fractions[k], fractions[k + 1], gears[k], eps)
+            for k in range(len(fractions) - 1)
+            if gears[k] != gears[k + 1]
+        ]
+        states = np.array([at(a, b, f) for f in sorted(fractions + cusps)])
+        pieces.append(states if not pieces else states[1:])
+    if not pieces:
+        return Path(np.zeros((0, 5)), waypoints)
+    return Path(gear_rows(np.vstack(pieces)), waypoints)
 
 
-def _gear_curvature(states: np.ndarray) -> np.ndarray:
-    """Per-sample κ of ``(N, 3)`` ``x, y, yaw`` states, ignoring the steps at cusps.
+_DENSE = 0.4 * _SPACING  # sample step along a Reeds–Shepp curve
+
+
+def _step_gears(states: np.ndarray) -> np.ndarray:
+    """+1 / -1 per step of ``(N, 3)`` states: the chord along or against the mid-step yaw."""
+    d = np.diff(states[:, :2], axis=0)
+    mid = states[:-1, 2] + 0.5 * wrap_angle(np.diff(states[:, 2]))
+    return np.where(d[:, 0] * np.cos(mid) + d[:, 1] * np.sin(mid) >= 0.0, 1, -1)
+
+
+def _motion_gear(curve: Any, f: float, eps: float) -> int:
+    """+1 when the car moves along its yaw at curve fraction ``f``, -1 against it."""
+    lo, hi = max(0.0, f - eps), min(1.0, f + eps)
+    x0, y0, _ = curve(lo)
+    x1, y1, _ = curve(hi)
+    yaw = curve(f)[2]
+    return 1 if (x1 - x0) * math.cos(yaw) + (y1 - y0) * math.sin(yaw) >= 0.0 else -1
+
+
+def _bisect_cusp(curve: Any, lo: float, hi: float, gear_lo: int, eps: float) -> float:
+    """The curve fraction in ``(lo, hi)`` where the motion's gear changes from ``gear_lo``."""
+    while hi - lo > eps:
+        mid = 0.5 * (lo + hi)
+        if _motion_gear(curve, mid, 0.25 * eps) == gear_lo:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+def gear_rows(states: np.ndarray) -> np.ndarray:
+    """Rows ``[x, y, yaw, kappa, gear]`` of dense ``(N, 3)`` nose-yaw states.
+
+    The gear of a step is whether its chord runs along the yaw (+1) or against it
+    (-1); where it changes the sample is a cusp and its row repeats with the new
+    gear. Curvature is computed within each gear segment, never across a cusp:
+    κ = gear · d(yaw)/ds (the steering's curvature, as a reversing car turns its
+    yaw by -κ per metre travelled), each sample taking its outgoing step's value
+    and a segment's last sample its incoming one. Repeated positions are dropped
+    first.
 
     Examples
     --------
     >>> t = np.linspace(0.0, 1.0, 11)
     >>> arc = np.column_stack([np.sin(t) * 5, 5 - np.cos(t) * 5, t])  # κ = 0.2, forward
-    >>> bool(np.allclose(_gear_curvature(arc), 0.2, atol=1e-3))
-    True
+    >>> back = arc[::-1][1:]  # and back along it in reverse: κ = 0.2 again
+    >>> rows = gear_rows(np.vstack([arc, back]))
+    >>> Path(rows, np.zeros((0, 2))).cusps.tolist(), bool(np.allclose(rows[:, 3], 0.2, atol=1e-3))
+    ([11], True)
     """
-    n = len(states)
-    kappa = np.zeros(n)
-    if n < 2:
-        return kappa
-    d = np.diff(states[:, :2], axis=0)
-    ds = np.hypot(*d.T)
-    dyaw = wrap_angle(np.diff(states[:, 2]))
-    mid_yaw = states[:-1, 2] + 0.5 * dyaw
-    gear = np.where(d[:, 0] * np.cos(mid_yaw) + d[:, 1] * np.sin(mid_yaw) >= 0.0, 1, -1)
-    seg = np.where(ds > 1e-9, dyaw / np.maximum(ds, 1e-12), 0.0)
-    change = np.flatnonzero(gear[1:] != gear[:-1])  # a cusp lies in step i or i + 1
-    if len(change):
-        bad = np.zeros(len(seg), dtype=bool)
-        bad[change] = bad[change + 1] = True
-        good, idx = np.flatnonzero(~bad), np.flatnonzero(bad)
-        if len(good):
-            # Each dropped step takes its nearest kept step's value: the last forward
-            # step looks back, the first reverse step ahead (its own gear run).
-            pos = np.searchsorted(good, idx)
-            left = good[np.clip(pos - 1, 0, len(good) - 1)]
-            right = good[np.clip(pos, 0, len(good) - 1)]
-            seg[idx] = seg[np.where(np.abs(idx - left) <= np.abs(right - idx), left, right)]
-        else:
-            seg[:] = 0.0
-    kappa[:-1] = seg
-    kappa[-1] = seg[-1]
-    return kappa
+    states = np.asarray(states, dtype=float).reshape(-1, 3)
+    if len(states) > 1:
+        keep = np.concatenate([[True], np.hypot(*np.diff(states[:, :2], axis=0).T) > 1e-9])
+        states = states[keep]
+    if len(states) < 2:
+        return np.column_stack([states, np.zeros(len(states)), np.ones(len(states))])
+    gears = _step_gears(states)
+    bounds = [0, *(np.flatnonzero(gears[1:] != gears[:-1]) + 1).tolist(), len(gears)]
+    rows = []
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        run = states[a : b + 1]
+        gear = float(gears[a])
+        ds = np.hypot(*np.diff(run[:, :2], axis=0).T)
+        k = gear * wrap_angle(np.diff(run[:, 2])) / ds
+        kappa = np.append(k, k[-1])
+        rows.append(np.column_stack([run, kappa, np.full(len(run), gear)]))
+    return np.vstack(rows)
 
 
 def _register() -> None:
