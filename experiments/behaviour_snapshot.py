@@ -123,9 +123,23 @@ def snapshot(episodes: bool = True) -> dict[str, dict]:
     return data
 
 
+#: Plan JSON keys added with gears (issue #13), and their value for a forward-only plan.
+GEAR_DEFAULTS = {"reverse": False, "cusps": 0}
+
+
+def with_gears(entry: dict) -> dict:
+    """A plan entry recorded before gears in today's form: 4-number rows get gear +1."""
+    if "path" not in entry:
+        return entry
+    out = {**GEAR_DEFAULTS, **entry}
+    out["path"] = [list(row) + [1.0] if len(row) == 4 else row for row in entry["path"]]
+    return out
+
+
 def compare(before: dict[str, dict], after: dict[str, dict]) -> list[str]:
-    """Human-readable differences between two snapshots."""
+    """Human-readable differences between two snapshots (older plan entries read with gears)."""
     diffs = []
+    before = {k: with_gears(v) if k.startswith("plan/") else v for k, v in before.items()}
     for key in sorted(set(before) | set(after)):
         a, b = before.get(key), after.get(key)
         if a is None or b is None:

@@ -8,6 +8,8 @@ import math
 import numpy as np
 import pytest
 import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from rrtdrive.maps import Map, Obstacle
 from rrtdrive.types import InputError, Path, Pose
@@ -169,3 +171,42 @@ def test_path_from_json_reads_four_or_five_columns():
         path_from_json([[0, 0, 0, 0], [0, 0, 0, 0, 1]])
     with pytest.raises(InputError, match="path.gear"):
         path_from_json([[0, 0, 0, 0, 0], [0.2, 0, 0, 0, 0]])
+
+
+def _drive_segments(segments, start=(50.0, 50.0, 0.3), spacing=0.2) -> np.ndarray:
+    """Exact rows of arcs ``(gear, kappa, length)``: the yaw turns by gear * kappa per metre."""
+    x, y, yaw = start
+    rows = []
+    for gear, kappa, length in segments:
+        s = np.linspace(0.0, length, max(2, math.ceil(length / spacing) + 1))
+        travel = yaw if gear > 0 else yaw + math.pi
+        w = gear * kappa
+        if abs(w) < 1e-12:
+            xs, ys = x + s * math.cos(travel), y + s * math.sin(travel)
+        else:
+            xs = x + (np.sin(travel + w * s) - math.sin(travel)) / w
+            ys = y + (math.cos(travel) - np.cos(travel + w * s)) / w
+        yaws = yaw + w * s
+        rows.append(np.column_stack([xs, ys, yaws, np.full_like(s, kappa), np.full_like(s, gear)]))
+        x, y, yaw = float(xs[-1]), float(ys[-1]), float(yaws[-1])
+    return np.vstack(rows)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from([1, -1]), st.floats(-1 / 6, 1 / 6),
+                          st.floats(1.0, 8.0)), min_size=1, max_size=4))
+def test_exact_gear_arcs_pass_and_flipped_gears_fail(segments):
+    rows = _drive_segments(segments)
+    gears = [g for g, _, _ in segments]
+    cusps = sum(a != b for a, b in zip(gears[:-1], gears[1:], strict=True))
+    end = rows[-1]
+    m = Map("open", (0.0, 0.0, 100.0, 100.0), (), Pose(50.0, 50.0, 0.3),
+            Pose(float(end[0]), float(end[1]), float(end[2])))
+    path = Path(rows, np.zeros((0, 2)))
+    check = verify_path(m, path)
+    assert check.ok and check.cusps == cusps, check
+    assert check.max_discrete_curvature <= max(abs(k) for _, k, _ in segments) + 1e-3
+    # The same geometry with the gears the other way round runs against its yaw.
+    flipped = rows.copy()
+    flipped[:, 4] *= -1
+    assert not verify_path(m, Path(flipped, np.zeros((0, 2)))).travel_ok
