@@ -99,12 +99,16 @@ def test_every_candidate_of_the_formulas_reaches_the_goal(poses, r):
     # The end-pose filter in reeds_shepp_paths is a safety net: no formula relies on it.
     start, goal = poses
     x, y, phi = rs._normalised_goal(start, goal, r)
-    raw = {rs._tidy(w, ls) for w, ls in rs._raw_candidates(x, y, phi)}
-    keys = {(w, tuple(round(s, 9) for s in ls)) for w, ls in raw}
-    paths = reeds_shepp_paths(start, goal, r)
-    assert len(paths) == len(keys)
-    for p in paths:
+    raw = [rs._tidy(w, ls) for w, ls in rs._raw_candidates(x, y, phi)]
+    assert raw
+    for word, lengths in raw:
+        p = ReedsSheppPath(start, word, tuple(s * r for s in lengths), r)
         check_samples(p, goal, 0.5)
+    # reeds_shepp_paths keeps one copy of each of them (overlapping families).
+    paths = reeds_shepp_paths(start, goal, r)
+    distinct = {(w, tuple(round(s, 6) for s in ls)) for w, ls in raw}
+    assert len(paths) == len(distinct)
+    assert {(p.word, tuple(round(s / r, 6) for s in p.lengths)) for p in paths} == distinct
 
 
 @settings(max_examples=100, deadline=None)

@@ -30,7 +30,9 @@ also in reverse, so that ``d yaw = kappa * ds`` with signed ``ds``.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from operator import attrgetter, itemgetter
 
 import numpy as np
 
@@ -52,6 +54,8 @@ _TWO_PI = 2.0 * math.pi
 _ZERO = 10.0 * np.finfo(float).eps
 #: Segments shorter than this (radius 1) are dropped: they would only add spurious cusps.
 _TINY = 1e-10
+#: Candidates whose segment lengths agree to this (radius 1) are one path.
+_SAME = 1e-9
 #: Steering of a segment kind: +1 left, -1 right, 0 straight.
 _TURN = {"L": 1, "S": 0, "R": -1}
 
@@ -105,9 +109,7 @@ def _lrl(x: float, y: float, phi: float, sp: float, cp: float) -> tuple | None:
     return (t, u, v) if t >= -_ZERO and u <= _ZERO else None
 
 
-def _tau_omega(
-    u: float, v: float, xi: float, eta: float, phi: float
-) -> tuple[float, float]:
+def _tau_omega(u: float, v: float, xi: float, eta: float, phi: float) -> tuple[float, float]:
     """The first and last arc of the CCCC words from their two middle arcs ``u``, ``v``."""
     delta = _mod2pi(u - v)
     a = math.sin(u) - math.sin(delta)
@@ -185,70 +187,140 @@ def _reflected(word: str) -> str:
     return word.translate(str.maketrans("LR", "RL"))
 
 
-#: (formula, base word, segment lengths from (t, u, v), whether the backwards
-#: symmetry adds words). Timeflip and reflect apply to every family.
+#: (formula, base word, segment lengths from (t, u, v), total length from (t, u, v),
+#: whether the backwards symmetry adds words). Timeflip and reflect apply to every family.
 _FAMILIES = (
-    (_lsl, "LSL", lambda t, u, v: (t, u, v), False),
-    (_lsr, "LSR", lambda t, u, v: (t, u, v), False),
-    (_lrl, "LRL", lambda t, u, v: (t, u, v), True),
-    (_lrlr_a, "LRLR", lambda t, u, v: (t, u, -u, v), False),
-    (_lrlr_b, "LRLR", lambda t, u, v: (t, u, u, v), False),
-    (_lrsl, "LRSL", lambda t, u, v: (t, -_HALF_PI, u, v), True),
-    (_lrsr, "LRSR", lambda t, u, v: (t, -_HALF_PI, u, v), True),
-    (_lrslr, "LRSLR", lambda t, u, v: (t, -_HALF_PI, u, -_HALF_PI, v), False),
+    (_lsl, "LSL", lambda t, u, v: (t, u, v), lambda t, u, v: abs(t) + abs(u) + abs(v), False),
+    (_lsr, "LSR", lambda t, u, v: (t, u, v), lambda t, u, v: abs(t) + abs(u) + abs(v), False),
+    (_lrl, "LRL", lambda t, u, v: (t, u, v), lambda t, u, v: abs(t) + abs(u) + abs(v), True),
+    (
+        _lrlr_a,
+        "LRLR",
+        lambda t, u, v: (t, u, -u, v),
+        lambda t, u, v: abs(t) + 2.0 * abs(u) + abs(v),
+        False,
+    ),
+    (
+        _lrlr_b,
+        "LRLR",
+        lambda t, u, v: (t, u, u, v),
+        lambda t, u, v: abs(t) + 2.0 * abs(u) + abs(v),
+        False,
+    ),
+    (
+        _lrsl,
+        "LRSL",
+        lambda t, u, v: (t, -_HALF_PI, u, v),
+        lambda t, u, v: abs(t) + abs(u) + abs(v) + _HALF_PI,
+        True,
+    ),
+    (
+        _lrsr,
+        "LRSR",
+        lambda t, u, v: (t, -_HALF_PI, u, v),
+        lambda t, u, v: abs(t) + abs(u) + abs(v) + _HALF_PI,
+        True,
+    ),
+    (
+        _lrslr,
+        "LRSLR",
+        lambda t, u, v: (t, -_HALF_PI, u, -_HALF_PI, v),
+        lambda t, u, v: abs(t) + abs(u) + abs(v) + _PI,
+        False,
+    ),
 )
 #: (timeflip, reflect) in the order OMPL tries them.
 _SYMMETRIES = ((False, False), (True, False), (False, True), (True, True))
-#: Word of each (base word, reflect, backwards) combination, built once.
-_WORD_OF = {
-    (w, refl, back): (_reflected(w) if refl else w)[:: -1 if back else 1]
-    for _, w, _, _ in _FAMILIES
-    for refl in (False, True)
-    for back in (False, True)
-}
+
+
+def _transformed(
+    lengths: Callable[..., tuple[float, ...]], flip: bool, back: bool
+) -> Callable[..., tuple[float, ...]]:
+    """``lengths`` followed by the timeflip (negate) and backwards (reverse) symmetries."""
+    if flip and back:
+        return lambda t, u, v: tuple(-s for s in reversed(lengths(t, u, v)))
+    if flip:
+        return lambda t, u, v: tuple(-s for s in lengths(t, u, v))
+    if back:
+        return lambda t, u, v: lengths(t, u, v)[::-1]
+    return lengths
+
+
+#: The 44 (formula, symmetry) evaluations, flattened once: (formula, index of the
+#: transformed goal, word, signed lengths from (t, u, v), total length from (t, u, v)).
+#: Goal index: 4 * backwards + symmetry, see :func:`_frames`.
+_PLAN = tuple(
+    (
+        formula,
+        4 * back + k,
+        (_reflected(word) if refl else word)[:: -1 if back else 1],
+        _transformed(lengths, flip, back),
+        total,
+    )
+    for formula, word, lengths, total, has_backwards in _FAMILIES
+    for back in ((0, 1) if has_backwards else (0,))
+    for k, (flip, refl) in enumerate(_SYMMETRIES)
+)
+
+
+def _frames(x: float, y: float, phi: float) -> list[tuple[float, float, float, float, float]]:
+    """The goal ``(x, y, phi, sin phi, cos phi)`` under the eight symmetries of the problem.
+
+    Index ``4 * backwards + k`` with ``k`` indexing :data:`_SYMMETRIES`: timeflip is
+    ``(-x, y, -phi)``, reflect ``(x, -y, -phi)``; backwards first maps the goal to
+    ``(x cos phi + y sin phi, x sin phi - y cos phi, phi)``.
+    """
+    sp, cp = math.sin(phi), math.cos(phi)
+    xb, yb = x * cp + y * sp, x * sp - y * cp
+    return [
+        (x, y, phi, sp, cp),
+        (-x, y, -phi, -sp, cp),
+        (x, -y, -phi, -sp, cp),
+        (-x, -y, phi, sp, cp),
+        (xb, yb, phi, sp, cp),
+        (-xb, yb, -phi, -sp, cp),
+        (xb, -yb, -phi, -sp, cp),
+        (-xb, -yb, phi, sp, cp),
+    ]
 
 
 def _raw_candidates(x: float, y: float, phi: float) -> list[tuple[str, tuple[float, ...]]]:
     """Every word that the formulas solve, as (word, signed lengths at radius 1)."""
-    sp, cp = math.sin(phi), math.cos(phi)
-    xb, yb = x * cp + y * sp, x * sp - y * cp
+    goals = _frames(x, y, phi)
     out: list[tuple[str, tuple[float, ...]]] = []
-    for formula, word, lengths, has_backwards in _FAMILIES:
-        for back in (False, True) if has_backwards else (False,):
-            px, py = (xb, yb) if back else (x, y)
-            for flip, refl in _SYMMETRIES:
-                mirrored = flip != refl  # phi changes sign under exactly one of the two
-                res = formula(
-                    -px if flip else px,
-                    -py if refl else py,
-                    -phi if mirrored else phi,
-                    -sp if mirrored else sp,
-                    cp,
-                )
-                if res is None:
-                    continue
-                seg = lengths(*res)
-                if flip:
-                    seg = tuple(-s for s in seg)
-                if back:
-                    seg = seg[::-1]
-                out.append((_WORD_OF[word, refl, back], seg))
+    for formula, index, word, lengths, _ in _PLAN:
+        res = formula(*goals[index])
+        if res is not None:
+            out.append((word, lengths(*res)))
     return out
+
+
+def _shortest_length(x: float, y: float, phi: float) -> float:
+    """The smallest total length (radius 1) over :func:`_raw_candidates`, without words."""
+    goals = _frames(x, y, phi)
+    best = math.inf
+    for formula, index, _, _, total in _PLAN:
+        res = formula(*goals[index])
+        if res is not None:
+            length = total(*res)
+            if length < best:
+                best = length
+    return best
 
 
 def _tidy(word: str, lengths: tuple[float, ...]) -> tuple[str, tuple[float, ...]]:
     """Drop zero-length segments and merge neighbours of the same kind and gear."""
-    kinds: list[str] = []
+    kinds = ""
     segs: list[float] = []
     for k, s in zip(word, lengths, strict=True):
-        if abs(s) <= _TINY:
+        if -_TINY <= s <= _TINY:
             continue
         if kinds and kinds[-1] == k and (segs[-1] > 0) == (s > 0):
             segs[-1] += s
         else:
-            kinds.append(k)
+            kinds += k
             segs.append(s)
-    return "".join(kinds), tuple(segs)
+    return kinds, tuple(segs)
 
 
 def _advance(
@@ -459,22 +531,65 @@ def reeds_shepp_paths(
     """
     x, y, phi = _normalised_goal(start, goal, radius)
     pos_tol = tol * max(1.0, radius) / radius  # in the normalised frame
-    seen: set[tuple] = set()
-    out = []
+    candidates = []
     for word, lengths in _raw_candidates(x, y, phi):
         word, lengths = _tidy(word, lengths)
-        key = (word, tuple(round(s, 9) for s in lengths))
-        if key in seen:
+        candidates.append((sum(map(abs, lengths)), word, lengths))
+    candidates.sort(key=itemgetter(0))  # stable: ties keep the order of _PLAN (OMPL's)
+    kept: list[tuple[float, str, tuple[float, ...]]] = []
+    for cand in candidates:
+        if _is_copy(cand, kept) or _misses(cand[1], cand[2], x, y, phi, pos_tol, tol):
             continue
-        seen.add(key)
-        ex, ey, eyaw = 0.0, 0.0, 0.0
-        for kind, seg in zip(word, lengths, strict=True):
-            ex, ey, eyaw = _advance(ex, ey, eyaw, kind, seg, 1.0)
-        if math.hypot(ex - x, ey - y) > pos_tol or abs(wrap_angle(eyaw - phi)) > tol:
-            continue
-        out.append(ReedsSheppPath(start, word, tuple(s * radius for s in lengths), radius, goal))
-    out.sort(key=lambda p: p.length)
+        kept.append(cand)
+    out = [
+        ReedsSheppPath(start, word, tuple(s * radius for s in lengths), radius, goal)
+        for _, word, lengths in kept
+    ]
+    out.sort(key=attrgetter("length"))  # in metres: scaling may swap near-equal lengths
     return out
+
+
+def _is_copy(
+    cand: tuple[float, str, tuple[float, ...]], kept: list[tuple[float, str, tuple[float, ...]]]
+) -> bool:
+    """Whether ``cand`` equals (to 1e-9) one of ``kept``, sorted by length before it.
+
+    Families overlap (a CCSC word whose line has length 0 is a CCC word, and the
+    backwards symmetry of a symmetric word is the word itself).
+    """
+    total, word, lengths = cand
+    for other_total, other_word, other_lengths in reversed(kept):
+        if total - other_total > _SAME:
+            return False
+        if other_word == word and all(
+            abs(a - b) <= _SAME for a, b in zip(lengths, other_lengths, strict=True)
+        ):
+            return True
+    return False
+
+
+def _misses(
+    word: str,
+    lengths: tuple[float, ...],
+    x: float,
+    y: float,
+    phi: float,
+    pos_tol: float,
+    tol: float,
+) -> bool:
+    """Whether the word, integrated from the origin at radius 1, misses the goal ``(x, y, phi)``."""
+    ex = ey = eyaw = 0.0
+    for kind, seg in zip(word, lengths, strict=True):
+        if kind == "S":
+            ex += seg * math.cos(eyaw)
+            ey += seg * math.sin(eyaw)
+        else:
+            turn = _TURN[kind]
+            yaw1 = eyaw + seg * turn
+            ex += (math.sin(yaw1) - math.sin(eyaw)) * turn
+            ey -= (math.cos(yaw1) - math.cos(eyaw)) * turn
+            eyaw = yaw1
+    return math.hypot(ex - x, ey - y) > pos_tol or abs(wrap_angle(eyaw - phi)) > tol
 
 
 def shortest_reeds_shepp(start: Pose, goal: Pose, radius: float) -> ReedsSheppPath | None:
@@ -501,10 +616,4 @@ def reeds_shepp_distance(start: Pose, goal: Pose, radius: float) -> float:
     >>> round(reeds_shepp_distance(Pose(0.0, 0.0, 0.0), Pose(-3.0, 0.0, 0.0), 5.0), 6)
     3.0
     """
-    x, y, phi = _normalised_goal(start, goal, radius)
-    best = math.inf
-    for _, lengths in _raw_candidates(x, y, phi):
-        total = sum(abs(s) for s in lengths)
-        if total < best:
-            best = total
-    return best * radius
+    return _shortest_length(*_normalised_goal(start, goal, radius)) * radius
