@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning import reeds_shepp as rs
+from rrtdrive.planning import reeds_shepp_words as words
 from rrtdrive.planning.dubins import shortest_dubins
 from rrtdrive.planning.reeds_shepp import (
     ReedsSheppPath,
@@ -99,7 +100,7 @@ def test_every_candidate_of_the_formulas_reaches_the_goal(poses, r):
     # The end-pose filter in reeds_shepp_paths is a safety net: no formula relies on it.
     start, goal = poses
     x, y, phi = rs._normalised_goal(start, goal, r)
-    raw = [rs._tidy(w, ls) for w, ls in rs._raw_candidates(x, y, phi)]
+    raw = [rs._tidy(w, ls) for w, ls in words.candidates(x, y, phi)]
     assert raw
     for word, lengths in raw:
         p = ReedsSheppPath(start, word, tuple(s * r for s in lengths), r)
