@@ -13,6 +13,9 @@ within 3 turning radii of the start, half each; headings uniform) the script tim
 * ``shortest_reeds_shepp``;
 * ``reeds_shepp_distance`` (the length only);
 * ``ReedsSheppPath.sample(0.1)`` of the shortest path;
+* ``ReedsSheppTable.distance`` (trilinear lookup in the table of
+  ``planning/reeds_shepp_table.py``, exact outside it; built before timing, its build
+  time and its error against the exact length over the pairs reported);
 * OMPL's ``ReedsSheppStateSpace.distance`` when ``ompl`` imports (a reference).
 
 Each function runs over all pairs ``--repeats`` times; the mean per call is reported
@@ -40,6 +43,7 @@ from rrtdrive.planning.reeds_shepp import (
     reeds_shepp_paths,
     shortest_reeds_shepp,
 )
+from rrtdrive.planning.reeds_shepp_table import ReedsSheppTable
 from rrtdrive.types import Pose
 
 
@@ -97,6 +101,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--radius", type=float, default=6.0)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--table-extent", type=float, default=24.0)
+    ap.add_argument("--table-resolution", type=float, default=0.5)
+    ap.add_argument("--table-yaw-bins", type=int, default=72)
     ap.add_argument("--out", default="results")
     args = ap.parse_args(argv)
     if args.pairs < 1 or args.repeats < 1 or not args.radius > 0:
@@ -109,6 +116,12 @@ def main(argv: list[str] | None = None) -> int:
         "shortest_reeds_shepp": lambda a, b: shortest_reeds_shepp(a, b, r),
         "reeds_shepp_distance": lambda a, b: reeds_shepp_distance(a, b, r),
     }
+    c0 = time.process_time()
+    table = ReedsSheppTable.build(
+        r, args.table_extent, args.table_resolution, args.table_yaw_bins, seed=args.seed
+    )
+    table_build_cpu_s = time.process_time() - c0
+    funcs["table_distance"] = table.distance
     ompl = _ompl_distance(r)
     if ompl is not None:
         funcs["ompl_distance"] = ompl
@@ -121,6 +134,21 @@ def main(argv: list[str] | None = None) -> int:
         "candidates_per_pair_mean": round(float(np.mean(candidates)), 3),
         "shortest_with_cusps": sum(p.gear_changes > 0 for p in shortest),
         "ompl": ompl is not None,
+    }
+    exact = np.array([p.length for p in shortest])
+    looked = np.array([table.distance(a, b) for a, b in pairs])
+    inside = looked != exact
+    err = np.abs(looked - exact)
+    checks["table"] = {
+        "shape": list(table.values.shape),
+        "build_cpu_s": round(table_build_cpu_s, 3),
+        "max_error_at_build_m": round(table.max_error, 4),
+        "pairs_inside_grid": int(np.sum(inside)),
+        "error_inside_mean_m": round(float(err[inside].mean()), 5) if inside.any() else None,
+        "error_inside_p99_m": round(float(np.quantile(err[inside], 0.99)), 4)
+        if inside.any()
+        else None,
+        "error_inside_max_m": round(float(err[inside].max()), 4) if inside.any() else None,
     }
     if ompl is not None:
         diff = max(abs(p.length - ompl(a, b)) for p, (a, b) in zip(shortest, pairs, strict=True))

@@ -20,6 +20,11 @@ from rrtdrive.planning.reeds_shepp import (
     reeds_shepp_paths,
     shortest_reeds_shepp,
 )
+from rrtdrive.planning.reeds_shepp_table import (
+    ReedsSheppTable,
+    reeds_shepp_table,
+    shortest_lengths,
+)
 from rrtdrive.types import InputError, Pose
 
 coord = st.floats(-40.0, 40.0, allow_nan=False)
@@ -196,3 +201,79 @@ def test_lengths_match_ompl():
             ref = space.distance(a, b)
             assert shortest_reeds_shepp(s, g, r).length == pytest.approx(ref, abs=1e-6)
             assert reeds_shepp_distance(s, g, r) == pytest.approx(ref, abs=1e-6)
+
+
+# --- many poses at once, and the lookup table (planning/reeds_shepp_table.py) ---------
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.floats(0.1, 8.0))
+def test_vectorised_lengths_equal_the_scalar_ones(seed, spread):
+    rng = np.random.default_rng(seed)
+    x, y = rng.uniform(-spread, spread, (2, 200))
+    phi = rng.uniform(-4.0, 4.0, 200)
+    # Exact headings and axes too, where the formulas' sign tests sit on their edges.
+    phi[:40] = rng.choice([0.0, math.pi / 2, -math.pi / 2, math.pi, -math.pi], 40)
+    y[40:60] = 0.0
+    got = shortest_lengths(x, y, phi)
+    want = [words.shortest_length(a, b, c) for a, b, c in zip(x, y, phi, strict=True)]
+    assert np.allclose(got, want, rtol=0.0, atol=1e-9)
+
+
+@pytest.fixture(scope="module")
+def small_table() -> ReedsSheppTable:
+    return ReedsSheppTable.build(2.0, extent=6.0, resolution=0.25, yaw_bins=48)
+
+
+def test_table_is_exact_on_its_nodes_in_all_four_quadrants(small_table):
+    t = small_table
+    rng = np.random.default_rng(1)
+    n = t.values.shape[0]
+    for _ in range(200):
+        i, j, k = rng.integers(0, n), rng.integers(0, n), rng.integers(0, t.yaw_bins)
+        x, y, yaw = i * t.resolution, j * t.resolution, k * 2 * math.pi / t.yaw_bins
+        sx, sy = rng.choice([-1.0, 1.0], 2)
+        # Mirroring a quadrant negates the heading once per axis flipped.
+        goal_yaw = yaw * (sx * sy)
+        start = Pose(3.0, -1.0, 0.0)
+        goal = Pose(3.0 + sx * x, -1.0 + sy * y, goal_yaw)
+        exact = reeds_shepp_distance(start, goal, t.radius)
+        assert t.distance(start, goal) == pytest.approx(exact, abs=1e-9)
+        assert t.lookup(sx * x, sy * y, goal_yaw) == pytest.approx(exact, abs=1e-9)
+
+
+def test_table_lookup_between_nodes_and_outside(small_table):
+    t = small_table
+    rng = np.random.default_rng(2)
+    starts = [Pose(*rng.uniform(-5, 5, 2), rng.uniform(-math.pi, math.pi)) for _ in range(300)]
+    err = []
+    for k, s in enumerate(starts):
+        reach = 5.5 if k % 3 else 12.0  # a third of the goals may fall outside the grid
+        g = Pose(s.x + rng.uniform(-reach, reach), s.y + rng.uniform(-reach, reach),
+                 rng.uniform(-math.pi, math.pi))
+        exact = reeds_shepp_distance(s, g, t.radius)
+        got = t.distance(s, g)
+        # The scalar and the array lookups are one interpolation.
+        c, sn = math.cos(s.yaw), math.sin(s.yaw)
+        dx, dy = g.x - s.x, g.y - s.y
+        assert t.lookup(c * dx + sn * dy, c * dy - sn * dx, g.yaw - s.yaw) == pytest.approx(got)
+        local = (abs(c * dx + sn * dy), abs(c * dy - sn * dx))
+        if max(local) > t.extent:
+            assert got == exact  # outside: the exact length
+        else:
+            err.append(abs(got - exact))
+    assert len(err) > 100
+    # Interpolation error: at most what build() measured on its own random poses, plus
+    # slack for poses it did not draw; small on average.
+    assert max(err) <= 2 * t.max_error + 1e-9
+    assert float(np.mean(err)) < 0.1 * t.resolution
+
+
+def test_table_cache_and_errors():
+    assert reeds_shepp_table(1.5, 3.0, 0.5, 8) is reeds_shepp_table(1.5, 3.0, 0.5, 8)
+    with pytest.raises(InputError, match="radius"):
+        ReedsSheppTable.build(0.0)
+    with pytest.raises(InputError, match="resolution"):
+        ReedsSheppTable.build(1.0, resolution=-1.0)
+    with pytest.raises(InputError, match="yaw_bins"):
+        ReedsSheppTable.build(1.0, yaw_bins=2)
