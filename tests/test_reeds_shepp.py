@@ -277,3 +277,48 @@ def test_table_cache_and_errors():
         ReedsSheppTable.build(1.0, resolution=-1.0)
     with pytest.raises(InputError, match="yaw_bins"):
         ReedsSheppTable.build(1.0, yaw_bins=2)
+
+
+def _pose_at(path: ReedsSheppPath, s: float) -> tuple[float, float, float]:
+    """The pose ``s`` metres (driven, either gear) along ``path``, integrated by hand."""
+    x, y, yaw = path.start.x, path.start.y, path.start.yaw
+    for seg in path.segments:
+        step = max(-s, seg.length) if seg.gear < 0 else min(s, seg.length)
+        s -= abs(step)
+        if seg.kind == "S":
+            x, y = x + step * math.cos(yaw), y + step * math.sin(yaw)
+        else:
+            k = (1.0 if seg.kind == "L" else -1.0) / path.radius
+            yaw1 = yaw + step * k
+            x += (math.sin(yaw1) - math.sin(yaw)) / k
+            y -= (math.cos(yaw1) - math.cos(yaw)) / k
+            yaw = yaw1
+        if s <= 0:
+            break
+    return x, y, yaw
+
+
+def test_geometry_matches_ompl_interpolation():
+    # Not only the length: the shortest word itself, pose by pose along it, where it is
+    # unique (ties between words of equal length may be broken either way).
+    ob = pytest.importorskip("ompl.base")
+    rng = np.random.default_rng(4)
+    compared = 0
+    for _ in range(300):
+        r = float(rng.uniform(1.0, 8.0))
+        space = ob.ReedsSheppStateSpace(r)
+        a, b, c = space.allocState(), space.allocState(), space.allocState()
+        s = Pose(*rng.uniform(-10, 10, 2), rng.uniform(-math.pi, math.pi))
+        g = Pose(*(s.xy + rng.uniform(-3 * r, 3 * r, 2)), rng.uniform(-math.pi, math.pi))
+        a.setX(s.x), a.setY(s.y), a.setYaw(s.yaw)
+        b.setX(g.x), b.setY(g.y), b.setYaw(g.yaw)
+        paths = reeds_shepp_paths(s, g, r)
+        if len(paths) > 1 and paths[1].length - paths[0].length < 1e-9:
+            continue
+        compared += 1
+        for t in np.linspace(0.05, 0.95, 7):
+            space.interpolate(a, b, float(t), c)
+            x, y, yaw = _pose_at(paths[0], t * paths[0].length)
+            assert math.hypot(c.getX() - x, c.getY() - y) < 1e-9
+            assert abs(wrap_angle(c.getYaw() - yaw)) < 1e-9
+    assert compared > 200
