@@ -9,7 +9,8 @@ the tests compare the lengths with OMPL's when ``ompl`` is installed). This modu
 scales them, drops zero-length segments and copies, and, as
 :mod:`rrtdrive.planning.dubins` does, integrates every candidate in closed form and
 keeps it only when it ends at the goal pose, so a wrong formula cannot return a path
-that does not connect.
+that does not connect. For many lengths at once, or a cached table of them for a
+heuristic, see :mod:`rrtdrive.planning.reeds_shepp_table`.
 
 Conventions: a segment's signed length is positive in forward gear and negative in
 reverse; ``yaw`` is where the nose points in both gears, and the curvature of a
