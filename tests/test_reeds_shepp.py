@@ -249,8 +249,11 @@ def test_table_lookup_between_nodes_and_outside(small_table):
     err = []
     for k, s in enumerate(starts):
         reach = 5.5 if k % 3 else 12.0  # a third of the goals may fall outside the grid
-        g = Pose(s.x + rng.uniform(-reach, reach), s.y + rng.uniform(-reach, reach),
-                 rng.uniform(-math.pi, math.pi))
+        g = Pose(
+            s.x + rng.uniform(-reach, reach),
+            s.y + rng.uniform(-reach, reach),
+            rng.uniform(-math.pi, math.pi),
+        )
         exact = reeds_shepp_distance(s, g, t.radius)
         got = t.distance(s, g)
         # The scalar and the array lookups are one interpolation.
