@@ -12,7 +12,13 @@ from rrtdrive.planning.dubins import DubinsPath, dubins_paths
 from rrtdrive.planning.smoothing import SmoothingConfig, make_drivable
 from rrtdrive.types import Path, Pose
 
-__all__ = ["dubins_fallback"]
+__all__ = ["dubins_fallback", "MAX_FALLBACK_CANDIDATES"]
+
+#: Tree nodes tried as tail or lead joints per query, a counted budget (the wall
+#: clock only caps it). Measured on parking_lot's 100 random goals and 100 random
+#: starts (docs/planning.md, "Budgets and determinism"): every fallback that
+#: solves does so within 41; failures tried up to 423, for seconds, in vain.
+MAX_FALLBACK_CANDIDATES = 128
 
 
 def _free_dubins(
@@ -42,6 +48,7 @@ def dubins_fallback(
     expired: Callable[[], bool] | None = None,
     sample_spacing: float = 0.25,
     check_spacing: float = 0.1,
+    max_candidates: int = MAX_FALLBACK_CANDIDATES,
 ) -> tuple[Path, str] | None:
     """A drivable path that ends in a Dubins path, when the tree paths alone fail.
 
@@ -70,9 +77,13 @@ def dubins_fallback(
     smoothing : SmoothingConfig, optional
         Post-processing settings for the tree part; no tails or leads without it.
     expired : callable, optional
-        Stops the search for tails and leads when it returns True.
+        The safety cap: stops the search for tails and leads when it returns True
+        (the caller then reports a timeout).
     sample_spacing, check_spacing : float
         Spacing of the returned samples and of the poses tested.
+    max_candidates : int
+        Most tree nodes tried as joints, tails and leads together (the counted
+        budget that decides; :data:`MAX_FALLBACK_CANDIDATES`).
 
     Returns
     -------
@@ -86,10 +97,12 @@ def dubins_fallback(
         return Path(direct.sample(sample_spacing), direct.joints()), direct.word
     if smoothing is None:
         return None
+    tried = 0
     for raw in raw_paths:
         for i in range(len(raw) - 2, 0, -1):
-            if expired is not None and expired():
+            if tried >= max_candidates or (expired is not None and expired()):
                 return None
+            tried += 1
             yaw = math.atan2(raw[i, 1] - raw[i - 1, 1], raw[i, 0] - raw[i - 1, 0])
             joint = Pose(float(raw[i, 0]), float(raw[i, 1]), yaw)
             tail = _free_dubins(checker, joint, goal, radius, clearance, check_spacing)
@@ -104,8 +117,9 @@ def dubins_fallback(
             return Path(samples, waypoints), f"tree path to {where} + {tail.word}"
     for raw in raw_paths:
         for i in range(1, len(raw) - 1):
-            if expired is not None and expired():
+            if tried >= max_candidates or (expired is not None and expired()):
                 return None
+            tried += 1
             yaw = math.atan2(raw[i + 1, 1] - raw[i, 1], raw[i + 1, 0] - raw[i, 0])
             joint = Pose(float(raw[i, 0]), float(raw[i, 1]), yaw)
             lead = _free_dubins(checker, start, joint, radius, clearance, check_spacing)
