@@ -74,7 +74,8 @@ def run_query(
     Returns
     -------
     PlanResult
-        The precheck's failure, or what ``search`` returns.
+        The precheck's failure, or what ``search`` returns; its ``stats`` get
+        ``grid_resolution_m``, the checker's cell size.
 
     Examples
     --------
@@ -94,7 +95,9 @@ def run_query(
     result = precheck(problem, planner, watch)
     if result is None:
         result = search(watch)
-    return dataclasses.replace(result, setup_time_s=setup)
+    # The grid's cell size, coarser than configured on a very big map.
+    stats = {**result.stats, "grid_resolution_m": float(checker.resolution)}
+    return dataclasses.replace(result, setup_time_s=setup, stats=stats)
 
 
 def solved(
