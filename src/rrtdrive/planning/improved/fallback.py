@@ -14,11 +14,12 @@ from rrtdrive.types import Path, Pose
 
 __all__ = ["dubins_fallback", "MAX_FALLBACK_CANDIDATES"]
 
-#: Tree nodes tried as tail or lead joints per query, a counted budget (the wall
-#: clock only caps it). Measured on parking_lot's 100 random goals and 100 random
-#: starts (docs/planning.md, "Budgets and determinism"): every fallback that
-#: solves does so within 41; failures tried up to 423, for seconds, in vain.
-MAX_FALLBACK_CANDIDATES = 128
+#: Tree nodes tried as tail joints, and again as lead joints, per query: a counted
+#: budget (the wall clock only caps it). Measured on parking_lot's 100 random goals
+#: and 100 random starts (docs/planning.md, "Budgets and determinism"): every
+#: fallback that solves does so by the 45th tail or the 32nd lead; failures tried
+#: up to 211 of each, for seconds, in vain.
+MAX_FALLBACK_CANDIDATES = 64
 
 
 def _free_dubins(
@@ -82,8 +83,8 @@ def dubins_fallback(
     sample_spacing, check_spacing : float
         Spacing of the returned samples and of the poses tested.
     max_candidates : int
-        Most tree nodes tried as joints, tails and leads together (the counted
-        budget that decides; :data:`MAX_FALLBACK_CANDIDATES`).
+        Most tree nodes tried as tail joints, and again as lead joints (the
+        counted budget that decides; :data:`MAX_FALLBACK_CANDIDATES`).
 
     Returns
     -------
@@ -100,7 +101,9 @@ def dubins_fallback(
     tried = 0
     for raw in raw_paths:
         for i in range(len(raw) - 2, 0, -1):
-            if tried >= max_candidates or (expired is not None and expired()):
+            if tried >= max_candidates:
+                break
+            if expired is not None and expired():
                 return None
             tried += 1
             yaw = math.atan2(raw[i, 1] - raw[i - 1, 1], raw[i, 0] - raw[i - 1, 0])
@@ -115,9 +118,12 @@ def dubins_fallback(
             waypoints = np.vstack([head.control_points, tail.joints()[1:]])
             where = f"({joint.x:.1f}, {joint.y:.1f})"
             return Path(samples, waypoints), f"tree path to {where} + {tail.word}"
+    tried = 0
     for raw in raw_paths:
         for i in range(1, len(raw) - 1):
-            if tried >= max_candidates or (expired is not None and expired()):
+            if tried >= max_candidates:
+                return None
+            if expired is not None and expired():
                 return None
             tried += 1
             yaw = math.atan2(raw[i + 1, 1] - raw[i, 1], raw[i + 1, 0] - raw[i, 0])
