@@ -208,8 +208,10 @@ def solved_result(
     return solved(planner, watch, path, raw, trees, iterations, message, stats, nodes=nodes)
 
 
-def timeout_message(iterations: int, budget: Budget) -> str:
+def timeout_message(iterations: int, budget: Budget, unit: str = "iterations") -> str:
     """The message of a query stopped by the safety cap: the cap, the count, what to change.
+
+    ``unit`` names the count (e.g. ``"expansions"`` for a search over a lattice).
 
     Examples
     --------
@@ -220,7 +222,7 @@ def timeout_message(iterations: int, budget: Budget) -> str:
     'raise --max-time or lower --max-iterations'
     """
     return (
-        f"stopped by the {budget.max_time_s:g} s safety cap after {iterations} iterations: "
+        f"stopped by the {budget.max_time_s:g} s safety cap after {iterations} {unit}: "
         "the result depends on this machine's speed; raise --max-time or lower --max-iterations"
     )
 
@@ -232,6 +234,7 @@ def timeout_result(
     trees: tuple[Tree, ...] = (),
     stats: dict[str, float] | None = None,
     raw_path: np.ndarray | None = None,
+    unit: str = "iterations",
 ) -> PlanResult:
     """The result of a query that the wall-clock safety cap stopped: :attr:`PlanStatus.TIMEOUT`.
 
@@ -254,11 +257,13 @@ def timeout_result(
         Planner statistics so far.
     raw_path : numpy.ndarray, optional
         A tree path the query was working on, if any.
+    unit : str
+        What ``iterations`` counts, for the message (``"expansions"`` ...).
 
     Returns
     -------
     PlanResult
-        Failed, empty path, status ``timeout``.
+        Failed, empty path, status ``timeout``; ``iterations`` is stored as given.
 
     Examples
     --------
@@ -274,7 +279,7 @@ def timeout_result(
         planner,
         PlanStatus.TIMEOUT,
         watch,
-        timeout_message(iterations, watch.budget),
+        timeout_message(iterations, watch.budget, unit),
         trees=trees,
         iterations=iterations,
         raw_path=raw_path,
