@@ -135,9 +135,14 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         options["disable"] = tuple(args.disable)
     planner = make_planner(args.planner, **options)
     budget = Budget(max_iterations=args.max_iterations, max_time_s=args.max_time)
+    config = None
+    if args.resolution is not None:
+        from rrtdrive.collision import CheckerConfig
+
+        config = CheckerConfig(resolution=args.resolution)
     t_map = time.perf_counter()
-    # The map's distance field: per-map set-up too.
-    problem = PlanningProblem.from_map(m, reverse=args.reverse)
+    # The map's distance field: per-map set-up too (a map too big for any grid: exit 2).
+    problem = PlanningProblem.from_map(m, config=config, reverse=args.reverse)
     field_s = time.perf_counter() - t_map
     result = planner.solve(problem, np.random.default_rng(args.seed), budget)
     result = dataclasses.replace(result, setup_time_s=result.setup_time_s + field_s)
@@ -258,10 +263,18 @@ def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
         "--max-iterations",
         type=positive_int,
         default=20_000,
-        help="iteration budget (default 20000)",
+        help="iteration budget: with the seed it decides the outcome (default 20000)",
     )
     plan.add_argument(
-        "--max-time", type=positive_float, default=5.0, help="time budget in seconds (default 5)"
+        "--max-time", type=positive_float, default=Budget().max_time_s, metavar="S",
+        help="wall-clock safety cap in seconds, set-up excluded (default "
+        f"{Budget().max_time_s:g}); reaching it fails with status 'timeout', since the "
+        "result would depend on the machine's speed",
+    )
+    plan.add_argument(
+        "--resolution", type=positive_float, default=None, metavar="M",
+        help="collision grid cell size in metres (default 0.1; a map too big for that gets "
+        "a coarser grid up to 0.5 m automatically, with a warning)",
     )
     plan.add_argument(
         "--reverse", action="store_true",

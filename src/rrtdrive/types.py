@@ -361,6 +361,9 @@ class PlanStatus(enum.Enum):
     INVALID_START = "invalid_start"
     INVALID_GOAL = "invalid_goal"
     POSTPROCESS_FAILED = "postprocess_failed"
+    #: The wall-clock safety cap (:attr:`Budget.max_time_s`) stopped the query before
+    #: its counted budgets did: the outcome depends on the machine's speed.
+    TIMEOUT = "timeout"
 
     @property
     def success(self) -> bool:
@@ -370,18 +373,31 @@ class PlanStatus(enum.Enum):
 
 @dataclass(frozen=True)
 class Budget:
-    """Limits on a search: both are enforced, whichever comes first ends it.
+    """Limits on a query: counted budgets decide, the wall clock is only a safety cap.
+
+    A seeded query's outcome is decided by counts alone (``max_iterations`` here;
+    each planner's post-processing has its own counted limits, e.g. the improved
+    planner's repair rounds, tree paths and Dubins fallback candidates), so it is
+    the same on any machine. ``max_time_s`` is a safety cap: a query that reaches
+    it stops with :attr:`PlanStatus.TIMEOUT` (never a solved path or another
+    failure), because what it would have returned depends on the machine's speed.
 
     Parameters
     ----------
     max_iterations : int
-        Largest number of sampling iterations.
+        Largest number of sampling iterations (the budget that decides).
     max_time_s : float
-        Largest wall time in seconds.
+        Wall-clock safety cap in seconds (per-map set-up excluded); the default is
+        set high enough that queries finish by count on slow machines too.
+
+    Examples
+    --------
+    >>> Budget().max_iterations, Budget().max_time_s
+    (20000, 30.0)
     """
 
     max_iterations: int = 20_000
-    max_time_s: float = 5.0
+    max_time_s: float = 30.0
 
     def __post_init__(self) -> None:
         require_int("budget.max_iterations", self.max_iterations)

@@ -83,7 +83,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--max-time", dest="max_time_s", type=_float_arg, metavar="S",
-        help="planning time budget per run in seconds (default 5)",
+        help="planning wall-clock safety cap per run in seconds (default 5); a plan that "
+        "reaches it fails as 'timeout' (the iterations decide otherwise)",
     )
     p.add_argument(
         "--max-iterations", type=_int_arg, metavar="N",

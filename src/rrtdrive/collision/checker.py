@@ -8,6 +8,8 @@ lives on its :class:`~rrtdrive.collision.grid.GridCache`.
 from __future__ import annotations
 
 import array
+import dataclasses
+import logging
 import math
 import time
 from collections.abc import Sequence
@@ -17,13 +19,15 @@ import shapely
 from scipy import ndimage
 
 from rrtdrive.collision.config import CheckerConfig
-from rrtdrive.collision.grid import GridCache, rasterise
+from rrtdrive.collision.grid import GridCache, grid_resolution, grid_shape, rasterise
 from rrtdrive.geometry import densify
 from rrtdrive.maps import Map, Obstacle
 from rrtdrive.types import VehicleParams
 from rrtdrive.vehicle import cover_discs, footprint_corners
 
 __all__ = ["CollisionChecker"]
+
+logger = logging.getLogger(__name__)
 
 
 class CollisionChecker:
@@ -42,7 +46,16 @@ class CollisionChecker:
     vehicle : VehicleParams
         The car.
     config : CheckerConfig, optional
-        Grid resolution and margins.
+        Grid resolution and margins. A map whose grid would exceed
+        ``config.max_grid_cells`` gets a coarser grid (a warning is logged;
+        :attr:`resolution` is the cell size used, :attr:`requested_resolution`
+        the one asked for, and :attr:`config` carries the one used).
+
+    Raises
+    ------
+    InputError
+        Naming ``bounds`` when the map is too big for any allowed grid
+        (see :func:`~rrtdrive.collision.grid.grid_resolution`).
 
     Examples
     --------
@@ -65,30 +78,43 @@ class CollisionChecker:
         self.bounds = tuple(float(b) for b in bounds)
         self.obstacles = tuple(obstacles)
         self.vehicle = vehicle
-        self.config = config or CheckerConfig()
+        config = config or CheckerConfig()
+        self.requested_resolution = config.resolution
         t_setup = time.perf_counter()
-        h = self.config.resolution
+        # Before anything is allocated: refuse, or coarsen, a grid too big for memory.
+        h = grid_resolution(self.bounds, config)
+        if h != config.resolution:
+            logger.warning(
+                "bounds: a %g x %g m map at %g m would exceed checker.max_grid_cells = %d; "
+                "using %g m cells (grid error %.3f m)",
+                self.bounds[2] - self.bounds[0], self.bounds[3] - self.bounds[1],
+                config.resolution, config.max_grid_cells, h, h * math.sqrt(2.0),
+            )  # fmt: skip
+            config = dataclasses.replace(config, resolution=h)
+        self.config = config
         # Cells are aligned with the bounds, so every point outside lies in an occupied cell.
         n_pad = int(math.ceil(self.config.pad / h))
         xmin, ymin, xmax, ymax = self.bounds
         self._origin = np.array([xmin - n_pad * h, ymin - n_pad * h])
-        nx = int(math.ceil((xmax - xmin) / h)) + 2 * n_pad
-        ny = int(math.ceil((ymax - ymin) / h)) + 2 * n_pad
+        nx, ny = grid_shape(self.bounds, h, self.config.pad)
         self._shape = (nx, ny)
         self._inv_h = 1.0 / h
         self._ox, self._oy = float(self._origin[0]), float(self._origin[1])
         occupied = rasterise(self.bounds, self.obstacles, self._origin, h, nx, ny)
-        # Distance from each cell centre to the nearest occupied cell centre.
-        field = ndimage.distance_transform_edt(~occupied) * h
+        # Distance from each cell centre to the nearest occupied cell centre (scaled
+        # and shifted in place: big grids hold one float field, not three).
+        field = ndimage.distance_transform_edt(~occupied)
+        del occupied
+        field *= h
         # The point-to-centre error (h/sqrt2) plus the rasterisation error (h/sqrt2).
         self.grid_error = h * math.sqrt(2.0) + 1e-9
-        self._clearance = (field - self.grid_error).astype(np.float64)
+        field -= self.grid_error
+        self._clearance = np.ascontiguousarray(field, dtype=np.float64)
         # A flat array of C doubles for the scalar lookups: compact in memory, so
         # the walks along edges miss the cache far less than nested lists would.
         self._clearance_cells = array.array("d")
-        self._clearance_cells.frombytes(np.ascontiguousarray(self._clearance).tobytes())
+        self._clearance_cells.frombytes(memoryview(self._clearance).cast("B"))
         self._clearance_flat = self._clearance.ravel()
-        self._occupied = occupied
         self.edge_radius = vehicle.width / 2.0 + self.config.margin
         self.grid = GridCache(
             self._clearance, self._origin, h, self.grid_error, vehicle, self.bounds,
@@ -132,7 +158,7 @@ class CollisionChecker:
 
     @property
     def resolution(self) -> float:
-        """Grid cell size in metres."""
+        """Grid cell size in metres used (coarser than requested for a very big map)."""
         return self.config.resolution
 
     def clearance(self, x: float, y: float) -> float:

@@ -1,5 +1,7 @@
 """The checker's occupancy grid and the data derived from it, built once per checker.
 
+:func:`grid_resolution` picks the cell size that keeps a map's grid within
+:attr:`CheckerConfig.max_grid_cells` (or refuses the bounds);
 :func:`rasterise` marks the cells an obstacle or the outside may touch;
 :class:`GridCache` owns the clearance field made from it and lazily builds, caches
 and times what planners derive from that field: connectivity labels, the cells a
@@ -17,12 +19,91 @@ import numpy as np
 import shapely
 from scipy import ndimage
 
+from rrtdrive.collision.config import CheckerConfig
 from rrtdrive.maps import Obstacle
-from rrtdrive.types import VehicleParams
+from rrtdrive.types import InputError, VehicleParams
 
 T = TypeVar("T")
 
-__all__ = ["rasterise", "GridCache"]
+__all__ = ["grid_shape", "grid_resolution", "rasterise", "GridCache"]
+
+
+def grid_shape(bounds: Sequence[float], resolution: float, pad: float) -> tuple[int, int]:
+    """Cells ``(nx, ny)`` of the grid over ``bounds`` with ``pad`` metres of border each side.
+
+    Cells are aligned with the bounds (the border is a whole number of cells).
+
+    Examples
+    --------
+    >>> grid_shape((0.0, 0.0, 100.0, 50.0), 0.1, 1.0)
+    (1020, 520)
+    """
+    h = float(resolution)
+    n_pad = int(math.ceil(pad / h))
+    xmin, ymin, xmax, ymax = (float(b) for b in bounds)
+    return (
+        int(math.ceil((xmax - xmin) / h)) + 2 * n_pad,
+        int(math.ceil((ymax - ymin) / h)) + 2 * n_pad,
+    )
+
+
+def grid_resolution(bounds: Sequence[float], config: CheckerConfig) -> float:
+    """The cell size for ``bounds``: ``config.resolution``, or coarser when the grid is too big.
+
+    The grid may have at most ``config.max_grid_cells`` cells. When it would have
+    more, the cell size grows in centimetre steps to the first that fits; up to
+    ``config.max_auto_resolution`` (or ``config.resolution`` when that is coarser)
+    the checker takes it. Its error margin grows with the cell (rasterisation and
+    lookup each ``h / sqrt 2``), so the fast tests stay conservative.
+
+    Parameters
+    ----------
+    bounds : sequence of float
+        ``(xmin, ymin, xmax, ymax)`` in metres.
+    config : CheckerConfig
+        Requested resolution, pad and the limits.
+
+    Returns
+    -------
+    float
+        Cell size in metres, ``>= config.resolution``.
+
+    Raises
+    ------
+    InputError
+        Naming ``bounds`` when even the coarsest allowed cell makes too many cells.
+
+    Examples
+    --------
+    >>> grid_resolution((0.0, 0.0, 100.0, 100.0), CheckerConfig())
+    0.1
+    >>> grid_resolution((0.0, 0.0, 1000.0, 1000.0), CheckerConfig())
+    0.15
+    """
+    h0, limit = config.resolution, config.max_grid_cells
+    nx, ny = grid_shape(bounds, h0, config.pad)
+    if nx * ny <= limit:
+        return h0
+    xmin, ymin, xmax, ymax = (float(b) for b in bounds)
+    # The area alone gives a lower bound of the cell size; the border adds a few steps.
+    steps = max(int(math.ceil(h0 * 100.0)), int(math.ceil(100.0 * math.sqrt(
+        (xmax - xmin) * (ymax - ymin) / limit
+    ))))  # fmt: skip
+    while True:
+        h = round(steps / 100.0, 10)
+        fx, fy = grid_shape(bounds, h, config.pad)
+        if h > h0 and fx * fy <= limit:
+            break
+        steps += 1
+    coarsest = max(h0, config.max_auto_resolution)
+    if h > coarsest + 1e-12:
+        raise InputError(
+            f"bounds: {xmax - xmin:g} x {ymax - ymin:g} m needs {nx * ny:,} grid cells at "
+            f"{h0:g} m; the limit is {limit:,} cells (checker.max_grid_cells), which needs "
+            f"{h:g} m cells, coarser than the {coarsest:g} m the checker chooses by itself; "
+            f"use a smaller map or --resolution {h:g}"
+        )
+    return h
 
 
 def rasterise(

@@ -120,20 +120,46 @@ class Planner(Protocol):
 
 
 class Stopwatch:
-    """Wall-clock budget keeper started at construction."""
+    """The query's wall clock: elapsed time, and the safety cap ``budget.max_time_s``.
 
-    def __init__(self, budget: Budget) -> None:
+    The cap is a safety net, not a budget that decides (see :class:`Budget`): the
+    first :meth:`expired` call that finds it passed latches :attr:`capped`, and
+    a capped query ends in :func:`rrtdrive.planning.result.timeout_result`
+    whatever it found. Only places that stop work on :meth:`expired` can cap a
+    query; a query that runs past the cap without asking finishes as its counts say.
+
+    Parameters
+    ----------
+    budget : Budget
+        The query's limits (only ``max_time_s`` is read).
+    clock : callable, optional
+        Seconds as a float, monotonic (default :func:`time.perf_counter`); tests
+        may pass a fake one.
+
+    Examples
+    --------
+    >>> ticks = iter([0.0, 1.0, 3.0])
+    >>> watch = Stopwatch(Budget(max_time_s=2.0), clock=lambda: next(ticks))
+    >>> watch.expired(), watch.capped, watch.expired(), watch.capped
+    (False, False, True, True)
+    """
+
+    def __init__(self, budget: Budget, clock: Callable[[], float] | None = None) -> None:
         self.budget = budget
-        self.t0 = time.perf_counter()
+        self._clock = time.perf_counter if clock is None else clock
+        self.t0 = self._clock()
         self._deadline = self.t0 + budget.max_time_s
+        self.capped = False
 
     def elapsed(self) -> float:
         """Seconds since start."""
-        return time.perf_counter() - self.t0
+        return self._clock() - self.t0
 
     def expired(self) -> bool:
-        """True once the time budget is spent."""
-        return time.perf_counter() >= self._deadline
+        """True once the safety cap is reached (and from then on :attr:`capped` is True)."""
+        if not self.capped and self._clock() >= self._deadline:
+            self.capped = True
+        return self.capped
 
 
 class GrowingTree:

@@ -4,8 +4,14 @@ A planner's ``solve`` is ``run_query(name, problem, budget, search)``: the
 stopwatch starts, :func:`~rrtdrive.planning.base.precheck` answers an invalid
 start or goal or a provably unreachable goal, and only then does ``search``
 run. A search ends in :func:`solved`, :func:`solved_result` (a baseline's raw
-tree path), :func:`search_result` (that, or the out-of-budget failure) or
+tree path), :func:`search_result` (that, or the out-of-budget failure),
+:func:`timeout_result` (the safety cap stopped it) or
 :func:`~rrtdrive.planning.base.failure`.
+
+Counted budgets decide a query's outcome; the wall-clock ``max_time_s`` is a
+safety cap whose only outcome is :attr:`PlanStatus.TIMEOUT` (see
+:class:`~rrtdrive.types.Budget`), so a seeded query answers the same on any
+machine unless it reports ``timeout``.
 """
 
 from __future__ import annotations
@@ -27,6 +33,8 @@ __all__ = [
     "solved",
     "solved_result",
     "search_result",
+    "timeout_result",
+    "timeout_message",
     "budget_message",
     "baseline_caveat",
 ]
@@ -57,7 +65,7 @@ def run_query(
     problem : PlanningProblem
         The query.
     budget : Budget
-        Its limits; the stopwatch enforces the time limit.
+        Its limits; the stopwatch keeps the safety cap ``max_time_s``.
     search : callable
         ``search(watch) -> PlanResult``, the planner's own work.
     prepare : callable, optional
@@ -66,7 +74,8 @@ def run_query(
     Returns
     -------
     PlanResult
-        The precheck's failure, or what ``search`` returns.
+        The precheck's failure, or what ``search`` returns; its ``stats`` get
+        ``grid_resolution_m``, the checker's cell size.
 
     Examples
     --------
@@ -86,7 +95,9 @@ def run_query(
     result = precheck(problem, planner, watch)
     if result is None:
         result = search(watch)
-    return dataclasses.replace(result, setup_time_s=setup)
+    # The grid's cell size, coarser than configured on a very big map.
+    stats = {**result.stats, "grid_resolution_m": float(checker.resolution)}
+    return dataclasses.replace(result, setup_time_s=setup, stats=stats)
 
 
 def solved(
@@ -197,14 +208,89 @@ def solved_result(
     return solved(planner, watch, path, raw, trees, iterations, message, stats, nodes=nodes)
 
 
-def budget_message(iterations: int, watch: Stopwatch, budget: Budget, nodes: int) -> str:
-    """The failure message of a search that ran out of budget."""
-    if watch.expired():
-        limit = f"time budget of {budget.max_time_s:g} s spent"
-    else:
-        limit = f"iteration budget of {budget.max_iterations} spent"
+def timeout_message(iterations: int, budget: Budget, unit: str = "iterations") -> str:
+    """The message of a query stopped by the safety cap: the cap, the count, what to change.
+
+    ``unit`` names the count (e.g. ``"expansions"`` for a search over a lattice).
+
+    Examples
+    --------
+    >>> msg = timeout_message(1234, Budget(max_time_s=5.0))
+    >>> msg.split(": ")[0]
+    'stopped by the 5 s safety cap after 1234 iterations'
+    >>> msg.split("; ")[1]
+    'raise --max-time or lower --max-iterations'
+    """
     return (
-        f"no path found within the budget: {limit} "
+        f"stopped by the {budget.max_time_s:g} s safety cap after {iterations} {unit}: "
+        "the result depends on this machine's speed; raise --max-time or lower --max-iterations"
+    )
+
+
+def timeout_result(
+    planner: str,
+    watch: Stopwatch,
+    iterations: int,
+    trees: tuple[Tree, ...] = (),
+    stats: dict[str, float] | None = None,
+    raw_path: np.ndarray | None = None,
+    unit: str = "iterations",
+) -> PlanResult:
+    """The result of a query that the wall-clock safety cap stopped: :attr:`PlanStatus.TIMEOUT`.
+
+    Every planner ends a query whose stopwatch is :attr:`~Stopwatch.capped` here,
+    whatever it had found by then (a path found after some work was cut short, or
+    the best path so far of an anytime planner, would depend on the machine's
+    speed). The message is :func:`timeout_message`.
+
+    Parameters
+    ----------
+    planner : str
+        Registered planner name.
+    watch : Stopwatch
+        The query's stopwatch (its budget names the cap).
+    iterations : int
+        Iterations (or expansions) done before the cap.
+    trees : tuple of Tree
+        Search trees so far, for plotting.
+    stats : dict, optional
+        Planner statistics so far.
+    raw_path : numpy.ndarray, optional
+        A tree path the query was working on, if any.
+    unit : str
+        What ``iterations`` counts, for the message (``"expansions"`` ...).
+
+    Returns
+    -------
+    PlanResult
+        Failed, empty path, status ``timeout``; ``iterations`` is stored as given.
+
+    Examples
+    --------
+    >>> ticks = iter([0.0, 9.0, 9.0])
+    >>> watch = Stopwatch(Budget(max_time_s=5.0), clock=lambda: next(ticks))
+    >>> watch.expired()
+    True
+    >>> res = timeout_result("demo", watch, 7)
+    >>> res.status.value, res.success, res.message.split(":")[0]
+    ('timeout', False, 'stopped by the 5 s safety cap after 7 iterations')
+    """
+    return failure(
+        planner,
+        PlanStatus.TIMEOUT,
+        watch,
+        timeout_message(iterations, watch.budget, unit),
+        trees=trees,
+        iterations=iterations,
+        raw_path=raw_path,
+        stats=stats,
+    )
+
+
+def budget_message(iterations: int, watch: Stopwatch, budget: Budget, nodes: int) -> str:
+    """The failure message of a search that spent its iteration budget."""
+    return (
+        f"no path found within the budget: iteration budget of {budget.max_iterations} spent "
         f"({iterations} iterations, {watch.elapsed():.3f} s, {nodes} nodes)"
     )
 
@@ -219,7 +305,10 @@ def search_result(
     budget: Budget,
     stats: dict[str, float],
 ) -> PlanResult:
-    """The end of a baseline search: :func:`solved_result`, or out of budget when no path.
+    """The end of a baseline search: :func:`solved_result`, out of budget, or the timeout.
+
+    A query whose stopwatch is capped ends in :func:`timeout_result` even with a
+    path (an anytime search's best path so far depends on the machine's speed).
 
     Parameters
     ----------
@@ -244,6 +333,8 @@ def search_result(
     -------
     PlanResult
     """
+    if watch.capped:
+        return timeout_result(planner, watch, iterations, trees, stats)
     if raw_path is None:
         return failure(
             planner,

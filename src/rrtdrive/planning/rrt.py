@@ -89,7 +89,7 @@ class RRTPlanner:
         rng : numpy.random.Generator
             The only source of randomness.
         budget : Budget
-            Iteration and time limits.
+            Iteration budget (decides) and safety cap (reaching it: ``timeout``).
 
         Returns
         -------

@@ -124,7 +124,8 @@ class RRTConnectPlanner:
         rng : numpy.random.Generator
             The only source of randomness.
         budget : Budget
-            Iteration and time limits; each connect loop also stops when time is up.
+            Iteration budget (decides) and safety cap (each connect loop also
+            checks it; reaching it ends the query as ``timeout``).
 
         Returns
         -------

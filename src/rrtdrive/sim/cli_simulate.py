@@ -72,7 +72,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--plan-time", type=positive_float, default=None,
-        help=f"planning time budget in seconds (default {DEFAULT_PLAN_TIME_S:g})",
+        help=f"planning wall-clock safety cap in seconds (default {DEFAULT_PLAN_TIME_S:g}); "
+        "a plan that reaches it fails as 'timeout' (the iterations decide otherwise)",
     )
     p.add_argument(
         "--deterministic", action="store_true",

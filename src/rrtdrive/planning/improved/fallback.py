@@ -12,7 +12,14 @@ from rrtdrive.planning.dubins import DubinsPath, dubins_paths
 from rrtdrive.planning.smoothing import SmoothingConfig, make_drivable
 from rrtdrive.types import Path, Pose
 
-__all__ = ["dubins_fallback"]
+__all__ = ["dubins_fallback", "MAX_FALLBACK_CANDIDATES"]
+
+#: Tree nodes tried as tail joints, and again as lead joints, per query: a counted
+#: budget (the wall clock only caps it). Measured on parking_lot's 100 random goals
+#: and 100 random starts (docs/planning.md, "Budgets and determinism"): every
+#: fallback that solves does so by the 45th tail or the 32nd lead; failures tried
+#: up to 211 of each, for seconds, in vain.
+MAX_FALLBACK_CANDIDATES = 64
 
 
 def _free_dubins(
@@ -42,6 +49,7 @@ def dubins_fallback(
     expired: Callable[[], bool] | None = None,
     sample_spacing: float = 0.25,
     check_spacing: float = 0.1,
+    max_candidates: int = MAX_FALLBACK_CANDIDATES,
 ) -> tuple[Path, str] | None:
     """A drivable path that ends in a Dubins path, when the tree paths alone fail.
 
@@ -70,9 +78,13 @@ def dubins_fallback(
     smoothing : SmoothingConfig, optional
         Post-processing settings for the tree part; no tails or leads without it.
     expired : callable, optional
-        Stops the search for tails and leads when it returns True.
+        The safety cap: stops the search for tails and leads when it returns True
+        (the caller then reports a timeout).
     sample_spacing, check_spacing : float
         Spacing of the returned samples and of the poses tested.
+    max_candidates : int
+        Most tree nodes tried as tail joints, and again as lead joints (the
+        counted budget that decides; :data:`MAX_FALLBACK_CANDIDATES`).
 
     Returns
     -------
@@ -86,10 +98,14 @@ def dubins_fallback(
         return Path(direct.sample(sample_spacing), direct.joints()), direct.word
     if smoothing is None:
         return None
+    tried = 0
     for raw in raw_paths:
         for i in range(len(raw) - 2, 0, -1):
+            if tried >= max_candidates:
+                break
             if expired is not None and expired():
                 return None
+            tried += 1
             yaw = math.atan2(raw[i, 1] - raw[i - 1, 1], raw[i, 0] - raw[i - 1, 0])
             joint = Pose(float(raw[i, 0]), float(raw[i, 1]), yaw)
             tail = _free_dubins(checker, joint, goal, radius, clearance, check_spacing)
@@ -102,10 +118,14 @@ def dubins_fallback(
             waypoints = np.vstack([head.control_points, tail.joints()[1:]])
             where = f"({joint.x:.1f}, {joint.y:.1f})"
             return Path(samples, waypoints), f"tree path to {where} + {tail.word}"
+    tried = 0
     for raw in raw_paths:
         for i in range(1, len(raw) - 1):
+            if tried >= max_candidates:
+                return None
             if expired is not None and expired():
                 return None
+            tried += 1
             yaw = math.atan2(raw[i + 1, 1] - raw[i, 1], raw[i + 1, 0] - raw[i, 0])
             joint = Pose(float(raw[i, 0]), float(raw[i, 1]), yaw)
             lead = _free_dubins(checker, start, joint, radius, clearance, check_spacing)

@@ -423,7 +423,7 @@ def grow_until_meet(
     max_iterations : int
         Iteration budget of the whole query.
     expired : callable
-        True once the time budget is spent.
+        True once the safety cap is reached (the query then ends as ``timeout``).
 
     Returns
     -------

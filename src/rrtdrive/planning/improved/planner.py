@@ -32,7 +32,7 @@ from rrtdrive.planning.improved.growth import (
     grow_until_meet,
     rooted_edge_test,
 )
-from rrtdrive.planning.result import run_query, solved
+from rrtdrive.planning.result import run_query, solved, timeout_result
 from rrtdrive.planning.sampling import SampleSource
 from rrtdrive.planning.smoothing import make_drivable
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Tree
@@ -109,8 +109,10 @@ class ImprovedRRTConnect:
         rng : numpy.random.Generator
             The only source of randomness.
         budget : Budget
-            Iteration and wall-time limits (both enforced for the growth; each
-            post-processing is bounded by ``smoothing.max_rounds``).
+            The iteration budget decides the growth (each post-processing is
+            bounded by ``smoothing.max_rounds``, the Dubins fallback by its
+            candidate count); reaching the safety cap ``max_time_s`` ends the
+            query as ``timeout``.
 
         Returns
         -------
@@ -196,7 +198,9 @@ class _Query:
             return out
         self.stats["iterations"] = float(self.iterations)
         self.stats["growth_time_s"] = self.watch.elapsed() - self.stats["postprocess_time_s"]
-        if self.cfg.dubins_fallback:
+        # The safety cap cut the growth short: a timeout (no fallback, whose answer
+        # would depend on how far the growth got on this machine).
+        if self.cfg.dubins_fallback and not self.watch.capped:
             out = self.fallback()
             if out is not None:
                 return out
@@ -358,8 +362,10 @@ class _Query:
         )  # fmt: skip
 
     def failure(self) -> PlanResult:
-        """The honest failure: post-processing failed, or no path within the budget."""
+        """The honest failure: the safety cap, post-processing failed, or no path in the budget."""
         stats, watch, iterations = self.stats, self.watch, self.iterations
+        if watch.capped:
+            return timeout_result(NAME, watch, iterations, self.trees, stats, self.last_raw)
         if stats["postprocess_attempts"] > 0 and self.last_message:
             tail = ")"
             if self.cfg.dubins_fallback:
@@ -375,12 +381,11 @@ class _Query:
                 raw_path=self.last_raw,
                 stats=stats,
             )
-        reason = "time" if watch.expired() else "iteration"
         return failure(
             NAME,
             PlanStatus.NO_PATH_IN_BUDGET,
             watch,
-            f"no path within the {reason} budget ({iterations} iterations, "
+            f"no path within the iteration budget ({iterations} iterations, "
             f"{watch.elapsed():.3f} s)",
             trees=self.trees,
             iterations=iterations,
