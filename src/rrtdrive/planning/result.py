@@ -19,6 +19,7 @@ import numpy as np
 
 from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, polyline_path, precheck
+from rrtdrive.planning.diagnosis import diagnose
 from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Tree
 
 __all__ = [
@@ -86,7 +87,9 @@ def run_query(
     result = precheck(problem, planner, watch)
     if result is None:
         result = search(watch)
-    return dataclasses.replace(result, setup_time_s=setup)
+    # A failure says which constraint makes the query hard, measured after the stopwatch.
+    found = None if result.success else diagnose(problem)
+    return dataclasses.replace(result, setup_time_s=setup, diagnosis=found)
 
 
 def solved(
