@@ -418,13 +418,19 @@ def _passage(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diag
             "the goal is walled off from the start: no gap connects them",
             {**numbers, "width_m": 0.0},
         )
-    # The narrowest place: cells between the two thresholds on the start side's rim.
+    # The narrowest place: the cells kept at ``lo`` but not at ``hi`` that join the
+    # start's side to the goal's; the best-cleared of them is the pass.
     structure = np.ones((3, 3), dtype=bool)
-    labels, _ = ndimage.label(grid >= hi, structure=structure)
-    side = labels == labels[a]
-    rim = ndimage.binary_dilation(side, structure=structure) & ~side & (grid >= lo)
-    cells = np.argwhere(rim)
-    best = tuple(cells[int(np.argmin(grid[rim]))]) if len(cells) else a
+    low, _ = ndimage.label(grid >= lo, structure=structure)
+    high, _ = ndimage.label(grid >= hi, structure=structure)
+    band = (low == low[a]) & (high == 0)
+    parts, count = ndimage.label(band, structure=structure)
+    near_a = ndimage.binary_dilation(high == high[a], structure=structure)
+    near_b = ndimage.binary_dilation(high == high[b], structure=structure)
+    joins = np.intersect1d(np.unique(parts[near_a & band]), np.unique(parts[near_b & band]))
+    pick = band if len(joins) == 0 else np.isin(parts, joins[joins > 0])
+    best = np.unravel_index(int(np.argmax(np.where(pick, grid, -np.inf))), grid.shape)
+    best = (int(best[0]), int(best[1]))
     x, y = _world(checker, best)
     width = 2.0 * float(shapely.Point(x, y).distance(_shapes(checker).solid))
     numbers.update(width_m=width, x=x, y=y)
