@@ -19,6 +19,7 @@ from rrtdrive.planning.diagnosis import (
     DiagnosisKind,
     diagnose,
     edge_keep,
+    end_keep,
     free_run,
     street_width,
     u_turn_width,
@@ -113,6 +114,31 @@ def test_tight_clearance_names_the_obstacle_and_the_edge_tests_keep():
     assert found.numbers["obstacle"] == 1
     assert found.numbers["keep_m"] == pytest.approx(edge_keep(problem(m).checker))
     assert found.message.startswith("the goal's body is 0.08 m from obstacle 1; tree edges keep")
+
+
+def test_goal_nose_near_a_wall_defeats_the_edge_test_not_the_body():
+    # The garage case: the nose 0.5 m from the wall, less than the edge test's end keep.
+    checker = problem(wall_map(gap_ahead=0.5)).checker
+    assert 0.5 < end_keep(checker) < 1.0
+    wall = Obstacle((30.0 + F + 0.5 + 0.5, 10.0), (1.0, 20.0))
+    m = Map("nose", (0.0, 0.0, 60.0, 20.0), (wall,), Pose(5.0, 10.0, 0.0), Pose(30.0, 10.0, 0.0))
+    found = diagnose(problem(m))
+    assert found.kind is DiagnosisKind.TIGHT_CLEARANCE
+    gap = footprint_polygon(m.goal.as_tuple(), CAR).distance(wall.polygon())
+    assert found.numbers["gap_m"] == pytest.approx(gap) and gap == pytest.approx(0.5)
+    assert found.numbers["keep_end_m"] == pytest.approx(end_keep(problem(m).checker))
+    assert "beyond its nose" in found.message and "no tree edge reaches it" in found.message
+    # The swept capsule's round end pokes r - sqrt(r^2 - (W/2)^2) past the bumper (shapely).
+    r = checker.edge_radius
+    capsule = shapely.LineString([(0.0, 0.0), (10.0, 0.0)]).buffer(r)
+    beyond = capsule.bounds[2] - 10.0 - math.sqrt(r * r - 0.81)
+    assert end_keep(checker) - checker.grid_error - checker.config.min_trace_step == (
+        pytest.approx(beyond, abs=1e-3)
+    )
+    # A wall beyond the keep is no finding of this kind.
+    far = Obstacle((30.0 + F + end_keep(checker) + 0.1 + 0.5, 10.0), (1.0, 20.0))
+    m2 = Map("far", m.bounds, (far,), m.start, m.goal)
+    assert diagnose(problem(m2)) is None
 
 
 def gap_wall_map(gap: float) -> Map:

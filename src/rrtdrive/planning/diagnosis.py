@@ -10,9 +10,10 @@ and measures, from the map's geometry, the first of these that holds:
    (curvatures from -kappa_max to kappa_max) with the exact body test; less than a
    car length on every arc is too little for the smallest manoeuvre. With room the
    other way the pose is reachable in reverse only; with none either way it is boxed in.
-3. ``tight_clearance``: the end body is closer to an obstacle than the tree edges'
-   swept test keeps (the checker's margin plus its grid error), so no tree edge
-   leaves it although the exact body is free.
+3. ``tight_clearance``: the first tree edge along the start's (or into the goal's)
+   heading fails the swept edge test although the exact body is free along it: the
+   body is closer to an obstacle than that test keeps beside it (the checker's margin,
+   its grid error and trace step) or beyond its bumper (the capsule's round end too).
 4. ``narrow_passage``: start and goal are joined only through a gap narrower than
    the swept edge test needs (or none at all); located on the distance field and
    measured with shapely.
@@ -47,6 +48,8 @@ __all__ = [
     "DiagnosisKind",
     "Diagnosis",
     "diagnose",
+    "edge_keep",
+    "end_keep",
     "u_turn_width",
     "free_run",
     "street_width",
@@ -360,26 +363,33 @@ def edge_keep(checker: CollisionChecker) -> float:
     return checker.config.margin + checker.grid_error + checker.config.min_trace_step
 
 
+def end_keep(checker: CollisionChecker) -> float:
+    """The room beyond a bumper the swept edge test needs: its round end, grid error, step."""
+    r = checker.edge_radius
+    inset = math.sqrt(max(r * r - (checker.vehicle.width / 2.0) ** 2, 0.0))
+    return r - inset + checker.grid_error + checker.config.min_trace_step
+
+
 def _tight(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagnosis | None:
-    keep = edge_keep(checker)
+    side, ends = edge_keep(checker), end_keep(checker)
     leg = 0.5
-    for label, pose, forward in (("start", start, 1), ("goal", goal, -1)):
-        body = footprint_polygon(pose.as_tuple(), m.vehicle)
-        index, gap = nearest_obstacle(m, body, checker)
-        if gap >= keep:
-            continue
+    ways = (("start", start, 1, "its rear", "leaves"), ("goal", goal, -1, "its nose", "reaches"))
+    for label, pose, forward, bumper, verb in ways:
+        # The tree's first edge at the pose: a short one along its heading, driven forward.
         u = np.array([math.cos(pose.yaw), math.sin(pose.yaw)])
         far = pose.xy + forward * leg * u
         a, b = (pose.xy, far) if forward > 0 else (far, pose.xy)
         if checker.edge_free(a, b) or free_run(checker, pose, forward, 0.0, leg) < leg:
             continue
+        index, gap = nearest_obstacle(m, footprint_polygon(pose.as_tuple(), m.vehicle), checker)
         return Diagnosis(
             DiagnosisKind.TIGHT_CLEARANCE,
             f"the {label}'s body is {gap:.2f} m from {_obstacle_name(index)}; tree edges keep "
-            f"{keep:.2f} m (the checker's {checker.config.margin:.2f} m margin, "
+            f"{side:.2f} m beside the body and {ends:.2f} m beyond {bumper} (the swept "
+            f"test's round ends, the checker's {checker.config.margin:.2f} m margin, "
             f"{checker.grid_error:.2f} m grid error and {checker.config.min_trace_step:.2f} m "
-            f"trace step), so no tree edge reaches it",
-            {"gap_m": gap, "keep_m": keep, "obstacle": index},
+            f"trace step), so no tree edge {verb} it",
+            {"gap_m": gap, "keep_m": side, "keep_end_m": ends, "obstacle": index},
         )
     return None
 
