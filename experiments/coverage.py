@@ -100,7 +100,7 @@ def run_ours(item: dict[str, Any]) -> dict[str, Any]:
     if flag == "reverse":
         problem = dataclasses.replace(problem, reverse=True)
     res = make_planner(base).solve(
-        problem, np.random.default_rng(0), Budget(max_time_s=item["max_time"])
+        problem, np.random.default_rng(item.get("seed", 0)), Budget(max_time_s=item["max_time"])
     )
     row: dict[str, Any] = {
         "status": res.status.value,
@@ -165,7 +165,8 @@ def run_ompl(item: dict[str, Any]) -> dict[str, Any]:
 def run_one(item: dict[str, Any]) -> dict[str, Any]:
     """A worker's job: one (query, planner) pair; the row carries its item's keys."""
     row = run_ompl(item) if item["planner"] in OMPL else run_ours(item)
-    return {**{k: item[k] for k in ("map", "vary", "index", "planner")}, **row}
+    keys = ("map", "vary", "index", "planner", "query", "seed")
+    return {**{k: item[k] for k in keys if k in item}, **row}
 
 
 def _median(values: list[float]) -> float | None:
@@ -274,6 +275,42 @@ def report(payload: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def tight_queries() -> list[tuple[str, str, Pose]]:
+    """``(map, label, goal)`` of the tight maps: each map's own query, every free garage bay."""
+    from rrtdrive.maps import TIGHT_MAP_NAMES
+    from rrtdrive.tight_maps import GARAGE_EMPTY_BAYS, garage_goal
+
+    out = []
+    for name in TIGHT_MAP_NAMES:
+        if name == "garage":
+            out += [(name, f"garage bay {b}", garage_goal(*b)) for b in GARAGE_EMPTY_BAYS]
+        else:
+            out.append((name, name, builtin_map(name).goal))
+    return out
+
+
+def tight_report(payload: dict[str, Any]) -> str:
+    """The markdown page of a ``--tight`` run: per query and planner, solved over seeds."""
+    lines = [
+        "# The tight maps: which planners solve them", "",
+        f"Command: `{payload['command']}`  ",
+        f"Seeds {payload['seeds']} per query; ours {payload['max_time_s']:g} s budget, OMPL "
+        f"{payload['ompl_time_s']:g} s; `verified` is `verify_path` (forward-only today); "
+        f"{payload['machine']}.", "",
+        "| query | planner | solved | verified | collision-free | outcomes | diagnosis |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for c in payload["summary"]:
+        outcomes = ", ".join(f"{k} {v}" for k, v in sorted(c["statuses"].items()))
+        lines.append(
+            f"| {c['query']} | {c['planner']} | {c['solved']}/{c['runs']} | {c['verified']} | "
+            f"{c['collision_free']} | {outcomes} | {', '.join(c['diagnoses']) or '-'} |"
+        )
+    if payload["skipped"]:
+        lines += ["", "Skipped:", ""] + [f"- `{k}`: {v}" for k, v in payload["skipped"].items()]
+    return "\n".join(lines) + "\n"
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--map", default="parking_lot")
@@ -286,6 +323,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default="results")
     ap.add_argument("--doc", default=None, help="also write this markdown page")
+    ap.add_argument(
+        "--tight", action="store_true",
+        help="plan the tight maps' queries instead (garage bays, turning bulb, kerbside, "
+        "reverse bay); writes OUT/coverage_tight.*",
+    )
+    ap.add_argument("--seeds", type=int, default=3, help="with --tight: planner seeds per query")
     args = ap.parse_args(argv)
     sets = [s for s in args.sets.split(",") if s]
     if args.count < 1 or not set(sets) <= {"goal", "start"} or not sets:
@@ -296,6 +339,16 @@ def main(argv: list[str] | None = None) -> int:
     for p, why in skipped.items():
         print(f"skipping {p}: {why}", file=sys.stderr)
     items = []
+    if args.tight:
+        for index, (name, label, goal) in enumerate(tight_queries()):
+            for seed in range(args.seeds):
+                for p in planners:
+                    items.append({
+                        "map": name, "vary": "goal", "index": index, "pose": goal.as_tuple(),
+                        "planner": p, "max_time": args.max_time, "ompl_time": args.ompl_time,
+                        "query": label, "seed": seed,
+                    })  # fmt: skip
+        sets = []
     for vary in sets:
         for index, pose in enumerate(draw_goals(args.map, args.count, args.seed, vary)):
             for p in planners:
@@ -315,6 +368,38 @@ def main(argv: list[str] | None = None) -> int:
     command = "python experiments/coverage.py " + " ".join(
         sys.argv[1:] if argv is None else argv
     )
+    machine = f"{platform.machine()} {os.cpu_count()} CPUs, Python {platform.python_version()}"
+    out = FsPath(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    if args.tight:
+        cells: dict[tuple[str, str], list[dict[str, Any]]] = {}
+        for r in rows:
+            cells.setdefault((r["query"], r["planner"]), []).append(r)
+        summary = [
+            {
+                "query": q, "planner": p, "runs": len(rs),
+                "solved": sum(r["solved"] for r in rs),
+                "verified": sum(r["verified"] for r in rs),
+                "collision_free": sum(r["collision_free"] for r in rs),
+                "statuses": {st: sum(r["status"] == st for r in rs)
+                             for st in sorted({r["status"] for r in rs})},
+                "diagnoses": sorted({r["diagnosis"] for r in rs if r.get("diagnosis")}),
+            }
+            for (q, p), rs in cells.items()
+        ]  # fmt: skip
+        payload = {
+            "command": command.strip(), "seeds": args.seeds, "planners": planners,
+            "skipped": skipped, "max_time_s": args.max_time, "ompl_time_s": args.ompl_time,
+            "jobs": args.jobs, "machine": machine, "wall_time_s": wall, "summary": summary,
+            "rows": rows,
+        }  # fmt: skip
+        write_text_atomic(out / "coverage_tight.json", json.dumps(payload, indent=1) + "\n")
+        text = tight_report(payload)
+        write_text_atomic(out / "coverage_tight.md", text)
+        if args.doc:
+            write_text_atomic(FsPath(args.doc), text)
+        print(text)
+        return 0
     payload = {
         "command": command.strip(),
         "map": args.map,
@@ -326,14 +411,11 @@ def main(argv: list[str] | None = None) -> int:
         "max_time_s": args.max_time,
         "ompl_time_s": args.ompl_time,
         "jobs": args.jobs,
-        "machine": f"{platform.machine()} {os.cpu_count()} CPUs, Python "
-        f"{platform.python_version()}",
+        "machine": machine,
         "wall_time_s": wall,
         "summary": summarise(rows, planners, sets),
         "rows": rows,
     }
-    out = FsPath(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     stem = f"coverage_{args.map}"
     write_text_atomic(out / f"{stem}.json", json.dumps(payload, indent=1) + "\n")
     text = report(payload)

@@ -166,7 +166,7 @@ def test_narrow_passage_located_and_measured():
     # A gap narrower than the car, and none at all.
     assert "narrower than the car" in diagnose(problem(gap_wall_map(1.5))).message
     no_path = diagnose(problem(builtin_map("no_path")))
-    assert no_path.kind is DiagnosisKind.NARROW_PASSAGE and no_path.numbers["width_m"] == 0.0
+    assert no_path.kind is DiagnosisKind.WALLED_OFF and no_path.numbers["width_m"] == 0.0
     # A gap the edge test passes is no finding.
     assert diagnose(problem(gap_wall_map(3.0))) is None
 

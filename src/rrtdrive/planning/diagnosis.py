@@ -14,9 +14,9 @@ and measures, from the map's geometry, the first of these that holds:
    heading fails the swept edge test although the exact body is free along it: the
    body is closer to an obstacle than that test keeps beside it (the checker's margin,
    its grid error and trace step) or beyond its bumper (the capsule's round end too).
-4. ``narrow_passage``: start and goal are joined only through a gap narrower than
-   the swept edge test needs (or none at all); located on the distance field and
-   measured with shapely.
+4. ``narrow_passage`` / ``walled_off``: start and goal are joined only through a gap
+   narrower than the swept edge test needs, or by none at all; the gap is located on
+   the distance field and measured with shapely.
 5. ``u_turn``: start and goal headings differ by more than 120 degrees while the
    street at the start is narrower than a forward U-turn of this car needs
    (:func:`u_turn_width`), and either no place reachable from the start is that wide
@@ -72,6 +72,7 @@ class DiagnosisKind(enum.Enum):
     BOXED_IN = "boxed_in"
     TIGHT_CLEARANCE = "tight_clearance"
     NARROW_PASSAGE = "narrow_passage"
+    WALLED_OFF = "walled_off"
     U_TURN = "u_turn"
 
 
@@ -424,7 +425,7 @@ def _passage(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diag
     numbers = {"needed_m": needed_width, "car_width_m": v.width}
     if lo < 0.0:
         return Diagnosis(
-            DiagnosisKind.NARROW_PASSAGE,
+            DiagnosisKind.WALLED_OFF,
             "the goal is walled off from the start: no gap connects them",
             {**numbers, "width_m": 0.0},
         )
