@@ -9,6 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from rrtdrive.cli import main, plan_to_json
 from rrtdrive.maps import Map, Obstacle, builtin_map, save_map
@@ -99,6 +101,21 @@ def test_free_run_matches_the_shapely_gap_on_straights():
     run = free_run(checker, m.start, 1, 0.0, 5.0)
     assert run == pytest.approx(1.234, abs=1.5e-3) and run <= 1.234
     assert free_run(checker, m.start, -1, 0.0, 5.0) == 5.0  # nothing behind within 5 m
+
+
+@settings(max_examples=15, deadline=None)
+@given(gap=st.floats(0.05, 3.0), yaw=st.floats(-0.3, 0.3))
+def test_free_run_is_a_tight_lower_bound_of_the_shapely_run(gap, yaw):
+    # A wall square to the x axis ahead of a car turned by ``yaw``: the straight run
+    # until the body touches is the shapely distance along the heading.
+    wall = Obstacle((20.0 + F + gap + 0.5, 10.0), (1.0, 20.0))
+    m = Map("w", (0.0, 0.0, 60.0, 20.0), (wall,), Pose(20.0, 10.0, yaw), Pose(10.0, 10.0, 0.0))
+    checker = problem(m).checker
+    run = free_run(checker, m.start, 1, 0.0, 5.0)
+    body = footprint_polygon(m.start.as_tuple(), CAR)
+    # Moving along the heading, the body's leading corner closes the x gap at cos(yaw).
+    truth = min(body.distance(wall.polygon()) / math.cos(yaw), 5.0)
+    assert truth - 2e-3 <= run <= truth + 1e-9
 
 
 def test_tight_clearance_names_the_obstacle_and_the_edge_tests_keep():

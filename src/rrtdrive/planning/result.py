@@ -87,9 +87,13 @@ def run_query(
     result = precheck(problem, planner, watch)
     if result is None:
         result = search(watch)
+    if result.success:
+        return dataclasses.replace(result, setup_time_s=setup)
     # A failure says which constraint makes the query hard, measured after the stopwatch.
-    found = None if result.success else diagnose(problem)
-    return dataclasses.replace(result, setup_time_s=setup, diagnosis=found)
+    t_diagnosis = time.perf_counter()
+    found = diagnose(problem)
+    stats = {**result.stats, "diagnosis_time_s": time.perf_counter() - t_diagnosis}
+    return dataclasses.replace(result, setup_time_s=setup, diagnosis=found, stats=stats)
 
 
 def solved(
