@@ -156,7 +156,9 @@ def test_json_to_file_is_atomic(capsys, tmp_path):
 def test_maps_export(capsys, tmp_path):
     code, out, _ = run(capsys, "maps", "--export", str(tmp_path))
     assert code == 0 and "parking_lot" in out
-    assert len(list(tmp_path.glob("*.json"))) == 4
+    from rrtdrive.maps import BUILTIN_MAPS
+
+    assert len(list(tmp_path.glob("*.json"))) == len(BUILTIN_MAPS)
 
 
 def test_console_script_help_and_exit_codes():
