@@ -332,7 +332,8 @@ def _room(
                 DiagnosisKind.BOXED_IN,
                 f"the {label} is boxed in: on any steady steering the car has at most "
                 f"{behind:.2f} m behind it and {ahead:.2f} m ahead of it, {least}; "
-                f"reaching it takes several gear changes{tip}",
+                f"{'leaving' if label == 'start' else 'reaching'} it takes several gear "
+                f"changes{tip}",
                 numbers,
             )
         if reverse:
