@@ -169,7 +169,9 @@ def test_json_to_file_is_atomic(capsys, tmp_path):
 def test_maps_export(capsys, tmp_path):
     code, out, _ = run(capsys, "maps", "--export", str(tmp_path))
     assert code == 0 and "parking_lot" in out
-    assert len(list(tmp_path.glob("*.json"))) == 4
+    from rrtdrive.maps import BUILTIN_MAPS
+
+    assert len(list(tmp_path.glob("*.json"))) == len(BUILTIN_MAPS)
 
 
 def test_console_script_help_and_exit_codes():
@@ -232,7 +234,9 @@ def test_negative_pose_accepted(capsys, tmp_path):
 def test_maps_export_creates_the_folder(capsys, tmp_path):
     out = tmp_path / "a" / "b"
     code, _, _ = run(capsys, "maps", "--export", str(out))
-    assert code == 0 and len(list(out.glob("*.json"))) == 4
+    from rrtdrive.maps import BUILTIN_MAPS
+
+    assert code == 0 and len(list(out.glob("*.json"))) == len(BUILTIN_MAPS)
 
 
 def test_failed_plan_json_has_null_length_and_curvature(capsys):

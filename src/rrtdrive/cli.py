@@ -85,6 +85,7 @@ def plan_to_json(
         "planning_time_s": result.planning_time_s,
         "setup_time_s": result.setup_time_s,
         "message": result.message,
+        "diagnosis": None if result.diagnosis is None else result.diagnosis.to_json(),
     }
 
 
@@ -164,6 +165,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         f"{1e3 * result.planning_time_s:.1f} ms"
         if result.success
         else f"FAILED ({result.status.value}): {result.message}"
+        + ("" if result.diagnosis is None else f"\n  why: {result.diagnosis.message}")
     )
     # With the JSON on stdout, the human summary goes to stderr to keep stdout parseable.
     print(summary, file=sys.stderr if args.json == "-" else sys.stdout)

@@ -32,6 +32,7 @@ __all__ = [
     "Obstacle",
     "Map",
     "BUILTIN_MAPS",
+    "TIGHT_MAP_NAMES",
     "builtin_map",
     "load_map",
     "save_map",
@@ -440,6 +441,20 @@ BUILTIN_MAPS: dict[str, Callable[[], Map]] = {
     "narrow_gap": narrow_gap_map,
     "no_path": no_path_map,
 }
+
+#: Tight maps shipped as files in ``data/maps/`` (:mod:`rrtdrive.tight_maps` writes them).
+TIGHT_MAP_NAMES = ("garage", "turning_bulb", "kerbside", "reverse_bay")
+_DATA_MAPS = FsPath(__file__).resolve().parent / "data" / "maps"
+
+
+def _shipped(name: str) -> Callable[[], Map]:
+    def load() -> Map:
+        return load_map(_DATA_MAPS / f"{name}.json")
+
+    return load
+
+
+BUILTIN_MAPS.update({name: _shipped(name) for name in TIGHT_MAP_NAMES})
 
 
 def builtin_map(name: str) -> Map:

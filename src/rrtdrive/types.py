@@ -434,6 +434,10 @@ class PlanResult:
         Wall time of the per-map set-up this query triggered (connectivity labels,
         sampling cells, expanded obstacles, passage cells), outside ``planning_time_s``
         and outside the budget; 0 when the map's checker had it all already.
+    diagnosis : rrtdrive.planning.diagnosis.Diagnosis or None
+        On a failure, the constraint that makes the query hard or impossible, in
+        the user's terms (:func:`rrtdrive.planning.diagnosis.diagnose`); ``None``
+        on success or when no finding applies.
     """
 
     status: PlanStatus
@@ -447,6 +451,7 @@ class PlanResult:
     message: str = ""
     stats: dict[str, float] = field(default_factory=dict)
     setup_time_s: float = 0.0
+    diagnosis: object | None = None
 
     @property
     def success(self) -> bool:

@@ -25,6 +25,7 @@ import numpy as np
 
 from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, polyline_path, precheck
+from rrtdrive.planning.diagnosis import diagnose
 from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Tree
 
 __all__ = [
@@ -97,7 +98,13 @@ def run_query(
         result = search(watch)
     # The grid's cell size, coarser than configured on a very big map.
     stats = {**result.stats, "grid_resolution_m": float(checker.resolution)}
-    return dataclasses.replace(result, setup_time_s=setup, stats=stats)
+    if result.success:
+        return dataclasses.replace(result, setup_time_s=setup, stats=stats)
+    # A failure says which constraint makes the query hard, measured after the stopwatch.
+    t_diagnosis = time.perf_counter()
+    found = diagnose(problem)
+    stats["diagnosis_time_s"] = time.perf_counter() - t_diagnosis
+    return dataclasses.replace(result, setup_time_s=setup, diagnosis=found, stats=stats)
 
 
 def solved(

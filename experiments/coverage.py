@@ -1,0 +1,433 @@
+"""Coverage benchmark: which random queries each planner solves, side by side in one run.
+
+Usage (OMPL lives in the lead's venv only)::
+
+    PYTHONPATH=src:. /work/venv/bin/python experiments/coverage.py --map parking_lot \
+        --count 100 --jobs 2 --out results --doc docs/coverage.md
+
+The random goal poses and the random start poses of ``experiments/random_goals.py``
+(``--count`` of each, seed ``--seed``: uniform position and heading where the body
+is free; the other end is the map's own) are planned by every planner of
+``--planners`` (comma-separated):
+
+- a registered rrtdrive planner by name (``improved-rrt-connect``, ``hybrid-a-star``
+  ...), planner seed 0, budget ``--max-time``; ``NAME+reverse`` plans the same with
+  reversing allowed (``PlanningProblem(..., reverse=True)``);
+- ``ompl-dubins-rrt`` (``DubinsStateSpace(r_min)`` + RRT, forward only) and
+  ``ompl-rs-rrtconnect`` (``ReedsSheppStateSpace(r_min)`` + RRTConnect, reversing),
+  range 5 m, ``--ompl-time`` seconds, our *exact* body test
+  (:meth:`~rrtdrive.collision.CollisionChecker.pose_free`) as the validity checker,
+  motions checked every 0.25 m, the solution simplified (``simplifySolution``).
+
+A name that is not available today (a planner not registered, ``+reverse`` before
+``PlanningProblem`` has its ``reverse`` field, OMPL not installed) is skipped with a
+note in the output. Every solved path is checked by :func:`rrtdrive.verify.verify_path`
+(forward-only today: a path with cusps fails its heading and curvature checks, so
+the collision-free column is given apart). Per planner and set: solved, verified,
+median planning time and length of the solved, median time of the failures; per
+pair (ours, OMPL): the share of OMPL's solved that ours solves and the median
+per-query time and length ratios on the queries both solve. OMPL's times include
+its simplification. OMPL seeds its RNG once per worker process, so OMPL rows are
+not reproducible query by query; ours are.
+
+Writes ``OUT/coverage_MAP.json`` (every row, the resolved settings) and ``.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import importlib.util
+import json
+import math
+import os
+import platform
+import statistics
+import sys
+import time
+from pathlib import Path as FsPath
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(FsPath(__file__).resolve().parent))
+from random_goals import draw_goals  # noqa: E402  (the sibling script's pose sets)
+
+from rrtdrive.atomic import write_text_atomic  # noqa: E402
+from rrtdrive.bench.backends import parallel_map  # noqa: E402
+from rrtdrive.maps import builtin_map  # noqa: E402
+from rrtdrive.planning import PLANNERS, PlanningProblem, make_planner  # noqa: E402
+from rrtdrive.types import Budget, Path, Pose  # noqa: E402
+from rrtdrive.verify import verify_path  # noqa: E402
+
+DEFAULT_PLANNERS = (
+    "improved-rrt-connect,improved-rrt-connect+reverse,hybrid-a-star,hybrid-a-star+reverse,"
+    "ompl-dubins-rrt,ompl-rs-rrtconnect"
+)
+#: OMPL comparators: name -> (state space, geometric planner class).
+OMPL = {"ompl-dubins-rrt": ("dubins", "RRT"), "ompl-rs-rrtconnect": ("rs", "RRTConnect")}
+
+
+def availability(name: str) -> str | None:
+    """Why planner spec ``name`` cannot run today, or ``None`` when it can."""
+    if name in OMPL:
+        return None if importlib.util.find_spec("ompl") else "OMPL is not installed here"
+    base, _, flag = name.partition("+")
+    if flag and flag != "reverse":
+        return f"unknown suffix +{flag}"
+    if base not in PLANNERS:
+        return f"planner {base!r} is not registered (yet)"
+    if flag and "reverse" not in {f.name for f in dataclasses.fields(PlanningProblem)}:
+        return "PlanningProblem has no reverse field yet"
+    return None
+
+
+def _problem(item: dict[str, Any]) -> tuple[Any, PlanningProblem]:
+    base = builtin_map(item["map"])
+    m = dataclasses.replace(base, **{item["vary"]: Pose(*item["pose"])})
+    return m, PlanningProblem.from_map(m)
+
+
+def _check(m: Any, path: Path) -> dict[str, Any]:
+    check = verify_path(m, path)
+    return {"verified": bool(check.ok), "collision_free": bool(check.collision_free)}
+
+
+def run_ours(item: dict[str, Any]) -> dict[str, Any]:
+    """One query with an rrtdrive planner."""
+    m, problem = _problem(item)
+    base, _, flag = item["planner"].partition("+")
+    if flag == "reverse":
+        problem = dataclasses.replace(problem, reverse=True)
+    res = make_planner(base).solve(
+        problem, np.random.default_rng(item.get("seed", 0)), Budget(max_time_s=item["max_time"])
+    )
+    row: dict[str, Any] = {
+        "status": res.status.value,
+        "solved": res.success,
+        "time_s": res.planning_time_s,
+        "length_m": res.path.length if res.success else None,
+        "message": res.message[:300],
+    }
+    diagnosis = getattr(res, "diagnosis", None)
+    if diagnosis is not None:
+        row["diagnosis"] = diagnosis.kind.value
+    row.update(_check(m, res.path) if res.success else {"verified": False, "collision_free": False})
+    return row
+
+
+def run_ompl(item: dict[str, Any]) -> dict[str, Any]:
+    """One query with OMPL on our exact body test."""
+    from ompl import base as ob
+    from ompl import geometric as og
+    from ompl import util as ou
+
+    from rrtdrive.bench.ompl_planners import simple_setup
+
+    ou.setLogLevel(ou.LogLevel.LOG_NONE)
+    m, problem = _problem(item)
+    space, algorithm = OMPL[item["planner"]]
+    ss, si = simple_setup(problem, space)
+    free = problem.checker.pose_free
+    ss.setStateValidityChecker(lambda s: free((s.getX(), s.getY(), s.getYaw())))
+    ou.RNG.setSeed(1 + item["index"])  # takes effect only before a process's first draw
+    planner = getattr(og, algorithm)(si)
+    planner.setRange(5.0)
+    ss.setPlanner(planner)
+    objective = ob.PathLengthOptimizationObjective(si)
+    objective.setCostThreshold(ob.Cost(float("inf")))
+    ss.setOptimizationObjective(objective)
+    t0 = time.perf_counter()
+    status = ss.solve(float(item["ompl_time"]))
+    solve_s = time.perf_counter() - t0
+    exact = status.asString() == "Exact solution"
+    row: dict[str, Any] = {"status": "solved" if exact else "no_path_in_budget", "solved": exact}
+    if not exact:
+        row.update(time_s=solve_s, solve_s=solve_s, length_m=None, verified=False,
+                   collision_free=False)
+        return row
+    ss.simplifySolution()
+    total_s = time.perf_counter() - t0
+    sol = ss.getSolutionPath()
+    length = float(sol.length())
+    sol.interpolate(max(2, int(math.ceil(length / 0.1)) + 1))
+    states = np.array(
+        [(s.getX(), s.getY(), s.getYaw()) for s in (sol.getState(i)
+                                                    for i in range(sol.getStateCount()))]
+    )
+    keep = np.concatenate([[True], np.hypot(*np.diff(states[:, :2], axis=0).T) > 1e-9])
+    states = states[keep]
+    path = Path(np.column_stack([states, np.zeros(len(states))]), states[:, :2])
+    row.update(time_s=total_s, solve_s=solve_s, length_m=length, **_check(m, path))
+    return row
+
+
+def run_one(item: dict[str, Any]) -> dict[str, Any]:
+    """A worker's job: one (query, planner) pair; the row carries its item's keys."""
+    row = run_ompl(item) if item["planner"] in OMPL else run_ours(item)
+    keys = ("map", "vary", "index", "planner", "query", "seed")
+    return {**{k: item[k] for k in keys if k in item}, **row}
+
+
+def _median(values: list[float]) -> float | None:
+    return statistics.median(values) if values else None
+
+
+def summarise(rows: list[dict[str, Any]], planners: list[str], sets: list[str]) -> dict:
+    """Per planner x set figures and the (ours, OMPL) pair figures."""
+    cell: dict[tuple[str, str], dict[int, dict]] = {
+        (p, s): {} for p in planners for s in sets
+    }
+    for r in rows:
+        cell[(r["planner"], r["vary"])][r["index"]] = r
+    per: dict[str, dict[str, Any]] = {}
+    for (p, s), runs in cell.items():
+        vals = list(runs.values())
+        ok = [r for r in vals if r["solved"]]
+        bad = [r for r in vals if not r["solved"]]
+        statuses: dict[str, int] = {}
+        for r in vals:
+            statuses[r["status"]] = statuses.get(r["status"], 0) + 1
+        per.setdefault(p, {})[s] = {
+            "queries": len(vals),
+            "solved": len(ok),
+            "verified": sum(r["verified"] for r in vals),
+            "collision_free": sum(r["collision_free"] for r in vals),
+            "median_time_solved_s": _median([r["time_s"] for r in ok]),
+            "median_length_m": _median([r["length_m"] for r in ok]),
+            "median_time_failed_s": _median([r["time_s"] for r in bad]),
+            "statuses": statuses,
+        }
+    pairs: dict[str, dict[str, Any]] = {}
+    ompl = [p for p in planners if p in OMPL]
+    for ours in (p for p in planners if p not in OMPL):
+        for ref in ompl:
+            for s in sets:
+                a, b = cell[(ours, s)], cell[(ref, s)]
+                ref_ok = [i for i, r in b.items() if r["solved"]]
+                both = [i for i in ref_ok if a.get(i, {}).get("solved")]
+                pairs[f"{ours} vs {ref} / {s}"] = {
+                    "ompl_solved": len(ref_ok),
+                    "both_solved": len(both),
+                    "ours_only": sum(
+                        1 for i, r in a.items() if r["solved"] and not b.get(i, {}).get("solved")
+                    ),
+                    "share_of_ompl_solved": len(both) / len(ref_ok) if ref_ok else None,
+                    "median_time_ratio": _median(
+                        [a[i]["time_s"] / b[i]["time_s"] for i in both if b[i]["time_s"] > 0]
+                    ),
+                    "median_length_ratio": _median(
+                        [a[i]["length_m"] / b[i]["length_m"] for i in both if b[i]["length_m"]]
+                    ),
+                }
+    return {"per_planner": per, "pairs": pairs}
+
+
+def _fmt(v: float | None, scale: float = 1.0, digits: int = 1) -> str:
+    return "-" if v is None else f"{v * scale:.{digits}f}"
+
+
+def report(payload: dict[str, Any]) -> str:
+    """The markdown page of one run."""
+    s = payload["summary"]
+    lines = [
+        f"# Coverage on `{payload['map']}`: random goal and start poses, planners side by side",
+        "",
+        f"Command: `{payload['command']}`  ",
+        f"{payload['count']} random goal poses and {payload['count']} random start poses "
+        f"(seed {payload['seed']}, as `experiments/random_goals.py`); ours: planner seed 0, "
+        f"{payload['max_time_s']:g} s budget; OMPL: {payload['ompl_time_s']:g} s, our exact "
+        f"body test; {payload['jobs']} worker(s) on {payload['machine']}; wall time "
+        f"{payload['wall_time_s'] / 60:.1f} min.",
+        "",
+        "| planner | set | solved | verified | collision-free | median time solved [ms] "
+        "| median length [m] | median time failed [ms] | other outcomes |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for p, sets in s["per_planner"].items():
+        for name, c in sets.items():
+            other = ", ".join(f"{k} {v}" for k, v in sorted(c["statuses"].items()) if k != "solved")
+            lines.append(
+                f"| {p} | {name}s | {c['solved']}/{c['queries']} | {c['verified']} | "
+                f"{c['collision_free']} | {_fmt(c['median_time_solved_s'], 1e3)} | "
+                f"{_fmt(c['median_length_m'], 1, 2)} | {_fmt(c['median_time_failed_s'], 1e3)} | "
+                f"{other or '-'} |"
+            )
+    lines += [
+        "",
+        "Pairs (ours against an OMPL planner): the share of OMPL's solved queries that "
+        "ours solves, and per-query ratios ours / OMPL on the queries both solve.",
+        "",
+        "| pair / set | OMPL solved | both | ours only | share of OMPL's solved "
+        "| median time ratio | median length ratio |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for key, c in s["pairs"].items():
+        share = c["share_of_ompl_solved"]
+        lines.append(
+            f"| {key}s | {c['ompl_solved']} | {c['both_solved']} | {c['ours_only']} | "
+            f"{'-' if share is None else f'{100 * share:.0f} %'} | "
+            f"{_fmt(c['median_time_ratio'], 1, 3)} | {_fmt(c['median_length_ratio'], 1, 3)} |"
+        )
+    if payload["skipped"]:
+        lines += ["", "Skipped (not available in this run):", ""]
+        lines += [f"- `{k}`: {v}" for k, v in payload["skipped"].items()]
+    return "\n".join(lines) + "\n"
+
+
+def tight_queries() -> list[tuple[str, str, Pose]]:
+    """``(map, label, goal)`` of the tight maps: each map's own query, every free garage bay."""
+    from rrtdrive.maps import TIGHT_MAP_NAMES
+    from rrtdrive.tight_maps import GARAGE_EMPTY_BAYS, garage_goal
+
+    out = []
+    for name in TIGHT_MAP_NAMES:
+        if name == "garage":
+            out += [(name, f"garage bay {b}", garage_goal(*b)) for b in GARAGE_EMPTY_BAYS]
+        else:
+            out.append((name, name, builtin_map(name).goal))
+    return out
+
+
+def tight_report(payload: dict[str, Any]) -> str:
+    """The markdown page of a ``--tight`` run: per query and planner, solved over seeds."""
+    lines = [
+        "# The tight maps: which planners solve them", "",
+        f"Command: `{payload['command']}`  ",
+        f"Seeds {payload['seeds']} per query; ours {payload['max_time_s']:g} s budget, OMPL "
+        f"{payload['ompl_time_s']:g} s; `verified` is `verify_path` (forward-only today); "
+        f"{payload['machine']}.", "",
+        "| query | planner | solved | verified | collision-free | outcomes | diagnosis |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for c in payload["summary"]:
+        outcomes = ", ".join(f"{k} {v}" for k, v in sorted(c["statuses"].items()))
+        lines.append(
+            f"| {c['query']} | {c['planner']} | {c['solved']}/{c['runs']} | {c['verified']} | "
+            f"{c['collision_free']} | {outcomes} | {', '.join(c['diagnoses']) or '-'} |"
+        )
+    if payload["skipped"]:
+        lines += ["", "Skipped:", ""] + [f"- `{k}`: {v}" for k, v in payload["skipped"].items()]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--map", default="parking_lot")
+    ap.add_argument("--count", type=int, default=100, help="poses per set (default 100)")
+    ap.add_argument("--sets", default="goal,start", help="goal, start or both (default)")
+    ap.add_argument("--seed", type=int, default=1, help="seed of the pose sets")
+    ap.add_argument("--planners", default=DEFAULT_PLANNERS)
+    ap.add_argument("--max-time", type=float, default=5.0, help="our planners' budget [s]")
+    ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time cap [s]")
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--out", default="results")
+    ap.add_argument("--doc", default=None, help="also write this markdown page")
+    ap.add_argument(
+        "--tight", action="store_true",
+        help="plan the tight maps' queries instead (garage bays, turning bulb, kerbside, "
+        "reverse bay); writes OUT/coverage_tight.*",
+    )
+    ap.add_argument("--seeds", type=int, default=3, help="with --tight: planner seeds per query")
+    args = ap.parse_args(argv)
+    sets = [s for s in args.sets.split(",") if s]
+    if args.count < 1 or not set(sets) <= {"goal", "start"} or not sets:
+        ap.error("--count must be >= 1 and --sets a list of goal, start")
+    wanted = [p for p in args.planners.split(",") if p]
+    skipped = {p: why for p in wanted if (why := availability(p)) is not None}
+    planners = [p for p in wanted if p not in skipped]
+    for p, why in skipped.items():
+        print(f"skipping {p}: {why}", file=sys.stderr)
+    items = []
+    if args.tight:
+        for index, (name, label, goal) in enumerate(tight_queries()):
+            for seed in range(args.seeds):
+                for p in planners:
+                    items.append({
+                        "map": name, "vary": "goal", "index": index, "pose": goal.as_tuple(),
+                        "planner": p, "max_time": args.max_time, "ompl_time": args.ompl_time,
+                        "query": label, "seed": seed,
+                    })  # fmt: skip
+        sets = []
+    for vary in sets:
+        for index, pose in enumerate(draw_goals(args.map, args.count, args.seed, vary)):
+            for p in planners:
+                items.append({
+                    "map": args.map, "vary": vary, "index": index, "pose": pose.as_tuple(),
+                    "planner": p, "max_time": args.max_time, "ompl_time": args.ompl_time,
+                })  # fmt: skip
+    t0 = time.perf_counter()
+
+    def progress(done: int, total: int) -> None:
+        print(f"\r{done}/{total} runs, {time.perf_counter() - t0:.0f} s", end="",
+              file=sys.stderr, flush=True)
+
+    rows = parallel_map(run_one, items, args.jobs, progress, run_timeout_s=600.0)
+    print(file=sys.stderr)
+    wall = time.perf_counter() - t0
+    command = "python experiments/coverage.py " + " ".join(
+        sys.argv[1:] if argv is None else argv
+    )
+    machine = f"{platform.machine()} {os.cpu_count()} CPUs, Python {platform.python_version()}"
+    out = FsPath(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    if args.tight:
+        cells: dict[tuple[str, str], list[dict[str, Any]]] = {}
+        for r in rows:
+            cells.setdefault((r["query"], r["planner"]), []).append(r)
+        summary = [
+            {
+                "query": q, "planner": p, "runs": len(rs),
+                "solved": sum(r["solved"] for r in rs),
+                "verified": sum(r["verified"] for r in rs),
+                "collision_free": sum(r["collision_free"] for r in rs),
+                "statuses": {st: sum(r["status"] == st for r in rs)
+                             for st in sorted({r["status"] for r in rs})},
+                "diagnoses": sorted({r["diagnosis"] for r in rs if r.get("diagnosis")}),
+            }
+            for (q, p), rs in cells.items()
+        ]  # fmt: skip
+        payload = {
+            "command": command.strip(), "seeds": args.seeds, "planners": planners,
+            "skipped": skipped, "max_time_s": args.max_time, "ompl_time_s": args.ompl_time,
+            "jobs": args.jobs, "machine": machine, "wall_time_s": wall, "summary": summary,
+            "rows": rows,
+        }  # fmt: skip
+        write_text_atomic(out / "coverage_tight.json", json.dumps(payload, indent=1) + "\n")
+        text = tight_report(payload)
+        write_text_atomic(out / "coverage_tight.md", text)
+        if args.doc:
+            write_text_atomic(FsPath(args.doc), text)
+        print(text)
+        return 0
+    payload = {
+        "command": command.strip(),
+        "map": args.map,
+        "count": args.count,
+        "sets": sets,
+        "seed": args.seed,
+        "planners": planners,
+        "skipped": skipped,
+        "max_time_s": args.max_time,
+        "ompl_time_s": args.ompl_time,
+        "jobs": args.jobs,
+        "machine": machine,
+        "wall_time_s": wall,
+        "summary": summarise(rows, planners, sets),
+        "rows": rows,
+    }
+    stem = f"coverage_{args.map}"
+    write_text_atomic(out / f"{stem}.json", json.dumps(payload, indent=1) + "\n")
+    text = report(payload)
+    write_text_atomic(out / f"{stem}.md", text)
+    if args.doc:
+        write_text_atomic(FsPath(args.doc), text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    code = main()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)  # no interpreter teardown: nanobind's leak warnings (FACTS.md)

@@ -1,0 +1,269 @@
+"""Failure diagnosis: each finding on a small map built here, its numbers against shapely."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rrtdrive.cli import main, plan_to_json
+from rrtdrive.maps import Map, Obstacle, builtin_map, save_map
+from rrtdrive.planning import make_planner
+from rrtdrive.planning.base import PlanningProblem
+from rrtdrive.planning.diagnosis import (
+    Diagnosis,
+    DiagnosisKind,
+    diagnose,
+    edge_keep,
+    end_keep,
+    free_run,
+    street_width,
+    u_turn_width,
+)
+from rrtdrive.types import Budget, Pose, VehicleParams
+from rrtdrive.vehicle import footprint_polygon
+
+CAR = VehicleParams()
+F, B = CAR.front_extent, CAR.rear_overhang
+
+
+@dataclass(frozen=True, eq=False)
+class ReverseProblem(PlanningProblem):
+    """A problem that allows reversing (until PlanningProblem has the field itself)."""
+
+    reverse: bool = True
+
+
+def problem(m: Map) -> PlanningProblem:
+    return PlanningProblem.from_map(m)
+
+
+def wall_map(gap_ahead: float | None = None, gap_behind: float | None = None) -> Map:
+    """A 60 x 20 m room; the start at (20, 10) heading +x, walls across at the given gaps."""
+    obstacles = []
+    if gap_ahead is not None:
+        obstacles.append(Obstacle((20.0 + F + gap_ahead + 0.5, 10.0), (1.0, 20.0)))
+    if gap_behind is not None:
+        obstacles.append(Obstacle((20.0 - B - gap_behind - 0.5, 10.0), (1.0, 20.0)))
+    obstacles.append(Obstacle((55.0, 2.0), (2.0, 2.0)))  # a far-away block
+    return Map("walls", (0.0, 0.0, 60.0, 20.0), tuple(obstacles), Pose(20.0, 10.0, 0.0),
+               Pose(10.0, 10.0, math.pi) if gap_ahead else Pose(35.0, 10.0, 0.0))
+
+
+def test_start_facing_a_wall_needs_reverse_with_the_gap_shapely_measures():
+    m = wall_map(gap_ahead=0.4)
+    found = diagnose(problem(m))
+    assert found.kind is DiagnosisKind.NEEDS_REVERSE
+    body = footprint_polygon(m.start.as_tuple(), CAR)
+    gap = body.distance(m.obstacles[0].polygon())
+    assert gap == pytest.approx(0.4, abs=1e-9)
+    assert found.numbers["straight_gap_m"] == pytest.approx(gap, abs=2e-3)
+    assert found.numbers["straight_gap_m"] <= gap  # a lower bound
+    assert found.numbers["obstacle"] == 0
+    assert "obstacle 0 0.40 m ahead of its nose" in found.message
+    assert "can only be left in reverse (try --reverse)" in found.message
+
+
+def test_goal_backing_onto_a_wall_can_only_be_reached_in_reverse():
+    wall = Obstacle((30.0 - B - 0.3 - 0.5, 10.0), (1.0, 20.0))
+    m = Map("bay", (0.0, 0.0, 60.0, 20.0), (wall,), Pose(45.0, 10.0, math.pi),
+            Pose(30.0, 10.0, 0.0))
+    found = diagnose(problem(m))
+    assert found.kind is DiagnosisKind.NEEDS_REVERSE
+    gap = footprint_polygon(m.goal.as_tuple(), CAR).distance(wall.polygon())
+    assert found.numbers["straight_gap_m"] == pytest.approx(gap, abs=2e-3)
+    assert "0.30 m behind its rear" in found.message
+    assert "it can only be reached in reverse" in found.message
+    # With reversing allowed the wall is no constraint any more.
+    rev = ReverseProblem(m, problem(m).checker, m.start, m.goal, m.vehicle)
+    again = diagnose(rev)
+    assert again is None or again.kind is not DiagnosisKind.NEEDS_REVERSE
+
+
+def test_boxed_in_between_two_walls():
+    m = wall_map(gap_ahead=0.5, gap_behind=0.6)
+    found = diagnose(problem(m))
+    assert found.kind is DiagnosisKind.BOXED_IN
+    assert found.numbers["room_ahead_m"] == pytest.approx(0.5, abs=2e-3)
+    assert found.numbers["room_behind_m"] == pytest.approx(0.6, abs=2e-3)
+    assert "boxed in" in found.message and "gear changes" in found.message
+
+
+def test_free_run_matches_the_shapely_gap_on_straights():
+    m = wall_map(gap_ahead=1.234)
+    checker = problem(m).checker
+    run = free_run(checker, m.start, 1, 0.0, 5.0)
+    assert run == pytest.approx(1.234, abs=1.5e-3) and run <= 1.234
+    assert free_run(checker, m.start, -1, 0.0, 5.0) == 5.0  # nothing behind within 5 m
+
+
+@settings(max_examples=15, deadline=None)
+@given(gap=st.floats(0.05, 3.0), yaw=st.floats(-0.3, 0.3))
+def test_free_run_is_a_tight_lower_bound_of_the_shapely_run(gap, yaw):
+    # A wall square to the x axis ahead of a car turned by ``yaw``: the straight run
+    # until the body touches is the shapely distance along the heading.
+    wall = Obstacle((20.0 + F + gap + 0.5, 10.0), (1.0, 20.0))
+    m = Map("w", (0.0, 0.0, 60.0, 20.0), (wall,), Pose(20.0, 10.0, yaw), Pose(10.0, 10.0, 0.0))
+    checker = problem(m).checker
+    run = free_run(checker, m.start, 1, 0.0, 5.0)
+    body = footprint_polygon(m.start.as_tuple(), CAR)
+    # Moving along the heading, the body's leading corner closes the x gap at cos(yaw).
+    truth = min(body.distance(wall.polygon()) / math.cos(yaw), 5.0)
+    assert truth - 2e-3 <= run <= truth + 1e-9
+
+
+def test_tight_clearance_names_the_obstacle_and_the_edge_tests_keep():
+    # A block 0.08 m beside the goal's body, parallel to it.
+    goal = Pose(30.0, 10.0, 0.0)
+    side = Obstacle((30.0 + 1.255, 10.0 + 0.9 + 0.08 + 0.5), (6.0, 1.0))
+    m = Map("side", (0.0, 0.0, 60.0, 20.0), (Obstacle((55.0, 2.0), (2.0, 2.0)), side),
+            Pose(5.0, 10.0, 0.0), goal)
+    found = diagnose(problem(m))
+    assert found.kind is DiagnosisKind.TIGHT_CLEARANCE
+    gap = footprint_polygon(goal.as_tuple(), CAR).distance(side.polygon())
+    assert found.numbers["gap_m"] == pytest.approx(gap, abs=1e-9)
+    assert found.numbers["obstacle"] == 1
+    assert found.numbers["keep_m"] == pytest.approx(edge_keep(problem(m).checker))
+    assert found.message.startswith("the goal's body is 0.08 m from obstacle 1; tree edges keep")
+
+
+def test_goal_nose_near_a_wall_defeats_the_edge_test_not_the_body():
+    # The garage case: the nose 0.5 m from the wall, less than the edge test's end keep.
+    checker = problem(wall_map(gap_ahead=0.5)).checker
+    assert 0.5 < end_keep(checker) < 1.0
+    wall = Obstacle((30.0 + F + 0.5 + 0.5, 10.0), (1.0, 20.0))
+    m = Map("nose", (0.0, 0.0, 60.0, 20.0), (wall,), Pose(5.0, 10.0, 0.0), Pose(30.0, 10.0, 0.0))
+    found = diagnose(problem(m))
+    assert found.kind is DiagnosisKind.TIGHT_CLEARANCE
+    gap = footprint_polygon(m.goal.as_tuple(), CAR).distance(wall.polygon())
+    assert found.numbers["gap_m"] == pytest.approx(gap) and gap == pytest.approx(0.5)
+    assert found.numbers["keep_end_m"] == pytest.approx(end_keep(problem(m).checker))
+    assert "beyond its nose" in found.message and "no tree edge reaches it" in found.message
+    # The swept capsule's round end pokes r - sqrt(r^2 - (W/2)^2) past the bumper (shapely).
+    r = checker.edge_radius
+    capsule = shapely.LineString([(0.0, 0.0), (10.0, 0.0)]).buffer(r)
+    beyond = capsule.bounds[2] - 10.0 - math.sqrt(r * r - 0.81)
+    assert end_keep(checker) - checker.grid_error - checker.config.min_trace_step == (
+        pytest.approx(beyond, abs=1e-3)
+    )
+    # A wall beyond the keep is no finding of this kind.
+    far = Obstacle((30.0 + F + end_keep(checker) + 0.1 + 0.5, 10.0), (1.0, 20.0))
+    m2 = Map("far", m.bounds, (far,), m.start, m.goal)
+    assert diagnose(problem(m2)) is None
+
+
+def gap_wall_map(gap: float) -> Map:
+    """A wall across x = 30 with one opening ``gap`` wide centred on y = 10."""
+    low = 10.0 - gap / 2
+    high = 10.0 + gap / 2
+    wall = (
+        Obstacle((30.0, low / 2), (1.0, low)),
+        Obstacle((30.0, (high + 20.0) / 2), (1.0, 20.0 - high)),
+    )
+    return Map("gap", (0.0, 0.0, 60.0, 20.0), wall, Pose(10.0, 10.0, 0.0), Pose(50.0, 10.0, 0.0))
+
+
+def test_narrow_passage_located_and_measured():
+    m = gap_wall_map(2.1)
+    found = diagnose(problem(m))
+    assert found.kind is DiagnosisKind.NARROW_PASSAGE
+    x, y = found.numbers["x"], found.numbers["y"]
+    assert abs(x - 30.0) < 1.0 and abs(y - 10.0) < 0.5
+    walls = shapely.union_all([o.polygon() for o in m.obstacles])
+    assert found.numbers["width_m"] == pytest.approx(2 * shapely.Point(x, y).distance(walls))
+    assert found.numbers["width_m"] <= 2.1 + 1e-9 and found.numbers["width_m"] > 1.8
+    assert found.numbers["needed_m"] == pytest.approx(1.8 + 2 * edge_keep(problem(m).checker))
+    assert "tree edges need" in found.message
+    # A gap narrower than the car, and none at all.
+    assert "narrower than the car" in diagnose(problem(gap_wall_map(1.5))).message
+    no_path = diagnose(problem(builtin_map("no_path")))
+    assert no_path.kind is DiagnosisKind.WALLED_OFF and no_path.numbers["width_m"] == 0.0
+    # A gap the edge test passes is no finding.
+    assert diagnose(problem(gap_wall_map(3.0))) is None
+
+
+def test_u_turn_width_is_the_swept_strip_of_a_tightest_half_circle():
+    r = CAR.min_turning_radius
+    yaws = np.linspace(0.0, math.pi, 721)
+    # Left turn about (0, r) from the origin heading +x.
+    poses = np.column_stack([r * np.sin(yaws), r - r * np.cos(yaws), yaws])
+    swept = shapely.union_all([footprint_polygon(tuple(p), CAR) for p in poses])
+    _, ymin, _, ymax = swept.bounds
+    assert u_turn_width(CAR) == pytest.approx(ymax - ymin, abs=2e-3)
+
+
+def street_map(width: float = 10.0) -> Map:
+    """A dead-end street along x, ``width`` wide, closed at both ends by the bounds."""
+    walls = (
+        Obstacle((40.0, 5.0 - 0.5), (80.0, 1.0)),
+        Obstacle((40.0, 5.0 + width + 0.5), (80.0, 1.0)),
+    )
+    mid = 5.0 + width / 2
+    return Map("street", (0.0, 0.0, 80.0, width + 10.0), walls, Pose(10.0, mid - 2.5, 0.0),
+               Pose(30.0, mid + 2.5, math.pi))
+
+
+def test_u_turn_in_a_narrow_street():
+    m = street_map(10.0)
+    found = diagnose(problem(m))
+    assert found.kind is DiagnosisKind.U_TURN
+    assert found.numbers["street_width_m"] == pytest.approx(10.0, abs=1e-9)
+    assert found.numbers["needed_m"] == pytest.approx(u_turn_width(CAR))
+    assert found.numbers["widest_m"] < u_turn_width(CAR)
+    assert found.message.startswith("the street at (11.3, 7.5) is 10.0 m wide; a forward U-turn "
+                                    "needs 14.7 m; no place reachable from the start is wider")
+    centre = shapely.Point(found.numbers["x"], found.numbers["y"])
+    across = sum(centre.distance(o.polygon()) for o in m.obstacles)
+    assert found.numbers["street_width_m"] == pytest.approx(across, abs=1e-9)
+    assert street_width(m, (centre.x, centre.y), 0.0) == found.numbers["street_width_m"]
+    # A street wide enough for the turn is no finding.
+    assert diagnose(problem(street_map(16.0))) is None
+
+
+def test_body_collision_names_the_obstacle():
+    m = wall_map(gap_ahead=2.0)
+    inside = Pose(20.0 + F + 2.0 + 0.5, 10.0, 0.0)  # rear axle in the wall
+    p = problem(m)
+    bad = PlanningProblem(m, p.checker, m.start, inside, m.vehicle)
+    found = diagnose(bad)
+    assert found.kind is DiagnosisKind.BODY_COLLIDES
+    assert footprint_polygon(inside.as_tuple(), CAR).intersects(m.obstacles[0].polygon())
+    assert found.numbers["obstacle"] == 0 and "goal's body" in found.message
+
+
+def test_open_query_has_no_finding_and_json_rounds():
+    assert diagnose(problem(builtin_map("overtake"))) is None
+    d = Diagnosis(DiagnosisKind.U_TURN, "m", {"a": 1.234567})
+    assert d.to_json() == {"kind": "u_turn", "message": "m", "numbers": {"a": 1.2346}}
+
+
+def test_failed_plan_carries_the_diagnosis_into_result_and_json(tmp_path, capsys):
+    m = street_map(10.0)
+    res = make_planner("improved-rrt-connect").solve(
+        problem(m), np.random.default_rng(0), Budget(max_iterations=300, max_time_s=1e6)
+    )
+    assert not res.success
+    assert res.diagnosis is not None and res.diagnosis.kind is DiagnosisKind.U_TURN
+    payload = plan_to_json(res, 0, m.name)
+    assert payload["diagnosis"]["kind"] == "u_turn"
+    assert payload["diagnosis"]["message"] == res.diagnosis.message
+    solved = make_planner("improved-rrt-connect").solve(
+        problem(builtin_map("overtake")), np.random.default_rng(0), Budget(max_time_s=1e6)
+    )
+    assert solved.success and solved.diagnosis is None
+    assert plan_to_json(solved, 0, "overtake")["diagnosis"] is None
+    # The CLI prints it and writes it.
+    path = tmp_path / "street.json"
+    save_map(m, path)
+    code = main(["plan", str(path), "--max-iterations", "300", "--max-time", "1000",
+                 "--json", str(tmp_path / "out.json")])
+    assert code == 1
+    out = capsys.readouterr().out
+    assert "why: the street at" in out
+    assert json.loads((tmp_path / "out.json").read_text())["diagnosis"]["kind"] == "u_turn"
