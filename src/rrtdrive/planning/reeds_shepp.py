@@ -297,7 +297,7 @@ def _is_copy(
     """
     total, word, lengths = cand
     for other_total, other_word, other_lengths in reversed(kept):
-        if total - other_total > _SAME:
+        if total - other_total > 5 * _SAME:  # 5 segments, each within _SAME
             return False
         if other_word == word and all(
             abs(a - b) <= _SAME for a, b in zip(lengths, other_lengths, strict=True)
