@@ -22,7 +22,14 @@ from typing import NamedTuple
 import numpy as np
 from scipy.special import fresnel
 
-__all__ = ["ClothoidTurn", "clothoid_turn", "turn_tangent", "sample_turn", "sharpness_levels"]
+__all__ = [
+    "ClothoidTurn",
+    "clothoid_turn",
+    "turn_tangent",
+    "turn_circle",
+    "sample_turn",
+    "sharpness_levels",
+]
 
 
 class ClothoidTurn(NamedTuple):
@@ -119,6 +126,28 @@ def turn_tangent(theta: float, kappa: float, sigma: float) -> float:
     (7.071, 0.0)
     """
     return clothoid_turn(theta, kappa, sigma).tangent
+
+
+def turn_circle(kappa: float, sigma: float) -> tuple[float, float]:
+    """The circle a clothoid-arc-clothoid turn is equivalent to: ``(r_in, d)``.
+
+    The arc's centre lies ``d`` along the incoming leg from the turn's start and
+    ``r_in`` beside it (Fraichard & Scheuer's inner circle), so a turn of
+    deflection ``theta >= kappa^2 / sigma`` has the tangent length
+    ``r_in tan(theta / 2) + d``: the turn is the arc of radius ``r_in`` tangent to
+    both legs, lengthened by ``d`` at either end.
+
+    Examples
+    --------
+    >>> r_in, d = turn_circle(1 / 6, 0.08)
+    >>> t = clothoid_turn(math.pi / 2, 1 / 6, 0.08)
+    >>> round(r_in * math.tan(math.pi / 4) + d - t.tangent, 12)
+    0.0
+    """
+    lc = kappa / sigma
+    xc, yc = (float(v) for v in _clothoid_xy(np.array(lc), sigma))
+    phi = 0.5 * kappa * lc
+    return yc + math.cos(phi) / kappa, xc - math.sin(phi) / kappa
 
 
 def sample_turn(turn: ClothoidTurn, s: np.ndarray) -> np.ndarray:

@@ -31,7 +31,14 @@ from rrtdrive.planning.smoothing.clothoid import (
 from rrtdrive.planning.smoothing.config import SmoothingConfig
 from rrtdrive.planning.smoothing.corners import Corner, Ends, signed_deflection, unit
 
-__all__ = ["Piece", "ClothoidCurve", "ClothoidFitter", "polygon_turns", "sample_pieces"]
+__all__ = [
+    "Piece",
+    "ClothoidCurve",
+    "ClothoidFitter",
+    "polygon_turns",
+    "polygon_curve",
+    "sample_pieces",
+]
 
 
 class Piece(NamedTuple):
@@ -225,6 +232,28 @@ def curve_pieces(
                 Piece(min(i + 1, last), a[0] + half * ux, a[1] + half * uy, yaw, half, None)
             )
     return pieces
+
+
+def polygon_curve(
+    pts: np.ndarray, kappa: float, sigma: float, end_gap: float = 0.0
+) -> list[Piece] | None:
+    """The pieces rounding every corner of ``pts`` with the turn of ``kappa`` and ``sigma``.
+
+    None when a leg is too short for the turns at its ends (plus ``end_gap`` at
+    the first and last leg).
+
+    Examples
+    --------
+    >>> pieces = polygon_curve(np.array([[0.0, 0.0], [20.0, 0.0], [20.0, 20.0]]), 1 / 6, 0.08)
+    >>> [p.turn is not None for p in pieces], round(sum(p.length for p in pieces), 3)
+    [False, False, True, False, False], 37.367
+    """
+    p = np.asarray(pts, dtype=float).reshape(-1, 2).tolist()
+    n = len(p)
+    turns, conflicts = polygon_turns(
+        p, [kappa] * n, np.array([sigma]), [True] * n, end_gap
+    )
+    return None if conflicts else curve_pieces(p, turns)
 
 
 class ClothoidFitter:
