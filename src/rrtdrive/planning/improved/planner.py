@@ -246,10 +246,16 @@ class _Query:
         stats.update(res.stats)
         elapsed = self.watch.elapsed()
         stats["growth_time_s"] = elapsed - stats["postprocess_time_s"]
-        message = (
-            f"solved: {len(res.key_points)} key points, {len(res.control_points)} "
-            f"control points, {res.rounds} fit round(s)"
-        )
+        if self.smoothing.clothoid:
+            message = (
+                f"solved: {len(res.key_points)} key points, {int(res.stats['fillets'])} "
+                f"clothoid turns, {res.rounds} fit round(s)"
+            )
+        else:
+            message = (
+                f"solved: {len(res.key_points)} key points, {len(res.control_points)} "
+                f"control points, {res.rounds} fit round(s)"
+            )
         path = Path(res.samples, res.control_points)
         return solved(
             NAME, self.watch, path, raw, trees, iterations, message, stats,
