@@ -256,7 +256,8 @@ class SmoothingResult:
     samples : numpy.ndarray
         ``(N, 4)`` rows ``[x, y, yaw, kappa]`` (empty when not ok).
     control_points : numpy.ndarray
-        The final B-spline control points ``(M, 2)``.
+        The final B-spline control points ``(M, 2)``; for clothoid curves the key
+        polygon whose corners the turns round (as ``key_points``).
     key_points : numpy.ndarray
         The key polygon after pruning, sharp-angle repair, heading legs and repairs.
     rounds : int

@@ -1,10 +1,11 @@
-"""The guarantee (SPEC §3 item 9): a tree path in, a drivable curve or an honest failure out.
+"""The guarantee (SPEC §3 items 9-10): a tree path in, a drivable curve or an honest failure out.
 
 :func:`make_drivable` builds the key polygon (:mod:`.corners`), then runs one
-orchestrating loop: fit the control points and the B-spline (:mod:`.curve`),
-check the curvature and the body, and hand every corner or leg that breaks a
-limit to its next repair (:mod:`.repair`), until the curve passes or the
-rounds or the repairs run out.
+orchestrating loop: fit the curve -- clothoid turns (:mod:`.clothoid_curve`, the
+default) or the control points and the B-spline (:mod:`.curve`) -- check the
+curvature (and, for clothoids, the sharpness) and the body, and hand every corner
+or leg that breaks a limit to its next repair (:mod:`.repair`), until the curve
+passes or the rounds or the repairs run out.
 """
 
 from __future__ import annotations
@@ -43,7 +44,15 @@ def make_drivable(
     checker: PathChecker,
     config: SmoothingConfig | None = None,
 ) -> SmoothingResult:
-    """Turn a collision-free tree path into a drivable, curvature-bounded B-spline path.
+    """Turn a collision-free tree path into a drivable, curvature-bounded path.
+
+    With ``config.curve = CurveKind.CLOTHOID`` (the default) every corner of the
+    key polygon becomes a symmetric clothoid turn: the curvature is continuous, 0
+    at both ends, at most ``kappa_safety * kappa_max``, and the steering rate per
+    metre ``|d delta / ds|`` at most ``max_sharpness`` (both exact per turn; each
+    turn takes the gentlest of :func:`sharpness_levels` that fits its legs, and the
+    tightest after a collision). The loop and the repairs below are the same, with
+    the turn's tangent length as its reach. ``CurveKind.BSPLINE`` is the paper's:
 
     The chain (SPEC §3 items 5–9): straight legs along the start and goal headings
     are added (their points survive the pruning; they lengthen when the turn after
@@ -84,8 +93,8 @@ def make_drivable(
     >>> m = builtin_map("overtake")
     >>> res = make_drivable(np.array([[5.0, 44.0], [40.0, 48.0], [92.0, 44.0]]),
     ...                     m.start, m.goal, CollisionChecker.for_map(m))
-    >>> res.ok, bool(res.max_curvature <= 1 / 6)
-    (True, True)
+    >>> res.ok, bool(res.max_curvature <= 1 / 6), bool(res.max_sharpness <= 0.2)
+    (True, True, True)
     """
     cfg = config or SmoothingConfig()
     raw = np.asarray(raw, dtype=float).reshape(-1, 2)
