@@ -82,17 +82,29 @@ class ClothoidCurve(NamedTuple):
     max_sharpness: float
 
 
-def sample_pieces(pieces: Sequence[Piece], spacing: float) -> tuple[np.ndarray, np.ndarray]:
-    """Rows at most ``spacing`` apart in arc length (each piece's ends included), and owners."""
+def sample_pieces(
+    pieces: Sequence[Piece],
+    spacing: float,
+    cache: dict[tuple[bytes, float], np.ndarray] | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Rows at most ``spacing`` apart in arc length (each piece's ends included), and owners.
+
+    ``cache`` keeps each piece's rows (by its geometry and the spacing) between calls:
+    a repair round changes a few corners and keeps the other pieces.
+    """
     rows: list[np.ndarray] = []
     owners: list[np.ndarray] = []
     for k, piece in enumerate(pieces):
-        n = max(1, math.ceil(piece.length / spacing - 1e-9))
-        s = np.linspace(0.0, piece.length, n + 1)
-        if k > 0:
-            s = s[1:]  # the previous piece ended here
-        rows.append(piece.rows(s))
-        owners.append(np.full(len(s), piece.owner, dtype=np.int64))
+        key = (piece.key(), spacing) if cache is not None else None
+        full = cache.get(key) if cache is not None else None
+        if full is None:
+            n = max(1, math.ceil(piece.length / spacing - 1e-9))
+            full = piece.rows(np.linspace(0.0, piece.length, n + 1))
+            if cache is not None:
+                cache[key] = full
+        part = full if k == 0 else full[1:]  # the previous piece ended at its start
+        rows.append(part)
+        owners.append(np.full(len(part), piece.owner, dtype=np.int64))
     return np.vstack(rows), np.concatenate(owners)
 
 
@@ -278,6 +290,7 @@ class ClothoidFitter:
         )
         self._turns: dict[tuple[float, float], list[ClothoidTurn]] = {}
         self._free_pieces: set[bytes] = set()
+        self._rows: dict[tuple[bytes, float], np.ndarray] = {}
 
     def build(self, corners: Sequence[Corner]) -> tuple[ClothoidCurve | None, list[int]]:
         """The curve of the corners, or None and the legs too short for their turns."""
@@ -312,7 +325,7 @@ class ClothoidFitter:
     ) -> tuple[list[int], np.ndarray]:
         """Corners whose pieces collide, and the dense poses (at most check_spacing apart)."""
         cfg, ends = self.cfg, self.ends
-        dense, owner = sample_pieces(curve.pieces, cfg.check_spacing)
+        dense, owner = sample_pieces(curve.pieces, cfg.check_spacing, self._rows)
         piece_of = np.concatenate(
             [np.full(max(1, math.ceil(p.length / cfg.check_spacing - 1e-9)) + (k == 0), k)
              for k, p in enumerate(curve.pieces)]
@@ -344,7 +357,7 @@ class ClothoidFitter:
 
     def output_samples(self, curve: ClothoidCurve) -> np.ndarray:
         """Rows at most ``sample_spacing`` apart with exact curvature; piece ends included."""
-        rows, _ = sample_pieces(curve.pieces, self.cfg.sample_spacing)
+        rows, _ = sample_pieces(curve.pieces, self.cfg.sample_spacing, self._rows)
         ends = self.ends
         rows[0, :3] = (ends.start.x, ends.start.y, ends.start.yaw)
         rows[-1, :3] = (ends.goal.x, ends.goal.y, ends.goal.yaw)
