@@ -31,7 +31,7 @@ __all__ = ["CC_RADIUS_STEPS", "dubins_fallback"]
 #: Dubins arcs longer than this are split into equal sub-arcs for the polygon
 #: (a polygon corner turns by less than pi; sub-arcs need a larger radius to fit).
 _MAX_ARC = 0.95 * math.pi
-CC_RADIUS_STEPS: tuple[float, ...] = (1.0, 1.1, 1.25, 1.4, 1.6, 1.8, 2.1, 2.5)
+CC_RADIUS_STEPS: tuple[float, ...] = (1.0, 1.15, 1.35, 1.6, 2.0, 2.5)
 
 
 def _free_end(
@@ -70,11 +70,13 @@ def _free_end(
                 found.append((length, len(found), pieces, poly, cand.word, r_in * step))
     # The shortest rounded word first, whatever its radius.
     for _, _, pieces, poly, word, r in sorted(found, key=lambda f: f[:2]):
+        # Most candidates collide somewhere: poses at most 1 m apart first, then all.
+        coarse, _ = sample_pieces(pieces, 1.0)
+        _pin_ends(coarse, start, goal)
+        if not bool(np.all(checker.poses_free(coarse[:, :3], clearance=clearance))):
+            continue
         dense, _ = sample_pieces(pieces, check_spacing)
         _pin_ends(dense, start, goal)
-        # Most candidates collide somewhere: every tenth pose first, then all of them.
-        if not bool(np.all(checker.poses_free(dense[::10, :3], clearance=clearance))):
-            continue
         if bool(np.all(checker.poses_free(dense[:, :3], clearance=clearance))):
             rows, _ = sample_pieces(pieces, sample_spacing)
             _pin_ends(rows, start, goal)
