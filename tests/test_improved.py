@@ -528,7 +528,7 @@ def test_dubins_fallback_turns_round_in_open_space(goal):
     dubins_length = shortest_dubins(m.start, m.goal, 1.05 / KAPPA).length
     assert max_sharpness(res.path.samples, m.vehicle.wheelbase) <= 0.2 + 1e-6
     assert res.path.samples[0, 3] == 0.0 and res.path.samples[-1, 3] == 0.0
-    assert dubins_length <= res.path.length <= 1.35 * dubins_length
+    assert dubins_length <= res.path.length <= 1.45 * dubins_length
     paper = solve(m, 0, smoothing={"curve": CurveKind.BSPLINE})
     assert_valid_path(paper, m)
     assert paper.path.length == pytest.approx(dubins_length, rel=0.01)
