@@ -115,6 +115,7 @@ def polygon_turns(
     tight: Sequence[bool],
     end_gap: float,
     cache: dict[tuple[float, float], list[ClothoidTurn]] | None = None,
+    radius_steps: Sequence[float] = (1.0,),
 ) -> tuple[list[ClothoidTurn | None], list[int]]:
     """The turn at every corner of polygon ``pts``, or the legs too short for the tightest ones.
 
@@ -126,6 +127,10 @@ def polygon_turns(
         Arc curvature per corner (entries 0 and -1 unused).
     levels : numpy.ndarray
         Sharpnesses to choose from, tightest first (:func:`sharpness_levels`).
+    radius_steps : sequence of float
+        Multiples of each corner's radius a turn that is not tight may use: it takes
+        the combination of radius and sharpness with the longest tangent that fits
+        its share of the legs (the gentlest turn there is room for).
     tight : sequence of bool
         Per corner: the tightest level only.
     end_gap : float
@@ -157,7 +162,17 @@ def polygon_turns(
         key = (theta, float(kappas[c]))
         opts = cache.get(key)
         if opts is None:
-            opts = cache[key] = [clothoid_turn(theta, kappas[c], float(sg)) for sg in levels]
+            # Every radius step x sharpness level, by tangent length: the first, the
+            # tightest (the corner's radius, the sharpest level), reaches least.
+            tight_turn = clothoid_turn(theta, kappas[c], float(levels[0]))
+            rest = [
+                clothoid_turn(theta, kappas[c] / step, float(sg))
+                for step in radius_steps
+                for sg in levels
+            ]
+            opts = cache[key] = [tight_turn] + sorted(
+                (t for t in rest if t.tangent > tight_turn.tangent), key=lambda t: t.tangent
+            )
         options[c] = opts[:1] if tight[c] else opts
         tmin[c] = opts[0].tangent
     gaps = [0.0] * (n - 1)
@@ -299,7 +314,8 @@ class ClothoidFitter:
         r0 = cfg.design_radius
         kappas = [1.0 / (c.radius if c.radius > 0.0 else r0) for c in corners]
         turns, conflicts = polygon_turns(
-            pts, kappas, self.levels, [c.tight for c in corners], cfg.end_gap, self._turns
+            pts, kappas, self.levels, [c.tight for c in corners], cfg.end_gap, self._turns,
+            cfg.gentle_radius_steps,
         )
         if conflicts:
             return None, conflicts

@@ -70,6 +70,10 @@ class SmoothingConfig:
         ``max_steer_rate / STEER_RATE_DESIGN_SPEED`` (0.2 rad/m for 0.4 rad/s).
     min_sharpness : float
         The gentlest clothoid turns used where the legs leave room (rad/m).
+    gentle_radius_steps : tuple of float
+        Multiples of a corner's radius its clothoid turn may widen to where the legs
+        leave room (with the gentlest sharpness that fits): the turn with the longest
+        tangent that fits is taken, so it cuts the corner as a spline would.
     wheelbase : float
         ``L`` in metres, for ``delta = atan(L kappa)`` (the car's).
     prune, sharp_repair, supplement : bool
@@ -120,6 +124,7 @@ class SmoothingConfig:
     degree: int = 2
     max_sharpness: float = 0.2
     min_sharpness: float = 0.02
+    gentle_radius_steps: tuple[float, ...] = (1.0, 1.5, 2.25, 3.5, 5.0)
     wheelbase: float = 2.51
     prune: bool = True
     sharp_repair: bool = True
@@ -179,6 +184,14 @@ class SmoothingConfig:
         self._check_repair_constants()
 
     def _check_repair_constants(self) -> None:
+        steps = self.gentle_radius_steps
+        if not isinstance(steps, tuple) or not steps or any(
+            not isinstance(x, (int, float)) or not math.isfinite(x) or x < 1.0 for x in steps
+        ):
+            raise InputError(
+                "smoothing.gentle_radius_steps: must be a non-empty tuple of numbers >= 1, "
+                f"got {steps!r}"
+            )
         if not isinstance(self.radius_steps, tuple) or not self.radius_steps:
             raise InputError(
                 f"smoothing.radius_steps: must be a non-empty tuple, got {self.radius_steps!r}"
