@@ -1,10 +1,11 @@
-"""The guarantee (SPEC §3 item 9): a tree path in, a drivable curve or an honest failure out.
+"""The guarantee (SPEC §3 items 9-10): a tree path in, a drivable curve or an honest failure out.
 
 :func:`make_drivable` builds the key polygon (:mod:`.corners`), then runs one
-orchestrating loop: fit the control points and the B-spline (:mod:`.curve`),
-check the curvature and the body, and hand every corner or leg that breaks a
-limit to its next repair (:mod:`.repair`), until the curve passes or the
-rounds or the repairs run out.
+orchestrating loop: fit the curve -- clothoid turns (:mod:`.clothoid_curve`, the
+default) or the control points and the B-spline (:mod:`.curve`) -- check the
+curvature (and, for clothoids, the sharpness) and the body, and hand every corner
+or leg that breaks a limit to its next repair (:mod:`.repair`), until the curve
+passes or the rounds or the repairs run out.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rrtdrive.planning.smoothing.checks import CheckerView, EdgeCache, PathChecker
+from rrtdrive.planning.smoothing.clothoid_curve import ClothoidFitter
 from rrtdrive.planning.smoothing.config import SmoothingConfig, SmoothingResult
 from rrtdrive.planning.smoothing.corners import Ends, KeyPolygon, build_key_polygon
 from rrtdrive.planning.smoothing.curve import CurveFitter
@@ -42,7 +44,15 @@ def make_drivable(
     checker: PathChecker,
     config: SmoothingConfig | None = None,
 ) -> SmoothingResult:
-    """Turn a collision-free tree path into a drivable, curvature-bounded B-spline path.
+    """Turn a collision-free tree path into a drivable, curvature-bounded path.
+
+    With ``config.curve = CurveKind.CLOTHOID`` (the default) every corner of the
+    key polygon becomes a symmetric clothoid turn: the curvature is continuous, 0
+    at both ends, at most ``kappa_safety * kappa_max``, and the steering rate per
+    metre ``|d delta / ds|`` at most ``max_sharpness`` (both exact per turn; each
+    turn takes the gentlest of :func:`sharpness_levels` that fits its legs, and the
+    tightest after a collision). The loop and the repairs below are the same, with
+    the turn's tangent length as its reach. ``CurveKind.BSPLINE`` is the paper's:
 
     The chain (SPEC §3 items 5–9): straight legs along the start and goal headings
     are added (their points survive the pruning; they lengthen when the turn after
@@ -83,8 +93,8 @@ def make_drivable(
     >>> m = builtin_map("overtake")
     >>> res = make_drivable(np.array([[5.0, 44.0], [40.0, 48.0], [92.0, 44.0]]),
     ...                     m.start, m.goal, CollisionChecker.for_map(m))
-    >>> res.ok, bool(res.max_curvature <= 1 / 6)
-    (True, True)
+    >>> res.ok, bool(res.max_curvature <= 1 / 6), bool(res.max_sharpness <= 0.2)
+    (True, True, True)
     """
     cfg = config or SmoothingConfig()
     raw = np.asarray(raw, dtype=float).reshape(-1, 2)
@@ -128,7 +138,10 @@ def _attempt(
     if isinstance(poly, str):
         return _Attempt(None, poly, None, np.zeros((0, 2)), 0)
     poly = _lengthen_heading_legs(poly, raw, ends, edges, cfg, max_turn)
-    return _repair_loop(Repairer(poly, ends, edges, cfg), CurveFitter(cfg, view, ends), cfg)
+    repairer = Repairer(poly, ends, edges, cfg)
+    if cfg.clothoid:
+        return _clothoid_loop(repairer, ClothoidFitter(cfg, view, ends), cfg)
+    return _repair_loop(repairer, CurveFitter(cfg, view, ends), cfg)
 
 
 def _initial_polygon(
@@ -214,6 +227,47 @@ def _repair_loop(repairer: Repairer, fitter: CurveFitter, cfg: SmoothingConfig) 
             message = f"could not repair a {what} violation near ({stuck[0]:.1f}, {stuck[1]:.1f})"
             break
     return _Attempt(None, message, ctrl, _key_points(repairer), rounds)
+
+
+def _clothoid_loop(repairer: Repairer, fitter: ClothoidFitter, cfg: SmoothingConfig) -> _Attempt:
+    """:func:`_repair_loop` for clothoid curves: build, check limits and body, repair."""
+    corners = repairer.corners
+    message = f"no drivable curve within {cfg.max_rounds} repair rounds"
+    rounds = 0
+    while rounds < cfg.max_rounds:
+        rounds += 1
+        curve, conflicts = fitter.build(corners)
+        if curve is None:
+            failed = _fix_conflicts(repairer, conflicts)
+            if failed is not None:
+                a, b = corners[failed].point, corners[failed + 1].point
+                message = (
+                    f"the turns at ({a[0]:.1f}, {a[1]:.1f}) and ({b[0]:.1f}, {b[1]:.1f}) "
+                    "are too close for the car"
+                )
+                break
+            continue
+        bad = fitter.check_limits(curve, len(corners))
+        what = "curvature or sharpness"
+        if not bad:
+            bad, _ = fitter.check_collision(curve, len(corners))
+            what = "collision"
+            if not bad:
+                samples = fitter.output_samples(curve)
+                key = _key_points(repairer)
+                stats = _stats(repairer)
+                stats["tight_turns"] = float(sum(c.tight for c in corners[1:-1]))
+                ok = SmoothingResult(
+                    True, samples, key, key, rounds, curve.max_curvature, "", stats,
+                    curve.max_sharpness,
+                )  # fmt: skip
+                return _Attempt(ok, "", key, key, rounds)
+        stuck = _advance_all(repairer, bad)
+        if stuck is not None:
+            message = f"could not repair a {what} violation near ({stuck[0]:.1f}, {stuck[1]:.1f})"
+            break
+    key = _key_points(repairer)
+    return _Attempt(None, message, key, key, rounds)
 
 
 def _fix_conflicts(repairer: Repairer, conflicts: list[int]) -> int | None:
