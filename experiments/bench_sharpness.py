@@ -31,7 +31,7 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
-from rrtdrive.maps import BUILTIN_MAPS, builtin_map, write_text_atomic
+from rrtdrive.maps import BUILTIN_MAPS, TIGHT_MAP_NAMES, builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem
 from rrtdrive.planning.improved import ImprovedRRTConnect
 from rrtdrive.planning.smoothing import CurveKind, SmoothingConfig, max_sharpness
@@ -103,7 +103,8 @@ def main(argv: list[str] | None = None) -> int:
     )
     budget = Budget(max_time_s=args.max_time)
     maps: dict[str, dict] = {}
-    for name in BUILTIN_MAPS:
+    # The tight maps (issue 13) are the coverage benchmark's: experiments/coverage.py.
+    for name in [n for n in BUILTIN_MAPS if n not in TIGHT_MAP_NAMES]:
         m = builtin_map(name)
         problem = PlanningProblem.from_map(m)
         rows: dict[str, list[dict]] = {arm: [] for arm in SETTINGS}
