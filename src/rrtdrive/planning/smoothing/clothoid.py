@@ -25,6 +25,7 @@ from scipy.special import fresnel
 __all__ = [
     "ClothoidTurn",
     "clothoid_turn",
+    "clothoid_turns",
     "turn_tangent",
     "turn_circle",
     "sample_turn",
@@ -115,6 +116,42 @@ def clothoid_turn(theta: float, kappa: float, sigma: float) -> ClothoidTurn:
     # incoming leg (the x axis) meets the line through it at the heading theta/2 + pi/2.
     tangent = xm + ym * math.tan(half)
     return ClothoidTurn(float(theta), sigma, peak, lc, arc, tangent)
+
+
+def clothoid_turns(theta: float, kappa: np.ndarray, sigma: np.ndarray) -> list[ClothoidTurn]:
+    """:func:`clothoid_turn` for many ``(kappa, sigma)`` pairs at once (one Fresnel call).
+
+    Examples
+    --------
+    >>> many = clothoid_turns(1.0, np.array([1 / 6, 0.1]), np.array([0.08, 0.02]))
+    >>> [round(t.tangent, 9) for t in many] == [
+    ...     round(clothoid_turn(1.0, 1 / 6, 0.08).tangent, 9),
+    ...     round(clothoid_turn(1.0, 0.1, 0.02).tangent, 9)]
+    True
+    """
+    th = abs(float(theta))
+    k = np.asarray(kappa, dtype=float)
+    sg = np.asarray(sigma, dtype=float)
+    if th < 1e-12 or th >= math.pi - 1e-9:
+        return [clothoid_turn(theta, float(a), float(b)) for a, b in zip(k, sg, strict=True)]
+    cc = k * k / sg >= th  # clothoid-clothoid
+    peak = np.where(cc, np.sqrt(th * sg), k)
+    lc = np.where(cc, np.sqrt(th / sg), k / sg)
+    arc = np.where(cc, 0.0, (th - k * lc) / k)
+    a = np.sqrt(math.pi / sg)
+    sf, cf = fresnel(lc / a)
+    xc, yc = a * cf, a * sf
+    phi = 0.5 * peak * lc
+    half = 0.5 * th
+    xm = np.where(cc, xc, xc + (math.sin(half) - np.sin(phi)) / peak)
+    ym = np.where(cc, yc, yc - (math.cos(half) - np.cos(phi)) / peak)
+    tangent = xm + ym * math.tan(half)
+    t = float(theta)
+    return [
+        ClothoidTurn(t, *row)
+        for row in zip(sg.tolist(), peak.tolist(), lc.tolist(), arc.tolist(), tangent.tolist(),
+                       strict=True)
+    ]  # fmt: skip
 
 
 def turn_tangent(theta: float, kappa: float, sigma: float) -> float:

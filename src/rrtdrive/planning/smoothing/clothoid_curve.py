@@ -25,6 +25,7 @@ from rrtdrive.planning.smoothing.checks import CheckerView
 from rrtdrive.planning.smoothing.clothoid import (
     ClothoidTurn,
     clothoid_turn,
+    clothoid_turns,
     sample_turn,
     sharpness_levels,
 )
@@ -165,11 +166,8 @@ def polygon_turns(
             # Every radius step x sharpness level, by tangent length: the first, the
             # tightest (the corner's radius, the sharpest level), reaches least.
             tight_turn = clothoid_turn(theta, kappas[c], float(levels[0]))
-            rest = [
-                clothoid_turn(theta, kappas[c] / step, float(sg))
-                for step in radius_steps
-                for sg in levels
-            ]
+            steps = np.repeat(np.asarray(radius_steps, dtype=float), len(levels))
+            rest = clothoid_turns(theta, kappas[c] / steps, np.tile(levels, len(radius_steps)))
             opts = cache[key] = [tight_turn] + sorted(
                 (t for t in rest if t.tangent > tight_turn.tangent), key=lambda t: t.tangent
             )
@@ -273,7 +271,7 @@ def polygon_curve(
     --------
     >>> pieces = polygon_curve(np.array([[0.0, 0.0], [20.0, 0.0], [20.0, 20.0]]), 1 / 6, 0.08)
     >>> [p.turn is not None for p in pieces], round(sum(p.length for p in pieces), 3)
-    [False, False, True, False, False], 37.367
+    ([False, False, True, False, False], 37.367)
     """
     p = np.asarray(pts, dtype=float).reshape(-1, 2).tolist()
     n = len(p)
