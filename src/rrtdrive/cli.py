@@ -60,10 +60,14 @@ def parse_pose(text: str, name: str) -> Pose:
 
 def plan_to_json(result: PlanResult, seed: int, map_name: str) -> dict[str, object]:
     """The JSON contract of ``rrtdrive plan`` (SPEC §5)."""
+    from rrtdrive.planning.hybrid.escalation import stage_of
+
     return {
         "success": result.success,
         "status": result.status.value,
         "planner": result.planner,
+        # Which stage of the planner solved it (e.g. the default's Hybrid A* escalation).
+        "stage": stage_of(result) if result.success else None,
         "map": map_name,
         "seed": seed,
         "path": np.round(result.path.samples, 6).tolist(),

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,9 +27,10 @@ from rrtdrive.planning.hybrid.heuristic import (
 from rrtdrive.planning.hybrid.path import BuiltPath, build_path
 from rrtdrive.planning.hybrid.primitives import PrimitiveSet
 from rrtdrive.planning.hybrid.search import HybridSearch, SearchOutcome, analytic_shots
+from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
 from rrtdrive.planning.result import run_query, solved
 from rrtdrive.planning.smoothing import SmoothingConfig
-from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Tree
+from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Pose, Tree
 
 __all__ = ["NAME", "HybridAStar", "HybridAnswer", "hybrid_query", "free_cell_graph"]
 
@@ -53,6 +54,15 @@ def _dubins_table(radius: float, yaw_bins: int) -> DubinsTable:
 def dubins_table(radius: float, config: HybridConfig) -> DubinsTable:
     """The Dubins length table of a turning radius, built once per process."""
     return _dubins_table(float(radius), config.yaw_bins)
+
+
+def reeds_shepp_to(goal: Pose, radius: float) -> Callable[[float, float, float], float]:
+    """The Reeds-Shepp length from one pose to ``goal`` (the heuristic with reverse)."""
+
+    def length(x: float, y: float, yaw: float) -> float:
+        return reeds_shepp_distance(Pose(x, y, yaw), goal, radius)
+
+    return length
 
 
 def query_clearance(problem: PlanningProblem, wanted: float) -> float:
@@ -138,7 +148,7 @@ def hybrid_query(
     grid = free_cell_graph(problem, config.xy_resolution)
     field = HolonomicField.towards(grid, goal)
     if reverse:
-        heuristic = Heuristic(field, None, goal)
+        heuristic = Heuristic(field, None, goal, reeds_shepp_to(goal, radius))
     else:
         table = dubins_table(radius, config)
         heuristic = Heuristic(field, table.to(goal), goal, table.scalar_to(goal))
@@ -275,11 +285,12 @@ def hybrid_result(
     """The :class:`PlanResult` of an answer: solved, or the failure its outcome names."""
     o = answer.outcome
     if answer.path is None:
-        status = (
-            PlanStatus.PROVEN_UNREACHABLE
-            if o.reason == "exhausted"
-            else PlanStatus.NO_PATH_IN_BUDGET
-        )
+        status = PlanStatus.NO_PATH_IN_BUDGET
+        if o.reason == "exhausted":
+            status = PlanStatus.PROVEN_UNREACHABLE
+        elif o.reason == "time":
+            # The wall-clock cap has its own status where PlanStatus has one (issue 13, item 4).
+            status = getattr(PlanStatus, "TIMEOUT", PlanStatus.NO_PATH_IN_BUDGET)
         return failure(
             planner, status, watch, answer.message, trees=(answer.tree,), iterations=o.expansions,
             stats=stats,

@@ -9,9 +9,7 @@ rectangle where the discs cannot decide). ``f = g + w h`` with the
 :class:`~rrtdrive.planning.hybrid.heuristic.Heuristic`. From expanded nodes,
 every few expansions (each one near the goal), an *analytic expansion* tries
 the obstacle-free shortest paths to the exact goal pose and keeps the first whose
-body is clear: Dubins forward, and with reverse the Reeds-Shepp paths when the
-geometry is available, else Dubins driven backwards (the forward Dubins path
-from the goal to the node, reversed in time).
+body is clear: Dubins forward, Reeds-Shepp with reverse.
 
 No decision reads the clock: the expansion budget bounds the search, the
 wall-clock limit only stops it early (reported as such). Ties in ``f`` are
@@ -28,11 +26,12 @@ from typing import TypeVar
 
 import numpy as np
 
-from rrtdrive.planning.dubins import DubinsPath, dubins_paths
+from rrtdrive.planning.dubins import dubins_paths
 from rrtdrive.planning.hybrid.body import BodyTest
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.heuristic import Heuristic
 from rrtdrive.planning.hybrid.primitives import PrimitiveSet, arc_poses
+from rrtdrive.planning.reeds_shepp import reeds_shepp_paths
 from rrtdrive.types import Pose
 
 __all__ = ["Piece", "SearchOutcome", "HybridSearch", "analytic_shots"]
@@ -79,27 +78,38 @@ Shots = Callable[[Pose], Sequence[list[Piece]]]
 _TURN = {"L": 1, "S": 0, "R": -1}
 
 
-def _walk_hits(cand: DubinsPath, spacing: float, body: BodyTest) -> bool:
-    """Whether a pose ``spacing`` apart along ``cand`` surely collides (stops at the first)."""
-    x, y, yaw = cand.start.x, cand.start.y, cand.start.yaw
-    r = cand.radius
-    for letter, seg in zip(cand.word, cand.lengths, strict=True):
+def _walk_hits(
+    start: Pose, word: str, lengths: Sequence[float], radius: float, spacing: float, body: BodyTest
+) -> bool:
+    """Whether a pose ``spacing`` apart along a word surely collides (stops at the first).
+
+    ``lengths`` are signed (negative in reverse), as in Reeds-Shepp words; Dubins
+    lengths are all positive.
+    """
+    x, y, yaw = start.x, start.y, start.yaw
+    for letter, seg in zip(word, lengths, strict=True):
         turn = _TURN[letter]
-        n = max(1, math.ceil(seg / spacing))
+        n = max(1, math.ceil(abs(seg) / spacing))
         c0, s0 = math.cos(yaw), math.sin(yaw)
         for k in range(1, n + 1):
             u = seg * k / n
             if turn == 0:
                 px, py, pyaw = x + u * c0, y + u * s0, yaw
             else:
-                pyaw = yaw + turn * u / r
-                px = x + turn * r * (math.sin(pyaw) - s0)
-                py = y - turn * r * (math.cos(pyaw) - c0)
+                pyaw = yaw + turn * u / radius
+                px = x + turn * radius * (math.sin(pyaw) - s0)
+                py = y - turn * radius * (math.cos(pyaw) - c0)
             if body.hit_at(px, py, pyaw):
                 return True
-        if n:
-            x, y, yaw = px, py, pyaw
+        x, y, yaw = px, py, pyaw
     return False
+
+
+def _gear_pieces(rows: np.ndarray) -> list[Piece]:
+    """Rows ``[x, y, yaw, kappa, gear]`` cut at the cusps (each piece keeps both end rows)."""
+    gear = rows[:, 4]
+    cuts = np.flatnonzero(gear[1:] != gear[:-1]) + 1
+    return [Piece(int(part[0, 4]), part[:, :4].copy()) for part in np.split(rows, cuts)]
 
 
 def analytic_shots(
@@ -110,35 +120,31 @@ def analytic_shots(
     body: BodyTest | None = None,
     max_candidates: int = 3,
 ) -> Shots:
-    """The analytic expansions to ``goal``: Dubins forward (and backward when ``reverse``).
+    """The analytic expansions to ``goal``: Dubins paths forward, Reeds-Shepp with reverse.
 
-    A backward Dubins path from ``p`` to ``goal`` is the forward Dubins path from
-    ``goal`` to ``p`` driven in reverse: the same poses in the opposite order,
-    the same steering curvature. Only the ``max_candidates`` shortest are tried;
-    with ``body``, those whose poses half a metre apart surely collide are dropped
-    before they are sampled finely.
+    Only the ``max_candidates`` shortest words are tried; with ``body``, those
+    whose poses half a metre apart surely collide are dropped before they are
+    sampled finely. A Reeds-Shepp word is cut into one piece per gear.
     """
     coarse = max(spacing, 0.5)
 
-    def usable(cand: DubinsPath) -> bool:
-        return body is None or not _walk_hits(cand, coarse, body)
-
     def shots(pose: Pose) -> list[list[Piece]]:
-        cands = [(c.length, 1, c) for c in dubins_paths(pose, goal, radius)]
-        if reverse:
-            cands += [(c.length, -1, c) for c in dubins_paths(goal, pose, radius)]
-        cands.sort(key=lambda c: (c[0], -c[1]))
         out: list[list[Piece]] = []
         # The longer words loop through the lot: they rarely clear where the short ones fail.
-        for _, gear, cand in cands[:max_candidates]:
-            if not usable(cand):
-                continue
-            rows = cand.sample(spacing)
-            if gear < 0:
-                rows = rows[::-1].copy()
+        if reverse:
+            for cand in reeds_shepp_paths(pose, goal, radius)[:max_candidates]:
+                if body is not None and _walk_hits(
+                    pose, cand.word, cand.lengths, radius, coarse, body
+                ):
+                    continue
+                rows = cand.sample(spacing)
                 rows[0, :3] = pose.as_tuple()
-                rows[-1, :3] = goal.as_tuple()
-            out.append([Piece(gear, rows)])
+                out.append(_gear_pieces(rows))
+            return out
+        for cand in dubins_paths(pose, goal, radius)[:max_candidates]:
+            if body is not None and _walk_hits(pose, cand.word, cand.lengths, radius, coarse, body):
+                continue
+            out.append([Piece(1, cand.sample(spacing))])
         return out
 
     return shots
