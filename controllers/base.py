@@ -110,9 +110,9 @@ class PathProjector:
 
     def __init__(self, path: Path) -> None:
         samples = np.asarray(path.samples, dtype=float)
-        if samples.ndim != 2 or samples.shape[1] != 4 or len(samples) < 2:
+        if samples.ndim != 2 or samples.shape[1] != 5 or len(samples) < 2:
             raise InputError(
-                f"path: need at least two samples [x, y, yaw, kappa], got {samples.shape}"
+                f"path: need at least two samples [x, y, yaw, kappa, gear], got {samples.shape}"
             )
         require_finite("path", *samples.ravel().tolist())
         xy = samples[:, :2]

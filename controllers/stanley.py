@@ -35,7 +35,9 @@ def front_axle_path(path: Path, wheelbase: float) -> Path:
     s = np.asarray(path.samples, dtype=float)
     c, sn = np.cos(s[:, 2]), np.sin(s[:, 2])
     wheel = s[:, 2] + np.arctan(wheelbase * s[:, 3])
-    out = np.column_stack([s[:, 0] + wheelbase * c, s[:, 1] + wheelbase * sn, wheel, s[:, 3]])
+    out = np.column_stack(
+        [s[:, 0] + wheelbase * c, s[:, 1] + wheelbase * sn, wheel, s[:, 3], s[:, 4]]
+    )
     return Path(out, path.waypoints)
 
 

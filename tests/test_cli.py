@@ -25,10 +25,11 @@ def test_plan_json_success_and_deterministic(capsys):
     first = json.loads(out)
     assert first["success"] is True
     for key in ("planner", "seed", "path", "waypoints", "length_m", "max_curvature", "nodes",
-                "planning_time_s", "setup_time_s", "message"):
+                "planning_time_s", "setup_time_s", "message", "reverse", "cusps"):
         assert key in first
+    assert first["reverse"] is False and first["cusps"] == 0
     path = np.array(first["path"])
-    assert path.shape[1] == 4
+    assert path.shape[1] == 5 and np.all(path[:, 4] == 1)
     assert np.hypot(*np.diff(path[:, :2], axis=0).T).max() <= 0.25 + 1e-6
     m = builtin_map("parking_lot")
     np.testing.assert_allclose(path[0, :2], [m.start.x, m.start.y], atol=1e-6)
@@ -38,6 +39,18 @@ def test_plan_json_success_and_deterministic(capsys):
     for timing in ("planning_time_s", "setup_time_s"):  # wall times
         assert first.pop(timing) >= 0.0 and second.pop(timing) >= 0.0
     assert first == second
+
+
+def test_plan_reverse_flag_is_in_the_json(capsys):
+    # rrt-connect cannot reverse: allowed, it still returns a forward-only path.
+    code, out, _ = run(capsys, "plan", "parking_lot", "--planner", "rrt-connect", "--reverse",
+                       "--json", "-")
+    data = json.loads(out)
+    assert code == 0 and data["reverse"] is True and data["cusps"] == 0
+    assert all(len(row) == 5 and row[4] == 1 for row in data["path"])
+    with pytest.raises(SystemExit):
+        main(["plan", "--help"])
+    assert "--reverse" in capsys.readouterr().out
 
 
 def test_plan_no_path_exits_1_with_message(capsys):

@@ -562,7 +562,7 @@ def test_dubins_fallback_never_returns_a_colliding_path():
     if res.success:
         assert_valid_path(res, m)
     else:
-        assert res.path.samples.shape == (0, 4)
+        assert res.path.samples.shape == (0, 5)
     assert ImprovedRRTConnect(dubins_radius_factor=1.2).config.dubins_radius_factor == 1.2
     with pytest.raises(InputError, match="dubins_radius_factor"):
         ImprovedRRTConnect(dubins_radius_factor=0.9)

@@ -63,7 +63,7 @@ def assert_valid(result: PlanResult, problem: PlanningProblem) -> None:
     vertex_poses = np.column_stack([raw, np.append(heading, heading[-1])])
     assert checker.poses_free(vertex_poses).all()
     samples = result.path.samples
-    assert samples.shape[1] == 4 and len(samples) >= 2
+    assert samples.shape[1] == 5 and len(samples) >= 2 and result.path.is_forward_only
     assert np.max(np.hypot(*np.diff(samples[:, :2], axis=0).T)) <= 0.25 + 1e-9
     assert checker.poses_free(samples[:, :3]).all()
     np.testing.assert_array_equal(result.path.waypoints, raw)

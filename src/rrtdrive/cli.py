@@ -58,8 +58,16 @@ def parse_pose(text: str, name: str) -> Pose:
     return Pose.from_seq(values, name)
 
 
-def plan_to_json(result: PlanResult, seed: int, map_name: str) -> dict[str, object]:
-    """The JSON contract of ``rrtdrive plan`` (SPEC §5)."""
+def plan_to_json(
+    result: PlanResult, seed: int, map_name: str, reverse: bool = False
+) -> dict[str, object]:
+    """The JSON contract of ``rrtdrive plan`` (SPEC §5, docs/planning.md).
+
+    ``reverse`` is whether gear changes were allowed (``--reverse``); ``path`` rows
+    are ``[x, y, yaw, kappa, gear]`` and ``cusps`` counts the gear changes (0 for a
+    forward-only path, also when a planner that cannot reverse was allowed to).
+    ``stage`` names the stage of the planner that solved it (``null`` on failure).
+    """
     from rrtdrive.planning.hybrid.escalation import stage_of
 
     return {
@@ -70,7 +78,9 @@ def plan_to_json(result: PlanResult, seed: int, map_name: str) -> dict[str, obje
         "stage": stage_of(result) if result.success else None,
         "map": map_name,
         "seed": seed,
+        "reverse": bool(reverse),
         "path": np.round(result.path.samples, 6).tolist(),
+        "cusps": len(result.path.cusps),
         "waypoints": np.round(result.path.waypoints, 6).tolist(),
         # A failed plan has no path to measure: null, as in bench rows, not 0.0.
         "length_m": round(result.path.length, 6) if result.success else None,
@@ -131,12 +141,14 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     planner = make_planner(args.planner, **options)
     budget = Budget(max_iterations=args.max_iterations, max_time_s=args.max_time)
     t_map = time.perf_counter()
-    problem = PlanningProblem.from_map(m)  # the map's distance field: per-map set-up too
+    # The map's distance field: per-map set-up too.
+    problem = PlanningProblem.from_map(m, reverse=args.reverse)
     field_s = time.perf_counter() - t_map
     result = planner.solve(problem, np.random.default_rng(args.seed), budget)
     result = dataclasses.replace(result, setup_time_s=result.setup_time_s + field_s)
     if args.json:
-        _write_output(args.json, json.dumps(plan_to_json(result, args.seed, m.name)) + "\n")
+        text = json.dumps(plan_to_json(result, args.seed, m.name, reverse=args.reverse))
+        _write_output(args.json, text + "\n")
     if args.plot:
         from rrtdrive.plotting import plot_plan, save_figure
 
@@ -144,8 +156,10 @@ def _cmd_plan(args: argparse.Namespace) -> int:
             save_figure(plot_plan(m, result), args.plot)
         except OSError as exc:
             raise InputError(f"--plot: cannot write {args.plot}: {exc.strerror}") from None
+    cusps = len(result.path.cusps)
+    gears = f"{cusps} gear change{'s' if cusps != 1 else ''}, " if cusps else ""
     summary = f"{m.name}: {result.planner} seed {args.seed}: " + (
-        f"solved, length {result.path.length:.2f} m, max curvature "
+        f"solved, length {result.path.length:.2f} m, {gears}max curvature "
         f"{result.path.max_curvature:.4f} 1/m, {result.nodes} nodes, "
         f"{1e3 * result.planning_time_s:.1f} ms"
         if result.success
@@ -253,6 +267,11 @@ def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
     )
     plan.add_argument(
         "--max-time", type=positive_float, default=5.0, help="time budget in seconds (default 5)"
+    )
+    plan.add_argument(
+        "--reverse", action="store_true",
+        help="allow gear changes (driving in reverse); a planner that cannot reverse "
+        "returns a forward-only path (JSON: \"reverse\": true, \"cusps\": 0)",
     )
     plan.add_argument("--json", metavar="FILE|-", help="write the result as JSON ('-' for stdout)")
     plan.add_argument(

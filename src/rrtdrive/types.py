@@ -207,21 +207,64 @@ class VehicleParams:
 
 @dataclass(frozen=True, eq=False)
 class Path:
-    """A sampled path: rows ``[x, y, yaw, kappa]`` of the rear-axle centre.
+    """A sampled path: rows ``[x, y, yaw, kappa, gear]`` of the rear-axle centre.
+
+    ``gear`` is +1 driving forward and -1 in reverse; ``yaw`` is where the car's
+    nose points in both gears (so a reversing car travels along ``yaw + pi``);
+    ``kappa = tan(delta) / L`` is the steering's curvature in both gears. Where the
+    gear changes (a cusp) the position row repeats with the new gear, so the cusp
+    adds nothing to the travelled length and every gear segment starts and ends
+    at the cusp pose.
+
+    Parameters
+    ----------
+    samples : array_like
+        Shape ``(N, 5)``, or ``(N, 4)`` rows ``[x, y, yaw, kappa]`` that get gear +1
+        (every forward-only producer); empty for a failed plan.
+    waypoints : array_like
+        Shape ``(M, 2)``: the control points or polyline vertices the path came from.
 
     Attributes
     ----------
     samples : numpy.ndarray
-        Shape ``(N, 4)``; empty ``(0, 4)`` for a failed plan.
+        Shape ``(N, 5)``, read-only; ``(0, 5)`` for a failed plan.
     waypoints : numpy.ndarray
-        Shape ``(M, 2)``: the control points or polyline vertices the path came from.
+        Shape ``(M, 2)``, read-only.
+
+    Examples
+    --------
+    >>> xs = np.linspace(0.0, 5.0, 6)
+    >>> fwd = np.column_stack([xs, 0 * xs, 0 * xs, 0 * xs, 1 + 0 * xs])
+    >>> back = np.column_stack([xs[::-1], 0 * xs, 0 * xs, 0 * xs, -1 + 0 * xs])
+    >>> p = Path(np.vstack([fwd, back]), np.zeros((0, 2)))
+    >>> p.cusps.tolist(), p.segments(), p.length, p.is_forward_only
+    ([6], [(0, 6), (6, 12)], 10.0, False)
+    >>> Path(fwd[:, :4], np.zeros((0, 2))).samples.shape
+    (6, 5)
     """
 
     samples: np.ndarray
     waypoints: np.ndarray
 
     def __post_init__(self) -> None:
-        s = np.asarray(self.samples, dtype=float).reshape(-1, 4)
+        s = np.asarray(self.samples, dtype=float)
+        if s.size == 0:
+            s = np.zeros((0, 5))
+        elif s.ndim != 2 or s.shape[1] not in (4, 5):
+            raise InputError(
+                f"path.samples: expected rows [x, y, yaw, kappa, gear] (or [x, y, yaw, kappa]), "
+                f"got shape {s.shape}"
+            )
+        elif s.shape[1] == 4:
+            s = np.column_stack([s, np.ones(len(s))])
+        else:
+            s = s.copy()
+            bad = np.flatnonzero((s[:, 4] != 1.0) & (s[:, 4] != -1.0))
+            if len(bad):
+                raise InputError(
+                    f"path.gear: must be +1 (forward) or -1 (reverse), got {s[bad[0], 4]!r} "
+                    f"in row {int(bad[0])}"
+                )
         w = np.asarray(self.waypoints, dtype=float).reshape(-1, 2)
         s.setflags(write=False)
         w.setflags(write=False)
@@ -230,8 +273,8 @@ class Path:
 
     @classmethod
     def empty(cls) -> Path:
-        """An empty path, used by failed plans."""
-        return cls(np.zeros((0, 4)), np.zeros((0, 2)))
+        """An empty path ``(0, 5)``, used by failed plans."""
+        return cls(np.zeros((0, 5)), np.zeros((0, 2)))
 
     def __len__(self) -> int:
         return len(self.samples)
@@ -242,8 +285,36 @@ class Path:
         return self.samples[:, :2]
 
     @property
+    def gears(self) -> np.ndarray:
+        """Gear per row, shape ``(N,)`` of ints: +1 forward, -1 reverse."""
+        return self.samples[:, 4].astype(np.int64)
+
+    @property
+    def cusps(self) -> np.ndarray:
+        """Indices of the rows where the gear changes (the first row of each new gear)."""
+        g = self.samples[:, 4]
+        return np.flatnonzero(g[1:] != g[:-1]) + 1
+
+    @property
+    def is_forward_only(self) -> bool:
+        """True when every row is in gear +1 (also for an empty path)."""
+        return bool(np.all(self.samples[:, 4] > 0))
+
+    def segments(self) -> list[tuple[int, int]]:
+        """Row slices ``(start, stop)`` of the gear segments, in order.
+
+        Each segment is one gear, drivable on its own; consecutive segments share
+        the cusp position (the last row of one repeats as the first of the next).
+        An empty path has no segments.
+        """
+        if len(self.samples) == 0:
+            return []
+        bounds = [0, *self.cusps.tolist(), len(self.samples)]
+        return [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+    @property
     def length(self) -> float:
-        """Arc length of the sampled polyline in metres."""
+        """Travelled length of the sampled polyline in metres (a cusp row adds 0)."""
         if len(self.samples) < 2:
             return 0.0
         return float(np.sum(np.hypot(*np.diff(self.samples[:, :2], axis=0).T)))
@@ -254,7 +325,7 @@ class Path:
         return float(np.max(np.abs(self.samples[:, 3]))) if len(self.samples) else 0.0
 
     def arc_length(self) -> np.ndarray:
-        """Cumulative arc length at each sample, starting at 0."""
+        """Cumulative travelled length at each sample, starting at 0."""
         if len(self.samples) == 0:
             return np.zeros(0)
         steps = np.hypot(*np.diff(self.samples[:, :2], axis=0).T)

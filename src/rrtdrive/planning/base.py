@@ -13,7 +13,16 @@ import numpy as np
 from rrtdrive.collision import CheckerConfig, CollisionChecker
 from rrtdrive.geometry import densify
 from rrtdrive.maps import Map
-from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Pose, Tree, VehicleParams
+from rrtdrive.types import (
+    Budget,
+    InputError,
+    Path,
+    PlanResult,
+    PlanStatus,
+    Pose,
+    Tree,
+    VehicleParams,
+)
 
 __all__ = [
     "PlanningProblem",
@@ -33,6 +42,21 @@ class PlanningProblem:
 
     Build it with :meth:`from_map`; checkers are cached per map so that repeated
     queries on one map pay the distance-field construction once.
+
+    Parameters
+    ----------
+    map : Map
+        Obstacles and bounds.
+    checker : CollisionChecker
+        The map's collision checker.
+    start, goal : Pose
+        The query.
+    vehicle : VehicleParams
+        The car.
+    reverse : bool
+        Whether the path may change gear (drive in reverse, ``rrtdrive plan
+        --reverse``). A planner that cannot reverse ignores it and returns a
+        forward-only path; without it every planner's path is forward-only.
     """
 
     map: Map
@@ -40,6 +64,12 @@ class PlanningProblem:
     start: Pose
     goal: Pose
     vehicle: VehicleParams = field(default_factory=VehicleParams)
+    reverse: bool = False
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.reverse, (bool, np.bool_)):
+            raise InputError(f"reverse: expected True or False, got {self.reverse!r}")
+        object.__setattr__(self, "reverse", bool(self.reverse))
 
     @classmethod
     def from_map(
@@ -47,11 +77,12 @@ class PlanningProblem:
         m: Map,
         checker: CollisionChecker | None = None,
         config: CheckerConfig | None = None,
+        reverse: bool = False,
     ) -> PlanningProblem:
-        """The problem of map ``m`` with its own start and goal."""
+        """The problem of map ``m`` with its own start and goal (gear changes if ``reverse``)."""
         if checker is None:
             checker = cached_checker(m, config)
-        return cls(m, checker, m.start, m.goal, m.vehicle)
+        return cls(m, checker, m.start, m.goal, m.vehicle, reverse=reverse)
 
     @property
     def bounds(self) -> tuple[float, float, float, float]:

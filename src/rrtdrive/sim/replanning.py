@@ -264,7 +264,7 @@ def lane_path(x0: float, x1: float, lane_y: float, spacing: float = SPACING) -> 
     --------
     >>> p = lane_path(0.0, 10.0, 44.0)
     >>> len(p), p.samples[-1].tolist()
-    (41, [10.0, 44.0, 0.0, 0.0])
+    (41, [10.0, 44.0, 0.0, 0.0, 1.0])
     """
     n = max(2, int(math.ceil((x1 - x0) / spacing - 1e-9)) + 1)
     xs = np.linspace(x0, x1, n)
