@@ -194,17 +194,7 @@ def answer_stats(answer: HybridAnswer) -> dict[str, float]:
 
 def path_of(built: BuiltPath) -> Path:
     """The :class:`Path` of a built path (rows with their gear column)."""
-    rows = built.rows
-    try:
-        path = Path(rows, built.waypoints)
-    except ValueError:
-        path = None
-    if path is not None and path.samples.shape == rows.shape:
-        return path
-    # A Path of four columns (before gears): forward-only rows only.
-    if np.any(rows[:, 4] < 0):
-        raise InputError("path: this Path type has no gear column for a reversing path")
-    return Path(rows[:, :4], built.waypoints)
+    return Path(built.rows, built.waypoints)
 
 
 @register_planner(NAME)
