@@ -148,7 +148,8 @@ def hybrid_query(
     grid = free_cell_graph(problem, config.xy_resolution)
     field = HolonomicField.towards(grid, goal)
     if reverse:
-        heuristic = Heuristic(field, None, goal, reeds_shepp_to(goal, radius))
+        rs = reeds_shepp_to(goal, radius) if config.reeds_shepp_heuristic else None
+        heuristic = Heuristic(field, None, goal, rs)
     else:
         table = dubins_table(radius, config)
         heuristic = Heuristic(field, table.to(goal), goal, table.scalar_to(goal))
