@@ -187,6 +187,21 @@ def test_exhausted_search_is_proven_at_its_resolution() -> None:
     assert "no path at 0.5 m / 5 deg resolution" in res.message
 
 
+def test_a_goal_reachable_only_in_reverse_is_proven_so_forward() -> None:
+    # Tail 0.4 m from the left wall, nose along +x: no forward drive can arrive.
+    m = builtin_map("parking_lot").with_query(goal=Pose(2.0, 75.0, 0.0))
+    res = HybridAStar(probe_after=50).solve(
+        PlanningProblem.from_map(m), np.random.default_rng(0), BUDGET
+    )
+    assert res.status is PlanStatus.PROVEN_UNREACHABLE and res.iterations == 50
+    assert "can only be reached in reverse" in res.message
+    rev = HybridAStar().solve(
+        PlanningProblem.from_map(m, reverse=True), np.random.default_rng(0), BUDGET
+    )
+    assert rev.success and len(rev.path.cusps) >= 1
+    check_gear_path(m, rev.path)
+
+
 # ----------------------------------------------------------------- determinism
 
 

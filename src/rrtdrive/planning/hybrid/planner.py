@@ -94,6 +94,13 @@ def _failure_message(outcome: SearchOutcome, cfg: HybridConfig, budget: Budget) 
             f"no path at {res} resolution: the search ran out of states ({counts}); "
             "the goal is unreachable for this car at this resolution"
         )
+    if outcome.reason == "no_approach":
+        return (
+            f"no path at {res} resolution: driving forward, the car cannot arrive at the goal "
+            f"pose (every way it could have come from, the goal's poses driven backwards, "
+            f"was explored and none leads out; {counts}); it can only be reached in reverse "
+            "if at all (try --reverse)"
+        )
     if outcome.reason == "time":
         return (
             f"no path found: the wall-clock cap of {budget.max_time_s:g} s was hit before the "
@@ -168,13 +175,54 @@ def hybrid_query(
             clearance, kappa_max, config.check_spacing, config.sample_spacing,
         )  # fmt: skip
 
-    path, outcome = search.run(accept, budget.max_iterations, watch.expired)
+    probe = None
+    if not reverse and config.probe_after > 0:
+
+        def unreachable() -> bool:
+            return _no_forward_approach(problem, body, field, config, radius, kappa_max, watch)
+
+        probe = (config.probe_after, unreachable)
+    path, outcome = search.run(accept, budget.max_iterations, watch.expired, probe)
     tree = Tree(
         np.column_stack([search.x, search.y]) if search.x else np.zeros((0, 2)),
         np.array(search.parent, dtype=np.int64),
     )
     message = "" if path is not None else _failure_message(outcome, config, budget)
     return HybridAnswer(path, outcome, message, tree)
+
+
+def _no_forward_approach(
+    problem: PlanningProblem,
+    body: BodyTest,
+    field: HolonomicField,
+    config: HybridConfig,
+    radius: float,
+    kappa_max: float,
+    watch: Stopwatch,
+) -> bool:
+    """Whether the poses a forward drive could reach the goal from run out (a proof).
+
+    The goal's predecessors are what the car reaches from the goal in reverse
+    (a forward arc driven backwards in time). A search over them from the goal,
+    with no goal of its own, that runs out of states within
+    ``config.probe_expansions`` proves, at the search's resolution, that no
+    forward path arrives: e.g. a goal whose tail is against a wall.
+    """
+    goal = problem.goal
+    prims = PrimitiveSet.build(
+        1.0 / radius, config.curvatures, config.step, config.check_spacing, reverse=True
+    )
+    back = PrimitiveSet(
+        prims.kappas[prims.gears < 0], prims.gears[prims.gears < 0],
+        prims.local[prims.gears < 0], prims.length,
+    )  # fmt: skip
+    towards_start = Heuristic(field, None, goal)  # any order serves: only exhaustion counts
+    flood = HybridSearch(
+        body, goal, problem.start, towards_start, back, lambda pose: [], config, kappa_max,
+        problem.bounds,
+    )  # fmt: skip
+    _, outcome = flood.run(lambda pieces: None, config.probe_expansions, watch.expired)
+    return outcome.reason == "exhausted"
 
 
 def answer_stats(answer: HybridAnswer) -> dict[str, float]:
@@ -277,7 +325,7 @@ def hybrid_result(
     o = answer.outcome
     if answer.path is None:
         status = PlanStatus.NO_PATH_IN_BUDGET
-        if o.reason == "exhausted":
+        if o.reason in ("exhausted", "no_approach"):
             status = PlanStatus.PROVEN_UNREACHABLE
         elif o.reason == "time":
             # The wall-clock cap has its own status where PlanStatus has one (issue 13, item 4).

@@ -57,7 +57,8 @@ class SearchOutcome:
     Attributes
     ----------
     reason : str
-        ``"solved"``, ``"exhausted"`` (open list empty), ``"expansions"`` (budget
+        ``"solved"``, ``"exhausted"`` (open list empty), ``"no_approach"`` (the goal's
+        predecessors ran out: see the planner's probe), ``"expansions"`` (budget
         spent), ``"time"`` (wall-clock cap hit) or ``"rejected"`` (``max_solutions``
         goal connections found, none accepted).
     expansions, nodes, shots, connections : int
@@ -265,6 +266,7 @@ class HybridSearch:
         accept: Callable[[list[Piece]], T | None],
         max_expansions: int,
         expired: Callable[[], bool],
+        probe: tuple[int, Callable[[], bool]] | None = None,
     ) -> tuple[T | None, SearchOutcome]:
         """Search until ``accept`` takes a start-to-goal connection or the budget ends.
 
@@ -277,6 +279,10 @@ class HybridSearch:
             Largest number of node expansions.
         expired : callable
             The wall-clock safety cap.
+        probe : (int, callable), optional
+            ``(after, unreachable)``: once ``after`` expansions have not solved the
+            query, ``unreachable()`` is asked once; True ends the search as
+            ``"no_approach"`` (the caller proved the goal unreachable at this resolution).
 
         Returns
         -------
@@ -310,6 +316,11 @@ class HybridSearch:
             if expired():
                 reason = "time"
                 break
+            if probe is not None and self.expansions == probe[0]:
+                if probe[1]():
+                    reason = "no_approach"
+                    break
+                probe = None
             closed.add(k)
             self.expansions += 1
             since_shot += 1
