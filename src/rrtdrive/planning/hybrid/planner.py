@@ -150,7 +150,12 @@ def hybrid_query(
     if smoothing is not None:
         smoothing = dataclasses.replace(smoothing, clearance=clearance, kappa_max=kappa_max)
     radius = config.radius_factor / kappa_max
-    search_clearance = clearance + 0.01  # the returned rows interpolate between arc poses
+    # The returned rows interpolate linearly between arc poses 0.25 m apart (at most
+    # 1.3 mm off the arc at kappa_max): the re-check allows 5 mm less than the search kept,
+    # so that it does not reject what the search found. The start and goal poses have
+    # at least the search's clearance (capped at theirs), never more is asked of them.
+    search_clearance = clearance
+    recheck_clearance = max(0.0, clearance - 0.005)
     goal = problem.goal
     grid = free_cell_graph(problem, config.xy_resolution)
     field = HolonomicField.towards(grid, goal)
@@ -172,7 +177,7 @@ def hybrid_query(
     def accept(pieces: list) -> BuiltPath | None:
         return build_path(
             pieces, problem.checker, smoothing if config.smooth else None, config.arc_fallback,
-            clearance, kappa_max, config.check_spacing, config.sample_spacing,
+            recheck_clearance, kappa_max, config.check_spacing, config.sample_spacing,
         )  # fmt: skip
 
     probe = None
