@@ -15,7 +15,7 @@ import dataclasses
 
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.hybrid.config import HybridConfig
-from rrtdrive.planning.hybrid.planner import NAME, answer_stats, hybrid_query, path_of
+from rrtdrive.planning.hybrid.planner import NAME, answer_stats, arcs_note, hybrid_query, path_of
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, PlanResult, PlanStatus
 
@@ -83,7 +83,8 @@ def escalate(
     cfg = config or HybridConfig()
     reverse = bool(getattr(problem, "reverse", False))
     answer = hybrid_query(problem, budget, watch, cfg, reverse, smoothing if cfg.smooth else None)
-    stats = {**failed.stats, **{f"hybrid_{k}": v for k, v in answer_stats(answer).items()}}
+    own = answer_stats(answer, problem.vehicle.wheelbase)
+    stats = {**failed.stats, **{f"hybrid_{k}": v for k, v in own.items()}}
     gear = "with reverse" if reverse else "forward only"
     if answer.path is None:
         return dataclasses.replace(
@@ -99,7 +100,7 @@ def escalate(
     message = (
         f"solved by the Hybrid A* escalation ({gear}; {answer.outcome.expansions} expansions, "
         f"{path.length:.1f} m, {built.segments - 1} cusp(s)); the RRT-Connect stages "
-        f"failed: {reason}"
+        f"failed: {reason}" + arcs_note(built)
     )
     return dataclasses.replace(
         failed,

@@ -24,7 +24,7 @@ import numpy as np
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.geometry import densify, wrap_angle
 from rrtdrive.planning.hybrid.search import Piece
-from rrtdrive.planning.smoothing import SmoothingConfig, make_drivable
+from rrtdrive.planning.smoothing import SmoothingConfig, make_drivable, max_sharpness
 from rrtdrive.types import Pose
 
 __all__ = ["GearSegment", "gear_segments", "BuiltPath", "build_path"]
@@ -72,6 +72,19 @@ class BuiltPath:
     segments: int
     smoothed: int
     smoothing_message: str
+
+    def max_sharpness(self, wheelbase: float) -> float:
+        """Largest ``|d delta / ds|`` (rad/m) within the gear segments (``inf``: a jump).
+
+        A cusp is a stop, where the steering may turn at standstill: it does not count.
+        Exact arcs jump in curvature where two primitives meet, so their value is
+        ``inf`` unless the segment steers constantly.
+        """
+        gear = self.rows[:, 4]
+        cuts = np.flatnonzero(gear[1:] != gear[:-1]) + 1
+        return max(
+            (max_sharpness(part, wheelbase) for part in np.split(self.rows, cuts)), default=0.0
+        )
 
 
 def _raw_polyline(rows: np.ndarray, spacing: float) -> np.ndarray:

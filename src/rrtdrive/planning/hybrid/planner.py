@@ -230,7 +230,7 @@ def _no_forward_approach(
     return outcome.reason == "exhausted"
 
 
-def answer_stats(answer: HybridAnswer) -> dict[str, float]:
+def answer_stats(answer: HybridAnswer, wheelbase: float) -> dict[str, float]:
     """The search counters of an answer, for :attr:`PlanResult.stats`."""
     o = answer.outcome
     stats = {
@@ -243,6 +243,7 @@ def answer_stats(answer: HybridAnswer) -> dict[str, float]:
         stats["gear_segments"] = float(answer.path.segments)
         stats["smoothed_segments"] = float(answer.path.smoothed)
         stats["cusps"] = float(answer.path.segments - 1)
+        stats["max_sharpness"] = answer.path.max_sharpness(wheelbase)
     return stats
 
 
@@ -313,7 +314,8 @@ class HybridAStar:
 
         def search(watch: Stopwatch) -> PlanResult:
             answer = hybrid_query(problem, budget, watch, cfg, reverse, self.smoothing)
-            return hybrid_result(NAME, answer, watch, answer_stats(answer))
+            stats = answer_stats(answer, problem.vehicle.wheelbase)
+            return hybrid_result(NAME, answer, watch, stats)
 
         def prepare() -> None:
             free_cell_graph(problem, cfg.xy_resolution)
@@ -344,11 +346,21 @@ def hybrid_result(
     cusps = built.segments - 1
     message = (
         f"solved by Hybrid A*: {o.expansions} expansions, {path.length:.1f} m, "
-        f"{cusps} cusp(s), {built.smoothed}/{built.segments} segment(s) smoothed"
+        f"{cusps} cusp(s), {built.smoothed}/{built.segments} segment(s) smoothed" + arcs_note(built)
     )
     raw = built.rows[:, :2]
     return solved(
         planner, watch, path, raw, (answer.tree,), o.expansions, message, stats, nodes=o.nodes
+    )
+
+
+def arcs_note(built: BuiltPath) -> str:
+    """What a path with unsmoothed segments does not guarantee (empty when all are smoothed)."""
+    if built.smoothed == built.segments:
+        return ""
+    return (
+        "; the unsmoothed segments are exact arcs and lines: |kappa| <= kappa_max and the "
+        "body are checked, but the curvature jumps where they meet (no sharpness bound)"
     )
 
 
