@@ -2,9 +2,11 @@
 
 Modules: :mod:`.config` (:class:`HybridConfig`), :mod:`.primitives` (the arcs),
 :mod:`.heuristic` (holonomic-with-obstacles and Dubins estimates),
-:mod:`.search` (the A* loop with analytic expansions), :mod:`.path` (gear
-segments smoothed and checked) and :mod:`.planner` (the registered
-``hybrid-a-star`` planner and the query the improved planner escalates to).
+:mod:`.body` (the body test with a sure-collision screen), :mod:`.search`
+(the A* loop with analytic expansions), :mod:`.path` (gear segments smoothed
+and checked), :mod:`.query` (one query: from the start, then from the goal),
+:mod:`.planner` (the registered ``hybrid-a-star`` planner) and
+:mod:`.escalation` (what the improved planner runs when its stages fail).
 """
 
 from __future__ import annotations
@@ -19,14 +21,17 @@ from rrtdrive.planning.hybrid.heuristic import (
 from rrtdrive.planning.hybrid.path import BuiltPath, GearSegment, build_path, gear_segments
 from rrtdrive.planning.hybrid.planner import (
     NAME,
-    HybridAnswer,
     HybridAStar,
     answer_stats,
-    free_cell_graph,
-    hybrid_query,
     hybrid_result,
 )
 from rrtdrive.planning.hybrid.primitives import PrimitiveSet, arc_poses
+from rrtdrive.planning.hybrid.query import (
+    HybridAnswer,
+    free_cell_graph,
+    hybrid_query,
+    reversed_in_time,
+)
 from rrtdrive.planning.hybrid.search import HybridSearch, Piece, SearchOutcome, analytic_shots
 
 __all__ = [
@@ -52,4 +57,5 @@ __all__ = [
     "free_cell_graph",
     "hybrid_query",
     "hybrid_result",
+    "reversed_in_time",
 ]

@@ -47,12 +47,12 @@ class HybridConfig:
         Dubins length is forward). Off by default: on the first 10 random goals of
         ``experiments/random_goals.py`` it cost 2.3x the time (22.1 vs 9.6 s in all,
         median 196 vs 121 expansions), each call about 0.2 ms.
-    probe_after, probe_expansions : int
-        Forward only: after ``probe_after`` expansions without a path (0: never),
-        a search from the goal over its predecessors (the car driven backwards)
-        with at most ``probe_expansions`` expansions; when it runs out of states,
-        no forward path can arrive and the query ends as proven unreachable at
-        this resolution instead of spending the whole budget.
+    switch_after : int
+        Expansions of the search from the start before a query still open is
+        searched from the goal back to the start with the rest of the budget (0:
+        never). From the goal, a tight bay or a goal against a wall is a way out;
+        forward only, a search from the goal that runs out of states proves that
+        no forward drive can arrive.
     shot_interval : int
         Largest number of expansions between analytic shots at the goal.
     shot_distance : float
@@ -99,8 +99,7 @@ class HybridConfig:
     steer_cost: float = 0.1
     heuristic_weight: float = 1.5
     reeds_shepp_heuristic: bool = False
-    probe_after: int = 300
-    probe_expansions: int = 1500
+    switch_after: int = 400
     shot_interval: int = 5
     shot_distance: float = 4.0
     body_clearance: float = 0.15
@@ -146,8 +145,7 @@ class HybridConfig:
                 raise InputError(f"hybrid.{name}: must be >= 0, got {value!r}")
         require_int("hybrid.shot_interval", self.shot_interval)
         require_int("hybrid.max_solutions", self.max_solutions)
-        require_int("hybrid.probe_after", self.probe_after, minimum=0)
-        require_int("hybrid.probe_expansions", self.probe_expansions)
+        require_int("hybrid.switch_after", self.switch_after, minimum=0)
         for name in ("smooth", "arc_fallback", "reeds_shepp_heuristic"):
             if not isinstance(getattr(self, name), bool):
                 raise InputError(

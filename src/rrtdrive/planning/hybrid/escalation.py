@@ -15,7 +15,8 @@ import dataclasses
 
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.hybrid.config import HybridConfig
-from rrtdrive.planning.hybrid.planner import NAME, answer_stats, arcs_note, hybrid_query, path_of
+from rrtdrive.planning.hybrid.planner import NAME, answer_stats, arcs_note, path_of
+from rrtdrive.planning.hybrid.query import hybrid_query
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, PlanResult, PlanStatus
 
@@ -107,7 +108,7 @@ def escalate(
         status=PlanStatus.SOLVED,
         path=path,
         raw_path=built.rows[:, :2],
-        trees=(*failed.trees, answer.tree),
+        trees=(*failed.trees, *answer.trees),
         nodes=failed.nodes + answer.outcome.nodes,
         planning_time_s=watch.elapsed(),
         message=message,

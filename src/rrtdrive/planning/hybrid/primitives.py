@@ -113,6 +113,11 @@ class PrimitiveSet:
     def __len__(self) -> int:
         return len(self.kappas)
 
+    def gear(self, gear: int) -> PrimitiveSet:
+        """The primitives of one gear only."""
+        keep = self.gears == gear
+        return PrimitiveSet(self.kappas[keep], self.gears[keep], self.local[keep], self.length)
+
     def poses_from(self, x: float, y: float, yaw: float) -> np.ndarray:
         """World poses ``(P, n, 3)`` of every primitive driven from ``(x, y, yaw)``."""
         c, s = math.cos(yaw), math.sin(yaw)

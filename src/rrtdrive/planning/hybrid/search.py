@@ -34,7 +34,7 @@ from rrtdrive.planning.hybrid.primitives import PrimitiveSet, arc_poses
 from rrtdrive.planning.reeds_shepp import reeds_shepp_paths
 from rrtdrive.types import Pose
 
-__all__ = ["Piece", "SearchOutcome", "HybridSearch", "analytic_shots"]
+__all__ = ["Piece", "SearchOutcome", "Shots", "HybridSearch", "analytic_shots", "walk_hits"]
 
 T = TypeVar("T")
 
@@ -57,8 +57,8 @@ class SearchOutcome:
     Attributes
     ----------
     reason : str
-        ``"solved"``, ``"exhausted"`` (open list empty), ``"no_approach"`` (the goal's
-        predecessors ran out: see the planner's probe), ``"expansions"`` (budget
+        ``"solved"``, ``"exhausted"`` (open list empty), ``"no_approach"`` (the search from
+        the goal ran out: see :mod:`.query`), ``"expansions"`` (budget
         spent), ``"time"`` (wall-clock cap hit) or ``"rejected"`` (``max_solutions``
         goal connections found, none accepted).
     expansions, nodes, shots, connections : int
@@ -79,7 +79,7 @@ Shots = Callable[[Pose], Sequence[list[Piece]]]
 _TURN = {"L": 1, "S": 0, "R": -1}
 
 
-def _walk_hits(
+def walk_hits(
     start: Pose, word: str, lengths: Sequence[float], radius: float, spacing: float, body: BodyTest
 ) -> bool:
     """Whether a pose ``spacing`` apart along a word surely collides (stops at the first).
@@ -134,7 +134,7 @@ def analytic_shots(
         # The longer words loop through the lot: they rarely clear where the short ones fail.
         if reverse:
             for cand in reeds_shepp_paths(pose, goal, radius)[:max_candidates]:
-                if body is not None and _walk_hits(
+                if body is not None and walk_hits(
                     pose, cand.word, cand.lengths, radius, coarse, body
                 ):
                     continue
@@ -143,7 +143,7 @@ def analytic_shots(
                 out.append(_gear_pieces(rows))
             return out
         for cand in dubins_paths(pose, goal, radius)[:max_candidates]:
-            if body is not None and _walk_hits(pose, cand.word, cand.lengths, radius, coarse, body):
+            if body is not None and walk_hits(pose, cand.word, cand.lengths, radius, coarse, body):
                 continue
             out.append([Piece(1, cand.sample(spacing))])
         return out
@@ -266,7 +266,6 @@ class HybridSearch:
         accept: Callable[[list[Piece]], T | None],
         max_expansions: int,
         expired: Callable[[], bool],
-        probe: tuple[int, Callable[[], bool]] | None = None,
     ) -> tuple[T | None, SearchOutcome]:
         """Search until ``accept`` takes a start-to-goal connection or the budget ends.
 
@@ -276,13 +275,10 @@ class HybridSearch:
             ``accept(pieces)``: the final result made from a connection (every
             piece in driving order), or ``None`` to reject it and search on.
         max_expansions : int
-            Largest number of node expansions.
+            Largest number of node expansions in all (a later call resumes the
+            search and may raise it).
         expired : callable
             The wall-clock safety cap.
-        probe : (int, callable), optional
-            ``(after, unreachable)``: once ``after`` expansions have not solved the
-            query, ``unreachable()`` is asked once; True ends the search as
-            ``"no_approach"`` (the caller proved the goal unreachable at this resolution).
 
         Returns
         -------
@@ -290,14 +286,17 @@ class HybridSearch:
         """
         cfg, prims, body = self.cfg, self.prims, self.body
         w = cfg.heuristic_weight
-        start = self.start
-        h0 = self.heuristic.at(start.x, start.y, start.yaw)
-        root = self._add(start.x, start.y, start.yaw, 0.0, 0, math.nan, -1)
-        heap: list[tuple[float, int]] = [(w * h0, root)]
-        closed: set[int] = set()
-        best: dict[int, float] = {}
-        hval = [h0]
-        since_shot = cfg.shot_interval
+        if not self.x:  # the first call; a later one resumes where the last stopped
+            start = self.start
+            h0 = self.heuristic.at(start.x, start.y, start.yaw)
+            root = self._add(start.x, start.y, start.yaw, 0.0, 0, math.nan, -1)
+            self._heap: list[tuple[float, int]] = [(w * h0, root)]
+            self._closed: set[int] = set()
+            self._best: dict[int, float] = {}
+            self._hval = [h0]
+            self._since_shot = cfg.shot_interval
+        heap, closed, best, hval = self._heap, self._closed, self._best, self._hval
+        since_shot = self._since_shot
         base_cost = self._base_cost.tolist()
         gears = prims.gears.tolist()
         kappas = prims.kappas.tolist()
@@ -305,22 +304,18 @@ class HybridSearch:
         kmax = self.kappa_max
         reason = "exhausted"
         while heap:
-            _, i = heapq.heappop(heap)
+            _f, i = heapq.heappop(heap)
             xi, yi, yawi, gi, geari = self.x[i], self.y[i], self.yaw[i], self.g[i], self.gear[i]
             k = self.key(xi, yi, yawi, geari if geari else 1)
             if k in closed:
                 continue
             if self.expansions >= max_expansions:
+                heapq.heappush(heap, (_f, i))  # not expanded: a later call takes it
                 reason = "expansions"
                 break
             if expired():
                 reason = "time"
                 break
-            if probe is not None and self.expansions == probe[0]:
-                if probe[1]():
-                    reason = "no_approach"
-                    break
-                probe = None
             closed.add(k)
             self.expansions += 1
             since_shot += 1
@@ -367,6 +362,7 @@ class HybridSearch:
                 )
                 hval.append(hj)
                 heapq.heappush(heap, (cost + w * hj, n))
+        self._since_shot = since_shot
         return None, self._outcome(reason)
 
     def _outcome(self, reason: str) -> SearchOutcome:
