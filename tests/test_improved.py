@@ -130,9 +130,7 @@ def test_components_can_be_disabled_by_name_or_keyword():
     assert planner.config.smoothing.sharp_repair is False
     assert ImprovedConfig().without(*COMPONENTS) == ImprovedConfig(
         **{name: False for name in COMPONENTS if name not in SMOOTHING_COMPONENTS},
-        smoothing=SmoothingConfig(
-            max_rounds=24, **{name: False for name in SMOOTHING_COMPONENTS}
-        ),
+        smoothing=SmoothingConfig(max_rounds=24, **{name: False for name in SMOOTHING_COMPONENTS}),
     )
 
 
@@ -525,7 +523,7 @@ def test_dubins_fallback_turns_round_in_open_space(goal):
     assert res.path.length == pytest.approx(
         shortest_dubins(m.start, m.goal, 1.05 / KAPPA).length, rel=0.01
     )
-    without = solve(m, 0, disable=("dubins_fallback",))
+    without = solve(m, 0, disable=("dubins_fallback", "escalation"))
     assert without.status is PlanStatus.POSTPROCESS_FAILED
 
 
@@ -533,7 +531,10 @@ def test_dubins_tail_rescues_a_goal_facing_into_a_parking_row():
     # A goal across the aisle's direction with no room for the tree path's last
     # corner: the fallback keeps the tree path to a node and ends in a Dubins tail.
     m = dataclasses.replace(builtin_map("parking_lot"), goal=Pose(32.973, 78.843, -1.2366))
-    assert solve(m, 0, disable=("dubins_fallback",)).status is PlanStatus.POSTPROCESS_FAILED
+    assert (
+        solve(m, 0, disable=("dubins_fallback", "escalation")).status
+        is PlanStatus.POSTPROCESS_FAILED
+    )
     res = solve(m, 0)
     assert_valid_path(res, m)
     assert "Dubins fallback (tree path to" in res.message
@@ -545,7 +546,10 @@ def test_dubins_lead_rescues_a_start_facing_across_the_aisle():
     # The mirror image: a Dubins path from the start to a tree node, then the tree path.
     start = Pose(20.34552406761496, 26.23133404418495, 1.573087632505973)
     m = dataclasses.replace(builtin_map("parking_lot"), start=start)
-    assert solve(m, 0, disable=("dubins_fallback",)).status is PlanStatus.POSTPROCESS_FAILED
+    assert (
+        solve(m, 0, disable=("dubins_fallback", "escalation")).status
+        is PlanStatus.POSTPROCESS_FAILED
+    )
     res = solve(m, 0)
     assert_valid_path(res, m)
     assert "+ tree path from" in res.message
