@@ -130,9 +130,7 @@ def test_components_can_be_disabled_by_name_or_keyword():
     assert planner.config.smoothing.sharp_repair is False
     assert ImprovedConfig().without(*COMPONENTS) == ImprovedConfig(
         **{name: False for name in COMPONENTS if name not in SMOOTHING_COMPONENTS},
-        smoothing=SmoothingConfig(
-            max_rounds=24, **{name: False for name in SMOOTHING_COMPONENTS}
-        ),
+        smoothing=SmoothingConfig(max_rounds=24, **{name: False for name in SMOOTHING_COMPONENTS}),
     )
 
 
@@ -532,7 +530,7 @@ def test_dubins_fallback_turns_round_in_open_space(goal):
     paper = solve(m, 0, smoothing={"curve": CurveKind.BSPLINE})
     assert_valid_path(paper, m)
     assert paper.path.length == pytest.approx(dubins_length, rel=0.01)
-    without = solve(m, 0, disable=("dubins_fallback",))
+    without = solve(m, 0, disable=("dubins_fallback", "escalation"))
     assert without.status is PlanStatus.POSTPROCESS_FAILED
 
 
@@ -560,7 +558,7 @@ def test_dubins_tail_rescues_a_goal_facing_into_a_parking_row():
     # A goal across the aisle's direction with no room for the tree path's last
     # corner: the fallback keeps the tree path to a node and ends in a Dubins tail.
     m = dataclasses.replace(builtin_map("parking_lot"), goal=Pose(32.973, 78.843, -1.2366))
-    without = solve(m, 0, NO_CLOCK, disable=("dubins_fallback",), **PAPER)
+    without = solve(m, 0, NO_CLOCK, disable=("dubins_fallback", "escalation"), **PAPER)
     assert without.status is PlanStatus.POSTPROCESS_FAILED
     res = solve(m, 0, NO_CLOCK, **PAPER)
     assert_valid_path(res, m)
@@ -574,7 +572,7 @@ def test_dubins_lead_rescues_a_start_facing_across_the_aisle():
     # The mirror image: a Dubins path from the start to a tree node, then the tree path.
     start = Pose(20.34552406761496, 26.23133404418495, 1.573087632505973)
     m = dataclasses.replace(builtin_map("parking_lot"), start=start)
-    without = solve(m, 0, NO_CLOCK, disable=("dubins_fallback",), **PAPER)
+    without = solve(m, 0, NO_CLOCK, disable=("dubins_fallback", "escalation"), **PAPER)
     assert without.status is PlanStatus.POSTPROCESS_FAILED
     res = solve(m, 0, NO_CLOCK, **PAPER)
     assert_valid_path(res, m)

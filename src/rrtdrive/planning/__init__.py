@@ -18,7 +18,7 @@ def _load_builtin_planners() -> None:
     # Importing the modules registers their planners.
     import importlib
 
-    for module in ("rrt", "rrt_connect", "rrt_star", "improved"):
+    for module in ("rrt", "rrt_connect", "rrt_star", "improved", "hybrid"):
         try:
             importlib.import_module(f"rrtdrive.planning.{module}")
         except ModuleNotFoundError as exc:  # a planner module not written yet

@@ -28,6 +28,7 @@ COMPONENTS: tuple[str, ...] = (
     "supplement",
     "passage_sampling",
     "dubins_fallback",
+    "escalation",
 )
 
 #: The components that are switches of the post-processor: fields of ``ImprovedConfig.smoothing``.
@@ -76,6 +77,14 @@ class ImprovedConfig:
         that need a U-turn or a sharp approach in open space, which the tree paths
         with their straight legs cannot. On by default; it never runs when the
         paper's pipeline succeeds.
+    escalation : bool
+        Beyond the paper (issue 13): when the tree paths and the Dubins fallback
+        fail (not for an invalid start or goal), run the Hybrid A* search
+        (:func:`rrtdrive.planning.hybrid.escalate`; forward only, or reversing when
+        ``problem.reverse``) with the query's iteration budget as its expansion
+        budget and the time left as its cap, before reporting failure. On by
+        default; it never runs when an earlier stage succeeds. Off for the paper's
+        pipeline alone (``without("dubins_fallback", "escalation")``).
     dubins_radius_factor : float
         Turning radius of the fallback's arcs as a multiple of ``1 / kappa_max``
         (>= 1; default 1.05, a little room for tracking).
@@ -126,6 +135,7 @@ class ImprovedConfig:
     obstacle_expansion: bool = True
     passage_sampling: bool = True
     dubins_fallback: bool = True
+    escalation: bool = True
     dubins_radius_factor: float = 1.05
     passage_bias: float = 0.1
     expansion_a: float = 1.0

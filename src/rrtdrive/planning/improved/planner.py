@@ -18,6 +18,7 @@ import numpy as np
 
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register_planner
+from rrtdrive.planning.hybrid.escalation import escalate
 from rrtdrive.planning.improved.config import ImprovedConfig
 from rrtdrive.planning.improved.expansion import (
     default_expansion_lmin,
@@ -224,6 +225,8 @@ class _Query:
             out = self.fallback()
             if out is not None:
                 return out
+        if self.cfg.escalation:
+            return escalate(self.failure(), self.problem, budget, watch, self.smoothing)
         return self.failure()
 
     def smooth(

@@ -114,9 +114,9 @@ class SpaceTimePlan:
 #: Components that rely on the static obstacles alone and are off in space-time:
 #: the expanded checker is built from the static rectangles (it would lose the
 #: traffic) and passage sampling looks for narrow static passages (a road has none).
-#: The Dubins fallback is off too: it checks poses without the tree's arrival
-#: times, and on a road a lane change never needs to turn round.
-STATIC_ONLY = ("obstacle_expansion", "passage_sampling", "dubins_fallback")
+#: The Dubins fallback and the Hybrid A* escalation are off too: they check poses
+#: without the tree's arrival times, and on a road a lane change never needs to turn round.
+STATIC_ONLY = ("obstacle_expansion", "passage_sampling", "dubins_fallback", "escalation")
 
 
 class SpaceTimeRRTConnect(ImprovedRRTConnect):

@@ -1,0 +1,164 @@
+"""Tunables of the Hybrid A* planner: :class:`HybridConfig`."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from rrtdrive.types import InputError, require_finite, require_int, require_positive
+
+__all__ = ["HybridConfig"]
+
+
+@dataclass(frozen=True)
+class HybridConfig:
+    """Parameters of :class:`~rrtdrive.planning.hybrid.HybridAStar`, validated on construction.
+
+    Parameters
+    ----------
+    xy_resolution : float
+        Side of the position cells in metres: a search state is closed per cell,
+        heading bin and gear (Dolgov et al. 2008: states continuous, closing discrete).
+    yaw_resolution : float
+        Width of a heading bin in radians (5 degrees).
+    step : float
+        Arc length of a motion primitive in metres; longer than a cell diagonal,
+        so every successor leaves its parent's cell.
+    curvatures : int
+        Number of steering curvatures, odd, spread evenly over
+        ``[-kappa_search, kappa_search]`` (the middle one straight).
+    radius_factor : float
+        The search's primitives and analytic shots turn with radius
+        ``radius_factor / kappa_max`` (>= 1: a little room below the car's limit).
+    reverse_cost : float
+        Cost per metre driven in reverse, as a multiple of a forward metre (>= 1).
+    gear_change_cost : float
+        Cost of a change of gear (a cusp), in metres.
+    steer_change_cost : float
+        Cost of a change of steering curvature between consecutive primitives, in
+        metres per ``kappa_max`` of change (keeps the path from zig-zagging).
+    steer_cost : float
+        Cost per metre driven with curvature ``kappa_max``, scaled by ``|kappa| / kappa_max``.
+    heuristic_weight : float
+        Weight ``w >= 1`` of the heuristic in ``f = g + w h`` (1: admissible
+        heuristic, near-optimal paths; more: fewer expansions).
+    reeds_shepp_heuristic : bool
+        With reverse, also take the Reeds-Shepp length into the heuristic (as the
+        Dubins length is forward). Off by default: on the first 10 random goals of
+        ``experiments/random_goals.py`` it cost 2.3x the time (22.1 vs 9.6 s in all,
+        median 196 vs 121 expansions), each call about 0.2 ms.
+    switch_after : int
+        Expansions of the search from the start before a query still open is
+        searched from the goal back to the start with the rest of the budget (0:
+        never). From the goal, a tight bay or a goal against a wall is a way out;
+        forward only, a search from the goal that runs out of states proves that
+        no forward drive can arrive.
+    shot_interval : int
+        Largest number of expansions between analytic shots at the goal.
+    shot_distance : float
+        Shots are tried every ``clip(h / shot_distance, 1, shot_interval)``
+        expansions, ``h`` the node's heuristic in metres: every expansion near the goal.
+    body_clearance : float
+        Distance the body keeps from every obstacle along the path (exact test),
+        capped per query at the clearance of the start and goal poses themselves.
+    check_spacing : float
+        Largest gap between the poses given to the body test, metres.
+    sample_spacing : float
+        Largest gap between the returned path's samples, metres.
+    smooth : bool
+        Try to smooth each gear segment into a B-spline with the improved planner's
+        post-processor (:func:`~rrtdrive.planning.smoothing.make_drivable`). Off by
+        default: on ``parking_lot`` its heading legs and swept-capsule edge test
+        rejected the search's segments near obstacles (4 of 4 tried), at 50-140 ms each.
+    arc_fallback : bool
+        When a segment cannot be smoothed, keep its exact arcs (curvature
+        piecewise constant, ``|kappa| <= kappa_max``, body checked exactly), as the
+        Dubins fallback does; ``False``: such a path is rejected and the search goes on.
+    max_solutions : int
+        Goal connections tried (each one found by a shot and rejected by the
+        smoothing) before the search reports failure.
+
+    Examples
+    --------
+    >>> HybridConfig().step
+    1.0
+    >>> HybridConfig(curvatures=4)
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: hybrid.curvatures: must be an odd integer >= 1, got 4
+    """
+
+    xy_resolution: float = 0.5
+    yaw_resolution: float = math.radians(5.0)
+    step: float = 1.0
+    curvatures: int = 5
+    radius_factor: float = 1.02
+    reverse_cost: float = 2.0
+    gear_change_cost: float = 5.0
+    steer_change_cost: float = 1.0
+    steer_cost: float = 0.1
+    heuristic_weight: float = 1.5
+    reeds_shepp_heuristic: bool = False
+    switch_after: int = 400
+    shot_interval: int = 5
+    shot_distance: float = 4.0
+    body_clearance: float = 0.15
+    check_spacing: float = 0.1
+    sample_spacing: float = 0.25
+    smooth: bool = False
+    arc_fallback: bool = True
+    max_solutions: int = 8
+
+    def __post_init__(self) -> None:
+        for name in (
+            "xy_resolution", "yaw_resolution", "step", "shot_distance",
+            "check_spacing", "sample_spacing",
+        ):  # fmt: skip
+            require_positive(f"hybrid.{name}", getattr(self, name))
+        if self.step <= self.xy_resolution * math.sqrt(2.0):
+            raise InputError(
+                f"hybrid.step: must exceed the cell diagonal "
+                f"{self.xy_resolution * math.sqrt(2.0):.3f} m, got {self.step!r}"
+            )
+        if self.yaw_resolution > math.pi / 4:
+            raise InputError(
+                f"hybrid.yaw_resolution: must be at most pi/4, got {self.yaw_resolution!r}"
+            )
+        if (
+            isinstance(self.curvatures, bool)
+            or not isinstance(self.curvatures, int)
+            or self.curvatures < 1
+            or self.curvatures % 2 == 0
+        ):
+            raise InputError(
+                f"hybrid.curvatures: must be an odd integer >= 1, got {self.curvatures!r}"
+            )
+        for name, low in (("radius_factor", 1.0), ("reverse_cost", 1.0), ("heuristic_weight", 1.0)):
+            value = getattr(self, name)
+            require_finite(f"hybrid.{name}", value)
+            if value < low:
+                raise InputError(f"hybrid.{name}: must be >= {low:g}, got {value!r}")
+        for name in ("gear_change_cost", "steer_change_cost", "steer_cost", "body_clearance"):
+            value = getattr(self, name)
+            require_finite(f"hybrid.{name}", value)
+            if value < 0:
+                raise InputError(f"hybrid.{name}: must be >= 0, got {value!r}")
+        require_int("hybrid.shot_interval", self.shot_interval)
+        require_int("hybrid.max_solutions", self.max_solutions)
+        require_int("hybrid.switch_after", self.switch_after, minimum=0)
+        for name in ("smooth", "arc_fallback", "reeds_shepp_heuristic"):
+            if not isinstance(getattr(self, name), bool):
+                raise InputError(
+                    f"hybrid.{name}: expected true or false, got {getattr(self, name)!r}"
+                )
+
+    @property
+    def yaw_bins(self) -> int:
+        """Number of heading bins over a full turn.
+
+        Examples
+        --------
+        >>> HybridConfig().yaw_bins
+        72
+        """
+        return max(1, round(2.0 * math.pi / self.yaw_resolution))

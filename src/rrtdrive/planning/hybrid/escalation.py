@@ -1,0 +1,116 @@
+"""The default planner's escalation (issue 13, item 3): Hybrid A* after a failed query.
+
+``improved-rrt-connect`` runs the paper's pipeline (and its Dubins fallback)
+first. When that fails for any reason but an invalid start or goal or a proven
+unreachable goal, :func:`escalate` runs the Hybrid A* search (forward only, or
+with reverse when ``problem.reverse``) on the same stopwatch: the query's
+iteration budget bounds its expansions and the wall clock left is its safety
+cap. The result keeps the improved planner's name; ``stats["stage"]`` and the
+message say which stage solved it (:func:`stage_of`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from rrtdrive.planning.base import PlanningProblem, Stopwatch
+from rrtdrive.planning.hybrid.config import HybridConfig
+from rrtdrive.planning.hybrid.planner import NAME, answer_stats, arcs_note, path_of
+from rrtdrive.planning.hybrid.query import hybrid_query
+from rrtdrive.planning.smoothing import SmoothingConfig
+from rrtdrive.types import Budget, PlanResult, PlanStatus
+
+__all__ = ["STAGES", "ESCALATES_FROM", "escalate", "stage_of"]
+
+#: The stages of ``improved-rrt-connect``, in the order they run.
+STAGES: tuple[str, ...] = ("improved-rrt-connect", "dubins-fallback", NAME)
+
+#: Failures the escalation answers; the others are about the query itself.
+ESCALATES_FROM = frozenset({PlanStatus.NO_PATH_IN_BUDGET, PlanStatus.POSTPROCESS_FAILED})
+
+
+def stage_of(result: PlanResult) -> str:
+    """Which stage produced ``result``: ``stats["stage"]``, else read from its counters.
+
+    Examples
+    --------
+    >>> from rrtdrive.planning.base import Stopwatch, failure
+    >>> r = failure("improved-rrt-connect", PlanStatus.NO_PATH_IN_BUDGET, Stopwatch(Budget()), "")
+    >>> stage_of(r), stage_of(dataclasses.replace(r, stats={"dubins_fallback": 1.0}))
+    ('improved-rrt-connect', 'dubins-fallback')
+    """
+    stage = result.stats.get("stage")
+    if isinstance(stage, str):
+        return stage
+    if result.stats.get("dubins_fallback"):
+        return "dubins-fallback"
+    return result.planner
+
+
+def escalate(
+    failed: PlanResult,
+    problem: PlanningProblem,
+    budget: Budget,
+    watch: Stopwatch,
+    smoothing: SmoothingConfig | None = None,
+    config: HybridConfig | None = None,
+) -> PlanResult:
+    """Rescue a failed improved-planner result with the Hybrid A* search.
+
+    Parameters
+    ----------
+    failed : PlanResult
+        The improved planner's failure (returned unchanged unless its status is
+        in :data:`ESCALATES_FROM` and the search finds a path).
+    problem : PlanningProblem
+        The query (``getattr(problem, "reverse", False)`` allows reversing).
+    budget : Budget
+        The query's budget: ``max_iterations`` expansions at most.
+    watch : Stopwatch
+        The query's running stopwatch (its expiry caps the search).
+    smoothing : SmoothingConfig, optional
+        Per-segment post-processor; ``None``: the exact arcs.
+    config : HybridConfig, optional
+        The search's settings.
+
+    Returns
+    -------
+    PlanResult
+        Solved with ``stats["stage"] == "hybrid-a-star"``, or ``failed`` with the
+        search's outcome added to its message and ``stats``.
+    """
+    if failed.success or failed.status not in ESCALATES_FROM or watch.expired():
+        return failed
+    cfg = config or HybridConfig()
+    reverse = bool(getattr(problem, "reverse", False))
+    answer = hybrid_query(problem, budget, watch, cfg, reverse, smoothing if cfg.smooth else None)
+    own = answer_stats(answer, problem.vehicle.wheelbase)
+    stats = {**failed.stats, **{f"hybrid_{k}": v for k, v in own.items()}}
+    gear = "with reverse" if reverse else "forward only"
+    if answer.path is None:
+        return dataclasses.replace(
+            failed,
+            message=f"{failed.message}; Hybrid A* ({gear}) found none either: {answer.message}",
+            stats=stats,
+            planning_time_s=watch.elapsed(),
+        )
+    stats["stage"] = NAME  # type: ignore[assignment]  # the one string entry
+    built = answer.path
+    path = path_of(built)
+    reason = failed.message.removeprefix("post-processing failed: ")
+    message = (
+        f"solved by the Hybrid A* escalation ({gear}; {answer.outcome.expansions} expansions, "
+        f"{path.length:.1f} m, {built.segments - 1} cusp(s)); the RRT-Connect stages "
+        f"failed: {reason}" + arcs_note(built)
+    )
+    return dataclasses.replace(
+        failed,
+        status=PlanStatus.SOLVED,
+        path=path,
+        raw_path=built.rows[:, :2],
+        trees=(*failed.trees, *answer.trees),
+        nodes=failed.nodes + answer.outcome.nodes,
+        planning_time_s=watch.elapsed(),
+        message=message,
+        stats=stats,
+    )

@@ -1,0 +1,213 @@
+"""From a Hybrid A* connection to a checked path with gears.
+
+The pieces of a connection are grouped into gear segments (a cusp between two
+segments). Each segment is, when ``smooth`` is on, handed to the improved
+planner's post-processor (:func:`~rrtdrive.planning.smoothing.make_drivable`)
+between its exact end poses, with its own rows (thinned to about a metre) as the
+raw path. A reverse segment ``P -> Q`` is the same geometry as the forward drive
+``Q -> P`` with the same nose yaw and the same steering curvature: that forward
+path is smoothed and its rows reversed. A segment that cannot be smoothed keeps
+its exact arcs when ``arc_fallback`` is on. Every segment is then checked again
+(exact body with the clearance, ``|kappa| <= kappa_max``), so a path is never
+returned unchecked.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from rrtdrive.collision import CollisionChecker
+from rrtdrive.geometry import densify, wrap_angle
+from rrtdrive.planning.hybrid.search import Piece
+from rrtdrive.planning.smoothing import SmoothingConfig, make_drivable, max_sharpness
+from rrtdrive.types import Pose
+
+__all__ = ["GearSegment", "gear_segments", "BuiltPath", "build_path"]
+
+
+@dataclass(frozen=True, eq=False)
+class GearSegment:
+    """The rows ``[x, y, yaw, kappa]`` of one gear between two stops (or the ends)."""
+
+    gear: int
+    rows: np.ndarray
+
+
+def gear_segments(pieces: Sequence[Piece]) -> list[GearSegment]:
+    """Consecutive pieces of one gear joined into segments (junction rows not repeated)."""
+    out: list[GearSegment] = []
+    for p in pieces:
+        if out and out[-1].gear == p.gear:
+            out[-1] = GearSegment(p.gear, np.vstack([out[-1].rows, p.rows[1:]]))
+        else:
+            out.append(GearSegment(p.gear, np.asarray(p.rows, dtype=float)))
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class BuiltPath:
+    """A checked path: rows ``[x, y, yaw, kappa, gear]``, its waypoints and how it was made.
+
+    Attributes
+    ----------
+    rows : numpy.ndarray
+        ``(N, 5)``; at a cusp the position row repeats with the new gear.
+    waypoints : numpy.ndarray
+        ``(M, 2)``: the segments' control points (smoothed) or end and joint positions.
+    segments : int
+        Gear segments (cusps + 1).
+    smoothed : int
+        Segments smoothed into B-splines (the others kept their arcs).
+    smoothing_message : str
+        Why the last unsmoothed segment could not be smoothed ('' when all were).
+    """
+
+    rows: np.ndarray
+    waypoints: np.ndarray
+    segments: int
+    smoothed: int
+    smoothing_message: str
+
+    def max_sharpness(self, wheelbase: float) -> float:
+        """Largest ``|d delta / ds|`` (rad/m) within the gear segments (``inf``: a jump).
+
+        A cusp is a stop, where the steering may turn at standstill: it does not count.
+        Exact arcs jump in curvature where two primitives meet, so their value is
+        ``inf`` unless the segment steers constantly.
+        """
+        gear = self.rows[:, 4]
+        cuts = np.flatnonzero(gear[1:] != gear[:-1]) + 1
+        return max(
+            (max_sharpness(part, wheelbase) for part in np.split(self.rows, cuts)), default=0.0
+        )
+
+
+def _raw_polyline(rows: np.ndarray, spacing: float) -> np.ndarray:
+    """The segment's positions thinned to about ``spacing`` apart, both ends kept."""
+    xy = rows[:, :2]
+    steps = np.hypot(*np.diff(xy, axis=0).T)
+    s = np.concatenate([[0.0], np.cumsum(steps)])
+    total = s[-1]
+    if total <= spacing:
+        return xy[[0, -1]].copy()
+    marks = np.linspace(0.0, total, max(2, int(math.ceil(total / spacing)) + 1))
+    idx = np.unique(np.searchsorted(s, marks).clip(0, len(xy) - 1))
+    idx[0], idx[-1] = 0, len(xy) - 1
+    return xy[np.unique(idx)]
+
+
+def _segment_ok(
+    rows: np.ndarray, checker: CollisionChecker, clearance: float, kappa_max: float, spacing: float
+) -> bool:
+    if len(rows) < 2 or float(np.abs(rows[:, 3]).max()) > kappa_max * (1.0 + 1e-9):
+        return False
+    ok, _ = checker.path_free(rows, spacing=spacing, clearance=clearance)
+    return ok
+
+
+def _resample(rows: np.ndarray, spacing: float) -> np.ndarray:
+    """Rows at most ``spacing`` apart (linear in position and yaw, kappa of the row before)."""
+    dense = densify(rows[:, :3], spacing, angle_column=2, rel_slack=1e-5)
+    owner = np.searchsorted(dense.vertex_index, np.arange(len(dense.points)), side="right") - 1
+    kappa = rows[np.clip(owner, 0, len(rows) - 1), 3]
+    return np.column_stack([dense.points, kappa])
+
+
+def _smoothed(
+    seg: GearSegment,
+    checker: CollisionChecker,
+    smoothing: SmoothingConfig,
+    raw_spacing: float,
+) -> tuple[np.ndarray, np.ndarray, str]:
+    """``(rows, control points, '')`` of the smoothed segment, or empty rows and why not."""
+    rows = seg.rows if seg.gear > 0 else seg.rows[::-1]
+    start = Pose(*rows[0, :3])
+    goal = Pose(*rows[-1, :3])
+    raw = _raw_polyline(rows, raw_spacing)
+    res = make_drivable(raw, start, goal, checker, smoothing)
+    if not res.ok:
+        return np.zeros((0, 4)), np.zeros((0, 2)), res.message
+    out = np.array(res.samples, dtype=float)
+    out[0, :3] = start.as_tuple()
+    out[-1, :3] = goal.as_tuple()
+    ctrl = np.asarray(res.control_points, dtype=float)
+    if seg.gear < 0:
+        out, ctrl = out[::-1].copy(), ctrl[::-1].copy()
+    return out, ctrl, ""
+
+
+def build_path(
+    pieces: Sequence[Piece],
+    checker: CollisionChecker,
+    smoothing: SmoothingConfig | None,
+    arc_fallback: bool,
+    clearance: float,
+    kappa_max: float,
+    check_spacing: float = 0.1,
+    sample_spacing: float = 0.25,
+    raw_spacing: float = 1.0,
+) -> BuiltPath | None:
+    """The checked path of a connection, or ``None`` when a segment fits no guarantee.
+
+    Parameters
+    ----------
+    pieces : sequence of Piece
+        The connection in driving order (exact arcs, start to goal).
+    checker : CollisionChecker
+        The map's checker.
+    smoothing : SmoothingConfig or None
+        The post-processor's settings (its clearance and ``kappa_max`` are the
+        query's); ``None``: keep the arcs.
+    arc_fallback : bool
+        Keep a segment's arcs when it cannot be smoothed.
+    clearance : float
+        Body clearance every segment keeps (exact test).
+    kappa_max : float
+        The car's curvature limit.
+    check_spacing, sample_spacing, raw_spacing : float
+        Spacing of the tested poses, of the returned rows, and of the raw path
+        given to the smoothing.
+
+    Returns
+    -------
+    BuiltPath or None
+    """
+    segs = gear_segments(pieces)
+    out_rows: list[np.ndarray] = []
+    waypoints: list[np.ndarray] = []
+    smoothed = 0
+    message = ""
+    for seg in segs:
+        rows = np.zeros((0, 4))
+        if smoothing is not None:
+            rows, ctrl, why = _smoothed(seg, checker, smoothing, raw_spacing)
+            if len(rows) and _segment_ok(rows, checker, clearance, kappa_max, check_spacing):
+                smoothed += 1
+                waypoints.append(ctrl)
+            else:
+                rows = np.zeros((0, 4))
+                message = why or "the smoothed segment failed the re-check"
+        if not len(rows):
+            if not arc_fallback:
+                return None
+            rows = _resample(seg.rows, sample_spacing)
+            if not _segment_ok(rows, checker, clearance, kappa_max, check_spacing):
+                return None
+            waypoints.append(rows[[0, -1], :2])
+        rows = np.column_stack([rows, np.full(len(rows), float(seg.gear))])
+        rows[:, 2] = wrap_angle(rows[:, 2])
+        out_rows.append(rows)
+    all_rows = np.vstack(out_rows)
+    return BuiltPath(all_rows, np.vstack(waypoints), len(segs), smoothed, message)
+
+
+def with_smoothing_clearance(
+    smoothing: SmoothingConfig, clearance: float, kappa_max: float
+) -> SmoothingConfig:
+    """``smoothing`` with the query's clearance and curvature limit."""
+    return dataclasses.replace(smoothing, clearance=clearance, kappa_max=kappa_max)

@@ -1,0 +1,174 @@
+"""The registered ``hybrid-a-star`` planner: :func:`~.query.hybrid_query` as a :class:`PlanResult`.
+
+:class:`HybridAStar` wraps the query in the shared preamble
+(:func:`~rrtdrive.planning.result.run_query`); :func:`hybrid_result`,
+:func:`answer_stats` and :func:`arcs_note` are shared with the escalation.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+
+import numpy as np
+
+from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register_planner
+from rrtdrive.planning.hybrid.config import HybridConfig
+from rrtdrive.planning.hybrid.path import BuiltPath
+from rrtdrive.planning.hybrid.query import (
+    HybridAnswer,
+    dubins_table,
+    free_cell_graph,
+    hybrid_query,
+)
+from rrtdrive.planning.result import run_query, solved
+from rrtdrive.planning.smoothing import SmoothingConfig
+from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus
+
+__all__ = ["NAME", "HybridAStar", "hybrid_result", "answer_stats", "arcs_note", "path_of"]
+
+NAME = "hybrid-a-star"
+
+
+def answer_stats(answer: HybridAnswer, wheelbase: float) -> dict[str, float]:
+    """The search counters of an answer, for :attr:`PlanResult.stats`."""
+    o = answer.outcome
+    stats = {
+        "expansions": float(o.expansions),
+        "hybrid_nodes": float(o.nodes),
+        "shots": float(o.shots),
+        "connections": float(o.connections),
+    }
+    if answer.path is not None:
+        stats["gear_segments"] = float(answer.path.segments)
+        stats["smoothed_segments"] = float(answer.path.smoothed)
+        stats["cusps"] = float(answer.path.segments - 1)
+        stats["max_sharpness"] = answer.path.max_sharpness(wheelbase)
+    return stats
+
+
+def path_of(built: BuiltPath) -> Path:
+    """The :class:`Path` of a built path (rows with their gear column)."""
+    return Path(built.rows, built.waypoints)
+
+
+@register_planner(NAME)
+class HybridAStar:
+    """Hybrid A* (Dolgov et al. 2008) with analytic expansions to the exact goal pose.
+
+    Parameters
+    ----------
+    config : HybridConfig, optional
+        Full configuration; keyword ``options`` override its fields.
+    reverse : bool, optional
+        Allow reversing; default ``getattr(problem, "reverse", False)`` per query.
+    smoothing : SmoothingConfig, optional
+        The per-segment post-processor (default ``SmoothingConfig(max_rounds=24)``,
+        the improved planner's).
+    **options
+        Any :class:`HybridConfig` field.
+
+    Examples
+    --------
+    >>> from rrtdrive.maps import builtin_map
+    >>> res = HybridAStar().solve(PlanningProblem.from_map(builtin_map("overtake")),
+    ...                           np.random.default_rng(0), Budget())
+    >>> res.success, bool(res.path.max_curvature <= 1 / 6)
+    (True, True)
+    """
+
+    name = NAME
+
+    def __init__(
+        self,
+        config: HybridConfig | None = None,
+        *,
+        reverse: bool | None = None,
+        smoothing: SmoothingConfig | None = None,
+        **options: object,
+    ) -> None:
+        base = config if config is not None else HybridConfig()
+        if not isinstance(base, HybridConfig):
+            raise InputError(f"planner.config: expected a HybridConfig, got {type(base).__name__}")
+        self.config = _with_options(base, options) if options else base
+        if reverse is not None and not isinstance(reverse, bool):
+            raise InputError(f"planner.reverse: expected true or false, got {reverse!r}")
+        self.reverse = reverse
+        self.smoothing = smoothing if smoothing is not None else SmoothingConfig(max_rounds=24)
+
+    def __repr__(self) -> str:
+        return f"HybridAStar({self.config!r}, reverse={self.reverse!r})"
+
+    def solve(
+        self, problem: PlanningProblem, rng: np.random.Generator, budget: Budget
+    ) -> PlanResult:
+        """Plan from ``problem.start`` to ``problem.goal``; never returns ``None``.
+
+        The search is deterministic: ``rng`` is not used, ``budget.max_iterations``
+        bounds the expansions and ``budget.max_time_s`` is only a safety cap.
+        """
+        reverse = self.reverse
+        if reverse is None:
+            reverse = bool(getattr(problem, "reverse", False))
+        cfg = self.config
+
+        def search(watch: Stopwatch) -> PlanResult:
+            answer = hybrid_query(problem, budget, watch, cfg, reverse, self.smoothing)
+            stats = answer_stats(answer, problem.vehicle.wheelbase)
+            return hybrid_result(NAME, answer, watch, stats)
+
+        def prepare() -> None:
+            free_cell_graph(problem, cfg.xy_resolution)
+            if not reverse:
+                dubins_table(cfg.radius_factor / problem.vehicle.kappa_max, cfg)
+
+        return run_query(NAME, problem, budget, search, prepare)
+
+
+def hybrid_result(
+    planner: str, answer: HybridAnswer, watch: Stopwatch, stats: dict[str, float]
+) -> PlanResult:
+    """The :class:`PlanResult` of an answer: solved, or the failure its outcome names."""
+    o = answer.outcome
+    if answer.path is None:
+        status = PlanStatus.NO_PATH_IN_BUDGET
+        if o.reason in ("exhausted", "no_approach"):
+            status = PlanStatus.PROVEN_UNREACHABLE
+        elif o.reason == "time":
+            # The wall-clock cap has its own status where PlanStatus has one (issue 13, item 4).
+            status = getattr(PlanStatus, "TIMEOUT", PlanStatus.NO_PATH_IN_BUDGET)
+        return failure(
+            planner, status, watch, answer.message, trees=answer.trees, iterations=o.expansions,
+            stats=stats,
+        )  # fmt: skip
+    built = answer.path
+    path = path_of(built)
+    cusps = built.segments - 1
+    message = (
+        f"solved by Hybrid A*: {o.expansions} expansions, {path.length:.1f} m, "
+        f"{cusps} cusp(s), {built.smoothed}/{built.segments} segment(s) smoothed" + arcs_note(built)
+    )
+    raw = built.rows[:, :2]
+    return solved(
+        planner, watch, path, raw, answer.trees, o.expansions, message, stats, nodes=o.nodes
+    )
+
+
+def arcs_note(built: BuiltPath) -> str:
+    """What a path with unsmoothed segments does not guarantee (empty when all are smoothed)."""
+    if built.smoothed == built.segments:
+        return ""
+    return (
+        "; the unsmoothed segments are exact arcs and lines: |kappa| <= kappa_max and the "
+        "body are checked, but the curvature jumps where they meet (no sharpness bound)"
+    )
+
+
+def _with_options(base: HybridConfig, options: Mapping[str, object]) -> HybridConfig:
+    fields = {f.name for f in dataclasses.fields(HybridConfig)}
+    unknown = sorted(set(options) - fields)
+    if unknown:
+        raise InputError(
+            f"planner.{unknown[0]}: unknown option for hybrid-a-star; allowed {sorted(fields)}"
+        )
+    return dataclasses.replace(base, **options)  # type: ignore[arg-type]

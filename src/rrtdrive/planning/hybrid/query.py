@@ -1,0 +1,315 @@
+"""One Hybrid A* query: set-up, the search from the start and, if needed, from the goal.
+
+:func:`hybrid_query` runs on a started stopwatch and returns a
+:class:`HybridAnswer`. It searches from the start for ``switch_after``
+expansions; a query still open then is searched from the goal back towards the
+start for the rest of the budget, and the path found is driven in the opposite
+direction of time (rows reversed, gears flipped: with reverse allowed every
+motion reversed in time is a motion; forward only, the search from the goal
+uses reverse arcs alone, so its reversal drives forward). Many queries are hard
+at one end only (a tight bay, a start against a wall): from the other end the
+hard part is a way out. The search from the goal that runs out of states
+proves the goal unreachable at the search's resolution.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from rrtdrive.planning.base import PlanningProblem, Stopwatch
+from rrtdrive.planning.dubins import dubins_paths
+from rrtdrive.planning.hybrid.body import BodyTest
+from rrtdrive.planning.hybrid.config import HybridConfig
+from rrtdrive.planning.hybrid.heuristic import (
+    DubinsTable,
+    FreeCellGraph,
+    Heuristic,
+    HolonomicField,
+)
+from rrtdrive.planning.hybrid.path import BuiltPath, build_path
+from rrtdrive.planning.hybrid.primitives import PrimitiveSet
+from rrtdrive.planning.hybrid.search import (
+    HybridSearch,
+    Piece,
+    SearchOutcome,
+    Shots,
+    analytic_shots,
+    walk_hits,
+)
+from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
+from rrtdrive.planning.smoothing import SmoothingConfig
+from rrtdrive.types import Budget, Pose, Tree
+
+__all__ = [
+    "HybridAnswer",
+    "hybrid_query",
+    "free_cell_graph",
+    "dubins_table",
+    "query_clearance",
+    "reversed_in_time",
+]
+
+
+def free_cell_graph(problem: PlanningProblem, resolution: float) -> FreeCellGraph:
+    """The map's :class:`FreeCellGraph`, built once per map (timed as set-up)."""
+    checker = problem.checker
+    return checker.grid.derived(
+        ("hybrid-free-cells", float(resolution)),
+        lambda: FreeCellGraph.build(checker, resolution),
+    )
+
+
+@functools.lru_cache(maxsize=4)
+def _dubins_table(radius: float, yaw_bins: int) -> DubinsTable:
+    return DubinsTable.build(radius, yaw_bins=yaw_bins)
+
+
+def dubins_table(radius: float, config: HybridConfig) -> DubinsTable:
+    """The Dubins length table of a turning radius, built once per process."""
+    return _dubins_table(float(radius), config.yaw_bins)
+
+
+def reeds_shepp_to(goal: Pose, radius: float) -> Callable[[float, float, float], float]:
+    """The Reeds-Shepp length from one pose to ``goal`` (the heuristic with reverse)."""
+
+    def length(x: float, y: float, yaw: float) -> float:
+        return reeds_shepp_distance(Pose(x, y, yaw), goal, radius)
+
+    return length
+
+
+def query_clearance(problem: PlanningProblem, wanted: float) -> float:
+    """``wanted``, capped at the exact body clearance the start and goal poses have."""
+    if wanted <= 0.0:
+        return 0.0
+    c = problem.checker
+    have = min(
+        c.body_clearance(problem.start.as_tuple()), c.body_clearance(problem.goal.as_tuple())
+    )
+    return max(0.0, min(wanted, have * 0.999))
+
+
+@dataclass(frozen=True, eq=False)
+class HybridAnswer:
+    """What one query gave: the checked path (or ``None``), the outcome and a message.
+
+    ``trees`` are the search trees, the one from the start first (the one from the
+    goal second, when the query turned to it).
+    """
+
+    path: BuiltPath | None
+    outcome: SearchOutcome
+    message: str
+    trees: tuple[Tree, ...]
+
+
+def _failure_message(
+    outcome: SearchOutcome, cfg: HybridConfig, budget: Budget, reverse: bool
+) -> str:
+    res = f"{cfg.xy_resolution:g} m / {np.degrees(cfg.yaw_resolution):g} deg"
+    counts = f"{outcome.expansions} expansions, {outcome.nodes} nodes"
+    if outcome.reason == "exhausted":
+        return (
+            f"no path at {res} resolution: the search ran out of states ({counts}); "
+            "the goal is unreachable for this car at this resolution"
+        )
+    if outcome.reason == "no_approach":
+        if reverse:
+            return (
+                f"no path at {res} resolution: every way the car could arrive at the goal was "
+                f"explored from the goal and none leads to the start ({counts})"
+            )
+        return (
+            f"no path at {res} resolution: driving forward, the car cannot arrive at the goal "
+            f"pose (every way it could have come from, the goal driven backwards, was "
+            f"explored and none leads to the start; {counts}); it can only be reached in "
+            "reverse if at all (try --reverse)"
+        )
+    if outcome.reason == "time":
+        return (
+            f"no path found: the wall-clock cap of {budget.max_time_s:g} s was hit before the "
+            f"expansion budget of {budget.max_iterations} ({counts})"
+        )
+    if outcome.reason == "rejected":
+        return (
+            f"no path found: {outcome.connections} goal connections could not be made "
+            f"drivable ({counts})"
+        )
+    return f"no path found within the expansion budget of {budget.max_iterations} ({counts})"
+
+
+def reversed_in_time(pieces: Sequence[Piece]) -> list[Piece]:
+    """The same motion driven backwards in time: order and rows reversed, gears flipped.
+
+    Examples
+    --------
+    >>> rows = np.array([[0.0, 0, 0, 0.1], [1.0, 0, 0, 0.1]])
+    >>> out = reversed_in_time([Piece(1, rows)])
+    >>> out[0].gear, out[0].rows[:, 0].tolist()
+    (-1, [1.0, 0.0])
+    """
+    return [Piece(-p.gear, p.rows[::-1].copy()) for p in reversed(pieces)]
+
+
+def _backward_dubins_shots(
+    target: Pose, radius: float, spacing: float, body: BodyTest, max_candidates: int = 3
+) -> Shots:
+    """Reverse-only shots from a pose to ``target``: forward Dubins ``target -> pose`` reversed."""
+    coarse = max(spacing, 0.5)
+
+    def shots(pose: Pose) -> list[list[Piece]]:
+        out = []
+        for cand in dubins_paths(target, pose, radius)[:max_candidates]:
+            if walk_hits(target, cand.word, cand.lengths, radius, coarse, body):
+                continue
+            rows = cand.sample(spacing)[::-1].copy()
+            rows[0, :3] = pose.as_tuple()
+            rows[-1, :3] = target.as_tuple()
+            out.append([Piece(-1, rows)])
+        return out
+
+    return shots
+
+
+def _tree(search: HybridSearch) -> Tree:
+    xy = np.column_stack([search.x, search.y]) if search.x else np.zeros((0, 2))
+    return Tree(xy, np.array(search.parent, dtype=np.int64))
+
+
+def hybrid_query(
+    problem: PlanningProblem,
+    budget: Budget,
+    watch: Stopwatch,
+    config: HybridConfig,
+    reverse: bool,
+    smoothing: SmoothingConfig | None,
+) -> HybridAnswer:
+    """One Hybrid A* query from ``problem.start`` to ``problem.goal``.
+
+    Parameters
+    ----------
+    problem : PlanningProblem
+        The query.
+    budget : Budget
+        ``max_iterations`` bounds the expansions of both searches together;
+        ``max_time_s`` is only a cap.
+    watch : Stopwatch
+        The started stopwatch whose expiry stops the search.
+    config : HybridConfig
+        The search's settings (``switch_after``: when to turn to the goal's side).
+    reverse : bool
+        Whether reverse primitives and shots are allowed.
+    smoothing : SmoothingConfig or None
+        The per-segment post-processor (its ``clearance`` is the one kept); ``None``:
+        exact arcs only.
+
+    Returns
+    -------
+    HybridAnswer
+    """
+    kappa_max = problem.vehicle.kappa_max
+    clearance = query_clearance(problem, config.body_clearance)
+    if smoothing is not None:
+        smoothing = dataclasses.replace(smoothing, clearance=clearance, kappa_max=kappa_max)
+    radius = config.radius_factor / kappa_max
+    # The returned rows interpolate linearly between arc poses 0.25 m apart (at most
+    # 1.3 mm off the arc at kappa_max): the re-check allows 5 mm less than the search kept,
+    # so that it does not reject what the search found. The start and goal poses have
+    # at least the search's clearance (capped at theirs), never more is asked of them.
+    recheck_clearance = max(0.0, clearance - 0.005)
+    start, goal = problem.start, problem.goal
+    grid = free_cell_graph(problem, config.xy_resolution)
+    body = BodyTest(problem.checker, clearance)
+    prims = PrimitiveSet.build(
+        1.0 / radius, config.curvatures, config.step, config.check_spacing, reverse=True
+    )
+    if not reverse:
+        prims = prims.gear(1)
+
+    def accept(pieces: list[Piece]) -> BuiltPath | None:
+        return build_path(
+            pieces, problem.checker, smoothing if config.smooth else None, config.arc_fallback,
+            recheck_clearance, kappa_max, config.check_spacing, config.sample_spacing,
+        )  # fmt: skip
+
+    to_goal = HolonomicField.towards(grid, goal)
+    if reverse:
+        rs = reeds_shepp_to(goal, radius) if config.reeds_shepp_heuristic else None
+        heuristic = Heuristic(to_goal, None, goal, rs)
+    else:
+        table = dubins_table(radius, config)
+        heuristic = Heuristic(to_goal, table.to(goal), goal, table.scalar_to(goal))
+    shots = analytic_shots(goal, radius, reverse, config.check_spacing, body)
+    ahead = HybridSearch(
+        body, start, goal, heuristic, prims, shots, config, kappa_max, problem.bounds
+    )
+    searches = [(ahead, accept)]
+    if config.switch_after > 0:
+        # From the goal back to the start: forward only, by reverse arcs alone.
+        back_prims = prims if reverse else prims_reverse(radius, config)
+        if reverse:
+            back_shots = analytic_shots(start, radius, True, config.check_spacing, body)
+        else:
+            back_shots = _backward_dubins_shots(start, radius, config.check_spacing, body)
+        back_h = Heuristic(HolonomicField.towards(grid, start), None, start)
+        back = HybridSearch(
+            body, goal, start, back_h, back_prims, back_shots, config, kappa_max, problem.bounds
+        )
+        searches.append((back, lambda p: accept(reversed_in_time(p))))
+    path, outcome = _alternate(searches, budget.max_iterations, config.switch_after, watch)
+    trees = tuple(_tree(s) for s, _ in searches if s.x)
+    message = "" if path is not None else _failure_message(outcome, config, budget, reverse)
+    return HybridAnswer(path, outcome, message, trees)
+
+
+def _alternate(
+    searches: list[tuple[HybridSearch, Callable[[list[Piece]], BuiltPath | None]]],
+    budget: int,
+    first: int,
+    watch: Stopwatch,
+) -> tuple[BuiltPath | None, SearchOutcome]:
+    """Run the searches in turns of ``first``, ``first``, ``2 first``, ``2 first``, ... expansions.
+
+    The turns are counted in expansions, never in time, so the schedule is the
+    same on any machine. Either search running out of states ends the query: from
+    the start it proves the goal unreachable, from the goal that no approach exists.
+    """
+    outcomes = [SearchOutcome("expansions", 0, 0, 0, 0) for _ in searches]
+    turn, used, k = max(1, first), 0, 0
+    while True:
+        search, accept = searches[k]
+        if len(searches) == 1:
+            turn = budget
+        step = min(turn, budget - used)
+        before = outcomes[k].expansions
+        path, outcomes[k] = search.run(accept, before + step, watch.expired)
+        used += outcomes[k].expansions - before
+        if path is not None or outcomes[k].reason != "expansions" or used >= budget:
+            break
+        if k == len(searches) - 1:
+            turn *= 2
+        k = (k + 1) % len(searches)
+    if len(searches) == 1:
+        return path, outcomes[0]
+    a, b = outcomes
+    reason = outcomes[k].reason
+    if reason == "exhausted" and k == 1:
+        reason = "no_approach"  # exhausted from the goal's side
+    total = SearchOutcome(
+        reason, a.expansions + b.expansions, a.nodes + b.nodes, a.shots + b.shots,
+        a.connections + b.connections,
+    )  # fmt: skip
+    return path, total
+
+
+def prims_reverse(radius: float, config: HybridConfig) -> PrimitiveSet:
+    """The reverse arcs alone (the search from the goal of a forward-only query)."""
+    prims = PrimitiveSet.build(
+        1.0 / radius, config.curvatures, config.step, config.check_spacing, reverse=True
+    )
+    return prims.gear(-1)

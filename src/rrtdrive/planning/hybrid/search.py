@@ -1,0 +1,371 @@
+"""The Hybrid A* search (Dolgov, Thrun, Montemerlo & Diebel 2008) over one query.
+
+States are continuous poses ``(x, y, yaw)`` with a gear; a state is closed per
+cell of ``xy_resolution``, heading bin of ``yaw_resolution`` and gear, the first
+to be expanded there wins. Successors are the :class:`PrimitiveSet` arcs whose
+body poses (at most ``check_spacing`` apart) pass the checker's body test with
+the query's clearance (three covering discs first, then six, then the exact
+rectangle where the discs cannot decide). ``f = g + w h`` with the
+:class:`~rrtdrive.planning.hybrid.heuristic.Heuristic`. From expanded nodes,
+every few expansions (each one near the goal), an *analytic expansion* tries
+the obstacle-free shortest paths to the exact goal pose and keeps the first whose
+body is clear: Dubins forward, Reeds-Shepp with reverse.
+
+No decision reads the clock: the expansion budget bounds the search, the
+wall-clock limit only stops it early (reported as such). Ties in ``f`` are
+broken by insertion order.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import TypeVar
+
+import numpy as np
+
+from rrtdrive.planning.dubins import dubins_paths
+from rrtdrive.planning.hybrid.body import BodyTest
+from rrtdrive.planning.hybrid.config import HybridConfig
+from rrtdrive.planning.hybrid.heuristic import Heuristic
+from rrtdrive.planning.hybrid.primitives import PrimitiveSet, arc_poses
+from rrtdrive.planning.reeds_shepp import reeds_shepp_paths
+from rrtdrive.types import Pose
+
+__all__ = ["Piece", "SearchOutcome", "Shots", "HybridSearch", "analytic_shots", "walk_hits"]
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True, eq=False)
+class Piece:
+    """A stretch of path in one gear: rows ``[x, y, yaw, kappa]``, both end poses included.
+
+    ``kappa`` is the steering curvature; ``gear`` +1 forward, -1 reverse.
+    """
+
+    gear: int
+    rows: np.ndarray
+
+
+@dataclass(frozen=True)
+class SearchOutcome:
+    """How a search ended.
+
+    Attributes
+    ----------
+    reason : str
+        ``"solved"``, ``"exhausted"`` (open list empty), ``"no_approach"`` (the search from
+        the goal ran out: see :mod:`.query`), ``"expansions"`` (budget
+        spent), ``"time"`` (wall-clock cap hit) or ``"rejected"`` (``max_solutions``
+        goal connections found, none accepted).
+    expansions, nodes, shots, connections : int
+        Nodes expanded, nodes created, analytic shots tried, goal connections found.
+    """
+
+    reason: str
+    expansions: int
+    nodes: int
+    shots: int
+    connections: int
+
+
+#: ``shots(pose) -> candidates``: pieces from the pose to the exact goal, shortest first.
+Shots = Callable[[Pose], Sequence[list[Piece]]]
+
+
+_TURN = {"L": 1, "S": 0, "R": -1}
+
+
+def walk_hits(
+    start: Pose, word: str, lengths: Sequence[float], radius: float, spacing: float, body: BodyTest
+) -> bool:
+    """Whether a pose ``spacing`` apart along a word surely collides (stops at the first).
+
+    ``lengths`` are signed (negative in reverse), as in Reeds-Shepp words; Dubins
+    lengths are all positive.
+    """
+    x, y, yaw = start.x, start.y, start.yaw
+    for letter, seg in zip(word, lengths, strict=True):
+        turn = _TURN[letter]
+        n = max(1, math.ceil(abs(seg) / spacing))
+        c0, s0 = math.cos(yaw), math.sin(yaw)
+        for k in range(1, n + 1):
+            u = seg * k / n
+            if turn == 0:
+                px, py, pyaw = x + u * c0, y + u * s0, yaw
+            else:
+                pyaw = yaw + turn * u / radius
+                px = x + turn * radius * (math.sin(pyaw) - s0)
+                py = y - turn * radius * (math.cos(pyaw) - c0)
+            if body.hit_at(px, py, pyaw):
+                return True
+        x, y, yaw = px, py, pyaw
+    return False
+
+
+def _gear_pieces(rows: np.ndarray) -> list[Piece]:
+    """Rows ``[x, y, yaw, kappa, gear]`` cut at the cusps (each piece keeps both end rows)."""
+    gear = rows[:, 4]
+    cuts = np.flatnonzero(gear[1:] != gear[:-1]) + 1
+    return [Piece(int(part[0, 4]), part[:, :4].copy()) for part in np.split(rows, cuts)]
+
+
+def analytic_shots(
+    goal: Pose,
+    radius: float,
+    reverse: bool,
+    spacing: float,
+    body: BodyTest | None = None,
+    max_candidates: int = 3,
+) -> Shots:
+    """The analytic expansions to ``goal``: Dubins paths forward, Reeds-Shepp with reverse.
+
+    Only the ``max_candidates`` shortest words are tried; with ``body``, those
+    whose poses half a metre apart surely collide are dropped before they are
+    sampled finely. A Reeds-Shepp word is cut into one piece per gear.
+    """
+    coarse = max(spacing, 0.5)
+
+    def shots(pose: Pose) -> list[list[Piece]]:
+        out: list[list[Piece]] = []
+        # The longer words loop through the lot: they rarely clear where the short ones fail.
+        if reverse:
+            for cand in reeds_shepp_paths(pose, goal, radius)[:max_candidates]:
+                if body is not None and walk_hits(
+                    pose, cand.word, cand.lengths, radius, coarse, body
+                ):
+                    continue
+                rows = cand.sample(spacing)
+                rows[0, :3] = pose.as_tuple()
+                out.append(_gear_pieces(rows))
+            return out
+        for cand in dubins_paths(pose, goal, radius)[:max_candidates]:
+            if body is not None and walk_hits(pose, cand.word, cand.lengths, radius, coarse, body):
+                continue
+            out.append([Piece(1, cand.sample(spacing))])
+        return out
+
+    return shots
+
+
+class HybridSearch:
+    """One Hybrid A* query: the primitives, the heuristic, the checker and the budget.
+
+    Parameters
+    ----------
+    body : BodyTest
+        The body test (the map's checker with the query's clearance).
+    start, goal : Pose
+        Rear-axle poses.
+    heuristic : Heuristic
+        Cost-to-go estimate to ``goal``.
+    primitives : PrimitiveSet
+        The successors' arcs.
+    shots : callable
+        Analytic expansions (:func:`analytic_shots`).
+    config : HybridConfig
+        Costs, resolutions and shot schedule.
+    kappa_max : float
+        The car's curvature limit (scales the steering costs).
+    bounds : tuple of float
+        The map's bounds (the closing grid's origin).
+    """
+
+    def __init__(
+        self,
+        body: BodyTest,
+        start: Pose,
+        goal: Pose,
+        heuristic: Heuristic,
+        primitives: PrimitiveSet,
+        shots: Shots,
+        config: HybridConfig,
+        kappa_max: float,
+        bounds: tuple[float, float, float, float],
+    ) -> None:
+        self.body, self.start, self.goal = body, start, goal
+        self.heuristic, self.prims, self.shots = heuristic, primitives, shots
+        self.cfg, self.kappa_max = config, kappa_max
+        self.xmin, self.ymin = bounds[0], bounds[1]
+        self.ny = int(math.ceil((bounds[3] - bounds[1]) / config.xy_resolution)) + 2
+        self.nyaw = config.yaw_bins
+        # Node storage (parallel lists: appends are the hot path).
+        self.x: list[float] = []
+        self.y: list[float] = []
+        self.yaw: list[float] = []
+        self.g: list[float] = []
+        self.gear: list[int] = []
+        self.kappa: list[float] = []
+        self.parent: list[int] = []
+        self.expansions = 0
+        self.shots_tried = 0
+        self.connections = 0
+        # Per-primitive constants of the edge cost.
+        p = primitives
+        self._base_cost = p.length * (
+            np.where(p.gears < 0, config.reverse_cost, 1.0)
+            + config.steer_cost * np.abs(p.kappas) / kappa_max
+        )
+
+    def key(self, x: float, y: float, yaw: float, gear: int) -> int:
+        """The closing bin of a state: its cell, heading bin and gear."""
+        res = self.cfg.xy_resolution
+        ix = int((x - self.xmin) // res)
+        iy = int((y - self.ymin) // res)
+        iyaw = int(((yaw % (2.0 * math.pi)) / (2.0 * math.pi)) * self.nyaw) % self.nyaw
+        return (((ix * self.ny + iy) * self.nyaw + iyaw) << 1) | (gear < 0)
+
+    def _add(
+        self, x: float, y: float, yaw: float, g: float, gear: int, kappa: float, par: int
+    ) -> int:
+        self.x.append(x)
+        self.y.append(y)
+        self.yaw.append(yaw)
+        self.g.append(g)
+        self.gear.append(gear)
+        self.kappa.append(kappa)
+        self.parent.append(par)
+        return len(self.x) - 1
+
+    def chain(self, i: int) -> list[Piece]:
+        """The pieces from the start to node ``i``, one per primitive, merged per gear."""
+        nodes = []
+        while i >= 0:
+            nodes.append(i)
+            i = self.parent[i]
+        nodes.reverse()
+        pieces: list[Piece] = []
+        cfg = self.cfg
+        n = max(1, math.ceil(self.prims.length / cfg.sample_spacing - 1e-9))
+        s = self.prims.length * np.arange(n + 1) / n
+        for a, b in zip(nodes[:-1], nodes[1:], strict=True):
+            poses = arc_poses(self.x[a], self.y[a], self.yaw[a], self.kappa[b], self.gear[b], s)
+            rows = np.column_stack([poses, np.full(len(poses), self.kappa[b])])
+            rows[-1, :3] = (self.x[b], self.y[b], self.yaw[b])
+            if pieces and pieces[-1].gear == self.gear[b]:
+                pieces[-1] = Piece(self.gear[b], np.vstack([pieces[-1].rows, rows[1:]]))
+            else:
+                pieces.append(Piece(self.gear[b], rows))
+        return pieces
+
+    def _shot(self, i: int) -> list[list[Piece]]:
+        """The clear analytic expansions from node ``i``, shortest first."""
+        self.shots_tried += 1
+        pose = Pose(self.x[i], self.y[i], self.yaw[i])
+        found = []
+        for pieces in self.shots(pose):
+            if self.body.all_free(np.vstack([p.rows[:, :3] for p in pieces])):
+                found.append(pieces)
+        return found
+
+    def run(
+        self,
+        accept: Callable[[list[Piece]], T | None],
+        max_expansions: int,
+        expired: Callable[[], bool],
+    ) -> tuple[T | None, SearchOutcome]:
+        """Search until ``accept`` takes a start-to-goal connection or the budget ends.
+
+        Parameters
+        ----------
+        accept : callable
+            ``accept(pieces)``: the final result made from a connection (every
+            piece in driving order), or ``None`` to reject it and search on.
+        max_expansions : int
+            Largest number of node expansions in all (a later call resumes the
+            search and may raise it).
+        expired : callable
+            The wall-clock safety cap.
+
+        Returns
+        -------
+        (result or None, SearchOutcome)
+        """
+        cfg, prims, body = self.cfg, self.prims, self.body
+        w = cfg.heuristic_weight
+        if not self.x:  # the first call; a later one resumes where the last stopped
+            start = self.start
+            h0 = self.heuristic.at(start.x, start.y, start.yaw)
+            root = self._add(start.x, start.y, start.yaw, 0.0, 0, math.nan, -1)
+            self._heap: list[tuple[float, int]] = [(w * h0, root)]
+            self._closed: set[int] = set()
+            self._best: dict[int, float] = {}
+            self._hval = [h0]
+            self._since_shot = cfg.shot_interval
+        heap, closed, best, hval = self._heap, self._closed, self._best, self._hval
+        since_shot = self._since_shot
+        base_cost = self._base_cost.tolist()
+        gears = prims.gears.tolist()
+        kappas = prims.kappas.tolist()
+        h_at = self.heuristic.at
+        kmax = self.kappa_max
+        reason = "exhausted"
+        while heap:
+            _f, i = heapq.heappop(heap)
+            xi, yi, yawi, gi, geari = self.x[i], self.y[i], self.yaw[i], self.g[i], self.gear[i]
+            k = self.key(xi, yi, yawi, geari if geari else 1)
+            if k in closed:
+                continue
+            if self.expansions >= max_expansions:
+                heapq.heappush(heap, (_f, i))  # not expanded: a later call takes it
+                reason = "expansions"
+                break
+            if expired():
+                reason = "time"
+                break
+            closed.add(k)
+            self.expansions += 1
+            since_shot += 1
+            interval = min(cfg.shot_interval, max(1, int(hval[i] / cfg.shot_distance)))
+            if since_shot >= interval:
+                since_shot = 0
+                for pieces in self._shot(i):
+                    self.connections += 1
+                    out = accept(self.chain(i) + pieces)
+                    if out is not None:
+                        return out, self._outcome("solved")
+                    if self.connections >= cfg.max_solutions:
+                        return None, self._outcome("rejected")
+            poses = prims.poses_from(xi, yi, yawi)
+            ki = self.kappa[i]
+            # Closed bins, unreachable cells and dearer duplicates go before the body test.
+            cand: list[tuple[int, int, float, float]] = []
+            for j, end in enumerate(poses[:, -1, :].tolist()):
+                gear = gears[j]
+                kj = self.key(end[0], end[1], end[2], gear)
+                if kj in closed:
+                    continue
+                hj = h_at(end[0], end[1], end[2])
+                if hj == math.inf:
+                    continue
+                cost = gi + base_cost[j]
+                if geari and gear != geari:
+                    cost += cfg.gear_change_cost
+                if ki == ki:  # not the root's NaN
+                    cost += cfg.steer_change_cost * abs(kappas[j] - ki) / kmax
+                if cost >= best.get(kj, math.inf):
+                    continue
+                cand.append((j, kj, cost, hj))
+            if not cand:
+                continue
+            free = body.runs_free(poses[[c[0] for c in cand]])
+            for (j, kj, cost, hj), ok in zip(cand, free.tolist(), strict=True):
+                if not ok:
+                    continue
+                end = poses[j, -1]
+                best[kj] = cost
+                n = self._add(
+                    float(end[0]), float(end[1]), float(end[2]), cost, gears[j], kappas[j], i
+                )
+                hval.append(hj)
+                heapq.heappush(heap, (cost + w * hj, n))
+        self._since_shot = since_shot
+        return None, self._outcome(reason)
+
+    def _outcome(self, reason: str) -> SearchOutcome:
+        return SearchOutcome(
+            reason, self.expansions, len(self.x), self.shots_tried, self.connections
+        )
