@@ -26,6 +26,7 @@ from rrtdrive.planning.hybrid import (
 from rrtdrive.planning.hybrid.body import BodyTest
 from rrtdrive.planning.hybrid.escalation import stage_of
 from rrtdrive.planning.improved import ImprovedRRTConnect
+from rrtdrive.planning.smoothing import CurveKind
 from rrtdrive.types import Budget, InputError, Path, PlanStatus, Pose
 from rrtdrive.verify import verify_path
 
@@ -238,7 +239,9 @@ def test_escalation_rescues_what_the_paper_pipeline_fails() -> None:
     off = ImprovedRRTConnect(disable=("dubins_fallback", "escalation")).solve(
         problem, np.random.default_rng(0), BUDGET
     )
-    on = ImprovedRRTConnect(disable=("dubins_fallback",)).solve(
+    # The paper's smoothing promises no sharpness bound: the search's arcs are returned.
+    paper = {"smoothing": {"curve": CurveKind.BSPLINE}}
+    on = ImprovedRRTConnect(disable=("dubins_fallback",), **paper).solve(
         problem, np.random.default_rng(0), BUDGET
     )
     assert not off.success and "stage" not in off.stats
@@ -246,6 +249,12 @@ def test_escalation_rescues_what_the_paper_pipeline_fails() -> None:
     assert stage_of(on) == on.stats["stage"] == "hybrid-a-star"
     assert "solved by the Hybrid A* escalation" in on.message
     assert verify_path(m, on.path).ok
+    # The default (clothoid) keeps its sharpness guarantee: the find is reported, not returned.
+    kept = ImprovedRRTConnect(disable=("dubins_fallback",)).solve(
+        problem, np.random.default_rng(0), BUDGET
+    )
+    assert not kept.success and kept.stats["hybrid_found_unsmooth"] == 1.0
+    assert "curvature jumps" in kept.message and "--planner hybrid-a-star" in kept.message
 
 
 def test_escalation_leaves_invalid_queries_alone() -> None:

@@ -76,8 +76,7 @@ def plan_to_json(
     :func:`~rrtdrive.planning.smoothing.max_sharpness`); ``steer_rate_speed_limit``
     the speed (m/s) at which that needs exactly ``vehicle.max_steer_rate`` (null for
     instant steering or a failed plan). ``stage`` names the stage of the planner that
-    solved it (``null`` on failure); ``continuous_curvature`` is false when the
-    curvature jumps somewhere within a gear segment (``max_sharpness`` is then null).
+    solved it (``null`` on failure).
     """
     from rrtdrive.planning.hybrid.escalation import stage_of
     from rrtdrive.planning.smoothing import max_sharpness, steer_rate_speed_limit
@@ -101,9 +100,6 @@ def plan_to_json(
         "length_m": round(result.path.length, 6) if result.success else None,
         "max_curvature": round(result.path.max_curvature, 6) if result.success else None,
         "max_sharpness": _json_number(sharp),
-        # False where the curvature jumps (e.g. the Hybrid A* escalation's exact arcs):
-        # max_sharpness is then null and the car must stop to steer there.
-        "continuous_curvature": None if sharp is None else bool(math.isfinite(sharp)),
         "steer_rate_speed_limit": _json_number(limit),
         "nodes": result.nodes,
         "iterations": result.iterations,

@@ -17,7 +17,7 @@ from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.planner import NAME, answer_stats, arcs_note, path_of
 from rrtdrive.planning.hybrid.query import hybrid_query
-from rrtdrive.planning.smoothing import SmoothingConfig
+from rrtdrive.planning.smoothing import SmoothingConfig, max_sharpness
 from rrtdrive.types import Budget, PlanResult, PlanStatus
 
 __all__ = ["STAGES", "ESCALATES_FROM", "escalate", "stage_of"]
@@ -73,6 +73,11 @@ def escalate(
     config : HybridConfig, optional
         The search's settings.
 
+    Under clothoid ``smoothing`` (the default) a found path is returned only if it
+    keeps the sharpness bound ``smoothing.max_sharpness``; the search's exact arcs
+    do not (their curvature jumps), so such a find is reported in the failure's
+    message and ``stats["hybrid_found_unsmooth"]``.
+
     Returns
     -------
     PlanResult
@@ -94,9 +99,28 @@ def escalate(
             stats=stats,
             planning_time_s=watch.elapsed(),
         )
-    stats["stage"] = NAME  # type: ignore[assignment]  # the one string entry
     built = answer.path
     path = path_of(built)
+    bound = smoothing.max_sharpness if smoothing is not None and smoothing.clothoid else None
+    sharp = max_sharpness(path.samples, problem.vehicle.wheelbase)
+    if bound is not None and sharp > bound + 1e-9:
+        # The default promises continuous curvature within the sharpness bound
+        # (issue 12); the search's exact arcs jump in curvature where they meet, so
+        # its path is reported, not returned (hybrid-a-star itself returns it).
+        stats["hybrid_found_unsmooth"] = 1.0
+        return dataclasses.replace(
+            failed,
+            message=(
+                f"{failed.message}; Hybrid A* ({gear}) found a path ({path.length:.1f} m, "
+                f"{built.segments - 1} cusp(s)) whose curvature jumps where its arcs meet "
+                f"(|d delta/ds| up to {_shown(sharp)} rad/m, bound {bound:g}): it needs a car "
+                "that stops to steer, so the default does not return it; "
+                "--planner hybrid-a-star gives it, --paper-smoothing accepts it"
+            ),
+            stats=stats,
+            planning_time_s=watch.elapsed(),
+        )
+    stats["stage"] = NAME  # type: ignore[assignment]  # the one string entry
     reason = failed.message.removeprefix("post-processing failed: ")
     message = (
         f"solved by the Hybrid A* escalation ({gear}; {answer.outcome.expansions} expansions, "
@@ -114,3 +138,8 @@ def escalate(
         message=message,
         stats=stats,
     )
+
+
+def _shown(value: float) -> str:
+    """A sharpness for a message: ``inf`` where the curvature jumps on the spot."""
+    return "inf" if value == float("inf") else f"{value:.2f}"
