@@ -119,4 +119,4 @@ class LQR(TrackingController):
     def steering(self, state: VehicleState, proj: Projection) -> float:
         """LQR steering angle with curvature feed-forward."""
         u = -(self._k_e * proj.cte + self._k_psi * self.heading_error)
-        return math.atan(self.vehicle.wheelbase * (proj.kappa + u))
+        return math.atan(self.vehicle.wheelbase * (self.ff_kappa(proj) + u))
