@@ -36,6 +36,7 @@ from rrtdrive import Budget, builtin_map
 from rrtdrive.atomic import write_text_atomic
 from rrtdrive.cli import plan_to_json
 from rrtdrive.planning import PlanningProblem, make_planner
+from rrtdrive.planning.smoothing import CurveKind
 
 MAPS = ("overtake", "parking_lot", "narrow_gap", "no_path")
 PLANNERS = ("rrt", "rrt-connect", "rrt-star", "improved-rrt-connect")
@@ -66,15 +67,22 @@ def _drop_timing(d: dict) -> dict:
     return out
 
 
-def plan_entries() -> dict[str, dict]:
-    """Plan JSON (timings dropped) of every built-in map x planner x seed."""
+def plan_entries(paper: bool = False) -> dict[str, dict]:
+    """Plan JSON (timings dropped) of every built-in map x planner x seed.
+
+    ``paper``: the improved planner with the paper's B-spline post-processing
+    (``rrtdrive plan --paper-smoothing``) instead of the default clothoid turns.
+    """
     out: dict[str, dict] = {}
     budget = Budget(max_time_s=NO_WALL_LIMIT_S)
     for name in MAPS:
         problem = PlanningProblem.from_map(builtin_map(name))
         for planner in PLANNERS:
+            options: dict[str, object] = {}
+            if paper and planner == "improved-rrt-connect":
+                options["smoothing"] = {"curve": CurveKind.BSPLINE}
             for seed in SEEDS:
-                result = make_planner(planner).solve(
+                result = make_planner(planner, **options).solve(
                     problem, np.random.default_rng(seed), budget
                 )
                 out[f"plan/{name}/{planner}/{seed}"] = _drop_timing(
@@ -115,9 +123,9 @@ def episode_entries() -> dict[str, dict]:
     return out
 
 
-def snapshot(episodes: bool = True) -> dict[str, dict]:
-    """The whole snapshot."""
-    data = plan_entries()
+def snapshot(episodes: bool = True, paper: bool = False) -> dict[str, dict]:
+    """The whole snapshot (``paper``: plans with the paper's smoothing, see plan_entries)."""
+    data = plan_entries(paper)
     if episodes:
         data.update(episode_entries())
     return data
@@ -144,8 +152,13 @@ def main() -> int:
     group.add_argument("--record", metavar="FILE", help="write a snapshot to FILE")
     group.add_argument("--compare", metavar="FILE", help="compare against a recorded FILE")
     ap.add_argument("--plans-only", action="store_true", help="skip the episodes")
+    ap.add_argument(
+        "--paper", action="store_true",
+        help="plan with the paper's B-spline smoothing (rrtdrive plan --paper-smoothing); "
+        "episodes keep the default planner",
+    )
     args = ap.parse_args()
-    data = snapshot(episodes=not args.plans_only)
+    data = snapshot(episodes=not args.plans_only, paper=args.paper)
     if args.record:
         write_text_atomic(args.record, json.dumps(data, indent=1, sort_keys=True) + "\n")
         print(f"recorded {len(data)} entries in {args.record}")

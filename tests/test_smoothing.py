@@ -14,6 +14,7 @@ from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import Map, Obstacle, builtin_map
 from rrtdrive.planning.base import cached_checker
 from rrtdrive.planning.smoothing import (
+    CurveKind,
     SmoothingConfig,
     clamped_uniform_knots,
     curvature,
@@ -536,7 +537,10 @@ def test_repair_constants_are_validated_config_fields_with_the_old_values():
     assert cfg.unprune_turn == math.radians(100.0) and cfg.hairpin_turn == math.radians(135.0)
     assert cfg.unprune_hairpin_turn == math.radians(120.0)
     assert cfg.drop_hairpin_turn == math.radians(150.0) and cfg.end_gap == 0.05
-    assert cfg.design_radius == pytest.approx(1.0 / (KAPPA * 0.97 * math.cos(math.radians(5.0))))
+    assert SmoothingConfig(curve=CurveKind.BSPLINE).design_radius == pytest.approx(
+        1.0 / (KAPPA * 0.97 * math.cos(math.radians(5.0)))
+    )
+    assert cfg.design_radius == pytest.approx(1.0 / (KAPPA * 0.97))
     for kwargs, name in (
         ({"radius_steps": ()}, "radius_steps"),
         ({"radius_steps": (1.0, -1.0)}, "radius_steps"),

@@ -14,6 +14,7 @@ import argparse
 import dataclasses
 import importlib
 import json
+import math
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -29,7 +30,7 @@ from rrtdrive.cli_args import (
     positive_int,
     validate_output,
 )
-from rrtdrive.types import Budget, InputError, PlanResult, Pose
+from rrtdrive.types import Budget, InputError, PlanResult, Pose, VehicleParams
 
 __all__ = ["COMMANDS", "build_parser", "main", "plan_to_json", "parse_pose"]
 
@@ -58,8 +59,22 @@ def parse_pose(text: str, name: str) -> Pose:
     return Pose.from_seq(values, name)
 
 
-def plan_to_json(result: PlanResult, seed: int, map_name: str) -> dict[str, object]:
-    """The JSON contract of ``rrtdrive plan`` (SPEC §5)."""
+def plan_to_json(
+    result: PlanResult, seed: int, map_name: str, vehicle: VehicleParams | None = None
+) -> dict[str, object]:
+    """The JSON contract of ``rrtdrive plan`` (SPEC §5).
+
+    ``max_sharpness`` is the path's largest steering rate per metre ``|d delta/ds|``
+    (rad/m, from its rows and the ``vehicle``'s wheelbase, see
+    :func:`~rrtdrive.planning.smoothing.max_sharpness`); ``steer_rate_speed_limit``
+    the speed (m/s) at which that needs exactly ``vehicle.max_steer_rate`` (null for
+    instant steering or a failed plan).
+    """
+    from rrtdrive.planning.smoothing import max_sharpness, steer_rate_speed_limit
+
+    car = vehicle if vehicle is not None else VehicleParams()
+    sharp = max_sharpness(result.path.samples, car.wheelbase) if result.success else None
+    limit = steer_rate_speed_limit(sharp, car.max_steer_rate) if sharp is not None else None
     return {
         "success": result.success,
         "status": result.status.value,
@@ -71,12 +86,19 @@ def plan_to_json(result: PlanResult, seed: int, map_name: str) -> dict[str, obje
         # A failed plan has no path to measure: null, as in bench rows, not 0.0.
         "length_m": round(result.path.length, 6) if result.success else None,
         "max_curvature": round(result.path.max_curvature, 6) if result.success else None,
+        "max_sharpness": _json_number(sharp),
+        "steer_rate_speed_limit": _json_number(limit),
         "nodes": result.nodes,
         "iterations": result.iterations,
         "planning_time_s": result.planning_time_s,
         "setup_time_s": result.setup_time_s,
         "message": result.message,
     }
+
+
+def _json_number(value: float | None) -> float | None:
+    """Rounded for the JSON; None (null) for None and for inf (a path that never steers)."""
+    return None if value is None or not math.isfinite(value) else round(value, 6)
 
 
 def _write_output(target: str, text: str) -> None:
@@ -124,6 +146,14 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         options["step"] = args.step
     if args.disable:
         options["disable"] = tuple(args.disable)
+    if args.paper_smoothing:
+        if args.planner in PLANNERS and not _takes_option(PLANNERS[args.planner], "disable"):
+            raise InputError(
+                f"--paper-smoothing: applies to the improved planner only, not {args.planner!r}"
+            )
+        from rrtdrive.planning.smoothing import CurveKind
+
+        options["smoothing"] = {"curve": CurveKind.BSPLINE}
     planner = make_planner(args.planner, **options)
     budget = Budget(max_iterations=args.max_iterations, max_time_s=args.max_time)
     t_map = time.perf_counter()
@@ -132,7 +162,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     result = planner.solve(problem, np.random.default_rng(args.seed), budget)
     result = dataclasses.replace(result, setup_time_s=result.setup_time_s + field_s)
     if args.json:
-        _write_output(args.json, json.dumps(plan_to_json(result, args.seed, m.name)) + "\n")
+        doc = plan_to_json(result, args.seed, m.name, m.vehicle)
+        _write_output(args.json, json.dumps(doc) + "\n")
     if args.plot:
         from rrtdrive.plotting import plot_plan, save_figure
 
@@ -239,6 +270,14 @@ def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
         action="append",
         metavar="COMPONENT",
         help="switch off a component of the improved planner (repeatable), for ablation; "
+        "improved-rrt-connect only",
+    )
+    plan.add_argument(
+        "--paper-smoothing",
+        action="store_true",
+        help="the paper's degree-2 B-spline post-processing (curvature jumps where a leg "
+        "meets a fillet) instead of the default clothoid turns (continuous curvature, "
+        "steering rate per metre <= max_steer_rate / 2 m/s, 0.2 rad/m by default); "
         "improved-rrt-connect only",
     )
     plan.add_argument(

@@ -118,6 +118,40 @@ class DubinsPath:
             out.append((x, y))
         return np.array(out)
 
+    def polygon(self, max_arc: float = 2.0 * math.pi / 3.0) -> np.ndarray:
+        """The tangent polygon ``(K, 2)``: start, one vertex per (sub-)arc, end.
+
+        Each arc is split into ``ceil(angle / max_arc)`` equal sub-arcs; a sub-arc's
+        vertex is where the tangents at its ends meet, so the polygon's corners turn
+        by at most ``max_arc`` and its legs hold the straight segment. A
+        continuous-curvature path rounds these corners with clothoid turns
+        (:mod:`rrtdrive.planning.smoothing.clothoid`).
+
+        Examples
+        --------
+        >>> p = dubins_paths(Pose(0.0, 0.0, 0.0), Pose(0.0, 4.0, math.pi), 2.0)[0]
+        >>> p.word, np.round(p.polygon(), 6).tolist()
+        ('LSL', [[0.0, 0.0], [2.0, 0.0], [2.0, 4.0], [0.0, 4.0]])
+        """
+        if not 0.0 < max_arc < math.pi:
+            raise InputError(f"max_arc: must lie in (0, pi), got {max_arc!r}")
+        x, y, yaw = self.start.x, self.start.y, self.start.yaw
+        out = [(x, y)]
+        for turn, seg in zip(_WORDS[self.word], self.lengths, strict=True):
+            if turn != 0 and seg > 1e-9:
+                angle = seg / self.radius
+                m = max(1, math.ceil(angle / max_arc - 1e-9))
+                sub = seg / m
+                reach = self.radius * math.tan(0.5 * angle / m)
+                for _ in range(m):
+                    out.append((x + reach * math.cos(yaw), y + reach * math.sin(yaw)))
+                    x, y, yaw = _advance(x, y, yaw, turn, sub, self.radius)
+            else:
+                x, y, yaw = _advance(x, y, yaw, turn, seg, self.radius)
+        end = (self.goal.x, self.goal.y) if self.goal is not None else (x, y)
+        out.append(end)
+        return np.array(out)
+
     def end(self) -> tuple[float, float, float]:
         """Pose ``(x, y, yaw)`` at the end of the path (yaw unwrapped)."""
         x, y, yaw = self.start.x, self.start.y, self.start.yaw

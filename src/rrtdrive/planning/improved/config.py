@@ -33,9 +33,11 @@ COMPONENTS: tuple[str, ...] = (
 #: The components that are switches of the post-processor: fields of ``ImprovedConfig.smoothing``.
 SMOOTHING_COMPONENTS: tuple[str, ...] = ("prune", "sharp_repair", "supplement")
 
-#: Fields of :class:`SmoothingConfig` the planner sets per query: the car's ``kappa_max``,
-#: the step ``p`` as ``heading_leg`` and the capped ``body_clearance`` as ``clearance``.
-PER_QUERY_SMOOTHING: tuple[str, ...] = ("kappa_max", "heading_leg", "clearance")
+#: Fields of :class:`SmoothingConfig` the planner sets per query: the car's ``kappa_max``
+#: and ``wheelbase``, the step ``p`` as ``heading_leg`` and the capped ``body_clearance``
+#: as ``clearance``. (``max_sharpness`` is the config's, or the car's
+#: ``max_steer_rate / STEER_RATE_DESIGN_SPEED`` when that is smaller.)
+PER_QUERY_SMOOTHING: tuple[str, ...] = ("kappa_max", "wheelbase", "heading_leg", "clearance")
 
 
 def default_smoothing() -> SmoothingConfig:
@@ -43,8 +45,8 @@ def default_smoothing() -> SmoothingConfig:
 
     Examples
     --------
-    >>> default_smoothing().max_rounds, default_smoothing().degree
-    (24, 2)
+    >>> default_smoothing().max_rounds, default_smoothing().curve.value
+    (24, 'clothoid')
     """
     return SmoothingConfig(max_rounds=24)
 
@@ -97,7 +99,10 @@ class ImprovedConfig:
     smoothing : SmoothingConfig
         The post-processor (Sec. 3.2, :func:`default_smoothing`): the components
         ``prune``, ``sharp_repair`` and ``supplement`` (:data:`SMOOTHING_COMPONENTS`),
-        the spline ``degree`` (2, paper, or 3), Eq. 16's ``supplement_delta`` and
+        the ``curve`` (``CurveKind.CLOTHOID``, continuous curvature with the
+        steering rate per metre bounded by ``max_sharpness``, default; or
+        ``CurveKind.BSPLINE``, the paper's), the spline ``degree`` (2, paper, or 3),
+        Eq. 16's ``supplement_delta`` and
         ``supplement_n``, ``max_rounds`` fit-check-repair rounds per tree path (24)
         and the sampling and fillet settings. Its :data:`PER_QUERY_SMOOTHING`
         fields are set per query and must keep their defaults here.

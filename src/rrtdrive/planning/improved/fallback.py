@@ -1,4 +1,13 @@
-"""The Dubins fallback (beyond the paper): a Dubins path, or a tree path with a Dubins end."""
+"""The Dubins fallback (beyond the paper): a Dubins path, or a tree path with a Dubins end.
+
+With clothoid smoothing (the default) a Dubins word's line-arc path would bring
+back the curvature jumps, so each word becomes its tangent polygon
+(:meth:`DubinsPath.polygon`) rounded by the tightest clothoid turns
+(:func:`polygon_curve`): continuous curvature, 0 at both ends, and the sharpness
+bound; where the turns do not fit the polygon's legs, the word is retried with a
+larger radius (:data:`CC_RADIUS_STEPS`). The paper's B-spline keeps the plain
+Dubins words.
+"""
 
 from __future__ import annotations
 
@@ -8,11 +17,73 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from rrtdrive.collision import CollisionChecker
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.dubins import DubinsPath, dubins_paths
 from rrtdrive.planning.smoothing import SmoothingConfig, make_drivable
+from rrtdrive.planning.smoothing.clothoid import turn_circle
+from rrtdrive.planning.smoothing.clothoid_curve import polygon_curve, sample_pieces
 from rrtdrive.types import Path, Pose
 
-__all__ = ["dubins_fallback"]
+__all__ = ["CC_RADIUS_STEPS", "dubins_fallback"]
+
+#: Radii (multiples of the fallback's radius) a Dubins word is tried with when its
+#: polygon is rounded by clothoid turns: the turns need longer legs than the arcs.
+#: Dubins arcs longer than this are split into equal sub-arcs for the polygon
+#: (a polygon corner turns by less than pi; sub-arcs need a larger radius to fit).
+_MAX_ARC = 0.95 * math.pi
+CC_RADIUS_STEPS: tuple[float, ...] = (1.0, 1.1, 1.25, 1.4, 1.6, 1.8, 2.1, 2.5)
+
+
+def _free_end(
+    checker: CollisionChecker,
+    start: Pose,
+    goal: Pose,
+    radius: float,
+    clearance: float,
+    smoothing: SmoothingConfig | None,
+    sample_spacing: float,
+    check_spacing: float,
+) -> tuple[np.ndarray, np.ndarray, str] | None:
+    """The shortest clear Dubins word (clothoid-rounded with clothoid smoothing), sampled."""
+    if smoothing is None or not smoothing.clothoid:
+        cand = _free_dubins(checker, start, goal, radius, clearance, check_spacing)
+        if cand is None:
+            return None
+        return cand.sample(sample_spacing), cand.joints(), cand.word
+    sigma = smoothing.tightest_sigma
+    # A clothoid turn is the arc of radius r_in lengthened by d at either end
+    # (Fraichard & Scheuer's inner circle), so the Dubins word of radius r_in between
+    # the poses moved in by d, with the real ends put back, is a polygon whose
+    # rounded corners fit when its straight is at least 2 d long. Larger radii give
+    # the turns more room (CCC words, arcs split at the polygon's corners).
+    kappa = 1.0 / max(radius, smoothing.design_radius)
+    r_in, d = turn_circle(kappa, sigma)
+    a = Pose(start.x + d * math.cos(start.yaw), start.y + d * math.sin(start.yaw), start.yaw)
+    b = Pose(goal.x - d * math.cos(goal.yaw), goal.y - d * math.sin(goal.yaw), goal.yaw)
+    found = []
+    for step in CC_RADIUS_STEPS:
+        for cand in dubins_paths(a, b, r_in * step):
+            poly = np.vstack([start.xy, cand.polygon(_MAX_ARC)[1:-1], goal.xy])
+            pieces = polygon_curve(poly, kappa, sigma)
+            if pieces is not None:
+                length = sum(p.length for p in pieces)
+                found.append((length, len(found), pieces, poly, cand.word, r_in * step))
+    # The shortest rounded word first, whatever its radius.
+    for _, _, pieces, poly, word, r in sorted(found, key=lambda f: f[:2]):
+        dense, _ = sample_pieces(pieces, check_spacing)
+        _pin_ends(dense, start, goal)
+        if bool(np.all(checker.poses_free(dense[:, :3], clearance=clearance))):
+            rows, _ = sample_pieces(pieces, sample_spacing)
+            _pin_ends(rows, start, goal)
+            return rows, poly, f"{word} of radius {r:.1f} m with clothoid turns"
+    return None
+
+
+def _pin_ends(rows: np.ndarray, start: Pose, goal: Pose) -> None:
+    """Put the first and last rows exactly on the end poses (they differ by ~1e-12)."""
+    rows[0, :3] = start.as_tuple()
+    rows[-1, :3] = goal.as_tuple()
+    rows[:, 2] = wrap_angle(rows[:, 2])
 
 
 def _free_dubins(
@@ -46,14 +117,16 @@ def dubins_fallback(
     """A drivable path that ends in a Dubins path, when the tree paths alone fail.
 
     First the shortest Dubins path from ``start`` to ``goal`` that the exact body
-    test clears. Then, for each tree path in ``raw_paths`` and each of its nodes
-    from the last but one backwards, a *tail*: the node, with the heading of the
-    tree edge into it, is joined to ``goal`` by a clear Dubins path, and the tree
-    path up to the node is made drivable by :func:`make_drivable` with that pose
-    as its goal; the two meet at the node with the same position and heading.
-    Last, the mirror image, a *lead*: a clear Dubins path from ``start`` to a node
-    (with the heading of the tree edge out of it, nodes in driving order), then the
-    tree path from there made drivable.
+    test clears (with clothoid ``smoothing``: the shortest clear word rounded by
+    clothoid turns, see the module docstring). Then, for each tree path in
+    ``raw_paths`` and each of its nodes from the last but one backwards, a
+    *tail*: the node, with the heading of the tree edge into it, is joined to
+    ``goal`` by such a clear path, and the tree path up to the node is made
+    drivable by :func:`make_drivable` with that pose as its goal; the two meet at
+    the node with the same position and heading (and ``kappa = 0`` with clothoids).
+    Last, the mirror image, a *lead*: a clear path from ``start`` to a node (with
+    the heading of the tree edge out of it, nodes in driving order), then the tree
+    path from there made drivable.
 
     Parameters
     ----------
@@ -81,9 +154,14 @@ def dubins_fallback(
         tree part, then the Dubins segment junctions) and a description, or
         ``None`` when nothing fits.
     """
-    direct = _free_dubins(checker, start, goal, radius, clearance, check_spacing)
+    def free_end(a: Pose, b: Pose) -> tuple[np.ndarray, np.ndarray, str] | None:
+        return _free_end(
+            checker, a, b, radius, clearance, smoothing, sample_spacing, check_spacing
+        )
+
+    direct = free_end(start, goal)
     if direct is not None:
-        return Path(direct.sample(sample_spacing), direct.joints()), direct.word
+        return Path(direct[0], direct[1]), direct[2]
     if smoothing is None:
         return None
     for raw in raw_paths:
@@ -92,31 +170,31 @@ def dubins_fallback(
                 return None
             yaw = math.atan2(raw[i, 1] - raw[i - 1, 1], raw[i, 0] - raw[i - 1, 0])
             joint = Pose(float(raw[i, 0]), float(raw[i, 1]), yaw)
-            tail = _free_dubins(checker, joint, goal, radius, clearance, check_spacing)
+            tail = free_end(joint, goal)
             if tail is None:
                 continue
             head = make_drivable(raw[: i + 1], start, joint, checker, smoothing)
             if not head.ok:
                 continue
-            samples = np.vstack([head.samples, tail.sample(sample_spacing)[1:]])
-            waypoints = np.vstack([head.control_points, tail.joints()[1:]])
+            samples = np.vstack([head.samples, tail[0][1:]])
+            waypoints = np.vstack([head.control_points, tail[1][1:]])
             where = f"({joint.x:.1f}, {joint.y:.1f})"
-            return Path(samples, waypoints), f"tree path to {where} + {tail.word}"
+            return Path(samples, waypoints), f"tree path to {where} + {tail[2]}"
     for raw in raw_paths:
         for i in range(1, len(raw) - 1):
             if expired is not None and expired():
                 return None
             yaw = math.atan2(raw[i + 1, 1] - raw[i, 1], raw[i + 1, 0] - raw[i, 0])
             joint = Pose(float(raw[i, 0]), float(raw[i, 1]), yaw)
-            lead = _free_dubins(checker, start, joint, radius, clearance, check_spacing)
+            lead = free_end(start, joint)
             if lead is None:
                 continue
             rest = make_drivable(raw[i:], joint, goal, checker, smoothing)
             if not rest.ok:
                 continue
-            samples = np.vstack([lead.sample(sample_spacing)[:-1], rest.samples])
-            waypoints = np.vstack([lead.joints()[:-1], rest.control_points])
+            samples = np.vstack([lead[0][:-1], rest.samples])
+            waypoints = np.vstack([lead[1][:-1], rest.control_points])
             where = f"({joint.x:.1f}, {joint.y:.1f})"
-            return Path(samples, waypoints), f"{lead.word} + tree path from {where}"
+            return Path(samples, waypoints), f"{lead[2]} + tree path from {where}"
     return None
 

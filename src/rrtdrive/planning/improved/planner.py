@@ -34,7 +34,7 @@ from rrtdrive.planning.improved.growth import (
 )
 from rrtdrive.planning.result import run_query, solved
 from rrtdrive.planning.sampling import SampleSource
-from rrtdrive.planning.smoothing import make_drivable
+from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, make_drivable
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Tree
 
 __all__ = ["NAME", "ImprovedRRTConnect"]
@@ -129,6 +129,23 @@ class ImprovedRRTConnect:
         )
 
 
+def sharpness_bound(configured: float, max_steer_rate: float | None) -> float:
+    """The query's ``max_sharpness``: the config's, or the car's rate / 2 m/s when smaller.
+
+    The config's bound (0.2 rad/m by default, for CommonRoad's 0.4 rad/s) holds for a
+    car without a rate limit too, so that the default paths are drivable by any
+    actuator at least that fast; a slower actuator tightens it.
+
+    Examples
+    --------
+    >>> sharpness_bound(0.2, None), sharpness_bound(0.2, 0.3), sharpness_bound(0.2, 1.0)
+    (0.2, 0.15, 0.2)
+    """
+    if max_steer_rate is None or not math.isfinite(max_steer_rate):
+        return configured
+    return min(configured, max_steer_rate / STEER_RATE_DESIGN_SPEED)
+
+
 class _Query:
     """Working state of one query: its settings, counters and the tree paths tried."""
 
@@ -141,9 +158,12 @@ class _Query:
         self.checker = checker = problem.checker
         self.start, self.goal = start, goal = problem.start, problem.goal
         # The config's post-processor with the query's PER_QUERY_SMOOTHING fields.
+        vehicle = problem.vehicle
         self.smoothing = dataclasses.replace(
             cfg.smoothing,
-            kappa_max=problem.vehicle.kappa_max,
+            kappa_max=vehicle.kappa_max,
+            wheelbase=vehicle.wheelbase,
+            max_sharpness=sharpness_bound(cfg.smoothing.max_sharpness, vehicle.max_steer_rate),
             heading_leg=cfg.step,
             clearance=endpoint_capped_clearance(checker, start, goal, cfg.body_clearance),
         )
@@ -221,13 +241,21 @@ class _Query:
         stats["key_points"] = float(len(res.key_points))
         stats["control_points"] = float(len(res.control_points))
         stats["max_curvature"] = res.max_curvature
+        if not math.isnan(res.max_sharpness):
+            stats["max_sharpness"] = res.max_sharpness
         stats.update(res.stats)
         elapsed = self.watch.elapsed()
         stats["growth_time_s"] = elapsed - stats["postprocess_time_s"]
-        message = (
-            f"solved: {len(res.key_points)} key points, {len(res.control_points)} "
-            f"control points, {res.rounds} fit round(s)"
-        )
+        if self.smoothing.clothoid:
+            message = (
+                f"solved: {len(res.key_points)} key points, {int(res.stats['fillets'])} "
+                f"clothoid turns, {res.rounds} fit round(s)"
+            )
+        else:
+            message = (
+                f"solved: {len(res.key_points)} key points, {len(res.control_points)} "
+                f"control points, {res.rounds} fit round(s)"
+            )
         path = Path(res.samples, res.control_points)
         return solved(
             NAME, self.watch, path, raw, trees, iterations, message, stats,

@@ -1,4 +1,10 @@
-"""Smoothing: a tree path into a drivable B-spline (paper Sec. 3.2; SPEC §3 items 5–9).
+"""Smoothing: a tree path into a drivable curve (paper Sec. 3.2; SPEC §3 items 5–10).
+
+The default curve (``SmoothingConfig.curve = CurveKind.CLOTHOID``, SPEC §3 item 10)
+joins straight legs by symmetric clothoid turns (:mod:`.clothoid`,
+:mod:`.clothoid_curve`): continuous curvature, 0 at both ends, and a steering rate
+per metre ``|d delta / ds|`` at most ``max_sharpness``, checked exactly per turn.
+``CurveKind.BSPLINE`` is the paper's B-spline pipeline described below.
 
 The steps are small functions over arrays and a collision checker, so each can
 be tested and switched off on its own:
@@ -46,7 +52,13 @@ from rrtdrive.planning.smoothing.bspline import (
     spline_curvature,
 )
 from rrtdrive.planning.smoothing.checks import EdgeChecker, PathChecker
-from rrtdrive.planning.smoothing.config import SmoothingConfig, SmoothingResult
+from rrtdrive.planning.smoothing.clothoid import ClothoidTurn, clothoid_turn, sample_turn
+from rrtdrive.planning.smoothing.config import (
+    STEER_RATE_DESIGN_SPEED,
+    CurveKind,
+    SmoothingConfig,
+    SmoothingResult,
+)
 from rrtdrive.planning.smoothing.drivable import make_drivable
 from rrtdrive.planning.smoothing.fillet import Fillet, fillet_points
 from rrtdrive.planning.smoothing.operations import (
@@ -55,6 +67,11 @@ from rrtdrive.planning.smoothing.operations import (
     repair_sharp_angles,
     sharp_flags,
     supplement,
+)
+from rrtdrive.planning.smoothing.sharpness import (
+    interval_sharpness,
+    max_sharpness,
+    steer_rate_speed_limit,
 )
 
 __all__ = [
@@ -76,5 +93,13 @@ __all__ = [
     "fillet_points",
     "SmoothingConfig",
     "SmoothingResult",
+    "CurveKind",
+    "STEER_RATE_DESIGN_SPEED",
+    "ClothoidTurn",
+    "clothoid_turn",
+    "sample_turn",
+    "interval_sharpness",
+    "max_sharpness",
+    "steer_rate_speed_limit",
     "make_drivable",
 ]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass, field
 
@@ -9,7 +10,29 @@ import numpy as np
 
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
-__all__ = ["MOVE_DIRECTIONS", "DEFAULT_CORNER_MOVES", "SmoothingConfig", "SmoothingResult"]
+__all__ = [
+    "MOVE_DIRECTIONS",
+    "DEFAULT_CORNER_MOVES",
+    "STEER_RATE_DESIGN_SPEED",
+    "CurveKind",
+    "SmoothingConfig",
+    "SmoothingResult",
+]
+
+#: Speed (m/s) at which a path of the default sharpness bound needs exactly the
+#: actuator's largest steering rate: the bound is ``max_steer_rate / 2 m/s``.
+STEER_RATE_DESIGN_SPEED = 2.0
+
+
+class CurveKind(enum.Enum):
+    """The curve the post-processor fits to the key polygon."""
+
+    #: Straight legs joined by symmetric clothoid turns: continuous curvature and a
+    #: bounded steering rate per metre (the default).
+    CLOTHOID = "clothoid"
+    #: The paper's clamped uniform B-spline of ``SmoothingConfig.degree`` (2 in the paper):
+    #: curvature jumps where a leg meets a fillet.
+    BSPLINE = "bspline"
 
 #: Directions a corner can be moved in, each from its original place: "back" along its
 #: outgoing line (the outgoing straight starts earlier), "ahead" on along its incoming
@@ -36,8 +59,19 @@ class SmoothingConfig:
     ----------
     kappa_max : float
         Largest admissible curvature in 1/m (the car's ``kappa_max``).
+    curve : CurveKind
+        ``CLOTHOID`` (default: continuous curvature, sharpness bounded by
+        ``max_sharpness``) or ``BSPLINE`` (the paper's pipeline, of ``degree``).
     degree : int
-        B-spline degree, 2 (paper) or 3.
+        B-spline degree, 2 (paper) or 3; only for ``curve=BSPLINE``.
+    max_sharpness : float
+        Largest steering rate per metre ``|d delta / ds|`` (rad/m, ``delta =
+        atan(wheelbase kappa)``) of a ``CLOTHOID`` curve, checked exactly on the result:
+        ``max_steer_rate / STEER_RATE_DESIGN_SPEED`` (0.2 rad/m for 0.4 rad/s).
+    min_sharpness : float
+        The gentlest clothoid turns used where the legs leave room (rad/m).
+    wheelbase : float
+        ``L`` in metres, for ``delta = atan(L kappa)`` (the car's).
     prune, sharp_repair, supplement : bool
         Switch the paper's steps on or off.
     supplement_delta, supplement_n : float
@@ -50,7 +84,8 @@ class SmoothingConfig:
     check_spacing : float
         Largest gap between the poses given to the exact body test (m).
     kappa_safety : float
-        Fillets are designed for ``kappa_safety * kappa_max``.
+        Fillets and clothoid arcs are designed for ``kappa_safety * kappa_max``, the
+        tightest clothoids for ``kappa_safety * max_sharpness``.
     fillet_max_angle : float
         Largest turn per fillet vertex (radians).
     max_rounds : int
@@ -81,7 +116,11 @@ class SmoothingConfig:
     """
 
     kappa_max: float = 1.0 / 6.0
+    curve: CurveKind = CurveKind.CLOTHOID
     degree: int = 2
+    max_sharpness: float = 0.2
+    min_sharpness: float = 0.02
+    wheelbase: float = 2.51
     prune: bool = True
     sharp_repair: bool = True
     supplement: bool = True
@@ -109,8 +148,21 @@ class SmoothingConfig:
             "heading_leg",
             "sample_spacing",
             "check_spacing",
+            "max_sharpness",
+            "min_sharpness",
+            "wheelbase",
         ):
             require_positive(f"smoothing.{name}", getattr(self, name))
+        if not isinstance(self.curve, CurveKind):
+            raise InputError(
+                f"smoothing.curve: must be one of {[k.value for k in CurveKind]}, "
+                f"got {self.curve!r}"
+            )
+        if self.min_sharpness > self.max_sharpness:
+            raise InputError(
+                f"smoothing.min_sharpness: must be <= max_sharpness {self.max_sharpness}, "
+                f"got {self.min_sharpness!r}"
+            )
         if self.degree not in (2, 3):
             raise InputError(f"smoothing.degree: must be 2 or 3, got {self.degree!r}")
         if not 0.0 < self.supplement_n < 1.0:
@@ -159,15 +211,38 @@ class SmoothingConfig:
             raise InputError(f"smoothing.end_gap: must be >= 0, got {self.end_gap!r}")
 
     @property
+    def clothoid(self) -> bool:
+        """Whether the curve is made of clothoid turns."""
+        return self.curve is CurveKind.CLOTHOID
+
+    @property
     def design_radius(self) -> float:
-        """Smallest fillet radius: ``max |kappa| = 1 / (R cos(phi/2)) <= safety * kappa_max``.
+        """Smallest turn radius: ``safety * kappa_max`` on the arc.
+
+        A fillet's quadratic pieces peak at ``1 / (R cos(phi/2))``, so its radius is
+        that much larger; a clothoid turn's arc has exactly ``1 / R``.
 
         Examples
         --------
-        >>> round(SmoothingConfig().design_radius, 3)
+        >>> round(SmoothingConfig(curve=CurveKind.BSPLINE).design_radius, 3)
         6.209
+        >>> round(SmoothingConfig().design_radius, 3)
+        6.186
         """
+        if self.clothoid:
+            return 1.0 / (self.kappa_max * self.kappa_safety)
         return 1.0 / (self.kappa_max * self.kappa_safety * math.cos(self.fillet_max_angle / 2.0))
+
+    @property
+    def tightest_sigma(self) -> float:
+        """Sharpness ``dkappa/ds`` (1/m^2) of the tightest clothoids.
+
+        Examples
+        --------
+        >>> round(SmoothingConfig().tightest_sigma, 5)
+        0.07729
+        """
+        return self.kappa_safety * self.max_sharpness / self.wheelbase
 
 
 @dataclass(frozen=True, eq=False)
@@ -187,7 +262,11 @@ class SmoothingResult:
     rounds : int
         Fit-check rounds used (1 when the first fit passed).
     max_curvature : float
-        Largest ``|kappa|`` of the curve (exact per span for degree 2, dense samples for 3).
+        Largest ``|kappa|`` of the curve (exact per span for degree 2 and per turn for
+        clothoids, dense samples for degree 3).
+    max_sharpness : float
+        Largest ``|d delta / ds|`` in rad/m, exact per clothoid; ``nan`` for a B-spline
+        (whose curvature jumps at the knots for degree 2).
     message : str
         Why it failed, or an empty string.
     stats : dict
@@ -202,3 +281,4 @@ class SmoothingResult:
     max_curvature: float
     message: str = ""
     stats: dict[str, float] = field(default_factory=dict)
+    max_sharpness: float = math.nan

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rrtdrive.planning.smoothing.checks import EdgeCache
+from rrtdrive.planning.smoothing.clothoid import turn_tangent
 from rrtdrive.planning.smoothing.config import SmoothingConfig
 from rrtdrive.planning.smoothing.fillet import fillet_points, outer_reach
 from rrtdrive.planning.smoothing.operations import prune, repair_sharp_angles
@@ -29,7 +30,9 @@ __all__ = [
     "build_key_polygon",
     "unit",
     "deflection",
+    "signed_deflection",
     "kind_of",
+    "turn_reach",
 ]
 
 
@@ -60,9 +63,13 @@ class Corner:
     raw_index : int
         Index into the augmented path (:attr:`KeyPolygon.aug`) it came from.
     radius : float
-        Fillet radius in m; 0 for a plain corner.
+        Fillet radius in m; 0 for a plain corner (a clothoid curve gives a plain
+        corner the design radius).
     attempt : int
         Treatments used so far (:meth:`~rrtdrive.planning.smoothing.repair.Repairer.advance`).
+    tight : bool
+        Clothoid curves only: the turn uses the tightest clothoids (least cut
+        across the corner) instead of the gentlest that fit its legs.
     """
 
     point: np.ndarray
@@ -71,6 +78,7 @@ class Corner:
     raw_index: int
     radius: float = 0.0
     attempt: int = 0
+    tight: bool = False
 
     @classmethod
     def at(cls, point: np.ndarray, kind: CornerKind, raw_index: int) -> Corner:
@@ -142,15 +150,39 @@ class KeyPolygon:
         return deflection(p[0], p[1], p[2]), deflection(p[-3], p[-2], p[-1])
 
     def heading_reach(self, radius: float, cfg: SmoothingConfig) -> tuple[float, float]:
-        """Guard reach that fillets of ``radius`` at the start- and goal-leg corners need."""
+        """Reach that turns of ``radius`` at the start- and goal-leg corners need."""
         p = self.points()
         out = []
         for c in (1, len(p) - 2):
             ux, uy, _ = unit(*(p[c] - p[c - 1]))
             vx, vy, _ = unit(*(p[c + 1] - p[c]))
-            f = fillet_points(p[c], (ux, uy), (vx, vy), radius, cfg.fillet_max_angle)
-            out.append(outer_reach(f, cfg.degree))
+            out.append(turn_reach(cfg, p[c], (ux, uy), (vx, vy), radius))
         return out[0], out[1]
+
+
+def turn_reach(
+    cfg: SmoothingConfig,
+    point: np.ndarray,
+    u_in: tuple[float, float],
+    u_out: tuple[float, float],
+    radius: float,
+) -> float:
+    """Least distance along each leg from a corner that its turn of ``radius`` needs.
+
+    For a B-spline the fillet's outermost guard point; for clothoids the tangent
+    length of the tightest turn (``inf`` for a reversal). 0 for ``radius = 0``
+    with a B-spline (a plain control point).
+    """
+    if cfg.clothoid:
+        theta = math.atan2(
+            u_in[0] * u_out[1] - u_in[1] * u_out[0], u_in[0] * u_out[0] + u_in[1] * u_out[1]
+        )
+        r = radius if radius > 0.0 else cfg.design_radius
+        return turn_tangent(theta, 1.0 / r, cfg.tightest_sigma)
+    if radius <= 0.0:
+        return 0.0
+    f = fillet_points(point, u_in, u_out, radius, cfg.fillet_max_angle)
+    return outer_reach(f, cfg.degree) if math.isfinite(f.reach) else math.inf
 
 
 def unit(dx: float, dy: float) -> tuple[float, float, float]:
@@ -159,6 +191,11 @@ def unit(dx: float, dy: float) -> tuple[float, float, float]:
     if n < 1e-12:
         return 0.0, 0.0, 0.0
     return dx / n, dy / n, n
+
+
+def signed_deflection(u: tuple[float, float], v: tuple[float, float]) -> float:
+    """Signed turn in radians from direction ``u`` to ``v`` (positive: left)."""
+    return math.atan2(u[0] * v[1] - u[1] * v[0], u[0] * v[0] + u[1] * v[1])
 
 
 def deflection(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> float:

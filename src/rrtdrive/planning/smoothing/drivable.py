@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rrtdrive.planning.smoothing.checks import CheckerView, EdgeCache, PathChecker
+from rrtdrive.planning.smoothing.clothoid_curve import ClothoidFitter
 from rrtdrive.planning.smoothing.config import SmoothingConfig, SmoothingResult
 from rrtdrive.planning.smoothing.corners import Ends, KeyPolygon, build_key_polygon
 from rrtdrive.planning.smoothing.curve import CurveFitter
@@ -128,7 +129,10 @@ def _attempt(
     if isinstance(poly, str):
         return _Attempt(None, poly, None, np.zeros((0, 2)), 0)
     poly = _lengthen_heading_legs(poly, raw, ends, edges, cfg, max_turn)
-    return _repair_loop(Repairer(poly, ends, edges, cfg), CurveFitter(cfg, view, ends), cfg)
+    repairer = Repairer(poly, ends, edges, cfg)
+    if cfg.clothoid:
+        return _clothoid_loop(repairer, ClothoidFitter(cfg, view, ends), cfg)
+    return _repair_loop(repairer, CurveFitter(cfg, view, ends), cfg)
 
 
 def _initial_polygon(
@@ -214,6 +218,47 @@ def _repair_loop(repairer: Repairer, fitter: CurveFitter, cfg: SmoothingConfig) 
             message = f"could not repair a {what} violation near ({stuck[0]:.1f}, {stuck[1]:.1f})"
             break
     return _Attempt(None, message, ctrl, _key_points(repairer), rounds)
+
+
+def _clothoid_loop(repairer: Repairer, fitter: ClothoidFitter, cfg: SmoothingConfig) -> _Attempt:
+    """:func:`_repair_loop` for clothoid curves: build, check limits and body, repair."""
+    corners = repairer.corners
+    message = f"no drivable curve within {cfg.max_rounds} repair rounds"
+    rounds = 0
+    while rounds < cfg.max_rounds:
+        rounds += 1
+        curve, conflicts = fitter.build(corners)
+        if curve is None:
+            failed = _fix_conflicts(repairer, conflicts)
+            if failed is not None:
+                a, b = corners[failed].point, corners[failed + 1].point
+                message = (
+                    f"the turns at ({a[0]:.1f}, {a[1]:.1f}) and ({b[0]:.1f}, {b[1]:.1f}) "
+                    "are too close for the car"
+                )
+                break
+            continue
+        bad = fitter.check_limits(curve, len(corners))
+        what = "curvature or sharpness"
+        if not bad:
+            bad, _ = fitter.check_collision(curve, len(corners))
+            what = "collision"
+            if not bad:
+                samples = fitter.output_samples(curve)
+                key = _key_points(repairer)
+                stats = _stats(repairer)
+                stats["tight_turns"] = float(sum(c.tight for c in corners[1:-1]))
+                ok = SmoothingResult(
+                    True, samples, key, key, rounds, curve.max_curvature, "", stats,
+                    curve.max_sharpness,
+                )  # fmt: skip
+                return _Attempt(ok, "", key, key, rounds)
+        stuck = _advance_all(repairer, bad)
+        if stuck is not None:
+            message = f"could not repair a {what} violation near ({stuck[0]:.1f}, {stuck[1]:.1f})"
+            break
+    key = _key_points(repairer)
+    return _Attempt(None, message, key, key, rounds)
 
 
 def _fix_conflicts(repairer: Repairer, conflicts: list[int]) -> int | None:

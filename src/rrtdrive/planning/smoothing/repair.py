@@ -24,9 +24,9 @@ from rrtdrive.planning.smoothing.corners import (
     KeyPolygon,
     deflection,
     kind_of,
+    turn_reach,
     unit,
 )
-from rrtdrive.planning.smoothing.fillet import Fillet, fillet_points, outer_reach
 from rrtdrive.planning.smoothing.operations import prune
 
 __all__ = ["Repairer"]
@@ -63,6 +63,14 @@ class Repairer:
         self.moves = 0
         self.drops = 0
         self.unprunes = 0
+        self._give_turns()
+
+    def _give_turns(self) -> None:
+        """Clothoid curves round every corner: a plain corner gets the design radius."""
+        if self.cfg.clothoid:
+            for corner in self.corners[1:-1]:
+                if corner.radius <= 0.0:
+                    corner.radius = self.r_design
 
     @property
     def corners(self) -> list[Corner]:
@@ -84,15 +92,15 @@ class Repairer:
         now = self._turn_at(c)
         return deflection(p[c - 1].point, new, p[c + 1].point) <= max(now, self.cfg.hairpin_turn)
 
-    def _fillet(self, c: int) -> Fillet:
-        """The fillet of corner ``c`` with its current radius."""
+    def _reach(self, c: int) -> float:
+        """How far along each leg the turn of corner ``c`` (current radius) reaches."""
         p = self.corners
-        return fillet_points(
+        return turn_reach(
+            self.cfg,
             p[c].point,
             unit(*(p[c].point - p[c - 1].point))[:2],
             unit(*(p[c + 1].point - p[c].point))[:2],
             p[c].radius,
-            self.cfg.fillet_max_angle,
         )
 
     def _leg_length(self, leg: int) -> float:
@@ -146,6 +154,11 @@ class Repairer:
         """Next treatment for corner ``c``: plain -> fillets -> moves; False when exhausted."""
         steps, moves = self.cfg.radius_steps, self.cfg.corner_moves
         corner = self.corners[c]
+        if self.cfg.clothoid and not corner.tight:
+            # The gentlest clothoids that fit cut across the corner most: tighten first.
+            corner.tight = True
+            corner.attempt = max(corner.attempt, 1)
+            return True
         while True:
             corner.attempt += 1
             a = corner.attempt
@@ -202,6 +215,7 @@ class Repairer:
             return False
         idx = [i0 + int(k) for k in sub[1:-1]]
         self.corners[c : c + 1] = [Corner.at(poly.aug[k], kind_of(k, n_aug), k) for k in idx]
+        self._give_turns()
         self.unprunes += 1
         return True
 
@@ -239,7 +253,7 @@ class Repairer:
         need = 0.0
         for c in (leg, leg + 1):
             if 0 < c < n - 1 and self.corners[c].radius > 0.0:
-                need += outer_reach(self._fillet(c), self.cfg.degree)
+                need += self._reach(c)
         gap = self.cfg.end_gap if leg in (0, n - 2) else 0.0
         return need + gap <= self._leg_length(leg)
 
@@ -316,13 +330,12 @@ class Repairer:
         grown[c] = grown.get(c, 0) + 1
         ray, end = (self.ends.hs, self.ends.s) if leg == 0 else (-self.ends.hg, self.ends.g)
         corner = self.corners[c]
-        f = self._fillet(c)
+        reach = self._reach(c)
         length = float(np.hypot(*(corner.point - end)))
-        new_length = outer_reach(f, self.cfg.degree) + 0.5 + 0.1 * length
+        new_length = reach + 0.5 + 0.1 * length
         new = end + new_length * ray if math.isfinite(new_length) else None
         if (
             new is not None
-            and math.isfinite(f.reach)
             and self._turn_ok(c, new)
             and self.place(c, new)
         ):
@@ -361,6 +374,7 @@ class Repairer:
             corner = self.corners[c]
             if corner.attempt < n_steps:
                 corner.attempt = n_steps  # straight to the moves
+            corner.tight = True  # a gentler turn only needs more room
             if self.advance(c):
                 return True
         return False
