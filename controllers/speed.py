@@ -106,7 +106,7 @@ class SpeedConfig:
     taper_stop_speed: float = 0.01
     steer_rate_share: float = 0.7
     start_steer_tol: float = 0.005
-    comfort_jerk: float = 3.0
+    comfort_jerk: float = 2.0
 
     def __post_init__(self) -> None:
         for name in (
