@@ -206,7 +206,14 @@ class SpeedController:
             self.arrived = True
             self.v_ref = 0.0
             return self._hold(speed, dt)
-        v_ref, a_ref = profile.at(s)
+        if self.comfort:
+            # Read the profile ahead by half the time the jerk bound needs to swing the
+            # command through the profile's acceleration range: the jerk-limited ramp then
+            # straddles the profile's corners instead of starting at them (and lagging).
+            tau = 0.5 * max(cfg.accel, cfg.decel) / cfg.comfort_jerk
+            v_ref, a_ref = profile.at(s + abs(speed) * tau)
+        else:
+            v_ref, a_ref = profile.at(s)
         if remaining <= 0.0:
             # Past the end: brake to a stop within a few centimetres.
             self.v_ref = 0.0
