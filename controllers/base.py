@@ -9,14 +9,21 @@ Python on lists with a local search from the previous match (no numpy per step).
 from __future__ import annotations
 
 import bisect
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from rrtdrive.controllers.speed import SpeedConfig, SpeedController, SpeedProfile
+from rrtdrive.controllers.speed import (
+    FINAL_APPROACH_M,
+    SpeedConfig,
+    SpeedController,
+    SpeedProfile,
+)
 from rrtdrive.geometry import wrap_angle
+from rrtdrive.speed_profile import steering_rate_speed_cap
 from rrtdrive.types import InputError, Path, VehicleParams, require_finite, require_positive
 
 __all__ = [
@@ -240,6 +247,19 @@ class TrackingController:
     ``atan(L * kappa_max)``, so the executed curvature never exceeds ``kappa_max``;
     the actuator's own 30° limit is wider).
 
+    When the car's actuator is rate-limited (``vehicle.max_steer_rate`` finite), the
+    controller knows it: the speed profile is also capped by the steering rate
+    (``speed.steer_rate_share``), the command is clipped to what the actuator can
+    reach in one step from the current angle (``state.steer +- rate * dt``, ``dt``
+    the time since the last call; the controllers keep no steering memory, so
+    nothing winds up against the limit), at the start of a path the car stays at
+    rest until its wheels are within ``speed.start_steer_tol`` of the command, the
+    speed loop runs in comfort mode, and :attr:`ff_preview` (the distance driven in
+    one step, ``|v| dt``) tells the feed-forward how far ahead to read the path's
+    curvature: the actuator turns the wheels linearly over the step after a command,
+    so a command reaches its mean one step late. With an instant actuator none of
+    this happens.
+
     Parameters
     ----------
     vehicle : VehicleParams
@@ -253,6 +273,11 @@ class TrackingController:
     ----------
     cte, heading_error, s, v_ref : float
         Diagnostics of the last call (rear axle, left positive; yaw - path yaw).
+    steer_rate : float or None
+        The actuator's rate limit (rad/s) from ``vehicle``; ``None`` when instant.
+    ff_preview : float
+        Metres ahead of the projection at which feed-forward reads the path (0
+        with an instant actuator).
     """
 
     name = "tracking"
@@ -268,10 +293,17 @@ class TrackingController:
         limit = self.vehicle.steer_for_kappa_max if steer_limit is None else steer_limit
         require_positive("controller.steer_limit", limit)
         self.steer_limit = min(float(limit), self.vehicle.max_steer)
+        rate = self.vehicle.max_steer_rate
+        self.steer_rate: float | None = (
+            float(rate) if rate is not None and math.isfinite(rate) else None
+        )
         self.projector: PathProjector | None = None
-        self.speed = SpeedController(self.speed_config)
+        self.speed = SpeedController(self.speed_config, comfort=self.steer_rate is not None)
         self.profile: SpeedProfile | None = None
         self.cte = self.heading_error = self.s = self.v_ref = 0.0
+        self.ff_preview = 0.0
+        self._last_t: float | None = None
+        self._launched = False
 
     @property
     def arrived(self) -> bool:
@@ -281,12 +313,12 @@ class TrackingController:
     def reset(self, path: Path, v_start: float = 0.0) -> None:
         """Start tracking ``path`` from speed ``v_start``."""
         self.projector = PathProjector(path)
-        p = self.projector
-        self.profile = SpeedProfile(
-            np.asarray(p.s), np.asarray(p.kappa), self.speed_config, v_start
-        )
+        self.profile = self._profile(self.projector, v_start)
         self.speed.reset(self.profile)
         self.cte = self.heading_error = self.s = self.v_ref = 0.0
+        self.ff_preview = 0.0
+        self._last_t = None
+        self._launched = False
         self._reset_steering()
 
     def retarget(self, path: Path, v_start: float) -> None:
@@ -299,11 +331,32 @@ class TrackingController:
         do not jump when the reference is continuous. :meth:`reset` starts afresh.
         """
         self.projector = PathProjector(path)
-        p = self.projector
-        self.profile = SpeedProfile(
-            np.asarray(p.s), np.asarray(p.kappa), self.speed_config, v_start
-        )
+        self.profile = self._profile(self.projector, v_start)
         self.speed.retarget(self.profile)
+
+    def _profile(self, p: PathProjector, v_start: float) -> SpeedProfile:
+        """The speed profile along ``p``; with a rate-limited actuator, capped by its rate."""
+        s, kappa = np.asarray(p.s), np.asarray(p.kappa)
+        cap = None
+        config = self.speed_config
+        if self.steer_rate is not None:
+            # Comfort mode starts from the car's own speed (no launch step in v_ref: the
+            # PI would answer it with an overshoot of the jerk-limited command).
+            config = dataclasses.replace(config, v_launch=0.0)
+            cap = steering_rate_speed_cap(
+                s, kappa, self.vehicle.wheelbase, self.steer_rate,
+                self.speed_config.steer_rate_share,
+            )
+            # No speed-up on the final approach (after a slow stretch the loop could not
+            # turn a rise back into the stop within its jerk bound): cap it there by its
+            # running minimum.
+            first = SpeedProfile(s, kappa, config, v_start, v_cap=cap)
+            final = s > s[-1] - FINAL_APPROACH_M
+            if np.any(final):
+                i0 = int(np.argmax(final))
+                cap = cap.copy()
+                cap[i0:] = np.minimum(cap[i0:], np.minimum.accumulate(first.v[i0:]))
+        return SpeedProfile(s, kappa, config, v_start, v_cap=cap)
 
     def hold_at(self, s: float | None) -> None:
         """Stop at arc length ``s`` and wait there, or drive on when ``None``.
@@ -332,11 +385,42 @@ class TrackingController:
         self.s = proj.s
         self.cte = proj.cte
         self.heading_error = wrap_angle(state.yaw - proj.yaw)
+        if self.steer_rate is not None:
+            return self._control_rate_limited(state, proj, self.steer_rate)
         accel = self.speed.control(proj.s, state.speed, state.t)
         self.v_ref = self.speed.v_ref
         steer = self.steering(state, proj)
         limit = self.steer_limit
         return accel, (limit if steer > limit else -limit if steer < -limit else steer)
+
+    def _control_rate_limited(
+        self, state: VehicleState, proj: Projection, rate: float
+    ) -> tuple[float, float]:
+        """:meth:`control` for a rate-limited actuator (see the class docs)."""
+        dt = None if self._last_t is None else state.t - self._last_t
+        self._last_t = state.t
+        self.ff_preview = abs(state.speed) * dt if dt is not None and dt > 0 else 0.0
+        limit = self.steer_limit
+        steer = min(max(self.steering(state, proj), -limit), limit)
+        want = steer
+        if dt is not None and dt > 0:
+            reach = rate * dt
+            steer = min(max(steer, state.steer - reach), state.steer + reach)
+        if not self._launched:
+            if state.speed == 0.0 and abs(want - state.steer) > self.speed_config.start_steer_tol:
+                # Turn the wheels at rest first: the path starts at this angle.
+                self.v_ref = 0.0
+                return 0.0, steer
+            self._launched = True
+        accel = self.speed.control(proj.s, state.speed, state.t)
+        self.v_ref = self.speed.v_ref
+        return accel, steer
+
+    def ff_kappa(self, proj: Projection) -> float:
+        """The path curvature for feed-forward: at :attr:`ff_preview` ahead of ``proj``."""
+        if self.ff_preview <= 0.0:
+            return proj.kappa
+        return self.projector.point_at(proj.s + self.ff_preview)[3]  # type: ignore[union-attr]
 
     def steering(self, state: VehicleState, proj: Projection) -> float:
         """Steering angle for ``state`` given its rear-axle projection ``proj``."""

@@ -90,6 +90,14 @@ class LQR(TrackingController):
         LQR weights (see :func:`design_gain`).
     steer_limit : float, optional
         Largest commanded steering angle (default: the curvature limit's).
+    bandwidth : float
+        Rate-limited actuator only: the largest closed-loop bandwidth in time (rad/s).
+        The arc-length design has the natural frequency ``(q_e / r)^(1/4)`` per metre,
+        ``v`` times that per second; above ``bandwidth / (q_e / r)^(1/4)`` m/s the
+        input weight grows to ``q_e (v / bandwidth)^4`` (gains designed per 0.5 m/s),
+        so the corrections ask the wheels to turn no faster at speed than at parking
+        speeds (a fixed arc-length gain drove the 0.4 rad/s car into a growing
+        oscillation at 11 m/s).
 
     Examples
     --------
@@ -111,12 +119,29 @@ class LQR(TrackingController):
         q_psi: float = 1.0,
         r: float = 4.0,
         steer_limit: float | None = None,
+        bandwidth: float = 2.0,
     ) -> None:
         super().__init__(vehicle, speed, steer_limit)
+        require_positive("lqr.bandwidth", bandwidth)
         self.gain = design_gain(q_e, q_psi, r)
         self._k_e, self._k_psi = float(self.gain[0]), float(self.gain[1])
+        self._weights = (float(q_e), float(q_psi), float(r))
+        self.bandwidth = float(bandwidth)
+
+    def _gains(self, speed: float) -> tuple[float, float]:
+        """``(k_e, k_psi)`` for ``speed``: fixed, or scheduled for a rate-limited actuator."""
+        if self.steer_rate is None:
+            return self._k_e, self._k_psi
+        q_e, q_psi, r = self._weights
+        v = 0.5 * math.ceil(abs(speed) / 0.5)  # design per 0.5 m/s (cached)
+        r_eff = max(r, q_e * (v / self.bandwidth) ** 4)
+        if r_eff == r:
+            return self._k_e, self._k_psi
+        k_e, k_psi = _design_gain(q_e, q_psi, r_eff)
+        return k_e, k_psi
 
     def steering(self, state: VehicleState, proj: Projection) -> float:
         """LQR steering angle with curvature feed-forward."""
-        u = -(self._k_e * proj.cte + self._k_psi * self.heading_error)
-        return math.atan(self.vehicle.wheelbase * (proj.kappa + u))
+        k_e, k_psi = self._gains(state.speed)
+        u = -(k_e * proj.cte + k_psi * self.heading_error)
+        return math.atan(self.vehicle.wheelbase * (self.ff_kappa(proj) + u))

@@ -8,6 +8,14 @@ rises no faster than ``accel`` and falls no faster than ``decel`` (forward and
 backward passes over arc length), and reaches zero at the end of the path. The
 loop adds the profile's own acceleration ``v dv/ds`` as a feed-forward to a PI
 correction on the speed error, and holds the car once it has stopped at the goal.
+
+For a car with a rate-limited steering actuator (``VehicleParams.max_steer_rate``)
+the tracking controllers also cap the profile by the steering rate
+(:func:`rrtdrive.speed_profile.steering_rate_speed_cap`, ``steer_rate_share``), hold
+the car at rest until the wheels have turned to the path's initial angle
+(``start_steer_tol``), and run the loop in comfort mode: every change of the
+acceleration command is bounded by ``comfort_jerk`` (below nuPlan's |jerk| bound of
+4.13 m/s^3), also while a car-following cap binds.
 """
 
 from __future__ import annotations
@@ -18,7 +26,11 @@ from dataclasses import dataclass
 from rrtdrive.speed_profile import SpeedProfile
 from rrtdrive.types import InputError, require_finite, require_positive
 
-__all__ = ["SpeedConfig", "SpeedProfile", "SpeedController"]
+__all__ = ["SpeedConfig", "SpeedProfile", "SpeedController", "FINAL_APPROACH_M"]
+
+#: The final approach: within this distance of the path's end the loop brings the
+#: car to its stop (the taper, or the constant deceleration).
+FINAL_APPROACH_M = 2.0
 
 
 @dataclass(frozen=True)
@@ -64,6 +76,16 @@ class SpeedConfig:
         See ``stop_taper``; in ``(0, 1]``.
     taper_stop_speed : float
         See ``stop_taper`` (m/s).
+    steer_rate_share : float
+        Rate-limited actuator only: the share of ``max_steer_rate`` the path's own
+        steering may use (``v <= share * rate / |d delta/ds|``); the rest is left
+        to the controller's corrections. In ``(0, 1]``.
+    start_steer_tol : float
+        Rate-limited actuator only: at the start of a path the car stays at rest
+        until its steering angle is within this of the controller's command (rad).
+    comfort_jerk : float
+        Rate-limited actuator only (comfort mode): largest rise and fall of the
+        acceleration command in m/s^3, in every phase but the last stopping steps.
     """
 
     v_max: float = 3.0
@@ -82,11 +104,14 @@ class SpeedConfig:
     stop_taper: bool = True
     taper_start: float = 0.75
     taper_stop_speed: float = 0.01
+    steer_rate_share: float = 0.7
+    start_steer_tol: float = 0.005
+    comfort_jerk: float = 2.0
 
     def __post_init__(self) -> None:
         for name in (
             "v_max", "a_lat_max", "accel", "decel", "stop_distance", "stop_speed", "jerk_max",
-            "taper_stop_speed",
+            "taper_stop_speed", "start_steer_tol", "comfort_jerk",
         ):
             require_positive(f"speed.{name}", getattr(self, name))
         for name in ("v_launch", "kp", "ki", "a_min", "a_max"):
@@ -100,6 +125,11 @@ class SpeedConfig:
         require_finite("speed.taper_start", self.taper_start)
         if not 0.0 < self.taper_start <= 1.0:
             raise InputError(f"speed.taper_start: must lie in (0, 1], got {self.taper_start!r}")
+        require_finite("speed.steer_rate_share", self.steer_rate_share)
+        if not 0.0 < self.steer_rate_share <= 1.0:
+            raise InputError(
+                f"speed.steer_rate_share: must lie in (0, 1], got {self.steer_rate_share!r}"
+            )
         if not self.a_min < 0 < self.a_max:
             raise InputError(
                 f"speed.a_min/a_max: need a_min < 0 < a_max, got {self.a_min}, {self.a_max}"
@@ -119,10 +149,15 @@ class SpeedController:
     ----------
     config : SpeedConfig
         Gains and limits.
+    comfort : bool
+        Comfort mode: rises and falls of the command are both bounded by
+        ``config.comfort_jerk`` (and rises also by ``jerk_max``), while the
+        car-following cap binds too.
     """
 
-    def __init__(self, config: SpeedConfig) -> None:
+    def __init__(self, config: SpeedConfig, comfort: bool = False) -> None:
         self.config = config
+        self.comfort = comfort
         self.profile: SpeedProfile | None = None
         self.integral = 0.0
         self.last_t: float | None = None
@@ -171,7 +206,14 @@ class SpeedController:
             self.arrived = True
             self.v_ref = 0.0
             return self._hold(speed, dt)
-        v_ref, a_ref = profile.at(s)
+        if self.comfort:
+            # Read the profile ahead by half the time the jerk bound needs to swing the
+            # command through the profile's acceleration range: the jerk-limited ramp then
+            # straddles the profile's corners instead of starting at them (and lagging).
+            tau = 0.5 * max(cfg.accel, cfg.decel) / cfg.comfort_jerk
+            v_ref, a_ref = profile.at(s + abs(speed) * tau)
+        else:
+            v_ref, a_ref = profile.at(s)
         if remaining <= 0.0:
             # Past the end: brake to a stop within a few centimetres.
             self.v_ref = 0.0
@@ -187,7 +229,7 @@ class SpeedController:
                 v_ref = v_cap
                 a_ref = -speed * speed / (2.0 * max(d, cfg.stop_distance)) if speed > 0 else 0.0
         self.v_ref = v_ref
-        if remaining < 2.0 and speed > 0.0:
+        if remaining < FINAL_APPROACH_M and speed > 0.0:
             if cfg.stop_taper:
                 # The constant-jerk stop through the remaining distance: a state feedback
                 # whose solution from any (v, d) is that stop, its deceleration fading
@@ -198,7 +240,8 @@ class SpeedController:
                     self.tapering = True
                     self.v_ref = 0.0
                     self.integral = 0.0
-                    return self._limit(a_stop, dt, cfg.jerk_brake_max)
+                    fall = cfg.comfort_jerk if self.comfort else cfg.jerk_brake_max
+                    return self._limit(a_stop, dt, fall)
             else:
                 # Final approach: the constant deceleration that stops exactly at the end.
                 a_ref = min(a_ref, -speed * speed / (2.0 * max(remaining, cfg.stop_distance)))
@@ -207,7 +250,10 @@ class SpeedController:
         raw = a_ref + cfg.kp * err + cfg.ki * trial
         cap = self.accel_cap
         capped = cap is not None and raw > cap
-        a = self._limit(cap if capped else raw, dt, None if capped else cfg.jerk_brake_max)
+        if self.comfort:
+            a = self._limit(cap if capped else raw, dt, cfg.comfort_jerk)
+        else:
+            a = self._limit(cap if capped else raw, dt, None if capped else cfg.jerk_brake_max)
         if a == raw:
             # Conditional integration (anti-windup): only while the command is not limited.
             limit = cfg.a_max / cfg.ki if cfg.ki > 0 else 0.0
@@ -239,7 +285,8 @@ class SpeedController:
         """Clip to the acceleration limits; rises at most ``jerk_max``, falls ``fall_jerk``."""
         cfg = self.config
         a = min(max(a, cfg.a_min), cfg.a_max)
-        rise = self.last_a + cfg.jerk_max * dt
+        jerk = min(cfg.jerk_max, cfg.comfort_jerk) if self.comfort else cfg.jerk_max
+        rise = self.last_a + jerk * dt
         if a > rise:
             a = rise
         if fall_jerk is not None:

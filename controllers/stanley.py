@@ -112,5 +112,10 @@ class Stanley(TrackingController):
         self.front.reset_hint(proj.index)  # type: ignore[union-attr]
         fp = self.front.project(fx, fy)  # type: ignore[union-attr]
         self.front_cte = fp.cte
-        psi = wrap_angle(fp.yaw - state.yaw)
+        heading = fp.yaw
+        if self.ff_preview > 0.0:
+            # The wheel's part of the trace's direction, read one step ahead (actuator lag).
+            ahead = self.front.point_at(fp.s + self.ff_preview)[3]  # type: ignore[union-attr]
+            heading += math.atan(L * ahead) - math.atan(L * fp.kappa)
+        psi = wrap_angle(heading - state.yaw)
         return psi + math.atan2(-self.k * fp.cte, self.k_soft + abs(state.speed))

@@ -25,7 +25,9 @@ from rrtdrive.types import InputError, Path, VehicleParams
 from rrtdrive.vehicle import bicycle_step
 
 NAMES = ["pure-pursuit", "stanley", "lqr"]
-V = VehicleParams()
+#: Instant steering: ``simulate`` applies each command at once (the actuator is tested
+#: in test_drivable.py).
+V = VehicleParams(max_steer_rate=None)
 
 
 def straight_path(length: float = 60.0, step: float = 0.1) -> Path:
@@ -119,7 +121,8 @@ def test_steady_state_on_a_circle_is_the_curvature_angle(name):
 
 @pytest.mark.parametrize("name", NAMES)
 def test_converges_from_an_offset(name):
-    traj = simulate(make_controller(name), straight_path(80.0), (0.0, 1.0, 0.0), steps=500)
+    ctrl = make_controller(name, vehicle=V)
+    traj = simulate(ctrl, straight_path(80.0), (0.0, 1.0, 0.0), steps=500)
     # After 30 m the rear axle is on the path and aligned.
     late = traj[traj[:, 0] > 30.0]
     assert np.max(np.abs(late[:, 1])) < 0.05
@@ -132,14 +135,14 @@ def test_tracks_a_circle_at_the_curvature_limit(name):
     # Stay short of the path's end (past it the path runs straight on).
     path = circle_path(radius, 1.9 * math.pi)
     steps = int(1.75 * math.pi * radius / (2.0 * 0.05))
-    traj = simulate(make_controller(name), path, (0.0, 0.0, 0.0), steps=steps)
+    traj = simulate(make_controller(name, vehicle=V), path, (0.0, 0.0, 0.0), steps=steps)
     r = np.hypot(traj[:, 0], traj[:, 1] - radius)
     assert np.max(np.abs(r - radius)) < 0.15
 
 
 @pytest.mark.parametrize("name", NAMES)
 def test_steering_never_exceeds_the_curvature_limit(name):
-    traj = simulate(make_controller(name), straight_path(), (0.0, 3.0, 1.0), steps=300)
+    traj = simulate(make_controller(name, vehicle=V), straight_path(), (0.0, 3.0, 1.0), steps=300)
     kappa = np.tan(np.abs(traj[:, 3])) / V.wheelbase
     assert np.all(kappa <= V.kappa_max + 1e-12)
     assert np.max(kappa) == pytest.approx(V.kappa_max)  # it did saturate

@@ -16,6 +16,9 @@ from rrtdrive.sim.tasks import make_scenario
 from rrtdrive.types import Pose, VehicleParams
 from rrtdrive.vehicle import footprint_corners
 
+#: Instant steering: these tests are about the bicycle model, not the actuator.
+INSTANT = VehicleParams(max_steer_rate=None)
+
 
 def _road() -> Road:
     net = RoadNetwork()
@@ -36,7 +39,7 @@ def _drive(ego: EgoVehicle, road: Road, steps: int, dt: float) -> np.ndarray:
 @pytest.mark.parametrize("hz", [15, 20])
 def test_constant_steering_drives_circle_of_radius_L_over_tan_delta(steer_deg, hz):
     road = _road()
-    ego = EgoVehicle(road, Pose(0.0, 0.0, 0.0), speed=4.0)
+    ego = EgoVehicle(road, Pose(0.0, 0.0, 0.0), speed=4.0, vehicle=INSTANT)
     road.vehicles.append(ego)
     delta = math.radians(steer_deg)
     ego.act({"acceleration": 0.0, "steering": delta})
@@ -89,7 +92,7 @@ def test_true_size_and_reference_point():
 
 def test_steering_is_clipped_to_30_degrees():
     road = _road()
-    ego = EgoVehicle(road, Pose(0.0, 0.0, 0.0), speed=2.0)
+    ego = EgoVehicle(road, Pose(0.0, 0.0, 0.0), speed=2.0, vehicle=INSTANT)
     road.vehicles.append(ego)
     ego.act({"acceleration": 0.0, "steering": math.radians(60.0)})
     road.step(0.05)

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from rrtdrive.cli import main
+from rrtdrive.sim.ego import EgoVehicle
 from rrtdrive.sim.episode import TRAJECTORY_COLUMNS, trajectory_csv
 from rrtdrive.sim.runner import run_episode
 from rrtdrive.vehicle import bicycle_step
@@ -25,13 +26,17 @@ def test_trajectory_rows_are_the_logged_states_and_applied_commands(episode):
     assert np.array_equal(traj[:-1, 5:7], log.controls[:, ::-1])
     assert set(np.unique(traj[:, 7])) <= {-1.0, 1.0}
     # The rows are a trajectory of the rear-axle bicycle model: each pose follows from
-    # the previous one with the logged speed and the applied steering.
+    # the previous one with the logged speed and the applied steering (which a
+    # rate-limited actuator turns linearly over the step from the previous angle).
     L = episode.scenario.vehicle.wheelbase
     k = len(traj) // 2
-    # The speed ramps linearly within a step: the arc is driven at the step's mean speed.
-    mean_speed = 0.5 * (traj[k, 4] + traj[k + 1, 4])
-    x, y, yaw = bicycle_step(tuple(traj[k, 1:4]), mean_speed, traj[k, 5], log.dt, L)
-    assert np.allclose([x, y], traj[k + 1, 1:3], atol=1e-6)
+    n = EgoVehicle.RAMP_SUBSTEPS
+    s0, s1 = traj[k - 1, 5], traj[k, 5]
+    pose = tuple(traj[k, 1:4])
+    for i in range(n):
+        v = 0.5 * (traj[k, 4] + traj[k + 1, 4])  # the speed changes linearly over the step
+        pose = bicycle_step(pose, v, s0 + (s1 - s0) * (i + 0.5) / n, log.dt / n, L)
+    assert np.allclose(pose[:2], traj[k + 1, 1:3], atol=1e-6)
 
 
 def test_csv_has_the_header_and_one_row_per_state(episode):

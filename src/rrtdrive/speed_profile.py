@@ -4,8 +4,11 @@ The rules, in one place: ``v(s) <= v_max``, ``v(s) <= sqrt(a_lat_max / |kappa(s)
 (the lateral-acceleration cap), the first sample no faster than
 ``max(v_start, v_launch)``, rising at most ``accel`` and falling at most ``decel``
 over arc length (forward and backward passes on ``v^2``), and optionally a stop
-at the end. Arrival times integrate ``ds / v`` with the mean speed of each
-interval.
+at the end. A car with a rate-limited steering actuator adds a per-sample cap
+(:func:`steering_rate_speed_cap`): ``v(s) <= share * max_steer_rate / |d delta/ds|(s)``,
+so the steering angle the path asks for (``delta = atan(L kappa)``) changes no faster
+than the actuator can turn the wheels. Arrival times integrate ``ds / v`` with the
+mean speed of each interval.
 
 Two users: the controllers track :class:`SpeedProfile` (which stops at the end of
 its path), and space-time planning times whole paths with :func:`profile_times`
@@ -26,7 +29,20 @@ from typing import Protocol
 
 import numpy as np
 
-__all__ = ["SpeedLimits", "speed_caps_squared", "SpeedProfile", "profile_times", "arrival_times"]
+__all__ = [
+    "SpeedLimits",
+    "speed_caps_squared",
+    "steering_sharpness",
+    "steering_rate_speed_cap",
+    "SpeedProfile",
+    "profile_times",
+    "arrival_times",
+]
+
+#: Arc-length window (metres) over which :func:`steering_sharpness` measures the
+#: change of the steering angle: finer than any path feature the car can follow,
+#: coarser than the gaps between repeated or nearly repeated samples.
+SHARPNESS_WINDOW_M = 0.25
 
 
 class SpeedLimits(Protocol):
@@ -87,6 +103,103 @@ def speed_caps_squared(
         cap2 = np.minimum(a_lat_max / np.maximum(k, 1e-12), v_max * v_max)
     cap2[0] = min(cap2[0], v_first**2)
     return cap2
+
+
+def steering_sharpness(
+    s: np.ndarray, kappa: np.ndarray, wheelbase: float, window: float = SHARPNESS_WINDOW_M
+) -> np.ndarray:
+    """``|d delta / ds|`` at each sample (rad/m), ``delta = atan(L kappa)``, robust to sampling.
+
+    The steering angle is interpolated linearly in arc length onto a grid of spacing
+    ``window``; the slope of a grid interval is its change over ``window``, and a
+    sample takes the largest slope of the grid intervals next to it. So a sample gap
+    much shorter than ``window`` (a repeated row, a cusp) cannot make the slope
+    blow up, and a jump of the angle counts as a change over ``window``.
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        Arc length of the samples, non-decreasing from 0.
+    kappa : numpy.ndarray
+        Path curvature at the samples (1/m).
+    wheelbase : float
+        ``L`` in metres.
+    window : float
+        Grid spacing in metres (> 0).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N,)`` sharpness in rad/m.
+
+    Examples
+    --------
+    >>> s = np.linspace(0.0, 10.0, 101)
+    >>> k = np.clip(s - 4.0, 0.0, 1.0) * 0.1  # curvature ramps 0 -> 0.1 over s in [4, 5]
+    >>> sh = steering_sharpness(s, k, 2.5)
+    >>> round(float(sh.max()), 3), float(sh[0])
+    (0.25, 0.0)
+    """
+    s = np.asarray(s, dtype=float)
+    delta = np.arctan(wheelbase * np.asarray(kappa, dtype=float))
+    length = float(s[-1] - s[0]) if len(s) else 0.0
+    if len(s) < 2 or length <= 0.0:
+        return np.zeros(len(s))
+    n = max(1, int(math.ceil(length / window)))
+    h = length / n
+    grid = s[0] + h * np.arange(n + 1)
+    slope = np.abs(np.diff(np.interp(grid, s, delta))) / h  # (n,)
+    cell = np.clip(((s - s[0]) / h).astype(int), 0, n - 1)
+    # A sample on a grid node touches the intervals on both sides; take the larger.
+    before = np.clip(cell - 1, 0, n - 1)
+    after = np.clip(cell + 1, 0, n - 1)
+    return np.maximum(np.maximum(slope[cell], slope[before]), slope[after])
+
+
+def steering_rate_speed_cap(
+    s: np.ndarray,
+    kappa: np.ndarray,
+    wheelbase: float,
+    max_steer_rate: float,
+    share: float = 1.0,
+    window: float = SHARPNESS_WINDOW_M,
+) -> np.ndarray:
+    """Speed cap of a rate-limited steering actuator: ``share * rate / |d delta/ds|`` (m/s).
+
+    At speed ``v`` the path asks the wheels to turn at ``v |d delta/ds|`` rad/s; the
+    cap keeps that within ``share`` of ``max_steer_rate`` (the rest is left to the
+    controller's corrections). Straight or constant-curvature stretches are not
+    capped (``inf``).
+
+    Parameters
+    ----------
+    s, kappa : numpy.ndarray
+        Arc length and curvature of the samples.
+    wheelbase : float
+        ``L`` in metres.
+    max_steer_rate : float
+        The actuator's rate limit in rad/s.
+    share : float
+        Share of the rate the path's own steering may use, in ``(0, 1]``.
+    window : float
+        See :func:`steering_sharpness`.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N,)`` caps in m/s (``inf`` where the steering angle does not change).
+
+    Examples
+    --------
+    >>> s = np.linspace(0.0, 10.0, 101)
+    >>> k = np.clip(s - 4.0, 0.0, 1.0) * 0.1
+    >>> cap = steering_rate_speed_cap(s, k, 2.5, 0.4, share=0.5)
+    >>> round(float(cap.min()), 3), bool(np.isinf(cap[0]))
+    (0.801, True)
+    """
+    sharp = steering_sharpness(s, kappa, wheelbase, window)
+    with np.errstate(divide="ignore"):
+        return np.where(sharp > 1e-12, share * max_steer_rate / np.maximum(sharp, 1e-300), np.inf)
 
 
 def arrival_times(s: np.ndarray, v: np.ndarray, v_floor: float = 0.05) -> np.ndarray:
@@ -167,6 +280,9 @@ class SpeedProfile:
         Limits (for example ``rrtdrive.controllers.SpeedConfig``).
     v_start : float
         Speed at the start of the path.
+    v_cap : numpy.ndarray, optional
+        Further per-sample speed caps in m/s (for example
+        :func:`steering_rate_speed_cap`); ``None``: none.
 
     Examples
     --------
@@ -178,7 +294,12 @@ class SpeedProfile:
     """
 
     def __init__(
-        self, s: np.ndarray, kappa: np.ndarray, config: SpeedLimits, v_start: float = 0.0
+        self,
+        s: np.ndarray,
+        kappa: np.ndarray,
+        config: SpeedLimits,
+        v_start: float = 0.0,
+        v_cap: np.ndarray | None = None,
     ) -> None:
         s = np.asarray(s, dtype=float)
         kappa = np.abs(np.asarray(kappa, dtype=float))
@@ -188,6 +309,8 @@ class SpeedProfile:
         # monotone and correctly rounded, and sqrt(v*v) == v); the first sample's cap is
         # applied on v, as the controllers always had it.
         v = np.sqrt(speed_caps_squared(kappa, config.v_max, config.a_lat_max, math.inf))
+        if v_cap is not None:
+            v = np.minimum(v, np.asarray(v_cap, dtype=float))
         v[0] = min(v[0], max(v_start, config.v_launch))
         ds = np.diff(s)
         for i in range(1, len(v)):
