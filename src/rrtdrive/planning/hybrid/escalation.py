@@ -17,7 +17,7 @@ from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.planner import NAME, answer_stats, arcs_note, path_of
 from rrtdrive.planning.hybrid.query import hybrid_query
-from rrtdrive.planning.smoothing import SmoothingConfig, max_sharpness
+from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, PlanResult, PlanStatus
 
 __all__ = ["STAGES", "ESCALATES_FROM", "escalate", "stage_of"]
@@ -102,7 +102,7 @@ def escalate(
     built = answer.path
     path = path_of(built)
     bound = smoothing.max_sharpness if smoothing is not None and smoothing.clothoid else None
-    sharp = max_sharpness(path.samples, problem.vehicle.wheelbase)
+    sharp = own["max_sharpness"]
     if bound is not None and sharp > bound + 1e-9:
         # The default promises continuous curvature within the sharpness bound
         # (issue 12); the search's exact arcs jump in curvature where they meet, so

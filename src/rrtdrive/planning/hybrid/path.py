@@ -76,15 +76,12 @@ class BuiltPath:
     def max_sharpness(self, wheelbase: float) -> float:
         """Largest ``|d delta / ds|`` (rad/m) within the gear segments (``inf``: a jump).
 
-        A cusp is a stop, where the steering may turn at standstill: it does not count.
+        A cusp is a stop, where the steering may turn at standstill: it does not count
+        (:func:`~rrtdrive.planning.smoothing.max_sharpness` skips gear changes).
         Exact arcs jump in curvature where two primitives meet, so their value is
         ``inf`` unless the segment steers constantly.
         """
-        gear = self.rows[:, 4]
-        cuts = np.flatnonzero(gear[1:] != gear[:-1]) + 1
-        return max(
-            (max_sharpness(part, wheelbase) for part in np.split(self.rows, cuts)), default=0.0
-        )
+        return max_sharpness(self.rows, wheelbase)
 
 
 def _raw_polyline(rows: np.ndarray, spacing: float) -> np.ndarray:

@@ -19,7 +19,7 @@ import numpy as np
 from rrtdrive.planning.smoothing.checks import CheckerView, EdgeCache, PathChecker
 from rrtdrive.planning.smoothing.clothoid_curve import ClothoidFitter
 from rrtdrive.planning.smoothing.config import SmoothingConfig, SmoothingResult
-from rrtdrive.planning.smoothing.corners import Ends, KeyPolygon, build_key_polygon
+from rrtdrive.planning.smoothing.corners import Corner, Ends, KeyPolygon, build_key_polygon
 from rrtdrive.planning.smoothing.curve import CurveFitter
 from rrtdrive.planning.smoothing.repair import Repairer
 from rrtdrive.types import Pose
@@ -202,11 +202,7 @@ def _repair_loop(repairer: Repairer, fitter: CurveFitter, cfg: SmoothingConfig) 
         if conflicts:
             failed = _fix_conflicts(repairer, conflicts)
             if failed is not None:
-                a, b = corners[failed].point, corners[failed + 1].point
-                message = (
-                    f"the turns at ({a[0]:.1f}, {a[1]:.1f}) and ({b[0]:.1f}, {b[1]:.1f}) "
-                    "are too close for the car"
-                )
+                message = _turns_too_close(corners, failed)
                 break
             continue
         if len(ctrl) <= cfg.degree:
@@ -224,7 +220,7 @@ def _repair_loop(repairer: Repairer, fitter: CurveFitter, cfg: SmoothingConfig) 
                 return _Attempt(ok, "", ctrl, ok.key_points, rounds)
         stuck = _advance_all(repairer, bad)
         if stuck is not None:
-            message = f"could not repair a {what} violation near ({stuck[0]:.1f}, {stuck[1]:.1f})"
+            message = _unrepaired(what, stuck)
             break
     return _Attempt(None, message, ctrl, _key_points(repairer), rounds)
 
@@ -240,11 +236,7 @@ def _clothoid_loop(repairer: Repairer, fitter: ClothoidFitter, cfg: SmoothingCon
         if curve is None:
             failed = _fix_conflicts(repairer, conflicts)
             if failed is not None:
-                a, b = corners[failed].point, corners[failed + 1].point
-                message = (
-                    f"the turns at ({a[0]:.1f}, {a[1]:.1f}) and ({b[0]:.1f}, {b[1]:.1f}) "
-                    "are too close for the car"
-                )
+                message = _turns_too_close(corners, failed)
                 break
             continue
         bad = fitter.check_limits(curve, len(corners))
@@ -264,10 +256,24 @@ def _clothoid_loop(repairer: Repairer, fitter: ClothoidFitter, cfg: SmoothingCon
                 return _Attempt(ok, "", key, key, rounds)
         stuck = _advance_all(repairer, bad)
         if stuck is not None:
-            message = f"could not repair a {what} violation near ({stuck[0]:.1f}, {stuck[1]:.1f})"
+            message = _unrepaired(what, stuck)
             break
     key = _key_points(repairer)
     return _Attempt(None, message, key, key, rounds)
+
+
+def _turns_too_close(corners: list[Corner], leg: int) -> str:
+    """The failure message of a leg too short for the turns at both its ends."""
+    a, b = corners[leg].point, corners[leg + 1].point
+    return (
+        f"the turns at ({a[0]:.1f}, {a[1]:.1f}) and ({b[0]:.1f}, {b[1]:.1f}) "
+        "are too close for the car"
+    )
+
+
+def _unrepaired(what: str, where: np.ndarray) -> str:
+    """The failure message of a violation the repairs ran out of treatments for."""
+    return f"could not repair a {what} violation near ({where[0]:.1f}, {where[1]:.1f})"
 
 
 def _fix_conflicts(repairer: Repairer, conflicts: list[int]) -> int | None:
