@@ -24,7 +24,7 @@ import sys
 import time
 from pathlib import Path as FsPath
 
-from rrtdrive.bench.backends import parallel_map
+from rrtdrive.bench.backends import episode_progress, parallel_map
 from rrtdrive.evaluation import EpisodeReport, evaluate, summarise
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim.runner import EpisodeConfig, run_episode
@@ -134,11 +134,7 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     reports: list[dict] = []
 
-    def progress(i: int, total: int) -> None:
-        if i % 10 == 0 or i == total:
-            print(f"\r{i}/{total} episodes, {time.perf_counter() - t0:.0f} s",
-                  end="", file=sys.stderr, flush=True)
-
+    progress = episode_progress()
     reports = parallel_map(run_one, jobs, args.jobs, progress)
     print(file=sys.stderr)
     summaries: dict[str, dict] = {}

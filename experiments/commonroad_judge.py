@@ -17,11 +17,10 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import time
 from pathlib import Path
 
 from rrtdrive.atomic import write_text_atomic
-from rrtdrive.bench.backends import parallel_map
+from rrtdrive.bench.backends import episode_progress, parallel_map
 from rrtdrive.commonroad_judge import COMMONROAD_STEER_RATE, commonroad_available, judge_trajectory
 from rrtdrive.evaluation import evaluate
 from rrtdrive.sim.runner import run_episode
@@ -69,12 +68,7 @@ def main(argv: list[str] | None = None) -> int:
         for s in args.scenarios.split(",") for c in args.controllers.split(",")
         for seed in range(args.seeds)
     ]
-    t0 = time.perf_counter()
-
-    def progress(i: int, total: int) -> None:
-        print(f"\r{i}/{total} episodes, {time.perf_counter() - t0:.0f} s",
-              end="", file=sys.stderr, flush=True)
-
+    progress = episode_progress(every=1)
     rows = parallel_map(run_one, jobs, args.jobs, progress)
     print(file=sys.stderr)
     lines = [

@@ -27,7 +27,7 @@ import time
 from pathlib import Path as FsPath
 
 from rrtdrive.atomic import write_text_atomic
-from rrtdrive.bench.backends import parallel_map
+from rrtdrive.bench.backends import episode_progress, parallel_map
 from rrtdrive.evaluation import evaluate
 from rrtdrive.evaluation.nuplan_comfort import COMFORT_BOUNDS
 from rrtdrive.sim.replanning import ReplanConfig
@@ -193,12 +193,7 @@ def main(argv: list[str] | None = None) -> int:
         for s in scenarios for c in controllers for seed in range(args.seeds)
     ]
     t0 = time.perf_counter()
-
-    def progress(i: int, total: int) -> None:
-        if i % 10 == 0 or i == total:
-            print(f"\r{i}/{total} episodes, {time.perf_counter() - t0:.0f} s",
-                  end="", file=sys.stderr, flush=True)
-
+    progress = episode_progress()
     reports = parallel_map(run_one, jobs, args.jobs, progress)
     print(file=sys.stderr)
     summaries = {

@@ -31,7 +31,7 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
-from rrtdrive.bench.backends import parallel_map
+from rrtdrive.bench.backends import episode_progress, parallel_map
 from rrtdrive.evaluation import TTC_LEAST_MIN_S, EpisodeReport, evaluate, summarise
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim.replanning import ReplanConfig
@@ -239,12 +239,7 @@ def main(argv: list[str] | None = None) -> int:
         for d in densities for seed in range(args.seeds)
     ]
     t0 = time.perf_counter()
-
-    def progress(i: int, total: int) -> None:
-        if i % 10 == 0 or i == total:
-            print(f"\r{i}/{total} episodes, {time.perf_counter() - t0:.0f} s",
-                  end="", file=sys.stderr, flush=True)
-
+    progress = episode_progress()
     reports = parallel_map(run_one, jobs, args.jobs, progress)
     best: dict | None = None
     for rep in reports:  # in job order, so a tie keeps the lower seed

@@ -465,6 +465,22 @@ class RayBackend:
                     pass
 
 
+def episode_progress(every: int = 10) -> Callable[[int, int], None]:
+    """A :func:`parallel_map` progress callback: ``done/total episodes, N s`` on stderr.
+
+    Prints every ``every``-th finished item and the last, on one line, timed from
+    the moment this is called.
+    """
+    t0 = time.perf_counter()
+
+    def progress(i: int, total: int) -> None:
+        if i % every == 0 or i == total:
+            print(f"\r{i}/{total} episodes, {time.perf_counter() - t0:.0f} s",
+                  end="", file=sys.stderr, flush=True)
+
+    return progress
+
+
 def parallel_map(
     fn: Callable[[Any], dict[str, Any]],
     items: Iterable[Any],
