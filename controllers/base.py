@@ -9,21 +9,15 @@ Python on lists with a local search from the previous match (no numpy per step).
 from __future__ import annotations
 
 import bisect
-import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from rrtdrive.controllers.speed import (
-    FINAL_APPROACH_M,
-    SpeedConfig,
-    SpeedController,
-    SpeedProfile,
-)
+from rrtdrive.controllers.speed import SpeedConfig, SpeedController, SpeedProfile
 from rrtdrive.geometry import wrap_angle
-from rrtdrive.speed_profile import steering_rate_speed_cap
+from rrtdrive.speed_profile import actuator_profile
 from rrtdrive.types import InputError, Path, VehicleParams, require_finite, require_positive
 
 __all__ = [
@@ -336,27 +330,10 @@ class TrackingController:
 
     def _profile(self, p: PathProjector, v_start: float) -> SpeedProfile:
         """The speed profile along ``p``; with a rate-limited actuator, capped by its rate."""
-        s, kappa = np.asarray(p.s), np.asarray(p.kappa)
-        cap = None
-        config = self.speed_config
-        if self.steer_rate is not None:
-            # Comfort mode starts from the car's own speed (no launch step in v_ref: the
-            # PI would answer it with an overshoot of the jerk-limited command).
-            config = dataclasses.replace(config, v_launch=0.0)
-            cap = steering_rate_speed_cap(
-                s, kappa, self.vehicle.wheelbase, self.steer_rate,
-                self.speed_config.steer_rate_share,
-            )
-            # No speed-up on the final approach (after a slow stretch the loop could not
-            # turn a rise back into the stop within its jerk bound): cap it there by its
-            # running minimum.
-            first = SpeedProfile(s, kappa, config, v_start, v_cap=cap)
-            final = s > s[-1] - FINAL_APPROACH_M
-            if np.any(final):
-                i0 = int(np.argmax(final))
-                cap = cap.copy()
-                cap[i0:] = np.minimum(cap[i0:], np.minimum.accumulate(first.v[i0:]))
-        return SpeedProfile(s, kappa, config, v_start, v_cap=cap)
+        return actuator_profile(
+            np.asarray(p.s), np.asarray(p.kappa), self.speed_config, v_start,
+            self.vehicle.wheelbase, self.steer_rate,
+        )
 
     def hold_at(self, s: float | None) -> None:
         """Stop at arc length ``s`` and wait there, or drive on when ``None``.

@@ -23,14 +23,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from rrtdrive.speed_profile import SpeedProfile
+from rrtdrive.speed_profile import FINAL_APPROACH_M, SpeedProfile
 from rrtdrive.types import InputError, require_finite, require_positive
 
 __all__ = ["SpeedConfig", "SpeedProfile", "SpeedController", "FINAL_APPROACH_M"]
-
-#: The final approach: within this distance of the path's end the loop brings the
-#: car to its stop (the taper, or the constant deceleration).
-FINAL_APPROACH_M = 2.0
 
 
 @dataclass(frozen=True)
@@ -86,6 +82,12 @@ class SpeedConfig:
     comfort_jerk : float
         Rate-limited actuator only (comfort mode): largest rise and fall of the
         acceleration command in m/s^3, in every phase but the last stopping steps.
+    comfort_a_max : float
+        Rate-limited actuator only (comfort mode): the command's upper limit in m/s^2
+        instead of ``a_max`` when that is larger. nuPlan reads the acceleration at the
+        body centre through its filters, which adds to the command while the car
+        turns and re-accelerates (2 m/s^2 commanded read as up to 3.3 m/s^2 in
+        overtake-traffic against its bound of 2.40).
     """
 
     v_max: float = 3.0
@@ -107,11 +109,12 @@ class SpeedConfig:
     steer_rate_share: float = 0.7
     start_steer_tol: float = 0.005
     comfort_jerk: float = 2.0
+    comfort_a_max: float = 1.5
 
     def __post_init__(self) -> None:
         for name in (
             "v_max", "a_lat_max", "accel", "decel", "stop_distance", "stop_speed", "jerk_max",
-            "taper_stop_speed", "start_steer_tol", "comfort_jerk",
+            "taper_stop_speed", "start_steer_tol", "comfort_jerk", "comfort_a_max",
         ):
             require_positive(f"speed.{name}", getattr(self, name))
         for name in ("v_launch", "kp", "ki", "a_min", "a_max"):
@@ -284,7 +287,8 @@ class SpeedController:
     def _limit(self, a: float, dt: float, fall_jerk: float | None = None) -> float:
         """Clip to the acceleration limits; rises at most ``jerk_max``, falls ``fall_jerk``."""
         cfg = self.config
-        a = min(max(a, cfg.a_min), cfg.a_max)
+        a_max = min(cfg.a_max, cfg.comfort_a_max) if self.comfort else cfg.a_max
+        a = min(max(a, cfg.a_min), a_max)
         jerk = min(cfg.jerk_max, cfg.comfort_jerk) if self.comfort else cfg.jerk_max
         rise = self.last_a + jerk * dt
         if a > rise:

@@ -24,6 +24,7 @@ behaviour; the choice is left to a deliberate, behaviour-changing change.
 from __future__ import annotations
 
 import bisect
+import dataclasses
 import math
 from typing import Protocol
 
@@ -35,6 +36,9 @@ __all__ = [
     "steering_sharpness",
     "steering_rate_speed_cap",
     "SpeedProfile",
+    "RateLimitedLimits",
+    "actuator_profile",
+    "FINAL_APPROACH_M",
     "profile_times",
     "arrival_times",
 ]
@@ -43,6 +47,11 @@ __all__ = [
 #: change of the steering angle: finer than any path feature the car can follow,
 #: coarser than the gaps between repeated or nearly repeated samples.
 SHARPNESS_WINDOW_M = 0.25
+
+#: The final approach: within this distance of the path's end the speed loop brings
+#: the car to its stop (the taper, or the constant deceleration), and a rate-limited
+#: car's profile does not speed up again (:func:`actuator_profile`).
+FINAL_APPROACH_M = 2.0
 
 
 class SpeedLimits(Protocol):
@@ -344,3 +353,73 @@ class SpeedProfile:
     def times(self) -> np.ndarray:
         """Arrival time at each sample (0 at the first; see :func:`arrival_times`)."""
         return arrival_times(self.s, self.v)
+
+
+class RateLimitedLimits(SpeedLimits, Protocol):
+    """:class:`SpeedLimits` plus the share of the steering rate the path may use."""
+
+    @property
+    def steer_rate_share(self) -> float:
+        """Share of ``max_steer_rate`` the path's own steering may use, in ``(0, 1]``."""
+        ...
+
+
+def actuator_profile(
+    s: np.ndarray,
+    kappa: np.ndarray,
+    config: RateLimitedLimits,
+    v_start: float,
+    wheelbase: float,
+    max_steer_rate: float | None,
+) -> SpeedProfile:
+    """The speed profile the controllers drive along a path, for the car's steering actuator.
+
+    The one function for everything that times a path as the car will drive it (the
+    tracking controllers, the oncoming-traffic gate, the traffic re-planner's checks).
+    With an instant actuator (``max_steer_rate`` ``None`` or ``inf``) it is the plain
+    :class:`SpeedProfile`. With a rate-limited one it is also capped by the steering
+    rate (:func:`steering_rate_speed_cap` with ``config.steer_rate_share``), starts
+    from the car's own speed (no launch speed: the comfort-mode loop would answer a
+    launch step with an overshoot of its jerk-limited command), and does not speed up
+    again within :data:`FINAL_APPROACH_M` of the end (after a slow stretch the loop
+    could not turn a rise back into the stop within its jerk bound).
+
+    Parameters
+    ----------
+    s, kappa : numpy.ndarray
+        Arc length (increasing from 0) and curvature of the path's samples.
+    config : RateLimitedLimits
+        The speed settings (``rrtdrive.controllers.SpeedConfig``).
+    v_start : float
+        Speed at the start of the path, m/s.
+    wheelbase : float
+        ``L`` in metres.
+    max_steer_rate : float or None
+        The actuator's rate limit in rad/s.
+
+    Returns
+    -------
+    SpeedProfile
+
+    Examples
+    --------
+    >>> from rrtdrive.controllers import SpeedConfig
+    >>> s = np.linspace(0.0, 20.0, 81)
+    >>> k = np.clip(s - 8.0, 0.0, 1.0) * 0.15  # a clothoid-like rise into a 0.15 1/m arc
+    >>> fast = actuator_profile(s, k, SpeedConfig(), 0.0, 2.51, None)
+    >>> slow = actuator_profile(s, k, SpeedConfig(), 0.0, 2.51, 0.4)
+    >>> float(fast.v[0]), float(slow.v[0]), float(fast.v[34]), round(float(slow.v[34]), 3)
+    (0.5, 0.0, 3.0, 0.759)
+    """
+    s = np.asarray(s, dtype=float)
+    kappa = np.asarray(kappa, dtype=float)
+    if max_steer_rate is None or not math.isfinite(max_steer_rate):
+        return SpeedProfile(s, kappa, config, v_start)
+    config = dataclasses.replace(config, v_launch=0.0)  # type: ignore[type-var]
+    cap = steering_rate_speed_cap(s, kappa, wheelbase, max_steer_rate, config.steer_rate_share)
+    first = SpeedProfile(s, kappa, config, v_start, v_cap=cap)
+    final = s > s[-1] - FINAL_APPROACH_M
+    if np.any(final):
+        i0 = int(np.argmax(final))
+        cap[i0:] = np.minimum(cap[i0:], np.minimum.accumulate(first.v[i0:]))
+    return SpeedProfile(s, kappa, config, v_start, v_cap=cap)

@@ -21,7 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from rrtdrive.controllers import SpeedConfig, SpeedProfile
+from rrtdrive.controllers import SpeedConfig
+from rrtdrive.speed_profile import actuator_profile
 from rrtdrive.types import Path, VehicleParams
 from rrtdrive.vehicle import footprint_corners
 
@@ -79,6 +80,12 @@ class OncomingGate:
         ``(s, kappa)`` of the path, to time the crossing with the speed profile.
     speed : SpeedConfig
         The speed profile settings the controller uses.
+    vehicle : VehicleParams, optional
+        The ego car: with a rate-limited steering actuator the crossing is timed by the
+        same capped profile the controller drives
+        (:func:`~rrtdrive.speed_profile.actuator_profile`),
+        plus the comfort-mode loop's slower start (its command rises at ``comfort_jerk``).
+        ``None``: an instant actuator.
     stop_gap : float
         Stop line this far (metres of arc) before ``zone.s_in``.
     margin_s : float
@@ -93,6 +100,7 @@ class OncomingGate:
         speed: SpeedConfig,
         stop_gap: float = 1.0,
         margin_s: float = 2.0,
+        vehicle: VehicleParams | None = None,
     ) -> None:
         self.zone = zone
         self.s_stop = max(0.0, zone.s_in - stop_gap)
@@ -107,9 +115,15 @@ class OncomingGate:
         ss, kk = s[mask] - self.s_stop, kappa[mask]
         if len(ss) >= 2:
             # Conservative: this profile starts at rest and also stops at the zone's end.
-            v = SpeedProfile(ss, kk, speed, v_start=0.0).v
+            rate = None if vehicle is None else vehicle.max_steer_rate
+            wheelbase = 1.0 if vehicle is None else vehicle.wheelbase
+            v = actuator_profile(ss, kk, speed, 0.0, wheelbase, rate).v
             dt = np.diff(ss) / np.maximum(0.5 * (v[1:] + v[:-1]), 0.1)
             self.crossing_time = float(np.sum(dt))
+            if rate is not None and math.isfinite(rate):
+                # The comfort-mode loop ramps its command up at comfort_jerk: the car
+                # starts later than the profile by about the time of that ramp.
+                self.crossing_time += speed.accel / speed.comfort_jerk
         else:
             self.crossing_time = 0.0
 

@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from rrtdrive.controllers import SpeedConfig, SpeedProfile, TrackingController, VehicleState
+from rrtdrive.controllers import SpeedConfig, TrackingController, VehicleState
 from rrtdrive.maps import Map
 from rrtdrive.planning.base import cached_checker
 from rrtdrive.planning.spacetime import (
@@ -55,6 +55,7 @@ from rrtdrive.planning.spacetime import (
 from rrtdrive.sim.follower import lead_gap
 from rrtdrive.sim.prediction import predict
 from rrtdrive.sim.replanning import SPACING, ReplanConfig, ReplanRecord, TrafficLog, lane_path
+from rrtdrive.speed_profile import actuator_profile
 from rrtdrive.types import Budget, InputError, Path, Pose
 from rrtdrive.vehicle import footprint_corners
 
@@ -303,7 +304,12 @@ class TrafficDriver:
         why : str
         """
         s = path.arc_length()
-        profile = SpeedProfile(s, path.samples[:, 3], self.speed, self.ego.speed)
+        ctrl = self.controller
+        # The profile the controller will drive on this path (with its steering-rate cap).
+        profile = actuator_profile(
+            s, path.samples[:, 3], ctrl.speed_config, self.ego.speed, ctrl.vehicle.wheelbase,
+            ctrl.steer_rate,
+        )
         v = np.maximum(0.5 * (profile.v[1:] + profile.v[:-1]), 0.05)
         times = np.concatenate([[0.0], np.cumsum(np.diff(s) / v)])
         if times[check_end] > self.config.horizon_s:

@@ -149,7 +149,10 @@ class OvertakeTask(PathTask):
             return None
         ego = env.unwrapped.vehicle
         cars = [v for v in env.unwrapped.road.vehicles if v is not ego and v.speed > 0]
-        return OncomingGate(zone, (path.arc_length(), path.samples[:, 3]), speed), cars
+        gate = OncomingGate(
+            zone, (path.arc_length(), path.samples[:, 3]), speed, vehicle=self.vehicle
+        )
+        return gate, cars
 
     def make_driver(
         self,
