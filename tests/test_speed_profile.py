@@ -8,7 +8,14 @@ import pytest
 from rrtdrive.controllers import SpeedConfig
 from rrtdrive.controllers import SpeedProfile as ControllersProfile
 from rrtdrive.planning.spacetime import profile_times as spacetime_times
-from rrtdrive.speed_profile import SpeedProfile, arrival_times, profile_times, speed_caps_squared
+from rrtdrive.speed_profile import (
+    SpeedProfile,
+    actuator_profile,
+    arrival_times,
+    profile_times,
+    speed_caps_squared,
+    steering_rate_speed_cap,
+)
 
 
 def test_both_users_get_the_one_implementation():
@@ -45,3 +52,45 @@ def test_profile_obeys_the_rules_and_its_times_match_the_closed_form_away_from_t
 def test_arrival_times_use_the_mean_speed_with_a_floor():
     assert arrival_times(np.array([0.0, 2.0]), np.array([1.0, 3.0])).tolist() == [0.0, 1.0]
     assert arrival_times(np.array([0.0, 0.1]), np.array([0.0, 0.0])).tolist() == [0.0, 2.0]
+
+
+# ----------------------------------------------------------------------------- the car's profile
+
+
+def _clothoid_dip(length: float = 30.0) -> tuple[np.ndarray, np.ndarray]:
+    """A path whose curvature ramps up and down around s = 20 m: a slow stretch near the end."""
+    s = np.linspace(0.0, length, int(length / 0.1) + 1)
+    kappa = 0.15 * np.clip(1.0 - np.abs(s - 20.0), 0.0, 1.0)
+    return s, kappa
+
+
+def test_the_cars_profile_is_the_plain_one_for_an_instant_actuator():
+    s, kappa = _clothoid_dip()
+    cfg = SpeedConfig()
+    for rate in (None, np.inf):
+        prof = actuator_profile(s, kappa, cfg, 0.4, 2.51, rate)
+        assert np.array_equal(prof.v, SpeedProfile(s, kappa, cfg, 0.4).v)
+
+
+def test_the_cars_profile_obeys_the_steering_rate_cap_and_starts_from_rest():
+    s, kappa = _clothoid_dip(60.0)
+    cfg = SpeedConfig()
+    prof = actuator_profile(s, kappa, cfg, 0.0, 2.51, 0.4)
+    cap = steering_rate_speed_cap(s, kappa, 2.51, 0.4, cfg.steer_rate_share)
+    assert prof.v[0] == 0.0 and np.all(prof.v <= cap + 1e-12)
+    assert np.all(prof.v <= SpeedProfile(s, kappa, cfg, 0.0).v + 1e-12)
+
+
+def test_no_short_speed_up_between_the_last_slow_stretch_and_the_stop():
+    # 10 m after the dip: the plain rules rise and brake at once, which the comfort loop
+    # (jerk 2 m/s^3) cannot turn into the stop; the car's profile holds the dip's speed.
+    s, kappa = _clothoid_dip(30.0)
+    cfg = SpeedConfig()
+    prof = actuator_profile(s, kappa, cfg, 0.0, 2.51, 0.4)
+    after = s >= 21.0
+    assert np.all(np.diff(prof.v[after]) <= 1e-12)
+    # With a long straight after the dip (a plateau at v_max before the braking) it does
+    # speed up again.
+    s, kappa = _clothoid_dip(80.0)
+    prof = actuator_profile(s, kappa, cfg, 0.0, 2.51, 0.4)
+    assert prof.v[s >= 21.0].max() == pytest.approx(cfg.v_max)

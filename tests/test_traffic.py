@@ -37,8 +37,9 @@ from rrtdrive.sim.replanning import ReplanConfig, lane_path
 from rrtdrive.sim.runner import EpisodeConfig, run_episode
 from rrtdrive.sim.scenes import OncomingCar, build_env, scenario_rngs
 from rrtdrive.sim.tasks import TRAFFIC_DENSITIES, make_scenario, traffic_speed_config
+from rrtdrive.sim.traffic import OncomingGate, conflict_zone
 from rrtdrive.sim.traffic_driver import TrafficDriver
-from rrtdrive.types import Budget, InputError, Pose, VehicleParams
+from rrtdrive.types import Budget, InputError, Path, Pose, VehicleParams
 
 V = VehicleParams()
 #: Tests ignore the wall clock: an episode then depends on its seed only.
@@ -484,3 +485,24 @@ def test_every_controller_overtakes_in_traffic_without_a_collision(controller):
     r = evaluate(ep)
     assert not r.collision, ep.message
     assert ep.status == "completed" and r.success, ep.message
+
+
+def test_the_oncoming_gate_times_the_crossing_as_the_car_drives_it():
+    # A lane change out of the ego lane: the body enters the oncoming lane.
+    x = np.arange(0.0, 60.0, 0.1)
+    u = np.clip((x - 15.0) / 25.0, 0.0, 1.0)
+    y = 44.0 + 4.0 * (6 * u**5 - 15 * u**4 + 10 * u**3)
+    dy = np.gradient(y, x)
+    kappa = np.gradient(dy, x) / (1 + dy**2) ** 1.5
+    path = Path(np.column_stack([x, y, np.arctan(dy), kappa]), np.zeros((0, 2)))
+    speed = SpeedConfig(v_max=8.0)
+    instant = VehicleParams(max_steer_rate=None)
+    zone = conflict_zone(path, 44.0, 4.0, instant)
+    assert zone is not None
+    s = path.arc_length()
+    t_instant = OncomingGate(zone, (s, kappa), speed, vehicle=instant).crossing_time
+    assert t_instant == OncomingGate(zone, (s, kappa), speed).crossing_time
+    # The rate-limited car starts from rest without the launch speed, capped by its
+    # steering rate, and its comfort loop ramps the command up: a later exit.
+    t_rate = OncomingGate(zone, (s, kappa), speed, vehicle=VehicleParams()).crossing_time
+    assert t_rate >= t_instant + speed.accel / speed.comfort_jerk

@@ -363,6 +363,39 @@ class RateLimitedLimits(SpeedLimits, Protocol):
         """Share of ``max_steer_rate`` the path's own steering may use, in ``(0, 1]``."""
         ...
 
+    @property
+    def comfort_jerk(self) -> float:
+        """Largest rise and fall of the comfort-mode acceleration command, m/s^3."""
+        ...
+
+
+def _last_rise_too_short(s: np.ndarray, v: np.ndarray, swing: float, jerk: float) -> int | None:
+    """Start of a last speed-up the jerk-limited loop cannot turn into the final stop.
+
+    The tail of a profile that stops at its end is a run where ``v`` never rises:
+    a plateau, then the braking to the stop. Before it the profile may rise from a
+    trough. Turning that rise into the braking swings the command through ``swing``
+    m/s^2, which takes ``swing / jerk`` seconds at the comfort jerk; when the plateau
+    is shorter than that at its speed, the car overshoots the profile and the stop.
+    Returns the trough's index then, else ``None`` (also when the rise starts at the
+    first sample: that is the start, not a slow stretch).
+    """
+    eps = 1e-9
+    n = len(v)
+    brake = n - 1
+    while brake > 0 and v[brake - 1] > v[brake] + eps:
+        brake -= 1
+    plateau = brake
+    while plateau > 0 and abs(v[plateau - 1] - v[brake]) <= eps:
+        plateau -= 1
+    trough = plateau
+    while trough > 0 and v[trough - 1] < v[trough] - eps:
+        trough -= 1
+    if trough == plateau or trough == 0:
+        return None
+    need = v[plateau] * swing / jerk
+    return trough if s[brake] - s[plateau] < need else None
+
 
 def actuator_profile(
     s: np.ndarray,
@@ -381,8 +414,10 @@ def actuator_profile(
     rate (:func:`steering_rate_speed_cap` with ``config.steer_rate_share``), starts
     from the car's own speed (no launch speed: the comfort-mode loop would answer a
     launch step with an overshoot of its jerk-limited command), and does not speed up
-    again within :data:`FINAL_APPROACH_M` of the end (after a slow stretch the loop
-    could not turn a rise back into the stop within its jerk bound).
+    again within :data:`FINAL_APPROACH_M` of the end, nor after the last slow stretch
+    when the speed-up would be followed at once by the final braking (after a slow
+    stretch the comfort-mode loop could not turn a rise back into the stop within its
+    jerk bound, and would overshoot the goal).
 
     Parameters
     ----------
@@ -419,7 +454,10 @@ def actuator_profile(
     cap = steering_rate_speed_cap(s, kappa, wheelbase, max_steer_rate, config.steer_rate_share)
     first = SpeedProfile(s, kappa, config, v_start, v_cap=cap)
     final = s > s[-1] - FINAL_APPROACH_M
-    if np.any(final):
-        i0 = int(np.argmax(final))
+    i0 = int(np.argmax(final)) if np.any(final) else None
+    trough = _last_rise_too_short(s, first.v, config.accel + config.decel, config.comfort_jerk)
+    if trough is not None and (i0 is None or trough < i0):
+        i0 = trough
+    if i0 is not None:
         cap[i0:] = np.minimum(cap[i0:], np.minimum.accumulate(first.v[i0:]))
     return SpeedProfile(s, kappa, config, v_start, v_cap=cap)
