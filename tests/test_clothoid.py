@@ -229,7 +229,10 @@ def test_plan_json_reports_sharpness_and_the_paper_flag(tmp_path, capsys):
     out = tmp_path / "plan.json"
     assert cli_main(["plan", "parking_lot", "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
-    assert doc["max_sharpness"] <= BOUND and doc["steer_rate_speed_limit"] is None
+    assert doc["max_sharpness"] <= BOUND
+    # The default car's actuator (0.4 rad/s) follows the path at 2 m/s or faster.
+    assert doc["steer_rate_speed_limit"] == pytest.approx(0.4 / doc["max_sharpness"], rel=1e-2)
+    assert doc["steer_rate_speed_limit"] >= 2.0
     assert {"path", "waypoints", "length_m", "max_curvature"} <= set(doc)
     assert cli_main(["plan", "parking_lot", "--paper-smoothing", "--json", str(out)]) == 0
     paper = json.loads(out.read_text())

@@ -117,7 +117,8 @@ def test_commands_stay_within_the_actuators_reach_and_the_car_waits_for_its_whee
 
 @pytest.mark.parametrize("name", NAMES)
 def test_an_instant_actuator_starts_at_once(name):
-    ctrl = make_controller(name, vehicle=VehicleParams(), speed=SpeedConfig(v_max=3.0))
+    instant = VehicleParams(max_steer_rate=None)
+    ctrl = make_controller(name, vehicle=instant, speed=SpeedConfig(v_max=3.0))
     assert ctrl.steer_rate is None
     ctrl.reset(clothoid_path())
     a, _ = ctrl.control(VehicleState(0.0, 0.3, 0.05, 0.0, 0.0, 0.0))

@@ -138,10 +138,11 @@ class VehicleParams:
     max_steer : float
         Actuator limit of the front-wheel angle in radians.
     max_steer_rate : float or None
-        Largest rate of the front-wheel angle in rad/s (CommonRoad's vehicles: 0.4):
-        the simulated ego's steering angle slews toward the command at no more than
-        this. ``None`` or ``inf``: the angle follows the command at once (today's
-        default, see docs/metrics.md "Drivability").
+        Largest rate of the front-wheel angle in rad/s (default 0.4, CommonRoad's
+        vehicles' value): the simulated ego's steering angle slews toward the command
+        at no more than this, and the controllers know it (docs/metrics.md
+        "Drivability"). ``None`` or ``inf``: the angle follows the command at once
+        (instant steering, the car before issue 12).
 
     Examples
     --------
@@ -155,7 +156,7 @@ class VehicleParams:
     wheelbase: float = 2.51
     min_turning_radius: float = 6.0
     max_steer: float = math.radians(30.0)
-    max_steer_rate: float | None = None
+    max_steer_rate: float | None = 0.4
 
     def __post_init__(self) -> None:
         for name in ("length", "width", "wheelbase", "min_turning_radius", "max_steer"):
