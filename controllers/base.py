@@ -366,6 +366,40 @@ class TrackingController:
         return self.speed.arrived and self.segment >= len(self.segments) - 1
 
     @property
+    def at_stop(self) -> bool:
+        """True once the car has stopped at the end of the gear segment being driven."""
+        return self.speed.arrived
+
+    @property
+    def remaining(self) -> float:
+        """Metres from the car's projection to the end of the gear segment being driven.
+
+        The distance to the next stop: the next cusp, or the end of the path on its
+        last segment (negative past it).
+        """
+        if self.projector is None:
+            return 0.0
+        return self.projector.length - (self.s - self._s0)
+
+    def start_segment(self, index: int) -> None:
+        """Drive gear segment ``index`` from rest from now on (state as after :meth:`reset`).
+
+        The controller changes segment by itself at each cusp while it drives; this is
+        for a caller that drives the car otherwise (an agent) and tells the controller
+        where it is, so that its profile and projection are the segment's.
+
+        Raises
+        ------
+        InputError
+            For an index outside the path's segments.
+        """
+        if not 0 <= index < len(self.segments):
+            raise InputError(
+                f"segment: need 0 <= index < {len(self.segments)}, got {index!r}"
+            )
+        self._start_segment(index, 0.0, keep_state=False)
+
+    @property
     def next_cusp_s(self) -> float | None:
         """Travelled length along the path of the next cusp ahead, ``None`` on the last segment."""
         if self.segment >= len(self.segments) - 1:
