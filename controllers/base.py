@@ -1,24 +1,31 @@
-"""The controller seam: vehicle state, the Controller protocol, and a fast path projector.
+"""The controller seam: vehicle state, the Controller protocol, the shared tracking machinery.
 
 Every controller tracks a :class:`rrtdrive.types.Path` (rear-axle samples
-``[x, y, yaw, kappa]``) on the same kinematic bicycle (:class:`VehicleParams`).
-``control`` runs once per simulation step, so the projector works in plain
-Python on lists with a local search from the previous match (no numpy per step).
+``[x, y, yaw, kappa, gear]``) on the same kinematic bicycle (:class:`VehicleParams`),
+one gear segment at a time (:mod:`rrtdrive.controllers.gears`), projecting the car
+on it with :class:`~rrtdrive.controllers.projection.PathProjector` (re-exported here).
 """
 
 from __future__ import annotations
 
-import bisect
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from rrtdrive.controllers.gears import (
+    CUSP_SPEED,
+    GearSegment,
+    gear_segments,
+    mirror_state_values,
+)
+from rrtdrive.controllers.projection import PathProjector, Projection
 from rrtdrive.controllers.speed import SpeedConfig, SpeedController, SpeedProfile
 from rrtdrive.geometry import wrap_angle
 from rrtdrive.speed_profile import actuator_profile
-from rrtdrive.types import InputError, Path, VehicleParams, require_finite, require_positive
+from rrtdrive.types import InputError, Path, VehicleParams, require_positive
 
 __all__ = [
     "VehicleState",
@@ -27,6 +34,7 @@ __all__ = [
     "PathProjector",
     "TrackingController",
 ]
+
 
 @dataclass(frozen=True)
 class VehicleState:
@@ -67,192 +75,40 @@ class Controller(Protocol):
         ...
 
 
-@dataclass(frozen=True)
-class Projection:
-    """A point projected on the path.
-
-    Attributes
-    ----------
-    index : int
-        Index of the segment start sample.
-    s : float
-        Arc length of the foot point (may run past either end on the extensions).
-    x, y, yaw, kappa : float
-        Foot point, path heading and curvature there.
-    cte : float
-        Signed lateral offset of the point from the path, positive to the left.
-    """
-
-    index: int
-    s: float
-    x: float
-    y: float
-    yaw: float
-    kappa: float
-    cte: float
-
-
-class PathProjector:
-    """Projects points on a sampled path; beyond either end the path runs straight on.
-
-    Parameters
-    ----------
-    path : Path
-        At least two samples.
-
-    Examples
-    --------
-    >>> xs = np.linspace(0.0, 10.0, 41)
-    >>> p = Path(np.column_stack([xs, 0 * xs, 0 * xs, 0 * xs]), np.zeros((0, 2)))
-    >>> pr = PathProjector(p).project(3.1, 0.5)
-    >>> round(pr.s, 6), round(pr.cte, 6)
-    (3.1, 0.5)
-    """
-
-    def __init__(self, path: Path) -> None:
-        samples = np.asarray(path.samples, dtype=float)
-        if samples.ndim != 2 or samples.shape[1] != 5 or len(samples) < 2:
-            raise InputError(
-                f"path: need at least two samples [x, y, yaw, kappa, gear], got {samples.shape}"
-            )
-        require_finite("path", *samples.ravel().tolist())
-        if not path.is_forward_only:  # every closed loop (runner, re-planner, gym env) gets here
-            n = len(path.cusps)
-            what = f"has {n} gear change{'s' if n != 1 else ''}" if n else "is driven in reverse"
-            raise InputError(
-                f"path: {what}; driving in reverse is not supported yet (issue #14)"
-            )
-        xy = samples[:, :2]
-        seg = np.hypot(*np.diff(xy, axis=0).T)
-        keep = np.concatenate([[True], seg > 1e-9])  # drop repeated samples
-        samples = samples[keep]
-        if len(samples) < 2:
-            raise InputError("path: all samples coincide")
-        self.samples = samples
-        self.x = samples[:, 0].tolist()
-        self.y = samples[:, 1].tolist()
-        self.yaw = np.unwrap(samples[:, 2]).tolist()
-        self.kappa = samples[:, 3].tolist()
-        s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(samples[:, :2], axis=0).T))])
-        self.s = s.tolist()
-        self.length = float(s[-1])
-        self.n = len(self.x)
-        # Segment directions (unit) for projection.
-        d = np.diff(samples[:, :2], axis=0)
-        norm = np.hypot(d[:, 0], d[:, 1])
-        self.ux = (d[:, 0] / norm).tolist()
-        self.uy = (d[:, 1] / norm).tolist()
-        self.seg_len = norm.tolist()
-        self.hint = 0
-
-    def reset_hint(self, index: int = 0) -> None:
-        """Restart the local search at segment ``index``."""
-        self.hint = max(0, min(index, self.n - 2))
-
-    def _seg_dist2(self, i: int, px: float, py: float) -> float:
-        dx, dy = px - self.x[i], py - self.y[i]
-        t = dx * self.ux[i] + dy * self.uy[i]
-        if t < 0.0:
-            t = 0.0
-        elif t > self.seg_len[i]:
-            t = self.seg_len[i]
-        ex, ey = dx - t * self.ux[i], dy - t * self.uy[i]
-        return ex * ex + ey * ey
-
-    def nearest_segment(self, px: float, py: float) -> int:
-        """Index of the segment nearest to ``(px, py)``, by local descent from the last match.
-
-        Walks forward while the next segment is at least as near, else backward while
-        the previous one is nearer: a few evaluations per control step, and progress
-        stays continuous even where the path comes back near itself.
-        """
-        i = self.hint
-        last = self.n - 2
-        d = self._seg_dist2(i, px, py)
-        moved = False
-        while i < last:
-            dn = self._seg_dist2(i + 1, px, py)
-            if dn > d:
-                break
-            i, d, moved = i + 1, dn, True
-        if not moved:
-            while i > 0:
-                dp = self._seg_dist2(i - 1, px, py)
-                if dp >= d:
-                    break
-                i, d = i - 1, dp
-        self.hint = i
-        return i
-
-    def project(self, px: float, py: float) -> Projection:
-        """Foot point of ``(px, py)`` on the path (with straight extensions at the ends)."""
-        i = self.nearest_segment(px, py)
-        dx, dy = px - self.x[i], py - self.y[i]
-        ux, uy = self.ux[i], self.uy[i]
-        t = dx * ux + dy * uy
-        seg = self.seg_len[i]
-        if (i == 0 and t < 0.0) or (i == self.n - 2 and t > seg):
-            # On the straight extension before the start or past the end.
-            end = 0 if t < 0.0 else self.n - 1
-            yaw = self.yaw[end]
-            c, s_ = math.cos(yaw), math.sin(yaw)
-            ex, ey = px - self.x[end], py - self.y[end]
-            along = ex * c + ey * s_
-            return Projection(
-                i, self.s[end] + along, self.x[end] + along * c, self.y[end] + along * s_,
-                yaw, 0.0, ey * c - ex * s_,
-            )
-        if t < 0.0:
-            t = 0.0
-        elif t > seg:
-            t = seg
-        frac = t / seg
-        yaw = self.yaw[i] + frac * (self.yaw[i + 1] - self.yaw[i])
-        kappa = self.kappa[i] + frac * (self.kappa[i + 1] - self.kappa[i])
-        # Signed offset from the segment's line, positive to the left of the path.
-        cte = ux * dy - uy * dx
-        return Projection(i, self.s[i] + t, self.x[i] + t * ux, self.y[i] + t * uy, yaw, kappa, cte)
-
-    def point_at(self, s: float) -> tuple[float, float, float, float]:
-        """``(x, y, yaw, kappa)`` at arc length ``s``, straight on past either end."""
-        if s <= 0.0:
-            yaw = self.yaw[0]
-            return (self.x[0] + s * math.cos(yaw), self.y[0] + s * math.sin(yaw), yaw, 0.0)
-        if s >= self.length:
-            yaw = self.yaw[-1]
-            d = s - self.length
-            return (self.x[-1] + d * math.cos(yaw), self.y[-1] + d * math.sin(yaw), yaw, 0.0)
-        i = bisect.bisect_right(self.s, s) - 1
-        i = min(i, self.n - 2)
-        frac = (s - self.s[i]) / (self.s[i + 1] - self.s[i])
-        return (
-            self.x[i] + frac * (self.x[i + 1] - self.x[i]),
-            self.y[i] + frac * (self.y[i + 1] - self.y[i]),
-            self.yaw[i] + frac * (self.yaw[i + 1] - self.yaw[i]),
-            self.kappa[i] + frac * (self.kappa[i + 1] - self.kappa[i]),
-        )
-
-
 class TrackingController:
-    """Shared machinery: projection, speed profile and PI loop, steering limit.
+    """Shared machinery: gear segments, projection, speed profile and PI loop, steering limit.
 
     Subclasses implement :meth:`steering`. The steering output is clipped to
     ``steer_limit`` (by default the angle of the path curvature limit,
     ``atan(L * kappa_max)``, so the executed curvature never exceeds ``kappa_max``;
     the actuator's own 30° limit is wider).
 
+    **Gears.** A path with cusps is driven one gear segment at a time
+    (:func:`rrtdrive.controllers.gears.gear_segments`): each segment's speed profile
+    ends in a stop at its cusp; once the car stands still there (``|v| <=``
+    :data:`CUSP_SPEED`) the controller switches to the next segment and gear and
+    goes on; it has arrived when it stopped at the end of the last one. A reverse
+    segment is tracked as the forward problem of the mirrored car (heading + pi,
+    curvature, speed and steering negated; see :mod:`rrtdrive.controllers.gears`),
+    and the commands are mirrored back. Reverse segments' profiles are capped by
+    ``speed.v_max_reverse``, and every segment of a path with gears rises and falls
+    at most ``speed.accel_manoeuvre`` (short segments that each end in a stop: with
+    the full rates a jerk-limited loop overshot a 3 m segment's stop by 0.4 m). A
+    forward-only path is one segment, tracked exactly as
+    before gears existed.
+
     When the car's actuator is rate-limited (``vehicle.max_steer_rate`` finite), the
     controller knows it: the speed profile is also capped by the steering rate
     (``speed.steer_rate_share``), the command is clipped to what the actuator can
     reach in one step from the current angle (``state.steer +- rate * dt``, ``dt``
     the time since the last call; the controllers keep no steering memory, so
-    nothing winds up against the limit), at the start of a path the car stays at
-    rest until its wheels are within ``speed.start_steer_tol`` of the command, the
-    speed loop runs in comfort mode, and :attr:`ff_preview` (the distance driven in
-    one step, ``|v| dt``) tells the feed-forward how far ahead to read the path's
-    curvature: the actuator turns the wheels linearly over the step after a command,
-    so a command reaches its mean one step late. With an instant actuator none of
-    this happens.
+    nothing winds up against the limit), at the start of every gear segment the car
+    stays at rest until its wheels are within ``speed.start_steer_tol`` of the
+    command, the speed loop runs in comfort mode, and :attr:`ff_preview` (the
+    distance driven in one step, ``|v| dt``) tells the feed-forward how far ahead to
+    read the path's curvature: the actuator turns the wheels linearly over the step
+    after a command, so a command reaches its mean one step late. With an instant
+    actuator none of this happens.
 
     Parameters
     ----------
@@ -266,7 +122,15 @@ class TrackingController:
     Attributes
     ----------
     cte, heading_error, s, v_ref : float
-        Diagnostics of the last call (rear axle, left positive; yaw - path yaw).
+        Diagnostics of the last call (rear axle; ``cte`` left of the direction of
+        travel positive; ``heading_error`` = yaw - path yaw, both nose headings;
+        ``s`` the travelled length along the whole path; ``v_ref`` signed).
+    gear : int
+        Gear of the segment being driven (+1 or -1).
+    segment : int
+        Index of the gear segment being driven.
+    segments : list of GearSegment
+        The path's gear segments.
     steer_rate : float or None
         The actuator's rate limit (rad/s) from ``vehicle``; ``None`` when instant.
     ff_preview : float
@@ -296,24 +160,66 @@ class TrackingController:
         self.profile: SpeedProfile | None = None
         self.cte = self.heading_error = self.s = self.v_ref = 0.0
         self.ff_preview = 0.0
+        self.segments: list[GearSegment] = []
+        self.segment = 0
+        self.gear = 1
+        self._s0 = 0.0
+        self._manoeuvre = False
         self._last_t: float | None = None
         self._launched = False
 
     @property
     def arrived(self) -> bool:
-        """True once the car has stopped at the end of the path."""
+        """True once the car has stopped at the end of the path (its last gear segment)."""
+        return self.speed.arrived and self.segment >= len(self.segments) - 1
+
+    @property
+    def at_stop(self) -> bool:
+        """True once the car has stopped at the end of the gear segment being driven."""
         return self.speed.arrived
 
+    @property
+    def remaining(self) -> float:
+        """Metres from the car's projection to the end of the gear segment being driven.
+
+        The distance to the next stop: the next cusp, or the end of the path on its
+        last segment (negative past it).
+        """
+        if self.projector is None:
+            return 0.0
+        return self.projector.length - (self.s - self._s0)
+
+    def start_segment(self, index: int) -> None:
+        """Drive gear segment ``index`` from rest from now on (state as after :meth:`reset`).
+
+        The controller changes segment by itself at each cusp while it drives; this is
+        for a caller that drives the car otherwise (an agent) and tells the controller
+        where it is, so that its profile and projection are the segment's.
+
+        Raises
+        ------
+        InputError
+            For an index outside the path's segments.
+        """
+        if not 0 <= index < len(self.segments):
+            raise InputError(
+                f"segment: need 0 <= index < {len(self.segments)}, got {index!r}"
+            )
+        self._start_segment(index, 0.0, keep_state=False)
+
+    @property
+    def next_cusp_s(self) -> float | None:
+        """Travelled length along the path of the next cusp ahead, ``None`` on the last segment."""
+        if self.segment >= len(self.segments) - 1:
+            return None
+        seg = self.segments[self.segment]
+        return seg.s0 + seg.length
+
     def reset(self, path: Path, v_start: float = 0.0) -> None:
-        """Start tracking ``path`` from speed ``v_start``."""
-        self.projector = PathProjector(path)
-        self.profile = self._profile(self.projector, v_start)
-        self.speed.reset(self.profile)
-        self.cte = self.heading_error = self.s = self.v_ref = 0.0
-        self.ff_preview = 0.0
-        self._last_t = None
-        self._launched = False
-        self._reset_steering()
+        """Start tracking ``path`` (its first gear segment) from speed ``v_start``."""
+        self.segments = self._split(path)
+        self._manoeuvre = not path.is_forward_only
+        self._start_segment(0, v_start, keep_state=False)
 
     def retarget(self, path: Path, v_start: float) -> None:
         """Switch to ``path`` while driving, keeping the speed loop's and steering's state.
@@ -324,24 +230,68 @@ class TrackingController:
         command (the jerk limit) and any steering memory carry on, so the commands
         do not jump when the reference is continuous. :meth:`reset` starts afresh.
         """
-        self.projector = PathProjector(path)
-        self.profile = self._profile(self.projector, v_start)
-        self.speed.retarget(self.profile)
+        self.segments = self._split(path)
+        self._manoeuvre = not path.is_forward_only
+        self._start_segment(0, v_start, keep_state=True)
 
-    def _profile(self, p: PathProjector, v_start: float) -> SpeedProfile:
-        """The speed profile along ``p``; with a rate-limited actuator, capped by its rate."""
+    @staticmethod
+    def _split(path: Path) -> list[GearSegment]:
+        segments = gear_segments(path)
+        if not segments:
+            raise InputError("path: all samples coincide")
+        return segments
+
+    def _start_segment(self, index: int, v_start: float, keep_state: bool) -> None:
+        """Track gear segment ``index`` from signed speed ``v_start``."""
+        seg = self.segments[index]
+        self.segment = index
+        self.gear = seg.gear
+        self._s0 = seg.s0
+        v = v_start if seg.gear > 0 else -v_start
+        self.projector = PathProjector(seg.path, arc_end=self._manoeuvre)
+        self.profile = self._profile(self.projector, v, seg.gear, self._manoeuvre)
+        if keep_state:
+            self.speed.retarget(self.profile)
+        else:
+            self.speed.reset(self.profile)
+            self.cte = self.heading_error = self.s = self.v_ref = 0.0
+            self.ff_preview = 0.0
+            self._last_t = None
+            self._launched = False
+            self._reset_steering()
+        self._track(seg.path)
+
+    def _track(self, path: Path) -> None:
+        """Hook: a gear segment starts (``path``, forward problem); build per-path state."""
+
+    def _profile(
+        self, p: PathProjector, v_start: float, gear: int = 1, manoeuvre: bool = False
+    ) -> SpeedProfile:
+        """The speed profile along ``p``; with a rate-limited actuator, capped by its rate.
+
+        Reverse segments are capped by ``v_max_reverse``; every segment of a path with
+        gears (``manoeuvre``) rises and falls at most ``accel_manoeuvre``.
+        """
+        config = self.speed_config
+        if gear < 0 and config.v_max_reverse < config.v_max:
+            config = dataclasses.replace(config, v_max=config.v_max_reverse)
+        if manoeuvre:
+            a = config.accel_manoeuvre
+            config = dataclasses.replace(
+                config, accel=min(config.accel, a), decel=min(config.decel, a)
+            )
         return actuator_profile(
-            np.asarray(p.s), np.asarray(p.kappa), self.speed_config, v_start,
-            self.vehicle.wheelbase, self.steer_rate,
+            np.asarray(p.s), np.asarray(p.kappa), config, v_start,
+            self.vehicle.wheelbase, self.steer_rate, rise_to_peak=manoeuvre,
         )
 
     def hold_at(self, s: float | None) -> None:
-        """Stop at arc length ``s`` and wait there, or drive on when ``None``.
+        """Stop at arc length ``s`` (along the whole path) and wait there; ``None``: drive on.
 
         A stop line for the speed loop (an oncoming-traffic gate); it stays until
         changed, and :meth:`reset` / :meth:`retarget` clear it.
         """
-        self.speed.stop_at = s
+        self.speed.stop_at = None if s is None else s - self._s0
 
     def cap_accel(self, accel: float | None) -> None:
         """Cap the acceleration command at ``accel`` m/s^2 (``None``: no cap).
@@ -355,11 +305,34 @@ class TrackingController:
 
     def control(self, state: VehicleState) -> tuple[float, float]:
         """``(acceleration, steering)`` for ``state``; see :class:`Controller`."""
-        p = self.projector
-        if p is None:
+        if self.projector is None:
             raise RuntimeError(f"{type(self).__name__}.control called before reset")
-        proj = p.project(state.x, state.y)
-        self.s = proj.s
+        if (
+            self.speed.arrived
+            and self.segment < len(self.segments) - 1
+            and abs(state.speed) <= CUSP_SPEED
+        ):
+            # Stopped at the cusp: change gear and drive the next segment from rest.
+            self._start_segment(self.segment + 1, 0.0, keep_state=False)
+        if self.gear > 0:
+            accel, steer = self._control_forward(state)
+            if accel < 0.0 and state.speed <= 0.0:
+                accel = 0.0  # braking at rest holds the car: it never rolls against its gear
+            return accel, steer
+        yaw, speed, steer = mirror_state_values(state.yaw, state.speed, state.steer)
+        accel, steer = self._control_forward(
+            VehicleState(state.x, state.y, yaw, speed, steer, state.t)
+        )
+        if accel < 0.0 and speed <= 0.0:
+            accel = 0.0
+        self.v_ref = -self.v_ref
+        return -accel, -steer
+
+    def _control_forward(self, state: VehicleState) -> tuple[float, float]:
+        """:meth:`control` of the forward problem of the current segment."""
+        p = self.projector
+        proj = p.project(state.x, state.y)  # type: ignore[union-attr]
+        self.s = self._s0 + proj.s
         self.cte = proj.cte
         self.heading_error = wrap_angle(state.yaw - proj.yaw)
         if self.steer_rate is not None:

@@ -50,7 +50,11 @@ class Stanley(TrackingController):
     the steering angle is ``psi + atan2(-k e, k_soft + v)``: a car left of the path
     or pointing left of it steers right (negative). On a circle the trace's
     direction is ``yaw + atan(L kappa)``, so the curvature feed-forward is built in
-    and the rear axle stays on the path at steady state.
+    and the rear axle stays on the path at steady state. In reverse the law runs on
+    the mirrored car (:mod:`rrtdrive.controllers.gears`): its steered point lies ``L``
+    beyond the rear axle in the direction of travel (behind the real car), whose
+    velocity turns with the wheels as a front axle's does, so the law keeps its
+    first-order cross-track dynamics.
 
     Parameters
     ----------
@@ -91,18 +95,13 @@ class Stanley(TrackingController):
         self.front: PathProjector | None = None
         self.front_cte = 0.0
 
-    def reset(self, path: Path, v_start: float = 0.0) -> None:
-        """Track ``path``: the rear-axle projector drives the speed, the front one steers."""
-        super().reset(path, v_start)
-        self.front = PathProjector(front_axle_path(path, self.vehicle.wheelbase))
+    def _track(self, path: Path) -> None:
+        """A gear segment starts: the front-axle trace of its (forward) path steers.
 
-    def retarget(self, path: Path, v_start: float) -> None:
-        """Switch to ``path`` while driving: the front-axle trace is rebuilt with the rest.
-
-        Without it the steering would keep following the front-axle trace of the
-        first path (issue #15: Stanley crashed in every re-planned overtake).
+        Rebuilt for every segment and on :meth:`retarget` too: without it the steering
+        would keep following the trace of the first path (issue #15: Stanley crashed in
+        every re-planned overtake).
         """
-        super().retarget(path, v_start)
         self.front = PathProjector(front_axle_path(path, self.vehicle.wheelbase))
 
     def steering(self, state: VehicleState, proj: Projection) -> float:

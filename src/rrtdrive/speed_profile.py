@@ -404,6 +404,7 @@ def actuator_profile(
     v_start: float,
     wheelbase: float,
     max_steer_rate: float | None,
+    rise_to_peak: bool = False,
 ) -> SpeedProfile:
     """The speed profile the controllers drive along a path, for the car's steering actuator.
 
@@ -431,6 +432,10 @@ def actuator_profile(
         ``L`` in metres.
     max_steer_rate : float or None
         The actuator's rate limit in rad/s.
+    rise_to_peak : bool, optional
+        The path is one gear segment of a manoeuvre (it starts at rest and may be
+        shorter than the final approach): it may still speed up to its peak, or the
+        running minimum from its standstill start would keep it at 0.
 
     Returns
     -------
@@ -458,6 +463,8 @@ def actuator_profile(
     trough = _last_rise_too_short(s, first.v, config.accel + config.decel, config.comfort_jerk)
     if trough is not None and (i0 is None or trough < i0):
         i0 = trough
+    if i0 is not None and rise_to_peak:
+        i0 = max(i0, int(np.argmax(first.v)))
     if i0 is not None:
         cap[i0:] = np.minimum(cap[i0:], np.minimum.accumulate(first.v[i0:]))
     return SpeedProfile(s, kappa, config, v_start, v_cap=cap)
