@@ -88,7 +88,7 @@ def escalate(
         return failed
     cfg = config or HybridConfig()
     reverse = bool(getattr(problem, "reverse", False))
-    answer = hybrid_query(problem, budget, watch, cfg, reverse, smoothing if cfg.smooth else None)
+    answer = hybrid_query(problem, budget, watch, cfg, reverse, smoothing)
     own = answer_stats(answer, problem.vehicle.wheelbase)
     stats = {**failed.stats, **{f"hybrid_{k}": v for k, v in own.items()}}
     gear = "with reverse" if reverse else "forward only"

@@ -31,7 +31,7 @@ from rrtdrive.planning.hybrid.heuristic import (
     Heuristic,
     HolonomicField,
 )
-from rrtdrive.planning.hybrid.path import BuiltPath, build_path
+from rrtdrive.planning.hybrid.path import BuiltPath, Ramps, build_path
 from rrtdrive.planning.hybrid.primitives import PrimitiveSet
 from rrtdrive.planning.hybrid.search import (
     HybridSearch,
@@ -42,7 +42,7 @@ from rrtdrive.planning.hybrid.search import (
     walk_hits,
 )
 from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
-from rrtdrive.planning.smoothing import SmoothingConfig
+from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, SmoothingConfig
 from rrtdrive.types import Budget, Pose, Tree
 
 __all__ = [
@@ -52,7 +52,21 @@ __all__ = [
     "dubins_table",
     "query_clearance",
     "reversed_in_time",
+    "sharpness_bound_of",
 ]
+
+
+def sharpness_bound_of(problem: PlanningProblem, smoothing: SmoothingConfig | None) -> float:
+    """The query's sharpness bound, rad/m, as the improved planner's.
+
+    ``smoothing.max_sharpness`` (0.2 rad/m without one), or the car's
+    ``max_steer_rate / 2 m/s`` when smaller.
+    """
+    bound = smoothing.max_sharpness if smoothing is not None else SmoothingConfig().max_sharpness
+    rate = problem.vehicle.max_steer_rate
+    if rate is not None and rate < float("inf"):
+        bound = min(bound, rate / STEER_RATE_DESIGN_SPEED)
+    return bound
 
 
 def free_cell_graph(problem: PlanningProblem, resolution: float) -> FreeCellGraph:
@@ -205,8 +219,9 @@ def hybrid_query(
     reverse : bool
         Whether reverse primitives and shots are allowed.
     smoothing : SmoothingConfig or None
-        The per-segment post-processor (its ``clearance`` is the one kept); ``None``:
-        exact arcs only.
+        Its ``max_sharpness`` is the bound of ``curve="clothoid"``
+        (:func:`sharpness_bound_of`); with ``curve="arcs"`` and ``smooth`` it is the
+        per-segment post-processor; ``None``: the default bound, or exact arcs.
 
     Returns
     -------
@@ -231,10 +246,16 @@ def hybrid_query(
     if not reverse:
         prims = prims.gear(1)
 
+    ramps = None
+    if config.curve == "clothoid":
+        bound = sharpness_bound_of(problem, smoothing)
+        ramps = Ramps(bound, problem.vehicle.wheelbase, kappa_max)
+    post = smoothing if config.smooth and ramps is None else None
+
     def accept(pieces: list[Piece]) -> BuiltPath | None:
         return build_path(
-            pieces, problem.checker, smoothing if config.smooth else None, config.arc_fallback,
-            recheck_clearance, kappa_max, config.check_spacing, config.sample_spacing,
+            pieces, problem.checker, post, config.arc_fallback, recheck_clearance, kappa_max,
+            config.check_spacing, config.sample_spacing, ramps=ramps,
         )  # fmt: skip
 
     to_goal = HolonomicField.towards(grid, goal)
