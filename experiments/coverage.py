@@ -328,16 +328,20 @@ def tight_report(payload: dict[str, Any]) -> str:
         "# The tight maps: which planners solve them", "",
         f"Command: `{payload['command']}`  ",
         f"Seeds {payload['seeds']} per query; ours {payload['max_time_s']:g} s budget, OMPL "
-        f"{payload['ompl_time_s']:g} s; `verified` is `verify_path` (forward-only today); "
+        f"{payload['ompl_time_s']:g} s; `verified` is `verify_path` (gear-aware; OMPL rows "
+        "carry no gears, so for them read collision-free); "
         f"{payload['machine']}.", "",
-        "| query | planner | solved | verified | collision-free | outcomes | diagnosis |",
-        "|---|---|---|---|---|---|---|",
+        "| query | planner | solved | verified | collision-free | median time solved [ms] "
+        f"| max sharpness [rad/m] | within {SHARPNESS_BOUND:g} rad/m | outcomes | diagnosis |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for c in payload["summary"]:
         outcomes = ", ".join(f"{k} {v}" for k, v in sorted(c["statuses"].items()))
         lines.append(
             f"| {c['query']} | {c['planner']} | {c['solved']}/{c['runs']} | {c['verified']} | "
-            f"{c['collision_free']} | {outcomes} | {', '.join(c['diagnoses']) or '-'} |"
+            f"{c['collision_free']} | {_fmt(c.get('median_time_solved_s'), 1e3)} | "
+            f"{_sharp(c.get('max_sharpness'))} | {_count(c.get('within_bound'))} | {outcomes} | "
+            f"{', '.join(c['diagnoses']) or '-'} |"
         )
     if payload["skipped"]:
         lines += ["", "Skipped:", ""] + [f"- `{k}`: {v}" for k, v in payload["skipped"].items()]
@@ -417,6 +421,8 @@ def main(argv: list[str] | None = None) -> int:
                 "statuses": {st: sum(r["status"] == st for r in rs)
                              for st in sorted({r["status"] for r in rs})},
                 "diagnoses": sorted({r["diagnosis"] for r in rs if r.get("diagnosis")}),
+                **_sharpness([r for r in rs if r["solved"]]),
+                "median_time_solved_s": _median([r["time_s"] for r in rs if r["solved"]]),
             }
             for (q, p), rs in cells.items()
         ]  # fmt: skip
