@@ -89,7 +89,12 @@ class HybridConfig:
         Dubins fallback does; ``False``: such a path is rejected and the search goes on.
     max_solutions : int
         Goal connections tried (each one found by a shot and rejected by the
-        smoothing) before the search reports failure.
+        smoothing or the ramps) before the search gives up.
+    ramp_margin : float
+        With ``curve="clothoid"``: when ``max_solutions`` ramped connections were
+        rejected (the ramps cut a tight corner too close), the query is searched
+        again with the rest of the budget keeping this much more body clearance
+        (capped at the start's and goal's own); 0: no second search.
 
     Examples
     --------
@@ -122,6 +127,7 @@ class HybridConfig:
     smooth: bool = False
     arc_fallback: bool = True
     max_solutions: int = 16
+    ramp_margin: float = 0.1
 
     def __post_init__(self) -> None:
         for name in (
@@ -152,7 +158,9 @@ class HybridConfig:
             require_finite(f"hybrid.{name}", value)
             if value < low:
                 raise InputError(f"hybrid.{name}: must be >= {low:g}, got {value!r}")
-        for name in ("gear_change_cost", "steer_change_cost", "steer_cost", "body_clearance"):
+        for name in (
+        "gear_change_cost", "steer_change_cost", "steer_cost", "body_clearance", "ramp_margin",
+    ):  # fmt: skip
             value = getattr(self, name)
             require_finite(f"hybrid.{name}", value)
             if value < 0:

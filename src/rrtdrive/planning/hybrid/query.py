@@ -69,6 +69,10 @@ def sharpness_bound_of(problem: PlanningProblem, smoothing: SmoothingConfig | No
     return bound
 
 
+#: ``accept(pieces)``: the checked path of a connection, or ``None`` to search on.
+Accept = Callable[[list[Piece]], BuiltPath | None]
+
+
 def free_cell_graph(problem: PlanningProblem, resolution: float) -> FreeCellGraph:
     """The map's :class:`FreeCellGraph`, built once per map (timed as set-up)."""
     checker = problem.checker
@@ -239,7 +243,6 @@ def hybrid_query(
     recheck_clearance = max(0.0, clearance - 0.005)
     start, goal = problem.start, problem.goal
     grid = free_cell_graph(problem, config.xy_resolution)
-    body = BodyTest(problem.checker, clearance)
     prims = PrimitiveSet.build(
         1.0 / radius, config.curvatures, config.step, config.check_spacing, reverse=True
     )
@@ -265,31 +268,56 @@ def hybrid_query(
     else:
         table = dubins_table(radius, config)
         heuristic = Heuristic(to_goal, table.to(goal), goal, table.scalar_to(goal))
-    shots = analytic_shots(goal, radius, reverse, config.check_spacing, body)
-    ahead = HybridSearch(
-        body, start, goal, heuristic, prims, shots, config, kappa_max, problem.bounds
-    )
-    searches = [(ahead, accept)]
-    if config.switch_after > 0:
-        # From the goal back to the start: forward only, by reverse arcs alone.
-        back_prims = prims if reverse else prims_reverse(radius, config)
-        if reverse:
-            back_shots = analytic_shots(start, radius, True, config.check_spacing, body)
-        else:
-            back_shots = _backward_dubins_shots(start, radius, config.check_spacing, body)
-        back_h = Heuristic(HolonomicField.towards(grid, start), None, start)
-        back = HybridSearch(
-            body, goal, start, back_h, back_prims, back_shots, config, kappa_max, problem.bounds
+    back_h = Heuristic(HolonomicField.towards(grid, start), None, start)
+
+    def searches_with(search_clearance: float) -> list[tuple[HybridSearch, Accept]]:
+        body = BodyTest(problem.checker, search_clearance)
+        shots = analytic_shots(goal, radius, reverse, config.check_spacing, body)
+        ahead = HybridSearch(
+            body, start, goal, heuristic, prims, shots, config, kappa_max, problem.bounds
         )
-        searches.append((back, lambda p: accept(reversed_in_time(p))))
-    path, outcome = _alternate(searches, budget.max_iterations, config.switch_after, watch)
+        out: list[tuple[HybridSearch, Accept]] = [(ahead, accept)]
+        if config.switch_after > 0:
+            # From the goal back to the start: forward only, by reverse arcs alone.
+            back_prims = prims if reverse else prims_reverse(radius, config)
+            if reverse:
+                back_shots = analytic_shots(start, radius, True, config.check_spacing, body)
+            else:
+                back_shots = _backward_dubins_shots(start, radius, config.check_spacing, body)
+            back = HybridSearch(
+                body, goal, start, back_h, back_prims, back_shots, config, kappa_max,
+                problem.bounds,
+            )  # fmt: skip
+            out.append((back, lambda p: accept(reversed_in_time(p))))
+        return out
+
+    # The ramps cut corners by centimetres: where every connection the search finds
+    # is rejected for it (max_solutions of them), search again, with the rest of the
+    # budget, keeping ``ramp_margin`` more clearance (the re-check is unchanged).
+    margins = (0.0, config.ramp_margin) if ramps is not None and config.ramp_margin > 0 else (0.0,)
+    used = SearchOutcome("expansions", 0, 0, 0, 0)
+    searches: list[tuple[HybridSearch, Accept]] = []
+    for margin in margins:
+        search_clearance = clearance if margin == 0.0 else query_clearance(
+            problem, config.body_clearance + margin
+        )
+        searches = searches_with(search_clearance)
+        left = budget.max_iterations - used.expansions
+        path, outcome = _alternate(searches, left, config.switch_after, watch)
+        used = SearchOutcome(
+            outcome.reason, used.expansions + outcome.expansions, used.nodes + outcome.nodes,
+            used.shots + outcome.shots, used.connections + outcome.connections,
+        )  # fmt: skip
+        if path is not None or outcome.reason != "rejected" or left - outcome.expansions <= 0:
+            break
+    outcome = used
     trees = tuple(_tree(s) for s, _ in searches if s.x)
     message = "" if path is not None else _failure_message(outcome, config, budget, reverse)
     return HybridAnswer(path, outcome, message, trees)
 
 
 def _alternate(
-    searches: list[tuple[HybridSearch, Callable[[list[Piece]], BuiltPath | None]]],
+    searches: list[tuple[HybridSearch, Accept]],
     budget: int,
     first: int,
     watch: Stopwatch,
