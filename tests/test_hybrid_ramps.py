@@ -113,3 +113,20 @@ def test_config_names_the_curve() -> None:
 
     with pytest.raises(InputError, match="hybrid.curve"):
         HybridConfig(curve="bspline")
+
+
+#: Random start 11 of the coverage set (``random_goals.draw_goals("parking_lot", 30, 1,
+#: "start")``): forward, every connection the first search finds runs through one tight
+#: corner that the ramps cut below the clearance.
+TIGHT_CORNER_START = Pose(59.2941018104284, 26.00974477372232, 2.135538579126397)
+
+
+def test_rejected_ramps_search_again_with_more_clearance() -> None:
+    m = builtin_map("parking_lot").with_query(start=TIGHT_CORNER_START)
+    problem = PlanningProblem.from_map(m)
+    without = HybridAStar(ramp_margin=0.0).solve(problem, np.random.default_rng(0), BUDGET)
+    assert not without.success and without.stats["connections"] == 16
+    assert "could not be made drivable" in without.message
+    res = HybridAStar().solve(problem, np.random.default_rng(0), BUDGET)
+    assert res.success and verify_path(m, res.path).ok
+    assert max_sharpness(res.path.samples, L) <= 0.2
