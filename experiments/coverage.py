@@ -57,6 +57,7 @@ from rrtdrive.atomic import write_text_atomic  # noqa: E402
 from rrtdrive.bench.backends import parallel_map  # noqa: E402
 from rrtdrive.maps import builtin_map  # noqa: E402
 from rrtdrive.planning import PLANNERS, PlanningProblem, make_planner  # noqa: E402
+from rrtdrive.planning.smoothing import max_sharpness  # noqa: E402
 from rrtdrive.types import Budget, Path, Pose  # noqa: E402
 from rrtdrive.verify import verify_path  # noqa: E402
 
@@ -109,6 +110,10 @@ def run_ours(item: dict[str, Any]) -> dict[str, Any]:
         "length_m": res.path.length if res.success else None,
         "message": res.message[:300],
     }
+    if res.success:
+        # Per gear segment (a cusp is a stop); JSON has no inf: a jump is the string "inf".
+        sharp = max_sharpness(res.path.samples, problem.vehicle.wheelbase)
+        row["max_sharpness"] = sharp if math.isfinite(sharp) else "inf"
     diagnosis = getattr(res, "diagnosis", None)
     if diagnosis is not None:
         row["diagnosis"] = diagnosis.kind.value
@@ -173,6 +178,23 @@ def _median(values: list[float]) -> float | None:
     return statistics.median(values) if values else None
 
 
+#: The default sharpness bound, rad/m (``SmoothingConfig.max_sharpness``).
+SHARPNESS_BOUND = 0.2
+
+
+def _sharpness(ok: list[dict[str, Any]]) -> dict[str, Any]:
+    """The largest sharpness of the solved paths and how many keep the bound."""
+    vals = [math.inf if r["max_sharpness"] == "inf" else r["max_sharpness"]
+            for r in ok if "max_sharpness" in r]  # fmt: skip
+    if not vals:
+        return {"max_sharpness": None, "within_bound": None}
+    top = max(vals)
+    return {
+        "max_sharpness": top if math.isfinite(top) else "inf",
+        "within_bound": sum(v <= SHARPNESS_BOUND + 1e-9 for v in vals),
+    }
+
+
 def summarise(rows: list[dict[str, Any]], planners: list[str], sets: list[str]) -> dict:
     """Per planner x set figures and the (ours, OMPL) pair figures."""
     cell: dict[tuple[str, str], dict[int, dict]] = {
@@ -197,6 +219,7 @@ def summarise(rows: list[dict[str, Any]], planners: list[str], sets: list[str]) 
             "median_length_m": _median([r["length_m"] for r in ok]),
             "median_time_failed_s": _median([r["time_s"] for r in bad]),
             "statuses": statuses,
+            **_sharpness(ok),
         }
     pairs: dict[str, dict[str, Any]] = {}
     ompl = [p for p in planners if p in OMPL]
@@ -227,6 +250,14 @@ def _fmt(v: float | None, scale: float = 1.0, digits: int = 1) -> str:
     return "-" if v is None else f"{v * scale:.{digits}f}"
 
 
+def _sharp(v: float | str | None) -> str:
+    return "-" if v is None else (v if isinstance(v, str) else f"{v:.3f}")
+
+
+def _count(v: int | None) -> str:
+    return "-" if v is None else str(v)
+
+
 def report(payload: dict[str, Any]) -> str:
     """The markdown page of one run."""
     s = payload["summary"]
@@ -241,8 +272,9 @@ def report(payload: dict[str, Any]) -> str:
         f"{payload['wall_time_s'] / 60:.1f} min.",
         "",
         "| planner | set | solved | verified | collision-free | median time solved [ms] "
-        "| median length [m] | median time failed [ms] | other outcomes |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| median length [m] | median time failed [ms] | max sharpness [rad/m] "
+        f"| within {SHARPNESS_BOUND:g} rad/m | other outcomes |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for p, sets in s["per_planner"].items():
         for name, c in sets.items():
@@ -251,6 +283,7 @@ def report(payload: dict[str, Any]) -> str:
                 f"| {p} | {name}s | {c['solved']}/{c['queries']} | {c['verified']} | "
                 f"{c['collision_free']} | {_fmt(c['median_time_solved_s'], 1e3)} | "
                 f"{_fmt(c['median_length_m'], 1, 2)} | {_fmt(c['median_time_failed_s'], 1e3)} | "
+                f"{_sharp(c.get('max_sharpness'))} | {_count(c.get('within_bound'))} | "
                 f"{other or '-'} |"
             )
     lines += [
@@ -295,16 +328,20 @@ def tight_report(payload: dict[str, Any]) -> str:
         "# The tight maps: which planners solve them", "",
         f"Command: `{payload['command']}`  ",
         f"Seeds {payload['seeds']} per query; ours {payload['max_time_s']:g} s budget, OMPL "
-        f"{payload['ompl_time_s']:g} s; `verified` is `verify_path` (forward-only today); "
+        f"{payload['ompl_time_s']:g} s; `verified` is `verify_path` (gear-aware; OMPL rows "
+        "carry no gears, so for them read collision-free); "
         f"{payload['machine']}.", "",
-        "| query | planner | solved | verified | collision-free | outcomes | diagnosis |",
-        "|---|---|---|---|---|---|---|",
+        "| query | planner | solved | verified | collision-free | median time solved [ms] "
+        f"| max sharpness [rad/m] | within {SHARPNESS_BOUND:g} rad/m | outcomes | diagnosis |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for c in payload["summary"]:
         outcomes = ", ".join(f"{k} {v}" for k, v in sorted(c["statuses"].items()))
         lines.append(
             f"| {c['query']} | {c['planner']} | {c['solved']}/{c['runs']} | {c['verified']} | "
-            f"{c['collision_free']} | {outcomes} | {', '.join(c['diagnoses']) or '-'} |"
+            f"{c['collision_free']} | {_fmt(c.get('median_time_solved_s'), 1e3)} | "
+            f"{_sharp(c.get('max_sharpness'))} | {_count(c.get('within_bound'))} | {outcomes} | "
+            f"{', '.join(c['diagnoses']) or '-'} |"
         )
     if payload["skipped"]:
         lines += ["", "Skipped:", ""] + [f"- `{k}`: {v}" for k, v in payload["skipped"].items()]
@@ -384,6 +421,8 @@ def main(argv: list[str] | None = None) -> int:
                 "statuses": {st: sum(r["status"] == st for r in rs)
                              for st in sorted({r["status"] for r in rs})},
                 "diagnoses": sorted({r["diagnosis"] for r in rs if r.get("diagnosis")}),
+                **_sharpness([r for r in rs if r["solved"]]),
+                "median_time_solved_s": _median([r["time_s"] for r in rs if r["solved"]]),
             }
             for (q, p), rs in cells.items()
         ]  # fmt: skip

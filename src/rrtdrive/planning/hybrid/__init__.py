@@ -3,8 +3,10 @@
 Modules: :mod:`.config` (:class:`HybridConfig`), :mod:`.primitives` (the arcs),
 :mod:`.heuristic` (holonomic-with-obstacles and Dubins estimates),
 :mod:`.body` (the body test with a sure-collision screen), :mod:`.search`
-(the A* loop with analytic expansions), :mod:`.path` (gear segments smoothed
-and checked), :mod:`.query` (one query: from the start, then from the goal),
+(the A* loop with analytic expansions), :mod:`.ramps` (continuous curvature for a
+segment of arcs: steering ramps within the sharpness bound, exact end poses),
+:mod:`.path` (gear segments made continuous in curvature and checked),
+:mod:`.query` (one query: from the start, then from the goal),
 :mod:`.planner` (the registered ``hybrid-a-star`` planner) and
 :mod:`.escalation` (what the improved planner runs when its stages fail).
 """
@@ -18,7 +20,13 @@ from rrtdrive.planning.hybrid.heuristic import (
     HolonomicField,
     dubins_lengths,
 )
-from rrtdrive.planning.hybrid.path import BuiltPath, GearSegment, build_path, gear_segments
+from rrtdrive.planning.hybrid.path import (
+    BuiltPath,
+    GearSegment,
+    Ramps,
+    build_path,
+    gear_segments,
+)
 from rrtdrive.planning.hybrid.planner import (
     NAME,
     HybridAStar,
@@ -32,6 +40,7 @@ from rrtdrive.planning.hybrid.query import (
     hybrid_query,
     reversed_in_time,
 )
+from rrtdrive.planning.hybrid.ramps import ramped_segment
 from rrtdrive.planning.hybrid.search import HybridSearch, Piece, SearchOutcome, analytic_shots
 
 __all__ = [
@@ -50,9 +59,11 @@ __all__ = [
     "dubins_lengths",
     "BuiltPath",
     "GearSegment",
+    "Ramps",
     "build_path",
     "gear_segments",
     "analytic_shots",
+    "ramped_segment",
     "answer_stats",
     "free_cell_graph",
     "hybrid_query",

@@ -7,7 +7,10 @@ from dataclasses import dataclass
 
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
-__all__ = ["HybridConfig"]
+__all__ = ["CURVES", "HybridConfig"]
+
+#: The kinds of returned segments (:attr:`HybridConfig.curve`).
+CURVES = ("clothoid", "arcs")
 
 
 @dataclass(frozen=True)
@@ -65,18 +68,33 @@ class HybridConfig:
         Largest gap between the poses given to the body test, metres.
     sample_spacing : float
         Largest gap between the returned path's samples, metres.
+    curve : str
+        What the returned segments are: ``"clothoid"`` (default) gives every gear
+        segment continuous curvature within the sharpness bound (each jump of the
+        arcs' steering angle becomes a ramp at the bound, the arcs' lengths and
+        angles re-fitted so the segment ends exactly on its pose:
+        :func:`~rrtdrive.planning.hybrid.ramps.ramped_segment`); a connection that
+        cannot be made so, or collides once made so, is rejected and the search goes
+        on. ``"arcs"``: the search's exact arcs (curvature jumps where two meet),
+        with ``smooth`` and ``arc_fallback``, for comparison.
     smooth : bool
-        Try to smooth each gear segment into a B-spline with the improved planner's
-        post-processor (:func:`~rrtdrive.planning.smoothing.make_drivable`). Off by
-        default: on ``parking_lot`` its heading legs and swept-capsule edge test
-        rejected the search's segments near obstacles (4 of 4 tried), at 50-140 ms each.
+        With ``curve="arcs"``: try to smooth each gear segment into a B-spline
+        with the improved planner's post-processor
+        (:func:`~rrtdrive.planning.smoothing.make_drivable`). Off by default: on
+        ``parking_lot`` its heading legs and swept-capsule edge test rejected the
+        search's segments near obstacles (4 of 4 tried), at 50-140 ms each.
     arc_fallback : bool
         When a segment cannot be smoothed, keep its exact arcs (curvature
         piecewise constant, ``|kappa| <= kappa_max``, body checked exactly), as the
         Dubins fallback does; ``False``: such a path is rejected and the search goes on.
     max_solutions : int
         Goal connections tried (each one found by a shot and rejected by the
-        smoothing) before the search reports failure.
+        smoothing or the ramps) before the search gives up.
+    ramp_margin : float
+        With ``curve="clothoid"``: when ``max_solutions`` ramped connections were
+        rejected (the ramps cut a tight corner too close), the query is searched
+        again with the rest of the budget keeping this much more body clearance
+        (capped at the start's and goal's own); 0: no second search.
 
     Examples
     --------
@@ -105,9 +123,11 @@ class HybridConfig:
     body_clearance: float = 0.15
     check_spacing: float = 0.1
     sample_spacing: float = 0.25
+    curve: str = "clothoid"
     smooth: bool = False
     arc_fallback: bool = True
-    max_solutions: int = 8
+    max_solutions: int = 16
+    ramp_margin: float = 0.1
 
     def __post_init__(self) -> None:
         for name in (
@@ -138,11 +158,15 @@ class HybridConfig:
             require_finite(f"hybrid.{name}", value)
             if value < low:
                 raise InputError(f"hybrid.{name}: must be >= {low:g}, got {value!r}")
-        for name in ("gear_change_cost", "steer_change_cost", "steer_cost", "body_clearance"):
+        for name in (
+        "gear_change_cost", "steer_change_cost", "steer_cost", "body_clearance", "ramp_margin",
+    ):  # fmt: skip
             value = getattr(self, name)
             require_finite(f"hybrid.{name}", value)
             if value < 0:
                 raise InputError(f"hybrid.{name}: must be >= 0, got {value!r}")
+        if self.curve not in CURVES:
+            raise InputError(f"hybrid.curve: must be one of {list(CURVES)}, got {self.curve!r}")
         require_int("hybrid.shot_interval", self.shot_interval)
         require_int("hybrid.max_solutions", self.max_solutions)
         require_int("hybrid.switch_after", self.switch_after, minimum=0)

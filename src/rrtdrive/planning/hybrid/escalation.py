@@ -73,10 +73,12 @@ def escalate(
     config : HybridConfig, optional
         The search's settings.
 
-    Under clothoid ``smoothing`` (the default) a found path is returned only if it
-    keeps the sharpness bound ``smoothing.max_sharpness``; the search's exact arcs
-    do not (their curvature jumps), so such a find is reported in the failure's
-    message and ``stats["hybrid_found_unsmooth"]``.
+    The search's segments get continuous curvature within the query's sharpness
+    bound (``HybridConfig.curve="clothoid"``, the default: steering ramps, exact end
+    poses, re-checked), so the find is returned. Under clothoid ``smoothing`` (the
+    default) a path that still breaks ``smoothing.max_sharpness`` (only with
+    ``curve="arcs"``: exact arcs jump in curvature) is not returned but reported in
+    the failure's message and ``stats["hybrid_found_unsmooth"]``.
 
     Returns
     -------
@@ -88,7 +90,7 @@ def escalate(
         return failed
     cfg = config or HybridConfig()
     reverse = bool(getattr(problem, "reverse", False))
-    answer = hybrid_query(problem, budget, watch, cfg, reverse, smoothing if cfg.smooth else None)
+    answer = hybrid_query(problem, budget, watch, cfg, reverse, smoothing)
     own = answer_stats(answer, problem.vehicle.wheelbase)
     stats = {**failed.stats, **{f"hybrid_{k}": v for k, v in own.items()}}
     gear = "with reverse" if reverse else "forward only"
@@ -105,8 +107,8 @@ def escalate(
     sharp = own["max_sharpness"]
     if bound is not None and sharp > bound + 1e-9:
         # The default promises continuous curvature within the sharpness bound
-        # (issue 12); the search's exact arcs jump in curvature where they meet, so
-        # its path is reported, not returned (hybrid-a-star itself returns it).
+        # (issue 12); exact arcs (curve="arcs") jump in curvature where they meet, so
+        # such a path is reported, not returned (hybrid-a-star itself returns it).
         stats["hybrid_found_unsmooth"] = 1.0
         return dataclasses.replace(
             failed,

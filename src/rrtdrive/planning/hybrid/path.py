@@ -23,11 +23,12 @@ import numpy as np
 
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.geometry import densify, wrap_angle
+from rrtdrive.planning.hybrid.ramps import ramped_segment
 from rrtdrive.planning.hybrid.search import Piece
 from rrtdrive.planning.smoothing import SmoothingConfig, make_drivable, max_sharpness
 from rrtdrive.types import Pose
 
-__all__ = ["GearSegment", "gear_segments", "BuiltPath", "build_path"]
+__all__ = ["GearSegment", "gear_segments", "BuiltPath", "Ramps", "build_path"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,7 +63,8 @@ class BuiltPath:
     segments : int
         Gear segments (cusps + 1).
     smoothed : int
-        Segments smoothed into B-splines (the others kept their arcs).
+        Segments made continuous in curvature (steering ramps or B-splines); the
+        others kept their exact arcs.
     smoothing_message : str
         Why the last unsmoothed segment could not be smoothed ('' when all were).
     """
@@ -138,6 +140,35 @@ def _smoothed(
     return out, ctrl, ""
 
 
+@dataclass(frozen=True)
+class Ramps:
+    """Continuous curvature for every segment: the sharpness bound and the car.
+
+    ``ramp_share`` of ``sharpness`` goes to the ramps (the rows measure a little
+    more than the ramps' own rate); every segment is checked against ``sharpness``.
+    """
+
+    sharpness: float
+    wheelbase: float
+    kappa_max: float
+    ramp_share: float = 0.9
+
+    @property
+    def delta_max(self) -> float:
+        """The steering limit ``atan(L kappa_max)``."""
+        return math.atan(self.wheelbase * self.kappa_max)
+
+
+def _ramped(seg: GearSegment, ramps: Ramps, spacing: float) -> np.ndarray | None:
+    rows = ramped_segment(
+        seg.rows, seg.gear, ramps.ramp_share * ramps.sharpness, ramps.wheelbase,
+        ramps.delta_max, spacing=min(spacing, 0.2),
+    )  # fmt: skip
+    if rows is None or max_sharpness(rows, ramps.wheelbase) > ramps.sharpness:
+        return None
+    return rows
+
+
 def build_path(
     pieces: Sequence[Piece],
     checker: CollisionChecker,
@@ -148,6 +179,7 @@ def build_path(
     check_spacing: float = 0.1,
     sample_spacing: float = 0.25,
     raw_spacing: float = 1.0,
+    ramps: Ramps | None = None,
 ) -> BuiltPath | None:
     """The checked path of a connection, or ``None`` when a segment fits no guarantee.
 
@@ -181,6 +213,18 @@ def build_path(
     message = ""
     for seg in segs:
         rows = np.zeros((0, 4))
+        if ramps is not None:
+            ramped = _ramped(seg, ramps, sample_spacing)
+            if ramped is None or not _segment_ok(
+                ramped, checker, clearance, kappa_max, check_spacing
+            ):
+                return None
+            smoothed += 1
+            waypoints.append(ramped[[0, -1], :2])
+            rows = np.column_stack([ramped, np.full(len(ramped), float(seg.gear))])
+            rows[:, 2] = wrap_angle(rows[:, 2])
+            out_rows.append(rows)
+            continue
         if smoothing is not None:
             rows, ctrl, why = _smoothed(seg, checker, smoothing, raw_spacing)
             if len(rows) and _segment_ok(rows, checker, clearance, kappa_max, check_spacing):

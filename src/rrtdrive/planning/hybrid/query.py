@@ -31,7 +31,7 @@ from rrtdrive.planning.hybrid.heuristic import (
     Heuristic,
     HolonomicField,
 )
-from rrtdrive.planning.hybrid.path import BuiltPath, build_path
+from rrtdrive.planning.hybrid.path import BuiltPath, Ramps, build_path
 from rrtdrive.planning.hybrid.primitives import PrimitiveSet
 from rrtdrive.planning.hybrid.search import (
     HybridSearch,
@@ -42,7 +42,7 @@ from rrtdrive.planning.hybrid.search import (
     walk_hits,
 )
 from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
-from rrtdrive.planning.smoothing import SmoothingConfig
+from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, SmoothingConfig
 from rrtdrive.types import Budget, Pose, Tree
 
 __all__ = [
@@ -52,7 +52,25 @@ __all__ = [
     "dubins_table",
     "query_clearance",
     "reversed_in_time",
+    "sharpness_bound_of",
 ]
+
+
+def sharpness_bound_of(problem: PlanningProblem, smoothing: SmoothingConfig | None) -> float:
+    """The query's sharpness bound, rad/m, as the improved planner's.
+
+    ``smoothing.max_sharpness`` (0.2 rad/m without one), or the car's
+    ``max_steer_rate / 2 m/s`` when smaller.
+    """
+    bound = smoothing.max_sharpness if smoothing is not None else SmoothingConfig().max_sharpness
+    rate = problem.vehicle.max_steer_rate
+    if rate is not None and rate < float("inf"):
+        bound = min(bound, rate / STEER_RATE_DESIGN_SPEED)
+    return bound
+
+
+#: ``accept(pieces)``: the checked path of a connection, or ``None`` to search on.
+Accept = Callable[[list[Piece]], BuiltPath | None]
 
 
 def free_cell_graph(problem: PlanningProblem, resolution: float) -> FreeCellGraph:
@@ -205,8 +223,9 @@ def hybrid_query(
     reverse : bool
         Whether reverse primitives and shots are allowed.
     smoothing : SmoothingConfig or None
-        The per-segment post-processor (its ``clearance`` is the one kept); ``None``:
-        exact arcs only.
+        Its ``max_sharpness`` is the bound of ``curve="clothoid"``
+        (:func:`sharpness_bound_of`); with ``curve="arcs"`` and ``smooth`` it is the
+        per-segment post-processor; ``None``: the default bound, or exact arcs.
 
     Returns
     -------
@@ -224,17 +243,22 @@ def hybrid_query(
     recheck_clearance = max(0.0, clearance - 0.005)
     start, goal = problem.start, problem.goal
     grid = free_cell_graph(problem, config.xy_resolution)
-    body = BodyTest(problem.checker, clearance)
     prims = PrimitiveSet.build(
         1.0 / radius, config.curvatures, config.step, config.check_spacing, reverse=True
     )
     if not reverse:
         prims = prims.gear(1)
 
+    ramps = None
+    if config.curve == "clothoid":
+        bound = sharpness_bound_of(problem, smoothing)
+        ramps = Ramps(bound, problem.vehicle.wheelbase, kappa_max)
+    post = smoothing if config.smooth and ramps is None else None
+
     def accept(pieces: list[Piece]) -> BuiltPath | None:
         return build_path(
-            pieces, problem.checker, smoothing if config.smooth else None, config.arc_fallback,
-            recheck_clearance, kappa_max, config.check_spacing, config.sample_spacing,
+            pieces, problem.checker, post, config.arc_fallback, recheck_clearance, kappa_max,
+            config.check_spacing, config.sample_spacing, ramps=ramps,
         )  # fmt: skip
 
     to_goal = HolonomicField.towards(grid, goal)
@@ -244,31 +268,56 @@ def hybrid_query(
     else:
         table = dubins_table(radius, config)
         heuristic = Heuristic(to_goal, table.to(goal), goal, table.scalar_to(goal))
-    shots = analytic_shots(goal, radius, reverse, config.check_spacing, body)
-    ahead = HybridSearch(
-        body, start, goal, heuristic, prims, shots, config, kappa_max, problem.bounds
-    )
-    searches = [(ahead, accept)]
-    if config.switch_after > 0:
-        # From the goal back to the start: forward only, by reverse arcs alone.
-        back_prims = prims if reverse else prims_reverse(radius, config)
-        if reverse:
-            back_shots = analytic_shots(start, radius, True, config.check_spacing, body)
-        else:
-            back_shots = _backward_dubins_shots(start, radius, config.check_spacing, body)
-        back_h = Heuristic(HolonomicField.towards(grid, start), None, start)
-        back = HybridSearch(
-            body, goal, start, back_h, back_prims, back_shots, config, kappa_max, problem.bounds
+    back_h = Heuristic(HolonomicField.towards(grid, start), None, start)
+
+    def searches_with(search_clearance: float) -> list[tuple[HybridSearch, Accept]]:
+        body = BodyTest(problem.checker, search_clearance)
+        shots = analytic_shots(goal, radius, reverse, config.check_spacing, body)
+        ahead = HybridSearch(
+            body, start, goal, heuristic, prims, shots, config, kappa_max, problem.bounds
         )
-        searches.append((back, lambda p: accept(reversed_in_time(p))))
-    path, outcome = _alternate(searches, budget.max_iterations, config.switch_after, watch)
+        out: list[tuple[HybridSearch, Accept]] = [(ahead, accept)]
+        if config.switch_after > 0:
+            # From the goal back to the start: forward only, by reverse arcs alone.
+            back_prims = prims if reverse else prims_reverse(radius, config)
+            if reverse:
+                back_shots = analytic_shots(start, radius, True, config.check_spacing, body)
+            else:
+                back_shots = _backward_dubins_shots(start, radius, config.check_spacing, body)
+            back = HybridSearch(
+                body, goal, start, back_h, back_prims, back_shots, config, kappa_max,
+                problem.bounds,
+            )  # fmt: skip
+            out.append((back, lambda p: accept(reversed_in_time(p))))
+        return out
+
+    # The ramps cut corners by centimetres: where every connection the search finds
+    # is rejected for it (max_solutions of them), search again, with the rest of the
+    # budget, keeping ``ramp_margin`` more clearance (the re-check is unchanged).
+    margins = (0.0, config.ramp_margin) if ramps is not None and config.ramp_margin > 0 else (0.0,)
+    used = SearchOutcome("expansions", 0, 0, 0, 0)
+    searches: list[tuple[HybridSearch, Accept]] = []
+    for margin in margins:
+        search_clearance = clearance if margin == 0.0 else query_clearance(
+            problem, config.body_clearance + margin
+        )
+        searches = searches_with(search_clearance)
+        left = budget.max_iterations - used.expansions
+        path, outcome = _alternate(searches, left, config.switch_after, watch)
+        used = SearchOutcome(
+            outcome.reason, used.expansions + outcome.expansions, used.nodes + outcome.nodes,
+            used.shots + outcome.shots, used.connections + outcome.connections,
+        )  # fmt: skip
+        if path is not None or outcome.reason != "rejected" or left - outcome.expansions <= 0:
+            break
+    outcome = used
     trees = tuple(_tree(s) for s, _ in searches if s.x)
     message = "" if path is not None else _failure_message(outcome, config, budget, reverse)
     return HybridAnswer(path, outcome, message, trees)
 
 
 def _alternate(
-    searches: list[tuple[HybridSearch, Callable[[list[Piece]], BuiltPath | None]]],
+    searches: list[tuple[HybridSearch, Accept]],
     budget: int,
     first: int,
     watch: Stopwatch,
