@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path as FsPath
 
 import numpy as np
@@ -25,7 +25,7 @@ from rrtdrive.sim.render import TRACE_COLOR, SceneCanvas
 from rrtdrive.sim.scenes import SimConfig, build_env
 from rrtdrive.types import InputError, Pose, require_int
 
-__all__ = ["render_frames", "write_video", "frame_is_blank", "frame_indices"]
+__all__ = ["render_frames", "write_video", "write_frames", "frame_is_blank", "frame_indices"]
 
 #: ``progress(frames_done, frames_total)``, called after each frame is handed to the encoder.
 Progress = Callable[[int, int], None]
@@ -219,4 +219,29 @@ def write_video(
             writer.append(frame)
             if progress is not None:
                 progress(writer.frames, total)
+    return writer.frames
+
+
+def write_frames(
+    frames: Iterable[np.ndarray], target: str | os.PathLike[str], fps: float
+) -> int:
+    """Write ready RGB frames (any even or odd size) as an MP4; return the frame count.
+
+    For frames drawn elsewhere (highway-env's own ``env.render()`` of a stock env);
+    odd sides are padded by one edge pixel. The file appears only when complete.
+    """
+    out = FsPath(target)
+    if out.suffix.lower() != ".mp4":
+        raise InputError(f"--video: the file must end in .mp4, got {str(target)!r}")
+    if not out.parent.exists():
+        raise InputError(f"--video: folder {str(out.parent)!r} does not exist")
+    if not (math.isfinite(fps) and fps > 0):
+        raise InputError(f"fps: must be > 0, got {fps!r}")
+    with Mp4Writer(out, fps, quality=7, macro_block_size=2) as writer:
+        for frame in frames:
+            f = np.asarray(frame, dtype=np.uint8)
+            pad_h, pad_w = f.shape[0] % 2, f.shape[1] % 2
+            if pad_h or pad_w:
+                f = np.pad(f, ((0, pad_h), (0, pad_w), (0, 0)), mode="edge")
+            writer.append(np.ascontiguousarray(f))
     return writer.frames
