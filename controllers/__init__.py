@@ -16,6 +16,7 @@ from rrtdrive.controllers.base import (
     TrackingController,
     VehicleState,
 )
+from rrtdrive.controllers.gears import GearSegment, gear_segments, mirror_path
 from rrtdrive.controllers.lqr import LQR
 from rrtdrive.controllers.pure_pursuit import PurePursuit
 from rrtdrive.controllers.speed import SpeedConfig, SpeedController, SpeedProfile
@@ -26,6 +27,7 @@ __all__ = [
     "CONTROLLERS",
     "LQR",
     "Controller",
+    "GearSegment",
     "PathProjector",
     "Projection",
     "PurePursuit",
@@ -35,7 +37,9 @@ __all__ = [
     "Stanley",
     "TrackingController",
     "VehicleState",
+    "gear_segments",
     "make_controller",
+    "mirror_path",
 ]
 
 CONTROLLERS: dict[str, Callable[..., TrackingController]] = {

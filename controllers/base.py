@@ -1,7 +1,8 @@
 """The controller seam: vehicle state, the Controller protocol, and a fast path projector.
 
 Every controller tracks a :class:`rrtdrive.types.Path` (rear-axle samples
-``[x, y, yaw, kappa]``) on the same kinematic bicycle (:class:`VehicleParams`).
+``[x, y, yaw, kappa, gear]``) on the same kinematic bicycle (:class:`VehicleParams`),
+one gear segment at a time (:mod:`rrtdrive.controllers.gears`).
 ``control`` runs once per simulation step, so the projector works in plain
 Python on lists with a local search from the previous match (no numpy per step).
 """
@@ -16,6 +17,12 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from rrtdrive.controllers.gears import (
+    CUSP_SPEED,
+    GearSegment,
+    gear_segments,
+    mirror_state_values,
+)
 from rrtdrive.controllers.speed import (
     FINAL_APPROACH_M,
     SpeedConfig,
@@ -122,11 +129,12 @@ class PathProjector:
                 f"path: need at least two samples [x, y, yaw, kappa, gear], got {samples.shape}"
             )
         require_finite("path", *samples.ravel().tolist())
-        if not path.is_forward_only:  # every closed loop (runner, re-planner, gym env) gets here
+        if not path.is_forward_only:
             n = len(path.cusps)
             what = f"has {n} gear change{'s' if n != 1 else ''}" if n else "is driven in reverse"
             raise InputError(
-                f"path: {what}; driving in reverse is not supported yet (issue #14)"
+                f"path: {what}; a PathProjector projects one forward gear segment "
+                "(rrtdrive.controllers.gear_segments splits a path into them)"
             )
         xy = samples[:, :2]
         seg = np.hypot(*np.diff(xy, axis=0).T)
@@ -240,25 +248,39 @@ class PathProjector:
 
 
 class TrackingController:
-    """Shared machinery: projection, speed profile and PI loop, steering limit.
+    """Shared machinery: gear segments, projection, speed profile and PI loop, steering limit.
 
     Subclasses implement :meth:`steering`. The steering output is clipped to
     ``steer_limit`` (by default the angle of the path curvature limit,
     ``atan(L * kappa_max)``, so the executed curvature never exceeds ``kappa_max``;
     the actuator's own 30° limit is wider).
 
+    **Gears.** A path with cusps is driven one gear segment at a time
+    (:func:`rrtdrive.controllers.gears.gear_segments`): each segment's speed profile
+    ends in a stop at its cusp; once the car stands still there (``|v| <=``
+    :data:`CUSP_SPEED`) the controller switches to the next segment and gear and
+    goes on; it has arrived when it stopped at the end of the last one. A reverse
+    segment is tracked as the forward problem of the mirrored car (heading + pi,
+    curvature, speed and steering negated; see :mod:`rrtdrive.controllers.gears`),
+    and the commands are mirrored back. Reverse segments' profiles are capped by
+    ``speed.v_max_reverse``, and every segment of a path with gears rises and falls
+    at most ``speed.accel_manoeuvre`` (short segments that each end in a stop: with
+    the full rates a jerk-limited loop overshot a 3 m segment's stop by 0.4 m). A
+    forward-only path is one segment, tracked exactly as
+    before gears existed.
+
     When the car's actuator is rate-limited (``vehicle.max_steer_rate`` finite), the
     controller knows it: the speed profile is also capped by the steering rate
     (``speed.steer_rate_share``), the command is clipped to what the actuator can
     reach in one step from the current angle (``state.steer +- rate * dt``, ``dt``
     the time since the last call; the controllers keep no steering memory, so
-    nothing winds up against the limit), at the start of a path the car stays at
-    rest until its wheels are within ``speed.start_steer_tol`` of the command, the
-    speed loop runs in comfort mode, and :attr:`ff_preview` (the distance driven in
-    one step, ``|v| dt``) tells the feed-forward how far ahead to read the path's
-    curvature: the actuator turns the wheels linearly over the step after a command,
-    so a command reaches its mean one step late. With an instant actuator none of
-    this happens.
+    nothing winds up against the limit), at the start of every gear segment the car
+    stays at rest until its wheels are within ``speed.start_steer_tol`` of the
+    command, the speed loop runs in comfort mode, and :attr:`ff_preview` (the
+    distance driven in one step, ``|v| dt``) tells the feed-forward how far ahead to
+    read the path's curvature: the actuator turns the wheels linearly over the step
+    after a command, so a command reaches its mean one step late. With an instant
+    actuator none of this happens.
 
     Parameters
     ----------
@@ -272,7 +294,15 @@ class TrackingController:
     Attributes
     ----------
     cte, heading_error, s, v_ref : float
-        Diagnostics of the last call (rear axle, left positive; yaw - path yaw).
+        Diagnostics of the last call (rear axle; ``cte`` left of the direction of
+        travel positive; ``heading_error`` = yaw - path yaw, both nose headings;
+        ``s`` the travelled length along the whole path; ``v_ref`` signed).
+    gear : int
+        Gear of the segment being driven (+1 or -1).
+    segment : int
+        Index of the gear segment being driven.
+    segments : list of GearSegment
+        The path's gear segments.
     steer_rate : float or None
         The actuator's rate limit (rad/s) from ``vehicle``; ``None`` when instant.
     ff_preview : float
@@ -302,24 +332,32 @@ class TrackingController:
         self.profile: SpeedProfile | None = None
         self.cte = self.heading_error = self.s = self.v_ref = 0.0
         self.ff_preview = 0.0
+        self.segments: list[GearSegment] = []
+        self.segment = 0
+        self.gear = 1
+        self._s0 = 0.0
+        self._manoeuvre = False
         self._last_t: float | None = None
         self._launched = False
 
     @property
     def arrived(self) -> bool:
-        """True once the car has stopped at the end of the path."""
-        return self.speed.arrived
+        """True once the car has stopped at the end of the path (its last gear segment)."""
+        return self.speed.arrived and self.segment >= len(self.segments) - 1
+
+    @property
+    def next_cusp_s(self) -> float | None:
+        """Travelled length along the path of the next cusp ahead, ``None`` on the last segment."""
+        if self.segment >= len(self.segments) - 1:
+            return None
+        seg = self.segments[self.segment]
+        return seg.s0 + seg.length
 
     def reset(self, path: Path, v_start: float = 0.0) -> None:
-        """Start tracking ``path`` from speed ``v_start``."""
-        self.projector = PathProjector(path)
-        self.profile = self._profile(self.projector, v_start)
-        self.speed.reset(self.profile)
-        self.cte = self.heading_error = self.s = self.v_ref = 0.0
-        self.ff_preview = 0.0
-        self._last_t = None
-        self._launched = False
-        self._reset_steering()
+        """Start tracking ``path`` (its first gear segment) from speed ``v_start``."""
+        self.segments = self._split(path)
+        self._manoeuvre = not path.is_forward_only
+        self._start_segment(0, v_start, keep_state=False)
 
     def retarget(self, path: Path, v_start: float) -> None:
         """Switch to ``path`` while driving, keeping the speed loop's and steering's state.
@@ -330,15 +368,58 @@ class TrackingController:
         command (the jerk limit) and any steering memory carry on, so the commands
         do not jump when the reference is continuous. :meth:`reset` starts afresh.
         """
-        self.projector = PathProjector(path)
-        self.profile = self._profile(self.projector, v_start)
-        self.speed.retarget(self.profile)
+        self.segments = self._split(path)
+        self._manoeuvre = not path.is_forward_only
+        self._start_segment(0, v_start, keep_state=True)
 
-    def _profile(self, p: PathProjector, v_start: float) -> SpeedProfile:
-        """The speed profile along ``p``; with a rate-limited actuator, capped by its rate."""
+    @staticmethod
+    def _split(path: Path) -> list[GearSegment]:
+        segments = gear_segments(path)
+        if not segments:
+            raise InputError("path: all samples coincide")
+        return segments
+
+    def _start_segment(self, index: int, v_start: float, keep_state: bool) -> None:
+        """Track gear segment ``index`` from signed speed ``v_start``."""
+        seg = self.segments[index]
+        self.segment = index
+        self.gear = seg.gear
+        self._s0 = seg.s0
+        v = v_start if seg.gear > 0 else -v_start
+        self.projector = PathProjector(seg.path)
+        self.profile = self._profile(self.projector, v, seg.gear, self._manoeuvre)
+        if keep_state:
+            self.speed.retarget(self.profile)
+        else:
+            self.speed.reset(self.profile)
+            self.cte = self.heading_error = self.s = self.v_ref = 0.0
+            self.ff_preview = 0.0
+            self._last_t = None
+            self._launched = False
+            self._reset_steering()
+        self._track(seg.path)
+
+    def _track(self, path: Path) -> None:
+        """Hook: a gear segment starts (``path``, forward problem); build per-path state."""
+
+    def _profile(
+        self, p: PathProjector, v_start: float, gear: int = 1, manoeuvre: bool = False
+    ) -> SpeedProfile:
+        """The speed profile along ``p``; with a rate-limited actuator, capped by its rate.
+
+        Reverse segments are capped by ``v_max_reverse``; every segment of a path with
+        gears (``manoeuvre``) rises and falls at most ``accel_manoeuvre``.
+        """
         s, kappa = np.asarray(p.s), np.asarray(p.kappa)
         cap = None
         config = self.speed_config
+        if gear < 0 and config.v_max_reverse < config.v_max:
+            config = dataclasses.replace(config, v_max=config.v_max_reverse)
+        if manoeuvre:
+            a = config.accel_manoeuvre
+            config = dataclasses.replace(
+                config, accel=min(config.accel, a), decel=min(config.decel, a)
+            )
         if self.steer_rate is not None:
             # Comfort mode starts from the car's own speed (no launch step in v_ref: the
             # PI would answer it with an overshoot of the jerk-limited command).
@@ -354,17 +435,21 @@ class TrackingController:
             final = s > s[-1] - FINAL_APPROACH_M
             if np.any(final):
                 i0 = int(np.argmax(final))
+                if manoeuvre:
+                    # A segment shorter than the final approach may still speed up to its
+                    # peak (from its start at rest, the running minimum would be 0).
+                    i0 = max(i0, int(np.argmax(first.v)))
                 cap = cap.copy()
                 cap[i0:] = np.minimum(cap[i0:], np.minimum.accumulate(first.v[i0:]))
         return SpeedProfile(s, kappa, config, v_start, v_cap=cap)
 
     def hold_at(self, s: float | None) -> None:
-        """Stop at arc length ``s`` and wait there, or drive on when ``None``.
+        """Stop at arc length ``s`` (along the whole path) and wait there; ``None``: drive on.
 
         A stop line for the speed loop (an oncoming-traffic gate); it stays until
         changed, and :meth:`reset` / :meth:`retarget` clear it.
         """
-        self.speed.stop_at = s
+        self.speed.stop_at = None if s is None else s - self._s0
 
     def cap_accel(self, accel: float | None) -> None:
         """Cap the acceleration command at ``accel`` m/s^2 (``None``: no cap).
@@ -378,11 +463,34 @@ class TrackingController:
 
     def control(self, state: VehicleState) -> tuple[float, float]:
         """``(acceleration, steering)`` for ``state``; see :class:`Controller`."""
-        p = self.projector
-        if p is None:
+        if self.projector is None:
             raise RuntimeError(f"{type(self).__name__}.control called before reset")
-        proj = p.project(state.x, state.y)
-        self.s = proj.s
+        if (
+            self.speed.arrived
+            and self.segment < len(self.segments) - 1
+            and abs(state.speed) <= CUSP_SPEED
+        ):
+            # Stopped at the cusp: change gear and drive the next segment from rest.
+            self._start_segment(self.segment + 1, 0.0, keep_state=False)
+        if self.gear > 0:
+            accel, steer = self._control_forward(state)
+            if accel < 0.0 and state.speed <= 0.0:
+                accel = 0.0  # braking at rest holds the car: it never rolls against its gear
+            return accel, steer
+        yaw, speed, steer = mirror_state_values(state.yaw, state.speed, state.steer)
+        accel, steer = self._control_forward(
+            VehicleState(state.x, state.y, yaw, speed, steer, state.t)
+        )
+        if accel < 0.0 and speed <= 0.0:
+            accel = 0.0
+        self.v_ref = -self.v_ref
+        return -accel, -steer
+
+    def _control_forward(self, state: VehicleState) -> tuple[float, float]:
+        """:meth:`control` of the forward problem of the current segment."""
+        p = self.projector
+        proj = p.project(state.x, state.y)  # type: ignore[union-attr]
+        self.s = self._s0 + proj.s
         self.cte = proj.cte
         self.heading_error = wrap_angle(state.yaw - proj.yaw)
         if self.steer_rate is not None:

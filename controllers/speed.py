@@ -41,6 +41,13 @@ class SpeedConfig:
     ----------
     v_max : float
         Speed cap in m/s.
+    v_max_reverse : float
+        Speed cap of reverse gear segments in m/s (the profile there is capped by
+        ``min(v_max, v_max_reverse)``).
+    accel_manoeuvre : float
+        Largest acceleration and deceleration of the profile (m/s^2) on every gear
+        segment of a path with gear changes or reverse driving: short segments that
+        each end in a stop, which the loop must hit within centimetres.
     a_lat_max : float
         Lateral-acceleration cap in m/s^2 (sets ``v <= sqrt(a_lat_max / |kappa|)``).
     accel : float
@@ -89,6 +96,8 @@ class SpeedConfig:
     """
 
     v_max: float = 3.0
+    v_max_reverse: float = 1.5
+    accel_manoeuvre: float = 0.5
     a_lat_max: float = 1.5
     accel: float = 1.0
     decel: float = 1.0
@@ -110,8 +119,9 @@ class SpeedConfig:
 
     def __post_init__(self) -> None:
         for name in (
-            "v_max", "a_lat_max", "accel", "decel", "stop_distance", "stop_speed", "jerk_max",
-            "taper_stop_speed", "start_steer_tol", "comfort_jerk",
+            "v_max", "v_max_reverse", "accel_manoeuvre", "a_lat_max", "accel", "decel",
+            "stop_distance", "stop_speed", "jerk_max", "taper_stop_speed", "start_steer_tol",
+            "comfort_jerk",
         ):
             require_positive(f"speed.{name}", getattr(self, name))
         for name in ("v_launch", "kp", "ki", "a_min", "a_max"):

@@ -91,18 +91,13 @@ class Stanley(TrackingController):
         self.front: PathProjector | None = None
         self.front_cte = 0.0
 
-    def reset(self, path: Path, v_start: float = 0.0) -> None:
-        """Track ``path``: the rear-axle projector drives the speed, the front one steers."""
-        super().reset(path, v_start)
-        self.front = PathProjector(front_axle_path(path, self.vehicle.wheelbase))
+    def _track(self, path: Path) -> None:
+        """A gear segment starts: the front-axle trace of its (forward) path steers.
 
-    def retarget(self, path: Path, v_start: float) -> None:
-        """Switch to ``path`` while driving: the front-axle trace is rebuilt with the rest.
-
-        Without it the steering would keep following the front-axle trace of the
-        first path (issue #15: Stanley crashed in every re-planned overtake).
+        Rebuilt for every segment and on :meth:`retarget` too: without it the steering
+        would keep following the trace of the first path (issue #15: Stanley crashed in
+        every re-planned overtake).
         """
-        super().retarget(path, v_start)
         self.front = PathProjector(front_axle_path(path, self.vehicle.wheelbase))
 
     def steering(self, state: VehicleState, proj: Projection) -> float:

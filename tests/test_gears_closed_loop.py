@@ -1,4 +1,4 @@
-"""The closed loop drives forward only (until issue #14): reverse paths are refused clearly."""
+"""The closed loop drives paths with gear changes (issue #14); the gym env still refuses them."""
 
 from __future__ import annotations
 
@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 
 import rrtdrive.envs  # noqa: F401  (registers the envs)
-from rrtdrive.controllers import make_controller
+from rrtdrive.controllers import PathProjector, make_controller
 from rrtdrive.planning import PLANNERS, PlanningProblem
 from rrtdrive.planning.base import Stopwatch
 from rrtdrive.sim.runner import run_episode
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Pose
 
-MESSAGE = r"path: has 1 gear change; driving in reverse is not supported yet \(issue #14\)"
+MESSAGE = r"path: has 1 gear change; a PathProjector projects one forward gear segment"
 
 
 def _shuttle(start: Pose) -> Path:
@@ -39,22 +39,26 @@ class _Shuttler:
                           Stopwatch(budget).elapsed())
 
 
-def test_controllers_refuse_a_reverse_path():
+def test_controllers_drive_out_and_back():
     path = _shuttle(Pose(0.0, 0.0, 0.0))
     for name in ("pure-pursuit", "stanley", "lqr"):
-        with pytest.raises(InputError, match=MESSAGE):
-            make_controller(name).reset(path)
-    back_only = Path(path.samples[21:], path.waypoints)
-    with pytest.raises(InputError, match="is driven in reverse; driving in reverse is not"):
-        make_controller("pure-pursuit").reset(back_only)
+        c = make_controller(name)
+        c.reset(path)
+        assert [s.gear for s in c.segments] == [1, -1]
+    with pytest.raises(InputError, match="a PathProjector projects one forward gear segment"):
+        PathProjector(path)
 
 
-def test_runner_refuses_a_reverse_path():
+def test_runner_drives_a_reverse_path():
+    from rrtdrive.evaluation import evaluate
     from rrtdrive.maps import builtin_map
 
     path = _shuttle(builtin_map("parking_lot").start)
-    with pytest.raises(InputError, match=MESSAGE):
-        run_episode("parking", planner=path, controller="pure-pursuit", seed=0)
+    ep = run_episode("parking", planner=path, controller="pure-pursuit", seed=0)
+    assert ep.status == "arrived"
+    r = evaluate(ep)
+    assert r.path_cusps == 1 and r.gear_changes == 1
+    assert np.hypot(*(ep.log.states[-1, :2] - path.samples[-1, :2])) < 0.1
 
 
 def test_gym_env_refuses_a_reverse_path(monkeypatch):

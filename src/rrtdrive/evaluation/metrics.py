@@ -26,7 +26,7 @@ from rrtdrive.evaluation.collisions import (
 from rrtdrive.evaluation.nuplan_comfort import NuplanComfort, nuplan_comfort
 from rrtdrive.evaluation.report import EpisodeReport, EvalConfig
 from rrtdrive.evaluation.success import SuccessTerms, success_terms
-from rrtdrive.evaluation.tracking import tracking_errors
+from rrtdrive.evaluation.tracking import gear_changes, tracking_errors
 from rrtdrive.evaluation.traffic_metrics import (
     TTC_LEAST_MIN_S,
     min_vehicle_distance,
@@ -63,7 +63,8 @@ class MetricContext:
     @cached_property
     def errors(self) -> tuple[np.ndarray, np.ndarray]:
         """Cross-track and heading errors of every logged pose."""
-        return tracking_errors(self.episode.path, self.episode.log.states[:, :3])
+        states = self.episode.log.states
+        return tracking_errors(self.episode.path, states[:, :3], speeds=states[:, 3])
 
     @cached_property
     def kappa(self) -> np.ndarray:
@@ -264,6 +265,9 @@ METRICS: Mapping[str, Metric] = MappingProxyType({
     "nuplan_jerk_abs_max": Metric(lambda ep, ctx: ctx.nuplan.jerk_abs_max),
     "nuplan_yaw_rate_abs_max": Metric(lambda ep, ctx: ctx.nuplan.yaw_rate_abs_max),
     "nuplan_yaw_accel_abs_max": Metric(lambda ep, ctx: ctx.nuplan.yaw_accel_abs_max),
+    # Gears (docs/metrics.md, "Gear changes").
+    "path_cusps": _always(lambda ep, ctx: int(len(ep.path.cusps)) if len(ep.path) else None),
+    "gear_changes": Metric(lambda ep, ctx: gear_changes(ep.log.states[:, 3]), empty=0),
 })
 
 

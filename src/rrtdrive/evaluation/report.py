@@ -152,6 +152,8 @@ class EpisodeReport:
     nuplan_jerk_abs_max: float | None = None
     nuplan_yaw_rate_abs_max: float | None = None
     nuplan_yaw_accel_abs_max: float | None = None
+    path_cusps: int | None = None
+    gear_changes: int | None = None
 
     def __post_init__(self) -> None:
         # Reports read back from JSON carry the outcome as its string.

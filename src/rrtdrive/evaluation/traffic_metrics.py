@@ -21,7 +21,7 @@ from rrtdrive.evaluation.collisions import (
     relative_angles,
     vehicle_collisions,
 )
-from rrtdrive.evaluation.tracking import distinct_samples
+from rrtdrive.evaluation.tracking import along_path, distinct_samples
 from rrtdrive.geometry import box_corners, project_to_polyline
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -164,10 +164,16 @@ def min_vehicle_distance(episode: Episode) -> float | None:
 def progress(episode: Episode) -> float | None:
     """Arc length along the tracked path between the first and last logged rear axle (m).
 
-    ``None`` when the path has fewer than two samples.
+    On a path with gear changes, travelled length over all its segments, each pose
+    projected on the segment being driven. ``None`` when the path has fewer than
+    two samples.
     """
     path = episode.path
     if len(path) < 2:
         return None
+    if not path.is_forward_only:
+        states = episode.log.states
+        s_all = along_path(path, states[:, :2], states[:, 3])
+        return float(s_all[-1] - s_all[0])
     s_ends = project_to_polyline(distinct_samples(path)[:, :2], episode.log.states[[0, -1], :2]).s
     return float(s_ends[1] - s_ends[0])
