@@ -116,7 +116,11 @@ def make_stock_env(
             "steering_range": [-params.max_steer, params.max_steer],
         },
     }
-    return gym.make(env_id, config=config, render_mode="rgb_array" if render else None)
+    # Configured after making: parking-parked-v0's class takes no constructor arguments.
+    env = gym.make(env_id)
+    env.unwrapped.configure(config)
+    env.unwrapped.render_mode = "rgb_array" if render else None
+    return env
 
 
 def _normalise(value: float, low: float, high: float) -> float:
