@@ -105,6 +105,7 @@ class SceneRenderer:
         trace_xy: Sequence[Sequence[float]],
         ref_xy: np.ndarray,
         lines: Sequence[str],
+        gears: np.ndarray | None = None,
     ) -> np.ndarray:
         """One RGB frame, ``(height, width, 3)`` uint8, freshly allocated.
 
@@ -124,9 +125,12 @@ class SceneRenderer:
             Reference points the agent observes, ``(K, 2)`` world points.
         lines : sequence of str
             Read-out text, one line each.
+        gears : numpy.ndarray, optional
+            The path's gear per point (``Path.gears``): reverse segments dashed, cusps
+            marked (:meth:`~rrtdrive.sim.render.SceneCanvas.draw`).
         """
         canvas = self.canvas
-        canvas.draw(road, simulation_frequency, path_xy, goal_xy)
+        canvas.draw(road, simulation_frequency, path_xy, goal_xy, gears=gears)
         canvas.polyline(trace_xy, TRACE_COLOR)
         canvas.dots(ref_xy, REF_COLOR, 2)
         return canvas.frame(lines)
