@@ -111,7 +111,11 @@ class PathProjector:
     Parameters
     ----------
     path : Path
-        At least two samples.
+        At least two samples, all in gear +1.
+    arc_end : bool
+        Past its end the path goes on along the circle of its last curvature
+        (:meth:`point_at`; the controllers use it on the gear segments of a path with
+        gear changes), else straight on. The projection always extends straight.
 
     Examples
     --------
@@ -122,7 +126,8 @@ class PathProjector:
     (3.1, 0.5)
     """
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, arc_end: bool = False) -> None:
+        self.arc_end = bool(arc_end)
         samples = np.asarray(path.samples, dtype=float)
         if samples.ndim != 2 or samples.shape[1] != 5 or len(samples) < 2:
             raise InputError(
@@ -228,13 +233,28 @@ class PathProjector:
         return Projection(i, self.s[i] + t, self.x[i] + t * ux, self.y[i] + t * uy, yaw, kappa, cte)
 
     def point_at(self, s: float) -> tuple[float, float, float, float]:
-        """``(x, y, yaw, kappa)`` at arc length ``s``, straight on past either end."""
+        """``(x, y, yaw, kappa)`` at arc length ``s``, straight on past either end.
+
+        With ``arc_end`` the path goes on past its end on the circle of its last
+        curvature instead.
+        """
         if s <= 0.0:
             yaw = self.yaw[0]
             return (self.x[0] + s * math.cos(yaw), self.y[0] + s * math.sin(yaw), yaw, 0.0)
         if s >= self.length:
             yaw = self.yaw[-1]
             d = s - self.length
+            k = self.kappa[-1]
+            if self.arc_end and abs(k) > 1e-9:
+                # On the circle of the end's curvature: the car reaches the end with the
+                # path's curvature (a gear segment ends at a stop, not at a straight).
+                y1 = yaw + k * d
+                return (
+                    self.x[-1] + (math.sin(y1) - math.sin(yaw)) / k,
+                    self.y[-1] - (math.cos(y1) - math.cos(yaw)) / k,
+                    y1,
+                    k,
+                )
             return (self.x[-1] + d * math.cos(yaw), self.y[-1] + d * math.sin(yaw), yaw, 0.0)
         i = bisect.bisect_right(self.s, s) - 1
         i = min(i, self.n - 2)
@@ -346,6 +366,40 @@ class TrackingController:
         return self.speed.arrived and self.segment >= len(self.segments) - 1
 
     @property
+    def at_stop(self) -> bool:
+        """True once the car has stopped at the end of the gear segment being driven."""
+        return self.speed.arrived
+
+    @property
+    def remaining(self) -> float:
+        """Metres from the car's projection to the end of the gear segment being driven.
+
+        The distance to the next stop: the next cusp, or the end of the path on its
+        last segment (negative past it).
+        """
+        if self.projector is None:
+            return 0.0
+        return self.projector.length - (self.s - self._s0)
+
+    def start_segment(self, index: int) -> None:
+        """Drive gear segment ``index`` from rest from now on (state as after :meth:`reset`).
+
+        The controller changes segment by itself at each cusp while it drives; this is
+        for a caller that drives the car otherwise (an agent) and tells the controller
+        where it is, so that its profile and projection are the segment's.
+
+        Raises
+        ------
+        InputError
+            For an index outside the path's segments.
+        """
+        if not 0 <= index < len(self.segments):
+            raise InputError(
+                f"segment: need 0 <= index < {len(self.segments)}, got {index!r}"
+            )
+        self._start_segment(index, 0.0, keep_state=False)
+
+    @property
     def next_cusp_s(self) -> float | None:
         """Travelled length along the path of the next cusp ahead, ``None`` on the last segment."""
         if self.segment >= len(self.segments) - 1:
@@ -386,7 +440,7 @@ class TrackingController:
         self.gear = seg.gear
         self._s0 = seg.s0
         v = v_start if seg.gear > 0 else -v_start
-        self.projector = PathProjector(seg.path)
+        self.projector = PathProjector(seg.path, arc_end=self._manoeuvre)
         self.profile = self._profile(self.projector, v, seg.gear, self._manoeuvre)
         if keep_state:
             self.speed.retarget(self.profile)

@@ -78,7 +78,9 @@ class LQR(TrackingController):
     """Steering ``tan(delta) = L (kappa_path - K [e, e_psi])``.
 
     The feed-forward ``kappa_path`` keeps the car on a curve; the LQR term pulls the
-    errors to zero. Gains from :func:`design_gain`.
+    errors to zero. Gains from :func:`design_gain`. In reverse the error model is the
+    mirrored car's (:mod:`rrtdrive.controllers.gears`): errors and arc length in the
+    direction of travel, the same gains.
 
     Parameters
     ----------

@@ -18,7 +18,12 @@ class PurePursuit(TrackingController):
     of arc length ahead of the rear axle's projection (on the straight extension
     past the end). With ``alpha`` its bearing in the car frame and ``l`` its
     distance, the arc has curvature ``2 sin(alpha) / l`` and the steering angle is
-    ``atan(2 L sin(alpha) / l)``.
+    ``atan(2 L sin(alpha) / l)``. In reverse the same law runs on the mirrored car
+    (:mod:`rrtdrive.controllers.gears`), still about the rear axle, with the
+    look-ahead point behind the nose along the direction of travel; on the segments of
+    a path with gear changes the look-ahead point past a segment's end lies on the
+    circle of its last curvature (``PathProjector(arc_end=True)``), so the car
+    reaches each cusp with the path's curvature instead of straightening early.
 
     Parameters
     ----------

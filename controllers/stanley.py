@@ -50,7 +50,11 @@ class Stanley(TrackingController):
     the steering angle is ``psi + atan2(-k e, k_soft + v)``: a car left of the path
     or pointing left of it steers right (negative). On a circle the trace's
     direction is ``yaw + atan(L kappa)``, so the curvature feed-forward is built in
-    and the rear axle stays on the path at steady state.
+    and the rear axle stays on the path at steady state. In reverse the law runs on
+    the mirrored car (:mod:`rrtdrive.controllers.gears`): its steered point lies ``L``
+    beyond the rear axle in the direction of travel (behind the real car), whose
+    velocity turns with the wheels as a front axle's does, so the law keeps its
+    first-order cross-track dynamics.
 
     Parameters
     ----------

@@ -141,16 +141,17 @@ class ResidualMixer:
     ) -> tuple[float, float]:
         """The command to apply, from the controller's ``(c_accel, c_steer)`` and the residual.
 
-        ``ctrl`` is the tracking controller (its ``arrived``, ``s`` and ``projector``).
+        ``ctrl`` is the tracking controller (its ``at_stop`` and ``remaining``).
         """
-        if ctrl.arrived or ctrl.s >= ctrl.projector.length:
-            # Holding at the goal or braking past the end: the controller alone,
+        remaining = ctrl.remaining
+        if ctrl.at_stop or remaining <= 0.0:
+            # Holding at the goal (or a cusp) or braking past it: the controller alone,
             # so that a biased residual cannot keep the car creeping forever.
             self.controller_accel = c_accel
             return c_accel, c_steer
-        # The residual fades out over the last RESIDUAL_FADE_M of the path, so that the
-        # hand-over to the controller's hold at the goal does not jump the command.
-        fade = min(1.0, (ctrl.projector.length - ctrl.s) / RESIDUAL_FADE_M)
+        # The residual fades out over the last RESIDUAL_FADE_M before each stop (the
+        # goal, a cusp), so that the hand-over to the controller's hold does not jump.
+        fade = min(1.0, remaining / RESIDUAL_FADE_M)
         lim = self.limits.steer_limit
         accel = self.accel(c_accel, fade * d_accel, self.dt)
         return accel, min(max(c_steer + fade * d_steer, -lim), lim)

@@ -67,10 +67,17 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
     ``rrtdrive/OvertakeTraffic-v0`` (re-planned in the loop, see ``replan_options``);
     keyword arguments of ``gym.make`` reach this constructor.
 
-    **Observation** (``float32``, shape ``(6 + 3 K + 5 M,)``, SI units, ego frame =
+    **Observation** (``float32``, shape ``(6 + 3 K + 5 M + 2,)``, SI units, ego frame =
     rear axle, x forward, y left): the car's state against the path, K reference
-    points ahead with their curvatures, the M nearest other vehicles; the entries
-    are listed in :mod:`rrtdrive.envs.observation` and by :func:`observation_names`.
+    points ahead with their curvatures, the M nearest other vehicles, the gear to
+    drive and the distance to the next stop; the entries are listed in
+    :mod:`rrtdrive.envs.observation` and by :func:`observation_names`.
+
+    **Gear changes**: a path with cusps is observed and rewarded one gear segment
+    at a time. With ``residual=True`` the controller changes segment (it stops at
+    each cusp; the residual fades out before every stop); an agent driving alone
+    moves on to the next segment once it stands still (|v| <= 0.1 m/s) within
+    0.5 m of the cusp, or moves in the next segment's gear.
 
     **Action** (``float32``, ``[-1, 1]^2``): ``[a, d]``, an acceleration and a
     steering angle over the car's command range, or with ``residual=True`` a
@@ -338,6 +345,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             loop.step(accel, steer)
             mixer.applied(accel)
             steps += 1
+            self._follow_segments()
         self._wall += time.perf_counter() - wall0
 
         self._obs64 = self._observe64()
@@ -448,24 +456,59 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
     # ------------------------------------------------------------------ internals
 
     def _use_reference(self, path: Path) -> None:
-        """A re-planned reference took over (``overtake-traffic``)."""
+        """A new reference: the start, or a re-planned one took over (``overtake-traffic``)."""
         self.path = path
-        self._projector = PathProjector(path)
-        self._profile = self._ctrl.profile  # the driver's controller rebuilt it for this path
+        self._use_segment(self._ctrl.segment)
+
+    def _use_segment(self, index: int) -> None:
+        """Observe and reward along gear segment ``index`` of the path (the controller's)."""
+        ctrl = self._ctrl
+        seg = ctrl.segments[index]
+        self._segment = index
+        self._seg_s0 = seg.s0
+        last = ctrl.segments[-1]
+        self._to_goal = last.s0 + last.length - (seg.s0 + seg.length)
+        self._projector = PathProjector(seg.path, arc_end=not self.path.is_forward_only)
+        self._profile = ctrl.profile  # the driver's controller rebuilt it for this segment
+
+    def _follow_segments(self) -> None:
+        """Move on to the next gear segment when the car has (see the class docs)."""
+        ctrl = self._ctrl
+        if self._runs_driver:
+            if ctrl.segment != self._segment:
+                self._use_segment(ctrl.segment)
+            return
+        if self._segment >= len(ctrl.segments) - 1:
+            return
+        nxt = ctrl.segments[self._segment + 1].gear
+        v = self._ego.speed
+        proj = self._projector.project(*self._ego.rear[:2])
+        at_cusp = (
+            abs(v) <= self.eval_config.stop_speed
+            and abs(self._projector.length - proj.s) <= self.eval_config.goal_tol_m
+        )
+        if at_cusp or (v != 0.0 and (v > 0.0) == (nxt > 0)):
+            ctrl.start_segment(self._segment + 1)
+            self._use_segment(self._segment + 1)
 
     def _clipped_s(self, rear: Any) -> float:
-        """Arc length of the rear axle's projection on the current reference, clipped to it."""
+        """Length along the current reference of the rear axle's projection, clipped to it.
+
+        On a path with gear changes: along the whole path, the segment being driven
+        clipped to its ends.
+        """
         proj = self._projector.project(rear[0], rear[1])
-        return min(max(proj.s, 0.0), self._projector.length)
+        return self._seg_s0 + min(max(proj.s, 0.0), self._projector.length)
 
     def _progress_s(self) -> float:
-        """Arc length of the rear axle's projection, clipped to the path."""
-        return min(max(self._proj_s, 0.0), self._projector.length)
+        """Length along the path of the rear axle's projection, clipped to its segment."""
+        return self._seg_s0 + min(max(self._proj_s, 0.0), self._projector.length)
 
     def _observe64(self) -> np.ndarray:
         """The observation in float64 (clipped to the Box bounds); sets ``_proj_s``."""
         obs, self._proj_s = self._layout.observe(
-            self._ego, self._projector, self._v_ref_at(), self._rec.others
+            self._ego, self._projector, self._v_ref_at(), self._rec.others,
+            self._ctrl.segments[self._segment].gear, self._to_goal,
         )
         return obs
 

@@ -79,9 +79,9 @@ def test_check_env(env_id, residual):
 def test_spaces_and_observation_layout():
     env = gym.make("rrtdrive/Overtake-v0", n_ref_points=4, ref_spacing=2.0)
     assert env.action_space == gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
-    assert env.observation_space.shape == (6 + 3 * 4,)
+    assert env.observation_space.shape == (6 + 3 * 4 + 2,)
     assert env.observation_space.dtype == np.float32
-    assert len(observation_names(4)) == 18
+    assert len(observation_names(4)) == 20
     obs, info = env.reset(seed=0)
     assert obs.dtype == np.float32 and obs in env.observation_space
     u = env.unwrapped
@@ -93,6 +93,8 @@ def test_spaces_and_observation_layout():
     ref = obs[6:14].reshape(4, 2)
     assert np.allclose(ref[:, 0], [2.0, 4.0, 6.0, 8.0], atol=0.05)  # straight ahead first
     assert np.all(np.abs(obs[14:18]) <= scen.vehicle.kappa_max + 1e-6)
+    # A forward path: gear +1, the next stop is the goal.
+    assert obs[18] == 1.0 and obs[19] == obs[5]
     env.close()
 
 
@@ -116,9 +118,9 @@ def test_observation_of_other_vehicles():
     m, k = 3, 2
     env = gym.make("rrtdrive/OvertakeTraffic-v0", n_ref_points=k, n_vehicles=m,
                    vehicle_range=60.0, residual=True, max_time_s=4.0)
-    assert env.observation_space.shape == (6 + 3 * k + 5 * m,)
+    assert env.observation_space.shape == (6 + 3 * k + 5 * m + 2,)
     names = observation_names(k, m)
-    assert len(names) == 6 + 3 * k + 5 * m and names[6 + 3 * k] == "veh_present_1"
+    assert len(names) == 6 + 3 * k + 5 * m + 2 and names[6 + 3 * k] == "veh_present_1"
     obs, _ = env.reset(seed=3)
     seen = [obs]
     done = False
@@ -131,14 +133,14 @@ def test_observation_of_other_vehicles():
     assert log.others.shape[1] >= m  # the lead car and oncoming cars exist
     for step, o in enumerate(seen):
         expect = _vehicles_from_log(log, step, m, 60.0).astype(np.float32)
-        assert np.allclose(o[6 + 3 * k :], expect, atol=1e-4), step
-    first = seen[0][6 + 3 * k :].reshape(m, 5)
+        assert np.allclose(o[6 + 3 * k : 6 + 3 * k + 5 * m], expect, atol=1e-4), step
+    first = seen[0][6 + 3 * k : 6 + 3 * k + 5 * m].reshape(m, 5)
     assert first[0, 0] == 1.0 and first[0, 1] > 0  # the lead car ahead, nearest
     env.close()
     # No other vehicles (parking: parked cars are obstacles): every slot empty.
     park = gym.make("rrtdrive/Parking-v0", n_vehicles=2)
     obs, _ = park.reset(seed=0)
-    assert obs.shape == (6 + 30 + 10,) and not obs[36:].any()
+    assert obs.shape == (6 + 30 + 10 + 2,) and not obs[36:46].any()
     park.close()
     with pytest.raises(InputError, match="n_vehicles"):
         gym.make("rrtdrive/Overtake-v0", n_vehicles=-1)
@@ -444,7 +446,7 @@ def test_config_is_frozen_validated_and_reaches_the_env():
     env = gym.make("rrtdrive/Overtake-v0", config=cfg, n_ref_points=3)
     u = env.unwrapped
     assert u.config == cfg.with_options(n_ref_points=3) and u.weights.cte == 100.0
-    assert env.observation_space.shape == (6 + 3 * 3,)
+    assert env.observation_space.shape == (6 + 3 * 3 + 2,)
     env.close()
     with pytest.raises(InputError, match="scenario"):
         DriveEnv("parking", config=cfg)
@@ -464,11 +466,8 @@ def test_action_mapping_and_zero_residual_mixer():
     with pytest.raises(InputError, match="action"):
         action_command([0.0], lim)
 
-    class Ctrl:  # the three attributes the mixer reads
-        arrived, s = False, 0.0
-
-        class projector:  # noqa: N801
-            length = 10.0
+    class Ctrl:  # the two attributes the mixer reads
+        at_stop, remaining = False, 10.0
 
     mixer = ResidualMixer(lim, SpeedConfig(), 0.05)
     for c in (0.0, 0.2, 0.25, -1.0, 1.9):
@@ -484,7 +483,8 @@ def test_observation_layout_bounds_and_names():
     from rrtdrive.envs.observation import KAPPA_CLIP, OBS_CLIP, ObservationLayout
 
     lay = ObservationLayout(3, 1.0, 2, 50.0, 0.5)
-    assert lay.size == len(lay.names()) == 6 + 9 + 10 == lay.low.shape[0]
+    assert lay.size == len(lay.names()) == 6 + 9 + 10 + 2 == lay.low.shape[0]
+    assert lay.low[-2] == -1.0 and lay.high[-2] == 1.0  # the gear
     assert lay.names() == observation_names(3, 2)
     assert lay.low.dtype == lay.high.dtype == np.float32
     assert lay.high[1] == np.float32(0.5) and lay.high[2] == OBS_CLIP

@@ -1,14 +1,13 @@
-"""The closed loop drives paths with gear changes (issue #14); the gym env still refuses them."""
+"""The closed loop drives paths with gear changes (issue #14); the gym env: test_reverse_gym.py."""
 
 from __future__ import annotations
 
-import gymnasium as gym
 import numpy as np
 import pytest
 
 import rrtdrive.envs  # noqa: F401  (registers the envs)
 from rrtdrive.controllers import PathProjector, make_controller
-from rrtdrive.planning import PLANNERS, PlanningProblem
+from rrtdrive.planning import PlanningProblem
 from rrtdrive.planning.base import Stopwatch
 from rrtdrive.sim.runner import run_episode
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Pose
@@ -59,11 +58,3 @@ def test_runner_drives_a_reverse_path():
     r = evaluate(ep)
     assert r.path_cusps == 1 and r.gear_changes == 1
     assert np.hypot(*(ep.log.states[-1, :2] - path.samples[-1, :2])) < 0.1
-
-
-def test_gym_env_refuses_a_reverse_path(monkeypatch):
-    monkeypatch.setitem(PLANNERS, "test-shuttle", _Shuttler)
-    env = gym.make("rrtdrive/Overtake-v0", planner="test-shuttle")
-    with pytest.raises(InputError, match=MESSAGE):
-        env.reset(seed=0)
-    env.close()

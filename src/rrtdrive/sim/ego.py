@@ -6,7 +6,10 @@ centre-of-gravity bicycle with wheelbase = length (5 m) by explicit Euler. The
 by the exact closed-form arc of :func:`rrtdrive.vehicle.bicycle_step`, with the
 paper's dimensions (4.30 m x 1.80 m, wheelbase 2.51 m) and steering limit (30°).
 highway-env sees the body centre (``position``) and the true body size, so it
-draws and collides the car at its real size.
+draws and collides the car at its real size, in both gears: a negative speed
+drives the rear axle backwards along the same arcs, the nose heading stays the
+pose's yaw, and highway-env's velocity (``speed * direction``) points backwards for
+its swept collision test.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from typing import Any
 
 import numpy as np
 from highway_env.road.road import Road
+from highway_env.utils import are_polygons_intersecting
 from highway_env.vehicle.kinematics import Vehicle
 
 from rrtdrive.geometry import wrap_angle
@@ -192,6 +196,23 @@ class EgoVehicle(Vehicle):
         limit = self.params.max_steer
         self.action["steering"] = min(max(float(self.action["steering"]), -limit), limit)
         self.action["acceleration"] = float(self.action["acceleration"])
+
+    def _is_colliding(self, other: Any, dt: float) -> tuple[bool, bool, np.ndarray]:
+        """highway-env's collision test, its circle pre-check also right when reversing.
+
+        highway-env widens the pre-check's circles by ``speed * dt``; with a negative
+        speed that would shrink them and miss a contact while backing up, so the
+        reversing car widens them by ``|speed| * dt``. The exact test (polygons, with
+        the displacement ``velocity * dt``) is highway-env's own in both gears.
+        """
+        if self.speed >= 0.0:
+            return super()._is_colliding(other, dt)
+        reach = (self.diagonal + other.diagonal) / 2.0 - self.speed * dt
+        if np.linalg.norm(other.position - self.position) > reach:
+            return False, False, np.zeros(2)
+        return are_polygons_intersecting(
+            self.polygon(), other.polygon(), self.velocity * dt, other.velocity * dt
+        )
 
     #: Sub-steps of a step in which the rate-limited steering angle moves.
     RAMP_SUBSTEPS = 8

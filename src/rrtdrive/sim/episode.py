@@ -23,6 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = [
     "TRAJECTORY_COLUMNS",
     "trajectory_csv",
+    "driven_gears",
     "EpisodeStatus",
     "DriveLog",
     "Episode",
@@ -191,7 +192,7 @@ class Episode:
         Columns :data:`TRAJECTORY_COLUMNS`: ``t, x, y, yaw, speed, steer, accel, gear``
         - time, rear-axle position and heading, signed speed, the front-wheel angle
         and acceleration applied from that time to the next step, and the gear
-        (+1 forward, -1 reverse, from the applied speed's sign; +1 at standstill).
+        (+1 forward, -1 reverse; see :func:`driven_gears`).
         The last row is the final state: it keeps the last steering angle and has
         zero acceleration. Shape ``(N + 1, 8)`` (empty when nothing was driven).
         """
@@ -206,8 +207,29 @@ class Episode:
             steer[-1] = log.controls[-1, 1]
             accel[:-1] = log.controls[:, 0]
         speed = log.states[:, 3]
-        gear = np.where(speed < 0.0, -1.0, 1.0)
-        return np.column_stack([log.t, log.states[:, :3], speed, steer, accel, gear])
+        return np.column_stack([log.t, log.states[:, :3], speed, steer, accel, driven_gears(speed)])
+
+
+def driven_gears(speed: np.ndarray) -> np.ndarray:
+    """The gear at each logged time from the signed speeds: +1 forward, -1 reverse.
+
+    Moving, the sign of the speed; standing still, the gear of the last motion
+    (before the first motion: the gear of the first; +1 when the car never moves),
+    so a stop at a cusp keeps its gear until the car moves off in the new one.
+
+    Examples
+    --------
+    >>> driven_gears(np.array([0.0, -0.5, 0.0, 0.0, 0.4, 0.0])).tolist()
+    [-1.0, -1.0, -1.0, -1.0, 1.0, 1.0]
+    """
+    v = np.asarray(speed, dtype=float)
+    moving = np.flatnonzero(v != 0.0)
+    if len(moving) == 0:
+        return np.ones(len(v))
+    # Index of the last moving sample at or before each time (the first one before it).
+    last = np.maximum.accumulate(np.where(v != 0.0, np.arange(len(v)), -1))
+    last = np.where(last < 0, moving[0], last)
+    return np.where(v[last] < 0.0, -1.0, 1.0)
 
 
 #: Header of :meth:`Episode.trajectory` and ``rrtdrive simulate --trajectory``.
