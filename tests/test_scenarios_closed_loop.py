@@ -14,7 +14,7 @@ from rrtdrive.evaluation import evaluate
 from rrtdrive.sim.runner import EpisodeConfig, run_episode
 from rrtdrive.sim.tasks import make_scenario
 from rrtdrive.sim.video import hud_gears, render_frames
-from rrtdrive.types import Budget, InputError
+from rrtdrive.types import Budget
 
 #: Iterations decide, not the machine's speed.
 DETERMINISTIC = EpisodeConfig(budget=Budget(max_time_s=1e6))
@@ -58,15 +58,6 @@ def test_video_of_a_reversing_episode_draws_the_reverse_segments_and_cusps():
     assert frame.shape[:2] == task.camera().size[::-1]
 
 
-#: The gym env's observation and residual mode across cusps are issue 14 item 6 (helper
-#: wt-cusps: envs/observation.py); until they land its PathProjector refuses gear paths.
-GYM_GEARS = pytest.mark.xfail(
-    raises=InputError, strict=False,
-    reason="the gym env's observation across cusps is not merged yet (issue 14 item 6)",
-)
-
-
-@GYM_GEARS
 @pytest.mark.parametrize("env_id", ["rrtdrive/ParallelParking-v0", "rrtdrive/UTurn-v0"])
 def test_check_env_new_scenarios(env_id):
     env = gym.make(env_id, planner="hybrid-a-star", budget=Budget(max_time_s=1e6))
@@ -76,7 +67,6 @@ def test_check_env_new_scenarios(env_id):
     env.close()
 
 
-@GYM_GEARS
 def test_reverse_in_parking_is_an_option_of_the_parking_env():
     env = gym.make("rrtdrive/Parking-v0", planner="hybrid-a-star",
                    scenario_options={"reverse_in": True}, budget=Budget(max_time_s=1e6))
