@@ -36,10 +36,14 @@ ENV_IDS: dict[str, str] = {
     "rrtdrive/ParallelParking-v0": "parallel-parking",
     "rrtdrive/UTurn-v0": "u-turn",
 }
-#: Extra keyword arguments of an id, beyond its scenario (none today). Reverse-in
-#: parking is an option of the parking env:
+#: Extra keyword arguments of an id, beyond its scenario (``gym.make`` arguments
+#: override them). Parallel parking plans with Hybrid A*: the default planner's
+#: escalation refuses its arc paths (steering jumps above the sharpness bound), and
+#: nothing else finds the gap. Reverse-in parking is an option of the parking env:
 #: ``gym.make("rrtdrive/Parking-v0", scenario_options={"reverse_in": True})``.
-ENV_KWARGS: dict[str, dict[str, object]] = {}
+ENV_KWARGS: dict[str, dict[str, object]] = {
+    "rrtdrive/ParallelParking-v0": {"planner": "hybrid-a-star"},
+}
 
 
 def register_envs() -> None:
