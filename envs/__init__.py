@@ -5,7 +5,8 @@ scenario; nothing else happens. The registration uses entry-point strings, so
 highway-env and pygame load only when an environment is made::
 
     import gymnasium as gym
-    import rrtdrive  # registers rrtdrive/Parking-v0, Overtake-v0, OvertakeTraffic-v0
+    import rrtdrive  # registers rrtdrive/Parking-v0, Overtake-v0, OvertakeTraffic-v0,
+                     # ParallelParking-v0, UTurn-v0
 
     env = gym.make("rrtdrive/Parking-v0", controller="lqr", residual=True)
 
@@ -21,7 +22,7 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
-__all__ = ["ENV_IDS", "ENTRY_POINT", "register_envs"]
+__all__ = ["ENV_IDS", "ENV_KWARGS", "ENTRY_POINT", "register_envs"]
 
 ENTRY_POINT = "rrtdrive.envs.drive_env:DriveEnv"
 
@@ -32,6 +33,16 @@ ENV_IDS: dict[str, str] = {
     "rrtdrive/Parking-v0": "parking",
     "rrtdrive/Overtake-v0": "overtake",
     "rrtdrive/OvertakeTraffic-v0": "overtake-traffic",
+    "rrtdrive/ParallelParking-v0": "parallel-parking",
+    "rrtdrive/UTurn-v0": "u-turn",
+}
+#: Extra keyword arguments of an id, beyond its scenario (``gym.make`` arguments
+#: override them). Parallel parking plans with Hybrid A*: the default planner's
+#: escalation refuses its arc paths (steering jumps above the sharpness bound), and
+#: nothing else finds the gap. Reverse-in parking is an option of the parking env:
+#: ``gym.make("rrtdrive/Parking-v0", scenario_options={"reverse_in": True})``.
+ENV_KWARGS: dict[str, dict[str, object]] = {
+    "rrtdrive/ParallelParking-v0": {"planner": "hybrid-a-star"},
 }
 
 
@@ -39,7 +50,8 @@ def register_envs() -> None:
     """Register every id of :data:`ENV_IDS` with gymnasium (idempotent)."""
     for env_id, scenario in ENV_IDS.items():
         if env_id not in registry:
-            register(id=env_id, entry_point=ENTRY_POINT, kwargs={"scenario": scenario})
+            kwargs = {"scenario": scenario, **ENV_KWARGS.get(env_id, {})}
+            register(id=env_id, entry_point=ENTRY_POINT, kwargs=kwargs)
 
 
 register_envs()

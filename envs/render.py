@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from rrtdrive.sim.render import REF_COLOR, TRACE_COLOR, SceneCanvas
+from rrtdrive.sim.scenes import fit_view
 
 __all__ = ["SceneRenderer", "view_for"]
 
@@ -30,7 +31,8 @@ def view_for(
     bounds : tuple of float
         ``(xmin, ymin, xmax, ymax)`` of the map in metres.
     lane_y : float or None
-        Centre of the ego lane of a road scenario (a wide, low frame), else ``None``.
+        Centre of the ego lane of a road scenario (a wide, low frame), else ``None``
+        (the map fitted to the frame, :func:`rrtdrive.sim.scenes.fit_view`).
 
     Returns
     -------
@@ -50,9 +52,7 @@ def view_for(
     if lane_y is not None:
         size = (960, 320)
         return size, size[0] / (xmax - xmin + 6.5), ((xmin + xmax) / 2.0, lane_y + 2.0)
-    size = (640, 640)
-    scaling = min(size[0] / (xmax - xmin + 6.5), size[1] / (ymax - ymin + 6.5))
-    return size, round(scaling, 1), ((xmin + xmax) / 2.0, (ymin + ymax) / 2.0)
+    return fit_view(bounds)
 
 
 class SceneRenderer:
@@ -105,6 +105,7 @@ class SceneRenderer:
         trace_xy: Sequence[Sequence[float]],
         ref_xy: np.ndarray,
         lines: Sequence[str],
+        gears: np.ndarray | None = None,
     ) -> np.ndarray:
         """One RGB frame, ``(height, width, 3)`` uint8, freshly allocated.
 
@@ -124,9 +125,12 @@ class SceneRenderer:
             Reference points the agent observes, ``(K, 2)`` world points.
         lines : sequence of str
             Read-out text, one line each.
+        gears : numpy.ndarray, optional
+            The path's gear per point (``Path.gears``): reverse segments dashed, cusps
+            marked (:meth:`~rrtdrive.sim.render.SceneCanvas.draw`).
         """
         canvas = self.canvas
-        canvas.draw(road, simulation_frequency, path_xy, goal_xy)
+        canvas.draw(road, simulation_frequency, path_xy, goal_xy, gears=gears)
         canvas.polyline(trace_xy, TRACE_COLOR)
         canvas.dots(ref_xy, REF_COLOR, 2)
         return canvas.frame(lines)

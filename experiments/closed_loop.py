@@ -12,12 +12,26 @@ simulation frequency, evaluate (:func:`rrtdrive.evaluation.evaluate`). Writes
 ``OUT/closed_loop.json`` (every report, the summaries, the resolved settings and
 the command) and ``OUT/closed_loop.md``; with ``--doc`` the same table and a few
 frames (PNG) of seed 0 for the docs.
+
+The gear-change scenarios (issue 14) and stock highway-env envs::
+
+    python experiments/closed_loop.py --scenarios parking-reverse-in parallel-parking \
+        u-turn --seeds 10 --planner hybrid-a-star --name closed_loop_gears
+    python experiments/closed_loop.py --stock parking-v0 --seeds 100 --name closed_loop_stock
+
+``parking-reverse-in`` is ``parking`` with ``reverse_in=True``; a gear scenario's
+table adds the goal errors, nuPlan comfort, the steering-rate limit and the gear
+changes. ``--stock ENV`` drives highway-env's own env through ``env.step``
+(:func:`rrtdrive.sim.stock.drive_stock_env`) and adds ``highway_env_success``.
+``--name`` names the output files (default ``closed_loop``), so these runs do not
+overwrite the forward table.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import platform
 import sys
@@ -31,26 +45,123 @@ from rrtdrive.sim.runner import EpisodeConfig, run_episode
 from rrtdrive.sim.scenes import SimConfig
 from rrtdrive.sim.tasks import DEFAULT_PLANNER, make_scenario
 from rrtdrive.sim.tasks import Task as Scenario
-from rrtdrive.types import VehicleParams
+from rrtdrive.types import Budget, VehicleParams
 
 SCENARIOS = ("parking", "overtake", "overtake-oncoming")
+#: The gear-change scenarios (issue 14): their table has the gear columns.
+GEAR_SCENARIOS = ("parking-reverse-in", "parallel-parking", "u-turn")
 CONTROLLERS = ("pure-pursuit", "stanley", "lqr")
 
 
 def scenario_for(label: str, seed: int, oncoming: int) -> Scenario:
-    """``overtake-oncoming`` is the overtake scenario with ``oncoming`` oncoming cars."""
+    """``overtake-oncoming`` is the overtake scenario with ``oncoming`` oncoming cars.
+
+    ``parking-reverse-in`` is the parking scenario with its goal facing out of the spot.
+    """
     if label == "overtake-oncoming":
         return make_scenario("overtake", seed, oncoming=oncoming)
+    if label == "parking-reverse-in":
+        return make_scenario("parking", seed, reverse_in=True)
     return make_scenario(label, seed)
 
 
-def run_one(job: tuple[str, str, str, int, int, int]) -> dict:
-    label, planner, controller, seed, hz, oncoming = job
-    cfg = EpisodeConfig(sim=SimConfig(simulation_frequency=hz))
-    ep = run_episode(scenario_for(label, seed, oncoming), planner, controller, seed, cfg)
-    out = evaluate(ep).to_json()
+def _config(hz: int, deterministic: bool) -> EpisodeConfig:
+    budget = Budget(max_time_s=1e6) if deterministic else Budget()
+    return EpisodeConfig(sim=SimConfig(simulation_frequency=hz), budget=budget)
+
+
+def run_one(job: tuple) -> dict:
+    label, planner, controller, seed, hz, oncoming = job[:6]
+    deterministic = bool(job[6]) if len(job) > 6 else False
+    cfg = _config(hz, deterministic) if deterministic else EpisodeConfig(
+        sim=SimConfig(simulation_frequency=hz))
+    if label.startswith("stock:"):
+        from rrtdrive.sim.stock import drive_stock_env
+
+        run = drive_stock_env(label[len("stock:"):], seed, planner, controller, cfg)
+        out = evaluate(run.episode).to_json()
+        out.update(run.to_json())
+        out["max_time_s"] = run.episode.scenario.max_time_s
+    else:
+        ep = run_episode(scenario_for(label, seed, oncoming), planner, controller, seed, cfg)
+        out = evaluate(ep).to_json()
     out["scenario"] = label
     return out
+
+
+def _deg(v: float | None) -> str:
+    return "n/a" if v is None else f"{math.degrees(v):.2f}"
+
+
+def _vals(group: list[dict], key: str) -> list[float]:
+    return [r[key] for r in group if r.get(key) is not None]
+
+
+def gear_table(reports: list[dict], scenarios: list[str], controllers: list[str]) -> str:
+    """The gear scenarios' table: success, collisions, errors, comfort, rate limit, gears."""
+    head = (
+        "| scenario | controller | success | plan failed | collisions (highway-env / "
+        "footprint) | CTE RMS mean / max [m] | goal error max [m] | goal heading max [deg] | "
+        "nuPlan comfortable | steering rate over limit (episodes) | gear changes driven "
+        "(mean) | time mean [s] |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+    )
+    rows = []
+    for scen in scenarios:
+        for ctrl in controllers:
+            g = [r for r in reports if r["scenario"] == scen and r["controller"] == ctrl]
+            if not g:
+                continue
+            n = len(g)
+            drove = [r for r in g if r["status"] != "plan_failed"]
+            cte = _vals(drove, "cte_rms_m")
+            pos = _vals(drove, "goal_position_err_m")
+            head_err = _vals(drove, "goal_heading_err_rad")
+            gears = _vals(drove, "gear_changes")
+            dur = _vals(drove, "duration_s")
+            comfy = sum(bool(r.get("nuplan_comfortable")) for r in drove)
+            over = sum((r.get("steering_rate_over_limit_share") or 0) > 0 for r in drove)
+            rows.append(
+                f"| {scen} | {ctrl} | {sum(r['success'] for r in g)}/{n} | "
+                f"{n - len(drove)} | {sum(r['collision_highway_env'] for r in g)} / "
+                f"{sum(r['collision_footprint'] for r in g)} | "
+                f"{_fmt(sum(cte) / len(cte) if cte else None)} / {_fmt(max(cte, default=None))}"
+                f" | {_fmt(max(pos, default=None))} | {_deg(max(head_err, default=None))} | "
+                f"{comfy}/{len(drove)} | {over}/{len(drove)} | "
+                f"{_fmt(sum(gears) / len(gears) if gears else None, 2)} | "
+                f"{_fmt(sum(dur) / len(dur) if dur else None, 1)} |"
+            )
+    return head + "\n".join(rows) + "\n"
+
+
+def stock_table(reports: list[dict], envs: list[str], controllers: list[str]) -> str:
+    """Stock envs: highway-env's own verdict beside ours, crashes, stopped within the limit."""
+    head = (
+        "| env | controller | highway-env is_success | our success | plan failed | "
+        "crashed | stopped at the goal within the time limit | highway-env terminated "
+        "(median) [s] | time max [s] (limit) | goal error max [m] |\n"
+        "|---|---|---|---|---|---|---|---|---|---|\n"
+    )
+    rows = []
+    for env in envs:
+        for ctrl in controllers:
+            g = [r for r in reports if r["scenario"] == f"stock:{env}" and r["controller"] == ctrl]
+            if not g:
+                continue
+            n = len(g)
+            term = sorted(_vals(g, "highway_env_terminated_s"))
+            dur = _vals(g, "duration_s")
+            pos = _vals(g, "goal_position_err_m")
+            stopped = sum(r["status"] == "arrived" and r["success"] for r in g)
+            rows.append(
+                f"| {env} | {ctrl} | {sum(r['highway_env_success'] for r in g)}/{n} | "
+                f"{sum(r['success'] for r in g)}/{n} | "
+                f"{sum(r['status'] == 'plan_failed' for r in g)} | "
+                f"{sum(r['status'] == 'crashed' for r in g)} | {stopped}/{n} | "
+                f"{_fmt(term[len(term) // 2] if term else None, 2)} | "
+                f"{_fmt(max(dur, default=None), 1)} ({g[0].get('max_time_s', 0):g}) | "
+                f"{_fmt(max(pos, default=None))} |"
+            )
+    return head + "\n".join(rows) + "\n"
 
 
 def _fmt(v: float | None, digits: int = 3) -> str:
@@ -111,7 +222,23 @@ def save_frames(figures: FsPath, planner: str, hz: int, oncoming: int) -> list[s
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--seeds", type=int, default=50)
-    ap.add_argument("--scenarios", default=",".join(SCENARIOS))
+    ap.add_argument(
+        "--scenarios", nargs="+", default=[",".join(SCENARIOS)],
+        help=f"comma- or space-separated (default {','.join(SCENARIOS)}); gear scenarios: "
+        f"{', '.join(GEAR_SCENARIOS)}",
+    )
+    ap.add_argument(
+        "--stock", nargs="+", default=[], metavar="ENV",
+        help="stock highway-env envs to drive through env.step (parking-v0, "
+        "parking-parked-v0); with no --scenarios given, only these",
+    )
+    ap.add_argument(
+        "--name", default="closed_loop", help="output file stem in --out (default closed_loop)"
+    )
+    ap.add_argument(
+        "--deterministic", action="store_true",
+        help="planning stops on its iteration budget only (no wall-clock cap)",
+    )
     ap.add_argument(
         "--oncoming", type=int, default=2, help="oncoming cars in overtake-oncoming (default 2)"
     )
@@ -125,11 +252,16 @@ def main(argv: list[str] | None = None) -> int:
         "--figures", default=None, help="with --doc: write seed 0's frames here and show them"
     )
     args = ap.parse_args(argv)
-    scenarios = args.scenarios.split(",")
+    raw = argv if argv is not None else sys.argv[1:]
+    scenarios = [x for item in args.scenarios for x in item.split(",") if x]
+    if args.stock and "--scenarios" not in raw:
+        scenarios = []
+    stock = [x for item in args.stock for x in item.split(",") if x]
     controllers = args.controllers.split(",")
+    labels = scenarios + [f"stock:{e}" for e in stock]
     jobs = [
-        (s, args.planner, c, seed, args.frequency, args.oncoming)
-        for s in scenarios for c in controllers for seed in range(args.seeds)
+        (s, args.planner, c, seed, args.frequency, args.oncoming, args.deterministic)
+        for s in labels for c in controllers for seed in range(args.seeds)
     ]
     t0 = time.perf_counter()
     reports: list[dict] = []
@@ -139,7 +271,7 @@ def main(argv: list[str] | None = None) -> int:
     print(file=sys.stderr)
     summaries: dict[str, dict] = {}
     fields = set(EpisodeReport.__dataclass_fields__)
-    for s in scenarios:
+    for s in labels:
         for c in controllers:
             group = [r for r in reports if r["scenario"] == s and r["controller"] == c]
             objs = [EpisodeReport(**{k: v for k, v in r.items() if k in fields}) for r in group]
@@ -152,6 +284,8 @@ def main(argv: list[str] | None = None) -> int:
         "command": " ".join([sys.executable.rsplit("/", 1)[-1], *sys.argv]),
         "seeds": list(range(args.seeds)),
         "scenarios": scenarios,
+        "stock": stock,
+        "deterministic": args.deterministic,
         "controllers": controllers,
         "planner": args.planner,
         "simulation_frequency": args.frequency,
@@ -163,23 +297,32 @@ def main(argv: list[str] | None = None) -> int:
     out = FsPath(args.out)
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(
-        out / "closed_loop.json",
+        out / f"{args.name}.json",
         json.dumps({"settings": settings, "summaries": summaries, "failures": failures,
                     "reports": reports}, indent=1, allow_nan=False) + "\n",
     )
+    forward = [s for s in scenarios if s not in GEAR_SCENARIOS]
+    gear = [s for s in scenarios if s in GEAR_SCENARIOS]
+    tables = ""
+    if forward:
+        tables += table({k: v for k, v in summaries.items() if k.split("/")[0] in forward})
+    if gear:
+        tables += ("\n" if tables else "") + gear_table(reports, gear, controllers)
+    if stock:
+        tables += ("\n" if tables else "") + stock_table(reports, stock, controllers)
     md = (
         f"# Closed loop: {args.seeds} seeds x {len(controllers)} controllers x "
-        f"{len(scenarios)} scenarios\n\n"
+        f"{len(labels)} scenarios\n\n"
         f"Planner `{args.planner}`, control and simulation at {args.frequency} Hz in "
-        f"highway-env. Command: `{settings['command']}`.\n\n" + table(summaries)
+        f"highway-env. Command: `{settings['command']}`.\n\n" + tables
     )
     if failures:
         md += "\nFailed episodes:\n\n" + "".join(
             f"- {f['scenario']} / {f['controller']} / seed {f['seed']}: {f['status']}: "
             f"{f['message']}\n" for f in failures
         )
-    write_text_atomic(out / "closed_loop.md", md)
-    print(table(summaries))
+    write_text_atomic(out / f"{args.name}.md", md)
+    print(tables)
     if args.doc:
         page = md
         if args.figures:  # frames only into a folder that was named

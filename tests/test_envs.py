@@ -15,7 +15,7 @@ from gymnasium.utils.env_checker import check_env
 
 import rrtdrive
 from rrtdrive.controllers import VehicleState, make_controller
-from rrtdrive.envs import ENV_IDS
+from rrtdrive.envs import ENV_IDS, ENV_KWARGS
 from rrtdrive.envs.config import DriveEnvConfig
 from rrtdrive.envs.drive_env import DriveEnv
 from rrtdrive.envs.observation import observation_names
@@ -62,7 +62,7 @@ def test_every_scenario_has_an_env_id():
     for env_id, scenario in ENV_IDS.items():
         spec = gym.spec(env_id)
         assert spec.entry_point == "rrtdrive.envs.drive_env:DriveEnv"
-        assert spec.kwargs == {"scenario": scenario}
+        assert spec.kwargs == {"scenario": scenario, **ENV_KWARGS.get(env_id, {})}
 
 
 @pytest.mark.parametrize("env_id", sorted(ENV_IDS))

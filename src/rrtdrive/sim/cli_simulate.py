@@ -1,5 +1,11 @@
 """The ``rrtdrive simulate`` subcommand: one closed-loop episode, metrics as JSON, optional MP4.
 
+``SCENARIO`` is a built-in scenario (parking, overtake, overtake-traffic,
+parallel-parking, u-turn), a stock highway-env env (parking-v0,
+parking-parked-v0: driven through its own ``env.step``, JSON adds
+``highway_env_success``), or a map (a ``.json`` file or a built-in map name that is
+not a scenario name: its rectangles become highway-env obstacles).
+
 Wiring in ``rrtdrive.cli``::
 
     from rrtdrive.sim import cli_simulate
@@ -50,8 +56,22 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "episode succeeds, 1 when it fails, 2 on bad input.",
     )
     p.add_argument(
-        "scenario", metavar="SCENARIO", help="parking, overtake or overtake-traffic"
+        "scenario", metavar="SCENARIO",
+        help="parking, overtake, overtake-traffic, parallel-parking or u-turn; a stock "
+        "highway-env env (parking-v0, parking-parked-v0); or a map: a .json file or a "
+        "built-in map name (garage, kerbside, ...)",
     )
+    p.add_argument(
+        "--reverse", action="store_true",
+        help="plan with gear changes (as 'rrtdrive plan --reverse'); parallel-parking, "
+        "u-turn and parking --reverse-in always do",
+    )
+    p.add_argument(
+        "--reverse-in", action="store_true",
+        help="parking: the goal faces out of the spot, which is entered backwards",
+    )
+    p.add_argument("--start", metavar="X,Y,YAW", help="a map: rear-axle start (yaw in radians)")
+    p.add_argument("--goal", metavar="X,Y,YAW", help="a map: rear-axle goal (yaw in radians)")
     p.add_argument(
         "--planner", default=None, metavar="NAME",
         help="registered planner (default: the runner's DEFAULT_PLANNER, "
@@ -198,6 +218,7 @@ def _run(args: argparse.Namespace) -> int:
     from rrtdrive.planning import PLANNERS
     from rrtdrive.sim.runner import EpisodeConfig, run_episode
     from rrtdrive.sim.scenes import SimConfig
+    from rrtdrive.sim.stock import STOCK_ENVS
     from rrtdrive.sim.tasks import (
         DEFAULT_PLANNER,
         REPLANNING_SCENARIOS,
@@ -207,10 +228,20 @@ def _run(args: argparse.Namespace) -> int:
     )
     from rrtdrive.types import Budget
 
-    if args.scenario not in SCENARIOS:
-        raise InputError(
-            f"scenario: unknown scenario {args.scenario!r}; choose from {', '.join(SCENARIOS)}"
-        )
+    for name, default in (("reverse", False), ("reverse_in", False), ("start", None),
+                          ("goal", None)):
+        if not hasattr(args, name):  # a Namespace built by a caller without these flags
+            setattr(args, name, default)
+    target = _target_kind(args.scenario, SCENARIOS, STOCK_ENVS)
+    if target != "map":
+        for flag, value in (("--start", args.start), ("--goal", args.goal)):
+            if value is not None:
+                raise InputError(
+                    f"{flag}: only a map takes a start and goal; {args.scenario} draws its own"
+                )
+    if args.reverse_in and args.scenario != "parking":
+        raise InputError("--reverse-in: only the parking scenario has reverse-in bays")
+
     if args.controller not in CONTROLLER_NAMES:
         raise InputError(
             f"--controller: unknown controller {args.controller!r}; "
@@ -248,7 +279,15 @@ def _run(args: argparse.Namespace) -> int:
         if v is not None
     }
     replan = None
-    replan_config = TASKS[args.scenario].REPLAN_CONFIG  # None: the task plans once
+    # None: the task plans once (every map and stock env too).
+    replan_config = TASKS[args.scenario].REPLAN_CONFIG if target == "scenario" else None
+    if replan_config is not None and args.reverse:
+        raise InputError(f"--reverse: {args.scenario} re-plans while driving, forward only")
+    if target != "scenario":
+        given = [k for k, v in traffic_opts.items() if v is not None]
+        if given or getattr(args, "oncoming", 0):
+            flag = "--" + (given[0] if given else "oncoming").replace("_", "-")
+            raise InputError(f"{flag}: only a built-in scenario takes it, not {args.scenario}")
     if replan_config is not None:
         if deterministic:
             replan_opts["wall_limit"] = False
@@ -268,17 +307,43 @@ def _run(args: argparse.Namespace) -> int:
     )
     t0 = time.perf_counter()
     oncoming = getattr(args, "oncoming", 0) or 0
-    scenario = make_scenario(args.scenario, args.seed, oncoming=oncoming, **traffic_opts)
-    episode = run_episode(scenario, args.planner, args.controller, args.seed, config)
+    stock = None
+    if target == "stock":
+        from rrtdrive.sim.stock import drive_stock_env
+
+        stock = drive_stock_env(
+            args.scenario, args.seed, args.planner, args.controller, config,
+            reverse=args.reverse, render_stride=stride if args.video else 0,
+        )
+        episode = stock.episode
+    else:
+        scenario = _make_task(args, target, oncoming, traffic_opts, make_scenario)
+        episode = run_episode(scenario, args.planner, args.controller, args.seed, config)
     report = evaluate(episode)
     total = time.perf_counter() - t0
     extra: dict[str, Any] = {
         "total_time_s": round(total, 6),
         "oncoming": oncoming,
         "deterministic": deterministic,
+        "target": target,
+        "reverse": bool(episode.scenario.reverse),
     }
-    extra.update(scenario.describe())
-    if args.video:
+    extra.update(episode.scenario.describe())
+    if target != "scenario":
+        extra["scenario"] = args.scenario  # the name asked for, not the task kind "custom"
+    if stock is not None:
+        extra.update(stock.to_json())
+    if args.video and stock is not None:
+        if not stock.frames:
+            extra["video"] = None
+            print(f"rrtdrive simulate: no video: {episode.message}", file=sys.stderr)
+        else:
+            from rrtdrive.sim.video import write_frames
+
+            fps = (1.0 / episode.log.dt) / stride
+            extra["video_frames"] = write_frames(stock.frames, args.video, fps)
+            extra["video"] = args.video
+    elif args.video:
         if episode.log.steps == 0:
             extra["video"] = None
             print(
@@ -329,4 +394,66 @@ def _run(args: argparse.Namespace) -> int:
             file=sys.stdout,
         )
         print("\n".join(metrics_block(data)), file=sys.stdout)
-    return EXIT_OK if report.success else EXIT_FAILED
+    ok = report.success and (stock is None or stock.highway_env_success)
+    return EXIT_OK if ok else EXIT_FAILED
+
+
+def _target_kind(name: str, scenarios: tuple[str, ...], stock_envs: tuple[str, ...]) -> str:
+    """``"scenario"``, ``"stock"`` or ``"map"``; an unknown plain name is bad input."""
+    import os
+    from pathlib import Path as FsPath
+
+    from rrtdrive.maps import BUILTIN_MAPS
+
+    if name in scenarios:
+        return "scenario"
+    if name in stock_envs:
+        return "stock"
+    if name in BUILTIN_MAPS or name.endswith(".json") or os.sep in name or FsPath(name).exists():
+        return "map"
+    maps = sorted(m for m in BUILTIN_MAPS if m not in scenarios)
+    raise InputError(
+        f"scenario: unknown scenario {name!r}; choose from {', '.join(scenarios)}, a stock env "
+        f"({', '.join(stock_envs)}), a map file (.json) or a built-in map ({', '.join(maps)})"
+    )
+
+
+def _parse_pose(text: str | None, flag: str) -> Any:
+    """``"x,y,yaw"`` as a :class:`~rrtdrive.types.Pose` (``None`` stays ``None``)."""
+    from rrtdrive.types import Pose
+
+    if text is None:
+        return None
+    parts = text.split(",")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) != 3:
+        raise InputError(f"{flag}: expected three numbers x,y,yaw, got {text!r}")
+    return Pose.from_seq(values, flag)
+
+
+def _make_task(
+    args: argparse.Namespace, target: str, oncoming: int, traffic_opts: dict[str, Any],
+    make_scenario: Any,
+) -> Any:
+    """The task of a built-in scenario or of a map, with ``--reverse`` applied."""
+    import dataclasses
+
+    from rrtdrive.sim.tasks import CustomTask
+
+    if target == "map":
+        from rrtdrive.maps import resolve_map
+
+        return CustomTask.from_map(
+            resolve_map(args.scenario), args.seed, start=_parse_pose(args.start, "--start"),
+            goal=_parse_pose(args.goal, "--goal"), reverse=args.reverse,
+        )
+    task = make_scenario(
+        args.scenario, args.seed, oncoming=oncoming,
+        reverse_in=True if args.reverse_in else None, **traffic_opts,
+    )
+    if args.reverse and not task.reverse:
+        task = dataclasses.replace(task, reverse=True)
+    return task

@@ -35,11 +35,17 @@ from typing import Any
 import numpy as np
 
 __all__ = [
-    "PATH_COLOR", "TRACE_COLOR", "REF_COLOR", "GOAL_COLOR", "TEXT_COLOR", "PANEL_COLOR",
-    "SceneCanvas", "is_parked", "prepare_sdl",
+    "PATH_COLOR", "REVERSE_COLOR", "CUSP_COLOR", "TRACE_COLOR", "REF_COLOR", "GOAL_COLOR",
+    "TEXT_COLOR", "PANEL_COLOR", "SceneCanvas", "is_parked", "prepare_sdl",
 ]
 
 PATH_COLOR = (40, 90, 255)
+#: Reverse gear segments of the planned path, dashed (the static plots' cyan, dashed).
+REVERSE_COLOR = (23, 190, 207)
+#: Cusps (gear changes): yellow dots ringed in black, as the static plots' markers.
+CUSP_COLOR = (255, 215, 0)
+#: Length of a dash and of the gap after it on a reverse segment, metres.
+DASH_M = 1.0
 TRACE_COLOR = (255, 60, 40)
 REF_COLOR = (255, 150, 0)
 GOAL_COLOR = (0, 160, 0)
@@ -161,6 +167,7 @@ class SceneCanvas:
         path_xy: np.ndarray,
         goal_xy: tuple[float, float] | None,
         moving: Sequence[Any] | None = None,
+        gears: np.ndarray | None = None,
     ) -> None:
         """Draw the road, path, goal, objects and vehicles at their current poses.
 
@@ -183,8 +190,11 @@ class SceneCanvas:
 
         surface = self.surface
         surface.move_display_window_to(self.centre)
+        gear = None if gears is None else np.asarray(gears, dtype=float).reshape(-1)
+        if gear is not None and (len(gear) != len(path_xy) or np.all(gear > 0)):
+            gear = None
         if not self.reuse_static:
-            self._underlay(road, path_xy, goal_xy)
+            self._underlay(road, path_xy, goal_xy, gear)
             RoadGraphics.display_road_objects(road, surface, offscreen=True)
             RoadGraphics.display_traffic(
                 road, surface, simulation_frequency=simulation_frequency, offscreen=True
@@ -200,6 +210,7 @@ class SceneCanvas:
         key = (
             self.size, self.scaling, float(surface.origin[0]), float(surface.origin[1]),
             id(road.network), path.shape, path.tobytes(),
+            None if gear is None else gear.tobytes(),
             None if goal_xy is None else (float(goal_xy[0]), float(goal_xy[1])),
             tuple(_object_state(o) for o in road.objects),
             tuple(_vehicle_state(v) for v in road.vehicles if id(v) not in moving_ids),
@@ -208,7 +219,7 @@ class SceneCanvas:
             surface.blit(self._static, (0, 0))
             self.static_reuses += 1
         else:
-            self._underlay(road, path, goal_xy)
+            self._underlay(road, path, goal_xy, gear)
             RoadGraphics.display_road_objects(road, surface, offscreen=True)
             self._vehicles(road, lambda v: id(v) not in moving_ids)
             self._static, self._static_key = surface.copy(), key
@@ -221,7 +232,8 @@ class SceneCanvas:
             self._moving_vehicles(road, moving_ids)
 
     def _underlay(
-        self, road: Any, path_xy: np.ndarray, goal_xy: tuple[float, float] | None
+        self, road: Any, path_xy: np.ndarray, goal_xy: tuple[float, float] | None,
+        gears: np.ndarray | None = None,
     ) -> None:
         """Ground, lanes, path and goal: what highway-env's objects and vehicles cover."""
         pygame = self._pygame
@@ -229,11 +241,40 @@ class SceneCanvas:
 
         surface = self.surface
         RoadGraphics.display(road, surface)
-        if len(path_xy) >= 2:
+        if len(path_xy) >= 2 and gears is None:
             pygame.draw.lines(surface, PATH_COLOR, False, _to_pixels(surface, path_xy), 2)
+        elif len(path_xy) >= 2:
+            self._gear_path(np.asarray(path_xy, dtype=float), gears)
         if goal_xy is not None:
             gx, gy = surface.vec2pix(goal_xy)
             pygame.draw.circle(surface, GOAL_COLOR, (gx, gy), max(3, surface.pix(0.4)), 2)
+
+    def _gear_path(self, xy: np.ndarray, gears: np.ndarray) -> None:
+        """Forward segments solid, reverse ones dashed in another colour, cusps as dots."""
+        pygame, surface = self._pygame, self.surface
+        change = np.flatnonzero(np.diff(gears) != 0) + 1
+        bounds = [0, *change.tolist(), len(xy)]
+        for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+            seg = xy[max(0, a - 1) if a else a : b]
+            if len(seg) < 2:
+                continue
+            if gears[a] > 0:
+                pygame.draw.lines(surface, PATH_COLOR, False, _to_pixels(surface, seg), 2)
+                continue
+            s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(seg, axis=0).T))])
+            dash = np.floor(s / DASH_M).astype(int) % 2 == 0
+            for start in np.flatnonzero(dash & np.concatenate([[True], ~dash[:-1]])):
+                stop = start
+                while stop + 1 < len(seg) and dash[stop + 1]:
+                    stop += 1
+                piece = seg[start : stop + 2]  # one point past the dash's end
+                if len(piece) >= 2:
+                    pygame.draw.lines(surface, REVERSE_COLOR, False, _to_pixels(surface, piece), 3)
+        radius = max(4, surface.pix(0.35))
+        for c in change:
+            px = surface.vec2pix(xy[c])
+            pygame.draw.circle(surface, CUSP_COLOR, px, radius)
+            pygame.draw.circle(surface, TEXT_COLOR, px, radius, 1)
 
     def _vehicles(self, road: Any, keep: Any) -> None:
         from highway_env.vehicle.graphics import VehicleGraphics

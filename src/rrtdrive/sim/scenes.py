@@ -41,6 +41,7 @@ __all__ = [
     "SceneEnv",
     "SceneRoad",
     "SceneView",
+    "fit_view",
     "OncomingCar",
     "build_env",
     "scenario_rngs",
@@ -100,6 +101,70 @@ class SceneView:
     size: tuple[int, int]
     scaling: float
     centering: tuple[float, float]
+
+
+#: Largest frame :func:`fit_view` makes, and the smallest (room for the read-out panel).
+FIT_MAX_SIZE = (960, 640)
+FIT_MIN_SIZE = (320, 240)
+
+
+def _multiple_of_16(pixels: float) -> int:
+    return int(16 * math.ceil(pixels / 16.0 - 1e-9))
+
+
+def fit_view(
+    bounds: tuple[float, float, float, float],
+    margin: float = 3.25,
+    max_size: tuple[int, int] = FIT_MAX_SIZE,
+    max_scaling: float = 30.0,
+) -> tuple[tuple[int, int], float, tuple[float, float]]:
+    """Frame size, pixels per metre and centre that show the whole of ``bounds``.
+
+    The scene (plus ``margin`` metres on every side) fills the frame as far as
+    ``max_size`` allows: a 100 m square lot gets 640 x 640 pixels at 6 px/m, a
+    60 x 8 m street a wide 960 x 240 frame, a 30 x 20 m garage 30 px/m. Sides are
+    multiples of 16 (H.264 macro blocks) and at least :data:`FIT_MIN_SIZE` (the
+    read-out panel), the extra pixels showing more of the ground around the map.
+
+    Parameters
+    ----------
+    bounds : tuple of float
+        ``(xmin, ymin, xmax, ymax)`` in metres.
+    margin : float
+        Metres shown beyond each side of ``bounds``.
+    max_size : tuple of int
+        Largest ``(width, height)`` in pixels.
+    max_scaling : float
+        Largest pixels per metre (a tiny map is not blown up without limit).
+
+    Returns
+    -------
+    size : tuple of int
+        ``(width, height)`` in pixels.
+    scaling : float
+        Pixels per metre (rounded down to 0.1).
+    centre : tuple of float
+        The centre of ``bounds``.
+
+    Examples
+    --------
+    >>> fit_view((0.0, 0.0, 100.0, 100.0))
+    ((640, 640), 6.0, (50.0, 50.0))
+    >>> fit_view((0.0, 0.0, 60.0, 8.0))[:2]
+    ((960, 240), 14.4)
+    """
+    xmin, ymin, xmax, ymax = (float(b) for b in bounds)
+    if not (all(math.isfinite(b) for b in (xmin, ymin, xmax, ymax))
+            and xmax > xmin and ymax > ymin):
+        raise InputError(f"bounds: need finite xmin < xmax and ymin < ymax, got {bounds!r}")
+    w, h = xmax - xmin + 2 * margin, ymax - ymin + 2 * margin
+    scaling = min(max_size[0] / w, max_size[1] / h, max_scaling)
+    scaling = math.floor(scaling * 10.0 + 1e-6) / 10.0
+    size = (
+        max(FIT_MIN_SIZE[0], min(max_size[0], _multiple_of_16(w * scaling))),
+        max(FIT_MIN_SIZE[1], min(max_size[1], _multiple_of_16(h * scaling))),
+    )
+    return size, scaling, ((xmin + xmax) / 2.0, (ymin + ymax) / 2.0)
 
 
 def scenario_rngs(seed: int) -> tuple[np.random.Generator, np.random.Generator, int]:

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path as FsPath
 
 import numpy as np
@@ -25,7 +25,10 @@ from rrtdrive.sim.render import TRACE_COLOR, SceneCanvas
 from rrtdrive.sim.scenes import SimConfig, build_env
 from rrtdrive.types import InputError, Pose, require_int
 
-__all__ = ["render_frames", "write_video", "frame_is_blank", "frame_indices"]
+__all__ = [
+    "render_frames", "write_video", "write_frames", "frame_is_blank", "frame_indices",
+    "hud_gears",
+]
 
 #: ``progress(frames_done, frames_total)``, called after each frame is handed to the encoder.
 Progress = Callable[[int, int], None]
@@ -47,6 +50,30 @@ def _camera_for(episode: Episode) -> tuple[tuple[int, int], float, _Camera]:
     # The task frames itself (a long road: a window that follows the ego, moved every frame).
     view = episode.scenario.camera()
     return view.size, view.scaling, _Camera(*view.centre)
+
+
+def hud_gears(speeds: np.ndarray) -> np.ndarray:
+    """The gear the read-out shows at each logged state: ``"D"`` or ``"R"``.
+
+    The sign of the speed while moving; at standstill the gear of the next motion
+    (the gear is changed at rest, before the car moves off), ``"D"`` when it never
+    moves again.
+
+    Examples
+    --------
+    >>> hud_gears(np.array([0.0, 1.0, 0.0, 0.0, -0.5, 0.0])).tolist()
+    ['D', 'D', 'R', 'R', 'R', 'D']
+    """
+    v = np.asarray(speeds, dtype=float)
+    out = np.empty(len(v), dtype=object)
+    nxt = "D"
+    for k in range(len(v) - 1, -1, -1):
+        if v[k] > 0:
+            nxt = "D"
+        elif v[k] < 0:
+            nxt = "R"
+        out[k] = nxt
+    return out.astype(str)
 
 
 def frame_indices(episode: Episode, stride: int = 1) -> list[int]:
@@ -132,6 +159,9 @@ def render_frames(
             if len(episode.path) >= 2 else np.zeros(len(log.states))
         )
         goal = episode.scenario.goal
+        path_gears = episode.path.gears if len(episode.path) else None
+        gear_of = hud_gears(log.states[:, 3])
+        cusps = len(episode.path.cusps) if len(episode.path) else 0
         for k in indices:
             x, y, yaw, v = log.states[k]
             steer = float(log.controls[k - 1, 1]) if k > 0 else 0.0
@@ -155,16 +185,19 @@ def render_frames(
             canvas.draw(
                 road, sim.simulation_frequency, path_xy,
                 None if follow else (goal.x, goal.y),
+                gears=path_gears if traffic is None else None,
             )
             if k >= 1:
                 first = max(0, k - 600) if follow else 0
                 canvas.polyline(log.states[first : k + 1, :2], TRACE_COLOR)
             kappa = math.tan(steer) / vehicle.wheelbase
             lines = [
-                f"t {log.t[k]:5.2f} s   v {v:4.2f} m/s",
+                f"t {log.t[k]:5.2f} s   v {v:+5.2f} m/s   gear {gear_of[k]}",
                 f"kappa {kappa:+.3f} 1/m (max {vehicle.kappa_max:.3f})",
                 f"cte {cte[k]:+.3f} m   {episode.controller}",
             ]
+            if cusps:
+                lines.append(f"gear changes: path {cusps}")
             if traffic is not None:
                 mode = [m for tm, m in traffic.modes if tm <= log.t[k] + 1e-9]
                 lines.append(f"mode {mode[-1] if mode else 'follow'}")
@@ -219,4 +252,29 @@ def write_video(
             writer.append(frame)
             if progress is not None:
                 progress(writer.frames, total)
+    return writer.frames
+
+
+def write_frames(
+    frames: Iterable[np.ndarray], target: str | os.PathLike[str], fps: float
+) -> int:
+    """Write ready RGB frames (any even or odd size) as an MP4; return the frame count.
+
+    For frames drawn elsewhere (highway-env's own ``env.render()`` of a stock env);
+    odd sides are padded by one edge pixel. The file appears only when complete.
+    """
+    out = FsPath(target)
+    if out.suffix.lower() != ".mp4":
+        raise InputError(f"--video: the file must end in .mp4, got {str(target)!r}")
+    if not out.parent.exists():
+        raise InputError(f"--video: folder {str(out.parent)!r} does not exist")
+    if not (math.isfinite(fps) and fps > 0):
+        raise InputError(f"fps: must be > 0, got {fps!r}")
+    with Mp4Writer(out, fps, quality=7, macro_block_size=2) as writer:
+        for frame in frames:
+            f = np.asarray(frame, dtype=np.uint8)
+            pad_h, pad_w = f.shape[0] % 2, f.shape[1] % 2
+            if pad_h or pad_w:
+                f = np.pad(f, ((0, pad_h), (0, pad_w), (0, 0)), mode="edge")
+            writer.append(np.ascontiguousarray(f))
     return writer.frames

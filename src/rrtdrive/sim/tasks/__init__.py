@@ -12,7 +12,17 @@
   slow *moving* lead car and a seeded stream of oncoming IDM cars; the ego
   overtakes with receding-horizon space-time re-planning and is done once it is
   back in its lane ahead of the lead car.
-* :class:`CustomTask` (``custom``) - any map, planned and tracked to its goal.
+* :class:`ParallelParkingTask` (``parallel-parking``) - a kerbside street with
+  parked cars and a seeded gap of 1.5-2.0 car lengths; the ego stops by the kerb
+  in the gap (planned with gear changes).
+* :class:`UTurnTask` (``u-turn``) - a dead-end street of a seeded width (9-12 m)
+  narrower than a forward U-turn needs (14.65 m for the paper's car): the ego
+  turns round with a three-point turn (planned with gear changes).
+* :class:`CustomTask` (``custom``) - any map, planned and tracked to its goal
+  (:meth:`CustomTask.from_map`; ``rrtdrive simulate MAP.json``).
+
+``parking`` takes ``reverse_in=True``: the goal faces out of the spot, entered
+backwards (planned with gear changes).
 
 :func:`make_scenario` builds a task by name for a seed. Every task has the same
 methods (:class:`Task`): ``build_road`` (its highway-env road), ``scene_view`` and
@@ -51,7 +61,9 @@ from rrtdrive.sim.tasks.overtake_traffic import (
     traffic_map,
     traffic_speed_config,
 )
+from rrtdrive.sim.tasks.parallel_parking import ParallelParkingTask
 from rrtdrive.sim.tasks.parking import ParkingTask
+from rrtdrive.sim.tasks.u_turn import UTurnTask
 from rrtdrive.types import InputError, VehicleParams, require_int
 
 __all__ = [
@@ -63,6 +75,8 @@ __all__ = [
     "ParkingTask",
     "OvertakeTask",
     "OvertakeTrafficTask",
+    "ParallelParkingTask",
+    "UTurnTask",
     "CustomTask",
     "Reference",
     "SuccessPart",
@@ -81,10 +95,12 @@ __all__ = [
 ]
 
 #: The tasks :func:`make_scenario` builds by name.
-TASKS: dict[str, type[ParkingTask] | type[OvertakeTask] | type[OvertakeTrafficTask]] = {
+TASKS: dict[str, type[Task]] = {
     TaskKind.PARKING.value: ParkingTask,
     TaskKind.OVERTAKE.value: OvertakeTask,
     TaskKind.OVERTAKE_TRAFFIC.value: OvertakeTrafficTask,
+    TaskKind.PARALLEL_PARKING.value: ParallelParkingTask,
+    TaskKind.U_TURN.value: UTurnTask,
 }
 #: Names of the built-in scenarios.
 SCENARIOS = tuple(TASKS)
@@ -95,6 +111,7 @@ REPLANNING_SCENARIOS = tuple(name for name, cls in TASKS.items() if cls.REPLAN_C
 #: Why an option of one kind is refused by another (the messages name the option).
 _NOT_HERE = {
     "spot": "spot: only the parking scenario has spots",
+    "reverse_in": "reverse_in: only the parking scenario has reverse-in bays",
     "oncoming": "oncoming: only the overtake scenario has a count of oncoming cars",
     "density": "density: only the overtake-traffic scenario has it",
     "lead_speed": "lead_speed: only the overtake-traffic scenario has it",
@@ -126,15 +143,18 @@ def make_scenario(name: str, seed: int = 0, **options: Any) -> Task:
     Parameters
     ----------
     name : str
-        ``"parking"``, ``"overtake"`` or ``"overtake-traffic"``.
+        ``"parking"``, ``"overtake"``, ``"overtake-traffic"``, ``"parallel-parking"``
+        or ``"u-turn"``.
     seed : int
-        Seeds the start jitter and (parking) the choice of the free spot.
+        Seeds the start jitter and the kind's variation (parking: the free spot;
+        parallel-parking: the gap's length and place; u-turn: the street's width).
     **options
         ``jitter`` (three half-ranges of the uniform start jitter in x, y (metres) and
         yaw (radians), default ``(1.0, 0.5, radians(5))``) and ``vehicle`` (a
         :class:`~rrtdrive.types.VehicleParams`) for every kind, and per kind:
 
         - parking: ``spot``, force this ``(row, side, index)`` spot (must be empty);
+          ``reverse_in``, the goal faces out of the spot (entered backwards);
         - overtake: ``oncoming``, the number of oncoming cars (seeded positions
           90-140 m apart beyond the road's end, speeds 6-9 m/s; the ego waits for a
           gap before pulling out);
@@ -145,7 +165,8 @@ def make_scenario(name: str, seed: int = 0, **options: Any) -> Task:
           starts at this speed, 20-30 m behind it); ``lead_model``, ``"idm"``
           (default) or ``"constant"``.
 
-        An option of another kind may be given as ``None`` (``oncoming`` as 0).
+        An option of another kind may be given as ``None`` (``oncoming`` as 0,
+        ``reverse_in`` as False).
 
     Returns
     -------
@@ -184,7 +205,7 @@ def make_scenario(name: str, seed: int = 0, **options: Any) -> Task:
     for key, value in list(options.items()):
         if key in own:
             continue
-        if value is not None and not (key == "oncoming" and value == 0):
+        if value is not None and not (key in ("oncoming", "reverse_in") and not value):
             raise InputError(_NOT_HERE[key])
         del options[key]
     if cls is None:

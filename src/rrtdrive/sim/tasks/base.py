@@ -26,7 +26,7 @@ from rrtdrive.sim.episode import (
     plan_failed_message,
 )
 from rrtdrive.sim.loop import STOP_AT_PATH_END, Driver, EndRule, PathTracker, StopAtGoal
-from rrtdrive.sim.scenes import SceneView, scenario_rngs
+from rrtdrive.sim.scenes import SceneView, fit_view, scenario_rngs
 from rrtdrive.types import (
     Budget,
     InputError,
@@ -66,6 +66,8 @@ class TaskKind(enum.StrEnum):
     PARKING = "parking"
     OVERTAKE = "overtake"
     OVERTAKE_TRAFFIC = "overtake-traffic"
+    PARALLEL_PARKING = "parallel-parking"
+    U_TURN = "u-turn"
     CUSTOM = "custom"
 
 
@@ -157,12 +159,12 @@ def plan_scenario(
 ) -> PlanResult:
     """Plan the task's query with the registered planner ``planner``.
 
-    The planner's generator is the episode seed's planner stream.
+    The planner's generator is the episode seed's planner stream; gear changes are
+    allowed when the task says so (``scenario.reverse``).
     """
     _, plan_rng, _ = scenario_rngs(seed)
-    return make_planner(planner).solve(
-        PlanningProblem.from_map(scenario.map), plan_rng, budget or Budget()
-    )
+    problem = PlanningProblem.from_map(scenario.map, reverse=scenario.reverse)
+    return make_planner(planner).solve(problem, plan_rng, budget or Budget())
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -179,6 +181,9 @@ class Task:
         Speed cap for the episode in m/s.
     max_time_s : float
         Time allowed before the episode counts as failed.
+    reverse : bool
+        The path may change gear (plan with reversing allowed, as ``rrtdrive plan
+        --reverse``).
 
     Notes
     -----
@@ -203,6 +208,7 @@ class Task:
     seed: int
     v_max: float = 3.0
     max_time_s: float = 120.0
+    reverse: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.map, Map):
@@ -213,6 +219,8 @@ class Task:
             raise InputError(f"scenario.seed: need an integer >= 0, got {self.seed!r}")
         require_positive("scenario.v_max", self.v_max)
         require_positive("scenario.max_time_s", self.max_time_s)
+        if not isinstance(self.reverse, (bool, np.bool_)):
+            raise InputError(f"scenario.reverse: expected True or False, got {self.reverse!r}")
 
     # ------------------------------------------------------------------ data
 
@@ -247,13 +255,13 @@ class Task:
         raise NotImplementedError
 
     def scene_view(self) -> SceneView:
-        """Default frame of the live scene: the whole map in a square window."""
-        return SceneView((640, 640), 6.0, (0.5, 0.5))
+        """Default frame of the live scene: a window sized by :func:`fit_view` for the map."""
+        size, scaling, _ = fit_view(self.map.bounds)
+        return SceneView(size, scaling, (0.5, 0.5))
 
     def camera(self) -> VideoCamera:
-        """How the video frames this task: the whole map, square."""
-        b = self.map.bounds
-        return VideoCamera((640, 640), 6.0, ((b[0] + b[2]) / 2, (b[1] + b[3]) / 2))
+        """How the video frames this task: the whole map, fitted to the frame (:func:`fit_view`)."""
+        return VideoCamera(*fit_view(self.map.bounds))
 
     # ------------------------------------------------------------------ episode
 

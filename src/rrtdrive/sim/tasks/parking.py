@@ -1,8 +1,9 @@
-"""The parking task: from the lot's entrance nose-in into a seeded free spot."""
+"""The parking task: from the lot's entrance into a seeded free spot, nose-in or reversing in."""
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -14,7 +15,27 @@ from rrtdrive.sim.scenes import parking_network, populate_road
 from rrtdrive.sim.tasks.base import PathTask, TaskKind
 from rrtdrive.types import InputError, Pose, VehicleParams
 
-__all__ = ["ParkingTask", "parse_spot"]
+__all__ = ["ParkingTask", "parse_spot", "reverse_in_goal"]
+
+
+def reverse_in_goal(nose_in: Pose, vehicle: VehicleParams) -> Pose:
+    """The rear-axle pose of a car in the same place as ``nose_in``, facing out of the bay.
+
+    The body covers the same rectangle; the heading is turned by pi, so the rear
+    axle moves forward by twice its distance from the body centre.
+
+    Examples
+    --------
+    >>> import math
+    >>> g = reverse_in_goal(Pose(0.0, 0.0, math.pi / 2), VehicleParams())
+    >>> round(g.x, 6), round(g.y, 3), round(g.yaw, 4)
+    (0.0, 2.51, -1.5708)
+    """
+    d = 2.0 * (vehicle.length / 2.0 - vehicle.rear_overhang)
+    yaw = math.remainder(nose_in.yaw + math.pi, 2.0 * math.pi)
+    return Pose(
+        nose_in.x + d * math.cos(nose_in.yaw), nose_in.y + d * math.sin(nose_in.yaw), yaw
+    )
 
 
 def parse_spot(spot: object) -> tuple[int, int, int]:
@@ -47,7 +68,9 @@ class ParkingTask(PathTask):
     """Park in the ``parking_lot`` map: every parked car and block is a solid obstacle.
 
     The scene's walls close the bounds and each spot is drawn as a lane. The ego
-    starts at the entrance with a seeded jitter and must stop nose-in in the spot.
+    starts at the entrance with a seeded jitter and must stop nose-in in the spot,
+    or with ``reverse_in`` facing out of it (the spot is entered backwards, as most
+    drivers do in perpendicular bays: the path is planned with gear changes).
 
     Parameters
     ----------
@@ -55,17 +78,29 @@ class ParkingTask(PathTask):
         See :class:`~rrtdrive.sim.tasks.Task`.
     spot : tuple of int
         The ``(row, side, index)`` of the goal spot.
+    reverse_in : bool
+        The goal faces out of the spot (``rrtdrive simulate parking --reverse-in``);
+        ``reverse`` is then True.
     """
 
     kind: ClassVar[TaskKind] = TaskKind.PARKING
     #: Options of :func:`~rrtdrive.sim.tasks.make_scenario` besides ``jitter`` and ``vehicle``.
-    OPTIONS: ClassVar[tuple[str, ...]] = ("spot",)
+    OPTIONS: ClassVar[tuple[str, ...]] = ("spot", "reverse_in")
 
     spot: tuple[int, int, int]
+    reverse_in: bool = False
 
     def __post_init__(self) -> None:
         super().__post_init__()
         parse_spot(self.spot)
+        if not isinstance(self.reverse_in, (bool, np.bool_)):
+            raise InputError(f"reverse_in: expected True or False, got {self.reverse_in!r}")
+        if self.reverse_in and not self.reverse:
+            raise InputError("reverse_in: a reverse-in bay needs reverse=True (gear changes)")
+
+    def describe(self) -> dict[str, object]:
+        """The goal spot and whether it is entered backwards."""
+        return {"spot": list(self.spot), "reverse_in": bool(self.reverse_in)}
 
     @classmethod
     def create(
@@ -75,8 +110,12 @@ class ParkingTask(PathTask):
         offset: tuple[float, float, float],
         vehicle: VehicleParams,
         spot: object = None,
+        reverse_in: object = None,
     ) -> ParkingTask:
         """The task for ``seed``: ``offset`` is the drawn start jitter, ``rng`` draws the spot."""
+        if reverse_in is not None and not isinstance(reverse_in, (bool, np.bool_)):
+            raise InputError(f"reverse_in: expected True or False, got {reverse_in!r}")
+        backwards = bool(reverse_in)
         base = dataclasses.replace(parking_lot_map(), vehicle=vehicle)
         spots = sorted(PARKING_EMPTY_SPOTS)
         if spot is None:
@@ -86,8 +125,13 @@ class ParkingTask(PathTask):
         dx, dy, dyaw = offset
         start = Pose(base.start.x + dx, base.start.y + dy, base.start.yaw + dyaw)
         goal = parking_goal_pose(*chosen, vehicle=vehicle)
+        if backwards:
+            goal = reverse_in_goal(goal, vehicle)
         m = base.with_query(start=start, goal=goal)
-        return cls(map=m, seed=int(seed), spot=chosen, v_max=3.0, max_time_s=120.0)
+        return cls(
+            map=m, seed=int(seed), spot=chosen, v_max=3.0, max_time_s=120.0,
+            reverse=backwards, reverse_in=backwards,
+        )
 
     def build_road(self, np_random: np.random.Generator, history: bool) -> Road:
         """One lane per spot; the lot's obstacles and the walls."""

@@ -1,0 +1,76 @@
+"""``rrtdrive simulate`` on the new scenarios, on any map, and its bad input."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from rrtdrive.cli import main
+from rrtdrive.maps import Map, Obstacle, save_map
+from rrtdrive.types import Pose
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def small_map(tmp_path):
+    m = Map("yard", (0.0, 0.0, 40.0, 24.0), (Obstacle((20.0, 12.0), (4.0, 6.0)),),
+            Pose(4.0, 5.0, 0.0), Pose(30.0, 18.0, 0.0))
+    path = tmp_path / "yard.json"
+    save_map(m, path)
+    return path
+
+
+def test_simulate_a_map_file_drives_it_and_fits_the_video(capsys, tmp_path):
+    path = small_map(tmp_path)
+    video = tmp_path / "yard.mp4"
+    code, out, err = run(capsys, "simulate", str(path), "--deterministic", "--json", "-",
+                         "--video", str(video), "--video-stride", "50")
+    data = json.loads(out)
+    assert code == 0, err
+    assert data["success"] and data["target"] == "map" and data["map"] == "yard"
+    assert data["scenario"] == str(path) and data["reverse"] is False
+    import imageio.v3 as iio
+
+    frames = iio.imread(video, index=None)
+    assert frames.shape[1:3] == (640, 960)  # 40 x 24 m fitted at 20.6 px/m, not 6 px/m
+
+
+def test_simulate_a_map_with_start_and_goal_flags(capsys, tmp_path):
+    path = small_map(tmp_path)
+    code, out, err = run(capsys, "simulate", str(path), "--start", "4,18,0", "--goal", "30,5,0",
+                         "--deterministic", "--json", "-")
+    assert code == 0, err
+    assert json.loads(out)["success"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["parkng"], "scenario: unknown scenario 'parkng'"),
+        (["parking", "--start", "1,2,0"], "--start: only a map takes a start"),
+        (["overtake", "--reverse-in"], "--reverse-in: only the parking scenario"),
+        (["overtake-traffic", "--reverse"], "--reverse: overtake-traffic re-plans"),
+        (["garage", "--oncoming", "2"], "--oncoming: only a built-in scenario"),
+        (["garage", "--goal", "1,2"], "--goal: expected three numbers"),
+        (["garage", "--goal", "-5,2,0"], "goal"),
+        (["parking-v0", "--density", "low"], "--density: only a built-in scenario"),
+    ],
+)
+def test_simulate_bad_input_exits_2_with_one_line(capsys, argv, message):
+    code, out, err = run(capsys, "simulate", *argv)
+    assert code == 2
+    assert err.count("\n") == 1 and message in err, err
+
+
+def test_simulate_bad_map_file_names_the_field(capsys, tmp_path):
+    path = small_map(tmp_path)
+    doc = json.loads(path.read_text())
+    doc["obstacles"][0]["size"] = [4.0, -1.0]
+    path.write_text(json.dumps(doc))
+    code, _, err = run(capsys, "simulate", str(path))
+    assert code == 2 and err.count("\n") == 1 and "size" in err, err

@@ -1,0 +1,77 @@
+"""Stock highway-env envs driven by our ego, planner and controller through ``env.step``."""
+
+from __future__ import annotations
+
+import json
+
+import gymnasium as gym
+import highway_env  # noqa: F401  (registers its envs)
+import numpy as np
+import pytest
+
+from rrtdrive.cli import main
+from rrtdrive.evaluation import evaluate
+from rrtdrive.sim.ego import EgoVehicle
+from rrtdrive.sim.extract import attach_ego, map_from_env
+from rrtdrive.sim.runner import EpisodeConfig
+from rrtdrive.sim.stock import STOCK_ENVS, drive_stock_env, make_stock_env
+from rrtdrive.types import Budget, InputError
+
+DETERMINISTIC = EpisodeConfig(budget=Budget(max_time_s=1e6))
+
+
+def test_the_stock_ids_exist_in_this_highway_env():
+    for env_id in STOCK_ENVS:
+        assert env_id in gym.registry
+
+
+def test_stock_episode_stops_at_the_goal_and_highway_env_agrees():
+    run = drive_stock_env("parking-v0", 2, "hybrid-a-star", "pure-pursuit", DETERMINISTIC)
+    report = evaluate(run.episode)
+    assert report.success and run.highway_env_success
+    assert run.episode.status == "arrived" and run.episode.log.states[-1, 3] == 0.0
+    # highway-env's own termination said success on the way in, before we stopped.
+    assert run.highway_env_terminated_s is not None
+    assert run.highway_env_terminated_s <= report.duration_s <= run.episode.scenario.max_time_s
+    assert not run.highway_env_truncated
+    assert run.to_json()["highway_env_success"] is True
+    again = drive_stock_env("parking-v0", 2, "hybrid-a-star", "pure-pursuit", DETERMINISTIC)
+    assert np.array_equal(again.episode.log.states, run.episode.log.states)  # deterministic
+
+
+def test_stock_env_steps_through_env_step_with_our_ego():
+    env = make_stock_env("parking-v0", 20)
+    env.reset(seed=0)
+    ego = attach_ego(env)
+    assert isinstance(env.unwrapped.vehicle, EgoVehicle) and ego is env.unwrapped.vehicle
+    t0 = env.unwrapped.time
+    rear0 = list(ego.rear)
+    _, _, term, trunc, info = env.step(np.array([1.0, 0.0], dtype=np.float32))
+    assert env.unwrapped.time == pytest.approx(t0 + 1 / 20)  # one policy step = one sim step
+    assert ego.speed == pytest.approx(5.0 / 20)  # the top of highway-env's range, 5 m/s^2
+    assert ego.rear != rear0 and "is_success" in info and not (term or trunc)
+    env.close()
+
+
+def test_parked_variant_puts_its_parked_cars_in_the_map():
+    env = make_stock_env("parking-parked-v0", 20)
+    env.reset(seed=1)
+    attach_ego(env)
+    m = map_from_env(env)
+    cars = [o for o in m.obstacles if abs(o.size[0] - 5.0) < 1e-6 and abs(o.size[1] - 2.0) < 1e-6]
+    assert len(cars) == env.unwrapped.config["vehicles_count"] == 10
+    env.close()
+
+
+def test_unknown_stock_env_is_bad_input():
+    with pytest.raises(InputError, match="env: unknown stock env"):
+        make_stock_env("highway-v0", 20)
+
+
+def test_simulate_parking_v0_reports_highway_env_success(capsys):
+    code = main(["simulate", "parking-v0", "--seed", "2", "--planner", "hybrid-a-star",
+                 "--deterministic", "--json", "-"])
+    data = json.loads(capsys.readouterr().out)
+    assert code == 0
+    assert data["highway_env_success"] is True and data["success"] is True
+    assert data["scenario"] == "parking-v0" and data["target"] == "stock"
