@@ -432,7 +432,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         lines = [
             f"t {self._loop.t:5.2f} s   v {obs[0]:4.2f} m/s (ref {obs[4]:4.2f})",
             f"kappa {kappa:+.3f} 1/m (max {vehicle.kappa_max:.3f})",
-            f"cte {obs[2]:+.3f} m   {mode}",
+            f"cte {obs[2]:+.3f} m   {mode}   gear {'R' if obs[-2] < 0 else 'D'}",
         ]
         return self._renderer.frame(
             self._road,
@@ -442,6 +442,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             [st[:2] for st in self._rec.states],
             ref_world,
             lines,
+            gears=self.path.gears,  # type: ignore[union-attr]
         )
 
     def close(self) -> None:
