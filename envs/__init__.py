@@ -37,12 +37,14 @@ ENV_IDS: dict[str, str] = {
     "rrtdrive/UTurn-v0": "u-turn",
 }
 #: Extra keyword arguments of an id, beyond its scenario (``gym.make`` arguments
-#: override them). Parallel parking plans with Hybrid A*: the default planner's
-#: escalation refuses its arc paths (steering jumps above the sharpness bound), and
-#: nothing else finds the gap. Reverse-in parking is an option of the parking env:
+#: override them). Parallel parking and the U-turn plan with Hybrid A*, the
+#: reversing planner, directly: the default planner would reach the same search only
+#: after its RRT-Connect stages fail, at each reset (tens of seconds on a U-turn).
+#: Reverse-in parking is an option of the parking env:
 #: ``gym.make("rrtdrive/Parking-v0", scenario_options={"reverse_in": True})``.
 ENV_KWARGS: dict[str, dict[str, object]] = {
     "rrtdrive/ParallelParking-v0": {"planner": "hybrid-a-star"},
+    "rrtdrive/UTurn-v0": {"planner": "hybrid-a-star"},
 }
 
 

@@ -2,12 +2,9 @@
 
 from __future__ import annotations
 
-import warnings
-
 import gymnasium as gym
 import numpy as np
 import pytest
-from gymnasium.utils.env_checker import check_env
 
 import rrtdrive.envs  # noqa: F401  (registers the envs)
 from rrtdrive.evaluation import evaluate
@@ -56,15 +53,6 @@ def test_video_of_a_reversing_episode_draws_the_reverse_segments_and_cusps():
 
     assert has(REVERSE_COLOR) and has(CUSP_COLOR)
     assert frame.shape[:2] == task.camera().size[::-1]
-
-
-@pytest.mark.parametrize("env_id", ["rrtdrive/ParallelParking-v0", "rrtdrive/UTurn-v0"])
-def test_check_env_new_scenarios(env_id):
-    env = gym.make(env_id, planner="hybrid-a-star", budget=Budget(max_time_s=1e6))
-    with warnings.catch_warnings(record=True):
-        warnings.simplefilter("always")
-        check_env(env.unwrapped)
-    env.close()
 
 
 def test_reverse_in_parking_is_an_option_of_the_parking_env():
