@@ -190,6 +190,30 @@ def ramped_segment(
     >>> bool(np.allclose(out[[0, -1], :3], rows[[0, -1], :3], atol=1e-9))
     True
     """
+    # The rows are sampled for the fitted length, which the fit may lengthen a
+    # little beyond the raw one: sample finer until every gap keeps ``spacing``.
+    step = spacing
+    for _ in range(4):
+        out = _ramped_once(rows, gear, rate, wheelbase, delta_max, step, angle_weight)
+        if out is None:
+            return None
+        gap = float(np.hypot(*np.diff(out[:, :2], axis=0).T).max()) if len(out) > 1 else 0.0
+        if gap <= spacing:
+            return out
+        step *= 0.999 * spacing / gap
+    return None
+
+
+def _ramped_once(
+    rows: np.ndarray,
+    gear: int,
+    rate: float,
+    wheelbase: float,
+    delta_max: float,
+    spacing: float,
+    angle_weight: float,
+) -> np.ndarray | None:
+    """One fit of :func:`ramped_segment` with rows about ``spacing`` apart."""
     rows = np.asarray(rows, dtype=float)
     ds, kappa = _intervals(rows, gear)
     if not len(ds):
