@@ -9,10 +9,9 @@ within the step, as the ego integrates it). The highway-env runs are in
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
+from gear_paths import integrate_pieces
 
 from rrtdrive.controllers import (
     CONTROLLERS,
@@ -65,25 +64,14 @@ def drive(name: str, path: Path, rate: float | None, x0=None, max_time: float = 
     return c, np.array(rows)
 
 
-def _integrate(pieces, ds: float = 0.1) -> Path:
-    """Rows of the exact bicycle for ``(gear, kappa, length)`` pieces from the origin."""
-    blocks, pose = [], (0.0, 0.0, 0.0)
-    for gear, kappa, length in pieces:
-        pts = [pose]
-        for _ in range(int(round(length / ds))):
-            pts.append(bicycle_step(pts[-1], gear * ds, math.atan(L * kappa), 1.0, L))
-        p = np.array(pts)
-        blocks.append(np.column_stack([p, np.full(len(p), kappa), np.full(len(p), gear)]))
-        pose = tuple(p[-1])
-    return Path(np.vstack(blocks), np.zeros((0, 2)))
-
-
 R = VehicleParams().min_turning_radius
 PATHS = {
-    "reverse-straight": _integrate([(-1, 0.0, 15.0)]),
-    "reverse-arc": _integrate([(-1, 1.0 / R, 9.0)]),
+    "reverse-straight": integrate_pieces([(-1, 0.0, 15.0)]),
+    "reverse-arc": integrate_pieces([(-1, 1.0 / R, 9.0)]),
     # Forward left, reverse right, forward left: at the curvature limit throughout.
-    "three-point-turn": _integrate([(1, 1.0 / R, 8.0), (-1, -1.0 / R, 6.0), (1, 1.0 / R, 8.0)]),
+    "three-point-turn": integrate_pieces(
+        [(1, 1.0 / R, 8.0), (-1, -1.0 / R, 6.0), (1, 1.0 / R, 8.0)]
+    ),
 }
 #: Bounds measured with this file's plant (``drive``) and stated in docs/closed_loop.md:
 #: largest |CTE| (m, against the segment driven), final position error (m).

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from gear_paths import integrate_pieces
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -17,26 +18,13 @@ from rrtdrive.evaluation.tracking import (
 )
 from rrtdrive.geometry import project_to_polyline, wrap_angle
 from rrtdrive.types import Path
-from rrtdrive.vehicle import bicycle_step
 
 L = 2.51
 
 
-def _pieces(pieces, ds: float = 0.1) -> Path:
-    blocks, pose = [], (0.0, 0.0, 0.0)
-    for gear, kappa, length in pieces:
-        pts = [pose]
-        for _ in range(int(round(length / ds))):
-            pts.append(bicycle_step(pts[-1], gear * ds, math.atan(L * kappa), 1.0, L))
-        p = np.array(pts)
-        blocks.append(np.column_stack([p, np.full(len(p), kappa), np.full(len(p), gear)]))
-        pose = tuple(p[-1])
-    return Path(np.vstack(blocks), np.zeros((0, 2)))
-
-
 #: Forward 10 m, then back over its own ground on a gentle arc: near the cusp the two
 #: legs are centimetres apart with different headings.
-SHUTTLE = _pieces([(1, 0.0, 10.0), (-1, 1.0 / 12.0, 10.0)])
+SHUTTLE = integrate_pieces([(1, 0.0, 10.0), (-1, 1.0 / 12.0, 10.0)])
 
 
 def _driven(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -75,7 +63,7 @@ def test_errors_are_measured_against_the_segment_driven():
 
 
 def test_cte_sign_is_left_of_the_direction_of_travel():
-    back = _pieces([(-1, 0.0, 10.0)])  # reversing along -x, the nose along +x
+    back = integrate_pieces([(-1, 0.0, 10.0)])  # reversing along -x, the nose along +x
     cte, herr = tracking_errors(back, np.array([[-5.0, 0.3, 0.1]]), speeds=np.array([-1.0]))
     # +y is to the right of travel (-x): negative; the heading error is nose minus nose.
     assert math.isclose(cte[0], -0.3, abs_tol=1e-12) and math.isclose(herr[0], 0.1)
@@ -100,7 +88,7 @@ def test_gear_runs_and_the_segment_driven():
 @settings(max_examples=30, deadline=None)
 @given(st.floats(-0.5, 0.5), st.floats(-0.3, 0.3), st.floats(0.5, 9.5))
 def test_forward_paths_measure_as_before(dy, dyaw, x):
-    fwd = _pieces([(1, 1.0 / 20.0, 10.0)])
+    fwd = integrate_pieces([(1, 1.0 / 20.0, 10.0)])
     pose = np.array([[x, dy + x * x / 40.0, dyaw + x / 20.0]])
     a = tracking_errors(fwd, pose)
     b = tracking_errors(fwd, pose, speeds=np.array([1.0]))
