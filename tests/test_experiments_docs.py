@@ -58,5 +58,5 @@ def test_readme_lists_every_disable_component():
 def test_readme_test_command_is_the_ci_one():
     ci = (ROOT / ".ci" / "run").read_text()
     install = re.search(r'pip install --quiet "([^"]+)"', ci).group(1)
-    assert "python -m pytest -q tests" in ci
-    assert f'pip install "{install}" && python -m pytest -q tests' in README.read_text()
+    assert "python -m pytest -q -n auto tests" in ci
+    assert f'pip install "{install}" && python -m pytest -q -n auto tests' in README.read_text()
