@@ -120,6 +120,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         import torch
         from stable_baselines3 import PPO
+        from stable_baselines3.common.callbacks import BaseCallback
         from stable_baselines3.common.env_util import make_vec_env
         from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
     except ImportError:
@@ -143,7 +144,23 @@ def main(argv: list[str] | None = None) -> int:
         policy_kwargs={"log_std_init": args.log_std_init, "net_arch": [64, 64]}, verbose=0,
     )
     t0 = time.perf_counter()
-    model.learn(total_timesteps=args.timesteps)
+
+    class Progress(BaseCallback):
+        """A line on stderr at every tenth of the training (it takes minutes)."""
+
+        def __init__(self) -> None:
+            super().__init__()
+            self.next_tenth = 1
+
+        def _on_step(self) -> bool:
+            done = self.num_timesteps / args.timesteps
+            if self.next_tenth <= 10 and done * 10 >= self.next_tenth:
+                self.next_tenth = int(done * 10) + 1
+                print(f"training: {self.num_timesteps}/{args.timesteps} steps, "
+                      f"{time.perf_counter() - t0:.0f} s", file=sys.stderr, flush=True)
+            return True
+
+    model.learn(total_timesteps=args.timesteps, callback=Progress())
     train_wall = time.perf_counter() - t0
     monitors = train_env.venv.envs  # make_vec_env wraps each env in a Monitor
     train_episodes = sum(len(m.get_episode_rewards()) for m in monitors)
