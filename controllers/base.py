@@ -136,6 +136,15 @@ class TrackingController:
     ff_preview : float
         Metres ahead of the projection at which feed-forward reads the path (0
         with an instant actuator).
+    steer_wanted : float
+        The steering angle of the last call before the actuator's reach was applied
+        (within ``steer_limit``); the command itself when the actuator is instant.
+    steer_window : tuple of float or None
+        ``(low, high)``: the angles the actuator can reach in the last call's step
+        (the command lies within them); ``None`` with an instant actuator. A residual
+        added to the command (the gym env's residual mode) is added to
+        :attr:`steer_wanted` and clipped to this window, so that the clip does not
+        only ever cut the residual that turns the wheels against the controller.
     """
 
     name = "tracking"
@@ -160,6 +169,8 @@ class TrackingController:
         self.profile: SpeedProfile | None = None
         self.cte = self.heading_error = self.s = self.v_ref = 0.0
         self.ff_preview = 0.0
+        self.steer_wanted = 0.0
+        self.steer_window: tuple[float, float] | None = None
         self.segments: list[GearSegment] = []
         self.segment = 0
         self.gear = 1
@@ -314,6 +325,7 @@ class TrackingController:
         ):
             # Stopped at the cusp: change gear and drive the next segment from rest.
             self._start_segment(self.segment + 1, 0.0, keep_state=False)
+        self.steer_window = None
         if self.gear > 0:
             accel, steer = self._control_forward(state)
             if accel < 0.0 and state.speed <= 0.0:
@@ -326,6 +338,10 @@ class TrackingController:
         if accel < 0.0 and speed <= 0.0:
             accel = 0.0
         self.v_ref = -self.v_ref
+        # The mirrored car's angles, back in the real car's terms.
+        self.steer_wanted = -self.steer_wanted
+        if self.steer_window is not None:
+            self.steer_window = (-self.steer_window[1], -self.steer_window[0])
         return -accel, -steer
 
     def _control_forward(self, state: VehicleState) -> tuple[float, float]:
@@ -341,7 +357,9 @@ class TrackingController:
         self.v_ref = self.speed.v_ref
         steer = self.steering(state, proj)
         limit = self.steer_limit
-        return accel, (limit if steer > limit else -limit if steer < -limit else steer)
+        steer = limit if steer > limit else -limit if steer < -limit else steer
+        self.steer_wanted = steer
+        return accel, steer
 
     def _control_rate_limited(
         self, state: VehicleState, proj: Projection, rate: float
@@ -352,9 +370,10 @@ class TrackingController:
         self.ff_preview = abs(state.speed) * dt if dt is not None and dt > 0 else 0.0
         limit = self.steer_limit
         steer = min(max(self.steering(state, proj), -limit), limit)
-        want = steer
+        want = self.steer_wanted = steer
         if dt is not None and dt > 0:
             reach = rate * dt
+            self.steer_window = (state.steer - reach, state.steer + reach)
             steer = min(max(steer, state.steer - reach), state.steer + reach)
         if not self._launched:
             if state.speed == 0.0 and abs(want - state.steer) > self.speed_config.start_steer_tol:

@@ -154,7 +154,16 @@ class ResidualMixer:
         fade = min(1.0, remaining / RESIDUAL_FADE_M)
         lim = self.limits.steer_limit
         accel = self.accel(c_accel, fade * d_accel, self.dt)
-        return accel, min(max(c_steer + fade * d_steer, -lim), lim)
+        window = getattr(ctrl, "steer_window", None)
+        if window is None:
+            return accel, min(max(c_steer + fade * d_steer, -lim), lim)
+        # A rate-limited actuator: the residual goes on the controller's wish, and the
+        # sum is clipped to what the wheels can reach this step. Added to the command
+        # already clipped to that reach, every residual against the controller's turn
+        # would pass and every one with it be cut: zero-mean noise slowed the
+        # controller's corrections to a third and drove the car off the path.
+        steer = min(max(ctrl.steer_wanted + fade * d_steer, -lim), lim)
+        return accel, min(max(steer, window[0]), window[1])
 
     def accel(self, c_accel: float, d_accel: float, dt: float) -> float:
         """The controller's acceleration plus the residual, within the speed loop's limits.
