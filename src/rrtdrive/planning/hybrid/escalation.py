@@ -3,9 +3,12 @@
 ``improved-rrt-connect`` runs the paper's pipeline (and its Dubins fallback)
 first. When that fails for any reason but an invalid start or goal or a proven
 unreachable goal, :func:`escalate` runs the Hybrid A* search (forward only, or
-with reverse when ``problem.reverse``) on the same stopwatch: the query's
-iteration budget bounds its expansions and the wall clock left is its safety
-cap. The result keeps the improved planner's name; ``stats["stage"]`` and the
+with reverse when ``problem.reverse``) on the same stopwatch: the budget it is
+given (the improved planner passes the iterations its RRT-Connect stages left,
+:meth:`~rrtdrive.planning.improved.ImprovedConfig.stage_budgets`) bounds its
+expansions and the wall clock left is its safety cap. The result's
+``iterations`` count both: the failed stages' iterations plus the expansions.
+The result keeps the improved planner's name; ``stats["stage"]`` and the
 message say which stage solved it (:func:`stage_of`).
 """
 
@@ -65,7 +68,7 @@ def escalate(
     problem : PlanningProblem
         The query (``getattr(problem, "reverse", False)`` allows reversing).
     budget : Budget
-        The query's budget: ``max_iterations`` expansions at most.
+        The escalation's budget: ``max_iterations`` expansions at most.
     watch : Stopwatch
         The query's running stopwatch (its expiry caps the search).
     smoothing : SmoothingConfig, optional
@@ -94,11 +97,13 @@ def escalate(
     own = answer_stats(answer, problem.vehicle.wheelbase)
     stats = {**failed.stats, **{f"hybrid_{k}": v for k, v in own.items()}}
     gear = "with reverse" if reverse else "forward only"
+    used = failed.iterations + answer.outcome.expansions
     if answer.path is None:
         return dataclasses.replace(
             failed,
             message=f"{failed.message}; Hybrid A* ({gear}) found none either: {answer.message}",
             stats=stats,
+            iterations=used,
             planning_time_s=watch.elapsed(),
         )
     built = answer.path
@@ -120,6 +125,7 @@ def escalate(
                 "--planner hybrid-a-star gives it, --paper-smoothing accepts it"
             ),
             stats=stats,
+            iterations=used,
             planning_time_s=watch.elapsed(),
         )
     stats["stage"] = NAME  # type: ignore[assignment]  # the one string entry
@@ -136,6 +142,7 @@ def escalate(
         raw_path=built.rows[:, :2],
         trees=(*failed.trees, *answer.trees),
         nodes=failed.nodes + answer.outcome.nodes,
+        iterations=used,
         planning_time_s=watch.elapsed(),
         message=message,
         stats=stats,

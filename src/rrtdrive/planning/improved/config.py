@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from rrtdrive.planning.improved.fallback import MAX_FALLBACK_CANDIDATES
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
@@ -14,6 +16,7 @@ __all__ = [
     "SMOOTHING_COMPONENTS",
     "PER_QUERY_SMOOTHING",
     "ImprovedConfig",
+    "StageBudgets",
     "default_smoothing",
 ]
 
@@ -53,6 +56,25 @@ def default_smoothing() -> SmoothingConfig:
 
 
 @dataclass(frozen=True)
+class StageBudgets:
+    """The RRT-Connect stages' counted budgets in one query (:meth:`ImprovedConfig.stage_budgets`).
+
+    Attributes
+    ----------
+    iterations : int
+        Growth iterations, over all pairs of trees.
+    attempts : int
+        Tree paths post-processed.
+    candidates : int
+        Dubins fallback joints tried as tails, and again as leads.
+    """
+
+    iterations: int
+    attempts: int
+    candidates: int
+
+
+@dataclass(frozen=True)
 class ImprovedConfig:
     """Parameters of :class:`ImprovedRRTConnect`, validated on construction.
 
@@ -85,6 +107,20 @@ class ImprovedConfig:
         budget and the time left as its cap, before reporting failure. On by
         default; it never runs when an earlier stage succeeds. Off for the paper's
         pipeline alone (``without("dubins_fallback", "escalation")``).
+    rrt_share : float
+        Beyond the paper (issue 13): with ``escalation`` on, the share of each
+        counted budget the RRT-Connect stages get before the escalation, in
+        ``(0, 1]``: ``ceil(rrt_share * max_iterations)`` growth iterations,
+        ``ceil(rrt_share * max_postprocess_attempts)`` tree paths and
+        ``ceil(rrt_share * MAX_FALLBACK_CANDIDATES)`` Dubins fallback joints (tails,
+        and again leads); the escalation's Hybrid A* gets the iterations they left
+        as its expansion budget (:meth:`stage_budgets`). Counts, not time, so the
+        stage that solves is the same on any machine. Default 0.25 (5 000 of 20 000
+        iterations, 2 of 6 tree paths, 16 of 64 joints): on ``parking_lot``'s random
+        queries the RRT stages that solve do so within it, and the ones that fail
+        used to spend most of a 10 s cap before the escalation started
+        (docs/coverage_all.md). 1: every budget in full. Ignored with
+        ``escalation`` off: the paper's pipeline alone keeps every budget.
     dubins_radius_factor : float
         Turning radius of the fallback's arcs as a multiple of ``1 / kappa_max``
         (>= 1; default 1.05, a little room for tracking).
@@ -136,6 +172,7 @@ class ImprovedConfig:
     passage_sampling: bool = True
     dubins_fallback: bool = True
     escalation: bool = True
+    rrt_share: float = 0.25
     dubins_radius_factor: float = 1.05
     passage_bias: float = 0.1
     expansion_a: float = 1.0
@@ -160,6 +197,9 @@ class ImprovedConfig:
                     f"planner.smoothing.{name}: set per query (from the car, planner.step and "
                     f"planner.body_clearance); leave it at its default"
                 )
+        require_finite("planner.rrt_share", self.rrt_share)
+        if not 0.0 < self.rrt_share <= 1.0:
+            raise InputError(f"planner.rrt_share: must lie in (0, 1], got {self.rrt_share!r}")
         require_finite("planner.passage_bias", self.passage_bias)
         require_finite("planner.dubins_radius_factor", self.dubins_radius_factor)
         if self.dubins_radius_factor < 1.0:
@@ -183,6 +223,26 @@ class ImprovedConfig:
                 f"planner.body_clearance: must be >= 0, got {self.body_clearance!r}"
             )
         require_int("planner.max_postprocess_attempts", self.max_postprocess_attempts)
+
+    def stage_budgets(self, max_iterations: int) -> StageBudgets:
+        """The RRT-Connect stages' counted budgets for a query of ``max_iterations``.
+
+        With ``escalation`` on, ``rrt_share`` of each (rounded up, at least 1 tree
+        path); off, every budget in full.
+
+        Examples
+        --------
+        >>> ImprovedConfig().stage_budgets(20_000)
+        StageBudgets(iterations=5000, attempts=2, candidates=16)
+        >>> ImprovedConfig(escalation=False).stage_budgets(20_000)
+        StageBudgets(iterations=20000, attempts=6, candidates=64)
+        """
+        share = self.rrt_share if self.escalation else 1.0
+        return StageBudgets(
+            iterations=min(max_iterations, math.ceil(share * max_iterations)),
+            attempts=max(1, math.ceil(share * self.max_postprocess_attempts)),
+            candidates=math.ceil(share * MAX_FALLBACK_CANDIDATES),
+        )
 
     def enabled(self, component: str) -> bool:
         """Whether the named component of :data:`COMPONENTS` is on.
