@@ -19,7 +19,7 @@ import dataclasses
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.planner import NAME, answer_stats, arcs_note, path_of
-from rrtdrive.planning.hybrid.query import hybrid_query
+from rrtdrive.planning.hybrid.query import hybrid_query, query_clearance
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, PlanResult, PlanStatus
 
@@ -101,7 +101,10 @@ def escalate(
     if answer.path is None:
         return dataclasses.replace(
             failed,
-            message=f"{failed.message}; Hybrid A* ({gear}) found none either: {answer.message}",
+            message=(
+                f"{failed.message}; Hybrid A* ({gear}) found none either: {answer.message}"
+                + _proof_scope(answer.outcome.reason, query_clearance(problem, cfg.body_clearance))
+            ),
             stats=stats,
             iterations=used,
             planning_time_s=watch.elapsed(),
@@ -147,6 +150,21 @@ def escalate(
         message=message,
         stats=stats,
     )
+
+
+def _proof_scope(reason: str, clearance: float) -> str:
+    """What a search that ran out of states proved: only paths that keep its clearance.
+
+    Examples
+    --------
+    >>> _proof_scope("exhausted", 0.15)
+    ' (a proof for paths keeping 0.15 m body clearance, on that grid only)'
+    >>> _proof_scope("expansions", 0.15)
+    ''
+    """
+    if reason not in ("exhausted", "no_approach"):
+        return ""
+    return f" (a proof for paths keeping {clearance:.2f} m body clearance, on that grid only)"
 
 
 def _shown(value: float) -> str:

@@ -108,18 +108,18 @@ class ImprovedConfig:
         default; it never runs when an earlier stage succeeds. Off for the paper's
         pipeline alone (``without("dubins_fallback", "escalation")``).
     rrt_share : float
-        Beyond the paper (issue 13): with ``escalation`` on, the share of each
-        counted budget the RRT-Connect stages get before the escalation, in
-        ``(0, 1]``: ``ceil(rrt_share * max_iterations)`` growth iterations,
-        ``ceil(rrt_share * max_postprocess_attempts)`` tree paths and
+        Beyond the paper (issue 13): with ``escalation`` on, the share of the
+        counted budgets the RRT-Connect stages get before the escalation, in
+        ``(0, 1]``: ``ceil(rrt_share * max_iterations)`` growth iterations and
         ``ceil(rrt_share * MAX_FALLBACK_CANDIDATES)`` Dubins fallback joints (tails,
         and again leads); the escalation's Hybrid A* gets the iterations they left
-        as its expansion budget (:meth:`stage_budgets`). Counts, not time, so the
-        stage that solves is the same on any machine. Default 0.25 (5 000 of 20 000
-        iterations, 2 of 6 tree paths, 16 of 64 joints): on ``parking_lot``'s random
-        queries the RRT stages that solve do so within it, and the ones that fail
-        used to spend most of a 10 s cap before the escalation started
-        (docs/coverage_all.md). 1: every budget in full. Ignored with
+        as its expansion budget (:meth:`stage_budgets`). The
+        ``max_postprocess_attempts`` tree paths are all tried (a few tens of ms
+        each; the fallback's joints cost ~70 ms each and a stuck growth ~0.1 ms
+        per iteration). Counts, not time, so the stage that solves is the same on
+        any machine. Default 0.25 (5 000 of 20 000 iterations, 16 of 64 joints),
+        measured in docs/coverage_all.md. 1: every budget in full (the escalation
+        then gets only the iterations the growth left). Ignored with
         ``escalation`` off: the paper's pipeline alone keeps every budget.
     dubins_radius_factor : float
         Turning radius of the fallback's arcs as a multiple of ``1 / kappa_max``
@@ -227,20 +227,20 @@ class ImprovedConfig:
     def stage_budgets(self, max_iterations: int) -> StageBudgets:
         """The RRT-Connect stages' counted budgets for a query of ``max_iterations``.
 
-        With ``escalation`` on, ``rrt_share`` of each (rounded up, at least 1 tree
-        path); off, every budget in full.
+        With ``escalation`` on, ``rrt_share`` of the iterations and of the fallback
+        joints (rounded up), every tree path; off, every budget in full.
 
         Examples
         --------
         >>> ImprovedConfig().stage_budgets(20_000)
-        StageBudgets(iterations=5000, attempts=2, candidates=16)
+        StageBudgets(iterations=5000, attempts=6, candidates=16)
         >>> ImprovedConfig(escalation=False).stage_budgets(20_000)
         StageBudgets(iterations=20000, attempts=6, candidates=64)
         """
         share = self.rrt_share if self.escalation else 1.0
         return StageBudgets(
             iterations=min(max_iterations, math.ceil(share * max_iterations)),
-            attempts=max(1, math.ceil(share * self.max_postprocess_attempts)),
+            attempts=self.max_postprocess_attempts,
             candidates=math.ceil(share * MAX_FALLBACK_CANDIDATES),
         )
 

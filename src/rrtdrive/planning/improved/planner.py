@@ -422,11 +422,10 @@ class _Query:
         stats, watch, iterations = self.stats, self.watch, self.iterations
         if watch.capped:
             return timeout_result(NAME, watch, iterations, self.trees, stats, self.last_raw)
-        share = _share_note(self.limits, self.cfg, watch.budget.max_iterations)
         if stats["postprocess_attempts"] > 0 and self.last_message:
-            tail = f"{share})"
+            tail = ")"
             if self.cfg.dubins_fallback:
-                tail = f"{share}; no clear Dubins path, tail or lead either)"
+                tail = "; no clear Dubins path, tail or lead either)"
             return failure(
                 NAME,
                 PlanStatus.POSTPROCESS_FAILED,
@@ -442,7 +441,8 @@ class _Query:
             NAME,
             PlanStatus.NO_PATH_IN_BUDGET,
             watch,
-            f"no path within the iteration budget ({iterations} iterations{share}, "
+            f"no path within the iteration budget ({iterations} iterations"
+            f"{_share_note(self.limits, watch.budget.max_iterations)}, "
             f"{watch.elapsed():.3f} s)",
             trees=self.trees,
             iterations=iterations,
@@ -450,11 +450,8 @@ class _Query:
         )
 
 
-def _share_note(limits: StageBudgets, cfg: ImprovedConfig, max_iterations: int) -> str:
+def _share_note(limits: StageBudgets, max_iterations: int) -> str:
     """``", the RRT-Connect stages' share ..."`` for a failure message, when they had one."""
-    if limits.iterations >= max_iterations and limits.attempts >= cfg.max_postprocess_attempts:
+    if limits.iterations >= max_iterations:
         return ""
-    return (
-        f", the RRT-Connect stages' share: {limits.iterations} of {max_iterations} iterations, "
-        f"{limits.attempts} of {cfg.max_postprocess_attempts} tree paths"
-    )
+    return f", the RRT-Connect stages' share of {max_iterations}"
