@@ -12,7 +12,10 @@ is free; the other end is the map's own) are planned by every planner of
 
 - a registered rrtdrive planner by name (``improved-rrt-connect``, ``hybrid-a-star``
   ...), planner seed 0, budget ``--max-time``; ``NAME+reverse`` plans the same with
-  reversing allowed (``PlanningProblem(..., reverse=True)``);
+  reversing allowed (``PlanningProblem(..., reverse=True)``); a tail
+  ``@field=value,...`` passes planner options, e.g.
+  ``improved-rrt-connect+reverse@rrt_share=1`` (the RRT-Connect stages on their
+  full budgets, as before the counted share);
 - ``ompl-dubins-rrt`` (``DubinsStateSpace(r_min)`` + RRT, forward only) and
   ``ompl-rs-rrtconnect`` (``ReedsSheppStateSpace(r_min)`` + RRTConnect, reversing),
   range 5 m, ``--ompl-time`` seconds, our *exact* body test
@@ -79,7 +82,12 @@ def availability(name: str) -> str | None:
     """Why planner spec ``name`` cannot run today, or ``None`` when it can."""
     if name in OMPL:
         return None if importlib.util.find_spec("ompl") else "OMPL is not installed here"
-    base, _, flag = name.partition("+")
+    spec, _, opts = name.partition("@")
+    try:
+        _options(opts)
+    except ValueError as exc:
+        return str(exc)
+    base, _, flag = spec.partition("+")
     if flag and flag != "reverse":
         return f"unknown suffix +{flag}"
     if base not in PLANNERS:
@@ -100,13 +108,34 @@ def _check(m: Any, path: Path) -> dict[str, Any]:
     return {"verified": bool(check.ok), "collision_free": bool(check.collision_free)}
 
 
+def _options(text: str) -> dict[str, Any]:
+    """Planner options of a spec's ``@field=value,...`` tail (values as JSON numbers or words).
+
+    Examples
+    --------
+    >>> _options("rrt_share=1"), _options("")
+    ({'rrt_share': 1}, {})
+    """
+    out: dict[str, Any] = {}
+    for part in filter(None, text.split(",")):
+        key, eq, value = part.partition("=")
+        if not eq or not key:
+            raise ValueError(f"bad planner option {part!r}: expected field=value")
+        try:
+            out[key] = json.loads(value)
+        except json.JSONDecodeError:
+            out[key] = value
+    return out
+
+
 def run_ours(item: dict[str, Any]) -> dict[str, Any]:
     """One query with an rrtdrive planner."""
     m, problem = _problem(item)
-    base, _, flag = item["planner"].partition("+")
+    spec, _, opts = item["planner"].partition("@")
+    base, _, flag = spec.partition("+")
     if flag == "reverse":
         problem = dataclasses.replace(problem, reverse=True)
-    res = make_planner(base).solve(
+    res = make_planner(base, **_options(opts)).solve(
         problem, np.random.default_rng(item.get("seed", 0)), Budget(max_time_s=item["max_time"])
     )
     row: dict[str, Any] = {

@@ -117,8 +117,11 @@ class ImprovedConfig:
         ``max_postprocess_attempts`` tree paths are all tried (a few tens of ms
         each; the fallback's joints cost ~70 ms each and a stuck growth ~0.1 ms
         per iteration). Counts, not time, so the stage that solves is the same on
-        any machine. Default 0.25 (5 000 of 20 000 iterations, 16 of 64 joints),
-        measured in docs/coverage_all.md. 1: every budget in full (the escalation
+        any machine. Default 0.1 (2 000 of 20 000 iterations, 7 of 64 joints): on
+        ``parking_lot``'s 60 random queries (docs/coverage_all.md) every query the
+        RRT-Connect stages solve forward with full budgets they solve with it, at
+        the same stage and iteration count, and the ones they fail reach the
+        escalation sooner (measured there). 1: every budget in full (the escalation
         then gets only the iterations the growth left). Ignored with
         ``escalation`` off: the paper's pipeline alone keeps every budget.
     dubins_radius_factor : float
@@ -172,7 +175,7 @@ class ImprovedConfig:
     passage_sampling: bool = True
     dubins_fallback: bool = True
     escalation: bool = True
-    rrt_share: float = 0.25
+    rrt_share: float = 0.1
     dubins_radius_factor: float = 1.05
     passage_bias: float = 0.1
     expansion_a: float = 1.0
@@ -233,7 +236,7 @@ class ImprovedConfig:
         Examples
         --------
         >>> ImprovedConfig().stage_budgets(20_000)
-        StageBudgets(iterations=5000, attempts=6, candidates=16)
+        StageBudgets(iterations=2000, attempts=6, candidates=7)
         >>> ImprovedConfig(escalation=False).stage_budgets(20_000)
         StageBudgets(iterations=20000, attempts=6, candidates=64)
         """
