@@ -21,8 +21,8 @@ import pytest
 from rrtdrive.cli import plan_to_json
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import Map, Obstacle
-from rrtdrive.planning.base import PlanningProblem
-from rrtdrive.planning.hybrid.escalation import stage_of
+from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure
+from rrtdrive.planning.hybrid.escalation import escalate, stage_of
 from rrtdrive.planning.improved import ImprovedConfig, ImprovedRRTConnect
 from rrtdrive.planning.improved.fallback import MAX_FALLBACK_CANDIDATES
 from rrtdrive.types import Budget, InputError, PlanStatus, Pose
@@ -124,3 +124,20 @@ def test_the_stage_choice_is_deterministic_also_on_a_slower_machine() -> None:
     assert a.success and stage_of(a) == stage_of(b) == stage_of(c) == "hybrid-a-star"
     assert _json(a, problem) == _json(b, problem) == _json(c, slow)
     assert '"stage": "hybrid-a-star"' in _json(a, problem)
+
+
+def test_the_safety_cap_inside_the_escalation_is_a_timeout() -> None:
+    # A clock that passes the cap after a fixed number of readings: deterministic.
+    problem = PlanningProblem.from_map(bay_map(), reverse=True)
+    budget = Budget(max_iterations=2000, max_time_s=1.0)
+    readings = iter(range(10**6))
+    watch = Stopwatch(budget, clock=lambda: 0.0 if next(readings) < 40 else 2.0)
+    failed = failure(
+        "improved-rrt-connect", PlanStatus.POSTPROCESS_FAILED, watch, "the turns are too close"
+    )
+    res = escalate(failed, problem, budget, watch)
+    assert res.status is PlanStatus.TIMEOUT and watch.capped
+    assert res.message.startswith("stopped by the 1 s safety cap after ")
+    assert "in the Hybrid A* escalation, with reverse" in res.message
+    assert "the RRT-Connect stages had failed: the turns are too close" in res.message
+    assert res.iterations == res.stats["hybrid_expansions"] > 0

@@ -20,6 +20,7 @@ from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.planner import NAME, answer_stats, arcs_note, path_of
 from rrtdrive.planning.hybrid.query import hybrid_query, query_clearance
+from rrtdrive.planning.result import timeout_result
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, PlanResult, PlanStatus
 
@@ -86,8 +87,9 @@ def escalate(
     Returns
     -------
     PlanResult
-        Solved with ``stats["stage"] == "hybrid-a-star"``, or ``failed`` with the
-        search's outcome added to its message and ``stats``.
+        Solved with ``stats["stage"] == "hybrid-a-star"``; ``TIMEOUT`` when the
+        safety cap stopped the search; else ``failed`` with the search's outcome
+        added to its message and ``stats``.
     """
     if failed.success or failed.status not in ESCALATES_FROM or watch.expired():
         return failed
@@ -98,6 +100,21 @@ def escalate(
     stats = {**failed.stats, **{f"hybrid_{k}": v for k, v in own.items()}}
     gear = "with reverse" if reverse else "forward only"
     used = failed.iterations + answer.outcome.expansions
+    reason = failed.message.removeprefix("post-processing failed: ")
+    if answer.path is None and (watch.capped or answer.outcome.reason == "time"):
+        # The safety cap stopped the search: a timeout, as anywhere else (what it would
+        # have found depends on the machine's speed), not the RRT stages' counted failure.
+        out = timeout_result(
+            failed.planner, watch, used, (*failed.trees, *answer.trees), stats, failed.raw_path
+        )
+        return dataclasses.replace(
+            out,
+            message=(
+                f"{out.message} (in the Hybrid A* escalation, {gear}, after "
+                f"{answer.outcome.expansions} expansions; the RRT-Connect stages had failed: "
+                f"{reason})"
+            ),
+        )
     if answer.path is None:
         return dataclasses.replace(
             failed,
@@ -132,7 +149,6 @@ def escalate(
             planning_time_s=watch.elapsed(),
         )
     stats["stage"] = NAME  # type: ignore[assignment]  # the one string entry
-    reason = failed.message.removeprefix("post-processing failed: ")
     message = (
         f"solved by the Hybrid A* escalation ({gear}; {answer.outcome.expansions} expansions, "
         f"{path.length:.1f} m, {built.segments - 1} cusp(s)); the RRT-Connect stages "
