@@ -55,7 +55,7 @@ def test_stage_budgets_are_the_share_of_each_count() -> None:
     got = cfg.stage_budgets(2000)
     assert got.iterations == math.ceil(cfg.rrt_share * 2000) < 2000
     assert got.attempts == cfg.max_postprocess_attempts
-    assert got.candidates == math.ceil(cfg.rrt_share * MAX_FALLBACK_CANDIDATES)
+    assert got.candidates == cfg.escalation_fallback_joints < MAX_FALLBACK_CANDIDATES
     # The paper's pipeline alone (no escalation) keeps every budget in full.
     full = cfg.without("escalation").stage_budgets(2000)
     assert (full.iterations, full.attempts, full.candidates) == (
@@ -68,6 +68,12 @@ def test_stage_budgets_are_the_share_of_each_count() -> None:
 def test_a_bad_share_is_named(share: object) -> None:
     with pytest.raises(InputError, match=r"planner\.rrt_share"):
         ImprovedConfig(rrt_share=share)
+
+
+@pytest.mark.parametrize("joints", [-1, 2.5, True])
+def test_bad_fallback_joints_are_named(joints: object) -> None:
+    with pytest.raises(InputError, match=r"planner\.escalation_fallback_joints"):
+        ImprovedConfig(escalation_fallback_joints=joints)
 
 
 def test_a_query_the_rrt_stages_cannot_solve_is_escalated_within_the_share() -> None:

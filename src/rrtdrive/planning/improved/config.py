@@ -109,21 +109,23 @@ class ImprovedConfig:
         pipeline alone (``without("dubins_fallback", "escalation")``).
     rrt_share : float
         Beyond the paper (issue 13): with ``escalation`` on, the share of the
-        counted budgets the RRT-Connect stages get before the escalation, in
-        ``(0, 1]``: ``ceil(rrt_share * max_iterations)`` growth iterations and
-        ``ceil(rrt_share * MAX_FALLBACK_CANDIDATES)`` Dubins fallback joints (tails,
-        and again leads); the escalation's Hybrid A* gets the iterations they left
-        as its expansion budget (:meth:`stage_budgets`). The
-        ``max_postprocess_attempts`` tree paths are all tried (a few tens of ms
-        each; the fallback's joints cost ~70 ms each and a stuck growth ~0.1 ms
-        per iteration). Counts, not time, so the stage that solves is the same on
-        any machine. Default 0.1 (2 000 of 20 000 iterations, 7 of 64 joints): on
-        ``parking_lot``'s 60 random queries (docs/coverage_all.md) every query the
-        RRT-Connect stages solve forward with full budgets they solve with it, at
-        the same stage and iteration count, and the ones they fail reach the
-        escalation sooner (measured there). 1: every budget in full (the escalation
-        then gets only the iterations the growth left). Ignored with
-        ``escalation`` off: the paper's pipeline alone keeps every budget.
+        growth iterations the RRT-Connect stages get before the escalation, in
+        ``(0, 1]``: ``ceil(rrt_share * max_iterations)``; the escalation's Hybrid
+        A* gets the iterations they left as its expansion budget
+        (:meth:`stage_budgets`). Default 0.5 (10 000 of 20 000): the 50 seeds of
+        every built-in map solve within it as with the whole budget (``narrow_gap``
+        needs up to 6 023), while a growth whose trees never meet gives way sooner.
+        1: the whole budget (the escalation then gets only what the growth left).
+        Ignored with ``escalation`` off: the paper's pipeline alone keeps every budget.
+    escalation_fallback_joints : int
+        With ``escalation`` on, the Dubins fallback's tree nodes tried as tail
+        joints, and again as lead joints (>= 0; without the escalation
+        ``MAX_FALLBACK_CANDIDATES`` = 64). Default 7: each joint costs ~70 ms
+        (clothoid-rounded Dubins words at six radii), so 64 + 64 took most of a
+        failing query's time before the escalation; every fallback that solved one
+        of ``parking_lot``'s 60 random queries did so within 7 (docs/coverage_all.md).
+        The ``max_postprocess_attempts`` tree paths are all tried either way.
+        Counts, not time: the stage that solves is the same on any machine.
     dubins_radius_factor : float
         Turning radius of the fallback's arcs as a multiple of ``1 / kappa_max``
         (>= 1; default 1.05, a little room for tracking).
@@ -175,7 +177,8 @@ class ImprovedConfig:
     passage_sampling: bool = True
     dubins_fallback: bool = True
     escalation: bool = True
-    rrt_share: float = 0.1
+    rrt_share: float = 0.5
+    escalation_fallback_joints: int = 7
     dubins_radius_factor: float = 1.05
     passage_bias: float = 0.1
     expansion_a: float = 1.0
@@ -203,6 +206,7 @@ class ImprovedConfig:
         require_finite("planner.rrt_share", self.rrt_share)
         if not 0.0 < self.rrt_share <= 1.0:
             raise InputError(f"planner.rrt_share: must lie in (0, 1], got {self.rrt_share!r}")
+        require_int("planner.escalation_fallback_joints", self.escalation_fallback_joints, 0)
         require_finite("planner.passage_bias", self.passage_bias)
         require_finite("planner.dubins_radius_factor", self.dubins_radius_factor)
         if self.dubins_radius_factor < 1.0:
@@ -230,21 +234,24 @@ class ImprovedConfig:
     def stage_budgets(self, max_iterations: int) -> StageBudgets:
         """The RRT-Connect stages' counted budgets for a query of ``max_iterations``.
 
-        With ``escalation`` on, ``rrt_share`` of the iterations and of the fallback
-        joints (rounded up), every tree path; off, every budget in full.
+        With ``escalation`` on, ``rrt_share`` of the iterations (rounded up),
+        ``escalation_fallback_joints`` joints and every tree path; off, every
+        budget in full.
 
         Examples
         --------
         >>> ImprovedConfig().stage_budgets(20_000)
-        StageBudgets(iterations=2000, attempts=6, candidates=7)
+        StageBudgets(iterations=10000, attempts=6, candidates=7)
         >>> ImprovedConfig(escalation=False).stage_budgets(20_000)
         StageBudgets(iterations=20000, attempts=6, candidates=64)
         """
-        share = self.rrt_share if self.escalation else 1.0
+        if not self.escalation:
+            return StageBudgets(max_iterations, self.max_postprocess_attempts,
+                                MAX_FALLBACK_CANDIDATES)  # fmt: skip
         return StageBudgets(
-            iterations=min(max_iterations, math.ceil(share * max_iterations)),
+            iterations=min(max_iterations, math.ceil(self.rrt_share * max_iterations)),
             attempts=self.max_postprocess_attempts,
-            candidates=math.ceil(share * MAX_FALLBACK_CANDIDATES),
+            candidates=min(self.escalation_fallback_joints, MAX_FALLBACK_CANDIDATES),
         )
 
     def enabled(self, component: str) -> bool:

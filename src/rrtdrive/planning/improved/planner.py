@@ -5,8 +5,9 @@
 connection, the growth checker, the passage cells, the growth and smoothing of
 up to ``max_postprocess_attempts`` tree paths, the Dubins fallback, the
 Hybrid A* escalation and the failure. With the escalation on, the RRT-Connect
-stages run on ``rrt_share`` of the growth iterations and of the fallback's joints
-(:meth:`ImprovedConfig.stage_budgets`) and the escalation on the iterations left.
+stages run on ``rrt_share`` of the growth iterations and
+``escalation_fallback_joints`` fallback joints (:meth:`ImprovedConfig.stage_budgets`)
+and the escalation on the iterations left.
 """
 
 from __future__ import annotations
@@ -115,8 +116,9 @@ class ImprovedRRTConnect:
             The iteration budget decides the growth (each post-processing is
             bounded by ``smoothing.max_rounds``, the Dubins fallback by its
             candidate count); with the escalation on, the RRT-Connect stages get
-            ``rrt_share`` of the iterations and of the candidates, and the Hybrid
-            A* escalation the iterations left as expansions. Reaching the safety cap ``max_time_s``
+            ``rrt_share`` of the iterations and ``escalation_fallback_joints``
+            candidates, and the Hybrid A* escalation the iterations left as
+            expansions. Reaching the safety cap ``max_time_s``
             ends the query as ``timeout``.
 
         Returns
