@@ -13,9 +13,9 @@ is free; the other end is the map's own) are planned by every planner of
 - a registered rrtdrive planner by name (``improved-rrt-connect``, ``hybrid-a-star``
   ...), planner seed 0, budget ``--max-time``; ``NAME+reverse`` plans the same with
   reversing allowed (``PlanningProblem(..., reverse=True)``); a tail
-  ``@field=value,...`` passes planner options, e.g.
-  ``improved-rrt-connect+reverse@rrt_share=1`` (the RRT-Connect stages on their
-  full budgets, as before the counted share);
+  ``@field=value:...`` passes planner options, e.g.
+  ``improved-rrt-connect+reverse@rrt_share=1:escalation_fallback_joints=64`` (the
+  RRT-Connect stages on their full budgets, as before the counted share);
 - ``ompl-dubins-rrt`` (``DubinsStateSpace(r_min)`` + RRT, forward only) and
   ``ompl-rs-rrtconnect`` (``ReedsSheppStateSpace(r_min)`` + RRTConnect, reversing),
   range 5 m, ``--ompl-time`` seconds, our *exact* body test
@@ -109,15 +109,15 @@ def _check(m: Any, path: Path) -> dict[str, Any]:
 
 
 def _options(text: str) -> dict[str, Any]:
-    """Planner options of a spec's ``@field=value,...`` tail (values as JSON numbers or words).
+    """Planner options of a spec's ``@field=value:...`` tail (values as JSON numbers or words).
 
     Examples
     --------
-    >>> _options("rrt_share=1"), _options("")
-    ({'rrt_share': 1}, {})
+    >>> _options("rrt_share=1:escalation_fallback_joints=64"), _options("")
+    ({'rrt_share': 1, 'escalation_fallback_joints': 64}, {})
     """
     out: dict[str, Any] = {}
-    for part in filter(None, text.split(",")):
+    for part in filter(None, text.split(":")):
         key, eq, value = part.partition("=")
         if not eq or not key:
             raise ValueError(f"bad planner option {part!r}: expected field=value")
