@@ -122,8 +122,9 @@ class ImprovedConfig:
         joints, and again as lead joints (>= 0; without the escalation
         ``MAX_FALLBACK_CANDIDATES`` = 64). Default 7: each joint costs ~70 ms
         (clothoid-rounded Dubins words at six radii), so 64 + 64 took most of a
-        failing query's time before the escalation; every fallback that solved one
-        of ``parking_lot``'s 60 random queries did so within 7 (docs/coverage_all.md).
+        failing query's time before the escalation; of the fallback solutions of
+        ``parking_lot``'s 60 random queries all but one came within 7 (that one is
+        then solved by the Hybrid A*; docs/coverage_all.md).
         The ``max_postprocess_attempts`` tree paths are all tried either way.
         Counts, not time: the stage that solves is the same on any machine.
     dubins_radius_factor : float
