@@ -12,7 +12,10 @@ is free; the other end is the map's own) are planned by every planner of
 
 - a registered rrtdrive planner by name (``improved-rrt-connect``, ``hybrid-a-star``
   ...), planner seed 0, budget ``--max-time``; ``NAME+reverse`` plans the same with
-  reversing allowed (``PlanningProblem(..., reverse=True)``);
+  reversing allowed (``PlanningProblem(..., reverse=True)``); a tail
+  ``@field=value:...`` passes planner options, e.g.
+  ``improved-rrt-connect+reverse@rrt_share=1:escalation_fallback_joints=64`` (the
+  RRT-Connect stages on their full budgets, as before the counted share);
 - ``ompl-dubins-rrt`` (``DubinsStateSpace(r_min)`` + RRT, forward only) and
   ``ompl-rs-rrtconnect`` (``ReedsSheppStateSpace(r_min)`` + RRTConnect, reversing),
   range 5 m, ``--ompl-time`` seconds, our *exact* body test
@@ -57,6 +60,7 @@ from rrtdrive.atomic import write_text_atomic  # noqa: E402
 from rrtdrive.bench.backends import parallel_map  # noqa: E402
 from rrtdrive.maps import builtin_map  # noqa: E402
 from rrtdrive.planning import PLANNERS, PlanningProblem, make_planner  # noqa: E402
+from rrtdrive.planning.hybrid.escalation import stage_of  # noqa: E402
 from rrtdrive.planning.smoothing import max_sharpness  # noqa: E402
 from rrtdrive.types import Budget, Path, Pose  # noqa: E402
 from rrtdrive.verify import verify_path  # noqa: E402
@@ -64,6 +68,11 @@ from rrtdrive.verify import verify_path  # noqa: E402
 DEFAULT_PLANNERS = (
     "improved-rrt-connect,improved-rrt-connect+reverse,hybrid-a-star,hybrid-a-star+reverse,"
     "ompl-dubins-rrt,ompl-rs-rrtconnect"
+)
+#: Stage counters of the improved planner copied into a row when present.
+STAGE_STATS = (
+    "postprocess_attempts", "rrt_iterations", "rrt_stages_time_s", "escalation_time_s",
+    "dubins_time_s", "hybrid_expansions",
 )
 #: OMPL comparators: name -> (state space, geometric planner class).
 OMPL = {"ompl-dubins-rrt": ("dubins", "RRT"), "ompl-rs-rrtconnect": ("rs", "RRTConnect")}
@@ -73,7 +82,12 @@ def availability(name: str) -> str | None:
     """Why planner spec ``name`` cannot run today, or ``None`` when it can."""
     if name in OMPL:
         return None if importlib.util.find_spec("ompl") else "OMPL is not installed here"
-    base, _, flag = name.partition("+")
+    spec, _, opts = name.partition("@")
+    try:
+        _options(opts)
+    except ValueError as exc:
+        return str(exc)
+    base, _, flag = spec.partition("+")
     if flag and flag != "reverse":
         return f"unknown suffix +{flag}"
     if base not in PLANNERS:
@@ -94,13 +108,34 @@ def _check(m: Any, path: Path) -> dict[str, Any]:
     return {"verified": bool(check.ok), "collision_free": bool(check.collision_free)}
 
 
+def _options(text: str) -> dict[str, Any]:
+    """Planner options of a spec's ``@field=value:...`` tail (values as JSON numbers or words).
+
+    Examples
+    --------
+    >>> _options("rrt_share=1:escalation_fallback_joints=64"), _options("")
+    ({'rrt_share': 1, 'escalation_fallback_joints': 64}, {})
+    """
+    out: dict[str, Any] = {}
+    for part in filter(None, text.split(":")):
+        key, eq, value = part.partition("=")
+        if not eq or not key:
+            raise ValueError(f"bad planner option {part!r}: expected field=value")
+        try:
+            out[key] = json.loads(value)
+        except json.JSONDecodeError:
+            out[key] = value
+    return out
+
+
 def run_ours(item: dict[str, Any]) -> dict[str, Any]:
     """One query with an rrtdrive planner."""
     m, problem = _problem(item)
-    base, _, flag = item["planner"].partition("+")
+    spec, _, opts = item["planner"].partition("@")
+    base, _, flag = spec.partition("+")
     if flag == "reverse":
         problem = dataclasses.replace(problem, reverse=True)
-    res = make_planner(base).solve(
+    res = make_planner(base, **_options(opts)).solve(
         problem, np.random.default_rng(item.get("seed", 0)), Budget(max_time_s=item["max_time"])
     )
     row: dict[str, Any] = {
@@ -109,7 +144,15 @@ def run_ours(item: dict[str, Any]) -> dict[str, Any]:
         "time_s": res.planning_time_s,
         "length_m": res.path.length if res.success else None,
         "message": res.message[:300],
+        "iterations": res.iterations,
     }
+    # Which stage answered and what the stages before it cost (the default planner's
+    # counted shares, ImprovedConfig.rrt_share): the stages' own counters.
+    if base == "improved-rrt-connect":
+        row["stage"] = stage_of(res) if res.success else None
+    for key in STAGE_STATS:
+        if key in res.stats:
+            row[key] = res.stats[key]
     if res.success:
         # Per gear segment (a cusp is a stop); JSON has no inf: a jump is the string "inf".
         sharp = max_sharpness(res.path.samples, problem.vehicle.wheelbase)
@@ -195,6 +238,27 @@ def _sharpness(ok: list[dict[str, Any]]) -> dict[str, Any]:
     }
 
 
+def _stages(vals: list[dict[str, Any]]) -> dict[str, Any]:
+    """The default planner's stages: which solved, and the time of the stages before it."""
+    if not any("rrt_iterations" in r for r in vals):
+        return {}
+    by: dict[str, int] = {}
+    for r in vals:
+        if r["solved"] and r.get("stage"):
+            by[r["stage"]] = by.get(r["stage"], 0) + 1
+    escalated = [r for r in vals if "rrt_stages_time_s" in r]
+    return {
+        "solved_by_stage": by,
+        "escalated": len(escalated),
+        "median_rrt_stages_time_escalated_s": _median(
+            [r["rrt_stages_time_s"] for r in escalated]
+        ),
+        "median_escalation_time_s": _median(
+            [r["escalation_time_s"] for r in escalated if "escalation_time_s" in r]
+        ),
+    }
+
+
 def summarise(rows: list[dict[str, Any]], planners: list[str], sets: list[str]) -> dict:
     """Per planner x set figures and the (ours, OMPL) pair figures."""
     cell: dict[tuple[str, str], dict[int, dict]] = {
@@ -220,6 +284,7 @@ def summarise(rows: list[dict[str, Any]], planners: list[str], sets: list[str]) 
             "median_time_failed_s": _median([r["time_s"] for r in bad]),
             "statuses": statuses,
             **_sharpness(ok),
+            **_stages(vals),
         }
     pairs: dict[str, dict[str, Any]] = {}
     ompl = [p for p in planners if p in OMPL]
@@ -244,6 +309,14 @@ def summarise(rows: list[dict[str, Any]], planners: list[str], sets: list[str]) 
                     ),
                 }
     return {"per_planner": per, "pairs": pairs}
+
+
+def _load() -> str:
+    """The load averages, as ``uptime`` prints them (``-`` where the OS has none)."""
+    try:
+        return ", ".join(f"{v:.2f}" for v in os.getloadavg())
+    except OSError:
+        return "-"
 
 
 def _fmt(v: float | None, scale: float = 1.0, digits: int = 1) -> str:
@@ -302,6 +375,34 @@ def report(payload: dict[str, Any]) -> str:
             f"{'-' if share is None else f'{100 * share:.0f} %'} | "
             f"{_fmt(c['median_time_ratio'], 1, 3)} | {_fmt(c['median_length_ratio'], 1, 3)} |"
         )
+    staged = [(p, name, c) for p, sets in s["per_planner"].items()
+              for name, c in sets.items() if "solved_by_stage" in c]  # fmt: skip
+    if staged:
+        lines += [
+            "",
+            "The default planner's stages: which stage solved, and on the queries that "
+            "reached the escalation the median time its RRT-Connect stages spent first "
+            "(`rrt_stages_time_s`) and the escalation's own (`escalation_time_s`).",
+            "",
+            "| planner | set | solved by RRT-Connect / Dubins fallback / Hybrid A* | escalated "
+            "| median RRT stages time, escalated [ms] | median escalation time [ms] |",
+            "|---|---|---|---|---|---|",
+        ]
+        for p, name, c in staged:
+            by = c["solved_by_stage"]
+            counts = " / ".join(
+                str(by.get(k, 0)) for k in ("improved-rrt-connect", "dubins-fallback",
+                                            "hybrid-a-star")
+            )  # fmt: skip
+            lines.append(
+                f"| {p} | {name}s | {counts} | {c['escalated']} | "
+                f"{_fmt(c['median_rrt_stages_time_escalated_s'], 1e3)} | "
+                f"{_fmt(c['median_escalation_time_s'], 1e3)} |"
+            )
+    if payload.get("load"):
+        lines += ["", f"Load average (1/5/15 min) at start {payload['load']['start']}, at end "
+                  f"{payload['load']['end']} on {os.cpu_count()} CPUs: only ratios within one "
+                  "run compare."]  # fmt: skip
     if payload["skipped"]:
         lines += ["", "Skipped (not available in this run):", ""]
         lines += [f"- `{k}`: {v}" for k, v in payload["skipped"].items()]
@@ -394,6 +495,7 @@ def main(argv: list[str] | None = None) -> int:
                     "planner": p, "max_time": args.max_time, "ompl_time": args.ompl_time,
                 })  # fmt: skip
     t0 = time.perf_counter()
+    load_start = _load()
 
     def progress(done: int, total: int) -> None:
         print(f"\r{done}/{total} runs, {time.perf_counter() - t0:.0f} s", end="",
@@ -452,6 +554,7 @@ def main(argv: list[str] | None = None) -> int:
         "jobs": args.jobs,
         "machine": machine,
         "wall_time_s": wall,
+        "load": {"start": load_start, "end": _load()},
         "summary": summarise(rows, planners, sets),
         "rows": rows,
     }

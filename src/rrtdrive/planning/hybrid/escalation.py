@@ -3,9 +3,12 @@
 ``improved-rrt-connect`` runs the paper's pipeline (and its Dubins fallback)
 first. When that fails for any reason but an invalid start or goal or a proven
 unreachable goal, :func:`escalate` runs the Hybrid A* search (forward only, or
-with reverse when ``problem.reverse``) on the same stopwatch: the query's
-iteration budget bounds its expansions and the wall clock left is its safety
-cap. The result keeps the improved planner's name; ``stats["stage"]`` and the
+with reverse when ``problem.reverse``) on the same stopwatch: the budget it is
+given (the improved planner passes the iterations its RRT-Connect stages left,
+:meth:`~rrtdrive.planning.improved.ImprovedConfig.stage_budgets`) bounds its
+expansions and the wall clock left is its safety cap. The result's
+``iterations`` count both: the failed stages' iterations plus the expansions.
+The result keeps the improved planner's name; ``stats["stage"]`` and the
 message say which stage solved it (:func:`stage_of`).
 """
 
@@ -16,7 +19,8 @@ import dataclasses
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.planner import NAME, answer_stats, arcs_note, path_of
-from rrtdrive.planning.hybrid.query import hybrid_query
+from rrtdrive.planning.hybrid.query import hybrid_query, query_clearance
+from rrtdrive.planning.result import timeout_result
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, PlanResult, PlanStatus
 
@@ -65,7 +69,7 @@ def escalate(
     problem : PlanningProblem
         The query (``getattr(problem, "reverse", False)`` allows reversing).
     budget : Budget
-        The query's budget: ``max_iterations`` expansions at most.
+        The escalation's budget: ``max_iterations`` expansions at most.
     watch : Stopwatch
         The query's running stopwatch (its expiry caps the search).
     smoothing : SmoothingConfig, optional
@@ -83,8 +87,9 @@ def escalate(
     Returns
     -------
     PlanResult
-        Solved with ``stats["stage"] == "hybrid-a-star"``, or ``failed`` with the
-        search's outcome added to its message and ``stats``.
+        Solved with ``stats["stage"] == "hybrid-a-star"``; ``TIMEOUT`` when the
+        safety cap stopped the search; else ``failed`` with the search's outcome
+        added to its message and ``stats``.
     """
     if failed.success or failed.status not in ESCALATES_FROM or watch.expired():
         return failed
@@ -94,11 +99,31 @@ def escalate(
     own = answer_stats(answer, problem.vehicle.wheelbase)
     stats = {**failed.stats, **{f"hybrid_{k}": v for k, v in own.items()}}
     gear = "with reverse" if reverse else "forward only"
+    used = failed.iterations + answer.outcome.expansions
+    reason = failed.message.removeprefix("post-processing failed: ")
+    if answer.path is None and (watch.capped or answer.outcome.reason == "time"):
+        # The safety cap stopped the search: a timeout, as anywhere else (what it would
+        # have found depends on the machine's speed), not the RRT stages' counted failure.
+        out = timeout_result(
+            failed.planner, watch, used, (*failed.trees, *answer.trees), stats, failed.raw_path
+        )
+        return dataclasses.replace(
+            out,
+            message=(
+                f"{out.message} (in the Hybrid A* escalation, {gear}, after "
+                f"{answer.outcome.expansions} expansions; the RRT-Connect stages had failed: "
+                f"{reason})"
+            ),
+        )
     if answer.path is None:
         return dataclasses.replace(
             failed,
-            message=f"{failed.message}; Hybrid A* ({gear}) found none either: {answer.message}",
+            message=(
+                f"{failed.message}; Hybrid A* ({gear}) found none either: {answer.message}"
+                + _proof_scope(answer.outcome.reason, query_clearance(problem, cfg.body_clearance))
+            ),
             stats=stats,
+            iterations=used,
             planning_time_s=watch.elapsed(),
         )
     built = answer.path
@@ -120,10 +145,10 @@ def escalate(
                 "--planner hybrid-a-star gives it, --paper-smoothing accepts it"
             ),
             stats=stats,
+            iterations=used,
             planning_time_s=watch.elapsed(),
         )
     stats["stage"] = NAME  # type: ignore[assignment]  # the one string entry
-    reason = failed.message.removeprefix("post-processing failed: ")
     message = (
         f"solved by the Hybrid A* escalation ({gear}; {answer.outcome.expansions} expansions, "
         f"{path.length:.1f} m, {built.segments - 1} cusp(s)); the RRT-Connect stages "
@@ -136,10 +161,26 @@ def escalate(
         raw_path=built.rows[:, :2],
         trees=(*failed.trees, *answer.trees),
         nodes=failed.nodes + answer.outcome.nodes,
+        iterations=used,
         planning_time_s=watch.elapsed(),
         message=message,
         stats=stats,
     )
+
+
+def _proof_scope(reason: str, clearance: float) -> str:
+    """What a search that ran out of states proved: only paths that keep its clearance.
+
+    Examples
+    --------
+    >>> _proof_scope("exhausted", 0.15)
+    ' (a proof for paths keeping 0.15 m body clearance, on that grid only)'
+    >>> _proof_scope("expansions", 0.15)
+    ''
+    """
+    if reason not in ("exhausted", "no_approach"):
+        return ""
+    return f" (a proof for paths keeping {clearance:.2f} m body clearance, on that grid only)"
 
 
 def _shown(value: float) -> str:

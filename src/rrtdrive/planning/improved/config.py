@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from rrtdrive.planning.improved.fallback import MAX_FALLBACK_CANDIDATES
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
@@ -14,6 +16,7 @@ __all__ = [
     "SMOOTHING_COMPONENTS",
     "PER_QUERY_SMOOTHING",
     "ImprovedConfig",
+    "StageBudgets",
     "default_smoothing",
 ]
 
@@ -53,6 +56,25 @@ def default_smoothing() -> SmoothingConfig:
 
 
 @dataclass(frozen=True)
+class StageBudgets:
+    """The RRT-Connect stages' counted budgets in one query (:meth:`ImprovedConfig.stage_budgets`).
+
+    Attributes
+    ----------
+    iterations : int
+        Growth iterations, over all pairs of trees.
+    attempts : int
+        Tree paths post-processed.
+    candidates : int
+        Dubins fallback joints tried as tails, and again as leads.
+    """
+
+    iterations: int
+    attempts: int
+    candidates: int
+
+
+@dataclass(frozen=True)
 class ImprovedConfig:
     """Parameters of :class:`ImprovedRRTConnect`, validated on construction.
 
@@ -85,6 +107,26 @@ class ImprovedConfig:
         budget and the time left as its cap, before reporting failure. On by
         default; it never runs when an earlier stage succeeds. Off for the paper's
         pipeline alone (``without("dubins_fallback", "escalation")``).
+    rrt_share : float
+        Beyond the paper (issue 13): with ``escalation`` on, the share of the
+        growth iterations the RRT-Connect stages get before the escalation, in
+        ``(0, 1]``: ``ceil(rrt_share * max_iterations)``; the escalation's Hybrid
+        A* gets the iterations they left as its expansion budget
+        (:meth:`stage_budgets`). Default 0.5 (10 000 of 20 000): the 50 seeds of
+        every built-in map solve within it as with the whole budget (``narrow_gap``
+        needs up to 6 023), while a growth whose trees never meet gives way sooner.
+        1: the whole budget (the escalation then gets only what the growth left).
+        Ignored with ``escalation`` off: the paper's pipeline alone keeps every budget.
+    escalation_fallback_joints : int
+        With ``escalation`` on, the Dubins fallback's tree nodes tried as tail
+        joints, and again as lead joints (>= 0; without the escalation
+        ``MAX_FALLBACK_CANDIDATES`` = 64). Default 7: each joint costs ~70 ms
+        (clothoid-rounded Dubins words at six radii), so 64 + 64 took most of a
+        failing query's time before the escalation; of the fallback solutions of
+        ``parking_lot``'s 60 random queries all but one came within 7 (that one is
+        then solved by the Hybrid A*; docs/coverage_all.md).
+        The ``max_postprocess_attempts`` tree paths are all tried either way.
+        Counts, not time: the stage that solves is the same on any machine.
     dubins_radius_factor : float
         Turning radius of the fallback's arcs as a multiple of ``1 / kappa_max``
         (>= 1; default 1.05, a little room for tracking).
@@ -136,6 +178,8 @@ class ImprovedConfig:
     passage_sampling: bool = True
     dubins_fallback: bool = True
     escalation: bool = True
+    rrt_share: float = 0.5
+    escalation_fallback_joints: int = 7
     dubins_radius_factor: float = 1.05
     passage_bias: float = 0.1
     expansion_a: float = 1.0
@@ -160,6 +204,10 @@ class ImprovedConfig:
                     f"planner.smoothing.{name}: set per query (from the car, planner.step and "
                     f"planner.body_clearance); leave it at its default"
                 )
+        require_finite("planner.rrt_share", self.rrt_share)
+        if not 0.0 < self.rrt_share <= 1.0:
+            raise InputError(f"planner.rrt_share: must lie in (0, 1], got {self.rrt_share!r}")
+        require_int("planner.escalation_fallback_joints", self.escalation_fallback_joints, 0)
         require_finite("planner.passage_bias", self.passage_bias)
         require_finite("planner.dubins_radius_factor", self.dubins_radius_factor)
         if self.dubins_radius_factor < 1.0:
@@ -183,6 +231,29 @@ class ImprovedConfig:
                 f"planner.body_clearance: must be >= 0, got {self.body_clearance!r}"
             )
         require_int("planner.max_postprocess_attempts", self.max_postprocess_attempts)
+
+    def stage_budgets(self, max_iterations: int) -> StageBudgets:
+        """The RRT-Connect stages' counted budgets for a query of ``max_iterations``.
+
+        With ``escalation`` on, ``rrt_share`` of the iterations (rounded up),
+        ``escalation_fallback_joints`` joints and every tree path; off, every
+        budget in full.
+
+        Examples
+        --------
+        >>> ImprovedConfig().stage_budgets(20_000)
+        StageBudgets(iterations=10000, attempts=6, candidates=7)
+        >>> ImprovedConfig(escalation=False).stage_budgets(20_000)
+        StageBudgets(iterations=20000, attempts=6, candidates=64)
+        """
+        if not self.escalation:
+            return StageBudgets(max_iterations, self.max_postprocess_attempts,
+                                MAX_FALLBACK_CANDIDATES)  # fmt: skip
+        return StageBudgets(
+            iterations=min(max_iterations, math.ceil(self.rrt_share * max_iterations)),
+            attempts=self.max_postprocess_attempts,
+            candidates=min(self.escalation_fallback_joints, MAX_FALLBACK_CANDIDATES),
+        )
 
     def enabled(self, component: str) -> bool:
         """Whether the named component of :data:`COMPONENTS` is on.

@@ -3,8 +3,11 @@
 :class:`ImprovedRRTConnect` runs the shared preamble
 (:func:`~rrtdrive.planning.result.run_query`), then :class:`_Query`: the direct
 connection, the growth checker, the passage cells, the growth and smoothing of
-up to ``max_postprocess_attempts`` tree paths, the Dubins fallback, and the
-failure.
+up to ``max_postprocess_attempts`` tree paths, the Dubins fallback, the
+Hybrid A* escalation and the failure. With the escalation on, the RRT-Connect
+stages run on ``rrt_share`` of the growth iterations and
+``escalation_fallback_joints`` fallback joints (:meth:`ImprovedConfig.stage_budgets`)
+and the escalation on the iterations left.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ import numpy as np
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register_planner
 from rrtdrive.planning.hybrid.escalation import escalate
-from rrtdrive.planning.improved.config import ImprovedConfig
+from rrtdrive.planning.improved.config import ImprovedConfig, StageBudgets
 from rrtdrive.planning.improved.expansion import (
     default_expansion_lmin,
     endpoint_capped_clearance,
@@ -112,8 +115,11 @@ class ImprovedRRTConnect:
         budget : Budget
             The iteration budget decides the growth (each post-processing is
             bounded by ``smoothing.max_rounds``, the Dubins fallback by its
-            candidate count); reaching the safety cap ``max_time_s`` ends the
-            query as ``timeout``.
+            candidate count); with the escalation on, the RRT-Connect stages get
+            ``rrt_share`` of the iterations and ``escalation_fallback_joints``
+            candidates, and the Hybrid A* escalation the iterations left as
+            expansions. Reaching the safety cap ``max_time_s``
+            ends the query as ``timeout``.
 
         Returns
         -------
@@ -121,8 +127,10 @@ class ImprovedRRTConnect:
             ``SOLVED`` with a verified path, or a failure status with a message.
             ``stats`` holds ``nodes``, ``iterations``, ``growth_time_s``,
             ``postprocess_time_s``, ``postprocess_attempts``, ``repair_rounds``,
-            ``direct_connection``, ``expanded_obstacles``, ``expansion_used`` and,
-            when solved, ``key_points``, ``control_points``, ``max_curvature``
+            ``direct_connection``, ``expanded_obstacles``, ``expansion_used``,
+            ``rrt_iterations`` (the stages' iteration budget); after an escalation
+            ``rrt_stages_time_s`` and ``escalation_time_s``; when solved by the
+            tree path, ``key_points``, ``control_points``, ``max_curvature``
             (exact, of the whole curve) and the repair counters ``fillets``,
             ``merges``, ``moves``, ``drops``, ``unprunes`` and ``edge_checks``.
         """
@@ -189,6 +197,7 @@ class _Query:
         self.last_raw: np.ndarray | None = None
         self.failed_raws: list[np.ndarray] = []
         self.iterations = 0
+        self.limits = cfg.stage_budgets(Budget().max_iterations)
         self.trees: tuple[Tree, ...] = (
             Tree(self.s_xy[None, :], np.array([-1])),
             Tree(self.g_xy[None, :], np.array([-1])),
@@ -205,6 +214,8 @@ class _Query:
     def run(self, rng: np.random.Generator, budget: Budget, watch: Stopwatch) -> PlanResult:
         """The steps in order; the first that solves the query ends it."""
         self.watch = watch
+        self.limits = limits = self.cfg.stage_budgets(budget.max_iterations)
+        self.stats["rrt_iterations"] = float(limits.iterations)
         out = self.direct_connection()
         if out is not None:
             return out
@@ -226,8 +237,23 @@ class _Query:
             if out is not None:
                 return out
         if self.cfg.escalation:
-            return escalate(self.failure(), self.problem, budget, watch, self.smoothing)
+            return self.escalation(budget)
         return self.failure()
+
+    def escalation(self, budget: Budget) -> PlanResult:
+        """The Hybrid A* escalation on the iterations the RRT-Connect stages left."""
+        watch = self.watch
+        t_rrt = watch.elapsed()
+        self.stats["rrt_stages_time_s"] = t_rrt
+        failed = self.failure()
+        left = budget.max_iterations - self.iterations
+        if left < 1:  # the growth spent the whole budget (rrt_share 1)
+            return failed
+        rest = dataclasses.replace(budget, max_iterations=left)
+        out = escalate(failed, self.problem, rest, watch, self.smoothing)
+        if out is not failed:
+            out.stats["escalation_time_s"] = watch.elapsed() - t_rrt
+        return out
 
     def smooth(
         self, raw: np.ndarray, trees: tuple[Tree, ...], iterations: int
@@ -340,18 +366,18 @@ class _Query:
         """Grow a pair of trees until they meet, then smooth their tree path.
 
         A tree path that cannot be made drivable starts a fresh pair of trees (up
-        to ``max_postprocess_attempts``).
+        to the stages' ``attempts``; all ``iterations`` together are at most theirs).
         """
         cfg, stats, p = self.cfg, self.stats, self.cfg.step
         total_nodes = 0
-        while stats["postprocess_attempts"] < cfg.max_postprocess_attempts:
+        while stats["postprocess_attempts"] < self.limits.attempts:
             ts = ObtuseTree(self.s_xy, virtual_parent=self.s_xy - p * self.hs)
             tg = ObtuseTree(self.g_xy, virtual_parent=self.g_xy + p * self.hg)
             found, self.iterations = grow_until_meet(
                 ts, tg, samples, rng, edge_free,
                 step=p, obtuse=cfg.obtuse_parent, adaptive=cfg.adaptive_step,
                 passages=passages, passage_bias=cfg.passage_bias,
-                iterations=self.iterations, max_iterations=budget.max_iterations,
+                iterations=self.iterations, max_iterations=self.limits.iterations,
                 expired=self.watch.expired,
             )  # fmt: skip
             self.trees = (ts.freeze(), tg.freeze())
@@ -372,6 +398,7 @@ class _Query:
             self.checker, self.start, self.goal,
             self.cfg.dubins_radius_factor / self.problem.vehicle.kappa_max,
             self.smoothing.clearance, self.failed_raws[::-1], self.smoothing, watch.expired,
+            max_candidates=self.limits.candidates,
         )  # fmt: skip
         stats["dubins_time_s"] = time.perf_counter() - t0
         if found is None:
@@ -416,9 +443,17 @@ class _Query:
             NAME,
             PlanStatus.NO_PATH_IN_BUDGET,
             watch,
-            f"no path within the iteration budget ({iterations} iterations, "
+            f"no path within the iteration budget ({iterations} iterations"
+            f"{_share_note(self.limits, watch.budget.max_iterations)}, "
             f"{watch.elapsed():.3f} s)",
             trees=self.trees,
             iterations=iterations,
             stats=stats,
         )
+
+
+def _share_note(limits: StageBudgets, max_iterations: int) -> str:
+    """``", the RRT-Connect stages' share ..."`` for a failure message, when they had one."""
+    if limits.iterations >= max_iterations:
+        return ""
+    return f", the RRT-Connect stages' share of {max_iterations}"
