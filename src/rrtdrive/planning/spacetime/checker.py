@@ -89,7 +89,8 @@ class SpaceTimeChecker:
         self.deadline = deadline
         if steering is not None:
             rate, share = (float(v) for v in steering)
-            require_positive("spacetime.steering rate", rate)
+            if not rate > 0.0:
+                raise InputError(f"spacetime.steering rate: must be > 0, got {rate!r}")
             if not 0.0 < share <= 1.0:
                 raise InputError(f"spacetime.steering share: must lie in (0, 1], got {share!r}")
             steering = None if math.isinf(rate) else (rate, share)
