@@ -180,6 +180,7 @@ class SpeedController:
         self.accel_cap: float | None = None
         self.last_a = 0.0
         self.tapering = False
+        self.line_taper = False
 
     def retarget(self, profile: SpeedProfile) -> None:
         """Track ``profile`` from now on, keeping the loop's state (integral, last command).
@@ -191,6 +192,7 @@ class SpeedController:
         self.arrived = False
         self.stop_at = None
         self.tapering = False
+        self.line_taper = False
 
     def reset(self, profile: SpeedProfile) -> None:
         """Track ``profile`` from scratch."""
@@ -203,6 +205,7 @@ class SpeedController:
         self.accel_cap = None
         self.last_a = 0.0
         self.tapering = False
+        self.line_taper = False
 
     def control(self, s: float, speed: float, t: float) -> float:
         """Acceleration command for the car at arc length ``s`` with ``speed`` at time ``t``."""
@@ -219,6 +222,7 @@ class SpeedController:
             self.arrived = True
             self.v_ref = 0.0
             return self._hold(speed, dt)
+        tau = 0.0
         if self.comfort:
             # Read the profile ahead by half the time the jerk bound needs to swing the
             # command through the profile's acceleration range: the jerk-limited ramp then
@@ -231,13 +235,22 @@ class SpeedController:
             # Past the end: brake to a stop within a few centimetres.
             self.v_ref = 0.0
             return self._brake(speed, dt, 0.05)
-        if self.stop_at is not None:
+        if self.stop_at is None:
+            self.line_taper = False
+        else:
             # A stop line (for example: wait for oncoming traffic) caps the profile.
             d = self.stop_at - s
+            if self.comfort:
+                a_line = self._line_stop(d, speed, dt)
+                if a_line is not None:
+                    return a_line
             if d <= cfg.stop_distance:
                 self.v_ref = 0.0
                 return self._brake(speed, dt, max(d, 0.05))
-            v_cap = math.sqrt(2.0 * cfg.decel * d)
+            # Comfort mode reads the cap ahead like the profile (the ramp of the
+            # jerk-limited command then starts before the braking, not after it).
+            ahead = d - abs(speed) * tau if self.comfort else d
+            v_cap = math.sqrt(2.0 * cfg.decel * max(ahead, 0.0))
             if v_cap < v_ref:
                 v_ref = v_cap
                 a_ref = -speed * speed / (2.0 * max(d, cfg.stop_distance)) if speed > 0 else 0.0
@@ -272,6 +285,36 @@ class SpeedController:
             limit = cfg.a_max / cfg.ki if cfg.ki > 0 else 0.0
             self.integral = min(max(trial, -limit), limit)
         return a
+
+    def _line_stop(self, d: float, speed: float, dt: float) -> float | None:
+        """Comfort mode: the jerk-limited stop at the stop line ``d`` metres ahead, or ``None``.
+
+        The constant-jerk stop through ``d`` (``a = -2 v^2 / (3 d)``, its deceleration
+        fading to 0 at the line, as the stop at the end of the path) starts where it
+        asks for ``taper_start`` of ``decel``; its onset falls at most ``comfort_jerk``.
+        The stop at the line comes first: when that law asks for more than twice
+        ``decel`` (the gate revoked a release close to the line) the fall is limited by
+        ``jerk_brake_max`` only, and a car still moving at or past the line gets the
+        plain brake of :meth:`_brake` (``None`` is returned then, as before the taper
+        starts). Once slower than ``taper_stop_speed`` the car is held.
+        """
+        cfg = self.config
+        if speed <= 0.0:
+            self.line_taper = False
+            return None
+        if self.line_taper and speed <= cfg.taper_stop_speed:
+            self.v_ref = 0.0
+            return self._hold(speed, dt)
+        if d <= (0.0 if self.line_taper else cfg.stop_distance):
+            return None
+        a_stop = -2.0 * speed * speed / (3.0 * d)
+        if not (self.line_taper or a_stop <= -cfg.taper_start * cfg.decel):
+            return None
+        self.line_taper = True
+        self.v_ref = 0.0
+        self.integral = 0.0
+        fall = cfg.comfort_jerk if a_stop >= -2.0 * cfg.decel else cfg.jerk_brake_max
+        return self._limit(a_stop, dt, fall)
 
     def _hold(self, speed: float, dt: float) -> float:
         """Keep a (nearly) stopped car at rest: cancel the residual speed, no more."""

@@ -24,6 +24,7 @@ import math
 import platform
 import sys
 import time
+from collections import Counter
 from pathlib import Path as FsPath
 
 from rrtdrive.atomic import write_text_atomic
@@ -46,19 +47,44 @@ TARGETS = {"success": 0.99, "cte_rms_m": 0.10, "cte_max_m": 0.30}
 NO_WALL_LIMIT_S = 1e6
 
 
+def episode_config(hz: int, no_wall: bool) -> EpisodeConfig:
+    """The episode settings: with ``no_wall`` no wall-clock cap can decide an outcome.
+
+    Planning (the reference plan and every re-planning cycle) is then bounded by its
+    iteration budgets alone: the planning budget's safety cap is
+    :data:`NO_WALL_LIMIT_S` and the re-planner runs without its cycle deadline
+    (``ReplanConfig(wall_limit=False)``). Otherwise the defaults: a 30 s planning cap
+    and the re-planner's wall-time cycle budget.
+    """
+    sim = SimConfig(simulation_frequency=hz)
+    if no_wall:
+        return EpisodeConfig(
+            sim=sim, budget=Budget(max_time_s=NO_WALL_LIMIT_S),
+            replan=ReplanConfig(wall_limit=False),
+        )
+    return EpisodeConfig(sim=sim)
+
+
+def wall_capped(message: str) -> bool:
+    """A planner message saying the wall clock (a safety cap or a deadline) stopped it."""
+    return "safety cap" in message or "deadline passed" in message
+
+
 def run_one(job: tuple[str, str, int, float | None, str, int, bool]) -> dict:
     scenario, controller, seed, rate, density, hz, no_wall = job
     options = {"density": density} if scenario == "overtake-traffic" else {}
     task = make_scenario(scenario, seed, vehicle=VehicleParams(max_steer_rate=rate), **options)
-    if no_wall:
-        cfg = EpisodeConfig(
-            sim=SimConfig(simulation_frequency=hz), budget=Budget(max_time_s=NO_WALL_LIMIT_S),
-            replan=ReplanConfig(wall_limit=False),
-        )
-    else:
-        cfg = EpisodeConfig(sim=SimConfig(simulation_frequency=hz))
-    out = evaluate(run_episode(task, controller=controller, seed=seed, config=cfg)).to_json()
+    ep = run_episode(task, controller=controller, seed=seed, config=episode_config(hz, no_wall))
+    out = evaluate(ep).to_json()
     out["scenario"] = scenario
+    plan = ep.plan
+    out["plan_wall_capped"] = bool(plan is not None and wall_capped(plan.message))
+    if ep.traffic is not None:
+        records = ep.traffic.records
+        out["cycle_outcomes"] = dict(Counter(r.outcome for r in records))
+        out["planner_runs"] = sum(r.planning_time_s > 0 for r in records)
+        out["wall_capped_cycles"] = sum(wall_capped(r.message) for r in records)
+        out["horizon_rejections"] = sum("horizon" in r.message for r in records)
     return out
 
 
@@ -96,6 +122,10 @@ def summarise(rows: list[dict]) -> dict:
         "nuplan_yaw_accel_abs_max": _max(rows, "nuplan_yaw_accel_abs_max"),
         "path_max_sharpness_max": _max(rows, "path_max_sharpness"),
         "duration_s_mean": sum(r["duration_s"] for r in rows) / n if n else None,
+        "plans_wall_capped": sum(bool(r.get("plan_wall_capped")) for r in rows),
+        "planner_runs": sum(r.get("planner_runs", 0) for r in rows),
+        "wall_capped_cycles": sum(r.get("wall_capped_cycles", 0) for r in rows),
+        "horizon_rejections": sum(r.get("horizon_rejections", 0) for r in rows),
     }
 
 
@@ -220,6 +250,19 @@ def main(argv: list[str] | None = None) -> int:
         + (", no wall-clock planning limits" if args.no_wall_limit else "")
         + ".\n\n"
         + table(summaries)
+        + "\nPlanning stopped by the wall clock (a safety cap or the re-planner's cycle "
+        "deadline), per group: "
+        + "; ".join(
+            f"{k}: reference plans {s['plans_wall_capped']}/{s['episodes']}"
+            + (
+                f", re-planning cycles {s['wall_capped_cycles']} of {s['planner_runs']} "
+                f"planner runs (plans rejected as ending beyond the prediction horizon: "
+                f"{s['horizon_rejections']})"
+                if k.startswith("overtake-traffic") else ""
+            )
+            for k, s in summaries.items()
+        )
+        + ".\n"
         + "\nTargets missed (issue 12):\n\n"
         + ("\n".join(missed) if missed else "- none")
         + "\n"

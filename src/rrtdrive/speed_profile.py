@@ -237,6 +237,7 @@ def profile_times(
     decel: float,
     a_lat_max: float,
     v_launch: float = 0.5,
+    v_cap: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Speeds and arrival times along a path from the speed-profile rules, without a final stop.
 
@@ -254,6 +255,10 @@ def profile_times(
         Curvature at the samples.
     v0, v_max, accel, decel, a_lat_max, v_launch : float
         Start speed and profile limits.
+    v_cap : numpy.ndarray, optional
+        Further per-sample speed caps in m/s, as for :class:`SpeedProfile` (for
+        example :func:`steering_rate_speed_cap`: the path timed as a car with a
+        rate-limited steering actuator drives it); ``None``: none.
 
     Returns
     -------
@@ -269,6 +274,8 @@ def profile_times(
     """
     s = np.asarray(s, dtype=float)
     cap2 = speed_caps_squared(kappa, v_max, a_lat_max, max(v0, v_launch))
+    if v_cap is not None:
+        cap2 = np.minimum(cap2, np.square(np.asarray(v_cap, dtype=float)))
     v2 = 2.0 * accel * s + np.minimum.accumulate(cap2 - 2.0 * accel * s)
     back = (v2 + 2.0 * decel * s)[::-1]
     v2 = np.minimum(v2, np.minimum.accumulate(back)[::-1] - 2.0 * decel * s)

@@ -38,6 +38,7 @@ import dataclasses
 import logging
 import math
 import time
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -106,8 +107,20 @@ class TrafficDriver:
         self.speed = speed
         self.config = config
         self.rng = rng
-        options = {"max_postprocess_attempts": 2, "smoothing": {"max_rounds": 8}}
-        options.update(config.planner_options)
+        smoothing: dict[str, Any] = {"max_rounds": 8}
+        steering = self._steering()
+        if steering is not None:
+            # Plans a rate-limited car can drive at the road's lane-change speed: the
+            # speed the lateral-acceleration cap allows on the tightest planned turn.
+            v_turn = min(speed.v_max, math.sqrt(speed.a_lat_max * config.turning_radius_m))
+            smoothing["max_sharpness"] = steering[0] * steering[1] / v_turn
+        options: dict[str, Any] = {"max_postprocess_attempts": 2}
+        user = dict(config.planner_options)
+        given = user.pop("smoothing", None)
+        if isinstance(given, Mapping):
+            smoothing.update(given)
+        options.update(user)
+        options["smoothing"] = smoothing if given is None or isinstance(given, Mapping) else given
         self.planner = SpaceTimeRRTConnect(**options)
         self.plan_vehicle = dataclasses.replace(
             self.vehicle,
@@ -145,7 +158,16 @@ class TrafficDriver:
 
     def _speed_tuple(self) -> tuple[float, float, float, float, float]:
         c = self.speed
-        return (c.v_max, c.accel, c.decel, c.a_lat_max, c.v_launch)
+        # A rate-limited car starts from its own speed, no launch speed (actuator_profile).
+        v_launch = c.v_launch if self._steering() is None else 0.0
+        return (c.v_max, c.accel, c.decel, c.a_lat_max, v_launch)
+
+    def _steering(self) -> tuple[float, float] | None:
+        """``(max_steer_rate, share)`` of the controller's actuator; ``None``: instant."""
+        rate = self.controller.steer_rate
+        if rate is None or not math.isfinite(rate):
+            return None
+        return (float(rate), float(self.controller.speed_config.steer_rate_share))
 
     def _predict(self) -> Prediction:
         c = self.config
@@ -487,7 +509,8 @@ class TrafficDriver:
             near = (xr[:, 1] >= -20.0) & (xr[:, 0] <= length + 20.0)
             local = local.select(near)
         problem = SpaceTimeProblem(
-            window, local, timing.shifted(-x_off), cfg.safety, self._speed_tuple()
+            window, local, timing.shifted(-x_off), cfg.safety, self._speed_tuple(),
+            steering=self._steering(),
         )
         deadline = None
         left = 1e6

@@ -15,8 +15,8 @@ from rrtdrive.planning.spacetime.conflicts import traffic_conflicts
 from rrtdrive.planning.spacetime.prediction import Prediction
 from rrtdrive.planning.spacetime.safety import SafetyConfig
 from rrtdrive.planning.spacetime.timing import ArrivalTiming, yaw_curvature
-from rrtdrive.speed_profile import profile_times
-from rrtdrive.types import VehicleParams, require_finite, require_positive
+from rrtdrive.speed_profile import profile_times, steering_rate_speed_cap
+from rrtdrive.types import InputError, VehicleParams, require_finite, require_positive
 from rrtdrive.vehicle import cover_discs
 
 __all__ = ["SpaceTimeChecker"]
@@ -58,6 +58,11 @@ class SpaceTimeChecker:
         A :func:`time.perf_counter` value after which every test answers "not
         free", so that a planner running on this checker (its post-processing is
         bounded by rounds, not time) gives up within a wall-time budget.
+    steering : tuple of float, optional
+        ``(max_steer_rate, share)`` of a car with a rate-limited steering actuator:
+        whole paths are then timed as the controllers drive them, their speed also
+        capped by :func:`~rrtdrive.speed_profile.steering_rate_speed_cap` (the car's
+        wheelbase, ``share`` of the rate); ``None``: an instant actuator.
     """
 
     def __init__(
@@ -70,6 +75,7 @@ class SpaceTimeChecker:
         spacing: float = 0.5,
         slack_s: float = 0.2,
         deadline: float | None = None,
+        steering: tuple[float, float] | None = None,
     ) -> None:
         self.static = static
         self.prediction = prediction
@@ -81,6 +87,14 @@ class SpaceTimeChecker:
         require_finite("spacetime.slack_s", slack_s)
         self.slack_s = max(float(slack_s), 0.0)
         self.deadline = deadline
+        if steering is not None:
+            rate, share = (float(v) for v in steering)
+            if not rate > 0.0:
+                raise InputError(f"spacetime.steering rate: must be > 0, got {rate!r}")
+            if not 0.0 < share <= 1.0:
+                raise InputError(f"spacetime.steering share: must lie in (0, 1], got {share!r}")
+            steering = None if math.isinf(rate) else (rate, share)
+        self.steering = steering
         self.expired = False
         self.dynamic_checks = 0
         # The ego's covering discs, once per checker (the conflict test's hot path).
@@ -248,7 +262,8 @@ class SpaceTimeChecker:
 
         The path starts at the time and speed the nominal timing gives its first
         sample (:meth:`ArrivalTiming.state_at`: the timing's own ``t0`` and ``v0``
-        when it starts at the origin).
+        when it starts at the origin). With a rate-limited actuator (``steering``)
+        the speed is also capped by the steering rate, as the controllers cap it.
 
         Returns
         -------
@@ -259,7 +274,11 @@ class SpaceTimeChecker:
         s, kappa = yaw_curvature(smp)
         t0, v0 = self.timing.state_at(smp[0, :2])
         v_max, accel, decel, a_lat, v_launch = self.speed
-        t, v = profile_times(s, kappa, v0, v_max, accel, decel, a_lat, v_launch)
+        cap = None
+        if self.steering is not None:
+            rate, share = self.steering
+            cap = steering_rate_speed_cap(s, kappa, self.static.vehicle.wheelbase, rate, share)
+        t, v = profile_times(s, kappa, v0, v_max, accel, decel, a_lat, v_launch, cap)
         return t0 + t, v
 
     def path_free(

@@ -49,6 +49,10 @@ class SpaceTimeProblem:
         :func:`time.perf_counter` value at which the whole query (growth and
         post-processing) gives up (see :class:`SpaceTimeChecker`); ``None``: only
         the budget's limits apply.
+    steering : tuple of float, optional
+        ``(max_steer_rate, share)``: paths are timed as a car with this rate-limited
+        steering actuator drives them (see :class:`SpaceTimeChecker`); ``None``:
+        instant steering.
     """
 
     map: Map
@@ -57,6 +61,7 @@ class SpaceTimeProblem:
     safety: SafetyConfig = field(default_factory=SafetyConfig)
     speed: tuple[float, float, float, float, float] = (10.0, 1.0, 1.0, 1.5, 0.5)
     deadline: float | None = None
+    steering: tuple[float, float] | None = None
 
     @property
     def start(self) -> Pose:
@@ -175,7 +180,7 @@ class SpaceTimeRRTConnect(ImprovedRRTConnect):
         static = cached_checker(problem.map)
         return SpaceTimeChecker(
             static, problem.prediction, problem.timing, problem.safety, problem.speed,
-            deadline=problem.deadline,
+            deadline=problem.deadline, steering=problem.steering,
         )
 
     def solve_spacetime(
