@@ -185,7 +185,15 @@ def test_exhausted_search_is_proven_at_its_resolution() -> None:
     m = Map("box", (0.0, 0.0, 10.0, 6.0), (), Pose(2.0, 3.0, 0.0), Pose(6.4, 3.0, math.pi))
     res = HybridAStar().solve(PlanningProblem.from_map(m), np.random.default_rng(0), BUDGET)
     assert res.status is PlanStatus.PROVEN_UNREACHABLE
-    assert "no path at 0.5 m / 5 deg resolution" in res.message
+    # Proven at the finest resolution tried; the coarser search's end is named too.
+    assert "no path at 0.25 m / 2.5 deg resolution" in res.message
+    assert "before that, at 0.5 m / 5 deg / 1 m steps the search ran out of states" in res.message
+    coarse = HybridAStar(refinements=0).solve(
+        PlanningProblem.from_map(m), np.random.default_rng(0), BUDGET
+    )
+    assert coarse.status is PlanStatus.PROVEN_UNREACHABLE
+    assert "no path at 0.5 m / 5 deg resolution" in coarse.message
+    assert "before that" not in coarse.message
 
 
 def test_a_goal_reachable_only_in_reverse_is_proven_so_forward() -> None:

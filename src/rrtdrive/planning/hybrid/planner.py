@@ -38,6 +38,7 @@ def answer_stats(answer: HybridAnswer, wheelbase: float) -> dict[str, float]:
         "hybrid_nodes": float(o.nodes),
         "shots": float(o.shots),
         "connections": float(o.connections),
+        "refinements": float(answer.refinements),
     }
     if answer.path is not None:
         stats["gear_segments"] = float(answer.path.segments)
@@ -145,7 +146,7 @@ def hybrid_result(
     path = path_of(built)
     cusps = built.segments - 1
     message = (
-        f"solved by Hybrid A*: {o.expansions} expansions, {path.length:.1f} m, "
+        f"solved by Hybrid A*{answer.note}: {o.expansions} expansions, {path.length:.1f} m, "
         f"{cusps} cusp(s), {built.smoothed}/{built.segments} segment(s) smoothed" + arcs_note(built)
     )
     raw = built.rows[:, :2]

@@ -116,20 +116,25 @@ def query_clearance(problem: PlanningProblem, wanted: float) -> float:
 class HybridAnswer:
     """What one query gave: the checked path (or ``None``), the outcome and a message.
 
-    ``trees`` are the search trees, the one from the start first (the one from the
-    goal second, when the query turned to it).
+    ``trees`` are the search trees of the last resolution tried, the one from the
+    start first (the one from the goal second, when the query turned to it);
+    ``refinements`` counts the finer searches run after the first, and ``note``
+    says, for a solved query, at which resolution and why (empty when the first
+    search solved it).
     """
 
     path: BuiltPath | None
     outcome: SearchOutcome
     message: str
     trees: tuple[Tree, ...]
+    note: str = ""
+    refinements: int = 0
 
 
 def _failure_message(
     outcome: SearchOutcome, cfg: HybridConfig, budget: Budget, reverse: bool
 ) -> str:
-    res = f"{cfg.xy_resolution:g} m / {np.degrees(cfg.yaw_resolution):g} deg"
+    res = _resolution(cfg)
     counts = f"{outcome.expansions} expansions, {outcome.nodes} nodes"
     if outcome.reason == "exhausted":
         return (
@@ -209,17 +214,23 @@ def hybrid_query(
 ) -> HybridAnswer:
     """One Hybrid A* query from ``problem.start`` to ``problem.goal``.
 
+    A search that ends without a path but with expansions left (out of states,
+    or every goal connection rejected) is followed by one at half the cell,
+    heading bin and step (:meth:`HybridConfig.refined`), ``config.refinements``
+    times at most, with the rest of the budget: counted, so deterministic.
+
     Parameters
     ----------
     problem : PlanningProblem
         The query.
     budget : Budget
-        ``max_iterations`` bounds the expansions of both searches together;
+        ``max_iterations`` bounds the expansions of all searches together;
         ``max_time_s`` is only a cap.
     watch : Stopwatch
         The started stopwatch whose expiry stops the search.
     config : HybridConfig
-        The search's settings (``switch_after``: when to turn to the goal's side).
+        The search's settings (``switch_after``: when to turn to the goal's side;
+        ``refinements``: the finer retries).
     reverse : bool
         Whether reverse primitives and shots are allowed.
     smoothing : SmoothingConfig or None
@@ -231,6 +242,70 @@ def hybrid_query(
     -------
     HybridAnswer
     """
+    cfg = config
+    left = budget.max_iterations
+    tried: list[tuple[HybridConfig, SearchOutcome]] = []
+    while True:
+        path, outcome, trees = _query_at(problem, left, watch, cfg, reverse, smoothing)
+        tried.append((cfg, outcome))
+        left -= outcome.expansions
+        if (
+            path is not None
+            or cfg.refinements <= 0
+            or left <= 0
+            or outcome.reason not in _REFINE_ON
+            or watch.expired()
+        ):
+            break
+        cfg = cfg.refined()
+    total = SearchOutcome(
+        outcome.reason, *(sum(getattr(o, f) for _, o in tried) for f in _COUNTS)
+    )
+    earlier = tried[:-1]
+    if path is not None:
+        note = ""
+        if earlier:
+            note = f" at {_resolution(cfg)} resolution ({_earlier_note(earlier)})"
+        return HybridAnswer(path, total, "", trees, note, len(earlier))
+    message = _failure_message(outcome, cfg, budget, reverse)
+    if earlier:
+        message += f"; {_earlier_note(earlier)}"
+    return HybridAnswer(None, total, message, trees, "", len(earlier))
+
+
+#: Search endings that a finer search is tried after (budget left, no path).
+_REFINE_ON = ("exhausted", "no_approach", "rejected")
+_COUNTS = ("expansions", "nodes", "shots", "connections")
+
+
+def _resolution(cfg: HybridConfig) -> str:
+    return f"{cfg.xy_resolution:g} m / {np.degrees(cfg.yaw_resolution):g} deg"
+
+
+def _earlier_note(earlier: Sequence[tuple[HybridConfig, SearchOutcome]]) -> str:
+    """What the coarser searches before the last one ended with, for a message."""
+    why = {
+        "exhausted": "ran out of states",
+        "no_approach": "ran out of ways to arrive at the goal",
+        "rejected": "had every goal connection rejected",
+    }
+    parts = [
+        f"at {_resolution(c)} / {c.step:g} m steps the search {why.get(o.reason, o.reason)} "
+        f"after {o.expansions} expansions"
+        for c, o in earlier
+    ]
+    return "before that, " + "; ".join(parts)
+
+
+def _query_at(
+    problem: PlanningProblem,
+    budget: int,
+    watch: Stopwatch,
+    config: HybridConfig,
+    reverse: bool,
+    smoothing: SmoothingConfig | None,
+) -> tuple[BuiltPath | None, SearchOutcome, tuple[Tree, ...]]:
+    """The searches of :func:`hybrid_query` at one resolution, with ``budget`` expansions."""
     kappa_max = problem.vehicle.kappa_max
     clearance = query_clearance(problem, config.body_clearance)
     if smoothing is not None:
@@ -302,7 +377,7 @@ def hybrid_query(
             problem, config.body_clearance + margin
         )
         searches = searches_with(search_clearance)
-        left = budget.max_iterations - used.expansions
+        left = budget - used.expansions
         path, outcome = _alternate(searches, left, config.switch_after, watch)
         used = SearchOutcome(
             outcome.reason, used.expansions + outcome.expansions, used.nodes + outcome.nodes,
@@ -310,10 +385,8 @@ def hybrid_query(
         )  # fmt: skip
         if path is not None or outcome.reason != "rejected" or left - outcome.expansions <= 0:
             break
-    outcome = used
     trees = tuple(_tree(s) for s, _ in searches if s.x)
-    message = "" if path is not None else _failure_message(outcome, config, budget, reverse)
-    return HybridAnswer(path, outcome, message, trees)
+    return path, used, trees
 
 
 def _alternate(

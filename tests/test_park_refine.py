@@ -1,0 +1,97 @@
+"""Hybrid A* refines its resolution when the coarse search ends without a path (issue 14).
+
+Seeded maps that failed to plan at 0.5 m / 5 deg / 1 m steps in
+``results/closed_loop_gears100`` of session 5: parallel-parking seed 5 (a gap of
+1.51 car lengths, "proven_unreachable") and parking-reverse-in seed 12 (its 32
+goal connections rejected by the ramps). Both must now solve at the finer
+resolution, with the same guarantees, checked by code independent of the planner.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rrtdrive.planning.base import PlanningProblem
+from rrtdrive.planning.hybrid import HybridAStar, HybridConfig
+from rrtdrive.planning.smoothing import max_sharpness
+from rrtdrive.sim.tasks import make_scenario
+from rrtdrive.types import Budget, InputError, Path, PlanStatus
+from rrtdrive.verify import verify_path
+
+BUDGET = Budget(max_time_s=1e6)
+
+
+def _problem(task) -> PlanningProblem:
+    return PlanningProblem.from_map(task.map, reverse=task.reverse)
+
+
+def _assert_guarantees(task, path: Path, problem: PlanningProblem) -> None:
+    """Body, curvature, ends and cusps (verify), clearance, and sharpness per segment."""
+    check = verify_path(task.map, path)
+    assert check.ok, check
+    s = path.samples
+    assert np.allclose(s[0, :3], task.map.start.as_tuple(), atol=1e-9)
+    assert np.allclose(s[-1, :3], task.map.goal.as_tuple(), atol=1e-9)
+    car = task.map.vehicle
+    assert path.max_curvature <= car.kappa_max + 1e-9
+    checker = problem.checker
+    clear = min(checker.body_clearance(tuple(r[:3])) for r in s)
+    # The query's clearance: 0.15 m capped at the goal's own, minus the re-check's 5 mm.
+    want = min(0.15, checker.body_clearance(task.map.goal.as_tuple()) * 0.999) - 0.005
+    assert clear >= want - 1e-6
+    bound = min(0.2, car.max_steer_rate / 2.0)
+    for a, b in path.segments():
+        assert max_sharpness(s[a:b, :4], car.wheelbase) <= bound + 1e-9
+
+
+def test_refined_config_halves_cell_bin_and_step() -> None:
+    cfg = HybridConfig(refinements=2)
+    fine = cfg.refined()
+    assert (fine.xy_resolution, fine.step, fine.refinements) == (0.25, 0.5, 1)
+    assert fine.yaw_resolution == pytest.approx(cfg.yaw_resolution / 2)
+    with pytest.raises(InputError, match="hybrid.refinements"):
+        HybridConfig(refinements=-1)
+
+
+def test_tight_parallel_gap_is_solved_at_the_finer_resolution() -> None:
+    task = make_scenario("parallel-parking", 5)
+    assert task.gap_factor < 1.52  # one of the tightest gaps of the range
+    problem = _problem(task)
+    coarse = HybridAStar(refinements=0).solve(problem, np.random.default_rng(0), BUDGET)
+    assert coarse.status is PlanStatus.PROVEN_UNREACHABLE
+    assert "no path at 0.5 m / 5 deg resolution" in coarse.message
+    res = HybridAStar().solve(problem, np.random.default_rng(0), BUDGET)
+    assert res.success, res.message
+    assert res.stats["refinements"] == 1
+    # Honest: solved at the finer resolution, the coarse search's end named, not "proven".
+    assert "at 0.25 m / 2.5 deg resolution" in res.message
+    assert "ran out of ways to arrive at the goal" in res.message
+    assert len(res.path.cusps) >= 1 and res.path.samples[-1, 4] in (1.0, -1.0)
+    _assert_guarantees(task, res.path, problem)
+
+
+def test_reverse_in_bay_with_rejected_connections_is_solved_finer() -> None:
+    task = make_scenario("parking", 12, reverse_in=True)
+    problem = _problem(task)
+    coarse = HybridAStar(refinements=0).solve(problem, np.random.default_rng(0), BUDGET)
+    assert coarse.status is PlanStatus.NO_PATH_IN_BUDGET
+    assert "could not be made drivable" in coarse.message
+    res = HybridAStar().solve(problem, np.random.default_rng(0), BUDGET)
+    assert res.success, res.message
+    assert res.stats["refinements"] == 1
+    assert "had every goal connection rejected" in res.message
+    assert res.path.samples[-1, 4] == -1.0  # backed into the bay
+    _assert_guarantees(task, res.path, problem)
+
+
+def test_refinement_shares_the_counted_budget() -> None:
+    task = make_scenario("parallel-parking", 5)
+    # The coarse search needs ~404 expansions to end; 420 leaves too few for the fine one.
+    res = HybridAStar().solve(
+        _problem(task), np.random.default_rng(0), Budget(max_iterations=420, max_time_s=1e6)
+    )
+    assert not res.success
+    assert res.status is PlanStatus.NO_PATH_IN_BUDGET
+    assert res.iterations <= 420
+    assert "before that, at 0.5 m / 5 deg / 1 m steps" in res.message
