@@ -5,8 +5,8 @@ scenario; nothing else happens. The registration uses entry-point strings, so
 highway-env and pygame load only when an environment is made::
 
     import gymnasium as gym
-    import rrtdrive  # registers rrtdrive/Parking-v0, Overtake-v0, OvertakeTraffic-v0,
-                     # ParallelParking-v0, UTurn-v0
+    import rrtdrive  # registers rrtdrive/Parking-v0, ParkingReverseIn-v0, Overtake-v0,
+                     # OvertakeTraffic-v0, ParallelParking-v0, UTurn-v0
 
     env = gym.make("rrtdrive/Parking-v0", controller="lqr", residual=True)
 
@@ -31,6 +31,7 @@ ENTRY_POINT = "rrtdrive.envs.drive_env:DriveEnv"
 #: name in ``rrtdrive.sim.scenes.SCENARIOS`` has an id).
 ENV_IDS: dict[str, str] = {
     "rrtdrive/Parking-v0": "parking",
+    "rrtdrive/ParkingReverseIn-v0": "parking",
     "rrtdrive/Overtake-v0": "overtake",
     "rrtdrive/OvertakeTraffic-v0": "overtake-traffic",
     "rrtdrive/ParallelParking-v0": "parallel-parking",
@@ -40,9 +41,13 @@ ENV_IDS: dict[str, str] = {
 #: override them). Parallel parking and the U-turn plan with Hybrid A*, the
 #: reversing planner, directly: the default planner would reach the same search only
 #: after its RRT-Connect stages fail, at each reset (tens of seconds on a U-turn).
-#: Reverse-in parking is an option of the parking env:
-#: ``gym.make("rrtdrive/Parking-v0", scenario_options={"reverse_in": True})``.
+#: Reverse-in parking is the parking scenario with ``reverse_in``, planned the same
+#: way (a ``scenario_options`` given to ``gym.make`` replaces the registered one:
+#: keep ``"reverse_in": True`` in it).
 ENV_KWARGS: dict[str, dict[str, object]] = {
+    "rrtdrive/ParkingReverseIn-v0": {
+        "planner": "hybrid-a-star", "scenario_options": {"reverse_in": True},
+    },
     "rrtdrive/ParallelParking-v0": {"planner": "hybrid-a-star"},
     "rrtdrive/UTurn-v0": {"planner": "hybrid-a-star"},
 }

@@ -82,3 +82,21 @@ def test_an_agent_alone_moves_on_to_the_next_segment(shuttle):
     assert gears[0] == 1.0 and gears[-1] == -1.0
     assert abs(obs[5]) < 0.1 and abs(obs[2]) < 0.05 and abs(obs[3]) < 0.02
     env.close()
+
+
+def test_the_reverse_in_id_plans_a_reverse_entry_into_the_bay():
+    env = gym.make("rrtdrive/ParkingReverseIn-v0")
+    obs, _ = env.reset(seed=0)
+    u = env.unwrapped
+    gears = np.asarray(u.path.gears)
+    nose_in = gym.make("rrtdrive/Parking-v0")
+    nose_in.reset(seed=0)
+    # The same bay, parked facing out: the goal is turned round, and the car
+    # reverses into it (possibly with a short forward shuffle at the end).
+    turned = abs(abs(u._scenario.goal.yaw - nose_in.unwrapped._scenario.goal.yaw) - np.pi)
+    assert turned < 1e-9
+    assert gears[0] == 1 and (gears == -1).any() and (np.diff(gears) != 0).any()
+    assert obs[-2] == 1.0  # the first segment is driven forward
+    assert u.config.planner == "hybrid-a-star"
+    env.close()
+    nose_in.close()
