@@ -15,11 +15,10 @@ import rrtdrive.envs  # noqa: F401  (registers the ids)
 from rrtdrive.types import VehicleParams
 
 
-def steer_noise_episode(seed: int, rate: float | None) -> tuple[str, float]:
-    env = gym.make(
-        "rrtdrive/Parking-v0", residual=True, residual_scale=0.25, action_repeat=2,
-        scenario_options={"vehicle": VehicleParams(max_steer_rate=rate)},
-    )  # fmt: skip
+def steer_noise_episode(
+    seed: int, rate: float | None, env_id: str = "rrtdrive/Parking-v0", **options
+) -> tuple[str, float]:
+    env = gym.make(env_id, residual=True, residual_scale=0.25, action_repeat=2, **options)
     rng = np.random.default_rng(seed)
     env.reset(seed=seed)
     worst, done, info = 0.0, False, {}
@@ -34,8 +33,16 @@ def steer_noise_episode(seed: int, rate: float | None) -> tuple[str, float]:
 
 @pytest.mark.parametrize("rate", [0.4, None])
 def test_zero_mean_steering_residual_keeps_the_car_on_its_path(rate):
-    status, worst = steer_noise_episode(0, rate)
+    vehicle = VehicleParams(max_steer_rate=rate)
+    status, worst = steer_noise_episode(0, rate, scenario_options={"vehicle": vehicle})
     assert status == "arrived" and worst < 0.4, (status, worst)
+
+
+def test_the_same_across_a_cusp_and_in_reverse():
+    # Reversing into the bay (the default car): clipped first, the noise crashed the
+    # car (max cte 4.1 m); now 0.33 m. The window is mirrored with the car in reverse.
+    status, worst = steer_noise_episode(0, 0.4, "rrtdrive/ParkingReverseIn-v0")
+    assert status == "arrived" and worst < 0.5, (status, worst)
 
 
 class _Ctrl:
