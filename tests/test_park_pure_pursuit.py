@@ -16,13 +16,12 @@ import math
 import sys
 from pathlib import Path as FsPath
 
+import numpy as np
 import pytest
-from gear_paths import integrate_pieces
+from gear_paths import integrate_pieces, track_on_bicycle
 
-from rrtdrive.controllers import VehicleState
 from rrtdrive.controllers.pure_pursuit import PurePursuit
 from rrtdrive.types import InputError, Path, VehicleParams
-from rrtdrive.vehicle import bicycle_step
 
 DT = 0.05
 RATE = 0.4
@@ -51,31 +50,10 @@ def s_bend_cusp_reverse_arc() -> Path:
 
 def drive(controller: PurePursuit, path: Path, max_time: float = 120.0):
     """Track ``path`` from rest on the exact bicycle: ``(arrived, position error, gears)``."""
-    controller.reset(path)
-    x, y, yaw = path.samples[0, :3]
-    v = steer = 0.0
-    gears = set()
-    for k in range(int(max_time / DT)):
-        a, cmd = controller.control(VehicleState(x, y, yaw, v, steer, k * DT))
-        gears.add(controller.gear)
-        if controller.arrived and v == 0.0:
-            break
-        cmd = max(-CAR.max_steer, min(CAR.max_steer, cmd))
-        cmd = min(max(cmd, steer - RATE * DT), steer + RATE * DT)
-        v1 = v + a * DT
-        if abs(v1) < 1e-9:
-            v1 = 0.0
-        if v * v1 < 0.0 or (v != 0.0 and v1 == 0.0):
-            ds, v1 = 0.5 * v * abs(v / a), 0.0
-        else:
-            ds = 0.5 * (v + v1) * DT
-        pose = (x, y, yaw)
-        for i in range(8):
-            pose = bicycle_step(pose, ds / 8, steer + (cmd - steer) * (i + 0.5) / 8, 1.0, L)
-        x, y, yaw = pose
-        v, steer = v1, cmd
+    rows = track_on_bicycle(controller, path, RATE, max_time=max_time)
+    gears = {controller.segments[int(i)].gear for i in np.unique(rows[:, 6])}
     gx, gy, _ = path.samples[-1, :3]
-    return controller.arrived, math.hypot(x - gx, y - gy), gears
+    return controller.arrived, math.hypot(rows[-1, 1] - gx, rows[-1, 2] - gy), gears
 
 
 def test_compensated_pure_pursuit_stops_within_10_cm_after_the_cusp() -> None:

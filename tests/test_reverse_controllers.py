@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from gear_paths import integrate_pieces
+from gear_paths import integrate_pieces, track_on_bicycle
 
 from rrtdrive.controllers import (
     CONTROLLERS,
@@ -22,7 +22,6 @@ from rrtdrive.controllers import (
     mirror_path,
 )
 from rrtdrive.types import InputError, Path, VehicleParams
-from rrtdrive.vehicle import bicycle_step
 
 NAMES = sorted(CONTROLLERS)
 RATES = [None, 0.4]
@@ -32,36 +31,8 @@ DT = 0.05  # the closed loop's 20 Hz
 
 def drive(name: str, path: Path, rate: float | None, x0=None, max_time: float = 120.0):
     """Track ``path`` from rest; rows ``t, x, y, yaw, v, steer, segment, cte, heading_err``."""
-    v_params = VehicleParams(max_steer_rate=rate)
-    c = make_controller(name, vehicle=v_params)
-    c.reset(path)
-    x, y, yaw = path.samples[0, :3] if x0 is None else x0
-    v = steer = 0.0
-    rows = []
-    for k in range(int(max_time / DT)):
-        a, cmd = c.control(VehicleState(x, y, yaw, v, steer, k * DT))
-        rows.append((k * DT, x, y, yaw, v, steer, c.segment, c.cte, c.heading_error))
-        if c.arrived and v == 0.0:
-            break
-        cmd = max(-v_params.max_steer, min(v_params.max_steer, cmd))
-        if rate is not None:
-            cmd = min(max(cmd, steer - rate * DT), steer + rate * DT)
-        v1 = v + a * DT
-        if abs(v1) < 1e-9:
-            v1 = 0.0
-        if v * v1 < 0.0 or (v != 0.0 and v1 == 0.0):
-            ds, v1 = 0.5 * v * abs(v / a), 0.0
-        else:
-            ds = 0.5 * (v + v1) * DT
-        if ds != 0.0:
-            n = 8 if rate is not None and cmd != steer else 1
-            pose = (x, y, yaw)
-            for i in range(n):
-                d = steer + (cmd - steer) * (i + 0.5) / n if n > 1 else cmd
-                pose = bicycle_step(pose, ds / n, d, 1.0, L)
-            x, y, yaw = pose
-        v, steer = v1, cmd
-    return c, np.array(rows)
+    c = make_controller(name, vehicle=VehicleParams(max_steer_rate=rate))
+    return c, track_on_bicycle(c, path, rate, x0, max_time)
 
 
 R = VehicleParams().min_turning_radius
