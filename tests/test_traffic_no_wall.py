@@ -8,13 +8,9 @@ import time
 from pathlib import Path
 
 import pytest
+from traffic_drive import traffic_driver
 
-from rrtdrive.controllers import make_controller
-from rrtdrive.sim.drivelog import DriveRecorder
 from rrtdrive.sim.replanning import ReplanConfig
-from rrtdrive.sim.scenes import build_env, scenario_rngs
-from rrtdrive.sim.tasks import make_scenario, traffic_speed_config
-from rrtdrive.sim.traffic_driver import TrafficDriver
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -37,21 +33,8 @@ def slow_clock(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def _replan_cycles(wall_limit: bool, steps: int = 6) -> list:
-    scen = make_scenario("overtake-traffic", 8)
-    env = build_env(scen)
-    try:
-        speed = traffic_speed_config(scen)
-        ctrl = make_controller("pure-pursuit", vehicle=scen.vehicle, speed=speed)
-        driver = TrafficDriver(env, scen, ctrl, speed, ReplanConfig(wall_limit=wall_limit),
-                               scenario_rngs(8)[1])
-        driver.start()
-        dt = 1.0 / env.unwrapped.config["simulation_frequency"]
-        recorder = DriveRecorder(env, dt)
-        for k in range(steps):
-            recorder.step(*driver.control(k * dt))
-        return [r for r in driver.records if r.planning_time_s > 0]
-    finally:
-        env.close()
+    _, _, driver = traffic_driver(8, ReplanConfig(wall_limit=wall_limit), steps)
+    return [r for r in driver.records if r.planning_time_s > 0]
 
 
 def test_no_wall_limit_settings_have_no_wall_cap() -> None:

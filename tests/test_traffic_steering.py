@@ -6,13 +6,13 @@ import math
 
 import numpy as np
 import pytest
+from traffic_drive import traffic_driver
 
 from rrtdrive.controllers import SpeedConfig
 from rrtdrive.maps import Map
 from rrtdrive.planning.base import cached_checker
 from rrtdrive.planning.spacetime import ArrivalTiming, Prediction, SpaceTimeChecker
 from rrtdrive.sim.replanning import ReplanConfig, lane_path
-from rrtdrive.sim.tasks import make_scenario, traffic_speed_config
 from rrtdrive.speed_profile import actuator_profile, steering_sharpness
 from rrtdrive.types import InputError, Path, Pose, VehicleParams
 
@@ -64,25 +64,7 @@ def test_space_time_steering_bad_input_names_the_field(steering) -> None:
 
 def test_the_replanner_plans_lane_changes_the_car_drives_at_lane_change_speed() -> None:
     # Seed 8 (default density) accepts its first plan 0.5 s in; drive 1 s in highway-env.
-    from rrtdrive.controllers import make_controller
-    from rrtdrive.sim.drivelog import DriveRecorder
-    from rrtdrive.sim.scenes import build_env, scenario_rngs
-    from rrtdrive.sim.traffic_driver import TrafficDriver
-
-    scen = make_scenario("overtake-traffic", 8)
-    env = build_env(scen)
-    try:
-        speed = traffic_speed_config(scen)
-        ctrl = make_controller("pure-pursuit", vehicle=scen.vehicle, speed=speed)
-        driver = TrafficDriver(env, scen, ctrl, speed, ReplanConfig(wall_limit=False),
-                               scenario_rngs(8)[1])
-        driver.start()
-        dt = 1.0 / env.unwrapped.config["simulation_frequency"]
-        recorder = DriveRecorder(env, dt)
-        for k in range(20):
-            recorder.step(*driver.control(k * dt))
-    finally:
-        env.close()
+    scen, speed, driver = traffic_driver(8, ReplanConfig(wall_limit=False), 20)
     v_turn = min(speed.v_max, math.sqrt(speed.a_lat_max * ReplanConfig().turning_radius_m))
     bound = speed.steer_rate_share * scen.vehicle.max_steer_rate / v_turn
     assert 0.03 < bound < 0.04
@@ -105,19 +87,8 @@ def test_the_replanner_plans_lane_changes_the_car_drives_at_lane_change_speed() 
     [({}, None), ({"smoothing": {"max_sharpness": 0.05}}, 0.05)],
 )
 def test_the_replanner_sets_the_road_sharpness_unless_given(options, expected) -> None:
-    from rrtdrive.controllers import make_controller
-    from rrtdrive.sim.scenes import build_env, scenario_rngs
-    from rrtdrive.sim.traffic_driver import TrafficDriver
-
-    scen = make_scenario("overtake-traffic", 0)
-    env = build_env(scen)
-    try:
-        speed = traffic_speed_config(scen)
-        ctrl = make_controller("pure-pursuit", vehicle=scen.vehicle, speed=speed)
-        config = ReplanConfig(wall_limit=False, planner_options=options)
-        driver = TrafficDriver(env, scen, ctrl, speed, config, scenario_rngs(0)[1])
-    finally:
-        env.close()
+    config = ReplanConfig(wall_limit=False, planner_options=options)
+    scen, speed, driver = traffic_driver(0, config, None)
     v_turn = math.sqrt(speed.a_lat_max * config.turning_radius_m)
     road = speed.steer_rate_share * scen.vehicle.max_steer_rate / v_turn
     smoothing = driver.planner.config.smoothing
