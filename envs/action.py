@@ -141,7 +141,8 @@ class ResidualMixer:
     ) -> tuple[float, float]:
         """The command to apply, from the controller's ``(c_accel, c_steer)`` and the residual.
 
-        ``ctrl`` is the tracking controller (its ``at_stop`` and ``remaining``).
+        ``ctrl`` is the tracking controller (its ``at_stop``, ``remaining``,
+        ``steer_window`` and ``steer_wanted``).
         """
         remaining = ctrl.remaining
         if ctrl.at_stop or remaining <= 0.0:
@@ -154,7 +155,7 @@ class ResidualMixer:
         fade = min(1.0, remaining / RESIDUAL_FADE_M)
         lim = self.limits.steer_limit
         accel = self.accel(c_accel, fade * d_accel, self.dt)
-        window = getattr(ctrl, "steer_window", None)
+        window = ctrl.steer_window
         if window is None:
             return accel, min(max(c_steer + fade * d_steer, -lim), lim)
         # A rate-limited actuator: the residual goes on the controller's wish, and the

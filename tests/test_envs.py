@@ -466,8 +466,8 @@ def test_action_mapping_and_zero_residual_mixer():
     with pytest.raises(InputError, match="action"):
         action_command([0.0], lim)
 
-    class Ctrl:  # the two attributes the mixer reads
-        at_stop, remaining = False, 10.0
+    class Ctrl:  # the attributes the mixer reads (an instant actuator: no reach window)
+        at_stop, remaining, steer_window = False, 10.0, None
 
     mixer = ResidualMixer(lim, SpeedConfig(), 0.05)
     for c in (0.0, 0.2, 0.25, -1.0, 1.9):

@@ -197,7 +197,7 @@ class _Query:
         self.last_raw: np.ndarray | None = None
         self.failed_raws: list[np.ndarray] = []
         self.iterations = 0
-        self.limits = cfg.stage_budgets(Budget().max_iterations)
+        self.limits: StageBudgets  # the stages' counted budgets, set per query by run()
         self.trees: tuple[Tree, ...] = (
             Tree(self.s_xy[None, :], np.array([-1])),
             Tree(self.g_xy[None, :], np.array([-1])),
