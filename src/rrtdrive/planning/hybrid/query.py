@@ -258,9 +258,7 @@ def hybrid_query(
         ):
             break
         cfg = cfg.refined()
-    total = SearchOutcome(
-        outcome.reason, *(sum(getattr(o, f) for _, o in tried) for f in _COUNTS)
-    )
+    total = SearchOutcome.total(outcome.reason, [o for _, o in tried])
     earlier = tried[:-1]
     if path is not None:
         note = ""
@@ -275,7 +273,6 @@ def hybrid_query(
 
 #: Search endings that a finer search is tried after (budget left, no path).
 _REFINE_ON = ("exhausted", "no_approach", "rejected")
-_COUNTS = ("expansions", "nodes", "shots", "connections")
 
 
 def _resolution(cfg: HybridConfig) -> str:
@@ -379,10 +376,7 @@ def _query_at(
         searches = searches_with(search_clearance)
         left = budget - used.expansions
         path, outcome = _alternate(searches, left, config.switch_after, watch)
-        used = SearchOutcome(
-            outcome.reason, used.expansions + outcome.expansions, used.nodes + outcome.nodes,
-            used.shots + outcome.shots, used.connections + outcome.connections,
-        )  # fmt: skip
+        used = SearchOutcome.total(outcome.reason, [used, outcome])
         if path is not None or outcome.reason != "rejected" or left - outcome.expansions <= 0:
             break
     trees = tuple(_tree(s) for s, _ in searches if s.x)
@@ -418,15 +412,10 @@ def _alternate(
         k = (k + 1) % len(searches)
     if len(searches) == 1:
         return path, outcomes[0]
-    a, b = outcomes
     reason = outcomes[k].reason
     if reason == "exhausted" and k == 1:
         reason = "no_approach"  # exhausted from the goal's side
-    total = SearchOutcome(
-        reason, a.expansions + b.expansions, a.nodes + b.nodes, a.shots + b.shots,
-        a.connections + b.connections,
-    )  # fmt: skip
-    return path, total
+    return path, SearchOutcome.total(reason, outcomes)
 
 
 def prims_reverse(radius: float, config: HybridConfig) -> PrimitiveSet:

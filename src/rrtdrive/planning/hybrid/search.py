@@ -71,6 +71,17 @@ class SearchOutcome:
     shots: int
     connections: int
 
+    @classmethod
+    def total(cls, reason: str, outcomes: Sequence[SearchOutcome]) -> SearchOutcome:
+        """One outcome for several searches: ``reason``, and every count summed."""
+        return cls(
+            reason,
+            sum(o.expansions for o in outcomes),
+            sum(o.nodes for o in outcomes),
+            sum(o.shots for o in outcomes),
+            sum(o.connections for o in outcomes),
+        )
+
 
 #: ``shots(pose) -> candidates``: pieces from the pose to the exact goal, shortest first.
 Shots = Callable[[Pose], Sequence[list[Piece]]]
