@@ -58,7 +58,10 @@ def test_tight_parallel_gap_is_solved_at_the_finer_resolution() -> None:
     task = make_scenario("parallel-parking", 5)
     assert task.gap_factor < 1.52  # one of the tightest gaps of the range
     problem = _problem(task)
-    coarse = HybridAStar(refinements=0).solve(problem, np.random.default_rng(0), BUDGET)
+    # (min_clearance: no search keeping less than the usual clearance after the proof.)
+    coarse = HybridAStar(refinements=0, min_clearance=0.15).solve(
+        problem, np.random.default_rng(0), BUDGET
+    )
     assert coarse.status is PlanStatus.PROVEN_UNREACHABLE
     assert "no path at 0.5 m / 5 deg resolution" in coarse.message
     res = HybridAStar().solve(problem, np.random.default_rng(0), BUDGET)
@@ -87,8 +90,9 @@ def test_reverse_in_bay_with_rejected_connections_is_solved_finer() -> None:
 
 def test_refinement_shares_the_counted_budget() -> None:
     task = make_scenario("parallel-parking", 5)
-    # The coarse search needs ~404 expansions to end; 420 leaves too few for the fine one.
-    res = HybridAStar().solve(
+    # The coarse search needs ~404 expansions to end; 420 leaves too few for the fine one
+    # (coarse_after=0: the first search may spend the whole budget).
+    res = HybridAStar(coarse_after=0.0).solve(
         _problem(task), np.random.default_rng(0), Budget(max_iterations=420, max_time_s=1e6)
     )
     assert not res.success

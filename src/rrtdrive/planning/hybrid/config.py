@@ -105,6 +105,24 @@ class HybridConfig:
         are not reachable at 0.5 m / 5 deg / 1 m steps (the car cannot leave a gap
         0.3 m deep behind it by 1 m steps) and are at 0.25 m / 2.5 deg / 0.5 m.
         A failure is "proven unreachable" only at the finest resolution tried.
+    coarse_after : float
+        Share of the expansion budget the first search may spend; when it has spent
+        it without a path (and without running out of states), the rest goes to a
+        search at ``coarse_factor`` times the cell, heading bin and step (no finer
+        retry after it; 0 or 1: never). Long forward-only drives need it: a car that
+        must loop round on ``parking_lot`` expands 20 000 states at 0.5 m / 5 deg and
+        still has no path, and finds one in 229-4 264 expansions at 2 m / 20 deg /
+        4 m (6 of the 30 + 30 random queries of ``experiments/coverage.py``). A
+        failure of the coarse search proves nothing (status ``no_path_in_budget``).
+    coarse_factor : int
+        How much coarser that search is (>= 2; its heading bin is capped at pi/4).
+    min_clearance : float
+        When the searches keeping ``body_clearance`` run out of states (a proof for
+        paths that keep it), one more search at the first resolution keeps only this
+        much (``>= body_clearance``: never). A start pose with room around it but
+        less ahead needs it: random start 7 of ``experiments/coverage.py`` (0.20 m
+        clearance) cannot drive forward keeping 0.15 m, or 0.10 m, and can keeping
+        0.05 m (230 expansions); OMPL's planners keep none.
 
     Examples
     --------
@@ -139,6 +157,9 @@ class HybridConfig:
     max_solutions: int = 16
     ramp_margin: float = 0.1
     refinements: int = 1
+    coarse_after: float = 0.5
+    coarse_factor: int = 4
+    min_clearance: float = 0.05
 
     def __post_init__(self) -> None:
         for name in (
@@ -171,6 +192,7 @@ class HybridConfig:
                 raise InputError(f"hybrid.{name}: must be >= {low:g}, got {value!r}")
         for name in (
         "gear_change_cost", "steer_change_cost", "steer_cost", "body_clearance", "ramp_margin",
+        "min_clearance",
     ):  # fmt: skip
             value = getattr(self, name)
             require_finite(f"hybrid.{name}", value)
@@ -182,6 +204,12 @@ class HybridConfig:
         require_int("hybrid.max_solutions", self.max_solutions)
         require_int("hybrid.switch_after", self.switch_after, minimum=0)
         require_int("hybrid.refinements", self.refinements, minimum=0)
+        require_int("hybrid.coarse_factor", self.coarse_factor, minimum=2)
+        require_finite("hybrid.coarse_after", self.coarse_after)
+        if not 0.0 <= self.coarse_after <= 1.0:
+            raise InputError(
+                f"hybrid.coarse_after: must be within [0, 1], got {self.coarse_after!r}"
+            )
         for name in ("smooth", "arc_fallback", "reeds_shepp_heuristic"):
             if not isinstance(getattr(self, name), bool):
                 raise InputError(
@@ -203,6 +231,46 @@ class HybridConfig:
             yaw_resolution=self.yaw_resolution / 2.0,
             step=self.step / 2.0,
             refinements=max(0, self.refinements - 1),
+            coarse_after=0.0,
+        )
+
+    def tightened(self) -> HybridConfig:
+        """The last search: :attr:`min_clearance` kept, no finer or coarser one after it.
+
+        Examples
+        --------
+        >>> tight = HybridConfig().tightened()
+        >>> tight.body_clearance, tight.xy_resolution, tight.refinements, tight.coarsens
+        (0.05, 0.5, 0, False)
+        """
+        return dataclasses.replace(
+            self, body_clearance=self.min_clearance, refinements=0, coarse_after=0.0
+        )
+
+    @property
+    def coarsens(self) -> bool:
+        """Whether the first search hands the rest of its budget to a coarser one."""
+        return 0.0 < self.coarse_after < 1.0
+
+    def coarsened(self) -> HybridConfig:
+        """The coarser search: ``coarse_factor`` times the cell, bin and step; last of all.
+
+        Examples
+        --------
+        >>> coarse = HybridConfig().coarsened()
+        >>> coarse.xy_resolution, coarse.step, coarse.yaw_bins, coarse.refinements
+        (2.0, 4.0, 18, 0)
+        >>> coarse.coarsens
+        False
+        """
+        f = self.coarse_factor
+        return dataclasses.replace(
+            self,
+            xy_resolution=self.xy_resolution * f,
+            yaw_resolution=min(self.yaw_resolution * f, math.pi / 4),
+            step=self.step * f,
+            refinements=0,
+            coarse_after=0.0,
         )
 
     @property

@@ -19,7 +19,7 @@ import dataclasses
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.planner import NAME, answer_stats, arcs_note, path_of
-from rrtdrive.planning.hybrid.query import hybrid_query, query_clearance
+from rrtdrive.planning.hybrid.query import hybrid_query
 from rrtdrive.planning.result import timeout_result
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, PlanResult, PlanStatus
@@ -120,7 +120,7 @@ def escalate(
             failed,
             message=(
                 f"{failed.message}; Hybrid A* ({gear}) found none either: {answer.message}"
-                + _proof_scope(answer.outcome.reason, query_clearance(problem, cfg.body_clearance))
+                + _proof_scope(answer.outcome.reason, answer.clearance)
             ),
             stats=stats,
             iterations=used,

@@ -39,6 +39,7 @@ def answer_stats(answer: HybridAnswer, wheelbase: float) -> dict[str, float]:
         "shots": float(o.shots),
         "connections": float(o.connections),
         "refinements": float(answer.refinements),
+        "coarse_search": float(answer.coarse),
     }
     if answer.path is not None:
         stats["gear_segments"] = float(answer.path.segments)
@@ -119,9 +120,10 @@ class HybridAStar:
             return hybrid_result(NAME, answer, watch, stats)
 
         def prepare() -> None:
-            free_cell_graph(problem, cfg.xy_resolution)
-            if not reverse:
-                dubins_table(cfg.radius_factor / problem.vehicle.kappa_max, cfg)
+            for c in (cfg, cfg.coarsened()) if cfg.coarsens else (cfg,):
+                free_cell_graph(problem, c.xy_resolution)
+                if not reverse:
+                    dubins_table(c.radius_factor / problem.vehicle.kappa_max, c)
 
         return run_query(NAME, problem, budget, search, prepare)
 

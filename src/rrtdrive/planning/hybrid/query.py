@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -118,9 +119,12 @@ class HybridAnswer:
 
     ``trees`` are the search trees of the last resolution tried, the one from the
     start first (the one from the goal second, when the query turned to it);
-    ``refinements`` counts the finer searches run after the first, and ``note``
-    says, for a solved query, at which resolution and why (empty when the first
-    search solved it).
+    ``refinements`` counts the finer searches run after the first, ``coarse`` says
+    whether the last search was the coarser one (:attr:`HybridConfig.coarse_after`),
+    ``clearance`` is the body clearance the last search kept (less than
+    ``body_clearance`` after :attr:`HybridConfig.min_clearance`'s search), and
+    ``note`` says, for a solved query, at which resolution and why (empty when the
+    first search solved it).
     """
 
     path: BuiltPath | None
@@ -129,6 +133,8 @@ class HybridAnswer:
     trees: tuple[Tree, ...]
     note: str = ""
     refinements: int = 0
+    coarse: bool = False
+    clearance: float = 0.0
 
 
 def _failure_message(
@@ -242,37 +248,89 @@ def hybrid_query(
     -------
     HybridAnswer
     """
-    cfg = config
     left = budget.max_iterations
     tried: list[tuple[HybridConfig, SearchOutcome]] = []
-    while True:
-        path, outcome, trees = _query_at(problem, left, watch, cfg, reverse, smoothing)
-        tried.append((cfg, outcome))
-        left -= outcome.expansions
-        if (
-            path is not None
-            or cfg.refinements <= 0
-            or left <= 0
-            or outcome.reason not in _REFINE_ON
-            or watch.expired()
-        ):
-            break
-        cfg = cfg.refined()
-    total = SearchOutcome.total(outcome.reason, [o for _, o in tried])
+    found: tuple[BuiltPath | None, SearchOutcome, tuple[Tree, ...]]
+
+    def run(cfg: HybridConfig, allowed: int) -> None:
+        nonlocal left, found
+        found = _query_at(problem, allowed, watch, cfg, reverse, smoothing)
+        tried.append((cfg, found[1]))
+        left -= found[1].expansions
+
+    def more(reasons: tuple[str, ...]) -> bool:
+        return found[0] is None and left > 0 and not watch.expired() and found[1].reason in reasons
+
+    cfg = config
+    run(cfg, math.ceil(left * cfg.coarse_after) if cfg.coarsens else left)
+    stage = "first"
+    if cfg.coarsens and more(("expansions",)):
+        # Its share spent, not out of states: the rest goes to the coarser search.
+        cfg, stage = cfg.coarsened(), "coarse"
+        run(cfg, left)
+    else:
+        while cfg.refinements > 0 and more(_REFINE_ON):
+            cfg = cfg.refined()
+            run(cfg, left)
+        if config.min_clearance < config.body_clearance and more(_PROOFS):
+            # A proof for paths keeping body_clearance; a tighter path may exist.
+            cfg, stage = config.tightened(), "tight"
+            run(cfg, left)
+    path, outcome, trees = found
+    reason = outcome.reason
+    clearance = query_clearance(problem, cfg.body_clearance)
+    if stage == "coarse" and path is None and reason in _REFINE_ON:
+        # What the coarse search cannot do proves nothing: the finer one was cut short.
+        reason = "expansions"
+    if stage == "tight" and path is None and reason not in _PROOFS:
+        # Cut short keeping less clearance: the proof for the usual clearance stands.
+        reason = tried[-2][1].reason
+        clearance = query_clearance(problem, config.body_clearance)
+    total = SearchOutcome.total(reason, [o for _, o in tried])
     earlier = tried[:-1]
+    answer = functools.partial(
+        HybridAnswer, outcome=total, trees=trees, refinements=len(earlier) - (stage != "first"),
+        coarse=stage == "coarse", clearance=clearance,
+    )  # fmt: skip
     if path is not None:
         note = ""
+        if stage == "tight":
+            kept = query_clearance(problem, config.body_clearance)
+            note = f" keeping only {clearance:.2f} m body clearance (none keeps {kept:.2f} m)"
         if earlier:
-            note = f" at {_resolution(cfg)} resolution ({_earlier_note(earlier)})"
-        return HybridAnswer(path, total, "", trees, note, len(earlier))
+            note += f" at {_resolution(cfg)} resolution ({_earlier_note(earlier)})"
+        return answer(path=path, message="", note=note)
+    if stage == "coarse":
+        first_cfg, first = tried[0]
+        message = (
+            f"no path found within the expansion budget of {budget.max_iterations}: at "
+            f"{_resolution(first_cfg)} / {first_cfg.step:g} m steps the search "
+            f"{_why(first, 'its share of ')}, then at {_resolution(cfg)} / {cfg.step:g} m "
+            f"steps it {_why(outcome, '')} (a coarse search proves nothing; a larger "
+            "budget may find a path)"
+        )
+        return answer(path=None, message=message)
+    if stage == "tight":
+        # Lead with the proof at the finest resolution and the usual clearance.
+        (cfg, outcome), earlier = tried[-2], tried[:-2]
     message = _failure_message(outcome, cfg, budget, reverse)
     if earlier:
         message += f"; {_earlier_note(earlier)}"
-    return HybridAnswer(None, total, message, trees, "", len(earlier))
+    if stage == "tight":
+        last_cfg, last = tried[-1]
+        tight = query_clearance(problem, last_cfg.body_clearance)
+        message += (
+            f"; keeping only {tight:.2f} m body clearance, at {_resolution(last_cfg)} the "
+            f"search {_why(last, '')}" + (" too" if last.reason in _PROOFS else "")
+        )
+    return answer(path=None, message=message)
 
 
 #: Search endings that a finer search is tried after (budget left, no path).
 _REFINE_ON = ("exhausted", "no_approach", "rejected")
+
+#: Search endings that prove the query unreachable for the search's clearance and grid.
+_PROOFS = ("exhausted", "no_approach")
 
 
 def _resolution(cfg: HybridConfig) -> str:
@@ -281,17 +339,32 @@ def _resolution(cfg: HybridConfig) -> str:
 
 def _earlier_note(earlier: Sequence[tuple[HybridConfig, SearchOutcome]]) -> str:
     """What the coarser searches before the last one ended with, for a message."""
+    parts = [
+        f"at {_resolution(c)} / {c.step:g} m steps the search {_why(o, 'its share of ')}"
+        for c, o in earlier
+    ]
+    return "before that, " + "; ".join(parts)
+
+
+def _why(outcome: SearchOutcome, share: str) -> str:
+    """How a search ended, for a message.
+
+    Examples
+    --------
+    >>> _why(SearchOutcome("expansions", 10, 0, 0, 0), "its share of ")
+    'spent its share of 10 expansions'
+    >>> _why(SearchOutcome("exhausted", 7, 0, 0, 0), "")
+    'ran out of states after 7 expansions'
+    """
     why = {
         "exhausted": "ran out of states",
         "no_approach": "ran out of ways to arrive at the goal",
         "rejected": "had every goal connection rejected",
+        "time": "was stopped by the wall-clock cap",
     }
-    parts = [
-        f"at {_resolution(c)} / {c.step:g} m steps the search {why.get(o.reason, o.reason)} "
-        f"after {o.expansions} expansions"
-        for c, o in earlier
-    ]
-    return "before that, " + "; ".join(parts)
+    if outcome.reason == "expansions":
+        return f"spent {share}{outcome.expansions} expansions"
+    return f"{why.get(outcome.reason, outcome.reason)} after {outcome.expansions} expansions"
 
 
 def _query_at(

@@ -1,0 +1,89 @@
+"""Hybrid A*'s coarse stage (``HybridConfig.coarse_after``): a search that spends its
+share of the budget without a path hands the rest to one at 4x the cell, bin and step.
+
+Forward-only drives that must loop round on ``parking_lot`` need it; what the coarse
+search fails to find proves nothing, so such a failure is never ``proven_unreachable``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from pathlib import Path as FsPath
+
+import numpy as np
+import pytest
+
+from rrtdrive.maps import builtin_map
+from rrtdrive.planning import PlanningProblem, make_planner
+from rrtdrive.planning.hybrid import HybridConfig
+from rrtdrive.types import Budget, InputError, PlanStatus
+from rrtdrive.verify import verify_path
+
+sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "experiments"))
+from random_goals import draw_goals  # noqa: E402
+
+
+def _loop_start_problem() -> PlanningProblem:
+    """Random start 25 of the coverage set: forward only, the car must turn round."""
+    base = builtin_map("parking_lot")
+    pose = draw_goals("parking_lot", 30, 1, "start")[25]
+    return PlanningProblem.from_map(dataclasses.replace(base, start=pose))
+
+
+def _solve(problem: PlanningProblem, budget: int, **options: object):
+    planner = make_planner("hybrid-a-star", **options)
+    return planner.solve(
+        problem, np.random.default_rng(0), Budget(max_iterations=budget, max_time_s=300)
+    )
+
+
+def test_coarse_stage_solves_what_the_fine_search_cannot_in_the_budget() -> None:
+    problem = _loop_start_problem()
+    without = _solve(problem, 2000, coarse_after=0.0)
+    assert without.status is PlanStatus.NO_PATH_IN_BUDGET
+    res = _solve(problem, 2000)
+    assert res.status is PlanStatus.SOLVED, res.message
+    assert "at 2 m / 20 deg resolution" in res.message
+    assert "spent its share of 1000 expansions" in res.message
+    assert res.stats["coarse_search"] == 1.0 and res.stats["refinements"] == 0.0
+    assert 1000 < res.iterations <= 2000
+    # Exact start and goal, forward only, and the independent check passes.
+    assert np.allclose(res.path.samples[0, :3], problem.start.as_tuple(), atol=1e-9)
+    assert np.allclose(res.path.samples[-1, :3], problem.goal.as_tuple(), atol=1e-6)
+    assert np.all(res.path.samples[:, 4] == 1)
+    m = dataclasses.replace(builtin_map("parking_lot"), start=problem.start)
+    assert verify_path(m, res.path).ok
+
+
+def test_a_failed_coarse_search_is_not_a_proof() -> None:
+    # kerbside forward only: the fine search is cut at its share (200 of 400), the coarse
+    # one cannot reach the gap and runs out of states before the budget is spent.
+    problem = PlanningProblem.from_map(builtin_map("kerbside"))
+    cut = _solve(problem, 400)
+    assert cut.status is PlanStatus.NO_PATH_IN_BUDGET
+    assert cut.iterations < 400  # the coarse search ended by running out, not by the budget
+    assert "ran out of states" in cut.message and "a coarse search proves nothing" in cut.message
+    assert "spent its share of 200 expansions" in cut.message
+    # With budget enough that the fine search ends within its share, it (and its finer
+    # retry) proves that no forward drive arrives: the proof is not lost.
+    proof = _solve(problem, 900)
+    assert proof.status is PlanStatus.PROVEN_UNREACHABLE, proof.message
+    assert proof.stats["coarse_search"] == 0.0 and proof.stats["refinements"] == 1.0
+
+
+def test_queries_solved_within_the_share_are_unchanged() -> None:
+    problem = PlanningProblem.from_map(builtin_map("garage"))
+    a, b = _solve(problem, 2000), _solve(problem, 2000, coarse_after=0.0)
+    assert a.status is b.status is PlanStatus.SOLVED
+    assert a.iterations == b.iterations
+    assert np.array_equal(a.path.samples, b.path.samples)
+    assert a.stats["coarse_search"] == 0.0
+
+
+@pytest.mark.parametrize(
+    ("field", "value"), [("coarse_after", 1.5), ("coarse_after", -0.1), ("coarse_factor", 1)]
+)
+def test_bad_coarse_settings_name_the_field(field: str, value: float) -> None:
+    with pytest.raises(InputError, match=f"hybrid.{field}"):
+        HybridConfig(**{field: value})
