@@ -150,7 +150,8 @@ def escalate(
         )
     stats["stage"] = NAME  # type: ignore[assignment]  # the one string entry
     message = (
-        f"solved by the Hybrid A* escalation ({gear}; {answer.outcome.expansions} expansions, "
+        f"solved by the Hybrid A* escalation{answer.note} ({gear}; "
+        f"{answer.outcome.expansions} expansions, "
         f"{path.length:.1f} m, {built.segments - 1} cusp(s)); the RRT-Connect stages "
         f"failed: {reason}" + arcs_note(built)
     )

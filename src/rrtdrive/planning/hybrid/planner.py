@@ -40,6 +40,7 @@ def answer_stats(answer: HybridAnswer, wheelbase: float) -> dict[str, float]:
         "connections": float(o.connections),
         "refinements": float(answer.refinements),
         "coarse_search": float(answer.coarse),
+        "body_clearance_m": float(answer.clearance),
     }
     if answer.path is not None:
         stats["gear_segments"] = float(answer.path.segments)
