@@ -123,6 +123,14 @@ class HybridConfig:
         less ahead needs it: random start 7 of ``experiments/coverage.py`` (0.20 m
         clearance) cannot drive forward keeping 0.15 m, or 0.10 m, and can keeping
         0.05 m (230 expansions); OMPL's planners keep none.
+    wide_radius_factor : float
+        When the searches end with every goal connection rejected (``rejected``, at
+        every resolution tried), one more search at the first resolution turns with
+        radius ``wide_radius_factor / kappa_max`` (``<= radius_factor``: never). The
+        ramps of a word of full-lock arcs need steering beyond ``delta_max`` to end on
+        its pose: random goals 39 and 92 of ``coverage.py --count 100`` (with
+        reverse) had all 32 connections' ramps fail at 1.02 and solve at 1.1 in 4 and
+        1 expansions.
 
     Examples
     --------
@@ -157,9 +165,10 @@ class HybridConfig:
     max_solutions: int = 16
     ramp_margin: float = 0.1
     refinements: int = 1
-    coarse_after: float = 0.5
+    coarse_after: float = 0.25
     coarse_factor: int = 4
     min_clearance: float = 0.05
+    wide_radius_factor: float = 1.1
 
     def __post_init__(self) -> None:
         for name in (
@@ -185,7 +194,10 @@ class HybridConfig:
             raise InputError(
                 f"hybrid.curvatures: must be an odd integer >= 1, got {self.curvatures!r}"
             )
-        for name, low in (("radius_factor", 1.0), ("reverse_cost", 1.0), ("heuristic_weight", 1.0)):
+        for name, low in (
+            ("radius_factor", 1.0), ("reverse_cost", 1.0), ("heuristic_weight", 1.0),
+            ("wide_radius_factor", 1.0),
+        ):  # fmt: skip
             value = getattr(self, name)
             require_finite(f"hybrid.{name}", value)
             if value < low:
@@ -245,6 +257,18 @@ class HybridConfig:
         """
         return dataclasses.replace(
             self, body_clearance=self.min_clearance, refinements=0, coarse_after=0.0
+        )
+
+    def widened(self) -> HybridConfig:
+        """The last search after rejected connections: :attr:`wide_radius_factor`'s turns.
+
+        Examples
+        --------
+        >>> HybridConfig().widened().radius_factor, HybridConfig().widened().refinements
+        (1.1, 0)
+        """
+        return dataclasses.replace(
+            self, radius_factor=self.wide_radius_factor, refinements=0, coarse_after=0.0
         )
 
     @property

@@ -39,7 +39,9 @@ def answer_stats(answer: HybridAnswer, wheelbase: float) -> dict[str, float]:
         "shots": float(o.shots),
         "connections": float(o.connections),
         "refinements": float(answer.refinements),
-        "coarse_search": float(answer.coarse),
+        "coarse_search": float(answer.stage == "coarse"),
+        "tight_search": float(answer.stage == "tight"),
+        "wide_search": float(answer.stage == "wide"),
         "body_clearance_m": float(answer.clearance),
     }
     if answer.path is not None:

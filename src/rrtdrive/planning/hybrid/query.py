@@ -119,9 +119,10 @@ class HybridAnswer:
 
     ``trees`` are the search trees of the last resolution tried, the one from the
     start first (the one from the goal second, when the query turned to it);
-    ``refinements`` counts the finer searches run after the first, ``coarse`` says
-    whether the last search was the coarser one (:attr:`HybridConfig.coarse_after`),
-    ``clearance`` is the body clearance the last search kept (less than
+    ``refinements`` counts the finer searches run after the first, ``stage`` names
+    the last search (``"first"`` or a finer one, ``"coarse"``
+    (:attr:`HybridConfig.coarse_after`), ``"tight"`` (``min_clearance``) or ``"wide"``
+    (``wide_radius_factor``)), ``clearance`` is the body clearance the last search kept (less than
     ``body_clearance`` after :attr:`HybridConfig.min_clearance`'s search), and
     ``note`` says, for a solved query, at which resolution and why (empty when the
     first search solved it).
@@ -133,7 +134,7 @@ class HybridAnswer:
     trees: tuple[Tree, ...]
     note: str = ""
     refinements: int = 0
-    coarse: bool = False
+    stage: str = "first"
     clearance: float = 0.0
 
 
@@ -269,12 +270,19 @@ def hybrid_query(
         cfg, stage = cfg.coarsened(), "coarse"
         run(cfg, left)
     else:
+        first = tried[0][1].reason
+        tight = config.min_clearance < config.body_clearance and first in _PROOFS
+        wide = config.wide_radius_factor > config.radius_factor and first == "rejected"
         while cfg.refinements > 0 and more(_REFINE_ON):
             cfg = cfg.refined()
             run(cfg, left)
-        if config.min_clearance < config.body_clearance and more(_PROOFS):
+        if tight and more(_PROOFS):
             # A proof for paths keeping body_clearance; a tighter path may exist.
             cfg, stage = config.tightened(), "tight"
+            run(cfg, left)
+        elif wide and more(("rejected",)):
+            # The ramps of full-lock words need steering room: turn a little wider.
+            cfg, stage = config.widened(), "wide"
             run(cfg, left)
     path, outcome, trees = found
     reason = outcome.reason
@@ -282,18 +290,23 @@ def hybrid_query(
     if stage == "coarse" and path is None and reason in _REFINE_ON:
         # What the coarse search cannot do proves nothing: the finer one was cut short.
         reason = "expansions"
-    if stage == "tight" and path is None and reason not in _PROOFS:
-        # Cut short keeping less clearance: the proof for the usual clearance stands.
-        reason = tried[-2][1].reason
+    if stage == "tight" and path is None and reason not in (*_PROOFS, "time"):
+        # Cut short keeping less clearance: a proof for the usual clearance stands.
+        reason = tried[-2][1].reason if tried[-2][1].reason in _PROOFS else "expansions"
         clearance = query_clearance(problem, config.body_clearance)
+    if stage == "wide" and path is None and reason != "time":
+        # Wider turns prove nothing about the car's own: the rejections stand.
+        reason = "rejected"
     total = SearchOutcome.total(reason, [o for _, o in tried])
     earlier = tried[:-1]
     answer = functools.partial(
         HybridAnswer, outcome=total, trees=trees, refinements=len(earlier) - (stage != "first"),
-        coarse=stage == "coarse", clearance=clearance,
+        stage=stage, clearance=clearance,
     )  # fmt: skip
     if path is not None:
         note = ""
+        if stage == "wide":
+            note = f" turning with radius {cfg.radius_factor:g} / kappa_max"
         if stage == "tight":
             kept = query_clearance(problem, config.body_clearance)
             note = f" keeping only {clearance:.2f} m body clearance (none keeps {kept:.2f} m)"
@@ -310,8 +323,8 @@ def hybrid_query(
             "budget may find a path)"
         )
         return answer(path=None, message=message)
-    if stage == "tight":
-        # Lead with the proof at the finest resolution and the usual clearance.
+    if stage in ("tight", "wide"):
+        # Lead with the finest resolution's ending at the usual clearance and radius.
         (cfg, outcome), earlier = tried[-2], tried[:-2]
     message = _failure_message(outcome, cfg, budget, reverse)
     if earlier:
@@ -322,6 +335,12 @@ def hybrid_query(
         message += (
             f"; keeping only {tight:.2f} m body clearance, at {_resolution(last_cfg)} the "
             f"search {_why(last, '')}" + (" too" if last.reason in _PROOFS else "")
+        )
+    if stage == "wide":
+        last_cfg, last = tried[-1]
+        message += (
+            f"; turning with radius {last_cfg.radius_factor:g} / kappa_max, at "
+            f"{_resolution(last_cfg)} the search {_why(last, '')}"
         )
     return answer(path=None, message=message)
 

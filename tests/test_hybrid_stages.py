@@ -1,8 +1,12 @@
-"""Hybrid A*'s coarse stage (``HybridConfig.coarse_after``): a search that spends its
-share of the budget without a path hands the rest to one at 4x the cell, bin and step.
+"""Hybrid A*'s last-resort stages, on random queries of ``experiments/coverage.py``.
 
-Forward-only drives that must loop round on ``parking_lot`` need it; what the coarse
-search fails to find proves nothing, so such a failure is never ``proven_unreachable``.
+- coarse (``HybridConfig.coarse_after``): a search that spends its share of the
+  budget without a path hands the rest to one at 4x the cell, bin and step; forward
+  drives that must loop round on ``parking_lot`` need it. Its failure proves nothing.
+- tight (``min_clearance``): after a proof for paths keeping 0.15 m, one search
+  keeping 0.05 m; a start with room around it but less ahead needs it.
+- wide (``wide_radius_factor``): after every goal connection was rejected (the
+  ramps of full-lock words cannot end on the pose), one search turning wider.
 """
 
 from __future__ import annotations
@@ -24,11 +28,16 @@ sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "experiments"))
 from random_goals import draw_goals  # noqa: E402
 
 
+def _random_problem(vary: str, index: int, count: int = 30, reverse: bool = False):
+    """Random ``vary`` pose ``index`` of ``coverage.py --count count``: its map and problem."""
+    pose = draw_goals("parking_lot", count, 1, vary)[index]
+    m = dataclasses.replace(builtin_map("parking_lot"), **{vary: pose})
+    return m, PlanningProblem.from_map(m, reverse=reverse)
+
+
 def _loop_start_problem() -> PlanningProblem:
     """Random start 25 of the coverage set: forward only, the car must turn round."""
-    base = builtin_map("parking_lot")
-    pose = draw_goals("parking_lot", 30, 1, "start")[25]
-    return PlanningProblem.from_map(dataclasses.replace(base, start=pose))
+    return _random_problem("start", 25)[1]
 
 
 def _solve(problem: PlanningProblem, budget: int, **options: object):
@@ -45,9 +54,9 @@ def test_coarse_stage_solves_what_the_fine_search_cannot_in_the_budget() -> None
     res = _solve(problem, 2000)
     assert res.status is PlanStatus.SOLVED, res.message
     assert "at 2 m / 20 deg resolution" in res.message
-    assert "spent its share of 1000 expansions" in res.message
+    assert "spent its share of 500 expansions" in res.message
     assert res.stats["coarse_search"] == 1.0 and res.stats["refinements"] == 0.0
-    assert 1000 < res.iterations <= 2000
+    assert 500 < res.iterations <= 2000
     # Exact start and goal, forward only, and the independent check passes.
     assert np.allclose(res.path.samples[0, :3], problem.start.as_tuple(), atol=1e-9)
     assert np.allclose(res.path.samples[-1, :3], problem.goal.as_tuple(), atol=1e-6)
@@ -57,17 +66,17 @@ def test_coarse_stage_solves_what_the_fine_search_cannot_in_the_budget() -> None
 
 
 def test_a_failed_coarse_search_is_not_a_proof() -> None:
-    # kerbside forward only: the fine search is cut at its share (200 of 400), the coarse
+    # kerbside forward only: the fine search is cut at its share (100 of 400), the coarse
     # one cannot reach the gap and runs out of states before the budget is spent.
     problem = PlanningProblem.from_map(builtin_map("kerbside"))
     cut = _solve(problem, 400)
     assert cut.status is PlanStatus.NO_PATH_IN_BUDGET
     assert cut.iterations < 400  # the coarse search ended by running out, not by the budget
     assert "ran out of states" in cut.message and "a coarse search proves nothing" in cut.message
-    assert "spent its share of 200 expansions" in cut.message
+    assert "spent its share of 100 expansions" in cut.message
     # With budget enough that the fine search ends within its share, it (and its finer
     # retry) proves that no forward drive arrives: the proof is not lost.
-    proof = _solve(problem, 900)
+    proof = _solve(problem, 2000)
     assert proof.status is PlanStatus.PROVEN_UNREACHABLE, proof.message
     assert proof.stats["coarse_search"] == 0.0 and proof.stats["refinements"] == 1.0
 
@@ -81,8 +90,38 @@ def test_queries_solved_within_the_share_are_unchanged() -> None:
     assert a.stats["coarse_search"] == 0.0
 
 
+def test_tight_stage_keeps_less_clearance_only_after_a_proof() -> None:
+    m, problem = _random_problem("start", 7)
+    proof = _solve(problem, 20_000, min_clearance=0.15)
+    assert proof.status is PlanStatus.PROVEN_UNREACHABLE
+    res = _solve(problem, 20_000)
+    assert res.status is PlanStatus.SOLVED, res.message
+    assert "keeping only 0.05 m body clearance (none keeps 0.15 m)" in res.message
+    assert res.stats["tight_search"] == 1.0
+    assert res.stats["body_clearance_m"] == pytest.approx(0.05)
+    assert verify_path(m, res.path).ok
+    clear = min(problem.checker.body_clearance(tuple(r[:3])) for r in res.path.samples)
+    # The re-check allows 5 mm below the search's clearance (interpolated rows).
+    assert 0.045 - 1e-6 <= clear < 0.15
+
+
+def test_wide_stage_turns_wider_after_rejected_connections() -> None:
+    m, problem = _random_problem("goal", 39, count=100, reverse=True)
+    rejected = _solve(problem, 20_000, wide_radius_factor=1.02)
+    assert rejected.status is PlanStatus.NO_PATH_IN_BUDGET
+    assert "could not be made drivable" in rejected.message
+    res = _solve(problem, 20_000)
+    assert res.status is PlanStatus.SOLVED, res.message
+    assert "turning with radius 1.1 / kappa_max" in res.message
+    assert res.stats["wide_search"] == 1.0 and len(res.path.cusps) >= 1
+    assert verify_path(m, res.path).ok
+    assert res.path.max_curvature <= problem.vehicle.kappa_max + 1e-9
+
+
 @pytest.mark.parametrize(
-    ("field", "value"), [("coarse_after", 1.5), ("coarse_after", -0.1), ("coarse_factor", 1)]
+    ("field", "value"),
+    [("coarse_after", 1.5), ("coarse_after", -0.1), ("coarse_factor", 1),
+     ("min_clearance", -0.01), ("wide_radius_factor", 0.9)],
 )
 def test_bad_coarse_settings_name_the_field(field: str, value: float) -> None:
     with pytest.raises(InputError, match=f"hybrid.{field}"):
