@@ -220,7 +220,8 @@ class TrafficDriver:
         x0 = self.ego.rear[0]
         x1 = min(x0 + self.config.lane_extension_m, self._x_end())
         cfg = self.config
-        if merge and cfg.start_merge_s > 0.0:
+        # A car turned across the road (a custom jitter) starts on the lane line.
+        if merge and cfg.start_merge_s > 0.0 and abs(self.ego.rear[2]) < math.pi / 3:
             length = max(cfg.start_merge_min_m, cfg.start_merge_s * abs(self.ego.speed))
             kappa0 = math.tan(self.ego.steer) / self.vehicle.wheelbase
             path = merge_path(tuple(self.ego.rear), kappa0, length, x1, self.lane_y)
