@@ -22,7 +22,7 @@ from rrtdrive.sim.follower import IDMConfig
 from rrtdrive.sim.prediction import PREDICTORS
 from rrtdrive.types import InputError, Path, require_finite, require_int, require_positive
 
-__all__ = ["ReplanConfig", "ReplanRecord", "TrafficLog", "lane_path", "SPACING"]
+__all__ = ["ReplanConfig", "ReplanRecord", "TrafficLog", "lane_path", "merge_path", "SPACING"]
 
 #: Sample spacing of lane paths and stitched references (metres).
 SPACING = 0.25
@@ -84,6 +84,17 @@ class ReplanConfig:
         this much sooner.
     lane_extension_m : float
         Length of lane appended after a plan (and of the follow reference).
+    start_merge_s : float
+        The first reference joins the lane from the ego's start pose and steering
+        (:func:`merge_path`) over the distance driven in this many seconds at the
+        start speed (at least ``start_merge_min_m``), instead of starting on the
+        lane centre line beside a jittered car: with the line the controllers
+        corrected a 0.15 m, 1.5 degree start offset within 2-3 m, swinging the
+        rate-limited wheels from -0.4 to +0.4 rad/s, which nuPlan's body-centre
+        acceleration reads as a longitudinal jerk over its 4.13 m/s^3 bound
+        (docs/traffic.md). ``0``: the lane centre line from the start.
+    start_merge_min_m : float
+        Shortest start merge (metres).
     check_every : int
         The current plan's safety check runs every this many control steps.
     idm : IDMConfig
@@ -111,6 +122,8 @@ class ReplanConfig:
     max_plan_length_m: float = 110.0
     improve_s: float = 0.5
     lane_extension_m: float = 200.0
+    start_merge_s: float = 4.0
+    start_merge_min_m: float = 10.0
     check_every: int = 1
     idm: IDMConfig = field(default_factory=IDMConfig)
     planner_options: Mapping[str, Any] = field(default_factory=dict)
@@ -136,11 +149,12 @@ class ReplanConfig:
             )
         for name in (
             "horizon_s", "prediction_step", "complete_gap_m", "max_plan_length_m",
-            "lane_extension_m", "turning_radius_m",
+            "lane_extension_m", "turning_radius_m", "start_merge_min_m",
         ):
             require_positive(f"replan.{name}", getattr(self, name))
         for name in (
-            "cut_in_gap_m", "cut_in_headway_s", "check_beyond_m", "improve_s", "goal_slack_m"
+            "cut_in_gap_m", "cut_in_headway_s", "check_beyond_m", "improve_s", "goal_slack_m",
+            "start_merge_s",
         ):
             value = getattr(self, name)
             require_finite(f"replan.{name}", value)
@@ -270,3 +284,54 @@ def lane_path(x0: float, x1: float, lane_y: float, spacing: float = SPACING) -> 
     xs = np.linspace(x0, x1, n)
     samples = np.column_stack([xs, np.full(n, lane_y), np.zeros(n), np.zeros(n)])
     return Path(samples, np.zeros((0, 2)))
+
+
+def merge_path(
+    pose: tuple[float, float, float],
+    kappa0: float,
+    length: float,
+    x1: float,
+    lane_y: float,
+    spacing: float = SPACING,
+) -> Path:
+    """A reference from a car beside a lane into its centre line, then along it to ``x1``.
+
+    Over ``length`` metres of x the lateral offset follows the quintic ``y(x)`` that
+    starts at the car (rear axle ``pose``: position, heading, and curvature
+    ``kappa0``, the one its wheels steer now) and ends on the centre line with zero
+    slope and curvature; the lane line follows. Position, heading and curvature are
+    continuous along the whole path, so a car on it steers from its present angle at
+    a rate set by the merge's length and its speed. The car heads along +x within
+    +-90 degrees (a merge, not a turn).
+
+    Examples
+    --------
+    >>> p = merge_path((0.0, 44.12, 0.026), 0.0, 16.0, 50.0, 44.0)
+    >>> round(float(p.samples[0, 1]), 3), round(float(p.samples[0, 2]), 3), float(p.samples[-1, 1])
+    (44.12, 0.026, 44.0)
+    >>> bool(abs(p.samples[:, 3]).max() < 0.01)
+    True
+    """
+    x0, y0, yaw0 = (float(v) for v in pose)
+    require_positive("merge.length", length)
+    if not -math.pi / 2 < yaw0 < math.pi / 2:
+        raise InputError(f"merge.pose: heading must lie within +-90 degrees of +x, got {yaw0!r}")
+    slope0 = math.tan(yaw0)
+    curv0 = float(kappa0) * (1.0 + slope0 * slope0) ** 1.5  # y'' for curvature kappa0
+    end = x0 + length
+    n = max(2, int(math.ceil(length / spacing - 1e-9)) + 1)
+    u = np.linspace(0.0, 1.0, n)
+    # Quintic in u = (x - x0) / length with y, y', y'' given at both ends (0 at the end).
+    a0, a1, a2 = y0 - lane_y, slope0 * length, 0.5 * curv0 * length * length
+    a3 = -10.0 * a0 - 6.0 * a1 - 3.0 * a2
+    a4 = 15.0 * a0 + 8.0 * a1 + 3.0 * a2
+    a5 = -6.0 * a0 - 3.0 * a1 - a2
+    y = lane_y + a0 + u * (a1 + u * (a2 + u * (a3 + u * (a4 + u * a5))))
+    dy = (a1 + u * (2 * a2 + u * (3 * a3 + u * (4 * a4 + u * 5 * a5)))) / length
+    ddy = (2 * a2 + u * (6 * a3 + u * (12 * a4 + u * 20 * a5))) / (length * length)
+    kappa = ddy / (1.0 + dy * dy) ** 1.5
+    merge = np.column_stack([x0 + u * length, y, np.arctan(dy), kappa])
+    if x1 > end:
+        lane = lane_path(end, x1, lane_y, spacing).samples[1:, :4]
+        merge = np.concatenate([merge, lane])
+    return Path(merge, np.zeros((0, 2)))

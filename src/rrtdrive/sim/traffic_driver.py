@@ -55,7 +55,14 @@ from rrtdrive.planning.spacetime import (
 )
 from rrtdrive.sim.follower import lead_gap
 from rrtdrive.sim.prediction import predict
-from rrtdrive.sim.replanning import SPACING, ReplanConfig, ReplanRecord, TrafficLog, lane_path
+from rrtdrive.sim.replanning import (
+    SPACING,
+    ReplanConfig,
+    ReplanRecord,
+    TrafficLog,
+    lane_path,
+    merge_path,
+)
 from rrtdrive.speed_profile import actuator_profile
 from rrtdrive.types import Budget, InputError, Path, Pose
 from rrtdrive.vehicle import footprint_corners
@@ -203,12 +210,24 @@ class TrafficDriver:
         """
         return lead_gap(self.ego, self.others, self.vehicle)
 
-    def _lane_reference(self, t: float) -> None:
-        """Switch to the lane centre line from the ego's position on."""
+    def _lane_reference(self, t: float, merge: bool = False) -> None:
+        """Switch to the lane centre line from the ego's position on.
+
+        ``merge``: join the line from the ego's pose and steering first
+        (:func:`~rrtdrive.sim.replanning.merge_path`, ``start_merge_s``).
+        """
         cut, _ = self._projection() if self._path is not None else (0, 0.0)
         x0 = self.ego.rear[0]
         x1 = min(x0 + self.config.lane_extension_m, self._x_end())
-        self._switch(t, lane_path(x0, x1, self.lane_y), cut)
+        cfg = self.config
+        # A car turned across the road (a custom jitter) starts on the lane line.
+        if merge and cfg.start_merge_s > 0.0 and abs(self.ego.rear[2]) < math.pi / 3:
+            length = max(cfg.start_merge_min_m, cfg.start_merge_s * abs(self.ego.speed))
+            kappa0 = math.tan(self.ego.steer) / self.vehicle.wheelbase
+            path = merge_path(tuple(self.ego.rear), kappa0, length, x1, self.lane_y)
+        else:
+            path = lane_path(x0, x1, self.lane_y)
+        self._switch(t, path, cut)
         self._check_end = 0
         self._goal_time = math.inf
         self._goal_s = math.inf
@@ -229,7 +248,7 @@ class TrafficDriver:
             lane_path(self.ego.rear[0], self.ego.rear[0] + 1.0, self.lane_y), v_start=self.ego.speed
         )
         self._set_mode(0.0, "follow")
-        self._lane_reference(0.0)
+        self._lane_reference(0.0, merge=True)
         self._executed.clear()
 
     def command(self, t: float) -> tuple[float, float]:
