@@ -364,6 +364,26 @@ class CollisionChecker:
             free[unsure] = self._exact(p[unsure], clearance)
         return free
 
+    def poses_free_unscreened(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
+        """:meth:`poses_free` for poses that the three-disc screen does not clear.
+
+        The same answer as :meth:`poses_free` for such poses (for them its first
+        screen is False by assumption, so it is skipped): the six-disc screen, then
+        the exact shapely test. A caller that ran the three-disc screen with the
+        same ``clearance`` (e.g. the Hybrid A* body test) saves repeating it.
+        """
+        p = np.asarray(poses, dtype=float).reshape(-1, 3)
+        free = np.zeros(len(p), dtype=bool)
+        if not len(p):
+            return free
+        offsets, radius = self._screens[1]
+        sure = self._discs_clear(p, offsets, radius + clearance)
+        free[sure] = True
+        unsure = np.flatnonzero(~sure)
+        if len(unsure):
+            free[unsure] = self._exact(p[unsure], clearance)
+        return free
+
     def _discs_clear(self, p: np.ndarray, offsets: np.ndarray, need: float) -> np.ndarray:
         """True where every disc centre on the body axis at ``offsets`` has clearance ``need``.
 

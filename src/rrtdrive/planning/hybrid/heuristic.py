@@ -14,9 +14,11 @@ Two lower-bound-like estimates, and their maximum:
 
 from __future__ import annotations
 
+import functools
 import math
+from collections import OrderedDict
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import sparse
@@ -53,6 +55,10 @@ class FreeCellGraph:
     resolution: float
     index: np.ndarray
     graph: sparse.csr_matrix
+    #: The last few distance fields, by goal node (a field depends on the goal's cell only).
+    _fields: OrderedDict[int, np.ndarray] = field(
+        default_factory=OrderedDict, init=False, repr=False, compare=False
+    )
 
     @classmethod
     def build(cls, checker: CollisionChecker, resolution: float) -> FreeCellGraph:
@@ -84,12 +90,37 @@ class FreeCellGraph:
         )
         return cls(np.asarray(checker.grid_origin, dtype=float), float(H), index, graph)
 
+    def distances(self, node: int) -> np.ndarray:
+        """``(NX, NY)`` distance from each cell centre to node ``node``'s, less a cell diagonal.
+
+        ``inf`` where unreachable; one Dijkstra per node, the last
+        :data:`FIELD_CACHE` of them kept (read-only), so queries to one goal, or
+        from one start, share it.
+        """
+        out = self._fields.get(node)
+        if out is not None:
+            self._fields.move_to_end(node)
+            return out
+        d = dijkstra(self.graph, directed=False, indices=node)
+        out = np.full(self.index.shape, np.inf)
+        out[self.index >= 0] = d
+        out = np.maximum(out - self.resolution * math.sqrt(2.0), 0.0)
+        out.flags.writeable = False
+        self._fields[node] = out
+        while len(self._fields) > FIELD_CACHE:
+            self._fields.popitem(last=False)
+        return out
+
     def cell(self, x: float, y: float) -> tuple[int, int]:
         """The coarse cell ``(i, j)`` holding ``(x, y)`` (possibly outside the grid)."""
         return (
             int(math.floor((x - self.origin[0]) / self.resolution)),
             int(math.floor((y - self.origin[1]) / self.resolution)),
         )
+
+
+#: Distance fields a :class:`FreeCellGraph` keeps (by goal cell).
+FIELD_CACHE = 8
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,26 +131,30 @@ class HolonomicField:
     ----------
     grid : FreeCellGraph
         The map's graph.
+    node : int
+        The goal cell's node (-1: the goal lies in no free cell).
     dist : numpy.ndarray
         ``(NX, NY)`` distance from each cell centre to the goal's cell, less a cell
-        diagonal (a position may lie anywhere in its cell), ``inf`` where unreachable.
+        diagonal (a position may lie anywhere in its cell), ``inf`` where
+        unreachable; computed at the first look-up (a search that never runs
+        needs no Dijkstra).
     """
 
     grid: FreeCellGraph
-    dist: np.ndarray
+    node: int
 
     @classmethod
     def towards(cls, grid: FreeCellGraph, goal: Pose) -> HolonomicField:
-        """One Dijkstra from the goal's cell (an unreachable goal: ``inf`` everywhere)."""
+        """The field of one Dijkstra from the goal's cell (unreachable: ``inf`` everywhere)."""
         i, j = grid.cell(goal.x, goal.y)
-        out = np.full(grid.index.shape, np.inf)
         inside = 0 <= i < grid.index.shape[0] and 0 <= j < grid.index.shape[1]
-        node = int(grid.index[i, j]) if inside else -1
-        if node >= 0:
-            d = dijkstra(grid.graph, directed=False, indices=node)
-            out[grid.index >= 0] = d
-            out = np.maximum(out - grid.resolution * math.sqrt(2.0), 0.0)
-        return cls(grid, out)
+        return cls(grid, int(grid.index[i, j]) if inside else -1)
+
+    @functools.cached_property
+    def dist(self) -> np.ndarray:  # noqa: D102 - documented as an attribute
+        if self.node < 0:
+            return np.full(self.grid.index.shape, np.inf)
+        return self.grid.distances(self.node)
 
     def value(self, x: float, y: float) -> float:
         """The distance at one position (scalar :meth:`at`)."""
