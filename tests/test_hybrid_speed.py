@@ -131,3 +131,43 @@ def test_exact_test_of_unsure_poses_is_the_checkers(clearance: float) -> None:
     want = checker.poses_free(unsure, clearance=clearance)
     assert want.any() and not want.all()
     assert np.array_equal(body._exact(unsure), want)
+
+
+def test_lean_lookups_are_the_checkers_bit_for_bit() -> None:
+    """clearances_xy and the exact test's corners: the same floats as the general code."""
+    from rrtdrive.vehicle import footprint_corners
+
+    checker = _checker()
+    rng = np.random.default_rng(2)
+    inside = rng.uniform(0.0, 100.0, (500, 2))
+    outside = rng.uniform(-30.0, 130.0, (500, 2))  # some beyond the grid
+    for pts in (inside, outside):
+        got = checker.clearances_xy(pts[:, 0], pts[:, 1])
+        assert np.array_equal(got, checker.clearances(pts))
+    assert np.isinf(checker.clearances_xy(outside[:, 0], outside[:, 1])).any()
+    poses = np.column_stack([inside, rng.uniform(-np.pi, np.pi, 500)])
+    assert np.array_equal(checker._corners(poses), footprint_corners(poses, checker.vehicle))
+
+
+@pytest.mark.parametrize("reverse", [False, True])
+def test_scalar_heuristic_is_at(reverse: bool) -> None:
+    from rrtdrive.planning.hybrid.config import HybridConfig
+    from rrtdrive.planning.hybrid.heuristic import Heuristic
+    from rrtdrive.planning.hybrid.query import dubins_table
+
+    m = builtin_map("parking_lot")
+    grid = free_cell_graph(PlanningProblem.from_map(m), 0.5)
+    field = HolonomicField.towards(grid, m.goal)
+    if reverse:
+        h = Heuristic(field, None, m.goal)
+    else:
+        table = dubins_table(RADIUS, HybridConfig())
+        h = Heuristic(field, table.to(m.goal), m.goal, table.scalar_to(m.goal))
+    fast = h.scalar()
+    rng = np.random.default_rng(4)
+    pts = np.column_stack(
+        [rng.uniform(-10, 110, 2000), rng.uniform(-10, 110, 2000), rng.uniform(-4, 4, 2000)]
+    ).tolist()
+    got = [fast(*p) for p in pts]
+    assert got == [h.at(*p) for p in pts]  # bit for bit, inf included
+    assert math.inf in got and any(v < math.inf for v in got)

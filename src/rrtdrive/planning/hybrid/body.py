@@ -72,12 +72,9 @@ class BodyTest:
         """
         p = np.asarray(poses, dtype=float).reshape(-1, 3)
         off = self.offsets
-        c, s = np.cos(p[:, 2]), np.sin(p[:, 2])
-        pts = np.empty((len(p), len(off), 2))
-        np.multiply(c[:, None], off[None, :], out=pts[..., 0])
-        np.multiply(s[:, None], off[None, :], out=pts[..., 1])
-        pts += p[:, None, :2]
-        val = self.checker.clearances(pts.reshape(-1, 2)).reshape(len(p), len(off))
+        c, s = np.cos(p[:, 2])[:, None], np.sin(p[:, 2])[:, None]
+        # The points x + c * offset (the checker's order of operations: the same floats).
+        val = self.checker.clearances_xy(c * off + p[:, 0:1], s * off + p[:, 1:2])
         k = self._n_axis
         hit = (val[:, :k] < self.occupied_below).any(axis=1)
         room = val[:, k:].min(axis=1) - self.disc_need
@@ -113,11 +110,8 @@ class BodyTest:
             return out
         p = np.asarray(poses, dtype=float)
         off = self.offsets[: self._n_axis]
-        c, s = np.cos(p[:, 2]), np.sin(p[:, 2])
-        pts = np.empty((len(p), len(off), 2))
-        np.add(p[:, 0:1], c[:, None] * off[None, :], out=pts[..., 0])
-        np.add(p[:, 1:2], s[:, None] * off[None, :], out=pts[..., 1])
-        val = self.checker.clearances(pts.reshape(-1, 2)).reshape(len(p), -1)
+        c, s = np.cos(p[:, 2])[:, None], np.sin(p[:, 2])[:, None]
+        val = self.checker.clearances_xy(p[:, 0:1] + c * off, p[:, 1:2] + s * off)
         hit = (val < self.occupied_below).any(axis=1)
         nonempty = sizes > 0
         starts = (np.cumsum(sizes) - sizes)[nonempty]

@@ -14,6 +14,7 @@ Two lower-bound-like estimates, and their maximum:
 
 from __future__ import annotations
 
+import array
 import functools
 import math
 from collections import OrderedDict
@@ -155,6 +156,13 @@ class HolonomicField:
         if self.node < 0:
             return np.full(self.grid.index.shape, np.inf)
         return self.grid.distances(self.node)
+
+    @functools.cached_property
+    def cells(self) -> array.array:
+        """:attr:`dist` as a flat array of C doubles, row-major (scalar look-ups)."""
+        out = array.array("d")
+        out.frombytes(np.ascontiguousarray(self.dist, dtype=np.float64).tobytes())
+        return out
 
     def value(self, x: float, y: float) -> float:
         """The distance at one position (scalar :meth:`at`)."""
@@ -359,6 +367,33 @@ class Heuristic:
         if self.nonholonomic is not None:
             return max(h, float(self.nonholonomic(np.array([[x, y, yaw]]))[0]))
         return max(h, math.hypot(x - self.goal.x, y - self.goal.y))
+
+    def scalar(self) -> Callable[[float, float, float], float]:
+        """:meth:`at` as a closure over its constants: the same values, for the search's loop."""
+        if self.scalar_nonholonomic is None and self.nonholonomic is not None:
+            return self.at
+        field = self.holonomic
+        cells, grid = field.cells, field.grid
+        ox, oy = float(grid.origin[0]), float(grid.origin[1])
+        res = grid.resolution
+        nx, ny = field.dist.shape
+        floor, hypot, inf = math.floor, math.hypot, math.inf
+        other = self.scalar_nonholonomic
+        gx, gy = self.goal.x, self.goal.y
+
+        def at(x: float, y: float, yaw: float) -> float:
+            i = floor((x - ox) / res)
+            j = floor((y - oy) / res)
+            if not (0 <= i < nx and 0 <= j < ny):
+                return inf
+            h = cells[i * ny + j]
+            if h == inf:
+                return h
+            if other is not None:
+                return max(h, other(x, y, yaw))
+            return max(h, hypot(x - gx, y - gy))
+
+        return at
 
     def __call__(self, poses: np.ndarray) -> np.ndarray:
         """Estimates for poses ``(N, 3)``, metres (``inf``: the goal cannot be reached)."""

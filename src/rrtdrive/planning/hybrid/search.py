@@ -384,17 +384,27 @@ class HybridSearch:
         base_cost = self._base_cost.tolist()
         gears = prims.gears.tolist()
         kappas = prims.kappas.tolist()
-        h_at = self.heuristic.at
+        h_at = self.heuristic.scalar()
         kmax = self.kappa_max
+        shot_interval, shot_distance = cfg.shot_interval, cfg.shot_distance
+        gear_change_cost, steer_change_cost = cfg.gear_change_cost, cfg.steer_change_cost
+        # The node lists and key(), bound to locals (the same arithmetic: the hot loop).
+        xs, ys, yaws, gs, gear_of, kappa_of, parent = (
+            self.x, self.y, self.yaw, self.g, self.gear, self.kappa, self.parent
+        )  # fmt: skip
+        res, xmin, ymin, ny, nyaw = cfg.xy_resolution, self.xmin, self.ymin, self.ny, self.nyaw
+        two_pi = 2.0 * math.pi
+        inf = math.inf
+        heappop, heappush = heapq.heappop, heapq.heappush
         reason = "exhausted"
         while heap:
-            _f, i = heapq.heappop(heap)
-            xi, yi, yawi, gi, geari = self.x[i], self.y[i], self.yaw[i], self.g[i], self.gear[i]
+            _f, i = heappop(heap)
+            xi, yi, yawi, gi, geari = xs[i], ys[i], yaws[i], gs[i], gear_of[i]
             k = self.key(xi, yi, yawi, geari if geari else 1)
             if k in closed:
                 continue
             if self.expansions >= max_expansions:
-                heapq.heappush(heap, (_f, i))  # not expanded: a later call takes it
+                heappush(heap, (_f, i))  # not expanded: a later call takes it
                 reason = "expansions"
                 break
             if expired():
@@ -403,7 +413,7 @@ class HybridSearch:
             closed.add(k)
             self.expansions += 1
             since_shot += 1
-            interval = min(cfg.shot_interval, max(1, int(hval[i] / cfg.shot_distance)))
+            interval = min(shot_interval, max(1, int(hval[i] / shot_distance)))
             if since_shot >= interval:
                 since_shot = 0
                 for pieces in self._shot(i):
@@ -414,38 +424,53 @@ class HybridSearch:
                     if self.connections >= cfg.max_solutions:
                         return None, self._outcome("rejected")
             poses = prims.poses_from(xi, yi, yawi)
-            ki = self.kappa[i]
+            ki = kappa_of[i]
+            steered = ki == ki  # not the root's NaN
+            ends = poses[:, -1, :].tolist()
             # Closed bins, unreachable cells and dearer duplicates go before the body test.
             cand: list[tuple[int, int, float, float]] = []
-            for j, end in enumerate(poses[:, -1, :].tolist()):
+            for j, (ex, ey, eyaw) in enumerate(ends):
                 gear = gears[j]
-                kj = self.key(end[0], end[1], end[2], gear)
+                # self.key(ex, ey, eyaw, gear), inlined
+                iyaw = int(((eyaw % two_pi) / two_pi) * nyaw) % nyaw
+                kj = (
+                    (((int((ex - xmin) // res) * ny + int((ey - ymin) // res)) * nyaw + iyaw) << 1)
+                    | (gear < 0)
+                )  # fmt: skip
                 if kj in closed:
                     continue
-                hj = h_at(end[0], end[1], end[2])
-                if hj == math.inf:
+                hj = h_at(ex, ey, eyaw)
+                if hj == inf:
                     continue
                 cost = gi + base_cost[j]
                 if geari and gear != geari:
-                    cost += cfg.gear_change_cost
-                if ki == ki:  # not the root's NaN
-                    cost += cfg.steer_change_cost * abs(kappas[j] - ki) / kmax
-                if cost >= best.get(kj, math.inf):
+                    cost += gear_change_cost
+                if steered:
+                    cost += steer_change_cost * abs(kappas[j] - ki) / kmax
+                if cost >= best.get(kj, inf):
                     continue
                 cand.append((j, kj, cost, hj))
             if not cand:
                 continue
-            free = body.runs_free(poses[[c[0] for c in cand]])
-            for (j, kj, cost, hj), ok in zip(cand, free.tolist(), strict=True):
+            if len(cand) == len(ends):
+                free = body.runs_free(poses).tolist()
+            else:
+                free = body.runs_free(poses[[c[0] for c in cand]]).tolist()
+            for (j, kj, cost, hj), ok in zip(cand, free, strict=True):
                 if not ok:
                     continue
-                end = poses[j, -1]
+                ex, ey, eyaw = ends[j]
                 best[kj] = cost
-                n = self._add(
-                    float(end[0]), float(end[1]), float(end[2]), cost, gears[j], kappas[j], i
-                )
+                n = len(xs)
+                xs.append(ex)
+                ys.append(ey)
+                yaws.append(eyaw)
+                gs.append(cost)
+                gear_of.append(gears[j])
+                kappa_of.append(kappas[j])
+                parent.append(i)
                 hval.append(hj)
-                heapq.heappush(heap, (cost + w * hj, n))
+                heappush(heap, (cost + w * hj, n))
         self._since_shot = since_shot
         return None, self._outcome(reason)
 
