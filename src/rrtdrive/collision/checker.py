@@ -127,6 +127,9 @@ class CollisionChecker:
         self._cap_inset = math.sqrt(self.edge_radius**2 - (vehicle.width / 2.0) ** 2)
         self._cap_back = vehicle.rear_overhang - self._cap_inset
         self._cap_front = vehicle.front_extent - self._cap_inset
+        back, front, half = -vehicle.rear_overhang, vehicle.front_extent, vehicle.width / 2.0
+        self._corner_lx = np.array([back, front, front, back], dtype=float)
+        self._corner_ly = np.array([-half, -half, half, half], dtype=float)
         self._disc_offsets, disc_radius = cover_discs(vehicle, 3)
         self._disc_offsets_list = [float(o) for o in self._disc_offsets]
         self.disc_radius = disc_radius + self.config.margin
@@ -196,6 +199,28 @@ class CollisionChecker:
         out = np.full(len(p), -np.inf)
         out[ok] = self._clearance_flat[flat[ok]]
         return out
+
+    def clearances_xy(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """:meth:`clearances` for coordinates as two arrays of one shape (the same values).
+
+        The look-up of the hot loops: when every point lies inside the grid (the
+        usual case) it takes a few array operations, else it is :meth:`clearances`.
+        """
+        gx = (x - self._ox) * self._inv_h
+        gy = (y - self._oy) * self._inv_h
+        nx, ny = self._shape
+        # For g >= 0, int(g) < n exactly when g < n: the float bounds decide alone.
+        lo, hi = np.minimum.reduce, np.maximum.reduce  # the bare ufuncs: no method overhead
+        if (
+            gx.size
+            and lo(gx, axis=None) >= 0.0
+            and lo(gy, axis=None) >= 0.0
+            and hi(gx, axis=None) < nx
+            and hi(gy, axis=None) < ny
+        ):
+            return self._clearance_flat[gx.astype(np.int64) * ny + gy.astype(np.int64)]
+        pts = np.stack([np.asarray(x, dtype=float), np.asarray(y, dtype=float)], axis=-1)
+        return self.clearances(pts.reshape(-1, 2)).reshape(np.shape(x))
 
     # ------------------------------------------------------------------ fast tests
 
@@ -364,6 +389,30 @@ class CollisionChecker:
             free[unsure] = self._exact(p[unsure], clearance)
         return free
 
+    def poses_free_unscreened(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
+        """:meth:`poses_free` for poses that the three-disc screen does not clear.
+
+        The same answer as :meth:`poses_free` for such poses (for them its first
+        screen is False by assumption, so it is skipped): the six-disc screen, then
+        the exact shapely test. A caller that ran the three-disc screen with the
+        same ``clearance`` (e.g. the Hybrid A* body test) saves repeating it.
+        """
+        p = np.asarray(poses, dtype=float).reshape(-1, 3)
+        free = np.zeros(len(p), dtype=bool)
+        if not len(p):
+            return free
+        offsets, radius = self._screens[1]
+        # _discs_clear's points, as (x + c * offset, y + s * offset): the same floats.
+        x, y = p[:, 0:1], p[:, 1:2]
+        c, s = np.cos(p[:, 2])[:, None], np.sin(p[:, 2])[:, None]
+        val = self.clearances_xy(c * offsets + x, s * offsets + y)
+        sure = (val >= radius + clearance).all(axis=1)
+        free[sure] = True
+        unsure = np.flatnonzero(~sure)
+        if len(unsure):
+            free[unsure] = self._exact(p[unsure], clearance)
+        return free
+
     def _discs_clear(self, p: np.ndarray, offsets: np.ndarray, need: float) -> np.ndarray:
         """True where every disc centre on the body axis at ``offsets`` has clearance ``need``.
 
@@ -398,8 +447,21 @@ class CollisionChecker:
             return float(to_bounds)
         return float(min(to_bounds, self._union.distance(rect)))
 
+    def _corners(self, poses: np.ndarray) -> np.ndarray:
+        """:func:`~rrtdrive.vehicle.footprint_corners` of poses ``(N, 3)``, the same floats.
+
+        The arithmetic of :func:`~rrtdrive.geometry.box_corners` without its
+        broadcasting (the exact test's hot spot).
+        """
+        lx, ly = self._corner_lx, self._corner_ly
+        c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
+        out = np.empty((len(poses), 4, 2))
+        out[..., 0] = poses[:, 0:1] + c * lx - s * ly
+        out[..., 1] = poses[:, 1:2] + s * lx + c * ly
+        return out
+
     def _exact(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
-        corners = footprint_corners(poses, self.vehicle)
+        corners = self._corners(np.asarray(poses, dtype=float).reshape(-1, 3))
         # Inside the bounds box shrunk by the clearance: both are convex and the box
         # is axis-aligned, so that is all four corners inside, compared exactly.
         xmin, ymin, xmax, ymax = self.bounds

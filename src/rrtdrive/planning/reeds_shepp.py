@@ -42,6 +42,8 @@ __all__ = [
 _TINY = 1e-10
 #: Candidates whose segment lengths agree to this (radius 1) are one path.
 _SAME = 1e-9
+#: Relative slack of ``limit`` in :func:`reeds_shepp_paths` (far above float rounding).
+_LIMIT_SLACK = 1e-9
 #: Steering of a segment kind: +1 left, -1 right, 0 straight.
 _TURN = {"L": 1, "S": 0, "R": -1}
 
@@ -239,7 +241,7 @@ def _normalised_goal(start: Pose, goal: Pose, radius: float) -> tuple[float, flo
 
 
 def reeds_shepp_paths(
-    start: Pose, goal: Pose, radius: float, tol: float = 1e-6
+    start: Pose, goal: Pose, radius: float, tol: float = 1e-6, limit: int | None = None
 ) -> list[ReedsSheppPath]:
     """Every Reeds-Shepp word that joins ``start`` to ``goal``, shortest first.
 
@@ -252,6 +254,10 @@ def reeds_shepp_paths(
     tol : float
         A candidate is kept only when its integrated end lies within
         ``tol * max(1, radius)`` metres and ``tol`` radians of ``goal``.
+    limit : int, optional
+        Only the first ``limit`` of the list are needed: candidates clearly longer
+        than the ``limit``-th kept one are neither checked nor built (the first
+        ``limit`` paths are those of the full list).
 
     Returns
     -------
@@ -275,10 +281,17 @@ def reeds_shepp_paths(
         found.append((sum(map(abs, lengths)), word, lengths))
     found.sort(key=itemgetter(0))  # stable: ties keep the order of the words (OMPL's)
     kept: list[tuple[float, str, tuple[float, ...]]] = []
+    bound = math.inf
     for cand in found:
+        if cand[0] > bound:
+            break
         if _is_copy(cand, kept) or _misses(cand[1], cand[2], x, y, phi, pos_tol, tol):
             continue
         kept.append(cand)
+        if limit is not None and len(kept) == limit:
+            # Lengths in metres are these times the radius, to a few ulp: beyond this
+            # margin no later candidate can sort before the ``limit``-th.
+            bound = cand[0] * (1.0 + _LIMIT_SLACK) + _LIMIT_SLACK
     out = [
         ReedsSheppPath(start, word, tuple(s * radius for s in lengths), radius, goal)
         for _, word, lengths in kept

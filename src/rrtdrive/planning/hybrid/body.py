@@ -13,6 +13,7 @@ exact rectangle), so the answer is exactly the checker's.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -71,19 +72,21 @@ class BodyTest:
         """
         p = np.asarray(poses, dtype=float).reshape(-1, 3)
         off = self.offsets
-        c, s = np.cos(p[:, 2]), np.sin(p[:, 2])
-        pts = np.empty((len(p), len(off), 2))
-        np.multiply(c[:, None], off[None, :], out=pts[..., 0])
-        np.multiply(s[:, None], off[None, :], out=pts[..., 1])
-        pts += p[:, None, :2]
-        val = self.checker.clearances(pts.reshape(-1, 2)).reshape(len(p), len(off))
+        c, s = np.cos(p[:, 2])[:, None], np.sin(p[:, 2])[:, None]
+        # The points x + c * offset (the checker's order of operations: the same floats).
+        val = self.checker.clearances_xy(c * off + p[:, 0:1], s * off + p[:, 1:2])
         k = self._n_axis
         hit = (val[:, :k] < self.occupied_below).any(axis=1)
         room = val[:, k:].min(axis=1) - self.disc_need
         return hit, room >= 0.0, room
 
     def _exact(self, poses: np.ndarray) -> np.ndarray:
-        return self.checker.poses_free(poses, clearance=self.clearance)
+        """The checker's exact answer for poses the screen left unsure (not ``clear``).
+
+        Their three covering discs do not clear ``disc_need`` (the checker's first
+        screen, the same test), so the checker starts at its six-disc screen.
+        """
+        return self.checker.poses_free_unscreened(poses, clearance=self.clearance)
 
     def hit_at(self, x: float, y: float, yaw: float) -> bool:
         """Scalar :meth:`hits` for one pose (no numpy call: for walks that stop early)."""
@@ -93,6 +96,27 @@ class BodyTest:
             if clearance(x + c * off, y + s * off) < below:
                 return True
         return False
+
+    def any_hits(self, poses: np.ndarray, sizes: Sequence[int] | np.ndarray) -> np.ndarray:
+        """Boolean ``(W,)``: whether :meth:`hit_at` is True at some pose of each walk.
+
+        ``poses`` ``(M, 3)`` are the walks' poses one walk after the other,
+        ``sizes[w]`` of them for walk ``w``. One look-up for all (the same points,
+        so the same answer, as :meth:`hit_at` pose by pose).
+        """
+        sizes = np.asarray(sizes, dtype=np.int64)
+        out = np.zeros(len(sizes), dtype=bool)
+        if not self._n_axis or not len(poses):
+            return out
+        p = np.asarray(poses, dtype=float)
+        off = self.offsets[: self._n_axis]
+        c, s = np.cos(p[:, 2])[:, None], np.sin(p[:, 2])[:, None]
+        val = self.checker.clearances_xy(p[:, 0:1] + c * off, p[:, 1:2] + s * off)
+        hit = (val < self.occupied_below).any(axis=1)
+        nonempty = sizes > 0
+        starts = (np.cumsum(sizes) - sizes)[nonempty]
+        out[nonempty] = np.logical_or.reduceat(hit, starts)
+        return out
 
     def hits(self, poses: np.ndarray) -> np.ndarray:
         """Boolean ``(N,)``: True where the body surely collides (False proves nothing)."""

@@ -14,9 +14,12 @@ Two lower-bound-like estimates, and their maximum:
 
 from __future__ import annotations
 
+import array
+import functools
 import math
+from collections import OrderedDict
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import sparse
@@ -53,6 +56,10 @@ class FreeCellGraph:
     resolution: float
     index: np.ndarray
     graph: sparse.csr_matrix
+    #: The last few distance fields, by goal node (a field depends on the goal's cell only).
+    _fields: OrderedDict[int, np.ndarray] = field(
+        default_factory=OrderedDict, init=False, repr=False, compare=False
+    )
 
     @classmethod
     def build(cls, checker: CollisionChecker, resolution: float) -> FreeCellGraph:
@@ -84,12 +91,37 @@ class FreeCellGraph:
         )
         return cls(np.asarray(checker.grid_origin, dtype=float), float(H), index, graph)
 
+    def distances(self, node: int) -> np.ndarray:
+        """``(NX, NY)`` distance from each cell centre to node ``node``'s, less a cell diagonal.
+
+        ``inf`` where unreachable; one Dijkstra per node, the last
+        :data:`FIELD_CACHE` of them kept (read-only), so queries to one goal, or
+        from one start, share it.
+        """
+        out = self._fields.get(node)
+        if out is not None:
+            self._fields.move_to_end(node)
+            return out
+        d = dijkstra(self.graph, directed=False, indices=node)
+        out = np.full(self.index.shape, np.inf)
+        out[self.index >= 0] = d
+        out = np.maximum(out - self.resolution * math.sqrt(2.0), 0.0)
+        out.flags.writeable = False
+        self._fields[node] = out
+        while len(self._fields) > FIELD_CACHE:
+            self._fields.popitem(last=False)
+        return out
+
     def cell(self, x: float, y: float) -> tuple[int, int]:
         """The coarse cell ``(i, j)`` holding ``(x, y)`` (possibly outside the grid)."""
         return (
             int(math.floor((x - self.origin[0]) / self.resolution)),
             int(math.floor((y - self.origin[1]) / self.resolution)),
         )
+
+
+#: Distance fields a :class:`FreeCellGraph` keeps (by goal cell).
+FIELD_CACHE = 8
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,26 +132,37 @@ class HolonomicField:
     ----------
     grid : FreeCellGraph
         The map's graph.
+    node : int
+        The goal cell's node (-1: the goal lies in no free cell).
     dist : numpy.ndarray
         ``(NX, NY)`` distance from each cell centre to the goal's cell, less a cell
-        diagonal (a position may lie anywhere in its cell), ``inf`` where unreachable.
+        diagonal (a position may lie anywhere in its cell), ``inf`` where
+        unreachable; computed at the first look-up (a search that never runs
+        needs no Dijkstra).
     """
 
     grid: FreeCellGraph
-    dist: np.ndarray
+    node: int
 
     @classmethod
     def towards(cls, grid: FreeCellGraph, goal: Pose) -> HolonomicField:
-        """One Dijkstra from the goal's cell (an unreachable goal: ``inf`` everywhere)."""
+        """The field of one Dijkstra from the goal's cell (unreachable: ``inf`` everywhere)."""
         i, j = grid.cell(goal.x, goal.y)
-        out = np.full(grid.index.shape, np.inf)
         inside = 0 <= i < grid.index.shape[0] and 0 <= j < grid.index.shape[1]
-        node = int(grid.index[i, j]) if inside else -1
-        if node >= 0:
-            d = dijkstra(grid.graph, directed=False, indices=node)
-            out[grid.index >= 0] = d
-            out = np.maximum(out - grid.resolution * math.sqrt(2.0), 0.0)
-        return cls(grid, out)
+        return cls(grid, int(grid.index[i, j]) if inside else -1)
+
+    @functools.cached_property
+    def dist(self) -> np.ndarray:  # noqa: D102 - documented as an attribute
+        if self.node < 0:
+            return np.full(self.grid.index.shape, np.inf)
+        return self.grid.distances(self.node)
+
+    @functools.cached_property
+    def cells(self) -> array.array:
+        """:attr:`dist` as a flat array of C doubles, row-major (scalar look-ups)."""
+        out = array.array("d")
+        out.frombytes(np.ascontiguousarray(self.dist, dtype=np.float64).tobytes())
+        return out
 
     def value(self, x: float, y: float) -> float:
         """The distance at one position (scalar :meth:`at`)."""
@@ -324,6 +367,33 @@ class Heuristic:
         if self.nonholonomic is not None:
             return max(h, float(self.nonholonomic(np.array([[x, y, yaw]]))[0]))
         return max(h, math.hypot(x - self.goal.x, y - self.goal.y))
+
+    def scalar(self) -> Callable[[float, float, float], float]:
+        """:meth:`at` as a closure over its constants: the same values, for the search's loop."""
+        if self.scalar_nonholonomic is None and self.nonholonomic is not None:
+            return self.at
+        field = self.holonomic
+        cells, grid = field.cells, field.grid
+        ox, oy = float(grid.origin[0]), float(grid.origin[1])
+        res = grid.resolution
+        nx, ny = field.dist.shape
+        floor, hypot, inf = math.floor, math.hypot, math.inf
+        other = self.scalar_nonholonomic
+        gx, gy = self.goal.x, self.goal.y
+
+        def at(x: float, y: float, yaw: float) -> float:
+            i = floor((x - ox) / res)
+            j = floor((y - oy) / res)
+            if not (0 <= i < nx and 0 <= j < ny):
+                return inf
+            h = cells[i * ny + j]
+            if h == inf:
+                return h
+            if other is not None:
+                return max(h, other(x, y, yaw))
+            return max(h, hypot(x - gx, y - gy))
+
+        return at
 
     def __call__(self, poses: np.ndarray) -> np.ndarray:
         """Estimates for poses ``(N, 3)``, metres (``inf``: the goal cannot be reached)."""

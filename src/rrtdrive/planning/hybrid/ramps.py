@@ -76,8 +76,15 @@ def _profiles(
     joints = np.cumsum(lengths, axis=1)[:, :-1]
     jumps = np.diff(angles, axis=1)
     widths = np.maximum(np.abs(jumps) * factors[None, :] / rate, 1e-9)
-    u = (s[:, None, :] - joints[:, :, None]) / widths[:, :, None] + 0.5
-    delta = angles[:, :1] + (jumps[:, :, None] * np.clip(u, 0.0, 1.0)).sum(axis=1)
+    # (s - joint) / width + 0.5, clipped to [0, 1], times the jump: in place, the same floats.
+    u = s[:, None, :] - joints[:, :, None]
+    u /= widths[:, :, None]
+    u += 0.5
+    np.maximum(u, 0.0, out=u)
+    np.minimum(u, 1.0, out=u)
+    u *= jumps[:, :, None]
+    delta = u.sum(axis=1)
+    delta += angles[:, :1]
     return delta, total / (len(t) - 1)
 
 
@@ -94,6 +101,24 @@ def _integrate(
     x = start[0] + gear * np.concatenate([zero, np.cumsum(hb * np.cos(mid), axis=1)], axis=1)
     y = start[1] + gear * np.concatenate([zero, np.cumsum(hb * np.sin(mid), axis=1)], axis=1)
     return np.stack([x, y, yaw], axis=-1)
+
+
+def _ends(
+    start: np.ndarray, gear: int, delta: np.ndarray, h: np.ndarray, wheelbase: float
+) -> np.ndarray:
+    """``_integrate(...)[:, -1, :]``, the end poses ``(B, 3)``, with the same arithmetic."""
+    kappa = np.tan(delta) / wheelbase
+    hb = h[:, None]
+    dyaw = gear * 0.5 * (kappa[:, 1:] + kappa[:, :-1]) * hb
+    yaw = np.empty(delta.shape)
+    yaw[:, 0] = start[2] + 0.0
+    yaw[:, 1:] = start[2] + np.cumsum(dyaw, axis=1)
+    mid = 0.5 * (yaw[:, 1:] + yaw[:, :-1])
+    out = np.empty((len(delta), 3))
+    out[:, 0] = start[0] + gear * np.cumsum(hb * np.cos(mid), axis=1)[:, -1]
+    out[:, 1] = start[1] + gear * np.cumsum(hb * np.sin(mid), axis=1)[:, -1]
+    out[:, 2] = yaw[:, -1]
+    return out
 
 
 def _widening(lengths: np.ndarray, angles: np.ndarray, rate: float) -> np.ndarray:
@@ -245,7 +270,7 @@ def _ramped_once(
     for _ in range(_NEWTON_ITERATIONS):
         batch = np.vstack([p, p + eps * np.eye(2 * n)])
         delta, h = _profiles(batch[:, :n], batch[:, n:], factors, rate, t)
-        ends = _integrate(start, gear, delta, h, wheelbase)[:, -1, :]
+        ends = _ends(start, gear, delta, h, wheelbase)
         err = ends[0] - goal
         err[2] = wrap_angle(err[2])
         pose = (delta[0], h[0])

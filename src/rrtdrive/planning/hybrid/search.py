@@ -34,7 +34,16 @@ from rrtdrive.planning.hybrid.primitives import PrimitiveSet, arc_poses
 from rrtdrive.planning.reeds_shepp import reeds_shepp_paths
 from rrtdrive.types import Pose
 
-__all__ = ["Piece", "SearchOutcome", "Shots", "HybridSearch", "analytic_shots", "walk_hits"]
+__all__ = [
+    "Piece",
+    "SearchOutcome",
+    "Shots",
+    "HybridSearch",
+    "analytic_shots",
+    "walk_hits",
+    "walk_poses",
+    "walks_hit",
+]
 
 T = TypeVar("T")
 
@@ -90,31 +99,93 @@ Shots = Callable[[Pose], Sequence[list[Piece]]]
 _TURN = {"L": 1, "S": 0, "R": -1}
 
 
+def walk_poses(
+    start: Pose, words: Sequence[tuple[str, Sequence[float]]], radius: float, spacing: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Poses at most ``spacing`` apart along several words from one start (start excluded).
+
+    Each segment is cut into ``ceil(|length| / spacing)`` equal steps; its poses
+    are closed-form from the segment's start, the end pose of the segment before
+    as the same formula gives it, so every pose is computed with the same
+    arithmetic as in a walk one pose at a time. ``lengths`` are signed (negative
+    in reverse), as in Reeds-Shepp words; Dubins lengths are all positive.
+
+    Returns
+    -------
+    poses : numpy.ndarray
+        ``(M, 3)``: the poses of every word, in order.
+    sizes : numpy.ndarray
+        ``(W,)``: how many of them belong to each word.
+    """
+    # Per segment: its start pose (scalar, as the walk), the steps and the turn.
+    x0, y0, yaw0, c0s, s0s, turns, segs, counts = [], [], [], [], [], [], [], []
+    sizes = np.zeros(len(words), dtype=np.int64)
+    for w, (word, lengths) in enumerate(words):
+        x, y, yaw = start.x, start.y, start.yaw
+        for letter, seg in zip(word, lengths, strict=True):
+            turn = _TURN[letter]
+            n = max(1, math.ceil(abs(seg) / spacing))
+            c0, s0 = math.cos(yaw), math.sin(yaw)
+            x0.append(x)
+            y0.append(y)
+            yaw0.append(yaw)
+            c0s.append(c0)
+            s0s.append(s0)
+            turns.append(turn)
+            segs.append(seg)
+            counts.append(n)
+            sizes[w] += n
+            u = seg * n / n
+            if turn == 0:
+                x, y = x + u * c0, y + u * s0
+            else:
+                yaw = yaw + turn * u / radius
+                x = x + turn * radius * (math.sin(yaw) - s0)
+                y = y - turn * radius * (math.cos(yaw) - c0)
+    if not counts:
+        return np.zeros((0, 3)), sizes
+    n_seg = np.array(counts, dtype=np.int64)
+    rep = np.repeat(np.arange(len(counts)), n_seg)
+    # k = 1..n within each segment.
+    k = np.arange(1, len(rep) + 1) - np.repeat(np.cumsum(n_seg) - n_seg, n_seg)
+    u = np.array(segs)[rep] * k / n_seg[rep]
+    turn = np.array(turns, dtype=float)[rep]
+    px0, py0, pyaw0 = np.array(x0)[rep], np.array(y0)[rep], np.array(yaw0)[rep]
+    c0, s0 = np.array(c0s)[rep], np.array(s0s)[rep]
+    out = np.empty((len(rep), 3))
+    straight = turn == 0.0
+    pyaw = pyaw0 + turn * u / radius
+    tr = turn * radius
+    out[:, 0] = np.where(straight, px0 + u * c0, px0 + tr * (np.sin(pyaw) - s0))
+    out[:, 1] = np.where(straight, py0 + u * s0, py0 - tr * (np.cos(pyaw) - c0))
+    out[:, 2] = np.where(straight, pyaw0, pyaw)
+    return out, sizes
+
+
 def walk_hits(
     start: Pose, word: str, lengths: Sequence[float], radius: float, spacing: float, body: BodyTest
 ) -> bool:
-    """Whether a pose ``spacing`` apart along a word surely collides (stops at the first).
+    """Whether a pose ``spacing`` apart along a word surely collides (:meth:`BodyTest.hit_at`).
 
     ``lengths`` are signed (negative in reverse), as in Reeds-Shepp words; Dubins
-    lengths are all positive.
+    lengths are all positive. All poses of the word are screened at once
+    (:func:`walk_poses`, :meth:`BodyTest.any_hits`).
     """
-    x, y, yaw = start.x, start.y, start.yaw
-    for letter, seg in zip(word, lengths, strict=True):
-        turn = _TURN[letter]
-        n = max(1, math.ceil(abs(seg) / spacing))
-        c0, s0 = math.cos(yaw), math.sin(yaw)
-        for k in range(1, n + 1):
-            u = seg * k / n
-            if turn == 0:
-                px, py, pyaw = x + u * c0, y + u * s0, yaw
-            else:
-                pyaw = yaw + turn * u / radius
-                px = x + turn * radius * (math.sin(pyaw) - s0)
-                py = y - turn * radius * (math.cos(pyaw) - c0)
-            if body.hit_at(px, py, pyaw):
-                return True
-        x, y, yaw = px, py, pyaw
-    return False
+    return walks_hit(start, [(word, lengths)], radius, spacing, body)[0]
+
+
+def walks_hit(
+    start: Pose,
+    words: Sequence[tuple[str, Sequence[float]]],
+    radius: float,
+    spacing: float,
+    body: BodyTest,
+) -> list[bool]:
+    """:func:`walk_hits` for several ``(word, lengths)`` from one start, in one screen."""
+    if not words:
+        return []
+    poses, sizes = walk_poses(start, words, radius, spacing)
+    return body.any_hits(poses, sizes).tolist()
 
 
 def _gear_pieces(rows: np.ndarray) -> list[Piece]:
@@ -144,19 +215,21 @@ def analytic_shots(
         out: list[list[Piece]] = []
         # The longer words loop through the lot: they rarely clear where the short ones fail.
         if reverse:
-            for cand in reeds_shepp_paths(pose, goal, radius)[:max_candidates]:
-                if body is not None and walk_hits(
-                    pose, cand.word, cand.lengths, radius, coarse, body
-                ):
-                    continue
+            cands = reeds_shepp_paths(pose, goal, radius, limit=max_candidates)[:max_candidates]
+        else:
+            cands = dubins_paths(pose, goal, radius)[:max_candidates]
+        hit = [False] * len(cands)
+        if body is not None:
+            hit = walks_hit(pose, [(c.word, c.lengths) for c in cands], radius, coarse, body)
+        for cand, dropped in zip(cands, hit, strict=True):
+            if dropped:
+                continue
+            if reverse:
                 rows = cand.sample(spacing)
                 rows[0, :3] = pose.as_tuple()
                 out.append(_gear_pieces(rows))
-            return out
-        for cand in dubins_paths(pose, goal, radius)[:max_candidates]:
-            if body is not None and walk_hits(pose, cand.word, cand.lengths, radius, coarse, body):
-                continue
-            out.append([Piece(1, cand.sample(spacing))])
+            else:
+                out.append([Piece(1, cand.sample(spacing))])
         return out
 
     return shots
@@ -311,17 +384,27 @@ class HybridSearch:
         base_cost = self._base_cost.tolist()
         gears = prims.gears.tolist()
         kappas = prims.kappas.tolist()
-        h_at = self.heuristic.at
+        h_at = self.heuristic.scalar()
         kmax = self.kappa_max
+        shot_interval, shot_distance = cfg.shot_interval, cfg.shot_distance
+        gear_change_cost, steer_change_cost = cfg.gear_change_cost, cfg.steer_change_cost
+        # The node lists and key(), bound to locals (the same arithmetic: the hot loop).
+        xs, ys, yaws, gs, gear_of, kappa_of, parent = (
+            self.x, self.y, self.yaw, self.g, self.gear, self.kappa, self.parent
+        )  # fmt: skip
+        res, xmin, ymin, ny, nyaw = cfg.xy_resolution, self.xmin, self.ymin, self.ny, self.nyaw
+        two_pi = 2.0 * math.pi
+        inf = math.inf
+        heappop, heappush = heapq.heappop, heapq.heappush
         reason = "exhausted"
         while heap:
-            _f, i = heapq.heappop(heap)
-            xi, yi, yawi, gi, geari = self.x[i], self.y[i], self.yaw[i], self.g[i], self.gear[i]
+            _f, i = heappop(heap)
+            xi, yi, yawi, gi, geari = xs[i], ys[i], yaws[i], gs[i], gear_of[i]
             k = self.key(xi, yi, yawi, geari if geari else 1)
             if k in closed:
                 continue
             if self.expansions >= max_expansions:
-                heapq.heappush(heap, (_f, i))  # not expanded: a later call takes it
+                heappush(heap, (_f, i))  # not expanded: a later call takes it
                 reason = "expansions"
                 break
             if expired():
@@ -330,7 +413,7 @@ class HybridSearch:
             closed.add(k)
             self.expansions += 1
             since_shot += 1
-            interval = min(cfg.shot_interval, max(1, int(hval[i] / cfg.shot_distance)))
+            interval = min(shot_interval, max(1, int(hval[i] / shot_distance)))
             if since_shot >= interval:
                 since_shot = 0
                 for pieces in self._shot(i):
@@ -341,38 +424,53 @@ class HybridSearch:
                     if self.connections >= cfg.max_solutions:
                         return None, self._outcome("rejected")
             poses = prims.poses_from(xi, yi, yawi)
-            ki = self.kappa[i]
+            ki = kappa_of[i]
+            steered = ki == ki  # not the root's NaN
+            ends = poses[:, -1, :].tolist()
             # Closed bins, unreachable cells and dearer duplicates go before the body test.
             cand: list[tuple[int, int, float, float]] = []
-            for j, end in enumerate(poses[:, -1, :].tolist()):
+            for j, (ex, ey, eyaw) in enumerate(ends):
                 gear = gears[j]
-                kj = self.key(end[0], end[1], end[2], gear)
+                # self.key(ex, ey, eyaw, gear), inlined
+                iyaw = int(((eyaw % two_pi) / two_pi) * nyaw) % nyaw
+                kj = (
+                    (((int((ex - xmin) // res) * ny + int((ey - ymin) // res)) * nyaw + iyaw) << 1)
+                    | (gear < 0)
+                )  # fmt: skip
                 if kj in closed:
                     continue
-                hj = h_at(end[0], end[1], end[2])
-                if hj == math.inf:
+                hj = h_at(ex, ey, eyaw)
+                if hj == inf:
                     continue
                 cost = gi + base_cost[j]
                 if geari and gear != geari:
-                    cost += cfg.gear_change_cost
-                if ki == ki:  # not the root's NaN
-                    cost += cfg.steer_change_cost * abs(kappas[j] - ki) / kmax
-                if cost >= best.get(kj, math.inf):
+                    cost += gear_change_cost
+                if steered:
+                    cost += steer_change_cost * abs(kappas[j] - ki) / kmax
+                if cost >= best.get(kj, inf):
                     continue
                 cand.append((j, kj, cost, hj))
             if not cand:
                 continue
-            free = body.runs_free(poses[[c[0] for c in cand]])
-            for (j, kj, cost, hj), ok in zip(cand, free.tolist(), strict=True):
+            if len(cand) == len(ends):
+                free = body.runs_free(poses).tolist()
+            else:
+                free = body.runs_free(poses[[c[0] for c in cand]]).tolist()
+            for (j, kj, cost, hj), ok in zip(cand, free, strict=True):
                 if not ok:
                     continue
-                end = poses[j, -1]
+                ex, ey, eyaw = ends[j]
                 best[kj] = cost
-                n = self._add(
-                    float(end[0]), float(end[1]), float(end[2]), cost, gears[j], kappas[j], i
-                )
+                n = len(xs)
+                xs.append(ex)
+                ys.append(ey)
+                yaws.append(eyaw)
+                gs.append(cost)
+                gear_of.append(gears[j])
+                kappa_of.append(kappas[j])
+                parent.append(i)
                 hval.append(hj)
-                heapq.heappush(heap, (cost + w * hj, n))
+                heappush(heap, (cost + w * hj, n))
         self._since_shot = since_shot
         return None, self._outcome(reason)
 
