@@ -171,3 +171,49 @@ def test_scalar_heuristic_is_at(reverse: bool) -> None:
     got = [fast(*p) for p in pts]
     assert got == [h.at(*p) for p in pts]  # bit for bit, inf included
     assert math.inf in got and any(v < math.inf for v in got)
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    st.integers(1, 5),
+    st.integers(2, 9),
+    st.integers(0, 2**32 - 1),
+    st.floats(0.02, 1.0),
+)
+def test_banded_ramp_sum_is_the_full_sum(rows: int, pieces: int, seed: int, rate: float):
+    """The ramps' steering sum joint by joint: bit for bit the (B, J, T) array's sum."""
+    from rrtdrive.planning.hybrid.ramps import _SUBSTEPS, _ramp_sum, _ramp_sum_full
+
+    rng = np.random.default_rng(seed)
+    lengths = rng.uniform(0.05, 8.0, (rows, pieces))
+    angles = rng.uniform(-0.6, 0.6, (rows, pieces))
+    total = lengths.sum(axis=1)
+    t = np.linspace(0.0, 1.0, max(2, int(total.max() / 0.2)) * _SUBSTEPS + 1)
+    s = total[:, None] * t[None, :]
+    joints = np.cumsum(lengths, axis=1)[:, :-1]
+    jumps = np.diff(angles, axis=1)
+    factors = rng.uniform(1.0, 3.0, pieces - 1)
+    widths = np.maximum(np.abs(jumps) * factors[None, :] / rate, 1e-9)
+    got = _ramp_sum(s, t, total, joints, jumps, widths)
+    assert np.array_equal(got, _ramp_sum_full(s, joints, jumps, widths))
+
+
+def test_ramped_segment_unchanged_on_a_chain_of_arcs() -> None:
+    """A many-joint segment (overlapping ramps widened): the same rows as the full sum gives."""
+    from rrtdrive.planning.hybrid import ramps
+    from rrtdrive.planning.hybrid.primitives import arc_poses
+
+    rows = [np.array([[0.0, 0.0, 0.0]])]
+    for k in [0.0, 1 / 6, -1 / 6, 1 / 6, 0.0, -1 / 8, 0.0]:
+        rows.append(arc_poses(*rows[-1][-1], k, 1, np.linspace(0, 2.5, 11))[1:])
+    seg = np.vstack(rows)
+    args = (seg, 1, 0.17, 2.51, math.atan(2.51 / 5.9))
+    fast = ramps.ramped_segment(*args)
+    full = ramps._ramp_sum
+    try:
+        ramps._ramp_sum = lambda s, t, total, j, d, w: ramps._ramp_sum_full(s, j, d, w)
+        slow = ramps.ramped_segment(*args)
+    finally:
+        ramps._ramp_sum = full
+    assert fast is not None and slow is not None
+    assert np.array_equal(fast, slow)
