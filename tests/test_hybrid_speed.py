@@ -217,3 +217,54 @@ def test_ramped_segment_unchanged_on_a_chain_of_arcs() -> None:
         ramps._ramp_sum = full
     assert fast is not None and slow is not None
     assert np.array_equal(fast, slow)
+
+
+def _reference_chain(search, i: int):
+    """HybridSearch.chain as it was: one arc_poses call per primitive, pieces grown by vstack."""
+    from rrtdrive.planning.hybrid.primitives import arc_poses
+    from rrtdrive.planning.hybrid.search import Piece
+
+    nodes = []
+    while i >= 0:
+        nodes.append(i)
+        i = search.parent[i]
+    nodes.reverse()
+    pieces = []
+    n = max(1, math.ceil(search.prims.length / search.cfg.sample_spacing - 1e-9))
+    s = search.prims.length * np.arange(n + 1) / n
+    for a, b in zip(nodes[:-1], nodes[1:], strict=True):
+        poses = arc_poses(search.x[a], search.y[a], search.yaw[a], search.kappa[b],
+                          search.gear[b], s)  # fmt: skip
+        rows = np.column_stack([poses, np.full(len(poses), search.kappa[b])])
+        rows[-1, :3] = (search.x[b], search.y[b], search.yaw[b])
+        if pieces and pieces[-1].gear == search.gear[b]:
+            pieces[-1] = Piece(search.gear[b], np.vstack([pieces[-1].rows, rows[1:]]))
+        else:
+            pieces.append(Piece(search.gear[b], rows))
+    return pieces
+
+
+def test_vectorised_chain_is_the_reference() -> None:
+    """Chains of a real reversing search (many gears and curvatures): bit for bit."""
+    from rrtdrive.planning.hybrid.config import HybridConfig
+    from rrtdrive.planning.hybrid.heuristic import Heuristic
+    from rrtdrive.planning.hybrid.primitives import PrimitiveSet
+    from rrtdrive.planning.hybrid.search import HybridSearch, analytic_shots
+
+    m = builtin_map("parking_lot")
+    problem = PlanningProblem.from_map(m, reverse=True)
+    cfg = HybridConfig()
+    grid = free_cell_graph(problem, cfg.xy_resolution)
+    h = Heuristic(HolonomicField.towards(grid, m.goal), None, m.goal)
+    prims = PrimitiveSet.build(1 / RADIUS, cfg.curvatures, cfg.step, cfg.check_spacing, True)
+    body = BodyTest(problem.checker, 0.15)
+    shots = analytic_shots(m.goal, RADIUS, True, cfg.check_spacing, None, max_candidates=0)
+    search = HybridSearch(body, m.start, m.goal, h, prims, shots, cfg, 1 / RADIUS, m.bounds)
+    search.run(lambda pieces: None, 300, lambda: False)
+    gears = set()
+    for i in range(0, len(search.x), 7):
+        got, want = search.chain(i), _reference_chain(search, i)
+        assert [p.gear for p in got] == [p.gear for p in want]
+        assert all(np.array_equal(a.rows, b.rows) for a, b in zip(got, want, strict=True))
+        gears.update(p.gear for p in got)
+    assert gears == {1, -1}
