@@ -171,3 +171,100 @@ def test_scalar_heuristic_is_at(reverse: bool) -> None:
     got = [fast(*p) for p in pts]
     assert got == [h.at(*p) for p in pts]  # bit for bit, inf included
     assert math.inf in got and any(v < math.inf for v in got)
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    st.integers(1, 5),
+    st.integers(2, 9),
+    st.integers(0, 2**32 - 1),
+    st.floats(0.02, 1.0),
+)
+def test_banded_ramp_sum_is_the_full_sum(rows: int, pieces: int, seed: int, rate: float):
+    """The ramps' steering sum joint by joint: bit for bit the (B, J, T) array's sum."""
+    from rrtdrive.planning.hybrid.ramps import _SUBSTEPS, _ramp_sum, _ramp_sum_full
+
+    rng = np.random.default_rng(seed)
+    lengths = rng.uniform(0.05, 8.0, (rows, pieces))
+    angles = rng.uniform(-0.6, 0.6, (rows, pieces))
+    total = lengths.sum(axis=1)
+    t = np.linspace(0.0, 1.0, max(2, int(total.max() / 0.2)) * _SUBSTEPS + 1)
+    s = total[:, None] * t[None, :]
+    joints = np.cumsum(lengths, axis=1)[:, :-1]
+    jumps = np.diff(angles, axis=1)
+    factors = rng.uniform(1.0, 3.0, pieces - 1)
+    widths = np.maximum(np.abs(jumps) * factors[None, :] / rate, 1e-9)
+    got = _ramp_sum(s, t, total, joints, jumps, widths)
+    assert np.array_equal(got, _ramp_sum_full(s, joints, jumps, widths))
+
+
+def test_ramped_segment_unchanged_on_a_chain_of_arcs() -> None:
+    """A many-joint segment (overlapping ramps widened): the same rows as the full sum gives."""
+    from rrtdrive.planning.hybrid import ramps
+    from rrtdrive.planning.hybrid.primitives import arc_poses
+
+    rows = [np.array([[0.0, 0.0, 0.0]])]
+    for k in [0.0, 1 / 6, -1 / 6, 1 / 6, 0.0, -1 / 8, 0.0]:
+        rows.append(arc_poses(*rows[-1][-1], k, 1, np.linspace(0, 2.5, 11))[1:])
+    seg = np.vstack(rows)
+    args = (seg, 1, 0.17, 2.51, math.atan(2.51 / 5.9))
+    fast = ramps.ramped_segment(*args)
+    full = ramps._ramp_sum
+    try:
+        ramps._ramp_sum = lambda s, t, total, j, d, w: ramps._ramp_sum_full(s, j, d, w)
+        slow = ramps.ramped_segment(*args)
+    finally:
+        ramps._ramp_sum = full
+    assert fast is not None and slow is not None
+    assert np.array_equal(fast, slow)
+
+
+def _reference_chain(search, i: int):
+    """HybridSearch.chain as it was: one arc_poses call per primitive, pieces grown by vstack."""
+    from rrtdrive.planning.hybrid.primitives import arc_poses
+    from rrtdrive.planning.hybrid.search import Piece
+
+    nodes = []
+    while i >= 0:
+        nodes.append(i)
+        i = search.parent[i]
+    nodes.reverse()
+    pieces = []
+    n = max(1, math.ceil(search.prims.length / search.cfg.sample_spacing - 1e-9))
+    s = search.prims.length * np.arange(n + 1) / n
+    for a, b in zip(nodes[:-1], nodes[1:], strict=True):
+        poses = arc_poses(search.x[a], search.y[a], search.yaw[a], search.kappa[b],
+                          search.gear[b], s)  # fmt: skip
+        rows = np.column_stack([poses, np.full(len(poses), search.kappa[b])])
+        rows[-1, :3] = (search.x[b], search.y[b], search.yaw[b])
+        if pieces and pieces[-1].gear == search.gear[b]:
+            pieces[-1] = Piece(search.gear[b], np.vstack([pieces[-1].rows, rows[1:]]))
+        else:
+            pieces.append(Piece(search.gear[b], rows))
+    return pieces
+
+
+def test_vectorised_chain_is_the_reference() -> None:
+    """Chains of a real reversing search (many gears and curvatures): bit for bit."""
+    from rrtdrive.planning.hybrid.config import HybridConfig
+    from rrtdrive.planning.hybrid.heuristic import Heuristic
+    from rrtdrive.planning.hybrid.primitives import PrimitiveSet
+    from rrtdrive.planning.hybrid.search import HybridSearch, analytic_shots
+
+    m = builtin_map("parking_lot")
+    problem = PlanningProblem.from_map(m, reverse=True)
+    cfg = HybridConfig()
+    grid = free_cell_graph(problem, cfg.xy_resolution)
+    h = Heuristic(HolonomicField.towards(grid, m.goal), None, m.goal)
+    prims = PrimitiveSet.build(1 / RADIUS, cfg.curvatures, cfg.step, cfg.check_spacing, True)
+    body = BodyTest(problem.checker, 0.15)
+    shots = analytic_shots(m.goal, RADIUS, True, cfg.check_spacing, None, max_candidates=0)
+    search = HybridSearch(body, m.start, m.goal, h, prims, shots, cfg, 1 / RADIUS, m.bounds)
+    search.run(lambda pieces: None, 300, lambda: False)
+    gears = set()
+    for i in range(0, len(search.x), 7):
+        got, want = search.chain(i), _reference_chain(search, i)
+        assert [p.gear for p in got] == [p.gear for p in want]
+        assert all(np.array_equal(a.rows, b.rows) for a, b in zip(got, want, strict=True))
+        gears.update(p.gear for p in got)
+    assert gears == {1, -1}

@@ -76,16 +76,64 @@ def _profiles(
     joints = np.cumsum(lengths, axis=1)[:, :-1]
     jumps = np.diff(angles, axis=1)
     widths = np.maximum(np.abs(jumps) * factors[None, :] / rate, 1e-9)
-    # (s - joint) / width + 0.5, clipped to [0, 1], times the jump: in place, the same floats.
+    return _ramp_sum(s, t, total, joints, jumps, widths) + angles[:, :1], total / (len(t) - 1)
+
+
+def _ramp_sum(
+    s: np.ndarray,
+    t: np.ndarray,
+    total: np.ndarray,
+    joints: np.ndarray,
+    jumps: np.ndarray,
+    widths: np.ndarray,
+) -> np.ndarray:
+    """``sum_j jumps_j * clip((s - joints_j) / widths_j + 0.5, 0, 1)``, summed in ``j`` order.
+
+    Bit for bit the sum of the ``(B, J, T)`` array along ``j`` (numpy adds along a
+    non-contiguous axis one term after the other), computed one joint at a time:
+    before a ramp's columns its term is zero (adding it changes nothing), after
+    them it is the jump itself; only the columns its ramp may cover, in some row,
+    are evaluated. ``s`` is ``total * t`` per row, ``t`` increasing from 0 to 1.
+    """
+    B, T = s.shape
+    if not (np.isfinite(jumps).all() and np.isfinite(joints).all() and np.isfinite(s).all()):
+        return _ramp_sum_full(s, joints, jumps, widths)  # NaN/inf propagate as they did
+    acc = np.zeros((B, T))
+    if not joints.shape[1]:
+        return acc
+    span = np.maximum(total, 1e-300)
+    # Columns where some row's ramp may start or end, two columns of slack each way
+    # (t's spacing is far above the rounding of s = total * t); beyond them u <= 0
+    # or u >= 1 in every row, so clip gives exactly 0 or 1.
+    lo = np.searchsorted(t, ((joints - 0.5 * widths) / span[:, None]).min(axis=0)) - 2
+    hi = np.searchsorted(t, ((joints + 0.5 * widths) / span[:, None]).max(axis=0)) + 2
+    lo, hi = np.clip(lo, 0, T), np.clip(hi, 0, T)
+    for j in range(joints.shape[1]):
+        a, b = int(lo[j]), int(max(hi[j], lo[j]))
+        if b > a:
+            u = s[:, a:b] - joints[:, j : j + 1]
+            u /= widths[:, j : j + 1]
+            u += 0.5
+            np.maximum(u, 0.0, out=u)
+            np.minimum(u, 1.0, out=u)
+            u *= jumps[:, j : j + 1]
+            acc[:, a:b] += u
+        if b < T:
+            acc[:, b:] += jumps[:, j : j + 1]
+    return acc
+
+
+def _ramp_sum_full(
+    s: np.ndarray, joints: np.ndarray, jumps: np.ndarray, widths: np.ndarray
+) -> np.ndarray:
+    """:func:`_ramp_sum` over the whole ``(B, J, T)`` array (the reference)."""
     u = s[:, None, :] - joints[:, :, None]
     u /= widths[:, :, None]
     u += 0.5
     np.maximum(u, 0.0, out=u)
     np.minimum(u, 1.0, out=u)
     u *= jumps[:, :, None]
-    delta = u.sum(axis=1)
-    delta += angles[:, :1]
-    return delta, total / (len(t) - 1)
+    return u.sum(axis=1) if u.shape[1] else np.zeros(s.shape)
 
 
 def _integrate(

@@ -30,7 +30,7 @@ from rrtdrive.planning.dubins import dubins_paths
 from rrtdrive.planning.hybrid.body import BodyTest
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.heuristic import Heuristic
-from rrtdrive.planning.hybrid.primitives import PrimitiveSet, arc_poses
+from rrtdrive.planning.hybrid.primitives import PrimitiveSet
 from rrtdrive.planning.reeds_shepp import reeds_shepp_paths
 from rrtdrive.types import Pose
 
@@ -315,24 +315,54 @@ class HybridSearch:
         return len(self.x) - 1
 
     def chain(self, i: int) -> list[Piece]:
-        """The pieces from the start to node ``i``, one per primitive, merged per gear."""
+        """The pieces from the start to node ``i``, one per primitive, merged per gear.
+
+        Every primitive's rows are :func:`arc_poses` from its parent (evaluated for
+        all primitives at once, with the same arithmetic), the last one its node's
+        exact pose.
+        """
         nodes = []
         while i >= 0:
             nodes.append(i)
             i = self.parent[i]
         nodes.reverse()
-        pieces: list[Piece] = []
+        if len(nodes) < 2:
+            return []
         cfg = self.cfg
         n = max(1, math.ceil(self.prims.length / cfg.sample_spacing - 1e-9))
         s = self.prims.length * np.arange(n + 1) / n
-        for a, b in zip(nodes[:-1], nodes[1:], strict=True):
-            poses = arc_poses(self.x[a], self.y[a], self.yaw[a], self.kappa[b], self.gear[b], s)
-            rows = np.column_stack([poses, np.full(len(poses), self.kappa[b])])
-            rows[-1, :3] = (self.x[b], self.y[b], self.yaw[b])
-            if pieces and pieces[-1].gear == self.gear[b]:
-                pieces[-1] = Piece(self.gear[b], np.vstack([pieces[-1].rows, rows[1:]]))
-            else:
-                pieces.append(Piece(self.gear[b], rows))
+        a, b = nodes[:-1], nodes[1:]
+        xa = np.array([self.x[k] for k in a])
+        ya = np.array([self.y[k] for k in a])
+        yawa = np.array([self.yaw[k] for k in a])
+        kb = np.array([self.kappa[k] for k in b])
+        gb = [self.gear[k] for k in b]
+        gear = np.array(gb, dtype=np.int64)
+        rows = np.empty((len(b), n + 1, 4))
+        yaws = yawa[:, None] + (gear * kb)[:, None] * s[None, :]
+        rows[..., 2] = yaws
+        rows[..., 3] = kb[:, None]
+        line = np.abs(kb) < 1e-12
+        if line.any():
+            gs = gear[line, None] * s[None, :]
+            rows[line, :, 0] = xa[line, None] + gs * np.cos(yawa[line])[:, None]
+            rows[line, :, 1] = ya[line, None] + gs * np.sin(yawa[line])[:, None]
+        arc = ~line
+        if arc.any():
+            k, y0 = kb[arc, None], yawa[arc, None]
+            rows[arc, :, 0] = xa[arc, None] + (np.sin(yaws[arc]) - np.sin(y0)) / k
+            rows[arc, :, 1] = ya[arc, None] - (np.cos(yaws[arc]) - np.cos(y0)) / k
+        rows[:, -1, 0] = [self.x[k] for k in b]
+        rows[:, -1, 1] = [self.y[k] for k in b]
+        rows[:, -1, 2] = [self.yaw[k] for k in b]
+        # Consecutive primitives of one gear: one piece (junction rows not repeated).
+        pieces: list[Piece] = []
+        first = 0
+        for e in range(1, len(b) + 1):
+            if e == len(b) or gb[e] != gb[first]:
+                rest = rows[first + 1 : e, 1:].reshape(-1, 4)
+                pieces.append(Piece(gb[first], np.vstack([rows[first], rest])))
+                first = e
         return pieces
 
     def _shot(self, i: int) -> list[list[Piece]]:
