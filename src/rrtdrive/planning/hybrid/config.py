@@ -237,14 +237,7 @@ class HybridConfig:
         >>> fine.xy_resolution, fine.step, fine.yaw_bins, fine.refinements
         (0.25, 0.5, 144, 0)
         """
-        return dataclasses.replace(
-            self,
-            xy_resolution=self.xy_resolution / 2.0,
-            yaw_resolution=self.yaw_resolution / 2.0,
-            step=self.step / 2.0,
-            refinements=max(0, self.refinements - 1),
-            coarse_after=0.0,
-        )
+        return self._scaled(0.5, refinements=max(0, self.refinements - 1))
 
     def tightened(self) -> HybridConfig:
         """The last search: :attr:`min_clearance` kept, no finer or coarser one after it.
@@ -255,9 +248,7 @@ class HybridConfig:
         >>> tight.body_clearance, tight.xy_resolution, tight.refinements, tight.coarsens
         (0.05, 0.5, 0, False)
         """
-        return dataclasses.replace(
-            self, body_clearance=self.min_clearance, refinements=0, coarse_after=0.0
-        )
+        return self._last(body_clearance=self.min_clearance)
 
     def widened(self) -> HybridConfig:
         """The last search after rejected connections: :attr:`wide_radius_factor`'s turns.
@@ -267,9 +258,7 @@ class HybridConfig:
         >>> HybridConfig().widened().radius_factor, HybridConfig().widened().refinements
         (1.1, 0)
         """
-        return dataclasses.replace(
-            self, radius_factor=self.wide_radius_factor, refinements=0, coarse_after=0.0
-        )
+        return self._last(radius_factor=self.wide_radius_factor)
 
     @property
     def coarsens(self) -> bool:
@@ -287,15 +276,22 @@ class HybridConfig:
         >>> coarse.coarsens
         False
         """
-        f = self.coarse_factor
+        return self._scaled(float(self.coarse_factor), refinements=0)
+
+    def _scaled(self, factor: float, refinements: int) -> HybridConfig:
+        """Cell, heading bin (at most pi/4) and step times ``factor``; no coarse stage."""
         return dataclasses.replace(
             self,
-            xy_resolution=self.xy_resolution * f,
-            yaw_resolution=min(self.yaw_resolution * f, math.pi / 4),
-            step=self.step * f,
-            refinements=0,
+            xy_resolution=self.xy_resolution * factor,
+            yaw_resolution=min(self.yaw_resolution * factor, math.pi / 4),
+            step=self.step * factor,
+            refinements=refinements,
             coarse_after=0.0,
         )
+
+    def _last(self, **changes: float) -> HybridConfig:
+        """``changes`` applied, and no finer or coarser search after this one."""
+        return dataclasses.replace(self, refinements=0, coarse_after=0.0, **changes)
 
     @property
     def yaw_bins(self) -> int:

@@ -286,14 +286,15 @@ def hybrid_query(
             run(cfg, left)
     path, outcome, trees = found
     reason = outcome.reason
-    clearance = query_clearance(problem, cfg.body_clearance)
+    usual = query_clearance(problem, config.body_clearance)
+    kept = clearance = query_clearance(problem, cfg.body_clearance)
     if stage == "coarse" and path is None and reason in _REFINE_ON:
         # What the coarse search cannot do proves nothing: the finer one was cut short.
         reason = "expansions"
     if stage == "tight" and path is None and reason not in (*_PROOFS, "time"):
         # Cut short keeping less clearance: a proof for the usual clearance stands.
         reason = tried[-2][1].reason if tried[-2][1].reason in _PROOFS else "expansions"
-        clearance = query_clearance(problem, config.body_clearance)
+        clearance = usual
     if stage == "wide" and path is None and reason != "time":
         # Wider turns prove nothing about the car's own: the rejections stand.
         reason = "rejected"
@@ -303,45 +304,38 @@ def hybrid_query(
         HybridAnswer, outcome=total, trees=trees, refinements=len(earlier) - (stage != "first"),
         stage=stage, clearance=clearance,
     )  # fmt: skip
+    # How the last-resort search differed from the others, for its messages.
+    how = {
+        "tight": f"keeping only {kept:.2f} m body clearance",
+        "wide": f"turning with radius {cfg.radius_factor:g} / kappa_max",
+    }.get(stage, "")
     if path is not None:
-        note = ""
-        if stage == "wide":
-            note = f" turning with radius {cfg.radius_factor:g} / kappa_max"
+        note = f" {how}" if how else ""
         if stage == "tight":
-            kept = query_clearance(problem, config.body_clearance)
-            note = f" keeping only {clearance:.2f} m body clearance (none keeps {kept:.2f} m)"
+            note += f" (none keeps {usual:.2f} m)"
         if earlier:
             note += f" at {_resolution(cfg)} resolution ({_earlier_note(earlier)})"
         return answer(path=path, message="", note=note)
     if stage == "coarse":
-        first_cfg, first = tried[0]
+        first_cfg, first_outcome = tried[0]
         message = (
             f"no path found within the expansion budget of {budget.max_iterations}: at "
             f"{_resolution(first_cfg)} / {first_cfg.step:g} m steps the search "
-            f"{_why(first, 'its share of ')}, then at {_resolution(cfg)} / {cfg.step:g} m "
-            f"steps it {_why(outcome, '')} (a coarse search proves nothing; a larger "
-            "budget may find a path)"
+            f"{_why(first_outcome, 'its share of ')}, then at {_resolution(cfg)} / "
+            f"{cfg.step:g} m steps it {_why(outcome, '')} (a coarse search proves nothing; "
+            "a larger budget may find a path)"
         )
         return answer(path=None, message=message)
-    if stage in ("tight", "wide"):
+    (lead_cfg, lead), before = (cfg, outcome), earlier
+    if how:
         # Lead with the finest resolution's ending at the usual clearance and radius.
-        (cfg, outcome), earlier = tried[-2], tried[:-2]
-    message = _failure_message(outcome, cfg, budget, reverse)
-    if earlier:
-        message += f"; {_earlier_note(earlier)}"
-    if stage == "tight":
-        last_cfg, last = tried[-1]
-        tight = query_clearance(problem, last_cfg.body_clearance)
-        message += (
-            f"; keeping only {tight:.2f} m body clearance, at {_resolution(last_cfg)} the "
-            f"search {_why(last, '')}" + (" too" if last.reason in _PROOFS else "")
-        )
-    if stage == "wide":
-        last_cfg, last = tried[-1]
-        message += (
-            f"; turning with radius {last_cfg.radius_factor:g} / kappa_max, at "
-            f"{_resolution(last_cfg)} the search {_why(last, '')}"
-        )
+        (lead_cfg, lead), before = tried[-2], tried[:-2]
+    message = _failure_message(lead, lead_cfg, budget, reverse)
+    if before:
+        message += f"; {_earlier_note(before)}"
+    if how:
+        too = " too" if stage == "tight" and outcome.reason in _PROOFS else ""
+        message += f"; {how}, at {_resolution(cfg)} the search {_why(outcome, '')}{too}"
     return answer(path=None, message=message)
 
 
@@ -375,15 +369,19 @@ def _why(outcome: SearchOutcome, share: str) -> str:
     >>> _why(SearchOutcome("exhausted", 7, 0, 0, 0), "")
     'ran out of states after 7 expansions'
     """
-    why = {
-        "exhausted": "ran out of states",
-        "no_approach": "ran out of ways to arrive at the goal",
-        "rejected": "had every goal connection rejected",
-        "time": "was stopped by the wall-clock cap",
-    }
     if outcome.reason == "expansions":
         return f"spent {share}{outcome.expansions} expansions"
-    return f"{why.get(outcome.reason, outcome.reason)} after {outcome.expansions} expansions"
+    ending = _ENDINGS.get(outcome.reason, outcome.reason)
+    return f"{ending} after {outcome.expansions} expansions"
+
+
+#: How a search that did not spend its budget ended, in words.
+_ENDINGS = {
+    "exhausted": "ran out of states",
+    "no_approach": "ran out of ways to arrive at the goal",
+    "rejected": "had every goal connection rejected",
+    "time": "was stopped by the wall-clock cap",
+}
 
 
 def _query_at(
