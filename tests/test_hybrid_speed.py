@@ -268,3 +268,43 @@ def test_vectorised_chain_is_the_reference() -> None:
         assert all(np.array_equal(a.rows, b.rows) for a, b in zip(got, want, strict=True))
         gears.update(p.gear for p in got)
     assert gears == {1, -1}
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    x=st.floats(0.0, 100.0),
+    y=st.floats(0.0, 100.0),
+    yaw=st.floats(-math.pi, math.pi),
+    clearance=st.sampled_from([0.0, 0.05, 0.15, 0.25]),
+)
+def test_free_within_proves_every_successor_free(x, y, yaw, clearance):
+    """A node with the discs' room for the primitives' reach: every successor pose is free.
+
+    The skip of the search's body test must never call free what the exact test
+    rejects, and the primitives it skips are all of them, in both gears.
+    """
+    from rrtdrive.planning.hybrid.primitives import PrimitiveSet
+
+    body = BodyTest(_checker(), clearance)
+    prims = PrimitiveSet.build(1 / RADIUS, 5, 1.0, 0.1, reverse=True)
+    reach = body.reach(prims.length, 1 / RADIUS)
+    if not body.free_within(x, y, yaw, reach):
+        return
+    poses = prims.poses_from(x, y, yaw).reshape(-1, 3)
+    assert body.free(poses).all()
+    assert not body.hits(poses).any()
+
+
+def test_free_within_is_not_vacuous():
+    """On the parking lot's aisles the skip applies, and next to a parked car it does not."""
+    body = BodyTest(_checker(), 0.15)
+    reach = body.reach(1.0, 1 / RADIUS)
+    rng = np.random.default_rng(3)
+    pts = rng.uniform(0, 100, size=(2000, 3))
+    pts[:, 2] = rng.uniform(-math.pi, math.pi, 2000)
+    skipped = [body.free_within(*p, reach) for p in pts]
+    assert 0.05 < np.mean(skipped) < 0.95
+    # A pose whose body is not free is never skipped.
+    for p, s in zip(pts, skipped, strict=True):
+        if not body.free(p[None])[0]:
+            assert not s

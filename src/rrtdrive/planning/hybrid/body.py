@@ -57,6 +57,7 @@ class BodyTest:
         discs, radius = cover_discs(v, 3)
         self._n_axis = len(axis)
         self._axis_list = [float(o) for o in axis]
+        self._disc_list = [float(o) for o in discs]
         self.offsets = np.concatenate([axis, discs])
         # clearance() of an occupied cell is -grid_error; of a free cell >= h - grid_error.
         self.occupied_below = -checker.grid_error + 0.5 * h
@@ -87,6 +88,31 @@ class BodyTest:
         screen, the same test), so the checker starts at its six-disc screen.
         """
         return self.checker.poses_free_unscreened(poses, clearance=self.clearance)
+
+    def reach(self, length: float, kappa: float) -> list[float]:
+        """How far each covering disc's centre can move while the rear axle drives ``length``.
+
+        A centre ``o`` ahead of the rear axle moves ``sqrt(1 + (o kappa)^2)`` per metre
+        of rear-axle travel at steering curvature ``kappa``, in either gear: over
+        ``length`` at ``|kappa| <= kappa`` it stays within that many metres.
+        """
+        return [length * math.hypot(1.0, o * kappa) for o in self._disc_list]
+
+    def free_within(self, x: float, y: float, yaw: float, reach: Sequence[float]) -> bool:
+        """True when every pose whose discs lie within ``reach`` of this pose's is free.
+
+        The clearance field is a 1-Lipschitz lower bound of the distance to the nearest
+        obstacle: a disc centre with ``disc_need + reach`` of room here has
+        ``disc_need`` wherever it moves within ``reach``, so the body keeps the
+        clearance there (the checker's exact test says free, its screens no hit).
+        False proves nothing.
+        """
+        c, s = math.cos(yaw), math.sin(yaw)
+        clearance, need = self.checker.clearance, self.disc_need
+        for off, r in zip(self._disc_list, reach, strict=True):
+            if clearance(x + c * off, y + s * off) < need + r:
+                return False
+        return True
 
     def hit_at(self, x: float, y: float, yaw: float) -> bool:
         """Scalar :meth:`hits` for one pose (no numpy call: for walks that stop early)."""

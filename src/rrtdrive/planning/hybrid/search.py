@@ -293,6 +293,9 @@ class HybridSearch:
             np.where(p.gears < 0, config.reverse_cost, 1.0)
             + config.steer_cost * np.abs(p.kappas) / kappa_max
         )
+        # How far a covering disc moves along any primitive: with that much room at a
+        # node, every successor is free without a body test (the same answer).
+        self._reach = body.reach(p.length, float(np.abs(p.kappas).max()) if len(p) else 0.0)
 
     def key(self, x: float, y: float, yaw: float, gear: int) -> int:
         """The closing bin of a state: its cell, heading bin and gear."""
@@ -425,6 +428,7 @@ class HybridSearch:
         res, xmin, ymin, ny, nyaw = cfg.xy_resolution, self.xmin, self.ymin, self.ny, self.nyaw
         two_pi = 2.0 * math.pi
         inf = math.inf
+        free_within, reach = body.free_within, self._reach
         heappop, heappush = heapq.heappop, heapq.heappush
         reason = "exhausted"
         while heap:
@@ -482,7 +486,9 @@ class HybridSearch:
                 cand.append((j, kj, cost, hj))
             if not cand:
                 continue
-            if len(cand) == len(ends):
+            if free_within(xi, yi, yawi, reach):
+                free = [True] * len(cand)
+            elif len(cand) == len(ends):
                 free = body.runs_free(poses).tolist()
             else:
                 free = body.runs_free(poses[[c[0] for c in cand]]).tolist()
