@@ -135,11 +135,12 @@ TIGHT_CORNER_START = Pose(59.2941018104284, 26.00974477372232, 2.135538579126397
 def test_rejected_ramps_search_again_with_more_clearance() -> None:
     m = builtin_map("parking_lot").with_query(start=TIGHT_CORNER_START)
     problem = PlanningProblem.from_map(m)
-    without = HybridAStar(ramp_margin=0.0, refinements=0, wide_radius_factor=1.02).solve(
-        problem, np.random.default_rng(0), BUDGET
-    )
+    # The unit steps of the search (long_steps=()) find only connections through that corner.
+    without = HybridAStar(
+        ramp_margin=0.0, refinements=0, wide_radius_factor=1.02, long_steps=()
+    ).solve(problem, np.random.default_rng(0), BUDGET)
     assert not without.success and without.stats["connections"] == 16
     assert "could not be made drivable" in without.message
-    res = HybridAStar().solve(problem, np.random.default_rng(0), BUDGET)
+    res = HybridAStar(long_steps=()).solve(problem, np.random.default_rng(0), BUDGET)
     assert res.success and verify_path(m, res.path).ok
     assert max_sharpness(res.path.samples, L) <= 0.2

@@ -114,6 +114,12 @@ class BodyTest:
                 return False
         return True
 
+    def disc_room(self, x: float, y: float, yaw: float) -> list[float]:
+        """Each covering disc's room beyond ``disc_need`` at a pose (see :meth:`free_within`)."""
+        c, s = math.cos(yaw), math.sin(yaw)
+        clearance, need = self.checker.clearance, self.disc_need
+        return [clearance(x + c * off, y + s * off) - need for off in self._disc_list]
+
     def hit_at(self, x: float, y: float, yaw: float) -> bool:
         """Scalar :meth:`hits` for one pose (no numpy call: for walks that stop early)."""
         c, s = math.cos(yaw), math.sin(yaw)

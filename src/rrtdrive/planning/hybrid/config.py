@@ -28,6 +28,14 @@ class HybridConfig:
     step : float
         Arc length of a motion primitive in metres; longer than a cell diagonal,
         so every successor leaves its parent's cell.
+    long_steps : tuple of float
+        Longer primitives, as multiples of ``step``, expanded from a node whose
+        covering discs have room for their whole sweep (so their successors need no
+        body test, :meth:`~rrtdrive.planning.hybrid.body.BodyTest.free_within`): the
+        longest that fits is taken instead of the ``step`` arcs. Open aisles are
+        crossed in fewer expansions; near obstacles the search is unchanged. ``()``:
+        never. On the 30 + 30 random queries of ``experiments/coverage.py`` with
+        reverse, ``(2, 4)`` cut the median expansions from 110 / 174 to 58 / 125.
     curvatures : int
         Number of steering curvatures, odd, spread evenly over
         ``[-kappa_search, kappa_search]`` (the middle one straight).
@@ -145,6 +153,7 @@ class HybridConfig:
     xy_resolution: float = 0.5
     yaw_resolution: float = math.radians(5.0)
     step: float = 1.0
+    long_steps: tuple[float, ...] = (2.0, 4.0)
     curvatures: int = 5
     radius_factor: float = 1.02
     reverse_cost: float = 2.0
@@ -210,6 +219,14 @@ class HybridConfig:
             require_finite(f"hybrid.{name}", value)
             if value < 0:
                 raise InputError(f"hybrid.{name}: must be >= 0, got {value!r}")
+        if not isinstance(self.long_steps, tuple) or any(
+            isinstance(f, bool) or not isinstance(f, (int, float)) or not math.isfinite(f)
+            or f <= 1.0 for f in self.long_steps
+        ):
+            raise InputError(
+                f"hybrid.long_steps: must be a tuple of finite multiples of step > 1, "
+                f"got {self.long_steps!r}"
+            )
         if self.curve not in CURVES:
             raise InputError(f"hybrid.curve: must be one of {list(CURVES)}, got {self.curve!r}")
         require_int("hybrid.shot_interval", self.shot_interval)

@@ -9,12 +9,13 @@ steering driven backwards in time. Poses are closed-form on the arc.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["PrimitiveSet", "arc_poses"]
+__all__ = ["PrimitiveSet", "arc_poses", "primitive_sets"]
 
 
 def arc_poses(x: float, y: float, yaw: float, kappa: float, gear: int, s: np.ndarray) -> np.ndarray:
@@ -110,6 +111,19 @@ class PrimitiveSet:
                 local.append(arc_poses(0.0, 0.0, 0.0, float(k), g, s))
         return cls(np.array(kappas), np.array(gs, dtype=np.int64), np.array(local), float(length))
 
+    def scaled(self, factor: float) -> PrimitiveSet:
+        """The same curvatures and gears, each primitive ``factor`` times as long.
+
+        Its poses keep at most the spacing of these (``length / poses per primitive``).
+        """
+        length = self.length * factor
+        spacing = self.length / self.local.shape[1]
+        n = max(1, math.ceil(length / spacing - 1e-9))
+        s = length * np.arange(1, n + 1) / n
+        pairs = zip(self.kappas.tolist(), self.gears.tolist(), strict=True)
+        local = np.array([arc_poses(0.0, 0.0, 0.0, k, g, s) for k, g in pairs])
+        return PrimitiveSet(self.kappas.copy(), self.gears.copy(), local.reshape(-1, n, 3), length)
+
     def __len__(self) -> int:
         return len(self.kappas)
 
@@ -127,3 +141,18 @@ class PrimitiveSet:
         out[..., 1] = y + s * lx + c * ly
         out[..., 2] = yaw + self.local[..., 2]
         return out
+
+
+@functools.lru_cache(maxsize=32)
+def primitive_sets(
+    kappa_max: float, count: int, length: float, spacing: float, gear: int, long_steps: tuple
+) -> tuple[PrimitiveSet, ...]:
+    """The search's primitives of one gear (0: both) and their longer copies, built once.
+
+    The first set has arcs of ``length``; then one per factor of ``long_steps``
+    (:meth:`PrimitiveSet.scaled`). The sets are shared: never write to them.
+    """
+    base = PrimitiveSet.build(kappa_max, count, length, spacing, reverse=True)
+    if gear:
+        base = base.gear(gear)
+    return (base, *(base.scaled(f) for f in long_steps))

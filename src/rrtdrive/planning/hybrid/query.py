@@ -33,7 +33,7 @@ from rrtdrive.planning.hybrid.heuristic import (
     HolonomicField,
 )
 from rrtdrive.planning.hybrid.path import BuiltPath, Ramps, build_path
-from rrtdrive.planning.hybrid.primitives import PrimitiveSet
+from rrtdrive.planning.hybrid.primitives import PrimitiveSet, primitive_sets
 from rrtdrive.planning.hybrid.search import (
     HybridSearch,
     Piece,
@@ -102,14 +102,23 @@ def reeds_shepp_to(goal: Pose, radius: float) -> Callable[[float, float, float],
     return length
 
 
-def query_clearance(problem: PlanningProblem, wanted: float) -> float:
-    """``wanted``, capped at the exact body clearance the start and goal poses have."""
-    if wanted <= 0.0:
-        return 0.0
+def end_clearance(problem: PlanningProblem) -> float:
+    """The exact body clearance of the query's start and goal poses, the smaller."""
     c = problem.checker
-    have = min(
+    return min(
         c.body_clearance(problem.start.as_tuple()), c.body_clearance(problem.goal.as_tuple())
     )
+
+
+def query_clearance(problem: PlanningProblem, wanted: float, have: float | None = None) -> float:
+    """``wanted``, capped at the exact body clearance the start and goal poses have.
+
+    ``have``: that clearance (:func:`end_clearance`) when the caller has it already.
+    """
+    if wanted <= 0.0:
+        return 0.0
+    if have is None:
+        have = end_clearance(problem)
     return max(0.0, min(wanted, have * 0.999))
 
 
@@ -250,12 +259,13 @@ def hybrid_query(
     HybridAnswer
     """
     left = budget.max_iterations
+    have = end_clearance(problem)
     tried: list[tuple[HybridConfig, SearchOutcome]] = []
     found: tuple[BuiltPath | None, SearchOutcome, tuple[Tree, ...]]
 
     def run(cfg: HybridConfig, allowed: int) -> None:
         nonlocal left, found
-        found = _query_at(problem, allowed, watch, cfg, reverse, smoothing)
+        found = _query_at(problem, allowed, watch, cfg, reverse, smoothing, have)
         tried.append((cfg, found[1]))
         left -= found[1].expansions
 
@@ -286,8 +296,8 @@ def hybrid_query(
             run(cfg, left)
     path, outcome, trees = found
     reason = outcome.reason
-    usual = query_clearance(problem, config.body_clearance)
-    kept = clearance = query_clearance(problem, cfg.body_clearance)
+    usual = query_clearance(problem, config.body_clearance, have)
+    kept = clearance = query_clearance(problem, cfg.body_clearance, have)
     if stage == "coarse" and path is None and reason in _REFINE_ON:
         # What the coarse search cannot do proves nothing: the finer one was cut short.
         reason = "expansions"
@@ -391,10 +401,14 @@ def _query_at(
     config: HybridConfig,
     reverse: bool,
     smoothing: SmoothingConfig | None,
+    have: float,
 ) -> tuple[BuiltPath | None, SearchOutcome, tuple[Tree, ...]]:
-    """The searches of :func:`hybrid_query` at one resolution, with ``budget`` expansions."""
+    """The searches of :func:`hybrid_query` at one resolution, with ``budget`` expansions.
+
+    ``have``: the start's and goal's own body clearance (:func:`end_clearance`).
+    """
     kappa_max = problem.vehicle.kappa_max
-    clearance = query_clearance(problem, config.body_clearance)
+    clearance = query_clearance(problem, config.body_clearance, have)
     if smoothing is not None:
         smoothing = dataclasses.replace(smoothing, clearance=clearance, kappa_max=kappa_max)
     radius = config.radius_factor / kappa_max
@@ -405,11 +419,10 @@ def _query_at(
     recheck_clearance = max(0.0, clearance - 0.005)
     start, goal = problem.start, problem.goal
     grid = free_cell_graph(problem, config.xy_resolution)
-    prims = PrimitiveSet.build(
-        1.0 / radius, config.curvatures, config.step, config.check_spacing, reverse=True
-    )
-    if not reverse:
-        prims = prims.gear(1)
+    prims, *long_prims = primitive_sets(
+        1.0 / radius, config.curvatures, config.step, config.check_spacing, 0 if reverse else 1,
+        config.long_steps,
+    )  # fmt: skip
 
     ramps = None
     if config.curve == "clothoid":
@@ -436,19 +449,22 @@ def _query_at(
         body = BodyTest(problem.checker, search_clearance)
         shots = analytic_shots(goal, radius, reverse, config.check_spacing, body)
         ahead = HybridSearch(
-            body, start, goal, heuristic, prims, shots, config, kappa_max, problem.bounds
-        )
+            body, start, goal, heuristic, prims, shots, config, kappa_max, problem.bounds,
+            long_prims,
+        )  # fmt: skip
         out: list[tuple[HybridSearch, Accept]] = [(ahead, accept)]
         if config.switch_after > 0:
             # From the goal back to the start: forward only, by reverse arcs alone.
-            back_prims = prims if reverse else prims_reverse(radius, config)
+            back_prims, *back_long = (
+                (prims, *long_prims) if reverse else prims_reverse(radius, config)
+            )
             if reverse:
                 back_shots = analytic_shots(start, radius, True, config.check_spacing, body)
             else:
                 back_shots = _backward_dubins_shots(start, radius, config.check_spacing, body)
             back = HybridSearch(
                 body, goal, start, back_h, back_prims, back_shots, config, kappa_max,
-                problem.bounds,
+                problem.bounds, back_long,
             )  # fmt: skip
             out.append((back, lambda p: accept(reversed_in_time(p))))
         return out
@@ -461,7 +477,7 @@ def _query_at(
     searches: list[tuple[HybridSearch, Accept]] = []
     for margin in margins:
         search_clearance = clearance if margin == 0.0 else query_clearance(
-            problem, config.body_clearance + margin
+            problem, config.body_clearance + margin, have
         )
         searches = searches_with(search_clearance)
         left = budget - used.expansions
@@ -508,9 +524,8 @@ def _alternate(
     return path, SearchOutcome.total(reason, outcomes)
 
 
-def prims_reverse(radius: float, config: HybridConfig) -> PrimitiveSet:
-    """The reverse arcs alone (the search from the goal of a forward-only query)."""
-    prims = PrimitiveSet.build(
-        1.0 / radius, config.curvatures, config.step, config.check_spacing, reverse=True
+def prims_reverse(radius: float, config: HybridConfig) -> tuple[PrimitiveSet, ...]:
+    """The reverse arcs alone (the search from the goal of a forward-only query), and longer."""
+    return primitive_sets(
+        1.0 / radius, config.curvatures, config.step, config.check_spacing, -1, config.long_steps
     )
-    return prims.gear(-1)

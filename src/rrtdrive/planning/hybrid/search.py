@@ -235,6 +235,19 @@ def analytic_shots(
     return shots
 
 
+@dataclass(frozen=True)
+class _OpenArcs:
+    """Primitives of one length as the search loop reads them (plain lists)."""
+
+    length: float
+    #: How far each covering disc can move along them (:meth:`BodyTest.reach`).
+    reach: list[float]
+    #: Each primitive's cost before gear and steering changes.
+    costs: list[float]
+    #: Each primitive's end pose ``[x, y, dyaw]`` from a pose at the origin heading +x.
+    ends: list[list[float]]
+
+
 class HybridSearch:
     """One Hybrid A* query: the primitives, the heuristic, the checker and the budget.
 
@@ -248,6 +261,9 @@ class HybridSearch:
         Cost-to-go estimate to ``goal``.
     primitives : PrimitiveSet
         The successors' arcs.
+    long_primitives : sequence of PrimitiveSet
+        Longer copies of ``primitives`` (same curvatures and gears), taken instead
+        from a node whose discs have room for their reach (:attr:`HybridConfig.long_steps`).
     shots : callable
         Analytic expansions (:func:`analytic_shots`).
     config : HybridConfig
@@ -269,6 +285,7 @@ class HybridSearch:
         config: HybridConfig,
         kappa_max: float,
         bounds: tuple[float, float, float, float],
+        long_primitives: Sequence[PrimitiveSet] = (),
     ) -> None:
         self.body, self.start, self.goal = body, start, goal
         self.heuristic, self.prims, self.shots = heuristic, primitives, shots
@@ -284,18 +301,29 @@ class HybridSearch:
         self.gear: list[int] = []
         self.kappa: list[float] = []
         self.parent: list[int] = []
+        self.step: list[float] = []
         self.expansions = 0
         self.shots_tried = 0
         self.connections = 0
         # Per-primitive constants of the edge cost.
-        p = primitives
-        self._base_cost = p.length * (
-            np.where(p.gears < 0, config.reverse_cost, 1.0)
-            + config.steer_cost * np.abs(p.kappas) / kappa_max
+        self._base_cost = self._edge_costs(primitives)
+        # The primitives whose successors need no body test from a node with room for
+        # their sweep, longest first: the long ones, then the step arcs themselves
+        # (BodyTest.free_within: the same answer as the test).
+        kappa = float(np.abs(primitives.kappas).max()) if len(primitives) else 0.0
+        self._open = [
+            _OpenArcs(p.length, body.reach(p.length, kappa), self._edge_costs(p).tolist(),
+                      p.local[:, -1, :].tolist())
+            for p in sorted((*long_primitives, primitives), key=lambda p: -p.length)
+        ]  # fmt: skip
+
+    def _edge_costs(self, p: PrimitiveSet) -> np.ndarray:
+        """Each primitive's cost before gear and steering changes."""
+        cfg = self.cfg
+        return p.length * (
+            np.where(p.gears < 0, cfg.reverse_cost, 1.0)
+            + cfg.steer_cost * np.abs(p.kappas) / self.kappa_max
         )
-        # How far a covering disc moves along any primitive: with that much room at a
-        # node, every successor is free without a body test (the same answer).
-        self._reach = body.reach(p.length, float(np.abs(p.kappas).max()) if len(p) else 0.0)
 
     def key(self, x: float, y: float, yaw: float, gear: int) -> int:
         """The closing bin of a state: its cell, heading bin and gear."""
@@ -315,6 +343,7 @@ class HybridSearch:
         self.gear.append(gear)
         self.kappa.append(kappa)
         self.parent.append(par)
+        self.step.append(self.prims.length)
         return len(self.x) - 1
 
     def chain(self, i: int) -> list[Piece]:
@@ -331,16 +360,34 @@ class HybridSearch:
         nodes.reverse()
         if len(nodes) < 2:
             return []
-        cfg = self.cfg
-        n = max(1, math.ceil(self.prims.length / cfg.sample_spacing - 1e-9))
-        s = self.prims.length * np.arange(n + 1) / n
         a, b = nodes[:-1], nodes[1:]
+        lengths = [self.step[k] for k in b]
+        gb = [self.gear[k] for k in b]
+        edge_rows: list[np.ndarray] = [np.empty(0)] * len(b)
+        for length in sorted(set(lengths)):
+            idx = [e for e, v in enumerate(lengths) if v == length]
+            block = self._edge_rows([a[e] for e in idx], [b[e] for e in idx], length)
+            for e, r in zip(idx, block, strict=True):
+                edge_rows[e] = r
+        # Consecutive primitives of one gear: one piece (junction rows not repeated).
+        pieces: list[Piece] = []
+        first = 0
+        for e in range(1, len(b) + 1):
+            if e == len(b) or gb[e] != gb[first]:
+                rest = [edge_rows[k][1:] for k in range(first + 1, e)]
+                pieces.append(Piece(gb[first], np.vstack([edge_rows[first], *rest])))
+                first = e
+        return pieces
+
+    def _edge_rows(self, a: list[int], b: list[int], length: float) -> np.ndarray:
+        """Rows ``(E, n + 1, 4)`` of the primitives of one ``length`` from nodes ``a`` to ``b``."""
+        n = max(1, math.ceil(length / self.cfg.sample_spacing - 1e-9))
+        s = length * np.arange(n + 1) / n
         xa = np.array([self.x[k] for k in a])
         ya = np.array([self.y[k] for k in a])
         yawa = np.array([self.yaw[k] for k in a])
         kb = np.array([self.kappa[k] for k in b])
-        gb = [self.gear[k] for k in b]
-        gear = np.array(gb, dtype=np.int64)
+        gear = np.array([self.gear[k] for k in b], dtype=np.int64)
         rows = np.empty((len(b), n + 1, 4))
         yaws = yawa[:, None] + (gear * kb)[:, None] * s[None, :]
         rows[..., 2] = yaws
@@ -358,15 +405,7 @@ class HybridSearch:
         rows[:, -1, 0] = [self.x[k] for k in b]
         rows[:, -1, 1] = [self.y[k] for k in b]
         rows[:, -1, 2] = [self.yaw[k] for k in b]
-        # Consecutive primitives of one gear: one piece (junction rows not repeated).
-        pieces: list[Piece] = []
-        first = 0
-        for e in range(1, len(b) + 1):
-            if e == len(b) or gb[e] != gb[first]:
-                rest = rows[first + 1 : e, 1:].reshape(-1, 4)
-                pieces.append(Piece(gb[first], np.vstack([rows[first], rest])))
-                first = e
-        return pieces
+        return rows
 
     def _shot(self, i: int) -> list[list[Piece]]:
         """The clear analytic expansions from node ``i``, shortest first."""
@@ -428,7 +467,7 @@ class HybridSearch:
         res, xmin, ymin, ny, nyaw = cfg.xy_resolution, self.xmin, self.ymin, self.ny, self.nyaw
         two_pi = 2.0 * math.pi
         inf = math.inf
-        free_within, reach = body.free_within, self._reach
+        disc_room, open_sets, steps = body.disc_room, self._open, self.step
         heappop, heappush = heapq.heappop, heapq.heappush
         reason = "exhausted"
         while heap:
@@ -457,10 +496,27 @@ class HybridSearch:
                         return out, self._outcome("solved")
                     if self.connections >= cfg.max_solutions:
                         return None, self._outcome("rejected")
-            poses = prims.poses_from(xi, yi, yawi)
             ki = kappa_of[i]
             steered = ki == ki  # not the root's NaN
-            ends = poses[:, -1, :].tolist()
+            # The longest primitives whose sweep the node's discs have room for need no
+            # body test (free_within); with room for none, the step arcs and the test.
+            room = disc_room(xi, yi, yawi)
+            for arcs in open_sets:
+                if all(r >= q for r, q in zip(room, arcs.reach, strict=True)):
+                    break
+            else:
+                arcs = None
+            if arcs is not None:
+                step_len, costs, poses = arcs.length, arcs.costs, None
+                c0, s0 = math.cos(yawi), math.sin(yawi)
+                ends = [
+                    [xi + c0 * lx - s0 * ly, yi + s0 * lx + c0 * ly, yawi + dy]
+                    for lx, ly, dy in arcs.ends
+                ]
+            else:
+                step_len, costs = prims.length, base_cost
+                poses = prims.poses_from(xi, yi, yawi)
+                ends = poses[:, -1, :].tolist()
             # Closed bins, unreachable cells and dearer duplicates go before the body test.
             cand: list[tuple[int, int, float, float]] = []
             for j, (ex, ey, eyaw) in enumerate(ends):
@@ -476,7 +532,7 @@ class HybridSearch:
                 hj = h_at(ex, ey, eyaw)
                 if hj == inf:
                     continue
-                cost = gi + base_cost[j]
+                cost = gi + costs[j]
                 if geari and gear != geari:
                     cost += gear_change_cost
                 if steered:
@@ -486,7 +542,7 @@ class HybridSearch:
                 cand.append((j, kj, cost, hj))
             if not cand:
                 continue
-            if free_within(xi, yi, yawi, reach):
+            if poses is None:
                 free = [True] * len(cand)
             elif len(cand) == len(ends):
                 free = body.runs_free(poses).tolist()
@@ -505,6 +561,7 @@ class HybridSearch:
                 gear_of.append(gears[j])
                 kappa_of.append(kappas[j])
                 parent.append(i)
+                steps.append(step_len)
                 hval.append(hj)
                 heappush(heap, (cost + w * hj, n))
         self._since_shot = since_shot
