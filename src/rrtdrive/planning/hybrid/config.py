@@ -65,6 +65,13 @@ class HybridConfig:
         never). From the goal, a tight bay or a goal against a wall is a way out;
         forward only, a search from the goal that runs out of states proves that
         no forward drive can arrive.
+    meet_count : int
+        When the search from the goal has begun, at every analytic shot each search
+        also tries the shortest words to this many nodes of the other search's tree
+        (the nearest within ``meet_distance``, in position and heading): a clear one
+        joins the two trees (0: never).
+    meet_distance : float
+        How far, in metres, those nodes may lie.
     shot_interval : int
         Largest number of expansions between analytic shots at the goal.
     shot_distance : float
@@ -163,6 +170,8 @@ class HybridConfig:
     heuristic_weight: float = 1.5
     reeds_shepp_heuristic: bool = False
     switch_after: int = 400
+    meet_count: int = 1
+    meet_distance: float = 20.0
     shot_interval: int = 5
     shot_distance: float = 4.0
     body_clearance: float = 0.15
@@ -181,7 +190,7 @@ class HybridConfig:
 
     def __post_init__(self) -> None:
         for name in (
-            "xy_resolution", "yaw_resolution", "step", "shot_distance",
+            "xy_resolution", "yaw_resolution", "step", "shot_distance", "meet_distance",
             "check_spacing", "sample_spacing",
         ):  # fmt: skip
             require_positive(f"hybrid.{name}", getattr(self, name))
@@ -230,6 +239,7 @@ class HybridConfig:
         if self.curve not in CURVES:
             raise InputError(f"hybrid.curve: must be one of {list(CURVES)}, got {self.curve!r}")
         require_int("hybrid.shot_interval", self.shot_interval)
+        require_int("hybrid.meet_count", self.meet_count, minimum=0)
         require_int("hybrid.max_solutions", self.max_solutions)
         require_int("hybrid.switch_after", self.switch_after, minimum=0)
         require_int("hybrid.refinements", self.refinements, minimum=0)

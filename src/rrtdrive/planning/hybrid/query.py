@@ -21,6 +21,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.dubins import dubins_paths
@@ -467,6 +468,19 @@ def _query_at(
                 problem.bounds, back_long,
             )  # fmt: skip
             out.append((back, lambda p: accept(reversed_in_time(p))))
+            if config.meet_count > 0:
+
+                def connect(a: Pose, b: Pose) -> list[list[Piece]]:
+                    words = analytic_shots(b, radius, reverse, config.check_spacing, body)(a)
+                    return [
+                        w for w in words if body.all_free(np.vstack([p.rows[:, :3] for p in w]))
+                    ]
+
+                for here, there in ((ahead, back), (back, ahead)):
+                    here.meet = _Meeting(
+                        here, there, ahead, connect, radius, config.meet_distance,
+                        config.meet_count,
+                    )  # fmt: skip
         return out
 
     # The ramps cut corners by centimetres: where every connection the search finds
@@ -489,6 +503,66 @@ def _query_at(
     return path, used, trees
 
 
+class _Meeting:
+    """Connections from one search's nodes to the nodes of the other (meet in the middle).
+
+    The search from the start (``ahead``) and the one from the goal (``back``, whose
+    tree reversed in time drives to the goal) take turns; while one runs, the other's
+    tree stands still. At its analytic-shot times, a node of the running search tries
+    the shortest clear words (Reeds-Shepp with reverse, Dubins forward) to the
+    ``count`` nodes of the other tree within ``distance`` whose pose is closest
+    (distance plus the turning radius times the heading change); a clear one joins
+    both trees: the start's chain, the word, the goal's chain reversed in time.
+    """
+
+    def __init__(
+        self,
+        here: HybridSearch,
+        there: HybridSearch,
+        ahead: HybridSearch,
+        connect: Callable[[Pose, Pose], list[list[Piece]]],
+        radius: float,
+        distance: float,
+        count: int,
+    ) -> None:
+        self.here, self.there, self.ahead = here, there, ahead
+        self.connect, self.radius, self.distance, self.count = connect, radius, distance, count
+        self._tree: cKDTree | None = None
+        self._size = -1
+
+    def refresh(self) -> None:
+        """Index the other tree's nodes (it stands still while this search runs)."""
+        there = self.there
+        if len(there.x) != self._size:
+            self._size = len(there.x)
+            self._tree = cKDTree(np.column_stack([there.x, there.y])) if there.x else None
+
+    def __call__(self, i: int) -> list[list[Piece]]:
+        if self._tree is None:
+            return []
+        here, there = self.here, self.there
+        x, y, yaw = here.x[i], here.y[i], here.yaw[i]
+        near = self._tree.query_ball_point((x, y), self.distance)
+        if not near:
+            return []
+        # The likeliest shortest words first: near in position and heading.
+        scored = sorted(
+            (math.hypot(there.x[j] - x, there.y[j] - y)
+             + self.radius * abs(math.remainder(there.yaw[j] - yaw, 2.0 * math.pi)), j)
+            for j in near
+        )  # fmt: skip
+        out: list[list[Piece]] = []
+        for _, j in scored[: self.count]:
+            a, b = (i, j) if here is self.ahead else (j, i)
+            start_side, goal_side = (here, there) if here is self.ahead else (there, here)
+            pa = Pose(start_side.x[a], start_side.y[a], start_side.yaw[a])
+            pb = Pose(goal_side.x[b], goal_side.y[b], goal_side.yaw[b])
+            for word in self.connect(pa, pb):
+                whole = start_side.chain(a) + word + reversed_in_time(goal_side.chain(b))
+                out.append(whole if here is self.ahead else reversed_in_time(whole))
+        return out
+
+
 def _alternate(
     searches: list[tuple[HybridSearch, Accept]],
     budget: int,
@@ -509,6 +583,9 @@ def _alternate(
             turn = budget
         step = min(turn, budget - used)
         before = outcomes[k].expansions
+        meeting = search.meet
+        if isinstance(meeting, _Meeting):
+            meeting.refresh()
         path, outcomes[k] = search.run(accept, before + step, watch.expired)
         used += outcomes[k].expansions - before
         if path is not None or outcomes[k].reason != "expansions" or used >= budget:
