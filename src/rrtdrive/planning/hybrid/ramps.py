@@ -6,10 +6,11 @@ replaces every jump of ``d`` by a linear ramp of ``delta`` of length
 ``|d| / rate`` centred on the joint (a clothoid-like transition: the steering turns
 at a constant rate per metre), so that ``|d delta / ds| <= rate`` along the whole
 segment; where ramps of one sign overlap they are widened until the sum keeps the
-rate. The segment is then integrated from its exact start pose, and three smooth
-corrections of the steering (half-sine waves that vanish at both ends) are fitted
-by Newton's method so that it ends exactly on the original end pose. The steering
-stays within ``[-delta_max, delta_max]`` (clipped, then fitted again).
+rate. The segment is then integrated from its exact start pose, and the arcs'
+lengths and steering angles are fitted (least-change Gauss-Newton on a
+forward-difference Jacobian, every ramp keeping its rate) so that it ends exactly
+on the original end pose. The angles stay within ``[-delta_max, delta_max]`` (one
+that a step would push past its bound is held there).
 
 The ramps cut each corner by a few centimetres (at most about ``d w^2 / 48`` for a
 ramp of width ``w``), so the result is checked again by the caller (body with the
