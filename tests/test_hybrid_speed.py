@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.sparse.csgraph import dijkstra
 
@@ -308,3 +308,166 @@ def test_free_within_is_not_vacuous():
     for p, s in zip(pts, skipped, strict=True):
         if not body.free(p[None])[0]:
             assert not s
+
+
+def _reference_ends(start, gear: int, delta, h, wheelbase: float):
+    """ramps._ends as it was before it worked in place (d4ad454)."""
+    kappa = np.tan(delta) / wheelbase
+    hb = h[:, None]
+    dyaw = gear * 0.5 * (kappa[:, 1:] + kappa[:, :-1]) * hb
+    yaw = np.empty(delta.shape)
+    yaw[:, 0] = start[2] + 0.0
+    yaw[:, 1:] = start[2] + np.cumsum(dyaw, axis=1)
+    mid = 0.5 * (yaw[:, 1:] + yaw[:, :-1])
+    out = np.empty((len(delta), 3))
+    out[:, 0] = start[0] + gear * np.cumsum(hb * np.cos(mid), axis=1)[:, -1]
+    out[:, 1] = start[1] + gear * np.cumsum(hb * np.sin(mid), axis=1)[:, -1]
+    out[:, 2] = yaw[:, -1]
+    return out
+
+
+def _reference_widening(lengths, angles, rate: float):
+    """ramps._widening as it was, one ramp's maximum at a time (d4ad454)."""
+    jumps = np.diff(angles)
+    factors = np.ones(len(jumps))
+    if not len(jumps):
+        return factors
+    joints = np.cumsum(lengths)[:-1]
+    probe = np.linspace(0.0, float(lengths.sum()), 4001)
+    for _ in range(40):
+        widths = np.maximum(np.abs(jumps) * factors / rate, 1e-9)
+        inside = (probe[None, :] >= (joints - widths / 2)[:, None]) & (
+            probe[None, :] <= (joints + widths / 2)[:, None]
+        )
+        slope = (inside * (jumps / widths)[:, None]).sum(axis=0)
+        worst = np.array([np.abs(slope[m]).max() if m.any() else 0.0 for m in inside])
+        over = worst > rate * (1.0 + 1e-9)
+        if not over.any():
+            break
+        factors = np.where(over, factors * worst / rate * 1.001, factors)
+    return factors
+
+
+def _reference_fit(rows, gear, rate, wheelbase, delta_max, spacing, angle_weight):
+    """ramps._ramped_once as it was (d4ad454): every Newton iteration one (2n+1)-row batch.
+
+    The end pose and its forward-difference Jacobian from the batch ``[p, p + eps I]``,
+    the converged iteration included.
+    """
+    from rrtdrive.geometry import wrap_angle
+    from rrtdrive.planning.hybrid import ramps as r
+
+    rows = np.asarray(rows, dtype=float)
+    ds, kappa = r._intervals(rows, gear)
+    if not len(ds):
+        return None
+    lengths, angles = r._pieces(ds, kappa, wheelbase)
+    angles = np.clip(angles, -delta_max, delta_max)
+    n = len(lengths)
+    start, goal = rows[0, :3].copy(), rows[-1, :3]
+    m = max(1, math.ceil(float(lengths.sum()) / spacing - 1e-9))
+    t = np.linspace(0.0, 1.0, m * r._SUBSTEPS + 1)
+    if n == 1:
+        delta, h = r._profiles(lengths[None], angles[None], np.ones(0), rate, t)
+        poses = r._integrate(start, gear, delta, h, wheelbase)[0]
+        out = np.column_stack([poses, np.tan(delta[0]) / wheelbase])[:: r._SUBSTEPS]
+        out[0, :3], out[-1, :3] = start, goal
+        return out
+    p = np.concatenate([lengths, angles])
+    weight = np.concatenate([np.ones(n), np.full(n, angle_weight**2)])
+    lower = np.concatenate([np.zeros(n), np.full(n, -delta_max)])
+    upper = np.concatenate([np.full(n, np.inf), np.full(n, delta_max)])
+    factors = _reference_widening(lengths, angles, rate)
+    eps = 1e-6
+    for _ in range(r._NEWTON_ITERATIONS):
+        batch = np.vstack([p, p + eps * np.eye(2 * n)])
+        delta, h = r._profiles(batch[:, :n], batch[:, n:], factors, rate, t)
+        ends = _reference_ends(start, gear, delta, h, wheelbase)
+        err = ends[0] - goal
+        err[2] = wrap_angle(err[2])
+        pose = (delta[0], h[0])
+        if float(np.abs(err).max()) < r._NEWTON_TOL:
+            break
+        jac = ((ends[1:] - ends[0]) / eps).T
+        step = r._bounded_step(jac, err, p, weight, lower, upper)
+        if step is None:
+            return None
+        p = np.clip(p + step, lower, upper)
+    else:
+        return None
+    delta, h = pose
+    poses = r._integrate(start, gear, delta[None], np.array([h]), wheelbase)[0]
+    out = np.column_stack([poses, np.tan(delta) / wheelbase])[:: r._SUBSTEPS]
+    out[0, :3], out[-1, :3] = start, goal
+    return out
+
+
+_KS = 1 / RADIUS / 1.02
+_LEVELS = st.sampled_from([-_KS, -_KS / 2, 0.0, _KS / 2, _KS])
+
+
+def _chain(pieces, gear: int) -> np.ndarray:
+    """Rows of arcs ``(kappa, length)`` driven one after another, about 0.25 m apart."""
+    from rrtdrive.planning.hybrid.primitives import arc_poses
+
+    rows = [np.array([[3.0, -2.0, 0.7]])]
+    for kappa, length in pieces:
+        k = max(1, math.ceil(length / 0.25))
+        rows.append(arc_poses(*rows[-1][-1], kappa, gear, np.linspace(0.0, length, k + 1))[1:])
+    return np.vstack(rows)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(st.tuples(_LEVELS, st.floats(0.5, 8.0)), min_size=1, max_size=7),
+    st.sampled_from([1, -1]),
+    st.sampled_from([0.0, 3e-5, math.inf]),
+)
+# Full lock to full lock: the fit runs all its iterations and gives up (None).
+@example([(-_KS, 3.0), (_KS, 3.0)], 1, 3e-5)
+def test_newton_fit_is_the_batched_reference(pieces, gear: int, alone: float) -> None:
+    """The fit with the end pose first (any threshold): bit for bit the (2n+1)-row batches.
+
+    ``alone`` 0 never integrates the end pose alone, inf always does (then every
+    step needs the perturbed rows afterwards), 3e-5 is the shipped guess.
+    """
+    from unittest import mock
+
+    from rrtdrive.planning.hybrid import ramps
+
+    rows = _chain(pieces, gear)
+    args = (rows, gear, 0.17, 2.51, math.atan(2.51 / RADIUS))
+    with mock.patch.object(ramps, "_ALONE_BELOW", alone):
+        fast = ramps.ramped_segment(*args)
+    with mock.patch.object(ramps, "_ramped_once", _reference_fit):
+        slow = ramps.ramped_segment(*args)
+    assert (fast is None) == (slow is None)
+    if fast is not None:
+        assert np.array_equal(fast, slow)
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.integers(2, 12), st.integers(0, 2**32 - 1), st.floats(0.02, 0.5))
+def test_vectorised_widening_is_the_reference(pieces: int, seed: int, rate: float) -> None:
+    from rrtdrive.planning.hybrid.ramps import _widening
+
+    rng = np.random.default_rng(seed)
+    lengths = rng.uniform(0.1, 6.0, pieces)
+    angles = rng.uniform(-0.4, 0.4, pieces)
+    assert np.array_equal(
+        _widening(lengths, angles, rate), _reference_widening(lengths, angles, rate)
+    )
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(1, 9), st.integers(2, 600), st.integers(0, 2**32 - 1), st.sampled_from([1, -1]))
+def test_in_place_ends_are_the_reference(rows: int, cols: int, seed: int, gear: int) -> None:
+    from rrtdrive.planning.hybrid.ramps import _ends
+
+    rng = np.random.default_rng(seed)
+    delta = rng.uniform(-0.45, 0.45, (rows, cols))
+    h = rng.uniform(0.01, 0.1, rows)
+    start = np.array([rng.uniform(0, 100), rng.uniform(0, 100), rng.uniform(-4, 4)])
+    assert np.array_equal(
+        _ends(start, gear, delta, h, 2.51), _reference_ends(start, gear, delta, h, 2.51)
+    )

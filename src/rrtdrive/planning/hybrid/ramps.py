@@ -6,10 +6,11 @@ replaces every jump of ``d`` by a linear ramp of ``delta`` of length
 ``|d| / rate`` centred on the joint (a clothoid-like transition: the steering turns
 at a constant rate per metre), so that ``|d delta / ds| <= rate`` along the whole
 segment; where ramps of one sign overlap they are widened until the sum keeps the
-rate. The segment is then integrated from its exact start pose, and three smooth
-corrections of the steering (half-sine waves that vanish at both ends) are fitted
-by Newton's method so that it ends exactly on the original end pose. The steering
-stays within ``[-delta_max, delta_max]`` (clipped, then fitted again).
+rate. The segment is then integrated from its exact start pose, and the arcs'
+lengths and steering angles are fitted (least-change Gauss-Newton on a
+forward-difference Jacobian, every ramp keeping its rate) so that it ends exactly
+on the original end pose. The angles stay within ``[-delta_max, delta_max]`` (one
+that a step would push past its bound is held there).
 
 The ramps cut each corner by a few centimetres (at most about ``d w^2 / 48`` for a
 ramp of width ``w``), so the result is checked again by the caller (body with the
@@ -33,6 +34,16 @@ _NEWTON_ITERATIONS = 12
 _NEWTON_TOL = 1e-10
 #: Slack of the row-spacing test, metres (float rounding of rows exactly ``spacing`` apart).
 _GAP_SLACK = 1e-9
+#: Step of the finite-difference Jacobian of the end pose (metres for lengths, radians).
+_FD_EPS = 1e-6
+#: A Newton error (max of metres/radians) below which the next iteration is expected
+#: to be the last: its end pose is integrated alone, without the 2n perturbed rows
+#: that only a further step needs. Newton converges quadratically here: of the 454
+#: segments bench_ramps.py records, 295 of the 303 errors below this were followed
+#: by convergence, and no larger error was. Only the cost depends on it, not the rows.
+_ALONE_BELOW = 3e-5
+#: Size ``B * J * T`` up to which the steering sum is the whole ``(B, J, T)`` array.
+_FULL_SUM_MAX = 4096
 
 
 def _intervals(rows: np.ndarray, gear: int) -> tuple[np.ndarray, np.ndarray]:
@@ -96,6 +107,10 @@ def _ramp_sum(
     are evaluated. ``s`` is ``total * t`` per row, ``t`` increasing from 0 to 1.
     """
     B, T = s.shape
+    # Small sums (the common short segment) in one piece: the joint-by-joint loop's
+    # numpy calls cost more there than the (B, J, T) array they spare.
+    if B * joints.shape[1] * T <= _FULL_SUM_MAX:
+        return _ramp_sum_full(s, joints, jumps, widths)
     if not (np.isfinite(jumps).all() and np.isfinite(joints).all() and np.isfinite(s).all()):
         return _ramp_sum_full(s, joints, jumps, widths)  # NaN/inf propagate as they did
     acc = np.zeros((B, T))
@@ -154,19 +169,52 @@ def _integrate(
 def _ends(
     start: np.ndarray, gear: int, delta: np.ndarray, h: np.ndarray, wheelbase: float
 ) -> np.ndarray:
-    """``_integrate(...)[:, -1, :]``, the end poses ``(B, 3)``, with the same arithmetic."""
-    kappa = np.tan(delta) / wheelbase
+    """``_integrate(...)[:, -1, :]``, the end poses ``(B, 3)``, with the same arithmetic.
+
+    Each product and sum is :func:`_integrate`'s (IEEE operations commute, so
+    ``a * b`` in place of ``b * a`` is the same float), done in place; the running
+    sums are ``cumsum`` along each row, one term after the other, as there.
+    """
+    kappa = np.tan(delta)
+    kappa /= wheelbase
     hb = h[:, None]
-    dyaw = gear * 0.5 * (kappa[:, 1:] + kappa[:, :-1]) * hb
+    dyaw = kappa[:, 1:] + kappa[:, :-1]
+    dyaw *= gear * 0.5
+    dyaw *= hb
     yaw = np.empty(delta.shape)
     yaw[:, 0] = start[2] + 0.0
-    yaw[:, 1:] = start[2] + np.cumsum(dyaw, axis=1)
-    mid = 0.5 * (yaw[:, 1:] + yaw[:, :-1])
+    np.cumsum(dyaw, axis=1, out=yaw[:, 1:])
+    yaw[:, 1:] += start[2]
+    mid = yaw[:, 1:] + yaw[:, :-1]
+    mid *= 0.5
     out = np.empty((len(delta), 3))
-    out[:, 0] = start[0] + gear * np.cumsum(hb * np.cos(mid), axis=1)[:, -1]
-    out[:, 1] = start[1] + gear * np.cumsum(hb * np.sin(mid), axis=1)[:, -1]
+    for k, trig in ((0, np.cos), (1, np.sin)):
+        step = trig(mid)
+        step *= hb
+        out[:, k] = start[k] + gear * np.cumsum(step, axis=1)[:, -1]
     out[:, 2] = yaw[:, -1]
     return out
+
+
+def _with_perturbed(p: np.ndarray, base: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Lengths and angles ``(B, n)`` of ``p`` (if ``base``) and of ``p + eps e_k``, k < 2n."""
+    n = len(p) // 2
+    batch = p + _FD_EPS * np.eye(2 * n)
+    if base:
+        batch = np.vstack([p, batch])
+    return batch[:, :n], batch[:, n:]
+
+
+def _difference_quotient(ends: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """The forward-difference Jacobian ``(3, 2n)`` from the perturbed rows' end poses.
+
+    The fit's answer depends on this quotient's rounding (a 1e-10 relative change
+    of the Jacobian moved rows of 2 of bench_hybrid.py's 150 plans by 4e-9 m), so
+    its floats are kept: ``(ends - end) / eps`` is a fresh C-ordered ``(2n, 3)``
+    array and the Jacobian its F-ordered transpose, whose layout decides how the
+    matrix products of :func:`_bounded_step` round.
+    """
+    return ((ends - end) / _FD_EPS).T
 
 
 def _widening(lengths: np.ndarray, angles: np.ndarray, rate: float) -> np.ndarray:
@@ -183,7 +231,8 @@ def _widening(lengths: np.ndarray, angles: np.ndarray, rate: float) -> np.ndarra
             probe[None, :] <= (joints + widths / 2)[:, None]
         )
         slope = (inside * (jumps / widths)[:, None]).sum(axis=0)
-        worst = np.array([np.abs(slope[m]).max() if m.any() else 0.0 for m in inside])
+        # Each ramp's steepest summed slope (0 where a ramp covers no probe point).
+        worst = np.where(inside, np.abs(slope)[None, :], 0.0).max(axis=1)
         over = worst > rate * (1.0 + 1e-9)
         if not over.any():
             break
@@ -191,17 +240,27 @@ def _widening(lengths: np.ndarray, angles: np.ndarray, rate: float) -> np.ndarra
     return factors
 
 
+#: The regularisation of the step's normal matrix.
+_RIDGE = 1e-12 * np.eye(3)
+
+
 def _bounded_step(
-    jac: np.ndarray, err: np.ndarray, p: np.ndarray, weight: np.ndarray, n: int, delta_max: float
+    jac: np.ndarray,
+    err: np.ndarray,
+    p: np.ndarray,
+    weight: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
 ) -> np.ndarray | None:
-    """The least-change Gauss-Newton step, with parameters at a bound held when pushed out."""
+    """The least-change Gauss-Newton step, with parameters at a bound held when pushed out.
+
+    ``lower`` and ``upper`` bound ``p`` (lengths >= 0, angles within the steering limit).
+    """
     free = weight.copy()
-    lower = np.concatenate([np.zeros(n), np.full(n, -delta_max)])
-    upper = np.concatenate([np.full(n, np.inf), np.full(n, delta_max)])
-    for _ in range(2 * n + 1):
+    for _ in range(len(p) + 1):
         jw = jac * free[None, :]
         try:
-            lam = np.linalg.solve(jw @ jac.T + 1e-12 * np.eye(3), -err)
+            lam = np.linalg.solve(jw @ jac.T + _RIDGE, -err)
         except np.linalg.LinAlgError:
             return None
         step = free * (jac.T @ lam)
@@ -312,25 +371,37 @@ def _ramped_once(
         return out
     p = np.concatenate([lengths, angles])
     weight = np.concatenate([np.ones(n), np.full(n, angle_weight**2)])
+    lower = np.concatenate([np.zeros(n), np.full(n, -delta_max)])
+    upper = np.concatenate([np.full(n, np.inf), np.full(n, delta_max)])
     factors = _widening(lengths, angles, rate)
-    eps = 1e-6
     pose = None
+    last = math.inf
     for _ in range(_NEWTON_ITERATIONS):
-        batch = np.vstack([p, p + eps * np.eye(2 * n)])
-        delta, h = _profiles(batch[:, :n], batch[:, n:], factors, rate, t)
-        ends = _ends(start, gear, delta, h, wheelbase)
-        err = ends[0] - goal
+        jac = None
+        if last < _ALONE_BELOW:
+            # Probably the last iteration: its end pose alone (row for row the batch's
+            # first row), the perturbed rows only if a step is needed after all.
+            delta, h = _profiles(p[None, :n], p[None, n:], factors, rate, t)
+            end = _ends(start, gear, delta, h, wheelbase)[0]
+        else:
+            delta, h = _profiles(*_with_perturbed(p), factors, rate, t)
+            ends = _ends(start, gear, delta, h, wheelbase)
+            end = ends[0]
+            jac = _difference_quotient(ends[1:], end)
+        err = end - goal
         err[2] = wrap_angle(err[2])
         pose = (delta[0], h[0])
-        if float(np.abs(err).max()) < _NEWTON_TOL:
+        last = float(np.abs(err).max())
+        if last < _NEWTON_TOL:
             break
-        jac = ((ends[1:] - ends[0]) / eps).T  # (3, 2n)
-        step = _bounded_step(jac, err, p, weight, n, delta_max)
+        if jac is None:
+            # Not the last after all: the perturbed rows now.
+            d_eps, h_eps = _profiles(*_with_perturbed(p, base=False), factors, rate, t)
+            jac = _difference_quotient(_ends(start, gear, d_eps, h_eps, wheelbase), end)
+        step = _bounded_step(jac, err, p, weight, lower, upper)
         if step is None:
             return None
-        p = p + step
-        p = np.clip(p, np.concatenate([np.zeros(n), np.full(n, -delta_max)]),
-                    np.concatenate([np.full(n, np.inf), np.full(n, delta_max)]))
+        p = np.clip(p + step, lower, upper)
     else:
         return None
     if pose is None:
