@@ -34,14 +34,6 @@ _NEWTON_ITERATIONS = 12
 _NEWTON_TOL = 1e-10
 #: Slack of the row-spacing test, metres (float rounding of rows exactly ``spacing`` apart).
 _GAP_SLACK = 1e-9
-#: Step of the finite-difference Jacobian of the end pose (metres for lengths, radians).
-_FD_EPS = 1e-6
-#: A Newton error (max of metres/radians) below which the next iteration is expected
-#: to be the last: its end pose is integrated alone, without the 2n perturbed rows
-#: that only a further step needs. Newton converges quadratically here: of the 454
-#: segments bench_ramps.py records, 295 of the 303 errors below this were followed
-#: by convergence, and no larger error was. Only the cost depends on it, not the rows.
-_ALONE_BELOW = 3e-5
 #: Size ``B * J * T`` up to which the steering sum is the whole ``(B, J, T)`` array.
 _FULL_SUM_MAX = 4096
 
@@ -166,55 +158,87 @@ def _integrate(
     return np.stack([x, y, yaw], axis=-1)
 
 
-def _ends(
-    start: np.ndarray, gear: int, delta: np.ndarray, h: np.ndarray, wheelbase: float
-) -> np.ndarray:
-    """``_integrate(...)[:, -1, :]``, the end poses ``(B, 3)``, with the same arithmetic.
+def _end_and_jacobian(
+    p: np.ndarray,
+    factors: np.ndarray,
+    rate: float,
+    t: np.ndarray,
+    start: np.ndarray,
+    gear: int,
+    wheelbase: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """End pose of ``p = [lengths, angles]``, its exact Jacobian ``(3, 2n)``, the profile.
 
-    Each product and sum is :func:`_integrate`'s (IEEE operations commute, so
-    ``a * b`` in place of ``b * a`` is the same float), done in place; the running
-    sums are ``cumsum`` along each row, one term after the other, as there.
+    The derivative of the discrete integration (:func:`_integrate`'s end), one
+    integration instead of the ``2n + 1`` a difference quotient needs. A change
+    of the yaw at node ``c`` turns the rest of the path about it: the end moves by
+    the lever arm ``(-(y_end - y_c), x_end - x_c)`` (here the trapezoid's half-step
+    sums) and turns by the same angle. A change of the steering at node ``c``
+    changes the yaw of every later node by ``g h sec^2(delta_c) / L`` (half of it
+    at the first). The steering moves with an angle by the ramps' share of it (1/2
+    on a ramp, whose width grows with its jump; 1 after it), with a length by the
+    slope of the ramps it shifts (every joint after that piece) and through the
+    grid ``s = total t`` and step ``h = total / (T - 1)`` it stretches.
+
+    Returns
+    -------
+    tuple
+        The end pose ``(3,)``, the Jacobian ``(3, 2n)``, the steering profile
+        ``(T,)`` and the step ``h``.
     """
-    kappa = np.tan(delta)
-    kappa /= wheelbase
-    hb = h[:, None]
-    dyaw = kappa[:, 1:] + kappa[:, :-1]
-    dyaw *= gear * 0.5
-    dyaw *= hb
-    yaw = np.empty(delta.shape)
-    yaw[:, 0] = start[2] + 0.0
-    np.cumsum(dyaw, axis=1, out=yaw[:, 1:])
-    yaw[:, 1:] += start[2]
-    mid = yaw[:, 1:] + yaw[:, :-1]
-    mid *= 0.5
-    out = np.empty((len(delta), 3))
-    for k, trig in ((0, np.cos), (1, np.sin)):
-        step = trig(mid)
-        step *= hb
-        out[:, k] = start[k] + gear * np.cumsum(step, axis=1)[:, -1]
-    out[:, 2] = yaw[:, -1]
-    return out
-
-
-def _with_perturbed(p: np.ndarray, base: bool = True) -> tuple[np.ndarray, np.ndarray]:
-    """Lengths and angles ``(B, n)`` of ``p`` (if ``base``) and of ``p + eps e_k``, k < 2n."""
     n = len(p) // 2
-    batch = p + _FD_EPS * np.eye(2 * n)
-    if base:
-        batch = np.vstack([p, batch])
-    return batch[:, :n], batch[:, n:]
-
-
-def _difference_quotient(ends: np.ndarray, end: np.ndarray) -> np.ndarray:
-    """The forward-difference Jacobian ``(3, 2n)`` from the perturbed rows' end poses.
-
-    The fit's answer depends on this quotient's rounding (a 1e-10 relative change
-    of the Jacobian moved rows of 2 of bench_hybrid.py's 150 plans by 4e-9 m), so
-    its floats are kept: ``(ends - end) / eps`` is a fresh C-ordered ``(2n, 3)``
-    array and the Jacobian its F-ordered transpose, whose layout decides how the
-    matrix products of :func:`_bounded_step` round.
-    """
-    return ((ends - end) / _FD_EPS).T
+    lengths, angles = p[:n], p[n:]
+    delta_b, h_b = _profiles(p[None, :n], p[None, n:], factors, rate, t)
+    delta, h = delta_b[0], float(h_b[0])
+    T = len(t)
+    kappa = np.tan(delta) / wheelbase
+    dyaw = gear * 0.5 * (kappa[1:] + kappa[:-1]) * h
+    yaw = np.empty(T)
+    yaw[0] = start[2] + 0.0
+    yaw[1:] = start[2] + np.cumsum(dyaw)
+    mid = 0.5 * (yaw[1:] + yaw[:-1])
+    cos, sin = np.cos(mid), np.sin(mid)
+    px, py = np.cumsum(h * cos), np.cumsum(h * sin)
+    end = np.array([start[0] + gear * px[-1], start[1] + gear * py[-1], yaw[-1]])
+    # lever[:, c]: the sums over the steps from node c to the end (0 at the last node).
+    lever = np.zeros((2, T))
+    lever[0, 1:-1] = px[-1] - px[:-1]
+    lever[1, 1:-1] = py[-1] - py[:-1]
+    lever[0, 0], lever[1, 0] = px[-1], py[-1]
+    # r[:, i]: d end / d dyaw_i, the turn of every node after i.
+    r = np.empty((3, T - 1))
+    r[0] = -0.5 * gear * (lever[1, :-1] + lever[1, 1:])
+    r[1] = 0.5 * gear * (lever[0, :-1] + lever[0, 1:])
+    r[2] = 1.0
+    g = 0.5 * gear * h
+    v = np.zeros((3, T))
+    v[:, :-1] = r
+    v[:, 1:] += r
+    v *= g * (1.0 + (wheelbase * kappa) ** 2) / wheelbase  # d end / d delta_c
+    d_h = np.array([gear * px[-1], gear * py[-1], 0.0]) / h + (r @ dyaw) / h
+    # Suffix sums of v and v * t, with a zero column for "from T on".
+    V = np.zeros((3, T + 1))
+    V[:, :-1] = np.cumsum(v[:, ::-1], axis=1)[:, ::-1]
+    W = np.zeros((3, T + 1))
+    W[:, :-1] = np.cumsum((v * t)[:, ::-1], axis=1)[:, ::-1]
+    s = float(lengths.sum()) * t
+    joints = np.cumsum(lengths)[:-1]
+    jumps = np.diff(angles)
+    widths = np.maximum(np.abs(jumps) * factors / rate, 1e-9)
+    a = np.searchsorted(s, joints - 0.5 * widths, side="right")  # first node on a ramp
+    b = np.searchsorted(s, joints + 0.5 * widths, side="left")  # first node after it
+    slope = jumps / widths
+    on = V[:, a] - V[:, b]  # (3, J): v summed over each ramp
+    share = 0.5 * on + V[:, b]  # d end / d jump_j
+    jac = np.zeros((3, 2 * n))
+    jac[:, n] = V[:, 0]
+    jac[:, n:-1] -= share
+    jac[:, n + 1 :] += share
+    stretch = (W[:, a] - W[:, b]) @ slope  # the grid's stretch: the same for every length
+    later = np.zeros((3, n))
+    later[:, :-1] = np.cumsum((slope * on)[:, ::-1], axis=1)[:, ::-1]  # joints k .. J-1
+    jac[:, :n] = (stretch + d_h / (T - 1))[:, None] - later
+    return end, jac, delta, h
 
 
 def _widening(lengths: np.ndarray, angles: np.ndarray, rate: float) -> np.ndarray:
@@ -375,29 +399,13 @@ def _ramped_once(
     upper = np.concatenate([np.full(n, np.inf), np.full(n, delta_max)])
     factors = _widening(lengths, angles, rate)
     pose = None
-    last = math.inf
     for _ in range(_NEWTON_ITERATIONS):
-        jac = None
-        if last < _ALONE_BELOW:
-            # Probably the last iteration: its end pose alone (row for row the batch's
-            # first row), the perturbed rows only if a step is needed after all.
-            delta, h = _profiles(p[None, :n], p[None, n:], factors, rate, t)
-            end = _ends(start, gear, delta, h, wheelbase)[0]
-        else:
-            delta, h = _profiles(*_with_perturbed(p), factors, rate, t)
-            ends = _ends(start, gear, delta, h, wheelbase)
-            end = ends[0]
-            jac = _difference_quotient(ends[1:], end)
+        end, jac, d0, h0 = _end_and_jacobian(p, factors, rate, t, start, gear, wheelbase)
         err = end - goal
         err[2] = wrap_angle(err[2])
-        pose = (delta[0], h[0])
-        last = float(np.abs(err).max())
-        if last < _NEWTON_TOL:
+        pose = (d0, h0)
+        if float(np.abs(err).max()) < _NEWTON_TOL:
             break
-        if jac is None:
-            # Not the last after all: the perturbed rows now.
-            d_eps, h_eps = _profiles(*_with_perturbed(p, base=False), factors, rate, t)
-            jac = _difference_quotient(_ends(start, gear, d_eps, h_eps, wheelbase), end)
         step = _bounded_step(jac, err, p, weight, lower, upper)
         if step is None:
             return None
