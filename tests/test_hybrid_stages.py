@@ -107,10 +107,12 @@ def test_tight_stage_keeps_less_clearance_only_after_a_proof() -> None:
 
 def test_wide_stage_turns_wider_after_rejected_connections() -> None:
     m, problem = _random_problem("goal", 39, count=100, reverse=True)
-    rejected = _solve(problem, 20_000, wide_radius_factor=1.02)
+    # The search of session 7 (unit steps, weight 1.5), whose connections are all rejected.
+    before = {"long_steps": (), "heuristic_weight": 1.5}
+    rejected = _solve(problem, 20_000, wide_radius_factor=1.02, **before)
     assert rejected.status is PlanStatus.NO_PATH_IN_BUDGET
     assert "could not be made drivable" in rejected.message
-    res = _solve(problem, 20_000)
+    res = _solve(problem, 20_000, **before)
     assert res.status is PlanStatus.SOLVED, res.message
     assert "turning with radius 1.1 / kappa_max" in res.message
     assert res.stats["wide_search"] == 1.0 and len(res.path.cusps) >= 1

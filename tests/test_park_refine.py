@@ -77,14 +77,16 @@ def test_tight_parallel_gap_is_solved_at_the_finer_resolution() -> None:
 def test_reverse_in_bay_with_rejected_connections_is_solved_finer() -> None:
     task = make_scenario("parking", 12, reverse_in=True)
     problem = _problem(task)
-    # (wide_radius_factor: no wider-turning search after the rejections; long_steps=():
-    # the unit steps, whose connections at 0.5 m / 5 deg are all rejected here.)
-    coarse = HybridAStar(refinements=0, wide_radius_factor=1.02, long_steps=()).solve(
+    # (wide_radius_factor: no wider-turning search after the rejections; the search of
+    # session 6 (unit steps, weight 1.5), whose connections at 0.5 m / 5 deg are all
+    # rejected here.)
+    before = {"long_steps": (), "heuristic_weight": 1.5}
+    coarse = HybridAStar(refinements=0, wide_radius_factor=1.02, **before).solve(
         problem, np.random.default_rng(0), BUDGET
     )
     assert coarse.status is PlanStatus.NO_PATH_IN_BUDGET
     assert "could not be made drivable" in coarse.message
-    res = HybridAStar(long_steps=()).solve(problem, np.random.default_rng(0), BUDGET)
+    res = HybridAStar(**before).solve(problem, np.random.default_rng(0), BUDGET)
     assert res.success, res.message
     assert res.stats["refinements"] == 1
     assert "had every goal connection rejected" in res.message

@@ -496,7 +496,12 @@ def _query_at(
         searches = searches_with(search_clearance)
         left = budget - used.expansions
         path, outcome = _alternate(searches, left, config.switch_after, watch)
-        used = SearchOutcome.total(outcome.reason, [used, outcome])
+        reason = outcome.reason
+        if margin > 0.0 and reason in _PROOFS:
+            # Out of states keeping the margin too proves nothing for the query's own
+            # clearance: the rejected connections stand.
+            reason = "rejected"
+        used = SearchOutcome.total(reason, [used, outcome])
         if path is not None or outcome.reason != "rejected" or left - outcome.expansions <= 0:
             break
     trees = tuple(_tree(s) for s, _ in searches if s.x)
