@@ -7,6 +7,8 @@
   keeping 0.05 m; a start with room around it but less ahead needs it.
 - wide (``wide_radius_factor``): after every goal connection was rejected (the
   ramps of full-lock words cannot end on the pose), one search turning wider.
+- shares (``refine_share``): a finer search that a last resort may follow spends at
+  most half the rest, so that the last resort still runs.
 """
 
 from __future__ import annotations
@@ -123,8 +125,63 @@ def test_wide_stage_turns_wider_after_rejected_connections() -> None:
 @pytest.mark.parametrize(
     ("field", "value"),
     [("coarse_after", 1.5), ("coarse_after", -0.1), ("coarse_factor", 1),
-     ("min_clearance", -0.01), ("wide_radius_factor", 0.9)],
+     ("min_clearance", -0.01), ("wide_radius_factor", 0.9), ("refine_share", 0.0),
+     ("refine_share", 1.5)],
 )
 def test_bad_coarse_settings_name_the_field(field: str, value: float) -> None:
     with pytest.raises(InputError, match=f"hybrid.{field}"):
         HybridConfig(**{field: value})
+
+
+def _pinned_start_problem():
+    """Random start 34 of ``coverage.py --count 100``: 0.152 m clearance at the pose."""
+    return _random_problem("start", 34, count=100)
+
+
+def test_finer_search_leaves_the_tight_search_its_share() -> None:
+    # Forward only, no motion out of the start keeps 0.15 m at 0.5 m / 5 deg (3
+    # expansions); the finer search keeping 0.15 m needs ~35 000 expansions, the tight
+    # one 3 626: with refine_share the finer one stops at half the rest and the tight
+    # one solves it.
+    m, problem = _pinned_start_problem()
+    assert problem.checker.body_clearance(problem.start.as_tuple()) < 0.16
+    res = _solve(problem, 20_000)
+    assert res.status is PlanStatus.SOLVED, res.message
+    assert "keeping only 0.05 m body clearance" in res.message
+    assert "the search ran out of states after 3 expansions" in res.message
+    assert "at 0.25 m / 2.5 deg / 0.5 m steps the search spent its share of 9999" in res.message
+    # No proof for 0.15 m at the finer resolution, so none is claimed.
+    assert "none keeps" not in res.message
+    assert res.stats["tight_search"] == 1.0 and res.stats["refinements"] == 1.0
+    # The tight search solved it within the half left to it.
+    assert 3 + 9999 < res.iterations <= 20_000
+    assert np.all(res.path.samples[:, 4] == 1)
+    assert verify_path(m, res.path).ok
+    # All the rest to the finer search (the ladder before refine_share): no path.
+    old = _solve(problem, 20_000, refine_share=1.0)
+    assert old.status is PlanStatus.NO_PATH_IN_BUDGET
+    assert old.stats["tight_search"] == 0.0
+
+
+def test_tight_search_cut_short_after_a_shared_finer_one_proves_nothing() -> None:
+    _, problem = _pinned_start_problem()
+    res = _solve(problem, 6000)  # 3 + 2999 + 2998: the tight search needs 3 626
+    assert res.status is PlanStatus.NO_PATH_IN_BUDGET, res.message
+    assert res.message.startswith(
+        "no path found at 0.25 m / 2.5 deg resolution within its share of 2999 expansions"
+    )
+    assert "keeping only 0.05 m body clearance, at 0.5 m / 5 deg the search spent" in res.message
+    assert res.iterations == 6000
+
+
+def test_default_planner_solves_the_pinned_start_forward() -> None:
+    m, problem = _pinned_start_problem()
+    res = make_planner("improved-rrt-connect").solve(
+        problem, np.random.default_rng(0), Budget(max_time_s=300)
+    )
+    assert res.status is PlanStatus.SOLVED, res.message
+    assert res.stats["stage"] == "hybrid-a-star"
+    assert "keeping only 0.05 m body clearance" in res.message
+    assert res.stats["hybrid_tight_search"] == 1.0
+    assert np.all(res.path.samples[:, 4] == 1)
+    assert verify_path(m, res.path).ok

@@ -130,12 +130,12 @@ class HybridAnswer:
     ``trees`` are the search trees of the last resolution tried, the one from the
     start first (the one from the goal second, when the query turned to it);
     ``refinements`` counts the finer searches run after the first, ``stage`` names
-    the last search (``"first"`` or a finer one, ``"coarse"``
-    (:attr:`HybridConfig.coarse_after`), ``"tight"`` (``min_clearance``) or ``"wide"``
-    (``wide_radius_factor``)), ``clearance`` is the body clearance the last search kept (less than
-    ``body_clearance`` after :attr:`HybridConfig.min_clearance`'s search), and
-    ``note`` says, for a solved query, at which resolution and why (empty when the
-    first search solved it).
+    the last search (``"first"``, ``"fine"`` (:attr:`HybridConfig.refinements`),
+    ``"coarse"`` (:attr:`HybridConfig.coarse_after`), ``"tight"`` (``min_clearance``)
+    or ``"wide"`` (``wide_radius_factor``)), ``clearance`` is the body clearance the
+    last search kept (less than ``body_clearance`` after
+    :attr:`HybridConfig.min_clearance`'s search), and ``note`` says, for a solved
+    query, at which resolution and why (empty when the first search solved it).
     """
 
     path: BuiltPath | None
@@ -149,8 +149,16 @@ class HybridAnswer:
 
 
 def _failure_message(
-    outcome: SearchOutcome, cfg: HybridConfig, budget: Budget, reverse: bool
+    outcome: SearchOutcome,
+    cfg: HybridConfig,
+    budget: Budget,
+    reverse: bool,
+    allowed: int | None = None,
 ) -> str:
+    """How one search ended, as the lead of a failure message.
+
+    ``allowed``: the expansions of a search given a share of those left (``None``: all).
+    """
     res = _resolution(cfg)
     counts = f"{outcome.expansions} expansions, {outcome.nodes} nodes"
     if outcome.reason == "exhausted":
@@ -179,6 +187,11 @@ def _failure_message(
         return (
             f"no path found: {outcome.connections} goal connections could not be made "
             f"drivable ({counts})"
+        )
+    if allowed is not None:
+        return (
+            f"no path found at {res} resolution within its share of {allowed} expansions "
+            f"({counts})"
         )
     return f"no path found within the expansion budget of {budget.max_iterations} ({counts})"
 
@@ -221,6 +234,50 @@ def _tree(search: HybridSearch) -> Tree:
     return Tree(xy, np.array(search.parent, dtype=np.int64))
 
 
+@dataclass(frozen=True)
+class _Stage:
+    """One search of :func:`hybrid_query`'s ladder after the first, and when it runs.
+
+    It runs when the first search ended with one of ``after_first`` and the search
+    just before it with one of ``after_last``, without a path, with expansions left.
+    ``share`` is the part of the expansions left that it may spend when a later
+    stage of the ladder may still run after it (else it gets them all).
+    """
+
+    name: str
+    config: HybridConfig
+    after_first: tuple[str, ...]
+    after_last: tuple[str, ...]
+    share: float = 1.0
+
+
+def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
+    """The searches that may follow the first one, in order (:func:`hybrid_query`).
+
+    Examples
+    --------
+    >>> [(s.name, s.config.xy_resolution, s.share) for s in _ladder(HybridConfig())]
+    [('coarse', 2.0, 1.0), ('fine', 0.25, 0.5), ('tight', 0.5, 1.0), ('wide', 0.5, 1.0)]
+    """
+    stages = []
+    if config.coarsens:
+        # The first search spent its share, not out of states: the rest goes to a coarser one.
+        stages.append(_Stage("coarse", config.coarsened(), ("expansions",), ("expansions",)))
+    fine = config
+    for _ in range(config.refinements):
+        fine = fine.refined()
+        stages.append(_Stage("fine", fine, _REFINE_ON, _REFINE_ON, config.refine_share))
+    # The last resorts, at the first resolution, after the finer searches: a proof for
+    # paths keeping body_clearance (a tighter path may exist), or every connection
+    # rejected (the ramps of full-lock words need steering room: turn a little wider);
+    # also after a finer search that spent its share without either.
+    if config.min_clearance < config.body_clearance:
+        stages.append(_Stage("tight", config.tightened(), _PROOFS, (*_PROOFS, "expansions")))
+    if config.wide_radius_factor > config.radius_factor:
+        stages.append(_Stage("wide", config.widened(), ("rejected",), ("rejected", "expansions")))
+    return tuple(stages)
+
+
 def hybrid_query(
     problem: PlanningProblem,
     budget: Budget,
@@ -231,10 +288,15 @@ def hybrid_query(
 ) -> HybridAnswer:
     """One Hybrid A* query from ``problem.start`` to ``problem.goal``.
 
-    A search that ends without a path but with expansions left (out of states,
-    or every goal connection rejected) is followed by one at half the cell,
-    heading bin and step (:meth:`HybridConfig.refined`), ``config.refinements``
-    times at most, with the rest of the budget: counted, so deterministic.
+    The first search may spend ``coarse_after`` of the budget; the searches of
+    :func:`_ladder` follow it while there is no path and expansions are left: a
+    coarser one (:meth:`HybridConfig.coarsened`) when the first spent its share;
+    else finer ones (:meth:`HybridConfig.refined`, ``config.refinements`` of them)
+    after a search that ran out of states or had every goal connection rejected,
+    each with ``refine_share`` of the rest when a last resort may follow, then the
+    last resort: the tight search (``min_clearance``) after a proof, or the wide one
+    (``wide_radius_factor``) after rejected connections. All counted, so
+    deterministic.
 
     Parameters
     ----------
@@ -247,7 +309,8 @@ def hybrid_query(
         The started stopwatch whose expiry stops the search.
     config : HybridConfig
         The search's settings (``switch_after``: when to turn to the goal's side;
-        ``refinements``: the finer retries).
+        ``refinements``, ``coarse_after``, ``min_clearance``, ``wide_radius_factor``:
+        the searches after the first).
     reverse : bool
         Whether reverse primitives and shots are allowed.
     smoothing : SmoothingConfig or None
@@ -261,58 +324,54 @@ def hybrid_query(
     """
     left = budget.max_iterations
     have = end_clearance(problem)
-    tried: list[tuple[HybridConfig, SearchOutcome]] = []
+    # Each search tried: its settings, how it ended, and its share of the expansions
+    # left when it was given one (None: all of them).
+    tried: list[tuple[HybridConfig, SearchOutcome, int | None]] = []
     found: tuple[BuiltPath | None, SearchOutcome, tuple[Tree, ...]]
 
-    def run(cfg: HybridConfig, allowed: int) -> None:
+    def run(cfg: HybridConfig, share: float) -> None:
         nonlocal left, found
+        allowed = math.ceil(left * share) if share < 1.0 else left
         found = _query_at(problem, allowed, watch, cfg, reverse, smoothing, have)
-        tried.append((cfg, found[1]))
+        tried.append((cfg, found[1], allowed if allowed < left else None))
         left -= found[1].expansions
 
-    def more(reasons: tuple[str, ...]) -> bool:
-        return found[0] is None and left > 0 and not watch.expired() and found[1].reason in reasons
-
-    cfg = config
-    run(cfg, math.ceil(left * cfg.coarse_after) if cfg.coarsens else left)
-    stage = "first"
-    if cfg.coarsens and more(("expansions",)):
-        # Its share spent, not out of states: the rest goes to the coarser search.
-        cfg, stage = cfg.coarsened(), "coarse"
-        run(cfg, left)
-    else:
-        first = tried[0][1].reason
-        tight = config.min_clearance < config.body_clearance and first in _PROOFS
-        wide = config.wide_radius_factor > config.radius_factor and first == "rejected"
-        while cfg.refinements > 0 and more(_REFINE_ON):
-            cfg = cfg.refined()
-            run(cfg, left)
-        if tight and more(_PROOFS):
-            # A proof for paths keeping body_clearance; a tighter path may exist.
-            cfg, stage = config.tightened(), "tight"
-            run(cfg, left)
-        elif wide and more(("rejected",)):
-            # The ramps of full-lock words need steering room: turn a little wider.
-            cfg, stage = config.widened(), "wide"
-            run(cfg, left)
+    run(config, config.coarse_after if config.coarsens else 1.0)
+    first, stage, cfg = tried[0][1].reason, "first", config
+    ladder = [s for s in _ladder(config) if first in s.after_first]
+    for i, st in enumerate(ladder):
+        ended = found[1].reason
+        if found[0] is not None or left <= 0 or watch.expired() or ended not in st.after_last:
+            continue
+        later = i + 1 < len(ladder)
+        cfg, stage = st.config, st.name
+        run(cfg, st.share if later else 1.0)
     path, outcome, trees = found
     reason = outcome.reason
     usual = query_clearance(problem, config.body_clearance, have)
     kept = clearance = query_clearance(problem, cfg.body_clearance, have)
+    before = tried[-2][1].reason if len(tried) > 1 else ""
     if stage == "coarse" and path is None and reason in _REFINE_ON:
         # What the coarse search cannot do proves nothing: the finer one was cut short.
         reason = "expansions"
-    if stage == "tight" and path is None and reason not in (*_PROOFS, "time"):
-        # Cut short keeping less clearance: a proof for the usual clearance stands.
-        reason = tried[-2][1].reason if tried[-2][1].reason in _PROOFS else "expansions"
+    if (
+        stage == "tight"
+        and path is None
+        and reason != "time"
+        and (reason not in _PROOFS or before not in _PROOFS)
+    ):
+        # Cut short keeping less clearance, a proof for the usual clearance stands; a
+        # finer search cut short by its share proved nothing.
+        reason = before if before in _PROOFS else "expansions"
         clearance = usual
     if stage == "wide" and path is None and reason != "time":
         # Wider turns prove nothing about the car's own: the rejections stand.
         reason = "rejected"
-    total = SearchOutcome.total(reason, [o for _, o in tried])
+    total = SearchOutcome.total(reason, [o for _, o, _ in tried])
     earlier = tried[:-1]
     answer = functools.partial(
-        HybridAnswer, outcome=total, trees=trees, refinements=len(earlier) - (stage != "first"),
+        HybridAnswer, outcome=total, trees=trees,
+        refinements=sum(c.xy_resolution < config.xy_resolution for c, _, _ in tried),
         stage=stage, clearance=clearance,
     )  # fmt: skip
     # How the last-resort search differed from the others, for its messages.
@@ -322,13 +381,13 @@ def hybrid_query(
     }.get(stage, "")
     if path is not None:
         note = f" {how}" if how else ""
-        if stage == "tight":
+        if stage == "tight" and before in _PROOFS:
             note += f" (none keeps {usual:.2f} m)"
         if earlier:
             note += f" at {_resolution(cfg)} resolution ({_earlier_note(earlier)})"
         return answer(path=path, message="", note=note)
     if stage == "coarse":
-        first_cfg, first_outcome = tried[0]
+        first_cfg, first_outcome, _ = tried[0]
         message = (
             f"no path found within the expansion budget of {budget.max_iterations}: at "
             f"{_resolution(first_cfg)} / {first_cfg.step:g} m steps the search "
@@ -337,15 +396,16 @@ def hybrid_query(
             "a larger budget may find a path)"
         )
         return answer(path=None, message=message)
-    (lead_cfg, lead), before = (cfg, outcome), earlier
+    lead, earlier = tried[-1], tried[:-1]
     if how:
         # Lead with the finest resolution's ending at the usual clearance and radius.
-        (lead_cfg, lead), before = tried[-2], tried[:-2]
-    message = _failure_message(lead, lead_cfg, budget, reverse)
-    if before:
-        message += f"; {_earlier_note(before)}"
+        lead, earlier = tried[-2], tried[:-2]
+    lead_cfg, lead_outcome, allowed = lead
+    message = _failure_message(lead_outcome, lead_cfg, budget, reverse, allowed)
+    if earlier:
+        message += f"; {_earlier_note(earlier)}"
     if how:
-        too = " too" if stage == "tight" and outcome.reason in _PROOFS else ""
+        too = " too" if stage == "tight" and outcome.reason in _PROOFS and before in _PROOFS else ""
         message += f"; {how}, at {_resolution(cfg)} the search {_why(outcome, '')}{too}"
     return answer(path=None, message=message)
 
@@ -361,11 +421,11 @@ def _resolution(cfg: HybridConfig) -> str:
     return f"{cfg.xy_resolution:g} m / {np.degrees(cfg.yaw_resolution):g} deg"
 
 
-def _earlier_note(earlier: Sequence[tuple[HybridConfig, SearchOutcome]]) -> str:
-    """What the coarser searches before the last one ended with, for a message."""
+def _earlier_note(earlier: Sequence[tuple[HybridConfig, SearchOutcome, int | None]]) -> str:
+    """What the searches before the last one ended with, for a message."""
     parts = [
         f"at {_resolution(c)} / {c.step:g} m steps the search {_why(o, 'its share of ')}"
-        for c, o in earlier
+        for c, o, _ in earlier
     ]
     return "before that, " + "; ".join(parts)
 
