@@ -20,7 +20,7 @@ from rrtdrive.planning.base import PlanningProblem, cached_checker
 from rrtdrive.planning.dubins import dubins_paths
 from rrtdrive.planning.hybrid.body import BodyTest
 from rrtdrive.planning.hybrid.heuristic import HolonomicField
-from rrtdrive.planning.hybrid.query import free_cell_graph
+from rrtdrive.planning.hybrid.resolution import free_cell_graph
 from rrtdrive.planning.hybrid.search import walk_hits, walk_poses, walks_hit
 from rrtdrive.planning.reeds_shepp import reeds_shepp_paths
 from rrtdrive.types import Pose
@@ -153,7 +153,7 @@ def test_lean_lookups_are_the_checkers_bit_for_bit() -> None:
 def test_scalar_heuristic_is_at(reverse: bool) -> None:
     from rrtdrive.planning.hybrid.config import HybridConfig
     from rrtdrive.planning.hybrid.heuristic import Heuristic
-    from rrtdrive.planning.hybrid.query import dubins_table
+    from rrtdrive.planning.hybrid.resolution import dubins_table
 
     m = builtin_map("parking_lot")
     grid = free_cell_graph(PlanningProblem.from_map(m), 0.5)

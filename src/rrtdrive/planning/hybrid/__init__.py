@@ -6,7 +6,8 @@ Modules: :mod:`.config` (:class:`HybridConfig`), :mod:`.primitives` (the arcs),
 (the A* loop with analytic expansions), :mod:`.ramps` (continuous curvature for a
 segment of arcs: steering ramps within the sharpness bound, exact end poses),
 :mod:`.path` (gear segments made continuous in curvature and checked),
-:mod:`.query` (one query: from the start, then from the goal),
+:mod:`.resolution` (the searches at one resolution: from the start, then
+from the goal), :mod:`.query` (one query: the first search and the ladder after it),
 :mod:`.planner` (the registered ``hybrid-a-star`` planner) and
 :mod:`.escalation` (what the improved planner runs when its stages fail).
 """
@@ -34,13 +35,9 @@ from rrtdrive.planning.hybrid.planner import (
     hybrid_result,
 )
 from rrtdrive.planning.hybrid.primitives import PrimitiveSet, arc_poses
-from rrtdrive.planning.hybrid.query import (
-    HybridAnswer,
-    free_cell_graph,
-    hybrid_query,
-    reversed_in_time,
-)
+from rrtdrive.planning.hybrid.query import HybridAnswer, hybrid_query
 from rrtdrive.planning.hybrid.ramps import ramped_segment
+from rrtdrive.planning.hybrid.resolution import free_cell_graph, reversed_in_time
 from rrtdrive.planning.hybrid.search import HybridSearch, Piece, SearchOutcome, analytic_shots
 
 __all__ = [

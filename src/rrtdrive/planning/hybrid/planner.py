@@ -15,12 +15,8 @@ import numpy as np
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register_planner
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.path import BuiltPath
-from rrtdrive.planning.hybrid.query import (
-    HybridAnswer,
-    dubins_table,
-    free_cell_graph,
-    hybrid_query,
-)
+from rrtdrive.planning.hybrid.query import HybridAnswer, hybrid_query
+from rrtdrive.planning.hybrid.resolution import dubins_table, free_cell_graph
 from rrtdrive.planning.result import run_query, solved
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus

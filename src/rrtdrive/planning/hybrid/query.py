@@ -1,126 +1,36 @@
-"""One Hybrid A* query: set-up, the search from the start and, if needed, from the goal.
+"""One Hybrid A* query: the first search and the ladder of searches after it.
 
 :func:`hybrid_query` runs on a started stopwatch and returns a
-:class:`HybridAnswer`. It searches from the start for ``switch_after``
-expansions; a query still open then is searched from the goal back towards the
-start for the rest of the budget, and the path found is driven in the opposite
-direction of time (rows reversed, gears flipped: with reverse allowed every
-motion reversed in time is a motion; forward only, the search from the goal
-uses reverse arcs alone, so its reversal drives forward). Many queries are hard
-at one end only (a tight bay, a start against a wall): from the other end the
-hard part is a way out. The search from the goal that runs out of states
-proves the goal unreachable at the search's resolution.
+:class:`HybridAnswer`. Its first search (:func:`~.resolution.search_at_resolution`:
+from the start, then also from the goal) may be followed, while there is no path
+and budget is left, by the searches of :func:`_ladder`: a coarser one, finer ones,
+and the last resorts (less clearance, wider turns). Its messages say in the
+user's terms how each search ended.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
-from rrtdrive.planning.dubins import dubins_paths
-from rrtdrive.planning.hybrid.body import BodyTest
 from rrtdrive.planning.hybrid.config import HybridConfig
-from rrtdrive.planning.hybrid.heuristic import (
-    DubinsTable,
-    FreeCellGraph,
-    Heuristic,
-    HolonomicField,
+from rrtdrive.planning.hybrid.path import BuiltPath
+from rrtdrive.planning.hybrid.resolution import (
+    PROOFS,
+    end_clearance,
+    query_clearance,
+    search_at_resolution,
 )
-from rrtdrive.planning.hybrid.path import BuiltPath, Ramps, build_path
-from rrtdrive.planning.hybrid.primitives import PrimitiveSet, primitive_sets
-from rrtdrive.planning.hybrid.search import (
-    HybridSearch,
-    Piece,
-    SearchOutcome,
-    Shots,
-    analytic_shots,
-    walk_hits,
-)
-from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
-from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, SmoothingConfig
-from rrtdrive.types import Budget, Pose, Tree
+from rrtdrive.planning.hybrid.search import SearchOutcome
+from rrtdrive.planning.smoothing import SmoothingConfig
+from rrtdrive.types import Budget, Tree
 
-__all__ = [
-    "HybridAnswer",
-    "hybrid_query",
-    "free_cell_graph",
-    "dubins_table",
-    "query_clearance",
-    "reversed_in_time",
-    "sharpness_bound_of",
-]
-
-
-def sharpness_bound_of(problem: PlanningProblem, smoothing: SmoothingConfig | None) -> float:
-    """The query's sharpness bound, rad/m, as the improved planner's.
-
-    ``smoothing.max_sharpness`` (0.2 rad/m without one), or the car's
-    ``max_steer_rate / 2 m/s`` when smaller.
-    """
-    bound = smoothing.max_sharpness if smoothing is not None else SmoothingConfig().max_sharpness
-    rate = problem.vehicle.max_steer_rate
-    if rate is not None and rate < float("inf"):
-        bound = min(bound, rate / STEER_RATE_DESIGN_SPEED)
-    return bound
-
-
-#: ``accept(pieces)``: the checked path of a connection, or ``None`` to search on.
-Accept = Callable[[list[Piece]], BuiltPath | None]
-
-
-def free_cell_graph(problem: PlanningProblem, resolution: float) -> FreeCellGraph:
-    """The map's :class:`FreeCellGraph`, built once per map (timed as set-up)."""
-    checker = problem.checker
-    return checker.grid.derived(
-        ("hybrid-free-cells", float(resolution)),
-        lambda: FreeCellGraph.build(checker, resolution),
-    )
-
-
-@functools.lru_cache(maxsize=4)
-def _dubins_table(radius: float, yaw_bins: int) -> DubinsTable:
-    return DubinsTable.build(radius, yaw_bins=yaw_bins)
-
-
-def dubins_table(radius: float, config: HybridConfig) -> DubinsTable:
-    """The Dubins length table of a turning radius, built once per process."""
-    return _dubins_table(float(radius), config.yaw_bins)
-
-
-def reeds_shepp_to(goal: Pose, radius: float) -> Callable[[float, float, float], float]:
-    """The Reeds-Shepp length from one pose to ``goal`` (the heuristic with reverse)."""
-
-    def length(x: float, y: float, yaw: float) -> float:
-        return reeds_shepp_distance(Pose(x, y, yaw), goal, radius)
-
-    return length
-
-
-def end_clearance(problem: PlanningProblem) -> float:
-    """The exact body clearance of the query's start and goal poses, the smaller."""
-    c = problem.checker
-    return min(
-        c.body_clearance(problem.start.as_tuple()), c.body_clearance(problem.goal.as_tuple())
-    )
-
-
-def query_clearance(problem: PlanningProblem, wanted: float, have: float | None = None) -> float:
-    """``wanted``, capped at the exact body clearance the start and goal poses have.
-
-    ``have``: that clearance (:func:`end_clearance`) when the caller has it already.
-    """
-    if wanted <= 0.0:
-        return 0.0
-    if have is None:
-        have = end_clearance(problem)
-    return max(0.0, min(wanted, have * 0.999))
+__all__ = ["HybridAnswer", "hybrid_query"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -196,44 +106,6 @@ def _failure_message(
     return f"no path found within the expansion budget of {budget.max_iterations} ({counts})"
 
 
-def reversed_in_time(pieces: Sequence[Piece]) -> list[Piece]:
-    """The same motion driven backwards in time: order and rows reversed, gears flipped.
-
-    Examples
-    --------
-    >>> rows = np.array([[0.0, 0, 0, 0.1], [1.0, 0, 0, 0.1]])
-    >>> out = reversed_in_time([Piece(1, rows)])
-    >>> out[0].gear, out[0].rows[:, 0].tolist()
-    (-1, [1.0, 0.0])
-    """
-    return [Piece(-p.gear, p.rows[::-1].copy()) for p in reversed(pieces)]
-
-
-def _backward_dubins_shots(
-    target: Pose, radius: float, spacing: float, body: BodyTest, max_candidates: int = 3
-) -> Shots:
-    """Reverse-only shots from a pose to ``target``: forward Dubins ``target -> pose`` reversed."""
-    coarse = max(spacing, 0.5)
-
-    def shots(pose: Pose) -> list[list[Piece]]:
-        out = []
-        for cand in dubins_paths(target, pose, radius)[:max_candidates]:
-            if walk_hits(target, cand.word, cand.lengths, radius, coarse, body):
-                continue
-            rows = cand.sample(spacing)[::-1].copy()
-            rows[0, :3] = pose.as_tuple()
-            rows[-1, :3] = target.as_tuple()
-            out.append([Piece(-1, rows)])
-        return out
-
-    return shots
-
-
-def _tree(search: HybridSearch) -> Tree:
-    xy = np.column_stack([search.x, search.y]) if search.x else np.zeros((0, 2))
-    return Tree(xy, np.array(search.parent, dtype=np.int64))
-
-
 @dataclass(frozen=True)
 class _Stage:
     """One search of :func:`hybrid_query`'s ladder after the first, and when it runs.
@@ -272,7 +144,7 @@ def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
     # rejected (the ramps of full-lock words need steering room: turn a little wider);
     # also after a finer search that spent its share without either.
     if config.min_clearance < config.body_clearance:
-        stages.append(_Stage("tight", config.tightened(), _PROOFS, (*_PROOFS, "expansions")))
+        stages.append(_Stage("tight", config.tightened(), PROOFS, (*PROOFS, "expansions")))
     if config.wide_radius_factor > config.radius_factor:
         stages.append(_Stage("wide", config.widened(), ("rejected",), ("rejected", "expansions")))
     return tuple(stages)
@@ -315,7 +187,7 @@ def hybrid_query(
         Whether reverse primitives and shots are allowed.
     smoothing : SmoothingConfig or None
         Its ``max_sharpness`` is the bound of ``curve="clothoid"``
-        (:func:`sharpness_bound_of`); with ``curve="arcs"`` and ``smooth`` it is the
+        (:func:`~.resolution.sharpness_bound_of`); with ``curve="arcs"`` and ``smooth`` it is the
         per-segment post-processor; ``None``: the default bound, or exact arcs.
 
     Returns
@@ -332,7 +204,7 @@ def hybrid_query(
     def run(cfg: HybridConfig, share: float) -> None:
         nonlocal left, found
         allowed = math.ceil(left * share) if share < 1.0 else left
-        found = _query_at(problem, allowed, watch, cfg, reverse, smoothing, have)
+        found = search_at_resolution(problem, allowed, watch, cfg, reverse, smoothing, have)
         tried.append((cfg, found[1], allowed if allowed < left else None))
         left -= found[1].expansions
 
@@ -358,11 +230,11 @@ def hybrid_query(
         stage == "tight"
         and path is None
         and reason != "time"
-        and (reason not in _PROOFS or before not in _PROOFS)
+        and (reason not in PROOFS or before not in PROOFS)
     ):
         # Cut short keeping less clearance, a proof for the usual clearance stands; a
         # finer search cut short by its share proved nothing.
-        reason = before if before in _PROOFS else "expansions"
+        reason = before if before in PROOFS else "expansions"
         clearance = usual
     if stage == "wide" and path is None and reason != "time":
         # Wider turns prove nothing about the car's own: the rejections stand.
@@ -381,7 +253,7 @@ def hybrid_query(
     }.get(stage, "")
     if path is not None:
         note = f" {how}" if how else ""
-        if stage == "tight" and before in _PROOFS:
+        if stage == "tight" and before in PROOFS:
             note += f" (none keeps {usual:.2f} m)"
         if earlier:
             note += f" at {_resolution(cfg)} resolution ({_earlier_note(earlier)})"
@@ -405,7 +277,7 @@ def hybrid_query(
     if earlier:
         message += f"; {_earlier_note(earlier)}"
     if how:
-        too = " too" if stage == "tight" and outcome.reason in _PROOFS and before in _PROOFS else ""
+        too = " too" if stage == "tight" and outcome.reason in PROOFS and before in PROOFS else ""
         message += f"; {how}, at {_resolution(cfg)} the search {_why(outcome, '')}{too}"
     return answer(path=None, message=message)
 
@@ -413,8 +285,6 @@ def hybrid_query(
 #: Search endings that a finer search is tried after (budget left, no path).
 _REFINE_ON = ("exhausted", "no_approach", "rejected")
 
-#: Search endings that prove the query unreachable for the search's clearance and grid.
-_PROOFS = ("exhausted", "no_approach")
 
 
 def _resolution(cfg: HybridConfig) -> str:
@@ -455,219 +325,3 @@ _ENDINGS = {
 }
 
 
-def _query_at(
-    problem: PlanningProblem,
-    budget: int,
-    watch: Stopwatch,
-    config: HybridConfig,
-    reverse: bool,
-    smoothing: SmoothingConfig | None,
-    have: float,
-) -> tuple[BuiltPath | None, SearchOutcome, tuple[Tree, ...]]:
-    """The searches of :func:`hybrid_query` at one resolution, with ``budget`` expansions.
-
-    ``have``: the start's and goal's own body clearance (:func:`end_clearance`).
-    """
-    kappa_max = problem.vehicle.kappa_max
-    clearance = query_clearance(problem, config.body_clearance, have)
-    if smoothing is not None:
-        smoothing = dataclasses.replace(smoothing, clearance=clearance, kappa_max=kappa_max)
-    radius = config.radius_factor / kappa_max
-    # The returned rows interpolate linearly between arc poses 0.25 m apart (at most
-    # 1.3 mm off the arc at kappa_max): the re-check allows 5 mm less than the search kept,
-    # so that it does not reject what the search found. The start and goal poses have
-    # at least the search's clearance (capped at theirs), never more is asked of them.
-    recheck_clearance = max(0.0, clearance - 0.005)
-    start, goal = problem.start, problem.goal
-    grid = free_cell_graph(problem, config.xy_resolution)
-    prims, *long_prims = primitive_sets(
-        1.0 / radius, config.curvatures, config.step, config.check_spacing, 0 if reverse else 1,
-        config.long_steps,
-    )  # fmt: skip
-
-    ramps = None
-    if config.curve == "clothoid":
-        bound = sharpness_bound_of(problem, smoothing)
-        ramps = Ramps(bound, problem.vehicle.wheelbase, kappa_max)
-    post = smoothing if config.smooth and ramps is None else None
-
-    def accept(pieces: list[Piece]) -> BuiltPath | None:
-        return build_path(
-            pieces, problem.checker, post, config.arc_fallback, recheck_clearance, kappa_max,
-            config.check_spacing, config.sample_spacing, ramps=ramps,
-        )  # fmt: skip
-
-    to_goal = HolonomicField.towards(grid, goal)
-    if reverse:
-        rs = reeds_shepp_to(goal, radius) if config.reeds_shepp_heuristic else None
-        heuristic = Heuristic(to_goal, None, goal, rs)
-    else:
-        table = dubins_table(radius, config)
-        heuristic = Heuristic(to_goal, table.to(goal), goal, table.scalar_to(goal))
-    back_h = Heuristic(HolonomicField.towards(grid, start), None, start)
-
-    def searches_with(search_clearance: float) -> list[tuple[HybridSearch, Accept]]:
-        body = BodyTest(problem.checker, search_clearance)
-        shots = analytic_shots(goal, radius, reverse, config.check_spacing, body)
-        ahead = HybridSearch(
-            body, start, goal, heuristic, prims, shots, config, kappa_max, problem.bounds,
-            long_prims,
-        )  # fmt: skip
-        out: list[tuple[HybridSearch, Accept]] = [(ahead, accept)]
-        if config.switch_after > 0:
-            # From the goal back to the start: forward only, by reverse arcs alone.
-            back_prims, *back_long = (
-                (prims, *long_prims) if reverse else prims_reverse(radius, config)
-            )
-            if reverse:
-                back_shots = analytic_shots(start, radius, True, config.check_spacing, body)
-            else:
-                back_shots = _backward_dubins_shots(start, radius, config.check_spacing, body)
-            back = HybridSearch(
-                body, goal, start, back_h, back_prims, back_shots, config, kappa_max,
-                problem.bounds, back_long,
-            )  # fmt: skip
-            out.append((back, lambda p: accept(reversed_in_time(p))))
-            if config.meet_count > 0:
-
-                def connect(a: Pose, b: Pose) -> list[list[Piece]]:
-                    words = analytic_shots(b, radius, reverse, config.check_spacing, body)(a)
-                    return [
-                        w for w in words if body.all_free(np.vstack([p.rows[:, :3] for p in w]))
-                    ]
-
-                for here, there in ((ahead, back), (back, ahead)):
-                    here.meet = _Meeting(
-                        here, there, ahead, connect, radius, config.meet_distance,
-                        config.meet_count,
-                    )  # fmt: skip
-        return out
-
-    # The ramps cut corners by centimetres: where every connection the search finds
-    # is rejected for it (max_solutions of them), search again, with the rest of the
-    # budget, keeping ``ramp_margin`` more clearance (the re-check is unchanged).
-    margins = (0.0, config.ramp_margin) if ramps is not None and config.ramp_margin > 0 else (0.0,)
-    used = SearchOutcome("expansions", 0, 0, 0, 0)
-    searches: list[tuple[HybridSearch, Accept]] = []
-    for margin in margins:
-        search_clearance = clearance if margin == 0.0 else query_clearance(
-            problem, config.body_clearance + margin, have
-        )
-        searches = searches_with(search_clearance)
-        left = budget - used.expansions
-        path, outcome = _alternate(searches, left, config.switch_after, watch)
-        reason = outcome.reason
-        if margin > 0.0 and reason in _PROOFS:
-            # Out of states keeping the margin too proves nothing for the query's own
-            # clearance: the rejected connections stand.
-            reason = "rejected"
-        used = SearchOutcome.total(reason, [used, outcome])
-        if path is not None or outcome.reason != "rejected" or left - outcome.expansions <= 0:
-            break
-    trees = tuple(_tree(s) for s, _ in searches if s.x)
-    return path, used, trees
-
-
-class _Meeting:
-    """Connections from one search's nodes to the nodes of the other (meet in the middle).
-
-    The search from the start (``ahead``) and the one from the goal (``back``, whose
-    tree reversed in time drives to the goal) take turns; while one runs, the other's
-    tree stands still. At its analytic-shot times, a node of the running search tries
-    the shortest clear words (Reeds-Shepp with reverse, Dubins forward) to the
-    ``count`` nodes of the other tree within ``distance`` whose pose is closest
-    (distance plus the turning radius times the heading change); a clear one joins
-    both trees: the start's chain, the word, the goal's chain reversed in time.
-    """
-
-    def __init__(
-        self,
-        here: HybridSearch,
-        there: HybridSearch,
-        ahead: HybridSearch,
-        connect: Callable[[Pose, Pose], list[list[Piece]]],
-        radius: float,
-        distance: float,
-        count: int,
-    ) -> None:
-        self.here, self.there, self.ahead = here, there, ahead
-        self.connect, self.radius, self.distance, self.count = connect, radius, distance, count
-        self._tree: cKDTree | None = None
-        self._size = -1
-
-    def refresh(self) -> None:
-        """Index the other tree's nodes (it stands still while this search runs)."""
-        there = self.there
-        if len(there.x) != self._size:
-            self._size = len(there.x)
-            self._tree = cKDTree(np.column_stack([there.x, there.y])) if there.x else None
-
-    def __call__(self, i: int) -> list[list[Piece]]:
-        if self._tree is None:
-            return []
-        here, there = self.here, self.there
-        x, y, yaw = here.x[i], here.y[i], here.yaw[i]
-        near = self._tree.query_ball_point((x, y), self.distance)
-        if not near:
-            return []
-        # The likeliest shortest words first: near in position and heading.
-        scored = sorted(
-            (math.hypot(there.x[j] - x, there.y[j] - y)
-             + self.radius * abs(math.remainder(there.yaw[j] - yaw, 2.0 * math.pi)), j)
-            for j in near
-        )  # fmt: skip
-        out: list[list[Piece]] = []
-        for _, j in scored[: self.count]:
-            a, b = (i, j) if here is self.ahead else (j, i)
-            start_side, goal_side = (here, there) if here is self.ahead else (there, here)
-            pa = Pose(start_side.x[a], start_side.y[a], start_side.yaw[a])
-            pb = Pose(goal_side.x[b], goal_side.y[b], goal_side.yaw[b])
-            for word in self.connect(pa, pb):
-                whole = start_side.chain(a) + word + reversed_in_time(goal_side.chain(b))
-                out.append(whole if here is self.ahead else reversed_in_time(whole))
-        return out
-
-
-def _alternate(
-    searches: list[tuple[HybridSearch, Accept]],
-    budget: int,
-    first: int,
-    watch: Stopwatch,
-) -> tuple[BuiltPath | None, SearchOutcome]:
-    """Run the searches in turns of ``first``, ``first``, ``2 first``, ``2 first``, ... expansions.
-
-    The turns are counted in expansions, never in time, so the schedule is the
-    same on any machine. Either search running out of states ends the query: from
-    the start it proves the goal unreachable, from the goal that no approach exists.
-    """
-    outcomes = [SearchOutcome("expansions", 0, 0, 0, 0) for _ in searches]
-    turn, used, k = max(1, first), 0, 0
-    while True:
-        search, accept = searches[k]
-        if len(searches) == 1:
-            turn = budget
-        step = min(turn, budget - used)
-        before = outcomes[k].expansions
-        meeting = search.meet
-        if isinstance(meeting, _Meeting):
-            meeting.refresh()
-        path, outcomes[k] = search.run(accept, before + step, watch.expired)
-        used += outcomes[k].expansions - before
-        if path is not None or outcomes[k].reason != "expansions" or used >= budget:
-            break
-        if k == len(searches) - 1:
-            turn *= 2
-        k = (k + 1) % len(searches)
-    if len(searches) == 1:
-        return path, outcomes[0]
-    reason = outcomes[k].reason
-    if reason == "exhausted" and k == 1:
-        reason = "no_approach"  # exhausted from the goal's side
-    return path, SearchOutcome.total(reason, outcomes)
-
-
-def prims_reverse(radius: float, config: HybridConfig) -> tuple[PrimitiveSet, ...]:
-    """The reverse arcs alone (the search from the goal of a forward-only query), and longer."""
-    return primitive_sets(
-        1.0 / radius, config.curvatures, config.step, config.check_spacing, -1, config.long_steps
-    )

@@ -305,9 +305,6 @@ class HybridSearch:
         self.expansions = 0
         self.shots_tried = 0
         self.connections = 0
-        #: ``meet(i)``: whole connections through node ``i`` to the other search's tree
-        #: (set by the query when two searches take turns; see ``query._Meeting``).
-        self.meet: Callable[[int], list[list[Piece]]] | None = None
         # Per-primitive constants of the edge cost.
         self._base_cost = self._edge_costs(primitives)
         # The primitives whose successors need no body test from a node with room for
@@ -495,13 +492,6 @@ class HybridSearch:
                 for pieces in self._shot(i):
                     self.connections += 1
                     out = accept(self.chain(i) + pieces)
-                    if out is not None:
-                        return out, self._outcome("solved")
-                    if self.connections >= cfg.max_solutions:
-                        return None, self._outcome("rejected")
-                for whole in self.meet(i) if self.meet is not None else ():
-                    self.connections += 1
-                    out = accept(whole)
                     if out is not None:
                         return out, self._outcome("solved")
                     if self.connections >= cfg.max_solutions:

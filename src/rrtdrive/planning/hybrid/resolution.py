@@ -1,0 +1,310 @@
+"""The searches of one Hybrid A* query at one resolution (:func:`search_at_resolution`).
+
+The search from the start runs for ``switch_after`` expansions; a query still
+open then is searched from the goal back towards the start too, the two taking
+turns (:func:`_alternate`), and a path found from the goal is driven in the
+opposite direction of time (:func:`reversed_in_time`: rows reversed, gears
+flipped; with reverse allowed every motion reversed in time is a motion; forward
+only, the search from the goal uses reverse arcs alone, so its reversal drives
+forward). Many queries are hard at one end only (a tight bay, a start against a
+wall): from the other end the hard part is a way out. The search from the goal
+that runs out of states proves the goal unreachable at the search's resolution.
+Where every connection found is rejected (the ramps cut a corner), the searches
+run again keeping ``ramp_margin`` more clearance. Also here: the per-map set-up
+the searches share (:func:`free_cell_graph`, :func:`dubins_table`) and the
+query's clearance.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from rrtdrive.planning.base import PlanningProblem, Stopwatch
+from rrtdrive.planning.dubins import dubins_paths
+from rrtdrive.planning.hybrid.body import BodyTest
+from rrtdrive.planning.hybrid.config import HybridConfig
+from rrtdrive.planning.hybrid.heuristic import (
+    DubinsTable,
+    FreeCellGraph,
+    Heuristic,
+    HolonomicField,
+)
+from rrtdrive.planning.hybrid.path import BuiltPath, Ramps, build_path
+from rrtdrive.planning.hybrid.primitives import PrimitiveSet, primitive_sets
+from rrtdrive.planning.hybrid.search import (
+    HybridSearch,
+    Piece,
+    SearchOutcome,
+    Shots,
+    analytic_shots,
+    walk_hits,
+)
+from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
+from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, SmoothingConfig
+from rrtdrive.types import Pose, Tree
+
+__all__ = [
+    "PROOFS",
+    "Accept",
+    "dubins_table",
+    "end_clearance",
+    "free_cell_graph",
+    "prims_reverse",
+    "query_clearance",
+    "reeds_shepp_to",
+    "reversed_in_time",
+    "search_at_resolution",
+    "sharpness_bound_of",
+]
+
+#: Search endings that prove the query unreachable for the search's clearance and grid.
+PROOFS = ("exhausted", "no_approach")
+
+
+def sharpness_bound_of(problem: PlanningProblem, smoothing: SmoothingConfig | None) -> float:
+    """The query's sharpness bound, rad/m, as the improved planner's.
+
+    ``smoothing.max_sharpness`` (0.2 rad/m without one), or the car's
+    ``max_steer_rate / 2 m/s`` when smaller.
+    """
+    bound = smoothing.max_sharpness if smoothing is not None else SmoothingConfig().max_sharpness
+    rate = problem.vehicle.max_steer_rate
+    if rate is not None and rate < float("inf"):
+        bound = min(bound, rate / STEER_RATE_DESIGN_SPEED)
+    return bound
+
+
+#: ``accept(pieces)``: the checked path of a connection, or ``None`` to search on.
+Accept = Callable[[list[Piece]], BuiltPath | None]
+
+
+def free_cell_graph(problem: PlanningProblem, resolution: float) -> FreeCellGraph:
+    """The map's :class:`FreeCellGraph`, built once per map (timed as set-up)."""
+    checker = problem.checker
+    return checker.grid.derived(
+        ("hybrid-free-cells", float(resolution)),
+        lambda: FreeCellGraph.build(checker, resolution),
+    )
+
+
+@functools.lru_cache(maxsize=4)
+def _dubins_table(radius: float, yaw_bins: int) -> DubinsTable:
+    return DubinsTable.build(radius, yaw_bins=yaw_bins)
+
+
+def dubins_table(radius: float, config: HybridConfig) -> DubinsTable:
+    """The Dubins length table of a turning radius, built once per process."""
+    return _dubins_table(float(radius), config.yaw_bins)
+
+
+def reeds_shepp_to(goal: Pose, radius: float) -> Callable[[float, float, float], float]:
+    """The Reeds-Shepp length from one pose to ``goal`` (the heuristic with reverse)."""
+
+    def length(x: float, y: float, yaw: float) -> float:
+        return reeds_shepp_distance(Pose(x, y, yaw), goal, radius)
+
+    return length
+
+
+def end_clearance(problem: PlanningProblem) -> float:
+    """The exact body clearance of the query's start and goal poses, the smaller."""
+    c = problem.checker
+    return min(
+        c.body_clearance(problem.start.as_tuple()), c.body_clearance(problem.goal.as_tuple())
+    )
+
+
+def query_clearance(problem: PlanningProblem, wanted: float, have: float | None = None) -> float:
+    """``wanted``, capped at the exact body clearance the start and goal poses have.
+
+    ``have``: that clearance (:func:`end_clearance`) when the caller has it already.
+    """
+    if wanted <= 0.0:
+        return 0.0
+    if have is None:
+        have = end_clearance(problem)
+    return max(0.0, min(wanted, have * 0.999))
+
+
+def reversed_in_time(pieces: Sequence[Piece]) -> list[Piece]:
+    """The same motion driven backwards in time: order and rows reversed, gears flipped.
+
+    Examples
+    --------
+    >>> rows = np.array([[0.0, 0, 0, 0.1], [1.0, 0, 0, 0.1]])
+    >>> out = reversed_in_time([Piece(1, rows)])
+    >>> out[0].gear, out[0].rows[:, 0].tolist()
+    (-1, [1.0, 0.0])
+    """
+    return [Piece(-p.gear, p.rows[::-1].copy()) for p in reversed(pieces)]
+
+
+def _backward_dubins_shots(
+    target: Pose, radius: float, spacing: float, body: BodyTest, max_candidates: int = 3
+) -> Shots:
+    """Reverse-only shots from a pose to ``target``: forward Dubins ``target -> pose`` reversed."""
+    coarse = max(spacing, 0.5)
+
+    def shots(pose: Pose) -> list[list[Piece]]:
+        out = []
+        for cand in dubins_paths(target, pose, radius)[:max_candidates]:
+            if walk_hits(target, cand.word, cand.lengths, radius, coarse, body):
+                continue
+            rows = cand.sample(spacing)[::-1].copy()
+            rows[0, :3] = pose.as_tuple()
+            rows[-1, :3] = target.as_tuple()
+            out.append([Piece(-1, rows)])
+        return out
+
+    return shots
+
+
+def _tree(search: HybridSearch) -> Tree:
+    xy = np.column_stack([search.x, search.y]) if search.x else np.zeros((0, 2))
+    return Tree(xy, np.array(search.parent, dtype=np.int64))
+
+
+def search_at_resolution(
+    problem: PlanningProblem,
+    budget: int,
+    watch: Stopwatch,
+    config: HybridConfig,
+    reverse: bool,
+    smoothing: SmoothingConfig | None,
+    have: float,
+) -> tuple[BuiltPath | None, SearchOutcome, tuple[Tree, ...]]:
+    """The searches of :func:`hybrid_query` at one resolution, with ``budget`` expansions.
+
+    ``have``: the start's and goal's own body clearance (:func:`end_clearance`).
+    """
+    kappa_max = problem.vehicle.kappa_max
+    clearance = query_clearance(problem, config.body_clearance, have)
+    if smoothing is not None:
+        smoothing = dataclasses.replace(smoothing, clearance=clearance, kappa_max=kappa_max)
+    radius = config.radius_factor / kappa_max
+    # The returned rows interpolate linearly between arc poses 0.25 m apart (at most
+    # 1.3 mm off the arc at kappa_max): the re-check allows 5 mm less than the search kept,
+    # so that it does not reject what the search found. The start and goal poses have
+    # at least the search's clearance (capped at theirs), never more is asked of them.
+    recheck_clearance = max(0.0, clearance - 0.005)
+    start, goal = problem.start, problem.goal
+    grid = free_cell_graph(problem, config.xy_resolution)
+    prims, *long_prims = primitive_sets(
+        1.0 / radius, config.curvatures, config.step, config.check_spacing, 0 if reverse else 1,
+        config.long_steps,
+    )  # fmt: skip
+
+    ramps = None
+    if config.curve == "clothoid":
+        bound = sharpness_bound_of(problem, smoothing)
+        ramps = Ramps(bound, problem.vehicle.wheelbase, kappa_max)
+    post = smoothing if config.smooth and ramps is None else None
+
+    def accept(pieces: list[Piece]) -> BuiltPath | None:
+        return build_path(
+            pieces, problem.checker, post, config.arc_fallback, recheck_clearance, kappa_max,
+            config.check_spacing, config.sample_spacing, ramps=ramps,
+        )  # fmt: skip
+
+    to_goal = HolonomicField.towards(grid, goal)
+    if reverse:
+        rs = reeds_shepp_to(goal, radius) if config.reeds_shepp_heuristic else None
+        heuristic = Heuristic(to_goal, None, goal, rs)
+    else:
+        table = dubins_table(radius, config)
+        heuristic = Heuristic(to_goal, table.to(goal), goal, table.scalar_to(goal))
+    back_h = Heuristic(HolonomicField.towards(grid, start), None, start)
+
+    def searches_with(search_clearance: float) -> list[tuple[HybridSearch, Accept]]:
+        body = BodyTest(problem.checker, search_clearance)
+        shots = analytic_shots(goal, radius, reverse, config.check_spacing, body)
+        ahead = HybridSearch(
+            body, start, goal, heuristic, prims, shots, config, kappa_max, problem.bounds,
+            long_prims,
+        )  # fmt: skip
+        out: list[tuple[HybridSearch, Accept]] = [(ahead, accept)]
+        if config.switch_after > 0:
+            # From the goal back to the start: forward only, by reverse arcs alone.
+            back_prims, *back_long = (
+                (prims, *long_prims) if reverse else prims_reverse(radius, config)
+            )
+            if reverse:
+                back_shots = analytic_shots(start, radius, True, config.check_spacing, body)
+            else:
+                back_shots = _backward_dubins_shots(start, radius, config.check_spacing, body)
+            back = HybridSearch(
+                body, goal, start, back_h, back_prims, back_shots, config, kappa_max,
+                problem.bounds, back_long,
+            )  # fmt: skip
+            out.append((back, lambda p: accept(reversed_in_time(p))))
+        return out
+
+    # The ramps cut corners by centimetres: where every connection the search finds
+    # is rejected for it (max_solutions of them), search again, with the rest of the
+    # budget, keeping ``ramp_margin`` more clearance (the re-check is unchanged).
+    margins = (0.0, config.ramp_margin) if ramps is not None and config.ramp_margin > 0 else (0.0,)
+    used = SearchOutcome("expansions", 0, 0, 0, 0)
+    searches: list[tuple[HybridSearch, Accept]] = []
+    for margin in margins:
+        search_clearance = clearance if margin == 0.0 else query_clearance(
+            problem, config.body_clearance + margin, have
+        )
+        searches = searches_with(search_clearance)
+        left = budget - used.expansions
+        path, outcome = _alternate(searches, left, config.switch_after, watch)
+        reason = outcome.reason
+        if margin > 0.0 and reason in PROOFS:
+            # Out of states keeping the margin too proves nothing for the query's own
+            # clearance: the rejected connections stand.
+            reason = "rejected"
+        used = SearchOutcome.total(reason, [used, outcome])
+        if path is not None or outcome.reason != "rejected" or left - outcome.expansions <= 0:
+            break
+    trees = tuple(_tree(s) for s, _ in searches if s.x)
+    return path, used, trees
+
+
+def _alternate(
+    searches: list[tuple[HybridSearch, Accept]],
+    budget: int,
+    first: int,
+    watch: Stopwatch,
+) -> tuple[BuiltPath | None, SearchOutcome]:
+    """Run the searches in turns of ``first``, ``first``, ``2 first``, ``2 first``, ... expansions.
+
+    The turns are counted in expansions, never in time, so the schedule is the
+    same on any machine. Either search running out of states ends the query: from
+    the start it proves the goal unreachable, from the goal that no approach exists.
+    """
+    outcomes = [SearchOutcome("expansions", 0, 0, 0, 0) for _ in searches]
+    turn, used, k = max(1, first), 0, 0
+    while True:
+        search, accept = searches[k]
+        if len(searches) == 1:
+            turn = budget
+        step = min(turn, budget - used)
+        before = outcomes[k].expansions
+        path, outcomes[k] = search.run(accept, before + step, watch.expired)
+        used += outcomes[k].expansions - before
+        if path is not None or outcomes[k].reason != "expansions" or used >= budget:
+            break
+        if k == len(searches) - 1:
+            turn *= 2
+        k = (k + 1) % len(searches)
+    if len(searches) == 1:
+        return path, outcomes[0]
+    reason = outcomes[k].reason
+    if reason == "exhausted" and k == 1:
+        reason = "no_approach"  # exhausted from the goal's side
+    return path, SearchOutcome.total(reason, outcomes)
+
+
+def prims_reverse(radius: float, config: HybridConfig) -> tuple[PrimitiveSet, ...]:
+    """The reverse arcs alone (the search from the goal of a forward-only query), and longer."""
+    return primitive_sets(
+        1.0 / radius, config.curvatures, config.step, config.check_spacing, -1, config.long_steps
+    )
