@@ -276,17 +276,22 @@ def test_vectorised_chain_is_the_reference() -> None:
     y=st.floats(0.0, 100.0),
     yaw=st.floats(-math.pi, math.pi),
     clearance=st.sampled_from([0.0, 0.05, 0.15, 0.25]),
+    factor=st.sampled_from([1.0, 2.0, 4.0]),
 )
-def test_free_within_proves_every_successor_free(x, y, yaw, clearance):
+def test_free_within_proves_every_successor_free(x, y, yaw, clearance, factor):
     """A node with the discs' room for the primitives' reach: every successor pose is free.
 
     The skip of the search's body test must never call free what the exact test
-    rejects, and the primitives it skips are all of them, in both gears.
+    rejects, and the primitives it skips are all of them, in both gears, for the
+    step arcs and the long ones (``HybridConfig.long_steps``) alike.
     """
     from rrtdrive.planning.hybrid.primitives import PrimitiveSet
 
     body = BodyTest(_checker(), clearance)
     prims = PrimitiveSet.build(1 / RADIUS, 5, 1.0, 0.1, reverse=True)
+    if factor != 1.0:
+        prims = prims.scaled(factor)
+        assert prims.local.shape[1] == round(10 * factor)  # still 0.1 m apart
     reach = body.reach(prims.length, 1 / RADIUS)
     if not body.free_within(x, y, yaw, reach):
         return
