@@ -109,8 +109,9 @@ def test_tight_stage_keeps_less_clearance_only_after_a_proof() -> None:
 
 def test_wide_stage_turns_wider_after_rejected_connections() -> None:
     m, problem = _random_problem("goal", 39, count=100, reverse=True)
-    # The search of session 7 (unit steps, weight 1.5), whose connections are all rejected.
-    before = {"long_steps": (), "heuristic_weight": 1.5}
+    # The search of session 7 (unit steps, weight 1.5, every shot): its connections are
+    # all rejected.
+    before = {"long_steps": (), "heuristic_weight": 1.5, "shot_cell": 0.0}
     rejected = _solve(problem, 20_000, wide_radius_factor=1.02, **before)
     assert rejected.status is PlanStatus.NO_PATH_IN_BUDGET
     assert "could not be made drivable" in rejected.message

@@ -78,9 +78,9 @@ def test_reverse_in_bay_with_rejected_connections_is_solved_finer() -> None:
     task = make_scenario("parking", 12, reverse_in=True)
     problem = _problem(task)
     # (wide_radius_factor: no wider-turning search after the rejections; the search of
-    # session 6 (unit steps, weight 1.5), whose connections at 0.5 m / 5 deg are all
+    # session 6 (unit steps, weight 1.5, every shot), whose connections at 0.5 m / 5 deg are all
     # rejected here.)
-    before = {"long_steps": (), "heuristic_weight": 1.5}
+    before = {"long_steps": (), "heuristic_weight": 1.5, "shot_cell": 0.0}
     coarse = HybridAStar(refinements=0, wide_radius_factor=1.02, **before).solve(
         problem, np.random.default_rng(0), BUDGET
     )

@@ -451,6 +451,7 @@ class HybridSearch:
             self._best: dict[int, float] = {}
             self._hval = [h0]
             self._since_shot = cfg.shot_interval
+            self._shot_from: set[tuple[int, int, int]] = set()
         heap, closed, best, hval = self._heap, self._closed, self._best, self._hval
         since_shot = self._since_shot
         base_cost = self._base_cost.tolist()
@@ -468,6 +469,7 @@ class HybridSearch:
         two_pi = 2.0 * math.pi
         inf = math.inf
         disc_room, open_sets, steps = body.disc_room, self._open, self.step
+        shot_from, shot_cell, shot_bin = self._shot_from, cfg.shot_cell, cfg.shot_bin
         heappop, heappush = heapq.heappop, heapq.heappush
         reason = "exhausted"
         while heap:
@@ -489,7 +491,20 @@ class HybridSearch:
             interval = min(shot_interval, max(1, int(hval[i] / shot_distance)))
             if since_shot >= interval:
                 since_shot = 0
-                for pieces in self._shot(i):
+                # A shot from near a pose whose shots all failed runs into the same
+                # obstacles (the retries after a failure shoot every time: small moves
+                # decide in tight spots).
+                sk = None
+                if shot_cell > 0.0:
+                    iyaw = int(yawi % two_pi // shot_bin)
+                    sk = (int(xi // shot_cell), int(yi // shot_cell), iyaw)
+                if sk in shot_from:
+                    found = []
+                else:
+                    found = self._shot(i)
+                    if not found and sk is not None:
+                        shot_from.add(sk)
+                for pieces in found:
                     self.connections += 1
                     out = accept(self.chain(i) + pieces)
                     if out is not None:
