@@ -1,6 +1,8 @@
 """The default planner's escalation (issue 13, item 3): Hybrid A* after a failed query.
 
-``improved-rrt-connect`` runs the paper's pipeline (and its Dubins fallback)
+``improved-rrt-connect`` runs the paper's pipeline (and its Dubins fallback;
+with reverse only its direct Dubins path, the tails and leads after the
+escalation: :meth:`~rrtdrive.planning.improved.ImprovedConfig.escalates_first`)
 first. When that fails for any reason but an invalid start or goal or a proven
 unreachable goal, :func:`escalate` runs the Hybrid A* search (forward only, or
 with reverse when ``problem.reverse``) on the same stopwatch: the budget it is
@@ -26,7 +28,8 @@ from rrtdrive.types import Budget, PlanResult, PlanStatus
 
 __all__ = ["STAGES", "ESCALATES_FROM", "escalate", "stage_of"]
 
-#: The stages of ``improved-rrt-connect``, in the order they run.
+#: The stages of ``improved-rrt-connect``, in the order they run forward only (with
+#: reverse the fallback's tails and leads come after the Hybrid A* escalation).
 STAGES: tuple[str, ...] = ("improved-rrt-connect", "dubins-fallback", NAME)
 
 #: Failures the escalation answers; the others are about the query itself.

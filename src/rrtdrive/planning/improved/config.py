@@ -13,6 +13,7 @@ from rrtdrive.types import InputError, require_finite, require_int, require_posi
 
 __all__ = [
     "COMPONENTS",
+    "ESCALATION_FIRST",
     "SMOOTHING_COMPONENTS",
     "PER_QUERY_SMOOTHING",
     "ImprovedConfig",
@@ -33,6 +34,10 @@ COMPONENTS: tuple[str, ...] = (
     "dubins_fallback",
     "escalation",
 )
+
+#: When the Hybrid A* escalation runs before the Dubins fallback
+#: (:attr:`ImprovedConfig.escalation_first`).
+ESCALATION_FIRST: tuple[str, ...] = ("reverse", "always", "never")
 
 #: The components that are switches of the post-processor: fields of ``ImprovedConfig.smoothing``.
 SMOOTHING_COMPONENTS: tuple[str, ...] = ("prune", "sharp_repair", "supplement")
@@ -101,7 +106,8 @@ class ImprovedConfig:
         paper's pipeline succeeds.
     escalation : bool
         Beyond the paper (issue 13): when the tree paths and the Dubins fallback
-        fail (not for an invalid start or goal), run the Hybrid A* search
+        fail (with reverse, before the fallback's tails and leads:
+        ``escalation_first``; not for an invalid start or goal), run the Hybrid A* search
         (:func:`rrtdrive.planning.hybrid.escalate`; forward only, or reversing when
         ``problem.reverse``) with the query's iteration budget as its expansion
         budget and the time left as its cap, before reporting failure. On by
@@ -127,6 +133,27 @@ class ImprovedConfig:
         then solved by the Hybrid A*; docs/coverage_all.md).
         The ``max_postprocess_attempts`` tree paths are all tried either way.
         Counts, not time: the stage that solves is the same on any machine.
+    reverse_postprocess_attempts : int
+        With ``escalation`` on and reversing allowed, the tree paths post-processed
+        before the escalation (>= 1, at most ``max_postprocess_attempts``). Default
+        1, the paper's pipeline (one pair of trees, one tree path): a query it
+        solves is solved as before; one it does not goes to the Hybrid A* search with
+        Reeds-Shepp shots, which on ``parking_lot``'s 30 + 30 random queries solved
+        every query the tree paths 2-6 did (5 of 6 shorter) in a fraction of the
+        time those tree paths took on the queries they did not solve
+        (docs/planning.md).
+    escalation_first : str
+        When the Hybrid A* escalation runs before the Dubins fallback's tails and
+        leads (after its direct Dubins path; the tails and leads then run only if
+        the escalation fails): ``"reverse"`` (default) for queries that allow
+        reversing, ``"always"`` or ``"never"`` (the whole fallback first, the order
+        before session 8). With reverse the search's Reeds-Shepp shots reach what the
+        tails and leads reach, mostly shorter, sooner: on ``parking_lot``'s 30 + 30
+        random queries of ``experiments/coverage.py`` the tails and leads took
+        85-92 % of the time before the escalation on the escalated queries
+        (docs/planning.md). The direct Dubins path stays first: forward, without a
+        cusp, cheap, and in stock ``parking-v0`` most of the fallback's solutions.
+        Forward only, the whole fallback stays first.
     dubins_radius_factor : float
         Turning radius of the fallback's arcs as a multiple of ``1 / kappa_max``
         (>= 1; default 1.05, a little room for tracking).
@@ -180,6 +207,8 @@ class ImprovedConfig:
     escalation: bool = True
     rrt_share: float = 0.5
     escalation_fallback_joints: int = 7
+    reverse_postprocess_attempts: int = 1
+    escalation_first: str = "reverse"
     dubins_radius_factor: float = 1.05
     passage_bias: float = 0.1
     expansion_a: float = 1.0
@@ -208,6 +237,12 @@ class ImprovedConfig:
         if not 0.0 < self.rrt_share <= 1.0:
             raise InputError(f"planner.rrt_share: must lie in (0, 1], got {self.rrt_share!r}")
         require_int("planner.escalation_fallback_joints", self.escalation_fallback_joints, 0)
+        require_int("planner.reverse_postprocess_attempts", self.reverse_postprocess_attempts)
+        if self.escalation_first not in ESCALATION_FIRST:
+            raise InputError(
+                f"planner.escalation_first: must be one of {list(ESCALATION_FIRST)}, "
+                f"got {self.escalation_first!r}"
+            )
         require_finite("planner.passage_bias", self.passage_bias)
         require_finite("planner.dubins_radius_factor", self.dubins_radius_factor)
         if self.dubins_radius_factor < 1.0:
@@ -232,27 +267,47 @@ class ImprovedConfig:
             )
         require_int("planner.max_postprocess_attempts", self.max_postprocess_attempts)
 
-    def stage_budgets(self, max_iterations: int) -> StageBudgets:
+    def stage_budgets(self, max_iterations: int, reverse: bool = False) -> StageBudgets:
         """The RRT-Connect stages' counted budgets for a query of ``max_iterations``.
 
         With ``escalation`` on, ``rrt_share`` of the iterations (rounded up),
-        ``escalation_fallback_joints`` joints and every tree path; off, every
-        budget in full.
+        ``escalation_fallback_joints`` joints and every tree path, or
+        ``reverse_postprocess_attempts`` of them when the query may reverse; off,
+        every budget in full.
 
         Examples
         --------
         >>> ImprovedConfig().stage_budgets(20_000)
         StageBudgets(iterations=10000, attempts=6, candidates=7)
-        >>> ImprovedConfig(escalation=False).stage_budgets(20_000)
+        >>> ImprovedConfig().stage_budgets(20_000, reverse=True)
+        StageBudgets(iterations=10000, attempts=1, candidates=7)
+        >>> ImprovedConfig(escalation=False).stage_budgets(20_000, reverse=True)
         StageBudgets(iterations=20000, attempts=6, candidates=64)
         """
         if not self.escalation:
             return StageBudgets(max_iterations, self.max_postprocess_attempts,
                                 MAX_FALLBACK_CANDIDATES)  # fmt: skip
+        attempts = self.max_postprocess_attempts
+        if reverse:
+            attempts = min(attempts, self.reverse_postprocess_attempts)
         return StageBudgets(
             iterations=min(max_iterations, math.ceil(self.rrt_share * max_iterations)),
-            attempts=self.max_postprocess_attempts,
+            attempts=attempts,
             candidates=min(self.escalation_fallback_joints, MAX_FALLBACK_CANDIDATES),
+        )
+
+    def escalates_first(self, reverse: bool) -> bool:
+        """Whether a query (reversing or not) runs the escalation before the Dubins fallback.
+
+        Examples
+        --------
+        >>> ImprovedConfig().escalates_first(True), ImprovedConfig().escalates_first(False)
+        (True, False)
+        >>> ImprovedConfig(escalation_first="never").escalates_first(True)
+        False
+        """
+        return self.escalation_first == "always" or (
+            self.escalation_first == "reverse" and bool(reverse)
         )
 
     def enabled(self, component: str) -> bool:

@@ -127,14 +127,15 @@ def dubins_fallback(
     sample_spacing: float = 0.25,
     check_spacing: float = 0.1,
     max_candidates: int = MAX_FALLBACK_CANDIDATES,
+    direct: bool = True,
 ) -> tuple[Path, str] | None:
     """A drivable path that ends in a Dubins path, when the tree paths alone fail.
 
-    First the shortest Dubins path from ``start`` to ``goal`` that the exact body
-    test clears (with clothoid ``smoothing``: the shortest clear word rounded by
-    clothoid turns, see the module docstring). Then, for each tree path in
-    ``raw_paths`` and each of its nodes from the last but one backwards, a
-    *tail*: the node, with the heading of the tree edge into it, is joined to
+    First (unless ``direct`` is false) the shortest Dubins path from ``start`` to
+    ``goal`` that the exact body test clears (with clothoid ``smoothing``: the
+    shortest clear word rounded by clothoid turns, see the module docstring).
+    Then, for each tree path in ``raw_paths`` and each of its nodes from the last
+    but one backwards, a *tail*: the node, with the heading of the tree edge into it, is joined to
     ``goal`` by such a clear path, and the tree path up to the node is made
     drivable by :func:`make_drivable` with that pose as its goal; the two meet at
     the node with the same position and heading (and ``kappa = 0`` with clothoids).
@@ -163,7 +164,11 @@ def dubins_fallback(
         Spacing of the returned samples and of the poses tested.
     max_candidates : int
         Most tree nodes tried as tail joints, and again as lead joints (the
-        counted budget that decides; :data:`MAX_FALLBACK_CANDIDATES`).
+        counted budget that decides; :data:`MAX_FALLBACK_CANDIDATES`); 0: the
+        direct path only.
+    direct : bool
+        Whether to try the direct Dubins path first (``False``: tails and leads
+        only, after a caller has tried it).
 
     Returns
     -------
@@ -177,9 +182,9 @@ def dubins_fallback(
             checker, a, b, radius, clearance, smoothing, sample_spacing, check_spacing
         )
 
-    direct = free_end(start, goal)
-    if direct is not None:
-        return Path(direct[0], direct[1]), direct[2]
+    whole = free_end(start, goal) if direct else None
+    if whole is not None:
+        return Path(whole[0], whole[1]), whole[2]
     if smoothing is None:
         return None
     tried = 0

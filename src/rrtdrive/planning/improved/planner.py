@@ -7,7 +7,9 @@ up to ``max_postprocess_attempts`` tree paths, the Dubins fallback, the
 Hybrid A* escalation and the failure. With the escalation on, the RRT-Connect
 stages run on ``rrt_share`` of the growth iterations and
 ``escalation_fallback_joints`` fallback joints (:meth:`ImprovedConfig.stage_budgets`)
-and the escalation on the iterations left.
+and the escalation on the iterations left. With reverse allowed
+(:meth:`ImprovedConfig.escalates_first`): ``reverse_postprocess_attempts`` tree
+paths, the direct Dubins path, the escalation, then the fallback's tails and leads.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ import numpy as np
 
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register_planner
-from rrtdrive.planning.hybrid.escalation import escalate
+from rrtdrive.planning.hybrid.escalation import ESCALATES_FROM, escalate
 from rrtdrive.planning.improved.config import ImprovedConfig, StageBudgets
 from rrtdrive.planning.improved.expansion import (
     default_expansion_lmin,
@@ -196,6 +198,7 @@ class _Query:
         self.last_message = ""
         self.last_raw: np.ndarray | None = None
         self.failed_raws: list[np.ndarray] = []
+        self.fallback_tried = ""  # "direct": the direct Dubins path alone; "all"
         self.iterations = 0
         self.limits: StageBudgets  # the stages' counted budgets, set per query by run()
         self.trees: tuple[Tree, ...] = (
@@ -214,7 +217,7 @@ class _Query:
     def run(self, rng: np.random.Generator, budget: Budget, watch: Stopwatch) -> PlanResult:
         """The steps in order; the first that solves the query ends it."""
         self.watch = watch
-        self.limits = limits = self.cfg.stage_budgets(budget.max_iterations)
+        self.limits = limits = self.cfg.stage_budgets(budget.max_iterations, self.problem.reverse)
         self.stats["rrt_iterations"] = float(limits.iterations)
         out = self.direct_connection()
         if out is not None:
@@ -232,7 +235,22 @@ class _Query:
         self.stats["growth_time_s"] = self.watch.elapsed() - self.stats["postprocess_time_s"]
         # The safety cap cut the growth short: a timeout (no fallback, whose answer
         # would depend on how far the growth got on this machine).
-        if self.cfg.dubins_fallback and not self.watch.capped:
+        fallback = self.cfg.dubins_fallback and not self.watch.capped
+        if self.cfg.escalation and self.cfg.escalates_first(self.problem.reverse):
+            # With reverse: the direct Dubins path (cheap, forward, no cusp), then the
+            # Hybrid A* search (Reeds-Shepp shots), which answers sooner than the
+            # fallback's tails and leads (~70 ms a joint); those only after it.
+            if fallback:
+                out = self.fallback(joints=False)
+                if out is not None:
+                    return out
+            out = self.escalation(budget)
+            if out.success or not fallback or out.status not in ESCALATES_FROM:
+                return out
+            if self.watch.capped:
+                return self.failure()
+            return self.fallback(escalated=out, direct=False) or self.fallback_failed(out)
+        if fallback:
             out = self.fallback()
             if out is not None:
                 return out
@@ -390,17 +408,25 @@ class _Query:
                 return out
         return None
 
-    def fallback(self) -> PlanResult | None:
-        """Beyond the paper: the Dubins fallback over the failed tree paths, newest first."""
+    def fallback(
+        self, escalated: PlanResult | None = None, *, direct: bool = True, joints: bool = True
+    ) -> PlanResult | None:
+        """Beyond the paper: the Dubins fallback over the failed tree paths, newest first.
+
+        ``direct``: try the direct Dubins path; ``joints``: the tails and leads.
+        ``escalated``: the failed Hybrid A* escalation it runs after (with reverse,
+        :meth:`ImprovedConfig.escalates_first`), whose counts and stats it keeps.
+        """
         stats, watch = self.stats, self.watch
+        self.fallback_tried = "all" if joints else "direct"
         t0 = time.perf_counter()
         found = dubins_fallback(
             self.checker, self.start, self.goal,
             self.cfg.dubins_radius_factor / self.problem.vehicle.kappa_max,
             self.smoothing.clearance, self.failed_raws[::-1], self.smoothing, watch.expired,
-            max_candidates=self.limits.candidates,
+            max_candidates=self.limits.candidates if joints else 0, direct=direct,
         )  # fmt: skip
-        stats["dubins_time_s"] = time.perf_counter() - t0
+        stats["dubins_time_s"] = stats.get("dubins_time_s", 0.0) + time.perf_counter() - t0
         if found is None:
             return None
         path, word = found
@@ -413,11 +439,30 @@ class _Query:
         else:
             note = "the trees did not meet within the budget"
         raw = self.last_raw if self.last_raw is not None else np.vstack([self.s_xy, self.g_xy])
+        iterations = self.iterations
+        if escalated is not None:
+            stats = {**escalated.stats, **stats}
+            iterations = escalated.iterations
+            expansions = int(stats.get("hybrid_expansions", 0.0))
+            gear = "with reverse" if self.problem.reverse else "forward only"
+            note += f"; Hybrid A* ({gear}) found none ({expansions} expansions)"
         message = f"solved by the Dubins fallback ({word}; {path.length:.1f} m); {note}"
         return solved(
-            NAME, watch, path, raw, self.trees, self.iterations, message, stats,
+            NAME, watch, path, raw, self.trees, iterations, message, stats,
             nodes=int(stats["nodes"]),
         )  # fmt: skip
+
+    def fallback_failed(self, escalated: PlanResult) -> PlanResult:
+        """The failed escalation's result, saying that the Dubins fallback after it failed too."""
+        if self.watch.capped:
+            return self.failure()
+        stats = {**escalated.stats, "dubins_time_s": self.stats["dubins_time_s"]}
+        return dataclasses.replace(
+            escalated,
+            message=f"{escalated.message}; no clear Dubins tail or lead either",
+            stats=stats,
+            planning_time_s=self.watch.elapsed(),
+        )
 
     def failure(self) -> PlanResult:
         """The honest failure: the safety cap, post-processing failed, or no path in the budget."""
@@ -425,9 +470,10 @@ class _Query:
         if watch.capped:
             return timeout_result(NAME, watch, iterations, self.trees, stats, self.last_raw)
         if stats["postprocess_attempts"] > 0 and self.last_message:
-            tail = ")"
-            if self.cfg.dubins_fallback:
-                tail = "; no clear Dubins path, tail or lead either)"
+            tail = {
+                "all": "; no clear Dubins path, tail or lead either)",
+                "direct": "; no clear Dubins path)",
+            }.get(self.fallback_tried, ")")
             return failure(
                 NAME,
                 PlanStatus.POSTPROCESS_FAILED,
