@@ -510,3 +510,41 @@ def test_vectorised_widening_is_the_reference(pieces: int, seed: int, rate: floa
     assert np.array_equal(
         _widening(lengths, angles, rate), _reference_widening(lengths, angles, rate)
     )
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    x=st.floats(0.0, 100.0),
+    y=st.floats(0.0, 100.0),
+    yaw=st.floats(-math.pi, math.pi),
+)
+def test_field_clearance_is_a_lower_bound_of_the_exact_clearance(x, y, yaw):
+    """The query's clearance cap skips the exact distances only where the field's bound decides."""
+    from rrtdrive.planning.hybrid.resolution import field_clearance
+
+    checker = _checker()
+    exact = checker.body_clearance((x, y, yaw))
+    assert field_clearance(checker, Pose(x, y, yaw)) <= exact + 1e-12
+
+
+def test_end_clearance_caps_as_the_exact_value_does():
+    """EndClearance.cap gives min(wanted, 0.999 exact) whichever way it decides."""
+    import dataclasses
+
+    from rrtdrive.planning.hybrid.resolution import EndClearance
+
+    base = builtin_map("parking_lot")
+    rng = np.random.default_rng(4)
+    checker = _checker()
+    done = 0
+    while done < 40:
+        pose = Pose(rng.uniform(0, 100), rng.uniform(0, 100), rng.uniform(-math.pi, math.pi))
+        if not checker.pose_free(pose.as_tuple()):
+            continue
+        problem = PlanningProblem.from_map(dataclasses.replace(base, start=pose))
+        exact = min(checker.body_clearance(pose.as_tuple()),
+                    checker.body_clearance(problem.goal.as_tuple()))  # fmt: skip
+        for wanted in (0.0, 0.05, 0.15, 0.25, 0.6, 2.0):
+            want = max(0.0, min(wanted, exact * 0.999)) if wanted > 0 else 0.0
+            assert EndClearance(problem).cap(wanted) == want
+        done += 1

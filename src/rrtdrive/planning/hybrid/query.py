@@ -22,7 +22,7 @@ from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.path import BuiltPath
 from rrtdrive.planning.hybrid.resolution import (
     PROOFS,
-    end_clearance,
+    EndClearance,
     query_clearance,
     search_at_resolution,
 )
@@ -195,7 +195,7 @@ def hybrid_query(
     HybridAnswer
     """
     left = budget.max_iterations
-    have = end_clearance(problem)
+    have = EndClearance(problem)
     # Each search tried: its settings, how it ended, and its share of the expansions
     # left when it was given one (None: all of them).
     tried: list[tuple[HybridConfig, SearchOutcome, int | None]] = []

@@ -19,10 +19,12 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from rrtdrive.collision import CollisionChecker
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.dubins import dubins_paths
 from rrtdrive.planning.hybrid.body import BodyTest
@@ -46,12 +48,14 @@ from rrtdrive.planning.hybrid.search import (
 from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
 from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, SmoothingConfig
 from rrtdrive.types import Pose, Tree
+from rrtdrive.vehicle import cover_discs
 
 __all__ = [
     "PROOFS",
     "Accept",
     "dubins_table",
-    "end_clearance",
+    "EndClearance",
+    "field_clearance",
     "free_cell_graph",
     "prims_reverse",
     "query_clearance",
@@ -110,24 +114,62 @@ def reeds_shepp_to(goal: Pose, radius: float) -> Callable[[float, float, float],
     return length
 
 
-def end_clearance(problem: PlanningProblem) -> float:
-    """The exact body clearance of the query's start and goal poses, the smaller."""
-    c = problem.checker
-    return min(
-        c.body_clearance(problem.start.as_tuple()), c.body_clearance(problem.goal.as_tuple())
-    )
+class EndClearance:
+    """The smaller body clearance of the query's start and goal poses, exact only when needed.
+
+    A clearance wanted of the search is capped at what the start and goal poses
+    themselves have (:meth:`cap`). Most have more than any search wants, which the
+    clearance field shows without the exact (shapely) distances: the three covering
+    discs' centres have ``radius + d`` of room by the field's lower bound, so the
+    body keeps ``d`` (:func:`field_clearance`). Only a cap that this bound cannot
+    decide computes the exact value, once.
+    """
+
+    def __init__(self, problem: PlanningProblem) -> None:
+        self._problem = problem
+        self.bound = min(
+            field_clearance(problem.checker, problem.start),
+            field_clearance(problem.checker, problem.goal),
+        )
+        self._exact: float | None = None
+
+    @property
+    def exact(self) -> float:
+        """The exact value: the smaller of the two poses' body clearances."""
+        if self._exact is None:
+            p = self._problem
+            ends = (p.start.as_tuple(), p.goal.as_tuple())
+            self._exact = min(p.checker.body_clearance(e) for e in ends)
+        return self._exact
+
+    def cap(self, wanted: float) -> float:
+        """``wanted`` metres, capped at 0.999 of this clearance (0 for ``wanted <= 0``)."""
+        if wanted <= 0.0:
+            return 0.0
+        if wanted <= self.bound * 0.999:  # then also <= exact * 0.999
+            return wanted
+        return max(0.0, min(wanted, self.exact * 0.999))
 
 
-def query_clearance(problem: PlanningProblem, wanted: float, have: float | None = None) -> float:
+def field_clearance(checker: CollisionChecker, pose: Pose) -> float:
+    """A lower bound of the body's clearance at ``pose`` from the clearance field.
+
+    The three covering discs (:func:`~rrtdrive.vehicle.cover_discs`) contain the
+    body; the field is a lower bound of the distance at their centres.
+    """
+    offsets, radius = cover_discs(checker.vehicle, 3)
+    c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+    return min(checker.clearance(pose.x + c * o, pose.y + s * o) for o in offsets) - radius
+
+
+def query_clearance(
+    problem: PlanningProblem, wanted: float, have: EndClearance | None = None
+) -> float:
     """``wanted``, capped at the exact body clearance the start and goal poses have.
 
-    ``have``: that clearance (:func:`end_clearance`) when the caller has it already.
+    ``have``: the query's :class:`EndClearance` when the caller has it already.
     """
-    if wanted <= 0.0:
-        return 0.0
-    if have is None:
-        have = end_clearance(problem)
-    return max(0.0, min(wanted, have * 0.999))
+    return (have if have is not None else EndClearance(problem)).cap(wanted)
 
 
 def reversed_in_time(pieces: Sequence[Piece]) -> list[Piece]:
@@ -175,11 +217,11 @@ def search_at_resolution(
     config: HybridConfig,
     reverse: bool,
     smoothing: SmoothingConfig | None,
-    have: float,
+    have: EndClearance,
 ) -> tuple[BuiltPath | None, SearchOutcome, tuple[Tree, ...]]:
     """The searches of :func:`hybrid_query` at one resolution, with ``budget`` expansions.
 
-    ``have``: the start's and goal's own body clearance (:func:`end_clearance`).
+    ``have``: the start's and goal's own body clearance (:class:`EndClearance`).
     """
     kappa_max = problem.vehicle.kappa_max
     clearance = query_clearance(problem, config.body_clearance, have)
