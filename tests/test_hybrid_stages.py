@@ -23,6 +23,7 @@ import pytest
 from rrtdrive.maps import builtin_map
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.planning.hybrid import HybridConfig
+from rrtdrive.sim.tasks import make_scenario
 from rrtdrive.types import Budget, InputError, PlanStatus
 from rrtdrive.verify import verify_path
 
@@ -186,3 +187,47 @@ def test_default_planner_solves_the_pinned_start_forward() -> None:
     assert res.stats["hybrid_tight_search"] == 1.0
     assert np.all(res.path.samples[:, 4] == 1)
     assert verify_path(m, res.path).ok
+
+
+def test_a_finer_grid_met_during_the_search_is_set_up_not_planning(monkeypatch) -> None:
+    """The first finer search on a map builds its grid inside a Stopwatch.setup block."""
+    import time as _time
+
+    from rrtdrive.planning.hybrid import resolution
+
+    built = resolution.free_cell_graph
+    slept = []
+
+    def slow_graph(problem, res):
+        if res < 0.5 and not slept:  # the refined grid, the first time: pretend it is big
+            slept.append(res)
+            _time.sleep(0.3)
+        return built(problem, res)
+
+    monkeypatch.setattr(resolution, "free_cell_graph", slow_graph)
+    task = make_scenario("parallel-parking", 5)
+    problem = PlanningProblem.from_map(task.map, reverse=True)
+    res = make_planner("hybrid-a-star", heuristic_weight=1.5).solve(
+        problem, np.random.default_rng(0), Budget(max_time_s=300)
+    )
+    assert res.success and res.stats["refinements"] == 1.0 and slept
+    assert res.setup_time_s >= 0.3
+
+
+def test_setup_blocks_leave_planning_time_and_go_to_setup_time() -> None:
+    import time as _time
+
+    from rrtdrive.planning.base import failure
+    from rrtdrive.planning.result import run_query
+
+    def search(watch):
+        with watch.setup():
+            _time.sleep(0.2)
+        status = PlanStatus.TIMEOUT if watch.expired() else PlanStatus.NO_PATH_IN_BUDGET
+        return failure("demo", status, watch, "none")
+
+    problem = PlanningProblem.from_map(builtin_map("parking_lot"))
+    res = run_query("demo", problem, Budget(max_time_s=0.1), search)
+    assert res.setup_time_s >= 0.2
+    assert res.planning_time_s < 0.2
+    assert res.status is PlanStatus.NO_PATH_IN_BUDGET  # the set-up did not hit the 0.1 s cap

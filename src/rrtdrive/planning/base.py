@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Protocol, runtime_checkable
 
@@ -150,10 +151,38 @@ class Stopwatch:
         self.t0 = self._clock()
         self._deadline = self.t0 + budget.max_time_s
         self.capped = False
+        #: Seconds spent in :meth:`setup` blocks (per-map set-up built on first use).
+        self.setup_s = 0.0
 
     def elapsed(self) -> float:
-        """Seconds since start."""
+        """Seconds since start, less the time spent in :meth:`setup` blocks."""
         return self._clock() - self.t0
+
+    @contextlib.contextmanager
+    def setup(self) -> Iterator[None]:
+        """A block of per-map set-up met during the search (built once, then cached).
+
+        Its time is not planning time: :meth:`elapsed` and the safety cap leave it
+        out, and :attr:`setup_s` collects it (the result reports it in
+        ``setup_time_s``).
+
+        Examples
+        --------
+        >>> ticks = iter([0.0, 1.0, 4.0, 5.0])
+        >>> watch = Stopwatch(Budget(max_time_s=2.0), clock=lambda: next(ticks))
+        >>> with watch.setup():
+        ...     pass
+        >>> watch.setup_s, watch.elapsed()
+        (3.0, 2.0)
+        """
+        t = self._clock()
+        try:
+            yield
+        finally:
+            spent = self._clock() - t
+            self.t0 += spent
+            self._deadline += spent
+            self.setup_s += spent
 
     def expired(self) -> bool:
         """True once the safety cap is reached (and from then on :attr:`capped` is True)."""

@@ -55,9 +55,11 @@ def run_query(
 
     The per-map set-up (the connectivity labels the precheck reads, the start's
     sampling cells and whatever ``prepare`` builds) runs before the stopwatch
-    starts: it is reported as ``setup_time_s`` and never counted in
-    ``planning_time_s`` or against the budget. It is cached on the map's checker,
-    so a second query on the same map finds it built.
+    starts; set-up built on first use during the search runs in the stopwatch's
+    :meth:`~rrtdrive.planning.base.Stopwatch.setup` blocks. Both are reported as
+    ``setup_time_s`` and never counted in ``planning_time_s`` or against the budget.
+    It is cached on the map's checker, so a second query on the same map finds it
+    built.
 
     Parameters
     ----------
@@ -98,6 +100,8 @@ def run_query(
         result = search(watch)
     # The grid's cell size, coarser than configured on a very big map.
     stats = {**result.stats, "grid_resolution_m": float(checker.resolution)}
+    # Set-up the search met on its way (a map's first finer grid) is set-up too.
+    setup += watch.setup_s
     if result.success:
         return dataclasses.replace(result, setup_time_s=setup, stats=stats)
     # A failure says which constraint makes the query hard, measured after the stopwatch.

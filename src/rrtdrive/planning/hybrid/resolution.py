@@ -234,7 +234,9 @@ def search_at_resolution(
     # at least the search's clearance (capped at theirs), never more is asked of them.
     recheck_clearance = max(0.0, clearance - 0.005)
     start, goal = problem.start, problem.goal
-    grid = free_cell_graph(problem, config.xy_resolution)
+    with watch.setup():  # built once per map (per process for the table and primitives)
+        grid = free_cell_graph(problem, config.xy_resolution)
+        table = None if reverse else dubins_table(radius, config)
     prims, *long_prims = primitive_sets(
         1.0 / radius, config.curvatures, config.step, config.check_spacing, 0 if reverse else 1,
         config.long_steps,
@@ -257,7 +259,7 @@ def search_at_resolution(
         rs = reeds_shepp_to(goal, radius) if config.reeds_shepp_heuristic else None
         heuristic = Heuristic(to_goal, None, goal, rs)
     else:
-        table = dubins_table(radius, config)
+        assert table is not None
         heuristic = Heuristic(to_goal, table.to(goal), goal, table.scalar_to(goal))
     back_h = Heuristic(HolonomicField.towards(grid, start), None, start)
 
