@@ -123,6 +123,7 @@ class _Stage:
     share: float = 1.0
 
 
+@functools.lru_cache(maxsize=16)  # each stage's config validated once, not per query
 def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
     """The searches that may follow the first one, in order (:func:`hybrid_query`).
 
