@@ -19,6 +19,7 @@ import shapely
 from scipy import ndimage
 
 from rrtdrive.collision.config import CheckerConfig
+from rrtdrive.collision.exact import RectangleTest
 from rrtdrive.collision.grid import GridCache, grid_resolution, grid_shape, rasterise
 from rrtdrive.geometry import densify
 from rrtdrive.maps import Map, Obstacle
@@ -127,9 +128,7 @@ class CollisionChecker:
         self._cap_inset = math.sqrt(self.edge_radius**2 - (vehicle.width / 2.0) ** 2)
         self._cap_back = vehicle.rear_overhang - self._cap_inset
         self._cap_front = vehicle.front_extent - self._cap_inset
-        back, front, half = -vehicle.rear_overhang, vehicle.front_extent, vehicle.width / 2.0
-        self._corner_lx = np.array([back, front, front, back], dtype=float)
-        self._corner_ly = np.array([-half, -half, half, half], dtype=float)
+        self._rectangles = RectangleTest(self.bounds, self._union, vehicle)
         self._disc_offsets, disc_radius = cover_discs(vehicle, 3)
         self._disc_offsets_list = [float(o) for o in self._disc_offsets]
         self.disc_radius = disc_radius + self.config.margin
@@ -448,17 +447,8 @@ class CollisionChecker:
         return float(min(to_bounds, self._union.distance(rect)))
 
     def _corners(self, poses: np.ndarray) -> np.ndarray:
-        """:func:`~rrtdrive.vehicle.footprint_corners` of poses ``(N, 3)``, the same floats.
-
-        The arithmetic of :func:`~rrtdrive.geometry.box_corners` without its
-        broadcasting (the exact test's hot spot).
-        """
-        lx, ly = self._corner_lx, self._corner_ly
-        c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
-        out = np.empty((len(poses), 4, 2))
-        out[..., 0] = poses[:, 0:1] + c * lx - s * ly
-        out[..., 1] = poses[:, 1:2] + s * lx + c * ly
-        return out
+        """:func:`~rrtdrive.vehicle.footprint_corners` of poses ``(N, 3)``, the same floats."""
+        return self._rectangles.corners(poses)
 
     def rectangles_free(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
         """The exact test alone, no screen: each body rectangle ``clearance`` clear.
@@ -470,26 +460,7 @@ class CollisionChecker:
         return self._exact(poses, clearance)
 
     def _exact(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
-        corners = self._corners(np.asarray(poses, dtype=float).reshape(-1, 3))
-        # Inside the bounds box shrunk by the clearance: both are convex and the box
-        # is axis-aligned, so that is all four corners inside, compared exactly.
-        xmin, ymin, xmax, ymax = self.bounds
-        if clearance > 0.0:
-            xmin, ymin, xmax, ymax = (
-                xmin + clearance, ymin + clearance, xmax - clearance, ymax - clearance
-            )
-        x, y = corners[..., 0], corners[..., 1]
-        inside = ((x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax)).all(axis=1)
-        if self._union.is_empty:
-            return inside
-        test = np.flatnonzero(inside)
-        if len(test):
-            rects = shapely.polygons(corners[test])
-            if clearance > 0.0:
-                inside[test] = ~shapely.dwithin(self._union, rects, clearance)
-            else:
-                inside[test] = ~shapely.intersects(self._union, rects)
-        return inside
+        return self._rectangles.free(poses, clearance)
 
     def path_free(
         self, samples: np.ndarray, spacing: float = 0.1, clearance: float = 0.0
