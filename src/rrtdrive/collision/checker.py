@@ -221,6 +221,38 @@ class CollisionChecker:
         pts = np.stack([np.asarray(x, dtype=float), np.asarray(y, dtype=float)], axis=-1)
         return self.clearances(pts.reshape(-1, 2)).reshape(np.shape(x))
 
+    def axis_clearances(self, rows: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+        """:meth:`clearances` at points on the heading axis of poses, ``(K, N)``.
+
+        ``rows`` ``(3, N)`` are the poses' x, y and yaw; point ``k`` of a pose is
+        ``(cos(yaw) offsets[k] + x, sin(yaw) offsets[k] + y)``, evaluated in that
+        order (the points of the disc screens: the same floats, the same values).
+        The screens' look-up: all points in a dozen array operations.
+        """
+        n = rows.shape[1]
+        if not n:
+            return np.zeros((len(offsets), 0))
+        trig = np.empty((2, n))
+        np.cos(rows[2], out=trig[0])
+        np.sin(rows[2], out=trig[1])
+        g = offsets[:, None, None] * trig  # (K, 2, N)
+        g += rows[:2]
+        g -= self._origin[:, None]
+        g *= self._inv_h
+        nx, ny = self._shape
+        with np.errstate(invalid="ignore"):
+            idx = g.astype(np.int64)
+        flat = idx[:, 0] * ny
+        flat += idx[:, 1]
+        # For g >= 0, int(g) < n exactly when g < n: the float bounds decide alone.
+        hi = np.maximum.reduce(g, axis=(0, 2)).tolist()
+        if np.minimum.reduce(g, axis=None) >= 0.0 and hi[0] < nx and hi[1] < ny:
+            return self._clearance_flat.take(flat)
+        ok = (g >= 0.0).all(axis=1) & (idx[:, 0] < nx) & (idx[:, 1] < ny)
+        out = np.full(flat.shape, -np.inf)
+        out[ok] = self._clearance_flat[flat[ok]]
+        return out
+
     # ------------------------------------------------------------------ fast tests
 
     def segment_clear(self, a: Sequence[float], b: Sequence[float], radius: float) -> bool:
@@ -401,11 +433,7 @@ class CollisionChecker:
         if not len(p):
             return free
         offsets, radius = self._screens[1]
-        # _discs_clear's points, as (x + c * offset, y + s * offset): the same floats.
-        x, y = p[:, 0:1], p[:, 1:2]
-        c, s = np.cos(p[:, 2])[:, None], np.sin(p[:, 2])[:, None]
-        val = self.clearances_xy(c * offsets + x, s * offsets + y)
-        sure = (val >= radius + clearance).all(axis=1)
+        sure = self._discs_clear(p, offsets, radius + clearance)
         free[sure] = True
         unsure = np.flatnonzero(~sure)
         if len(unsure):
@@ -419,12 +447,7 @@ class CollisionChecker:
         r + clearance``, True proves the body keeps ``clearance`` (the field is a
         lower bound of the true distance).
         """
-        c, s = np.cos(p[:, 2]), np.sin(p[:, 2])
-        pts = np.empty((len(p), len(offsets), 2))
-        np.multiply(c[:, None], offsets[None, :], out=pts[..., 0])
-        np.multiply(s[:, None], offsets[None, :], out=pts[..., 1])
-        pts += p[:, None, :2]
-        return (self.clearances(pts.reshape(-1, 2)) >= need).reshape(len(p), -1).all(axis=1)
+        return (self.axis_clearances(p.T, offsets) >= need).all(axis=0)
 
     def pose_free(self, pose: Sequence[float]) -> bool:
         """Exact body test for one pose (scalar disc screen first, shapely when unsure)."""

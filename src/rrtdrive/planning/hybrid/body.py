@@ -67,6 +67,11 @@ class BodyTest:
         self.occupied_below = -checker.grid_error + 0.5 * h
         # Three covering discs clear by the clearance: the body is (the field is a lower bound).
         self.disc_need = radius + self.clearance
+        # The checker's second screen (six discs; the exact test's answer where they clear),
+        # looked up with the others in one pass by runs_free.
+        six, six_radius = cover_discs(v, 6)
+        self.six_need = six_radius + self.clearance
+        self._run_offsets = np.concatenate([self.offsets, six])
 
     def screen(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(hit, clear, room)`` for poses ``(N, 3)``.
@@ -76,13 +81,11 @@ class BodyTest:
         needed (the most negative poses are the likeliest to collide).
         """
         p = np.asarray(poses, dtype=float).reshape(-1, 3)
-        off = self.offsets
-        c, s = np.cos(p[:, 2])[:, None], np.sin(p[:, 2])[:, None]
-        # The points x + c * offset (the checker's order of operations: the same floats).
-        val = self.checker.clearances_xy(c * off + p[:, 0:1], s * off + p[:, 1:2])
+        val = self.checker.axis_clearances(p.T, self.offsets)
         k = self._n_axis
-        hit = (val[:, :k] < self.occupied_below).any(axis=1)
-        room = val[:, k:].min(axis=1) - self.disc_need
+        # (No NaN in val: a point outside the grid reads -inf.) min < b: some value is.
+        hit = np.minimum.reduce(val[:k], axis=0) < self.occupied_below
+        room = np.minimum.reduce(val[k:], axis=0) - self.disc_need
         return hit, room >= 0.0, room
 
     def _exact(self, poses: np.ndarray) -> np.ndarray:
@@ -149,10 +152,8 @@ class BodyTest:
         if not self._n_axis or not len(poses):
             return out
         p = np.asarray(poses, dtype=float)
-        off = self.offsets[: self._n_axis]
-        c, s = np.cos(p[:, 2])[:, None], np.sin(p[:, 2])[:, None]
-        val = self.checker.clearances_xy(p[:, 0:1] + c * off, p[:, 1:2] + s * off)
-        hit = (val < self.occupied_below).any(axis=1)
+        val = self.checker.axis_clearances(p.T, self.offsets[: self._n_axis])
+        hit = np.minimum.reduce(val, axis=0) < self.occupied_below
         nonempty = sizes > 0
         starts = (np.cumsum(sizes) - sizes)[nonempty]
         out[nonempty] = np.logical_or.reduceat(hit, starts)
@@ -191,28 +192,44 @@ class BodyTest:
         return len(rest) <= first or bool(self._exact(p[rest[first:]]).all())
 
     def runs_free(self, poses: np.ndarray) -> np.ndarray:
-        """Boolean ``(P,)`` for runs of poses ``(P, n, 3)``: True where the whole run is free.
-
-        The screen rejects runs first; the exact test then sees the unsure pose
-        with the least room of each run still possible, and last the other
-        unsure poses of the runs that passed it.
-        """
+        """Boolean ``(P,)`` for runs of poses ``(P, n, 3)``: True where the whole run is free."""
         P, n = poses.shape[0], poses.shape[1]
-        flat = poses.reshape(-1, 3)
-        hit, clear, room = self.screen(flat)
-        alive = ~hit.reshape(P, n).any(axis=1)
-        unsure = (~clear).reshape(P, n) & alive[:, None]
-        runs = np.flatnonzero(unsure.any(axis=1))
-        if not len(runs):
-            return alive
-        worst = runs * n + np.where(unsure[runs], room.reshape(P, n)[runs], np.inf).argmin(axis=1)
-        alive[runs[~self._exact(flat[worst])]] = False
+        return self.rows_free(poses.reshape(P * n, 3).T, P)
+
+    def rows_free(self, rows: np.ndarray, runs: int) -> np.ndarray:
+        """:meth:`runs_free` of ``runs`` runs given as rows ``(3, N)``: x, y, yaw, run after run.
+
+        One look-up for the screen's points and the checker's six discs; a run with a
+        sure hit is out. The exact rectangles then see the unsure pose with the least
+        room of each run still possible, and last the other unsure poses of the runs
+        that passed it (a pose the six discs clear is free: the checker's answer).
+        """
+        P = runs
+        n = rows.shape[1] // P
+        val = self.checker.axis_clearances(rows, self._run_offsets)
+        k, k3 = self._n_axis, self._n_axis + 3
+        # (No NaN in val.) alive: no axis point of the run below occupied_below.
+        alive = (
+            np.minimum.reduce(val[:k].reshape(k, P, n), axis=(0, 2)) >= self.occupied_below
+        )
+        room = np.minimum.reduce(val[k:k3], axis=0)
+        room -= self.disc_need
+        room = room.reshape(P, n)
+        unsure = room < 0.0
         unsure &= alive[:, None]
-        unsure.ravel()[worst] = False
-        idx = np.flatnonzero(unsure.ravel())
+        unsure &= (np.minimum.reduce(val[k3:], axis=0) < self.six_need).reshape(P, n)
+        todo = unsure.any(axis=1).nonzero()[0]
+        if not len(todo):
+            return alive
+        poses = rows.T
+        worst = np.where(unsure, room, np.inf)[todo].argmin(axis=1)
+        worst += todo * n
+        rectangles_free, clearance = self.checker.rectangles_free, self.clearance
+        alive[todo[~rectangles_free(poses[worst], clearance)]] = False
+        unsure &= alive[:, None]
+        flat = unsure.ravel()
+        flat[worst] = False
+        idx = flat.nonzero()[0]
         if len(idx):
-            ok = self._exact(flat[idx])
-            bad = np.zeros(P * n, dtype=bool)
-            bad[idx[~ok]] = True
-            alive &= ~bad.reshape(P, n).any(axis=1)
+            alive[idx[~rectangles_free(poses[idx], clearance)] // n] = False
         return alive
