@@ -7,7 +7,7 @@ body poses (at most ``check_spacing`` apart) pass the checker's body test with
 the query's clearance (three covering discs first, then six, then the exact
 rectangle where the discs cannot decide). ``f = g + w h`` with the
 :class:`~rrtdrive.planning.hybrid.heuristic.Heuristic`. From expanded nodes,
-every few expansions (each one near the goal), an *analytic expansion* tries
+every few expansions (each one near the goal), an *analytic expansion* (:mod:`.shots`) tries
 the obstacle-free shortest paths to the exact goal pose and keeps the first whose
 body is clear: Dubins forward, Reeds-Shepp with reverse.
 
@@ -26,12 +26,20 @@ from typing import TypeVar
 
 import numpy as np
 
-from rrtdrive.planning.dubins import dubins_paths
 from rrtdrive.planning.hybrid.body import BodyTest
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.heuristic import Heuristic
 from rrtdrive.planning.hybrid.primitives import PrimitiveSet
-from rrtdrive.planning.reeds_shepp import reeds_shepp_paths
+
+# The analytic expansions live in .shots; re-exported here, where they always were.
+from rrtdrive.planning.hybrid.shots import (
+    Piece,
+    Shots,
+    analytic_shots,
+    walk_hits,
+    walk_poses,
+    walks_hit,
+)
 from rrtdrive.types import Pose
 
 __all__ = [
@@ -46,17 +54,6 @@ __all__ = [
 ]
 
 T = TypeVar("T")
-
-
-@dataclass(frozen=True, eq=False)
-class Piece:
-    """A stretch of path in one gear: rows ``[x, y, yaw, kappa]``, both end poses included.
-
-    ``kappa`` is the steering curvature; ``gear`` +1 forward, -1 reverse.
-    """
-
-    gear: int
-    rows: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -90,149 +87,6 @@ class SearchOutcome:
             sum(o.shots for o in outcomes),
             sum(o.connections for o in outcomes),
         )
-
-
-#: ``shots(pose) -> candidates``: pieces from the pose to the exact goal, shortest first.
-Shots = Callable[[Pose], Sequence[list[Piece]]]
-
-
-_TURN = {"L": 1, "S": 0, "R": -1}
-
-
-def walk_poses(
-    start: Pose, words: Sequence[tuple[str, Sequence[float]]], radius: float, spacing: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Poses at most ``spacing`` apart along several words from one start (start excluded).
-
-    Each segment is cut into ``ceil(|length| / spacing)`` equal steps; its poses
-    are closed-form from the segment's start, the end pose of the segment before
-    as the same formula gives it, so every pose is computed with the same
-    arithmetic as in a walk one pose at a time. ``lengths`` are signed (negative
-    in reverse), as in Reeds-Shepp words; Dubins lengths are all positive.
-
-    Returns
-    -------
-    poses : numpy.ndarray
-        ``(M, 3)``: the poses of every word, in order.
-    sizes : numpy.ndarray
-        ``(W,)``: how many of them belong to each word.
-    """
-    # Per segment: its start pose (scalar, as the walk), the steps and the turn.
-    x0, y0, yaw0, c0s, s0s, turns, segs, counts = [], [], [], [], [], [], [], []
-    sizes = np.zeros(len(words), dtype=np.int64)
-    for w, (word, lengths) in enumerate(words):
-        x, y, yaw = start.x, start.y, start.yaw
-        for letter, seg in zip(word, lengths, strict=True):
-            turn = _TURN[letter]
-            n = max(1, math.ceil(abs(seg) / spacing))
-            c0, s0 = math.cos(yaw), math.sin(yaw)
-            x0.append(x)
-            y0.append(y)
-            yaw0.append(yaw)
-            c0s.append(c0)
-            s0s.append(s0)
-            turns.append(turn)
-            segs.append(seg)
-            counts.append(n)
-            sizes[w] += n
-            u = seg * n / n
-            if turn == 0:
-                x, y = x + u * c0, y + u * s0
-            else:
-                yaw = yaw + turn * u / radius
-                x = x + turn * radius * (math.sin(yaw) - s0)
-                y = y - turn * radius * (math.cos(yaw) - c0)
-    if not counts:
-        return np.zeros((0, 3)), sizes
-    n_seg = np.array(counts, dtype=np.int64)
-    rep = np.repeat(np.arange(len(counts)), n_seg)
-    # k = 1..n within each segment.
-    k = np.arange(1, len(rep) + 1) - np.repeat(np.cumsum(n_seg) - n_seg, n_seg)
-    u = np.array(segs)[rep] * k / n_seg[rep]
-    turn = np.array(turns, dtype=float)[rep]
-    px0, py0, pyaw0 = np.array(x0)[rep], np.array(y0)[rep], np.array(yaw0)[rep]
-    c0, s0 = np.array(c0s)[rep], np.array(s0s)[rep]
-    out = np.empty((len(rep), 3))
-    straight = turn == 0.0
-    pyaw = pyaw0 + turn * u / radius
-    tr = turn * radius
-    out[:, 0] = np.where(straight, px0 + u * c0, px0 + tr * (np.sin(pyaw) - s0))
-    out[:, 1] = np.where(straight, py0 + u * s0, py0 - tr * (np.cos(pyaw) - c0))
-    out[:, 2] = np.where(straight, pyaw0, pyaw)
-    return out, sizes
-
-
-def walk_hits(
-    start: Pose, word: str, lengths: Sequence[float], radius: float, spacing: float, body: BodyTest
-) -> bool:
-    """Whether a pose ``spacing`` apart along a word surely collides (:meth:`BodyTest.hit_at`).
-
-    ``lengths`` are signed (negative in reverse), as in Reeds-Shepp words; Dubins
-    lengths are all positive. All poses of the word are screened at once
-    (:func:`walk_poses`, :meth:`BodyTest.any_hits`).
-    """
-    return walks_hit(start, [(word, lengths)], radius, spacing, body)[0]
-
-
-def walks_hit(
-    start: Pose,
-    words: Sequence[tuple[str, Sequence[float]]],
-    radius: float,
-    spacing: float,
-    body: BodyTest,
-) -> list[bool]:
-    """:func:`walk_hits` for several ``(word, lengths)`` from one start, in one screen."""
-    if not words:
-        return []
-    poses, sizes = walk_poses(start, words, radius, spacing)
-    return body.any_hits(poses, sizes).tolist()
-
-
-def _gear_pieces(rows: np.ndarray) -> list[Piece]:
-    """Rows ``[x, y, yaw, kappa, gear]`` cut at the cusps (each piece keeps both end rows)."""
-    gear = rows[:, 4]
-    cuts = np.flatnonzero(gear[1:] != gear[:-1]) + 1
-    return [Piece(int(part[0, 4]), part[:, :4].copy()) for part in np.split(rows, cuts)]
-
-
-def analytic_shots(
-    goal: Pose,
-    radius: float,
-    reverse: bool,
-    spacing: float,
-    body: BodyTest | None = None,
-    max_candidates: int = 3,
-) -> Shots:
-    """The analytic expansions to ``goal``: Dubins paths forward, Reeds-Shepp with reverse.
-
-    Only the ``max_candidates`` shortest words are tried; with ``body``, those
-    whose poses half a metre apart surely collide are dropped before they are
-    sampled finely. A Reeds-Shepp word is cut into one piece per gear.
-    """
-    coarse = max(spacing, 0.5)
-
-    def shots(pose: Pose) -> list[list[Piece]]:
-        out: list[list[Piece]] = []
-        # The longer words loop through the lot: they rarely clear where the short ones fail.
-        if reverse:
-            cands = reeds_shepp_paths(pose, goal, radius, limit=max_candidates)[:max_candidates]
-        else:
-            cands = dubins_paths(pose, goal, radius)[:max_candidates]
-        hit = [False] * len(cands)
-        if body is not None:
-            hit = walks_hit(pose, [(c.word, c.lengths) for c in cands], radius, coarse, body)
-        for cand, dropped in zip(cands, hit, strict=True):
-            if dropped:
-                continue
-            if reverse:
-                rows = cand.sample(spacing)
-                rows[0, :3] = pose.as_tuple()
-                out.append(_gear_pieces(rows))
-            else:
-                out.append([Piece(1, cand.sample(spacing))])
-        return out
-
-    return shots
 
 
 @dataclass(frozen=True)
