@@ -146,3 +146,76 @@ def test_runs_free_near_parked_cars_is_the_reference() -> None:
         phases += bool((~hit & ~clear).any())
     assert seen == {True, False}
     assert phases > 100
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.floats(-50.0, 150.0),
+    st.floats(-50.0, 150.0),
+    st.floats(-10.0, 10.0),
+    st.sampled_from([1.0, 2.0, 4.0]),
+    st.lists(st.booleans(), min_size=10, max_size=10),
+)
+def test_rows_from_is_poses_from_bit_for_bit(x, y, yaw, factor, keep) -> None:
+    prims = PrimitiveSet.build(1 / RADIUS, 5, 1.0, 0.1, reverse=True)
+    if factor != 1.0:
+        prims = prims.scaled(factor)
+    want = prims.poses_from(x, y, yaw)
+    assert np.array_equal(prims.rows_from(x, y, yaw), want.reshape(-1, 3).T)
+    sub = np.flatnonzero(keep).tolist()
+    if sub:
+        assert np.array_equal(prims.rows_from(x, y, yaw, sub), want[sub].reshape(-1, 3).T)
+    # The loop's end poses (plain floats): poses_from's last rows.
+    c, s = math.cos(yaw), math.sin(yaw)
+    ends = [[x + c * lx - s * ly, y + s * lx + c * ly, yaw + dy] for lx, ly, dy in
+            prims.local[:, -1, :].tolist()]  # fmt: skip
+    assert ends == want[:, -1, :].tolist()
+
+
+#: Searches of the parking lot with reverse (gear 0) and forward (1): start, gear,
+#: expansions, shots on, and what they gave at 44c06ab (counts; the node arrays hashed).
+_SEARCHES = [
+    ((5.0, 6.0, 0.0), 0, 300, False, (300, 1886, 56, 0), "f9ade0e1b1e10f3e"),
+    ((89.47158621961735, 42.27169069454373, 0.5623580414487663), 0, 400, True,
+     (162, 883, 29, 16), "0a7d57ef7de6aff1"),
+    ((10.973466400669674, 20.32415440873966, -1.3583838921738032), 0, 600, True,
+     (600, 3464, 63, 0), "0f179bbf69c763f9"),
+    ((32.97317164990922, 78.84287034284043, -1.2365633569717065), 1, 400, True,
+     (43, 56, 4, 0), "9bc164ae0ec85c7f"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("start", "gear", "budget", "shots", "counts", "digest"), _SEARCHES)
+def test_search_loop_builds_the_recorded_tree(start, gear, budget, shots, counts, digest) -> None:
+    """The whole loop (keys, costs, long arcs, body tests, shots): every node as at 44c06ab.
+
+    Random starts between the parked cars of ``experiments/random_goals.py`` (seed 1:
+    starts 17, 25 and 3), where most expansions test their successors' bodies.
+    """
+    import hashlib
+
+    from rrtdrive.planning.base import PlanningProblem
+    from rrtdrive.planning.hybrid.config import HybridConfig
+    from rrtdrive.planning.hybrid.heuristic import Heuristic, HolonomicField
+    from rrtdrive.planning.hybrid.primitives import primitive_sets
+    from rrtdrive.planning.hybrid.resolution import free_cell_graph
+    from rrtdrive.planning.hybrid.search import HybridSearch, analytic_shots
+    from rrtdrive.types import Pose
+
+    m = builtin_map("parking_lot")
+    cfg = HybridConfig()
+    problem = PlanningProblem.from_map(m, reverse=gear == 0)
+    grid = free_cell_graph(problem, cfg.xy_resolution)
+    h = Heuristic(HolonomicField.towards(grid, m.goal), None, m.goal)
+    prims, *long = primitive_sets(
+        1 / RADIUS, cfg.curvatures, cfg.step, cfg.check_spacing, gear, cfg.long_steps
+    )
+    body = BodyTest(problem.checker, 0.15)
+    shoot = analytic_shots(m.goal, RADIUS, gear == 0, cfg.check_spacing, body, 3 if shots else 0)
+    search = HybridSearch(body, Pose(*start), m.goal, h, prims, shoot, cfg, 1 / RADIUS,
+                          m.bounds, long)  # fmt: skip
+    _, out = search.run(lambda pieces: None, budget, lambda: False)
+    assert (out.expansions, out.nodes, out.shots, out.connections) == counts
+    nodes = np.array([search.x, search.y, search.yaw, search.g, search.gear, search.kappa,
+                      search.parent, search.step])  # fmt: skip
+    assert hashlib.sha256(nodes.tobytes()).hexdigest()[:16] == digest

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import heapq
 import math
+import operator
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TypeVar
@@ -170,6 +171,10 @@ class HybridSearch:
                       p.local[:, -1, :].tolist())
             for p in sorted((*long_primitives, primitives), key=lambda p: -p.length)
         ]  # fmt: skip
+        # The step arcs when the node's discs have room for none: their successors tested.
+        self._tested = _OpenArcs(
+            primitives.length, [], self._base_cost.tolist(), primitives.local[:, -1, :].tolist()
+        )
 
     def _edge_costs(self, p: PrimitiveSet) -> np.ndarray:
         """Each primitive's cost before gear and steering changes."""
@@ -308,13 +313,17 @@ class HybridSearch:
             self._shot_from: set[tuple[int, int, int]] = set()
         heap, closed, best, hval = self._heap, self._closed, self._best, self._hval
         since_shot = self._since_shot
-        base_cost = self._base_cost.tolist()
         gears = prims.gears.tolist()
         kappas = prims.kappas.tolist()
-        h_at = self.heuristic.scalar()
+        # The key's gear bit of each primitive, and each one's steering-change cost after
+        # a node of each curvature (the same expression, evaluated once).
+        reverse_bit = [int(g < 0) for g in gears]
         kmax = self.kappa_max
+        scc = cfg.steer_change_cost
+        steer_after = {k: [scc * abs(kj - k) / kmax for kj in kappas] for k in kappas}
+        h_at = self.heuristic.scalar()
         shot_interval, shot_distance = cfg.shot_interval, cfg.shot_distance
-        gear_change_cost, steer_change_cost = cfg.gear_change_cost, cfg.steer_change_cost
+        gear_change_cost = cfg.gear_change_cost
         # The node lists and key(), bound to locals (the same arithmetic: the hot loop).
         xs, ys, yaws, gs, gear_of, kappa_of, parent = (
             self.x, self.y, self.yaw, self.g, self.gear, self.kappa, self.parent
@@ -322,17 +331,23 @@ class HybridSearch:
         res, xmin, ymin, ny, nyaw = cfg.xy_resolution, self.xmin, self.ymin, self.ny, self.nyaw
         two_pi = 2.0 * math.pi
         inf = math.inf
-        disc_room, open_sets, steps = body.disc_room, self._open, self.step
+        disc_room, open_sets, steps, tested = body.disc_room, self._open, self.step, self._tested
+        rows_free, rows_from = body.rows_free, prims.rows_from
         shot_from, shot_cell, shot_bin = self._shot_from, cfg.shot_cell, cfg.shot_bin
-        heappop, heappush = heapq.heappop, heapq.heappush
+        heappop, heappush, ge = heapq.heappop, heapq.heappush, operator.ge
+        expansions, max_solutions = self.expansions, cfg.max_solutions
         reason = "exhausted"
         while heap:
             _f, i = heappop(heap)
             xi, yi, yawi, gi, geari = xs[i], ys[i], yaws[i], gs[i], gear_of[i]
-            k = self.key(xi, yi, yawi, geari if geari else 1)
+            # self.key(xi, yi, yawi, geari or 1), inlined
+            iyaw = int(((yawi % two_pi) / two_pi) * nyaw) % nyaw
+            k = (((int((xi - xmin) // res) * ny + int((yi - ymin) // res)) * nyaw + iyaw) << 1) | (
+                geari < 0
+            )
             if k in closed:
                 continue
-            if self.expansions >= max_expansions:
+            if expansions >= max_expansions:
                 heappush(heap, (_f, i))  # not expanded: a later call takes it
                 reason = "expansions"
                 break
@@ -340,7 +355,7 @@ class HybridSearch:
                 reason = "time"
                 break
             closed.add(k)
-            self.expansions += 1
+            expansions += 1
             since_shot += 1
             interval = min(shot_interval, max(1, int(hval[i] / shot_distance)))
             if since_shot >= interval:
@@ -362,39 +377,36 @@ class HybridSearch:
                     self.connections += 1
                     out = accept(self.chain(i) + pieces)
                     if out is not None:
+                        self.expansions, self._since_shot = expansions, since_shot
                         return out, self._outcome("solved")
-                    if self.connections >= cfg.max_solutions:
+                    if self.connections >= max_solutions:
+                        self.expansions, self._since_shot = expansions, since_shot
                         return None, self._outcome("rejected")
             ki = kappa_of[i]
-            steered = ki == ki  # not the root's NaN
+            # The steering-change costs after this curvature (none after the root's NaN).
+            steer = steer_after.get(ki)
+            if steer is None and ki == ki:
+                steer = steer_after[ki] = [scc * abs(kj - ki) / kmax for kj in kappas]
             # The longest primitives whose sweep the node's discs have room for need no
             # body test (free_within); with room for none, the step arcs and the test.
             room = disc_room(xi, yi, yawi)
             for arcs in open_sets:
-                if all(r >= q for r, q in zip(room, arcs.reach, strict=True)):
+                if all(map(ge, room, arcs.reach)):
                     break
             else:
-                arcs = None
-            if arcs is not None:
-                step_len, costs, poses = arcs.length, arcs.costs, None
-                c0, s0 = math.cos(yawi), math.sin(yawi)
-                ends = [
-                    [xi + c0 * lx - s0 * ly, yi + s0 * lx + c0 * ly, yawi + dy]
-                    for lx, ly, dy in arcs.ends
-                ]
-            else:
-                step_len, costs = prims.length, base_cost
-                poses = prims.poses_from(xi, yi, yawi)
-                ends = poses[:, -1, :].tolist()
+                arcs = tested
+            c0, s0 = math.cos(yawi), math.sin(yawi)
+            costs = arcs.costs
             # Closed bins, unreachable cells and dearer duplicates go before the body test.
-            cand: list[tuple[int, int, float, float]] = []
-            for j, (ex, ey, eyaw) in enumerate(ends):
-                gear = gears[j]
-                # self.key(ex, ey, eyaw, gear), inlined
+            # The end poses: PrimitiveSet.poses_from's last rows, the same arithmetic.
+            cand: list[tuple[int, int, float, float, float, float, float]] = []
+            for j, (lx, ly, dy) in enumerate(arcs.ends):
+                ex, ey, eyaw = xi + c0 * lx - s0 * ly, yi + s0 * lx + c0 * ly, yawi + dy
+                # self.key(ex, ey, eyaw, gears[j]), inlined
                 iyaw = int(((eyaw % two_pi) / two_pi) * nyaw) % nyaw
                 kj = (
                     (((int((ex - xmin) // res) * ny + int((ey - ymin) // res)) * nyaw + iyaw) << 1)
-                    | (gear < 0)
+                    | reverse_bit[j]
                 )  # fmt: skip
                 if kj in closed:
                     continue
@@ -402,25 +414,24 @@ class HybridSearch:
                 if hj == inf:
                     continue
                 cost = gi + costs[j]
-                if geari and gear != geari:
+                if geari and gears[j] != geari:
                     cost += gear_change_cost
-                if steered:
-                    cost += steer_change_cost * abs(kappas[j] - ki) / kmax
+                if steer is not None:
+                    cost += steer[j]
                 if cost >= best.get(kj, inf):
                     continue
-                cand.append((j, kj, cost, hj))
+                cand.append((j, kj, cost, hj, ex, ey, eyaw))
             if not cand:
                 continue
-            if poses is None:
-                free = [True] * len(cand)
-            elif len(cand) == len(ends):
-                free = body.runs_free(poses).tolist()
-            else:
-                free = body.runs_free(poses[[c[0] for c in cand]]).tolist()
-            for (j, kj, cost, hj), ok in zip(cand, free, strict=True):
-                if not ok:
-                    continue
-                ex, ey, eyaw = ends[j]
+            if arcs is tested:
+                if len(cand) == len(gears):
+                    free = rows_free(rows_from(xi, yi, yawi), len(cand)).tolist()
+                else:
+                    keep = [c[0] for c in cand]
+                    free = rows_free(rows_from(xi, yi, yawi, keep), len(cand)).tolist()
+                cand = [c for c, ok in zip(cand, free, strict=True) if ok]
+            step_len = arcs.length
+            for j, kj, cost, hj, ex, ey, eyaw in cand:
                 best[kj] = cost
                 n = len(xs)
                 xs.append(ex)
@@ -433,7 +444,7 @@ class HybridSearch:
                 steps.append(step_len)
                 hval.append(hj)
                 heappush(heap, (cost + w * hj, n))
-        self._since_shot = since_shot
+        self.expansions, self._since_shot = expansions, since_shot
         return None, self._outcome(reason)
 
     def _outcome(self, reason: str) -> SearchOutcome:
