@@ -136,16 +136,18 @@ def test_runs_free_near_parked_cars_is_the_reference() -> None:
     """Poses along the parked rows: many runs unsure, both answers, both exact phases."""
     body = BodyTest(_checker(), 0.15)
     prims = PrimitiveSet.build(1 / RADIUS, 5, 1.0, 0.1, reverse=True)
-    seen, phases = set(), 0
+    seen, few, many = set(), 0, 0
     for x, y, yaw in _poses(5, 600):
         poses = prims.poses_from(x, y, yaw)
         got = body.runs_free(poses)
         assert np.array_equal(got, _reference_runs_free(body, poses))
         seen.update(got.tolist())
         hit, clear, _ = _reference_screen(body, poses.reshape(-1, 3))
-        phases += bool((~hit & ~clear).any())
+        unsure = int((~hit & ~clear).sum())
+        few += 0 < unsure <= 8
+        many += unsure > 30
     assert seen == {True, False}
-    assert phases > 100
+    assert few > 20 and many > 50  # one exact call, and the worst-first two
 
 
 @settings(max_examples=200, deadline=None)
