@@ -59,23 +59,23 @@ def walk_poses(
     sizes : numpy.ndarray
         ``(W,)``: how many of them belong to each word.
     """
-    # Per segment: its start pose (scalar, as the walk), the steps and the turn.
-    x0, y0, yaw0, c0s, s0s, turns, segs, counts = [], [], [], [], [], [], [], []
-    sizes = np.zeros(len(words), dtype=np.int64)
+    # Per segment: its start pose (scalar, as the walk), cos and sin of its yaw, the
+    # turn, the length and the steps; and where its poses begin.
+    segments: list[tuple[float, float, float, float, float, int, float, int]] = []
+    counts: list[int] = []
+    firsts: list[int] = []
+    sizes = [0] * len(words)
+    total = 0
     for w, (word, lengths) in enumerate(words):
         x, y, yaw = start.x, start.y, start.yaw
         for letter, seg in zip(word, lengths, strict=True):
             turn = _TURN[letter]
             n = max(1, math.ceil(abs(seg) / spacing))
             c0, s0 = math.cos(yaw), math.sin(yaw)
-            x0.append(x)
-            y0.append(y)
-            yaw0.append(yaw)
-            c0s.append(c0)
-            s0s.append(s0)
-            turns.append(turn)
-            segs.append(seg)
+            segments.append((x, y, yaw, c0, s0, turn, seg, n))
             counts.append(n)
+            firsts.append(total)
+            total += n
             sizes[w] += n
             u = seg * n / n
             if turn == 0:
@@ -85,23 +85,35 @@ def walk_poses(
                 x = x + turn * radius * (math.sin(yaw) - s0)
                 y = y - turn * radius * (math.cos(yaw) - c0)
     if not counts:
-        return np.zeros((0, 3)), sizes
-    n_seg = np.array(counts, dtype=np.int64)
-    rep = np.repeat(np.arange(len(counts)), n_seg)
-    # k = 1..n within each segment.
-    k = np.arange(1, len(rep) + 1) - np.repeat(np.cumsum(n_seg) - n_seg, n_seg)
-    u = np.array(segs)[rep] * k / n_seg[rep]
-    turn = np.array(turns, dtype=float)[rep]
-    px0, py0, pyaw0 = np.array(x0)[rep], np.array(y0)[rep], np.array(yaw0)[rep]
-    c0, s0 = np.array(c0s)[rep], np.array(s0s)[rep]
-    out = np.empty((len(rep), 3))
-    straight = turn == 0.0
-    pyaw = pyaw0 + turn * u / radius
+        return np.zeros((0, 3)), np.array(sizes, dtype=np.int64)
+    # Each pose's segment columns; k = 1..n within its segment (n exact as a float).
+    px0, py0, pyaw0, c0, s0, turn, seg, n = np.repeat(np.array(segments), counts, axis=0).T
+    k = np.arange(1, total + 1) - np.repeat(firsts, counts)
+    u = seg * k / n
+    pyaw = turn * u
+    pyaw /= radius
+    pyaw += pyaw0
     tr = turn * radius
-    out[:, 0] = np.where(straight, px0 + u * c0, px0 + tr * (np.sin(pyaw) - s0))
-    out[:, 1] = np.where(straight, py0 + u * s0, py0 - tr * (np.cos(pyaw) - c0))
-    out[:, 2] = np.where(straight, pyaw0, pyaw)
-    return out, sizes
+    straight = turn == 0.0
+    # Rows x, y, yaw: the arcs' formula everywhere, then the lines' where they are (the
+    # choice np.where made, with the same operations in the same order).
+    out = np.empty((3, total))
+    np.subtract(np.sin(pyaw), s0, out=out[0])
+    out[0] *= tr
+    out[0] += px0
+    line = u * c0
+    line += px0
+    np.copyto(out[0], line, where=straight)
+    arc = np.cos(pyaw)
+    arc -= c0
+    arc *= tr
+    np.subtract(py0, arc, out=out[1])
+    line = u * s0
+    line += py0
+    np.copyto(out[1], line, where=straight)
+    np.copyto(out[2], pyaw)
+    np.copyto(out[2], pyaw0, where=straight)
+    return out.T, np.array(sizes, dtype=np.int64)
 
 
 def walk_hits(
