@@ -232,23 +232,24 @@ class CollisionChecker:
         n = rows.shape[1]
         if not n:
             return np.zeros((len(offsets), 0))
-        trig = np.empty((2, n))
-        np.cos(rows[2], out=trig[0])
-        np.sin(rows[2], out=trig[1])
-        g = offsets[:, None, None] * trig  # (K, 2, N)
-        g += rows[:2]
-        g -= self._origin[:, None]
+        # Laid out (x or y, offset, pose): every operation runs over contiguous rows.
+        trig = np.empty((2, 1, n))
+        np.cos(rows[2], out=trig[0, 0])
+        np.sin(rows[2], out=trig[1, 0])
+        g = trig * offsets[:, None]
+        g += rows[:2, None, :]
+        g -= self._origin[:, None, None]
         g *= self._inv_h
         nx, ny = self._shape
         with np.errstate(invalid="ignore"):
             idx = g.astype(np.int64)
-        flat = idx[:, 0] * ny
-        flat += idx[:, 1]
+        flat = idx[0] * ny
+        flat += idx[1]
         # For g >= 0, int(g) < n exactly when g < n: the float bounds decide alone.
-        hi = np.maximum.reduce(g, axis=(0, 2)).tolist()
+        hi = np.maximum.reduce(g, axis=(1, 2)).tolist()
         if np.minimum.reduce(g, axis=None) >= 0.0 and hi[0] < nx and hi[1] < ny:
             return self._clearance_flat.take(flat)
-        ok = (g >= 0.0).all(axis=1) & (idx[:, 0] < nx) & (idx[:, 1] < ny)
+        ok = (g >= 0.0).all(axis=0) & (idx[0] < nx) & (idx[1] < ny)
         out = np.full(flat.shape, -np.inf)
         out[ok] = self._clearance_flat[flat[ok]]
         return out

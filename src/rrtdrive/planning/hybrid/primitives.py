@@ -147,7 +147,7 @@ class PrimitiveSet:
         (commuted operands round alike), in seven array operations.
         """
         c, s = math.cos(yaw), math.sin(yaw)
-        loc = self.rows if keep is None else self.rows[:, keep]
+        loc = self.rows if keep is None else self.rows.take(keep, axis=1)  # contiguous
         lx, ly = loc[0], loc[1]
         out = np.empty(loc.shape)
         np.multiply(lx, c, out=out[0])
