@@ -221,3 +221,21 @@ def test_search_loop_builds_the_recorded_tree(start, gear, budget, shots, counts
     nodes = np.array([search.x, search.y, search.yaw, search.g, search.gear, search.kappa,
                       search.parent, search.step])  # fmt: skip
     assert hashlib.sha256(nodes.tobytes()).hexdigest()[:16] == digest
+
+
+@pytest.mark.parametrize("resolution", [0.1, 0.6])
+def test_screens_without_axis_points_are_the_reference(resolution: float) -> None:
+    """A grid too coarse for the sure-collision screen (no axis points): no hit, same answers."""
+    from rrtdrive.collision import CheckerConfig, CollisionChecker
+
+    m = builtin_map("parking_lot")
+    checker = CollisionChecker.for_map(m, config=CheckerConfig(resolution=resolution))
+    body = BodyTest(checker, 0.15)
+    assert (body._n_axis == 0) == (resolution == 0.6)
+    p = _poses(9, 500)
+    got, want = body.screen(p), _reference_screen(body, p)
+    assert all(np.array_equal(a, b) for a, b in zip(got, want, strict=True))
+    prims = PrimitiveSet.build(1 / RADIUS, 5, 1.0, 0.1, reverse=True)
+    for x, y, yaw in p[:60]:
+        poses = prims.poses_from(x, y, yaw)
+        assert np.array_equal(body.runs_free(poses), _reference_runs_free(body, poses))

@@ -76,6 +76,8 @@ class BodyTest:
         six, six_radius = cover_discs(v, 6)
         self.six_need = six_radius + self.clearance
         self._run_offsets = np.concatenate([self.offsets, six])
+        k = self._n_axis
+        self._run_groups = np.array([0, k, k + 3] if k else [0, 3])
 
     def screen(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(hit, clear, room)`` for poses ``(N, 3)``.
@@ -88,7 +90,10 @@ class BodyTest:
         val = self.checker.axis_clearances(p.T, self.offsets)
         k = self._n_axis
         # (No NaN in val: a point outside the grid reads -inf.) min < b: some value is.
-        hit = np.minimum.reduce(val[:k], axis=0) < self.occupied_below
+        if k:
+            hit = np.minimum.reduce(val[:k], axis=0) < self.occupied_below
+        else:
+            hit = np.zeros(len(p), dtype=bool)
         room = np.minimum.reduce(val[k:], axis=0) - self.disc_need
         return hit, room >= 0.0, room
 
@@ -212,16 +217,17 @@ class BodyTest:
         P = runs
         n = rows.shape[1] // P
         val = self.checker.axis_clearances(rows, self._run_offsets)
-        k, k3 = self._n_axis, self._n_axis + 3
+        # Per pose the least clearance of the axis points (if any), the three discs, the six.
+        *axis, three, six = np.minimum.reduceat(val, self._run_groups, axis=0)
         # (No NaN in val.) alive: no axis point of the run below occupied_below.
-        alive = (
-            np.minimum.reduce(val[:k].reshape(k, P, n), axis=(0, 2)) >= self.occupied_below
-        )
-        six = np.minimum.reduce(val[k3:], axis=0)
+        if axis:
+            alive = np.minimum.reduce(axis[0].reshape(P, n), axis=1) >= self.occupied_below
+        else:
+            alive = np.ones(P, dtype=bool)
         six -= self.six_need
         six = six.reshape(P, n)
         # Neither screen clears the pose (for floats, v - need < 0 exactly when v < need).
-        unsure = (np.minimum.reduce(val[k:k3], axis=0) < self.disc_need).reshape(P, n)
+        unsure = (three < self.disc_need).reshape(P, n)
         unsure &= six < 0.0
         unsure &= alive[:, None]
         flat = unsure.ravel()

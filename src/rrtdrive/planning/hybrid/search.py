@@ -311,7 +311,10 @@ class HybridSearch:
             self._hval = [h0]
             self._since_shot = cfg.shot_interval
             self._shot_from: set[tuple[int, int, int]] = set()
+            # Each node's closing bin (a successor's is known when it is made).
+            self._keys = [self.key(start.x, start.y, start.yaw, 1)]
         heap, closed, best, hval = self._heap, self._closed, self._best, self._hval
+        keys = self._keys
         since_shot = self._since_shot
         gears = prims.gears.tolist()
         kappas = prims.kappas.tolist()
@@ -339,12 +342,7 @@ class HybridSearch:
         reason = "exhausted"
         while heap:
             _f, i = heappop(heap)
-            xi, yi, yawi, gi, geari = xs[i], ys[i], yaws[i], gs[i], gear_of[i]
-            # self.key(xi, yi, yawi, geari or 1), inlined
-            iyaw = int(((yawi % two_pi) / two_pi) * nyaw) % nyaw
-            k = (((int((xi - xmin) // res) * ny + int((yi - ymin) // res)) * nyaw + iyaw) << 1) | (
-                geari < 0
-            )
+            k = keys[i]
             if k in closed:
                 continue
             if expansions >= max_expansions:
@@ -356,6 +354,7 @@ class HybridSearch:
                 break
             closed.add(k)
             expansions += 1
+            xi, yi, yawi, gi, geari = xs[i], ys[i], yaws[i], gs[i], gear_of[i]
             since_shot += 1
             interval = min(shot_interval, max(1, int(hval[i] / shot_distance)))
             if since_shot >= interval:
@@ -443,6 +442,7 @@ class HybridSearch:
                 parent.append(i)
                 steps.append(step_len)
                 hval.append(hj)
+                keys.append(kj)
                 heappush(heap, (cost + w * hj, n))
         self.expansions, self._since_shot = expansions, since_shot
         return None, self._outcome(reason)
