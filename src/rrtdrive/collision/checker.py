@@ -241,14 +241,17 @@ class CollisionChecker:
         g -= self._origin[:, None, None]
         g *= self._inv_h
         nx, ny = self._shape
-        with np.errstate(invalid="ignore"):
-            idx = g.astype(np.int64)
-        flat = idx[0] * ny
-        flat += idx[1]
         # For g >= 0, int(g) < n exactly when g < n: the float bounds decide alone.
         hi = np.maximum.reduce(g, axis=(1, 2)).tolist()
         if np.minimum.reduce(g, axis=None) >= 0.0 and hi[0] < nx and hi[1] < ny:
+            idx = g.astype(np.int64)
+            flat = idx[0] * ny
+            flat += idx[1]
             return self._clearance_flat.take(flat)
+        with np.errstate(invalid="ignore"):  # NaN or inf read as outside, as clearances()
+            idx = g.astype(np.int64)
+        flat = idx[0] * ny
+        flat += idx[1]
         ok = (g >= 0.0).all(axis=0) & (idx[0] < nx) & (idx[1] < ny)
         out = np.full(flat.shape, -np.inf)
         out[ok] = self._clearance_flat[flat[ok]]

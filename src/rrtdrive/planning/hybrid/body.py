@@ -76,8 +76,6 @@ class BodyTest:
         six, six_radius = cover_discs(v, 6)
         self.six_need = six_radius + self.clearance
         self._run_offsets = np.concatenate([self.offsets, six])
-        k = self._n_axis
-        self._run_groups = np.array([0, k, k + 3] if k else [0, 3])
 
     def screen(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(hit, clear, room)`` for poses ``(N, 3)``.
@@ -217,13 +215,15 @@ class BodyTest:
         P = runs
         n = rows.shape[1] // P
         val = self.checker.axis_clearances(rows, self._run_offsets)
-        # Per pose the least clearance of the axis points (if any), the three discs, the six.
-        *axis, three, six = np.minimum.reduceat(val, self._run_groups, axis=0)
+        k, k3 = self._n_axis, self._n_axis + 3
         # (No NaN in val.) alive: no axis point of the run below occupied_below.
-        if axis:
-            alive = np.minimum.reduce(axis[0].reshape(P, n), axis=1) >= self.occupied_below
+        if k:
+            axis = val[:k].reshape(k, P, n)
+            alive = np.minimum.reduce(axis, axis=(0, 2)) >= self.occupied_below
         else:
             alive = np.ones(P, dtype=bool)
+        three = np.minimum.reduce(val[k:k3], axis=0)
+        six = np.minimum.reduce(val[k3:], axis=0)
         six -= self.six_need
         six = six.reshape(P, n)
         # Neither screen clears the pose (for floats, v - need < 0 exactly when v < need).

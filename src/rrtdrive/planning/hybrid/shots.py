@@ -61,7 +61,7 @@ def walk_poses(
     """
     # Per segment: its start pose (scalar, as the walk), cos and sin of its yaw, the
     # turn, the length and the steps; and where its poses begin.
-    segments: list[tuple[float, float, float, float, float, int, float, int]] = []
+    segments: list[float] = []  # eight numbers a segment, flat (one quick array)
     counts: list[int] = []
     firsts: list[int] = []
     sizes = [0] * len(words)
@@ -72,7 +72,7 @@ def walk_poses(
             turn = _TURN[letter]
             n = max(1, math.ceil(abs(seg) / spacing))
             c0, s0 = math.cos(yaw), math.sin(yaw)
-            segments.append((x, y, yaw, c0, s0, turn, seg, n))
+            segments += (x, y, yaw, c0, s0, turn, seg, n)
             counts.append(n)
             firsts.append(total)
             total += n
@@ -87,7 +87,8 @@ def walk_poses(
     if not counts:
         return np.zeros((0, 3)), np.array(sizes, dtype=np.int64)
     # Each pose's segment columns; k = 1..n within its segment (n exact as a float).
-    px0, py0, pyaw0, c0, s0, turn, seg, n = np.repeat(np.array(segments), counts, axis=0).T
+    table = np.array(segments, dtype=float).reshape(-1, 8)
+    px0, py0, pyaw0, c0, s0, turn, seg, n = np.repeat(table, counts, axis=0).T
     k = np.arange(1, total + 1) - np.repeat(firsts, counts)
     u = seg * k / n
     pyaw = turn * u
