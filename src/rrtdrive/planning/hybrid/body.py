@@ -154,16 +154,22 @@ class BodyTest:
         ``sizes[w]`` of them for walk ``w``. One look-up for all (the same points,
         so the same answer, as :meth:`hit_at` pose by pose).
         """
-        sizes = np.asarray(sizes, dtype=np.int64)
-        out = np.zeros(len(sizes), dtype=bool)
+        counts = [int(m) for m in sizes]
+        out = np.zeros(len(counts), dtype=bool)
         if not self._n_axis or not len(poses):
             return out
         p = np.asarray(poses, dtype=float)
         val = self.checker.axis_clearances(p.T, self.offsets[: self._n_axis])
         hit = np.minimum.reduce(val, axis=0) < self.occupied_below
-        nonempty = sizes > 0
-        starts = (np.cumsum(sizes) - sizes)[nonempty]
-        out[nonempty] = np.logical_or.reduceat(hit, starts)
+        # Each walk's first pose; reduceat over the nonempty walks alone (it would read
+        # an empty walk's next pose).
+        walks, starts, first = [], [], 0
+        for w, m in enumerate(counts):
+            if m > 0:
+                walks.append(w)
+                starts.append(first)
+            first += m
+        out[walks] = np.logical_or.reduceat(hit, starts)
         return out
 
     def hits(self, poses: np.ndarray) -> np.ndarray:
@@ -188,15 +194,16 @@ class BodyTest:
         """
         p = np.asarray(poses, dtype=float).reshape(-1, 3)
         hit, clear, room = self.screen(p)
-        if hit.any():
+        # The ufuncs' reductions, not the methods' Python wrappers (the shots' hot path).
+        if np.logical_or.reduce(hit):
             return False
-        rest = np.flatnonzero(~clear)
+        rest = (~clear).nonzero()[0]
         if not len(rest):
             return True
-        rest = rest[np.argsort(room[rest], kind="stable")]
-        if not self._exact(p[rest[:first]]).all():
+        rest = rest[room[rest].argsort(kind="stable")]
+        if not np.logical_and.reduce(self._exact(p[rest[:first]])):
             return False
-        return len(rest) <= first or bool(self._exact(p[rest[first:]]).all())
+        return len(rest) <= first or bool(np.logical_and.reduce(self._exact(p[rest[first:]])))
 
     def runs_free(self, poses: np.ndarray) -> np.ndarray:
         """Boolean ``(P,)`` for runs of poses ``(P, n, 3)``: True where the whole run is free."""
@@ -239,7 +246,7 @@ class BodyTest:
         if len(idx) <= _ONE_CALL:
             alive[idx[~rectangles_free(poses[idx], clearance)] // n] = False
             return alive
-        todo = unsure.any(axis=1).nonzero()[0]
+        todo = np.logical_or.reduce(unsure, axis=1).nonzero()[0]
         worst = np.where(unsure, six, np.inf)[todo].argmin(axis=1)
         worst += todo * n
         alive[todo[~rectangles_free(poses[worst], clearance)]] = False

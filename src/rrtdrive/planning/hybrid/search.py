@@ -21,7 +21,7 @@ from __future__ import annotations
 import heapq
 import math
 import operator
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import TypeVar
 
@@ -266,15 +266,17 @@ class HybridSearch:
         rows[:, -1, 2] = [self.yaw[k] for k in b]
         return rows
 
-    def _shot(self, i: int) -> list[list[Piece]]:
-        """The clear analytic expansions from node ``i``, shortest first."""
+    def _shot(self, i: int) -> Iterator[list[Piece]]:
+        """The clear analytic expansions from node ``i``, shortest first.
+
+        Lazy: a candidate is sampled and tested only when the one before it was
+        rejected (the connection the search accepts ends the shot).
+        """
         self.shots_tried += 1
         pose = Pose(self.x[i], self.y[i], self.yaw[i])
-        found = []
         for pieces in self.shots(pose):
             if self.body.all_free(np.vstack([p.rows[:, :3] for p in pieces])):
-                found.append(pieces)
-        return found
+                yield pieces
 
     def run(
         self,
@@ -366,13 +368,9 @@ class HybridSearch:
                 if shot_cell > 0.0:
                     iyaw = int(yawi % two_pi // shot_bin)
                     sk = (int(xi // shot_cell), int(yi // shot_cell), iyaw)
-                if sk in shot_from:
-                    found = []
-                else:
-                    found = self._shot(i)
-                    if not found and sk is not None:
-                        shot_from.add(sk)
-                for pieces in found:
+                found = 0
+                for pieces in () if sk in shot_from else self._shot(i):
+                    found += 1
                     self.connections += 1
                     out = accept(self.chain(i) + pieces)
                     if out is not None:
@@ -381,6 +379,8 @@ class HybridSearch:
                     if self.connections >= max_solutions:
                         self.expansions, self._since_shot = expansions, since_shot
                         return None, self._outcome("rejected")
+                if not found and sk is not None:
+                    shot_from.add(sk)
             ki = kappa_of[i]
             # The steering-change costs after this curvature (none after the root's NaN).
             steer = steer_after.get(ki)

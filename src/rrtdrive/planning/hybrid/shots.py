@@ -10,7 +10,7 @@ one shot in one look-up; the survivors are sampled finely for the exact test.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,8 +34,9 @@ class Piece:
     rows: np.ndarray
 
 
-#: ``shots(pose) -> candidates``: pieces from the pose to the exact goal, shortest first.
-Shots = Callable[[Pose], Sequence[list[Piece]]]
+#: ``shots(pose) -> candidates``: pieces from the pose to the exact goal, shortest first
+#: (an iterable, possibly lazy: a search that takes one reads no further).
+Shots = Callable[[Pose], Iterable[list[Piece]]]
 
 
 _TURN = {"L": 1, "S": 0, "R": -1}
@@ -88,8 +89,8 @@ def walk_poses(
         return np.zeros((0, 3)), np.array(sizes, dtype=np.int64)
     # Each pose's segment columns; k = 1..n within its segment (n exact as a float).
     table = np.array(segments, dtype=float).reshape(-1, 8)
-    px0, py0, pyaw0, c0, s0, turn, seg, n = np.repeat(table, counts, axis=0).T
-    k = np.arange(1, total + 1) - np.repeat(firsts, counts)
+    px0, py0, pyaw0, c0, s0, turn, seg, n = table.repeat(counts, axis=0).T
+    k = np.arange(1, total + 1) - np.array(firsts).repeat(counts)
     u = seg * k / n
     pyaw = turn * u
     pyaw /= radius
@@ -162,12 +163,12 @@ def analytic_shots(
 
     Only the ``max_candidates`` shortest words are tried; with ``body``, those
     whose poses half a metre apart surely collide are dropped before they are
-    sampled finely. A Reeds-Shepp word is cut into one piece per gear.
+    sampled finely (each one only when the caller asks for it). A Reeds-Shepp word
+    is cut into one piece per gear.
     """
     coarse = max(spacing, 0.5)
 
-    def shots(pose: Pose) -> list[list[Piece]]:
-        out: list[list[Piece]] = []
+    def shots(pose: Pose) -> Iterator[list[Piece]]:
         # The longer words loop through the lot: they rarely clear where the short ones fail.
         if reverse:
             cands = reeds_shepp_paths(pose, goal, radius, limit=max_candidates)[:max_candidates]
@@ -182,9 +183,8 @@ def analytic_shots(
             if reverse:
                 rows = cand.sample(spacing)
                 rows[0, :3] = pose.as_tuple()
-                out.append(_gear_pieces(rows))
+                yield _gear_pieces(rows)
             else:
-                out.append([Piece(1, cand.sample(spacing))])
-        return out
+                yield [Piece(1, cand.sample(spacing))]
 
     return shots
