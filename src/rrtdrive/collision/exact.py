@@ -71,7 +71,9 @@ class RectangleTest:
         self._empty = bool(union.is_empty)
         back, front, half = -vehicle.rear_overhang, vehicle.front_extent, vehicle.width / 2.0
         self._lx = np.array([back, front, front, back], dtype=float)
-        self._ly = np.array([-half, -half, half, half], dtype=float)
+        ly = np.array([-half, -half, half, half], dtype=float)
+        # Rows [-ly, ly]: the factors of s and c in corners() (negation is exact).
+        self._ly = np.stack([-ly, ly])
         #: Empty hole lists for up to this many polygons (grown on demand).
         self._holes = np.empty((64, 0), dtype=object)
 
@@ -80,17 +82,15 @@ class RectangleTest:
 
         Built as ``(N, 2, 4)`` (the x row, the y row) and returned as its
         ``(N, 4, 2)`` view, in four array operations: ``x + c lx - s ly`` as
-        ``(c lx + x) + (-s) ly`` and ``y + s lx + c ly`` as ``(s lx + y) + c ly``
+        ``(c lx + x) + s (-ly)`` and ``y + s lx + c ly`` as ``(s lx + y) + c ly``
         (commuted operands and a negated factor round alike: the same floats).
         """
-        trig = np.empty((len(poses), 4, 1))  # c, s, -s, c
+        trig = np.empty((len(poses), 2, 1))  # c, s
         np.cos(poses[:, 2], out=trig[:, 0, 0])
         np.sin(poses[:, 2], out=trig[:, 1, 0])
-        np.negative(trig[:, 1, 0], out=trig[:, 2, 0])
-        trig[:, 3, 0] = trig[:, 0, 0]
-        out = trig[:, 0:2] * self._lx
+        out = trig * self._lx
         out += poses[:, 0:2, None]
-        out += trig[:, 2:4] * self._ly
+        out += trig[:, ::-1] * self._ly
         return out.swapaxes(1, 2)
 
     def polygons(self, corners: np.ndarray) -> np.ndarray:
