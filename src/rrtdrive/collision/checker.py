@@ -19,6 +19,7 @@ import shapely
 from scipy import ndimage
 
 from rrtdrive.collision.config import CheckerConfig
+from rrtdrive.collision.exact import RectangleTest
 from rrtdrive.collision.grid import GridCache, grid_resolution, grid_shape, rasterise
 from rrtdrive.geometry import densify
 from rrtdrive.maps import Map, Obstacle
@@ -127,9 +128,7 @@ class CollisionChecker:
         self._cap_inset = math.sqrt(self.edge_radius**2 - (vehicle.width / 2.0) ** 2)
         self._cap_back = vehicle.rear_overhang - self._cap_inset
         self._cap_front = vehicle.front_extent - self._cap_inset
-        back, front, half = -vehicle.rear_overhang, vehicle.front_extent, vehicle.width / 2.0
-        self._corner_lx = np.array([back, front, front, back], dtype=float)
-        self._corner_ly = np.array([-half, -half, half, half], dtype=float)
+        self._rectangles = RectangleTest(self.bounds, self._union, vehicle)
         self._disc_offsets, disc_radius = cover_discs(vehicle, 3)
         self._disc_offsets_list = [float(o) for o in self._disc_offsets]
         self.disc_radius = disc_radius + self.config.margin
@@ -221,6 +220,42 @@ class CollisionChecker:
             return self._clearance_flat[gx.astype(np.int64) * ny + gy.astype(np.int64)]
         pts = np.stack([np.asarray(x, dtype=float), np.asarray(y, dtype=float)], axis=-1)
         return self.clearances(pts.reshape(-1, 2)).reshape(np.shape(x))
+
+    def axis_clearances(self, rows: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+        """:meth:`clearances` at points on the heading axis of poses, ``(K, N)``.
+
+        ``rows`` ``(3, N)`` are the poses' x, y and yaw; point ``k`` of a pose is
+        ``(cos(yaw) offsets[k] + x, sin(yaw) offsets[k] + y)``, evaluated in that
+        order (the points of the disc screens: the same floats, the same values).
+        The screens' look-up: all points in a dozen array operations.
+        """
+        n = rows.shape[1]
+        if not n:
+            return np.zeros((len(offsets), 0))
+        # Laid out (x or y, offset, pose): every operation runs over contiguous rows.
+        trig = np.empty((2, 1, n))
+        np.cos(rows[2], out=trig[0, 0])
+        np.sin(rows[2], out=trig[1, 0])
+        g = trig * offsets[:, None]
+        g += rows[:2, None, :]
+        g -= self._origin[:, None, None]
+        g *= self._inv_h
+        nx, ny = self._shape
+        # For g >= 0, int(g) < n exactly when g < n: the float bounds decide alone.
+        hi = np.maximum.reduce(g, axis=(1, 2)).tolist()
+        if np.minimum.reduce(g, axis=None) >= 0.0 and hi[0] < nx and hi[1] < ny:
+            idx = g.astype(np.int64)
+            flat = idx[0] * ny
+            flat += idx[1]
+            return self._clearance_flat.take(flat)
+        with np.errstate(invalid="ignore"):  # NaN or inf read as outside, as clearances()
+            idx = g.astype(np.int64)
+        flat = idx[0] * ny
+        flat += idx[1]
+        ok = (g >= 0.0).all(axis=0) & (idx[0] < nx) & (idx[1] < ny)
+        out = np.full(flat.shape, -np.inf)
+        out[ok] = self._clearance_flat[flat[ok]]
+        return out
 
     # ------------------------------------------------------------------ fast tests
 
@@ -402,11 +437,7 @@ class CollisionChecker:
         if not len(p):
             return free
         offsets, radius = self._screens[1]
-        # _discs_clear's points, as (x + c * offset, y + s * offset): the same floats.
-        x, y = p[:, 0:1], p[:, 1:2]
-        c, s = np.cos(p[:, 2])[:, None], np.sin(p[:, 2])[:, None]
-        val = self.clearances_xy(c * offsets + x, s * offsets + y)
-        sure = (val >= radius + clearance).all(axis=1)
+        sure = self._discs_clear(p, offsets, radius + clearance)
         free[sure] = True
         unsure = np.flatnonzero(~sure)
         if len(unsure):
@@ -420,12 +451,7 @@ class CollisionChecker:
         r + clearance``, True proves the body keeps ``clearance`` (the field is a
         lower bound of the true distance).
         """
-        c, s = np.cos(p[:, 2]), np.sin(p[:, 2])
-        pts = np.empty((len(p), len(offsets), 2))
-        np.multiply(c[:, None], offsets[None, :], out=pts[..., 0])
-        np.multiply(s[:, None], offsets[None, :], out=pts[..., 1])
-        pts += p[:, None, :2]
-        return (self.clearances(pts.reshape(-1, 2)) >= need).reshape(len(p), -1).all(axis=1)
+        return (self.axis_clearances(p.T, offsets) >= need).all(axis=0)
 
     def pose_free(self, pose: Sequence[float]) -> bool:
         """Exact body test for one pose (scalar disc screen first, shapely when unsure)."""
@@ -448,17 +474,8 @@ class CollisionChecker:
         return float(min(to_bounds, self._union.distance(rect)))
 
     def _corners(self, poses: np.ndarray) -> np.ndarray:
-        """:func:`~rrtdrive.vehicle.footprint_corners` of poses ``(N, 3)``, the same floats.
-
-        The arithmetic of :func:`~rrtdrive.geometry.box_corners` without its
-        broadcasting (the exact test's hot spot).
-        """
-        lx, ly = self._corner_lx, self._corner_ly
-        c, s = np.cos(poses[:, 2])[:, None], np.sin(poses[:, 2])[:, None]
-        out = np.empty((len(poses), 4, 2))
-        out[..., 0] = poses[:, 0:1] + c * lx - s * ly
-        out[..., 1] = poses[:, 1:2] + s * lx + c * ly
-        return out
+        """:func:`~rrtdrive.vehicle.footprint_corners` of poses ``(N, 3)``, the same floats."""
+        return self._rectangles.corners(poses)
 
     def rectangles_free(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
         """The exact test alone, no screen: each body rectangle ``clearance`` clear.
@@ -470,26 +487,7 @@ class CollisionChecker:
         return self._exact(poses, clearance)
 
     def _exact(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
-        corners = self._corners(np.asarray(poses, dtype=float).reshape(-1, 3))
-        # Inside the bounds box shrunk by the clearance: both are convex and the box
-        # is axis-aligned, so that is all four corners inside, compared exactly.
-        xmin, ymin, xmax, ymax = self.bounds
-        if clearance > 0.0:
-            xmin, ymin, xmax, ymax = (
-                xmin + clearance, ymin + clearance, xmax - clearance, ymax - clearance
-            )
-        x, y = corners[..., 0], corners[..., 1]
-        inside = ((x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax)).all(axis=1)
-        if self._union.is_empty:
-            return inside
-        test = np.flatnonzero(inside)
-        if len(test):
-            rects = shapely.polygons(corners[test])
-            if clearance > 0.0:
-                inside[test] = ~shapely.dwithin(self._union, rects, clearance)
-            else:
-                inside[test] = ~shapely.intersects(self._union, rects)
-        return inside
+        return self._rectangles.free(poses, clearance)
 
     def path_free(
         self, samples: np.ndarray, spacing: float = 0.1, clearance: float = 0.0

@@ -76,8 +76,10 @@ def _profiles(
     """
     total = lengths.sum(axis=1)
     s = total[:, None] * t[None, :]
-    joints = np.cumsum(lengths, axis=1)[:, :-1]
-    jumps = np.diff(angles, axis=1)
+    # ndarray methods and slices, not np.cumsum / np.diff: the same arithmetic without
+    # their Python wrappers (microseconds a call in the fit's inner loop).
+    joints = lengths.cumsum(axis=1)[:, :-1]
+    jumps = angles[:, 1:] - angles[:, :-1]
     widths = np.maximum(np.abs(jumps) * factors[None, :] / rate, 1e-9)
     return _ramp_sum(s, t, total, joints, jumps, widths) + angles[:, :1], total / (len(t) - 1)
 
@@ -112,9 +114,9 @@ def _ramp_sum(
     # Columns where some row's ramp may start or end, two columns of slack each way
     # (t's spacing is far above the rounding of s = total * t); beyond them u <= 0
     # or u >= 1 in every row, so clip gives exactly 0 or 1.
-    lo = np.searchsorted(t, ((joints - 0.5 * widths) / span[:, None]).min(axis=0)) - 2
-    hi = np.searchsorted(t, ((joints + 0.5 * widths) / span[:, None]).max(axis=0)) + 2
-    lo, hi = np.clip(lo, 0, T), np.clip(hi, 0, T)
+    lo = t.searchsorted(((joints - 0.5 * widths) / span[:, None]).min(axis=0)) - 2
+    hi = t.searchsorted(((joints + 0.5 * widths) / span[:, None]).max(axis=0)) + 2
+    lo, hi = np.minimum(np.maximum(lo, 0), T), np.minimum(np.maximum(hi, 0), T)  # clip
     for j in range(joints.shape[1]):
         a, b = int(lo[j]), int(max(hi[j], lo[j]))
         if b > a:
@@ -151,10 +153,10 @@ def _integrate(
     hb = h[:, None]
     dyaw = gear * 0.5 * (kappa[:, 1:] + kappa[:, :-1]) * hb
     zero = np.zeros((len(delta), 1))
-    yaw = start[2] + np.concatenate([zero, np.cumsum(dyaw, axis=1)], axis=1)
+    yaw = start[2] + np.concatenate([zero, dyaw.cumsum(axis=1)], axis=1)
     mid = 0.5 * (yaw[:, 1:] + yaw[:, :-1])
-    x = start[0] + gear * np.concatenate([zero, np.cumsum(hb * np.cos(mid), axis=1)], axis=1)
-    y = start[1] + gear * np.concatenate([zero, np.cumsum(hb * np.sin(mid), axis=1)], axis=1)
+    x = start[0] + gear * np.concatenate([zero, (hb * np.cos(mid)).cumsum(axis=1)], axis=1)
+    y = start[1] + gear * np.concatenate([zero, (hb * np.sin(mid)).cumsum(axis=1)], axis=1)
     return np.stack([x, y, yaw], axis=-1)
 
 
@@ -195,10 +197,10 @@ def _end_and_jacobian(
     dyaw = gear * 0.5 * (kappa[1:] + kappa[:-1]) * h
     yaw = np.empty(T)
     yaw[0] = start[2] + 0.0
-    yaw[1:] = start[2] + np.cumsum(dyaw)
+    yaw[1:] = start[2] + dyaw.cumsum()
     mid = 0.5 * (yaw[1:] + yaw[:-1])
     cos, sin = np.cos(mid), np.sin(mid)
-    px, py = np.cumsum(h * cos), np.cumsum(h * sin)
+    px, py = (h * cos).cumsum(), (h * sin).cumsum()
     end = np.array([start[0] + gear * px[-1], start[1] + gear * py[-1], yaw[-1]])
     # lever[:, c]: the sums over the steps from node c to the end (0 at the last node).
     lever = np.zeros((2, T))
@@ -218,15 +220,15 @@ def _end_and_jacobian(
     d_h = np.array([gear * px[-1], gear * py[-1], 0.0]) / h + (r @ dyaw) / h
     # Suffix sums of v and v * t, with a zero column for "from T on".
     V = np.zeros((3, T + 1))
-    V[:, :-1] = np.cumsum(v[:, ::-1], axis=1)[:, ::-1]
+    V[:, :-1] = v[:, ::-1].cumsum(axis=1)[:, ::-1]
     W = np.zeros((3, T + 1))
-    W[:, :-1] = np.cumsum((v * t)[:, ::-1], axis=1)[:, ::-1]
+    W[:, :-1] = (v * t)[:, ::-1].cumsum(axis=1)[:, ::-1]
     s = float(lengths.sum()) * t
-    joints = np.cumsum(lengths)[:-1]
-    jumps = np.diff(angles)
+    joints = lengths.cumsum()[:-1]
+    jumps = angles[1:] - angles[:-1]
     widths = np.maximum(np.abs(jumps) * factors / rate, 1e-9)
-    a = np.searchsorted(s, joints - 0.5 * widths, side="right")  # first node on a ramp
-    b = np.searchsorted(s, joints + 0.5 * widths, side="left")  # first node after it
+    a = s.searchsorted(joints - 0.5 * widths, side="right")  # first node on a ramp
+    b = s.searchsorted(joints + 0.5 * widths, side="left")  # first node after it
     slope = jumps / widths
     on = V[:, a] - V[:, b]  # (3, J): v summed over each ramp
     share = 0.5 * on + V[:, b]  # d end / d jump_j
@@ -236,18 +238,18 @@ def _end_and_jacobian(
     jac[:, n + 1 :] += share
     stretch = (W[:, a] - W[:, b]) @ slope  # the grid's stretch: the same for every length
     later = np.zeros((3, n))
-    later[:, :-1] = np.cumsum((slope * on)[:, ::-1], axis=1)[:, ::-1]  # joints k .. J-1
+    later[:, :-1] = (slope * on)[:, ::-1].cumsum(axis=1)[:, ::-1]  # joints k .. J-1
     jac[:, :n] = (stretch + d_h / (T - 1))[:, None] - later
     return end, jac, delta, h
 
 
 def _widening(lengths: np.ndarray, angles: np.ndarray, rate: float) -> np.ndarray:
     """Factors (>= 1) by which overlapping ramps of one sign are widened to keep ``rate``."""
-    jumps = np.diff(angles)
+    jumps = angles[1:] - angles[:-1]
     factors = np.ones(len(jumps))
     if not len(jumps):
         return factors
-    joints = np.cumsum(lengths)[:-1]
+    joints = lengths.cumsum()[:-1]
     probe = np.linspace(0.0, float(lengths.sum()), 4001)
     for _ in range(40):
         widths = np.maximum(np.abs(jumps) * factors / rate, 1e-9)

@@ -20,7 +20,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 
 import numpy as np
 
@@ -191,16 +191,15 @@ def _backward_dubins_shots(
     """Reverse-only shots from a pose to ``target``: forward Dubins ``target -> pose`` reversed."""
     coarse = max(spacing, 0.5)
 
-    def shots(pose: Pose) -> list[list[Piece]]:
-        out = []
+    def shots(pose: Pose) -> Iterator[list[Piece]]:
+        # Lazy (Shots): each word screened and sampled only when the caller asks.
         for cand in dubins_paths(target, pose, radius)[:max_candidates]:
             if walk_hits(target, cand.word, cand.lengths, radius, coarse, body):
                 continue
             rows = cand.sample(spacing)[::-1].copy()
             rows[0, :3] = pose.as_tuple()
             rows[-1, :3] = target.as_tuple()
-            out.append([Piece(-1, rows)])
-        return out
+            yield [Piece(-1, rows)]
 
     return shots
 

@@ -7,7 +7,7 @@ body poses (at most ``check_spacing`` apart) pass the checker's body test with
 the query's clearance (three covering discs first, then six, then the exact
 rectangle where the discs cannot decide). ``f = g + w h`` with the
 :class:`~rrtdrive.planning.hybrid.heuristic.Heuristic`. From expanded nodes,
-every few expansions (each one near the goal), an *analytic expansion* tries
+every few expansions (each one near the goal), an *analytic expansion* (:mod:`.shots`) tries
 the obstacle-free shortest paths to the exact goal pose and keeps the first whose
 body is clear: Dubins forward, Reeds-Shepp with reverse.
 
@@ -20,18 +20,27 @@ from __future__ import annotations
 
 import heapq
 import math
-from collections.abc import Callable, Sequence
+import operator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import TypeVar
 
 import numpy as np
 
-from rrtdrive.planning.dubins import dubins_paths
 from rrtdrive.planning.hybrid.body import BodyTest
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.heuristic import Heuristic
 from rrtdrive.planning.hybrid.primitives import PrimitiveSet
-from rrtdrive.planning.reeds_shepp import reeds_shepp_paths
+
+# The analytic expansions live in .shots; re-exported here, where they always were.
+from rrtdrive.planning.hybrid.shots import (
+    Piece,
+    Shots,
+    analytic_shots,
+    walk_hits,
+    walk_poses,
+    walks_hit,
+)
 from rrtdrive.types import Pose
 
 __all__ = [
@@ -46,17 +55,6 @@ __all__ = [
 ]
 
 T = TypeVar("T")
-
-
-@dataclass(frozen=True, eq=False)
-class Piece:
-    """A stretch of path in one gear: rows ``[x, y, yaw, kappa]``, both end poses included.
-
-    ``kappa`` is the steering curvature; ``gear`` +1 forward, -1 reverse.
-    """
-
-    gear: int
-    rows: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -90,149 +88,6 @@ class SearchOutcome:
             sum(o.shots for o in outcomes),
             sum(o.connections for o in outcomes),
         )
-
-
-#: ``shots(pose) -> candidates``: pieces from the pose to the exact goal, shortest first.
-Shots = Callable[[Pose], Sequence[list[Piece]]]
-
-
-_TURN = {"L": 1, "S": 0, "R": -1}
-
-
-def walk_poses(
-    start: Pose, words: Sequence[tuple[str, Sequence[float]]], radius: float, spacing: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Poses at most ``spacing`` apart along several words from one start (start excluded).
-
-    Each segment is cut into ``ceil(|length| / spacing)`` equal steps; its poses
-    are closed-form from the segment's start, the end pose of the segment before
-    as the same formula gives it, so every pose is computed with the same
-    arithmetic as in a walk one pose at a time. ``lengths`` are signed (negative
-    in reverse), as in Reeds-Shepp words; Dubins lengths are all positive.
-
-    Returns
-    -------
-    poses : numpy.ndarray
-        ``(M, 3)``: the poses of every word, in order.
-    sizes : numpy.ndarray
-        ``(W,)``: how many of them belong to each word.
-    """
-    # Per segment: its start pose (scalar, as the walk), the steps and the turn.
-    x0, y0, yaw0, c0s, s0s, turns, segs, counts = [], [], [], [], [], [], [], []
-    sizes = np.zeros(len(words), dtype=np.int64)
-    for w, (word, lengths) in enumerate(words):
-        x, y, yaw = start.x, start.y, start.yaw
-        for letter, seg in zip(word, lengths, strict=True):
-            turn = _TURN[letter]
-            n = max(1, math.ceil(abs(seg) / spacing))
-            c0, s0 = math.cos(yaw), math.sin(yaw)
-            x0.append(x)
-            y0.append(y)
-            yaw0.append(yaw)
-            c0s.append(c0)
-            s0s.append(s0)
-            turns.append(turn)
-            segs.append(seg)
-            counts.append(n)
-            sizes[w] += n
-            u = seg * n / n
-            if turn == 0:
-                x, y = x + u * c0, y + u * s0
-            else:
-                yaw = yaw + turn * u / radius
-                x = x + turn * radius * (math.sin(yaw) - s0)
-                y = y - turn * radius * (math.cos(yaw) - c0)
-    if not counts:
-        return np.zeros((0, 3)), sizes
-    n_seg = np.array(counts, dtype=np.int64)
-    rep = np.repeat(np.arange(len(counts)), n_seg)
-    # k = 1..n within each segment.
-    k = np.arange(1, len(rep) + 1) - np.repeat(np.cumsum(n_seg) - n_seg, n_seg)
-    u = np.array(segs)[rep] * k / n_seg[rep]
-    turn = np.array(turns, dtype=float)[rep]
-    px0, py0, pyaw0 = np.array(x0)[rep], np.array(y0)[rep], np.array(yaw0)[rep]
-    c0, s0 = np.array(c0s)[rep], np.array(s0s)[rep]
-    out = np.empty((len(rep), 3))
-    straight = turn == 0.0
-    pyaw = pyaw0 + turn * u / radius
-    tr = turn * radius
-    out[:, 0] = np.where(straight, px0 + u * c0, px0 + tr * (np.sin(pyaw) - s0))
-    out[:, 1] = np.where(straight, py0 + u * s0, py0 - tr * (np.cos(pyaw) - c0))
-    out[:, 2] = np.where(straight, pyaw0, pyaw)
-    return out, sizes
-
-
-def walk_hits(
-    start: Pose, word: str, lengths: Sequence[float], radius: float, spacing: float, body: BodyTest
-) -> bool:
-    """Whether a pose ``spacing`` apart along a word surely collides (:meth:`BodyTest.hit_at`).
-
-    ``lengths`` are signed (negative in reverse), as in Reeds-Shepp words; Dubins
-    lengths are all positive. All poses of the word are screened at once
-    (:func:`walk_poses`, :meth:`BodyTest.any_hits`).
-    """
-    return walks_hit(start, [(word, lengths)], radius, spacing, body)[0]
-
-
-def walks_hit(
-    start: Pose,
-    words: Sequence[tuple[str, Sequence[float]]],
-    radius: float,
-    spacing: float,
-    body: BodyTest,
-) -> list[bool]:
-    """:func:`walk_hits` for several ``(word, lengths)`` from one start, in one screen."""
-    if not words:
-        return []
-    poses, sizes = walk_poses(start, words, radius, spacing)
-    return body.any_hits(poses, sizes).tolist()
-
-
-def _gear_pieces(rows: np.ndarray) -> list[Piece]:
-    """Rows ``[x, y, yaw, kappa, gear]`` cut at the cusps (each piece keeps both end rows)."""
-    gear = rows[:, 4]
-    cuts = np.flatnonzero(gear[1:] != gear[:-1]) + 1
-    return [Piece(int(part[0, 4]), part[:, :4].copy()) for part in np.split(rows, cuts)]
-
-
-def analytic_shots(
-    goal: Pose,
-    radius: float,
-    reverse: bool,
-    spacing: float,
-    body: BodyTest | None = None,
-    max_candidates: int = 3,
-) -> Shots:
-    """The analytic expansions to ``goal``: Dubins paths forward, Reeds-Shepp with reverse.
-
-    Only the ``max_candidates`` shortest words are tried; with ``body``, those
-    whose poses half a metre apart surely collide are dropped before they are
-    sampled finely. A Reeds-Shepp word is cut into one piece per gear.
-    """
-    coarse = max(spacing, 0.5)
-
-    def shots(pose: Pose) -> list[list[Piece]]:
-        out: list[list[Piece]] = []
-        # The longer words loop through the lot: they rarely clear where the short ones fail.
-        if reverse:
-            cands = reeds_shepp_paths(pose, goal, radius, limit=max_candidates)[:max_candidates]
-        else:
-            cands = dubins_paths(pose, goal, radius)[:max_candidates]
-        hit = [False] * len(cands)
-        if body is not None:
-            hit = walks_hit(pose, [(c.word, c.lengths) for c in cands], radius, coarse, body)
-        for cand, dropped in zip(cands, hit, strict=True):
-            if dropped:
-                continue
-            if reverse:
-                rows = cand.sample(spacing)
-                rows[0, :3] = pose.as_tuple()
-                out.append(_gear_pieces(rows))
-            else:
-                out.append([Piece(1, cand.sample(spacing))])
-        return out
-
-    return shots
 
 
 @dataclass(frozen=True)
@@ -316,6 +171,10 @@ class HybridSearch:
                       p.local[:, -1, :].tolist())
             for p in sorted((*long_primitives, primitives), key=lambda p: -p.length)
         ]  # fmt: skip
+        # The step arcs when the node's discs have room for none: their successors tested.
+        self._tested = _OpenArcs(
+            primitives.length, [], self._base_cost.tolist(), primitives.local[:, -1, :].tolist()
+        )
 
     def _edge_costs(self, p: PrimitiveSet) -> np.ndarray:
         """Each primitive's cost before gear and steering changes."""
@@ -407,15 +266,17 @@ class HybridSearch:
         rows[:, -1, 2] = [self.yaw[k] for k in b]
         return rows
 
-    def _shot(self, i: int) -> list[list[Piece]]:
-        """The clear analytic expansions from node ``i``, shortest first."""
+    def _shot(self, i: int) -> Iterator[list[Piece]]:
+        """The clear analytic expansions from node ``i``, shortest first.
+
+        Lazy: a candidate is sampled and tested only when the one before it was
+        rejected (the connection the search accepts ends the shot).
+        """
         self.shots_tried += 1
         pose = Pose(self.x[i], self.y[i], self.yaw[i])
-        found = []
         for pieces in self.shots(pose):
             if self.body.all_free(np.vstack([p.rows[:, :3] for p in pieces])):
-                found.append(pieces)
-        return found
+                yield pieces
 
     def run(
         self,
@@ -452,15 +313,22 @@ class HybridSearch:
             self._hval = [h0]
             self._since_shot = cfg.shot_interval
             self._shot_from: set[tuple[int, int, int]] = set()
+            # Each node's closing bin (a successor's is known when it is made).
+            self._keys = [self.key(start.x, start.y, start.yaw, 1)]
         heap, closed, best, hval = self._heap, self._closed, self._best, self._hval
+        keys = self._keys
         since_shot = self._since_shot
-        base_cost = self._base_cost.tolist()
         gears = prims.gears.tolist()
         kappas = prims.kappas.tolist()
-        h_at = self.heuristic.scalar()
+        # The key's gear bit of each primitive, and each one's steering-change cost after
+        # a node of each curvature (the same expression, evaluated once).
+        reverse_bit = [int(g < 0) for g in gears]
         kmax = self.kappa_max
+        scc = cfg.steer_change_cost
+        steer_after = {k: [scc * abs(kj - k) / kmax for kj in kappas] for k in kappas}
+        h_at = self.heuristic.scalar()
         shot_interval, shot_distance = cfg.shot_interval, cfg.shot_distance
-        gear_change_cost, steer_change_cost = cfg.gear_change_cost, cfg.steer_change_cost
+        gear_change_cost = cfg.gear_change_cost
         # The node lists and key(), bound to locals (the same arithmetic: the hot loop).
         xs, ys, yaws, gs, gear_of, kappa_of, parent = (
             self.x, self.y, self.yaw, self.g, self.gear, self.kappa, self.parent
@@ -468,17 +336,18 @@ class HybridSearch:
         res, xmin, ymin, ny, nyaw = cfg.xy_resolution, self.xmin, self.ymin, self.ny, self.nyaw
         two_pi = 2.0 * math.pi
         inf = math.inf
-        disc_room, open_sets, steps = body.disc_room, self._open, self.step
+        disc_room, open_sets, steps, tested = body.disc_room, self._open, self.step, self._tested
+        rows_free, rows_from = body.rows_free, prims.rows_from
         shot_from, shot_cell, shot_bin = self._shot_from, cfg.shot_cell, cfg.shot_bin
-        heappop, heappush = heapq.heappop, heapq.heappush
+        heappop, heappush, ge = heapq.heappop, heapq.heappush, operator.ge
+        expansions, max_solutions = self.expansions, cfg.max_solutions
         reason = "exhausted"
         while heap:
             _f, i = heappop(heap)
-            xi, yi, yawi, gi, geari = xs[i], ys[i], yaws[i], gs[i], gear_of[i]
-            k = self.key(xi, yi, yawi, geari if geari else 1)
+            k = keys[i]
             if k in closed:
                 continue
-            if self.expansions >= max_expansions:
+            if expansions >= max_expansions:
                 heappush(heap, (_f, i))  # not expanded: a later call takes it
                 reason = "expansions"
                 break
@@ -486,7 +355,8 @@ class HybridSearch:
                 reason = "time"
                 break
             closed.add(k)
-            self.expansions += 1
+            expansions += 1
+            xi, yi, yawi, gi, geari = xs[i], ys[i], yaws[i], gs[i], gear_of[i]
             since_shot += 1
             interval = min(shot_interval, max(1, int(hval[i] / shot_distance)))
             if since_shot >= interval:
@@ -498,49 +368,44 @@ class HybridSearch:
                 if shot_cell > 0.0:
                     iyaw = int(yawi % two_pi // shot_bin)
                     sk = (int(xi // shot_cell), int(yi // shot_cell), iyaw)
-                if sk in shot_from:
-                    found = []
-                else:
-                    found = self._shot(i)
-                    if not found and sk is not None:
-                        shot_from.add(sk)
-                for pieces in found:
+                found = 0
+                for pieces in () if sk in shot_from else self._shot(i):
+                    found += 1
                     self.connections += 1
                     out = accept(self.chain(i) + pieces)
                     if out is not None:
+                        self.expansions, self._since_shot = expansions, since_shot
                         return out, self._outcome("solved")
-                    if self.connections >= cfg.max_solutions:
+                    if self.connections >= max_solutions:
+                        self.expansions, self._since_shot = expansions, since_shot
                         return None, self._outcome("rejected")
+                if not found and sk is not None:
+                    shot_from.add(sk)
             ki = kappa_of[i]
-            steered = ki == ki  # not the root's NaN
+            # The steering-change costs after this curvature (none after the root's NaN).
+            steer = steer_after.get(ki)
+            if steer is None and ki == ki:
+                steer = steer_after[ki] = [scc * abs(kj - ki) / kmax for kj in kappas]
             # The longest primitives whose sweep the node's discs have room for need no
             # body test (free_within); with room for none, the step arcs and the test.
             room = disc_room(xi, yi, yawi)
             for arcs in open_sets:
-                if all(r >= q for r, q in zip(room, arcs.reach, strict=True)):
+                if all(map(ge, room, arcs.reach)):
                     break
             else:
-                arcs = None
-            if arcs is not None:
-                step_len, costs, poses = arcs.length, arcs.costs, None
-                c0, s0 = math.cos(yawi), math.sin(yawi)
-                ends = [
-                    [xi + c0 * lx - s0 * ly, yi + s0 * lx + c0 * ly, yawi + dy]
-                    for lx, ly, dy in arcs.ends
-                ]
-            else:
-                step_len, costs = prims.length, base_cost
-                poses = prims.poses_from(xi, yi, yawi)
-                ends = poses[:, -1, :].tolist()
+                arcs = tested
+            c0, s0 = math.cos(yawi), math.sin(yawi)
+            costs = arcs.costs
             # Closed bins, unreachable cells and dearer duplicates go before the body test.
-            cand: list[tuple[int, int, float, float]] = []
-            for j, (ex, ey, eyaw) in enumerate(ends):
-                gear = gears[j]
-                # self.key(ex, ey, eyaw, gear), inlined
+            # The end poses: PrimitiveSet.poses_from's last rows, the same arithmetic.
+            cand: list[tuple[int, int, float, float, float, float, float]] = []
+            for j, (lx, ly, dy) in enumerate(arcs.ends):
+                ex, ey, eyaw = xi + c0 * lx - s0 * ly, yi + s0 * lx + c0 * ly, yawi + dy
+                # self.key(ex, ey, eyaw, gears[j]), inlined
                 iyaw = int(((eyaw % two_pi) / two_pi) * nyaw) % nyaw
                 kj = (
                     (((int((ex - xmin) // res) * ny + int((ey - ymin) // res)) * nyaw + iyaw) << 1)
-                    | (gear < 0)
+                    | reverse_bit[j]
                 )  # fmt: skip
                 if kj in closed:
                     continue
@@ -548,25 +413,24 @@ class HybridSearch:
                 if hj == inf:
                     continue
                 cost = gi + costs[j]
-                if geari and gear != geari:
+                if geari and gears[j] != geari:
                     cost += gear_change_cost
-                if steered:
-                    cost += steer_change_cost * abs(kappas[j] - ki) / kmax
+                if steer is not None:
+                    cost += steer[j]
                 if cost >= best.get(kj, inf):
                     continue
-                cand.append((j, kj, cost, hj))
+                cand.append((j, kj, cost, hj, ex, ey, eyaw))
             if not cand:
                 continue
-            if poses is None:
-                free = [True] * len(cand)
-            elif len(cand) == len(ends):
-                free = body.runs_free(poses).tolist()
-            else:
-                free = body.runs_free(poses[[c[0] for c in cand]]).tolist()
-            for (j, kj, cost, hj), ok in zip(cand, free, strict=True):
-                if not ok:
-                    continue
-                ex, ey, eyaw = ends[j]
+            if arcs is tested:
+                if len(cand) == len(gears):
+                    free = rows_free(rows_from(xi, yi, yawi), len(cand)).tolist()
+                else:
+                    keep = [c[0] for c in cand]
+                    free = rows_free(rows_from(xi, yi, yawi, keep), len(cand)).tolist()
+                cand = [c for c, ok in zip(cand, free, strict=True) if ok]
+            step_len = arcs.length
+            for j, kj, cost, hj, ex, ey, eyaw in cand:
                 best[kj] = cost
                 n = len(xs)
                 xs.append(ex)
@@ -578,8 +442,9 @@ class HybridSearch:
                 parent.append(i)
                 steps.append(step_len)
                 hval.append(hj)
+                keys.append(kj)
                 heappush(heap, (cost + w * hj, n))
-        self._since_shot = since_shot
+        self.expansions, self._since_shot = expansions, since_shot
         return None, self._outcome(reason)
 
     def _outcome(self, reason: str) -> SearchOutcome:

@@ -1,0 +1,190 @@
+"""Analytic expansions of the Hybrid A* search: the shortest words to the exact goal pose.
+
+From an expanded node the search tries the obstacle-free shortest paths to the
+goal (Dubins forward, Reeds-Shepp with reverse) and keeps those whose body is
+clear. Most fail by a lot, so each word's poses half a metre apart are screened
+first (:func:`walks_hit`, the body test's sure-collision screen), all words of
+one shot in one look-up; the survivors are sampled finely for the exact test.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from rrtdrive.planning.dubins import dubins_paths
+from rrtdrive.planning.hybrid.body import BodyTest
+from rrtdrive.planning.reeds_shepp import reeds_shepp_paths
+from rrtdrive.types import Pose
+
+__all__ = ["Piece", "Shots", "analytic_shots", "walk_hits", "walk_poses", "walks_hit"]
+
+
+@dataclass(frozen=True, eq=False)
+class Piece:
+    """A stretch of path in one gear: rows ``[x, y, yaw, kappa]``, both end poses included.
+
+    ``kappa`` is the steering curvature; ``gear`` +1 forward, -1 reverse.
+    """
+
+    gear: int
+    rows: np.ndarray
+
+
+#: ``shots(pose) -> candidates``: pieces from the pose to the exact goal, shortest first
+#: (an iterable, possibly lazy: a search that takes one reads no further).
+Shots = Callable[[Pose], Iterable[list[Piece]]]
+
+
+_TURN = {"L": 1, "S": 0, "R": -1}
+
+
+def walk_poses(
+    start: Pose, words: Sequence[tuple[str, Sequence[float]]], radius: float, spacing: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Poses at most ``spacing`` apart along several words from one start (start excluded).
+
+    Each segment is cut into ``ceil(|length| / spacing)`` equal steps; its poses
+    are closed-form from the segment's start, the end pose of the segment before
+    as the same formula gives it, so every pose is computed with the same
+    arithmetic as in a walk one pose at a time. ``lengths`` are signed (negative
+    in reverse), as in Reeds-Shepp words; Dubins lengths are all positive.
+
+    Returns
+    -------
+    poses : numpy.ndarray
+        ``(M, 3)``: the poses of every word, in order.
+    sizes : numpy.ndarray
+        ``(W,)``: how many of them belong to each word.
+    """
+    # Per segment: its start pose (scalar, as the walk), cos and sin of its yaw, the
+    # turn, the length and the steps; and where its poses begin.
+    segments: list[float] = []  # eight numbers a segment, flat (one quick array)
+    counts: list[int] = []
+    firsts: list[int] = []
+    sizes = [0] * len(words)
+    total = 0
+    for w, (word, lengths) in enumerate(words):
+        x, y, yaw = start.x, start.y, start.yaw
+        for letter, seg in zip(word, lengths, strict=True):
+            turn = _TURN[letter]
+            n = max(1, math.ceil(abs(seg) / spacing))
+            c0, s0 = math.cos(yaw), math.sin(yaw)
+            segments += (x, y, yaw, c0, s0, turn, seg, n)
+            counts.append(n)
+            firsts.append(total)
+            total += n
+            sizes[w] += n
+            u = seg * n / n
+            if turn == 0:
+                x, y = x + u * c0, y + u * s0
+            else:
+                yaw = yaw + turn * u / radius
+                x = x + turn * radius * (math.sin(yaw) - s0)
+                y = y - turn * radius * (math.cos(yaw) - c0)
+    if not counts:
+        return np.zeros((0, 3)), np.array(sizes, dtype=np.int64)
+    # Each pose's segment columns; k = 1..n within its segment (n exact as a float).
+    table = np.array(segments, dtype=float).reshape(-1, 8)
+    px0, py0, pyaw0, c0, s0, turn, seg, n = table.repeat(counts, axis=0).T
+    k = np.arange(1, total + 1) - np.array(firsts).repeat(counts)
+    u = seg * k / n
+    pyaw = turn * u
+    pyaw /= radius
+    pyaw += pyaw0
+    tr = turn * radius
+    straight = turn == 0.0
+    # Rows x, y, yaw: the arcs' formula everywhere, then the lines' where they are (the
+    # choice np.where made, with the same operations in the same order).
+    out = np.empty((3, total))
+    np.subtract(np.sin(pyaw), s0, out=out[0])
+    out[0] *= tr
+    out[0] += px0
+    line = u * c0
+    line += px0
+    np.copyto(out[0], line, where=straight)
+    arc = np.cos(pyaw)
+    arc -= c0
+    arc *= tr
+    np.subtract(py0, arc, out=out[1])
+    line = u * s0
+    line += py0
+    np.copyto(out[1], line, where=straight)
+    np.copyto(out[2], pyaw)
+    np.copyto(out[2], pyaw0, where=straight)
+    return out.T, np.array(sizes, dtype=np.int64)
+
+
+def walk_hits(
+    start: Pose, word: str, lengths: Sequence[float], radius: float, spacing: float, body: BodyTest
+) -> bool:
+    """Whether a pose ``spacing`` apart along a word surely collides (:meth:`BodyTest.hit_at`).
+
+    ``lengths`` are signed (negative in reverse), as in Reeds-Shepp words; Dubins
+    lengths are all positive. All poses of the word are screened at once
+    (:func:`walk_poses`, :meth:`BodyTest.any_hits`).
+    """
+    return walks_hit(start, [(word, lengths)], radius, spacing, body)[0]
+
+
+def walks_hit(
+    start: Pose,
+    words: Sequence[tuple[str, Sequence[float]]],
+    radius: float,
+    spacing: float,
+    body: BodyTest,
+) -> list[bool]:
+    """:func:`walk_hits` for several ``(word, lengths)`` from one start, in one screen."""
+    if not words:
+        return []
+    poses, sizes = walk_poses(start, words, radius, spacing)
+    return body.any_hits(poses, sizes).tolist()
+
+
+def _gear_pieces(rows: np.ndarray) -> list[Piece]:
+    """Rows ``[x, y, yaw, kappa, gear]`` cut at the cusps (each piece keeps both end rows)."""
+    gear = rows[:, 4]
+    cuts = np.flatnonzero(gear[1:] != gear[:-1]) + 1
+    return [Piece(int(part[0, 4]), part[:, :4].copy()) for part in np.split(rows, cuts)]
+
+
+def analytic_shots(
+    goal: Pose,
+    radius: float,
+    reverse: bool,
+    spacing: float,
+    body: BodyTest | None = None,
+    max_candidates: int = 3,
+) -> Shots:
+    """The analytic expansions to ``goal``: Dubins paths forward, Reeds-Shepp with reverse.
+
+    Only the ``max_candidates`` shortest words are tried; with ``body``, those
+    whose poses half a metre apart surely collide are dropped before they are
+    sampled finely (each one only when the caller asks for it). A Reeds-Shepp word
+    is cut into one piece per gear.
+    """
+    coarse = max(spacing, 0.5)
+
+    def shots(pose: Pose) -> Iterator[list[Piece]]:
+        # The longer words loop through the lot: they rarely clear where the short ones fail.
+        if reverse:
+            cands = reeds_shepp_paths(pose, goal, radius, limit=max_candidates)[:max_candidates]
+        else:
+            cands = dubins_paths(pose, goal, radius)[:max_candidates]
+        hit = [False] * len(cands)
+        if body is not None:
+            hit = walks_hit(pose, [(c.word, c.lengths) for c in cands], radius, coarse, body)
+        for cand, dropped in zip(cands, hit, strict=True):
+            if dropped:
+                continue
+            if reverse:
+                rows = cand.sample(spacing)
+                rows[0, :3] = pose.as_tuple()
+                yield _gear_pieces(rows)
+            else:
+                yield [Piece(1, cand.sample(spacing))]
+
+    return shots
