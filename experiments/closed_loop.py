@@ -18,11 +18,15 @@ The gear-change scenarios (issue 14) and stock highway-env envs::
     python experiments/closed_loop.py --scenarios parking-reverse-in parallel-parking \
         u-turn --seeds 10 --planner hybrid-a-star --name closed_loop_gears
     python experiments/closed_loop.py --stock parking-v0 --seeds 100 --name closed_loop_stock
+    python experiments/closed_loop.py --stock parking-v0 --reverse --seeds 100 \
+        --deterministic --name closed_loop_stock_reverse
 
 ``parking-reverse-in`` is ``parking`` with ``reverse_in=True``; a gear scenario's
 table adds the goal errors, nuPlan comfort, the steering-rate limit and the gear
 changes. ``--stock ENV`` drives highway-env's own env through ``env.step``
-(:func:`rrtdrive.sim.stock.drive_stock_env`) and adds ``highway_env_success``.
+(:func:`rrtdrive.sim.stock.drive_stock_env`) and adds ``highway_env_success``;
+with ``--reverse`` it plans the stock envs with gear changes (as ``rrtdrive simulate
+parking-v0 --reverse``) and adds the gear table for them.
 ``--name`` names the output files (default ``closed_loop``), so these runs do not
 overwrite the forward table.
 """
@@ -73,12 +77,15 @@ def _config(hz: int, deterministic: bool) -> EpisodeConfig:
 def run_one(job: tuple) -> dict:
     label, planner, controller, seed, hz, oncoming = job[:6]
     deterministic = bool(job[6]) if len(job) > 6 else False
+    reverse = bool(job[7]) if len(job) > 7 else False
     cfg = _config(hz, deterministic) if deterministic else EpisodeConfig(
         sim=SimConfig(simulation_frequency=hz))
     if label.startswith("stock:"):
         from rrtdrive.sim.stock import drive_stock_env
 
-        run = drive_stock_env(label[len("stock:"):], seed, planner, controller, cfg)
+        run = drive_stock_env(
+            label[len("stock:"):], seed, planner, controller, cfg, reverse=reverse
+        )
         out = evaluate(run.episode).to_json()
         out.update(run.to_json())
         out["max_time_s"] = run.episode.scenario.max_time_s
@@ -233,6 +240,11 @@ def main(argv: list[str] | None = None) -> int:
         "parking-parked-v0); with no --scenarios given, only these",
     )
     ap.add_argument(
+        "--reverse", action="store_true",
+        help="with --stock: plan the stock envs with gear changes (as 'rrtdrive simulate "
+        "parking-v0 --reverse'); the gear scenarios always reverse",
+    )
+    ap.add_argument(
         "--name", default="closed_loop", help="output file stem in --out (default closed_loop)"
     )
     ap.add_argument(
@@ -257,10 +269,13 @@ def main(argv: list[str] | None = None) -> int:
     if args.stock and "--scenarios" not in raw:
         scenarios = []
     stock = [x for item in args.stock for x in item.split(",") if x]
+    if args.reverse and not stock:
+        ap.error("--reverse: only stock envs (--stock) take it")
     controllers = args.controllers.split(",")
     labels = scenarios + [f"stock:{e}" for e in stock]
     jobs = [
-        (s, args.planner, c, seed, args.frequency, args.oncoming, args.deterministic)
+        (s, args.planner, c, seed, args.frequency, args.oncoming, args.deterministic,
+         args.reverse)
         for s in labels for c in controllers for seed in range(args.seeds)
     ]
     t0 = time.perf_counter()
@@ -285,6 +300,7 @@ def main(argv: list[str] | None = None) -> int:
         "seeds": list(range(args.seeds)),
         "scenarios": scenarios,
         "stock": stock,
+        "reverse": args.reverse,
         "deterministic": args.deterministic,
         "controllers": controllers,
         "planner": args.planner,
@@ -310,6 +326,8 @@ def main(argv: list[str] | None = None) -> int:
         tables += ("\n" if tables else "") + gear_table(reports, gear, controllers)
     if stock:
         tables += ("\n" if tables else "") + stock_table(reports, stock, controllers)
+    if stock and args.reverse:
+        tables += "\n" + gear_table(reports, [f"stock:{e}" for e in stock], controllers)
     md = (
         f"# Closed loop: {args.seeds} seeds x {len(controllers)} controllers x "
         f"{len(labels)} scenarios\n\n"
