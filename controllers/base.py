@@ -35,6 +35,10 @@ __all__ = [
     "TrackingController",
 ]
 
+#: Fewest samples a gear segment's speed profile is built on: a segment given by its
+#: two end rows alone would have no sample between its two stops.
+_MIN_PROFILE_SAMPLES = 3
+
 
 @dataclass(frozen=True)
 class VehicleState:
@@ -291,10 +295,18 @@ class TrackingController:
             config = dataclasses.replace(
                 config, accel=min(config.accel, a), decel=min(config.decel, a)
             )
+        s, kappa = np.asarray(p.s), np.asarray(p.kappa)
+        if len(s) < _MIN_PROFILE_SAMPLES:
+            # A segment of its two end rows alone (a short stub of a Reeds-Shepp word)
+            # would get a profile that stops at both, zero throughout: the car would
+            # never move. Between the rows the curvature is the first row's.
+            dense = np.linspace(0.0, float(s[-1]), _MIN_PROFILE_SAMPLES)
+            kappa = kappa[np.clip(np.searchsorted(s, dense, side="right") - 1, 0, len(s) - 1)]
+            s = dense
         return actuator_profile(
-            np.asarray(p.s), np.asarray(p.kappa), config, v_start,
+            s, kappa, config, v_start,
             self.vehicle.wheelbase, self.steer_rate, rise_to_peak=manoeuvre,
-        )
+        )  # fmt: skip
 
     def hold_at(self, s: float | None) -> None:
         """Stop at arc length ``s`` (along the whole path) and wait there; ``None``: drive on.
@@ -376,7 +388,10 @@ class TrackingController:
             self.steer_window = (state.steer - reach, state.steer + reach)
             steer = min(max(steer, state.steer - reach), state.steer + reach)
         if not self._launched:
-            if state.speed == 0.0 and abs(want - state.steer) > self.speed_config.start_steer_tol:
+            # At rest: CUSP_SPEED, not 0.0 (stock envs pass actions as float32, and a car
+            # standing at a cusp there reads -2e-8 m/s: the wheels were not turned first).
+            at_rest = abs(state.speed) <= CUSP_SPEED
+            if at_rest and abs(want - state.steer) > self.speed_config.start_steer_tol:
                 # Turn the wheels at rest first: the path starts at this angle.
                 self.v_ref = 0.0
                 return 0.0, steer

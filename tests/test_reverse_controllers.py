@@ -139,3 +139,38 @@ def test_speed_config_validates_the_reverse_fields():
         SpeedConfig(v_max_reverse=0.0)
     with pytest.raises(InputError, match="speed.accel_manoeuvre"):
         SpeedConfig(accel_manoeuvre=-1.0)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_reverse_stub_of_two_rows_is_driven(name):
+    """A 0.12 m first segment given by its two end rows alone is driven, not waited at.
+
+    Hybrid A*'s Reeds-Shepp words can start so (stock parking-v0 --reverse seeds 77 and
+    91): a profile on the two rows stops at both and is zero throughout, and the car
+    stood still until the episode's time ran out.
+    """
+    stub = np.array([[0.0, 0.0, 0.0, 0.0, -1.0], [-0.12, 0.0, 0.0, 0.0, -1.0]])
+    ahead = np.array([[-0.12 + 0.1 * k, 0.0, 0.0, 0.0, 1.0] for k in range(101)])
+    path = Path(np.vstack([stub, ahead]), np.zeros((0, 2)))
+    c, rows = drive(name, path, 0.4, max_time=60.0)
+    assert c.arrived and rows[-1, 6] == 1  # both segments driven
+    assert np.hypot(*(rows[-1, 1:3] - path.samples[-1, :2])) < 0.1
+    assert rows[-1, 0] < 30.0
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_wheels_turn_first_when_the_speed_reads_a_float32_zero(name):
+    """At rest is |v| <= CUSP_SPEED: a stock env's standing car reads -2.4e-8 m/s.
+
+    Before, only 0.0 counted as rest, so at a cusp in parking-v0 the wheels did not
+    turn first (seeds 23, 38, 61, 66 of parking-v0 --reverse set off with the wrong
+    lock and left the path).
+    """
+    path = integrate_pieces([(1, -1.0 / R, 6.0)])  # full right lock from the start
+    c = make_controller(name, vehicle=VehicleParams(max_steer_rate=0.4))
+    c.reset(path)
+    x, y, yaw = path.samples[0, :3]
+    accel, steer = c.control(VehicleState(x, y, yaw, -2.4e-8, 0.3, 0.0))
+    accel2, steer2 = c.control(VehicleState(x, y, yaw, -2.4e-8, steer, DT))
+    assert accel == 0.0 and accel2 == 0.0  # waits while the wheels turn
+    assert steer < 0.0 and steer2 <= steer  # towards the right lock

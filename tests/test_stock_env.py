@@ -75,3 +75,18 @@ def test_simulate_parking_v0_reports_highway_env_success(capsys):
     assert code == 0
     assert data["highway_env_success"] is True and data["success"] is True
     assert data["scenario"] == "parking-v0" and data["target"] == "stock"
+
+
+@pytest.mark.parametrize("seed", [38, 77])
+def test_parking_v0_with_reverse_drives_its_cusps(seed):
+    """parking-v0 --reverse in highway-env: seed 38's wheels turn at the cusp (the car
+    stands there at -2.4e-8 m/s, float32 actions), seed 77's 0.12 m reverse stub of two
+    rows is driven (both failed before: collision off the path, and a car that never
+    moved)."""
+    run = drive_stock_env(
+        "parking-v0", seed, "improved-rrt-connect", "pure-pursuit", DETERMINISTIC, reverse=True
+    )
+    report = evaluate(run.episode)
+    assert report.gear_changes >= 1
+    assert report.success and not report.collision_footprint, run.episode.message
+    assert report.goal_position_err_m <= 0.1 and report.cte_max_m <= 0.2
