@@ -20,7 +20,7 @@ import numpy as np
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.vehicle import cover_discs
 
-__all__ = ["BodyTest"]
+__all__ = ["BodyTest", "disc_reach"]
 
 #: Up to this many unsure poses skip the checker's six-disc screen: its fixed cost
 #: (about 18 us) exceeds the exact test's for them (about 2.4 us a pose after 20 us).
@@ -29,6 +29,11 @@ _DIRECT_EXACT = 6
 #: cost exceeds what testing each run's worst pose first saves on so few (with the
 #: worst by six-disc room: 82 -> 77 us per call recorded from the 60 reverse queries).
 _ONE_CALL = 8
+
+
+def disc_reach(offsets: Sequence[float], length: float, kappa: float) -> list[float]:
+    """:meth:`BodyTest.reach` for discs at ``offsets``: ``length * hypot(1, offset * kappa)``."""
+    return [length * math.hypot(1.0, o * kappa) for o in offsets]
 
 
 class BodyTest:
@@ -114,7 +119,12 @@ class BodyTest:
         of rear-axle travel at steering curvature ``kappa``, in either gear: over
         ``length`` at ``|kappa| <= kappa`` it stays within that many metres.
         """
-        return [length * math.hypot(1.0, o * kappa) for o in self._disc_list]
+        return disc_reach(self.disc_offsets, length, kappa)
+
+    @property
+    def disc_offsets(self) -> tuple[float, ...]:
+        """The covering discs' offsets ahead of the rear axle, metres."""
+        return tuple(self._disc_list)
 
     def free_within(self, x: float, y: float, yaw: float, reach: Sequence[float]) -> bool:
         """True when every pose whose discs lie within ``reach`` of this pose's is free.

@@ -8,6 +8,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Mapping
 
 import numpy as np
@@ -119,12 +120,18 @@ class HybridAStar:
             return hybrid_result(NAME, answer, watch, stats)
 
         def prepare() -> None:
-            for c in (cfg, cfg.coarsened()) if cfg.coarsens else (cfg,):
+            for c in _first_configs(cfg):
                 free_cell_graph(problem, c.xy_resolution)
                 if not reverse:
                     dubins_table(c.radius_factor / problem.vehicle.kappa_max, c)
 
         return run_query(NAME, problem, budget, search, prepare)
+
+
+@functools.lru_cache(maxsize=16)  # a validated copy once per config, not per query
+def _first_configs(cfg: HybridConfig) -> tuple[HybridConfig, ...]:
+    """The searches a query starts with: the first, and the coarse one that may follow it."""
+    return (cfg, cfg.coarsened()) if cfg.coarsens else (cfg,)
 
 
 def hybrid_result(

@@ -224,8 +224,6 @@ def search_at_resolution(
     """
     kappa_max = problem.vehicle.kappa_max
     clearance = query_clearance(problem, config.body_clearance, have)
-    if smoothing is not None:
-        smoothing = dataclasses.replace(smoothing, clearance=clearance, kappa_max=kappa_max)
     radius = config.radius_factor / kappa_max
     # The returned rows interpolate linearly between arc poses 0.25 m apart (at most
     # 1.3 mm off the arc at kappa_max): the re-check allows 5 mm less than the search kept,
@@ -245,7 +243,11 @@ def search_at_resolution(
     if config.curve == "clothoid":
         bound = sharpness_bound_of(problem, smoothing)
         ramps = Ramps(bound, problem.vehicle.wheelbase, kappa_max)
-    post = smoothing if config.smooth and ramps is None else None
+    post = None
+    if config.smooth and ramps is None and smoothing is not None:
+        # The per-segment post-processor keeps the query's clearance and curvature limit
+        # (a validated copy: built only where it is used, not for the default ramps).
+        post = dataclasses.replace(smoothing, clearance=clearance, kappa_max=kappa_max)
 
     def accept(pieces: list[Piece]) -> BuiltPath | None:
         return build_path(

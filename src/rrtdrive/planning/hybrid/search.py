@@ -18,6 +18,7 @@ broken by insertion order.
 
 from __future__ import annotations
 
+import functools
 import heapq
 import math
 import operator
@@ -27,7 +28,7 @@ from typing import TypeVar
 
 import numpy as np
 
-from rrtdrive.planning.hybrid.body import BodyTest
+from rrtdrive.planning.hybrid.body import BodyTest, disc_reach
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.heuristic import Heuristic
 from rrtdrive.planning.hybrid.primitives import PrimitiveSet
@@ -103,6 +104,41 @@ class _OpenArcs:
     ends: list[list[float]]
 
 
+def _edge_costs(p: PrimitiveSet, reverse_cost: float, steer_cost: float, kappa_max: float) -> list:
+    """Each primitive's cost before gear and steering changes."""
+    gear_factor = np.where(p.gears < 0, reverse_cost, 1.0)
+    return (p.length * (gear_factor + steer_cost * np.abs(p.kappas) / kappa_max)).tolist()
+
+
+@functools.lru_cache(maxsize=64)
+def _arc_tables(
+    primitives: PrimitiveSet,
+    long_primitives: tuple[PrimitiveSet, ...],
+    reverse_cost: float,
+    steer_cost: float,
+    kappa_max: float,
+    disc_offsets: tuple[float, ...],
+) -> tuple[list[_OpenArcs], _OpenArcs]:
+    """The loop's tables of a search's primitives, built once (shared: never written).
+
+    The open arcs, longest first: the long ones, then the step arcs themselves, each
+    with its sweep's reach (:func:`~.body.disc_reach`), costs and local end poses; and
+    the step arcs as taken with a body test.
+    """
+    kappa = float(np.abs(primitives.kappas).max()) if len(primitives) else 0.0
+    sets = sorted((*long_primitives, primitives), key=lambda p: -p.length)
+    opened = [
+        _OpenArcs(p.length, disc_reach(disc_offsets, p.length, kappa),
+                  _edge_costs(p, reverse_cost, steer_cost, kappa_max), p.local[:, -1, :].tolist())
+        for p in sets
+    ]  # fmt: skip
+    tested = _OpenArcs(
+        primitives.length, [], _edge_costs(primitives, reverse_cost, steer_cost, kappa_max),
+        primitives.local[:, -1, :].tolist(),
+    )  # fmt: skip
+    return opened, tested
+
+
 class HybridSearch:
     """One Hybrid A* query: the primitives, the heuristic, the checker and the budget.
 
@@ -160,29 +196,11 @@ class HybridSearch:
         self.expansions = 0
         self.shots_tried = 0
         self.connections = 0
-        # Per-primitive constants of the edge cost.
-        self._base_cost = self._edge_costs(primitives)
-        # The primitives whose successors need no body test from a node with room for
-        # their sweep, longest first: the long ones, then the step arcs themselves
-        # (BodyTest.free_within: the same answer as the test).
-        kappa = float(np.abs(primitives.kappas).max()) if len(primitives) else 0.0
-        self._open = [
-            _OpenArcs(p.length, body.reach(p.length, kappa), self._edge_costs(p).tolist(),
-                      p.local[:, -1, :].tolist())
-            for p in sorted((*long_primitives, primitives), key=lambda p: -p.length)
-        ]  # fmt: skip
-        # The step arcs when the node's discs have room for none: their successors tested.
-        self._tested = _OpenArcs(
-            primitives.length, [], self._base_cost.tolist(), primitives.local[:, -1, :].tolist()
-        )
-
-    def _edge_costs(self, p: PrimitiveSet) -> np.ndarray:
-        """Each primitive's cost before gear and steering changes."""
-        cfg = self.cfg
-        return p.length * (
-            np.where(p.gears < 0, cfg.reverse_cost, 1.0)
-            + cfg.steer_cost * np.abs(p.kappas) / self.kappa_max
-        )
+        # The primitives as the loop reads them: built once per primitive set and costs.
+        self._open, self._tested = _arc_tables(
+            primitives, tuple(long_primitives), config.reverse_cost, config.steer_cost,
+            kappa_max, body.disc_offsets,
+        )  # fmt: skip
 
     def key(self, x: float, y: float, yaw: float, gear: int) -> int:
         """The closing bin of a state: its cell, heading bin and gear."""
