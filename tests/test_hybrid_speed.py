@@ -462,7 +462,8 @@ def test_exact_jacobian_is_the_difference_quotient(pieces, gear: int, rate: floa
     factors = r._widening(lengths, angles, rate)
     p = np.concatenate([lengths, angles])
     start = rows[0].copy()
-    end, jac, delta, h = r._end_and_jacobian(p, factors, rate, t, start, gear, 2.51)
+    end, jacobian, delta, h = r._end_and_jacobian(p, factors, rate, t, start, gear, 2.51)
+    jac = jacobian()
     want_delta, want_h = r._profiles(p[None, :n], p[None, n:], factors, rate, t)
     assert np.array_equal(end, _reference_ends(start, gear, want_delta, want_h, 2.51)[0])
     assert np.array_equal(delta, want_delta[0]) and h == want_h[0]

@@ -20,6 +20,7 @@ clearance, ``|kappa|``, sharpness); a segment that cannot be closed returns ``No
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -168,8 +169,11 @@ def _end_and_jacobian(
     start: np.ndarray,
     gear: int,
     wheelbase: float,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+) -> tuple[np.ndarray, Callable[[], np.ndarray], np.ndarray, float]:
     """End pose of ``p = [lengths, angles]``, its exact Jacobian ``(3, 2n)``, the profile.
+
+    The Jacobian is returned as a function that computes it on demand: the Newton
+    step that converges needs none.
 
     The derivative of the discrete integration (:func:`_integrate`'s end), one
     integration instead of the ``2n + 1`` a difference quotient needs. A change
@@ -185,11 +189,10 @@ def _end_and_jacobian(
     Returns
     -------
     tuple
-        The end pose ``(3,)``, the Jacobian ``(3, 2n)``, the steering profile
-        ``(T,)`` and the step ``h``.
+        The end pose ``(3,)``, a function giving the Jacobian ``(3, 2n)``, the
+        steering profile ``(T,)`` and the step ``h``.
     """
     n = len(p) // 2
-    lengths, angles = p[:n], p[n:]
     delta_b, h_b = _profiles(p[None, :n], p[None, n:], factors, rate, t)
     delta, h = delta_b[0], float(h_b[0])
     T = len(t)
@@ -202,6 +205,30 @@ def _end_and_jacobian(
     cos, sin = np.cos(mid), np.sin(mid)
     px, py = (h * cos).cumsum(), (h * sin).cumsum()
     end = np.array([start[0] + gear * px[-1], start[1] + gear * py[-1], yaw[-1]])
+
+    def jacobian() -> np.ndarray:
+        return _jacobian(p, factors, rate, t, gear, wheelbase, kappa, dyaw, px, py, h)
+
+    return end, jacobian, delta, h
+
+
+def _jacobian(
+    p: np.ndarray,
+    factors: np.ndarray,
+    rate: float,
+    t: np.ndarray,
+    gear: int,
+    wheelbase: float,
+    kappa: np.ndarray,
+    dyaw: np.ndarray,
+    px: np.ndarray,
+    py: np.ndarray,
+    h: float,
+) -> np.ndarray:
+    """The Jacobian of :func:`_end_and_jacobian`, from its integration's arrays."""
+    n = len(p) // 2
+    lengths, angles = p[:n], p[n:]
+    T = len(t)
     # lever[:, c]: the sums over the steps from node c to the end (0 at the last node).
     lever = np.zeros((2, T))
     lever[0, 1:-1] = px[-1] - px[:-1]
@@ -240,7 +267,7 @@ def _end_and_jacobian(
     later = np.zeros((3, n))
     later[:, :-1] = (slope * on)[:, ::-1].cumsum(axis=1)[:, ::-1]  # joints k .. J-1
     jac[:, :n] = (stretch + d_h / (T - 1))[:, None] - later
-    return end, jac, delta, h
+    return jac
 
 
 def _widening(lengths: np.ndarray, angles: np.ndarray, rate: float) -> np.ndarray:
@@ -402,13 +429,13 @@ def _ramped_once(
     factors = _widening(lengths, angles, rate)
     pose = None
     for _ in range(_NEWTON_ITERATIONS):
-        end, jac, d0, h0 = _end_and_jacobian(p, factors, rate, t, start, gear, wheelbase)
+        end, jacobian, d0, h0 = _end_and_jacobian(p, factors, rate, t, start, gear, wheelbase)
         err = end - goal
         err[2] = wrap_angle(err[2])
         pose = (d0, h0)
         if float(np.abs(err).max()) < _NEWTON_TOL:
             break
-        step = _bounded_step(jac, err, p, weight, lower, upper)
+        step = _bounded_step(jacobian(), err, p, weight, lower, upper)
         if step is None:
             return None
         p = np.clip(p + step, lower, upper)
