@@ -144,3 +144,23 @@ def test_rejected_ramps_search_again_with_more_clearance() -> None:
     res = HybridAStar(long_steps=()).solve(problem, np.random.default_rng(0), BUDGET)
     assert res.success and verify_path(m, res.path).ok
     assert max_sharpness(res.path.samples, L) <= 0.2
+
+
+@pytest.mark.parametrize("name", ["parking-reverse-in", "parallel-parking", "u-turn"])
+def test_sharpness_measured_while_building_is_the_paths_own(name: str) -> None:
+    """BuiltPath keeps the largest segment sharpness it measured: the whole path's value."""
+    from rrtdrive.planning.base import Stopwatch
+    from rrtdrive.planning.hybrid.query import hybrid_query
+    from rrtdrive.planning.smoothing import SmoothingConfig
+    from rrtdrive.sim.tasks import make_scenario
+
+    task = make_scenario("parking", 3, reverse_in=True) if name == "parking-reverse-in" else (
+        make_scenario(name, 3)
+    )
+    problem = PlanningProblem.from_map(task.map, reverse=True)
+    answer = hybrid_query(
+        problem, BUDGET, Stopwatch(BUDGET), HybridConfig(), True, SmoothingConfig(max_rounds=24)
+    )
+    assert answer.path is not None and answer.path.measured_sharpness is not None
+    assert answer.path.max_sharpness(L) == max_sharpness(answer.path.rows, L)
+    assert answer.path.measured_sharpness == (L, max_sharpness(answer.path.rows, L))

@@ -74,6 +74,9 @@ class BuiltPath:
     segments: int
     smoothed: int
     smoothing_message: str
+    #: ``(wheelbase, value)`` of :meth:`max_sharpness` when every segment was measured
+    #: while the path was built (the ramped segments are), else ``None``.
+    measured_sharpness: tuple[float, float] | None = None
 
     def max_sharpness(self, wheelbase: float) -> float:
         """Largest ``|d delta / ds|`` (rad/m) within the gear segments (``inf``: a jump).
@@ -81,8 +84,11 @@ class BuiltPath:
         A cusp is a stop, where the steering may turn at standstill: it does not count
         (:func:`~rrtdrive.planning.smoothing.max_sharpness` skips gear changes).
         Exact arcs jump in curvature where two primitives meet, so their value is
-        ``inf`` unless the segment steers constantly.
+        ``inf`` unless the segment steers constantly. The largest of the segments'
+        values measured while building is the same number (the same intervals).
         """
+        if self.measured_sharpness is not None and self.measured_sharpness[0] == wheelbase:
+            return self.measured_sharpness[1]
         return max_sharpness(self.rows, wheelbase)
 
 
@@ -159,14 +165,16 @@ class Ramps:
         return math.atan(self.wheelbase * self.kappa_max)
 
 
-def _ramped(seg: GearSegment, ramps: Ramps, spacing: float) -> np.ndarray | None:
+def _ramped(seg: GearSegment, ramps: Ramps, spacing: float) -> tuple[np.ndarray, float] | None:
+    """The ramped rows of a segment and their sharpness, or ``None`` over the bound."""
     rows = ramped_segment(
         seg.rows, seg.gear, ramps.ramp_share * ramps.sharpness, ramps.wheelbase,
         ramps.delta_max, spacing=min(spacing, 0.2),
     )  # fmt: skip
-    if rows is None or max_sharpness(rows, ramps.wheelbase) > ramps.sharpness:
+    if rows is None:
         return None
-    return rows
+    sharp = max_sharpness(rows, ramps.wheelbase)
+    return None if sharp > ramps.sharpness else (rows, sharp)
 
 
 def build_path(
@@ -211,14 +219,17 @@ def build_path(
     waypoints: list[np.ndarray] = []
     smoothed = 0
     message = ""
+    sharpness = 0.0
     for seg in segs:
         rows = np.zeros((0, 4))
         if ramps is not None:
-            ramped = _ramped(seg, ramps, sample_spacing)
-            if ramped is None or not _segment_ok(
-                ramped, checker, clearance, kappa_max, check_spacing
+            found = _ramped(seg, ramps, sample_spacing)
+            if found is None or not _segment_ok(
+                found[0], checker, clearance, kappa_max, check_spacing
             ):
                 return None
+            ramped, sharp = found
+            sharpness = max(sharpness, sharp)
             smoothed += 1
             waypoints.append(ramped[[0, -1], :2])
             rows = np.column_stack([ramped, np.full(len(ramped), float(seg.gear))])
@@ -244,7 +255,8 @@ def build_path(
         rows[:, 2] = wrap_angle(rows[:, 2])
         out_rows.append(rows)
     all_rows = np.vstack(out_rows)
-    return BuiltPath(all_rows, np.vstack(waypoints), len(segs), smoothed, message)
+    measured = (ramps.wheelbase, sharpness) if ramps is not None else None
+    return BuiltPath(all_rows, np.vstack(waypoints), len(segs), smoothed, message, measured)
 
 
 def with_smoothing_clearance(
