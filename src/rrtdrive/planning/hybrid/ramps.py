@@ -169,7 +169,7 @@ def _end_and_jacobian(
     start: np.ndarray,
     gear: int,
     wheelbase: float,
-) -> tuple[np.ndarray, Callable[[], np.ndarray], np.ndarray, float]:
+) -> tuple[np.ndarray, Callable[[], np.ndarray], np.ndarray, Callable[[], np.ndarray]]:
     """End pose of ``p = [lengths, angles]``, its exact Jacobian ``(3, 2n)``, the profile.
 
     The Jacobian is returned as a function that computes it on demand: the Newton
@@ -190,7 +190,8 @@ def _end_and_jacobian(
     -------
     tuple
         The end pose ``(3,)``, a function giving the Jacobian ``(3, 2n)``, the
-        steering profile ``(T,)`` and the step ``h``.
+        steering profile ``(T,)`` and a function giving every pose ``(T, 3)`` (as
+        :func:`_integrate` would).
     """
     n = len(p) // 2
     delta_b, h_b = _profiles(p[None, :n], p[None, n:], factors, rate, t)
@@ -209,7 +210,14 @@ def _end_and_jacobian(
     def jacobian() -> np.ndarray:
         return _jacobian(p, factors, rate, t, gear, wheelbase, kappa, dyaw, px, py, h)
 
-    return end, jacobian, delta, h
+    def poses() -> np.ndarray:
+        # _integrate's rows from this integration's sums: the same operations, the same floats.
+        zero = np.zeros(1)
+        x = start[0] + gear * np.concatenate([zero, px])
+        y = start[1] + gear * np.concatenate([zero, py])
+        return np.stack([x, y, yaw], axis=-1)
+
+    return end, jacobian, delta, poses
 
 
 def _jacobian(
@@ -429,10 +437,12 @@ def _ramped_once(
     factors = _widening(lengths, angles, rate)
     pose = None
     for _ in range(_NEWTON_ITERATIONS):
-        end, jacobian, d0, h0 = _end_and_jacobian(p, factors, rate, t, start, gear, wheelbase)
+        end, jacobian, d0, poses_of = _end_and_jacobian(
+            p, factors, rate, t, start, gear, wheelbase
+        )
         err = end - goal
         err[2] = wrap_angle(err[2])
-        pose = (d0, h0)
+        pose = (d0, poses_of)
         if float(np.abs(err).max()) < _NEWTON_TOL:
             break
         step = _bounded_step(jacobian(), err, p, weight, lower, upper)
@@ -443,8 +453,8 @@ def _ramped_once(
         return None
     if pose is None:
         return None
-    delta, h = pose
-    poses = _integrate(start, gear, delta[None], np.array([h]), wheelbase)[0]
+    delta, poses_of = pose
+    poses = poses_of()
     out = np.column_stack([poses, np.tan(delta) / wheelbase])[::_SUBSTEPS]
     out[0, :3], out[-1, :3] = start, goal
     return out
