@@ -133,14 +133,10 @@ class BodyTest:
         obstacle: a disc centre with ``disc_need + reach`` of room here has
         ``disc_need`` wherever it moves within ``reach``, so the body keeps the
         clearance there (the checker's exact test says free, its screens no hit).
-        False proves nothing.
+        False proves nothing. The search makes this decision from :meth:`disc_room`
+        with the same comparisons.
         """
-        c, s = math.cos(yaw), math.sin(yaw)
-        clearance, need = self.checker.clearance, self.disc_need
-        for off, r in zip(self._disc_list, reach, strict=True):
-            if clearance(x + c * off, y + s * off) < need + r:
-                return False
-        return True
+        return all(room >= r for room, r in zip(self.disc_room(x, y, yaw), reach, strict=True))
 
     def disc_room(self, x: float, y: float, yaw: float) -> list[float]:
         """Each covering disc's room beyond ``disc_need`` at a pose (see :meth:`free_within`)."""
