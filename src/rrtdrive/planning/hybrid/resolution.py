@@ -234,10 +234,12 @@ def search_at_resolution(
     with watch.setup():  # built once per map (per process for the table and primitives)
         grid = free_cell_graph(problem, config.xy_resolution)
         table = None if reverse else dubins_table(radius, config)
-    prims, *long_prims = primitive_sets(
-        1.0 / radius, config.curvatures, config.step, config.check_spacing, 0 if reverse else 1,
-        config.long_steps,
-    )  # fmt: skip
+        prims, *long_prims = primitive_sets(
+            1.0 / radius, config.curvatures, config.step, config.check_spacing,
+            0 if reverse else 1, config.long_steps,
+        )  # fmt: skip
+        # From the goal back to the start: forward only, by reverse arcs alone.
+        back_sets = (prims, *long_prims) if reverse else prims_reverse(radius, config)
 
     ramps = None
     if config.curve == "clothoid":
@@ -273,10 +275,7 @@ def search_at_resolution(
         )  # fmt: skip
         out: list[tuple[HybridSearch, Accept]] = [(ahead, accept)]
         if config.switch_after > 0:
-            # From the goal back to the start: forward only, by reverse arcs alone.
-            back_prims, *back_long = (
-                (prims, *long_prims) if reverse else prims_reverse(radius, config)
-            )
+            back_prims, *back_long = back_sets
             if reverse:
                 back_shots = analytic_shots(start, radius, True, config.check_spacing, body)
             else:
