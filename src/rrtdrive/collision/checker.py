@@ -236,9 +236,9 @@ class CollisionChecker:
         trig = np.empty((2, 1, n))
         np.cos(rows[2], out=trig[0, 0])
         np.sin(rows[2], out=trig[1, 0])
-        g = trig * offsets[:, None]
-        g += rows[:2, None, :]
-        g -= self._origin[:, None, None]
+        world = trig * offsets[:, None]
+        world += rows[:2, None, :]
+        g = world - self._origin[:, None, None]
         g *= self._inv_h
         nx, ny = self._shape
         # For g >= 0, int(g) < n exactly when g < n: the float bounds decide alone.
@@ -248,14 +248,9 @@ class CollisionChecker:
             flat = idx[0] * ny
             flat += idx[1]
             return self._clearance_flat.take(flat)
-        with np.errstate(invalid="ignore"):  # NaN or inf read as outside, as clearances()
-            idx = g.astype(np.int64)
-        flat = idx[0] * ny
-        flat += idx[1]
-        ok = (g >= 0.0).all(axis=0) & (idx[0] < nx) & (idx[1] < ny)
-        out = np.full(flat.shape, -np.inf)
-        out[ok] = self._clearance_flat[flat[ok]]
-        return out
+        # Some point outside the grid (or not finite): clearances() reads those as -inf.
+        points = np.stack([world[0].ravel(), world[1].ravel()], axis=1)
+        return self.clearances(points).reshape(len(offsets), n)
 
     # ------------------------------------------------------------------ fast tests
 
