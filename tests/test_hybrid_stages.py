@@ -5,6 +5,8 @@
   drives that must loop round on ``parking_lot`` need it. Its failure proves nothing.
 - tight (``min_clearance``): after a proof for paths keeping 0.15 m, one search
   keeping 0.05 m; a start with room around it but less ahead needs it.
+- middle (``HybridConfig.middled``): after a coarse search that ended with budget
+  left, one at half its factor, then keeping ``min_clearance`` there.
 - wide (``wide_radius_factor``): after every goal connection was rejected (the
   ramps of full-lock words cannot end on the pose), one search turning wider.
 - shares (``refine_share``): a finer search that a last resort may follow spends at
@@ -70,18 +72,38 @@ def test_coarse_stage_solves_what_the_fine_search_cannot_in_the_budget() -> None
 
 def test_a_failed_coarse_search_is_not_a_proof() -> None:
     # kerbside forward only: the fine search is cut at its share (100 of 400), the coarse
-    # one cannot reach the gap and runs out of states before the budget is spent.
+    # one cannot reach the gap and runs out of states before the budget is spent; the
+    # middle one (1 m) and its tight one (0.05 m) spend the rest. No proof.
     problem = PlanningProblem.from_map(builtin_map("kerbside"))
     cut = _solve(problem, 400)
     assert cut.status is PlanStatus.NO_PATH_IN_BUDGET
-    assert cut.iterations < 400  # the coarse search ended by running out, not by the budget
-    assert "ran out of states" in cut.message and "a coarse search proves nothing" in cut.message
-    assert "spent its share of 100 expansions" in cut.message
+    assert "spent its share of 100 expansions, then at 2 m / 20 deg / 4 m steps it ran out of " \
+        "states" in cut.message
+    assert "then at 1 m / 10 deg / 2 m steps it spent its share of" in cut.message
+    assert "keeping only 0.05 m body clearance it spent" in cut.message
+    assert "a coarser search proves nothing" in cut.message
+    assert cut.iterations == 400
     # With budget enough that the fine search ends within its share, it (and its finer
     # retry) proves that no forward drive arrives: the proof is not lost.
     proof = _solve(problem, 2000)
     assert proof.status is PlanStatus.PROVEN_UNREACHABLE, proof.message
     assert proof.stats["coarse_search"] == 0.0 and proof.stats["refinements"] == 1.0
+
+
+def test_middle_stage_threads_an_approach_too_tight_for_the_coarse_grid() -> None:
+    # Random goal 94 forward: the only way in passes about 0.05 m from a parked car. The
+    # first search spends its share, the coarse one (2 m) and the middle one keeping
+    # 0.15 m (1 m) run out of ways to arrive; the middle one keeping 0.05 m finds it.
+    m, problem = _random_problem("goal", 94, count=100)
+    res = _solve(problem, 20000)
+    assert res.status is PlanStatus.SOLVED, res.message
+    assert "keeping only 0.05 m body clearance at 1 m / 10 deg resolution" in res.message
+    assert res.stats["tight_search"] == 1.0
+    assert verify_path(m, res.path).ok
+    assert np.all(res.path.samples[:, 4] == 1)
+    # Without the middle stage (coarse_factor 2 has none) the budget ends without a path.
+    without = _solve(problem, 20000, coarse_factor=2)
+    assert without.status is PlanStatus.NO_PATH_IN_BUDGET
 
 
 def test_queries_solved_within_the_share_are_unchanged() -> None:

@@ -10,6 +10,7 @@ user's terms how each search ended.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections.abc import Sequence
@@ -132,13 +133,33 @@ def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
 
     Examples
     --------
-    >>> [(s.name, s.config.xy_resolution, s.share) for s in _ladder(HybridConfig())]
-    [('coarse', 2.0, 1.0), ('fine', 0.25, 0.5), ('tight', 0.5, 1.0), ('wide', 0.5, 1.0)]
+    >>> ladder = _ladder(HybridConfig())
+    >>> [s.name for s in ladder]
+    ['coarse', 'middle', 'tight', 'fine', 'tight', 'wide']
+    >>> [s.config.xy_resolution for s in ladder]
+    [2.0, 1.0, 1.0, 0.25, 0.5, 0.5]
+    >>> [s.share for s in ladder]
+    [1.0, 0.5, 1.0, 0.5, 1.0, 1.0]
     """
     stages = []
     if config.coarsens:
         # The first search spent its share, not out of states: the rest goes to a coarser one.
-        stages.append(_Stage("coarse", config.coarsened(), ("expansions",), ("expansions",)))
+        spent = ("expansions",)
+        stages.append(_Stage("coarse", config.coarsened(), spent, spent))
+        if config.has_middle:
+            # The coarse one ended with budget left (its proof holds at 2 m only): a
+            # middle resolution, then keeping min_clearance there (an approach too tight
+            # for 0.15 m that a 2 m grid cannot thread and a 0.5 m one finds too late).
+            middle = config.middled()
+            stages.append(_Stage("middle", middle, spent, _REFINE_ON, config.refine_share))
+            if config.min_clearance < config.body_clearance:
+                # Last of all, with twice the goal connections: an approach 0.05 m from a
+                # car has most ramped connections cut the corner (random goal 94 forward:
+                # the 17th to 24th passed, 4 301 expansions).
+                tight = dataclasses.replace(
+                    middle.tightened(), max_solutions=2 * config.max_solutions
+                )
+                stages.append(_Stage("tight", tight, spent, (*PROOFS, "expansions")))
     fine = config
     for _ in range(config.refinements):
         fine = fine.refined()
@@ -227,11 +248,14 @@ def hybrid_query(
     usual = query_clearance(problem, config.body_clearance, have)
     kept = clearance = query_clearance(problem, cfg.body_clearance, have)
     before = tried[-2][1].reason if len(tried) > 1 else ""
-    if stage == "coarse" and path is None and reason in _REFINE_ON:
-        # What the coarse search cannot do proves nothing: the finer one was cut short.
+    # After a first search cut short at its share, nothing the later ones find out is a
+    # proof: the first resolution's search did not finish.
+    coarse_branch = first == "expansions" and len(tried) > 1
+    if coarse_branch and path is None and reason in _REFINE_ON:
         reason = "expansions"
     if (
         stage == "tight"
+        and not coarse_branch
         and path is None
         and reason != "time"
         and (reason not in PROOFS or before not in PROOFS)
@@ -243,6 +267,8 @@ def hybrid_query(
     if stage == "wide" and path is None and reason != "time":
         # Wider turns prove nothing about the car's own: the rejections stand.
         reason = "rejected"
+    if coarse_branch and path is None:
+        clearance = usual  # what the failure speaks of: the usual clearance
     total = SearchOutcome.total(reason, [o for _, o, _ in tried])
     earlier = tried[:-1]
     answer = functools.partial(
@@ -257,19 +283,23 @@ def hybrid_query(
     }.get(stage, "")
     if path is not None:
         note = f" {how}" if how else ""
-        if stage == "tight" and before in PROOFS:
+        if stage == "tight" and before in PROOFS and not coarse_branch:
             note += f" (none keeps {usual:.2f} m)"
         if earlier:
             note += f" at {_resolution(cfg)} resolution ({_earlier_note(earlier)})"
         return answer(path=path, message="", note=note)
-    if stage == "coarse":
-        first_cfg, first_outcome, _ = tried[0]
+    if coarse_branch:
+        steps = [
+            f"at {_resolution(c)} / {c.step:g} m steps"
+            + (f" keeping only {c.body_clearance:.2f} m body clearance" if c is not config
+               and c.body_clearance < config.body_clearance else "")
+            + f" {'the search' if k == 0 else 'it'} {_why(o, 'its share of ' if a else '')}"
+            for k, (c, o, a) in enumerate(tried)
+        ]  # fmt: skip
         message = (
-            f"no path found within the expansion budget of {budget.max_iterations}: at "
-            f"{_resolution(first_cfg)} / {first_cfg.step:g} m steps the search "
-            f"{_why(first_outcome, 'its share of ')}, then at {_resolution(cfg)} / "
-            f"{cfg.step:g} m steps it {_why(outcome, '')} (a coarse search proves nothing; "
-            "a larger budget may find a path)"
+            f"no path found within the expansion budget of {budget.max_iterations}: "
+            + ", then ".join(steps)
+            + " (a coarser search proves nothing; a larger budget may find a path)"
         )
         return answer(path=None, message=message)
     lead, earlier = tried[-1], tried[:-1]
