@@ -98,3 +98,47 @@ def test_one_dimensional_profile_is_the_batch_profile(pieces: int, seed: int, no
     assert np.array_equal(delta, want[0])
     assert h == float(want_h[0])
     assert np.array_equal(t, np.linspace(0.0, 1.0, nodes))
+
+
+def _reference_densify(p: np.ndarray, spacing: float, angle_column, rel_slack, abs_slack):
+    """geometry.densify as it was (fe62cbf): gathered rows ``a + frac (b - a)``, stacked."""
+    from rrtdrive.geometry import wrap_angle
+
+    seg = np.hypot(*np.diff(p[:, :2], axis=0).T)
+    pieces = np.maximum(1, np.ceil(seg / spacing * (1 + rel_slack) - abs_slack).astype(np.int64))
+    owner = np.repeat(np.arange(len(seg)), pieces)
+    first = np.repeat(np.cumsum(pieces) - pieces, pieces)
+    frac = (np.arange(len(owner)) - first) / np.repeat(pieces, pieces)
+    a, b = p[owner], p[owner + 1]
+    out = a + frac[:, None] * (b - a)
+    if angle_column is not None:
+        k = angle_column
+        out[:, k] = a[:, k] + frac * wrap_angle(b[:, k] - a[:, k])
+    return np.vstack([out, p[-1:]]), pieces
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.integers(2, 40),
+    st.integers(2, 5),
+    st.integers(0, 2**32 - 1),
+    st.sampled_from([0.05, 0.1, 0.25, 1.0]),
+    st.sampled_from([0.0, 1e-5]),
+    st.sampled_from([0.0, 1e-9]),
+    st.booleans(),
+)
+def test_densify_is_the_reference(
+    n: int, dims: int, seed: int, spacing: float, rel: float, ab: float, angles: bool
+) -> None:
+    """The in-place densify: the same rows (and signs of zero) and piece counts."""
+    from rrtdrive.geometry import densify
+
+    rng = np.random.default_rng(seed)
+    p = rng.normal(size=(n, dims)) * rng.choice([0.01, 1.0, 10.0])
+    p[rng.integers(0, n)] = p[0]  # a repeated row: a segment of length 0
+    column = 2 if angles and dims > 2 else None
+    got = densify(p, spacing, angle_column=column, rel_slack=rel, abs_slack=ab)
+    want, pieces = _reference_densify(p, spacing, column, rel, ab)
+    assert np.array_equal(got.points, want)
+    assert np.array_equal(np.signbit(got.points), np.signbit(want))
+    assert np.array_equal(got.pieces, pieces)
