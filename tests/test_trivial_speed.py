@@ -142,3 +142,21 @@ def test_densify_is_the_reference(
     assert np.array_equal(got.points, want)
     assert np.array_equal(np.signbit(got.points), np.signbit(want))
     assert np.array_equal(got.pieces, pieces)
+
+
+def test_body_tests_are_kept_per_map_and_clearance() -> None:
+    from rrtdrive.planning.base import cached_checker
+    from rrtdrive.planning.hybrid import resolution
+    from rrtdrive.planning.hybrid.body import BodyTest
+
+    checker = cached_checker(builtin_map("parking_lot"))
+    a = resolution.body_test(checker, 0.1)
+    assert resolution.body_test(checker, 0.1) is a
+    fresh = BodyTest(checker, 0.1)
+    assert vars(a).keys() == vars(fresh).keys()
+    for key, value in vars(fresh).items():
+        assert np.array_equal(getattr(a, key), value) if key != "checker" else a.checker is value
+    for k in range(resolution.BODY_TESTS + 2):
+        assert resolution.body_test(checker, 0.2 + 0.01 * k).clearance == 0.2 + 0.01 * k
+    tests = checker.grid.derived(("hybrid-body-tests",), dict)
+    assert len(tests) == resolution.BODY_TESTS  # the oldest dropped
