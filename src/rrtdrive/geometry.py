@@ -191,17 +191,30 @@ def densify(
     p = np.asarray(points, dtype=float)
     if len(p) < 2:
         return Densified(p, np.zeros(0, dtype=np.int64))
-    seg = np.hypot(*np.diff(p[:, :2], axis=0).T)
-    pieces = np.maximum(1, np.ceil(seg / spacing * (1 + rel_slack) - abs_slack).astype(np.int64))
-    owner = np.repeat(np.arange(len(seg)), pieces)
-    first = np.repeat(np.cumsum(pieces) - pieces, pieces)
-    frac = (np.arange(len(owner)) - first) / np.repeat(pieces, pieces)
-    a, b = p[owner], p[owner + 1]
-    out = a + frac[:, None] * (b - a)
+    # Each segment's difference b - a once, gathered per output row (the same floats as
+    # differences of the gathered rows), and the rows written in place: the arithmetic of
+    # ``a + frac (b - a)`` in fewer numpy calls (a hot path of the planners' re-checks).
+    step = p[1:] - p[:-1]
+    count = np.hypot(step[:, 0], step[:, 1]) / spacing
+    if rel_slack:  # x * (1 + 0) and x - 0 are x: the slack-free count skips them
+        count *= 1 + rel_slack
+    if abs_slack:
+        count -= abs_slack
+    pieces = np.maximum(1, np.ceil(count).astype(np.int64))
+    owner = np.repeat(np.arange(len(step)), pieces)
+    # take(), not fancy indexing: the same gather, several times faster on rows.
+    first = (pieces.cumsum() - pieces).take(owner)
+    frac = (np.arange(len(owner)) - first) / pieces.take(owner)
+    out = np.empty((len(owner) + 1, p.shape[1]))
+    body = out[:-1]
+    np.multiply(frac[:, None], step.take(owner, axis=0), out=body)
+    body += p.take(owner, axis=0)
     if angle_column is not None:
         k = angle_column
-        out[:, k] = a[:, k] + frac * wrap_angle(b[:, k] - a[:, k])
-    return Densified(np.vstack([out, p[-1:]]), pieces)
+        np.multiply(frac, wrap_angle(step[:, k]).take(owner), out=body[:, k])
+        body[:, k] += p[:, k].take(owner)
+    out[-1] = p[-1]
+    return Densified(out, pieces)
 
 
 @dataclass(frozen=True)

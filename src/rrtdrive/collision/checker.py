@@ -412,11 +412,11 @@ class CollisionChecker:
         for offsets, radius in self._screens:
             if len(unsure) == 0:
                 return free
-            sure = self._discs_clear(p[unsure], offsets, radius + clearance)
+            sure = self._discs_clear(p.take(unsure, axis=0), offsets, radius + clearance)
             free[unsure[sure]] = True
             unsure = unsure[~sure]
         if len(unsure):
-            free[unsure] = self._exact(p[unsure], clearance)
+            free[unsure] = self._exact(p.take(unsure, axis=0), clearance)
         return free
 
     def poses_free_unscreened(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
@@ -518,8 +518,9 @@ class CollisionChecker:
             owner = np.minimum(np.arange(len(s)), len(dense.pieces) - 1)
             return bool(free.all()), np.unique(owner[~free])
         free = self.poses_free(dense.points, clearance)
-        bad = np.unique(dense.segment[~free])
-        return bool(free.all()), bad
+        if free.all():  # nothing to list (what np.unique of no segment gives)
+            return True, np.zeros(0, dtype=np.int64)
+        return False, np.unique(dense.segment[~free])
 
     # ------------------------------------------------------------------ connectivity
 

@@ -19,6 +19,7 @@ clearance, ``|kappa|``, sharpness); a segment that cannot be closed returns ``No
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 
@@ -45,8 +46,9 @@ def _intervals(rows: np.ndarray, gear: int) -> tuple[np.ndarray, np.ndarray]:
     The curvature is read from the geometry (``d yaw / (gear ds)``), not from the
     rows' kappa column, so the row convention at joints does not matter.
     """
-    chord = np.hypot(*np.diff(rows[:, :2], axis=0).T)
-    dyaw = wrap_angle(np.diff(rows[:, 2]))
+    step = rows[1:, :3] - rows[:-1, :3]  # np.diff's arithmetic, one call for the three columns
+    chord = np.hypot(step[:, 0], step[:, 1])
+    dyaw = wrap_angle(step[:, 2])
     half = 0.5 * np.abs(dyaw)
     # The arc through two poses of an arc: chord * (theta/2) / sin(theta/2).
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -60,8 +62,10 @@ def _intervals(rows: np.ndarray, gear: int) -> tuple[np.ndarray, np.ndarray]:
 def _pieces(ds: np.ndarray, kappa: np.ndarray, wheelbase: float) -> tuple[np.ndarray, np.ndarray]:
     """Runs of equal curvature merged: their lengths and steering angles."""
     delta = np.arctan(wheelbase * kappa)
-    new = np.concatenate([[True], np.abs(np.diff(delta)) > 1e-6])
-    idx = np.cumsum(new) - 1
+    new = np.empty(len(delta), dtype=bool)
+    new[0] = True
+    np.greater(np.abs(delta[1:] - delta[:-1]), 1e-6, out=new[1:])
+    idx = new.cumsum() - 1
     lengths = np.bincount(idx, weights=ds)
     angles = np.bincount(idx, weights=delta * ds) / lengths
     return lengths, angles
@@ -194,8 +198,7 @@ def _end_and_jacobian(
         :func:`_integrate` would).
     """
     n = len(p) // 2
-    delta_b, h_b = _profiles(p[None, :n], p[None, n:], factors, rate, t)
-    delta, h = delta_b[0], float(h_b[0])
+    delta, h, grid = _profile(p[:n], p[n:], factors, rate, t)
     T = len(t)
     kappa = np.tan(delta) / wheelbase
     dyaw = gear * 0.5 * (kappa[1:] + kappa[:-1]) * h
@@ -203,12 +206,18 @@ def _end_and_jacobian(
     yaw[0] = start[2] + 0.0
     yaw[1:] = start[2] + dyaw.cumsum()
     mid = 0.5 * (yaw[1:] + yaw[:-1])
-    cos, sin = np.cos(mid), np.sin(mid)
-    px, py = (h * cos).cumsum(), (h * sin).cumsum()
+    # The x and y sums as the rows of one array: each row's products and running sums are
+    # those of the 1-D arrays, in half the numpy calls.
+    sums = np.empty((2, T - 1))
+    np.cos(mid, out=sums[0])
+    np.sin(mid, out=sums[1])
+    sums *= h
+    sums = sums.cumsum(axis=1)
+    px, py = sums[0], sums[1]
     end = np.array([start[0] + gear * px[-1], start[1] + gear * py[-1], yaw[-1]])
 
     def jacobian() -> np.ndarray:
-        return _jacobian(p, factors, rate, t, gear, wheelbase, kappa, dyaw, px, py, h)
+        return _jacobian(n, grid, gear, wheelbase, kappa, dyaw, sums, h, t)
 
     def poses() -> np.ndarray:
         # _integrate's rows from this integration's sums: the same operations, the same floats.
@@ -220,58 +229,91 @@ def _end_and_jacobian(
     return end, jacobian, delta, poses
 
 
+def _profile(
+    lengths: np.ndarray, angles: np.ndarray, factors: np.ndarray, rate: float, t: np.ndarray
+) -> tuple[np.ndarray, float, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """:func:`_profiles` of one parameter vector: the steering ``(T,)``, ``h`` and the grid.
+
+    The same floats as ``_profiles(lengths[None], angles[None], ...)`` (the same
+    operations on 1-D arrays; the ramps are summed one after the other, as numpy
+    sums the ``(B, J, T)`` array along ``J``), without its 2-D and 3-D wrappers.
+    The grid ``(s, joints, jumps, widths)`` is what :func:`_jacobian` reads.
+    """
+    total = lengths.sum()
+    s = total * t
+    joints = lengths.cumsum()[:-1]
+    jumps = angles[1:] - angles[:-1]
+    widths = np.maximum(np.abs(jumps) * factors / rate, 1e-9)
+    T = len(t)
+    J = len(jumps)
+    if J * T > _FULL_SUM_MAX:
+        ramp = _ramp_sum(s[None], t, total[None], joints[None], jumps[None], widths[None])[0]
+    elif J:
+        u = s[None, :] - joints[:, None]
+        u /= widths[:, None]
+        u += 0.5
+        np.maximum(u, 0.0, out=u)
+        np.minimum(u, 1.0, out=u)
+        u *= jumps[:, None]
+        ramp = u.sum(axis=0)
+    else:
+        ramp = np.zeros(T)
+    return ramp + angles[0], float(total / (T - 1)), (s, joints, jumps, widths)
+
+
 def _jacobian(
-    p: np.ndarray,
-    factors: np.ndarray,
-    rate: float,
-    t: np.ndarray,
+    n: int,
+    grid: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     gear: int,
     wheelbase: float,
     kappa: np.ndarray,
     dyaw: np.ndarray,
-    px: np.ndarray,
-    py: np.ndarray,
+    sums: np.ndarray,
     h: float,
+    t: np.ndarray,
 ) -> np.ndarray:
-    """The Jacobian of :func:`_end_and_jacobian`, from its integration's arrays."""
-    n = len(p) // 2
-    lengths, angles = p[:n], p[n:]
+    """The Jacobian of :func:`_end_and_jacobian`, from its integration's arrays.
+
+    ``grid``: :func:`_profile`'s ``(s, joints, jumps, widths)``; ``sums``: the
+    ``(2, T - 1)`` running sums of the x and y steps.
+    """
+    s, joints, jumps, widths = grid
     T = len(t)
     # lever[:, c]: the sums over the steps from node c to the end (0 at the last node).
     lever = np.zeros((2, T))
-    lever[0, 1:-1] = px[-1] - px[:-1]
-    lever[1, 1:-1] = py[-1] - py[:-1]
-    lever[0, 0], lever[1, 0] = px[-1], py[-1]
+    np.subtract(sums[:, -1:], sums[:, :-1], out=lever[:, 1:-1])
+    lever[:, 0] = sums[:, -1]
     # r[:, i]: d end / d dyaw_i, the turn of every node after i.
+    pair = lever[:, :-1] + lever[:, 1:]
     r = np.empty((3, T - 1))
-    r[0] = -0.5 * gear * (lever[1, :-1] + lever[1, 1:])
-    r[1] = 0.5 * gear * (lever[0, :-1] + lever[0, 1:])
+    np.multiply(-0.5 * gear, pair[1], out=r[0])
+    np.multiply(0.5 * gear, pair[0], out=r[1])
     r[2] = 1.0
     g = 0.5 * gear * h
     v = np.zeros((3, T))
     v[:, :-1] = r
     v[:, 1:] += r
     v *= g * (1.0 + (wheelbase * kappa) ** 2) / wheelbase  # d end / d delta_c
-    d_h = np.array([gear * px[-1], gear * py[-1], 0.0]) / h + (r @ dyaw) / h
-    # Suffix sums of v and v * t, with a zero column for "from T on".
-    V = np.zeros((3, T + 1))
-    V[:, :-1] = v[:, ::-1].cumsum(axis=1)[:, ::-1]
-    W = np.zeros((3, T + 1))
-    W[:, :-1] = (v * t)[:, ::-1].cumsum(axis=1)[:, ::-1]
-    s = float(lengths.sum()) * t
-    joints = lengths.cumsum()[:-1]
-    jumps = angles[1:] - angles[:-1]
-    widths = np.maximum(np.abs(jumps) * factors / rate, 1e-9)
+    d_h = np.array([gear * sums[0, -1], gear * sums[1, -1], 0.0]) / h + (r @ dyaw) / h
+    # Suffix sums of v (rows 0-2) and v * t (rows 3-5), summed from the last node on as
+    # before, in one running sum of the reversed rows: column T - c holds the sums from
+    # node c on (column 0, "from T on", is zero).
+    back = np.empty((6, T))
+    back[:3] = v[:, ::-1]
+    np.multiply(back[:3], t[::-1], out=back[3:])
+    suffix = np.zeros((6, T + 1))
+    np.cumsum(back, axis=1, out=suffix[:, 1:])
     a = s.searchsorted(joints - 0.5 * widths, side="right")  # first node on a ramp
     b = s.searchsorted(joints + 0.5 * widths, side="left")  # first node after it
     slope = jumps / widths
-    on = V[:, a] - V[:, b]  # (3, J): v summed over each ramp
-    share = 0.5 * on + V[:, b]  # d end / d jump_j
+    at_a, at_b = suffix[:, T - a], suffix[:, T - b]
+    on = at_a[:3] - at_b[:3]  # (3, J): v summed over each ramp
+    share = 0.5 * on + at_b[:3]  # d end / d jump_j
     jac = np.zeros((3, 2 * n))
-    jac[:, n] = V[:, 0]
+    jac[:, n] = suffix[:3, T]
     jac[:, n:-1] -= share
     jac[:, n + 1 :] += share
-    stretch = (W[:, a] - W[:, b]) @ slope  # the grid's stretch: the same for every length
+    stretch = (at_a[3:] - at_b[3:]) @ slope  # the grid's stretch: the same for every length
     later = np.zeros((3, n))
     later[:, :-1] = (slope * on)[:, ::-1].cumsum(axis=1)[:, ::-1]  # joints k .. J-1
     jac[:, :n] = (stretch + d_h / (T - 1))[:, None] - later
@@ -285,6 +327,8 @@ def _widening(lengths: np.ndarray, angles: np.ndarray, rate: float) -> np.ndarra
     if not len(jumps):
         return factors
     joints = lengths.cumsum()[:-1]
+    if _apart_and_within(joints, jumps, rate):
+        return factors
     probe = np.linspace(0.0, float(lengths.sum()), 4001)
     for _ in range(40):
         widths = np.maximum(np.abs(jumps) * factors / rate, 1e-9)
@@ -299,6 +343,28 @@ def _widening(lengths: np.ndarray, angles: np.ndarray, rate: float) -> np.ndarra
             break
         factors = np.where(over, factors * worst / rate * 1.001, factors)
     return factors
+
+
+def _apart_and_within(joints: np.ndarray, jumps: np.ndarray, rate: float) -> bool:
+    """Whether :func:`_widening`'s first round finds no ramp over ``rate`` (factors 1).
+
+    True when no probe point can lie on two of the unwidened ramps (for every pair
+    one ramp's start, as the probe test computes it, lies past the other's end) and
+    each ramp's own slope keeps ``rate``: then every probe's summed slope is one
+    ramp's, exactly (the other terms are zeros), and so is each ramp's steepest. The
+    common case (ramps apart) without the probes' ``(J, 4001)`` arrays; False decides
+    nothing (the probes do).
+    """
+    widths = np.maximum(np.abs(jumps) / rate, 1e-9)  # the first round's (factors 1: x * 1.0 = x)
+    lo = (joints - widths / 2).tolist()
+    hi = (joints + widths / 2).tolist()
+    for i in range(len(lo)):
+        for j in range(i + 1, len(lo)):
+            # Two ramps may share a probe only when max(lo) <= min(hi) (NaN: not apart).
+            if not (lo[j] > hi[i] or lo[i] > hi[j]):
+                return False
+    # A ramp that covers no probe point counts 0 in the probe test: also within.
+    return bool((np.abs(jumps / widths) <= rate * (1.0 + 1e-9)).all())
 
 
 #: The regularisation of the step's normal matrix.
@@ -392,7 +458,8 @@ def ramped_segment(
         out = _ramped_once(rows, gear, rate, wheelbase, delta_max, step, angle_weight)
         if out is None:
             return None
-        gap = float(np.hypot(*np.diff(out[:, :2], axis=0).T).max()) if len(out) > 1 else 0.0
+        d = out[1:, :2] - out[:-1, :2]
+        gap = float(np.hypot(d[:, 0], d[:, 1]).max()) if len(out) > 1 else 0.0
         # 1e-9 m of slack: rows exactly ``spacing`` apart measure a few 1e-15 m more,
         # and re-sampling those changed a 1 m segment's rows (5 -> 6) and, through the
         # speed profile on them, the stop at its cusp (u-turn seed 35: 0.05 -> 0.125 m).
@@ -417,19 +484,19 @@ def _ramped_once(
     if not len(ds):
         return None
     lengths, angles = _pieces(ds, kappa, wheelbase)
-    angles = np.clip(angles, -delta_max, delta_max)
+    angles = _clip(angles, -delta_max, delta_max)
     n = len(lengths)
     start, goal = rows[0, :3].copy(), rows[-1, :3]
     total0 = float(lengths.sum())
     m = max(1, math.ceil(total0 / spacing - 1e-9))
-    t = np.linspace(0.0, 1.0, m * _SUBSTEPS + 1)
+    t = _nodes(m * _SUBSTEPS + 1)
     if n == 1:
-        # One arc or line: already continuous.
-        delta, h = _profiles(lengths[None], angles[None], np.ones(0), rate, t)
-        poses = _integrate(start, gear, delta, h, wheelbase)[0]
-        out = np.column_stack([poses, np.tan(delta[0]) / wheelbase])[::_SUBSTEPS]
-        out[0, :3], out[-1, :3] = start, goal
-        return out
+        # One arc or line: already continuous (no ramp, nothing to fit: the profile and
+        # the poses of _profiles and _integrate, bit for bit).
+        _, _, delta, poses_of = _end_and_jacobian(
+            np.concatenate([lengths, angles]), np.ones(0), rate, t, start, gear, wheelbase
+        )
+        return _rows(poses_of(), delta, wheelbase, start, goal)
     p = np.concatenate([lengths, angles])
     weight = np.concatenate([np.ones(n), np.full(n, angle_weight**2)])
     lower = np.concatenate([np.zeros(n), np.full(n, -delta_max)])
@@ -448,13 +515,36 @@ def _ramped_once(
         step = _bounded_step(jacobian(), err, p, weight, lower, upper)
         if step is None:
             return None
-        p = np.clip(p + step, lower, upper)
+        p = _clip(p + step, lower, upper)
     else:
         return None
     if pose is None:
         return None
     delta, poses_of = pose
-    poses = poses_of()
-    out = np.column_stack([poses, np.tan(delta) / wheelbase])[::_SUBSTEPS]
+    return _rows(poses_of(), delta, wheelbase, start, goal)
+
+
+def _rows(
+    poses: np.ndarray, delta: np.ndarray, wheelbase: float, start: np.ndarray, goal: np.ndarray
+) -> np.ndarray:
+    """Every ``_SUBSTEPS``-th pose with its curvature, the ends set to the exact poses."""
+    poses = poses[::_SUBSTEPS]
+    out = np.empty((len(poses), 4))
+    out[:, :3] = poses
+    # The curvature of the returned rows only (elementwise: the same floats).
+    np.divide(np.tan(delta[::_SUBSTEPS]), wheelbase, out=out[:, 3])
     out[0, :3], out[-1, :3] = start, goal
     return out
+
+
+def _clip(a: np.ndarray, lower: np.ndarray | float, upper: np.ndarray | float) -> np.ndarray:
+    """``np.clip(a, lower, upper)``, the same floats, without its Python wrappers."""
+    return np.minimum(np.maximum(a, lower), upper)
+
+
+@functools.lru_cache(maxsize=1024)
+def _nodes(count: int) -> np.ndarray:
+    """``np.linspace(0, 1, count)``, read-only, made once per count (the fit's grid ``t``)."""
+    t = np.linspace(0.0, 1.0, count)
+    t.flags.writeable = False
+    return t

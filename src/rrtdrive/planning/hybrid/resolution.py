@@ -105,6 +105,26 @@ def dubins_table(radius: float, config: HybridConfig) -> DubinsTable:
     return _dubins_table(float(radius), config.yaw_bins)
 
 
+#: Body tests kept per map (the last few clearances asked for).
+BODY_TESTS = 8
+
+
+def body_test(checker: CollisionChecker, clearance: float) -> BodyTest:
+    """The map's :class:`BodyTest` keeping ``clearance``, made once for the last few clearances.
+
+    A body test is immutable and depends on the map and the clearance alone; making
+    one costs a query some 25 microseconds (most queries ask for the same clearance).
+    """
+    tests: dict[float, BodyTest] = checker.grid.derived(("hybrid-body-tests",), dict)
+    key = float(clearance)
+    test = tests.get(key)
+    if test is None:
+        test = tests[key] = BodyTest(checker, key)
+        while len(tests) > BODY_TESTS:
+            del tests[next(iter(tests))]  # the oldest made
+    return test
+
+
 def reeds_shepp_to(goal: Pose, radius: float) -> Callable[[float, float, float], float]:
     """The Reeds-Shepp length from one pose to ``goal`` (the heuristic with reverse)."""
 
@@ -267,7 +287,7 @@ def search_at_resolution(
     back_h = Heuristic(HolonomicField.towards(grid, start), None, start)
 
     def searches_with(search_clearance: float) -> list[tuple[HybridSearch, Accept]]:
-        body = BodyTest(problem.checker, search_clearance)
+        body = body_test(problem.checker, search_clearance)
         shots = analytic_shots(goal, radius, reverse, config.check_spacing, body)
         ahead = HybridSearch(
             body, start, goal, heuristic, prims, shots, config, kappa_max, problem.bounds,

@@ -339,11 +339,12 @@ class HybridSearch:
         gears = prims.gears.tolist()
         kappas = prims.kappas.tolist()
         # The key's gear bit of each primitive, and each one's steering-change cost after
-        # a node of each curvature (the same expression, evaluated once).
+        # a node of each curvature (the same expression, evaluated once per curvature
+        # the loop meets: a query that the root's shot answers needs none).
         reverse_bit = [int(g < 0) for g in gears]
         kmax = self.kappa_max
         scc = cfg.steer_change_cost
-        steer_after = {k: [scc * abs(kj - k) / kmax for kj in kappas] for k in kappas}
+        steer_after: dict[float, list[float]] = {}
         h_at = self.heuristic.scalar()
         shot_interval, shot_distance = cfg.shot_interval, cfg.shot_distance
         gear_change_cost = cfg.gear_change_cost

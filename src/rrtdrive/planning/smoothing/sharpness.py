@@ -34,14 +34,18 @@ def interval_sharpness(samples: np.ndarray, wheelbase: float) -> np.ndarray:
     s = np.asarray(samples, dtype=float)
     if len(s) < 2:
         return np.zeros(0)
-    ds = np.hypot(*np.diff(s[:, :2], axis=0).T)
+    d = s[1:, :2] - s[:-1, :2]  # np.diff's arithmetic without its wrapper
+    ds = np.hypot(d[:, 0], d[:, 1])
     k0, k1 = s[:-1, 3], s[1:, 3]
     dk = np.abs(k1 - k0)
     kmin = np.where(k0 * k1 > 0.0, np.minimum(np.abs(k0), np.abs(k1)), 0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         rate = wheelbase * dk / (ds * (1.0 + (wheelbase * kmin) ** 2))
-    # Two rows on one spot: a jump of curvature there is infinitely sharp, none is nothing.
-    rate = np.where(ds > 0.0, rate, np.where(dk > 0.0, np.inf, 0.0))
+    # Two rows on one spot: a jump of curvature there is infinitely sharp, none is nothing
+    # (rows all apart, the common case, keep every rate).
+    apart = ds > 0.0
+    if not np.logical_and.reduce(apart):
+        rate = np.where(apart, rate, np.where(dk > 0.0, np.inf, 0.0))
     if s.shape[1] >= 5:
         # A cusp (the gear changes): the car stands, so it may steer there at no cost
         # per metre; sharpness is a property of each gear segment.
