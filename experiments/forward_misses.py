@@ -1,0 +1,210 @@
+"""Why a forward-only random query that OMPL's Dubins RRT solves is not solved by ours.
+
+Usage (OMPL lives in the lead's venv only; without it the OMPL rows are skipped)::
+
+    python experiments/forward_misses.py --query start:81 --out results/forward_misses
+
+For one random query of ``experiments/coverage.py`` (``parking_lot``, seed 1, 100
+poses per set) it measures, in one run:
+
+- OMPL's Dubins RRT path (as ``coverage.py`` plans it: our exact body test as validity
+  checker, 10 s, simplified, interpolated every 0.1 m): its length, its least body
+  clearance (``CollisionChecker.body_clearance``) and where, and the largest
+  curvature jump between its arcs (it has no steering-rate bound);
+- ``hybrid-a-star`` forward only under settings that drop our guarantees one by one:
+  the default; keeping no clearance (``body_clearance=0, min_clearance=0``) with 11
+  steering curvatures and 200 goal connections; the same with exact arcs
+  (``curve=arcs``: curvature jumps where arcs meet, no sharpness bound); exact arcs
+  keeping 0.05 m. Each with a counted budget of ``--expansions``.
+
+Writes ``OUT/forward_misses.{json,md}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import sys
+import time
+from pathlib import Path as FsPath
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(FsPath(__file__).resolve().parent))
+import coverage as cov  # noqa: E402  (the sibling script)
+
+from rrtdrive.atomic import write_text_atomic  # noqa: E402
+from rrtdrive.planning import make_planner  # noqa: E402
+from rrtdrive.planning.smoothing import max_sharpness  # noqa: E402
+from rrtdrive.types import Budget  # noqa: E402
+from rrtdrive.verify import verify_path  # noqa: E402
+
+#: Our planner's settings, from the default to none of the guarantees but the body's.
+VARIANTS = {
+    "default": "",
+    "no clearance, 11 curvatures, 200 connections": (
+        "body_clearance=0:min_clearance=0:curvatures=11:max_solutions=200:coarse_after=0"
+    ),
+    "no clearance, exact arcs (no sharpness bound)": (
+        "body_clearance=0:min_clearance=0:curvatures=11:curve=arcs:coarse_after=0"
+    ),
+    "0.05 m clearance, exact arcs (no sharpness bound)": (
+        "body_clearance=0.05:min_clearance=0.05:curvatures=11:curve=arcs:coarse_after=0"
+    ),
+}
+
+
+def _item(query: str) -> dict[str, Any]:
+    vary, _, index = query.partition(":")
+    if vary not in ("goal", "start") or not index.isdigit():
+        raise SystemExit(f"--query: expected goal:N or start:N, got {query!r}")
+    i = int(index)
+    pose = cov.draw_goals("parking_lot", 100, 1, vary)[i]
+    return {"map": "parking_lot", "vary": vary, "index": i, "pose": pose.as_tuple()}
+
+
+def ompl_row(item: dict[str, Any], seconds: float) -> dict[str, Any] | None:
+    """OMPL's Dubins RRT on the query, as coverage.py runs it, with its path's figures."""
+    if cov.availability("ompl-dubins-rrt") is not None:
+        return None
+    from ompl import base as ob
+    from ompl import geometric as og
+    from ompl import util as ou
+
+    from rrtdrive.bench.ompl_planners import simple_setup
+
+    ou.setLogLevel(ou.LogLevel.LOG_NONE)
+    _, problem = cov._problem(item)
+    ss, si = simple_setup(problem, "dubins")
+    free = problem.checker.pose_free
+    ss.setStateValidityChecker(lambda s: free((s.getX(), s.getY(), s.getYaw())))
+    ou.RNG.setSeed(1 + item["index"])  # coverage.py's seed for a worker's first query
+    planner = og.RRT(si)
+    planner.setRange(5.0)
+    ss.setPlanner(planner)
+    objective = ob.PathLengthOptimizationObjective(si)
+    objective.setCostThreshold(ob.Cost(float("inf")))
+    ss.setOptimizationObjective(objective)
+    t0 = time.perf_counter()
+    status = ss.solve(seconds)
+    solve_s = time.perf_counter() - t0
+    if status.asString() != "Exact solution":
+        return {"solved": False, "time_s": solve_s}
+    ss.simplifySolution()
+    sol = ss.getSolutionPath()
+    length = float(sol.length())
+    sol.interpolate(max(2, int(math.ceil(length / 0.1)) + 1))
+    states = np.array([
+        (s.getX(), s.getY(), s.getYaw())
+        for s in (sol.getState(i) for i in range(sol.getStateCount()))
+    ])  # fmt: skip
+    clear = np.array([problem.checker.body_clearance(p) for p in states])
+    ds = np.hypot(*np.diff(states[:, :2], axis=0).T)
+    kappa = np.diff(np.unwrap(states[:, 2])) / np.where(ds > 0, ds, np.inf)
+    worst = int(np.argmin(clear))
+    return {
+        "solved": True, "time_s": solve_s, "length_m": length,
+        "min_clearance_m": float(clear[worst]),
+        "min_clearance_at": [round(float(v), 3) for v in states[worst]],
+        "max_curvature_jump": float(np.max(np.abs(np.diff(kappa)))),
+    }  # fmt: skip
+
+
+def ours_row(item: dict[str, Any], options: str, expansions: int) -> dict[str, Any]:
+    """``hybrid-a-star`` forward only with ``options`` (coverage.py's ``field=value:...``)."""
+    m, problem = cov._problem(item)
+    t0 = time.perf_counter()
+    res = make_planner("hybrid-a-star", **cov._options(options)).solve(
+        problem, np.random.default_rng(0), Budget(max_iterations=expansions, max_time_s=600.0)
+    )
+    row: dict[str, Any] = {
+        "options": options, "status": res.status.value, "solved": res.success,
+        "time_s": time.perf_counter() - t0, "expansions": res.iterations,
+        "message": res.message,
+    }  # fmt: skip
+    if res.success:
+        clear = np.array([problem.checker.body_clearance(p) for p in res.path.samples[:, :3]])
+        row.update(
+            length_m=res.path.length, min_clearance_m=float(clear.min()),
+            max_sharpness=float(max_sharpness(res.path.samples, problem.vehicle.wheelbase)),
+            verified=bool(verify_path(m, res.path).ok),
+        )  # fmt: skip
+    return row
+
+
+def report(payload: dict[str, Any]) -> str:
+    """The results page."""
+    lines = [
+        f"# Forward-only query {payload['query']}: what it takes", "",
+        f"Command: `{payload['command']}`  ",
+        f"{payload['machine']}; wall time {payload['wall_time_s']:.0f} s.", "",
+    ]  # fmt: skip
+    o = payload["ompl"]
+    if o is None:
+        lines.append("OMPL: not installed, skipped.")
+    elif not o["solved"]:
+        lines.append(f"OMPL Dubins RRT: no path in {o['time_s']:.1f} s.")
+    else:
+        lines.append(
+            f"OMPL Dubins RRT: {o['length_m']:.1f} m in {o['time_s']:.2f} s; least body "
+            f"clearance **{o['min_clearance_m']:.4f} m** at pose {o['min_clearance_at']}; "
+            f"largest curvature jump between its arcs {o['max_curvature_jump']:.3f} 1/m "
+            "(no steering-rate bound)."
+        )
+    lines += [
+        "", f"`hybrid-a-star` forward only, {payload['expansions']} expansions:", "",
+        "| settings | status | expansions | length [m] | least clearance [m] | max sharpness "
+        "[rad/m] | verified |",
+        "|---|---|---|---|---|---|---|",
+    ]  # fmt: skip
+    for name, r in payload["ours"].items():
+        if r["solved"]:
+            cells = (f"{r['length_m']:.1f}", f"{r['min_clearance_m']:.3f}",
+                     f"{r['max_sharpness']:.3g}", "yes" if r["verified"] else "no")
+        else:
+            cells = ("-", "-", "-", "-")
+        lines.append(f"| {name} | {r['status']} | {r['expansions']} | " + " | ".join(cells) + " |")
+    lines += ["", "Messages:", ""]
+    lines += [f"- {name}: {r['message']}" for name, r in payload["ours"].items()]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--query", default="start:81", help="goal:N or start:N (default start:81)")
+    ap.add_argument("--expansions", type=int, default=20000, help="our counted budget")
+    ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time cap [s]")
+    ap.add_argument("--out", default="results/forward_misses")
+    args = ap.parse_args(argv)
+    if args.expansions < 1 or args.ompl_time <= 0:
+        ap.error("--expansions must be >= 1 and --ompl-time > 0")
+    item = _item(args.query)
+    t0 = time.perf_counter()
+    ompl = ompl_row(item, args.ompl_time)
+    ours = {}
+    for name, options in VARIANTS.items():
+        print(f"{name} ...", file=sys.stderr, flush=True)
+        ours[name] = ours_row(item, options, args.expansions)
+    payload = {
+        "command": "python experiments/forward_misses.py "
+        + " ".join(sys.argv[1:] if argv is None else argv),
+        "query": args.query, "expansions": args.expansions,
+        "machine": f"{platform.machine()} {os.cpu_count()} CPUs, "
+        f"Python {platform.python_version()}",
+        "wall_time_s": time.perf_counter() - t0, "ompl": ompl, "ours": ours,
+    }  # fmt: skip
+    out = FsPath(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(out / "forward_misses.json", json.dumps(payload, indent=1) + "\n")
+    text = report(payload)
+    write_text_atomic(out / "forward_misses.md", text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
