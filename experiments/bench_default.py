@@ -1,0 +1,257 @@
+"""Default planner speed, old code against new, on the same queries, with the answers compared.
+
+Usage::
+
+    # Interleaved benchmark: this tree against the code of commit REF (old), query by query
+    python experiments/bench_default.py --ref 6b0d9b8 --out results --gears rev --repeat 3
+    # Equivalence only: record this tree's answers, later check a changed tree against them
+    python experiments/bench_default.py --record /tmp/default_base.pkl
+    python experiments/bench_default.py --check /tmp/default_base.pkl
+
+The queries are those of ``experiments/coverage.py``: ``parking_lot`` with the
+``--count`` random goal poses and random start poses of
+:func:`random_goals.draw_goals` (seed 1), each planned by the default planner
+``improved-rrt-connect`` (planner seed 0, ``Budget(max_time_s=10)``) forward-only
+(``fwd``) and with reverse (``rev``): 400 plans by default.
+
+Two answers are *the same* when the status, the message with its quoted times
+masked (``1.23 s`` -> ``T s``), the iterations, the stage and the path rows (to
+1e-9) agree. The benchmark runs the old code (a ``git archive`` of ``REF``'s
+``src/``, imported in a worker process) and this tree in another worker,
+alternating query by query (the worker machinery of ``bench_hybrid.py``), and
+writes ``OUT/bench_default.{json,md}``: per query both CPU times (the least of
+``--repeat`` runs) and whether the answers agree; the median per-query ratio new / old.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import pickle
+import platform
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path as FsPath
+
+HERE = FsPath(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(HERE))
+import bench_hybrid as bh  # noqa: E402  (the sibling benchmark's worker machinery)
+
+#: The query each worker runs first, untimed (imports, caches, the map's set-up).
+WARM = "goal:rev:7"
+_TIME = re.compile(r"\d+\.\d+ s")
+
+
+def query_ids(count: int = 100, gears: tuple[str, ...] = ("fwd", "rev")) -> list[str]:
+    """Every query's id: ``goal:rev:3``, ``start:fwd:12``."""
+    return [
+        f"{vary}:{gear}:{i}" for vary in ("goal", "start") for gear in gears for i in range(count)
+    ]
+
+
+class _Runner(bh._Runner):
+    """Plans queries by id with the default planner of the ``rrtdrive`` this process imports."""
+
+    def problem(self, qid: str):  # noqa: ANN201 - a PlanningProblem of either tree
+        from rrtdrive.maps import builtin_map
+        from rrtdrive.planning import PlanningProblem
+
+        vary, gear, i = qid.split(":")
+        m = dataclasses.replace(builtin_map("parking_lot"), **{vary: self.draws[vary][int(i)]})
+        return dataclasses.replace(PlanningProblem.from_map(m), reverse=gear == "rev")
+
+    def run_once(self, qid: str) -> dict:
+        import numpy as np
+
+        from rrtdrive.planning import make_planner
+        from rrtdrive.planning.hybrid.escalation import stage_of
+        from rrtdrive.types import Budget
+
+        problem = self.problem(qid)
+        problem.checker.component_labels  # noqa: B018 - per-map set-up, outside the timing
+        planner = make_planner("improved-rrt-connect")
+        cpu = time.process_time()
+        res = planner.solve(problem, np.random.default_rng(0), Budget(max_time_s=10))
+        cpu = time.process_time() - cpu
+        rows = None if res.path is None else np.asarray(res.path.samples, dtype=float).tolist()
+        return {
+            "id": qid,
+            "status": res.status.value,
+            "message": _TIME.sub("T s", res.message),
+            "iterations": int(res.iterations),
+            "nodes": stage_of(res),  # compared like bench_hybrid's nodes
+            "time_s": float(res.planning_time_s),
+            "cpu_s": cpu,
+            "rows": rows,
+        }
+
+
+def _worker(count: int, repeat: int, warm: str) -> int:
+    """Answer query ids read from stdin, one JSON line each, on stdout."""
+    import rrtdrive
+
+    runner = _Runner(count)
+    runner.run(warm)
+    print(json.dumps({"ready": str(FsPath(rrtdrive.__file__).resolve())}), flush=True)
+    for line in sys.stdin:
+        if line.strip():
+            print(json.dumps(runner.run(line.strip(), repeat)), flush=True)
+    return 0
+
+
+class _Worker(bh._Worker):
+    """A worker running this script's :func:`_worker`, importing ``rrtdrive`` from ``src``."""
+
+    def __init__(self, src: FsPath, count: int, repeat: int, warm: str) -> None:
+        env = dict(os.environ, PYTHONPATH=str(src))
+        cmd = [sys.executable, str(FsPath(__file__).resolve()), "--worker", "--count", str(count)]
+        cmd += ["--repeat", str(repeat), "--warm", warm]
+        self.proc = subprocess.Popen(
+            cmd,
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env, cwd=str(ROOT),
+        )  # fmt: skip
+        self.module = json.loads(self.ask_line())["ready"]
+        if not self.module.startswith(str(src.resolve())):
+            raise RuntimeError(f"worker imported {self.module}, not from {src}")
+
+
+def _markdown(meta: dict, summary: dict, rows: list[dict]) -> str:
+    lines = [
+        "# Default planner (improved-rrt-connect): old code against new, same answers",
+        "",
+        f"Command: `{meta['command']}`  ",
+        f"Old: `src/` of {meta['ref']} ({meta['ref_sha'][:10]}); new: {meta['new']}. "
+        f"{meta['machine']}, load {meta['load']}; wall time {meta['wall_s'] / 60:.1f} min. "
+        f"CPU times: the worker's process time of the `solve` call, the least of "
+        f"{meta['repeat']} runs; old and new alternate query by query.",
+        "",
+        "| queries | n | same answer | solved | CPU total old / new [s] "
+        "| CPU median ratio new/old | wall median ratio |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name, s in summary.items():
+        lines.append(
+            f"| {name} | {s['queries']} | {s['same']} | {s['solved']} "
+            f"| {s['old_cpu_total_s']:.2f} / {s['new_cpu_total_s']:.2f} "
+            f"| {s['cpu_median_ratio']:.3f} | {s['median_ratio']:.3f} |"
+        )
+    diff = [r for r in rows if not r["same"]]
+    lines += ["", f"Queries whose answers differ: {len(diff)}."]
+    lines += [f"- `{r['id']}`: {r['why']}" for r in diff]
+    lines += [
+        "",
+        "| query | status | stage | old CPU [ms] | new CPU [ms] | ratio |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        ratio = r["new_cpu_s"] / r["old_cpu_s"] if r["old_cpu_s"] > 0 else float("nan")
+        lines.append(
+            f"| {r['id']} | {r['status']} | {r['stage']} | {1e3 * r['old_cpu_s']:.1f} "
+            f"| {1e3 * r['new_cpu_s']:.1f} | {ratio:.3f} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def _bench(args: argparse.Namespace, ids: list[str]) -> int:
+    t0 = time.perf_counter()
+
+    def git(*cmd: str) -> str:
+        return subprocess.run(
+            ["git", *cmd], cwd=ROOT, check=True, capture_output=True, text=True
+        ).stdout.strip()
+
+    sha, head = git("rev-parse", args.ref), git("rev-parse", "--short", "HEAD")
+    dirty = git("status", "--porcelain", "src")
+    with tempfile.TemporaryDirectory(prefix="bench_default_") as tmp:
+        old = _Worker(bh._export(sha, FsPath(tmp)), args.count, args.repeat, WARM)
+        new = _Worker(ROOT / "src", args.count, args.repeat, WARM)
+        rows = []
+        for n, qid in enumerate(ids):
+            # Alternate which runs first, so neither always meets a warm cache.
+            pair = (old, new) if n % 2 == 0 else (new, old)
+            got = {id(w): w.run(qid) for w in pair}
+            a, b = got[id(old)], got[id(new)]
+            same, why = bh.same_answer(a, b)
+            rows.append({
+                "id": qid, "status": b["status"], "stage": b["nodes"],
+                "iterations": b["iterations"], "old_s": a["time_s"], "new_s": b["time_s"],
+                "old_cpu_s": a["cpu_s"], "new_cpu_s": b["cpu_s"], "same": same, "why": why,
+            })  # fmt: skip
+            print(f"{qid:16s} {b['status']:18s} old {1e3 * a['cpu_s']:8.1f} ms  new "
+                  f"{1e3 * b['cpu_s']:8.1f} ms  {'same' if same else 'DIFFERENT ' + why}",
+                  flush=True)  # fmt: skip
+        old.close()
+        new.close()
+    summary = bh._summary(rows)
+    meta = {
+        "command": "python experiments/bench_default.py " + " ".join(sys.argv[1:]),
+        "ref": args.ref,
+        "ref_sha": sha,
+        "new": f"this tree at {head}" + (" with uncommitted changes in src/" if dirty else ""),
+        "repeat": args.repeat,
+        "machine": (
+            f"{platform.machine()} {os.cpu_count()} CPUs, Python {platform.python_version()}"
+        ),
+        "load": " ".join(f"{v:.1f}" for v in os.getloadavg()),
+        "wall_s": time.perf_counter() - t0,
+    }
+    out = FsPath(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "bench_default.json").write_text(
+        json.dumps({"meta": meta, "summary": summary, "queries": rows}, indent=1) + "\n"
+    )
+    (out / "bench_default.md").write_text(_markdown(meta, summary, rows))
+    for name, s in summary.items():
+        print(f"{name}: same {s['same']}/{s['queries']}, CPU {s['old_cpu_total_s']:.2f} -> "
+              f"{s['new_cpu_total_s']:.2f} s, CPU median ratio {s['cpu_median_ratio']:.3f}")
+    return 0 if all(r["same"] for r in rows) else 1
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--ref", default="6b0d9b8", help="the old code's commit")
+    ap.add_argument("--out", default="results")
+    ap.add_argument("--count", type=int, default=100, help="random goals and starts each")
+    ap.add_argument("--gears", default="fwd,rev", help="fwd, rev or fwd,rev")
+    ap.add_argument("--repeat", type=int, default=1, help="runs per query; times: the least")
+    ap.add_argument("--warm", default=WARM, help=argparse.SUPPRESS)
+    ap.add_argument("--only", default="", help="comma-separated query ids (default: all)")
+    ap.add_argument("--record", default="", help="record this tree's answers to a file")
+    ap.add_argument("--check", default="", help="compare this tree's answers to a record")
+    ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    if args.worker:
+        return _worker(args.count, args.repeat, args.warm)
+    gears = tuple(args.gears.split(","))
+    ids = args.only.split(",") if args.only else query_ids(args.count, gears)
+    if not (args.record or args.check):
+        return _bench(args, ids)
+    runner = _Runner(args.count)
+    runner.run(WARM)
+    base = pickle.loads(FsPath(args.check).read_bytes()) if args.check else {}
+    got, bad, total = {}, 0, 0.0
+    for qid in ids:
+        r = runner.run(qid, args.repeat)
+        got[qid] = r
+        total += r["cpu_s"]
+        note = ""
+        if args.check:
+            same, why = bh.same_answer(base[qid], r)
+            bad += not same
+            note = f"old {1e3 * base[qid]['cpu_s']:8.1f} ms  " + ("same" if same else "DIFF " + why)
+        print(f"{qid:16s} {r['status']:18s} {r['nodes']:22s} {1e3 * r['cpu_s']:8.1f} ms  {note}",
+              flush=True)  # fmt: skip
+    if args.record:
+        FsPath(args.record).write_bytes(pickle.dumps(got))
+    print(f"total CPU {total:.2f} s" + (f"; {bad} answers differ" if args.check else ""))
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
