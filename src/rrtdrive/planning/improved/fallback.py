@@ -21,7 +21,8 @@ from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.dubins import DubinsPath, dubins_paths
 from rrtdrive.planning.smoothing import SmoothingConfig, make_drivable
 from rrtdrive.planning.smoothing.clothoid import turn_circle
-from rrtdrive.planning.smoothing.clothoid_curve import polygon_curve, sample_pieces
+from rrtdrive.planning.smoothing.clothoid_batch import sample_curves
+from rrtdrive.planning.smoothing.clothoid_curve import polygon_curve
 from rrtdrive.types import Path, Pose
 
 __all__ = ["CC_RADIUS_STEPS", "MAX_FALLBACK_CANDIDATES", "dubins_fallback"]
@@ -40,6 +41,11 @@ MAX_FALLBACK_CANDIDATES = 64
 #: (a polygon corner turns by less than pi; sub-arcs need a larger radius to fit).
 _MAX_ARC = 0.95 * math.pi
 CC_RADIUS_STEPS: tuple[float, ...] = (1.0, 1.15, 1.35, 1.6, 2.0, 2.5)
+#: Candidates per batch of the coarse test, shortest first (0: all the rest).
+_BATCHES = (1, 0)
+#: The coarse poses of the candidates are tested in rounds: every 16th pose of each,
+#: then every 4th of those still clear, then the rest (see _all_free).
+_STRIDES = (16, 4, 1)
 
 
 def _free_end(
@@ -77,19 +83,56 @@ def _free_end(
                 length = sum(p.length for p in pieces)
                 found.append((length, len(found), pieces, poly, cand.word, r_in * step))
     # The shortest rounded word first, whatever its radius.
-    for _, _, pieces, poly, word, r in sorted(found, key=lambda f: f[:2]):
-        # Most candidates collide somewhere: poses at most 1 m apart first, then all.
-        coarse, _ = sample_pieces(pieces, 1.0)
-        _pin_ends(coarse, start, goal)
-        if not bool(np.all(checker.poses_free(coarse[:, :3], clearance=clearance))):
-            continue
-        dense, _ = sample_pieces(pieces, check_spacing)
-        _pin_ends(dense, start, goal)
-        if bool(np.all(checker.poses_free(dense[:, :3], clearance=clearance))):
-            rows, _ = sample_pieces(pieces, sample_spacing)
+    order = sorted(found, key=lambda f: f[:2])
+    # Most candidates collide somewhere: poses at most 1 m apart first, then all. The
+    # coarse poses of several candidates are sampled and tested in one batch (the
+    # same floats and answers as one by one; on most queries none is clear): the
+    # shortest alone, then the next few, then the rest.
+    done = 0
+    for size in _BATCHES:
+        batch = order[done : done + size] if size else order[done:]
+        done += len(batch)
+        if not batch:
+            break
+        coarse = sample_curves([f[2] for f in batch], 1.0)
+        for rows in coarse:
             _pin_ends(rows, start, goal)
-            return rows, poly, f"{word} of radius {r:.1f} m with clothoid turns"
+        clear = _all_free(checker, coarse, clearance)
+        for (_, _, pieces, poly, word, r), ok in zip(batch, clear, strict=True):
+            if not ok:
+                continue
+            dense = sample_curves([pieces], check_spacing)[0]
+            _pin_ends(dense, start, goal)
+            if bool(np.all(checker.poses_free(dense[:, :3], clearance=clearance))):
+                out = sample_curves([pieces], sample_spacing)[0]
+                _pin_ends(out, start, goal)
+                return out, poly, f"{word} of radius {r:.1f} m with clothoid turns"
     return None
+
+
+def _all_free(checker: CollisionChecker, paths: list[np.ndarray], clearance: float) -> list[bool]:
+    """Per sampled path, whether the body is clear at all its poses (``poses_free``).
+
+    The same answers as testing each path's poses, with less exact work: every
+    ``_STRIDES[0]``-th pose of every path first (a colliding stretch usually spans
+    several poses), then more of the paths still clear only, until all.
+    """
+    if not paths:
+        return []
+    sizes = [len(p) for p in paths]
+    poses = np.vstack(paths)[:, :3]
+    owner = np.repeat(np.arange(len(paths)), sizes)
+    within = np.arange(len(poses)) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    clear = np.ones(len(paths), dtype=bool)
+    todo = np.ones(len(poses), dtype=bool)
+    for stride in _STRIDES:
+        pick = np.flatnonzero(todo & (within % stride == 0) & clear[owner])
+        if not len(pick):
+            continue
+        todo[pick] = False
+        ok = checker.poses_free(poses[pick], clearance=clearance)
+        clear[owner[pick[~ok]]] = False
+    return clear.tolist()
 
 
 def _pin_ends(rows: np.ndarray, start: Pose, goal: Pose) -> None:

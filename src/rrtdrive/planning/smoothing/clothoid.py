@@ -16,6 +16,7 @@ The steering angle is ``delta = atan(L kappa)``, so along a clothoid
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
@@ -72,6 +73,13 @@ def _clothoid_xy(s: np.ndarray, sigma: float) -> tuple[np.ndarray, np.ndarray]:
     return a * cf, a * sf
 
 
+@functools.lru_cache(maxsize=4096)
+def _clothoid_end(lc: float, sigma: float) -> tuple[float, float]:
+    """``_clothoid_xy(np.array(lc), sigma)`` as floats, remembered: a query's turns share a few."""
+    xc, yc = _clothoid_xy(np.array(lc), sigma)
+    return float(xc), float(yc)
+
+
 def clothoid_turn(theta: float, kappa: float, sigma: float) -> ClothoidTurn:
     """The symmetric turn of deflection ``theta``, arc curvature ``kappa``, sharpness ``sigma``.
 
@@ -104,7 +112,7 @@ def clothoid_turn(theta: float, kappa: float, sigma: float) -> ClothoidTurn:
     else:
         peak, lc = kappa, kappa / sigma
         arc = (th - kappa * lc) / kappa
-    xc, yc = (float(v) for v in _clothoid_xy(np.array(lc), sigma))
+    xc, yc = _clothoid_end(lc, sigma)
     phi = 0.5 * peak * lc
     half = 0.5 * th
     if arc > 0.0:

@@ -115,7 +115,7 @@ def polygon_turns(
     levels: np.ndarray,
     tight: Sequence[bool],
     end_gap: float,
-    cache: dict[tuple[float, float], list[ClothoidTurn]] | None = None,
+    cache: dict[tuple, list[ClothoidTurn]] | None = None,
     radius_steps: Sequence[float] = (1.0,),
 ) -> tuple[list[ClothoidTurn | None], list[int]]:
     """The turn at every corner of polygon ``pts``, or the legs too short for the tightest ones.
@@ -137,7 +137,8 @@ def polygon_turns(
     end_gap : float
         Straight length kept at the start and the goal.
     cache : dict, optional
-        Turns per ``(theta, kappa)``, shared between calls.
+        Turns per ``(theta, kappa)`` (and the tightest alone per ``(theta, kappa,
+        True)``), shared between calls.
 
     Returns
     -------
@@ -162,6 +163,13 @@ def polygon_turns(
             continue
         key = (theta, float(kappas[c]))
         opts = cache.get(key)
+        if opts is None and tight[c]:
+            # The tightest turn alone (all a tight corner uses); cached apart, so that
+            # a corner that is not tight still finds or builds all its options.
+            tkey = (theta, float(kappas[c]), True)
+            opts = cache.get(tkey)
+            if opts is None:
+                opts = cache[tkey] = [clothoid_turn(theta, kappas[c], float(levels[0]))]
         if opts is None:
             # Every radius step x sharpness level, by tangent length: the first, the
             # tightest (the corner's radius, the sharpest level), reaches least.
@@ -188,7 +196,7 @@ def polygon_turns(
     # shares with another flexible corner, all of it otherwise.
     for c in range(1, n - 1):
         opts = options[c]
-        if opts is None:
+        if opts is None or len(opts) == 1:  # one option: chosen[c] stays 0
             continue
         room = math.inf
         for leg, other in ((c - 1, c - 1), (c, c + 1)):
@@ -301,7 +309,7 @@ class ClothoidFitter:
         self.levels = sharpness_levels(
             cfg.max_sharpness, cfg.min_sharpness, cfg.wheelbase, cfg.kappa_safety
         )
-        self._turns: dict[tuple[float, float], list[ClothoidTurn]] = {}
+        self._turns: dict[tuple, list[ClothoidTurn]] = {}
         self._free_pieces: set[bytes] = set()
         self._rows: dict[tuple[bytes, float], np.ndarray] = {}
 
