@@ -132,19 +132,26 @@ def _markdown(meta: dict, summary: dict, rows: list[dict]) -> str:
         f"{meta['repeat']} runs; old and new alternate query by query.",
         "",
         "| queries | n | same answer | solved | CPU total old / new [s] "
-        "| CPU median ratio new/old | wall median ratio |",
-        "|---|---|---|---|---|---|---|",
+        "| CPU median old / new [ms] | CPU median ratio new/old | wall median ratio |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for name, s in summary.items():
+        group = [r for r in rows if name == "all" or bh._group(r["id"]) == name]
+        old_ms = 1e3 * bh._median([r["old_cpu_s"] for r in group])
+        new_ms = 1e3 * bh._median([r["new_cpu_s"] for r in group])
         lines.append(
             f"| {name} | {s['queries']} | {s['same']} | {s['solved']} "
             f"| {s['old_cpu_total_s']:.2f} / {s['new_cpu_total_s']:.2f} "
+            f"| {old_ms:.1f} / {new_ms:.1f} "
             f"| {s['cpu_median_ratio']:.3f} | {s['median_ratio']:.3f} |"
         )
     diff = [r for r in rows if not r["same"]]
     lines += ["", f"Queries whose answers differ: {len(diff)}."]
     lines += [f"- `{r['id']}`: {r['why']}" for r in diff]
     lines += [
+        "",
+        "The CPU median ratio is the median of the per-query ratios; the medians "
+        "old / new are of the per-query CPU times.",
         "",
         "| query | status | stage | old CPU [ms] | new CPU [ms] | ratio |",
         "|---|---|---|---|---|---|",
