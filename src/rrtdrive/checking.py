@@ -21,6 +21,7 @@ answer False where the static checker answers True, never the reverse.
 
 from __future__ import annotations
 
+import functools
 import inspect
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
@@ -226,14 +227,34 @@ def implements(obj: object, protocol: type) -> bool:
     >>> implements(checker, Checker), implements(object(), MotionValidator)
     (True, False)
     """
-    members = {
+    key = (type(obj), protocol)
+    if key in _CLASS_IMPLEMENTS:
+        return True
+    members = _members(protocol)
+    if not all(_has_static(obj, name) for name in members):
+        return False
+    # Members found on the class itself are found on every instance: remembered per
+    # class (post-processing asks this of the same checker class a few times a query).
+    mro = type(obj).__mro__
+    if all(any(name in vars(k) for k in mro) for name in members):
+        _CLASS_IMPLEMENTS.add(key)
+    return True
+
+
+#: ``(class, protocol)`` pairs whose class defines every member of the protocol.
+_CLASS_IMPLEMENTS: set[tuple[type, type]] = set()
+
+
+@functools.cache
+def _members(protocol: type) -> frozenset[str]:
+    """The public members of ``protocol`` and the protocols it extends."""
+    return frozenset(
         name
         for klass in protocol.__mro__
         if klass not in (object, Protocol) and getattr(klass, "_is_protocol", False)
         for name in (*vars(klass), *getattr(klass, "__annotations__", {}))
         if not name.startswith("_")
-    }
-    return all(_has_static(obj, name) for name in members)
+    )
 
 
 def _has_static(obj: object, name: str) -> bool:

@@ -128,6 +128,9 @@ class CollisionChecker:
         self._cap_inset = math.sqrt(self.edge_radius**2 - (vehicle.width / 2.0) ** 2)
         self._cap_back = vehicle.rear_overhang - self._cap_inset
         self._cap_front = vehicle.front_extent - self._cap_inset
+        # segment_clear's constants, once: the trace step and the box a cell inside the grid.
+        self._min_step = self.config.min_trace_step
+        self._inner = (self._ox + h, self._oy + h, self._ox + (nx - 1) * h, self._oy + (ny - 1) * h)
         self._rectangles = RectangleTest(self.bounds, self._union, vehicle)
         self._disc_offsets, disc_radius = cover_discs(vehicle, 3)
         self._disc_offsets_list = [float(o) for o in self._disc_offsets]
@@ -265,10 +268,9 @@ class CollisionChecker:
         ax, ay = float(a[0]), float(a[1])
         dx, dy = float(b[0]) - ax, float(b[1]) - ay
         length = math.hypot(dx, dy)
-        clearance = self.clearance
-        min_step = self.config.min_trace_step
         if length < 1e-12:
-            return clearance(ax, ay) - radius >= 0.0
+            return self.clearance(ax, ay) - radius >= 0.0
+        min_step = self._min_step
         ux, uy = dx / length, dy / length
         # clearance() inlined (the same arithmetic): this loop is the planners' hot spot.
         ox, oy, inv_h = self._ox, self._oy, self._inv_h
@@ -286,8 +288,7 @@ class CollisionChecker:
         t = 0.0
         # Both ends at least a cell inside the grid: so is every point between
         # (rounding moves them by far less), and the walk needs no bounds checks.
-        h = self.config.resolution
-        lo_x, lo_y, hi_x, hi_y = ox + h, oy + h, ox + (nx - 1) * h, oy + (ny - 1) * h
+        lo_x, lo_y, hi_x, hi_y = self._inner
         if lo_x <= ax <= hi_x and lo_x <= x <= hi_x and lo_y <= ay <= hi_y and lo_y <= y <= hi_y:
             while True:
                 room = (

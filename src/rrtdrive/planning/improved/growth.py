@@ -116,8 +116,13 @@ class ObtuseTree(GrowingTree):
         q3[1] = q[1]
         r = self._forms[:, : self.size] @ q3
         near = r[0]
+        i = int(near.argmin())
         if not obtuse:
-            return int(near.argmin())
+            return i
+        # The nearest node, when obtuse, is the answer: every node before it is
+        # farther, every one after it no nearer (argmin takes the first minimum).
+        if r[1, i] > 0.0:
+            return i
         # NaN (a root without parent) compares False: never obtuse.
         w = np.where(r[1] > 0.0, near, np.inf)
         i = int(w.argmin())

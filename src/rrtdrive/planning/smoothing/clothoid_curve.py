@@ -153,7 +153,7 @@ def polygon_turns(
         ux, uy, length = unit(pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1])
         dirs.append((ux, uy))
         lengths.append(length)
-    options: list[list[ClothoidTurn] | None] = [None] * n
+    thetas: list[float | None] = [None] * n
     tmin = [0.0] * n
     for c in range(1, n - 1):
         theta = signed_deflection(dirs[c - 1], dirs[c])
@@ -161,26 +161,8 @@ def polygon_turns(
             if lengths[c - 1] == 0.0 or lengths[c] == 0.0:
                 tmin[c] = math.inf  # a repeated point: no direction to turn from
             continue
-        key = (theta, float(kappas[c]))
-        opts = cache.get(key)
-        if opts is None and tight[c]:
-            # The tightest turn alone (all a tight corner uses); cached apart, so that
-            # a corner that is not tight still finds or builds all its options.
-            tkey = (theta, float(kappas[c]), True)
-            opts = cache.get(tkey)
-            if opts is None:
-                opts = cache[tkey] = [clothoid_turn(theta, kappas[c], float(levels[0]))]
-        if opts is None:
-            # Every radius step x sharpness level, by tangent length: the first, the
-            # tightest (the corner's radius, the sharpest level), reaches least.
-            tight_turn = clothoid_turn(theta, kappas[c], float(levels[0]))
-            steps = np.repeat(np.asarray(radius_steps, dtype=float), len(levels))
-            rest = clothoid_turns(theta, kappas[c] / steps, np.tile(levels, len(radius_steps)))
-            opts = cache[key] = [tight_turn] + sorted(
-                (t for t in rest if t.tangent > tight_turn.tangent), key=lambda t: t.tangent
-            )
-        options[c] = opts[:1] if tight[c] else opts
-        tmin[c] = opts[0].tangent
+        thetas[c] = theta
+        tmin[c] = _tightest(cache, theta, kappas[c], levels).tangent
     gaps = [0.0] * (n - 1)
     if n > 2:
         gaps[0] = end_gap if tmin[1] > 0.0 else 0.0
@@ -190,6 +172,28 @@ def polygon_turns(
     ]
     if conflicts:
         return [None] * n, conflicts
+    # Only now the gentler options (most calls of a repair loop end in a conflict,
+    # which the tightest turns alone decide).
+    options: list[list[ClothoidTurn] | None] = [None] * n
+    for c in range(1, n - 1):
+        theta = thetas[c]
+        if theta is None:
+            continue
+        if tight[c]:
+            options[c] = [_tightest(cache, theta, kappas[c], levels)]
+            continue
+        key = (theta, float(kappas[c]))
+        opts = cache.get(key)
+        if opts is None:
+            # Every radius step x sharpness level, by tangent length: the first, the
+            # tightest (the corner's radius, the sharpest level), reaches least.
+            tight_turn = _tightest(cache, theta, kappas[c], levels)
+            steps = np.repeat(np.asarray(radius_steps, dtype=float), len(levels))
+            rest = clothoid_turns(theta, kappas[c] / steps, np.tile(levels, len(radius_steps)))
+            opts = cache[key] = [tight_turn] + sorted(
+                (t for t in rest if t.tangent > tight_turn.tangent), key=lambda t: t.tangent
+            )
+        options[c] = opts
     chosen = [0.0] * n
     flexible = [o is not None and len(o) > 1 for o in options]
     # A fair first share: each flexible corner gets half the spare length of a leg it
@@ -219,6 +223,19 @@ def polygon_turns(
         if opts is not None:
             turns[c] = opts[int(chosen[c])]
     return turns, []
+
+
+def _tightest(
+    cache: dict[tuple, list[ClothoidTurn]], theta: float, kappa: float, levels: np.ndarray
+) -> ClothoidTurn:
+    """The tightest turn of a corner (its radius, the sharpest level), remembered in ``cache``."""
+    opts = cache.get((theta, float(kappa)))
+    if opts is None:
+        tkey = (theta, float(kappa), True)
+        opts = cache.get(tkey)
+        if opts is None:
+            opts = cache[tkey] = [clothoid_turn(theta, kappa, float(levels[0]))]
+    return opts[0]
 
 
 def _gentlest(opts: list[ClothoidTurn], room: float) -> int:
