@@ -59,9 +59,10 @@ VARIANTS = {
 
 
 def _item(query: str) -> dict[str, Any]:
+    """The coverage item of ``goal:N`` / ``start:N`` (a ValueError naming --query else)."""
     vary, _, index = query.partition(":")
-    if vary not in ("goal", "start") or not index.isdigit():
-        raise SystemExit(f"--query: expected goal:N or start:N, got {query!r}")
+    if vary not in ("goal", "start") or not index.isdigit() or not 0 <= int(index) < 100:
+        raise ValueError(f"--query: expected goal:N or start:N with N in 0..99, got {query!r}")
     i = int(index)
     pose = cov.draw_goals("parking_lot", 100, 1, vary)[i]
     return {"map": "parking_lot", "vary": vary, "index": i, "pose": pose.as_tuple()}
@@ -182,7 +183,10 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if args.expansions < 1 or args.ompl_time <= 0:
         ap.error("--expansions must be >= 1 and --ompl-time > 0")
-    item = _item(args.query)
+    try:
+        item = _item(args.query)
+    except ValueError as err:
+        ap.error(str(err))
     t0 = time.perf_counter()
     ompl = ompl_row(item, args.ompl_time)
     ours = {}
