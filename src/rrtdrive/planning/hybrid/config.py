@@ -172,6 +172,12 @@ class HybridConfig:
         its pose: random goals 39 and 92 of ``coverage.py --count 100`` (with
         reverse) had all 32 connections' ramps fail at 1.02 and solve at 1.1 in 4 and
         1 expansions.
+    shortcut_tries : int
+        After a connection is accepted, up to this many (anchor, anchor) pairs along it
+        are tried for a shorter analytic word between them
+        (:func:`~rrtdrive.planning.hybrid.shortcut.shortcut`); the shortened connection
+        is built and checked like any other and kept only when accepted and shorter.
+        0 (default): never.
 
     Examples
     --------
@@ -215,6 +221,7 @@ class HybridConfig:
     coarse_factor: int = 4
     min_clearance: float = 0.05
     wide_radius_factor: float = 1.1
+    shortcut_tries: int = 0
 
     def __post_init__(self) -> None:
         for name in (
@@ -271,6 +278,7 @@ class HybridConfig:
         require_int("hybrid.max_solutions", self.max_solutions)
         require_int("hybrid.switch_after", self.switch_after, minimum=0)
         require_int("hybrid.refinements", self.refinements, minimum=0)
+        require_int("hybrid.shortcut_tries", self.shortcut_tries, minimum=0)
         require_int("hybrid.coarse_factor", self.coarse_factor, minimum=2)
         require_finite("hybrid.refine_share", self.refine_share)
         if not 0.0 < self.refine_share <= 1.0:

@@ -45,6 +45,7 @@ from rrtdrive.planning.hybrid.search import (
     analytic_shots,
     walk_hits,
 )
+from rrtdrive.planning.hybrid.shortcut import shortcut
 from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
 from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, SmoothingConfig
 from rrtdrive.types import Pose, Tree
@@ -202,7 +203,7 @@ def reversed_in_time(pieces: Sequence[Piece]) -> list[Piece]:
     >>> out[0].gear, out[0].rows[:, 0].tolist()
     (-1, [1.0, 0.0])
     """
-    return [Piece(-p.gear, p.rows[::-1].copy()) for p in reversed(pieces)]
+    return [Piece(-p.gear, p.rows[::-1].copy(), p.shot) for p in reversed(pieces)]
 
 
 def _backward_dubins_shots(
@@ -219,7 +220,7 @@ def _backward_dubins_shots(
             rows = cand.sample(spacing)[::-1].copy()
             rows[0, :3] = pose.as_tuple()
             rows[-1, :3] = target.as_tuple()
-            yield [Piece(-1, rows)]
+            yield [Piece(-1, rows, True)]
 
     return shots
 
@@ -293,7 +294,10 @@ def search_at_resolution(
             body, start, goal, heuristic, prims, shots, config, kappa_max, problem.bounds,
             long_prims,
         )  # fmt: skip
-        out: list[tuple[HybridSearch, Accept]] = [(ahead, accept)]
+        take = accept
+        if config.shortcut_tries > 0:
+            take = _shortened(accept, body, radius, reverse, config)
+        out: list[tuple[HybridSearch, Accept]] = [(ahead, take)]
         if config.switch_after > 0:
             back_prims, *back_long = back_sets
             if reverse:
@@ -304,7 +308,7 @@ def search_at_resolution(
                 body, goal, start, back_h, back_prims, back_shots, config, kappa_max,
                 problem.bounds, back_long,
             )  # fmt: skip
-            out.append((back, lambda p: accept(reversed_in_time(p))))
+            out.append((back, lambda p: take(reversed_in_time(p))))
         return out
 
     # The ramps cut corners by centimetres: where every connection the search finds
@@ -330,6 +334,36 @@ def search_at_resolution(
             break
     trees = tuple(_tree(s) for s, _ in searches if s.x)
     return path, used, trees
+
+
+def _shortened(
+    accept: Accept, body: BodyTest, radius: float, reverse: bool, config: HybridConfig
+) -> Accept:
+    """``accept`` followed by :func:`~.shortcut.shortcut` (kept when accepted and shorter)."""
+
+    def take(pieces: list[Piece]) -> BuiltPath | None:
+        built = accept(pieces)
+        if built is None:
+            return None
+        shorter = shortcut(
+            pieces,
+            lambda t: analytic_shots(t, radius, reverse, config.check_spacing, body),
+            body,
+            config.shortcut_tries,
+        )
+        if shorter is None:
+            return built
+        better = accept(shorter)
+        if better is None or _rows_length(better.rows) >= _rows_length(built.rows):
+            return built
+        return better
+
+    return take
+
+
+def _rows_length(rows: np.ndarray) -> float:
+    d = np.diff(rows[:, :2], axis=0)
+    return float(np.hypot(d[:, 0], d[:, 1]).sum())
 
 
 def _alternate(

@@ -27,11 +27,13 @@ __all__ = ["Piece", "Shots", "analytic_shots", "walk_hits", "walk_poses", "walks
 class Piece:
     """A stretch of path in one gear: rows ``[x, y, yaw, kappa]``, both end poses included.
 
-    ``kappa`` is the steering curvature; ``gear`` +1 forward, -1 reverse.
+    ``kappa`` is the steering curvature; ``gear`` +1 forward, -1 reverse; ``shot``:
+    part of an analytic word (the shortest path between its ends, nothing to shorten).
     """
 
     gear: int
     rows: np.ndarray
+    shot: bool = False
 
 
 #: ``shots(pose) -> candidates``: pieces from the pose to the exact goal, shortest first
@@ -148,7 +150,7 @@ def _gear_pieces(rows: np.ndarray) -> list[Piece]:
     """Rows ``[x, y, yaw, kappa, gear]`` cut at the cusps (each piece keeps both end rows)."""
     gear = rows[:, 4]
     cuts = np.flatnonzero(gear[1:] != gear[:-1]) + 1
-    return [Piece(int(part[0, 4]), part[:, :4].copy()) for part in np.split(rows, cuts)]
+    return [Piece(int(part[0, 4]), part[:, :4].copy(), True) for part in np.split(rows, cuts)]
 
 
 def analytic_shots(
@@ -185,6 +187,6 @@ def analytic_shots(
                 rows[0, :3] = pose.as_tuple()
                 yield _gear_pieces(rows)
             else:
-                yield [Piece(1, cand.sample(spacing))]
+                yield [Piece(1, cand.sample(spacing), True)]
 
     return shots
