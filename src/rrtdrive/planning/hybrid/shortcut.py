@@ -95,6 +95,8 @@ def shortcut(
     -------
     list of Piece or None
     """
+    if tries <= 0 or all(p.shot for p in pieces):
+        return None  # one analytic word (the first shot answered): nothing to shorten
     atoms = _atoms(pieces, spacing)
     changed = False
     i = 0
