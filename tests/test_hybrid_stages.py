@@ -106,6 +106,33 @@ def test_middle_stage_threads_an_approach_too_tight_for_the_coarse_grid() -> Non
     assert without.status is PlanStatus.NO_PATH_IN_BUDGET
 
 
+def test_the_wall_clock_cap_on_the_middle_branch_is_a_timeout_named_as_such(monkeypatch) -> None:
+    # The cap is the machine's; to hit it at a known point, the middle search (the third)
+    # is made to end as the search loop ends when the stopwatch expires.
+    from rrtdrive.planning.hybrid import query
+    from rrtdrive.planning.hybrid.search import SearchOutcome
+
+    real = query.search_at_resolution
+    calls = []
+
+    def capped(problem, allowed, watch, cfg, *rest):
+        calls.append(cfg.xy_resolution)
+        if len(calls) == 3:
+            return None, SearchOutcome("time", 7, 9, 0, 0), ()
+        return real(problem, allowed, watch, cfg, *rest)
+
+    monkeypatch.setattr(query, "search_at_resolution", capped)
+    _, problem = _random_problem("goal", 94, count=100)
+    res = _solve(problem, 20000)
+    assert calls == [0.5, 2.0, 1.0]
+    assert res.status is PlanStatus.TIMEOUT
+    assert res.message.startswith(
+        "no path found: the wall-clock cap of 300 s was hit before the expansion budget of "
+        "20000: at 0.5 m / 5 deg / 1 m steps the search spent its share of 5000 expansions"
+    )
+    assert "then at 1 m / 10 deg / 2 m steps it was stopped by the wall-clock cap" in res.message
+
+
 def test_queries_solved_within_the_share_are_unchanged() -> None:
     problem = PlanningProblem.from_map(builtin_map("garage"))
     a, b = _solve(problem, 2000), _solve(problem, 2000, coarse_after=0.0)

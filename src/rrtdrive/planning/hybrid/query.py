@@ -296,9 +296,14 @@ def hybrid_query(
             + f" {'the search' if k == 0 else 'it'} {_why(o, 'its share of ' if a else '')}"
             for k, (c, o, a) in enumerate(tried)
         ]  # fmt: skip
+        lead_in = (
+            f"no path found: the wall-clock cap of {budget.max_time_s:g} s was hit before the "
+            f"expansion budget of {budget.max_iterations}"
+            if reason == "time"
+            else f"no path found within the expansion budget of {budget.max_iterations}"
+        )
         message = (
-            f"no path found within the expansion budget of {budget.max_iterations}: "
-            + ", then ".join(steps)
+            f"{lead_in}: " + ", then ".join(steps)
             + " (a coarser search proves nothing; a larger budget may find a path)"
         )
         return answer(path=None, message=message)
