@@ -26,7 +26,6 @@ writes ``OUT/bench_default.{json,md}``: per query both CPU times (the least of
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import os
 import pickle
@@ -58,38 +57,14 @@ def query_ids(count: int = 100, gears: tuple[str, ...] = ("fwd", "rev")) -> list
 class _Runner(bh._Runner):
     """Plans queries by id with the default planner of the ``rrtdrive`` this process imports."""
 
-    def problem(self, qid: str):  # noqa: ANN201 - a PlanningProblem of either tree
-        from rrtdrive.maps import builtin_map
-        from rrtdrive.planning import PlanningProblem
+    PLANNER = "improved-rrt-connect"
+    MAX_TIME_S = 10.0
 
-        vary, gear, i = qid.split(":")
-        m = dataclasses.replace(builtin_map("parking_lot"), **{vary: self.draws[vary][int(i)]})
-        return dataclasses.replace(PlanningProblem.from_map(m), reverse=gear == "rev")
-
-    def run_once(self, qid: str) -> dict:
-        import numpy as np
-
-        from rrtdrive.planning import make_planner
+    def compared(self, res) -> dict:  # noqa: ANN001 - a PlanResult of either tree
+        """The message with the times it quotes masked, and the stage in place of nodes."""
         from rrtdrive.planning.hybrid.escalation import stage_of
-        from rrtdrive.types import Budget
 
-        problem = self.problem(qid)
-        problem.checker.component_labels  # noqa: B018 - per-map set-up, outside the timing
-        planner = make_planner("improved-rrt-connect")
-        cpu = time.process_time()
-        res = planner.solve(problem, np.random.default_rng(0), Budget(max_time_s=10))
-        cpu = time.process_time() - cpu
-        rows = None if res.path is None else np.asarray(res.path.samples, dtype=float).tolist()
-        return {
-            "id": qid,
-            "status": res.status.value,
-            "message": _TIME.sub("T s", res.message),
-            "iterations": int(res.iterations),
-            "nodes": stage_of(res),  # compared like bench_hybrid's nodes
-            "time_s": float(res.planning_time_s),
-            "cpu_s": cpu,
-            "rows": rows,
-        }
+        return {"message": _TIME.sub("T s", res.message), "nodes": stage_of(res)}
 
 
 def _worker(count: int, repeat: int, warm: str) -> int:

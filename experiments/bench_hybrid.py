@@ -102,6 +102,14 @@ class _Runner:
             out["cpu_s"] = min(out["cpu_s"], again["cpu_s"])
         return out
 
+    #: The planner run, and its wall-clock cap (a safety cap: the budgets are counted).
+    PLANNER = "hybrid-a-star"
+    MAX_TIME_S = 1e6
+
+    def compared(self, res) -> dict:  # noqa: ANN001 - a PlanResult of either tree
+        """The answer's ``message`` and ``nodes``, as compared between old and new code."""
+        return {"message": res.message, "nodes": int(res.nodes)}
+
     def run_once(self, qid: str) -> dict:
         import numpy as np
 
@@ -110,17 +118,16 @@ class _Runner:
 
         problem = self.problem(qid)
         problem.checker.component_labels  # noqa: B018 - per-map set-up, outside the timing
-        planner = make_planner("hybrid-a-star")
+        planner = make_planner(self.PLANNER)
         cpu = time.process_time()
-        res = planner.solve(problem, np.random.default_rng(0), Budget(max_time_s=1e6))
+        res = planner.solve(problem, np.random.default_rng(0), Budget(max_time_s=self.MAX_TIME_S))
         cpu = time.process_time() - cpu
         rows = None if res.path is None else np.asarray(res.path.samples, dtype=float).tolist()
         return {
             "id": qid,
             "status": res.status.value,
-            "message": res.message,
             "iterations": int(res.iterations),
-            "nodes": int(res.nodes),
+            **self.compared(res),
             "time_s": float(res.planning_time_s),
             "cpu_s": cpu,
             "rows": rows,
