@@ -26,14 +26,10 @@ writes ``OUT/bench_default.{json,md}``: per query both CPU times (the least of
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import pickle
-import platform
 import re
-import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path as FsPath
 
@@ -65,35 +61,6 @@ class _Runner(bh._Runner):
         from rrtdrive.planning.hybrid.escalation import stage_of
 
         return {"message": _TIME.sub("T s", res.message), "nodes": stage_of(res)}
-
-
-def _worker(count: int, repeat: int, warm: str) -> int:
-    """Answer query ids read from stdin, one JSON line each, on stdout."""
-    import rrtdrive
-
-    runner = _Runner(count)
-    runner.run(warm)
-    print(json.dumps({"ready": str(FsPath(rrtdrive.__file__).resolve())}), flush=True)
-    for line in sys.stdin:
-        if line.strip():
-            print(json.dumps(runner.run(line.strip(), repeat)), flush=True)
-    return 0
-
-
-class _Worker(bh._Worker):
-    """A worker running this script's :func:`_worker`, importing ``rrtdrive`` from ``src``."""
-
-    def __init__(self, src: FsPath, count: int, repeat: int, warm: str) -> None:
-        env = dict(os.environ, PYTHONPATH=str(src))
-        cmd = [sys.executable, str(FsPath(__file__).resolve()), "--worker", "--count", str(count)]
-        cmd += ["--repeat", str(repeat), "--warm", warm]
-        self.proc = subprocess.Popen(
-            cmd,
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env, cwd=str(ROOT),
-        )  # fmt: skip
-        self.module = json.loads(self.ask_line())["ready"]
-        if not self.module.startswith(str(src.resolve())):
-            raise RuntimeError(f"worker imported {self.module}, not from {src}")
 
 
 def _markdown(meta: dict, summary: dict, rows: list[dict]) -> str:
@@ -142,53 +109,30 @@ def _markdown(meta: dict, summary: dict, rows: list[dict]) -> str:
 
 def _bench(args: argparse.Namespace, ids: list[str]) -> int:
     t0 = time.perf_counter()
-
-    def git(*cmd: str) -> str:
-        return subprocess.run(
-            ["git", *cmd], cwd=ROOT, check=True, capture_output=True, text=True
-        ).stdout.strip()
-
-    sha, head = git("rev-parse", args.ref), git("rev-parse", "--short", "HEAD")
-    dirty = git("status", "--porcelain", "src")
-    with tempfile.TemporaryDirectory(prefix="bench_default_") as tmp:
-        old = _Worker(bh._export(sha, FsPath(tmp)), args.count, args.repeat, WARM)
-        new = _Worker(ROOT / "src", args.count, args.repeat, WARM)
-        rows = []
-        for n, qid in enumerate(ids):
-            # Alternate which runs first, so neither always meets a warm cache.
-            pair = (old, new) if n % 2 == 0 else (new, old)
-            got = {id(w): w.run(qid) for w in pair}
-            a, b = got[id(old)], got[id(new)]
-            same, why = bh.same_answer(a, b)
-            rows.append({
-                "id": qid, "status": b["status"], "stage": b["nodes"],
-                "iterations": b["iterations"], "old_s": a["time_s"], "new_s": b["time_s"],
-                "old_cpu_s": a["cpu_s"], "new_cpu_s": b["cpu_s"], "same": same, "why": why,
-            })  # fmt: skip
-            print(f"{qid:16s} {b['status']:18s} old {1e3 * a['cpu_s']:8.1f} ms  new "
-                  f"{1e3 * b['cpu_s']:8.1f} ms  {'same' if same else 'DIFFERENT ' + why}",
-                  flush=True)  # fmt: skip
-        old.close()
-        new.close()
+    meta = bh.provenance(args.ref)
+    rows = []
+    for qid, a, b, same, why in bh.interleaved(
+        meta["ref_sha"], ids, args.count, args.repeat, args.warm, FsPath(__file__)
+    ):
+        rows.append({
+            "id": qid, "status": b["status"], "stage": b["nodes"],
+            "iterations": b["iterations"], "old_s": a["time_s"], "new_s": b["time_s"],
+            "old_cpu_s": a["cpu_s"], "new_cpu_s": b["cpu_s"], "same": same, "why": why,
+        })  # fmt: skip
+        print(f"{qid:16s} {b['status']:18s} old {1e3 * a['cpu_s']:8.1f} ms  new "
+              f"{1e3 * b['cpu_s']:8.1f} ms  {'same' if same else 'DIFFERENT ' + why}",
+              flush=True)  # fmt: skip
     summary = bh._summary(rows)
     meta = {
         "command": "python experiments/bench_default.py " + " ".join(sys.argv[1:]),
-        "ref": args.ref,
-        "ref_sha": sha,
-        "new": f"this tree at {head}" + (" with uncommitted changes in src/" if dirty else ""),
+        **meta,
         "repeat": args.repeat,
-        "machine": (
-            f"{platform.machine()} {os.cpu_count()} CPUs, Python {platform.python_version()}"
-        ),
+        "machine": bh.machine(),
         "load": " ".join(f"{v:.1f}" for v in os.getloadavg()),
         "wall_s": time.perf_counter() - t0,
     }
-    out = FsPath(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "bench_default.json").write_text(
-        json.dumps({"meta": meta, "summary": summary, "queries": rows}, indent=1) + "\n"
-    )
-    (out / "bench_default.md").write_text(_markdown(meta, summary, rows))
+    payload = {"meta": meta, "summary": summary, "queries": rows}
+    bh.write_results(args.out, "bench_default", payload, _markdown(meta, summary, rows))
     for name, s in summary.items():
         print(f"{name}: same {s['same']}/{s['queries']}, CPU {s['old_cpu_total_s']:.2f} -> "
               f"{s['new_cpu_total_s']:.2f} s, CPU median ratio {s['cpu_median_ratio']:.3f}")
@@ -209,7 +153,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.worker:
-        return _worker(args.count, args.repeat, args.warm)
+        return bh._worker(args.count, args.repeat, args.warm, _Runner)
     gears = tuple(args.gears.split(","))
     ids = args.only.split(",") if args.only else query_ids(args.count, gears)
     if not (args.record or args.check):

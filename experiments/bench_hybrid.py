@@ -38,6 +38,7 @@ import sys
 import tarfile
 import tempfile
 import time
+from collections.abc import Iterator
 from pathlib import Path as FsPath
 
 HERE = FsPath(__file__).resolve().parent
@@ -155,11 +156,11 @@ def same_answer(a: dict, b: dict) -> tuple[bool, str]:
     return True, ""
 
 
-def _worker(count: int, repeat: int, warm: str) -> int:
+def _worker(count: int, repeat: int, warm: str, runner_cls: type[_Runner] = _Runner) -> int:
     """Answer query ids read from stdin, one JSON line each, on stdout."""
     import rrtdrive
 
-    runner = _Runner(count)
+    runner = runner_cls(count)
     runner.run(warm)  # imports, caches and the map's set-up: not in the first query's time
     print(json.dumps({"ready": str(FsPath(rrtdrive.__file__).resolve())}), flush=True)
     for line in sys.stdin:
@@ -173,9 +174,12 @@ def _worker(count: int, repeat: int, warm: str) -> int:
 class _Worker:
     """A worker process importing ``rrtdrive`` from ``src``."""
 
-    def __init__(self, src: FsPath, count: int, repeat: int, warm: str) -> None:
+    def __init__(
+        self, src: FsPath, count: int, repeat: int, warm: str, script: FsPath = FsPath(__file__)
+    ) -> None:
         env = dict(os.environ, PYTHONPATH=str(src))
-        cmd = [sys.executable, str(FsPath(__file__).resolve()), "--worker", "--count", str(count)]
+        # ``script`` (this one or a sibling built on it) answers in its --worker mode.
+        cmd = [sys.executable, str(script.resolve()), "--worker", "--count", str(count)]
         cmd += ["--repeat", str(repeat), "--warm", warm]
         self.proc = subprocess.Popen(
             cmd,
@@ -298,56 +302,79 @@ def _markdown(meta: dict, summary: dict, rows: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def provenance(ref: str) -> dict:
+    """The old code's commit (``ref``, ``ref_sha``) and what "new" is (this tree)."""
+
+    def git(*cmd: str) -> str:
+        return subprocess.run(
+            ["git", *cmd], cwd=ROOT, check=True, capture_output=True, text=True
+        ).stdout.strip()
+
+    head, dirty = git("rev-parse", "--short", "HEAD"), git("status", "--porcelain", "src")
+    new = f"this tree at {head}" + (" with uncommitted changes in src/" if dirty else "")
+    return {"ref": ref, "ref_sha": git("rev-parse", ref), "new": new}
+
+
+def interleaved(
+    sha: str, ids: list[str], count: int, repeat: int, warm: str, script: FsPath
+) -> Iterator[tuple[str, dict, dict, bool, str]]:
+    """``(qid, old answer, new answer, same, why)`` per query: commit ``sha``'s ``src/``
+    against this tree's, each in a worker running ``script``, taking turns going first."""
+    with tempfile.TemporaryDirectory(prefix=f"{script.stem}_") as tmp:
+        old = _Worker(_export(sha, FsPath(tmp)), count, repeat, warm, script)
+        new = _Worker(ROOT / "src", count, repeat, warm, script)
+        try:
+            for n, qid in enumerate(ids):
+                # Alternate which runs first, so neither always meets a warm cache.
+                pair = (old, new) if n % 2 == 0 else (new, old)
+                got = {id(w): w.run(qid) for w in pair}
+                a, b = got[id(old)], got[id(new)]
+                yield (qid, a, b, *same_answer(a, b))
+        finally:
+            old.close()
+            new.close()
+
+
+def write_results(out: str, name: str, payload: dict, text: str) -> None:
+    """``OUT/NAME.json`` and ``OUT/NAME.md``, each written whole (temp file, then rename)."""
+    from rrtdrive.atomic import write_text_atomic  # this tree's, in the main process only
+
+    folder = FsPath(out)
+    folder.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(folder / f"{name}.json", json.dumps(payload, indent=1) + "\n")
+    write_text_atomic(folder / f"{name}.md", text)
+
+
+def machine() -> str:
+    """This machine, for a results page."""
+    return f"{platform.machine()} {os.cpu_count()} CPUs, Python {platform.python_version()}"
+
+
 def _bench(args: argparse.Namespace, ids: list[str]) -> int:
     t0 = time.perf_counter()
-    sha = subprocess.run(
-        ["git", "rev-parse", args.ref], cwd=ROOT, check=True, capture_output=True, text=True
-    ).stdout.strip()
-    head = subprocess.run(
-        ["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, check=True, capture_output=True,
-        text=True,
-    ).stdout.strip()  # fmt: skip
-    dirty = subprocess.run(
-        ["git", "status", "--porcelain", "src"], cwd=ROOT, capture_output=True, text=True
-    ).stdout.strip()
-    with tempfile.TemporaryDirectory(prefix="bench_hybrid_") as tmp:
-        old = _Worker(_export(sha, FsPath(tmp)), args.count, args.repeat, WARM)
-        new = _Worker(ROOT / "src", args.count, args.repeat, WARM)
-        rows = []
-        for n, qid in enumerate(ids):
-            # Alternate which runs first, so neither always meets a warm cache.
-            pair = (old, new) if n % 2 == 0 else (new, old)
-            got = {id(w): w.run(qid) for w in pair}
-            a, b = got[id(old)], got[id(new)]
-            same, why = same_answer(a, b)
-            rows.append({
-                "id": qid, "status": b["status"], "iterations": b["iterations"],
-                "old_s": a["time_s"], "new_s": b["time_s"], "old_cpu_s": a["cpu_s"],
-                "new_cpu_s": b["cpu_s"], "same": same, "why": why,
-            })  # fmt: skip
-            print(f"{qid:24s} {b['status']:20s} old {1e3 * a['time_s']:8.1f} ms  new "
-                  f"{1e3 * b['time_s']:8.1f} ms  {'same' if same else 'DIFFERENT ' + why}",
-                  flush=True)  # fmt: skip
-        old.close()
-        new.close()
+    meta = provenance(args.ref)
+    rows = []
+    for qid, a, b, same, why in interleaved(
+        meta["ref_sha"], ids, args.count, args.repeat, WARM, FsPath(__file__)
+    ):
+        rows.append({
+            "id": qid, "status": b["status"], "iterations": b["iterations"],
+            "old_s": a["time_s"], "new_s": b["time_s"], "old_cpu_s": a["cpu_s"],
+            "new_cpu_s": b["cpu_s"], "same": same, "why": why,
+        })  # fmt: skip
+        print(f"{qid:24s} {b['status']:20s} old {1e3 * a['time_s']:8.1f} ms  new "
+              f"{1e3 * b['time_s']:8.1f} ms  {'same' if same else 'DIFFERENT ' + why}",
+              flush=True)  # fmt: skip
     summary = _summary(rows)
     meta = {
         "command": "python experiments/bench_hybrid.py " + " ".join(sys.argv[1:]),
-        "ref": args.ref,
-        "ref_sha": sha,
-        "new": f"this tree at {head}" + (" with uncommitted changes in src/" if dirty else ""),
-        "machine": (
-            f"{platform.machine()} {os.cpu_count()} CPUs, Python {platform.python_version()}"
-        ),
+        **meta,
+        "machine": machine(),
         "load": " ".join(f"{v:.1f}" for v in os.getloadavg()),
         "wall_s": time.perf_counter() - t0,
     }
-    out = FsPath(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "bench_hybrid.json").write_text(
-        json.dumps({"meta": meta, "summary": summary, "queries": rows}, indent=1) + "\n"
-    )
-    (out / "bench_hybrid.md").write_text(_markdown(meta, summary, rows))
+    payload = {"meta": meta, "summary": summary, "queries": rows}
+    write_results(args.out, "bench_hybrid", payload, _markdown(meta, summary, rows))
     for name, s in summary.items():
         print(f"{name}: same {s['same']}/{s['queries']}, total {s['old_total_s']:.2f} -> "
               f"{s['new_total_s']:.2f} s, median {s['old_median_ms']:.1f} -> "
