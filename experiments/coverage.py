@@ -164,8 +164,15 @@ def run_ours(item: dict[str, Any]) -> dict[str, Any]:
     return row
 
 
-def run_ompl(item: dict[str, Any]) -> dict[str, Any]:
-    """One query with OMPL on our exact body test."""
+def solve_ompl(
+    problem: PlanningProblem, index: int, planner: str, seconds: float
+) -> tuple[float, float, float | None, np.ndarray | None]:
+    """OMPL's ``planner`` on query ``index``, with our exact body test as validity checker.
+
+    Returns the solve time, the time with its simplification, the simplified path's
+    length and its states ``(N, 3)`` interpolated at most 0.1 m apart (``None``, ``None``
+    without an exact solution).
+    """
     from ompl import base as ob
     from ompl import geometric as og
     from ompl import util as ou
@@ -173,27 +180,22 @@ def run_ompl(item: dict[str, Any]) -> dict[str, Any]:
     from rrtdrive.bench.ompl_planners import simple_setup
 
     ou.setLogLevel(ou.LogLevel.LOG_NONE)
-    m, problem = _problem(item)
-    space, algorithm = OMPL[item["planner"]]
+    space, algorithm = OMPL[planner]
     ss, si = simple_setup(problem, space)
     free = problem.checker.pose_free
     ss.setStateValidityChecker(lambda s: free((s.getX(), s.getY(), s.getYaw())))
-    ou.RNG.setSeed(1 + item["index"])  # takes effect only before a process's first draw
-    planner = getattr(og, algorithm)(si)
-    planner.setRange(5.0)
-    ss.setPlanner(planner)
+    ou.RNG.setSeed(1 + index)  # takes effect only before a process's first draw
+    search = getattr(og, algorithm)(si)
+    search.setRange(5.0)
+    ss.setPlanner(search)
     objective = ob.PathLengthOptimizationObjective(si)
     objective.setCostThreshold(ob.Cost(float("inf")))
     ss.setOptimizationObjective(objective)
     t0 = time.perf_counter()
-    status = ss.solve(float(item["ompl_time"]))
+    status = ss.solve(float(seconds))
     solve_s = time.perf_counter() - t0
-    exact = status.asString() == "Exact solution"
-    row: dict[str, Any] = {"status": "solved" if exact else "no_path_in_budget", "solved": exact}
-    if not exact:
-        row.update(time_s=solve_s, solve_s=solve_s, length_m=None, verified=False,
-                   collision_free=False)
-        return row
+    if status.asString() != "Exact solution":
+        return solve_s, solve_s, None, None
     ss.simplifySolution()
     total_s = time.perf_counter() - t0
     sol = ss.getSolutionPath()
@@ -203,6 +205,21 @@ def run_ompl(item: dict[str, Any]) -> dict[str, Any]:
         [(s.getX(), s.getY(), s.getYaw()) for s in (sol.getState(i)
                                                     for i in range(sol.getStateCount()))]
     )
+    return solve_s, total_s, length, states
+
+
+def run_ompl(item: dict[str, Any]) -> dict[str, Any]:
+    """One query with OMPL on our exact body test."""
+    m, problem = _problem(item)
+    solve_s, total_s, length, states = solve_ompl(
+        problem, item["index"], item["planner"], item["ompl_time"]
+    )
+    exact = states is not None
+    row: dict[str, Any] = {"status": "solved" if exact else "no_path_in_budget", "solved": exact}
+    if states is None:
+        row.update(time_s=solve_s, solve_s=solve_s, length_m=None, verified=False,
+                   collision_free=False)
+        return row
     keep = np.concatenate([[True], np.hypot(*np.diff(states[:, :2], axis=0).T) > 1e-9])
     states = states[keep]
     path = Path(np.column_stack([states, np.zeros(len(states))]), states[:, :2])

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import platform
 import sys
@@ -72,37 +71,10 @@ def ompl_row(item: dict[str, Any], seconds: float) -> dict[str, Any] | None:
     """OMPL's Dubins RRT on the query, as coverage.py runs it, with its path's figures."""
     if cov.availability("ompl-dubins-rrt") is not None:
         return None
-    from ompl import base as ob
-    from ompl import geometric as og
-    from ompl import util as ou
-
-    from rrtdrive.bench.ompl_planners import simple_setup
-
-    ou.setLogLevel(ou.LogLevel.LOG_NONE)
     _, problem = cov._problem(item)
-    ss, si = simple_setup(problem, "dubins")
-    free = problem.checker.pose_free
-    ss.setStateValidityChecker(lambda s: free((s.getX(), s.getY(), s.getYaw())))
-    ou.RNG.setSeed(1 + item["index"])  # coverage.py's seed for a worker's first query
-    planner = og.RRT(si)
-    planner.setRange(5.0)
-    ss.setPlanner(planner)
-    objective = ob.PathLengthOptimizationObjective(si)
-    objective.setCostThreshold(ob.Cost(float("inf")))
-    ss.setOptimizationObjective(objective)
-    t0 = time.perf_counter()
-    status = ss.solve(seconds)
-    solve_s = time.perf_counter() - t0
-    if status.asString() != "Exact solution":
+    solve_s, _, length, states = cov.solve_ompl(problem, item["index"], "ompl-dubins-rrt", seconds)
+    if states is None:
         return {"solved": False, "time_s": solve_s}
-    ss.simplifySolution()
-    sol = ss.getSolutionPath()
-    length = float(sol.length())
-    sol.interpolate(max(2, int(math.ceil(length / 0.1)) + 1))
-    states = np.array([
-        (s.getX(), s.getY(), s.getYaw())
-        for s in (sol.getState(i) for i in range(sol.getStateCount()))
-    ])  # fmt: skip
     clear = np.array([problem.checker.body_clearance(p) for p in states])
     ds = np.hypot(*np.diff(states[:, :2], axis=0).T)
     kappa = np.diff(np.unwrap(states[:, 2])) / np.where(ds > 0, ds, np.inf)
