@@ -45,7 +45,7 @@ from rrtdrive.planning.hybrid.search import (
     analytic_shots,
     walk_hits,
 )
-from rrtdrive.planning.hybrid.shortcut import shortcut
+from rrtdrive.planning.hybrid.shortcut import polyline_length, shortcut
 from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
 from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, SmoothingConfig
 from rrtdrive.types import Pose, Tree
@@ -354,16 +354,11 @@ def _shortened(
         if shorter is None:
             return built
         better = accept(shorter)
-        if better is None or _rows_length(better.rows) >= _rows_length(built.rows):
+        if better is None or polyline_length(better.rows) >= polyline_length(built.rows):
             return built
         return better
 
     return take
-
-
-def _rows_length(rows: np.ndarray) -> float:
-    d = np.diff(rows[:, :2], axis=0)
-    return float(np.hypot(d[:, 0], d[:, 1]).sum())
 
 
 def _alternate(

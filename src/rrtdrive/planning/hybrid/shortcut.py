@@ -20,16 +20,18 @@ from rrtdrive.planning.hybrid.body import BodyTest
 from rrtdrive.planning.hybrid.shots import Piece, Shots
 from rrtdrive.types import Pose
 
-__all__ = ["pieces_length", "shortcut"]
+__all__ = ["pieces_length", "polyline_length", "shortcut"]
+
+
+def polyline_length(rows: np.ndarray) -> float:
+    """Length of the polyline through the rows' positions (columns x, y), metres."""
+    d = np.diff(rows[:, :2], axis=0)
+    return float(np.hypot(d[:, 0], d[:, 1]).sum())
 
 
 def pieces_length(pieces: Sequence[Piece]) -> float:
     """Arc length of the pieces' rows (polyline through the samples), metres."""
-    total = 0.0
-    for p in pieces:
-        d = np.diff(p.rows[:, :2], axis=0)
-        total += float(np.hypot(d[:, 0], d[:, 1]).sum())
-    return total
+    return sum(polyline_length(p.rows) for p in pieces)
 
 
 def _atoms(pieces: Sequence[Piece], spacing: float) -> list[Piece]:
