@@ -181,11 +181,11 @@ def _drive_segments(segments, start=(50.0, 50.0, 0.3), spacing=0.2) -> np.ndarra
         s = np.linspace(0.0, length, max(2, math.ceil(length / spacing) + 1))
         travel = yaw if gear > 0 else yaw + math.pi
         w = gear * kappa
-        if abs(w) < 1e-12:
-            xs, ys = x + s * math.cos(travel), y + s * math.sin(travel)
-        else:
-            xs = x + (np.sin(travel + w * s) - math.sin(travel)) / w
-            ys = y + (math.cos(travel) - np.cos(travel + w * s)) / w
+        # The chord of the arc, 2 sin(w s / 2) / w = s sinc(w s / 2 pi): exact for any w
+        # (the difference of sines loses all digits as w -> 0).
+        chord = s * np.sinc(w * s / (2 * math.pi))
+        xs = x + chord * np.cos(travel + w * s / 2)
+        ys = y + chord * np.sin(travel + w * s / 2)
         yaws = yaw + w * s
         rows.append(np.column_stack([xs, ys, yaws, np.full_like(s, kappa), np.full_like(s, gear)]))
         x, y, yaw = float(xs[-1]), float(ys[-1]), float(yaws[-1])
