@@ -72,9 +72,10 @@ def ompl_row(item: dict[str, Any], seconds: float) -> dict[str, Any] | None:
     if cov.availability("ompl-dubins-rrt") is not None:
         return None
     _, problem = cov._problem(item)
-    solve_s, _, length, states = cov.solve_ompl(problem, item["index"], "ompl-dubins-rrt", seconds)
-    if states is None:
+    solve_s, _, length, path = cov.solve_ompl(problem, item["index"], "ompl-dubins-rrt", seconds)
+    if path is None:
         return {"solved": False, "time_s": solve_s}
+    states = path.samples[:, :3]  # forward only: Dubins curves have no cusps
     clear = np.array([problem.checker.body_clearance(p) for p in states])
     ds = np.hypot(*np.diff(states[:, :2], axis=0).T)
     kappa = np.diff(np.unwrap(states[:, 2])) / np.where(ds > 0, ds, np.inf)

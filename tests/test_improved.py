@@ -552,6 +552,7 @@ def assert_rescued_or_honest(m: Map) -> None:
     if res.success:
         assert_valid_path(res, m)
         assert max_sharpness(res.path.samples, m.vehicle.wheelbase) <= 0.2 + 1e-6
+        assert verify_path(m, res.path, max_sharpness=0.2).sharpness_ok
     else:
         assert res.status is PlanStatus.POSTPROCESS_FAILED and "Dubins" in res.message
 

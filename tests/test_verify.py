@@ -10,9 +10,10 @@ import pytest
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.special import fresnel
 
 from rrtdrive.maps import Map, Obstacle
-from rrtdrive.types import InputError, Path, Pose
+from rrtdrive.types import InputError, Path, Pose, VehicleParams
 from rrtdrive.verify import path_from_json, verify_path
 
 
@@ -210,3 +211,57 @@ def test_exact_gear_arcs_pass_and_flipped_gears_fail(segments):
     flipped = rows.copy()
     flipped[:, 4] *= -1
     assert not verify_path(m, Path(flipped, np.zeros((0, 2)))).travel_ok
+
+
+def _clothoid_rows(rate: float, wheelbase: float, length: float, spacing: float) -> np.ndarray:
+    """A straight 3 m lead, then a clothoid kappa = c s with steering rate ``rate`` at s = 0.
+
+    Built with scipy's Fresnel integrals, not the planner's clothoids:
+    ``d delta / ds = L c / (1 + (L kappa)^2)``, largest (``L c``) where kappa = 0.
+    """
+    c = rate / wheelbase
+    s = np.linspace(0.0, length, max(3, math.ceil(length / spacing) + 1))
+    scale = math.sqrt(math.pi / c)
+    fs, fc = fresnel(s / scale)
+    lead = np.linspace(-3.0, 0.0, 13)[:-1]
+    x = np.concatenate([lead, scale * fc]) + 20.0
+    y = np.concatenate([0.0 * lead, scale * fs]) + 20.0
+    kappa = np.concatenate([0.0 * lead, c * s])
+    yaw = np.concatenate([0.0 * lead, c * s * s / 2])
+    return np.column_stack([x, y, yaw, kappa, np.ones_like(x)])
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.floats(0.05, 0.6), st.floats(3.0, 12.0), st.floats(0.05, 0.25))
+def test_sharpness_of_an_exact_clothoid_is_measured(rate, length, spacing):
+    wheelbase = VehicleParams().wheelbase  # the map's car
+    rows = _clothoid_rows(rate, wheelbase, length, spacing)
+    m = Map("open", (0.0, 0.0, 100.0, 100.0), (), Pose(17.0, 20.0, 0.0),
+            Pose(*rows[-1, :3]))
+    path = Path(np.round(rows, 6), np.zeros((0, 2)))  # as the JSON carries it
+    kappa_end = rate / wheelbase * length
+    # The largest rate is at kappa = 0; the estimate sits between the rate at the
+    # clothoid's far end and (a little under) that at its start.
+    check = verify_path(m, path, max_sharpness=rate, curvature_tol=math.inf)
+    low = rate / (1 + (wheelbase * kappa_end) ** 2)
+    assert low - 1e-3 <= check.max_discrete_sharpness <= rate + 0.003, check
+    assert check.sharpness_ok
+    assert not verify_path(m, path, max_sharpness=0.8 * rate - 0.005,
+                           curvature_tol=math.inf).sharpness_ok
+
+
+def test_curvature_jump_fails_the_sharpness_bound_only_when_asked():
+    # A line straight into a 10 m arc: the steering wheel would jump by atan(0.27).
+    line = np.column_stack([np.arange(10.0, 20.0, 0.25), np.full(40, 10.0)])
+    t = np.arange(0.0, 1.5, 0.025)
+    arc = np.column_stack([20.0 + 10.0 * np.sin(t), 20.0 - 10.0 * np.cos(t)])
+    xy = np.vstack([line, arc])
+    yaw = np.concatenate([np.zeros(40), t])
+    rows = np.column_stack([xy, yaw, np.concatenate([np.zeros(40), np.full(len(t), 0.1)])])
+    m = Map("jump", (0.0, 0.0, 60.0, 60.0), (), Pose(10.0, 10.0, 0.0), Pose(*rows[-1, :3]))
+    path = Path(rows, np.zeros((0, 2)))
+    assert verify_path(m, path).ok
+    check = verify_path(m, path, max_sharpness=0.2)
+    assert not check.sharpness_ok and not check.ok
+    assert check.max_discrete_sharpness > 0.4
+    assert check.collision_free and check.curvature_ok and check.headings_ok

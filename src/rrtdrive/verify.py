@@ -3,7 +3,9 @@
 It shares no code with the planner or the checker (only the angle wrap and the
 densifier of :mod:`rrtdrive.geometry`): the body is a shapely polygon built
 here, curvature is the discrete three-point (Menger) curvature of the samples,
-and the direction of travel comes from the sample chords.
+sharpness the change of the steering angle ``atan(L kappa)`` between those
+estimates per metre, and the direction of travel comes from the sample chords.
+None of them reads the rows' ``kappa`` column.
 
 A path with gears is checked per gear segment, never across a cusp: a cusp is
 where the car stops and changes gear, so the chord across it means nothing and
@@ -65,6 +67,12 @@ class PathCheck:
     travel_heading_err_deg : float
         Largest angle between a chord's direction of travel and the rows' yaw
         (plus pi in reverse), over all segments.
+    max_discrete_sharpness : float
+        Largest change of the steering angle per metre, rad/m, from the discrete
+        curvature of each gear segment (a jump of curvature shows as a large value).
+    sharpness_ok : bool
+        ``max_discrete_sharpness`` is within the ``max_sharpness`` asked for (plus
+        slack); True when none was asked for.
     """
 
     ok: bool
@@ -81,14 +89,21 @@ class PathCheck:
     cusps: int = 0
     travel_ok: bool = True
     travel_heading_err_deg: float = 0.0
+    max_discrete_sharpness: float = 0.0
+    sharpness_ok: bool = True
+
+
+def _signed_menger(xy: np.ndarray) -> np.ndarray:
+    """Curvature of the circle through each three consecutive points, + turning left."""
+    a, b, c = xy[:-2], xy[1:-1], xy[2:]
+    ab, bc, ca = b - a, c - b, a - c
+    cross = ab[:, 0] * bc[:, 1] - ab[:, 1] * bc[:, 0]
+    denom = np.hypot(*ab.T) * np.hypot(*bc.T) * np.hypot(*ca.T)
+    return np.where(denom > 1e-12, 2.0 * cross / np.maximum(denom, 1e-300), 0.0)
 
 
 def _menger(xy: np.ndarray) -> np.ndarray:
-    a, b, c = xy[:-2], xy[1:-1], xy[2:]
-    ab, bc, ca = b - a, c - b, a - c
-    cross = np.abs(ab[:, 0] * bc[:, 1] - ab[:, 1] * bc[:, 0])
-    denom = np.hypot(*ab.T) * np.hypot(*bc.T) * np.hypot(*ca.T)
-    return np.where(denom > 1e-12, 2.0 * cross / np.maximum(denom, 1e-300), 0.0)
+    return np.abs(_signed_menger(xy))
 
 
 def _body(x: float, y: float, yaw: float, length: float, width: float, back: float):
@@ -101,19 +116,45 @@ def _body(x: float, y: float, yaw: float, length: float, width: float, back: flo
     return shapely.Polygon(pts)
 
 
-def _segment_curvature(xy: np.ndarray) -> float:
-    """Largest Menger curvature over points about 0.5 m apart (less noise than adjacent samples)."""
+def _thin(xy: np.ndarray, min_gap: float) -> list[int]:
+    """Indices of points of ``xy`` at least ``min_gap`` apart along the polyline, and the last."""
     gaps = np.hypot(*np.diff(xy, axis=0).T)
     keep = [0]
     acc = 0.0
     for i, g in enumerate(gaps, start=1):
         acc += g
-        if acc >= 0.5:
+        if acc >= min_gap:
             keep.append(i)
             acc = 0.0
     if keep[-1] != len(xy) - 1:
         keep.append(len(xy) - 1)
+    return keep
+
+
+def _segment_curvature(xy: np.ndarray) -> float:
+    """Largest Menger curvature over points about 0.5 m apart (less noise than adjacent samples)."""
+    keep = _thin(xy, 0.5)
     return float(_menger(xy[keep]).max()) if len(keep) >= 3 else 0.0
+
+
+def _segment_sharpness(xy: np.ndarray, wheelbase: float) -> float:
+    """Largest ``|d delta / ds|`` of one gear segment, from signed Menger curvature.
+
+    Points closer than 0.2 m are thinned out (rounding noise grows as 1 / gap^2).
+    The circle through three points a, b, c with gaps ``ab``, ``bc`` has the
+    curvature of the curve about ``(bc - ab) / 3`` past b (first order), so the
+    rate is taken between those positions.
+    """
+    keep = _thin(xy, 0.2)
+    if len(keep) > 2 and np.hypot(*(xy[keep[-1]] - xy[keep[-2]])) < 0.2:
+        del keep[-2]  # the last point stands in for a kept one too close to it
+    pts = xy[keep]
+    if len(pts) < 4:
+        return 0.0
+    gaps = np.hypot(*np.diff(pts, axis=0).T)
+    where = np.cumsum(gaps)[:-1] + (gaps[1:] - gaps[:-1]) / 3.0
+    delta = np.arctan(wheelbase * _signed_menger(pts))
+    return float(np.max(np.abs(np.diff(delta)) / np.diff(where)))
 
 
 def _travel_directions(seg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -130,6 +171,8 @@ def verify_path(
     max_sample_spacing: float = 0.25,
     heading_tol_deg: float = 3.0,
     curvature_tol: float = 0.01,
+    max_sharpness: float | None = None,
+    sharpness_tol: float = 0.005,
 ) -> PathCheck:
     """Check a path against the map with code independent of the planner.
 
@@ -148,6 +191,14 @@ def verify_path(
         and the goal against their poses, along the path against the rows' yaw.
     curvature_tol : float
         Slack on κ_max for the discrete curvature of 0.25 m samples.
+    max_sharpness : float or None
+        Bound on the steering angle's change per metre, rad/m (0.2 for the default
+        planners: ``max_steer_rate`` / 2 m/s); ``None`` checks none (the paper's
+        degree-2 B-spline jumps in curvature by design). ``max_discrete_sharpness``
+        is measured either way.
+    sharpness_tol : float
+        Slack on ``max_sharpness``, rad/m (the estimate of an exact clothoid is
+        within 0.003 rad/m of its sharpness at 0.25 m samples).
 
     Returns
     -------
@@ -183,6 +234,7 @@ def verify_path(
     obstacles = shapely.union_all([shapely.Polygon(o.corners()) for o in m.obstacles])
     bodies = []
     max_k = 0.0
+    max_sharp = 0.0
     travel_err = 0.0
     first_dir = last_dir = math.nan
     for a, b in path.segments():
@@ -196,6 +248,7 @@ def verify_path(
         if len(seg) < 2:
             continue
         max_k = max(max_k, _segment_curvature(seg[:, :2]))
+        max_sharp = max(max_sharp, _segment_sharpness(seg[:, :2], v.wheelbase))
         direction, moving = _travel_directions(seg)
         if not len(moving):
             continue
@@ -223,9 +276,10 @@ def verify_path(
     headings_ok = max(err_s, err_g) <= tol
     travel_ok = travel_err <= tol
     spacing_ok = float(gaps.max()) <= max_sample_spacing + 1e-6
+    sharpness_ok = max_sharpness is None or max_sharp <= max_sharpness + sharpness_tol
     return PathCheck(
         ok=collision_free and curvature_ok and headings_ok and endpoints_ok and spacing_ok
-        and cusps_ok and travel_ok,
+        and cusps_ok and travel_ok and sharpness_ok,
         collision_free=collision_free,
         curvature_ok=curvature_ok,
         headings_ok=headings_ok,
@@ -239,6 +293,8 @@ def verify_path(
         cusps=len(cusps),
         travel_ok=travel_ok,
         travel_heading_err_deg=math.degrees(travel_err),
+        max_discrete_sharpness=max_sharp,
+        sharpness_ok=sharpness_ok,
     )
 
 
