@@ -25,7 +25,8 @@ def test_plan_json_success_and_deterministic(capsys):
     first = json.loads(out)
     assert first["success"] is True
     for key in ("planner", "seed", "path", "waypoints", "length_m", "max_curvature", "nodes",
-                "planning_time_s", "setup_time_s", "message", "reverse", "cusps"):
+                "planning_time_s", "setup_time_s", "message", "reverse", "cusps", "start",
+                "goal"):
         assert key in first
     assert first["reverse"] is False and first["cusps"] == 0
     path = np.array(first["path"])
@@ -268,12 +269,14 @@ def test_bad_obstacle_field_named_by_its_file_path(capsys, tmp_path):
 
 
 def test_command_help_lines_match_their_modules():
+    from rrtdrive import verify_cli
     from rrtdrive.bench import cli_bench
     from rrtdrive.cli import COMMANDS
     from rrtdrive.sim import cli_simulate
 
     helps = {c.name: c.help for c in COMMANDS}
     assert helps["simulate"] == cli_simulate.HELP and helps["bench"] == cli_bench.HELP
+    assert helps["verify"] == verify_cli.HELP
 
 
 def _modules_after(*argv):

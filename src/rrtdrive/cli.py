@@ -1,4 +1,4 @@
-"""The ``rrtdrive`` command line: ``plan``, ``maps``, ``simulate`` and ``bench``.
+"""The ``rrtdrive`` command line: ``plan``, ``maps``, ``verify``, ``simulate`` and ``bench``.
 
 Exit codes: 0 success, 1 planning or episode failure, 2 bad input (one line on
 stderr, no traceback).
@@ -65,9 +65,13 @@ def plan_to_json(
     map_name: str,
     vehicle: VehicleParams | None = None,
     reverse: bool = False,
+    start: Pose | None = None,
+    goal: Pose | None = None,
 ) -> dict[str, object]:
     """The JSON contract of ``rrtdrive plan`` (SPEC §5, docs/planning.md).
 
+    ``start`` and ``goal`` are the query's poses ``[x, y, yaw]`` (``null`` when not
+    given), so ``rrtdrive verify`` can check the path against them.
     ``reverse`` is whether gear changes were allowed (``--reverse``); ``path`` rows
     are ``[x, y, yaw, kappa, gear]`` and ``cusps`` counts the gear changes (0 for a
     forward-only path, also when a planner that cannot reverse was allowed to).
@@ -93,6 +97,8 @@ def plan_to_json(
         "map": map_name,
         "seed": seed,
         "reverse": bool(reverse),
+        "start": None if start is None else [float(v) for v in start.as_tuple()],
+        "goal": None if goal is None else [float(v) for v in goal.as_tuple()],
         "path": np.round(result.path.samples, 6).tolist(),
         "cusps": len(result.path.cusps),
         "waypoints": np.round(result.path.waypoints, 6).tolist(),
@@ -182,7 +188,9 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     result = planner.solve(problem, np.random.default_rng(args.seed), budget)
     result = dataclasses.replace(result, setup_time_s=result.setup_time_s + field_s)
     if args.json:
-        doc = plan_to_json(result, args.seed, m.name, m.vehicle, reverse=args.reverse)
+        doc = plan_to_json(
+            result, args.seed, m.name, m.vehicle, reverse=args.reverse, start=m.start, goal=m.goal
+        )
         _write_output(args.json, json.dumps(doc) + "\n")
     if args.plot:
         from rrtdrive.plotting import plot_plan, save_figure
@@ -246,6 +254,11 @@ class Command:
 COMMANDS: tuple[Command, ...] = (
     Command("plan", "plan a path on a map", "rrtdrive.cli:add_plan_parser"),
     Command("maps", "list the built-in maps", "rrtdrive.cli:add_maps_parser"),
+    Command(
+        "verify",
+        "check a plan's path against its map with the independent verifier",
+        "rrtdrive.verify_cli:add_parser",
+    ),
     Command(
         "simulate",
         "plan and drive one closed-loop episode in highway-env",

@@ -27,9 +27,14 @@ from rrtdrive.geometry import densify, wrap_angle
 from rrtdrive.maps import Map
 from rrtdrive.types import InputError, Path
 
-__all__ = ["PathCheck", "verify_path", "path_from_json"]
+__all__ = ["CHECKS", "PathCheck", "verify_path", "path_from_json"]
 
 _CUSP_TOL_M = 1e-6  # a cusp repeats the position (to the JSON's 6 decimals)
+#: The pass / fail fields of :class:`PathCheck`; ``ok`` is all of them.
+CHECKS = (
+    "collision_free", "curvature_ok", "sharpness_ok", "headings_ok", "endpoints_ok",
+    "spacing_ok", "travel_ok", "cusps_ok",
+)
 
 
 @dataclass(frozen=True)
@@ -91,6 +96,11 @@ class PathCheck:
     travel_heading_err_deg: float = 0.0
     max_discrete_sharpness: float = 0.0
     sharpness_ok: bool = True
+
+    @property
+    def failed(self) -> tuple[str, ...]:
+        """The names of the checks (:data:`CHECKS`) that failed; empty when ``ok``."""
+        return tuple(name for name in CHECKS if not getattr(self, name))
 
 
 def _signed_menger(xy: np.ndarray) -> np.ndarray:
@@ -278,8 +288,8 @@ def verify_path(
     spacing_ok = float(gaps.max()) <= max_sample_spacing + 1e-6
     sharpness_ok = max_sharpness is None or max_sharp <= max_sharpness + sharpness_tol
     return PathCheck(
-        ok=collision_free and curvature_ok and headings_ok and endpoints_ok and spacing_ok
-        and cusps_ok and travel_ok and sharpness_ok,
+        ok=all((collision_free, curvature_ok, sharpness_ok, headings_ok, endpoints_ok,
+                spacing_ok, travel_ok, cusps_ok)),
         collision_free=collision_free,
         curvature_ok=curvature_ok,
         headings_ok=headings_ok,

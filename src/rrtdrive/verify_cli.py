@@ -1,0 +1,171 @@
+"""The ``rrtdrive verify`` subcommand: check a plan's path with :func:`rrtdrive.verify.verify_path`.
+
+It reads the JSON of ``rrtdrive plan --json`` (or any ``{"path": [[x, y, yaw,
+kappa(, gear)], ...]}``, so paths from other planners can be judged too), takes the
+map from the command line or the plan, the start and goal from ``--start`` /
+``--goal``, else the plan's, else the map's own, and prints each check with its
+measured value and bound.
+
+Exit codes: 0 when every check passes, 1 when one fails (or the plan has no path),
+2 on bad input (one line on stderr, naming the field).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import sys
+from typing import Any
+
+from rrtdrive.cli_args import positive_float, validate_output
+from rrtdrive.types import InputError, Pose
+
+__all__ = ["add_parser", "run", "HELP"]
+
+EXIT_OK, EXIT_FAILED = 0, 1
+HELP = "check a plan's path against its map with the independent verifier"
+#: The speed at which the sharpness bound is the car's steering rate (SmoothingConfig's).
+_DESIGN_SPEED = 2.0
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    """Add ``verify`` to an argparse subparsers object and return its parser."""
+    p = subparsers.add_parser(
+        "verify",
+        help=HELP,
+        description="Check a path against a map with code that shares nothing with the "
+        "planners: the car's body (shapely) at poses <= 0.1 m apart clear of every "
+        "obstacle and inside the bounds, curvature and sharpness measured from the "
+        "positions, headings at both ends, exact start and goal, sample spacing, and per "
+        "gear segment the direction of travel and the cusps. Exit 0 when every check "
+        "passes, 1 when one fails, 2 on bad input.",
+    )
+    p.add_argument("plan", metavar="PLAN", help="the plan JSON ('-' for stdin), e.g. from "
+                   "`rrtdrive plan MAP --json plan.json`")
+    p.add_argument(
+        "map", nargs="?", default=None, metavar="MAP",
+        help="a built-in map name or a map .json file (default: the map the plan names)",
+    )
+    p.add_argument("--start", metavar="X,Y,YAW",
+                   help="the start pose (default: the plan's, else the map's)")
+    p.add_argument("--goal", metavar="X,Y,YAW",
+                   help="the goal pose (default: the plan's, else the map's)")
+    sharp = p.add_mutually_exclusive_group()
+    sharp.add_argument(
+        "--max-sharpness", type=positive_float, default=None, metavar="RAD_PER_M",
+        help="bound on the steering angle's change per metre (default: the car's "
+        "max_steer_rate / 2 m/s, 0.2 rad/m, the default planners' guarantee)",
+    )
+    sharp.add_argument(
+        "--no-sharpness", action="store_true",
+        help="do not check sharpness (paths of --paper-smoothing or of planners without "
+        "steering-rate limits jump in curvature by design)",
+    )
+    p.add_argument("--json", metavar="FILE|-", help="also write the checks as JSON ('-': stdout)")
+    p.set_defaults(func=run)
+    return p
+
+
+def _read_plan(source: str) -> dict[str, Any]:
+    try:
+        text = sys.stdin.read() if source == "-" else open(source, encoding="utf-8").read()
+    except OSError as exc:
+        raise InputError(f"plan: cannot read {source}: {exc.strerror}") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"plan: {source} is not JSON ({exc.msg}, line {exc.lineno})") from None
+    if not isinstance(data, dict) or "path" not in data:
+        raise InputError(f"plan: {source} has no \"path\" (expected the JSON of rrtdrive plan)")
+    return data
+
+
+def _plan_pose(data: dict[str, Any], field: str) -> Pose | None:
+    value = data.get(field)
+    if value is None:
+        return None
+    try:
+        x, y, yaw = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise InputError(f"plan.{field}: expected [x, y, yaw], got {value!r}") from None
+    return Pose(x, y, yaw)
+
+
+def _map_of(args: argparse.Namespace, data: dict[str, Any]) -> Any:
+    from rrtdrive.maps import BUILTIN_MAPS, resolve_map
+
+    spec = args.map or data.get("map")
+    if not isinstance(spec, str) or not spec:
+        raise InputError("map: the plan names no map; give one: rrtdrive verify PLAN MAP")
+    if args.map is None and spec not in BUILTIN_MAPS:
+        raise InputError(
+            f"map: the plan names map {spec!r}, which is not built in; give its file: "
+            "rrtdrive verify PLAN MAP.json"
+        )
+    return resolve_map(spec)
+
+
+def _lines(check: Any, bounds: dict[str, float | None]) -> list[str]:
+    """One line per check: its name, pass or FAIL, and the measured value against its bound."""
+    mark = {True: "ok  ", False: "FAIL"}
+    sharp = bounds["max_sharpness"]
+    rows = [
+        (check.collision_free, "body clear of obstacles and inside the bounds", ""),
+        (check.curvature_ok, "curvature",
+         f"{check.max_discrete_curvature:.4f} 1/m (max {bounds['kappa_max']:.4f} + 0.01)"),
+        (check.sharpness_ok, "sharpness",
+         f"{check.max_discrete_sharpness:.4f} rad/m "
+         + ("(not checked)" if sharp is None else f"(max {sharp:g} + 0.005)")),
+        (check.headings_ok, "headings at start / goal",
+         f"{check.start_heading_err_deg:.2f} / {check.goal_heading_err_deg:.2f} deg (max 3)"),
+        (check.endpoints_ok, "ends exactly at start and goal", ""),
+        (check.spacing_ok, "sample spacing", f"{check.max_spacing_m:.3f} m (max 0.25)"),
+        (check.travel_ok, "direction of travel along the yaw",
+         f"{check.travel_heading_err_deg:.2f} deg (max 3)"),
+        (check.cusps_ok, "cusps repeat their pose", f"{check.cusps} gear change(s)"),
+    ]
+    return [f"  {mark[bool(ok)]} {name:48s} {detail}".rstrip() for ok, name, detail in rows]
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``rrtdrive verify``; return the exit code."""
+    from rrtdrive.cli import _write_output, parse_pose
+    from rrtdrive.verify import path_from_json, verify_path
+
+    validate_output(args.json, "--json")
+    data = _read_plan(args.plan)
+    path = path_from_json(data)
+    m = _map_of(args, data)
+    start = parse_pose(args.start, "--start") if args.start else _plan_pose(data, "start")
+    goal = parse_pose(args.goal, "--goal") if args.goal else _plan_pose(data, "goal")
+    if start or goal:
+        m = m.with_query(start, goal)
+    rate = m.vehicle.max_steer_rate
+    bound = args.max_sharpness
+    if bound is None and not args.no_sharpness and rate is not None and math.isfinite(rate):
+        bound = rate / _DESIGN_SPEED
+    bounds = {"kappa_max": m.vehicle.kappa_max, "max_sharpness": bound}
+    # With the JSON on stdout, the human lines go to stderr to keep stdout parseable.
+    out = sys.stderr if args.json == "-" else sys.stdout
+    if len(path.samples) < 2:
+        status = data.get("status", "unknown")
+        print(f"{args.plan} on {m.name}: FAILED: the plan has no path (status {status})",
+              file=out)
+        if args.json:
+            _write_output(args.json, json.dumps({"ok": False, "map": m.name, "rows": 0}) + "\n")
+        return EXIT_FAILED
+    check = verify_path(m, path, max_sharpness=bound)
+    verdict = "OK, every check passed" if check.ok else "FAILED"
+    print(f"{args.plan} on {m.name}: {verdict} ({len(path.samples)} rows, {path.length:.2f} m)",
+          file=out)
+    print("\n".join(_lines(check, bounds)), file=out)
+    if check.failed == ("sharpness_ok",):
+        print("  (only the sharpness fails: paths of --paper-smoothing jump in curvature by "
+              "design; --no-sharpness checks the rest)", file=out)
+    if args.json:
+        doc = {"map": m.name, "rows": len(path.samples), "length_m": round(path.length, 6),
+               **bounds, **dataclasses.asdict(check), "failed": list(check.failed)}
+        _write_output(args.json, json.dumps(doc) + "\n")
+    return EXIT_OK if check.ok else EXIT_FAILED

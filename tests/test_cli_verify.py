@@ -1,0 +1,118 @@
+"""``rrtdrive verify``: the independent check of a plan JSON, from the command line."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from rrtdrive.cli import main
+from rrtdrive.maps import builtin_map, save_map
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture(scope="module")
+def plans(tmp_path_factory):
+    """Plans of parking_lot written by ``rrtdrive plan``: default, paper smoothing, reverse."""
+    folder = tmp_path_factory.mktemp("plans")
+    out = {}
+    for name, extra in {
+        "default": [],
+        "paper": ["--paper-smoothing"],
+        "reverse": ["--reverse", "--goal", "20,30,3.1"],
+    }.items():
+        target = folder / f"{name}.json"
+        assert main(["plan", "parking_lot", "--json", str(target), *extra]) == 0
+        out[name] = target
+    return out
+
+
+def test_a_default_plan_passes_every_check(capsys, plans):
+    code, out, _ = run(capsys, "verify", str(plans["default"]))
+    assert code == 0, out
+    assert "OK, every check passed" in out and "FAIL" not in out
+    assert "sharpness" in out and "(max 0.2 + 0.005)" in out
+
+
+def test_a_reversing_plan_is_checked_against_its_own_goal(capsys, plans):
+    # The plan JSON carries the --goal it was planned for; the map's own goal differs.
+    data = json.loads(plans["reverse"].read_text())
+    assert data["goal"] == [20.0, 30.0, 3.1] and data["cusps"] >= 1
+    code, out, _ = run(capsys, "verify", str(plans["reverse"]))
+    assert code == 0, out
+    # Against the map's own goal instead, its end is in the wrong place.
+    m = builtin_map("parking_lot")
+    goal = ",".join(str(v) for v in m.goal.as_tuple())
+    code, out, _ = run(capsys, "verify", str(plans["reverse"]), "--goal", goal)
+    assert code == 1 and "FAIL ends exactly at start and goal" in out
+
+
+def test_paper_smoothing_fails_only_the_sharpness_bound(capsys, plans):
+    code, out, _ = run(capsys, "verify", str(plans["paper"]))
+    assert code == 1
+    assert [line.split()[1] for line in out.splitlines() if "FAIL " in line] == ["sharpness"]
+    assert "--no-sharpness" in out
+    code, out, _ = run(capsys, "verify", str(plans["paper"]), "--no-sharpness")
+    assert code == 0 and "(not checked)" in out
+    code, _, _ = run(capsys, "verify", str(plans["paper"]), "--max-sharpness", "5")
+    assert code == 0
+
+
+def test_an_obstacle_on_the_path_fails_the_body_check_alone(capsys, plans, tmp_path):
+    import dataclasses
+
+    from rrtdrive.maps import Obstacle
+
+    data = json.loads(plans["default"].read_text())
+    x, y = np.array(data["path"])[len(data["path"]) // 2, :2]
+    m = builtin_map("parking_lot")
+    blocked = dataclasses.replace(m, obstacles=(*m.obstacles, Obstacle((x, y), (1.0, 1.0))))
+    f = tmp_path / "blocked.json"
+    save_map(blocked, f)
+    report = tmp_path / "check.json"
+    code, out, _ = run(capsys, "verify", str(plans["default"]), str(f), "--json", str(report))
+    assert code == 1 and "FAIL body clear of obstacles" in out
+    doc = json.loads(report.read_text())
+    assert doc["ok"] is False and doc["failed"] == ["collision_free"]
+    assert doc["max_sharpness"] == 0.2 and doc["kappa_max"] == m.vehicle.kappa_max
+
+
+def test_a_map_file_and_json_on_stdout(capsys, plans, tmp_path):
+    f = tmp_path / "lot.json"
+    save_map(builtin_map("parking_lot"), f)
+    code, out, err = run(capsys, "verify", str(plans["default"]), str(f), "--json", "-")
+    assert code == 0
+    doc = json.loads(out)  # stdout is the JSON alone; the lines went to stderr
+    assert doc["ok"] is True and doc["failed"] == [] and "OK" in err
+
+
+@pytest.mark.parametrize(
+    ("content", "field"),
+    [
+        ("not json", "plan"),
+        ('{"success": true}', "plan"),
+        ('{"path": [[0, 0, 0, 0], [0, 0, 0]], "map": "parking_lot"}', "path"),
+        ('{"path": [[0, 0, 0, 0, 1], [0.2, 0, 0, 0, 1]], "map": "my_garage"}', "map"),
+        ('{"path": [[0, 0, 0, 0, 1], [0.2, 0, 0, 0, 1]], "map": "parking_lot", '
+         '"start": [1, 2]}', "plan.start"),
+    ],
+)
+def test_bad_input_is_one_line_naming_the_field(capsys, tmp_path, content, field):
+    f = tmp_path / "plan.json"
+    f.write_text(content)
+    code, out, err = run(capsys, "verify", str(f))
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and f"error: {field}" in err and "Traceback" not in err
+
+
+def test_a_failed_plan_has_nothing_to_verify(capsys, tmp_path):
+    f = tmp_path / "failed.json"
+    f.write_text(json.dumps({"path": [], "map": "parking_lot", "status": "no_path_in_budget"}))
+    code, out, _ = run(capsys, "verify", str(f))
+    assert code == 1 and "no path (status no_path_in_budget)" in out
