@@ -153,7 +153,8 @@ def _segment_sharpness(xy: np.ndarray, wheelbase: float) -> float:
     Points closer than 0.2 m are thinned out (rounding noise grows as 1 / gap^2).
     The circle through three points a, b, c with gaps ``ab``, ``bc`` has the
     curvature of the curve about ``(bc - ab) / 3`` past b (first order), so the
-    rate is taken between those positions.
+    rate is taken between those positions. A segment with fewer than four such
+    points (under about 0.6 m) has fewer than two estimates and reads 0.
     """
     keep = _thin(xy, 0.2)
     if len(keep) > 2 and np.hypot(*(xy[keep[-1]] - xy[keep[-2]])) < 0.2:
