@@ -55,6 +55,7 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parent))
+from coverage_report import SHARPNESS_BOUND, report, tight_report  # noqa: E402
 from random_goals import draw_goals  # noqa: E402  (the sibling script's pose sets)
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
@@ -75,8 +76,6 @@ STAGE_STATS = (
     "postprocess_attempts", "rrt_iterations", "rrt_stages_time_s", "escalation_time_s",
     "dubins_time_s", "hybrid_expansions",
 )
-#: The default sharpness bound, rad/m (``SmoothingConfig.max_sharpness``).
-SHARPNESS_BOUND = 0.2
 #: OMPL comparators: name -> (state space, geometric planner class).
 OMPL = {"ompl-dubins-rrt": ("dubins", "RRT"), "ompl-rs-rrtconnect": ("rs", "RRTConnect")}
 
@@ -353,106 +352,6 @@ def _load() -> str:
         return "-"
 
 
-def _fmt(v: float | None, scale: float = 1.0, digits: int = 1) -> str:
-    return "-" if v is None else f"{v * scale:.{digits}f}"
-
-
-def _sharp(v: float | str | None) -> str:
-    return "-" if v is None else (v if isinstance(v, str) else f"{v:.3f}")
-
-
-def _count(v: int | None) -> str:
-    return "-" if v is None else str(v)
-
-
-def report(payload: dict[str, Any]) -> str:
-    """The markdown page of one run."""
-    s = payload["summary"]
-    lines = [
-        f"# Coverage on `{payload['map']}`: random goal and start poses, planners side by side",
-        "",
-        f"Command: `{payload['command']}`  ",
-        f"{payload['count']} random goal poses and {payload['count']} random start poses "
-        f"(seed {payload['seed']}, as `experiments/random_goals.py`); ours: planner seed 0, "
-        f"{payload['max_time_s']:g} s budget; OMPL: {payload['ompl_time_s']:g} s, our exact "
-        f"body test; {payload['jobs']} worker(s) on {payload['machine']}; wall time "
-        f"{payload['wall_time_s'] / 60:.1f} min.",
-        "",
-        "`verified`: every guarantee by the independent `rrtdrive.verify.verify_path`, "
-        f"sharpness <= {SHARPNESS_BOUND:g} rad/m included (from the positions: OMPL's "
-        "curves jump in curvature); `any sharpness`: the same without that bound.",
-        "",
-        "| planner | set | solved | verified | any sharpness | collision-free "
-        "| median time solved [ms] "
-        "| median length [m] | median time failed [ms] | max sharpness [rad/m] "
-        f"| within {SHARPNESS_BOUND:g} rad/m | other outcomes |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for p, sets in s["per_planner"].items():
-        for name, c in sets.items():
-            other = ", ".join(f"{k} {v}" for k, v in sorted(c["statuses"].items()) if k != "solved")
-            lines.append(
-                f"| {p} | {name}s | {c['solved']}/{c['queries']} | {c['verified']} | "
-                f"{c.get('verified_any_sharpness', '-')} | {c['collision_free']} | "
-                f"{_fmt(c['median_time_solved_s'], 1e3)} | "
-                f"{_fmt(c['median_length_m'], 1, 2)} | {_fmt(c['median_time_failed_s'], 1e3)} | "
-                f"{_sharp(c.get('max_sharpness'))} | {_count(c.get('within_bound'))} | "
-                f"{other or '-'} |"
-            )
-    lines += [
-        "",
-        "Pairs (ours against an OMPL planner): the share of OMPL's solved queries that "
-        "ours solves, and on the queries both solve the median of the per-query ratios "
-        "ours / OMPL and the ratio of the medians (our median over OMPL's).",
-        "",
-        "| pair / set | OMPL solved | both | ours only | share of OMPL's solved "
-        "| median time ratio | median length ratio | time ratio of medians "
-        "| length ratio of medians |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
-    for key, c in s["pairs"].items():
-        share = c["share_of_ompl_solved"]
-        lines.append(
-            f"| {key}s | {c['ompl_solved']} | {c['both_solved']} | {c['ours_only']} | "
-            f"{'-' if share is None else f'{100 * share:.0f} %'} | "
-            f"{_fmt(c['median_time_ratio'], 1, 3)} | {_fmt(c['median_length_ratio'], 1, 3)} | "
-            f"{_fmt(c.get('time_ratio_of_medians'), 1, 3)} | "
-            f"{_fmt(c.get('length_ratio_of_medians'), 1, 3)} |"
-        )
-    staged = [(p, name, c) for p, sets in s["per_planner"].items()
-              for name, c in sets.items() if "solved_by_stage" in c]  # fmt: skip
-    if staged:
-        lines += [
-            "",
-            "The default planner's stages: which stage solved, and on the queries that "
-            "reached the escalation the median time its RRT-Connect stages spent first "
-            "(`rrt_stages_time_s`) and the escalation's own (`escalation_time_s`).",
-            "",
-            "| planner | set | solved by RRT-Connect / Dubins fallback / Hybrid A* | escalated "
-            "| median RRT stages time, escalated [ms] | median escalation time [ms] |",
-            "|---|---|---|---|---|---|",
-        ]
-        for p, name, c in staged:
-            by = c["solved_by_stage"]
-            counts = " / ".join(
-                str(by.get(k, 0)) for k in ("improved-rrt-connect", "dubins-fallback",
-                                            "hybrid-a-star")
-            )  # fmt: skip
-            lines.append(
-                f"| {p} | {name}s | {counts} | {c['escalated']} | "
-                f"{_fmt(c['median_rrt_stages_time_escalated_s'], 1e3)} | "
-                f"{_fmt(c['median_escalation_time_s'], 1e3)} |"
-            )
-    if payload.get("load"):
-        lines += ["", f"Load average (1/5/15 min) at start {payload['load']['start']}, at end "
-                  f"{payload['load']['end']} on {os.cpu_count()} CPUs: only ratios within one "
-                  "run compare."]  # fmt: skip
-    if payload["skipped"]:
-        lines += ["", "Skipped (not available in this run):", ""]
-        lines += [f"- `{k}`: {v}" for k, v in payload["skipped"].items()]
-    return "\n".join(lines) + "\n"
-
-
 def tight_queries() -> list[tuple[str, str, Pose]]:
     """``(map, label, goal)`` of the tight maps: each map's own query, every free garage bay."""
     from rrtdrive.maps import TIGHT_MAP_NAMES
@@ -465,35 +364,6 @@ def tight_queries() -> list[tuple[str, str, Pose]]:
         else:
             out.append((name, name, builtin_map(name).goal))
     return out
-
-
-def tight_report(payload: dict[str, Any]) -> str:
-    """The markdown page of a ``--tight`` run: per query and planner, solved over seeds."""
-    lines = [
-        "# The tight maps: which planners solve them", "",
-        f"Command: `{payload['command']}`  ",
-        f"Seeds {payload['seeds']} per query; ours {payload['max_time_s']:g} s budget, OMPL "
-        f"{payload['ompl_time_s']:g} s; `verified`: every check of `verify_path` per gear "
-        f"segment, sharpness <= {SHARPNESS_BOUND:g} rad/m included (OMPL's curves with their "
-        "gears and cusps); `any sharpness`: the same without that bound; "
-        f"{payload['machine']}; wall time {payload['wall_time_s'] / 60:.1f} min.", "",
-        "| query | planner | solved | verified | any sharpness | collision-free "
-        "| median time solved [ms] "
-        f"| max sharpness [rad/m] | within {SHARPNESS_BOUND:g} rad/m | outcomes | diagnosis |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for c in payload["summary"]:
-        outcomes = ", ".join(f"{k} {v}" for k, v in sorted(c["statuses"].items()))
-        lines.append(
-            f"| {c['query']} | {c['planner']} | {c['solved']}/{c['runs']} | {c['verified']} | "
-            f"{c.get('verified_any_sharpness', '-')} | {c['collision_free']} | "
-            f"{_fmt(c.get('median_time_solved_s'), 1e3)} | "
-            f"{_sharp(c.get('max_sharpness'))} | {_count(c.get('within_bound'))} | {outcomes} | "
-            f"{', '.join(c['diagnoses']) or '-'} |"
-        )
-    if payload["skipped"]:
-        lines += ["", "Skipped:", ""] + [f"- `{k}`: {v}" for k, v in payload["skipped"].items()]
-    return "\n".join(lines) + "\n"
 
 
 def main(argv: list[str] | None = None) -> int:
