@@ -6,7 +6,6 @@ pages are built from the payloads that script writes as JSON.
 
 from __future__ import annotations
 
-import os
 from typing import Any
 
 from rrtdrive.planning.smoothing import SmoothingConfig
@@ -109,7 +108,7 @@ def report(payload: dict[str, Any]) -> str:
             )
     if payload.get("load"):
         lines += ["", f"Load average (1/5/15 min) at start {payload['load']['start']}, at end "
-                  f"{payload['load']['end']} on {os.cpu_count()} CPUs: only ratios within one "
+                  f"{payload['load']['end']} on {payload['machine']}: only ratios within one "
                   "run compare."]  # fmt: skip
     if payload["skipped"]:
         lines += ["", "Skipped (not available in this run):", ""]
