@@ -15,7 +15,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import math
 import sys
 from typing import Any
 
@@ -26,8 +25,6 @@ __all__ = ["add_parser", "run", "HELP"]
 
 EXIT_OK, EXIT_FAILED = 0, 1
 HELP = "check a plan's path against its map with the independent verifier"
-#: The speed at which the sharpness bound is the car's steering rate (SmoothingConfig's).
-_DESIGN_SPEED = 2.0
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -55,8 +52,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     sharp = p.add_mutually_exclusive_group()
     sharp.add_argument(
         "--max-sharpness", type=positive_float, default=None, metavar="RAD_PER_M",
-        help="bound on the steering angle's change per metre (default: the car's "
-        "max_steer_rate / 2 m/s, 0.2 rad/m, the default planners' guarantee)",
+        help="bound on the steering angle's change per metre (default: the default "
+        "planners' guarantee, 0.2 rad/m, or the car's max_steer_rate / 2 m/s when smaller)",
     )
     sharp.add_argument(
         "--no-sharpness", action="store_true",
@@ -142,10 +139,13 @@ def run(args: argparse.Namespace) -> int:
     goal = parse_pose(args.goal, "--goal") if args.goal else _plan_pose(data, "goal")
     if start or goal:
         m = m.with_query(start, goal)
-    rate = m.vehicle.max_steer_rate
     bound = args.max_sharpness
-    if bound is None and not args.no_sharpness and rate is not None and math.isfinite(rate):
-        bound = rate / _DESIGN_SPEED
+    if bound is None and not args.no_sharpness:
+        from rrtdrive.planning.improved.planner import sharpness_bound
+        from rrtdrive.planning.smoothing import SmoothingConfig
+
+        # The bound the default planners keep for this car.
+        bound = sharpness_bound(SmoothingConfig().max_sharpness, m.vehicle.max_steer_rate)
     bounds = {"kappa_max": m.vehicle.kappa_max, "max_sharpness": bound}
     # With the JSON on stdout, the human lines go to stderr to keep stdout parseable.
     out = sys.stderr if args.json == "-" else sys.stdout
