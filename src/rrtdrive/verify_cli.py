@@ -149,17 +149,17 @@ def run(args: argparse.Namespace) -> int:
     bounds = {"kappa_max": m.vehicle.kappa_max, "max_sharpness": bound}
     # With the JSON on stdout, the human lines go to stderr to keep stdout parseable.
     out = sys.stderr if args.json == "-" else sys.stdout
-    label = "the plan on stdin" if args.plan == "-" else args.plan
+    label = "stdin" if args.plan == "-" else args.plan
     if len(path.samples) < 2:
         status = data.get("status", "unknown")
-        print(f"{label} on {m.name}: FAILED: the plan has no path (status {status})",
+        print(f"{m.name}: {label}: FAILED: the plan has no path (status {status})",
               file=out)
         if args.json:
             _write_output(args.json, json.dumps({"ok": False, "map": m.name, "rows": 0}) + "\n")
         return EXIT_FAILED
     check = verify_path(m, path, max_sharpness=bound)
     verdict = "OK, every check passed" if check.ok else "FAILED"
-    print(f"{label} on {m.name}: {verdict} ({len(path.samples)} rows, {path.length:.2f} m)",
+    print(f"{m.name}: {label}: {verdict} ({len(path.samples)} rows, {path.length:.2f} m)",
           file=out)
     print("\n".join(_lines(check, bounds)), file=out)
     if check.failed == ("sharpness_ok",):
