@@ -29,10 +29,8 @@ from rrtdrive.geometry import wrap_angle
 
 __all__ = ["ramped_segment"]
 
-#: ``ndarray.cumsum``'s own ufunc call (float64: the same running sums), without its wrapper.
-_accumulate = np.add.accumulate
-#: ``ndarray.sum``'s ufunc call, likewise.
-_add_reduce = np.add.reduce
+#: The ufuncs that ``ndarray.cumsum`` / ``.sum`` call (the same floats), without their wrappers.
+_accumulate, _add_reduce = np.add.accumulate, np.add.reduce
 #: The lever pairs' factors in :func:`_jacobian`: ``-g/2`` (y) and ``g/2`` (x), times the gear.
 _HALF_SIGNS = np.array([[-0.5], [0.5]])
 
@@ -431,13 +429,11 @@ def _bounded_step(
         except np.linalg.LinAlgError:
             return None
         step = free * (jt @ lam)
+        moves = zip(p_l, step.tolist(), lower_l, upper_l, free.tolist(), strict=True)
         out = [
-            i
-            for i, (x, d, lo, hi, f) in enumerate(
-                zip(p_l, step.tolist(), lower_l, upper_l, free.tolist(), strict=True)
-            )
+            i for i, (x, d, lo, hi, f) in enumerate(moves)
             if f > 0 and ((x + d < lo and d < 0) or (x + d > hi and d > 0))
-        ]
+        ]  # fmt: skip
         if not out:
             return step
         # Hold those that would cross at their bound (moved exactly onto it next round).
@@ -581,10 +577,7 @@ def _rows(
 
 @functools.lru_cache(maxsize=256)
 def _fit_bounds(n: int, angle_weight: float, delta_max: float) -> tuple[np.ndarray, ...]:
-    """The fit's ``weight``, ``lower`` and ``upper`` for ``n`` pieces, read-only, made once.
-
-    They depend on the car and the piece count alone (four concatenations a fit before).
-    """
+    """The fit's ``weight``, ``lower`` and ``upper`` for ``n`` pieces: read-only, made once."""
     weight = np.concatenate([np.ones(n), np.full(n, angle_weight**2)])
     lower = np.concatenate([np.zeros(n), np.full(n, -delta_max)])
     upper = np.concatenate([np.full(n, np.inf), np.full(n, delta_max)])
