@@ -29,6 +29,11 @@ from rrtdrive.geometry import wrap_angle
 
 __all__ = ["ramped_segment"]
 
+#: The ufuncs that ``ndarray.cumsum`` / ``.sum`` call (the same floats), without their wrappers.
+_accumulate, _add_reduce = np.add.accumulate, np.add.reduce
+#: The lever pairs' factors in :func:`_jacobian`: ``-g/2`` (y) and ``g/2`` (x), times the gear.
+_HALF_SIGNS = np.array([[-0.5], [0.5]])
+
 #: Sub-steps of the integration per returned row (rows at most ``spacing`` apart).
 _SUBSTEPS = 4
 #: Newton iterations of the end-pose fit and its tolerance (metres / radians).
@@ -50,9 +55,9 @@ def _intervals(rows: np.ndarray, gear: int) -> tuple[np.ndarray, np.ndarray]:
     chord = np.hypot(step[:, 0], step[:, 1])
     dyaw = wrap_angle(step[:, 2])
     half = 0.5 * np.abs(dyaw)
-    # The arc through two poses of an arc: chord * (theta/2) / sin(theta/2).
-    with np.errstate(invalid="ignore", divide="ignore"):
-        factor = np.where(half > 1e-9, half / np.sin(np.maximum(half, 1e-300)), 1.0)
+    # The arc through two poses of an arc: chord * (theta/2) / sin(theta/2). No errstate
+    # needed: wrapped, half <= pi/2, so sin(max(half, 1e-300)) > 0; NaN raises no flag.
+    factor = np.where(half > 1e-9, half / np.sin(np.maximum(half, 1e-300)), 1.0)
     ds = chord * factor
     keep = ds > 1e-9
     ds, dyaw = ds[keep], dyaw[keep]
@@ -195,36 +200,48 @@ def _end_and_jacobian(
     tuple
         The end pose ``(3,)``, a function giving the Jacobian ``(3, 2n)``, the
         steering profile ``(T,)`` and a function giving every pose ``(T, 3)`` (as
-        :func:`_integrate` would).
+        :func:`_integrate` would; ``poses(k)``: every ``k``-th of them).
     """
     n = len(p) // 2
     delta, h, grid = _profile(p[:n], p[n:], factors, rate, t)
     T = len(t)
-    kappa = np.tan(delta) / wheelbase
-    dyaw = gear * 0.5 * (kappa[1:] + kappa[:-1]) * h
+    # In place where the expression made temporaries: a * b and b * a, a + b and b + a
+    # round alike, so ``gear * 0.5 * (k1 + k0) * h`` is ``((k1 + k0) * (gear * 0.5)) * h``.
+    kappa = np.tan(delta)
+    kappa /= wheelbase
+    dyaw = kappa[1:] + kappa[:-1]
+    dyaw *= gear * 0.5
+    dyaw *= h
     yaw = np.empty(T)
     yaw[0] = start[2] + 0.0
-    yaw[1:] = start[2] + dyaw.cumsum()
-    mid = 0.5 * (yaw[1:] + yaw[:-1])
+    _accumulate(dyaw, out=yaw[1:])  # dyaw.cumsum(), then start[2] + it
+    yaw[1:] += start[2]
+    mid = yaw[1:] + yaw[:-1]
+    mid *= 0.5
     # The x and y sums as the rows of one array: each row's products and running sums are
     # those of the 1-D arrays, in half the numpy calls.
     sums = np.empty((2, T - 1))
     np.cos(mid, out=sums[0])
     np.sin(mid, out=sums[1])
     sums *= h
-    sums = sums.cumsum(axis=1)
+    sums = _accumulate(sums, axis=1)
     px, py = sums[0], sums[1]
     end = np.array([start[0] + gear * px[-1], start[1] + gear * py[-1], yaw[-1]])
 
     def jacobian() -> np.ndarray:
         return _jacobian(n, grid, gear, wheelbase, kappa, dyaw, sums, h, t)
 
-    def poses() -> np.ndarray:
-        # _integrate's rows from this integration's sums: the same operations, the same floats.
-        zero = np.zeros(1)
-        x = start[0] + gear * np.concatenate([zero, px])
-        y = start[1] + gear * np.concatenate([zero, py])
-        return np.stack([x, y, yaw], axis=-1)
+    def poses(every: int = 1) -> np.ndarray:
+        # _integrate's rows from this integration's sums: the same operations, the same
+        # floats; every ``every``-th row only (elementwise: those rows of the whole).
+        out = np.empty((len(range(0, T, every)), 3))
+        out[0, 0] = start[0] + gear * 0.0
+        out[0, 1] = start[1] + gear * 0.0
+        # Row i >= 1 is start + gear * sums[:, i - 1] (g * a is a * g).
+        np.multiply(sums[:, every - 1 :: every], gear, out=out[1:, :2].T)
+        out[1:, :2] += start[:2]
+        out[:, 2] = yaw[::every]
+        return out
 
     return end, jacobian, delta, poses
 
@@ -239,11 +256,16 @@ def _profile(
     sums the ``(B, J, T)`` array along ``J``), without its 2-D and 3-D wrappers.
     The grid ``(s, joints, jumps, widths)`` is what :func:`_jacobian` reads.
     """
-    total = lengths.sum()
+    # The ufuncs that ndarray.sum / cumsum call (the same floats), and the widths
+    # max(|jumps| * factors / rate, 1e-9) in place: this runs at every step of the fit.
+    total = _add_reduce(lengths)
     s = total * t
-    joints = lengths.cumsum()[:-1]
+    joints = _accumulate(lengths)[:-1]
     jumps = angles[1:] - angles[:-1]
-    widths = np.maximum(np.abs(jumps) * factors / rate, 1e-9)
+    widths = np.abs(jumps)
+    widths *= factors
+    widths /= rate
+    np.maximum(widths, 1e-9, out=widths)
     T = len(t)
     J = len(jumps)
     if J * T > _FULL_SUM_MAX:
@@ -255,10 +277,11 @@ def _profile(
         np.maximum(u, 0.0, out=u)
         np.minimum(u, 1.0, out=u)
         u *= jumps[:, None]
-        ramp = u.sum(axis=0)
+        ramp = _add_reduce(u, axis=0)
     else:
         ramp = np.zeros(T)
-    return ramp + angles[0], float(total / (T - 1)), (s, joints, jumps, widths)
+    ramp += angles[0]  # a fresh array: ramp + angles[0] in place
+    return ramp, float(total / (T - 1)), (s, joints, jumps, widths)
 
 
 def _jacobian(
@@ -283,30 +306,40 @@ def _jacobian(
     lever = np.zeros((2, T))
     np.subtract(sums[:, -1:], sums[:, :-1], out=lever[:, 1:-1])
     lever[:, 0] = sums[:, -1]
-    # r[:, i]: d end / d dyaw_i, the turn of every node after i.
-    pair = lever[:, :-1] + lever[:, 1:]
+    # r[:, i]: d end / d dyaw_i, the turn of every node after i: rows 0 and 1 are
+    # -g/2 (y lever pair) and g/2 (x lever pair), both in two calls (a * b is b * a).
     r = np.empty((3, T - 1))
-    np.multiply(-0.5 * gear, pair[1], out=r[0])
-    np.multiply(0.5 * gear, pair[0], out=r[1])
+    np.add(lever[::-1, :-1], lever[::-1, 1:], out=r[:2])
+    r[:2] *= _HALF_SIGNS * gear
     r[2] = 1.0
     g = 0.5 * gear * h
-    v = np.zeros((3, T))
-    v[:, :-1] = r
-    v[:, 1:] += r
-    v *= g * (1.0 + (wheelbase * kappa) ** 2) / wheelbase  # d end / d delta_c
+    # v: d end / d delta_c, written reversed (back[:3]: the order the suffix sums run in).
+    # v[:, c] = r[:, c] + r[:, c - 1] in the middle; the last column r[:, -1] + 0.0 as
+    # ``zeros; v[:, :-1] = r; v[:, 1:] += r`` made it (0.0 + -0.0 is 0.0).
+    back = np.empty((6, T))
+    v = back[:3, ::-1]
+    v[:, 0] = r[:, 0]
+    np.add(r[:, 1:], r[:, :-1], out=v[:, 1:-1])
+    np.add(r[:, -1], 0.0, out=v[:, -1])
+    # g * (1 + (L kappa)^2) / L, in place (x ** 2 is numpy's x * x).
+    scale = wheelbase * kappa
+    np.multiply(scale, scale, out=scale)
+    scale += 1.0
+    scale *= g
+    scale /= wheelbase
+    v *= scale
     d_h = np.array([gear * sums[0, -1], gear * sums[1, -1], 0.0]) / h + (r @ dyaw) / h
     # Suffix sums of v (rows 0-2) and v * t (rows 3-5), summed from the last node on as
     # before, in one running sum of the reversed rows: column T - c holds the sums from
     # node c on (column 0, "from T on", is zero).
-    back = np.empty((6, T))
-    back[:3] = v[:, ::-1]
     np.multiply(back[:3], t[::-1], out=back[3:])
-    suffix = np.zeros((6, T + 1))
-    np.cumsum(back, axis=1, out=suffix[:, 1:])
+    suffix = np.empty((6, T + 1))
+    suffix[:, 0] = 0.0
+    _accumulate(back, axis=1, out=suffix[:, 1:])
     a = s.searchsorted(joints - 0.5 * widths, side="right")  # first node on a ramp
     b = s.searchsorted(joints + 0.5 * widths, side="left")  # first node after it
     slope = jumps / widths
-    at_a, at_b = suffix[:, T - a], suffix[:, T - b]
+    at_a, at_b = suffix[:, T - a], suffix[:, T - b]  # (fancy: their layout sets the @ below)
     on = at_a[:3] - at_b[:3]  # (3, J): v summed over each ramp
     share = 0.5 * on + at_b[:3]  # d end / d jump_j
     jac = np.zeros((3, 2 * n))
@@ -315,7 +348,7 @@ def _jacobian(
     jac[:, n + 1 :] += share
     stretch = (at_a[3:] - at_b[3:]) @ slope  # the grid's stretch: the same for every length
     later = np.zeros((3, n))
-    later[:, :-1] = (slope * on)[:, ::-1].cumsum(axis=1)[:, ::-1]  # joints k .. J-1
+    later[:, :-1] = _accumulate((slope * on)[:, ::-1], axis=1)[:, ::-1]  # joints k .. J-1
     jac[:, :n] = (stretch + d_h / (T - 1))[:, None] - later
     return jac
 
@@ -384,16 +417,24 @@ def _bounded_step(
     ``lower`` and ``upper`` bound ``p`` (lengths >= 0, angles within the steering limit).
     """
     free = weight.copy()
+    jt = jac.T
+    rhs = -err
+    # The bounds test on Python floats (a handful of parameters: numpy's per-call cost is
+    # most of the work); p + step, the comparisons and NaN's falsity are the same there.
+    p_l, lower_l, upper_l = p.tolist(), lower.tolist(), upper.tolist()
     for _ in range(len(p) + 1):
-        jw = jac * free[None, :]
+        jw = jac * free  # free[None, :] broadcast
         try:
-            lam = np.linalg.solve(jw @ jac.T + _RIDGE, -err)
+            lam = np.linalg.solve(jw @ jt + _RIDGE, rhs)
         except np.linalg.LinAlgError:
             return None
-        step = free * (jac.T @ lam)
-        out = ((p + step < lower) & (step < 0)) | ((p + step > upper) & (step > 0))
-        out &= free > 0
-        if not out.any():
+        step = free * (jt @ lam)
+        moves = zip(p_l, step.tolist(), lower_l, upper_l, free.tolist(), strict=True)
+        out = [
+            i for i, (x, d, lo, hi, f) in enumerate(moves)
+            if f > 0 and ((x + d < lo and d < 0) or (x + d > hi and d > 0))
+        ]  # fmt: skip
+        if not out:
             return step
         # Hold those that would cross at their bound (moved exactly onto it next round).
         free[out] = 0.0
@@ -496,11 +537,9 @@ def _ramped_once(
         _, _, delta, poses_of = _end_and_jacobian(
             np.concatenate([lengths, angles]), np.ones(0), rate, t, start, gear, wheelbase
         )
-        return _rows(poses_of(), delta, wheelbase, start, goal)
+        return _rows(poses_of(_SUBSTEPS), delta, wheelbase, start, goal)
     p = np.concatenate([lengths, angles])
-    weight = np.concatenate([np.ones(n), np.full(n, angle_weight**2)])
-    lower = np.concatenate([np.zeros(n), np.full(n, -delta_max)])
-    upper = np.concatenate([np.full(n, np.inf), np.full(n, delta_max)])
+    weight, lower, upper = _fit_bounds(n, angle_weight, delta_max)
     factors = _widening(lengths, angles, rate)
     pose = None
     for _ in range(_NEWTON_ITERATIONS):
@@ -521,20 +560,30 @@ def _ramped_once(
     if pose is None:
         return None
     delta, poses_of = pose
-    return _rows(poses_of(), delta, wheelbase, start, goal)
+    return _rows(poses_of(_SUBSTEPS), delta, wheelbase, start, goal)
 
 
 def _rows(
     poses: np.ndarray, delta: np.ndarray, wheelbase: float, start: np.ndarray, goal: np.ndarray
 ) -> np.ndarray:
-    """Every ``_SUBSTEPS``-th pose with its curvature, the ends set to the exact poses."""
-    poses = poses[::_SUBSTEPS]
+    """Every ``_SUBSTEPS``-th pose (``poses``: those alone) with its curvature, exact ends."""
     out = np.empty((len(poses), 4))
     out[:, :3] = poses
     # The curvature of the returned rows only (elementwise: the same floats).
     np.divide(np.tan(delta[::_SUBSTEPS]), wheelbase, out=out[:, 3])
     out[0, :3], out[-1, :3] = start, goal
     return out
+
+
+@functools.lru_cache(maxsize=256)
+def _fit_bounds(n: int, angle_weight: float, delta_max: float) -> tuple[np.ndarray, ...]:
+    """The fit's ``weight``, ``lower`` and ``upper`` for ``n`` pieces: read-only, made once."""
+    weight = np.concatenate([np.ones(n), np.full(n, angle_weight**2)])
+    lower = np.concatenate([np.zeros(n), np.full(n, -delta_max)])
+    upper = np.concatenate([np.full(n, np.inf), np.full(n, delta_max)])
+    for a in (weight, lower, upper):
+        a.flags.writeable = False
+    return weight, lower, upper
 
 
 def _clip(a: np.ndarray, lower: np.ndarray | float, upper: np.ndarray | float) -> np.ndarray:

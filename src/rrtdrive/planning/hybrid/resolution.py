@@ -43,12 +43,12 @@ from rrtdrive.planning.hybrid.search import (
     SearchOutcome,
     Shots,
     analytic_shots,
-    walk_hits,
+    walks_hit,
 )
 from rrtdrive.planning.hybrid.shortcut import polyline_length, shortcut
 from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
 from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, SmoothingConfig
-from rrtdrive.types import Pose, Tree
+from rrtdrive.types import Pose, Tree, VehicleParams
 from rrtdrive.vehicle import cover_discs
 
 __all__ = [
@@ -178,9 +178,20 @@ def field_clearance(checker: CollisionChecker, pose: Pose) -> float:
     The three covering discs (:func:`~rrtdrive.vehicle.cover_discs`) contain the
     body; the field is a lower bound of the distance at their centres.
     """
-    offsets, radius = cover_discs(checker.vehicle, 3)
+    offsets, radius = _three_discs(checker.vehicle)
     c, s = math.cos(pose.yaw), math.sin(pose.yaw)
     return min(checker.clearance(pose.x + c * o, pose.y + s * o) for o in offsets) - radius
+
+
+@functools.lru_cache(maxsize=16)
+def _three_discs(vehicle: VehicleParams) -> tuple[tuple[float, ...], float]:
+    """``cover_discs(vehicle, 3)``, the offsets as Python floats, made once per car.
+
+    Each query's :class:`EndClearance` reads them twice; a float's products are the
+    float64 scalar's.
+    """
+    offsets, radius = cover_discs(vehicle, 3)
+    return tuple(offsets.tolist()), float(radius)
 
 
 def query_clearance(
@@ -213,9 +224,14 @@ def _backward_dubins_shots(
     coarse = max(spacing, 0.5)
 
     def shots(pose: Pose) -> Iterator[list[Piece]]:
-        # Lazy (Shots): each word screened and sampled only when the caller asks.
-        for cand in dubins_paths(target, pose, radius)[:max_candidates]:
-            if walk_hits(target, cand.word, cand.lengths, radius, coarse, body):
+        # All words screened in one look-up (walks_hit: each word's walk_hits), as the
+        # forward shots are: most shots screen every word (2.7 of 3 on bench_hybrid's
+        # queries), one call costs little more than one word's. Each word is sampled only
+        # when the caller asks (Shots).
+        cands = dubins_paths(target, pose, radius)[:max_candidates]
+        hit = walks_hit(target, [(c.word, c.lengths) for c in cands], radius, coarse, body)
+        for cand, dropped in zip(cands, hit, strict=True):
+            if dropped:
                 continue
             rows = cand.sample(spacing)[::-1].copy()
             rows[0, :3] = pose.as_tuple()

@@ -149,8 +149,12 @@ def walks_hit(
 def _gear_pieces(rows: np.ndarray) -> list[Piece]:
     """Rows ``[x, y, yaw, kappa, gear]`` cut at the cusps (each piece keeps both end rows)."""
     gear = rows[:, 4]
-    cuts = np.flatnonzero(gear[1:] != gear[:-1]) + 1
-    return [Piece(int(part[0, 4]), part[:, :4].copy(), True) for part in np.split(rows, cuts)]
+    # np.split's parts as slices (its Python wrapper cost more than the rest of this).
+    cuts = [0, *((gear[1:] != gear[:-1]).nonzero()[0] + 1).tolist(), len(rows)]
+    return [
+        Piece(int(rows[a, 4]), rows[a:b, :4].copy(), True)
+        for a, b in zip(cuts[:-1], cuts[1:], strict=True)
+    ]
 
 
 def analytic_shots(
