@@ -1,15 +1,19 @@
 """Post-processing's memos give the old answers bit for bit.
 
-The edge answers and screens one ``make_drivable`` call shares between its two
-pruning attempts (each attempt still counts its own ``edge_checks``), against
-caches of their own per attempt (the old code, set up here by monkeypatching);
-on tree paths of the default planner for random starts of parking_lot that fail
-post-processing with reverse, and random goals it solves forward.
+What one ``make_drivable`` call shares between its two pruning attempts -- the
+edge answers and screens (each attempt still counts its own ``edge_checks``),
+the clothoid turns, sampled rows and the repairs' tangent lengths -- and
+``Repairer.stretch`` working out each corner's shift limit once, against the old
+code (caches of their own per attempt, the old ``stretch`` kept here, set up by
+monkeypatching); on tree paths of the default planner for random starts of
+parking_lot that fail post-processing with reverse, and random goals it solves
+forward.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 import sys
 from pathlib import Path as FsPath
 
@@ -21,7 +25,8 @@ from rrtdrive.maps import builtin_map
 from rrtdrive.planning import PlanningProblem
 from rrtdrive.planning.base import cached_checker
 from rrtdrive.planning.improved import ImprovedRRTConnect
-from rrtdrive.planning.smoothing import checks, make_drivable
+from rrtdrive.planning.smoothing import checks, drivable, make_drivable
+from rrtdrive.planning.smoothing.repair import Repairer
 from rrtdrive.types import Budget
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "experiments"))
@@ -67,18 +72,52 @@ def _same(a, b) -> None:  # noqa: ANN001 - two SmoothingResults
     assert repr(a.max_sharpness) == repr(b.max_sharpness)
 
 
-def test_shared_edge_answers_give_the_old_results(tree_paths, monkeypatch) -> None:
-    checker = cached_checker(builtin_map("parking_lot"))
-    assert any(not make_drivable(raw, s, g, checker, cfg).ok for raw, s, g, cfg in tree_paths)
-    assert any(make_drivable(raw, s, g, checker, cfg).ok for raw, s, g, cfg in tree_paths)
-    new = [make_drivable(raw, s, g, checker, cfg) for raw, s, g, cfg in tree_paths]
-    real_init = checks.EdgeCache.__init__
+def _old_stretch(self, leg):  # noqa: ANN001, ANN202 - Repairer.stretch before the limits
+    p, n = self.corners, len(self.corners)
+    for c, delta in self._stretch_moves(leg):
+        if c <= 0 or c >= n - 1:
+            continue
+        other = p[c - 1 if c == leg else c + 1].point
+        if float(np.hypot(*delta)) >= 0.9 * float(np.hypot(*(other - p[c].point))):
+            continue
+        old = p[c].point.copy()
+        if not self.place(c, old + delta):
+            continue
+        if self._leg_fits(leg) or (leg == n - 2 and self._leg_fits(leg - 1)):
+            p[c].origin = p[c].point.copy()
+            return True
+        p[c].point = old
+    return False
 
-    def own_memos(self, view) -> None:  # noqa: ANN001 - the old code: a cache per attempt
+
+def _use_old_code(monkeypatch) -> None:  # noqa: ANN001
+    """Caches of their own per attempt, no tangent memo, the old ``stretch``."""
+    real_init = checks.EdgeCache.__init__
+    real_attempt = drivable._attempt
+
+    def own_memos(self, view) -> None:  # noqa: ANN001
         view.edge_memo, view.screen_memo = {}, {}
         real_init(self, view)
 
+    def fresh_attempt(raw, ends, view, cfg, max_turn, shared):  # noqa: ANN001, ANN202
+        return real_attempt(raw, ends, view, cfg, max_turn, drivable._Shared())
+
+    class NoTangents(Repairer):
+        def __init__(self, poly, ends, edges, cfg, tangents=None) -> None:  # noqa: ANN001
+            super().__init__(poly, ends, edges, cfg, None)
+
+        stretch = _old_stretch
+
     monkeypatch.setattr(checks.EdgeCache, "__init__", own_memos)
+    monkeypatch.setattr(drivable, "_attempt", fresh_attempt)
+    monkeypatch.setattr(drivable, "Repairer", NoTangents)
+
+
+def test_shared_memos_give_the_old_results(tree_paths, monkeypatch) -> None:
+    checker = cached_checker(builtin_map("parking_lot"))
+    new = [make_drivable(raw, s, g, checker, cfg) for raw, s, g, cfg in tree_paths]
+    assert any(not r.ok for r in new) and any(r.ok for r in new)
+    _use_old_code(monkeypatch)
     old = [make_drivable(raw, s, g, checker, cfg) for raw, s, g, cfg in tree_paths]
     for a, b in zip(new, old, strict=True):
         _same(a, b)
@@ -103,3 +142,17 @@ def test_edge_caches_of_one_view_share_answers_and_count_their_own() -> None:
         assert second.edge_free(e[:2], e[2:]) == checker.edge_free(e[:2], e[2:])
     assert (first.checks, second.checks) == (20, 20)  # as with caches of their own
     assert len(asked) == 30  # each edge asked of the checker once
+
+
+def test_unit_between_is_unit_of_the_difference() -> None:
+    from rrtdrive.planning.smoothing.corners import deflection, unit, unit_between
+
+    rng = np.random.default_rng(6)
+    pts = rng.uniform(-100.0, 100.0, (4000, 2)) * rng.choice([1e-13, 1e-7, 1.0, 1e3], (4000, 1))
+    pts[::50] = pts[1::50]  # repeated points: the zero vector
+    for a, b, c in zip(pts[:-2], pts[1:-1], pts[2:], strict=True):
+        assert [repr(float(v)) for v in unit(*(b - a))] == [repr(v) for v in unit_between(a, b)]
+        ux, uy, _ = unit(*(b - a))
+        vx, vy, _ = unit(*(c - b))
+        old = math.atan2(abs(ux * vy - uy * vx), ux * vx + uy * vy)
+        assert repr(float(old)) == repr(deflection(a, b, c))

@@ -317,18 +317,30 @@ class ClothoidFitter:
         The original map's checker.
     ends : Ends
         Start and goal of the path.
+    turns, rows : dict, optional
+        Caches of turns (:func:`polygon_turns`) and of sampled pieces
+        (:func:`sample_pieces`) to share with other fitters of the same ``cfg``.
     """
 
-    def __init__(self, cfg: SmoothingConfig, view: CheckerView, ends: Ends) -> None:
+    def __init__(
+        self,
+        cfg: SmoothingConfig,
+        view: CheckerView,
+        ends: Ends,
+        turns: dict[tuple, list[ClothoidTurn]] | None = None,
+        rows: dict[tuple[bytes, float], np.ndarray] | None = None,
+    ) -> None:
         self.cfg = cfg
         self.view = view
         self.ends = ends
         self.levels = sharpness_levels(
             cfg.max_sharpness, cfg.min_sharpness, cfg.wheelbase, cfg.kappa_safety
         )
-        self._turns: dict[tuple, list[ClothoidTurn]] = {}
+        self._turns: dict[tuple, list[ClothoidTurn]] = {} if turns is None else turns
+        # Pieces proven free stay per fitter: a piece's first and last rows are pinned
+        # to the end poses where it starts or ends the curve.
         self._free_pieces: set[bytes] = set()
-        self._rows: dict[tuple[bytes, float], np.ndarray] = {}
+        self._rows: dict[tuple[bytes, float], np.ndarray] = {} if rows is None else rows
 
     def build(self, corners: Sequence[Corner]) -> tuple[ClothoidCurve | None, list[int]]:
         """The curve of the corners, or None and the legs too short for their turns."""
