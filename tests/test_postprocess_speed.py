@@ -156,3 +156,33 @@ def test_unit_between_is_unit_of_the_difference() -> None:
         vx, vy, _ = unit(*(c - b))
         old = math.atan2(abs(ux * vy - uy * vx), ux * vx + uy * vy)
         assert repr(float(old)) == repr(deflection(a, b, c))
+
+
+def test_leg_length_and_curve_pieces_give_the_old_floats() -> None:
+    from rrtdrive.planning.smoothing.clothoid_curve import curve_pieces, polygon_turns
+    from rrtdrive.planning.smoothing.corners import unit
+
+    rng = np.random.default_rng(9)
+    pts = rng.uniform(-100.0, 100.0, (3000, 2)) * rng.choice([1e-9, 1.0, 1e3], (3000, 1))
+    for a, b in zip(pts[:-1], pts[1:], strict=True):
+        (ax, ay), (bx, by) = a.tolist(), b.tolist()
+        assert repr(float(np.hypot(*(b - a)))) == repr(float(np.hypot(bx - ax, by - ay)))
+
+    def old_turn_piece(pts, turns, i):  # noqa: ANN001, ANN202 - curve_pieces' turn, as it was
+        t = turns[i]
+        (x0, y0), pu, pv = pts[i], pts[i - 1], pts[i]
+        vx, vy, _ = unit(pv[0] - pu[0], pv[1] - pu[1])
+        return (i, x0 - t.tangent * vx, y0 - t.tangent * vy, math.atan2(vy, vx), t.length, t)
+
+    seen = 0
+    for _ in range(300):
+        n = int(rng.integers(3, 8))
+        poly = np.cumsum(rng.uniform(-25.0, 25.0, (n, 2)), axis=0).tolist()
+        turns, conflicts = polygon_turns(poly, [1 / 6] * n, np.array([0.08]), [True] * n, 0.0)
+        if conflicts:
+            continue
+        got = [tuple(p) for p in curve_pieces(poly, turns) if p.turn is not None]
+        want = [old_turn_piece(poly, turns, i) for i in range(1, n - 1) if turns[i] is not None]
+        assert repr(got) == repr(want)
+        seen += len(got)
+    assert seen > 100

@@ -259,6 +259,7 @@ def curve_pieces(
     n = len(pts)
     pieces: list[Piece] = []
     last = n - 2
+    vx = vy = v_yaw = 0.0
     for i in range(n - 1):
         (x0, y0), (x1, y1) = pts[i], pts[i + 1]
         ux, uy, length = unit(x1 - x0, y1 - y0)
@@ -267,12 +268,10 @@ def curve_pieces(
         t1 = turns[i + 1].tangent if turns[i + 1] is not None else 0.0
         if i > 0 and turns[i] is not None:
             t = turns[i]
-            pu, pv = pts[i - 1], pts[i]
-            vx, vy, _ = unit(pv[0] - pu[0], pv[1] - pu[1])
+            # The incoming leg's direction and heading: the previous leg's (vx, vy, v_yaw).
             pieces.append(
-                Piece(i, x0 - t.tangent * vx, y0 - t.tangent * vy, math.atan2(vy, vx),
-                      t.length, t)
-            )  # fmt: skip
+                Piece(i, x0 - t.tangent * vx, y0 - t.tangent * vy, v_yaw, t.length, t)
+            )
         straight = length - t0 - t1
         if straight > 1e-9:
             half = 0.5 * straight
@@ -281,6 +280,7 @@ def curve_pieces(
             pieces.append(
                 Piece(min(i + 1, last), a[0] + half * ux, a[1] + half * uy, yaw, half, None)
             )
+        vx, vy, v_yaw = ux, uy, yaw
     return pieces
 
 

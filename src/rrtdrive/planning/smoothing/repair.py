@@ -115,8 +115,10 @@ class Repairer:
         )
 
     def _leg_length(self, leg: int) -> float:
-        p = self.corners
-        return float(np.hypot(*(p[leg + 1].point - p[leg].point)))
+        p = self.poly.corners
+        # np.hypot(*(b - a)) with the difference taken in Python floats (the same values).
+        (ax, ay), (bx, by) = p[leg].point.tolist(), p[leg + 1].point.tolist()
+        return float(np.hypot(bx - ax, by - ay))
 
     # ------------------------------------------------------------- corner operations
 
