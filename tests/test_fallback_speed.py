@@ -19,7 +19,7 @@ from rrtdrive.planning.dubins import dubins_paths
 from rrtdrive.planning.improved import fallback
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.planning.smoothing.clothoid import clothoid_turn, turn_circle
-from rrtdrive.planning.smoothing.clothoid_batch import sample_curves
+from rrtdrive.planning.smoothing.clothoid_batch import CurveBatch, sample_curves
 from rrtdrive.planning.smoothing.clothoid_curve import polygon_curve, polygon_turns, sample_pieces
 from rrtdrive.types import Pose
 
@@ -145,3 +145,56 @@ def test_free_end_gives_the_old_answers():
                 assert new[1].tobytes() == old[1].tobytes()
                 assert new[2] == old[2]
     assert solved > 0
+
+
+@pytest.mark.parametrize("spacing", [1.0, 0.37])
+def test_curve_batch_rows_on_demand_are_the_rows_of_the_whole(spacing):
+    curves = _random_curves(13, 60)
+    whole = np.vstack(sample_curves(curves, spacing))
+    rng = np.random.default_rng(4)
+    for size in (1, 7, 200, len(whole)):
+        batch = CurveBatch(curves, spacing)  # fresh: pieces computed when first asked for
+        assert sum(batch.sizes) == len(whole)
+        for _ in range(3):
+            idx = np.sort(rng.choice(len(whole), size=size, replace=False))
+            assert batch.rows(idx).tobytes() == whole[idx].tobytes()
+    assert CurveBatch([], 1.0).sizes == []
+
+
+def test_pinned_lazy_body_test_is_the_old_one():
+    """``_clear_poses`` on poses computed when asked: as sampling, pinning, then ``_all_free``."""
+    m = builtin_map("parking_lot")
+    checker = cached_checker(m)
+    rng = np.random.default_rng(8)
+    xmin, ymin, xmax, ymax = m.bounds
+    curves = []
+    while len(curves) < 80:  # short polygons in the lot: some clear, most not
+        n = int(rng.integers(2, 5))
+        p0 = rng.uniform((xmin, ymin), (xmax, ymax))
+        pts = p0 + np.cumsum(rng.uniform(-9.0, 9.0, (n, 2)), axis=0)
+        pieces = polygon_curve(pts, 1 / 6, 0.08)
+        if pieces is not None:
+            curves.append(pieces)
+    # Free end poses with yaws that wrap.
+    start = Pose(m.start.x, m.start.y, m.start.yaw + 2.0 * math.pi)
+    goal = Pose(m.goal.x, m.goal.y, m.goal.yaw - 2.0 * math.pi)
+    answers = []
+    for chunk in (curves[:1], curves[1:], curves[:0]):
+        old = sample_curves(chunk, 1.0)
+        for rows in old:
+            fallback._pin_ends(rows, start, goal)
+        want = fallback._all_free(checker, old, 0.2)
+        batch = CurveBatch(chunk, 1.0)
+        poses_at = fallback._pinned(batch, start, goal)
+        asked = [0]
+
+        def same_as_old(pick, within, poses_at=poses_at, old=old, asked=asked):  # noqa: ANN001, ANN202
+            got = poses_at(pick, within)
+            assert got.tobytes() == np.vstack(old)[pick, :3].tobytes()
+            asked[0] += len(pick)
+            return got
+
+        assert fallback._clear_poses(checker, batch.sizes, same_as_old, 0.2) == want
+        assert asked[0] <= sum(batch.sizes)
+        answers += want
+    assert any(answers) and not all(answers)

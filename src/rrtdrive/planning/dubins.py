@@ -16,7 +16,6 @@ that does not connect.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -259,7 +258,8 @@ def dubins_paths(start: Pose, goal: Pose, radius: float, tol: float = 1e-6) -> l
         x, y, yaw = path.end()
         dyaw = wrap_angle(yaw - goal.yaw)
         if math.hypot(x - goal.x, y - goal.y) <= tol * max(1.0, radius) and abs(dyaw) <= tol:
-            out.append(dataclasses.replace(path, goal=goal))
+            # dataclasses.replace(path, goal=goal), without its generic field copying.
+            out.append(DubinsPath(start, word, path.lengths, radius, goal))
     out.sort(key=lambda p: p.length)
     return out
 

@@ -21,7 +21,7 @@ from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.dubins import DubinsPath, dubins_paths
 from rrtdrive.planning.smoothing import SmoothingConfig, make_drivable
 from rrtdrive.planning.smoothing.clothoid import turn_circle
-from rrtdrive.planning.smoothing.clothoid_batch import sample_curves
+from rrtdrive.planning.smoothing.clothoid_batch import CurveBatch, sample_curves
 from rrtdrive.planning.smoothing.clothoid_curve import polygon_curve
 from rrtdrive.types import Path, Pose
 
@@ -94,10 +94,8 @@ def _free_end(
         done += len(batch)
         if not batch:
             break
-        coarse = sample_curves([f[2] for f in batch], 1.0)
-        for rows in coarse:
-            _pin_ends(rows, start, goal)
-        clear = _all_free(checker, coarse, clearance)
+        coarse = CurveBatch([f[2] for f in batch], 1.0)
+        clear = _clear_poses(checker, coarse.sizes, _pinned(coarse, start, goal), clearance)
         for (_, _, pieces, poly, word, r), ok in zip(batch, clear, strict=True):
             if not ok:
                 continue
@@ -119,20 +117,54 @@ def _all_free(checker: CollisionChecker, paths: list[np.ndarray], clearance: flo
     """
     if not paths:
         return []
-    sizes = [len(p) for p in paths]
     poses = np.vstack(paths)[:, :3]
-    owner = np.repeat(np.arange(len(paths)), sizes)
-    within = np.arange(len(poses)) - np.repeat(np.cumsum(sizes) - sizes, sizes)
-    clear = np.ones(len(paths), dtype=bool)
-    todo = np.ones(len(poses), dtype=bool)
+    return _clear_poses(checker, [len(p) for p in paths], lambda pick, _: poses[pick], clearance)
+
+
+#: ``poses_at(pick, within)``: the poses ``(len(pick), 3)`` at the batch's rows ``pick``
+#: (``within``: the rows' indices within their paths, for all rows of the batch).
+PosesAt = Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+def _clear_poses(
+    checker: CollisionChecker, sizes: list[int], poses_at: PosesAt, clearance: float
+) -> list[bool]:
+    """:func:`_all_free` of paths of ``sizes`` rows whose poses ``poses_at`` gives when asked."""
+    if not sizes:
+        return []
+    total = sum(sizes)
+    owner = np.repeat(np.arange(len(sizes)), sizes)
+    within = np.arange(total) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    clear = np.ones(len(sizes), dtype=bool)
+    todo = np.ones(total, dtype=bool)
     for stride in _STRIDES:
         pick = np.flatnonzero(todo & (within % stride == 0) & clear[owner])
         if not len(pick):
             continue
         todo[pick] = False
-        ok = checker.poses_free(poses[pick], clearance=clearance)
+        ok = checker.poses_free(poses_at(pick, within), clearance=clearance)
         clear[owner[pick[~ok]]] = False
     return clear.tolist()
+
+
+def _pinned(batch: CurveBatch, start: Pose, goal: Pose) -> PosesAt:
+    """The poses of ``batch``'s rows as :func:`_pin_ends` leaves them, computed when asked.
+
+    The same floats as sampling every curve, pinning its ends and taking the rows:
+    each row is computed alone, the first of a curve is the start pose, the last
+    the goal pose, and the yaw is wrapped element by element.
+    """
+    last = np.cumsum(batch.sizes) - 1
+    s_pose, g_pose = start.as_tuple(), goal.as_tuple()
+
+    def poses_at(pick: np.ndarray, within: np.ndarray) -> np.ndarray:
+        rows = batch.rows(pick)
+        rows[within[pick] == 0, :3] = s_pose
+        rows[np.isin(pick, last), :3] = g_pose
+        rows[:, 2] = wrap_angle(rows[:, 2])
+        return np.ascontiguousarray(rows[:, :3])
+
+    return poses_at
 
 
 def _pin_ends(rows: np.ndarray, start: Pose, goal: Pose) -> None:

@@ -60,6 +60,19 @@ class CheckerView:
     def __init__(self, checker: PathChecker) -> None:
         self.checker = checker
         self.edge_free = checker.edge_free
+        # Edge answers and screens shared by the EdgeCaches of one make_drivable call:
+        # its second pruning attempt tests many of the first one's edges again.
+        self.edge_memo: dict[tuple[float, float, float, float], bool] = {}
+        self.screen_memo: dict[tuple[float, float, bytes], np.ndarray] = {}
+        # implements() inspects the checker statically (~0.1 ms a call for a checker
+        # with instance attributes): asked once per view, not once per attempt or round.
+        self._implements: dict[type, bool] = {}
+
+    def _is(self, protocol: type) -> bool:
+        known = self._implements.get(protocol)
+        if known is None:
+            known = self._implements[protocol] = implements(self.checker, protocol)
+        return known
 
     def obstacle_union(self) -> shapely.Geometry | None:
         """The prepared union of the obstacles (cached on the checker), or None.
@@ -67,12 +80,12 @@ class CheckerView:
         None when the checker does not implement the whole
         :class:`~rrtdrive.checking.Checker` contract (a bare motion validator).
         """
-        return self.checker.obstacle_union if implements(self.checker, Checker) else None
+        return self.checker.obstacle_union if self._is(Checker) else None
 
     def poses_free(self) -> PosesFree | None:
         """The exact batch body test of a :class:`~rrtdrive.checking.PoseValidityChecker`."""
         checker = self.checker
-        return checker.poses_free if implements(checker, PoseValidityChecker) else None
+        return checker.poses_free if self._is(PoseValidityChecker) else None
 
     def path_free(
         self, samples: np.ndarray, spacing: float, clearance: float
@@ -91,9 +104,12 @@ class EdgeCache:
 
     def __init__(self, view: CheckerView) -> None:
         self._edge_free = view.edge_free
+        # This cache's own answers (``checks`` counts its distinct edges, as before)
+        # and the view's, shared with the other caches of the same call.
         self._known: dict[tuple[float, float, float, float], bool] = {}
+        self._shared = view.edge_memo
         self.checks = 0
-        self._screens: dict[tuple[float, float, bytes], np.ndarray] = {}
+        self._screens = view.screen_memo
         self._union = view.obstacle_union()
         if self._union is None:
             # No obstacles known: no screen, so :func:`edge_screen` finds none.
@@ -118,5 +134,8 @@ class EdgeCache:
         hit = self._known.get(key)
         if hit is None:
             self.checks += 1
-            hit = self._known[key] = bool(self._edge_free(a, b))
+            hit = self._shared.get(key)
+            if hit is None:
+                hit = self._shared[key] = bool(self._edge_free(a, b))
+            self._known[key] = hit
         return hit

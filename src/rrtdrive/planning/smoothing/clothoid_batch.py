@@ -22,7 +22,7 @@ from scipy.special import fresnel
 from rrtdrive.planning.smoothing.clothoid import _clothoid_end
 from rrtdrive.planning.smoothing.clothoid_curve import Piece
 
-__all__ = ["sample_curves"]
+__all__ = ["sample_curves", "CurveBatch"]
 
 #: Per-row parameters of a turn piece, in this order (see :func:`_turn_params`).
 _TURN_FIELDS = 17
@@ -68,48 +68,111 @@ def sample_curves(curves: Sequence[Sequence[Piece]], spacing: float) -> list[np.
     >>> bool(np.array_equal(sample_curves([pieces], 0.5)[0], sample_pieces(pieces, 0.5)[0]))
     True
     """
-    flat = [p for pieces in curves for p in pieces]
-    if not flat:
-        return [np.empty((0, 4)) for _ in curves]
-    counts = [max(1, math.ceil(p.length / spacing - 1e-9)) + 1 for p in flat]
-    total = sum(counts)
-    cnt = np.array(counts)
-    ends = np.cumsum(cnt)
-    # np.linspace(0, L, n + 1): i * (L / n), the last exactly L.
-    i = np.arange(total, dtype=float) - np.repeat(ends - cnt, cnt)
-    step = np.repeat(np.array([p.length / (c - 1) for p, c in zip(flat, counts, strict=True)]), cnt)
-    s = i * step
-    s[ends - 1] = [p.length for p in flat]
-    base = np.array([(p.x, p.y, p.yaw, math.cos(p.yaw), math.sin(p.yaw)) for p in flat])
-    x0, y0, yaw0, c, sn = np.repeat(base, cnt, axis=0).T
-    out = np.empty((total, 4))
-    is_turn = np.repeat(np.array([p.turn is not None for p in flat], dtype=bool), cnt)
-    line = ~is_turn
-    out[line, 0] = x0[line] + s[line] * c[line]
-    out[line, 1] = y0[line] + s[line] * sn[line]
-    out[line, 2] = yaw0[line]
-    out[line, 3] = 0.0
-    if is_turn.any():
-        turns = [p for p in flat if p.turn is not None]
-        per = np.array([_turn_params(p) for p in turns]).reshape(-1, _TURN_FIELDS)
-        rows = np.repeat(per, cnt[[p.turn is not None for p in flat]], axis=0).T
-        with np.errstate(divide="ignore", invalid="ignore"):  # turns of no deflection
-            local = _sample_turns(s[is_turn], rows)
-        ct, st = c[is_turn], sn[is_turn]
-        out[is_turn, 0] = x0[is_turn] + ct * local[0] - st * local[1]
-        out[is_turn, 1] = y0[is_turn] + st * local[0] + ct * local[1]
-        out[is_turn, 2] = yaw0[is_turn] + local[2]
-        out[is_turn, 3] = local[3]
-    # Each piece after a curve's first starts where the previous ended: drop that row.
-    first_row = ends - cnt
-    keep = np.ones(total, dtype=bool)
-    bounds = np.cumsum([0] + [len(pc) for pc in curves])
-    for j in range(len(curves)):
-        keep[first_row[bounds[j] + 1 : bounds[j + 1]]] = False
-    kept = np.flatnonzero(keep)
-    rows_out = out[kept]
-    split = np.searchsorted(kept, first_row[bounds[1:-1]])
-    return np.split(rows_out, split)
+    batch = CurveBatch(curves, spacing)
+    if not batch.sizes:
+        return []
+    return np.split(batch.rows(), np.cumsum(batch.sizes[:-1]))
+
+
+class CurveBatch:
+    """The rows of :func:`sample_curves` laid out, each computed only when asked for.
+
+    A row's floats depend only on its arc length and its piece, so any subset of the
+    rows is the same floats as those rows of the whole (the tests check bit for
+    bit). The Dubins fallback tests every 16th pose of its candidates first and
+    most collide there: it asks for those rows, not all.
+
+    Parameters
+    ----------
+    curves : sequence of sequence of Piece
+        Each curve's pieces in driving order (each non-empty).
+    spacing : float
+        Largest arc length between rows (> 0).
+
+    Attributes
+    ----------
+    sizes : list of int
+        Rows per curve (each piece's ends included once); the rows of curve ``j``
+        are ``sum(sizes[:j])`` onwards.
+    """
+
+    def __init__(self, curves: Sequence[Sequence[Piece]], spacing: float) -> None:
+        flat = [p for pieces in curves for p in pieces]
+        self._flat = flat
+        if not flat:
+            self.sizes = [0] * len(curves)
+            self._s = np.empty(0)
+            self._piece = np.empty(0, dtype=np.int64)
+            return
+        lengths = [p.length for p in flat]
+        counts = [max(1, math.ceil(length / spacing - 1e-9)) + 1 for length in lengths]
+        total = sum(counts)
+        cnt = np.array(counts)
+        ends = np.cumsum(cnt)
+        # np.linspace(0, L, n + 1): i * (L / n), the last exactly L.
+        i = np.arange(total, dtype=float) - np.repeat(ends - cnt, cnt)
+        step = np.repeat(
+            np.array([length / (c - 1) for length, c in zip(lengths, counts, strict=True)]), cnt
+        )
+        s = i * step
+        s[ends - 1] = lengths
+        # Each piece after a curve's first starts where the previous ended: drop that row.
+        first_row = ends - cnt
+        keep = np.ones(total, dtype=bool)
+        bounds = np.cumsum([0] + [len(pc) for pc in curves]).tolist()
+        for j in range(len(curves)):
+            keep[first_row[bounds[j] + 1 : bounds[j + 1]]] = False
+        kept = np.flatnonzero(keep)
+        self._s = s[kept]
+        self._piece = np.repeat(np.arange(len(flat)), cnt)[kept]
+        split = np.searchsorted(kept, first_row[bounds[1:-1]]).tolist()
+        self.sizes = np.diff([0, *split, len(kept)]).tolist()
+        # Per piece, computed when a row of it is first asked for.
+        self._base = np.empty((len(flat), 5))
+        self._turn = np.zeros((len(flat), _TURN_FIELDS))
+        self._is_turn = np.array([p.turn is not None for p in flat], dtype=bool)
+        self._known = np.zeros(len(flat), dtype=bool)
+
+    def _prepare(self, pieces: np.ndarray) -> None:
+        """Compute the parameters of the pieces not yet known among ``pieces``."""
+        new = np.unique(pieces[~self._known[pieces]])
+        if not len(new):
+            return
+        flat = self._flat
+        todo = [flat[k] for k in new.tolist()]
+        self._base[new] = [(p.x, p.y, p.yaw, math.cos(p.yaw), math.sin(p.yaw)) for p in todo]
+        turns = new[self._is_turn[new]]
+        if len(turns):
+            self._turn[turns] = [_turn_params(flat[k]) for k in turns.tolist()]
+        self._known[new] = True
+
+    def rows(self, idx: np.ndarray | None = None) -> np.ndarray:
+        """Rows ``[x, y, yaw, kappa]`` at indices ``idx`` (all rows when None), shape ``(N, 4)``."""
+        if idx is None:
+            s, piece = self._s, self._piece
+        else:
+            s, piece = self._s[idx], self._piece[idx]
+        out = np.empty((len(s), 4))
+        if not len(s):
+            return out
+        self._prepare(piece)
+        x0, y0, yaw0, c, sn = self._base[piece].T
+        is_turn = self._is_turn[piece]
+        line = ~is_turn
+        out[line, 0] = x0[line] + s[line] * c[line]
+        out[line, 1] = y0[line] + s[line] * sn[line]
+        out[line, 2] = yaw0[line]
+        out[line, 3] = 0.0
+        if is_turn.any():
+            rows = self._turn[piece[is_turn]].T
+            with np.errstate(divide="ignore", invalid="ignore"):  # turns of no deflection
+                local = _sample_turns(s[is_turn], rows)
+            ct, st = c[is_turn], sn[is_turn]
+            out[is_turn, 0] = x0[is_turn] + ct * local[0] - st * local[1]
+            out[is_turn, 1] = y0[is_turn] + st * local[0] + ct * local[1]
+            out[is_turn, 2] = yaw0[is_turn] + local[2]
+            out[is_turn, 3] = local[3]
+        return out
 
 
 def _sample_turns(s: np.ndarray, rows: np.ndarray) -> np.ndarray:

@@ -259,6 +259,7 @@ def curve_pieces(
     n = len(pts)
     pieces: list[Piece] = []
     last = n - 2
+    vx = vy = v_yaw = 0.0
     for i in range(n - 1):
         (x0, y0), (x1, y1) = pts[i], pts[i + 1]
         ux, uy, length = unit(x1 - x0, y1 - y0)
@@ -267,12 +268,10 @@ def curve_pieces(
         t1 = turns[i + 1].tangent if turns[i + 1] is not None else 0.0
         if i > 0 and turns[i] is not None:
             t = turns[i]
-            pu, pv = pts[i - 1], pts[i]
-            vx, vy, _ = unit(pv[0] - pu[0], pv[1] - pu[1])
+            # The incoming leg's direction and heading: the previous leg's (vx, vy, v_yaw).
             pieces.append(
-                Piece(i, x0 - t.tangent * vx, y0 - t.tangent * vy, math.atan2(vy, vx),
-                      t.length, t)
-            )  # fmt: skip
+                Piece(i, x0 - t.tangent * vx, y0 - t.tangent * vy, v_yaw, t.length, t)
+            )
         straight = length - t0 - t1
         if straight > 1e-9:
             half = 0.5 * straight
@@ -281,6 +280,7 @@ def curve_pieces(
             pieces.append(
                 Piece(min(i + 1, last), a[0] + half * ux, a[1] + half * uy, yaw, half, None)
             )
+        vx, vy, v_yaw = ux, uy, yaw
     return pieces
 
 
@@ -317,18 +317,30 @@ class ClothoidFitter:
         The original map's checker.
     ends : Ends
         Start and goal of the path.
+    turns, rows : dict, optional
+        Caches of turns (:func:`polygon_turns`) and of sampled pieces
+        (:func:`sample_pieces`) to share with other fitters of the same ``cfg``.
     """
 
-    def __init__(self, cfg: SmoothingConfig, view: CheckerView, ends: Ends) -> None:
+    def __init__(
+        self,
+        cfg: SmoothingConfig,
+        view: CheckerView,
+        ends: Ends,
+        turns: dict[tuple, list[ClothoidTurn]] | None = None,
+        rows: dict[tuple[bytes, float], np.ndarray] | None = None,
+    ) -> None:
         self.cfg = cfg
         self.view = view
         self.ends = ends
         self.levels = sharpness_levels(
             cfg.max_sharpness, cfg.min_sharpness, cfg.wheelbase, cfg.kappa_safety
         )
-        self._turns: dict[tuple, list[ClothoidTurn]] = {}
+        self._turns: dict[tuple, list[ClothoidTurn]] = {} if turns is None else turns
+        # Pieces proven free stay per fitter: a piece's first and last rows are pinned
+        # to the end poses where it starts or ends the curve.
         self._free_pieces: set[bytes] = set()
-        self._rows: dict[tuple[bytes, float], np.ndarray] = {}
+        self._rows: dict[tuple[bytes, float], np.ndarray] = {} if rows is None else rows
 
     def build(self, corners: Sequence[Corner]) -> tuple[ClothoidCurve | None, list[int]]:
         """The curve of the corners, or None and the legs too short for their turns."""

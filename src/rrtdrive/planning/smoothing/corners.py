@@ -29,6 +29,7 @@ __all__ = [
     "KeyPolygon",
     "build_key_polygon",
     "unit",
+    "unit_between",
     "deflection",
     "signed_deflection",
     "kind_of",
@@ -154,8 +155,8 @@ class KeyPolygon:
         p = self.points()
         out = []
         for c in (1, len(p) - 2):
-            ux, uy, _ = unit(*(p[c] - p[c - 1]))
-            vx, vy, _ = unit(*(p[c + 1] - p[c]))
+            ux, uy, _ = unit_between(p[c - 1], p[c])
+            vx, vy, _ = unit_between(p[c], p[c + 1])
             out.append(turn_reach(cfg, p[c], (ux, uy), (vx, vy), radius))
         return out[0], out[1]
 
@@ -166,19 +167,27 @@ def turn_reach(
     u_in: tuple[float, float],
     u_out: tuple[float, float],
     radius: float,
+    memo: dict[tuple[float, float], float] | None = None,
 ) -> float:
     """Least distance along each leg from a corner that its turn of ``radius`` needs.
 
     For a B-spline the fillet's outermost guard point; for clothoids the tangent
     length of the tightest turn (``inf`` for a reversal). 0 for ``radius = 0``
-    with a B-spline (a plain control point).
+    with a B-spline (a plain control point). ``memo`` keeps the clothoid tangents
+    per deflection and radius; it belongs to one ``cfg``.
     """
     if cfg.clothoid:
         theta = math.atan2(
             u_in[0] * u_out[1] - u_in[1] * u_out[0], u_in[0] * u_out[0] + u_in[1] * u_out[1]
         )
         r = radius if radius > 0.0 else cfg.design_radius
-        return turn_tangent(theta, 1.0 / r, cfg.tightest_sigma)
+        if memo is None:
+            return turn_tangent(theta, 1.0 / r, cfg.tightest_sigma)
+        key = (theta, r)
+        tangent = memo.get(key)
+        if tangent is None:
+            tangent = memo[key] = turn_tangent(theta, 1.0 / r, cfg.tightest_sigma)
+        return tangent
     if radius <= 0.0:
         return 0.0
     f = fillet_points(point, u_in, u_out, radius, cfg.fillet_max_angle)
@@ -193,6 +202,16 @@ def unit(dx: float, dy: float) -> tuple[float, float, float]:
     return dx / n, dy / n, n
 
 
+def unit_between(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:
+    """``unit(*(b - a))`` for points ``(2,)``, in Python floats: the same values, faster.
+
+    The repairs call it thousands of times a query; numpy scalars make each of its
+    few operations slow, and IEEE arithmetic rounds alike on either type.
+    """
+    (ax, ay), (bx, by) = a.tolist(), b.tolist()
+    return unit(bx - ax, by - ay)
+
+
 def signed_deflection(u: tuple[float, float], v: tuple[float, float]) -> float:
     """Signed turn in radians from direction ``u`` to ``v`` (positive: left)."""
     return math.atan2(u[0] * v[1] - u[1] * v[0], u[0] * v[0] + u[1] * v[1])
@@ -200,8 +219,8 @@ def signed_deflection(u: tuple[float, float], v: tuple[float, float]) -> float:
 
 def deflection(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> float:
     """Turn in radians at ``b`` of the polyline ``a -> b -> c``."""
-    ux, uy, _ = unit(*(b - a))
-    vx, vy, _ = unit(*(c - b))
+    ux, uy, _ = unit_between(a, b)
+    vx, vy, _ = unit_between(b, c)
     return math.atan2(abs(ux * vy - uy * vx), ux * vx + uy * vy)
 
 

@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from rrtdrive.planning.smoothing.checks import CheckerView, EdgeCache, PathChecker
+from rrtdrive.planning.smoothing.clothoid import ClothoidTurn
 from rrtdrive.planning.smoothing.clothoid_curve import ClothoidFitter
 from rrtdrive.planning.smoothing.config import SmoothingConfig, SmoothingResult
 from rrtdrive.planning.smoothing.corners import Corner, Ends, KeyPolygon, build_key_polygon
@@ -35,6 +36,15 @@ class _Attempt:
     control_points: np.ndarray | None
     key_points: np.ndarray
     rounds: int
+
+
+@dataclass(frozen=True, eq=False)
+class _Shared:
+    """Memos of one :func:`make_drivable` call, shared by its attempts (one config)."""
+
+    turns: dict[tuple, list[ClothoidTurn]] = field(default_factory=dict)
+    rows: dict[tuple[bytes, float], np.ndarray] = field(default_factory=dict)
+    tangents: dict[tuple[float, float], float] = field(default_factory=dict)
 
 
 def make_drivable(
@@ -102,12 +112,15 @@ def make_drivable(
         return _failure("the tree path needs at least two points", None, np.zeros((0, 2)), 0)
     ends = Ends.of(start, goal)
     view = CheckerView(checker)
+    # The attempts below share the clothoid turns and sampled rows (pure functions of
+    # their keys) and the repairs' tangent lengths: the second meets many of the first's.
+    shared = _Shared()
     rounds = 0
     last: _Attempt | None = None
     # The paper's pruning first; if that cannot be made drivable, a pruning that
     # avoids hairpins (turns above unprune_turn) gets its own round budget.
     for max_turn in (None, cfg.unprune_turn) if cfg.prune else (None,):
-        last = _attempt(raw, ends, view, cfg, max_turn)
+        last = _attempt(raw, ends, view, cfg, max_turn, shared)
         rounds += last.rounds
         if last.result is not None:
             return dataclasses.replace(last.result, rounds=rounds)
@@ -130,7 +143,12 @@ def _failure(
 
 
 def _attempt(
-    raw: np.ndarray, ends: Ends, view: CheckerView, cfg: SmoothingConfig, max_turn: float | None
+    raw: np.ndarray,
+    ends: Ends,
+    view: CheckerView,
+    cfg: SmoothingConfig,
+    max_turn: float | None,
+    shared: _Shared,
 ) -> _Attempt:
     """One attempt of :func:`make_drivable` with the pruning turn limit ``max_turn``."""
     edges = EdgeCache(view)
@@ -138,9 +156,10 @@ def _attempt(
     if isinstance(poly, str):
         return _Attempt(None, poly, None, np.zeros((0, 2)), 0)
     poly = _lengthen_heading_legs(poly, raw, ends, edges, cfg, max_turn)
-    repairer = Repairer(poly, ends, edges, cfg)
+    repairer = Repairer(poly, ends, edges, cfg, shared.tangents)
     if cfg.clothoid:
-        return _clothoid_loop(repairer, ClothoidFitter(cfg, view, ends), cfg)
+        fitter = ClothoidFitter(cfg, view, ends, turns=shared.turns, rows=shared.rows)
+        return _clothoid_loop(repairer, fitter, cfg)
     return _repair_loop(repairer, CurveFitter(cfg, view, ends), cfg)
 
 

@@ -26,6 +26,7 @@ from rrtdrive.planning.smoothing.corners import (
     kind_of,
     turn_reach,
     unit,
+    unit_between,
 )
 from rrtdrive.planning.smoothing.operations import prune
 
@@ -49,15 +50,24 @@ class Repairer:
         The memoised edge test.
     cfg : SmoothingConfig
         Tunables.
+    tangents : dict, optional
+        Clothoid tangent lengths per deflection and radius (:func:`turn_reach`'s
+        memo), shared by the repairs of one ``make_drivable`` call.
     """
 
     def __init__(
-        self, poly: KeyPolygon, ends: Ends, edges: EdgeCache, cfg: SmoothingConfig
+        self,
+        poly: KeyPolygon,
+        ends: Ends,
+        edges: EdgeCache,
+        cfg: SmoothingConfig,
+        tangents: dict[tuple[float, float], float] | None = None,
     ) -> None:
         self.poly = poly
         self.ends = ends
         self.edges = edges
         self.cfg = cfg
+        self.tangents = tangents
         self.r_design = cfg.design_radius
         self.merges = 0
         self.moves = 0
@@ -98,14 +108,17 @@ class Repairer:
         return turn_reach(
             self.cfg,
             p[c].point,
-            unit(*(p[c].point - p[c - 1].point))[:2],
-            unit(*(p[c + 1].point - p[c].point))[:2],
+            unit_between(p[c - 1].point, p[c].point)[:2],
+            unit_between(p[c].point, p[c + 1].point)[:2],
             p[c].radius,
+            self.tangents,
         )
 
     def _leg_length(self, leg: int) -> float:
-        p = self.corners
-        return float(np.hypot(*(p[leg + 1].point - p[leg].point)))
+        p = self.poly.corners
+        # np.hypot(*(b - a)) with the difference taken in Python floats (the same values).
+        (ax, ay), (bx, by) = p[leg].point.tolist(), p[leg + 1].point.tolist()
+        return float(np.hypot(bx - ax, by - ay))
 
     # ------------------------------------------------------------- corner operations
 
@@ -133,8 +146,8 @@ class Repairer:
             if direction != "back" or not self._turn_ok(c, new):
                 return False
             return self.place(c, new)
-        uix, uiy, _ = unit(*(o - prev))
-        uox, uoy, _ = unit(*(nxt - o))
+        uix, uiy, _ = unit_between(prev, o)
+        uox, uoy, _ = unit_between(o, nxt)
         if direction == "back":
             d = np.array([-uox, -uoy])
         elif direction == "ahead":
@@ -226,8 +239,8 @@ class Repairer:
         if kind_a is _START_LEG and kind_b is _GOAL_LEG:
             return False
         a0, a1, b0, b1 = p[i - 1].point, p[i].point, p[i + 1].point, p[i + 2].point
-        uax, uay, la = unit(*(a1 - a0))
-        ubx, uby, lb = unit(*(b1 - b0))
+        uax, uay, la = unit_between(a0, a1)
+        ubx, uby, lb = unit_between(b0, b1)
         det = uax * uby - uay * ubx
         if abs(det) < 1e-9:
             return False
@@ -265,18 +278,18 @@ class Repairer:
             # The goal leg: the turn at the goal-leg point eases when the corner
             # before it turns earlier.
             if n - 3 > 0 and p[n - 3].kind is _NODE:
-                back = unit(*(p[n - 4].point - p[n - 3].point))[:2]
+                back = unit_between(p[n - 3].point, p[n - 4].point)[:2]
                 moves += [(n - 3, np.asarray(back) * d) for d in (3.0, 6.0, 10.0)]
         elif leg == 0:
             if n > 3 and p[2].kind is _NODE:
-                on = unit(*(p[3].point - p[2].point))[:2]
+                on = unit_between(p[2].point, p[3].point)[:2]
                 moves += [(2, np.asarray(on) * d) for d in (3.0, 6.0, 10.0)]
         else:
             length = self._leg_length(leg)
             for c, other in ((leg, leg - 1), (leg + 1, leg + 2)):
                 if p[c].kind is not _NODE or p[c].radius <= 0.0:
                     continue
-                away = unit(*(p[other].point - p[c].point))[:2]
+                away = unit_between(p[c].point, p[other].point)[:2]
                 moves += [(c, np.asarray(away) * d) for d in (0.5 * length, length, 2.0 * length)]
         return moves
 
@@ -287,11 +300,17 @@ class Repairer:
         it on along its outgoing line, until the fillets fit (edges checked).
         """
         p, n = self.corners, len(self.corners)
+        # Per corner, 0.9 times the leg it shifts along: a failed shift puts the corner
+        # back, so the limit is the same for all its shifts.
+        limits: dict[int, float] = {}
         for c, delta in self._stretch_moves(leg):
             if c <= 0 or c >= n - 1:
                 continue
-            other = p[c - 1 if c == leg else c + 1].point
-            if float(np.hypot(*delta)) >= 0.9 * float(np.hypot(*(other - p[c].point))):
+            limit = limits.get(c)
+            if limit is None:
+                other = p[c - 1 if c == leg else c + 1].point
+                limit = limits[c] = 0.9 * float(np.hypot(*(other - p[c].point)))
+            if float(np.hypot(*delta)) >= limit:
                 continue
             old = p[c].point.copy()
             if not self.place(c, old + delta):
