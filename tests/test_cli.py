@@ -298,7 +298,7 @@ def _modules_after(*argv):
     return heavy, light
 
 
-@pytest.mark.parametrize("argv", [["--version"], ["--help"], ["maps"]])
+@pytest.mark.parametrize("argv", [["--version"], ["--help"], ["maps"], ["verify", "--help"]])
 def test_startup_imports_no_planner_or_simulator(argv):
     heavy, planning = _modules_after(*argv)
     assert heavy == "[]"
@@ -309,6 +309,13 @@ def test_plan_imports_no_simulator_controller_or_plotting(tmp_path):
     heavy, planning = _modules_after("plan", "overtake", "--planner", "rrt", "--json",
                                      str(tmp_path / "r.json"))
     assert heavy == "[]" and planning.startswith("True")
+
+
+def test_verify_imports_no_simulator_controller_or_plotting(tmp_path):
+    plan = tmp_path / "r.json"
+    assert main(["plan", "overtake", "--planner", "rrt", "--json", str(plan)]) in (0, 1)
+    heavy, _ = _modules_after("verify", str(plan), "--no-sharpness")
+    assert heavy == "[]"
 
 
 def test_simulate_video_stride_zero_rejected(capsys):
