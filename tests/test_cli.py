@@ -314,7 +314,7 @@ def test_plan_imports_no_simulator_controller_or_plotting(tmp_path):
 def test_verify_imports_no_simulator_controller_or_plotting(tmp_path):
     plan = tmp_path / "r.json"
     assert main(["plan", "overtake", "--planner", "rrt", "--json", str(plan)]) in (0, 1)
-    heavy, _ = _modules_after("verify", str(plan), "--no-sharpness")
+    heavy, _ = _modules_after("verify", str(plan))
     assert heavy == "[]"
 
 
