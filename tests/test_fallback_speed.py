@@ -59,6 +59,17 @@ def test_sample_curves_is_sample_pieces_bit_for_bit(spacing):
     assert sample_curves([], 1.0) == []
 
 
+
+def _all_free(checker, paths, clearance):
+    """``_clear_poses`` on sampled paths held whole (as the fallback did before CurveBatch)."""
+    if not paths:
+        return []
+    poses = np.vstack(paths)[:, :3]
+    return fallback._clear_poses(
+        checker, [len(p) for p in paths], lambda pick, _: poses[pick], clearance
+    )
+
+
 def test_batched_body_test_is_one_test_per_path():
     m = builtin_map("parking_lot")
     checker = cached_checker(m)
@@ -75,7 +86,7 @@ def test_batched_body_test_is_one_test_per_path():
         )
     for clearance in (0.0, 0.3):
         want = [bool(np.all(checker.poses_free(p, clearance=clearance))) for p in paths]
-        assert fallback._all_free(checker, paths, clearance) == want
+        assert _all_free(checker, paths, clearance) == want
         assert any(want) and not all(want)
 
 
@@ -183,7 +194,7 @@ def test_pinned_lazy_body_test_is_the_old_one():
         old = sample_curves(chunk, 1.0)
         for rows in old:
             fallback._pin_ends(rows, start, goal)
-        want = fallback._all_free(checker, old, 0.2)
+        want = _all_free(checker, old, 0.2)
         batch = CurveBatch(chunk, 1.0)
         poses_at = fallback._pinned(batch, start, goal)
         asked = [0]

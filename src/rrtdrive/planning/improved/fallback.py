@@ -44,7 +44,7 @@ CC_RADIUS_STEPS: tuple[float, ...] = (1.0, 1.15, 1.35, 1.6, 2.0, 2.5)
 #: Candidates per batch of the coarse test, shortest first (0: all the rest).
 _BATCHES = (1, 0)
 #: The coarse poses of the candidates are tested in rounds: every 16th pose of each,
-#: then every 4th of those still clear, then the rest (see _all_free).
+#: then every 4th of those still clear, then the rest (see _clear_poses).
 _STRIDES = (16, 4, 1)
 
 
@@ -108,19 +108,6 @@ def _free_end(
     return None
 
 
-def _all_free(checker: CollisionChecker, paths: list[np.ndarray], clearance: float) -> list[bool]:
-    """Per sampled path, whether the body is clear at all its poses (``poses_free``).
-
-    The same answers as testing each path's poses, with less exact work: every
-    ``_STRIDES[0]``-th pose of every path first (a colliding stretch usually spans
-    several poses), then more of the paths still clear only, until all.
-    """
-    if not paths:
-        return []
-    poses = np.vstack(paths)[:, :3]
-    return _clear_poses(checker, [len(p) for p in paths], lambda pick, _: poses[pick], clearance)
-
-
 #: ``poses_at(pick, within)``: the poses ``(len(pick), 3)`` at the batch's rows ``pick``
 #: (``within``: the rows' indices within their paths, for all rows of the batch).
 PosesAt = Callable[[np.ndarray, np.ndarray], np.ndarray]
@@ -129,7 +116,13 @@ PosesAt = Callable[[np.ndarray, np.ndarray], np.ndarray]
 def _clear_poses(
     checker: CollisionChecker, sizes: list[int], poses_at: PosesAt, clearance: float
 ) -> list[bool]:
-    """:func:`_all_free` of paths of ``sizes`` rows whose poses ``poses_at`` gives when asked."""
+    """Per path of ``sizes`` rows, whether the body is clear at all its poses (``poses_free``).
+
+    ``poses_at`` gives the poses of the rows asked for. The same answers as testing
+    each path's poses, with less exact work: every ``_STRIDES[0]``-th pose of every
+    path first (a colliding stretch usually spans several poses), then more of the
+    paths still clear only, until all.
+    """
     if not sizes:
         return []
     total = sum(sizes)
