@@ -105,6 +105,10 @@ def _problem(item: dict[str, Any]) -> tuple[Any, PlanningProblem]:
     return m, PlanningProblem.from_map(m)
 
 
+#: The check fields of a row without a path.
+_UNCHECKED = {"verified": False, "verified_any_sharpness": False, "collision_free": False}
+
+
 def _check(m: Any, path: Path) -> dict[str, Any]:
     """The independent check, with the sharpness bound and without it."""
     check = verify_path(m, path, max_sharpness=SHARPNESS_BOUND)
@@ -168,8 +172,7 @@ def run_ours(item: dict[str, Any]) -> dict[str, Any]:
     diagnosis = getattr(res, "diagnosis", None)
     if diagnosis is not None:
         row["diagnosis"] = diagnosis.kind.value
-    row.update(_check(m, res.path) if res.success else
-               {"verified": False, "verified_any_sharpness": False, "collision_free": False})
+    row.update(_check(m, res.path) if res.success else _UNCHECKED)
     return row
 
 
@@ -224,8 +227,7 @@ def run_ompl(item: dict[str, Any]) -> dict[str, Any]:
     exact = path is not None
     row: dict[str, Any] = {"status": "solved" if exact else "no_path_in_budget", "solved": exact}
     if path is None:
-        row.update(time_s=solve_s, solve_s=solve_s, length_m=None, verified=False,
-                   verified_any_sharpness=False, collision_free=False)
+        row.update(time_s=solve_s, solve_s=solve_s, length_m=None, **_UNCHECKED)
         return row
     row.update(time_s=total_s, solve_s=solve_s, length_m=length, **_check(m, path))
     return row
