@@ -188,6 +188,8 @@ def test_exhausted_search_is_proven_at_its_resolution() -> None:
     # Proven at the finest resolution tried; the coarser search's end is named too.
     assert "no path at 0.25 m / 2.5 deg resolution" in res.message
     assert "before that, at 0.5 m / 5 deg / 1 m steps the search ran out of states" in res.message
+    assert "driving forward" in res.message
+    assert "(a path with reversing may exist: try --reverse)" in res.message
     coarse = HybridAStar(refinements=0).solve(
         PlanningProblem.from_map(m), np.random.default_rng(0), BUDGET
     )
