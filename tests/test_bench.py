@@ -405,6 +405,29 @@ def test_ompl_rows_on_the_same_map_and_checker():
     assert not fail.success and fail.status.value == "no_path_in_budget"
 
 
+def test_ompl_solves_a_goal_facing_exactly_pi():
+    # OMPL's SO2 bounds are [-pi, pi): a goal yaw of exactly pi (turning_bulb's, a car
+    # turning back down its street) made every OMPL planner fail without a word.
+    pytest.importorskip("ompl")
+    from rrtdrive.bench.ompl_planners import simple_setup
+    from rrtdrive.planning import PlanningProblem, make_planner
+    from rrtdrive.tight_maps import turning_bulb_map
+    from rrtdrive.types import Budget
+    from rrtdrive.verify import verify_path
+
+    m = turning_bulb_map()
+    assert m.goal.yaw == math.pi
+    problem = PlanningProblem.from_map(m, reverse=True)
+    for space in ("rs", "dubins"):
+        ss, si = simple_setup(problem, space)
+        assert si.satisfiesBounds(ss.getGoal().getState()), space
+    res = make_planner("ompl-rs-rrtconnect").solve(
+        problem, np.random.default_rng(0), Budget(max_time_s=10.0)
+    )
+    assert res.success, res.message
+    assert verify_path(m, res.path).endpoints_ok
+
+
 # ----------------------------------------------------------------------------- issue 15
 
 UNGUARDED_SCRIPT = """

@@ -150,7 +150,9 @@ def simple_setup(problem: PlanningProblem, space_kind: str) -> tuple[Any, Any]:
         else:
             st.setX(pose.x)
             st.setY(pose.y)
-            st.setYaw(pose.yaw)
+            # OMPL's SO2 bounds are [-pi, pi): a yaw of exactly pi is out of bounds, and
+            # a planner then fails silently (turning_bulb's goal was never solved).
+            st.setYaw(wrap_angle(pose.yaw))
     ss.setStartAndGoalStates(start, goal)
     return ss, si
 
