@@ -198,6 +198,19 @@ def test_exhausted_search_is_proven_at_its_resolution() -> None:
     assert "before that" not in coarse.message
 
 
+def test_a_failure_with_expansions_left_says_how_many_went_unspent() -> None:
+    # Turning round in a 10 x 6 m box: the first search spends its quarter, the coarser
+    # ones run out of states early, and the rest of the budget is never spent.
+    m = Map("box", (0.0, 0.0, 10.0, 6.0), (), Pose(2.0, 3.0, 0.0), Pose(6.4, 3.0, math.pi))
+    budget = Budget(max_iterations=20_000)
+    res = HybridAStar().solve(
+        PlanningProblem.from_map(m, reverse=True), np.random.default_rng(0), budget
+    )
+    assert res.status is PlanStatus.NO_PATH_IN_BUDGET and res.iterations < budget.max_iterations
+    unspent = budget.max_iterations - res.iterations
+    assert f"{unspent} expansions went unspent: the first search may spend 25% of" in res.message
+
+
 def test_a_goal_reachable_only_in_reverse_is_proven_so_forward() -> None:
     # Tail 0.4 m from the left wall, nose along +x: no forward drive can arrive.
     m = builtin_map("parking_lot").with_query(goal=Pose(2.0, 75.0, 0.0))

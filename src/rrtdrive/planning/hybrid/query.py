@@ -308,9 +308,18 @@ def hybrid_query(
             if reason == "time"
             else f"no path found within the expansion budget of {budget.max_iterations}"
         )
+        unused = budget.max_iterations - total.expansions
+        tail = (
+            "a larger budget may find a path"
+            if reason == "time" or unused <= 0
+            # The coarser searches ran out of states early: the rest went unspent, and
+            # only the first search's share grows with the budget.
+            else f"{unused} expansions went unspent: the first search may spend "
+            f"{config.coarse_after:.0%} of the budget, so a larger one lets it search longer"
+        )
         message = (
             f"{lead_in}: " + ", then ".join(steps)
-            + " (a coarser search proves nothing; a larger budget may find a path)"
+            + f" (a coarser search proves nothing; {tail})"
         )
         return answer(path=None, message=message)
     lead, earlier = tried[-1], tried[:-1]
