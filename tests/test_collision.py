@@ -126,6 +126,24 @@ def test_clearance_is_a_lower_bound(parking_lot, parking_checker, p):
     assert parking_checker.clearance(*p) >= true - 0.3  # and tight to within the grid error
 
 
+@given(
+    p=st.tuples(
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.one_of(st.floats(-5.0, 105.0), st.floats(allow_nan=True, allow_infinity=True)),
+    )
+)
+def test_clearance_of_any_float_point_is_a_number_and_matches_the_batch(parking_checker, p):
+    # Far outside (beyond 2**63 cells the cast to int wraps round), infinite or NaN:
+    # not clear (-inf off the grid), from the scalar and the batch alike; no exception.
+    one = parking_checker.clearance(*p)
+    batch = parking_checker.clearances(np.array([p, p[::-1]]))
+    assert batch[0] == one and batch[1] == parking_checker.clearance(*p[::-1])
+    inside = all(math.isfinite(v) and 0.0 <= v <= 100.0 for v in p)
+    assert inside or one <= 0.0
+    if not all(math.isfinite(v) and abs(v) < 1e6 for v in p):
+        assert one == -math.inf
+
+
 rect = st.builds(
     lambda cx, cy, lx, ly, yaw: Obstacle((cx, cy), (lx, ly), yaw),
     st.floats(2.0, 28.0),

@@ -172,15 +172,14 @@ class CollisionChecker:
         Negative or ``-inf`` means possibly inside an obstacle. Scalar and fast
         (about a microsecond); use :meth:`clearances` for many points.
         """
-        ox, oy = self._ox, self._oy
-        if x < ox or y < oy:
-            return -math.inf
-        i = int((x - ox) * self._inv_h)
-        j = int((y - oy) * self._inv_h)
+        gx = (x - self._ox) * self._inv_h
+        gy = (y - self._oy) * self._inv_h
         nx, ny = self._shape
-        if i >= nx or j >= ny:
+        # Decided on the floats (for g >= 0, int(g) < n exactly when g < n), so an
+        # infinite or NaN coordinate is outside too instead of failing int().
+        if not (0.0 <= gx < nx and 0.0 <= gy < ny):
             return -math.inf
-        return self._clearance_cells[i * ny + j]
+        return self._clearance_cells[int(gx) * ny + int(gy)]
 
     def clearances(self, points: np.ndarray) -> np.ndarray:
         """Vectorised :meth:`clearance` for points of shape ``(N, 2)``."""
@@ -189,11 +188,12 @@ class CollisionChecker:
         # Truncation equals floor where g >= 0, the only cells looked up.
         with np.errstate(invalid="ignore"):
             idx = g.astype(np.int64)
+        # On the floats, as in :meth:`clearance`: beyond 2**63 cells the cast wraps round.
         ok = (
             (g[:, 0] >= 0.0)
             & (g[:, 1] >= 0.0)
-            & (idx[:, 0] < self._shape[0])
-            & (idx[:, 1] < self._shape[1])
+            & (g[:, 0] < self._shape[0])
+            & (g[:, 1] < self._shape[1])
         )
         flat = idx[:, 0] * self._shape[1] + idx[:, 1]
         if ok.all():
