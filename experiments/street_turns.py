@@ -1,0 +1,179 @@
+"""Turning round in a street closed at both ends: ours with reverse against OMPL's RS RRTConnect.
+
+Usage (OMPL lives in the lead's venv only; without it its rows are skipped)::
+
+    python experiments/street_turns.py --out results/street_turns
+
+A user's three-point turn: a street ``--length`` metres long and ``W`` metres wide
+(each of ``--widths``), walled at both ends, the car at (8, W/2) facing along it and the
+goal the same position facing back (yaw pi). For each width and seed
+(``--seeds``), in one run: the default planner and ``hybrid-a-star``, both with
+``reverse``, on the counted 20 000-iteration budget (``--max-time`` is the cap), and
+OMPL's Reeds-Shepp RRTConnect with our exact body test as validity checker
+(``--ompl-time``, simplified), as ``experiments/coverage.py`` plans it. Every path is
+judged by ``verify_path`` with the 0.2 rad/m sharpness bound (``verified``) and without
+it (``any sharpness``). Ours are deterministic for a seed; OMPL's generator is seeded
+once per process.
+
+Writes ``OUT/street_turns.{json,md}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import statistics
+import sys
+import time
+from pathlib import Path as FsPath
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(__file__))
+import coverage as cov  # noqa: E402  (the sibling script)
+
+from rrtdrive.atomic import write_text_atomic  # noqa: E402
+from rrtdrive.maps import Map  # noqa: E402
+from rrtdrive.planning import PlanningProblem, make_planner  # noqa: E402
+from rrtdrive.types import Budget, Pose  # noqa: E402
+
+#: Our planners, each with reverse.
+OURS = ("improved-rrt-connect", "hybrid-a-star")
+OMPL_NAME = "ompl-rs-rrtconnect"
+
+
+def street(width: float, length: float) -> Map:
+    """The closed street of ``width`` x ``length`` m, start and goal facing opposite ways."""
+    y = width / 2.0
+    return Map(f"street_{width:g}m", (0.0, 0.0, length, width), (), Pose(8.0, y, 0.0),
+               Pose(8.0, y, math.pi))  # fmt: skip
+
+
+def ours_row(m: Map, planner: str, seed: int, max_time: float) -> dict[str, Any]:
+    """One plan of ours with reverse, judged."""
+    problem = PlanningProblem.from_map(m, reverse=True)
+    res = make_planner(planner).solve(
+        problem, np.random.default_rng(seed), Budget(max_iterations=20_000, max_time_s=max_time)
+    )
+    row = {"status": res.status.value, "solved": res.success, "time_s": res.planning_time_s,
+           "iterations": res.iterations}  # fmt: skip
+    if res.success:
+        row |= {
+            "length_m": res.path.length,
+            "cusps": len(res.path.cusps),
+            **cov._check(m, res.path),
+        }
+    else:
+        row["message"] = res.message[:300]
+    return row
+
+
+def ompl_row(m: Map, seed: int, seconds: float) -> dict[str, Any]:
+    """OMPL's RS RRTConnect on the same map and checker, judged."""
+    problem = PlanningProblem.from_map(m, reverse=True)
+    _, total_s, length, path = cov.solve_ompl(problem, seed, OMPL_NAME, seconds)
+    row: dict[str, Any] = {"solved": path is not None, "time_s": total_s}
+    if path is not None:
+        row |= {"length_m": length, "cusps": len(path.cusps), **cov._check(m, path)}
+    return row
+
+
+def _median(rows: list[dict[str, Any]], key: str) -> str:
+    values = [r[key] for r in rows if r["solved"]]
+    if not values:
+        return "-"
+    v = statistics.median(values)
+    return f"{v * 1000:.1f}" if key == "time_s" else f"{v:.1f}"
+
+
+def report(payload: dict[str, Any]) -> str:
+    """The markdown page of a payload."""
+    lines = [
+        "# Turning round in a closed street: ours with reverse and OMPL's RS RRTConnect",
+        "",
+        f"Command: `{payload['command']}`  ",
+        f"{payload['machine']}; wall time {payload['wall_time_s']:.0f} s; load at the start "
+        f"{payload['load']}. Street {payload['length']:g} m long; {payload['seeds']} seeds; "
+        f"ours 20 000 iterations (cap {payload['max_time']:g} s), OMPL {payload['ompl_time']:g} s.",
+        "",
+        "| width [m] | planner | solved | verified | any sharpness | median time [ms] | "
+        "median length [m] | median cusps |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for width, by_planner in payload["rows"].items():
+        for planner, rows in by_planner.items():
+            solved = [r for r in rows if r["solved"]]
+            cusps = statistics.median(r["cusps"] for r in solved) if solved else "-"
+            lines.append(
+                f"| {width} | {planner} | {len(solved)}/{len(rows)} | "
+                f"{sum(r.get('verified', False) for r in rows)} | "
+                f"{sum(r.get('verified_any_sharpness', False) for r in rows)} | "
+                f"{_median(rows, 'time_s')} | {_median(rows, 'length_m')} | {cusps} |"
+            )
+    return "\n".join(lines) + "\n"
+
+
+def _floats(text: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",") if v]
+    except ValueError:
+        raise ValueError(f"--widths: expected comma-separated metres, got {text!r}") from None
+    if not values or not all(math.isfinite(v) and v > 2.0 for v in values):
+        raise ValueError(f"--widths: each must be a number of metres > 2, got {text!r}")
+    return values
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--widths", default="6.5,7,7.5,8,9,10,12", help="street widths, m")
+    ap.add_argument("--length", type=float, default=30.0, help="street length, m (default 30)")
+    ap.add_argument("--seeds", type=int, default=3, help="seeds per width (default 3)")
+    ap.add_argument("--max-time", type=float, default=10.0, help="our wall-clock cap, s")
+    ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time, s")
+    ap.add_argument("--out", default="results/street_turns")
+    args = ap.parse_args(argv)
+    try:
+        widths = _floats(args.widths)
+    except ValueError as err:
+        ap.error(str(err))
+    if args.length < 16.0 or args.seeds < 1 or args.max_time <= 0 or args.ompl_time <= 0:
+        ap.error("--length must be >= 16, --seeds >= 1, --max-time and --ompl-time > 0")
+    have_ompl = cov.availability(OMPL_NAME) is None
+    t0 = time.perf_counter()
+    load = f"{os.getloadavg()[0]:.1f}"
+    rows: dict[str, dict[str, list[dict[str, Any]]]] = {}
+    for w in widths:
+        m = street(w, args.length)
+        by_planner = rows[f"{w:g}"] = {}
+        for planner in OURS:
+            print(f"width {w:g} m: {planner} ...", file=sys.stderr, flush=True)
+            by_planner[f"{planner}+reverse"] = [
+                ours_row(m, planner, s, args.max_time) for s in range(args.seeds)
+            ]
+        if have_ompl:
+            print(f"width {w:g} m: {OMPL_NAME} ...", file=sys.stderr, flush=True)
+            by_planner[OMPL_NAME] = [ompl_row(m, s, args.ompl_time) for s in range(args.seeds)]
+    payload = {
+        "command": "python experiments/street_turns.py "
+        + " ".join(sys.argv[1:] if argv is None else argv),
+        "length": args.length, "seeds": args.seeds, "max_time": args.max_time,
+        "ompl_time": args.ompl_time, "load": load,
+        "machine": f"{platform.machine()} {os.cpu_count()} CPUs, "
+        f"Python {platform.python_version()}",
+        "wall_time_s": time.perf_counter() - t0, "rows": rows,
+    }  # fmt: skip
+    out = FsPath(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(out / "street_turns.json", json.dumps(payload, indent=1) + "\n")
+    text = report(payload)
+    write_text_atomic(out / "street_turns.md", text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
