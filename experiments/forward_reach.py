@@ -27,14 +27,10 @@ Writes ``OUT/forward_reach.{json,md}``.
 from __future__ import annotations
 
 import argparse
-import json
-import math
 import os
-import platform
 import sys
 import time
 from dataclasses import asdict
-from pathlib import Path as FsPath
 from typing import Any
 
 import numpy as np
@@ -43,8 +39,8 @@ sys.path.insert(0, os.path.dirname(__file__))
 import coverage as cov  # noqa: E402  (the sibling script)
 from forward_misses import _item  # noqa: E402  (the query parser of the sibling script)
 from reach_sweep import Reach, sweep  # noqa: E402
+from results_io import command, machine, numbers_above, write_results  # noqa: E402
 
-from rrtdrive.atomic import write_text_atomic  # noqa: E402
 from rrtdrive.types import Path, Pose  # noqa: E402
 from rrtdrive.verify import verify_path  # noqa: E402
 
@@ -90,16 +86,6 @@ def report(payload: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _floats(text: str, name: str) -> list[float]:
-    try:
-        values = [float(v) for v in text.split(",") if v]
-    except ValueError:
-        raise ValueError(f"{name}: expected comma-separated numbers, got {text!r}") from None
-    if not values or not all(math.isfinite(v) and v > 0 for v in values):
-        raise ValueError(f"{name}: expected positive numbers, got {text!r}")
-    return values
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--query", default="start:81", help="goal:N or start:N (default start:81)")
@@ -116,8 +102,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", default="results/forward_reach")
     args = ap.parse_args(argv)
     try:
-        sharpness = _floats(args.sharpness, "--sharpness")
-        cells = _floats(args.cell, "--cell")
+        sharpness = numbers_above(args.sharpness, "--sharpness")
+        cells = numbers_above(args.cell, "--cell")
         item = _item(args.query)
     except ValueError as err:
         ap.error(str(err))
@@ -144,20 +130,13 @@ def main(argv: list[str] | None = None) -> int:
             )
             rows.append(_row(reach, m))
     payload = {
-        "command": "python experiments/forward_reach.py "
-        + " ".join(sys.argv[1:] if argv is None else argv),
+        "command": command("forward_reach.py", argv),
         "query": args.query, "pose": [round(v, 4) for v in item["pose"]],
         "clearance": args.clearance, "step": args.step,
-        "machine": f"{platform.machine()} {os.cpu_count()} CPUs, "
-        f"Python {platform.python_version()}",
+        "machine": machine(),
         "wall_time_s": time.perf_counter() - t0, "rows": rows,
     }  # fmt: skip
-    out = FsPath(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "forward_reach.json", json.dumps(payload, indent=1) + "\n")
-    text = report(payload)
-    write_text_atomic(out / "forward_reach.md", text)
-    print(text)
+    print(write_results(args.out, "forward_reach", payload, report))
     return 0
 
 

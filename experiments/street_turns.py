@@ -21,22 +21,19 @@ Writes ``OUT/street_turns.{json,md}``.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
-import platform
 import statistics
 import sys
 import time
-from pathlib import Path as FsPath
 from typing import Any
 
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 import coverage as cov  # noqa: E402  (the sibling script)
+from results_io import command, machine, numbers_above, write_results  # noqa: E402
 
-from rrtdrive.atomic import write_text_atomic  # noqa: E402
 from rrtdrive.maps import Map  # noqa: E402
 from rrtdrive.planning import PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.types import Budget, Pose  # noqa: E402
@@ -117,16 +114,6 @@ def report(payload: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _floats(text: str) -> list[float]:
-    try:
-        values = [float(v) for v in text.split(",") if v]
-    except ValueError:
-        raise ValueError(f"--widths: expected comma-separated metres, got {text!r}") from None
-    if not values or not all(math.isfinite(v) and v > 2.0 for v in values):
-        raise ValueError(f"--widths: each must be a number of metres > 2, got {text!r}")
-    return values
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--widths", default="6.5,7,7.5,8,9,10,12", help="street widths, m")
@@ -137,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", default="results/street_turns")
     args = ap.parse_args(argv)
     try:
-        widths = _floats(args.widths)
+        widths = numbers_above(args.widths, "--widths", floor=2.0)
     except ValueError as err:
         ap.error(str(err))
     if args.length < 16.0 or args.seeds < 1 or args.max_time <= 0 or args.ompl_time <= 0:
@@ -158,20 +145,13 @@ def main(argv: list[str] | None = None) -> int:
             print(f"width {w:g} m: {OMPL_NAME} ...", file=sys.stderr, flush=True)
             by_planner[OMPL_NAME] = [ompl_row(m, s, args.ompl_time) for s in range(args.seeds)]
     payload = {
-        "command": "python experiments/street_turns.py "
-        + " ".join(sys.argv[1:] if argv is None else argv),
+        "command": command("street_turns.py", argv),
         "length": args.length, "seeds": args.seeds, "max_time": args.max_time,
         "ompl_time": args.ompl_time, "load": load,
-        "machine": f"{platform.machine()} {os.cpu_count()} CPUs, "
-        f"Python {platform.python_version()}",
+        "machine": machine(),
         "wall_time_s": time.perf_counter() - t0, "rows": rows,
     }  # fmt: skip
-    out = FsPath(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "street_turns.json", json.dumps(payload, indent=1) + "\n")
-    text = report(payload)
-    write_text_atomic(out / "street_turns.md", text)
-    print(text)
+    print(write_results(args.out, "street_turns", payload, report))
     return 0
 
 

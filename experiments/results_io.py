@@ -1,0 +1,63 @@
+"""What the newer experiment scripts share: the machine line, number lists, writing results.
+
+``forward_reach.py`` and ``street_turns.py`` use it; a script writes its payload as
+``OUT/STEM.json`` and its page as ``OUT/STEM.md``, each through a temporary file.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import platform
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path as FsPath
+from typing import Any
+
+from rrtdrive.atomic import write_text_atomic
+
+
+def machine() -> str:
+    """The machine line of a payload: architecture, CPUs and Python."""
+    return f"{platform.machine()} {os.cpu_count()} CPUs, Python {platform.python_version()}"
+
+
+def command(script: str, argv: Sequence[str] | None) -> str:
+    """The command line that reproduces a run of ``experiments/SCRIPT``."""
+    args = sys.argv[1:] if argv is None else argv
+    return " ".join([f"python experiments/{script}", *args])
+
+
+def numbers_above(text: str, name: str, floor: float = 0.0) -> list[float]:
+    """The comma-separated numbers of option ``name``, each finite and above ``floor``.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name`` and what was given.
+
+    Examples
+    --------
+    >>> numbers_above("0.2,1", "--sharpness")
+    [0.2, 1.0]
+    """
+    try:
+        values = [float(v) for v in text.split(",") if v]
+    except ValueError:
+        raise ValueError(f"{name}: expected comma-separated numbers, got {text!r}") from None
+    if not values or not all(math.isfinite(v) and v > floor for v in values):
+        raise ValueError(f"{name}: expected numbers above {floor:g}, got {text!r}")
+    return values
+
+
+def write_results(
+    out: str, stem: str, payload: dict[str, Any], report: Callable[[dict[str, Any]], str]
+) -> str:
+    """Write ``OUT/STEM.json`` and the page ``OUT/STEM.md``; return the page."""
+    folder = FsPath(out)
+    folder.mkdir(parents=True, exist_ok=True)
+    write_text_atomic(folder / f"{stem}.json", json.dumps(payload, indent=1) + "\n")
+    text = report(payload)
+    write_text_atomic(folder / f"{stem}.md", text)
+    return text
