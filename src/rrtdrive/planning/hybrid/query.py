@@ -73,15 +73,12 @@ def _failure_message(
     res = _resolution(cfg)
     counts = f"{outcome.expansions} expansions, {outcome.nodes} nodes"
     if outcome.reason == "exhausted":
-        if not reverse:
-            return (
-                f"no path at {res} resolution: the search ran out of states ({counts}); "
-                "driving forward, the goal is unreachable for this car at this resolution "
-                "(a path with reversing may exist: try --reverse)"
-            )
-        return (
-            f"no path at {res} resolution: the search ran out of states ({counts}); "
-            "the goal is unreachable for this car at this resolution"
+        lead = f"no path at {res} resolution: the search ran out of states ({counts}); "
+        if reverse:
+            return lead + "the goal is unreachable for this car at this resolution"
+        return lead + (
+            "driving forward, the goal is unreachable for this car at this resolution "
+            "(a path with reversing may exist: try --reverse)"
         )
     if outcome.reason == "no_approach":
         if reverse:
