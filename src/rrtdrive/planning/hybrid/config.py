@@ -172,6 +172,15 @@ class HybridConfig:
         its pose: random goals 39 and 92 of ``coverage.py --count 100`` (with
         reverse) had all 32 connections' ramps fail at 1.02 and solve at 1.1 in 4 and
         1 expansions.
+    turn_moves : int
+        With reverse, when the search from the start has spent its first
+        ``switch_after`` expansions without a path, a multi-point turn from the start
+        is tried (:func:`~rrtdrive.planning.hybrid.turn.multi_point_turn`: full-lock
+        moves forward and in reverse by turns, each followed by a shot at the goal),
+        with at most this many moves each way round (0: never). Each move counts as
+        an expansion. A closed street 6.5 m wide, the goal the start turned round
+        (``experiments/street_turns.py``): the search alone needs 24 482 expansions
+        (more than the budget gives it); the turn, 6 moves and about 12 ms.
     shortcut_tries : int
         After a connection is accepted, up to this many (anchor, anchor) pairs along it
         are tried for a shorter analytic word between them
@@ -222,6 +231,7 @@ class HybridConfig:
     min_clearance: float = 0.05
     wide_radius_factor: float = 1.1
     shortcut_tries: int = 0
+    turn_moves: int = 12
 
     def __post_init__(self) -> None:
         for name in (
@@ -279,6 +289,7 @@ class HybridConfig:
         require_int("hybrid.switch_after", self.switch_after, minimum=0)
         require_int("hybrid.refinements", self.refinements, minimum=0)
         require_int("hybrid.shortcut_tries", self.shortcut_tries, minimum=0)
+        require_int("hybrid.turn_moves", self.turn_moves, minimum=0)
         require_int("hybrid.coarse_factor", self.coarse_factor, minimum=2)
         require_finite("hybrid.refine_share", self.refine_share)
         if not 0.0 < self.refine_share <= 1.0:

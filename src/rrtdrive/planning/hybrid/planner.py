@@ -39,6 +39,7 @@ def answer_stats(answer: HybridAnswer, wheelbase: float) -> dict[str, float]:
         "coarse_search": float(answer.stage == "coarse"),
         "tight_search": float(answer.stage == "tight"),
         "wide_search": float(answer.stage == "wide"),
+        "turn_moves": float(o.turn_moves),
         "body_clearance_m": float(answer.clearance),
     }
     if answer.path is not None:
@@ -153,8 +154,10 @@ def hybrid_result(
     built = answer.path
     path = path_of(built)
     cusps = built.segments - 1
+    turned = f" with a multi-point turn of {o.turn_moves} moves" if o.turn_moves else ""
     message = (
-        f"solved by Hybrid A*{answer.note}: {o.expansions} expansions, {path.length:.1f} m, "
+        f"solved by Hybrid A*{turned}{answer.note}: {o.expansions} expansions, "
+        f"{path.length:.1f} m, "
         f"{cusps} cusp(s), {built.smoothed}/{built.segments} segment(s) smoothed" + arcs_note(built)
     )
     raw = built.rows[:, :2]

@@ -46,6 +46,7 @@ from rrtdrive.planning.hybrid.search import (
     walks_hit,
 )
 from rrtdrive.planning.hybrid.shortcut import polyline_length, shortcut
+from rrtdrive.planning.hybrid.turn import TurnResult, multi_point_turn
 from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
 from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, SmoothingConfig
 from rrtdrive.types import Pose, Tree, VehicleParams
@@ -85,6 +86,8 @@ def sharpness_bound_of(problem: PlanningProblem, smoothing: SmoothingConfig | No
 
 #: ``accept(pieces)``: the checked path of a connection, or ``None`` to search on.
 Accept = Callable[[list[Piece]], BuiltPath | None]
+#: The multi-point turn of a search (:func:`~.turn.multi_point_turn`, all but run).
+Turn = Callable[[], TurnResult[BuiltPath]]
 
 
 def free_cell_graph(problem: PlanningProblem, resolution: float) -> FreeCellGraph:
@@ -303,6 +306,16 @@ def search_at_resolution(
         heuristic = Heuristic(to_goal, table.to(goal), goal, table.scalar_to(goal))
     back_h = Heuristic(HolonomicField.towards(grid, start), None, start)
 
+    def turn_with(search_clearance: float) -> Turn | None:
+        if not reverse or config.turn_moves <= 0 or config.switch_after <= 0:
+            return None
+        body = body_test(problem.checker, search_clearance)
+        shots = analytic_shots(goal, radius, True, config.check_spacing, body)
+        return functools.partial(
+            multi_point_turn, start, goal, body, shots, accept, 1.0 / radius,
+            config.turn_moves, config.check_spacing,
+        )  # fmt: skip
+
     def searches_with(search_clearance: float) -> list[tuple[HybridSearch, Accept]]:
         body = body_test(problem.checker, search_clearance)
         shots = analytic_shots(goal, radius, reverse, config.check_spacing, body)
@@ -339,7 +352,9 @@ def search_at_resolution(
         )
         searches = searches_with(search_clearance)
         left = budget - used.expansions
-        path, outcome = _alternate(searches, left, config.switch_after, watch)
+        path, outcome = _alternate(
+            searches, left, config.switch_after, watch, turn_with(search_clearance)
+        )
         reason = outcome.reason
         if margin > 0.0 and reason in PROOFS:
             # Out of states keeping the margin too proves nothing for the query's own
@@ -382,12 +397,15 @@ def _alternate(
     budget: int,
     first: int,
     watch: Stopwatch,
+    turn_first: Turn | None = None,
 ) -> tuple[BuiltPath | None, SearchOutcome]:
     """Run the searches in turns of ``first``, ``first``, ``2 first``, ``2 first``, ... expansions.
 
     The turns are counted in expansions, never in time, so the schedule is the
     same on any machine. Either search running out of states ends the query: from
     the start it proves the goal unreachable, from the goal that no approach exists.
+    ``turn_first``: the multi-point turn tried once, after the first turn from the
+    start (each of its moves counted as an expansion).
     """
     outcomes = [SearchOutcome("expansions", 0, 0, 0, 0) for _ in searches]
     turn, used, k = max(1, first), 0, 0
@@ -401,10 +419,23 @@ def _alternate(
         used += outcomes[k].expansions - before
         if path is not None or outcomes[k].reason != "expansions" or used >= budget:
             break
+        if turn_first is not None and k == 0 and not watch.expired():
+            tried = turn_first()
+            turned = tried.result is not None
+            outcomes.append(SearchOutcome(
+                "solved" if turned else "expansions", tried.moves, 0, tried.shots, 0,
+                tried.moves if turned else 0,
+            ))  # fmt: skip
+            used += tried.moves
+            turn_first = None
+            if turned:
+                return tried.result, SearchOutcome.total("solved", outcomes)
+            if used >= budget:
+                break
         if k == len(searches) - 1:
             turn *= 2
         k = (k + 1) % len(searches)
-    if len(searches) == 1:
+    if len(outcomes) == 1:
         return path, outcomes[0]
     reason = outcomes[k].reason
     if reason == "exhausted" and k == 1:

@@ -71,6 +71,8 @@ class SearchOutcome:
         goal connections found, none accepted).
     expansions, nodes, shots, connections : int
         Nodes expanded, nodes created, analytic shots tried, goal connections found.
+    turn_moves : int
+        Moves of the multi-point turn that solved the query (:mod:`.turn`; 0: none did).
     """
 
     reason: str
@@ -78,6 +80,7 @@ class SearchOutcome:
     nodes: int
     shots: int
     connections: int
+    turn_moves: int = 0
 
     @classmethod
     def total(cls, reason: str, outcomes: Sequence[SearchOutcome]) -> SearchOutcome:
@@ -88,6 +91,7 @@ class SearchOutcome:
             sum(o.nodes for o in outcomes),
             sum(o.shots for o in outcomes),
             sum(o.connections for o in outcomes),
+            sum(o.turn_moves for o in outcomes),
         )
 
 

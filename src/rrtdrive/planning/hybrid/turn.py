@@ -1,0 +1,162 @@
+"""A multi-point turn: full-lock moves forward and in reverse by turns, then a shot.
+
+A car that must turn round where the street is narrower than its U-turn needs a
+three-point (or a many-point) turn. Hybrid A* finds one, but slowly: each cusp
+costs ``gear_change_cost`` and the heuristic (zero where the goal is the start
+turned round) does not see it, so the search floods the street first (a closed
+street 6.5 m wide: 24 482 expansions at 0.5 m / 5 deg; ``experiments/street_turns.py``).
+:func:`multi_point_turn` turns the car the way people do: wheels at full lock,
+forward until the body would come closer than the clearance to an obstacle, then
+in reverse with the wheels at the other lock (the heading keeps turning the same
+way), and so on, each move stopping where the heading reaches the goal's; after
+every move an analytic shot (Reeds-Shepp) to the goal is tried. Every move is one
+exact arc, so a gear segment has no steering jump inside it; the connection is
+checked like any other (``accept``: ramps, body, curvature, sharpness).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Generic, TypeVar
+
+import numpy as np
+
+from rrtdrive.geometry import wrap_angle
+from rrtdrive.planning.hybrid.body import BodyTest
+from rrtdrive.planning.hybrid.primitives import arc_poses
+from rrtdrive.planning.hybrid.shots import Piece, Shots
+from rrtdrive.types import Pose
+
+__all__ = ["TurnResult", "multi_point_turn"]
+
+T = TypeVar("T")
+
+#: A move shorter than this (metres) turns the car by almost nothing: the turn is stuck.
+MIN_MOVE = 0.25
+
+
+@dataclass(frozen=True, eq=False)
+class TurnResult(Generic[T]):
+    """What :func:`multi_point_turn` gave: the accepted result (or ``None``) and its counts.
+
+    ``moves``: the full-lock moves driven (in the successful turn, or in all tried);
+    ``shots``: the analytic shots tried.
+    """
+
+    result: T | None
+    moves: int
+    shots: int
+
+
+def _move(
+    pose: Pose, kappa: float, gear: int, body: BodyTest, longest: float, spacing: float
+) -> np.ndarray:
+    """The poses of one full-lock move from ``pose``, up to the first one the body test fails.
+
+    At most ``longest`` metres, poses ``spacing`` apart (the last one exactly at
+    ``longest``), ``pose`` itself first.
+    """
+    count = max(1, math.ceil(longest / spacing))
+    s = np.minimum(np.arange(1, count + 1) * spacing, longest)
+    poses = arc_poses(pose.x, pose.y, pose.yaw, kappa, gear, s)
+    free = body.free(poses)
+    n = len(free) if free.all() else int(np.argmin(free))
+    return np.vstack([[pose.x, pose.y, pose.yaw], poses[:n]])
+
+
+def multi_point_turn(
+    start: Pose,
+    goal: Pose,
+    body: BodyTest,
+    shots: Shots,
+    accept: Callable[[list[Piece]], T | None],
+    kappa: float,
+    max_moves: int,
+    spacing: float = 0.1,
+) -> TurnResult[T]:
+    """Turn the car at ``start`` round to the goal's heading by full-lock moves, then shoot.
+
+    The turn runs the shorter way round first (then the longer one). Its first
+    move is forward, or in reverse when forward the body cannot move
+    :data:`MIN_MOVE`; the gears then alternate. A move ends where the body test
+    fails, or where the heading has turned as far as the goal's. Before the first
+    move and after each one, the shots from the pose to the goal are tried, each
+    connection given to ``accept``. The turn ends on the first accepted
+    connection, after ``max_moves`` moves, when a move is shorter than
+    :data:`MIN_MOVE`, or when the heading has reached the goal's and no shot is
+    accepted.
+
+    Parameters
+    ----------
+    start, goal : Pose
+        Where the turn starts, and the goal the shots aim at.
+    body : BodyTest
+        The exact body test with the search's clearance.
+    shots : Shots
+        The analytic expansions to ``goal`` (:func:`~.shots.analytic_shots`, with reverse).
+    accept : callable
+        ``accept(pieces)``: the result made from a start-to-goal connection, or ``None``.
+    kappa : float
+        Curvature of the moves (the search's ``1 / radius``).
+    max_moves : int
+        Largest number of moves in each direction of turning.
+    spacing : float
+        Largest gap between the poses tested along a move.
+
+    Returns
+    -------
+    TurnResult
+
+    Examples
+    --------
+    >>> from rrtdrive.collision import CollisionChecker
+    >>> from rrtdrive.maps import Map
+    >>> from rrtdrive.planning.hybrid.shots import analytic_shots
+    >>> street = Map("street", (0.0, 0.0, 30.0, 8.0), (), Pose(8.0, 4.0, 0.0),
+    ...              Pose(8.0, 4.0, math.pi))
+    >>> body = BodyTest(CollisionChecker.for_map(street), 0.15)
+    >>> turn = multi_point_turn(street.start, street.goal, body,
+    ...                         analytic_shots(street.goal, 6.0, True, 0.1, body),
+    ...                         lambda pieces: pieces, 1 / 6.0, max_moves=12)
+    >>> turn.result is not None, turn.moves
+    (True, 2)
+    """
+    total_moves = total_shots = 0
+    target = float(wrap_angle(goal.yaw - start.yaw))
+    way = 1.0 if target >= 0.0 else -1.0
+    for turn in (way, -way):
+        # Heading still to turn, >= 0, in the turning direction ``turn``.
+        left = target * turn if target * turn > 0.0 else target * turn + 2.0 * math.pi
+        pose, pieces, gear = start, [], 1
+        moves = 0
+        while True:
+            for cand in shots(pose):
+                total_shots += 1
+                result = accept(pieces + cand)
+                if result is not None:
+                    return TurnResult(result, moves, total_shots)
+            if moves >= max_moves or left <= 1e-9:
+                break
+            longest = left / kappa
+            rows = _move(pose, turn * gear * kappa, gear, body, longest, spacing)
+            if moves == 0 and _turned(rows) < MIN_MOVE * kappa:
+                gear = -gear  # nose against something: begin in reverse
+                rows = _move(pose, turn * gear * kappa, gear, body, longest, spacing)
+            turned = _turned(rows)
+            if turned < MIN_MOVE * kappa:
+                break
+            moves += 1
+            total_moves += 1
+            kappas = np.full(len(rows), turn * gear * kappa)
+            pieces = [*pieces, Piece(gear, np.column_stack([rows, kappas]))]
+            left = max(0.0, left - turned)
+            pose = Pose(*(float(v) for v in rows[-1]))
+            gear = -gear
+    return TurnResult(None, total_moves, total_shots)
+
+
+def _turned(rows: np.ndarray) -> float:
+    """How far the heading turned along the rows of one move (their yaw is unwrapped)."""
+    return abs(float(rows[-1, 2] - rows[0, 2]))
