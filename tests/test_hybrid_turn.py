@@ -51,6 +51,16 @@ def test_turns_round_in_a_street_narrower_than_its_u_turn(width: float) -> None:
     assert len(res.path.cusps) >= 3
 
 
+def test_turns_round_in_a_closed_box() -> None:
+    # 12 x 8 m, walls all round; the goal is the start turned round about the body's centre.
+    m = Map("box", (0.0, 0.0, 12.0, 8.0), (), Pose(4.7, 4.0, 0.0), Pose(7.3, 4.0, math.pi))
+    res = _plan(m)
+    assert res.success, res.message
+    assert res.stats["turn_moves"] >= 2
+    check = verify_path(m, res.path, max_sharpness=0.2)
+    assert check.ok, check
+
+
 def test_without_the_turn_the_same_budget_does_not_turn_round() -> None:
     m = _street(6.5)
     with_turn = _plan(m, budget=2_000)
