@@ -61,6 +61,18 @@ def test_turns_round_in_a_closed_box() -> None:
     assert check.ok, check
 
 
+def test_the_default_planner_escalates_to_the_turn_and_says_so() -> None:
+    m = _street(6.5)
+    res = make_planner("improved-rrt-connect").solve(
+        PlanningProblem.from_map(m, reverse=True), np.random.default_rng(0),
+        Budget(max_iterations=20_000, max_time_s=120.0),
+    )  # fmt: skip
+    assert res.success, res.message
+    assert "Hybrid A* escalation with a multi-point turn" in res.message
+    assert res.stats["hybrid_turn_moves"] >= 2
+    assert verify_path(m, res.path, max_sharpness=0.2).ok
+
+
 def test_without_the_turn_the_same_budget_does_not_turn_round() -> None:
     m = _street(6.5)
     with_turn = _plan(m, budget=2_000)

@@ -152,8 +152,10 @@ def escalate(
             planning_time_s=watch.elapsed(),
         )
     stats["stage"] = NAME  # type: ignore[assignment]  # the one string entry
+    moves = answer.outcome.turn_moves
+    turned = f" with a multi-point turn of {moves} moves" if moves else ""
     message = (
-        f"solved by the Hybrid A* escalation{answer.note} ({gear}; "
+        f"solved by the Hybrid A* escalation{turned}{answer.note} ({gear}; "
         f"{answer.outcome.expansions} expansions, "
         f"{path.length:.1f} m, {built.segments - 1} cusp(s)); the RRT-Connect stages "
         f"failed: {reason}" + arcs_note(built)
