@@ -6,7 +6,9 @@ Usage (OMPL lives in the lead's venv only; without it its rows are skipped)::
 
 A user's three-point turn: a street ``--length`` metres long and ``W`` metres wide
 (each of ``--widths``), walled at both ends, the car at (8, W/2) facing along it and the
-goal the same position facing back (yaw pi). For each width and seed
+goal the same position facing back (yaw pi); with ``--lanes BACK``, from lane to lane:
+the start in the right-hand lane (y = W/4) at x = 16, the goal in the other lane
+(y = 3W/4) facing back, BACK metres behind it. For each width and seed
 (``--seeds``), in one run: the default planner and ``hybrid-a-star``, both with
 ``reverse``, on the counted 20 000-iteration budget (``--max-time`` is the cap), and
 OMPL's Reeds-Shepp RRTConnect with our exact body test as validity checker
@@ -43,11 +45,19 @@ OURS = ("improved-rrt-connect", "hybrid-a-star")
 OMPL_NAME = "ompl-rs-rrtconnect"
 
 
-def street(width: float, length: float) -> Map:
-    """The closed street of ``width`` x ``length`` m, start and goal facing opposite ways."""
-    y = width / 2.0
-    return Map(f"street_{width:g}m", (0.0, 0.0, length, width), (), Pose(8.0, y, 0.0),
-               Pose(8.0, y, math.pi))  # fmt: skip
+def street(width: float, length: float, back: float | None = None) -> Map:
+    """The closed street of ``width`` x ``length`` m, start and goal facing opposite ways.
+
+    ``back`` (lanes): the start in the right-hand lane at x = 16, the goal in the
+    other lane ``back`` metres behind it, as a three-point turn from lane to lane.
+    """
+    if back is None:
+        y = width / 2.0
+        return Map(f"street_{width:g}m", (0.0, 0.0, length, width), (), Pose(8.0, y, 0.0),
+                   Pose(8.0, y, math.pi))  # fmt: skip
+    x = 16.0
+    return Map(f"lanes_{width:g}m", (0.0, 0.0, length, width), (), Pose(x, width / 4, 0.0),
+               Pose(x - back, 3 * width / 4, math.pi))  # fmt: skip
 
 
 def ours_row(m: Map, planner: str, seed: int, max_time: float) -> dict[str, Any]:
@@ -94,7 +104,14 @@ def report(payload: dict[str, Any]) -> str:
         "",
         f"Command: `{payload['command']}`  ",
         f"{payload['machine']}; wall time {payload['wall_time_s']:.0f} s; load at the start "
-        f"{payload['load']}. Street {payload['length']:g} m long; {payload['seeds']} seeds; "
+        f"{payload['load']}. Street {payload['length']:g} m long; "
+        + (
+            "the goal is the start turned round"
+            if payload.get("lanes") is None
+            else f"start in the right-hand lane at x = 16, goal in the other lane "
+            f"{payload['lanes']:g} m behind it"
+        )
+        + f"; {payload['seeds']} seeds; "
         f"ours 20 000 iterations (cap {payload['max_time']:g} s), OMPL {payload['ompl_time']:g} s.",
         "",
         "| width [m] | planner | solved | verified | any sharpness | median time [ms] | "
@@ -121,12 +138,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", type=int, default=3, help="seeds per width (default 3)")
     ap.add_argument("--max-time", type=float, default=10.0, help="our wall-clock cap, s")
     ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time, s")
+    ap.add_argument(
+        "--lanes", type=float, default=None, metavar="BACK",
+        help="from lane to lane: the start in the right-hand lane at x = 16, the goal in "
+        "the other lane BACK metres behind it (default: the goal is the start turned round)",
+    )  # fmt: skip
     ap.add_argument("--out", default="results/street_turns")
     args = ap.parse_args(argv)
     try:
         widths = numbers_above(args.widths, "--widths", floor=2.0)
     except ValueError as err:
         ap.error(str(err))
+    if args.lanes is not None and not 0.0 <= args.lanes <= 12.0:
+        ap.error(f"--lanes must lie within [0, 12] m, got {args.lanes:g}")
     if args.length < 16.0 or args.seeds < 1 or args.max_time <= 0 or args.ompl_time <= 0:
         ap.error("--length must be >= 16, --seeds >= 1, --max-time and --ompl-time > 0")
     have_ompl = cov.availability(OMPL_NAME) is None
@@ -134,7 +158,7 @@ def main(argv: list[str] | None = None) -> int:
     load = f"{os.getloadavg()[0]:.1f}"
     rows: dict[str, dict[str, list[dict[str, Any]]]] = {}
     for w in widths:
-        m = street(w, args.length)
+        m = street(w, args.length, args.lanes)
         by_planner = rows[f"{w:g}"] = {}
         for planner in OURS:
             print(f"width {w:g} m: {planner} ...", file=sys.stderr, flush=True)
@@ -146,7 +170,7 @@ def main(argv: list[str] | None = None) -> int:
             by_planner[OMPL_NAME] = [ompl_row(m, s, args.ompl_time) for s in range(args.seeds)]
     payload = {
         "command": command("street_turns.py", argv),
-        "length": args.length, "seeds": args.seeds, "max_time": args.max_time,
+        "length": args.length, "lanes": args.lanes, "seeds": args.seeds, "max_time": args.max_time,
         "ompl_time": args.ompl_time, "load": load,
         "machine": machine(),
         "wall_time_s": time.perf_counter() - t0, "rows": rows,

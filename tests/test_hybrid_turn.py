@@ -51,6 +51,18 @@ def test_turns_round_in_a_street_narrower_than_its_u_turn(width: float) -> None:
     assert len(res.path.cusps) >= 3
 
 
+def test_three_point_turn_from_lane_to_lane_in_a_narrow_street() -> None:
+    # The goal in the other lane beside the start: the turn ends off it, and a short
+    # search from the turned car finishes (it failed within 20 000 expansions without).
+    w = 6.5
+    start, goal = Pose(16.0, w / 4, 0.0), Pose(16.0, 3 * w / 4, math.pi)
+    m = Map("lanes", (0.0, 0.0, 30.0, w), (), start, goal)
+    res = _plan(m)
+    assert res.success, res.message
+    assert res.stats["turn_moves"] >= 2
+    assert verify_path(m, res.path, max_sharpness=0.2).ok
+
+
 def test_turns_round_in_a_closed_box() -> None:
     # 12 x 8 m, walls all round; the goal is the start turned round about the body's centre.
     m = Map("box", (0.0, 0.0, 12.0, 8.0), (), Pose(4.7, 4.0, 0.0), Pose(7.3, 4.0, math.pi))

@@ -311,9 +311,29 @@ def search_at_resolution(
             return None
         body = body_test(problem.checker, search_clearance)
         shots = analytic_shots(goal, radius, True, config.check_spacing, body)
+
+        def finish(pose: Pose, pieces: list[Piece]) -> tuple[BuiltPath | None, int]:
+            # Turned round near the goal but not onto it: a short search from there,
+            # turning a little wider (the ramps of a word of full-lock arcs need room).
+            # Every connection rejected does not end it: the 400 expansions do.
+            wide = dataclasses.replace(config.widened(), max_solutions=config.switch_after * 64)
+            r_wide = wide.radius_factor / kappa_max
+            w_prims, *w_long = primitive_sets(
+                1.0 / r_wide, wide.curvatures, wide.step, wide.check_spacing, 0, wide.long_steps
+            )
+            w_shots = analytic_shots(goal, r_wide, True, wide.check_spacing, body)
+            search = HybridSearch(
+                body, pose, goal, heuristic, w_prims, w_shots, wide, kappa_max, problem.bounds,
+                w_long,
+            )  # fmt: skip
+            found, outcome = search.run(
+                lambda rest: accept([*pieces, *rest]), config.switch_after, watch.expired
+            )
+            return found, outcome.expansions
+
         return functools.partial(
             multi_point_turn, start, goal, body, shots, accept, 1.0 / radius,
-            config.turn_moves, config.check_spacing,
+            config.turn_moves, config.check_spacing, finish,
         )  # fmt: skip
 
     def searches_with(search_clearance: float) -> list[tuple[HybridSearch, Accept]]:
@@ -423,10 +443,10 @@ def _alternate(
             tried = turn_first()
             turned = tried.result is not None
             outcomes.append(SearchOutcome(
-                "solved" if turned else "expansions", tried.moves, 0, tried.shots, 0,
-                tried.moves if turned else 0,
+                "solved" if turned else "expansions", tried.moves + tried.expansions, 0,
+                tried.shots, 0, tried.moves if turned else 0,
             ))  # fmt: skip
-            used += tried.moves
+            used += tried.moves + tried.expansions
             turn_first = None
             if turned:
                 return tried.result, SearchOutcome.total("solved", outcomes)

@@ -35,6 +35,11 @@ T = TypeVar("T")
 
 #: A move shorter than this (metres) turns the car by almost nothing: the turn is stuck.
 MIN_MOVE = 0.25
+#: A turned car within this many turning radii of the goal gets the finishing search.
+FINISH_RADII = 2.0
+
+#: ``finish(pose, pieces) -> (result or None, expansions)`` (:func:`multi_point_turn`).
+Finish = Callable[[Pose, list[Piece]], tuple[T | None, int]]
 
 
 @dataclass(frozen=True, eq=False)
@@ -42,12 +47,13 @@ class TurnResult(Generic[T]):
     """What :func:`multi_point_turn` gave: the accepted result (or ``None``) and its counts.
 
     ``moves``: the full-lock moves driven (in the successful turn, or in all tried);
-    ``shots``: the analytic shots tried.
+    ``shots``: the analytic shots tried; ``expansions``: those of the finishing searches.
     """
 
     result: T | None
     moves: int
     shots: int
+    expansions: int = 0
 
 
 def _move(
@@ -75,6 +81,7 @@ def multi_point_turn(
     kappa: float,
     max_moves: int,
     spacing: float = 0.1,
+    finish: Finish[T] | None = None,
 ) -> TurnResult[T]:
     """Turn the car at ``start`` round to the goal's heading by full-lock moves, then shoot.
 
@@ -104,6 +111,11 @@ def multi_point_turn(
         Largest number of moves in each direction of turning.
     spacing : float
         Largest gap between the poses tested along a move.
+    finish : callable, optional
+        ``finish(pose, pieces) -> (result or None, expansions)``: where the heading
+        has reached the goal's and no shot is accepted, a short search from the pose
+        (``pieces``: the turn so far), tried when the pose lies within
+        :data:`FINISH_RADII` turning radii of the goal.
 
     Returns
     -------
@@ -123,7 +135,7 @@ def multi_point_turn(
     >>> turn.result is not None, turn.moves
     (True, 2)
     """
-    total_moves = total_shots = 0
+    total_moves = total_shots = total_expansions = 0
     target = float(wrap_angle(goal.yaw - start.yaw))
     way = 1.0 if target >= 0.0 else -1.0
     for turn in (way, -way):
@@ -136,7 +148,14 @@ def multi_point_turn(
                 total_shots += 1
                 result = accept(pieces + cand)
                 if result is not None:
-                    return TurnResult(result, moves, total_shots)
+                    return TurnResult(result, moves, total_shots, total_expansions)
+            if left <= 1e-9 and finish is not None and moves > 0 and (
+                math.hypot(goal.x - pose.x, goal.y - pose.y) <= FINISH_RADII / kappa
+            ):
+                result, spent = finish(pose, pieces)
+                total_expansions += spent
+                if result is not None:
+                    return TurnResult(result, moves, total_shots, total_expansions)
             if moves >= max_moves or left <= 1e-9:
                 break
             longest = left / kappa
@@ -154,7 +173,7 @@ def multi_point_turn(
             left = max(0.0, left - turned)
             pose = Pose(*(float(v) for v in rows[-1]))
             gear = -gear
-    return TurnResult(None, total_moves, total_shots)
+    return TurnResult(None, total_moves, total_shots, total_expansions)
 
 
 def _turned(rows: np.ndarray) -> float:
