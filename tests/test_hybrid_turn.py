@@ -63,6 +63,17 @@ def test_three_point_turn_from_lane_to_lane_in_a_narrow_street() -> None:
     assert verify_path(m, res.path, max_sharpness=0.2).ok
 
 
+@pytest.mark.parametrize("budget", [401, 410, 450, 700])
+def test_the_turn_and_its_finishing_search_keep_within_the_budget(budget: int) -> None:
+    w = 6.5
+    start, goal = Pose(16.0, w / 4, 0.0), Pose(16.0, 3 * w / 4, math.pi)
+    # The first search may spend the whole budget (no coarse stage), so the turn comes
+    # after its first 400 expansions with only the rest left.
+    m = Map("lanes", (0.0, 0.0, 30.0, w), (), start, goal)
+    res = _plan(m, budget=budget, coarse_after=0.0)
+    assert res.iterations <= budget
+
+
 def test_turns_round_in_a_closed_box() -> None:
     # 12 x 8 m, walls all round; the goal is the start turned round about the body's centre.
     m = Map("box", (0.0, 0.0, 12.0, 8.0), (), Pose(4.7, 4.0, 0.0), Pose(7.3, 4.0, math.pi))

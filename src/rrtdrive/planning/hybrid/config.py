@@ -177,10 +177,12 @@ class HybridConfig:
         ``switch_after`` expansions without a path, a multi-point turn from the start
         is tried (:func:`~rrtdrive.planning.hybrid.turn.multi_point_turn`: full-lock
         moves forward and in reverse by turns, each followed by a shot at the goal),
-        with at most this many moves each way round (0: never). Each move counts as
-        an expansion. A closed street 6.5 m wide, the goal the start turned round
-        (``experiments/street_turns.py``): the search alone needs 24 482 expansions
-        (more than the budget gives it); the turn, 6 moves and about 12 ms.
+        with at most this many moves each way round (0: never); where the turned car
+        stands near the goal but no shot clears, a short search from it finishes
+        (``switch_after`` expansions, the wide stage's radius). Each move and each
+        finishing expansion counts as an expansion. A closed street 6.5 m wide, the
+        goal the start turned round (``experiments/street_turns.py``): the search alone
+        needs 24 482 expansions (more than the budget gives it); the turn, 6 moves.
     shortcut_tries : int
         After a connection is accepted, up to this many (anchor, anchor) pairs along it
         are tried for a shorter analytic word between them

@@ -86,8 +86,9 @@ def sharpness_bound_of(problem: PlanningProblem, smoothing: SmoothingConfig | No
 
 #: ``accept(pieces)``: the checked path of a connection, or ``None`` to search on.
 Accept = Callable[[list[Piece]], BuiltPath | None]
-#: The multi-point turn of a search (:func:`~.turn.multi_point_turn`, all but run).
-Turn = Callable[[], TurnResult[BuiltPath]]
+#: The multi-point turn of a search (:func:`~.turn.multi_point_turn`), given the
+#: expansions it may spend.
+Turn = Callable[[int], TurnResult[BuiltPath]]
 
 
 def free_cell_graph(problem: PlanningProblem, resolution: float) -> FreeCellGraph:
@@ -312,7 +313,7 @@ def search_at_resolution(
         body = body_test(problem.checker, search_clearance)
         shots = analytic_shots(goal, radius, True, config.check_spacing, body)
 
-        def finish(pose: Pose, pieces: list[Piece]) -> tuple[BuiltPath | None, int]:
+        def finish(pose: Pose, pieces: list[Piece], allowed: int) -> tuple[BuiltPath | None, int]:
             # Turned round near the goal but not onto it: a short search from there,
             # turning a little wider (the ramps of a word of full-lock arcs need room).
             # Every connection rejected does not end it: the 400 expansions do.
@@ -327,14 +328,18 @@ def search_at_resolution(
                 w_long,
             )  # fmt: skip
             found, outcome = search.run(
-                lambda rest: accept([*pieces, *rest]), config.switch_after, watch.expired
-            )
+                lambda rest: accept([*pieces, *rest]), min(config.switch_after, allowed),
+                watch.expired,
+            )  # fmt: skip
             return found, outcome.expansions
 
-        return functools.partial(
-            multi_point_turn, start, goal, body, shots, accept, 1.0 / radius,
-            config.turn_moves, config.check_spacing, finish,
-        )  # fmt: skip
+        def turn(allowed: int) -> TurnResult[BuiltPath]:
+            return multi_point_turn(
+                start, goal, body, shots, accept, 1.0 / radius, config.turn_moves,
+                config.check_spacing, finish, budget=allowed,
+            )  # fmt: skip
+
+        return turn
 
     def searches_with(search_clearance: float) -> list[tuple[HybridSearch, Accept]]:
         body = body_test(problem.checker, search_clearance)
@@ -440,7 +445,7 @@ def _alternate(
         if path is not None or outcomes[k].reason != "expansions" or used >= budget:
             break
         if turn_first is not None and k == 0 and not watch.expired():
-            tried = turn_first()
+            tried = turn_first(budget - used)
             turned = tried.result is not None
             outcomes.append(SearchOutcome(
                 "solved" if turned else "expansions", tried.moves + tried.expansions, 0,

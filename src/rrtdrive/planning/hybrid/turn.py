@@ -38,8 +38,8 @@ MIN_MOVE = 0.25
 #: A turned car within this many turning radii of the goal gets the finishing search.
 FINISH_RADII = 2.0
 
-#: ``finish(pose, pieces) -> (result or None, expansions)`` (:func:`multi_point_turn`).
-Finish = Callable[[Pose, list[Piece]], tuple[T | None, int]]
+#: ``finish(pose, pieces, allowed) -> (result or None, expansions)`` (:func:`multi_point_turn`).
+Finish = Callable[[Pose, list[Piece], int], tuple[T | None, int]]
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,6 +82,7 @@ def multi_point_turn(
     max_moves: int,
     spacing: float = 0.1,
     finish: Finish[T] | None = None,
+    budget: int | None = None,
 ) -> TurnResult[T]:
     """Turn the car at ``start`` round to the goal's heading by full-lock moves, then shoot.
 
@@ -112,10 +113,13 @@ def multi_point_turn(
     spacing : float
         Largest gap between the poses tested along a move.
     finish : callable, optional
-        ``finish(pose, pieces) -> (result or None, expansions)``: where the heading
-        has reached the goal's and no shot is accepted, a short search from the pose
-        (``pieces``: the turn so far), tried when the pose lies within
-        :data:`FINISH_RADII` turning radii of the goal.
+        ``finish(pose, pieces, allowed) -> (result or None, expansions)``: where the
+        heading has reached the goal's and no shot is accepted, a short search from
+        the pose (``pieces``: the turn so far; at most ``allowed`` expansions), tried
+        when the pose lies within :data:`FINISH_RADII` turning radii of the goal.
+    budget : int, optional
+        Largest number of moves and finishing expansions in all (``None``: no limit
+        but ``max_moves``).
 
     Returns
     -------
@@ -149,14 +153,15 @@ def multi_point_turn(
                 result = accept(pieces + cand)
                 if result is not None:
                     return TurnResult(result, moves, total_shots, total_expansions)
-            if left <= 1e-9 and finish is not None and moves > 0 and (
+            allowed = math.inf if budget is None else budget - total_moves - total_expansions
+            if left <= 1e-9 and finish is not None and moves > 0 and allowed > 0 and (
                 math.hypot(goal.x - pose.x, goal.y - pose.y) <= FINISH_RADII / kappa
             ):
-                result, spent = finish(pose, pieces)
+                result, spent = finish(pose, pieces, int(min(allowed, 2**31)))
                 total_expansions += spent
                 if result is not None:
                     return TurnResult(result, moves, total_shots, total_expansions)
-            if moves >= max_moves or left <= 1e-9:
+            if moves >= max_moves or left <= 1e-9 or allowed < 1:
                 break
             longest = left / kappa
             rows = _move(pose, turn * gear * kappa, gear, body, longest, spacing)
