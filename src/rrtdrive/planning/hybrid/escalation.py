@@ -20,7 +20,7 @@ import dataclasses
 
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.hybrid.config import HybridConfig
-from rrtdrive.planning.hybrid.planner import NAME, answer_stats, arcs_note, path_of
+from rrtdrive.planning.hybrid.planner import NAME, answer_stats, arcs_note, path_of, turn_note
 from rrtdrive.planning.hybrid.query import hybrid_query
 from rrtdrive.planning.result import timeout_result
 from rrtdrive.planning.smoothing import SmoothingConfig
@@ -152,10 +152,8 @@ def escalate(
             planning_time_s=watch.elapsed(),
         )
     stats["stage"] = NAME  # type: ignore[assignment]  # the one string entry
-    moves = answer.outcome.turn_moves
-    turned = f" with a multi-point turn of {moves} moves" if moves else ""
     message = (
-        f"solved by the Hybrid A* escalation{turned}{answer.note} ({gear}; "
+        f"solved by the Hybrid A* escalation{turn_note(answer.outcome)}{answer.note} ({gear}; "
         f"{answer.outcome.expansions} expansions, "
         f"{path.length:.1f} m, {built.segments - 1} cusp(s)); the RRT-Connect stages "
         f"failed: {reason}" + arcs_note(built)

@@ -18,6 +18,7 @@ from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.path import BuiltPath
 from rrtdrive.planning.hybrid.query import HybridAnswer, hybrid_query
 from rrtdrive.planning.hybrid.resolution import dubins_table, free_cell_graph
+from rrtdrive.planning.hybrid.search import SearchOutcome
 from rrtdrive.planning.result import run_query, solved
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus
@@ -154,9 +155,8 @@ def hybrid_result(
     built = answer.path
     path = path_of(built)
     cusps = built.segments - 1
-    turned = f" with a multi-point turn of {o.turn_moves} moves" if o.turn_moves else ""
     message = (
-        f"solved by Hybrid A*{turned}{answer.note}: {o.expansions} expansions, "
+        f"solved by Hybrid A*{turn_note(o)}{answer.note}: {o.expansions} expansions, "
         f"{path.length:.1f} m, "
         f"{cusps} cusp(s), {built.smoothed}/{built.segments} segment(s) smoothed" + arcs_note(built)
     )
@@ -164,6 +164,19 @@ def hybrid_result(
     return solved(
         planner, watch, path, raw, answer.trees, o.expansions, message, stats, nodes=o.nodes
     )
+
+
+def turn_note(outcome: SearchOutcome) -> str:
+    """How a solved query's path began, for its message: the multi-point turn's moves, if any.
+
+    Examples
+    --------
+    >>> turn_note(SearchOutcome("solved", 9, 0, 0, 0, 6))
+    ' with a multi-point turn of 6 moves'
+    """
+    if not outcome.turn_moves:
+        return ""
+    return f" with a multi-point turn of {outcome.turn_moves} moves"
 
 
 def arcs_note(built: BuiltPath) -> str:
