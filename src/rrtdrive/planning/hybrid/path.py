@@ -28,7 +28,7 @@ from rrtdrive.planning.hybrid.search import Piece
 from rrtdrive.planning.smoothing import SmoothingConfig, make_drivable, max_sharpness
 from rrtdrive.types import Pose
 
-__all__ = ["GearSegment", "gear_segments", "BuiltPath", "Ramps", "build_path"]
+__all__ = ["GearSegment", "gear_segments", "BuiltPath", "Ramps", "SegmentMemo", "build_path"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -146,6 +146,13 @@ def _smoothed(
     return out, ctrl, ""
 
 
+#: A gear segment (gear, its rows' bytes) -> its checked ramped rows and sharpness, or
+#: ``None`` when it fits no guarantee.
+SegmentMemo = dict[tuple[int, bytes], "tuple[np.ndarray, float] | None"]
+#: Segments a memo keeps (a few MB at most); later ones are fitted each time.
+MEMO_SIZE = 4096
+
+
 @dataclass(frozen=True)
 class Ramps:
     """Continuous curvature for every segment: the sharpness bound and the car.
@@ -188,6 +195,7 @@ def build_path(
     sample_spacing: float = 0.25,
     raw_spacing: float = 1.0,
     ramps: Ramps | None = None,
+    memo: SegmentMemo | None = None,
 ) -> BuiltPath | None:
     """The checked path of a connection, or ``None`` when a segment fits no guarantee.
 
@@ -209,6 +217,12 @@ def build_path(
     check_spacing, sample_spacing, raw_spacing : float
         Spacing of the tested poses, of the returned rows, and of the raw path
         given to the smoothing.
+    ramps : Ramps or None
+        Steering ramps for every segment (then ``smoothing`` is not used).
+    memo : SegmentMemo or None
+        The checked ramped segments of earlier calls with the same other
+        arguments: connections that share a stretch (a search's tree, a turn's
+        moves) fit and check its segments once.
 
     Returns
     -------
@@ -223,10 +237,18 @@ def build_path(
     for seg in segs:
         rows = np.zeros((0, 4))
         if ramps is not None:
-            found = _ramped(seg, ramps, sample_spacing)
-            if found is None or not _segment_ok(
-                found[0], checker, clearance, kappa_max, check_spacing
-            ):
+            key = (seg.gear, seg.rows.tobytes())
+            if memo is not None and key in memo:
+                found = memo[key]
+            else:
+                found = _ramped(seg, ramps, sample_spacing)
+                if found is not None and not _segment_ok(
+                    found[0], checker, clearance, kappa_max, check_spacing
+                ):
+                    found = None
+                if memo is not None and len(memo) < MEMO_SIZE:
+                    memo[key] = found
+            if found is None:
                 return None
             ramped, sharp = found
             sharpness = max(sharpness, sharp)

@@ -35,7 +35,7 @@ from rrtdrive.planning.hybrid.heuristic import (
     Heuristic,
     HolonomicField,
 )
-from rrtdrive.planning.hybrid.path import BuiltPath, Ramps, build_path
+from rrtdrive.planning.hybrid.path import BuiltPath, Ramps, SegmentMemo, build_path
 from rrtdrive.planning.hybrid.primitives import PrimitiveSet, primitive_sets
 from rrtdrive.planning.hybrid.search import (
     HybridSearch,
@@ -292,10 +292,12 @@ def search_at_resolution(
         # (a validated copy: built only where it is used, not for the default ramps).
         post = dataclasses.replace(smoothing, clearance=clearance, kappa_max=kappa_max)
 
+    memo: SegmentMemo = {}
+
     def accept(pieces: list[Piece]) -> BuiltPath | None:
         return build_path(
             pieces, problem.checker, post, config.arc_fallback, recheck_clearance, kappa_max,
-            config.check_spacing, config.sample_spacing, ramps=ramps,
+            config.check_spacing, config.sample_spacing, ramps=ramps, memo=memo,
         )  # fmt: skip
 
     to_goal = HolonomicField.towards(grid, goal)
