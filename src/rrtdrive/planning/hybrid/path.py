@@ -184,6 +184,41 @@ def _ramped(seg: GearSegment, ramps: Ramps, spacing: float) -> tuple[np.ndarray,
     return None if sharp > ramps.sharpness else (rows, sharp)
 
 
+def _fitted(
+    segs: Sequence[GearSegment],
+    ramps: Ramps,
+    checker: CollisionChecker,
+    clearance: float,
+    kappa_max: float,
+    check_spacing: float,
+    sample_spacing: float,
+    memo: SegmentMemo | None,
+) -> list[tuple[np.ndarray, float]] | None:
+    """Each segment's checked ramped rows and sharpness, or ``None`` when one fails.
+
+    Last segment first: a connection's new part is its end (a search's shot after
+    the tree path, a turn's moves), where it fails if it fails; the shared stretch
+    before it is most often in the memo.
+    """
+    out: list[tuple[np.ndarray, float]] = []
+    for seg in reversed(segs):
+        key = (seg.gear, seg.rows.tobytes())
+        if memo is not None and key in memo:
+            found = memo[key]
+        else:
+            found = _ramped(seg, ramps, sample_spacing)
+            if found is not None and not _segment_ok(
+                found[0], checker, clearance, kappa_max, check_spacing
+            ):
+                found = None
+            if memo is not None and len(memo) < MEMO_SIZE:
+                memo[key] = found
+        if found is None:
+            return None
+        out.append(found)
+    return out[::-1]
+
+
 def build_path(
     pieces: Sequence[Piece],
     checker: CollisionChecker,
@@ -229,28 +264,22 @@ def build_path(
     BuiltPath or None
     """
     segs = gear_segments(pieces)
+    fitted: list[tuple[np.ndarray, float]] = []
+    if ramps is not None:
+        found = _fitted(segs, ramps, checker, clearance, kappa_max, check_spacing,
+                        sample_spacing, memo)  # fmt: skip
+        if found is None:
+            return None
+        fitted = found
     out_rows: list[np.ndarray] = []
     waypoints: list[np.ndarray] = []
     smoothed = 0
     message = ""
     sharpness = 0.0
-    for seg in segs:
+    for i, seg in enumerate(segs):
         rows = np.zeros((0, 4))
         if ramps is not None:
-            key = (seg.gear, seg.rows.tobytes())
-            if memo is not None and key in memo:
-                found = memo[key]
-            else:
-                found = _ramped(seg, ramps, sample_spacing)
-                if found is not None and not _segment_ok(
-                    found[0], checker, clearance, kappa_max, check_spacing
-                ):
-                    found = None
-                if memo is not None and len(memo) < MEMO_SIZE:
-                    memo[key] = found
-            if found is None:
-                return None
-            ramped, sharp = found
+            ramped, sharp = fitted[i]
             sharpness = max(sharpness, sharp)
             smoothed += 1
             waypoints.append(ramped[[0, -1], :2])
