@@ -19,12 +19,15 @@ from rrtdrive.planning.base import PlanningProblem
 from rrtdrive.planning.diagnosis import DiagnosisKind, diagnose, street_width
 from rrtdrive.planning.dubins import dubins_paths
 from rrtdrive.tight_maps import (
+    DEAD_END_TURN,
+    DEAD_END_WIDTH,
     GARAGE_BAY_WIDTH,
     GARAGE_EMPTY_BAYS,
     KERB_GAP_FACTOR,
     REVERSE_BAY_WIDTH,
     STREET_WIDTH,
     TIGHT_MAPS,
+    full_lock_move,
     garage_goal,
 )
 from rrtdrive.types import Path, Pose, VehicleParams
@@ -100,6 +103,21 @@ def reference(name: str):
         out = drive(g, [(0.0, 6.0 - g.y), (-1.0 / R, R * math.pi / 2)])
         cusp = out[-1]
         return m, [(drive(s, [(0.0, cusp[0] - s.x)]), 1), (out[::-1], -1)]
+    if name == "dead_end":
+        # Full-lock moves, the gears alternating (each reverse one driven forward from
+        # its end, with its nose yaws, and the rows turned round), 2 m on to the goal.
+        segments, pose = [], s
+        for gear, degrees in DEAD_END_TURN:
+            end = full_lock_move(pose, gear, degrees)
+            arc = R * math.radians(degrees)
+            if gear > 0:
+                rows = drive(pose, [(1.0 / R, arc), (0.0, 2.0)] if end.yaw >= math.pi - 1e-12
+                             else [(1.0 / R, arc)])  # fmt: skip
+            else:
+                rows = drive(end, [(-1.0 / R, arc)])[::-1]
+            segments.append((rows, gear))
+            pose = end
+        return m, segments
     raise KeyError(name)
 
 
@@ -155,6 +173,19 @@ def test_street_and_gap_widths_against_shapely():
     assert left.polygon().distance(right.polygon()) == pytest.approx(REVERSE_BAY_WIDTH)
 
 
+def test_dead_end_geometry_against_shapely():
+    """The street is 7.5 m between its walls, closed at both ends; the turn is 180 degrees."""
+    m = builtin_map("dead_end")
+    south, north, west, east = (o.polygon() for o in m.obstacles)
+    assert south.distance(north) == pytest.approx(DEAD_END_WIDTH, abs=1e-9)
+    street = shapely.box(0.0, 0.0, 30.0, DEAD_END_WIDTH)
+    walls = shapely.union_all([south, north, west, east])
+    # Walled all round: the street's boundary lies within the walls.
+    assert walls.buffer(1e-9).contains(street.exterior)
+    assert sum(d for _, d in DEAD_END_TURN) == pytest.approx(180.0)
+    assert m.goal.yaw == pytest.approx(math.pi) and m.goal.y > m.start.y
+
+
 def test_diagnosis_on_the_tight_maps_names_their_constraint():
     """Forward only: the bay needs reverse, the kerb gap gear changes, the bulb a wider place."""
     found = {n: diagnose(PlanningProblem.from_map(builtin_map(n))) for n in TIGHT_MAP_NAMES}
@@ -162,3 +193,5 @@ def test_diagnosis_on_the_tight_maps_names_their_constraint():
     assert found["kerbside"].kind is DiagnosisKind.BOXED_IN
     assert found["turning_bulb"].kind is DiagnosisKind.U_TURN
     assert "wider place" in found["turning_bulb"].message
+    assert found["dead_end"].kind is DiagnosisKind.U_TURN
+    assert "7.5 m wide" in found["dead_end"].message and "--reverse" in found["dead_end"].message

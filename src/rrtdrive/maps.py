@@ -443,7 +443,7 @@ BUILTIN_MAPS: dict[str, Callable[[], Map]] = {
 }
 
 #: Tight maps shipped as files in ``data/maps/`` (:mod:`rrtdrive.tight_maps` writes them).
-TIGHT_MAP_NAMES = ("garage", "turning_bulb", "kerbside", "reverse_bay")
+TIGHT_MAP_NAMES = ("garage", "turning_bulb", "kerbside", "reverse_bay", "dead_end")
 _DATA_MAPS = FsPath(__file__).resolve().parent / "data" / "maps"
 
 

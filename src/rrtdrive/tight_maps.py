@@ -15,6 +15,9 @@ like any built-in. The geometry, for the paper's car (4.30 m x 1.80 m, r_min 6 m
   lengths; the goal is parallel-parked in the gap (0.3 m from the kerb).
 - ``reverse_bay``: a walled bay 3.0 m wide off an aisle, the goal facing out of
   it (its rear 0.5 m from the back wall), so it is entered in reverse.
+- ``dead_end``: a street :data:`DEAD_END_WIDTH` wide, walled at both ends, far too
+  narrow for a U-turn; the car turns round in it. The goal faces back, where the
+  full-lock moves :data:`DEAD_END_TURN` from the start and 2 m on leave the car.
 """
 
 from __future__ import annotations
@@ -41,6 +44,9 @@ __all__ = [
     "turning_bulb_map",
     "kerbside_map",
     "reverse_bay_map",
+    "DEAD_END_WIDTH",
+    "DEAD_END_TURN",
+    "dead_end_map",
     "write_tight_maps",
 ]
 
@@ -202,12 +208,51 @@ def reverse_bay_map() -> Map:
     )
 
 
+# ----------------------------------------------------------------------------- dead end
+
+DEAD_END_WIDTH = 7.5
+DEAD_END_LENGTH = 30.0
+#: A hand-made turn round: full-lock moves ``(gear, degrees)``, left lock forward and
+#: right lock in reverse (the heading turns left in both), 180 degrees in all; each
+#: move as long as the body keeps 0.2 m from the walls, to a tenth of a degree.
+DEAD_END_TURN = ((1, 50.8), (-1, 30.2), (1, 24.4), (-1, 25.0), (1, 49.6))
+
+
+def full_lock_move(pose: Pose, gear: int, degrees: float) -> Pose:
+    """Where a full-lock move of ``degrees`` leaves the car: left lock forward, right in reverse."""
+    kappa = gear / _CAR.min_turning_radius
+    yaw = pose.yaw + math.radians(degrees)  # the heading turns left in both gears
+    return Pose(
+        pose.x + (math.sin(yaw) - math.sin(pose.yaw)) / kappa,
+        pose.y - (math.cos(yaw) - math.cos(pose.yaw)) / kappa,
+        yaw,
+    )
+
+
+def dead_end_map() -> Map:
+    """A 7.5 m street walled at both ends: turn round in it (a U-turn needs about 14 m)."""
+    w, length = DEAD_END_WIDTH, DEAD_END_LENGTH
+    obstacles = (
+        Obstacle((length / 2, -_WALL / 2), (length + 2 * _WALL, _WALL)),
+        Obstacle((length / 2, w + _WALL / 2), (length + 2 * _WALL, _WALL)),
+        Obstacle((-_WALL / 2, w / 2), (_WALL, w)),
+        Obstacle((length + _WALL / 2, w / 2), (_WALL, w)),
+    )
+    start = Pose(8.0, w / 4, 0.0)
+    pose = start
+    for gear, degrees in DEAD_END_TURN:
+        pose = full_lock_move(pose, gear, degrees)
+    goal = Pose(pose.x - 2.0, pose.y, math.pi)
+    return Map("dead_end", (-_WALL, -_WALL, length + _WALL, w + _WALL), obstacles, start, goal)
+
+
 #: The tight maps by name, as shipped in ``rrtdrive/data/maps/``.
 TIGHT_MAPS: dict[str, Callable[[], Map]] = {
     "garage": garage_map,
     "turning_bulb": turning_bulb_map,
     "kerbside": kerbside_map,
     "reverse_bay": reverse_bay_map,
+    "dead_end": dead_end_map,
 }
 
 
