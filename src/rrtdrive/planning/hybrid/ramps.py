@@ -26,6 +26,8 @@ from collections.abc import Callable
 import numpy as np
 
 from rrtdrive.geometry import wrap_angle
+from rrtdrive.planning.hybrid.bounded_step import RIDGE as _RIDGE  # noqa: F401 (tests read it)
+from rrtdrive.planning.hybrid.bounded_step import bounded_step as _bounded_step
 
 __all__ = ["ramped_segment"]
 
@@ -406,47 +408,6 @@ def _apart_and_within(joints: np.ndarray, jumps: np.ndarray, rate: float) -> boo
                 return False
     # A ramp that covers no probe point counts 0 in the probe test: also within.
     return bool((np.abs(jumps / widths) <= rate * (1.0 + 1e-9)).all())
-
-
-#: The regularisation of the step's normal matrix.
-_RIDGE = 1e-12 * np.eye(3)
-
-
-def _bounded_step(
-    jac: np.ndarray,
-    err: np.ndarray,
-    p: np.ndarray,
-    weight: np.ndarray,
-    lower: np.ndarray,
-    upper: np.ndarray,
-) -> np.ndarray | None:
-    """The least-change Gauss-Newton step, with parameters at a bound held when pushed out.
-
-    ``lower`` and ``upper`` bound ``p`` (lengths >= 0, angles within the steering limit).
-    """
-    free = weight.copy()
-    jt = jac.T
-    rhs = -err
-    # The bounds test on Python floats (a handful of parameters: numpy's per-call cost is
-    # most of the work); p + step, the comparisons and NaN's falsity are the same there.
-    p_l, lower_l, upper_l = p.tolist(), lower.tolist(), upper.tolist()
-    for _ in range(len(p) + 1):
-        jw = jac * free  # free[None, :] broadcast
-        try:
-            lam = np.linalg.solve(jw @ jt + _RIDGE, rhs)
-        except np.linalg.LinAlgError:
-            return None
-        step = free * (jt @ lam)
-        moves = zip(p_l, step.tolist(), lower_l, upper_l, free.tolist(), strict=True)
-        out = [
-            i for i, (x, d, lo, hi, f) in enumerate(moves)
-            if f > 0 and ((x + d < lo and d < 0) or (x + d > hi and d > 0))
-        ]  # fmt: skip
-        if not out:
-            return step
-        # Hold those that would cross at their bound (moved exactly onto it next round).
-        free[out] = 0.0
-    return None
 
 
 def ramped_segment(
