@@ -1,7 +1,7 @@
 """Drive across cusps in highway-env: Hybrid A* plans on the tight maps, every controller.
 
 For each built-in tight map (``reverse_bay``, ``turning_bulb``, ``kerbside``,
-``garage``) the Hybrid A* planner plans with gear changes allowed (seed 0; the
+``garage``, ``dead_end``) the Hybrid A* planner plans with gear changes allowed (seed 0; the
 search is deterministic), and each controller drives the plan through highway-env
 (``run_episode`` on a ``CustomTask``) with an instant and a 0.4 rad/s steering
 actuator. Prints a markdown table of the evaluators' figures and writes it, with
@@ -30,7 +30,7 @@ from rrtdrive.sim.runner import run_episode
 from rrtdrive.sim.tasks import CustomTask
 from rrtdrive.types import Budget, VehicleParams
 
-MAPS = ("reverse_bay", "turning_bulb", "kerbside", "garage")
+MAPS = ("reverse_bay", "turning_bulb", "kerbside", "garage", "dead_end")
 CONTROLLERS = ("pure-pursuit", "stanley", "lqr")
 RATES = (None, 0.4)
 COLUMNS = (
