@@ -195,3 +195,42 @@ def test_diagnosis_on_the_tight_maps_names_their_constraint():
     assert "wider place" in found["turning_bulb"].message
     assert found["dead_end"].kind is DiagnosisKind.U_TURN
     assert "7.5 m wide" in found["dead_end"].message and "--reverse" in found["dead_end"].message
+
+
+def test_a_kerbside_gap_of_1_4_car_lengths_parks_keeping_less_clearance():
+    """Proven out of reach at 0.15 m, the 6 m gap is solved keeping 0.10 m (the snug search).
+
+    Before session 13 both planners answered "no path" (the last resort kept 0.05 m at
+    0.5 m / 1 m steps only). The path passes the independent check with the sharpness
+    bound, and its body keeps 0.10 m from the parked cars and the kerb (shapely): closest
+    to the kerb, which the car's rear swings near on the way in.
+    """
+    import shapely.affinity
+
+    from rrtdrive.planning import make_planner
+    from rrtdrive.tight_maps import kerbside_map
+    from rrtdrive.types import Budget
+
+    m = kerbside_map(1.4)
+    problem = PlanningProblem.from_map(m, reverse=True)
+    res = make_planner("hybrid-a-star").solve(problem, np.random.default_rng(0), Budget())
+    assert res.success, res.message
+    assert "keeping only 0.10 m body clearance (none keeps 0.15 m)" in res.message
+    assert res.stats["body_clearance_m"] == pytest.approx(0.10)
+    assert verify_path(m, res.path, max_sharpness=0.2).ok
+    cars = shapely.union_all([o.polygon() for o in m.obstacles])
+    kerb = shapely.box(*m.bounds).exterior
+    body = shapely.box(-CAR.rear_overhang, -CAR.width / 2, CAR.length - CAR.rear_overhang,
+                       CAR.width / 2)  # fmt: skip
+    gaps = [
+        shapely.affinity.translate(
+            shapely.affinity.rotate(body, yaw, origin=(0, 0), use_radians=True), x, y
+        ).distance(shapely.union(cars, kerb))
+        for x, y, yaw in res.path.samples[:, :3]
+    ]
+    assert 0.10 - 0.01 <= min(gaps) < 0.15  # rows 0.25 m apart; the planner checks every 0.1 m
+    # Forward only it stays out of reach, with the constraint named.
+    fwd = make_planner("hybrid-a-star").solve(
+        PlanningProblem.from_map(m), np.random.default_rng(0), Budget()
+    )
+    assert not fwd.success

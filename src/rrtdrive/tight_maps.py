@@ -154,9 +154,9 @@ KERB_STREET = 8.0
 KERB_REAR_ROOM = 0.3
 
 
-def kerbside_map() -> Map:
-    """Cars along the kerb (y = 0) with one gap of 1.6 car lengths; park in it."""
-    gap = KERB_GAP_FACTOR * _CAR.length
+def kerbside_map(gap_factor: float = KERB_GAP_FACTOR) -> Map:
+    """Cars along the kerb (y = 0) with one gap of ``gap_factor`` car lengths; park in it."""
+    gap = gap_factor * _CAR.length
     pitch = _CAR.length + 1.0
     y = KERB_OFFSET + _CAR.width / 2
     gap_start = 30.0  # front bumper of the car behind the gap

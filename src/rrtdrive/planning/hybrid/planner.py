@@ -38,7 +38,7 @@ def answer_stats(answer: HybridAnswer, wheelbase: float) -> dict[str, float]:
         "connections": float(o.connections),
         "refinements": float(answer.refinements),
         "coarse_search": float(answer.stage == "coarse"),
-        "tight_search": float(answer.stage == "tight"),
+        "tight_search": float(answer.stage in ("snug", "tight")),  # less clearance kept
         "wide_search": float(answer.stage == "wide"),
         "turn_moves": float(o.turn_moves),
         "body_clearance_m": float(answer.clearance),

@@ -13,7 +13,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,10 +42,11 @@ class HybridAnswer:
     start first (the one from the goal second, when the query turned to it);
     ``refinements`` counts the finer searches run after the first, ``stage`` names
     the last search (``"first"``, ``"fine"`` (:attr:`HybridConfig.refinements`),
-    ``"coarse"`` (:attr:`HybridConfig.coarse_after`), ``"tight"`` (``min_clearance``)
-    or ``"wide"`` (``wide_radius_factor``)), ``clearance`` is the body clearance the
-    last search kept (less than ``body_clearance`` after
-    :attr:`HybridConfig.min_clearance`'s search), and ``note`` says, for a solved
+    ``"coarse"`` (:attr:`HybridConfig.coarse_after`), ``"snug"`` (half-way from
+    ``body_clearance`` to ``min_clearance``, at the finest resolution), ``"tight"``
+    (``min_clearance``) or ``"wide"`` (``wide_radius_factor``)), ``clearance`` is the
+    body clearance the last search kept (less than ``body_clearance`` after the snug
+    and tight searches), and ``note`` says, for a solved
     query, at which resolution and why (empty when the first search solved it).
     """
 
@@ -127,6 +128,11 @@ class _Stage:
     share: float = 1.0
 
 
+#: The searches that keep less than the usual body clearance: ``"snug"`` (half-way to
+#: ``min_clearance``, at the finest resolution) and ``"tight"`` (``min_clearance``).
+_SNUGGER = ("snug", "tight")
+
+
 @functools.lru_cache(maxsize=16)  # each stage's config validated once, not per query
 def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
     """The searches that may follow the first one, in order (:func:`hybrid_query`).
@@ -138,11 +144,13 @@ def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
     --------
     >>> ladder = _ladder(HybridConfig())
     >>> [s.name for s in ladder]
-    ['coarse', 'middle', 'tight', 'fine', 'tight', 'wide']
+    ['coarse', 'middle', 'tight', 'fine', 'snug', 'tight', 'wide']
     >>> [s.config.xy_resolution for s in ladder]
-    [2.0, 1.0, 1.0, 0.25, 0.5, 0.5]
+    [2.0, 1.0, 1.0, 0.25, 0.25, 0.5, 0.5]
+    >>> [round(s.config.body_clearance, 3) for s in ladder]
+    [0.15, 0.15, 0.05, 0.15, 0.1, 0.05, 0.15]
     >>> [s.share for s in ladder]
-    [1.0, 0.5, 1.0, 0.5, 1.0, 1.0]
+    [1.0, 0.5, 1.0, 0.5, 0.5, 1.0, 1.0]
     """
     stages = []
     if config.coarsens:
@@ -172,6 +180,14 @@ def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
     # rejected (the ramps of full-lock words need steering room: turn a little wider);
     # also after a finer search that spent its share without either.
     if config.min_clearance < config.body_clearance:
+        if fine is not config:
+            # First half-way, at the finest resolution: a kerbside gap of 1.4 car lengths
+            # is proven out of reach at 0.15 m; its way in keeps 0.10 m, with short moves
+            # (0.5 m steps) that the 0.5 m / 1 m steps of the last one do not take, and
+            # 0.05 m there has every ramped connection cut a corner (session 13).
+            between = 0.5 * (config.body_clearance + config.min_clearance)
+            snug = dataclasses.replace(fine.tightened(), body_clearance=between)
+            stages.append(_Stage("snug", snug, PROOFS, PROOFS, config.refine_share))
         stages.append(_Stage("tight", config.tightened(), PROOFS, (*PROOFS, "expansions")))
     if config.wide_radius_factor > config.radius_factor:
         stages.append(_Stage("wide", config.widened(), ("rejected",), ("rejected", "expansions")))
@@ -249,23 +265,35 @@ def hybrid_query(
     path, outcome, trees = found
     reason = outcome.reason
     usual = query_clearance(problem, config.body_clearance, have)
-    kept = clearance = query_clearance(problem, cfg.body_clearance, have)
-    before = tried[-2][1].reason if len(tried) > 1 else ""
+    clearance = query_clearance(problem, cfg.body_clearance, have)
+
+    def how_of(c: HybridConfig) -> str:
+        """How a last-resort search differed from the others, for the messages."""
+        if c.body_clearance < config.body_clearance:
+            keeps = query_clearance(problem, c.body_clearance, have)
+            return f"keeping only {keeps:.2f} m body clearance"
+        if c.radius_factor > config.radius_factor:
+            return f"turning with radius {c.radius_factor:g} / kappa_max"
+        return ""
+
+    # The searches at the usual clearance and radius come first; the last resorts follow.
+    usual_count = max(k + 1 for k, (c, _, _) in enumerate(tried) if not how_of(c) or k == 0)
+    base = tried[usual_count - 1][1].reason
     # After a first search cut short at its share, nothing the later ones find out is a
     # proof: the first resolution's search did not finish.
     coarse_branch = first == "expansions" and len(tried) > 1
     if coarse_branch and path is None and reason in _REFINE_ON:
         reason = "expansions"
     if (
-        stage == "tight"
+        stage in _SNUGGER
         and not coarse_branch
         and path is None
         and reason != "time"
-        and (reason not in PROOFS or before not in PROOFS)
+        and (reason not in PROOFS or base not in PROOFS)
     ):
         # Cut short keeping less clearance, a proof for the usual clearance stands; a
         # finer search cut short by its share proved nothing.
-        reason = before if before in PROOFS else "expansions"
+        reason = base if base in PROOFS else "expansions"
         clearance = usual
     if stage == "wide" and path is None and reason != "time":
         # Wider turns prove nothing about the car's own: the rejections stand.
@@ -276,20 +304,17 @@ def hybrid_query(
     earlier = tried[:-1]
     answer = functools.partial(
         HybridAnswer, outcome=total, trees=trees,
-        refinements=sum(c.xy_resolution < config.xy_resolution for c, _, _ in tried),
+        refinements=sum(c.xy_resolution < config.xy_resolution and not how_of(c)
+                        for c, _, _ in tried),
         stage=stage, clearance=clearance,
     )  # fmt: skip
-    # How the last-resort search differed from the others, for its messages.
-    how = {
-        "tight": f"keeping only {kept:.2f} m body clearance",
-        "wide": f"turning with radius {cfg.radius_factor:g} / kappa_max",
-    }.get(stage, "")
+    how = how_of(cfg) if stage in (*_SNUGGER, "wide") else ""
     if path is not None:
         note = f" {how}" if how else ""
-        if stage == "tight" and before in PROOFS and not coarse_branch:
+        if stage in _SNUGGER and base in PROOFS and not coarse_branch:
             note += f" (none keeps {usual:.2f} m)"
         if earlier:
-            note += f" at {_resolution(cfg)} resolution ({_earlier_note(earlier)})"
+            note += f" at {_resolution(cfg)} resolution ({_earlier_note(earlier, how_of)})"
         return answer(path=path, message="", note=note)
     if coarse_branch:
         steps = [
@@ -319,17 +344,16 @@ def hybrid_query(
             + f" (a coarser search proves nothing; {tail})"
         )
         return answer(path=None, message=message)
-    lead, earlier = tried[-1], tried[:-1]
-    if how:
-        # Lead with the finest resolution's ending at the usual clearance and radius.
-        lead, earlier = tried[-2], tried[:-2]
-    lead_cfg, lead_outcome, allowed = lead
+    # Lead with the finest resolution's ending at the usual clearance and radius.
+    lead_cfg, lead_outcome, allowed = tried[usual_count - 1]
     message = _failure_message(lead_outcome, lead_cfg, budget, reverse, allowed)
-    if earlier:
-        message += f"; {_earlier_note(earlier)}"
-    if how:
-        too = " too" if stage == "tight" and outcome.reason in PROOFS and before in PROOFS else ""
-        message += f"; {how}, at {_resolution(cfg)} the search {_why(outcome, '')}{too}"
+    if usual_count > 1:
+        message += f"; {_earlier_note(tried[: usual_count - 1], how_of)}"
+    for k in range(usual_count, len(tried)):
+        c, o, _ = tried[k]
+        snug = c.body_clearance < config.body_clearance
+        too = " too" if snug and o.reason in PROOFS and tried[k - 1][1].reason in PROOFS else ""
+        message += f"; {how_of(c)}, at {_resolution(c)} the search {_why(o, '')}{too}"
     return answer(path=None, message=message)
 
 
@@ -342,10 +366,18 @@ def _resolution(cfg: HybridConfig) -> str:
     return f"{cfg.xy_resolution:g} m / {np.degrees(cfg.yaw_resolution):g} deg"
 
 
-def _earlier_note(earlier: Sequence[tuple[HybridConfig, SearchOutcome, int | None]]) -> str:
-    """What the searches before the last one ended with, for a message."""
+def _earlier_note(
+    earlier: Sequence[tuple[HybridConfig, SearchOutcome, int | None]],
+    how_of: Callable[[HybridConfig], str] = lambda c: "",
+) -> str:
+    """What the searches before the last one ended with, for a message.
+
+    ``how_of(config)``: how a last-resort search differed ('' for the others).
+    """
     parts = [
-        f"at {_resolution(c)} / {c.step:g} m steps the search {_why(o, 'its share of ')}"
+        f"at {_resolution(c)} / {c.step:g} m steps"
+        + (f" {how_of(c)}" if how_of(c) else "")
+        + f" the search {_why(o, 'its share of ')}"
         for c, o, _ in earlier
     ]
     return "before that, " + "; ".join(parts)
