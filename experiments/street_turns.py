@@ -69,7 +69,10 @@ def ours_row(m: Map, planner: str, seed: int, max_time: float) -> dict[str, Any]
     row = {"status": res.status.value, "solved": res.success, "time_s": res.planning_time_s,
            "iterations": res.iterations}  # fmt: skip
     if res.success:
+        stats = res.stats
         row |= {
+            # The body clearance the path's search kept (the default's escalation prefixes it).
+            "clearance_m": stats.get("body_clearance_m", stats.get("hybrid_body_clearance_m")),
             "length_m": res.path.length,
             "cusps": len(res.path.cusps),
             **cov._check(m, res.path),

@@ -1,0 +1,121 @@
+"""Parallel parking into kerbside gaps of several lengths: ours with reverse against OMPL's.
+
+Usage (OMPL lives in the lead's venv only; without it its rows are skipped)::
+
+    python experiments/kerb_gaps.py --out results/kerb_gaps
+
+The built-in ``kerbside`` map (:func:`rrtdrive.tight_maps.kerbside_map`) with its gap
+``F`` car lengths long, for each ``F`` of ``--factors``: cars parked along the kerb, the
+goal parallel-parked in the gap 0.3 m from its rear car and from the kerb. For each
+factor and seed (``--seeds``), in one run: the default planner and ``hybrid-a-star``,
+both with ``reverse``, on the counted 20 000-iteration budget (``--max-time`` is the
+cap), and OMPL's Reeds-Shepp RRTConnect with our exact body test as validity checker
+(``--ompl-time``), as ``experiments/street_turns.py`` plans them; every path judged by
+``verify_path`` with the 0.2 rad/m sharpness bound (``verified``) and without it
+(``any sharpness``). Our rows also give the body clearance the returned path's search
+kept (``stats["body_clearance_m"]``: 0.15 usually, less after the snug or tight search).
+
+Writes ``OUT/kerb_gaps.{json,md}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+from typing import Any
+
+sys.path.insert(0, os.path.dirname(__file__))
+import coverage as cov  # noqa: E402  (the sibling scripts)
+import street_turns as st  # noqa: E402
+from results_io import command, machine, numbers_above, write_results  # noqa: E402
+
+from rrtdrive.tight_maps import kerbside_map  # noqa: E402
+
+GEARED = ("improved-rrt-connect", "hybrid-a-star")
+
+
+def _median(rows: list[dict[str, Any]], key: str, scale: float = 1.0, fmt: str = "{:.1f}") -> str:
+    values = [r[key] * scale for r in rows if r["solved"] and r.get(key) is not None]
+    return fmt.format(statistics.median(values)) if values else "-"
+
+
+def report(payload: dict[str, Any]) -> str:
+    """The markdown page of a payload."""
+    lines = [
+        "# Parallel parking into kerbside gaps: ours with reverse and OMPL's RS RRTConnect",
+        "",
+        f"Command: `{payload['command']}`  ",
+        f"{payload['machine']}; wall time {payload['wall_time_s']:.0f} s; load at the start "
+        f"{payload['load']}. The `kerbside` map with its gap F car lengths (4.3 m) long; "
+        f"{payload['seeds']} seeds; ours 20 000 iterations (cap {payload['max_time']:g} s), "
+        f"OMPL {payload['ompl_time']:g} s.",
+        "",
+        "| gap [car lengths] | planner | solved | verified | any sharpness | median time "
+        "[ms] | median length [m] | median cusps | clearance kept [m] | outcomes |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for factor, by_planner in payload["rows"].items():
+        for planner, rows in by_planner.items():
+            solved = [r for r in rows if r["solved"]]
+            cusps = statistics.median(r["cusps"] for r in solved) if solved else "-"
+            outcomes: dict[str, int] = {}
+            for r in rows:
+                key = r.get("status", "solved" if r["solved"] else "no_path_in_budget")
+                outcomes[key] = outcomes.get(key, 0) + 1
+            lines.append(
+                f"| {factor} | {planner} | {len(solved)}/{len(rows)} | "
+                f"{sum(r.get('verified', False) for r in rows)} | "
+                f"{sum(r.get('verified_any_sharpness', False) for r in rows)} | "
+                f"{_median(rows, 'time_s', 1000.0)} | {_median(rows, 'length_m')} | {cusps} | "
+                f"{_median(rows, 'clearance_m', fmt='{:.2f}')} | "
+                + ", ".join(f"{k} {v}" for k, v in sorted(outcomes.items())) + " |"
+            )
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--factors", default="1.3,1.4,1.5,1.6,1.8,2.0,2.5",
+                    help="gap lengths in car lengths (default 1.3,...,2.5)")  # fmt: skip
+    ap.add_argument("--seeds", type=int, default=3, help="seeds per gap (default 3)")
+    ap.add_argument("--max-time", type=float, default=10.0, help="our wall-clock cap, s")
+    ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time, s")
+    ap.add_argument("--out", default="results/kerb_gaps")
+    args = ap.parse_args(argv)
+    try:
+        factors = numbers_above(args.factors, "--factors", floor=1.0)
+    except ValueError as err:
+        ap.error(str(err))
+    if args.seeds < 1 or args.max_time <= 0 or args.ompl_time <= 0:
+        ap.error("--seeds must be >= 1, --max-time and --ompl-time > 0")
+    have_ompl = cov.availability(st.OMPL_NAME) is None
+    t0 = time.perf_counter()
+    load = f"{os.getloadavg()[0]:.1f}"
+    rows: dict[str, dict[str, list[dict[str, Any]]]] = {}
+    for f in factors:
+        m = kerbside_map(f)
+        by_planner = rows[f"{f:g}"] = {}
+        for planner in GEARED:
+            print(f"gap {f:g}: {planner} ...", file=sys.stderr, flush=True)
+            by_planner[f"{planner}+reverse"] = [
+                st.ours_row(m, planner, s, args.max_time) for s in range(args.seeds)
+            ]
+        if have_ompl:
+            print(f"gap {f:g}: {st.OMPL_NAME} ...", file=sys.stderr, flush=True)
+            by_planner[st.OMPL_NAME] = [
+                st.ompl_row(m, s, args.ompl_time) for s in range(args.seeds)
+            ]
+    payload = {
+        "command": command("kerb_gaps.py", argv), "seeds": args.seeds,
+        "max_time": args.max_time, "ompl_time": args.ompl_time, "load": load,
+        "machine": machine(), "wall_time_s": time.perf_counter() - t0, "rows": rows,
+    }  # fmt: skip
+    print(write_results(args.out, "kerb_gaps", payload, report))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
