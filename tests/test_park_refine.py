@@ -86,12 +86,21 @@ def test_reverse_in_bay_with_rejected_connections_is_solved_finer() -> None:
     )
     assert coarse.status is PlanStatus.NO_PATH_IN_BUDGET
     assert "could not be made drivable" in coarse.message
-    res = HybridAStar(**before).solve(problem, np.random.default_rng(0), BUDGET)
+    res = HybridAStar(wide_radius_factor=1.02, **before).solve(
+        problem, np.random.default_rng(0), BUDGET
+    )
     assert res.success, res.message
     assert res.stats["refinements"] == 1
     assert "had every goal connection rejected" in res.message
     assert res.path.samples[-1, 4] == -1.0  # backed into the bay
     _assert_guarantees(task, res.path, problem)
+    # By default the wider-turning search comes before the finer one (session 13).
+    wide = HybridAStar(**before).solve(problem, np.random.default_rng(0), BUDGET)
+    assert wide.success, wide.message
+    assert wide.stats["wide_search"] == 1.0 and wide.stats["refinements"] == 0
+    assert "turning with radius 1.1 / kappa_max at 0.5 m / 5 deg resolution" in wide.message
+    assert wide.path.samples[-1, 4] == -1.0
+    _assert_guarantees(task, wide.path, problem)
 
 
 def test_refinement_shares_the_counted_budget() -> None:
