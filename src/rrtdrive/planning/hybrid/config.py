@@ -135,9 +135,9 @@ class HybridConfig:
         0.3 m deep behind it by 1 m steps) and are at 0.25 m / 2.5 deg / 0.5 m.
         A failure is "proven unreachable" only at the finest resolution tried.
     refine_share : float
-        Share of the expansions left that each finer search may spend when a last
-        resort (the tight or the wide search) may still follow it, in ``(0, 1]``; the
-        last resort gets the rest. Default 0.5: forward-only random start 34 of
+        Share of the expansions left that each search of the ladder may spend when a
+        later one (a finer, the snug or the tight search) may still follow it, in
+        ``(0, 1]``; the last one gets the rest. Default 0.5: forward-only random start 34 of
         ``coverage.py --count 100`` (0.152 m clearance at the pose) has its first
         search run out of states in 3 expansions; the finer one keeping 0.15 m then
         needs 34 776 expansions, the tight one (0.05 m) 3 626, so with all the rest
@@ -159,15 +159,19 @@ class HybridConfig:
         at that resolution spend the rest.
     min_clearance : float
         When the searches keeping ``body_clearance`` run out of states (a proof for
-        paths that keep it), one more search at the first resolution keeps only this
-        much (``>= body_clearance``: never). A start pose with room around it but
+        paths that keep it), a search at the finest resolution keeps half-way between
+        the two (the snug one; a kerbside gap of 1.4 car lengths parks keeping 0.10 m)
+        and then one at the first resolution keeps only this much
+        (``>= body_clearance``: never). A start pose with room around it but
         less ahead needs it: random start 7 of ``experiments/coverage.py`` (0.20 m
         clearance) cannot drive forward keeping 0.15 m, or 0.10 m, and can keeping
         0.05 m (230 expansions); OMPL's planners keep none.
     wide_radius_factor : float
-        When the searches end with every goal connection rejected (``rejected``, at
-        every resolution tried), one more search at the first resolution turns with
-        radius ``wide_radius_factor / kappa_max`` (``<= radius_factor``: never). The
+        When the first search ends with every goal connection rejected
+        (``rejected``), a search at the first resolution turns with radius
+        ``wide_radius_factor / kappa_max`` (``<= radius_factor``: never), before the
+        finer ones (since session 13: a kerbside gap of 2.5 car lengths then takes
+        652 expansions instead of 2 714). The
         ramps of a word of full-lock arcs need steering beyond ``delta_max`` to end on
         its pose: random goals 39 and 92 of ``coverage.py --count 100`` (with
         reverse) had all 32 connections' ramps fail at 1.02 and solve at 1.1 in 4 and
