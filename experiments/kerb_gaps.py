@@ -59,20 +59,16 @@ def report(payload: dict[str, Any]) -> str:
     ]
     for factor, by_planner in payload["rows"].items():
         for planner, rows in by_planner.items():
-            solved = [r for r in rows if r["solved"]]
-            cusps = statistics.median(r["cusps"] for r in solved) if solved else "-"
             outcomes: dict[str, int] = {}
             for r in rows:
                 key = r.get("status", "solved" if r["solved"] else "no_path_in_budget")
                 outcomes[key] = outcomes.get(key, 0) + 1
-            lines.append(
-                f"| {factor} | {planner} | {len(solved)}/{len(rows)} | "
-                f"{sum(r.get('verified', False) for r in rows)} | "
-                f"{sum(r.get('verified_any_sharpness', False) for r in rows)} | "
-                f"{_median(rows, 'time_s', 1000.0)} | {_median(rows, 'length_m')} | {cusps} | "
-                f"{_median(rows, 'clearance_m', fmt='{:.2f}')} | "
-                + ", ".join(f"{k} {v}" for k, v in sorted(outcomes.items())) + " |"
-            )
+            cells = [
+                *st.row_cells(rows),
+                _median(rows, "clearance_m", fmt="{:.2f}"),
+                ", ".join(f"{k} {v}" for k, v in sorted(outcomes.items())),
+            ]
+            lines.append(f"| {factor} | {planner} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 

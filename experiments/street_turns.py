@@ -123,15 +123,21 @@ def report(payload: dict[str, Any]) -> str:
     ]
     for width, by_planner in payload["rows"].items():
         for planner, rows in by_planner.items():
-            solved = [r for r in rows if r["solved"]]
-            cusps = statistics.median(r["cusps"] for r in solved) if solved else "-"
-            lines.append(
-                f"| {width} | {planner} | {len(solved)}/{len(rows)} | "
-                f"{sum(r.get('verified', False) for r in rows)} | "
-                f"{sum(r.get('verified_any_sharpness', False) for r in rows)} | "
-                f"{_median(rows, 'time_s')} | {_median(rows, 'length_m')} | {cusps} |"
-            )
+            lines.append(f"| {width} | {planner} | " + " | ".join(row_cells(rows)) + " |")
     return "\n".join(lines) + "\n"
+
+
+def row_cells(rows: list[dict[str, Any]]) -> list[str]:
+    """A planner's cells for one query: solved, verified, any sharpness, median time,
+    length and cusps (the columns ``kerb_gaps.py`` shares)."""
+    solved = [r for r in rows if r["solved"]]
+    cusps = statistics.median(r["cusps"] for r in solved) if solved else "-"
+    return [
+        f"{len(solved)}/{len(rows)}",
+        f"{sum(r.get('verified', False) for r in rows)}",
+        f"{sum(r.get('verified_any_sharpness', False) for r in rows)}",
+        _median(rows, "time_s"), _median(rows, "length_m"), f"{cusps}",
+    ]  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
