@@ -44,8 +44,9 @@ _NEWTON_TOL = 1e-10
 #: A fit is stuck when its pose error, still over ``_STUCK_FROM``, has not fallen under
 #: ``_STUCK_SHARE`` of the one before in ``_STUCK_AFTER`` iterations running: angles held
 #: at the steering limit leave too few free lengths to close the gap, and Gauss-Newton
-#: repeats the same tiny step to the end (half of all fits that fail did, in the street
-#: turns; none of those that converged in bench_hybrid's queries and the street turns).
+#: repeats the same tiny step to the end (in the 7 m lane-to-lane turn, 242 of the 245
+#: fits that fail now end after 3-5 iterations instead of 12; of the fits that converge
+#: in bench_hybrid's queries and the street turns, none would have ended so).
 _STUCK_SHARE = 0.9
 _STUCK_AFTER = 3
 _STUCK_FROM = 1e-6
