@@ -92,18 +92,10 @@ def main(argv: list[str] | None = None) -> int:
     load = f"{os.getloadavg()[0]:.1f}"
     rows: dict[str, dict[str, list[dict[str, Any]]]] = {}
     for f in factors:
-        m = kerbside_map(f)
-        by_planner = rows[f"{f:g}"] = {}
-        for planner in GEARED:
-            print(f"gap {f:g}: {planner} ...", file=sys.stderr, flush=True)
-            by_planner[f"{planner}+reverse"] = [
-                st.ours_row(m, planner, s, args.max_time) for s in range(args.seeds)
-            ]
-        if have_ompl:
-            print(f"gap {f:g}: {st.OMPL_NAME} ...", file=sys.stderr, flush=True)
-            by_planner[st.OMPL_NAME] = [
-                st.ompl_row(m, s, args.ompl_time) for s in range(args.seeds)
-            ]
+        rows[f"{f:g}"] = st.planner_rows(
+            kerbside_map(f), f"gap {f:g}", args.seeds, args.max_time, args.ompl_time,
+            have_ompl, GEARED,
+        )  # fmt: skip
     payload = {
         "command": command("kerb_gaps.py", argv), "seeds": args.seeds,
         "max_time": args.max_time, "ompl_time": args.ompl_time, "load": load,

@@ -92,6 +92,24 @@ def ompl_row(m: Map, seed: int, seconds: float) -> dict[str, Any]:
     return row
 
 
+def planner_rows(
+    m: Map, label: str, seeds: int, max_time: float, ompl_time: float, have_ompl: bool,
+    ours: tuple[str, ...] = OURS,
+) -> dict[str, list[dict[str, Any]]]:
+    """Every planner's rows on one map: ours with reverse, then OMPL's when it is installed.
+
+    ``label`` names the query in the progress lines on stderr.
+    """
+    by_planner: dict[str, list[dict[str, Any]]] = {}
+    for planner in ours:
+        print(f"{label}: {planner} ...", file=sys.stderr, flush=True)
+        by_planner[f"{planner}+reverse"] = [ours_row(m, planner, s, max_time) for s in range(seeds)]
+    if have_ompl:
+        print(f"{label}: {OMPL_NAME} ...", file=sys.stderr, flush=True)
+        by_planner[OMPL_NAME] = [ompl_row(m, s, ompl_time) for s in range(seeds)]
+    return by_planner
+
+
 def _median(rows: list[dict[str, Any]], key: str) -> str:
     values = [r[key] for r in rows if r["solved"]]
     if not values:
@@ -168,15 +186,9 @@ def main(argv: list[str] | None = None) -> int:
     rows: dict[str, dict[str, list[dict[str, Any]]]] = {}
     for w in widths:
         m = street(w, args.length, args.lanes)
-        by_planner = rows[f"{w:g}"] = {}
-        for planner in OURS:
-            print(f"width {w:g} m: {planner} ...", file=sys.stderr, flush=True)
-            by_planner[f"{planner}+reverse"] = [
-                ours_row(m, planner, s, args.max_time) for s in range(args.seeds)
-            ]
-        if have_ompl:
-            print(f"width {w:g} m: {OMPL_NAME} ...", file=sys.stderr, flush=True)
-            by_planner[OMPL_NAME] = [ompl_row(m, s, args.ompl_time) for s in range(args.seeds)]
+        rows[f"{w:g}"] = planner_rows(
+            m, f"width {w:g} m", args.seeds, args.max_time, args.ompl_time, have_ompl
+        )
     payload = {
         "command": command("street_turns.py", argv),
         "length": args.length, "lanes": args.lanes, "seeds": args.seeds, "max_time": args.max_time,

@@ -20,7 +20,7 @@ import pytest
 
 from rrtdrive.cli import plan_to_json
 from rrtdrive.collision import CollisionChecker
-from rrtdrive.maps import Map, Obstacle
+from rrtdrive.maps import Map, Obstacle, builtin_map
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure
 from rrtdrive.planning.hybrid.escalation import escalate, stage_of
 from rrtdrive.planning.improved import ImprovedConfig, ImprovedRRTConnect
@@ -133,8 +133,10 @@ def test_the_stage_choice_is_deterministic_also_on_a_slower_machine() -> None:
 
 
 def test_the_safety_cap_inside_the_escalation_is_a_timeout() -> None:
-    # A clock that passes the cap after a fixed number of readings: deterministic.
-    problem = PlanningProblem.from_map(bay_map(), reverse=True)
+    # A clock that passes the cap after a fixed number of readings: deterministic. The
+    # dead end needs a turn of several hundred expansions (the bay's straight lead-in
+    # answers in a few since session 14).
+    problem = PlanningProblem.from_map(builtin_map("dead_end"), reverse=True)
     budget = Budget(max_iterations=2000, max_time_s=1.0)
     readings = iter(range(10**6))
     watch = Stopwatch(budget, clock=lambda: 0.0 if next(readings) < 40 else 2.0)

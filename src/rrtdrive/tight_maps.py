@@ -66,9 +66,9 @@ GARAGE_EMPTY_BAYS = ((0, 5), (0, 9), (0, 13), (1, 11))
 GARAGE_NOSE_GAP = 0.5
 
 
-def garage_bays() -> list[tuple[int, int, float, float]]:
-    """Every bay as ``(side, index, x_centre, y_of_its_wall)``."""
-    top = GARAGE_BAY_DEPTH * 2 + GARAGE_AISLE_WIDTH
+def garage_bays(aisle: float = GARAGE_AISLE_WIDTH) -> list[tuple[int, int, float, float]]:
+    """Every bay as ``(side, index, x_centre, y_of_its_wall)``, the aisle ``aisle`` m wide."""
+    top = GARAGE_BAY_DEPTH * 2 + aisle
     return [
         (side, i, GARAGE_X0 + GARAGE_BAY_WIDTH * (i + 0.5), 0.0 if side == 0 else top)
         for side in (0, 1)
@@ -76,34 +76,41 @@ def garage_bays() -> list[tuple[int, int, float, float]]:
     ]
 
 
-def garage_goal(side: int, index: int) -> Pose:
-    """The rear-axle pose of a car parked nose-in in bay ``(side, index)``."""
-    for s, i, x, wall in garage_bays():
+def garage_goal(
+    side: int, index: int, aisle: float = GARAGE_AISLE_WIDTH, tail_in: bool = False
+) -> Pose:
+    """The rear-axle pose of a car parked nose-in (or ``tail_in``) in bay ``(side, index)``.
+
+    Either way the car's end at the wall is :data:`GARAGE_NOSE_GAP` from it.
+    """
+    for s, i, x, wall in garage_bays(aisle):
         if (s, i) == (side, index):
-            yaw = -math.pi / 2 if s == 0 else math.pi / 2
             inward = -1.0 if s == 0 else 1.0  # direction from the aisle to the wall
-            y = wall - inward * (GARAGE_NOSE_GAP + _CAR.front_extent)
-            return Pose(x, y, yaw)
+            if tail_in:
+                return Pose(x, wall - inward * (GARAGE_NOSE_GAP + _CAR.rear_overhang),
+                            -inward * math.pi / 2)  # fmt: skip
+            return Pose(x, wall - inward * (GARAGE_NOSE_GAP + _CAR.front_extent),
+                        inward * math.pi / 2)  # fmt: skip
     raise ValueError(f"no bay {(side, index)}")
 
 
-def garage_map() -> Map:
-    """The garage: two rows of 2.6 m bays off a 9 m aisle; goal nose-in in a free bay."""
+def garage_map(aisle: float = GARAGE_AISLE_WIDTH) -> Map:
+    """The garage: two rows of 2.6 m bays off a 9 m aisle (or ``aisle`` m), goal nose-in."""
     obstacles = []
-    for side, i, x, wall in garage_bays():
+    for side, i, x, wall in garage_bays(aisle):
         if (side, i) in GARAGE_EMPTY_BAYS:
             continue
         inward = -1.0 if side == 0 else 1.0
         y = wall - inward * (GARAGE_NOSE_GAP + _CAR.length / 2)
         obstacles.append(Obstacle((x, y), _PARKED, math.pi / 2))
-    top = GARAGE_BAY_DEPTH * 2 + GARAGE_AISLE_WIDTH
+    top = GARAGE_BAY_DEPTH * 2 + aisle
     width = GARAGE_X0 * 2 + GARAGE_BAY_WIDTH * GARAGE_BAYS
     return Map(
-        "garage",
+        "garage" if aisle == GARAGE_AISLE_WIDTH else f"garage_{aisle:g}m",
         (0.0, 0.0, width, top),
         tuple(obstacles),
-        Pose(3.0, GARAGE_BAY_DEPTH + GARAGE_AISLE_WIDTH - 1.5, 0.0),
-        garage_goal(*GARAGE_EMPTY_BAYS[1]),
+        Pose(3.0, GARAGE_BAY_DEPTH + aisle - 1.5, 0.0),
+        garage_goal(*GARAGE_EMPTY_BAYS[1], aisle=aisle),
     )
 
 

@@ -35,6 +35,7 @@ from rrtdrive.planning.hybrid.heuristic import (
     Heuristic,
     HolonomicField,
 )
+from rrtdrive.planning.hybrid.leads import lead_ins
 from rrtdrive.planning.hybrid.path import BuiltPath, Ramps, SegmentMemo, build_path
 from rrtdrive.planning.hybrid.primitives import PrimitiveSet, primitive_sets
 from rrtdrive.planning.hybrid.search import (
@@ -345,7 +346,10 @@ def search_at_resolution(
 
     def searches_with(search_clearance: float) -> list[tuple[HybridSearch, Accept]]:
         body = body_test(problem.checker, search_clearance)
-        shots = analytic_shots(goal, radius, reverse, config.check_spacing, body)
+        gears = (1, -1) if reverse else (1,)
+        longest = 2.0 * problem.vehicle.length
+        leads = lead_ins(goal, body, 1.0 / radius, gears, config.check_spacing, longest)
+        shots = analytic_shots(goal, radius, reverse, config.check_spacing, body, leads=leads)
         ahead = HybridSearch(
             body, start, goal, heuristic, prims, shots, config, kappa_max, problem.bounds,
             long_prims,
@@ -357,7 +361,10 @@ def search_at_resolution(
         if config.switch_after > 0:
             back_prims, *back_long = back_sets
             if reverse:
-                back_shots = analytic_shots(start, radius, True, config.check_spacing, body)
+                leads = lead_ins(start, body, 1.0 / radius, gears, config.check_spacing, longest)
+                back_shots = analytic_shots(
+                    start, radius, True, config.check_spacing, body, leads=leads
+                )
             else:
                 back_shots = _backward_dubins_shots(start, radius, config.check_spacing, body)
             back = HybridSearch(

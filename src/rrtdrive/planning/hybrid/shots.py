@@ -17,6 +17,7 @@ import numpy as np
 
 from rrtdrive.planning.dubins import dubins_paths
 from rrtdrive.planning.hybrid.body import BodyTest
+from rrtdrive.planning.hybrid.leads import Lead
 from rrtdrive.planning.reeds_shepp import reeds_shepp_paths
 from rrtdrive.types import Pose
 
@@ -164,33 +165,52 @@ def analytic_shots(
     spacing: float,
     body: BodyTest | None = None,
     max_candidates: int = 3,
+    leads: Sequence[Lead] = (),
 ) -> Shots:
     """The analytic expansions to ``goal``: Dubins paths forward, Reeds-Shepp with reverse.
 
     Only the ``max_candidates`` shortest words are tried; with ``body``, those
     whose poses half a metre apart surely collide are dropped before they are
     sampled finely (each one only when the caller asks for it). A Reeds-Shepp word
-    is cut into one piece per gear.
+    is cut into one piece per gear. ``leads`` (:func:`~.leads.lead_ins`): after the
+    words to ``goal``, those to each lead-in's start, followed by its straight drive in.
     """
     coarse = max(spacing, 0.5)
 
-    def shots(pose: Pose) -> Iterator[list[Piece]]:
+    def words(pose: Pose, to: Pose, lead: Lead | None) -> Iterator[list[Piece]]:
         # The longer words loop through the lot: they rarely clear where the short ones fail.
         if reverse:
-            cands = reeds_shepp_paths(pose, goal, radius, limit=max_candidates)[:max_candidates]
+            cands = reeds_shepp_paths(pose, to, radius, limit=max_candidates)[:max_candidates]
         else:
-            cands = dubins_paths(pose, goal, radius)[:max_candidates]
+            cands = dubins_paths(pose, to, radius)[:max_candidates]
         hit = [False] * len(cands)
         if body is not None:
             hit = walks_hit(pose, [(c.word, c.lengths) for c in cands], radius, coarse, body)
         for cand, dropped in zip(cands, hit, strict=True):
             if dropped:
                 continue
+            rows = cand.sample(spacing)
             if reverse:
-                rows = cand.sample(spacing)
                 rows[0, :3] = pose.as_tuple()
-                yield _gear_pieces(rows)
+            elif lead is None:
+                yield [Piece(1, rows, True)]
+                continue
             else:
-                yield [Piece(1, cand.sample(spacing), True)]
+                rows = np.column_stack([rows, np.ones(len(rows))])
+            yield _gear_pieces(rows if lead is None else _with_lead(rows, lead))
+
+    def shots(pose: Pose) -> Iterator[list[Piece]]:
+        yield from words(pose, goal, None)
+        for lead in leads:
+            yield from words(pose, lead.via, lead)
 
     return shots
+
+
+def _with_lead(rows: np.ndarray, lead: Lead) -> np.ndarray:
+    """Rows ``[x, y, yaw, kappa, gear]`` of a word to ``lead.via``, then the straight in."""
+    straight = np.column_stack([lead.rows, np.full(len(lead.rows), float(lead.gear))])
+    straight[:, 2] = rows[-1, 2] + (straight[:, 2] - straight[0, 2])  # the word's unwrapped yaw
+    if rows[-1, 4] == lead.gear:
+        straight = straight[1:]  # one gear: the junction row once
+    return np.vstack([rows, straight])
