@@ -17,11 +17,12 @@ from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import Map, builtin_map
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.planning.hybrid.body import BodyTest
+from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.leads import ARC_PROBE, lead_ins
 from rrtdrive.planning.hybrid.primitives import arc_poses
 from rrtdrive.planning.hybrid.shots import analytic_shots
 from rrtdrive.tight_maps import garage_goal, garage_map
-from rrtdrive.types import Budget, Pose, VehicleParams
+from rrtdrive.types import Budget, InputError, Pose, VehicleParams
 from rrtdrive.verify import verify_path
 
 CAR = VehicleParams()
@@ -125,3 +126,12 @@ def test_bay_to_bay_across_a_narrow_aisle_connects_in_a_few_expansions(aisle):
     check = verify_path(m, res.path, max_sharpness=0.2)
     assert check.ok, check.failed
     assert _clear(_walls(m), res.path.samples[::3], 0.1)
+
+
+def test_the_count_of_lead_ins_is_the_configs():
+    m = garage_map()
+    body = BodyTest(CollisionChecker.for_map(m), CLEARANCE)
+    counts = [len(lead_ins(m.goal, body, KAPPA, (1, -1), 0.1, 2 * CAR.length, n)) for n in range(4)]
+    assert counts == [0, 1, 2, 3]
+    with pytest.raises(InputError, match="hybrid.lead_ins"):
+        HybridConfig(lead_ins=-1)

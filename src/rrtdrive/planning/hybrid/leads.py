@@ -31,8 +31,6 @@ LEAD_STEP = 0.5
 #: Lead-ins start this far apart from the first unboxed point on (metres): the
 #: steering-rate ramp into the straight needs room there.
 VIA_SPACING = 1.0
-#: Largest number of lead-ins per gear.
-VIAS = 3
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,6 +63,7 @@ def lead_ins(
     gears: tuple[int, ...],
     spacing: float,
     longest: float,
+    count: int = 3,
 ) -> tuple[Lead, ...]:
     """The straight lead-ins into ``target`` for each gear of ``gears`` where it is boxed in.
 
@@ -72,9 +71,10 @@ def lead_ins(
     leaving ``target`` backwards in time drives in gear ``-g``. When both full-lock
     arcs that way hit within :data:`ARC_PROBE`, the straight drive that way is
     followed in :data:`LEAD_STEP` steps while it stays free, up to ``longest``
-    metres, to the first point whose own arcs do not both hit: the lead-in starts
-    there. No lead-in where the target is not boxed in that way, where the straight
-    hits first, or where no such point comes within ``longest``.
+    metres, to the first point whose own arcs do not both hit: the first lead-in
+    starts there, the next ones :data:`VIA_SPACING` further out each (``count`` in all
+    while the straight stays free). No lead-in where the target is not boxed in that
+    way, where the straight hits first, or where no such point comes within ``longest``.
 
     Parameters
     ----------
@@ -90,6 +90,8 @@ def lead_ins(
         Largest gap between the poses tested and returned.
     longest : float
         Longest straight lead-in, metres.
+    count : int
+        Largest number of lead-ins per gear (0: none).
 
     Returns
     -------
@@ -97,9 +99,10 @@ def lead_ins(
     """
     leads = []
     per_via = round(VIA_SPACING / LEAD_STEP)
-    for gear in gears:
+    for gear in gears if count > 0 else ():
         if not _boxed(target, kappa, -gear, body, spacing):
             continue
+        before = len(leads)
         n = max(1, math.ceil(LEAD_STEP / spacing))
         first = None  # the step count of the first unboxed point
         for step in range(1, int(longest / LEAD_STEP + 1e-9) + 1):
@@ -121,6 +124,6 @@ def lead_ins(
             rows[0, :3] = via.as_tuple()
             rows[-1, :3] = target.as_tuple()
             leads.append(Lead(via, gear, rows))
-            if step - first >= per_via * (VIAS - 1):
+            if len(leads) - before >= count:
                 break
     return tuple(leads)

@@ -35,7 +35,7 @@ from rrtdrive.planning.hybrid.heuristic import (
     Heuristic,
     HolonomicField,
 )
-from rrtdrive.planning.hybrid.leads import lead_ins
+from rrtdrive.planning.hybrid.leads import Lead, lead_ins
 from rrtdrive.planning.hybrid.path import BuiltPath, Ramps, SegmentMemo, build_path
 from rrtdrive.planning.hybrid.primitives import PrimitiveSet, primitive_sets
 from rrtdrive.planning.hybrid.search import (
@@ -309,6 +309,13 @@ def search_at_resolution(
         assert table is not None
         heuristic = Heuristic(to_goal, table.to(goal), goal, table.scalar_to(goal))
     back_h = Heuristic(HolonomicField.towards(grid, start), None, start)
+    gears = (1, -1) if reverse else (1,)
+    longest = 2.0 * problem.vehicle.length
+
+    def leads_into(target: Pose, body: BodyTest) -> tuple[Lead, ...]:
+        return lead_ins(
+            target, body, 1.0 / radius, gears, config.check_spacing, longest, config.lead_ins
+        )
 
     def turn_with(search_clearance: float) -> Turn | None:
         if not reverse or config.turn_moves <= 0 or config.switch_after <= 0:
@@ -346,10 +353,9 @@ def search_at_resolution(
 
     def searches_with(search_clearance: float) -> list[tuple[HybridSearch, Accept]]:
         body = body_test(problem.checker, search_clearance)
-        gears = (1, -1) if reverse else (1,)
-        longest = 2.0 * problem.vehicle.length
-        leads = lead_ins(goal, body, 1.0 / radius, gears, config.check_spacing, longest)
-        shots = analytic_shots(goal, radius, reverse, config.check_spacing, body, leads=leads)
+        shots = analytic_shots(
+            goal, radius, reverse, config.check_spacing, body, leads=leads_into(goal, body)
+        )
         ahead = HybridSearch(
             body, start, goal, heuristic, prims, shots, config, kappa_max, problem.bounds,
             long_prims,
@@ -361,9 +367,8 @@ def search_at_resolution(
         if config.switch_after > 0:
             back_prims, *back_long = back_sets
             if reverse:
-                leads = lead_ins(start, body, 1.0 / radius, gears, config.check_spacing, longest)
                 back_shots = analytic_shots(
-                    start, radius, True, config.check_spacing, body, leads=leads
+                    start, radius, True, config.check_spacing, body, leads=leads_into(start, body)
                 )
             else:
                 back_shots = _backward_dubins_shots(start, radius, config.check_spacing, body)
