@@ -327,11 +327,10 @@ def hybrid_query(
     if coarse_branch:
         steps = [
             f"at {_resolution(c)} / {c.step:g} m steps"
-            + (f" keeping only {c.body_clearance:.2f} m body clearance" if c is not config
-               and c.body_clearance < config.body_clearance else "")
+            + (f" {how_of(c)}" if k > 0 and how_of(c) else "")
             + f" {'the search' if k == 0 else 'it'} {_why(o, 'its share of ' if a else '')}"
             for k, (c, o, a) in enumerate(tried)
-        ]  # fmt: skip
+        ]
         lead_in = (
             f"no path found: the wall-clock cap of {budget.max_time_s:g} s was hit before the "
             f"expansion budget of {budget.max_iterations}"
