@@ -47,13 +47,25 @@ class Lead:
     rows: np.ndarray
 
 
-def _boxed(pose: Pose, kappa: float, gear: int, body: BodyTest, spacing: float) -> bool:
-    """Whether both full-lock arcs driven from ``pose`` in ``gear`` hit within ARC_PROBE."""
+def _arcs(poses: np.ndarray, kappa: float, gear: int, spacing: float) -> np.ndarray:
+    """Both full-lock arcs driven ARC_PROBE from each pose in ``gear``: ``(P, 2, m, 3)``.
+
+    The poses share one heading (they lie on one straight), so the arcs are those
+    from the origin shifted (``x + offset`` is what :func:`arc_poses` adds too).
+    """
     s = np.arange(1, math.ceil(ARC_PROBE / spacing) + 1) * spacing
-    return all(
-        not body.free(arc_poses(pose.x, pose.y, pose.yaw, turn * kappa, gear, s)).all()
-        for turn in (1.0, -1.0)
-    )
+    yaw = float(poses[0, 2])
+    base = np.stack([arc_poses(0.0, 0.0, yaw, turn * kappa, gear, s) for turn in (1.0, -1.0)])
+    out = np.repeat(base[None], len(poses), axis=0)
+    out[..., 0] += poses[:, 0, None, None]
+    out[..., 1] += poses[:, 1, None, None]
+    return out
+
+
+def _boxed(body: BodyTest, arcs: np.ndarray) -> np.ndarray:
+    """Per pose, whether both of its arcs hit: ``arcs`` is ``(P, 2, m, 3)``."""
+    free = body.runs_free(arcs.reshape(-1, *arcs.shape[2:])).reshape(-1, 2)
+    return ~free.any(axis=1)
 
 
 def lead_ins(
@@ -97,25 +109,29 @@ def lead_ins(
     -------
     tuple of Lead
     """
-    leads = []
+    leads: list[Lead] = []
     per_via = round(VIA_SPACING / LEAD_STEP)
+    n = max(1, math.ceil(LEAD_STEP / spacing))
+    steps = int(longest / LEAD_STEP + 1e-9)
+    here = np.array(target.as_tuple())
     for gear in gears if count > 0 else ():
-        if not _boxed(target, kappa, -gear, body, spacing):
+        if not _boxed(body, _arcs(here[None], kappa, -gear, spacing))[0]:
             continue
-        before = len(leads)
-        n = max(1, math.ceil(LEAD_STEP / spacing))
-        first = None  # the step count of the first unboxed point
-        for step in range(1, int(longest / LEAD_STEP + 1e-9) + 1):
-            out = step * LEAD_STEP
-            s = out - LEAD_STEP + np.arange(1, n + 1) * (LEAD_STEP / n)
-            ahead = arc_poses(target.x, target.y, target.yaw, 0.0, -gear, s)
-            if not body.free(ahead).all():
-                break  # the straight drive out hits: no lead-in from here on
-            via = Pose(*(float(v) for v in ahead[-1]))
-            if first is None and not _boxed(via, kappa, -gear, body, spacing):
-                first = step
-            if first is None or (step - first) % per_via:
-                continue
+        # The straight drive out, every pose at once: how many whole steps stay free.
+        s = np.arange(1, steps * n + 1) * (LEAD_STEP / n)
+        ahead = arc_poses(target.x, target.y, target.yaw, 0.0, -gear, s)
+        free = body.free(ahead)
+        clear_steps = (int(np.argmin(free)) if not free.all() else len(free)) // n
+        if clear_steps == 0:
+            continue
+        vias = ahead[n - 1 : clear_steps * n : n]  # the end of each free step
+        boxed = _boxed(body, _arcs(vias, kappa, -gear, spacing))
+        if boxed.all():
+            continue  # no point within ``longest`` lets the car turn
+        first = int(np.argmin(boxed))
+        for k in range(first, clear_steps, per_via)[:count]:
+            out = (k + 1) * LEAD_STEP
+            via = Pose(*(float(v) for v in vias[k]))
             m = max(1, math.ceil(out / spacing))
             back = arc_poses(
                 target.x, target.y, target.yaw, 0.0, -gear, np.linspace(out, 0.0, m + 1)
@@ -124,6 +140,4 @@ def lead_ins(
             rows[0, :3] = via.as_tuple()
             rows[-1, :3] = target.as_tuple()
             leads.append(Lead(via, gear, rows))
-            if len(leads) - before >= count:
-                break
     return tuple(leads)
