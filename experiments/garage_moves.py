@@ -74,15 +74,14 @@ def report(payload: dict[str, Any]) -> str:
         f"{payload['max_time']:g} s), OMPL {payload['ompl_time']:g} s.",
         "",
         "| aisle [m] | move | planner | solved | verified | any sharpness | median time [ms] | "
-        "median length [m] | median cusps |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "median length [m] | median cusps | least clearance [m] |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for key, by_planner in payload["rows"].items():
         aisle, move = key.split("|")
         for planner, rows in by_planner.items():
-            lines.append(
-                f"| {aisle} | {move} | {planner} | " + " | ".join(st.row_cells(rows)) + " |"
-            )
+            cells = " | ".join([*st.row_cells(rows), st.least_clearance_cell(rows)])
+            lines.append(f"| {aisle} | {move} | {planner} | {cells} |")
     return "\n".join(lines) + "\n"
 
 

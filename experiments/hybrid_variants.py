@@ -10,7 +10,10 @@ The queries are those of ``experiments/coverage.py`` (``parking_lot``, the
 ``--count`` random goal poses and random start poses of
 :func:`random_goals.draw_goals`, seed ``--seed``), forward only (``fwd``) and with
 reverse (``rev``), and the gear scenarios ``parking-reverse-in``,
-``parallel-parking`` and ``u-turn`` (seeds ``0 .. --scenario-seeds - 1``; ``gear``).
+``parallel-parking`` and ``u-turn`` (seeds ``0 .. --scenario-seeds - 1``; ``gear``);
+``turns`` (not by default): the angled bays entered against the row of
+``experiments/angled_bays.py`` (45 and 60 deg, aisles 4, 5, 6 m) and the lane-to-lane
+turns of ``experiments/street_turns.py --lanes 0`` at 7 and 7.5 m.
 Every query is planned by each variant of ``hybrid-a-star`` one after the other
 (interleaved, so load changes hit all alike), ``--repeat`` times each, and the
 least process (CPU) time is kept (the first plan of a query computes what the
@@ -111,6 +114,19 @@ def queries(sets: list[str], count: int, seed: int, scenario_seeds: int) -> list
                 m = dataclasses.replace(base, **{vary: pose})
                 out.append((f"{vary}:{gear}:{i}",
                             PlanningProblem.from_map(m, reverse=gear == "rev")))  # fmt: skip
+    if "turns" in sets:
+        # Turning round in a narrow aisle or street (session 14): angled bays entered
+        # against the row, and lane-to-lane turns in closed streets.
+        from angled_bays import angled_map
+        from street_turns import street
+
+        for angle in (45.0, 60.0):
+            for aisle in (4.0, 5.0, 6.0):
+                m = angled_map(angle, aisle, "against")
+                out.append((f"turns:{m.name}", PlanningProblem.from_map(m, reverse=True)))
+        for width in (7.0, 7.5):
+            m = street(width, 30.0, 0.0)
+            out.append((f"turns:{m.name}", PlanningProblem.from_map(m, reverse=True)))
     if "gear" in sets:
         for name in SCENARIOS:
             for s in range(scenario_seeds):
@@ -187,7 +203,9 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--variants", default=DEFAULT_VARIANTS,
                     help="name=field=value,...;name=... (default: session 7 and the steps since)")
-    ap.add_argument("--sets", default="rev,fwd,gear", help="of rev, fwd, gear (default all)")
+    ap.add_argument(
+        "--sets", default="rev,fwd,gear", help="of rev, fwd, gear, turns (default rev,fwd,gear)"
+    )
     ap.add_argument("--count", type=int, default=30, help="random poses per set (default 30)")
     ap.add_argument("--seed", type=int, default=1, help="seed of the pose sets (default 1)")
     ap.add_argument("--scenario-seeds", type=int, default=10, help="seeds per gear scenario")
@@ -200,8 +218,8 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, SyntaxError) as exc:
         ap.error(str(exc))
     sets = [s.strip() for s in args.sets.split(",") if s.strip()]
-    if not sets or set(sets) - {"rev", "fwd", "gear"}:
-        ap.error("--sets: a comma-separated list of rev, fwd, gear")
+    if not sets or set(sets) - {"rev", "fwd", "gear", "turns"}:
+        ap.error("--sets: a comma-separated list of rev, fwd, gear, turns")
     for name in ("count", "scenario_seeds", "repeat"):
         if getattr(args, name) < 1:
             ap.error(f"--{name.replace('_', '-')}: must be >= 1")

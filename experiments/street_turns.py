@@ -31,6 +31,7 @@ import time
 from typing import Any
 
 import numpy as np
+import shapely
 
 sys.path.insert(0, os.path.dirname(__file__))
 import coverage as cov  # noqa: E402  (the sibling script)
@@ -38,7 +39,7 @@ from results_io import command, machine, numbers_above, write_results  # noqa: E
 
 from rrtdrive.maps import Map  # noqa: E402
 from rrtdrive.planning import PlanningProblem, make_planner  # noqa: E402
-from rrtdrive.types import Budget, Pose  # noqa: E402
+from rrtdrive.types import Budget, Path, Pose  # noqa: E402
 
 #: Our planners, each with reverse.
 OURS = ("improved-rrt-connect", "hybrid-a-star")
@@ -60,6 +61,24 @@ def street(width: float, length: float, back: float | None = None) -> Map:
                Pose(x - back, 3 * width / 4, math.pi))  # fmt: skip
 
 
+def least_clearance(m: Map, path: Path) -> float:
+    """The least distance from the car's body at any path row to an obstacle or the map's
+    edge, by shapely (independent of the planner's checker), metres."""
+    car = m.vehicle
+    rows = path.samples
+    c, s = np.cos(rows[:, 2]), np.sin(rows[:, 2])
+    back, front, half = car.rear_overhang, car.length - car.rear_overhang, car.width / 2
+    local = np.array([(-back, -half), (front, -half), (front, half), (-back, half)])
+    xs = rows[:, 0, None] + c[:, None] * local[:, 0] - s[:, None] * local[:, 1]
+    ys = rows[:, 1, None] + s[:, None] * local[:, 0] + c[:, None] * local[:, 1]
+    bodies = shapely.polygons(np.stack([xs, ys], axis=-1))
+    x0, y0, x1, y1 = m.bounds
+    frame = shapely.box(x0 - 50, y0 - 50, x1 + 50, y1 + 50)
+    outside = frame.difference(shapely.box(x0, y0, x1, y1))
+    walls = shapely.union_all([outside, *(o.polygon() for o in m.obstacles)])
+    return float(np.min(shapely.distance(bodies, walls)))
+
+
 def ours_row(m: Map, planner: str, seed: int, max_time: float) -> dict[str, Any]:
     """One plan of ours with reverse, judged."""
     problem = PlanningProblem.from_map(m, reverse=True)
@@ -75,6 +94,7 @@ def ours_row(m: Map, planner: str, seed: int, max_time: float) -> dict[str, Any]
             "clearance_m": stats.get("body_clearance_m", stats.get("hybrid_body_clearance_m")),
             "length_m": res.path.length,
             "cusps": len(res.path.cusps),
+            "least_clearance_m": least_clearance(m, res.path),
             **cov._check(m, res.path),
         }
     else:
@@ -88,7 +108,12 @@ def ompl_row(m: Map, seed: int, seconds: float) -> dict[str, Any]:
     _, total_s, length, path = cov.solve_ompl(problem, seed, OMPL_NAME, seconds)
     row: dict[str, Any] = {"solved": path is not None, "time_s": total_s}
     if path is not None:
-        row |= {"length_m": length, "cusps": len(path.cusps), **cov._check(m, path)}
+        row |= {
+            "length_m": length,
+            "cusps": len(path.cusps),
+            "least_clearance_m": least_clearance(m, path),
+            **cov._check(m, path),
+        }
     return row
 
 
@@ -143,6 +168,12 @@ def report(payload: dict[str, Any]) -> str:
         for planner, rows in by_planner.items():
             lines.append(f"| {width} | {planner} | " + " | ".join(row_cells(rows)) + " |")
     return "\n".join(lines) + "\n"
+
+
+def least_clearance_cell(rows: list[dict[str, Any]]) -> str:
+    """The least body clearance over a planner's solved paths (``-`` where none has it)."""
+    values = [r["least_clearance_m"] for r in rows if r["solved"] and "least_clearance_m" in r]
+    return f"{min(values):.3f}" if values else "-"
 
 
 def row_cells(rows: list[dict[str, Any]]) -> list[str]:
