@@ -135,7 +135,7 @@ def plot_plan(m: Map, result: PlanResult, title: str | None = None) -> Figure:
 
     The path is drawn by :func:`draw_gear_path`: reverse segments dashed, cusps marked.
     """
-    fig, ax = plt.subplots(figsize=(7.5, 7.5))
+    fig, ax = plt.subplots(figsize=(7.5, 7.5), layout="constrained")
     draw_map(ax, m)
     draw_trees(ax, result.trees)
     draw_path(ax, result.raw_path, "tab:gray", "raw tree path", lw=1.0)
@@ -144,8 +144,9 @@ def plot_plan(m: Map, result: PlanResult, title: str | None = None) -> Figure:
         draw_gear_path(ax, result.path)
     status = "solved" if result.success else result.status.value
     ax.set_title(title or f"{m.name}: {result.planner} ({status}, {result.nodes} nodes)")
-    ax.legend(loc="upper right", fontsize=8)
-    fig.tight_layout()
+    # Beside the axes, outside them: inside, it covered a corner of the map (a goal in
+    # the garage's top right bays hid under it).
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     return fig
 
 
