@@ -106,8 +106,9 @@ def test_reverse_in_bay_with_rejected_connections_is_solved_finer() -> None:
 def test_refinement_shares_the_counted_budget() -> None:
     task = make_scenario("parallel-parking", 5)
     # The coarse search needs ~404 expansions to end; 420 leaves too few for the fine one
-    # (coarse_after=0: the first search may spend the whole budget).
-    res = HybridAStar(coarse_after=0.0).solve(
+    # (coarse_after=0: the first search may spend the whole budget; abreast_turns=0: the
+    # turns tried further along would spend the rest before the refinement).
+    res = HybridAStar(coarse_after=0.0, abreast_turns=0).solve(
         _problem(task), np.random.default_rng(0), Budget(max_iterations=420, max_time_s=1e6)
     )
     assert not res.success

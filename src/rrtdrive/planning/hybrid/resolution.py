@@ -47,7 +47,7 @@ from rrtdrive.planning.hybrid.search import (
     walks_hit,
 )
 from rrtdrive.planning.hybrid.shortcut import polyline_length, shortcut
-from rrtdrive.planning.hybrid.turn import TurnResult, multi_point_turn
+from rrtdrive.planning.hybrid.turn import TurnResult, abreast, multi_point_turn
 from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
 from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, SmoothingConfig
 from rrtdrive.types import Pose, Tree, VehicleParams
@@ -344,10 +344,28 @@ def search_at_resolution(
             return found, outcome.expansions
 
         def turn(allowed: int) -> TurnResult[BuiltPath]:
-            return multi_point_turn(
+            first = multi_point_turn(
                 start, goal, body, shots, accept, 1.0 / radius, config.turn_moves,
                 config.check_spacing, finish, budget=allowed,
             )  # fmt: skip
+            if first.result is not None:
+                return first
+            # Stuck where it starts: drive on to abreast of the goal (or near it), turn there.
+            moves, tried, spent = first.moves, first.shots, first.expansions
+            drives = abreast(start, goal, body, config.check_spacing, tries=config.abreast_turns)
+            for drive, pose in drives:
+                left = allowed - moves - spent - 1  # the drive counts as a move
+                if left < 1:
+                    break
+                again = multi_point_turn(
+                    pose, goal, body, shots, lambda p, d=drive: accept([d, *p]), 1.0 / radius,
+                    config.turn_moves, config.check_spacing, None, budget=left,
+                )  # fmt: skip
+                moves, tried = moves + again.moves + 1, tried + again.shots  # the drive: a move
+                spent += again.expansions
+                if again.result is not None:
+                    return TurnResult(again.result, moves, tried, spent)
+            return TurnResult(None, moves, tried, spent)
 
         return turn
 

@@ -17,7 +17,7 @@ checked like any other (``accept``: ramps, body, curvature, sharpness).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Generic, TypeVar
 
@@ -29,7 +29,7 @@ from rrtdrive.planning.hybrid.primitives import arc_poses
 from rrtdrive.planning.hybrid.shots import Piece, Shots
 from rrtdrive.types import Pose
 
-__all__ = ["TurnResult", "multi_point_turn"]
+__all__ = ["TurnResult", "abreast", "multi_point_turn"]
 
 T = TypeVar("T")
 
@@ -184,3 +184,40 @@ def multi_point_turn(
 def _turned(rows: np.ndarray) -> float:
     """How far the heading turned along the rows of one move (their yaw is unwrapped)."""
     return abs(float(rows[-1, 2] - rows[0, 2]))
+
+
+def abreast(
+    start: Pose, goal: Pose, body: BodyTest, spacing: float, step: float = 2.0, tries: int = 4
+) -> Iterator[tuple[Piece, Pose]]:
+    """Straight drives from ``start`` to abreast of ``goal`` and near it, to turn from there.
+
+    A turn that is stuck where the car starts (a wall behind it, no room at full
+    lock) may have room further along: a driver who came the wrong way along a
+    one-way row of angled bays drives on to the bay, then turns. The distance along
+    the start's heading to the goal's projection on it, rounded to ``step``, comes
+    first, then ``step`` either side of it by turns (never less than ``step``), at
+    most ``tries`` in all; a drive is given, as its piece (forward, or in reverse
+    when the goal lies behind) and its end pose, only when the body is free along it
+    (poses ``spacing`` apart).
+
+    Examples
+    --------
+    >>> from rrtdrive.collision import CollisionChecker
+    >>> from rrtdrive.maps import Map
+    >>> street = Map("street", (0.0, 0.0, 40.0, 8.0), (), Pose(3.0, 2.0, 0.0),
+    ...              Pose(21.0, 6.0, math.pi))
+    >>> body = BodyTest(CollisionChecker.for_map(street), 0.15)
+    >>> [round(pose.x, 6) for _, pose in abreast(street.start, street.goal, body, 0.1)]
+    [21.0, 19.0, 23.0, 17.0]
+    """
+    c, s = math.cos(start.yaw), math.sin(start.yaw)
+    along = (goal.x - start.x) * c + (goal.y - start.y) * s
+    gear = 1 if along >= 0.0 else -1
+    centre = round(abs(along) / step)
+    near = range(max(1, centre - tries), centre + tries + 1)
+    for k in sorted(near, key=lambda k: (abs(k - centre), k))[:tries]:
+        n = max(1, math.ceil(k * step / spacing))
+        rows = arc_poses(start.x, start.y, start.yaw, 0.0, gear, np.linspace(0.0, k * step, n + 1))
+        if body.free(rows[1:]).all():
+            kappas = np.zeros((len(rows), 1))
+            yield Piece(gear, np.hstack([rows, kappas])), Pose(*(float(v) for v in rows[-1]))
