@@ -194,8 +194,9 @@ class HybridConfig:
         is built and checked like any other and kept only when accepted and shorter.
         0 (default): never.
     abreast_turns : int
-        With reverse, when the multi-point turn from the start fails, it is tried
-        again, without its finishing search, from up to this many points on the
+        With reverse, when the multi-point turn from the start fails and the goal
+        faces at least 90 deg away from the start's heading (the car turns round), it
+        is tried again, without its finishing search, from up to this many points on the
         straight drive from the start to abreast of the goal and near it
         (:func:`~rrtdrive.planning.hybrid.turn.abreast`; 0: never). Angled bays at
         45 deg off a 5 m aisle, entered against the row

@@ -25,6 +25,7 @@ from collections.abc import Callable, Iterator, Sequence
 import numpy as np
 
 from rrtdrive.collision import CollisionChecker
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.dubins import dubins_paths
 from rrtdrive.planning.hybrid.body import BodyTest
@@ -348,7 +349,8 @@ def search_at_resolution(
                 start, goal, body, shots, accept, 1.0 / radius, config.turn_moves,
                 config.check_spacing, finish, budget=allowed,
             )  # fmt: skip
-            if first.result is not None:
+            turning_round = abs(wrap_angle(goal.yaw - start.yaw)) >= math.pi / 2
+            if first.result is not None or not turning_round:
                 return first
             # Stuck where it starts: drive on to abreast of the goal (or near it), turn there.
             moves, tried, spent = first.moves, first.shots, first.expansions
