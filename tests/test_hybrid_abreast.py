@@ -100,3 +100,18 @@ def test_angled_bay_against_the_row_turns_abreast_of_it():
 def test_abreast_turns_are_validated():
     with pytest.raises(InputError, match="hybrid.abreast_turns"):
         HybridConfig(abreast_turns=-1)
+
+
+def test_no_turn_further_along_when_the_car_only_turns_off():
+    # Leaving a garage bay into the aisle turns the car by 90 degrees: the search's own
+    # path stands (with a 90-degree threshold the turn further along connected first,
+    # 8.2 m longer, at the 6 m aisle).
+    from rrtdrive.tight_maps import GARAGE_BAY_DEPTH, garage_goal, garage_map
+
+    base = garage_map(6.0)
+    m = Map("leave", base.bounds, base.obstacles, garage_goal(0, 9, 6.0),
+            Pose(base.bounds[2] - 4.0, GARAGE_BAY_DEPTH + 1.5, 0.0))  # fmt: skip
+    with_turns, without = _plan(m), _plan(m, abreast_turns=0)
+    assert with_turns.success and without.success
+    assert np.array_equal(with_turns.path.samples, without.path.samples)
+    assert with_turns.iterations == without.iterations

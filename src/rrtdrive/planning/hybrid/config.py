@@ -195,7 +195,7 @@ class HybridConfig:
         0 (default): never.
     abreast_turns : int
         With reverse, when the multi-point turn from the start fails and the goal
-        faces at least 90 deg away from the start's heading (the car turns round), it
+        faces more than 100 deg away from the start's heading (the car turns round), it
         is tried again, without its finishing search, from up to this many points on the
         straight drive from the start to abreast of the goal and near it
         (:func:`~rrtdrive.planning.hybrid.turn.abreast`; 0: never). Angled bays at

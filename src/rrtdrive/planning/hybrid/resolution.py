@@ -114,6 +114,9 @@ def dubins_table(radius: float, config: HybridConfig) -> DubinsTable:
 
 #: Body tests kept per map (the last few clearances asked for).
 BODY_TESTS = 8
+#: A goal facing more than this (degrees) away from the start's heading turns the car
+#: round: a turn stuck at the start is then tried further along (``abreast_turns``).
+TURN_ROUND_DEG = 100.0
 
 
 def body_test(checker: CollisionChecker, clearance: float) -> BodyTest:
@@ -349,7 +352,9 @@ def search_at_resolution(
                 start, goal, body, shots, accept, 1.0 / radius, config.turn_moves,
                 config.check_spacing, finish, budget=allowed,
             )  # fmt: skip
-            turning_round = abs(wrap_angle(goal.yaw - start.yaw)) >= math.pi / 2
+            # Turning round, not turning off: leaving a garage bay into the aisle (90 deg)
+            # the search finds shorter paths than a turn further along (1.2-8.2 m).
+            turning_round = abs(wrap_angle(goal.yaw - start.yaw)) > math.radians(TURN_ROUND_DEG)
             if first.result is not None or not turning_round:
                 return first
             # Stuck where it starts: drive on to abreast of the goal (or near it), turn there.
