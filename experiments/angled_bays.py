@@ -31,7 +31,7 @@ from typing import Any
 sys.path.insert(0, os.path.dirname(__file__))
 import coverage as cov  # noqa: E402  (the sibling scripts)
 import street_turns as st  # noqa: E402
-from results_io import command, machine, numbers_above, write_results  # noqa: E402
+from results_io import numbers_above, write_results  # noqa: E402
 
 from rrtdrive.maps import Map, Obstacle  # noqa: E402
 from rrtdrive.types import Pose, VehicleParams  # noqa: E402
@@ -96,10 +96,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--angles", default="45,60", help="bay angles, deg (default 45,60)")
     ap.add_argument("--aisles", default="4,5,6", help="aisle widths, m (default 4,5,6)")
-    ap.add_argument("--seeds", type=int, default=3, help="seeds per case (default 3)")
-    ap.add_argument("--max-time", type=float, default=10.0, help="our wall-clock cap, s")
-    ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time, s")
-    ap.add_argument("--out", default="results/angled_bays")
+    st.add_run_options(ap, "case", "results/angled_bays")
     args = ap.parse_args(argv)
     try:
         angles = numbers_above(args.angles, "--angles", floor=20.0)
@@ -108,8 +105,7 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(str(err))
     if any(a > 90.0 for a in angles):
         ap.error("--angles must lie within [20, 90] degrees")
-    if args.seeds < 1 or args.max_time <= 0 or args.ompl_time <= 0:
-        ap.error("--seeds must be >= 1, --max-time and --ompl-time > 0")
+    st.check_run_options(ap, args)
     have_ompl = cov.availability(st.OMPL_NAME) is None
     t0 = time.perf_counter()
     load = f"{os.getloadavg()[0]:.1f}"
@@ -121,12 +117,7 @@ def main(argv: list[str] | None = None) -> int:
                     angled_map(angle, aisle, direction), f"{angle:g} deg {direction}, {aisle:g} m",
                     args.seeds, args.max_time, args.ompl_time, have_ompl,
                 )  # fmt: skip
-    payload = {
-        "command": command("angled_bays.py", argv),
-        "seeds": args.seeds, "max_time": args.max_time, "ompl_time": args.ompl_time,
-        "load": load, "machine": machine(),
-        "wall_time_s": time.perf_counter() - t0, "rows": rows,
-    }  # fmt: skip
+    payload = st.run_payload("angled_bays.py", argv, args, load, t0, rows)
     print(write_results(args.out, "angled_bays", payload, report))
     return 0
 

@@ -35,7 +35,7 @@ from typing import Any
 sys.path.insert(0, os.path.dirname(__file__))
 import coverage as cov  # noqa: E402  (the sibling scripts)
 import street_turns as st  # noqa: E402
-from results_io import command, machine, numbers_above, write_results  # noqa: E402
+from results_io import numbers_above, write_results  # noqa: E402
 
 from rrtdrive.maps import Map  # noqa: E402
 from rrtdrive.tight_maps import GARAGE_BAY_DEPTH, garage_goal, garage_map  # noqa: E402
@@ -89,10 +89,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--aisles", default="9,7,6", help="aisle widths, m (default 9,7,6)")
     ap.add_argument("--moves", default=",".join(MOVES), help=f"moves (default all: {MOVES})")
-    ap.add_argument("--seeds", type=int, default=3, help="seeds per move (default 3)")
-    ap.add_argument("--max-time", type=float, default=10.0, help="our wall-clock cap, s")
-    ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time, s")
-    ap.add_argument("--out", default="results/garage_moves")
+    st.add_run_options(ap, "move", "results/garage_moves")
     args = ap.parse_args(argv)
     try:
         aisles = numbers_above(args.aisles, "--aisles", floor=4.0)
@@ -102,8 +99,7 @@ def main(argv: list[str] | None = None) -> int:
     unknown = [m for m in moves if m not in MOVES]
     if unknown or not moves:
         ap.error(f"--moves: unknown {unknown}; choose from {', '.join(MOVES)}")
-    if args.seeds < 1 or args.max_time <= 0 or args.ompl_time <= 0:
-        ap.error("--seeds must be >= 1, --max-time and --ompl-time > 0")
+    st.check_run_options(ap, args)
     have_ompl = cov.availability(st.OMPL_NAME) is None
     t0 = time.perf_counter()
     load = f"{os.getloadavg()[0]:.1f}"
@@ -114,12 +110,7 @@ def main(argv: list[str] | None = None) -> int:
                 move_map(aisle, move), f"aisle {aisle:g} m, {move}", args.seeds,
                 args.max_time, args.ompl_time, have_ompl,
             )  # fmt: skip
-    payload = {
-        "command": command("garage_moves.py", argv),
-        "seeds": args.seeds, "max_time": args.max_time, "ompl_time": args.ompl_time,
-        "load": load, "machine": machine(),
-        "wall_time_s": time.perf_counter() - t0, "rows": rows,
-    }  # fmt: skip
+    payload = st.run_payload("garage_moves.py", argv, args, load, t0, rows)
     print(write_results(args.out, "garage_moves", payload, report))
     return 0
 

@@ -30,7 +30,7 @@ from typing import Any
 sys.path.insert(0, os.path.dirname(__file__))
 import coverage as cov  # noqa: E402  (the sibling scripts)
 import street_turns as st  # noqa: E402
-from results_io import command, machine, numbers_above, write_results  # noqa: E402
+from results_io import numbers_above, write_results  # noqa: E402
 
 from rrtdrive.tight_maps import kerbside_map  # noqa: E402
 
@@ -76,17 +76,13 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--factors", default="1.3,1.4,1.5,1.6,1.8,2.0,2.5",
                     help="gap lengths in car lengths (default 1.3,...,2.5)")  # fmt: skip
-    ap.add_argument("--seeds", type=int, default=3, help="seeds per gap (default 3)")
-    ap.add_argument("--max-time", type=float, default=10.0, help="our wall-clock cap, s")
-    ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time, s")
-    ap.add_argument("--out", default="results/kerb_gaps")
+    st.add_run_options(ap, "gap", "results/kerb_gaps")
     args = ap.parse_args(argv)
     try:
         factors = numbers_above(args.factors, "--factors", floor=1.0)
     except ValueError as err:
         ap.error(str(err))
-    if args.seeds < 1 or args.max_time <= 0 or args.ompl_time <= 0:
-        ap.error("--seeds must be >= 1, --max-time and --ompl-time > 0")
+    st.check_run_options(ap, args)
     have_ompl = cov.availability(st.OMPL_NAME) is None
     t0 = time.perf_counter()
     load = f"{os.getloadavg()[0]:.1f}"
@@ -96,11 +92,7 @@ def main(argv: list[str] | None = None) -> int:
             kerbside_map(f), f"gap {f:g}", args.seeds, args.max_time, args.ompl_time,
             have_ompl, GEARED,
         )  # fmt: skip
-    payload = {
-        "command": command("kerb_gaps.py", argv), "seeds": args.seeds,
-        "max_time": args.max_time, "ompl_time": args.ompl_time, "load": load,
-        "machine": machine(), "wall_time_s": time.perf_counter() - t0, "rows": rows,
-    }  # fmt: skip
+    payload = st.run_payload("kerb_gaps.py", argv, args, load, t0, rows)
     print(write_results(args.out, "kerb_gaps", payload, report))
     return 0
 

@@ -117,6 +117,33 @@ def ompl_row(m: Map, seed: int, seconds: float) -> dict[str, Any]:
     return row
 
 
+def add_run_options(ap: argparse.ArgumentParser, unit: str, out: str) -> None:
+    """The options every side-by-side script shares: seeds, our cap, OMPL's time, out."""
+    ap.add_argument("--seeds", type=int, default=3, help=f"seeds per {unit} (default 3)")
+    ap.add_argument("--max-time", type=float, default=10.0, help="our wall-clock cap, s")
+    ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time, s")
+    ap.add_argument("--out", default=out)
+
+
+def check_run_options(ap: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Exit 2 naming the option when a shared one is out of range."""
+    if args.seeds < 1 or args.max_time <= 0 or args.ompl_time <= 0:
+        ap.error("--seeds must be >= 1, --max-time and --ompl-time > 0")
+
+
+def run_payload(
+    script: str, argv: list[str] | None, args: argparse.Namespace, load: str, t0: float,
+    rows: dict[str, Any],
+) -> dict[str, Any]:
+    """The results payload of a side-by-side script: its command, settings, machine, rows."""
+    return {
+        "command": command(script, argv),
+        "seeds": args.seeds, "max_time": args.max_time, "ompl_time": args.ompl_time,
+        "load": load, "machine": machine(),
+        "wall_time_s": time.perf_counter() - t0, "rows": rows,
+    }  # fmt: skip
+
+
 def planner_rows(
     m: Map, label: str, seeds: int, max_time: float, ompl_time: float, have_ompl: bool,
     ours: tuple[str, ...] = OURS,
