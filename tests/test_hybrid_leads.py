@@ -135,3 +135,19 @@ def test_the_count_of_lead_ins_is_the_configs():
     assert counts == [0, 1, 2, 3]
     with pytest.raises(InputError, match="hybrid.lead_ins"):
         HybridConfig(lead_ins=-1)
+
+
+def test_leaving_a_bay_searches_from_the_goal_sooner():
+    # The start is boxed in its bay: the search from the goal, whose shots aim at the
+    # start's lead-ins, starts after 100 expansions instead of 400 (before: 425).
+    base = garage_map(7.0)
+    m = Map("leave", base.bounds, base.obstacles, garage_goal(0, 9, 7.0),
+            Pose(base.bounds[2] - 4.0, 5.5 + 7.0 / 4, 0.0))  # fmt: skip
+    res = make_planner("hybrid-a-star").solve(
+        PlanningProblem.from_map(m, reverse=True), np.random.default_rng(0),
+        Budget(max_iterations=20_000, max_time_s=60.0),
+    )  # fmt: skip
+    assert res.success, res.message
+    assert 100 < res.iterations <= 150
+    check = verify_path(m, res.path, max_sharpness=0.2)
+    assert check.ok, check.failed

@@ -117,6 +117,9 @@ BODY_TESTS = 8
 #: A goal facing more than this (degrees) away from the start's heading turns the car
 #: round: a turn stuck at the start is then tried further along (``abreast_turns``).
 TURN_ROUND_DEG = 100.0
+#: With a start boxed in (it has straight lead-ins), the search from the goal starts
+#: after ``switch_after / BOXED_START_SOONER`` expansions from the start.
+BOXED_START_SOONER = 4
 
 
 def body_test(checker: CollisionChecker, clearance: float) -> BodyTest:
@@ -416,8 +419,13 @@ def search_at_resolution(
         )
         searches = searches_with(search_clearance)
         left = budget - used.expansions
+        first_turn = config.switch_after
+        if reverse and leads_into(start, body_test(problem.checker, search_clearance)):
+            # A start boxed in a bay: the way out is straight, and from the goal's side the
+            # lead-in out of the start connects; search from there sooner.
+            first_turn = max(1, config.switch_after // BOXED_START_SOONER)
         path, outcome = _alternate(
-            searches, left, config.switch_after, watch, turn_with(search_clearance)
+            searches, left, first_turn, watch, turn_with(search_clearance)
         )
         reason = outcome.reason
         if margin > 0.0 and reason in PROOFS:
