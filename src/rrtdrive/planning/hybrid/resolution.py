@@ -379,8 +379,9 @@ def search_at_resolution(
 
         return turn
 
-    def searches_with(search_clearance: float) -> list[tuple[HybridSearch, Accept]]:
-        body = body_test(problem.checker, search_clearance)
+    def searches_with(
+        body: BodyTest, start_leads: tuple[Lead, ...]
+    ) -> list[tuple[HybridSearch, Accept]]:
         shots = analytic_shots(
             goal, radius, reverse, config.check_spacing, body, leads=leads_into(goal, body)
         )
@@ -396,7 +397,7 @@ def search_at_resolution(
             back_prims, *back_long = back_sets
             if reverse:
                 back_shots = analytic_shots(
-                    start, radius, True, config.check_spacing, body, leads=leads_into(start, body)
+                    start, radius, True, config.check_spacing, body, leads=start_leads
                 )
             else:
                 back_shots = _backward_dubins_shots(start, radius, config.check_spacing, body)
@@ -417,10 +418,12 @@ def search_at_resolution(
         search_clearance = clearance if margin == 0.0 else query_clearance(
             problem, config.body_clearance + margin, have
         )
-        searches = searches_with(search_clearance)
+        body = body_test(problem.checker, search_clearance)
+        start_leads = leads_into(start, body) if reverse else ()
+        searches = searches_with(body, start_leads)
         left = budget - used.expansions
         first_turn = config.switch_after
-        if reverse and leads_into(start, body_test(problem.checker, search_clearance)):
+        if start_leads:
             # A start boxed in a bay: the way out is straight, and from the goal's side the
             # lead-in out of the start connects; search from there sooner.
             first_turn = max(1, config.switch_after // BOXED_START_SOONER)
