@@ -72,14 +72,11 @@ def angled_map(angle_deg: float, aisle: float, direction: str) -> Map:
 def report(payload: dict[str, Any]) -> str:
     """The markdown page of a payload."""
     lines = [
-        "# Angled bays, with the row's direction and against it: ours with reverse and OMPL's",
-        "",
-        f"Command: `{payload['command']}`  ",
-        f"{payload['machine']}; wall time {payload['wall_time_s']:.0f} s; load at the start "
-        f"{payload['load']}. Bays 2.6 m wide, 5.5 m deep, at the angle to the aisle; "
-        f"{payload['seeds']} seeds; ours 20 000 iterations (cap {payload['max_time']:g} s), "
-        f"OMPL {payload['ompl_time']:g} s.",
-        "",
+        *st.page_header(
+            payload,
+            "Angled bays, with the row's direction and against it: ours with reverse and OMPL's",
+            "Bays 2.6 m wide, 5.5 m deep, at the angle to the aisle",
+        ),
         "| angle [deg] | direction | aisle [m] | planner | solved | verified | any sharpness "
         "| median time [ms] | median length [m] | median cusps | least clearance [m] |",
         "|---|---|---|---|---|---|---|---|---|---|---|",

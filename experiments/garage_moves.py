@@ -65,14 +65,11 @@ def move_map(aisle: float, move: str) -> Map:
 def report(payload: dict[str, Any]) -> str:
     """The markdown page of a payload."""
     lines = [
-        "# Everyday garage moves: ours with reverse and OMPL's RS RRTConnect",
-        "",
-        f"Command: `{payload['command']}`  ",
-        f"{payload['machine']}; wall time {payload['wall_time_s']:.0f} s; load at the start "
-        f"{payload['load']}. The `garage` map (2.6 m bays, 5.5 m deep) with its aisle A m "
-        f"wide; {payload['seeds']} seeds; ours 20 000 iterations (cap "
-        f"{payload['max_time']:g} s), OMPL {payload['ompl_time']:g} s.",
-        "",
+        *st.page_header(
+            payload,
+            "Everyday garage moves: ours with reverse and OMPL's RS RRTConnect",
+            "The `garage` map (2.6 m bays, 5.5 m deep) with its aisle A m wide",
+        ),
         "| aisle [m] | move | planner | solved | verified | any sharpness | median time [ms] | "
         "median length [m] | median cusps | least clearance [m] |",
         "|---|---|---|---|---|---|---|---|---|---|",

@@ -45,14 +45,11 @@ def _median(rows: list[dict[str, Any]], key: str, scale: float = 1.0, fmt: str =
 def report(payload: dict[str, Any]) -> str:
     """The markdown page of a payload."""
     lines = [
-        "# Parallel parking into kerbside gaps: ours with reverse and OMPL's RS RRTConnect",
-        "",
-        f"Command: `{payload['command']}`  ",
-        f"{payload['machine']}; wall time {payload['wall_time_s']:.0f} s; load at the start "
-        f"{payload['load']}. The `kerbside` map with its gap F car lengths (4.3 m) long; "
-        f"{payload['seeds']} seeds; ours 20 000 iterations (cap {payload['max_time']:g} s), "
-        f"OMPL {payload['ompl_time']:g} s.",
-        "",
+        *st.page_header(
+            payload,
+            "Parallel parking into kerbside gaps: ours with reverse and OMPL's RS RRTConnect",
+            "The `kerbside` map with its gap F car lengths (4.3 m) long",
+        ),
         "| gap [car lengths] | planner | solved | verified | any sharpness | median time "
         "[ms] | median length [m] | median cusps | clearance kept [m] | outcomes |",
         "|---|---|---|---|---|---|---|---|---|---|",

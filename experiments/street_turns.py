@@ -170,23 +170,33 @@ def _median(rows: list[dict[str, Any]], key: str) -> str:
     return f"{v * 1000:.1f}" if key == "time_s" else f"{v:.1f}"
 
 
-def report(payload: dict[str, Any]) -> str:
-    """The markdown page of a payload."""
-    lines = [
-        "# Turning round in a closed street: ours with reverse and OMPL's RS RRTConnect",
+def page_header(payload: dict[str, Any], title: str, setting: str) -> list[str]:
+    """The first lines of a side-by-side page: title, command, machine, ``setting``, budgets."""
+    return [
+        f"# {title}",
         "",
         f"Command: `{payload['command']}`  ",
         f"{payload['machine']}; wall time {payload['wall_time_s']:.0f} s; load at the start "
-        f"{payload['load']}. Street {payload['length']:g} m long; "
-        + (
-            "the goal is the start turned round"
-            if payload.get("lanes") is None
-            else f"start in the right-hand lane at x = 16, goal in the other lane "
-            f"{payload['lanes']:g} m behind it"
-        )
-        + f"; {payload['seeds']} seeds; "
-        f"ours 20 000 iterations (cap {payload['max_time']:g} s), OMPL {payload['ompl_time']:g} s.",
+        f"{payload['load']}. {setting}; {payload['seeds']} seeds; ours 20 000 iterations "
+        f"(cap {payload['max_time']:g} s), OMPL {payload['ompl_time']:g} s.",
         "",
+    ]
+
+
+def report(payload: dict[str, Any]) -> str:
+    """The markdown page of a payload."""
+    ends = (
+        "the goal is the start turned round"
+        if payload.get("lanes") is None
+        else f"start in the right-hand lane at x = 16, goal in the other lane "
+        f"{payload['lanes']:g} m behind it"
+    )
+    lines = [
+        *page_header(
+            payload,
+            "Turning round in a closed street: ours with reverse and OMPL's RS RRTConnect",
+            f"Street {payload['length']:g} m long; {ends}",
+        ),
         "| width [m] | planner | solved | verified | any sharpness | median time [ms] | "
         "median length [m] | median cusps |",
         "|---|---|---|---|---|---|---|---|",
