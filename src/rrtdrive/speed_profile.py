@@ -456,7 +456,7 @@ def actuator_profile(
     >>> fast = actuator_profile(s, k, SpeedConfig(), 0.0, 2.51, None)
     >>> slow = actuator_profile(s, k, SpeedConfig(), 0.0, 2.51, 0.4)
     >>> float(fast.v[0]), float(slow.v[0]), float(fast.v[34]), round(float(slow.v[34]), 3)
-    (0.5, 0.0, 3.0, 0.759)
+    (0.5, 0.0, 3.0, 0.746)
     """
     s = np.asarray(s, dtype=float)
     kappa = np.asarray(kappa, dtype=float)

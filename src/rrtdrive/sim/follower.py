@@ -48,7 +48,7 @@ class IDMConfig:
     Examples
     --------
     >>> round(IDMConfig().accel_for(4.0, 11.0, 10.0, 0.0), 3)  # at the desired gap: about 0
-    -0.009
+    -0.026
     """
 
     accel: float = 1.5
