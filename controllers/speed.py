@@ -26,7 +26,12 @@ from dataclasses import dataclass
 from rrtdrive.speed_profile import FINAL_APPROACH_M, SpeedProfile
 from rrtdrive.types import InputError, require_finite, require_positive
 
-__all__ = ["SpeedConfig", "SpeedProfile", "SpeedController", "FINAL_APPROACH_M"]
+__all__ = ["SpeedConfig", "SpeedProfile", "SpeedController", "FINAL_APPROACH_M", "PAST_END_M"]
+
+#: A car that runs past the end of its path (or gear segment) stops within this (metres).
+PAST_END_M = 0.05
+#: The window of that stop never shrinks below this (metres): the brake stays finite.
+PAST_END_FLOOR_M = 0.01
 
 
 @dataclass(frozen=True)
@@ -232,9 +237,11 @@ class SpeedController:
         else:
             v_ref, a_ref = profile.at(s)
         if remaining <= 0.0:
-            # Past the end: brake to a stop within a few centimetres.
+            # Past the end: stop within PAST_END_M of it. The window shrinks as the car
+            # runs on (a fixed one, asked anew each step, lets the car crawl on: the
+            # deceleration v^2 / 2d fades with the speed; 0.19 m and 1.6 s at a cusp).
             self.v_ref = 0.0
-            return self._brake(speed, dt, 0.05)
+            return self._brake(speed, dt, max(PAST_END_M + remaining, PAST_END_FLOOR_M))
         if self.stop_at is None:
             self.line_taper = False
         else:

@@ -20,6 +20,7 @@ from rrtdrive.controllers import (
     make_controller,
 )
 from rrtdrive.controllers.lqr import design_gain, lateral_error_model
+from rrtdrive.controllers.speed import PAST_END_M
 from rrtdrive.controllers.stanley import front_axle_path
 from rrtdrive.types import InputError, Path, VehicleParams
 from rrtdrive.vehicle import bicycle_step
@@ -207,6 +208,29 @@ def test_speed_loop_stops_at_the_end():
     assert ctrl.arrived
     assert abs(pos - 30.0) < 0.05
     assert v == 0.0
+
+
+@pytest.mark.parametrize("speed", [0.1, 0.4, 1.0])
+@pytest.mark.parametrize("comfort", [False, True])
+def test_a_car_past_the_end_stops_within_the_window(speed: float, comfort: bool):
+    # A 0.7 m gear segment of a multi-point turn: the jerk-limited loop reached its end
+    # at 0.4 m/s and, braking with v^2 / 0.1 asked anew each step, crawled 0.19 m on.
+    cfg = SpeedConfig()
+    s = np.linspace(0.0, 0.7, 8)
+    ctrl = SpeedController(cfg, comfort=comfort)
+    ctrl.reset(SpeedProfile(s, np.zeros_like(s), cfg))
+    pos, v, dt = 0.7, speed, 0.05
+    for k in range(400):
+        a = ctrl.control(pos, v, k * dt)
+        v1 = max(0.0, v + a * dt)
+        pos += 0.5 * (v + v1) * dt
+        v = v1
+        if v == 0.0:
+            break
+    assert v == 0.0 and k * dt < 1.0
+    # Within the window, or the brake's own limit where that is longer, and one step's run
+    # (the command acts a step after the sample).
+    assert pos - 0.7 <= max(PAST_END_M, speed**2 / (2 * -cfg.a_min)) + speed * dt
 
 
 def _drive_straight(cfg: SpeedConfig, length: float = 30.0, dt: float = 0.05):
