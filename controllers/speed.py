@@ -252,8 +252,12 @@ class SpeedController:
                 if a_line is not None:
                     return a_line
             if d <= cfg.stop_distance:
+                # Within ``stop_distance`` of the line: stop within PAST_END_M; past it,
+                # within what is left of that (as past the end of the path).
                 self.v_ref = 0.0
-                return self._brake(speed, dt, max(d, 0.05))
+                return self._brake(
+                    speed, dt, max(d, PAST_END_M + min(d, 0.0), PAST_END_FLOOR_M)
+                )
             # Comfort mode reads the cap ahead like the profile (the ramp of the
             # jerk-limited command then starts before the braking, not after it).
             ahead = d - abs(speed) * tau if self.comfort else d

@@ -233,6 +233,27 @@ def test_a_car_past_the_end_stops_within_the_window(speed: float, comfort: bool)
     assert pos - 0.7 <= max(PAST_END_M, speed**2 / (2 * -cfg.a_min)) + speed * dt
 
 
+@pytest.mark.parametrize("speed", [0.1, 0.4, 1.0])
+@pytest.mark.parametrize("comfort", [False, True])
+def test_a_car_past_a_stop_line_stops_within_the_window(speed: float, comfort: bool):
+    # The stop line of a traffic gate, 10 m along a 30 m path: the car is at the line.
+    cfg = SpeedConfig()
+    s = np.linspace(0.0, 30.0, 301)
+    ctrl = SpeedController(cfg, comfort=comfort)
+    ctrl.reset(SpeedProfile(s, np.zeros_like(s), cfg))
+    ctrl.stop_at = 10.0
+    pos, v, dt = 10.0, speed, 0.05
+    for k in range(400):
+        a = ctrl.control(pos, v, k * dt)
+        v1 = max(0.0, v + a * dt)
+        pos += 0.5 * (v + v1) * dt
+        v = v1
+        if v == 0.0:
+            break
+    assert v == 0.0 and k * dt < 1.0
+    assert pos - 10.0 <= max(PAST_END_M, speed**2 / (2 * -cfg.a_min)) + speed * dt
+
+
 def _drive_straight(cfg: SpeedConfig, length: float = 30.0, dt: float = 0.05):
     """Point-mass run of the speed loop on a straight profile: positions, commands."""
     s = np.linspace(0.0, length, int(length * 10) + 1)
