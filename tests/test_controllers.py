@@ -210,16 +210,19 @@ def test_speed_loop_stops_at_the_end():
     assert v == 0.0
 
 
-@pytest.mark.parametrize("speed", [0.1, 0.4, 1.0])
-@pytest.mark.parametrize("comfort", [False, True])
-def test_a_car_past_the_end_stops_within_the_window(speed: float, comfort: bool):
-    # A 0.7 m gear segment of a multi-point turn: the jerk-limited loop reached its end
-    # at 0.4 m/s and, braking with v^2 / 0.1 asked anew each step, crawled 0.19 m on.
+def _stop_from(length: float, stop_at: float | None, speed: float, comfort: bool) -> float:
+    """Point-mass run of the speed loop from where it must stop, at ``speed``: how far it ran.
+
+    On a straight ``length`` m profile, from its end (``stop_at`` None) or from a stop
+    line at ``stop_at``; asserts that the car stops within a second.
+    """
     cfg = SpeedConfig()
-    s = np.linspace(0.0, 0.7, 8)
+    s = np.linspace(0.0, length, int(round(length * 10)) + 1)
     ctrl = SpeedController(cfg, comfort=comfort)
     ctrl.reset(SpeedProfile(s, np.zeros_like(s), cfg))
-    pos, v, dt = 0.7, speed, 0.05
+    ctrl.stop_at = stop_at
+    start = length if stop_at is None else stop_at
+    pos, v, dt = start, speed, 0.05
     for k in range(400):
         a = ctrl.control(pos, v, k * dt)
         v1 = max(0.0, v + a * dt)
@@ -228,30 +231,28 @@ def test_a_car_past_the_end_stops_within_the_window(speed: float, comfort: bool)
         if v == 0.0:
             break
     assert v == 0.0 and k * dt < 1.0
-    # Within the window, or the brake's own limit where that is longer, and one step's run
-    # (the command acts a step after the sample).
-    assert pos - 0.7 <= max(PAST_END_M, speed**2 / (2 * -cfg.a_min)) + speed * dt
+    return pos - start
+
+
+def _stop_window(speed: float, dt: float = 0.05) -> float:
+    # The window, or the brake's own limit where that is longer, and one step's run (the
+    # command acts a step after the sample).
+    return max(PAST_END_M, speed**2 / (2 * -SpeedConfig().a_min)) + speed * dt
+
+
+@pytest.mark.parametrize("speed", [0.1, 0.4, 1.0])
+@pytest.mark.parametrize("comfort", [False, True])
+def test_a_car_past_the_end_stops_within_the_window(speed: float, comfort: bool):
+    # A 0.7 m gear segment of a multi-point turn: the jerk-limited loop reached its end
+    # at 0.4 m/s and, braking with v^2 / 0.1 asked anew each step, crawled 0.19 m on.
+    assert _stop_from(0.7, None, speed, comfort) <= _stop_window(speed)
 
 
 @pytest.mark.parametrize("speed", [0.1, 0.4, 1.0])
 @pytest.mark.parametrize("comfort", [False, True])
 def test_a_car_past_a_stop_line_stops_within_the_window(speed: float, comfort: bool):
     # The stop line of a traffic gate, 10 m along a 30 m path: the car is at the line.
-    cfg = SpeedConfig()
-    s = np.linspace(0.0, 30.0, 301)
-    ctrl = SpeedController(cfg, comfort=comfort)
-    ctrl.reset(SpeedProfile(s, np.zeros_like(s), cfg))
-    ctrl.stop_at = 10.0
-    pos, v, dt = 10.0, speed, 0.05
-    for k in range(400):
-        a = ctrl.control(pos, v, k * dt)
-        v1 = max(0.0, v + a * dt)
-        pos += 0.5 * (v + v1) * dt
-        v = v1
-        if v == 0.0:
-            break
-    assert v == 0.0 and k * dt < 1.0
-    assert pos - 10.0 <= max(PAST_END_M, speed**2 / (2 * -cfg.a_min)) + speed * dt
+    assert _stop_from(30.0, 10.0, speed, comfort) <= _stop_window(speed)
 
 
 def _drive_straight(cfg: SpeedConfig, length: float = 30.0, dt: float = 0.05):
