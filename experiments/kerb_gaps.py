@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import sys
 import time
 from typing import Any
@@ -35,11 +34,6 @@ from results_io import numbers_above, write_results  # noqa: E402
 from rrtdrive.tight_maps import kerbside_map  # noqa: E402
 
 GEARED = ("improved-rrt-connect", "hybrid-a-star")
-
-
-def _median(rows: list[dict[str, Any]], key: str, scale: float = 1.0, fmt: str = "{:.1f}") -> str:
-    values = [r[key] * scale for r in rows if r["solved"] and r.get(key) is not None]
-    return fmt.format(statistics.median(values)) if values else "-"
 
 
 def report(payload: dict[str, Any]) -> str:
@@ -62,7 +56,7 @@ def report(payload: dict[str, Any]) -> str:
                 outcomes[key] = outcomes.get(key, 0) + 1
             cells = [
                 *st.row_cells(rows),
-                _median(rows, "clearance_m", fmt="{:.2f}"),
+                st.median_cell(rows, "clearance_m", fmt="{:.2f}"),
                 ", ".join(f"{k} {v}" for k, v in sorted(outcomes.items())),
             ]
             lines.append(f"| {factor} | {planner} | " + " | ".join(cells) + " |")

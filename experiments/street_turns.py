@@ -162,12 +162,12 @@ def planner_rows(
     return by_planner
 
 
-def _median(rows: list[dict[str, Any]], key: str) -> str:
-    values = [r[key] for r in rows if r["solved"]]
-    if not values:
-        return "-"
-    v = statistics.median(values)
-    return f"{v * 1000:.1f}" if key == "time_s" else f"{v:.1f}"
+def median_cell(
+    rows: list[dict[str, Any]], key: str, scale: float = 1.0, fmt: str = "{:.1f}"
+) -> str:
+    """The median of ``key`` times ``scale`` over the solved rows that have it (``-``: none)."""
+    values = [r[key] * scale for r in rows if r["solved"] and r.get(key) is not None]
+    return fmt.format(statistics.median(values)) if values else "-"
 
 
 def page_header(payload: dict[str, Any], title: str, setting: str) -> list[str]:
@@ -222,7 +222,7 @@ def row_cells(rows: list[dict[str, Any]]) -> list[str]:
         f"{len(solved)}/{len(rows)}",
         f"{sum(r.get('verified', False) for r in rows)}",
         f"{sum(r.get('verified_any_sharpness', False) for r in rows)}",
-        _median(rows, "time_s"), _median(rows, "length_m"), f"{cusps}",
+        median_cell(rows, "time_s", 1000.0), median_cell(rows, "length_m"), f"{cusps}",
     ]  # fmt: skip
 
 
