@@ -255,6 +255,28 @@ def test_a_car_past_a_stop_line_stops_within_the_window(speed: float, comfort: b
     assert _stop_from(30.0, 10.0, speed, comfort) <= _stop_window(speed)
 
 
+@pytest.mark.parametrize("short", [0.1, 0.2, 0.5])
+@pytest.mark.parametrize("comfort", [False, True])
+def test_a_car_at_rest_short_of_the_end_drives_on_to_it(short: float, comfort: bool):
+    # A car stopped short of a cusp: the profile's braking fed forward whole (v_ref dv/ds,
+    # as if the car ran at the profile's speed) held it to 1 cm/s: 5.6-6.5 s to creep on.
+    cfg = SpeedConfig()
+    s = np.linspace(0.0, 30.0, 301)
+    ctrl = SpeedController(cfg, comfort=comfort)
+    ctrl.reset(SpeedProfile(s, np.zeros_like(s), cfg))
+    pos, v, dt = 30.0 - short, 0.0, 0.05
+    for k in range(2000):
+        a = ctrl.control(pos, v, k * dt)
+        v1 = max(0.0, v + a * dt)
+        pos += 0.5 * (v + v1) * dt
+        v = v1
+        if ctrl.arrived and v == 0.0:
+            break
+    assert ctrl.arrived and v == 0.0
+    assert k * dt <= 2.5
+    assert abs(pos - 30.0) <= cfg.stop_distance
+
+
 def _drive_straight(cfg: SpeedConfig, length: float = 30.0, dt: float = 0.05):
     """Point-mass run of the speed loop on a straight profile: positions, commands."""
     s = np.linspace(0.0, length, int(length * 10) + 1)
