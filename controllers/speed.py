@@ -7,7 +7,9 @@ The profile obeys ``v(s) <= sqrt(a_lat_max / |kappa(s)|)`` and ``v(s) <= v_max``
 rises no faster than ``accel`` and falls no faster than ``decel`` (forward and
 backward passes over arc length), and reaches zero at the end of the path. The
 loop adds the profile's own acceleration ``v dv/ds`` as a feed-forward to a PI
-correction on the speed error, and holds the car once it has stopped at the goal.
+correction on the speed error (its braking taken at the car's speed, ``speed dv/ds``,
+when the car is slower than the profile), and holds the car once it has stopped at the
+goal; a car that runs past the end stops within ``PAST_END_M``.
 
 For a car with a rate-limited steering actuator (``VehicleParams.max_steer_rate``)
 the tracking controllers also cap the profile by the steering rate
