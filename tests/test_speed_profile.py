@@ -2,16 +2,21 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from rrtdrive.controllers import SpeedConfig
+from rrtdrive.controllers import SpeedConfig, SpeedController
 from rrtdrive.controllers import SpeedProfile as ControllersProfile
 from rrtdrive.planning.spacetime import profile_times as spacetime_times
 from rrtdrive.speed_profile import (
     SpeedProfile,
     actuator_profile,
     arrival_times,
+    peak_with_plateau,
     profile_times,
     speed_caps_squared,
     steering_rate_speed_cap,
@@ -94,3 +99,55 @@ def test_no_short_speed_up_between_the_last_slow_stretch_and_the_stop():
     s, kappa = _clothoid_dip(80.0)
     prof = actuator_profile(s, kappa, cfg, 0.0, 2.51, 0.4)
     assert prof.v[s >= 21.0].max() == pytest.approx(cfg.v_max)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.floats(0.05, 0.5),  # sample spacing
+    st.floats(0.3, 30.0),  # length
+    st.floats(0.0, 1.0),  # where, as a share of the length
+)
+def test_the_reference_between_samples_keeps_the_intervals_acceleration(
+    spacing: float, length: float, where: float
+):
+    # Each interval has one acceleration a_ref = d(v^2/2)/ds, so v_ref^2 is linear in s
+    # on it: v_ref linear in s instead made the last interval's v_ref proportional to
+    # the distance left (v_ref = 2 d at 0.25 m spacing), an exponential crawl to the stop.
+    n = max(2, int(length / spacing) + 1)
+    s = np.linspace(0.0, length, n)
+    prof = SpeedProfile(s, np.zeros_like(s), SpeedConfig(), 0.0)
+    x = where * length * (1 - 1e-9)
+    v, a = prof.at(x)
+    i = int(np.searchsorted(s, x, side="right") - 1)
+    v0, (_, a0) = prof.v[i], prof.at(float(s[i]))
+    assert a == a0
+    assert v * v - v0 * v0 == pytest.approx(2.0 * a * (x - s[i]), abs=1e-9)
+
+
+@pytest.mark.parametrize("length", [0.5, 0.7, 1.0, 2.0, 5.0])
+def test_a_manoeuvre_segment_peaks_low_enough_for_the_comfort_loop_to_stop(length: float):
+    # A multi-point turn's 0.7 m move: the rest-to-rest triangle of a profile (rise, then
+    # brake at once) left the jerk-limited loop speeding up when it had to brake; the
+    # car reached the cusp at 0.4 m/s and stopped 0.2 m past it.
+    cfg = SpeedConfig()
+    slow = dataclasses.replace(cfg, accel=cfg.accel_manoeuvre, decel=cfg.accel_manoeuvre)
+    s = np.linspace(0.0, length, max(3, int(length / 0.25) + 1))
+    prof = actuator_profile(s, np.zeros_like(s), slow, 0.0, 2.51, 0.4, rise_to_peak=True)
+    peak = float(prof.v.max())
+    assert peak == pytest.approx(
+        min(peak_with_plateau(length, slow.accel, slow.accel + slow.decel, slow.comfort_jerk),
+            float(SpeedProfile(s, np.zeros_like(s), slow, 0.0).v.max()), slow.v_max),
+        rel=1e-6,
+    )  # fmt: skip
+    # The loop in comfort mode on a point mass: at rest at the end, never past it.
+    ctrl = SpeedController(slow, comfort=True)
+    ctrl.reset(prof)
+    pos, v, dt = 0.0, 0.0, 0.05
+    for k in range(2000):
+        a = ctrl.control(pos, v, k * dt)
+        v1 = max(0.0, v + a * dt)
+        pos += 0.5 * (v + v1) * dt
+        v = v1
+        if ctrl.arrived and v == 0.0:
+            break
+    assert ctrl.arrived and abs(pos - length) <= slow.stop_distance

@@ -38,6 +38,7 @@ __all__ = [
     "SpeedProfile",
     "RateLimitedLimits",
     "actuator_profile",
+    "peak_with_plateau",
     "FINAL_APPROACH_M",
     "profile_times",
     "arrival_times",
@@ -355,7 +356,11 @@ class SpeedProfile:
             return self._v[0], self._a[0]
         i = bisect.bisect_right(self._s, s) - 1
         frac = (s - self._s[i]) / (self._s[i + 1] - self._s[i])
-        return self._v[i] + frac * (self._v[i + 1] - self._v[i]), self._a[i]
+        # v^2 is linear in s on an interval of constant acceleration (the interval's
+        # a_ref): v itself linear made the last interval's v_ref proportional to the
+        # distance left, an exponential crawl to the stop (0.5 s time constant at 0.25 m).
+        v0, v1 = self._v[i], self._v[i + 1]
+        return math.sqrt(v0 * v0 + frac * (v1 * v1 - v0 * v0)), self._a[i]
 
     def times(self) -> np.ndarray:
         """Arrival time at each sample (0 at the first; see :func:`arrival_times`)."""
@@ -442,7 +447,8 @@ def actuator_profile(
     rise_to_peak : bool, optional
         The path is one gear segment of a manoeuvre (it starts at rest and may be
         shorter than the final approach): it may still speed up to its peak, or the
-        running minimum from its standstill start would keep it at 0.
+        running minimum from its standstill start would keep it at 0; the peak is
+        capped by :func:`peak_with_plateau` for its length.
 
     Returns
     -------
@@ -474,4 +480,27 @@ def actuator_profile(
         i0 = max(i0, int(np.argmax(first.v)))
     if i0 is not None:
         cap[i0:] = np.minimum(cap[i0:], np.minimum.accumulate(first.v[i0:]))
+    if rise_to_peak:
+        swing = config.accel + config.decel
+        accel = min(config.accel, config.decel)
+        cap = np.minimum(cap, peak_with_plateau(float(s[-1]), accel, swing, config.comfort_jerk))
     return SpeedProfile(s, kappa, config, v_start, v_cap=cap)
+
+
+def peak_with_plateau(length: float, accel: float, swing: float, jerk: float) -> float:
+    """Top speed of a rest-to-rest run of ``length`` metres that the comfort loop can stop.
+
+    The run rises and falls at ``accel`` (m/s^2) and holds its top speed ``v`` for the
+    ``swing / jerk`` seconds the jerk-limited command needs to swing from speeding up to
+    braking (as :func:`_last_rise_too_short` asks of a last rise):
+    ``v^2 / accel + v swing / jerk = length``. A manoeuvre's gear segment is such a run;
+    without the plateau, a multi-point turn's 0.7 m moves (a triangle of a profile) left
+    the car still speeding up when it had to brake, and it ran 0.2 m past the cusp.
+
+    Examples
+    --------
+    >>> round(peak_with_plateau(0.7, 0.5, 1.0, 2.0), 3)
+    0.48
+    """
+    lag = swing / jerk
+    return 0.5 * accel * (math.sqrt(lag * lag + 4.0 * length / accel) - lag)
