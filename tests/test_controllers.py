@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from speed_runs import point_mass_run
 
 from rrtdrive.controllers import (
     LQR,
@@ -197,14 +198,7 @@ def test_speed_loop_stops_at_the_end():
     s = np.linspace(0.0, 30.0, 301)
     ctrl = SpeedController(cfg)
     ctrl.reset(SpeedProfile(s, np.zeros_like(s), cfg))
-    pos, v, dt = 0.0, 0.0, 0.05
-    for k in range(2000):
-        a = ctrl.control(pos, v, k * dt)
-        v1 = max(0.0, v + a * dt)
-        pos += 0.5 * (v + v1) * dt
-        v = v1
-        if ctrl.arrived and v == 0.0:
-            break
+    pos, v, _ = point_mass_run(ctrl, 0.0, 0.0)
     assert ctrl.arrived
     assert abs(pos - 30.0) < 0.05
     assert v == 0.0
@@ -222,15 +216,8 @@ def _stop_from(length: float, stop_at: float | None, speed: float, comfort: bool
     ctrl.reset(SpeedProfile(s, np.zeros_like(s), cfg))
     ctrl.stop_at = stop_at
     start = length if stop_at is None else stop_at
-    pos, v, dt = start, speed, 0.05
-    for k in range(400):
-        a = ctrl.control(pos, v, k * dt)
-        v1 = max(0.0, v + a * dt)
-        pos += 0.5 * (v + v1) * dt
-        v = v1
-        if v == 0.0:
-            break
-    assert v == 0.0 and k * dt < 1.0
+    pos, v, t = point_mass_run(ctrl, start, speed, steps=400, until_arrived=False)
+    assert v == 0.0 and t < 1.0
     return pos - start
 
 
@@ -264,16 +251,9 @@ def test_a_car_at_rest_short_of_the_end_drives_on_to_it(short: float, comfort: b
     s = np.linspace(0.0, 30.0, 301)
     ctrl = SpeedController(cfg, comfort=comfort)
     ctrl.reset(SpeedProfile(s, np.zeros_like(s), cfg))
-    pos, v, dt = 30.0 - short, 0.0, 0.05
-    for k in range(2000):
-        a = ctrl.control(pos, v, k * dt)
-        v1 = max(0.0, v + a * dt)
-        pos += 0.5 * (v + v1) * dt
-        v = v1
-        if ctrl.arrived and v == 0.0:
-            break
+    pos, v, t = point_mass_run(ctrl, 30.0 - short, 0.0)
     assert ctrl.arrived and v == 0.0
-    assert k * dt <= 2.5
+    assert t <= 2.5
     assert abs(pos - 30.0) <= cfg.stop_distance
 
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from speed_runs import point_mass_run
 
 from rrtdrive.controllers import SpeedConfig, SpeedController
 from rrtdrive.controllers import SpeedProfile as ControllersProfile
@@ -142,12 +143,5 @@ def test_a_manoeuvre_segment_peaks_low_enough_for_the_comfort_loop_to_stop(lengt
     # The loop in comfort mode on a point mass: at rest at the end, never past it.
     ctrl = SpeedController(slow, comfort=True)
     ctrl.reset(prof)
-    pos, v, dt = 0.0, 0.0, 0.05
-    for k in range(2000):
-        a = ctrl.control(pos, v, k * dt)
-        v1 = max(0.0, v + a * dt)
-        pos += 0.5 * (v + v1) * dt
-        v = v1
-        if ctrl.arrived and v == 0.0:
-            break
+    pos, _, _ = point_mass_run(ctrl, 0.0, 0.0)
     assert ctrl.arrived and abs(pos - length) <= slow.stop_distance
