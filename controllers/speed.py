@@ -285,9 +285,9 @@ class SpeedController:
                 # Final approach: the constant deceleration that stops exactly at the end.
                 a_ref = min(a_ref, -speed * speed / (2.0 * max(remaining, cfg.stop_distance)))
         if a_ref < 0.0 and 0.0 <= speed < v_ref:
-            # The profile's braking, as the car slower than it would brake: a_ref is
-            # v_ref dv/ds, at the car's speed it is speed dv/ds. Taken whole, it stopped
-            # cars 9 cm short of a cusp, then left them creeping at 1 cm/s for seconds.
+            # The profile's braking at the car's own speed: a_ref is v_ref dv/ds, and a
+            # car slower than v_ref brakes speed dv/ds. Taken whole, it stopped cars 9 cm
+            # short of a cusp, then held them creeping at 1 cm/s for seconds.
             a_ref *= speed / v_ref
         err = v_ref - speed
         trial = self.integral + err * dt
