@@ -80,12 +80,8 @@ def report(payload: dict[str, Any]) -> str:
         "| angle [deg] | direction | aisle [m] | planner | solved | verified | any sharpness "
         "| median time [ms] | median length [m] | median cusps | least clearance [m] |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
+        *st.clearance_table_rows(payload),
     ]
-    for key, by_planner in payload["rows"].items():
-        angle, direction, aisle = key.split("|")
-        for planner, rows in by_planner.items():
-            cells = " | ".join([*st.row_cells(rows), st.least_clearance_cell(rows)])
-            lines.append(f"| {angle} | {direction} | {aisle} | {planner} | {cells} |")
     return "\n".join(lines) + "\n"
 
 

@@ -73,12 +73,8 @@ def report(payload: dict[str, Any]) -> str:
         "| aisle [m] | move | planner | solved | verified | any sharpness | median time [ms] | "
         "median length [m] | median cusps | least clearance [m] |",
         "|---|---|---|---|---|---|---|---|---|---|",
+        *st.clearance_table_rows(payload),
     ]
-    for key, by_planner in payload["rows"].items():
-        aisle, move = key.split("|")
-        for planner, rows in by_planner.items():
-            cells = " | ".join([*st.row_cells(rows), st.least_clearance_cell(rows)])
-            lines.append(f"| {aisle} | {move} | {planner} | {cells} |")
     return "\n".join(lines) + "\n"
 
 

@@ -213,6 +213,18 @@ def least_clearance_cell(rows: list[dict[str, Any]]) -> str:
     return f"{min(values):.3f}" if values else "-"
 
 
+def clearance_table_rows(payload: dict[str, Any]) -> list[str]:
+    """A page's table rows: the case's key parts (``a|b|...``), the planner, its cells and
+    the least clearance (the pages of ``angled_bays.py`` and ``garage_moves.py``)."""
+    lines = []
+    for key, by_planner in payload["rows"].items():
+        case = " | ".join(key.split("|"))
+        for planner, rows in by_planner.items():
+            cells = " | ".join([*row_cells(rows), least_clearance_cell(rows)])
+            lines.append(f"| {case} | {planner} | {cells} |")
+    return lines
+
+
 def row_cells(rows: list[dict[str, Any]]) -> list[str]:
     """A planner's cells for one query: solved, verified, any sharpness, median time,
     length and cusps (the columns ``kerb_gaps.py`` shares)."""
