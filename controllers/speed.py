@@ -17,7 +17,10 @@ the tracking controllers also cap the profile by the steering rate
 the car at rest until the wheels have turned to the path's initial angle
 (``start_steer_tol``), and run the loop in comfort mode: every change of the
 acceleration command is bounded by ``comfort_jerk`` (below nuPlan's |jerk| bound of
-4.13 m/s^3), also while a car-following cap binds.
+4.13 m/s^3), also while a car-following cap binds. A positive command is kept small
+enough to ramp down to 0 at that bound before the car passes the highest reference
+speed within reach (``a^2 / 2 comfort_jerk <= v_top - speed``), so the car does not
+overshoot the top of a rise.
 """
 
 from __future__ import annotations
@@ -295,6 +298,15 @@ class SpeedController:
         cap = self.accel_cap
         capped = cap is not None and raw > cap
         if self.comfort:
+            if raw > 0.0 and speed >= 0.0:
+                # Ramping a command a down to 0 at the jerk bound gains a^2 / 2J of speed:
+                # keep that within the highest reference the ramp can reach, or the car
+                # overshoots the top of a rise (and brakes harder later).
+                ramp = raw / cfg.comfort_jerk
+                reach = speed * (ramp + tau) + raw * ramp * ramp / 3.0
+                room = max(profile.peak(s, s + reach) - speed, 0.0)
+                raw = min(raw, math.sqrt(2.0 * cfg.comfort_jerk * room))
+                capped = cap is not None and raw > cap
             a = self._limit(cap if capped else raw, dt, cfg.comfort_jerk)
         else:
             a = self._limit(cap if capped else raw, dt, None if capped else cfg.jerk_brake_max)

@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from speed_runs import point_mass_run
 
 from rrtdrive.controllers import (
@@ -23,6 +25,7 @@ from rrtdrive.controllers import (
 from rrtdrive.controllers.lqr import design_gain, lateral_error_model
 from rrtdrive.controllers.speed import PAST_END_M
 from rrtdrive.controllers.stanley import front_axle_path
+from rrtdrive.speed_profile import actuator_profile
 from rrtdrive.types import InputError, Path, VehicleParams
 from rrtdrive.vehicle import bicycle_step
 
@@ -320,3 +323,32 @@ def test_retarget_steers_along_the_new_path(name):
     switched.retarget(second, 2.0)
     state = VehicleState(5.0, 3.0, 0.0, 2.0)
     assert switched.control(state)[1] == pytest.approx(fresh.control(state)[1], abs=1e-12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    slow_end=st.floats(0.0, 30.0),
+    rest=st.floats(3.0, 30.0),
+    slow_speed=st.floats(0.3, 2.5),
+)
+def test_the_comfort_loop_does_not_overshoot_the_top_of_a_rise(
+    slow_end: float, rest: float, slow_speed: float
+):
+    # A slow stretch (a bend whose lateral-acceleration cap is slow_speed), then a rise
+    # and the stop at the end, as the controllers' profile (actuator_profile) has it; the
+    # actuator is fast enough not to cap it. Lagging on the rise, the jerk-limited loop's
+    # PI asked for more than the profile's acceleration and could not ramp it down in
+    # time: up to 0.34 m/s over the peak and 0.58 m past the end, braking at -4 m/s^2
+    # (stock parking-v0 seed 32: 0.26 m/s over, -3.5 m/s^2 before the goal).
+    cfg = SpeedConfig()
+    length = slow_end + rest
+    s = np.linspace(0.0, length, int(length / 0.25) + 2)
+    kappa = np.where(s < slow_end, cfg.a_lat_max / slow_speed**2, 0.0)
+    profile = actuator_profile(s, kappa, cfg, 0.0, 2.51, 1e3)
+    ctrl = SpeedController(cfg, comfort=True)
+    ctrl.reset(profile)
+    trace: list[tuple[float, float, float, float]] = []
+    pos, v, _ = point_mass_run(ctrl, 0.0, 0.0, steps=4000, trace=trace)
+    assert max(step[2] for step in trace) <= float(profile.v.max()) + 0.05
+    assert min(step[3] for step in trace) >= -1.5 * cfg.decel
+    assert ctrl.arrived and v == 0.0 and abs(pos - length) <= cfg.stop_distance

@@ -18,6 +18,7 @@ from rrtdrive.speed_profile import (
     actuator_profile,
     arrival_times,
     peak_with_plateau,
+    plateau_caps,
     profile_times,
     speed_caps_squared,
     steering_rate_speed_cap,
@@ -145,3 +146,46 @@ def test_a_manoeuvre_segment_peaks_low_enough_for_the_comfort_loop_to_stop(lengt
     ctrl.reset(prof)
     pos, _, _ = point_mass_run(ctrl, 0.0, 0.0)
     assert ctrl.arrived and abs(pos - length) <= slow.stop_distance
+
+
+@pytest.mark.parametrize("length", [1.0, 3.0, 8.0, 20.0])
+def test_plateau_caps_of_a_rest_to_rest_triangle_are_peak_with_plateau(length: float):
+    # The same rule in two forms: the closed form for a triangle, the search on samples.
+    accel, lag = 0.8, 0.5
+    s = np.linspace(0.0, length, 4001)
+    v = np.sqrt(2.0 * accel * np.minimum(s, length - s))
+    top = float(np.minimum(v, plateau_caps(s, v, lag)).max())
+    expected = min(peak_with_plateau(length, accel, lag, 1.0), float(v.max()))
+    assert top == pytest.approx(expected, abs=2.0 * accel * length / 4000 / max(expected, 0.1))
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    caps=st.lists(st.floats(0.2, 3.0), min_size=2, max_size=12),
+    length=st.floats(2.0, 60.0),
+    lag=st.floats(0.1, 1.5),
+)
+def test_plateau_caps_give_every_peak_its_plateau_within_the_profile_bounds(
+    caps: list[float], length: float, lag: float
+):
+    cfg = SpeedConfig(v_launch=0.0)  # from rest, as actuator_profile (peaks at a moving
+    # start are left alone)
+    s = np.linspace(0.0, length, int(length / 0.25) + 2)
+    cap = np.asarray(caps)[np.minimum((s / length * len(caps)).astype(int), len(caps) - 1)]
+    v = SpeedProfile(s, np.zeros_like(s), cfg, v_start=0.0, v_cap=cap).v
+    capped = np.minimum(v, plateau_caps(s, v, lag))
+    assert np.all(capped <= v)
+    # Still within the profile's acceleration and deceleration (min of a feasible
+    # profile and a constant).
+    dv2 = np.diff(capped**2) / (2.0 * np.diff(s))
+    assert dv2.max() <= cfg.accel + 1e-9 and dv2.min() >= -cfg.decel - 1e-9
+    # Every peak (a run of samples at one level, lower on both sides) lasts lag seconds.
+    i = 1
+    while i < len(capped) - 1:
+        j = i
+        while j + 1 < len(capped) and abs(capped[j + 1] - capped[i]) <= 1e-9:
+            j += 1
+        lower = capped[i - 1] < capped[i] - 1e-9
+        if lower and j + 1 < len(capped) and capped[j + 1] < capped[i] - 1e-9:
+            assert s[j] - s[i] >= capped[i] * lag - 1e-6
+        i = j + 1

@@ -30,6 +30,8 @@ from typing import Protocol
 
 import numpy as np
 
+from rrtdrive.speed_peaks import last_rise_too_short, peak_with_plateau, plateau_caps
+
 __all__ = [
     "SpeedLimits",
     "speed_caps_squared",
@@ -39,6 +41,7 @@ __all__ = [
     "RateLimitedLimits",
     "actuator_profile",
     "peak_with_plateau",
+    "plateau_caps",
     "FINAL_APPROACH_M",
     "profile_times",
     "arrival_times",
@@ -362,6 +365,15 @@ class SpeedProfile:
         v0, v1 = self._v[i], self._v[i + 1]
         return math.sqrt(v0 * v0 + frac * (v1 * v1 - v0 * v0)), self._a[i]
 
+    def peak(self, s0: float, s1: float) -> float:
+        """The highest reference speed on the stretch ``[s0, s1]`` of arc length."""
+        top = max(self.at(s0)[0], self.at(s1)[0])
+        i = bisect.bisect_right(self._s, s0)
+        j = bisect.bisect_left(self._s, s1)
+        if i < j:
+            top = max(top, max(self._v[i:j]))
+        return top
+
     def times(self) -> np.ndarray:
         """Arrival time at each sample (0 at the first; see :func:`arrival_times`)."""
         return arrival_times(self.s, self.v)
@@ -379,34 +391,6 @@ class RateLimitedLimits(SpeedLimits, Protocol):
     def comfort_jerk(self) -> float:
         """Largest rise and fall of the comfort-mode acceleration command, m/s^3."""
         ...
-
-
-def _last_rise_too_short(s: np.ndarray, v: np.ndarray, swing: float, jerk: float) -> int | None:
-    """Start of a last speed-up the jerk-limited loop cannot turn into the final stop.
-
-    The tail of a profile that stops at its end is a run where ``v`` never rises:
-    a plateau, then the braking to the stop. Before it the profile may rise from a
-    trough. Turning that rise into the braking swings the command through ``swing``
-    m/s^2, which takes ``swing / jerk`` seconds at the comfort jerk; when the plateau
-    is shorter than that at its speed, the car overshoots the profile and the stop.
-    Returns the trough's index then, else ``None`` (also when the rise starts at the
-    first sample: that is the start, not a slow stretch).
-    """
-    eps = 1e-9
-    n = len(v)
-    brake = n - 1
-    while brake > 0 and v[brake - 1] > v[brake] + eps:
-        brake -= 1
-    plateau = brake
-    while plateau > 0 and abs(v[plateau - 1] - v[brake]) <= eps:
-        plateau -= 1
-    trough = plateau
-    while trough > 0 and v[trough - 1] < v[trough] - eps:
-        trough -= 1
-    if trough == plateau or trough == 0:
-        return None
-    need = v[plateau] * swing / jerk
-    return trough if s[brake] - s[plateau] < need else None
 
 
 def actuator_profile(
@@ -430,7 +414,12 @@ def actuator_profile(
     again within :data:`FINAL_APPROACH_M` of the end, nor after the last slow stretch
     when the speed-up would be followed at once by the final braking (after a slow
     stretch the comfort-mode loop could not turn a rise back into the stop within its
-    jerk bound, and would overshoot the goal).
+    jerk bound, and would overshoot the goal). The last peak of a path's profile, before
+    its final stop, is then given a plateau of ``decel / comfort_jerk`` seconds
+    (:func:`plateau_caps`): the time the command needs to swing from holding the speed
+    to braking (a manoeuvre's gear segment has its own, :func:`peak_with_plateau`).
+    Earlier peaks are left as they are: the loop keeps within them by itself
+    (``SpeedController``), and space-time planning times paths without such caps.
 
     Parameters
     ----------
@@ -473,7 +462,7 @@ def actuator_profile(
     first = SpeedProfile(s, kappa, config, v_start, v_cap=cap)
     final = s > s[-1] - FINAL_APPROACH_M
     i0 = int(np.argmax(final)) if np.any(final) else None
-    trough = _last_rise_too_short(s, first.v, config.accel + config.decel, config.comfort_jerk)
+    trough = last_rise_too_short(s, first.v, config.accel + config.decel, config.comfort_jerk)
     if trough is not None and (i0 is None or trough < i0):
         i0 = trough
     if i0 is not None and rise_to_peak:
@@ -484,23 +473,9 @@ def actuator_profile(
         swing = config.accel + config.decel
         accel = min(config.accel, config.decel)
         cap = np.minimum(cap, peak_with_plateau(float(s[-1]), accel, swing, config.comfort_jerk))
-    return SpeedProfile(s, kappa, config, v_start, v_cap=cap)
-
-
-def peak_with_plateau(length: float, accel: float, swing: float, jerk: float) -> float:
-    """Top speed of a rest-to-rest run of ``length`` metres that the comfort loop can stop.
-
-    The run rises and falls at ``accel`` (m/s^2) and holds its top speed ``v`` for the
-    ``swing / jerk`` seconds the jerk-limited command needs to swing from speeding up to
-    braking (as :func:`_last_rise_too_short` asks of a last rise):
-    ``v^2 / accel + v swing / jerk = length``. A manoeuvre's gear segment is such a run;
-    without the plateau, a multi-point turn's 0.7 m moves (a triangle of a profile) left
-    the car still speeding up when it had to brake, and it ran 0.2 m past the cusp.
-
-    Examples
-    --------
-    >>> round(peak_with_plateau(0.7, 0.5, 1.0, 2.0), 3)
-    0.48
-    """
-    lag = swing / jerk
-    return 0.5 * accel * (math.sqrt(lag * lag + 4.0 * length / accel) - lag)
+        return SpeedProfile(s, kappa, config, v_start, v_cap=cap)
+    second = SpeedProfile(s, kappa, config, v_start, v_cap=cap)
+    flat = plateau_caps(second.s, second.v, config.decel / config.comfort_jerk, last_only=True)
+    if np.all(flat >= second.v):
+        return second
+    return SpeedProfile(s, kappa, config, v_start, v_cap=np.minimum(cap, flat))

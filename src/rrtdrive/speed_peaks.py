@@ -1,0 +1,158 @@
+"""The shapes of a speed profile that a jerk-limited speed loop can follow to a stop.
+
+The comfort-mode speed loop (``rrtdrive.controllers.SpeedController``) bounds every
+change of its acceleration command by a jerk; turning from speeding up to braking
+then takes ``swing / jerk`` seconds. A profile that rises and at once brakes (a peak
+without a plateau) leaves the car still speeding up when it should brake: it runs
+past the peak, then past the stop. These functions find such peaks and the caps that
+flatten them; :func:`rrtdrive.speed_profile.actuator_profile` applies them.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["last_rise_too_short", "peak_with_plateau", "plateau_caps"]
+
+
+def last_rise_too_short(s: np.ndarray, v: np.ndarray, swing: float, jerk: float) -> int | None:
+    """Start of a last speed-up the jerk-limited loop cannot turn into the final stop.
+
+    The tail of a profile that stops at its end is a run where ``v`` never rises:
+    a plateau, then the braking to the stop. Before it the profile may rise from a
+    trough. Turning that rise into the braking swings the command through ``swing``
+    m/s^2, which takes ``swing / jerk`` seconds at the comfort jerk; when the plateau
+    is shorter than that at its speed, the car overshoots the profile and the stop.
+    Returns the trough's index then, else ``None`` (also when the rise starts at the
+    first sample: that is the start, not a slow stretch).
+    """
+    eps = 1e-9
+    n = len(v)
+    brake = n - 1
+    while brake > 0 and v[brake - 1] > v[brake] + eps:
+        brake -= 1
+    plateau = brake
+    while plateau > 0 and abs(v[plateau - 1] - v[brake]) <= eps:
+        plateau -= 1
+    trough = plateau
+    while trough > 0 and v[trough - 1] < v[trough] - eps:
+        trough -= 1
+    if trough == plateau or trough == 0:
+        return None
+    need = v[plateau] * swing / jerk
+    return trough if s[brake] - s[plateau] < need else None
+
+
+def peak_with_plateau(length: float, accel: float, swing: float, jerk: float) -> float:
+    """Top speed of a rest-to-rest run of ``length`` metres that the comfort loop can stop.
+
+    The run rises and falls at ``accel`` (m/s^2) and holds its top speed ``v`` for the
+    ``swing / jerk`` seconds the jerk-limited command needs to swing from speeding up to
+    braking (as :func:`last_rise_too_short` asks of a last rise):
+    ``v^2 / accel + v swing / jerk = length``. A manoeuvre's gear segment is such a run;
+    without the plateau, a multi-point turn's 0.7 m moves (a triangle of a profile) left
+    the car still speeding up when it had to brake, and it ran 0.2 m past the cusp.
+
+    Examples
+    --------
+    >>> round(peak_with_plateau(0.7, 0.5, 1.0, 2.0), 3)
+    0.48
+    """
+    lag = swing / jerk
+    return 0.5 * accel * (math.sqrt(lag * lag + 4.0 * length / accel) - lag)
+
+
+def plateau_caps(s: np.ndarray, v: np.ndarray, lag: float, last_only: bool = False) -> np.ndarray:
+    """Caps that give every peak of a profile a plateau of ``lag`` seconds.
+
+    A jerk-limited loop needs ``lag`` seconds to swing its command from speeding up to
+    braking; on a peak without a plateau (the profile rises, then at once falls) it is
+    still speeding up when the profile brakes, overshoots the peak and must brake
+    harder than the profile later (on the stock ``parking-v0`` seed 32 the car reached
+    3.24 m/s on a 2.98 m/s peak 5 m before the goal and stopped at -3.5 m/s^2). Each
+    local peak is lowered to the highest speed ``c`` at which the stretch around it
+    where ``v >= c`` is at least ``c * lag`` metres long (:func:`peak_with_plateau`
+    is the same rule for a rest-to-rest triangle). Peaks whose stretch reaches the
+    first sample (a car already moving) are left alone.
+
+    Parameters
+    ----------
+    s, v : numpy.ndarray
+        Arc length (increasing) and speed of the profile's samples.
+    lag : float
+        Seconds the plateau must last, ``swing / jerk``.
+    last_only : bool, optional
+        Cap the last peak only (the one before a final stop).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N,)`` speed caps in m/s (``inf`` where nothing is capped).
+        ``min(v, caps)`` keeps ``v``'s acceleration and deceleration bounds.
+
+    Examples
+    --------
+    >>> s = np.linspace(0.0, 8.0, 33)
+    >>> v = np.sqrt(np.minimum(s, 8.0 - s))  # a triangle in v^2: rise, then brake at once
+    >>> capped = np.minimum(v, plateau_caps(s, v, 1.0))
+    >>> float(v.max()), round(float(capped.max()), 3)  # the peak, lowered to sqrt(3)
+    (2.0, 1.732)
+    >>> float(np.ptp(s[capped >= capped.max() - 1e-9]))  # its plateau: >= 1.732 m, 1 s
+    2.0
+    """
+    s = np.asarray(s, dtype=float)
+    v = np.asarray(v, dtype=float)
+    n = len(v)
+    caps = np.full(n, np.inf)
+    eps = 1e-9
+    peaks: list[tuple[int, int]] = []
+    i = 1
+    while i < n - 1:
+        # A local peak: a run of equal speeds higher than both neighbours.
+        j = i
+        while j + 1 < n and abs(v[j + 1] - v[i]) <= eps:
+            j += 1
+        if v[i - 1] < v[i] - eps and j + 1 < n and v[j + 1] < v[i] - eps:
+            peaks.append((i, j))
+        i = j + 1
+    for i, j in peaks[-1:] if last_only else peaks:
+        lo, hi, level = _plateau_level(s, v, i, j, lag)
+        if level is not None:
+            caps[lo : hi + 1] = np.minimum(caps[lo : hi + 1], level)
+    return caps
+
+
+def _plateau_level(
+    s: np.ndarray, v: np.ndarray, i: int, j: int, lag: float
+) -> tuple[int, int, float | None]:
+    """The level of the peak ``v[i..j]`` (see :func:`plateau_caps`) and the stretch it caps."""
+
+    def stretch(c: float) -> tuple[int, int]:
+        lo, hi = i, j
+        while lo > 0 and v[lo - 1] >= c:
+            lo -= 1
+        while hi + 1 < len(v) and v[hi + 1] >= c:
+            hi += 1
+        return lo, hi
+
+    def width(c: float) -> float:
+        # Between the samples at or above c: once capped at c, the samples next to them
+        # are below c, so that is the plateau the capped profile has.
+        lo, hi = stretch(c)
+        return float(s[hi] - s[lo])
+
+    if width(v[i]) >= v[i] * lag:
+        return i, j, None
+    low, high = 0.0, float(v[i])
+    for _ in range(40):  # bisection to about 1e-12 of the peak: ample for a speed
+        mid = 0.5 * (low + high)
+        if width(mid) >= mid * lag:
+            low = mid
+        else:
+            high = mid
+    lo, hi = stretch(low)
+    if lo == 0:
+        return lo, hi, None
+    return lo, hi, low
