@@ -333,3 +333,29 @@ def test_geometry_matches_ompl_interpolation():
             assert math.hypot(c.getX() - x, c.getY() - y) < 1e-9
             assert abs(wrap_angle(c.getYaw() - yaw)) < 1e-9
     assert compared > 200
+
+
+@settings(max_examples=80, deadline=None)
+@given(pose_pairs(), radius, st.floats(0.01, 5.0), st.integers(1, 6))
+def test_a_cusp_cost_orders_the_same_paths_by_length_plus_cost(poses, r, cost, limit):
+    start, goal = poses
+    plain = reeds_shepp_paths(start, goal, r)
+    costed = reeds_shepp_paths(start, goal, r, cusp_cost=cost)
+    key = [p.length + cost * p.gear_changes for p in costed]
+    assert key == sorted(key)
+    assert sorted((p.word, p.lengths) for p in plain) == sorted((p.word, p.lengths) for p in costed)
+    # ``limit`` keeps the first of that order.
+    first = reeds_shepp_paths(start, goal, r, limit=limit, cusp_cost=cost)[:limit]
+    assert [p.length + cost * p.gear_changes for p in first] == pytest.approx(key[:limit])
+
+
+def test_a_cusp_cost_drops_a_last_move_of_two_centimetres():
+    # Into a parking-reverse-in bay (seed 0): the shortest word ends in a 1.5 cm forward
+    # move after the reverse into the bay, 0.05 mm shorter than the word without it.
+    start, goal, r = Pose(29.347, 28.266, 0.284), Pose(66.5, 21.995, math.pi / 2), 1 / 0.163
+    words_by_length = [p.word for p in reeds_shepp_paths(start, goal, r)]
+    assert words_by_length.index("LRSLR") < words_by_length.index("LRSL")
+    costed = reeds_shepp_paths(start, goal, r, cusp_cost=0.5)
+    assert [p.word for p in costed].index("LRSL") < [p.word for p in costed].index("LRSLR")
+    lrsl = next(p for p in costed if p.word == "LRSL")
+    assert lrsl.gear_changes == 1 and min(abs(s) for s in lrsl.lengths) > 1.0

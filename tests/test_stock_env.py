@@ -77,12 +77,14 @@ def test_simulate_parking_v0_reports_highway_env_success(capsys):
     assert data["scenario"] == "parking-v0" and data["target"] == "stock"
 
 
-@pytest.mark.parametrize("seed", [38, 77])
+@pytest.mark.parametrize("seed", [38])
 def test_parking_v0_with_reverse_drives_its_cusps(seed):
     """parking-v0 --reverse in highway-env: seed 38's wheels turn at the cusp (the car
-    stands there at -2.4e-8 m/s, float32 actions), seed 77's 0.12 m reverse stub of two
-    rows is driven (both failed before: collision off the path, and a car that never
-    moved)."""
+    stands there at -2.4e-8 m/s, float32 actions; it failed before with a collision off
+    the path). Seed 77 was here too, for its 0.12 m reverse stub of two rows; since the
+    shots prefer words with fewer cusps (session 16) it plans without the stub, which
+    ``tests/test_reverse_controllers.py::test_a_reverse_stub_of_two_rows_is_driven``
+    drives."""
     run = drive_stock_env(
         "parking-v0", seed, "improved-rrt-connect", "pure-pursuit", DETERMINISTIC, reverse=True
     )

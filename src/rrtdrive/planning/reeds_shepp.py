@@ -20,6 +20,7 @@ also in reverse, so that ``d yaw = kappa * ds`` with signed ``ds``.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from operator import attrgetter, itemgetter
@@ -241,7 +242,12 @@ def _normalised_goal(start: Pose, goal: Pose, radius: float) -> tuple[float, flo
 
 
 def reeds_shepp_paths(
-    start: Pose, goal: Pose, radius: float, tol: float = 1e-6, limit: int | None = None
+    start: Pose,
+    goal: Pose,
+    radius: float,
+    tol: float = 1e-6,
+    limit: int | None = None,
+    cusp_cost: float = 0.0,
 ) -> list[ReedsSheppPath]:
     """Every Reeds-Shepp word that joins ``start`` to ``goal``, shortest first.
 
@@ -258,6 +264,10 @@ def reeds_shepp_paths(
         Only the first ``limit`` of the list are needed: candidates clearly longer
         than the ``limit``-th kept one are neither checked nor built (the first
         ``limit`` paths are those of the full list).
+    cusp_cost : float, optional
+        Metres added to a word's length per cusp for the order (and ``limit``): of
+        two words within ``cusp_cost`` of each other, the one with fewer gear
+        changes comes first. 0: by length alone.
 
     Returns
     -------
@@ -276,9 +286,13 @@ def reeds_shepp_paths(
     x, y, phi = _normalised_goal(start, goal, radius)
     pos_tol = tol * max(1.0, radius) / radius  # in the normalised frame
     found = []
+    per_cusp = cusp_cost / radius  # in the normalised frame
     for word, lengths in candidates(x, y, phi):
         word, lengths = _tidy(word, lengths)
-        found.append((sum(map(abs, lengths)), word, lengths))
+        cost = sum(map(abs, lengths))
+        if per_cusp:
+            cost += per_cusp * sum(1 for a, b in itertools.pairwise(lengths) if (a > 0) != (b > 0))
+        found.append((cost, word, lengths))
     found.sort(key=itemgetter(0))  # stable: ties keep the order of the words (OMPL's)
     kept: list[tuple[float, str, tuple[float, ...]]] = []
     bound = math.inf
@@ -296,7 +310,11 @@ def reeds_shepp_paths(
         ReedsSheppPath(start, word, tuple(s * radius for s in lengths), radius, goal)
         for _, word, lengths in kept
     ]
-    out.sort(key=attrgetter("length"))  # in metres: scaling may swap near-equal lengths
+    # In metres: scaling may swap near-equal lengths.
+    if cusp_cost:
+        out.sort(key=lambda p: p.length + cusp_cost * p.gear_changes)
+    else:
+        out.sort(key=attrgetter("length"))
     return out
 
 

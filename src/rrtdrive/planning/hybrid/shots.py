@@ -147,6 +147,12 @@ def walks_hit(
     return body.any_hits(poses, sizes).tolist()
 
 
+#: Of two Reeds-Shepp words within this many metres of each other, the shots try the one
+#: with fewer cusps first: the shortest word to a bay often ends in a 1-2 cm move in the
+#: other gear (a cusp the car drives for nothing), 0.05 mm shorter than the word without.
+SHOT_CUSP_COST_M = 0.5
+
+
 def _gear_pieces(rows: np.ndarray) -> list[Piece]:
     """Rows ``[x, y, yaw, kappa, gear]`` cut at the cusps (each piece keeps both end rows)."""
     gear = rows[:, 4]
@@ -180,7 +186,9 @@ def analytic_shots(
     def words(pose: Pose, to: Pose, lead: Lead | None) -> Iterator[list[Piece]]:
         # The longer words loop through the lot: they rarely clear where the short ones fail.
         if reverse:
-            cands = reeds_shepp_paths(pose, to, radius, limit=max_candidates)[:max_candidates]
+            cands = reeds_shepp_paths(
+                pose, to, radius, limit=max_candidates, cusp_cost=SHOT_CUSP_COST_M
+            )[:max_candidates]
         else:
             cands = dubins_paths(pose, to, radius)[:max_candidates]
         hit = [False] * len(cands)
