@@ -23,7 +23,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
-from operator import attrgetter, itemgetter
+from operator import itemgetter
 
 import numpy as np
 
@@ -161,8 +161,7 @@ class ReedsSheppPath:
     @property
     def gear_changes(self) -> int:
         """Number of cusps (changes of gear between consecutive segments)."""
-        g = self.gears
-        return sum(1 for a, b in zip(g, g[1:], strict=False) if a != b)
+        return _gear_changes(self.lengths)
 
     def end(self) -> tuple[float, float, float]:
         """Pose ``(x, y, yaw)`` at the end of the path, integrated (yaw unwrapped)."""
@@ -291,7 +290,7 @@ def reeds_shepp_paths(
         word, lengths = _tidy(word, lengths)
         cost = sum(map(abs, lengths))
         if per_cusp:
-            cost += per_cusp * sum(1 for a, b in itertools.pairwise(lengths) if (a > 0) != (b > 0))
+            cost += per_cusp * _gear_changes(lengths)
         found.append((cost, word, lengths))
     found.sort(key=itemgetter(0))  # stable: ties keep the order of the words (OMPL's)
     kept: list[tuple[float, str, tuple[float, ...]]] = []
@@ -310,12 +309,14 @@ def reeds_shepp_paths(
         ReedsSheppPath(start, word, tuple(s * radius for s in lengths), radius, goal)
         for _, word, lengths in kept
     ]
-    # In metres: scaling may swap near-equal lengths.
-    if cusp_cost:
-        out.sort(key=lambda p: p.length + cusp_cost * p.gear_changes)
-    else:
-        out.sort(key=attrgetter("length"))
+    # In metres: scaling may swap near-equal lengths (cusp_cost 0 adds exactly 0).
+    out.sort(key=lambda p: p.length + cusp_cost * p.gear_changes)
     return out
+
+
+def _gear_changes(lengths: tuple[float, ...]) -> int:
+    """Cusps of a word: consecutive signed segment lengths of opposite signs."""
+    return sum(1 for a, b in itertools.pairwise(lengths) if (a > 0) != (b > 0))
 
 
 def _is_copy(
