@@ -295,18 +295,17 @@ class SpeedController:
         err = v_ref - speed
         trial = self.integral + err * dt
         raw = a_ref + cfg.kp * err + cfg.ki * trial
+        if self.comfort and raw > 0.0 and speed >= 0.0:
+            # Ramping a command a down to 0 at the jerk bound gains a^2 / 2J of speed:
+            # keep that within the highest reference the ramp can reach, or the car
+            # overshoots the top of a rise (and brakes harder later).
+            ramp = raw / cfg.comfort_jerk
+            reach = speed * (ramp + tau) + raw * ramp * ramp / 3.0
+            room = max(profile.peak(s, s + reach) - speed, 0.0)
+            raw = min(raw, math.sqrt(2.0 * cfg.comfort_jerk * room))
         cap = self.accel_cap
         capped = cap is not None and raw > cap
         if self.comfort:
-            if raw > 0.0 and speed >= 0.0:
-                # Ramping a command a down to 0 at the jerk bound gains a^2 / 2J of speed:
-                # keep that within the highest reference the ramp can reach, or the car
-                # overshoots the top of a rise (and brakes harder later).
-                ramp = raw / cfg.comfort_jerk
-                reach = speed * (ramp + tau) + raw * ramp * ramp / 3.0
-                room = max(profile.peak(s, s + reach) - speed, 0.0)
-                raw = min(raw, math.sqrt(2.0 * cfg.comfort_jerk * room))
-                capped = cap is not None and raw > cap
             a = self._limit(cap if capped else raw, dt, cfg.comfort_jerk)
         else:
             a = self._limit(cap if capped else raw, dt, None if capped else cfg.jerk_brake_max)

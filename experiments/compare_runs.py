@@ -20,11 +20,15 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from collections.abc import Sequence
 from typing import Any
 
-from rrtdrive.atomic import write_text_atomic
+sys.path.insert(0, os.path.dirname(__file__))
+from results_io import command  # noqa: E402  (the sibling script)
+
+from rrtdrive.atomic import write_text_atomic  # noqa: E402
 
 Report = dict[str, Any]
 
@@ -122,9 +126,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (OSError, KeyError, ValueError) as exc:
         print(f"compare_runs: cannot read the runs: {exc}", file=sys.stderr)
         return 2
-    given = " ".join(argv if argv is not None else sys.argv[1:])
-    command = f"python experiments/compare_runs.py {given}"
-    text = f"# Closed loop, before -> after\n\nCommand: `{command}`\n\n{page}"
+    line = command("compare_runs.py", argv)
+    text = f"# Closed loop, before -> after\n\nCommand: `{line}`\n\n{page}"
     print(text, end="")
     if args.out:
         write_text_atomic(args.out, text)
