@@ -72,17 +72,21 @@ def test_coarse_stage_solves_what_the_fine_search_cannot_in_the_budget() -> None
 
 def test_a_failed_coarse_search_is_not_a_proof() -> None:
     # kerbside forward only: the fine search is cut at its share (100 of 400), the coarse
-    # one cannot reach the gap and runs out of states before the budget is spent; the
-    # middle one (1 m) and its tight one (0.05 m) spend the rest. No proof.
+    # one cannot reach the gap and runs out of states; the middle one (1 m) and its tight
+    # one (0.05 m) run out of ways to arrive at the goal (the gap cannot be driven into
+    # straight, so the search from the goal starts after 100 expansions), at their
+    # coarser grid. No proof, and the message says why.
     problem = PlanningProblem.from_map(builtin_map("kerbside"))
     cut = _solve(problem, 400)
     assert cut.status is PlanStatus.NO_PATH_IN_BUDGET
     assert "spent its share of 100 expansions, then at 2 m / 20 deg / 4 m steps it ran out of " \
         "states" in cut.message
-    assert "then at 1 m / 10 deg / 2 m steps it spent its share of" in cut.message
-    assert "keeping only 0.05 m body clearance it spent" in cut.message
+    assert "then at 1 m / 10 deg / 2 m steps it ran out of ways to arrive at the goal" in (
+        cut.message
+    )
+    assert "keeping only 0.05 m body clearance it ran out of ways to arrive" in cut.message
     assert "a coarser search proves nothing" in cut.message
-    assert cut.iterations == 400
+    assert cut.iterations <= 400
     # With budget enough that the fine search ends within its share, it (and its finer
     # retry) proves that no forward drive arrives: the proof is not lost.
     proof = _solve(problem, 2000)

@@ -57,6 +57,7 @@ from rrtdrive.vehicle import cover_discs
 __all__ = [
     "PROOFS",
     "Accept",
+    "approach_blocked",
     "dubins_table",
     "EndClearance",
     "field_clearance",
@@ -117,9 +118,12 @@ BODY_TESTS = 8
 #: A goal facing more than this (degrees) away from the start's heading turns the car
 #: round: a turn stuck at the start is then tried further along (``abreast_turns``).
 TURN_ROUND_DEG = 100.0
-#: With a start boxed in (it has straight lead-ins), the search from the goal starts
-#: after ``switch_after / BOXED_START_SOONER`` expansions from the start.
+#: With a start boxed in (it has straight lead-ins), or a goal whose straight forward
+#: approach is blocked (:func:`approach_blocked`), the search from the goal starts after
+#: ``switch_after / BOXED_START_SOONER`` expansions from the start.
 BOXED_START_SOONER = 4
+#: The straight forward approach into the goal tested by :func:`approach_blocked` (metres).
+APPROACH_PROBE = 1.0
 
 
 def body_test(checker: CollisionChecker, clearance: float) -> BodyTest:
@@ -423,9 +427,11 @@ def search_at_resolution(
         searches = searches_with(body, start_leads)
         left = budget - used.expansions
         first_turn = config.switch_after
-        if start_leads:
+        if start_leads or approach_blocked(goal, body, config.check_spacing):
             # A start boxed in a bay: the way out is straight, and from the goal's side the
-            # lead-in out of the start connects; search from there sooner.
+            # lead-in out of the start connects. A goal that cannot be driven into
+            # straight forward (a kerbside gap, a bay to reverse into): from the goal's
+            # side its hard part is a way out. Search from there sooner.
             first_turn = max(1, config.switch_after // BOXED_START_SOONER)
         path, outcome = _alternate(
             searches, left, first_turn, watch, turn_with(search_clearance)
@@ -523,3 +529,15 @@ def prims_reverse(radius: float, config: HybridConfig) -> tuple[PrimitiveSet, ..
     return primitive_sets(
         1.0 / radius, config.curvatures, config.step, config.check_spacing, -1, config.long_steps
     )
+
+
+def approach_blocked(goal: Pose, body: BodyTest, spacing: float) -> bool:
+    """Whether the straight forward drive into ``goal`` over its last metre collides.
+
+    The poses :data:`APPROACH_PROBE` metres and less behind the goal along its
+    heading, ``spacing`` apart, by the body test (the goal itself excluded).
+    """
+    s = np.arange(1, math.ceil(APPROACH_PROBE / spacing) + 1) * spacing
+    c, si = math.cos(goal.yaw), math.sin(goal.yaw)
+    poses = np.column_stack([goal.x - c * s, goal.y - si * s, np.full(len(s), goal.yaw)])
+    return not body.all_free(poses)

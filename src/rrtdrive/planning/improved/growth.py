@@ -396,6 +396,7 @@ def grow_until_meet(
     iterations: int,
     max_iterations: int,
     expired: Callable[[], bool],
+    root_patience: int = 0,
 ) -> tuple[np.ndarray | None, int]:
     """Bidirectional growth of one pair of trees until they meet or the budget ends.
 
@@ -429,16 +430,23 @@ def grow_until_meet(
         Iteration budget of the whole query.
     expired : callable
         True once the safety cap is reached (the query then ends as ``timeout``).
+    root_patience : int
+        Beyond the paper: the pair gives up after this many of its iterations when
+        either tree is still only its root (0: never).
 
     Returns
     -------
     found : numpy.ndarray or None
-        The raw start-to-goal path through both trees, ``None`` when the budget ended.
+        The raw start-to-goal path through both trees, ``None`` when the budget ended
+        (or a root never grew: ``len(ts) == 1`` or ``len(tg) == 1``).
     iterations : int
         Iterations used so far, this pair's included.
     """
     ta, tb = ts, tg
+    give_up = iterations + root_patience if root_patience > 0 else max_iterations
     while iterations < max_iterations and not expired():
+        if iterations >= give_up and (ts.size == 1 or tg.size == 1):
+            break
         iterations += 1
         if passages is not None and rng.random() < passage_bias:
             # Beyond the paper: a point on a narrow passage's centre line, joined

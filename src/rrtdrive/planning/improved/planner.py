@@ -200,6 +200,7 @@ class _Query:
         self.failed_raws: list[np.ndarray] = []
         self.fallback_tried = ""  # "direct": the direct Dubins path alone; "all"
         self.iterations = 0
+        self.stuck_root = ""  # "start" / "goal": that tree never left its root (root_patience)
         self.limits: StageBudgets  # the stages' counted budgets, set per query by run()
         self.trees: tuple[Tree, ...] = (
             Tree(self.s_xy[None, :], np.array([-1])),
@@ -396,12 +397,16 @@ class _Query:
                 step=p, obtuse=cfg.obtuse_parent, adaptive=cfg.adaptive_step,
                 passages=passages, passage_bias=cfg.passage_bias,
                 iterations=self.iterations, max_iterations=self.limits.iterations,
-                expired=self.watch.expired,
+                expired=self.watch.expired, root_patience=self.limits.root_patience,
             )  # fmt: skip
             self.trees = (ts.freeze(), tg.freeze())
             total_nodes += len(ts) + len(tg)
             stats["nodes"] = float(total_nodes)
             if found is None:
+                if self.iterations < self.limits.iterations and not self.watch.expired():
+                    # root_patience: a root never grew (the budget was not spent).
+                    self.stuck_root = "start" if len(ts) == 1 else "goal"
+                    stats["stuck_root"] = 1.0
                 return None
             out = self.smooth(found, self.trees, self.iterations)
             if out is not None:
@@ -436,6 +441,10 @@ class _Query:
             # make_drivable's messages open with "post-processing failed: "; the query did not.
             reason = self.last_message.removeprefix("post-processing failed: ")
             note = f"no tree path could be made drivable ({reason})"
+        elif self.stuck_root:
+            end = self.stuck_root
+            patience = self.limits.root_patience
+            note = f"the {end} tree never left the {end} pose ({patience} iterations)"
         else:
             note = "the trees did not meet within the budget"
         raw = self.last_raw if self.last_raw is not None else np.vstack([self.s_xy, self.g_xy])
@@ -485,13 +494,25 @@ class _Query:
                 raw_path=self.last_raw,
                 stats=stats,
             )
+        if self.stuck_root:
+            end = self.stuck_root
+            lead = (
+                f"no path: the {end} tree never left the {end} pose in "
+                f"{self.limits.root_patience} iterations (it grows straight along the "
+                f"{end}'s heading, and every such edge collides: the {end} is boxed in; "
+                f"{iterations} iterations, {watch.elapsed():.3f} s)"
+            )
+        else:
+            lead = (
+                f"no path within the iteration budget ({iterations} iterations"
+                f"{_share_note(self.limits, watch.budget.max_iterations)}, "
+                f"{watch.elapsed():.3f} s)"
+            )
         return failure(
             NAME,
             PlanStatus.NO_PATH_IN_BUDGET,
             watch,
-            f"no path within the iteration budget ({iterations} iterations"
-            f"{_share_note(self.limits, watch.budget.max_iterations)}, "
-            f"{watch.elapsed():.3f} s)",
+            lead,
             trees=self.trees,
             iterations=iterations,
             stats=stats,
