@@ -136,7 +136,8 @@ class ImprovedConfig:
         129 pairs that failed on the 400 random queries and the 9 built-in maps x 20
         seeds x both gears (``kerbside``, ``garage``, ``reverse_bay``: 10 000
         iterations, ~140 ms each), while of the 1 428 pairs that met, the last root
-        to grow did so after 3 503 iterations. Default 4000.
+        to grow did so after 3 503 iterations (``python experiments/root_growth.py
+        --out results/root_growth_s18``). Default 4000.
     escalation_fallback_joints : int
         With ``escalation`` on, the Dubins fallback's tree nodes tried as tail
         joints, and again as lead joints (>= 0; without the escalation
