@@ -498,8 +498,9 @@ class _Query:
             end = self.stuck_root
             lead = (
                 f"no path: the {end} tree never left the {end} pose in "
-                f"{self.limits.root_patience} iterations (it grows straight along the "
-                f"{end}'s heading, and every such edge collides: the {end} is boxed in; "
+                f"{self.limits.root_patience} iterations (it grows only straight along "
+                f"the {end}'s heading, and no edge tried that way was free: the {end} is "
+                f"boxed in along its heading; "
                 f"{iterations} iterations, {watch.elapsed():.3f} s)"
             )
         else:
