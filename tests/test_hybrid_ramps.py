@@ -139,8 +139,9 @@ def test_rejected_ramps_search_again_with_more_clearance() -> None:
     m = builtin_map("parking_lot").with_query(start=TIGHT_CORNER_START)
     problem = PlanningProblem.from_map(m)
     # The unit steps of the search (long_steps=()) find only connections through that corner.
+    # (persist=False: no search going on through the rejections either, session 18.)
     without = HybridAStar(
-        ramp_margin=0.0, refinements=0, wide_radius_factor=1.02, long_steps=()
+        ramp_margin=0.0, refinements=0, wide_radius_factor=1.02, long_steps=(), persist=False
     ).solve(problem, np.random.default_rng(0), BUDGET)
     assert not without.success and without.stats["connections"] == 16
     assert "could not be made drivable" in without.message

@@ -166,7 +166,8 @@ def test_wide_stage_turns_wider_after_rejected_connections() -> None:
     # The search of session 7 (unit steps, weight 1.5, every shot): its connections are
     # all rejected.
     before = {"long_steps": (), "heuristic_weight": 1.5, "shot_cell": 0.0}
-    rejected = _solve(problem, 20_000, wide_radius_factor=1.02, **before)
+    # (persist=False: without the search that goes on through the rejections, session 18.)
+    rejected = _solve(problem, 20_000, wide_radius_factor=1.02, persist=False, **before)
     assert rejected.status is PlanStatus.NO_PATH_IN_BUDGET
     assert "could not be made drivable" in rejected.message
     res = _solve(problem, 20_000, **before)

@@ -86,7 +86,7 @@ def test_reverse_in_bay_with_rejected_connections_is_solved_finer(
     # session-6 timing is restored so that the finer retry is what is tested.)
     before = {"long_steps": (), "heuristic_weight": 1.5, "shot_cell": 0.0}
     monkeypatch.setattr(resolution, "approach_blocked", lambda *_: False)
-    coarse = HybridAStar(refinements=0, wide_radius_factor=1.02, **before).solve(
+    coarse = HybridAStar(refinements=0, wide_radius_factor=1.02, persist=False, **before).solve(
         problem, np.random.default_rng(0), BUDGET
     )
     assert coarse.status is PlanStatus.NO_PATH_IN_BUDGET

@@ -209,6 +209,11 @@ class HybridConfig:
         (:func:`~rrtdrive.planning.hybrid.leads.lead_ins`; 0: never). Leaving one
         garage bay for another across a 6 m aisle: 8 426 expansions without, 20 with
         (``experiments/garage_moves.py``).
+    persist : bool
+        When the first search had every goal connection rejected and so had the
+        wider-turning and finer searches after it, search once more at the finest
+        resolution, going on through rejected connections until the budget ends
+        (``False``: stop there, with the rest of the budget unspent).
 
     Examples
     --------
@@ -256,6 +261,7 @@ class HybridConfig:
     turn_moves: int = 12
     abreast_turns: int = 4
     lead_ins: int = 3
+    persist: bool = True
 
     def __post_init__(self) -> None:
         for name in (
@@ -325,7 +331,7 @@ class HybridConfig:
             raise InputError(
                 f"hybrid.coarse_after: must be within [0, 1], got {self.coarse_after!r}"
             )
-        for name in ("smooth", "arc_fallback", "reeds_shepp_heuristic"):
+        for name in ("smooth", "arc_fallback", "reeds_shepp_heuristic", "persist"):
             if not isinstance(getattr(self, name), bool):
                 raise InputError(
                     f"hybrid.{name}: expected true or false, got {getattr(self, name)!r}"

@@ -20,7 +20,14 @@ import dataclasses
 
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.hybrid.config import HybridConfig
-from rrtdrive.planning.hybrid.planner import NAME, answer_stats, arcs_note, path_of, turn_note
+from rrtdrive.planning.hybrid.planner import (
+    NAME,
+    answer_stats,
+    arcs_note,
+    path_of,
+    proof_scope,
+    turn_note,
+)
 from rrtdrive.planning.hybrid.query import hybrid_query
 from rrtdrive.planning.result import timeout_result
 from rrtdrive.planning.smoothing import SmoothingConfig
@@ -123,7 +130,7 @@ def escalate(
             failed,
             message=(
                 f"{failed.message}; Hybrid A* ({gear}) found none either: {answer.message}"
-                + _proof_scope(answer.outcome.reason, answer.clearance)
+                + proof_scope(answer.outcome.reason, answer.clearance)
             ),
             stats=stats,
             iterations=used,
@@ -170,21 +177,6 @@ def escalate(
         message=message,
         stats=stats,
     )
-
-
-def _proof_scope(reason: str, clearance: float) -> str:
-    """What a search that ran out of states proved: only paths that keep its clearance.
-
-    Examples
-    --------
-    >>> _proof_scope("exhausted", 0.15)
-    ' (a proof for paths keeping 0.15 m body clearance, on that grid only)'
-    >>> _proof_scope("expansions", 0.15)
-    ''
-    """
-    if reason not in ("exhausted", "no_approach"):
-        return ""
-    return f" (a proof for paths keeping {clearance:.2f} m body clearance, on that grid only)"
 
 
 def _shown(value: float) -> str:

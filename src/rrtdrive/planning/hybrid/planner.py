@@ -23,7 +23,9 @@ from rrtdrive.planning.result import run_query, solved
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus
 
-__all__ = ["NAME", "HybridAStar", "hybrid_result", "answer_stats", "arcs_note", "path_of"]
+__all__ = [
+    "NAME", "HybridAStar", "hybrid_result", "answer_stats", "arcs_note", "path_of", "proof_scope",
+]
 
 NAME = "hybrid-a-star"
 
@@ -40,6 +42,7 @@ def answer_stats(answer: HybridAnswer, wheelbase: float) -> dict[str, float]:
         "coarse_search": float(answer.stage == "coarse"),
         "tight_search": float(answer.stage in ("snug", "tight")),  # less clearance kept
         "wide_search": float(answer.stage == "wide"),
+        "persist_search": float(answer.stage == "persist"),
         "turn_moves": float(o.turn_moves),
         "body_clearance_m": float(answer.clearance),
     }
@@ -148,8 +151,10 @@ def hybrid_result(
         elif o.reason == "time":
             # The wall-clock cap has its own status where PlanStatus has one (issue 13, item 4).
             status = getattr(PlanStatus, "TIMEOUT", PlanStatus.NO_PATH_IN_BUDGET)
+        # A proof holds for the clearance its search kept, on its grid: say so.
+        message = answer.message + proof_scope(o.reason, answer.clearance)
         return failure(
-            planner, status, watch, answer.message, trees=answer.trees, iterations=o.expansions,
+            planner, status, watch, message, trees=answer.trees, iterations=o.expansions,
             stats=stats,
         )  # fmt: skip
     built = answer.path
@@ -164,6 +169,21 @@ def hybrid_result(
     return solved(
         planner, watch, path, raw, answer.trees, o.expansions, message, stats, nodes=o.nodes
     )
+
+
+def proof_scope(reason: str, clearance: float) -> str:
+    """What a search that ran out of states proved: only paths that keep its clearance.
+
+    Examples
+    --------
+    >>> proof_scope("exhausted", 0.15)
+    ' (a proof for paths keeping 0.15 m body clearance, on that grid only)'
+    >>> proof_scope("expansions", 0.15)
+    ''
+    """
+    if reason not in ("exhausted", "no_approach"):
+        return ""
+    return f" (a proof for paths keeping {clearance:.2f} m body clearance, on that grid only)"
 
 
 def turn_note(outcome: SearchOutcome) -> str:
