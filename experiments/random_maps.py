@@ -1,20 +1,22 @@
-"""Random user-like maps: ours with reverse against OMPL's Reeds-Shepp RRTConnect.
+"""Random user-like maps: ours against OMPL (Reeds-Shepp RRTConnect, or Dubins RRT forward).
 
 Usage (OMPL lives in the lead's venv only; without it its rows are skipped)::
 
     python experiments/random_maps.py --maps 200 --jobs 2 --out results/random_maps
-    python experiments/random_maps.py --maps 50 --out /tmp/rm \
+    python experiments/random_maps.py --maps 200 --jobs 2 --forward --out results/random_maps_fwd
+    python experiments/random_maps.py --maps 50 --out /tmp/rm \\
         --planners hybrid-a-star,hybrid-a-star@persist=false
 
 Each map (seeds ``0 .. --maps - 1``, one generator per seed): bounds 20-60 m by
 15-40 m, 0-9 rectangles 0.5-8 m a side at any angle, start and goal anywhere 3 m or
 more inside the bounds at any heading; a map whose start or goal body overlaps an
 obstacle is drawn again from the same generator. Each of ``--planners`` plans it with
-reverse (planner seed 0, 20 000 iterations, ``--max-time`` cap); a planner spec may
-carry options, ``NAME@field=value:...``. OMPL's RS RRTConnect (``--ompl-time``, our
-exact body test as validity checker, as ``experiments/coverage.py`` plans it) is the
-outside judge. Every path is checked by ``verify_path`` with the 0.2 rad/m sharpness
-bound (``verified``) and without it (``any sharpness``).
+reverse (``--forward``: forward only; planner seed 0, 20 000 iterations, ``--max-time``
+cap); a planner spec may carry options, ``NAME@field=value:...``. OMPL's RS RRTConnect
+(``--forward``: its Dubins RRT; ``--ompl-time``, our exact body test as validity
+checker, as ``experiments/coverage.py`` plans it) is the outside judge. Every path is
+checked by ``verify_path`` with the 0.2 rad/m sharpness bound (``verified``) and
+without it (``any sharpness``).
 
 Writes ``OUT/random_maps.{json,md}``: per planner solved, verified, the share of OMPL's
 solved maps it solves, median times and the maps OMPL solves and it does not.
@@ -40,7 +42,7 @@ from rrtdrive.maps import Map, Obstacle  # noqa: E402
 from rrtdrive.planning import PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.types import Budget, InputError, Pose  # noqa: E402
 
-OMPL_NAME = "ompl-rs-rrtconnect"
+OMPL_NAMES = ("ompl-rs-rrtconnect", "ompl-dubins-rrt")
 DEFAULT_PLANNERS = "improved-rrt-connect,hybrid-a-star"
 
 
@@ -65,13 +67,13 @@ def random_map(seed: int) -> Map:
 
 
 def run_one(item: dict[str, Any]) -> dict[str, Any]:
-    """One map with one planner, with reverse."""
+    """One map with one planner, with reverse unless ``item["forward"]``."""
     m = random_map(item["seed"])
-    problem = PlanningProblem.from_map(m, reverse=True)
-    if item["planner"] == OMPL_NAME:
+    problem = PlanningProblem.from_map(m, reverse=not item["forward"])
+    if item["planner"] in OMPL_NAMES:
         # Timed as experiments/coverage.py does: a solved query's time includes OMPL's
         # simplification (its length is the simplified path's).
-        solve_s, total_s, length, path = cov.solve_ompl(problem, item["seed"], OMPL_NAME,
+        solve_s, total_s, length, path = cov.solve_ompl(problem, item["seed"], item["planner"],
                                                         item["ompl_time"])  # fmt: skip
         row = {"solved": path is not None, "time_s": total_s, "length_m": length}
         checks = cov._check(m, path) if path is not None else dict(cov._UNCHECKED)
@@ -96,7 +98,7 @@ def _median(values: list[float]) -> float | None:
 def summarise(rows: list[dict[str, Any]], planners: list[str], maps: int) -> dict[str, Any]:
     """Per planner: solved, verified, against OMPL, times."""
     by = {p: [r for r in rows if r["planner"] == p] for p in planners}
-    ompl = {r["seed"]: r for r in by.get(OMPL_NAME, [])}
+    ompl = {r["seed"]: r for name in OMPL_NAMES for r in by.get(name, [])}
     out: dict[str, Any] = {}
     for p, rs in by.items():
         solved = [r for r in rs if r["solved"]]
@@ -107,7 +109,7 @@ def summarise(rows: list[dict[str, Any]], planners: list[str], maps: int) -> dic
             "median_time_failed_s": _median([r["time_s"] for r in rs if not r["solved"]]),
             "max_time_s": max((r["time_s"] for r in rs), default=None),
         }  # fmt: skip
-        if ompl and p != OMPL_NAME:
+        if ompl and p not in OMPL_NAMES:
             theirs = [seed for seed, r in ompl.items() if r["solved"]]
             mine = {r["seed"] for r in solved}
             both = [seed for seed in theirs if seed in mine]
@@ -132,12 +134,15 @@ def _cell(v: Any, scale: float = 1.0, fmt: str = "{:.1f}") -> str:
 def report(payload: dict[str, Any]) -> str:
     """The page."""
     lines = [
-        "# Random maps: ours with reverse and OMPL's RS RRTConnect",
+        "# Random maps: ours "
+        + ("forward only and OMPL's Dubins RRT" if payload["forward"]
+           else "with reverse and OMPL's RS RRTConnect"),
         "",
         f"Command: `{payload['command']}`  ",
         f"{payload['machine']}; wall time {payload['wall_time_s'] / 60:.1f} min; load at the "
         f"start {payload['load']}. {payload['maps']} random maps (seeds 0-"
-        f"{payload['maps'] - 1}; `random_map` in the script), each planned with reverse; ours "
+        f"{payload['maps'] - 1}; `random_map` in the script), each planned "
+        f"{'forward only' if payload['forward'] else 'with reverse'}; ours "
         f"20 000 iterations (cap {payload['max_time']:g} s), OMPL {payload['ompl_time']:g} s.",
         "",
         "| planner | solved | verified | any sharpness | OMPL solved | share of OMPL's "
@@ -157,7 +162,7 @@ def report(payload: dict[str, Any]) -> str:
         )
     lines += ["", "Failures of ours (map seed: status, message):", ""]
     for r in payload["rows"]:
-        if r["planner"] != OMPL_NAME and not r["solved"]:
+        if r["planner"] not in OMPL_NAMES and not r["solved"]:
             lines.append(f"- `{r['planner']}` map {r['seed']}: {r['status']}: {r['message']}")
     return "\n".join(lines) + "\n"
 
@@ -169,6 +174,8 @@ def main(argv: list[str] | None = None) -> int:
                     help=f"our planner specs, comma-separated (default {DEFAULT_PLANNERS})")
     ap.add_argument("--max-time", type=float, default=10.0, help="our safety cap, s")
     ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time, s")
+    ap.add_argument("--forward", action="store_true",
+                    help="plan forward only (OMPL: Dubins RRT) instead of with reverse")
     ap.add_argument("--jobs", type=int, default=1, help="worker processes")
     ap.add_argument("--out", required=True, help="directory for random_maps.{json,md}")
     args = ap.parse_args(argv)
@@ -179,10 +186,12 @@ def main(argv: list[str] | None = None) -> int:
         why = cov.availability(p)
         if why is not None:
             ap.error(f"--planners: {p}: {why}")
-    if cov.availability(OMPL_NAME) is None:
-        planners.append(OMPL_NAME)
+    ompl = OMPL_NAMES[1] if args.forward else OMPL_NAMES[0]
+    if cov.availability(ompl) is None:
+        planners.append(ompl)
     items = [
-        {"seed": seed, "planner": p, "max_time": args.max_time, "ompl_time": args.ompl_time}
+        {"seed": seed, "planner": p, "max_time": args.max_time, "ompl_time": args.ompl_time,
+         "forward": args.forward}
         for seed in range(args.maps) for p in planners
     ]  # fmt: skip
     t0, load = time.perf_counter(), f"{os.getloadavg()[0]:.1f}"
@@ -192,6 +201,7 @@ def main(argv: list[str] | None = None) -> int:
     payload = {
         "command": command("random_maps.py", argv), "machine": machine(), "load": load,
         "maps": args.maps, "max_time": args.max_time, "ompl_time": args.ompl_time,
+        "forward": args.forward,
         "wall_time_s": time.perf_counter() - t0,
         "summary": summarise(rows, planners, args.maps), "rows": rows,
     }  # fmt: skip

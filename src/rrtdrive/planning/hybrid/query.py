@@ -229,7 +229,9 @@ def hybrid_query(
     (``wide_radius_factor``) first; finer ones (:meth:`HybridConfig.refined`,
     ``config.refinements`` of them) after a search that ran out of states or had
     every goal connection rejected, each with ``refine_share`` of the rest when a
-    later search may follow; then, after a proof, the searches keeping less clearance
+    later search may follow; when those had every connection rejected too, the finest
+    once more, going on through the rejections (``persist``); then, after a proof, the
+    searches keeping less clearance
     (the snug one half-way at the finest resolution, the tight one ``min_clearance``
     at the first). All counted, so deterministic.
 
