@@ -129,8 +129,11 @@ class _Stage:
     share: float = 1.0
 
 
-#: Goal connections the ``"persist"`` search may have rejected: no limit but the budget.
-PERSIST_SOLUTIONS = 1_000_000_000
+#: Goal connections the ``"persist"`` search may have rejected. Each costs a ramp fit
+#: (about 2 ms); the five random maps it solved needed up to 641 (about 1 s, map 36 of
+#: ``experiments/random_maps.py``), and this bounds a query whose every connection fails
+#: to seconds, not the minutes its expansion budget alone would allow.
+PERSIST_SOLUTIONS = 4096
 #: The searches that keep less than the usual body clearance: ``"snug"`` (half-way to
 #: ``min_clearance``, at the finest resolution) and ``"tight"`` (``min_clearance``).
 _SNUGGER = ("snug", "tight")
@@ -188,12 +191,13 @@ def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
         # The first finer search also after a wide one that spent its share.
         after = (*_REFINE_ON, "expansions") if k == 0 else _REFINE_ON
         stages.append(_Stage("fine", fine, _REFINE_ON, after, config.refine_share))
-    if config.persist:
+    if config.persist and config.max_solutions < PERSIST_SOLUTIONS:
         # Every goal connection rejected at each resolution tried, with budget left: the
         # finest search once more, going on through the rejections until the budget
         # ends. A goal close to the start is met first by tight words whose steering
         # ramps fail; one tried from further along passes (a random map's goal 3.8 m
-        # from the start: 16 + 16 connections rejected in 25 expansions, solved in 78).
+        # from the start: 16 + 16 connections rejected in 25 expansions by the first
+        # search, every one by the wide and fine ones; this one solves it, 272 in all).
         persist = dataclasses.replace(fine, max_solutions=PERSIST_SOLUTIONS)
         stages.append(_Stage("persist", persist, ("rejected",), ("rejected",)))
     # The last resorts after the finer searches: a proof for paths keeping
@@ -295,7 +299,7 @@ def hybrid_query(
             return f"keeping only {keeps:.2f} m body clearance"
         if c.radius_factor > config.radius_factor:
             return f"turning with radius {c.radius_factor:g} / kappa_max"
-        if c.max_solutions >= PERSIST_SOLUTIONS:
+        if c.max_solutions > config.max_solutions:
             return "going on through rejected connections"
         return ""
 
