@@ -96,10 +96,6 @@ def run_one(item: dict[str, Any]) -> dict[str, Any]:
     return row | (cov._check(m, res.path) if res.success else dict(cov._UNCHECKED))
 
 
-def _median(values: list[float]) -> float | None:
-    return float(np.median(values)) if values else None
-
-
 def summarise(rows: list[dict[str, Any]], planners: list[str], maps: int) -> dict[str, Any]:
     """Per planner: solved, verified, against OMPL, times."""
     by = {p: [r for r in rows if r["planner"] == p] for p in planners}
@@ -110,8 +106,8 @@ def summarise(rows: list[dict[str, Any]], planners: list[str], maps: int) -> dic
         s: dict[str, Any] = {
             "maps": maps, "solved": len(solved), "verified": sum(r["verified"] for r in rs),
             "any_sharpness": sum(r["verified_any_sharpness"] for r in rs),
-            "median_time_solved_s": _median([r["time_s"] for r in solved]),
-            "median_time_failed_s": _median([r["time_s"] for r in rs if not r["solved"]]),
+            "median_time_solved_s": cov._median([r["time_s"] for r in solved]),
+            "median_time_failed_s": cov._median([r["time_s"] for r in rs if not r["solved"]]),
             "max_time_s": max((r["time_s"] for r in rs), default=None),
         }  # fmt: skip
         if ompl and p not in OMPL_NAMES:
@@ -123,10 +119,10 @@ def summarise(rows: list[dict[str, Any]], planners: list[str], maps: int) -> dic
                 "share_of_ompl": len(both) / len(theirs) if theirs else None,
                 "missed": sorted(set(theirs) - mine),
                 "ours_only": sorted(mine - set(theirs)),
-                "time_ratio_of_medians": (
-                    _median([r["time_s"] for r in solved if r["seed"] in both])
-                    / _median([ompl[seed]["time_s"] for seed in both])
-                ) if both else None,
+                "time_ratio_of_medians": cov._ratio(
+                    cov._median([r["time_s"] for r in solved if r["seed"] in both]),
+                    cov._median([ompl[seed]["time_s"] for seed in both]),
+                ),
             }  # fmt: skip
         out[p] = s
     return out

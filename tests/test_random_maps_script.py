@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import sys
 from pathlib import Path
@@ -13,21 +12,12 @@ import shapely
 from rrtdrive.types import VehicleParams
 from rrtdrive.vehicle import footprint_polygon
 
-SCRIPT = Path(__file__).resolve().parents[1] / "experiments" / "random_maps.py"
-
-
-@pytest.fixture(scope="module")
-def random_maps():
-    sys.path.insert(0, str(SCRIPT.parent))
-    spec = importlib.util.spec_from_file_location("random_maps", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["random_maps"] = module  # the workers unpickle run_one by this name
-    spec.loader.exec_module(module)
-    return module
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "experiments"))
+import random_maps  # noqa: E402
 
 
 @pytest.mark.parametrize("seed", range(8))
-def test_a_seed_gives_one_map_whose_ends_are_free(random_maps, seed: int) -> None:  # noqa: ANN001
+def test_a_seed_gives_one_map_whose_ends_are_free(seed: int) -> None:
     m = random_maps.random_map(seed)
     assert m == random_maps.random_map(seed)
     obstacles = shapely.union_all([o.polygon() for o in m.obstacles])
@@ -38,7 +28,7 @@ def test_a_seed_gives_one_map_whose_ends_are_free(random_maps, seed: int) -> Non
         assert not body.intersects(obstacles)
 
 
-def test_a_small_run_writes_its_page_and_counts(random_maps, tmp_path) -> None:  # noqa: ANN001
+def test_a_small_run_writes_its_page_and_counts(tmp_path) -> None:  # noqa: ANN001
     assert random_maps.main(
         ["--maps", "3", "--planners", "hybrid-a-star", "--out", str(tmp_path)]
     ) == 0

@@ -2,25 +2,14 @@
 
 from __future__ import annotations
 
-import importlib.util
 import sys
 from pathlib import Path
 
-import pytest
-
-SCRIPT = Path(__file__).resolve().parents[1] / "experiments" / "root_growth.py"
-
-
-@pytest.fixture(scope="module")
-def root_growth():
-    sys.path.insert(0, str(SCRIPT.parent))
-    spec = importlib.util.spec_from_file_location("root_growth", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "experiments"))
+import root_growth  # noqa: E402
 
 
-def test_pairs_on_the_built_in_maps(root_growth) -> None:  # noqa: ANN001
+def test_pairs_on_the_built_in_maps() -> None:
     from rrtdrive.planning.improved import planner as improved_planner
 
     original = improved_planner.grow_until_meet
