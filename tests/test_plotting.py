@@ -61,3 +61,30 @@ def test_forward_path_keeps_one_path_entry(tmp_path):
     labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert "path" in labels and not any("reverse" in t or "cusp" in t for t in labels)
     save_figure(fig, tmp_path / "fwd.png")
+
+
+def _axes_box_fraction(fig) -> tuple[float, float]:
+    """The map axes' drawn box (after the equal aspect) as shares of the figure's size."""
+    fig.canvas.draw()
+    box = fig.axes[0].get_window_extent()
+    return box.width / fig.bbox.width, box.height / fig.bbox.height
+
+
+def test_the_figure_follows_the_maps_aspect():
+    # A 60 m x 8 m street in a square figure filled a sixth of its height.
+    m, result = _reverse_result()
+    for bounds in ((0.0, 0.0, 60.0, 8.0), (0.0, 0.0, 40.0, 40.0), (0.0, 0.0, 12.0, 50.0)):
+        wide = Map("aspect", bounds, (), Pose(3.0, 2.0, 0.0), Pose(6.0, 4.0, 0.0))
+        fig = plot_plan(wide, result)
+        w_share, h_share = _axes_box_fraction(fig)
+        # The long side of the map takes most of its side of the figure (the legend
+        # sits beside the map, the title above it).
+        xmin, ymin, xmax, ymax = bounds
+        long_share = w_share if xmax - xmin >= ymax - ymin else h_share
+        assert long_share > 0.55, (bounds, w_share, h_share)
+        assert w_share * h_share > 0.3, (bounds, w_share, h_share)
+        # Equal axes: the drawn box keeps the map's proportions (padding included).
+        box = fig.axes[0].get_window_extent()
+        pad = 0.04 * max(xmax - xmin, ymax - ymin)  # draw_map's margin, both sides
+        ratio = (xmax - xmin + pad) / (ymax - ymin + pad)
+        assert math.isclose(box.width / box.height, ratio, rel_tol=0.05)

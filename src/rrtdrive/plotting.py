@@ -32,6 +32,7 @@ __all__ = [
     "draw_pose",
     "plot_plan",
     "plot_curvature",
+    "map_figure_size",
     "save_figure",
 ]
 
@@ -130,12 +131,40 @@ def draw_gear_path(
         )
 
 
+#: The map's longer side on the page, inches; its shorter side follows the map's aspect,
+#: down to :data:`_MIN_SIDE_IN` (a 60 m x 8 m kerbside in a square figure took a sixth of it).
+_MAP_SIDE_IN = 6.5
+_MIN_SIDE_IN = 1.5
+#: Room beside and above the map: the legend (outside, to the right), title and labels.
+_LEGEND_IN = 2.6
+_TITLE_IN = 1.0
+
+
+def map_figure_size(bounds: tuple[float, float, float, float]) -> tuple[float, float]:
+    """A figure size (inches) whose map axes follow the bounds' aspect, legend beside.
+
+    Examples
+    --------
+    >>> map_figure_size((0.0, 0.0, 60.0, 60.0))
+    (9.1, 7.5)
+    >>> map_figure_size((0.0, 0.0, 60.0, 8.0))
+    (9.1, 2.5)
+    """
+    xmin, ymin, xmax, ymax = bounds
+    width, height = max(xmax - xmin, 1e-9), max(ymax - ymin, 1e-9)
+    if width >= height:
+        w_in, h_in = _MAP_SIDE_IN, max(_MIN_SIDE_IN, _MAP_SIDE_IN * height / width)
+    else:
+        w_in, h_in = max(_MIN_SIDE_IN, _MAP_SIDE_IN * width / height), _MAP_SIDE_IN
+    return round(w_in + _LEGEND_IN, 2), round(h_in + _TITLE_IN, 2)
+
+
 def plot_plan(m: Map, result: PlanResult, title: str | None = None) -> Figure:
     """The map, the trees, the raw tree path, the waypoints and the final path of one result.
 
     The path is drawn by :func:`draw_gear_path`: reverse segments dashed, cusps marked.
     """
-    fig, ax = plt.subplots(figsize=(7.5, 7.5), layout="constrained")
+    fig, ax = plt.subplots(figsize=map_figure_size(m.bounds), layout="constrained")
     draw_map(ax, m)
     draw_trees(ax, result.trees)
     draw_path(ax, result.raw_path, "tab:gray", "raw tree path", lw=1.0)
