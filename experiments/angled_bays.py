@@ -12,7 +12,8 @@ free bay as a driver coming along the aisle turns into it (heading ``-A``); ``ag
 the bay is angled the other way (heading ``A - 180``), so the car must turn round first
 (a driver who came the wrong way along a one-way row). For each case and seed
 (``--seeds``), in one run: the default planner and ``hybrid-a-star``, both with
-``reverse``, and OMPL's Reeds-Shepp RRTConnect with our exact body test, as
+``reverse``, and OMPL's Reeds-Shepp RRTConnect with our exact body test (once per body
+clearance of ``--ompl-clearances``, default 0 and 0.15 m), as
 ``experiments/street_turns.py`` plans them; every path judged by ``verify_path`` with
 the 0.2 rad/m sharpness bound (``verified``) and without it (``any sharpness``).
 
@@ -109,6 +110,7 @@ def main(argv: list[str] | None = None) -> int:
                 rows[f"{angle:g}|{direction}|{aisle:g}"] = st.planner_rows(
                     angled_map(angle, aisle, direction), f"{angle:g} deg {direction}, {aisle:g} m",
                     args.seeds, args.max_time, args.ompl_time, have_ompl,
+                    clearances=args.ompl_clearances,
                 )  # fmt: skip
     payload = st.run_payload("angled_bays.py", argv, args, load, t0, rows)
     print(write_results(args.out, "angled_bays", payload, report))

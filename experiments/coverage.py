@@ -177,7 +177,7 @@ def run_ours(item: dict[str, Any]) -> dict[str, Any]:
 
 
 def solve_ompl(
-    problem: PlanningProblem, index: int, planner: str, seconds: float
+    problem: PlanningProblem, index: int, planner: str, seconds: float, clearance: float = 0.0
 ) -> tuple[float, float, float | None, Path | None]:
     """OMPL's ``planner`` on query ``index``, with our exact body test as validity checker.
 
@@ -185,6 +185,9 @@ def solve_ompl(
     length and the path itself: rows at most 0.1 m apart along OMPL's own curves,
     with the gears of its motion and each cusp repeated
     (:func:`rrtdrive.bench.ompl_planners.reeds_shepp_path`; all forward for Dubins);
+    ``clearance``: the distance every state's body must keep (0: touching is valid; our
+    planners keep 0.15 m, so a comparison at their clearance sets it to that).
+
     ``None``, ``None`` without an exact solution.
     """
     from ompl import base as ob
@@ -197,7 +200,7 @@ def solve_ompl(
     space, algorithm = OMPL[planner]
     ss, si = simple_setup(problem, space)
     free = problem.checker.pose_free
-    ss.setStateValidityChecker(lambda s: free((s.getX(), s.getY(), s.getYaw())))
+    ss.setStateValidityChecker(lambda s: free((s.getX(), s.getY(), s.getYaw()), clearance))
     ou.RNG.setSeed(1 + index)  # takes effect only before a process's first draw
     search = getattr(og, algorithm)(si)
     search.setRange(5.0)

@@ -16,7 +16,8 @@ each ``A`` of ``--aisles``, and four moves a driver makes there:
 For each move and seed (``--seeds``), in one run: the default planner and
 ``hybrid-a-star``, both with ``reverse``, on the counted 20 000-iteration budget
 (``--max-time`` is the cap), and OMPL's Reeds-Shepp RRTConnect with our exact body test
-as validity checker (``--ompl-time``), as ``experiments/street_turns.py`` plans them;
+as validity checker (``--ompl-time``; once per body clearance of ``--ompl-clearances``,
+default 0 and 0.15 m), as ``experiments/street_turns.py`` plans them;
 every path judged by ``verify_path`` with the 0.2 rad/m sharpness bound (``verified``)
 and without it (``any sharpness``).
 
@@ -101,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
         for move in moves:
             rows[f"{aisle:g}|{move}"] = st.planner_rows(
                 move_map(aisle, move), f"aisle {aisle:g} m, {move}", args.seeds,
-                args.max_time, args.ompl_time, have_ompl,
+                args.max_time, args.ompl_time, have_ompl, clearances=args.ompl_clearances,
             )  # fmt: skip
     payload = st.run_payload("garage_moves.py", argv, args, load, t0, rows)
     print(write_results(args.out, "garage_moves", payload, report))

@@ -10,7 +10,8 @@ goal parallel-parked in the gap 0.3 m from its rear car and from the kerb. For e
 factor and seed (``--seeds``), in one run: the default planner and ``hybrid-a-star``,
 both with ``reverse``, on the counted 20 000-iteration budget (``--max-time`` is the
 cap), and OMPL's Reeds-Shepp RRTConnect with our exact body test as validity checker
-(``--ompl-time``), as ``experiments/street_turns.py`` plans them; every path judged by
+(``--ompl-time``; once per clearance of ``--ompl-clearances``, default 0 and 0.15 m),
+as ``experiments/street_turns.py`` plans them; every path judged by
 ``verify_path`` with the 0.2 rad/m sharpness bound (``verified``) and without it
 (``any sharpness``). Our rows also give the body clearance the returned path's search
 kept (``stats["body_clearance_m"]``: 0.15 usually, less after the snug or tight search).
@@ -81,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
     for f in factors:
         rows[f"{f:g}"] = st.planner_rows(
             kerbside_map(f), f"gap {f:g}", args.seeds, args.max_time, args.ompl_time,
-            have_ompl, GEARED,
+            have_ompl, GEARED, args.ompl_clearances,
         )  # fmt: skip
     payload = st.run_payload("kerb_gaps.py", argv, args, load, t0, rows)
     print(write_results(args.out, "kerb_gaps", payload, report))

@@ -12,7 +12,9 @@ the start in the right-hand lane (y = W/4) at x = 16, the goal in the other lane
 (``--seeds``), in one run: the default planner and ``hybrid-a-star``, both with
 ``reverse``, on the counted 20 000-iteration budget (``--max-time`` is the cap), and
 OMPL's Reeds-Shepp RRTConnect with our exact body test as validity checker
-(``--ompl-time``, simplified), as ``experiments/coverage.py`` plans it. Every path is
+(``--ompl-time``, simplified), as ``experiments/coverage.py`` plans it, once for each
+body clearance its states must keep (``--ompl-clearances``, default 0 m: touching allowed,
+and our planners' 0.15 m; a row ``ompl-rs-rrtconnect@0.15m``). Every path is
 judged by ``verify_path`` with the 0.2 rad/m sharpness bound (``verified``) and without
 it (``any sharpness``). Ours are deterministic for a seed; OMPL's generator is seeded
 once per process.
@@ -39,11 +41,14 @@ from results_io import command, machine, numbers_above, write_results  # noqa: E
 
 from rrtdrive.maps import Map  # noqa: E402
 from rrtdrive.planning import PlanningProblem, make_planner  # noqa: E402
+from rrtdrive.planning.hybrid import HybridConfig  # noqa: E402
 from rrtdrive.types import Budget, Path, Pose  # noqa: E402
 
 #: Our planners, each with reverse.
 OURS = ("improved-rrt-connect", "hybrid-a-star")
 OMPL_NAME = "ompl-rs-rrtconnect"
+#: The body clearance our planners keep (both defaults), for OMPL's row at the same.
+OUR_CLEARANCE = HybridConfig().body_clearance
 
 
 def street(width: float, length: float, back: float | None = None) -> Map:
@@ -102,12 +107,13 @@ def ours_row(m: Map, planner: str, seed: int, max_time: float) -> dict[str, Any]
     return row
 
 
-def ompl_row(m: Map, seed: int, seconds: float) -> dict[str, Any]:
-    """OMPL's RS RRTConnect on the same map and checker, judged."""
+def ompl_row(m: Map, seed: int, seconds: float, clearance: float = 0.0) -> dict[str, Any]:
+    """OMPL's RS RRTConnect on the same map and checker (its body ``clearance`` clear), judged."""
     problem = PlanningProblem.from_map(m, reverse=True)
-    _, total_s, length, path = cov.solve_ompl(problem, seed, OMPL_NAME, seconds)
+    _, total_s, length, path = cov.solve_ompl(problem, seed, OMPL_NAME, seconds, clearance)
     row: dict[str, Any] = {"solved": path is not None, "time_s": total_s}
     if path is not None:
+        row["clearance_m"] = clearance  # the clearance its states had to keep
         row |= {
             "length_m": length,
             "cusps": len(path.cusps),
@@ -122,13 +128,40 @@ def add_run_options(ap: argparse.ArgumentParser, unit: str, out: str) -> None:
     ap.add_argument("--seeds", type=int, default=3, help=f"seeds per {unit} (default 3)")
     ap.add_argument("--max-time", type=float, default=10.0, help="our wall-clock cap, s")
     ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time, s")
+    add_ompl_clearance_option(ap)
     ap.add_argument("--out", default=out)
+
+
+def add_ompl_clearance_option(ap: argparse.ArgumentParser) -> None:
+    """``--ompl-clearances``: the body clearances OMPL's states keep, one row each."""
+    ap.add_argument(
+        "--ompl-clearances", default=f"0,{OUR_CLEARANCE:g}",
+        help="body clearances OMPL's states must keep, m, one OMPL row each (default "
+        f"0,{OUR_CLEARANCE:g}: touching allowed, and the {OUR_CLEARANCE:g} m our planners keep)",
+    )  # fmt: skip
+
+
+def ompl_clearances(ap: argparse.ArgumentParser, text: str) -> tuple[float, ...]:
+    """The parsed ``--ompl-clearances`` (exit 2 naming it when a value is bad)."""
+    try:
+        values = tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        ap.error(f"--ompl-clearances: expected numbers separated by commas, got {text!r}")
+    if not values or any(not 0.0 <= v <= 1.0 for v in values):
+        ap.error(f"--ompl-clearances: each value must lie within [0, 1] m, got {text!r}")
+    return values
+
+
+def ompl_label(clearance: float) -> str:
+    """The row name of OMPL at ``clearance``: the bare name when touching is allowed."""
+    return OMPL_NAME if clearance <= 0.0 else f"{OMPL_NAME}@{clearance:g}m"
 
 
 def check_run_options(ap: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """Exit 2 naming the option when a shared one is out of range."""
     if args.seeds < 1 or args.max_time <= 0 or args.ompl_time <= 0:
         ap.error("--seeds must be >= 1, --max-time and --ompl-time > 0")
+    args.ompl_clearances = ompl_clearances(ap, args.ompl_clearances)
 
 
 def run_payload(
@@ -139,7 +172,7 @@ def run_payload(
     return {
         "command": command(script, argv),
         "seeds": args.seeds, "max_time": args.max_time, "ompl_time": args.ompl_time,
-        "load": load, "machine": machine(),
+        "ompl_clearances": list(args.ompl_clearances), "load": load, "machine": machine(),
         "wall_time_s": time.perf_counter() - t0, "rows": rows,
     }  # fmt: skip
 
@@ -147,18 +180,21 @@ def run_payload(
 def planner_rows(
     m: Map, label: str, seeds: int, max_time: float, ompl_time: float, have_ompl: bool,
     ours: tuple[str, ...] = OURS,
+    clearances: tuple[float, ...] = (0.0,),
 ) -> dict[str, list[dict[str, Any]]]:
     """Every planner's rows on one map: ours with reverse, then OMPL's when it is installed.
 
-    ``label`` names the query in the progress lines on stderr.
+    ``label`` names the query in the progress lines on stderr; OMPL gets one row per
+    body clearance of ``clearances`` (:func:`ompl_label`).
     """
     by_planner: dict[str, list[dict[str, Any]]] = {}
     for planner in ours:
         print(f"{label}: {planner} ...", file=sys.stderr, flush=True)
         by_planner[f"{planner}+reverse"] = [ours_row(m, planner, s, max_time) for s in range(seeds)]
-    if have_ompl:
-        print(f"{label}: {OMPL_NAME} ...", file=sys.stderr, flush=True)
-        by_planner[OMPL_NAME] = [ompl_row(m, s, ompl_time) for s in range(seeds)]
+    for clearance in clearances if have_ompl else ():
+        name = ompl_label(clearance)
+        print(f"{label}: {name} ...", file=sys.stderr, flush=True)
+        by_planner[name] = [ompl_row(m, s, ompl_time, clearance) for s in range(seeds)]
     return by_planner
 
 
@@ -178,9 +214,19 @@ def page_header(payload: dict[str, Any], title: str, setting: str) -> list[str]:
         f"Command: `{payload['command']}`  ",
         f"{payload['machine']}; wall time {payload['wall_time_s']:.0f} s; load at the start "
         f"{payload['load']}. {setting}; {payload['seeds']} seeds; ours 20 000 iterations "
-        f"(cap {payload['max_time']:g} s), OMPL {payload['ompl_time']:g} s.",
+        f"(cap {payload['max_time']:g} s), OMPL {payload['ompl_time']:g} s"
+        f"{_ompl_clearances_note(payload)}.",
         "",
     ]
+
+
+def _ompl_clearances_note(payload: dict[str, Any]) -> str:
+    """The header's words on OMPL's clearances (runs before they were recorded: none)."""
+    kept = [c for c in payload.get("ompl_clearances", []) if c > 0.0]
+    if not kept:
+        return ""
+    rows = ", ".join(f"`{ompl_label(c)}`" for c in kept)
+    return f"; OMPL's states may touch obstacles in its plain row, keep the clearance in {rows}"
 
 
 def report(payload: dict[str, Any]) -> str:
@@ -245,6 +291,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", type=int, default=3, help="seeds per width (default 3)")
     ap.add_argument("--max-time", type=float, default=10.0, help="our wall-clock cap, s")
     ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time, s")
+    add_ompl_clearance_option(ap)
     ap.add_argument(
         "--lanes", type=float, default=None, metavar="BACK",
         help="from lane to lane: the start in the right-hand lane at x = 16, the goal in "
@@ -260,6 +307,7 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"--lanes must lie within [0, 12] m, got {args.lanes:g}")
     if args.length < 16.0 or args.seeds < 1 or args.max_time <= 0 or args.ompl_time <= 0:
         ap.error("--length must be >= 16, --seeds >= 1, --max-time and --ompl-time > 0")
+    clearances = ompl_clearances(ap, args.ompl_clearances)
     have_ompl = cov.availability(OMPL_NAME) is None
     t0 = time.perf_counter()
     load = f"{os.getloadavg()[0]:.1f}"
@@ -267,12 +315,13 @@ def main(argv: list[str] | None = None) -> int:
     for w in widths:
         m = street(w, args.length, args.lanes)
         rows[f"{w:g}"] = planner_rows(
-            m, f"width {w:g} m", args.seeds, args.max_time, args.ompl_time, have_ompl
+            m, f"width {w:g} m", args.seeds, args.max_time, args.ompl_time, have_ompl,
+            clearances=clearances,
         )
     payload = {
         "command": command("street_turns.py", argv),
         "length": args.length, "lanes": args.lanes, "seeds": args.seeds, "max_time": args.max_time,
-        "ompl_time": args.ompl_time, "load": load,
+        "ompl_time": args.ompl_time, "ompl_clearances": list(clearances), "load": load,
         "machine": machine(),
         "wall_time_s": time.perf_counter() - t0, "rows": rows,
     }  # fmt: skip

@@ -219,6 +219,8 @@ def test_exact_test_with_clearance_agrees_with_shapely_distance(
     want = inner.contains(body) and union.distance(body) > clearance
     got = bool(parking_checker.poses_free(np.array([pose]), clearance)[0])
     assert got == want
+    # The scalar test (an outside planner's validity checker) gives the same answer.
+    assert parking_checker.pose_free(pose, clearance) == want
 
 
 @given(pose=poses)

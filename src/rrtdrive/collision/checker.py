@@ -449,12 +449,24 @@ class CollisionChecker:
         """
         return (self.axis_clearances(p.T, offsets) >= need).all(axis=0)
 
-    def pose_free(self, pose: Sequence[float]) -> bool:
-        """Exact body test for one pose (scalar disc screen first, shapely when unsure)."""
+    def pose_free(self, pose: Sequence[float], clearance: float = 0.0) -> bool:
+        """Exact body test for one pose (scalar disc screen first, shapely when unsure).
+
+        With ``clearance`` > 0 the body must keep that distance from obstacles and
+        bounds, as in :meth:`poses_free` (the same answer, without numpy's per-call
+        overhead: an outside planner's validity checker calls it once per state).
+        """
         x, y, yaw = float(pose[0]), float(pose[1]), float(pose[2])
-        if self.pose_free_fast(x, y, yaw):
+        if clearance <= 0.0:
+            if self.pose_free_fast(x, y, yaw):
+                return True
+            return bool(self._exact(np.array([[x, y, yaw]]))[0])
+        c, s = math.cos(yaw), math.sin(yaw)
+        need = self.disc_radius + clearance
+        field = self.clearance
+        if all(field(x + c * off, y + s * off) >= need for off in self._disc_offsets_list):
             return True
-        return bool(self._exact(np.array([[x, y, yaw]]))[0])
+        return bool(self._exact(np.array([[x, y, yaw]]), clearance)[0])
 
     def body_clearance(self, pose: Sequence[float]) -> float:
         """Exact distance from the body at ``pose`` to the nearest obstacle or the bounds.
