@@ -1,7 +1,9 @@
 """A pair of trees whose start or goal tree never leaves its root gives way (``root_patience``).
 
-A root grows only along its pose's heading (the virtual parents), so a pose boxed in
-along it leaves its tree a single node for the whole growth share. With the
+A root grows only by edges within 90 degrees of its pose's heading (the virtual
+parents), so a pose boxed in along it leaves its tree a single node for the whole
+growth share (where that is provable before any iteration the growth does not even
+start: ``improved/boxed.py``). With the
 escalation on, the growth gives up after ``ImprovedConfig.root_patience`` of the
 pair's iterations instead; the paper's pipeline alone (escalation off) keeps every
 iteration.
@@ -82,7 +84,12 @@ def test_patience_only_ever_stops_a_pair_with_a_bare_root(seed: int, patience: i
             np.testing.assert_array_equal(found, old_found)
 
 
-def test_a_kerbside_gap_gives_way_after_the_patience_with_the_same_path() -> None:
+def test_a_kerbside_gap_gives_way_after_the_patience_with_the_same_path(monkeypatch) -> None:  # noqa: ANN001
+    # The kerbside goal is proven boxed in before any iteration (test_root_boxed_in.py);
+    # without that proof the pair waits out the patience.
+    from rrtdrive.planning.improved import planner as improved_planner
+
+    monkeypatch.setattr(improved_planner, "root_boxed_in", lambda *a, **k: False)
     problem = PlanningProblem.from_map(builtin_map("kerbside"), reverse=True)
     cfg = ImprovedConfig()
     res = ImprovedRRTConnect().solve(problem, np.random.default_rng(0), BUDGET)

@@ -342,6 +342,11 @@ class CollisionChecker:
             self.edge_radius,
         )
 
+    @property
+    def edge_capsule(self) -> tuple[float, float, float]:
+        """:meth:`edge_free`'s capsule: its reach behind and ahead of an edge, its radius."""
+        return self._cap_back, self._cap_front, self.edge_radius
+
     def point_free(self, x: float, y: float) -> bool:
         """Fast test: could a car with its rear axle at ``(x, y)`` fit with *some* heading.
 
@@ -458,15 +463,12 @@ class CollisionChecker:
         """
         x, y, yaw = float(pose[0]), float(pose[1]), float(pose[2])
         if clearance <= 0.0:
-            if self.pose_free_fast(x, y, yaw):
-                return True
-            return bool(self._exact(np.array([[x, y, yaw]]))[0])
-        c, s = math.cos(yaw), math.sin(yaw)
-        need = self.disc_radius + clearance
-        field = self.clearance
-        if all(field(x + c * off, y + s * off) >= need for off in self._disc_offsets_list):
-            return True
-        return bool(self._exact(np.array([[x, y, yaw]]), clearance)[0])
+            sure = self.pose_free_fast(x, y, yaw)
+        else:  # the same three-disc screen, each disc clear by the clearance too
+            c, s, need = math.cos(yaw), math.sin(yaw), self.disc_radius + clearance
+            room = self.clearance
+            sure = all(room(x + c * o, y + s * o) >= need for o in self._disc_offsets_list)
+        return sure or bool(self._exact(np.array([[x, y, yaw]]), clearance)[0])
 
     def body_clearance(self, pose: Sequence[float]) -> float:
         """Exact distance from the body at ``pose`` to the nearest obstacle or the bounds.

@@ -130,14 +130,16 @@ class ImprovedConfig:
     root_patience : int
         Beyond the paper: with ``escalation`` on, a pair of trees whose start or
         goal tree is still only its root after this many of the pair's iterations
-        gives way to the next stage (0: never). A root grows only along its pose's
-        heading (the virtual parents), so a pose boxed in along it (a kerbside gap,
-        a garage bay) leaves its tree a single node for the whole share: 128 of the
+        gives way to the next stage (0: never). A root grows only by edges within 90
+        degrees of its pose's heading (the virtual parents), so a pose boxed in along it
+        (a kerbside gap, a garage bay) leaves its tree a single node for the whole share: 128 of the
         129 pairs that failed on the 400 random queries and the 9 built-in maps x 20
         seeds x both gears (``kerbside``, ``garage``, ``reverse_bay``: 10 000
         iterations, ~140 ms each), while of the 1 428 pairs that met, the last root
         to grow did so after 3 503 iterations (``python experiments/root_growth.py
-        --out results/root_growth_s18``). Default 4000.
+        --out results/root_growth_s18``). Default 4000. Where the boxing is provable
+        before any iteration (:func:`~rrtdrive.planning.improved.boxed.root_boxed_in`),
+        the growth does not start at all.
     escalation_fallback_joints : int
         With ``escalation`` on, the Dubins fallback's tree nodes tried as tail
         joints, and again as lead joints (>= 0; without the escalation

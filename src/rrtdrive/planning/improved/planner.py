@@ -24,6 +24,7 @@ import numpy as np
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register_planner
 from rrtdrive.planning.hybrid.escalation import ESCALATES_FROM, escalate
+from rrtdrive.planning.improved.boxed import root_boxed_in
 from rrtdrive.planning.improved.config import ImprovedConfig, StageBudgets
 from rrtdrive.planning.improved.expansion import (
     default_expansion_lmin,
@@ -201,6 +202,7 @@ class _Query:
         self.fallback_tried = ""  # "direct": the direct Dubins path alone; "all"
         self.iterations = 0
         self.stuck_root = ""  # "start" / "goal": that tree never left its root (root_patience)
+        self.root_proof = False  # stuck_root proven before any iteration (root_boxed_in)
         self.limits: StageBudgets  # the stages' counted budgets, set per query by run()
         self.trees: tuple[Tree, ...] = (
             Tree(self.s_xy[None, :], np.array([-1])),
@@ -388,6 +390,13 @@ class _Query:
         to the stages' ``attempts``; all ``iterations`` together are at most theirs).
         """
         cfg, stats, p = self.cfg, self.stats, self.cfg.step
+        boxed = self.boxed_root()
+        if boxed:
+            # Proven before any iteration (boxed.root_boxed_in): no edge at that root can
+            # ever pass, so the pair would only wait out root_patience for nothing.
+            self.stuck_root, self.root_proof = boxed, True
+            stats["stuck_root"] = stats["root_boxed_in"] = 1.0
+            return None
         total_nodes = 0
         while stats["postprocess_attempts"] < self.limits.attempts:
             ts = ObtuseTree(self.s_xy, virtual_parent=self.s_xy - p * self.hs)
@@ -412,6 +421,34 @@ class _Query:
             if out is not None:
                 return out
         return None
+
+    def boxed_root(self) -> str:
+        """``"start"`` or ``"goal"`` when that root provably cannot grow, else ``""``.
+
+        Only beyond the paper (``root_patience`` on) and with the obtuse parents, whose
+        virtual parents keep a root's edges within 90 degrees of its heading.
+        """
+        if self.limits.root_patience <= 0 or not self.cfg.obtuse_parent:
+            return ""
+        for end, pose in (("start", self.start), ("goal", self.goal)):
+            if root_boxed_in(self.checker, pose):
+                return end
+        return ""
+
+    def stuck_words(self) -> str:
+        """Why the stuck root's tree never grew, for the messages."""
+        end = self.stuck_root
+        if self.root_proof:
+            return (
+                f"the {end} tree cannot leave the {end} pose: every edge it may grow, within "
+                f"90 deg of the {end}'s heading, is blocked there (the {end} is boxed in "
+                "along its heading)"
+            )
+        return (
+            f"the {end} tree never left the {end} pose in {self.limits.root_patience} "
+            f"iterations (it grows only by edges within 90 deg of the {end}'s heading, and "
+            f"none tried was free: the {end} is boxed in along its heading)"
+        )
 
     def fallback(
         self, escalated: PlanResult | None = None, *, direct: bool = True, joints: bool = True
@@ -442,9 +479,7 @@ class _Query:
             reason = self.last_message.removeprefix("post-processing failed: ")
             note = f"no tree path could be made drivable ({reason})"
         elif self.stuck_root:
-            end = self.stuck_root
-            patience = self.limits.root_patience
-            note = f"the {end} tree never left the {end} pose ({patience} iterations)"
+            note = self.stuck_words()
         else:
             note = "the trees did not meet within the budget"
         raw = self.last_raw if self.last_raw is not None else np.vstack([self.s_xy, self.g_xy])
@@ -495,13 +530,9 @@ class _Query:
                 stats=stats,
             )
         if self.stuck_root:
-            end = self.stuck_root
             lead = (
-                f"no path: the {end} tree never left the {end} pose in "
-                f"{self.limits.root_patience} iterations (it grows only straight along "
-                f"the {end}'s heading, and no edge tried that way was free: the {end} is "
-                f"boxed in along its heading; "
-                f"{iterations} iterations, {watch.elapsed():.3f} s)"
+                f"no path: {self.stuck_words()} ({iterations} iterations, "
+                f"{watch.elapsed():.3f} s)"
             )
         else:
             lead = (

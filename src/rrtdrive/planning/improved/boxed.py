@@ -1,0 +1,107 @@
+"""Whether a tree root can ever grow: a proof from the clearance field, before any iteration.
+
+A root with a virtual parent (the start and the goal of the improved planner, with the
+obtuse-parent component on) is only ever extended by a straight edge within 90 degrees
+of its pose's heading: Eq. 11 picks it only when the angle (virtual parent, root, q) is
+obtuse, and the virtual parent lies behind the start and ahead of the goal, whose edges
+are driven into it. Every such edge, driven in direction ``u``, is tested by
+:meth:`~rrtdrive.collision.CollisionChecker.edge_free` at the root: a capsule of
+radius ``r`` about the segment from ``root - back u`` to the far end ``+ front u``
+(:attr:`~rrtdrive.collision.CollisionChecker.edge_capsule`). That capsule contains the
+capsule of the edge of length zero in the same direction, about the segment
+``[root - back u, root + front u]``; and the test passes only where its capsule is
+truly clear (it walks the field, a lower bound of the distance). So when, for every
+direction of the fan, that short capsule holds an obstacle point, no edge at the root
+can ever pass, and the tree stays its root whatever it samples.
+
+:func:`root_boxed_in` proves it on a fan of directions ``tol / front`` apart: a
+direction's segment whose exact distance (shapely) to the obstacles or to the outside
+of the bounds is below ``r - tol`` puts an obstacle point within ``r`` of the segment
+of every direction within half a fan step (the segment's points move at most ``front``
+times the angle). The clearance field answers first where it can: a direction whose
+segment it finds clear of ``r`` plus a cell everywhere may pass, and then nothing is
+proven. A ``False`` proves nothing: the growth then runs, and
+:attr:`~.config.ImprovedConfig.root_patience` bounds it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+
+from rrtdrive.collision import CollisionChecker
+from rrtdrive.types import Pose
+
+__all__ = ["ROOT_FAN_TOL", "root_boxed_in"]
+
+#: The proof's tolerance, metres: a direction counts as blocked when an obstacle lies
+#: this much inside its capsule, which covers the directions half a fan step either side.
+ROOT_FAN_TOL = 0.05
+#: Spacing of the field's look-ups along each direction's segment, metres.
+_POINT_SPACING = 0.1
+
+
+def root_boxed_in(checker: CollisionChecker, root: Pose, tol: float = ROOT_FAN_TOL) -> bool:
+    """True when no tree edge can ever leave (or, for the goal, enter) ``root``.
+
+    Parameters
+    ----------
+    checker : CollisionChecker
+        The map's checker, whose :meth:`~CollisionChecker.edge_free` tests edges at
+        the roots.
+    root : Pose
+        The start (edges leave it) or the goal (edges are driven into it); in both,
+        an edge's driving direction lies within 90 degrees of ``root.yaw``.
+    tol : float
+        How far inside every direction's capsule an obstacle must lie, metres.
+
+    Returns
+    -------
+    bool
+        ``True`` is a proof (up to float rounding); ``False`` proves nothing.
+
+    Examples
+    --------
+    >>> from rrtdrive.maps import Map, Obstacle
+    >>> walls = (Obstacle((10.0, 2.0), (0.4, 4.0), 0.0),)  # 0.3 m ahead of the bumper
+    >>> m = Map("nose", (0.0, 0.0, 20.0, 4.0), walls, Pose(6.2, 2.0, 0.0), Pose(2.0, 2.0, 0.0))
+    >>> c = CollisionChecker.for_map(m)
+    >>> root_boxed_in(c, m.start), root_boxed_in(c, Pose(6.2, 2.0, math.pi))
+    (True, False)
+    """
+    back, front, radius = checker.edge_capsule
+    # A zero-length edge is tested as a disc about the root (edge_free); where that disc
+    # is clear the proof below would not cover it.
+    reach = math.hypot(checker.vehicle.front_extent, checker.vehicle.width / 2.0)
+    if checker.clearance(root.x, root.y) - reach - checker.config.margin >= 0.0:
+        return False
+    count = math.ceil(math.pi * max(front, back) / tol)
+    # Directions at the centres of ``count`` equal parts of the closed fan [-90, 90] deg.
+    angles = root.yaw + (np.arange(count) + 0.5) * (math.pi / count) - math.pi / 2.0
+    c, s = np.cos(angles), np.sin(angles)
+    ends = np.stack(
+        [np.column_stack([root.x - back * c, root.y - back * s]),
+         np.column_stack([root.x + front * c, root.y + front * s])], axis=1,
+    )  # fmt: skip
+    # The field first: a segment clear of the radius plus a cell everywhere may pass.
+    along = np.linspace(0.0, 1.0, max(2, math.ceil((front + back) / _POINT_SPACING) + 1))
+    xs = ends[:, :1, 0] + (ends[:, 1:, 0] - ends[:, :1, 0]) * along
+    ys = ends[:, :1, 1] + (ends[:, 1:, 1] - ends[:, :1, 1]) * along
+    if (checker.clearances_xy(xs, ys).min(axis=1) >= radius + checker.resolution).any():
+        return False
+    need = radius - tol
+    # Outside the bounds, or nearer their edge than need at an end (inside a box the
+    # distance to its edge along a segment is least at an end).
+    xmin, ymin, xmax, ymax = checker.bounds
+    edge = np.minimum.reduce(
+        [ends[..., 0] - xmin, xmax - ends[..., 0], ends[..., 1] - ymin, ymax - ends[..., 1]]
+    ).min(axis=1)
+    blocked = edge < need
+    union = checker.obstacle_union
+    if not blocked.all() and not union.is_empty:
+        open_ = ~blocked
+        lines = shapely.linestrings(ends[open_])
+        blocked[open_] = shapely.distance(lines, union) < need
+    return bool(blocked.all())
