@@ -19,8 +19,7 @@ direction's segment whose exact distance (shapely) to the obstacles or to the ou
 of the bounds is below ``r - tol`` puts an obstacle point within ``r`` of the segment
 of every direction within half a fan step (the segment's points move at most ``front``
 times the angle). The clearance field answers first where it can: a direction whose
-segment it finds clear of ``r`` plus a cell everywhere may pass, and then nothing is
-proven. A ``False`` proves nothing: the growth then runs, and
+segment it finds ``r - tol`` clear is not blocked, and then nothing is proven. A ``False`` proves nothing: the growth then runs, and
 :attr:`~.config.ImprovedConfig.root_patience` bounds it.
 """
 
@@ -85,13 +84,17 @@ def root_boxed_in(checker: CollisionChecker, root: Pose, tol: float = ROOT_FAN_T
         [np.column_stack([root.x - back * c, root.y - back * s]),
          np.column_stack([root.x + front * c, root.y + front * s])], axis=1,
     )  # fmt: skip
-    # The field first: a segment clear of the radius plus a cell everywhere may pass.
-    along = np.linspace(0.0, 1.0, max(2, math.ceil((front + back) / _POINT_SPACING) + 1))
+    need = radius - tol
+    # The field first (a lower bound of the distance): a direction whose segment it finds
+    # ``need`` clear, with half the look-ups' spacing for the points between, is not
+    # blocked, and then nothing is proven.
+    n = max(2, math.ceil((front + back) / _POINT_SPACING) + 1)
+    along = np.linspace(0.0, 1.0, n)
     xs = ends[:, :1, 0] + (ends[:, 1:, 0] - ends[:, :1, 0]) * along
     ys = ends[:, :1, 1] + (ends[:, 1:, 1] - ends[:, :1, 1]) * along
-    if (checker.clearances_xy(xs, ys).min(axis=1) >= radius + checker.resolution).any():
+    half_gap = 0.5 * (front + back) / (n - 1)
+    if (checker.clearances_xy(xs, ys).min(axis=1) >= need + half_gap).any():
         return False
-    need = radius - tol
     # Outside the bounds, or nearer their edge than need at an end (inside a box the
     # distance to its edge along a segment is least at an end).
     xmin, ymin, xmax, ymax = checker.bounds
@@ -100,7 +103,14 @@ def root_boxed_in(checker: CollisionChecker, root: Pose, tol: float = ROOT_FAN_T
     ).min(axis=1)
     blocked = edge < need
     union = checker.obstacle_union
-    if not blocked.all() and not union.is_empty:
+    if union.is_empty:
+        return bool(blocked.all())
+    # Straight along the heading first: where the root is not boxed in, most often that
+    # direction is clear, and one distance settles it.
+    mid = count // 2
+    if not blocked[mid] and shapely.distance(shapely.linestrings(ends[mid]), union) >= need:
+        return False
+    if not blocked.all():
         open_ = ~blocked
         lines = shapely.linestrings(ends[open_])
         blocked[open_] = shapely.distance(lines, union) < need
