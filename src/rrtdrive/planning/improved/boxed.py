@@ -19,7 +19,8 @@ direction's segment whose exact distance (shapely) to the obstacles or to the ou
 of the bounds is below ``r - tol`` puts an obstacle point within ``r`` of the segment
 of every direction within half a fan step (the segment's points move at most ``front``
 times the angle). The clearance field answers first where it can: a direction whose
-segment it finds ``r - tol`` clear is not blocked, and then nothing is proven. A ``False`` proves nothing: the growth then runs, and
+segment it finds ``r - tol`` clear is not blocked, and then nothing is proven. A
+``False`` proves nothing: the growth then runs, and
 :attr:`~.config.ImprovedConfig.root_patience` bounds it.
 """
 
