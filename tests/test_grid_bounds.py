@@ -172,3 +172,18 @@ def test_a_big_maps_set_up_is_reported_apart_and_outside_the_budget():
     # before the stopwatch starts: set-up is orders of magnitude more than the search.
     assert res.planning_time_s < res.setup_time_s
     assert verify_path(m, res.path).ok
+
+
+def test_simulate_refuses_10_km_bounds_naming_what_to_change(tmp_path, capsys):
+    # simulate has no --resolution of its own: the message names the command that has.
+    f = tmp_path / "huge.json"
+    f.write_text(json.dumps({
+        "name": "huge", "bounds": [0, 0, 10_000, 10_000], "obstacles": [],
+        "start": [10, 10, 0], "goal": [9_000, 9_000, 0],
+    }))  # fmt: skip
+    code = main(["simulate", str(f)])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert err.startswith("rrtdrive simulate: error: bounds: 10000 x 10000 m needs ")
+    assert "rrtdrive plan --resolution 1.42" in err and "CheckerConfig(resolution=1.42)" in err
+    assert "Traceback" not in err and err.count("\n") == 1
