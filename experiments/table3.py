@@ -297,7 +297,8 @@ def main(argv: list[str] | None = None) -> int:
     for page in (out / "table3.md", *([FsPath(args.doc)] if args.doc else [])):
         rel = os.path.relpath(fig_dir, page.parent).replace(os.sep, "/") + "/"
         write_text_atomic(page, text.replace(FIGURE_LINK, rel))
-    print(text)
+    # On the terminal the figures' links are relative to where the script was run.
+    print(text.replace(FIGURE_LINK, os.path.relpath(fig_dir).replace(os.sep, "/") + "/"))
     return 0
 
 

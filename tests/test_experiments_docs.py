@@ -40,6 +40,10 @@ def test_table3_into_elsewhere_leaves_docs_untouched(tmp_path):
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert (tmp_path / "table3.md").is_file() and (tmp_path / "table3.json").is_file()
     assert _docs_digest() == before
+    # What it prints links the figures as written, no placeholder left.
+    assert "@@" not in proc.stdout and "@@" not in (tmp_path / "table3.md").read_text()
+    links = re.findall(r"\]\(([^)]+\.png)\)", proc.stdout)
+    assert links and all((ROOT / link).resolve().is_file() for link in links)
 
 
 README = ROOT / "README.md"
