@@ -6,7 +6,8 @@ Usage::
 
 A sweep of the forward drives from one pose of ``experiments/coverage.py``'s random
 sets (``parking_lot``, seed 1, 100 poses per set), for each steering-rate bound of
-``--sharpness`` (rad of steering angle per metre): every ``--step`` metres each drive
+``--sharpness`` (rad of steering angle per metre), from the wheels straight or (with
+``--turned-wheels``) from any steering angle: every ``--step`` metres each drive
 turns its steering angle by ``-s step``, ``0`` or ``+s step`` (clipped at the car's
 ``delta_max``), the poses in between (every ``step / 4``) are tested with the
 planner's exact body test keeping ``--clearance``, and the drives that collide are
@@ -67,7 +68,12 @@ def report(payload: dict[str, Any]) -> str:
         f"Command: `{payload['command']}`  ",
         f"{payload['machine']}; wall time {payload['wall_time_s']:.0f} s. Pose "
         f"{payload['pose']}; body clearance kept {payload['clearance']} m; a step of "
-        f"{payload['step']} m.",
+        f"{payload['step']} m; "
+        + (
+            "starting at any steering angle (turned at rest)."
+            if payload.get("turned_wheels")
+            else "starting with the wheels straight."
+        ),
         "",
         "| steering rate [rad/m] | merge cell [m] | outcome | drives at the peak | capped |",
         "|---|---|---|---|---|",
@@ -99,6 +105,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--step", type=float, default=0.2, help="metres between steering moves")
     ap.add_argument("--distance", type=float, default=30.0, help="metres a drive must reach")
     ap.add_argument("--max-states", type=int, default=300_000, help="drives kept per step")
+    ap.add_argument(
+        "--turned-wheels", action="store_true",
+        help="start at any steering angle, lock to lock (the car turns its wheels at rest "
+        "before it sets off, as the controllers do); default: wheels straight",
+    )  # fmt: skip
     ap.add_argument("--out", default="results/forward_reach")
     args = ap.parse_args(argv)
     try:
@@ -127,12 +138,13 @@ def main(argv: list[str] | None = None) -> int:
                 cell=c,
                 distance=args.distance,
                 max_states=args.max_states,
+                turned_wheels=args.turned_wheels,
             )
             rows.append(_row(reach, m))
     payload = {
         "command": command("forward_reach.py", argv),
         "query": args.query, "pose": [round(v, 4) for v in item["pose"]],
-        "clearance": args.clearance, "step": args.step,
+        "clearance": args.clearance, "step": args.step, "turned_wheels": args.turned_wheels,
         "machine": machine(),
         "wall_time_s": time.perf_counter() - t0, "rows": rows,
     }  # fmt: skip

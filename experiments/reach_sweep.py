@@ -61,6 +61,7 @@ def sweep(
     heading_bin: float = math.radians(0.5),
     distance: float = 30.0,
     max_states: int = 300_000,
+    turned_wheels: bool = False,
 ) -> Reach:
     """Sweep every forward drive from ``start`` at steering rate ``<= sharpness``.
 
@@ -69,13 +70,17 @@ def sweep(
     checker : CollisionChecker
         The map's checker; poses are tested with ``poses_free(..., clearance)``.
     start : tuple of float
-        ``(x, y, yaw)``; the drive starts with the wheels straight.
+        ``(x, y, yaw)``; the drive starts with the wheels straight, or with
+        ``turned_wheels`` at any of the ``2 STEER_BINS + 1`` steering angles from lock to
+        lock (a car at rest turns its wheels before it sets off, as the controllers do).
     wheelbase, kappa_max : float
         The car: ``kappa = tan(delta) / wheelbase``, ``|kappa| <= kappa_max``.
     sharpness : float
         Largest change of the steering angle per metre, rad/m.
     clearance, step, cell, heading_bin, distance, max_states
         As in the module docstring.
+    turned_wheels : bool
+        See ``start``.
 
     Returns
     -------
@@ -83,7 +88,12 @@ def sweep(
     """
     delta_max = math.atan(wheelbase * kappa_max)
     turn = sharpness * step
-    x, y, th, de = (np.array([v]) for v in (*start, 0.0))
+    if turned_wheels:
+        de = np.linspace(-delta_max, delta_max, 2 * STEER_BINS + 1)
+    else:
+        de = np.zeros(1)
+    x, y, th = (np.full(len(de), v, dtype=float) for v in start)
+    kappa0 = np.tan(de) / wheelbase  # each root's curvature, set at rest
     layers: list[tuple[np.ndarray, ...]] = []
     peak, capped = 1, False
     n_steps = int(math.ceil(distance / step))
@@ -123,15 +133,17 @@ def sweep(
     return Reach(
         sharpness=sharpness, cell=cell, driven_m=len(layers) * step,
         survived=len(layers) == n_steps, peak_states=peak, capped=capped,
-        poses=_trace(start, layers),
+        poses=_trace(start, layers, kappa0),
     )  # fmt: skip
 
 
-def _trace(start: tuple[float, float, float], layers: list[tuple[np.ndarray, ...]]) -> np.ndarray:
-    """The rows of drive 0 of the last layer, back to the start."""
+def _trace(
+    start: tuple[float, float, float], layers: list[tuple[np.ndarray, ...]], kappa0: np.ndarray
+) -> np.ndarray:
+    """The rows of drive 0 of the last layer, back to the start (``kappa0``: each root's)."""
     rows, i = [], 0
     for parent, sub_rows in reversed(layers):
         rows.append(sub_rows[i])
         i = int(parent[i])
-    rows.append(np.array([[*start, 0.0]]))
+    rows.append(np.array([[*start, float(kappa0[i])]]))
     return np.concatenate(rows[::-1])

@@ -97,3 +97,24 @@ def test_steering_never_moves_faster_than_the_bound():
     assert rate.max() <= 0.2 * (1 + 1e-6)
     assert np.abs(reach.poses[:, 3]).max() <= m.vehicle.kappa_max * (1 + 1e-9)
     assert math.isclose(s[-1], 25.0, rel_tol=1e-3)
+
+
+def test_wheels_turned_at_rest_reach_a_turn_that_straight_wheels_miss():
+    # 1 m before the corner the wheels cannot come round at 0.2 rad/m from straight; a
+    # car at rest turns them first (the controllers do), and then it makes the turn.
+    base = _corner_map()
+    m = Map("corner_near", base.bounds, base.obstacles, Pose(29.0, 8.0, 0.0), base.goal)
+    straight = _sweep(m, sharpness=0.2, distance=20.0, **COARSE)
+    turned = _sweep(m, sharpness=0.2, distance=20.0, turned_wheels=True, **COARSE)
+    assert not straight.survived and straight.driven_m < 10.0
+    assert turned.survived and turned.poses[-1, 1] > 11.0
+    # The drive starts at its wheels' angle (set at rest), then keeps the rate bound.
+    assert turned.poses[0, 3] != 0.0  # the wheels were turned at rest
+    delta = np.arctan(m.vehicle.wheelbase * turned.poses[:, 3])
+    s = np.r_[0.0, np.cumsum(np.hypot(*np.diff(turned.poses[:, :2], axis=0).T))]
+    assert (np.abs(np.diff(delta)) / np.diff(s)).max() <= 0.2 * (1 + 1e-6)
+    check = verify_path(
+        m.with_query(goal=Pose(*turned.poses[-1, :3])), Path(turned.poses, np.zeros((0, 2))),
+        max_sharpness=0.2, sharpness_tol=0.01,
+    )  # fmt: skip
+    assert check.ok, check.failed
