@@ -550,3 +550,53 @@ def test_reeds_shepp_cusps_are_found_on_the_curve(goal):
         ds = np.hypot(*np.diff(seg[:, :2], axis=0).T)
         dyaw = np.diff(np.unwrap(seg[:, 2]))
         np.testing.assert_allclose(dyaw, seg[:-1, 4] * seg[:-1, 3] * ds, atol=1e-6)
+
+
+# ----------------------------------------------------------------------------- maps driven
+
+
+def test_a_map_file_is_driven_closed_loop_with_reverse(tmp_path):
+    # A user's map as a closed-loop scenario: its start to its goal, here only in reverse.
+    f = tmp_path / "bay.json"
+    save_map(builtin_map("reverse_bay"), f)
+    cfg = BenchConfig(
+        scenarios=(str(f),), planners=("improved-rrt-connect",), controllers=("lqr",),
+        seeds=1, workers=1, out=str(tmp_path / "out"), plots=False, reverse=True,
+    )
+    f.unlink()  # the map travels with the run, as for planning-only runs
+    report = run_bench(cfg)
+    assert (report.executed, report.errors) == (1, 0)
+    (row,) = [json.loads(x) for x in (tmp_path / "out" / "runs.jsonl").read_text().splitlines()]
+    assert row["kind"] == "episode" and row["scenario"] == str(f)
+    assert row["success"] and not row["collision"] and row["verified"]
+    assert row["gear_changes"] >= 1 and row["path_cusps"] >= 1  # it reversed into the bay
+    summary = (tmp_path / "out" / "summary.md").read_text()
+    assert "## Closed loop" in summary and str(f) in summary
+
+
+def test_reverse_and_driven_maps_are_in_the_run_keys(tmp_path):
+    fwd = BenchConfig(scenarios=("kerbside", "parking"), maps=("kerbside",), seeds=1)
+    rev = BenchConfig(scenarios=("kerbside", "parking"), maps=("kerbside",), seeds=1, reverse=True)
+    assert not {s.key for s in expand(fwd)} & {s.key for s in expand(rev)}
+    assert all(s.reverse for s in expand(rev)) and not any(s.reverse for s in expand(fwd))
+    # A built-in scenario keeps the key it had before maps could be driven.
+    (old,) = expand(BenchConfig(scenarios=("parking",), seeds=1))
+    assert old.config_hash in {s.config_hash for s in expand(fwd)}
+    # A driven map file: its content is in the key, as for a planned one.
+    f = tmp_path / "m.json"
+    save_map(builtin_map("kerbside"), f)
+    (a,) = expand(BenchConfig(scenarios=(str(f),), seeds=1))
+    m = builtin_map("kerbside")
+    save_map(m.with_query(start=type(m.start)(m.start.x + 1.0, m.start.y, m.start.yaw)), f)
+    (b,) = expand(BenchConfig(scenarios=(str(f),), seeds=1))
+    assert a.config_hash != b.config_hash and a.map_json is not None
+
+
+def test_an_unknown_scenario_names_scenarios_and_maps(capsys):
+    with pytest.raises(InputError, match="scenarios: unknown scenario 'nowhere'.*or give a map"):
+        BenchConfig(scenarios=("nowhere",), seeds=1)
+    with pytest.raises(InputError, match="reverse"):
+        BenchConfig(maps=("overtake",), reverse="yes")
+    assert main(["bench", "--scenarios", "nowhere.json"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "scenarios:" in err[0]

@@ -59,7 +59,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--scenarios", action="append", metavar="NAMES",
-        help="closed-loop scenarios (parking, overtake, overtake-traffic)",
+        help="closed-loop runs: built-in scenarios (parking, overtake, overtake-traffic, "
+        "parallel-parking, u-turn) or maps, built-in names or .json files, driven from their "
+        "start to their goal",
     )
     p.add_argument(
         "--planners", action="append", metavar="NAMES",
@@ -108,6 +110,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "overtake-traffic re-plans without cutting cycles at their time budget, so rows "
         "depend on the seed alone (not with --max-time)",
     )
+    p.add_argument(
+        "--reverse", action="store_true",
+        help="allow gear changes in every run, as plan/simulate --reverse (a planner that "
+        "cannot reverse plans forward)",
+    )
     p.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(func=run)
@@ -138,6 +145,8 @@ def config_from_args(args: argparse.Namespace) -> Any:
             values[k] = v
     if args.no_plots:
         values["plots"] = False
+    if getattr(args, "reverse", False):
+        values["reverse"] = True
     if getattr(args, "deterministic", False):
         if args.max_time_s is not None:
             raise InputError("--max-time: --deterministic turns the planning time limit off")

@@ -3,7 +3,8 @@
 A bench is the product of
 
 - planning-only runs: ``maps × planners × seeds`` (no controller), and
-- closed-loop runs: ``scenarios × planners × controllers × seeds``.
+- closed-loop runs: ``scenarios × planners × controllers × seeds`` (a scenario is a
+  built-in one or a map, built-in or a ``.json`` file, driven from its start to its goal).
 
 Each run is a :class:`RunSpec`. Its *configuration hash* covers everything that
 defines the run except the seed (kind, map content or scenario name, planner,
@@ -35,6 +36,7 @@ __all__ = [
     "config_from_mapping",
     "map_digest",
     "SCHEMA",
+    "is_map_scenario",
 ]
 
 #: Version of the row schema and of the hashed fields; bump to invalidate old rows.
@@ -56,6 +58,7 @@ CONFIG_KEYS = (
     "ray",
     "plots",
     "deterministic",
+    "reverse",
 )
 
 #: The planning time budget of a deterministic bench: never reached (iterations bind).
@@ -128,7 +131,8 @@ class BenchConfig:
     maps : tuple of str
         Built-in map names or map ``.json`` files for planning-only runs.
     scenarios : tuple of str
-        Closed-loop scenarios (``parking``, ``overtake``).
+        Closed-loop scenarios: built-in ones (``parking``, ``overtake`` …) or maps
+        (built-in names or ``.json`` files), driven from their start to their goal.
     planners : tuple of str
         Registered planner names, including the OMPL rows (``ompl-r2-rrtconnect`` …).
     controllers : tuple of str
@@ -156,6 +160,9 @@ class BenchConfig:
         (``max_time_s`` becomes :data:`NO_WALL_LIMIT_S`; giving both is an error) and
         overtake-traffic's re-planning cycles are not cut at their time budget, so a
         run depends on its seed only, not on the machine's load.
+    reverse : bool
+        Allow gear changes in every run (``rrtdrive plan --reverse``; scenarios as
+        ``rrtdrive simulate --reverse``). A planner that cannot reverse plans forward.
 
     Examples
     --------
@@ -178,6 +185,7 @@ class BenchConfig:
     ray: str | None = None
     plots: bool = True
     deterministic: bool = False
+    reverse: bool = False
     map_digests: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
     map_contents: Mapping[str, str | None] = field(
         default_factory=dict, compare=False, repr=False
@@ -211,6 +219,8 @@ class BenchConfig:
             raise InputError(f"ray: expected an address string, got {self.ray!r}")
         if not isinstance(self.plots, bool):
             raise InputError(f"plots: expected true or false, got {self.plots!r}")
+        if not isinstance(self.reverse, bool):
+            raise InputError(f"reverse: expected true or false, got {self.reverse!r}")
         if not self.maps and not self.scenarios:
             raise InputError("maps/scenarios: give at least one map or one scenario")
         if not self.planners:
@@ -228,23 +238,27 @@ class BenchConfig:
                 raise InputError(
                     f"planners: {p!r} needs OMPL; install it with pip install 'rrtdrive[ompl]'"
                 )
+        from rrtdrive.sim.tasks import SCENARIOS
+
         digests, contents = dict(self.map_digests), dict(self.map_contents)
-        for m in self.maps:
+        # Maps, and the scenarios that are maps (driven from their start to their goal).
+        mapped = [("maps", m) for m in self.maps]
+        mapped += [("scenarios", s) for s in self.scenarios if s not in SCENARIOS]
+        for field_name, m in mapped:
             if m not in digests or m not in contents:
                 try:
                     digests[m], contents[m] = map_digest(m)
                 except InputError as exc:
+                    if field_name == "scenarios":
+                        raise InputError(
+                            f"scenarios: unknown scenario {m!r}; choose from "
+                            f"{list(SCENARIOS)} or give a map (a built-in name or a .json "
+                            f"file) to drive ({exc})"
+                        ) from None
                     raise InputError(f"maps: {m!r}: {exc}") from None
         object.__setattr__(self, "map_digests", digests)
         object.__setattr__(self, "map_contents", contents)
         if self.scenarios:
-            from rrtdrive.sim.tasks import SCENARIOS
-
-            for s in self.scenarios:
-                if s not in SCENARIOS:
-                    raise InputError(
-                        f"scenarios: unknown scenario {s!r}; choose from {list(SCENARIOS)}"
-                    )
             from rrtdrive.controllers import CONTROLLERS
 
             if not self.controllers:
@@ -294,10 +308,12 @@ class RunSpec:
     config_hash : str
         Hash of every field above but the seed (and of the map's content).
     map_json : str or None
-        The map as JSON text for a map file (``None``: ``target`` is a built-in name
-        or a scenario).
+        The map as JSON text for a map file, planned or driven (``None``: ``target`` is
+        a built-in map or scenario).
     deterministic : bool
         Re-planning without wall-time cuts (the planning budget is in ``max_time_s``).
+    reverse : bool
+        Gear changes allowed.
     """
 
     kind: str
@@ -310,6 +326,7 @@ class RunSpec:
     config_hash: str
     map_json: str | None = None
     deterministic: bool = False
+    reverse: bool = False
 
     @property
     def key(self) -> tuple[str, int]:
@@ -359,8 +376,8 @@ def expand(cfg: BenchConfig) -> list[RunSpec]:
     return [
         RunSpec(
             kind, target, p, c, seed, cfg.max_time_s, cfg.max_iterations, h,
-            cfg.map_contents.get(target) if kind == "plan" else None,
-            cfg.deterministic,
+            cfg.map_contents.get(target) if kind == "plan" or is_map_scenario(target) else None,
+            cfg.deterministic, cfg.reverse,
         )
         for seed in range(cfg.seeds)
         for kind, target, p, c, h in cells
@@ -380,12 +397,23 @@ def _hash_payload(
     }
     if cfg.deterministic:  # only then: earlier benches' run keys stay valid
         payload["deterministic"] = True
+    if cfg.reverse:  # likewise
+        payload["reverse"] = True
     if kind == "plan":
         # The map's content, not its spelling: a changed file is a new configuration.
         payload["map_digest"] = cfg.map_digests[target]
     else:
         payload["scenario"] = target
+        if is_map_scenario(target):
+            payload["map_digest"] = cfg.map_digests[target]
     return payload
+
+
+def is_map_scenario(target: str) -> bool:
+    """Whether a closed-loop target is a map (driven start to goal), not a built-in scenario."""
+    from rrtdrive.sim.tasks import SCENARIOS
+
+    return target not in SCENARIOS
 
 
 def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:

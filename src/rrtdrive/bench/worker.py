@@ -124,7 +124,7 @@ def _plan_metrics(spec: RunSpec) -> dict[str, Any]:
     from rrtdrive.verify import verify_path
 
     m = _map(spec.target, spec.map_json)
-    problem = PlanningProblem.from_map(m)
+    problem = PlanningProblem.from_map(m, reverse=spec.reverse)
     planner = make_planner(spec.planner)
     budget = Budget(max_iterations=spec.max_iterations, max_time_s=spec.max_time_s)
     result = planner.solve(problem, np.random.default_rng(spec.seed), budget)
@@ -156,6 +156,23 @@ def _replan_config(spec: RunSpec) -> Any:
     return ReplanConfig(wall_limit=False)
 
 
+def _task(spec: RunSpec) -> Any:
+    """The closed-loop task of a run: a built-in scenario, or a map from start to goal."""
+    import dataclasses
+
+    from rrtdrive.bench.grid import is_map_scenario
+    from rrtdrive.sim.tasks import CustomTask, make_scenario
+
+    if is_map_scenario(spec.target):
+        return CustomTask.from_map(
+            _map(spec.target, spec.map_json), spec.seed, reverse=spec.reverse
+        )
+    task = make_scenario(spec.target, spec.seed)
+    if spec.reverse and not task.reverse:  # as rrtdrive simulate --reverse
+        task = dataclasses.replace(task, reverse=True)
+    return task
+
+
 def _episode_metrics(spec: RunSpec) -> dict[str, Any]:
     import rrtdrive.bench.ompl_planners  # noqa: F401  (registers the OMPL rows)
     from rrtdrive.evaluation import evaluate
@@ -168,7 +185,7 @@ def _episode_metrics(spec: RunSpec) -> dict[str, Any]:
         replan=_replan_config(spec),
     )
     assert spec.controller is not None
-    episode = run_episode(spec.target, spec.planner, spec.controller, spec.seed, config)
+    episode = run_episode(_task(spec), spec.planner, spec.controller, spec.seed, config)
     report = evaluate(episode).to_json()
     for k in ("scenario", "planner", "controller", "seed"):
         report.pop(k, None)
