@@ -130,17 +130,20 @@ def test_a_coarse_grid_plans_a_verified_path(coarse):
     assert verify_path(m, res.path).ok
 
 
-def test_cli_refuses_10_km_bounds_with_exit_2(tmp_path, capsys):
+@pytest.mark.parametrize("command", ["plan", "simulate"])
+def test_cli_refuses_10_km_bounds_with_exit_2(tmp_path, capsys, command):
     f = tmp_path / "huge.json"
     f.write_text(json.dumps({
         "name": "huge", "bounds": [0, 0, 10_000, 10_000], "obstacles": [],
         "start": [10, 10, 0], "goal": [9_000, 9_000, 0],
     }))  # fmt: skip
-    code = main(["plan", str(f)])
+    code = main([command, str(f)])
     out, err = capsys.readouterr()
     assert code == 2 and out == ""
-    assert err.startswith("rrtdrive plan: error: bounds: 10000 x 10000 m needs ")
-    assert "--resolution" in err and "Traceback" not in err and err.count("\n") == 1
+    assert err.startswith(f"rrtdrive {command}: error: bounds: 10000 x 10000 m needs ")
+    assert "Traceback" not in err and err.count("\n") == 1
+    # simulate has no --resolution of its own: the message names the command that has.
+    assert "rrtdrive plan --resolution 1.42" in err and "CheckerConfig(resolution=1.42)" in err
 
 
 def big_map(n: int = 800, size: float = 500.0, seed: int = 0) -> Map:
@@ -172,18 +175,3 @@ def test_a_big_maps_set_up_is_reported_apart_and_outside_the_budget():
     # before the stopwatch starts: set-up is orders of magnitude more than the search.
     assert res.planning_time_s < res.setup_time_s
     assert verify_path(m, res.path).ok
-
-
-def test_simulate_refuses_10_km_bounds_naming_what_to_change(tmp_path, capsys):
-    # simulate has no --resolution of its own: the message names the command that has.
-    f = tmp_path / "huge.json"
-    f.write_text(json.dumps({
-        "name": "huge", "bounds": [0, 0, 10_000, 10_000], "obstacles": [],
-        "start": [10, 10, 0], "goal": [9_000, 9_000, 0],
-    }))  # fmt: skip
-    code = main(["simulate", str(f)])
-    out, err = capsys.readouterr()
-    assert code == 2 and out == ""
-    assert err.startswith("rrtdrive simulate: error: bounds: 10000 x 10000 m needs ")
-    assert "rrtdrive plan --resolution 1.42" in err and "CheckerConfig(resolution=1.42)" in err
-    assert "Traceback" not in err and err.count("\n") == 1
