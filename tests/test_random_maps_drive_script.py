@@ -36,3 +36,18 @@ def test_bad_options_exit_2(capsys) -> None:  # noqa: ANN001
             random_maps_drive.main(argv)
         assert exc.value.code == 2
     assert "--controllers" in capsys.readouterr().err
+
+
+def test_the_commonroad_judges_random_maps_are_the_driven_ones() -> None:
+    # experiments/commonroad_judge.py --random-maps drives the same maps, on the car it is given.
+    import commonroad_judge
+    from random_maps import random_map
+
+    from rrtdrive.types import VehicleParams
+
+    car = VehicleParams(max_steer_rate=0.4)
+    task = commonroad_judge._task(commonroad_judge.RANDOM_MAPS, 3, car)
+    m = random_map(3)
+    assert task.reverse and task.map.obstacles == m.obstacles
+    assert (task.map.start, task.map.goal) == (m.start, m.goal)
+    assert task.vehicle.max_steer_rate == 0.4
