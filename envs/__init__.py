@@ -6,7 +6,7 @@ highway-env and pygame load only when an environment is made::
 
     import gymnasium as gym
     import rrtdrive  # registers rrtdrive/Parking-v0, ParkingReverseIn-v0, Overtake-v0,
-                     # OvertakeTraffic-v0, ParallelParking-v0, UTurn-v0
+                     # OvertakeTraffic-v0, ParallelParking-v0, UTurn-v0, Map-v0
 
     env = gym.make("rrtdrive/Parking-v0", controller="lqr", residual=True)
 
@@ -26,7 +26,8 @@ __all__ = ["ENV_IDS", "ENV_KWARGS", "ENTRY_POINT", "register_envs"]
 
 ENTRY_POINT = "rrtdrive.envs.drive_env:DriveEnv"
 
-#: Registered id -> scenario name of :func:`rrtdrive.sim.scenes.make_scenario`.
+#: Registered id -> scenario name of :func:`rrtdrive.sim.scenes.make_scenario` (or, for
+#: ``Map-v0``, the map it drives unless ``scenario`` names another).
 #: A new scenario is one more line here (``tests/test_envs.py`` checks that every
 #: name in ``rrtdrive.sim.scenes.SCENARIOS`` has an id).
 ENV_IDS: dict[str, str] = {
@@ -36,6 +37,9 @@ ENV_IDS: dict[str, str] = {
     "rrtdrive/OvertakeTraffic-v0": "overtake-traffic",
     "rrtdrive/ParallelParking-v0": "parallel-parking",
     "rrtdrive/UTurn-v0": "u-turn",
+    # Any map, start to goal: gym.make("rrtdrive/Map-v0", scenario="my_lot.json",
+    # scenario_options={"reverse": True}); the built-in parking lot by default.
+    "rrtdrive/Map-v0": "parking_lot",
 }
 #: Extra keyword arguments of an id, beyond its scenario (``gym.make`` arguments
 #: override them). Parallel parking and the U-turn plan with Hybrid A*, the

@@ -20,6 +20,7 @@ import numpy as np
 from rrtdrive.controllers import CONTROLLERS, SpeedConfig, TrackingController, make_controller
 from rrtdrive.envs.action import CommandLimits
 from rrtdrive.envs.reward import RewardWeights
+from rrtdrive.maps import Map, resolve_map
 from rrtdrive.planning import PLANNERS
 from rrtdrive.sim.scenes import SimConfig
 from rrtdrive.sim.tasks import (
@@ -28,6 +29,7 @@ from rrtdrive.sim.tasks import (
     SCENARIO_OPTIONS,
     SCENARIOS,
     TASKS,
+    CustomTask,
     make_scenario,
 )
 from rrtdrive.sim.tasks import Task as Scenario
@@ -71,7 +73,9 @@ class DriveEnvConfig:
     Parameters
     ----------
     scenario : str
-        Scenario name (``parking``, ``overtake``, ``overtake-traffic``).
+        Scenario name (``parking``, ``overtake``, ``overtake-traffic``,
+        ``parallel-parking``, ``u-turn``), or a map (a built-in name or a ``.json``
+        file) driven from its start to its goal, as ``rrtdrive simulate MAP``.
     planner : str
         Registered planner that plans each episode's path.
     controller : str
@@ -104,7 +108,7 @@ class DriveEnvConfig:
     scenario_options : mapping, optional
         Keyword arguments of :func:`~rrtdrive.sim.scenes.make_scenario` (``jitter``,
         ``spot``, ``oncoming``; ``density``, ``lead_speed``, ``lead_model`` for
-        ``overtake-traffic``).
+        ``overtake-traffic``); for a map, ``reverse`` (gear changes allowed).
     replan_options : mapping, optional
         ``overtake-traffic``: :class:`~rrtdrive.sim.replanning.ReplanConfig` fields.
         The reference path is then re-planned in the loop
@@ -132,6 +136,8 @@ class DriveEnvConfig:
         the controller's steering limit).
     max_steer : float
         The car's steering limit (rad), the bound of the observed steering angle.
+    map : Map or None
+        The map a map scenario drives (read once), else ``None``.
 
     Examples
     --------
@@ -167,14 +173,23 @@ class DriveEnvConfig:
     replan: Any = field(init=False, repr=False, compare=False)
     limits: CommandLimits = field(init=False, repr=False, compare=False)
     max_steer: float = field(init=False, repr=False, compare=False)
+    map: Map | None = field(init=False, repr=False, compare=False, default=None)
 
     def __post_init__(self) -> None:
         def put(name: str, value: Any) -> None:
             object.__setattr__(self, name, value)
 
         scenario, planner, controller = self.scenario, self.planner, self.controller
-        if not isinstance(scenario, str) or scenario not in SCENARIOS:
-            raise InputError(f"scenario: unknown scenario {scenario!r}; choose from {SCENARIOS}")
+        if not isinstance(scenario, str):
+            raise InputError(f"scenario: expected a name, got {scenario!r}")
+        if scenario not in SCENARIOS:
+            try:
+                put("map", resolve_map(scenario))
+            except InputError as exc:
+                raise InputError(
+                    f"scenario: unknown scenario {scenario!r}; choose from {SCENARIOS} or "
+                    f"give a map (a built-in name or a .json file) to drive ({exc})"
+                ) from None
         if not isinstance(planner, str) or planner not in PLANNERS:
             raise InputError(
                 f"planner: unknown planner {planner!r}; choose from {sorted(PLANNERS)}"
@@ -200,7 +215,8 @@ class DriveEnvConfig:
         put("scenario_options", _require_mapping("scenario_options", self.scenario_options))
         put("replan_options", _require_mapping("replan_options", self.replan_options))
         replan = None
-        replan_config = TASKS[scenario].REPLAN_CONFIG  # None: the task plans once
+        # None: the task plans once (a map's too).
+        replan_config = None if self.map is not None else TASKS[scenario].REPLAN_CONFIG
         if replan_config is not None:
             _check_fields("replan_options", self.replan_options, replan_config)  # type: ignore[arg-type]
             try:
@@ -276,6 +292,8 @@ class DriveEnvConfig:
     def scenario_for(self, seed: int) -> Scenario:
         """The scenario of episode seed ``seed`` with ``scenario_options``."""
         options: dict[str, Any] = self.scenario_options  # type: ignore[assignment]
+        if self.map is not None:
+            return _map_task(self.map, seed, options)
         for key in options:
             if key not in SCENARIO_OPTIONS:
                 raise InputError(
@@ -319,3 +337,20 @@ class DriveEnvConfig:
         return make_controller(
             self.controller, vehicle=scenario.vehicle, speed=speed, **self.controller_options
         )
+
+
+#: The scenario options of a map scenario.
+MAP_OPTIONS = ("reverse",)
+
+
+def _map_task(m: Map, seed: int, options: Mapping[str, Any]) -> Scenario:
+    """The task of driving map ``m`` from its start to its goal (``reverse``: gear changes)."""
+    for key in options:
+        if key not in MAP_OPTIONS:
+            raise InputError(
+                f"scenario_options.{key}: not an option of a map; choose from {list(MAP_OPTIONS)}"
+            )
+    reverse = options.get("reverse", False)
+    if not isinstance(reverse, bool):
+        raise InputError(f"scenario_options.reverse: expected True or False, got {reverse!r}")
+    return CustomTask.from_map(m, seed, reverse=reverse)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import subprocess
 import sys
 import warnings
@@ -58,7 +59,9 @@ def test_import_registers_ids_without_highway_env_or_pygame():
 
 def test_every_scenario_has_an_env_id():
     # Adding a scenario to sim.scenes.SCENARIOS needs one line in envs/__init__.py: ENV_IDS.
-    assert sorted(set(ENV_IDS.values())) == sorted(SCENARIOS)
+    # Map-v0 drives a map (the parking lot unless ``scenario`` names another).
+    assert sorted(set(ENV_IDS.values()) - {"parking_lot"}) == sorted(SCENARIOS)
+    assert ENV_IDS["rrtdrive/Map-v0"] == "parking_lot"
     for env_id, scenario in ENV_IDS.items():
         spec = gym.spec(env_id)
         assert spec.entry_point == "rrtdrive.envs.drive_env:DriveEnv"
@@ -532,3 +535,36 @@ def test_traffic_reward_does_not_punish_following():
     # Behind the lead, v_ref is about its 4 m/s, not the profile's 11 m/s.
     assert following and all(abs(v - v_ref) < 0.5 for v, v_ref in following)
     env.close()
+
+
+
+def test_a_map_is_driven_start_to_goal_with_reverse(tmp_path):
+    # A user's map file as the scenario: planned with reverse, driven into the kerbside
+    # gap by the plain controller (zero residual), judged as any episode.
+    from rrtdrive.maps import builtin_map, save_map
+
+    f = tmp_path / "kerb.json"
+    save_map(builtin_map("kerbside"), f)
+    env = gym.make(
+        "rrtdrive/Map-v0", scenario=str(f), scenario_options={"reverse": True},
+        controller="lqr", residual=True,
+    )  # fmt: skip
+    obs, total, steps, info = run_to_end(env, zero, seed=0)
+    u = env.unwrapped
+    assert info["status"] == "arrived" and info["is_success"] and not info["crashed"]
+    assert len(u.path.cusps) >= 1 and u.report.collision is False
+    m = builtin_map("kerbside")
+    assert np.hypot(*(u.episode.log.states[-1, :2] - [m.goal.x, m.goal.y])) < 0.1
+    env.close()
+
+
+@pytest.mark.parametrize(
+    ("options", "field"),
+    [({"scenario": "nowhere"}, "scenario: unknown scenario 'nowhere'"),
+     ({"scenario": "kerbside", "scenario_options": {"spot": 3}}, "scenario_options.spot"),
+     ({"scenario": "kerbside", "scenario_options": {"reverse": "yes"}},
+      "scenario_options.reverse")],
+)  # fmt: skip
+def test_bad_map_scenarios_name_the_field(options, field):
+    with pytest.raises(InputError, match=re.escape(field)):
+        DriveEnvConfig.from_options(**options)
