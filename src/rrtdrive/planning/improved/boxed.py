@@ -1,4 +1,4 @@
-"""Whether a tree root can ever grow: a proof from the clearance field, before any iteration.
+"""Whether a tree root can ever grow: a proof from the map's exact geometry, before any iteration.
 
 A root with a virtual parent (the start and the goal of the improved planner, with the
 obtuse-parent component on) is only ever extended by a straight edge within 90 degrees
