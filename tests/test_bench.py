@@ -590,6 +590,11 @@ def test_reverse_and_driven_maps_are_in_the_run_keys(tmp_path):
     save_map(m.with_query(start=type(m.start)(m.start.x + 1.0, m.start.y, m.start.yaw)), f)
     (b,) = expand(BenchConfig(scenarios=(str(f),), seeds=1))
     assert a.config_hash != b.config_hash and a.map_json is not None
+    # Its content, not its name: the same map under another name is the same run.
+    g = tmp_path / "renamed.json"
+    g.write_text(f.read_text())
+    (c,) = expand(BenchConfig(scenarios=(str(g),), seeds=1))
+    assert c.config_hash == b.config_hash
 
 
 def test_an_unknown_scenario_names_scenarios_and_maps(capsys):

@@ -399,13 +399,12 @@ def _hash_payload(
         payload["deterministic"] = True
     if cfg.reverse:  # likewise
         payload["reverse"] = True
-    if kind == "plan":
-        # The map's content, not its spelling: a changed file is a new configuration.
+    if kind == "plan" or is_map_scenario(target):
+        # The map's content, not its spelling: a changed file is a new configuration
+        # (and a renamed one the same), planned or driven.
         payload["map_digest"] = cfg.map_digests[target]
     else:
         payload["scenario"] = target
-        if is_map_scenario(target):
-            payload["map_digest"] = cfg.map_digests[target]
     return payload
 
 
