@@ -76,3 +76,18 @@ def test_a_curvature_jump_passes_only_without_the_sharpness_bound():
     assert check["collision_free"] and check["verified_any_sharpness"]
     assert not check["verified"]
     assert check["discrete_sharpness"] > coverage.SHARPNESS_BOUND
+
+
+def test_the_share_of_ompls_solved_is_not_rounded_up_to_a_target():
+    # 89 of OMPL's 90: 98.9 %, which a whole-percent page showed as "99 %" (the target).
+    n = 90
+    rows = _rows("hybrid-a-star", [0.01] * n, [50.0] * n, [True] * 89 + [False]) + _rows(
+        "ompl-dubins-rrt", [0.02] * n, [50.0] * n, [True] * n)
+    summary = coverage.summarise(rows, ["hybrid-a-star", "ompl-dubins-rrt"], ["goal"])
+    payload = {
+        "map": "parking_lot", "command": "x", "count": n, "seed": 1, "max_time_s": 10.0,
+        "ompl_time_s": 10.0, "jobs": 1, "machine": "m", "wall_time_s": 1.0,
+        "summary": summary, "skipped": {},
+    }  # fmt: skip
+    page = coverage.report(payload)
+    assert "| 98.9 % |" in page and "| 99 % |" not in page
