@@ -605,3 +605,21 @@ def test_an_unknown_scenario_names_scenarios_and_maps(capsys):
     assert main(["bench", "--scenarios", "nowhere.json"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "scenarios:" in err[0]
+
+
+def test_a_stock_highway_env_scenario_is_benched_and_judged_by_both(tmp_path):
+    from rrtdrive.bench.grid import STOCK_ENVS
+    from rrtdrive.sim.stock import STOCK_ENVS as SIM_STOCK_ENVS
+
+    assert STOCK_ENVS == SIM_STOCK_ENVS
+    cfg = BenchConfig(
+        scenarios=("parking-v0",), planners=("improved-rrt-connect",), controllers=("lqr",),
+        seeds=1, workers=1, out=str(tmp_path), plots=False, reverse=True,
+    )
+    (spec,) = expand(cfg)
+    assert spec.map_json is None and spec.reverse
+    report = run_bench(cfg)
+    assert (report.executed, report.errors) == (1, 0)
+    (row,) = [json.loads(x) for x in (tmp_path / "runs.jsonl").read_text().splitlines()]
+    assert row["scenario"] == "parking-v0" and row["kind"] == "episode"
+    assert row["highway_env_success"] is True and row["success"] and not row["collision"]

@@ -4,7 +4,8 @@ A bench is the product of
 
 - planning-only runs: ``maps × planners × seeds`` (no controller), and
 - closed-loop runs: ``scenarios × planners × controllers × seeds`` (a scenario is a
-  built-in one or a map, built-in or a ``.json`` file, driven from its start to its goal).
+  built-in one, a stock highway-env one (``parking-v0``, ``parking-parked-v0``) or a map,
+  built-in or a ``.json`` file, driven from its start to its goal).
 
 Each run is a :class:`RunSpec`. Its *configuration hash* covers everything that
 defines the run except the seed (kind, map content or scenario name, planner,
@@ -131,8 +132,10 @@ class BenchConfig:
     maps : tuple of str
         Built-in map names or map ``.json`` files for planning-only runs.
     scenarios : tuple of str
-        Closed-loop scenarios: built-in ones (``parking``, ``overtake`` …) or maps
-        (built-in names or ``.json`` files), driven from their start to their goal.
+        Closed-loop scenarios: built-in ones (``parking``, ``overtake`` …), stock
+        highway-env ones (``parking-v0``, ``parking-parked-v0``: its own draw per seed,
+        judged by it too) or maps (built-in names or ``.json`` files), driven from their
+        start to their goal.
     planners : tuple of str
         Registered planner names, including the OMPL rows (``ompl-r2-rrtconnect`` …).
     controllers : tuple of str
@@ -243,7 +246,7 @@ class BenchConfig:
         digests, contents = dict(self.map_digests), dict(self.map_contents)
         # Maps, and the scenarios that are maps (driven from their start to their goal).
         mapped = [("maps", m) for m in self.maps]
-        mapped += [("scenarios", s) for s in self.scenarios if s not in SCENARIOS]
+        mapped += [("scenarios", s) for s in self.scenarios if is_map_scenario(s)]
         for field_name, m in mapped:
             if m not in digests or m not in contents:
                 try:
@@ -252,8 +255,8 @@ class BenchConfig:
                     if field_name == "scenarios":
                         raise InputError(
                             f"scenarios: unknown scenario {m!r}; choose from "
-                            f"{list(SCENARIOS)} or give a map (a built-in name or a .json "
-                            f"file) to drive ({exc})"
+                            f"{[*SCENARIOS, *STOCK_ENVS]} or give a map (a built-in name or "
+                            f"a .json file) to drive ({exc})"
                         ) from None
                     raise InputError(f"maps: {m!r}: {exc}") from None
         object.__setattr__(self, "map_digests", digests)
@@ -409,10 +412,15 @@ def _hash_payload(
 
 
 def is_map_scenario(target: str) -> bool:
-    """Whether a closed-loop target is a map (driven start to goal), not a built-in scenario."""
+    """Whether a closed-loop target is a map (driven start to goal), not a named scenario."""
     from rrtdrive.sim.tasks import SCENARIOS
 
-    return target not in SCENARIOS
+    return target not in SCENARIOS and target not in STOCK_ENVS
+
+
+#: Stock highway-env scenarios (``rrtdrive.sim.stock.STOCK_ENVS``, kept here without
+#: importing highway-env; ``tests/test_bench.py`` checks they agree).
+STOCK_ENVS = ("parking-v0", "parking-parked-v0")
 
 
 def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:

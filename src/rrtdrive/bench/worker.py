@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rrtdrive.bench.grid import RunSpec
+from rrtdrive.bench.grid import STOCK_ENVS, RunSpec
 
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.maps import Map
@@ -185,8 +185,19 @@ def _episode_metrics(spec: RunSpec) -> dict[str, Any]:
         replan=_replan_config(spec),
     )
     assert spec.controller is not None
-    episode = run_episode(_task(spec), spec.planner, spec.controller, spec.seed, config)
+    stock_success = None
+    if spec.target in STOCK_ENVS:
+        from rrtdrive.sim.stock import drive_stock_env
+
+        stock = drive_stock_env(
+            spec.target, spec.seed, spec.planner, spec.controller, config, reverse=spec.reverse
+        )
+        episode, stock_success = stock.episode, stock.highway_env_success
+    else:
+        episode = run_episode(_task(spec), spec.planner, spec.controller, spec.seed, config)
     report = evaluate(episode).to_json()
+    if spec.target in STOCK_ENVS:
+        report["highway_env_success"] = stock_success  # the env's own judgement beside ours
     for k in ("scenario", "planner", "controller", "seed"):
         report.pop(k, None)
     plan_ok = episode.plan is not None and episode.plan.success
