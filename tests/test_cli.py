@@ -49,6 +49,12 @@ def test_plan_reverse_flag_is_in_the_json(capsys):
     data = json.loads(out)
     assert code == 0 and data["reverse"] is True and data["cusps"] == 0
     assert all(len(row) == 5 and row[4] == 1 for row in data["path"])
+    # ... and says so on stderr, naming the planners that do reverse.
+    _, _, err = run(capsys, "plan", "parking_lot", "--planner", "rrt-connect", "--reverse")
+    assert "note: rrt-connect plans forward only; --reverse takes effect with " in err
+    assert "hybrid-a-star" in err and "improved-rrt-connect" in err
+    _, _, err = run(capsys, "plan", "parking_lot", "--reverse")
+    assert "plans forward only" not in err
     with pytest.raises(SystemExit):
         main(["plan", "--help"])
     assert "--reverse" in capsys.readouterr().out

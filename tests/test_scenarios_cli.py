@@ -74,3 +74,11 @@ def test_simulate_bad_map_file_names_the_field(capsys, tmp_path):
     path.write_text(json.dumps(doc))
     code, _, err = run(capsys, "simulate", str(path))
     assert code == 2 and err.count("\n") == 1 and "size" in err, err
+
+
+def test_simulate_reverse_with_a_forward_planner_says_so(capsys):
+    code = main(["simulate", "kerbside", "--reverse", "--planner", "rrt"])
+    err = capsys.readouterr().err
+    # The goal is boxed in: rrt cannot reach it forward; the note says why reversing did not help.
+    assert code == 1
+    assert "note: rrt plans forward only; --reverse takes effect with hybrid-a-star" in err

@@ -145,7 +145,13 @@ def _takes_option(factory: Callable[..., object], name: str) -> bool:
 
 def _cmd_plan(args: argparse.Namespace) -> int:
     from rrtdrive.maps import resolve_map
-    from rrtdrive.planning import PLANNERS, PlanningProblem, make_planner
+    from rrtdrive.planning import (
+        PLANNERS,
+        PlanningProblem,
+        forward_only_note,
+        make_planner,
+        reverses,
+    )
 
     validate_output(args.json, "--json")
     validate_output(args.plot, "--plot", PLOT_SUFFIXES, allow_stdout=False)
@@ -175,6 +181,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
         options["smoothing"] = {"curve": CurveKind.BSPLINE}
     planner = make_planner(args.planner, **options)
+    if args.reverse and not reverses(args.planner):
+        print(f"rrtdrive plan: {forward_only_note(args.planner)}", file=sys.stderr)
     budget = Budget(max_iterations=args.max_iterations, max_time_s=args.max_time)
     config = None
     if args.resolution is not None:

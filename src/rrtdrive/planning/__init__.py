@@ -11,7 +11,10 @@ from rrtdrive.planning.base import (
 )
 from rrtdrive.types import InputError
 
-__all__ = ["PLANNERS", "GrowingTree", "Planner", "PlanningProblem", "make_planner", "polyline_path"]
+__all__ = [
+    "PLANNERS", "GrowingTree", "Planner", "PlanningProblem", "make_planner", "polyline_path",
+    "reverses",
+]
 
 
 def _load_builtin_planners() -> None:
@@ -47,3 +50,20 @@ def make_planner(name: str, **options: object) -> Planner:
         return factory(**options)
     except TypeError as exc:
         raise InputError(f"planner: {exc}") from None
+
+
+def reverses(name: str) -> bool:
+    """Whether the registered planner ``name`` plans gear changes when a problem allows them.
+
+    Examples
+    --------
+    >>> reverses("hybrid-a-star"), reverses("improved-rrt-connect"), reverses("rrt")
+    (True, True, False)
+    """
+    return bool(getattr(PLANNERS.get(name), "reverses", False))
+
+
+def forward_only_note(name: str) -> str:
+    """The note for ``--reverse`` given to a planner that plans forward only."""
+    takes = ", ".join(sorted(n for n in PLANNERS if reverses(n)))
+    return f"note: {name} plans forward only; --reverse takes effect with {takes}"

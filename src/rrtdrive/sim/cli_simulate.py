@@ -215,7 +215,7 @@ def metrics_block(data: dict[str, Any]) -> list[str]:
 
 def _run(args: argparse.Namespace) -> int:
     from rrtdrive.evaluation import evaluate, failure_reason
-    from rrtdrive.planning import PLANNERS
+    from rrtdrive.planning import PLANNERS, forward_only_note, reverses
     from rrtdrive.sim.runner import EpisodeConfig, run_episode
     from rrtdrive.sim.scenes import SimConfig
     from rrtdrive.sim.stock import STOCK_ENVS
@@ -254,6 +254,8 @@ def _run(args: argparse.Namespace) -> int:
             f"--planner: unknown planner {args.planner!r}; "
             f"choose from {', '.join(sorted(PLANNERS))}"
         )
+    if getattr(args, "reverse", False) and not reverses(args.planner):
+        print(f"rrtdrive simulate: {forward_only_note(args.planner)}", file=sys.stderr)
     if args.video is not None and args.video == "-":
         raise InputError("--video: needs a file name ending in .mp4")
     # Before the episode runs: a bad target should not cost a whole episode.

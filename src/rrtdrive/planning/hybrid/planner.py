@@ -85,6 +85,8 @@ class HybridAStar:
     """
 
     name = NAME
+    #: It honours ``PlanningProblem.reverse`` (gear changes); the baselines plan forward.
+    reverses = True
 
     def __init__(
         self,

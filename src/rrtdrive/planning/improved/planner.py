@@ -83,6 +83,8 @@ class ImprovedRRTConnect:
     """
 
     name = NAME
+    #: It honours ``PlanningProblem.reverse`` (gear changes); the baselines plan forward.
+    reverses = True
 
     def __init__(
         self,
