@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
@@ -186,6 +187,8 @@ class DriveEnvConfig:
             try:
                 put("map", resolve_map(scenario))
             except InputError as exc:
+                if scenario.endswith(".json") or os.path.exists(scenario):
+                    raise InputError(f"scenario: {scenario!r}: {exc}") from None
                 raise InputError(
                     f"scenario: unknown scenario {scenario!r}; choose from {SCENARIOS} or "
                     f"give a map (a built-in name or a .json file) to drive ({exc})"

@@ -604,7 +604,8 @@ def test_an_unknown_scenario_names_scenarios_and_maps(capsys):
         BenchConfig(maps=("overtake",), reverse="yes")
     assert main(["bench", "--scenarios", "nowhere.json"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "scenarios:" in err[0]
+    # A .json name is a map file: the file's own problem is the message.
+    assert len(err) == 1 and "scenarios: 'nowhere.json': map:" in err[0]
 
 
 def test_a_stock_highway_env_scenario_is_benched_and_judged_by_both(tmp_path):

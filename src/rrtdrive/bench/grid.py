@@ -252,13 +252,13 @@ class BenchConfig:
                 try:
                     digests[m], contents[m] = map_digest(m)
                 except InputError as exc:
-                    if field_name == "scenarios":
+                    if field_name == "scenarios" and not _names_a_file(m):
                         raise InputError(
                             f"scenarios: unknown scenario {m!r}; choose from "
                             f"{[*SCENARIOS, *STOCK_ENVS]} or give a map (a built-in name or "
                             f"a .json file) to drive ({exc})"
                         ) from None
-                    raise InputError(f"maps: {m!r}: {exc}") from None
+                    raise InputError(f"{field_name}: {m!r}: {exc}") from None
         object.__setattr__(self, "map_digests", digests)
         object.__setattr__(self, "map_contents", contents)
         if self.scenarios:
@@ -409,6 +409,11 @@ def _hash_payload(
     else:
         payload["scenario"] = target
     return payload
+
+
+def _names_a_file(spec: str) -> bool:
+    """Whether a name is meant as a map file (its error is the file's, not "unknown")."""
+    return spec.endswith(".json") or os.path.exists(spec)
 
 
 def is_map_scenario(target: str) -> bool:
