@@ -84,7 +84,7 @@ def test_a_query_the_rrt_stages_cannot_solve_is_escalated_within_the_share(monke
     monkeypatch.setattr(improved_planner, "root_boxed_in", lambda *a, **k: False)
     m = bay_map()
     problem = PlanningProblem.from_map(m, reverse=True)
-    res = solve(problem)
+    res = solve(problem, narrow_fan=0.0)  # the whole patience too (its fan is narrow)
     assert res.success, res.message
     assert stage_of(res) == res.stats["stage"] == "hybrid-a-star"
     assert "solved by the Hybrid A* escalation" in res.message and "(with reverse" in res.message
@@ -98,7 +98,7 @@ def test_a_query_the_rrt_stages_cannot_solve_is_escalated_within_the_share(monke
     assert res.stats["rrt_stages_time_s"] > 0 and res.stats["escalation_time_s"] > 0
     assert not res.path.is_forward_only and verify_path(m, res.path).collision_free
     # With every budget in full the same stages spend more before the escalation starts.
-    full = solve(problem, rrt_share=1.0)
+    full = solve(problem, rrt_share=1.0, narrow_fan=0.0)
     assert full.stats["iterations"] > res.stats["iterations"]
 
 

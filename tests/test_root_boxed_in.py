@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 import pytest
+import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -18,7 +19,7 @@ from rrtdrive.maps import Map, Obstacle, builtin_map
 from rrtdrive.planning.base import PlanningProblem, cached_checker
 from rrtdrive.planning.improved import ImprovedConfig, ImprovedRRTConnect
 from rrtdrive.planning.improved import planner as improved_planner
-from rrtdrive.planning.improved.boxed import root_boxed_in
+from rrtdrive.planning.improved.boxed import open_share, root_boxed_in
 from rrtdrive.tight_maps import garage_goal, kerbside_map
 from rrtdrive.types import Budget, Pose
 from rrtdrive.verify import verify_path
@@ -128,7 +129,7 @@ def test_the_kerbside_goal_skips_the_growth_for_the_same_path(monkeypatch) -> No
     assert verify_path(m, res.path, max_sharpness=0.2).ok
     # Without the proof the pair waits out root_patience, then the same escalation.
     monkeypatch.setattr(improved_planner, "root_boxed_in", lambda *a, **k: False)
-    waited = ImprovedRRTConnect().solve(problem, np.random.default_rng(0), BUDGET)
+    waited = ImprovedRRTConnect(narrow_fan=0.0).solve(problem, np.random.default_rng(0), BUDGET)
     assert waited.success and "root_boxed_in" not in waited.stats
     assert waited.iterations == ImprovedConfig().root_patience + res.iterations
     np.testing.assert_allclose(waited.path.samples, res.path.samples, atol=1e-9)
@@ -145,3 +146,51 @@ def test_the_papers_pipeline_and_the_ablations_grow_as_before() -> None:
         problem, np.random.default_rng(0), Budget(max_iterations=3000, max_time_s=600.0)
     )
     assert "root_boxed_in" not in no_obtuse.stats
+
+
+
+def test_a_narrow_fan_gives_way_sooner_for_the_same_path() -> None:
+    # A garage bay: room ahead of the bumper for a few directions only (not provable),
+    # so the pair gives way after narrow_patience iterations, not root_patience.
+    import dataclasses
+
+    m = dataclasses.replace(builtin_map("garage"), goal=garage_goal(0, 9, 9.0))
+    checker = cached_checker(m)
+    share = open_share(checker, m.goal)
+    assert 0.0 < share < ImprovedConfig().narrow_fan and not root_boxed_in(checker, m.goal)
+    problem = PlanningProblem.from_map(m, reverse=True)
+    res = ImprovedRRTConnect().solve(problem, np.random.default_rng(0), BUDGET)
+    assert res.success and res.stats["narrow_root"] == 1.0
+    assert res.stats["goal_open_share"] == share
+    assert f"never left the goal pose in {ImprovedConfig().narrow_patience} iterations" in (
+        res.message
+    )
+    full = ImprovedRRTConnect(narrow_fan=0.0).solve(problem, np.random.default_rng(0), BUDGET)
+    assert "narrow_root" not in full.stats
+    assert full.iterations - res.iterations == (
+        ImprovedConfig().root_patience - ImprovedConfig().narrow_patience
+    )
+    np.testing.assert_allclose(full.path.samples, res.path.samples, atol=1e-9)
+    assert verify_path(m, res.path, max_sharpness=0.2).ok
+
+
+@settings(max_examples=30, deadline=None)
+@given(x=st.floats(2.0, 28.0), y=st.floats(2.0, 6.0), yaw=st.floats(-math.pi, math.pi))
+def test_the_open_share_is_the_exact_capsule_count(x: float, y: float, yaw: float) -> None:
+    # The field's shortcut never changes the share: against shapely alone, direction by
+    # direction (the capsule of a zero-length edge, clear of obstacles and bounds).
+    m = kerbside_map(1.6)
+    checker = cached_checker(m)
+    pose = Pose(x, y, yaw)
+    back, front, radius = checker.edge_capsule
+    count = math.ceil(math.pi * max(front, back) / 0.05)
+    angles = yaw + (np.arange(count) + 0.5) * (math.pi / count) - math.pi / 2
+    union = shapely.union_all([o.polygon() for o in m.obstacles])
+    walls = shapely.box(*m.bounds)
+    opened = 0
+    for a in angles:
+        u = np.array([math.cos(a), math.sin(a)])
+        seg = shapely.LineString([np.array([x, y]) - back * u, np.array([x, y]) + front * u])
+        inside = walls.buffer(-radius).contains(seg)
+        opened += bool(inside and union.distance(seg) >= radius)
+    assert open_share(checker, pose) == pytest.approx(opened / count, abs=1.5 / count)

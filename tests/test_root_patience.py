@@ -92,7 +92,8 @@ def test_a_kerbside_gap_gives_way_after_the_patience_with_the_same_path(monkeypa
     monkeypatch.setattr(improved_planner, "root_boxed_in", lambda *a, **k: False)
     problem = PlanningProblem.from_map(builtin_map("kerbside"), reverse=True)
     cfg = ImprovedConfig()
-    res = ImprovedRRTConnect().solve(problem, np.random.default_rng(0), BUDGET)
+    # The whole patience: without narrow_fan's (its fan is narrow; test_root_boxed_in.py).
+    res = ImprovedRRTConnect(narrow_fan=0.0).solve(problem, np.random.default_rng(0), BUDGET)
     assert res.success, res.message
     assert res.stats["stuck_root"] == 1.0
     assert f"the goal tree never left the goal pose in {cfg.root_patience} iterations" in (

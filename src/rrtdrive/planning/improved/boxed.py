@@ -34,7 +34,7 @@ import shapely
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.types import Pose
 
-__all__ = ["ROOT_FAN_TOL", "root_boxed_in"]
+__all__ = ["ROOT_FAN_TOL", "open_share", "root_boxed_in"]
 
 #: The proof's tolerance, metres: a direction counts as blocked when an obstacle lies
 #: this much inside its capsule, which covers the directions half a fan step either side.
@@ -77,14 +77,8 @@ def root_boxed_in(checker: CollisionChecker, root: Pose, tol: float = ROOT_FAN_T
     reach = math.hypot(checker.vehicle.front_extent, checker.vehicle.width / 2.0)
     if checker.clearance(root.x, root.y) - reach - checker.config.margin >= 0.0:
         return False
-    count = math.ceil(math.pi * max(front, back) / tol)
-    # Directions at the centres of ``count`` equal parts of the closed fan [-90, 90] deg.
-    angles = root.yaw + (np.arange(count) + 0.5) * (math.pi / count) - math.pi / 2.0
-    c, s = np.cos(angles), np.sin(angles)
-    ends = np.stack(
-        [np.column_stack([root.x - back * c, root.y - back * s]),
-         np.column_stack([root.x + front * c, root.y + front * s])], axis=1,
-    )  # fmt: skip
+    ends = _fan(root, back, front, tol)
+    count = len(ends)
     need = radius - tol
     # The field first (a lower bound of the distance): a direction whose segment it finds
     # ``need`` clear, with half the look-ups' spacing for the points between, is not
@@ -116,3 +110,58 @@ def root_boxed_in(checker: CollisionChecker, root: Pose, tol: float = ROOT_FAN_T
         lines = shapely.linestrings(ends[open_])
         blocked[open_] = shapely.distance(lines, union) < need
     return bool(blocked.all())
+
+
+def _fan(root: Pose, back: float, front: float, tol: float) -> np.ndarray:
+    """``(count, 2, 2)``: each direction's segment ends, the fan cut ``tol / front`` fine.
+
+    The directions are the centres of ``count`` equal parts of the closed fan of
+    -90 to 90 degrees about the heading.
+    """
+    count = math.ceil(math.pi * max(front, back) / tol)
+    angles = root.yaw + (np.arange(count) + 0.5) * (math.pi / count) - math.pi / 2.0
+    c, s = np.cos(angles), np.sin(angles)
+    return np.stack(
+        [np.column_stack([root.x - back * c, root.y - back * s]),
+         np.column_stack([root.x + front * c, root.y + front * s])], axis=1,
+    )  # fmt: skip
+
+
+def open_share(checker: CollisionChecker, root: Pose, tol: float = ROOT_FAN_TOL) -> float:
+    """The share of the root's fan with room for a growth edge: a measure, not a proof.
+
+    A direction is open when the capsule of a zero-length edge in it (see the module)
+    is clear of obstacles and the bounds' edge by its radius (shapely's exact
+    distance; the clearance field decides first where it is sure). A root whose share
+    is small can still grow, through the few directions open, but seldom: the
+    improved planner gives it less patience (``ImprovedConfig.narrow_fan``).
+
+    Examples
+    --------
+    >>> from rrtdrive.maps import builtin_map
+    >>> m = builtin_map("kerbside")
+    >>> c = CollisionChecker.for_map(m)
+    >>> open_share(c, m.goal), round(open_share(c, m.start), 2)  # boxed in; a street
+    (0.0, 0.51)
+    """
+    back, front, radius = checker.edge_capsule
+    ends = _fan(root, back, front, tol)
+    n = max(2, math.ceil((front + back) / _POINT_SPACING) + 1)
+    along = np.linspace(0.0, 1.0, n)
+    xs = ends[:, :1, 0] + (ends[:, 1:, 0] - ends[:, :1, 0]) * along
+    ys = ends[:, :1, 1] + (ends[:, 1:, 1] - ends[:, :1, 1]) * along
+    half_gap = 0.5 * (front + back) / (n - 1)
+    sure = checker.clearances_xy(xs, ys).min(axis=1) >= radius + half_gap
+    xmin, ymin, xmax, ymax = checker.bounds
+    edge = np.minimum.reduce(
+        [ends[..., 0] - xmin, xmax - ends[..., 0], ends[..., 1] - ymin, ymax - ends[..., 1]]
+    ).min(axis=1)
+    is_open = sure.copy()
+    rest = ~sure & (edge >= radius)
+    union = checker.obstacle_union
+    if rest.any():
+        far = np.full(int(rest.sum()), np.inf)
+        if not union.is_empty:
+            far = shapely.distance(shapely.linestrings(ends[rest]), union)
+        is_open[rest] = far >= radius
+    return float(is_open.mean())

@@ -24,7 +24,7 @@ import numpy as np
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register_planner
 from rrtdrive.planning.hybrid.escalation import ESCALATES_FROM, escalate
-from rrtdrive.planning.improved.boxed import root_boxed_in
+from rrtdrive.planning.improved.boxed import open_share, root_boxed_in
 from rrtdrive.planning.improved.config import ImprovedConfig, StageBudgets
 from rrtdrive.planning.improved.expansion import (
     default_expansion_lmin,
@@ -205,6 +205,7 @@ class _Query:
         self.iterations = 0
         self.stuck_root = ""  # "start" / "goal": that tree never left its root (root_patience)
         self.root_proof = False  # stuck_root proven before any iteration (root_boxed_in)
+        self.patience = 0  # the pairs' root_patience (narrow_patience for a narrow fan)
         self.limits: StageBudgets  # the stages' counted budgets, set per query by run()
         self.trees: tuple[Tree, ...] = (
             Tree(self.s_xy[None, :], np.array([-1])),
@@ -399,6 +400,7 @@ class _Query:
             self.stuck_root, self.root_proof = boxed, True
             stats["stuck_root"] = stats["root_boxed_in"] = 1.0
             return None
+        self.patience = self.root_patience()
         total_nodes = 0
         while stats["postprocess_attempts"] < self.limits.attempts:
             ts = ObtuseTree(self.s_xy, virtual_parent=self.s_xy - p * self.hs)
@@ -408,7 +410,7 @@ class _Query:
                 step=p, obtuse=cfg.obtuse_parent, adaptive=cfg.adaptive_step,
                 passages=passages, passage_bias=cfg.passage_bias,
                 iterations=self.iterations, max_iterations=self.limits.iterations,
-                expired=self.watch.expired, root_patience=self.limits.root_patience,
+                expired=self.watch.expired, root_patience=self.patience,
             )  # fmt: skip
             self.trees = (ts.freeze(), tg.freeze())
             total_nodes += len(ts) + len(tg)
@@ -437,6 +439,23 @@ class _Query:
                 return end
         return ""
 
+    def root_patience(self) -> int:
+        """The pairs' patience: ``narrow_patience`` when the start's or goal's fan is narrow.
+
+        ``stats["start_open_share"]`` and ``stats["goal_open_share"]`` are the fans'
+        open shares (:func:`~rrtdrive.planning.improved.boxed.open_share`),
+        ``stats["narrow_root"]`` 1 when either is below ``narrow_fan``.
+        """
+        cfg, patience = self.cfg, self.limits.root_patience
+        if patience <= 0 or not cfg.obtuse_parent or cfg.narrow_fan <= 0.0:
+            return patience
+        for end, pose in (("start", self.start), ("goal", self.goal)):
+            self.stats[f"{end}_open_share"] = open_share(self.checker, pose)
+        if min(self.stats["start_open_share"], self.stats["goal_open_share"]) >= cfg.narrow_fan:
+            return patience
+        self.stats["narrow_root"] = 1.0
+        return min(patience, cfg.narrow_patience)
+
     def stuck_words(self) -> str:
         """Why the stuck root's tree never grew, for the messages."""
         end = self.stuck_root
@@ -446,10 +465,14 @@ class _Query:
                 f"90 deg of the {end}'s heading, is blocked there (the {end} is boxed in "
                 "along its heading)"
             )
+        narrow = ""
+        if self.stats.get("narrow_root"):
+            share = self.stats[f"{end}_open_share"]
+            narrow = f"; {100 * share:.0f} % of those directions have room for an edge there"
         return (
-            f"the {end} tree never left the {end} pose in {self.limits.root_patience} "
+            f"the {end} tree never left the {end} pose in {self.patience} "
             f"iterations (it grows only by edges within 90 deg of the {end}'s heading, and "
-            f"none tried was free: the {end} is boxed in along its heading)"
+            f"none tried was free{narrow}: the {end} is boxed in along its heading)"
         )
 
     def fallback(
