@@ -77,25 +77,14 @@ def root_boxed_in(checker: CollisionChecker, root: Pose, tol: float = ROOT_FAN_T
     reach = math.hypot(checker.vehicle.front_extent, checker.vehicle.width / 2.0)
     if checker.clearance(root.x, root.y) - reach - checker.config.margin >= 0.0:
         return False
-    ends = _fan(root, back, front, tol)
+    ends, field_min, half_gap, edge = _fan_room(checker, root, back, front, tol)
     count = len(ends)
     need = radius - tol
-    # The field first (a lower bound of the distance): a direction whose segment it finds
-    # ``need`` clear, with half the look-ups' spacing for the points between, is not
-    # blocked, and then nothing is proven.
-    n = max(2, math.ceil((front + back) / _POINT_SPACING) + 1)
-    along = np.linspace(0.0, 1.0, n)
-    xs = ends[:, :1, 0] + (ends[:, 1:, 0] - ends[:, :1, 0]) * along
-    ys = ends[:, :1, 1] + (ends[:, 1:, 1] - ends[:, :1, 1]) * along
-    half_gap = 0.5 * (front + back) / (n - 1)
-    if (checker.clearances_xy(xs, ys).min(axis=1) >= need + half_gap).any():
+    # The field first: a direction it finds ``need`` clear is not blocked, and then
+    # nothing is proven.
+    if (field_min >= need + half_gap).any():
         return False
-    # Outside the bounds, or nearer their edge than need at an end (inside a box the
-    # distance to its edge along a segment is least at an end).
-    xmin, ymin, xmax, ymax = checker.bounds
-    edge = np.minimum.reduce(
-        [ends[..., 0] - xmin, xmax - ends[..., 0], ends[..., 1] - ymin, ymax - ends[..., 1]]
-    ).min(axis=1)
+    # Outside the bounds, or nearer their edge than need at an end.
     blocked = edge < need
     union = checker.obstacle_union
     if union.is_empty:
@@ -112,19 +101,43 @@ def root_boxed_in(checker: CollisionChecker, root: Pose, tol: float = ROOT_FAN_T
     return bool(blocked.all())
 
 
-def _fan(root: Pose, back: float, front: float, tol: float) -> np.ndarray:
-    """``(count, 2, 2)``: each direction's segment ends, the fan cut ``tol / front`` fine.
+def _fan_room(
+    checker: CollisionChecker, root: Pose, back: float, front: float, tol: float
+) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+    """The fan's segments and two bounds of their room, for both functions here.
 
-    The directions are the centres of ``count`` equal parts of the closed fan of
-    -90 to 90 degrees about the heading.
+    Returns
+    -------
+    ends : numpy.ndarray
+        ``(count, 2, 2)``: each direction's segment ends, the fan cut ``tol / front``
+        fine: the centres of ``count`` equal parts of -90 to 90 degrees about the heading.
+    field_min, half_gap : numpy.ndarray, float
+        ``(count,)``: the clearance field's least value along each segment, at points
+        :data:`_POINT_SPACING` apart (at most); less ``half_gap``, half their spacing
+        (the points between), a lower bound of the segment's distance to the obstacles
+        and the outside.
+    edge : numpy.ndarray
+        ``(count,)``: each segment's distance to the bounds' edge, negative outside
+        (inside a box that distance along a segment is least at an end).
     """
     count = math.ceil(math.pi * max(front, back) / tol)
     angles = root.yaw + (np.arange(count) + 0.5) * (math.pi / count) - math.pi / 2.0
     c, s = np.cos(angles), np.sin(angles)
-    return np.stack(
+    ends = np.stack(
         [np.column_stack([root.x - back * c, root.y - back * s]),
          np.column_stack([root.x + front * c, root.y + front * s])], axis=1,
     )  # fmt: skip
+    n = max(2, math.ceil((front + back) / _POINT_SPACING) + 1)
+    along = np.linspace(0.0, 1.0, n)
+    xs = ends[:, :1, 0] + (ends[:, 1:, 0] - ends[:, :1, 0]) * along
+    ys = ends[:, :1, 1] + (ends[:, 1:, 1] - ends[:, :1, 1]) * along
+    half_gap = 0.5 * (front + back) / (n - 1)
+    field_min = checker.clearances_xy(xs, ys).min(axis=1)
+    xmin, ymin, xmax, ymax = checker.bounds
+    edge = np.minimum.reduce(
+        [ends[..., 0] - xmin, xmax - ends[..., 0], ends[..., 1] - ymin, ymax - ends[..., 1]]
+    ).min(axis=1)
+    return ends, field_min, half_gap, edge
 
 
 def open_share(checker: CollisionChecker, root: Pose, tol: float = ROOT_FAN_TOL) -> float:
@@ -145,17 +158,8 @@ def open_share(checker: CollisionChecker, root: Pose, tol: float = ROOT_FAN_TOL)
     (0.0, 0.51)
     """
     back, front, radius = checker.edge_capsule
-    ends = _fan(root, back, front, tol)
-    n = max(2, math.ceil((front + back) / _POINT_SPACING) + 1)
-    along = np.linspace(0.0, 1.0, n)
-    xs = ends[:, :1, 0] + (ends[:, 1:, 0] - ends[:, :1, 0]) * along
-    ys = ends[:, :1, 1] + (ends[:, 1:, 1] - ends[:, :1, 1]) * along
-    half_gap = 0.5 * (front + back) / (n - 1)
-    sure = checker.clearances_xy(xs, ys).min(axis=1) >= radius + half_gap
-    xmin, ymin, xmax, ymax = checker.bounds
-    edge = np.minimum.reduce(
-        [ends[..., 0] - xmin, xmax - ends[..., 0], ends[..., 1] - ymin, ymax - ends[..., 1]]
-    ).min(axis=1)
+    ends, field_min, half_gap, edge = _fan_room(checker, root, back, front, tol)
+    sure = field_min >= radius + half_gap
     is_open = sure.copy()
     rest = ~sure & (edge >= radius)
     union = checker.obstacle_union
