@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
@@ -21,7 +20,7 @@ import numpy as np
 from rrtdrive.controllers import CONTROLLERS, SpeedConfig, TrackingController, make_controller
 from rrtdrive.envs.action import CommandLimits
 from rrtdrive.envs.reward import RewardWeights
-from rrtdrive.maps import Map, resolve_map
+from rrtdrive.maps import Map, names_map_file, resolve_map
 from rrtdrive.planning import PLANNERS
 from rrtdrive.sim.scenes import SimConfig
 from rrtdrive.sim.tasks import (
@@ -187,7 +186,7 @@ class DriveEnvConfig:
             try:
                 put("map", resolve_map(scenario))
             except InputError as exc:
-                if scenario.endswith(".json") or os.path.exists(scenario):
+                if names_map_file(scenario):
                     raise InputError(f"scenario: {scenario!r}: {exc}") from None
                 raise InputError(
                     f"scenario: unknown scenario {scenario!r}; choose from {SCENARIOS} or "

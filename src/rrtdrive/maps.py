@@ -37,6 +37,7 @@ __all__ = [
     "load_map",
     "save_map",
     "resolve_map",
+    "names_map_file",
     "check_endpoint",
 ]
 
@@ -473,11 +474,19 @@ def builtin_map(name: str) -> Map:
         ) from None
 
 
+def names_map_file(spec: str) -> bool:
+    """Whether ``spec`` names a map file (``.json``, a path, or a file that exists).
+
+    :func:`resolve_map` reads such a name as a file, so its error is the file's.
+    """
+    return spec.endswith(".json") or os.path.sep in spec or FsPath(spec).exists()
+
+
 def resolve_map(spec: str, vehicle: VehicleParams | None = None) -> Map:
     """A built-in map by name, or a map file by path."""
     if spec in BUILTIN_MAPS:
         m = builtin_map(spec)
         return m if vehicle is None else dataclasses.replace(m, vehicle=vehicle)
-    if spec.endswith(".json") or os.path.sep in spec or FsPath(spec).exists():
+    if names_map_file(spec):
         return load_map(spec, vehicle)
     return builtin_map(spec)

@@ -241,6 +241,7 @@ class BenchConfig:
                 raise InputError(
                     f"planners: {p!r} needs OMPL; install it with pip install 'rrtdrive[ompl]'"
                 )
+        from rrtdrive.maps import names_map_file
         from rrtdrive.sim.tasks import SCENARIOS
 
         digests, contents = dict(self.map_digests), dict(self.map_contents)
@@ -252,7 +253,9 @@ class BenchConfig:
                 try:
                     digests[m], contents[m] = map_digest(m)
                 except InputError as exc:
-                    if field_name == "scenarios" and not _names_a_file(m):
+                    if field_name == "scenarios" and not names_map_file(m):
+                        from rrtdrive.sim.stock import STOCK_ENVS
+
                         raise InputError(
                             f"scenarios: unknown scenario {m!r}; choose from "
                             f"{[*SCENARIOS, *STOCK_ENVS]} or give a map (a built-in name or "
@@ -411,21 +414,12 @@ def _hash_payload(
     return payload
 
 
-def _names_a_file(spec: str) -> bool:
-    """Whether a name is meant as a map file (its error is the file's, not "unknown")."""
-    return spec.endswith(".json") or os.path.exists(spec)
-
-
 def is_map_scenario(target: str) -> bool:
     """Whether a closed-loop target is a map (driven start to goal), not a named scenario."""
+    from rrtdrive.sim.stock import STOCK_ENVS
     from rrtdrive.sim.tasks import SCENARIOS
 
     return target not in SCENARIOS and target not in STOCK_ENVS
-
-
-#: Stock highway-env scenarios (``rrtdrive.sim.stock.STOCK_ENVS``, kept here without
-#: importing highway-env; ``tests/test_bench.py`` checks they agree).
-STOCK_ENVS = ("parking-v0", "parking-parked-v0")
 
 
 def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:

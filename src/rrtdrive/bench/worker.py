@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rrtdrive.bench.grid import STOCK_ENVS, RunSpec
+from rrtdrive.bench.grid import RunSpec
 
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.maps import Map
@@ -177,6 +177,7 @@ def _episode_metrics(spec: RunSpec) -> dict[str, Any]:
     import rrtdrive.bench.ompl_planners  # noqa: F401  (registers the OMPL rows)
     from rrtdrive.evaluation import evaluate
     from rrtdrive.sim.runner import EpisodeConfig, run_episode
+    from rrtdrive.sim.stock import STOCK_ENVS, drive_stock_env
     from rrtdrive.types import Budget
     from rrtdrive.verify import verify_path
 
@@ -185,19 +186,17 @@ def _episode_metrics(spec: RunSpec) -> dict[str, Any]:
         replan=_replan_config(spec),
     )
     assert spec.controller is not None
-    stock_success = None
+    stock = None
     if spec.target in STOCK_ENVS:
-        from rrtdrive.sim.stock import drive_stock_env
-
         stock = drive_stock_env(
             spec.target, spec.seed, spec.planner, spec.controller, config, reverse=spec.reverse
         )
-        episode, stock_success = stock.episode, stock.highway_env_success
+        episode = stock.episode
     else:
         episode = run_episode(_task(spec), spec.planner, spec.controller, spec.seed, config)
     report = evaluate(episode).to_json()
-    if spec.target in STOCK_ENVS:
-        report["highway_env_success"] = stock_success  # the env's own judgement beside ours
+    if stock is not None:  # the env's own judgement beside ours
+        report["highway_env_success"] = stock.highway_env_success
     for k in ("scenario", "planner", "controller", "seed"):
         report.pop(k, None)
     plan_ok = episode.plan is not None and episode.plan.success

@@ -402,16 +402,13 @@ def _run(args: argparse.Namespace) -> int:
 
 def _target_kind(name: str, scenarios: tuple[str, ...], stock_envs: tuple[str, ...]) -> str:
     """``"scenario"``, ``"stock"`` or ``"map"``; an unknown plain name is bad input."""
-    import os
-    from pathlib import Path as FsPath
-
-    from rrtdrive.maps import BUILTIN_MAPS
+    from rrtdrive.maps import BUILTIN_MAPS, names_map_file
 
     if name in scenarios:
         return "scenario"
     if name in stock_envs:
         return "stock"
-    if name in BUILTIN_MAPS or name.endswith(".json") or os.sep in name or FsPath(name).exists():
+    if name in BUILTIN_MAPS or names_map_file(name):
         return "map"
     maps = sorted(m for m in BUILTIN_MAPS if m not in scenarios)
     raise InputError(
