@@ -18,7 +18,6 @@ iteration of their pair at which one did, and the roots of failed pairs that nev
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import sys
 from collections import Counter
@@ -30,28 +29,23 @@ sys.path.insert(0, str(HERE))
 
 from results_io import command, machine, write_results  # noqa: E402
 
-from rrtdrive.maps import builtin_map  # noqa: E402
-from rrtdrive.planning import PlanningProblem  # noqa: E402
 from rrtdrive.planning.improved.boxed import open_share  # noqa: E402
 
 #: Bands of open share, [lo, hi).
 BANDS = ((0.0, 0.05), (0.05, 0.1), (0.1, 0.15), (0.15, 0.2), (0.2, 0.3), (0.3, 0.5), (0.5, 1.01))
 
 
-def shares(query_ids: list[str], count: int) -> dict[str, tuple[float, float]]:
-    """Each query's ``(start share, goal share)``; ids as ``root_growth.py`` writes them."""
-    from random_goals import draw_goals
+def shares(query_ids: list[str], count: int, seeds: int) -> dict[str, tuple[float, float]]:
+    """Each query's ``(start share, goal share)``, its problem as ``root_growth.py`` made it."""
+    from root_growth import queries
 
-    draws = {v: draw_goals("parking_lot", count, 1, v) for v in ("goal", "start")}
+    problems = {qid: problem for qid, problem, _seed in queries(count, seeds)}
     out: dict[str, tuple[float, float]] = {}
     for qid in query_ids:
-        name, _gear, index = qid.split(":")
-        if name in draws:
-            m = dataclasses.replace(builtin_map("parking_lot"), **{name: draws[name][int(index)]})
-        else:
-            m = builtin_map(name)
-        checker = PlanningProblem.from_map(m).checker
-        out[qid] = (open_share(checker, m.start), open_share(checker, m.goal))
+        problem = problems[qid]
+        out[qid] = (
+            open_share(problem.checker, problem.start), open_share(problem.checker, problem.goal)
+        )
     return out
 
 
@@ -109,9 +103,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         data = json.loads(FsPath(args.run).read_text())
         pairs, count = data["pairs"], int(data["meta"]["count"])
+        seeds = int(data["meta"]["seeds"])
     except (OSError, ValueError, KeyError) as exc:
         ap.error(f"run: not a root_growth.json ({exc})")
-    by_query = shares(sorted({p["query"] for p in pairs}), count)
+    by_query = shares(sorted({p["query"] for p in pairs}), count, seeds)
     payload = {
         "command": command("root_fans.py", argv), "source": args.run, "machine": machine(),
         "summary": summarise(pairs, by_query),

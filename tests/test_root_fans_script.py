@@ -15,7 +15,7 @@ import root_fans  # noqa: E402
 def test_a_boxed_goal_and_an_open_lot_land_in_their_bands(tmp_path) -> None:  # noqa: ANN001
     run = tmp_path / "root_growth.json"
     run.write_text(json.dumps({
-        "meta": {"count": 1},
+        "meta": {"count": 1, "seeds": 1},
         "pairs": [
             {"query": "kerbside:fwd:0", "met": False, "iterations": 10000,
              "start_grew": 2, "goal_grew": None},
