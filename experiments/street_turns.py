@@ -124,30 +124,26 @@ def ompl_row(m: Map, seed: int, seconds: float, clearance: float = 0.0) -> dict[
 
 
 def add_run_options(ap: argparse.ArgumentParser, unit: str, out: str) -> None:
-    """The options every side-by-side script shares: seeds, our cap, OMPL's time, out."""
+    """The options every side-by-side script shares: seeds, our cap, OMPL's time and
+    clearances (``--ompl-clearances``: one OMPL row each), out."""
     ap.add_argument("--seeds", type=int, default=3, help=f"seeds per {unit} (default 3)")
     ap.add_argument("--max-time", type=float, default=10.0, help="our wall-clock cap, s")
     ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time, s")
-    add_ompl_clearance_option(ap)
-    ap.add_argument("--out", default=out)
-
-
-def add_ompl_clearance_option(ap: argparse.ArgumentParser) -> None:
-    """``--ompl-clearances``: the body clearances OMPL's states keep, one row each."""
     ap.add_argument(
         "--ompl-clearances", default=f"0,{OUR_CLEARANCE:g}",
         help="body clearances OMPL's states must keep, m, one OMPL row each (default "
         f"0,{OUR_CLEARANCE:g}: touching allowed, and the {OUR_CLEARANCE:g} m our planners keep)",
     )  # fmt: skip
+    ap.add_argument("--out", default=out)
 
 
 def ompl_clearances(ap: argparse.ArgumentParser, text: str) -> tuple[float, ...]:
     """The parsed ``--ompl-clearances`` (exit 2 naming it when a value is bad)."""
     try:
-        values = tuple(float(v) for v in text.split(",") if v.strip())
-    except ValueError:
-        ap.error(f"--ompl-clearances: expected numbers separated by commas, got {text!r}")
-    if not values or any(not 0.0 <= v <= 1.0 for v in values):
+        values = tuple(numbers_above(text, "--ompl-clearances", floor=-math.inf))
+    except ValueError as err:
+        ap.error(str(err))
+    if any(not 0.0 <= v <= 1.0 for v in values):
         ap.error(f"--ompl-clearances: each value must lie within [0, 1] m, got {text!r}")
     return values
 
@@ -288,16 +284,12 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--widths", default="6.5,7,7.5,8,9,10,12", help="street widths, m")
     ap.add_argument("--length", type=float, default=30.0, help="street length, m (default 30)")
-    ap.add_argument("--seeds", type=int, default=3, help="seeds per width (default 3)")
-    ap.add_argument("--max-time", type=float, default=10.0, help="our wall-clock cap, s")
-    ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time, s")
-    add_ompl_clearance_option(ap)
+    add_run_options(ap, "width", "results/street_turns")
     ap.add_argument(
         "--lanes", type=float, default=None, metavar="BACK",
         help="from lane to lane: the start in the right-hand lane at x = 16, the goal in "
         "the other lane BACK metres behind it (default: the goal is the start turned round)",
     )  # fmt: skip
-    ap.add_argument("--out", default="results/street_turns")
     args = ap.parse_args(argv)
     try:
         widths = numbers_above(args.widths, "--widths", floor=2.0)
@@ -305,9 +297,10 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(str(err))
     if args.lanes is not None and not 0.0 <= args.lanes <= 12.0:
         ap.error(f"--lanes must lie within [0, 12] m, got {args.lanes:g}")
-    if args.length < 16.0 or args.seeds < 1 or args.max_time <= 0 or args.ompl_time <= 0:
-        ap.error("--length must be >= 16, --seeds >= 1, --max-time and --ompl-time > 0")
-    clearances = ompl_clearances(ap, args.ompl_clearances)
+    if args.length < 16.0:
+        ap.error(f"--length must be >= 16, got {args.length:g}")
+    check_run_options(ap, args)
+    clearances = args.ompl_clearances
     have_ompl = cov.availability(OMPL_NAME) is None
     t0 = time.perf_counter()
     load = f"{os.getloadavg()[0]:.1f}"
