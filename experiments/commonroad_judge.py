@@ -17,7 +17,6 @@ episode each, scenario ``random-maps``, as ``experiments/random_maps_drive.py``)
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import os
 import sys
@@ -40,12 +39,9 @@ def _task(scenario: str, seed: int, vehicle: VehicleParams):  # noqa: ANN202 - a
     if scenario != RANDOM_MAPS:
         return make_scenario(scenario, seed, vehicle=vehicle)
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-    from random_maps import random_map
+    from random_maps_drive import driving_task
 
-    from rrtdrive.sim.tasks import CustomTask
-
-    m = dataclasses.replace(random_map(seed), vehicle=vehicle)
-    return CustomTask.from_map(m, 0, reverse=True)
+    return driving_task(seed, vehicle)
 
 
 def run_one(job: tuple[str, str, int, float | None, float]) -> dict:

@@ -17,6 +17,7 @@ goal errors and gear changes driven, then every episode that did not arrive.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 import time
@@ -27,19 +28,31 @@ from random_maps import random_map  # noqa: E402
 from results_io import command, machine, write_results  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
+from rrtdrive.types import VehicleParams  # noqa: E402
 
 CONTROLLERS = ("pure-pursuit", "stanley", "lqr")
+
+
+def driving_task(seed: int, vehicle: VehicleParams | None = None) -> Any:
+    """Random map ``seed`` driven start to goal with reverse, episode seed 0 (on ``vehicle``).
+
+    The task of this script's episodes, and of ``commonroad_judge.py --random-maps``.
+    """
+    from rrtdrive.sim.tasks import CustomTask
+
+    m = random_map(seed)
+    if vehicle is not None:
+        m = dataclasses.replace(m, vehicle=vehicle)
+    return CustomTask.from_map(m, 0, reverse=True)
 
 
 def drive(item: tuple[int, str, str]) -> dict[str, Any]:
     """One map, one controller: the episode's judged outcome."""
     from rrtdrive.evaluation import evaluate
     from rrtdrive.sim.runner import run_episode
-    from rrtdrive.sim.tasks import CustomTask
 
     seed, controller, planner = item
-    task = CustomTask.from_map(random_map(seed), 0, reverse=True)
-    ep = run_episode(task, planner=planner, controller=controller, seed=0)
+    ep = run_episode(driving_task(seed), planner=planner, controller=controller, seed=0)
     ev = evaluate(ep).to_json()
     return {
         "map": seed, "controller": controller, "status": ep.status.value,
