@@ -201,10 +201,13 @@ def test_connectivity_proof_is_sound_for_a_gap_the_car_just_fits():
     assert all(reference_free(m, x, 15.5, 0.0) for x in np.linspace(3.0, 25.0, 221))
 
 
-@given(pose=poses)
-def test_scalar_fast_pose_test_equals_vectorised(parking_checker, pose):
+@given(pose=poses, clearance=st.sampled_from([0.0, 0.15, 0.5]))
+def test_scalar_fast_pose_test_equals_vectorised(parking_checker, pose, clearance):
     assert parking_checker.pose_free_fast(*pose) == bool(
         parking_checker.poses_free_fast(np.array([pose]))[0]
+    )
+    assert parking_checker.pose_free_fast(*pose, clearance) == bool(
+        parking_checker.poses_free_fast(np.array([pose]), clearance)[0]
     )
 
 
