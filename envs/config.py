@@ -31,6 +31,7 @@ from rrtdrive.sim.tasks import (
     TASKS,
     CustomTask,
     make_scenario,
+    unknown_scenario,
 )
 from rrtdrive.sim.tasks import Task as Scenario
 from rrtdrive.types import Budget, InputError, require_int
@@ -188,10 +189,7 @@ class DriveEnvConfig:
             except InputError as exc:
                 if names_map_file(scenario):
                     raise InputError(f"scenario: {scenario!r}: {exc}") from None
-                raise InputError(
-                    f"scenario: unknown scenario {scenario!r}; choose from {SCENARIOS} or "
-                    f"give a map (a built-in name or a .json file) to drive ({exc})"
-                ) from None
+                raise unknown_scenario("scenario", scenario) from None
         if not isinstance(planner, str) or planner not in PLANNERS:
             raise InputError(
                 f"planner: unknown planner {planner!r}; choose from {sorted(PLANNERS)}"

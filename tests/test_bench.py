@@ -598,7 +598,7 @@ def test_reverse_and_driven_maps_are_in_the_run_keys(tmp_path):
 
 
 def test_an_unknown_scenario_names_scenarios_and_maps(capsys):
-    with pytest.raises(InputError, match="scenarios: unknown scenario 'nowhere'.*or give a map"):
+    with pytest.raises(InputError, match="scenarios: unknown scenario 'nowhere'.*a map file"):
         BenchConfig(scenarios=("nowhere",), seeds=1)
     with pytest.raises(InputError, match="reverse"):
         BenchConfig(maps=("overtake",), reverse="yes")

@@ -82,3 +82,32 @@ def test_simulate_reverse_with_a_forward_planner_says_so(capsys):
     # The goal is boxed in: rrt cannot reach it forward; the note says why reversing did not help.
     assert code == 1
     assert "note: rrt plans forward only; --reverse takes effect with hybrid-a-star" in err
+
+
+def test_an_unknown_scenario_reads_alike_in_simulate_bench_and_gym(capsys):
+    """One wording, the closest name suggested, in each place a scenario is named."""
+    from rrtdrive.bench import BenchConfig
+    from rrtdrive.envs.config import DriveEnvConfig
+    from rrtdrive.types import InputError
+
+    code, _, err = run(capsys, "simulate", "parkng_lot")
+    assert code == 2
+    simulate = err.strip().split("error: ", 1)[1]
+    with pytest.raises(InputError) as bench:
+        BenchConfig(scenarios=("parkng_lot",), seeds=1)
+    with pytest.raises(InputError) as gym:
+        DriveEnvConfig.from_options(scenario="parkng_lot")
+    assert simulate.startswith(
+        "scenario: unknown scenario 'parkng_lot' (did you mean 'parking_lot'?)"
+    )
+    # bench names its own option; the gym drives no stock envs, so lists none.
+    assert str(bench.value) == "scenarios" + simulate[len("scenario"):]
+    stock = ", a stock env (parking-v0, parking-parked-v0)"
+    assert stock in simulate and str(gym.value) == simulate.replace(stock, "")
+    # Every built-in map that is not itself a scenario is offered.
+    from rrtdrive.maps import BUILTIN_MAPS
+    from rrtdrive.sim.tasks import SCENARIOS
+
+    assert all(m in simulate for m in BUILTIN_MAPS if m not in SCENARIOS)
+    code, _, err = run(capsys, "simulate", "zzzz")
+    assert code == 2 and "did you mean" not in err

@@ -242,7 +242,6 @@ class BenchConfig:
                     f"planners: {p!r} needs OMPL; install it with pip install 'rrtdrive[ompl]'"
                 )
         from rrtdrive.maps import names_map_file
-        from rrtdrive.sim.tasks import SCENARIOS
 
         digests, contents = dict(self.map_digests), dict(self.map_contents)
         # Maps, and the scenarios that are maps (driven from their start to their goal).
@@ -255,12 +254,9 @@ class BenchConfig:
                 except InputError as exc:
                     if field_name == "scenarios" and not names_map_file(m):
                         from rrtdrive.sim.stock import STOCK_ENVS
+                        from rrtdrive.sim.tasks import unknown_scenario
 
-                        raise InputError(
-                            f"scenarios: unknown scenario {m!r}; choose from "
-                            f"{[*SCENARIOS, *STOCK_ENVS]} or give a map (a built-in name or "
-                            f"a .json file) to drive ({exc})"
-                        ) from None
+                        raise unknown_scenario("scenarios", m, tuple(STOCK_ENVS)) from None
                     raise InputError(f"{field_name}: {m!r}: {exc}") from None
         object.__setattr__(self, "map_digests", digests)
         object.__setattr__(self, "map_contents", contents)

@@ -410,11 +410,9 @@ def _target_kind(name: str, scenarios: tuple[str, ...], stock_envs: tuple[str, .
         return "stock"
     if name in BUILTIN_MAPS or names_map_file(name):
         return "map"
-    maps = sorted(m for m in BUILTIN_MAPS if m not in scenarios)
-    raise InputError(
-        f"scenario: unknown scenario {name!r}; choose from {', '.join(scenarios)}, a stock env "
-        f"({', '.join(stock_envs)}), a map file (.json) or a built-in map ({', '.join(maps)})"
-    )
+    from rrtdrive.sim.tasks import unknown_scenario
+
+    raise unknown_scenario("scenario", name, stock_envs)
 
 
 def _parse_pose(text: str | None, flag: str) -> Any:

@@ -36,7 +36,9 @@ re-planning settings), so nothing else needs to ask which kind a task is.
 
 from __future__ import annotations
 
+import difflib
 import math
+from collections.abc import Sequence
 from typing import Any
 
 from rrtdrive.sim.scenes import scenario_rngs
@@ -83,6 +85,7 @@ __all__ = [
     "VideoCamera",
     "REPLANNING_SCENARIOS",
     "make_scenario",
+    "unknown_scenario",
     "SCENARIO_OPTIONS",
     "plan_scenario",
     "DEFAULT_PLANNER",
@@ -135,6 +138,38 @@ def _jitter(jitter: object) -> tuple[float, float, float]:
             f"got {jitter!r}"
         )
     return values  # type: ignore[return-value]
+
+
+def unknown_scenario(field: str, name: str, stock_envs: Sequence[str] = ()) -> InputError:
+    """The one error for a scenario name that is no scenario, stock env or map.
+
+    Worded alike wherever a scenario is named (``rrtdrive simulate``, ``rrtdrive
+    bench``, the gym config): what may be given instead, the closest known name first.
+
+    Parameters
+    ----------
+    field : str
+        The field or option that named it (the message's first word).
+    name : str
+        The name given.
+    stock_envs : sequence of str
+        The stock highway-env names the caller also drives (none: it drives none).
+
+    Examples
+    --------
+    >>> print(unknown_scenario("scenario", "parkng"))  # doctest: +ELLIPSIS
+    scenario: unknown scenario 'parkng' (did you mean 'parking'?); choose from parking, ...
+    """
+    from rrtdrive.maps import BUILTIN_MAPS
+
+    maps = sorted(m for m in BUILTIN_MAPS if m not in SCENARIOS)
+    close = difflib.get_close_matches(name, [*SCENARIOS, *stock_envs, *maps], n=1)
+    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    stock = f", a stock env ({', '.join(stock_envs)})" if stock_envs else ""
+    return InputError(
+        f"{field}: unknown scenario {name!r}{hint}; choose from {', '.join(SCENARIOS)}{stock}, "
+        f"a map file (.json) or a built-in map ({', '.join(maps)})"
+    )
 
 
 def make_scenario(name: str, seed: int = 0, **options: Any) -> Task:
