@@ -8,16 +8,14 @@ from __future__ import annotations
 
 from typing import Any
 
+from results_io import cell
+
 from rrtdrive.planning.smoothing import SmoothingConfig
 
 __all__ = ["SHARPNESS_BOUND", "report", "tight_report"]
 
 #: The default sharpness bound, rad/m: the default planners' guarantee.
 SHARPNESS_BOUND = SmoothingConfig().max_sharpness
-
-
-def _fmt(v: float | None, scale: float = 1.0, digits: int = 1) -> str:
-    return "-" if v is None else f"{v * scale:.{digits}f}"
 
 
 def _sharp(v: float | str | None) -> str:
@@ -57,8 +55,8 @@ def report(payload: dict[str, Any]) -> str:
             lines.append(
                 f"| {p} | {name}s | {c['solved']}/{c['queries']} | {c['verified']} | "
                 f"{c.get('verified_any_sharpness', '-')} | {c['collision_free']} | "
-                f"{_fmt(c['median_time_solved_s'], 1e3)} | "
-                f"{_fmt(c['median_length_m'], 1, 2)} | {_fmt(c['median_time_failed_s'], 1e3)} | "
+                f"{cell(c['median_time_solved_s'], 1e3)} | "
+                f"{cell(c['median_length_m'], 1, 2)} | {cell(c['median_time_failed_s'], 1e3)} | "
                 f"{_sharp(c.get('max_sharpness'))} | {_count(c.get('within_bound'))} | "
                 f"{other or '-'} |"
             )
@@ -78,9 +76,9 @@ def report(payload: dict[str, Any]) -> str:
         lines.append(
             f"| {key}s | {c['ompl_solved']} | {c['both_solved']} | {c['ours_only']} | "
             f"{'-' if share is None else f'{100 * share:.1f} %'} | "
-            f"{_fmt(c['median_time_ratio'], 1, 3)} | {_fmt(c['median_length_ratio'], 1, 3)} | "
-            f"{_fmt(c.get('time_ratio_of_medians'), 1, 3)} | "
-            f"{_fmt(c.get('length_ratio_of_medians'), 1, 3)} |"
+            f"{cell(c['median_time_ratio'], 1, 3)} | {cell(c['median_length_ratio'], 1, 3)} | "
+            f"{cell(c.get('time_ratio_of_medians'), 1, 3)} | "
+            f"{cell(c.get('length_ratio_of_medians'), 1, 3)} |"
         )
     staged = [(p, name, c) for p, sets in s["per_planner"].items()
               for name, c in sets.items() if "solved_by_stage" in c]  # fmt: skip
@@ -103,8 +101,8 @@ def report(payload: dict[str, Any]) -> str:
             )  # fmt: skip
             lines.append(
                 f"| {p} | {name}s | {counts} | {c['escalated']} | "
-                f"{_fmt(c['median_rrt_stages_time_escalated_s'], 1e3)} | "
-                f"{_fmt(c['median_escalation_time_s'], 1e3)} |"
+                f"{cell(c['median_rrt_stages_time_escalated_s'], 1e3)} | "
+                f"{cell(c['median_escalation_time_s'], 1e3)} |"
             )
     if payload.get("load"):
         lines += ["", f"Load average (1/5/15 min) at start {payload['load']['start']}, at end "
@@ -136,7 +134,7 @@ def tight_report(payload: dict[str, Any]) -> str:
         lines.append(
             f"| {c['query']} | {c['planner']} | {c['solved']}/{c['runs']} | {c['verified']} | "
             f"{c.get('verified_any_sharpness', '-')} | {c['collision_free']} | "
-            f"{_fmt(c.get('median_time_solved_s'), 1e3)} | "
+            f"{cell(c.get('median_time_solved_s'), 1e3)} | "
             f"{_sharp(c.get('max_sharpness'))} | {_count(c.get('within_bound'))} | {outcomes} | "
             f"{', '.join(c['diagnoses']) or '-'} |"
         )

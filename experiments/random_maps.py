@@ -36,7 +36,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 import coverage as cov  # noqa: E402  (the sibling scripts)
-from results_io import command, machine, write_results  # noqa: E402
+from results_io import cell, command, machine, write_results  # noqa: E402
 from street_turns import least_clearance  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
@@ -128,15 +128,11 @@ def summarise(rows: list[dict[str, Any]], planners: list[str], maps: int) -> dic
     return out
 
 
-def _cell(v: Any, scale: float = 1.0, fmt: str = "{:.1f}") -> str:
-    return "-" if v is None else fmt.format(v * scale)
-
-
 def _missed(seeds: list[int], rows: list[dict[str, Any]]) -> str:
     """The maps OMPL solves and a planner does not, each with OMPL's least clearance."""
     near = {r["seed"]: r.get("least_clearance_m") for r in rows if r["planner"] in OMPL_NAMES}
     return ", ".join(
-        f"{seed} ({_cell(near.get(seed), 1, '{:.3f}')} m)" for seed in seeds
+        f"{seed} ({cell(near.get(seed), 1, 3)} m)" for seed in seeds
     ) or "-"
 
 
@@ -163,11 +159,11 @@ def report(payload: dict[str, Any]) -> str:
         share = s.get("share_of_ompl")
         lines.append(
             f"| {p} | {s['solved']}/{s['maps']} | {s['verified']} | {s['any_sharpness']} "
-            f"| {s.get('ompl_solved', '-')} | {_cell(share, 100, '{:.1f} %')} "
+            f"| {s.get('ompl_solved', '-')} | {cell(share, 100, 1, ' %')} "
             f"| {_missed(s.get('missed', []), payload['rows'])} "
-            f"| {_cell(s['median_time_solved_s'], 1000)} "
-            f"| {_cell(s.get('time_ratio_of_medians'), 1, '{:.3f}')} "
-            f"| {_cell(s['median_time_failed_s'], 1000)} | {_cell(s['max_time_s'], 1, '{:.2f}')} |"
+            f"| {cell(s['median_time_solved_s'], 1000)} "
+            f"| {cell(s.get('time_ratio_of_medians'), 1, 3)} "
+            f"| {cell(s['median_time_failed_s'], 1000)} | {cell(s['max_time_s'], 1, 2)} |"
         )
     lines += ["", "Failures of ours (map seed: status, message):", ""]
     for r in payload["rows"]:

@@ -25,7 +25,7 @@ from typing import Any
 
 sys.path.insert(0, os.path.dirname(__file__))
 from random_maps import random_map  # noqa: E402
-from results_io import command, machine, write_results  # noqa: E402
+from results_io import cell, command, machine, write_results  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
 from rrtdrive.types import VehicleParams  # noqa: E402
@@ -101,8 +101,7 @@ def report(payload: dict[str, Any]) -> str:
         "|---|---|---|---|---|---|---|---|",
     ]
     for c, s in payload["summary"].items():
-        cte = "-" if s["cte_max_m"] is None else f"{s['cte_max_m']:.3f}"
-        goal = "-" if s["goal_error_max_m"] is None else f"{s['goal_error_max_m']:.3f}"
+        cte, goal = cell(s["cte_max_m"], 1, 3), cell(s["goal_error_max_m"], 1, 3)
         lines.append(
             f"| {c} | {s['success']}/{s['episodes']} | {s['plan_failed']} | "
             f"{s['collision_highway_env']} / {s['collision_footprint']} | {cte} | {goal} | "

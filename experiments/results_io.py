@@ -1,7 +1,8 @@
 """What the newer experiment scripts share: the machine line, number lists, writing results.
 
-``forward_reach.py`` and ``street_turns.py`` use it; a script writes its payload as
-``OUT/STEM.json`` and its page as ``OUT/STEM.md``, each through a temporary file.
+``forward_reach.py``, ``street_turns.py`` and the report pages use it; a script writes
+its payload as ``OUT/STEM.json`` and its page as ``OUT/STEM.md``, each through a
+temporary file; :func:`cell` formats a table's numbers.
 """
 
 from __future__ import annotations
@@ -49,6 +50,17 @@ def numbers_above(text: str, name: str, floor: float = 0.0) -> list[float]:
     if not values or not all(math.isfinite(v) and v > floor for v in values):
         raise ValueError(f"{name}: expected numbers above {floor:g}, got {text!r}")
     return values
+
+
+def cell(value: float | None, scale: float = 1.0, digits: int = 1, suffix: str = "") -> str:
+    """A table cell: ``value * scale`` to ``digits`` decimals then ``suffix``, ``-`` for none.
+
+    Examples
+    --------
+    >>> cell(0.01234, 1000), cell(None), cell(0.989, 100, 1, " %")
+    ('12.3', '-', '98.9 %')
+    """
+    return "-" if value is None else f"{value * scale:.{digits}f}{suffix}"
 
 
 def write_results(
