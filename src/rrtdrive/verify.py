@@ -51,7 +51,8 @@ class PathCheck:
         The discrete curvature of every gear segment is at most κ_max (plus slack).
     headings_ok : bool
         The direction of travel at the start and at the goal matches their yaw
-        (gear-corrected: a path may leave the start or reach the goal in reverse).
+        (gear-corrected: a path may leave the start or reach the goal in reverse);
+        a path that never moves (the start is the goal) has every row's yaw there.
     endpoints_ok : bool
         The first and last positions are the start's and the goal's.
     spacing_ok : bool
@@ -276,8 +277,15 @@ def verify_path(
     )
     # Chords of the first and last moving steps: at most 0.25 m long, so even at
     # kappa_max the chord deviates from the tangent by under 0.7 degrees.
-    err_s = abs(wrap_angle(first_dir - m.start.yaw)) if not math.isnan(first_dir) else math.pi
-    err_g = abs(wrap_angle(last_dir - m.goal.yaw)) if not math.isnan(last_dir) else math.pi
+    if math.isnan(first_dir):
+        # A path that never moves (the start is the goal): the car keeps its heading, so
+        # every row's yaw must be the start's and the goal's.
+        yaws = s[:, 2]
+        err_s = float(np.max(np.abs(wrap_angle(yaws - m.start.yaw))))
+        err_g = float(np.max(np.abs(wrap_angle(yaws - m.goal.yaw))))
+    else:
+        err_s = abs(wrap_angle(first_dir - m.start.yaw))
+        err_g = abs(wrap_angle(last_dir - m.goal.yaw))
     endpoints_ok = bool(
         np.allclose(xy[0], (m.start.x, m.start.y), atol=1e-6)
         and np.allclose(xy[-1], (m.goal.x, m.goal.y), atol=1e-6)

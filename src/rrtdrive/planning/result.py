@@ -26,11 +26,15 @@ import numpy as np
 from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, polyline_path, precheck
 from rrtdrive.planning.diagnosis import diagnose
-from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Tree
+from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Pose, Tree
 
 __all__ = [
+    "SAME_POSE_TOL",
     "Search",
+    "already_there",
+    "at_goal",
     "run_query",
+    "same_pose",
     "solved",
     "solved_result",
     "search_result",
@@ -96,6 +100,8 @@ def run_query(
     setup = time.perf_counter() - t0
     watch = Stopwatch(budget)
     result = precheck(problem, planner, watch)
+    if result is None and at_goal(problem):
+        result = already_there(planner, problem, watch)
     if result is None:
         result = search(watch)
     # The grid's cell size, coarser than configured on a very big map.
@@ -109,6 +115,47 @@ def run_query(
     found = diagnose(problem)
     stats["diagnosis_time_s"] = time.perf_counter() - t_diagnosis
     return dataclasses.replace(result, setup_time_s=setup, diagnosis=found, stats=stats)
+
+
+#: Start and goal closer than this (metres, and radians of heading) are one pose.
+SAME_POSE_TOL = 1e-9
+
+
+def same_pose(a: Pose, b: Pose) -> bool:
+    """Whether two poses are one (position and heading within :data:`SAME_POSE_TOL`)."""
+    return (
+        math.hypot(b.x - a.x, b.y - a.y) <= SAME_POSE_TOL
+        and abs(wrap_angle(b.yaw - a.yaw)) <= SAME_POSE_TOL
+    )
+
+
+def at_goal(problem: PlanningProblem) -> bool:
+    """Whether the start is the goal pose (:func:`same_pose`).
+
+    Examples
+    --------
+    >>> import dataclasses
+    >>> from rrtdrive.maps import builtin_map
+    >>> m = builtin_map("parking_lot")
+    >>> here = dataclasses.replace(m, goal=m.start)
+    >>> at_goal(PlanningProblem.from_map(m)), at_goal(PlanningProblem.from_map(here))
+    (False, True)
+    """
+    return same_pose(problem.start, problem.goal)
+
+
+def already_there(planner: str, problem: PlanningProblem, watch: Stopwatch) -> PlanResult:
+    """The answer when the start is the goal: a path of 0 m that stays at the pose.
+
+    Every planner gives it, before any search: a search would look for a way to
+    leave and come back (a forward-only one, a loop round the map).
+    """
+    a, b = problem.start, problem.goal
+    rows = np.array([[a.x, a.y, a.yaw, 0.0, 1.0], [b.x, b.y, b.yaw, 0.0, 1.0]])
+    return solved(
+        planner, watch, Path(rows, rows[:, :2]), rows[:, :2].copy(), (), 0,
+        "the start is the goal pose: nothing to drive (a path of 0 m)", {},
+    )  # fmt: skip
 
 
 def solved(

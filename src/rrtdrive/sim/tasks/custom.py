@@ -15,6 +15,7 @@ import numpy as np
 from highway_env.road.road import Road
 
 from rrtdrive.maps import Map
+from rrtdrive.planning.result import same_pose
 from rrtdrive.sim.scenes import plain_network, populate_road
 from rrtdrive.sim.tasks.base import PathTask, TaskKind
 from rrtdrive.types import InputError, Pose
@@ -43,6 +44,16 @@ class CustomTask(PathTask):
     kind: ClassVar[TaskKind] = TaskKind.CUSTOM
 
     closed: bool = True
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        a = self.map.start
+        if same_pose(a, self.map.goal):
+            # A planner answers 0 m (run_query); an episode would have nothing to drive.
+            raise InputError(
+                f"goal: the goal is the start pose ({a.x:g}, {a.y:g}, "
+                f"{math.degrees(a.yaw):g} deg): there is nothing to drive; give another goal"
+            )
 
     @classmethod
     def from_map(
