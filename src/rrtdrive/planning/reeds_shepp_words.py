@@ -33,6 +33,9 @@ _HALF_PI = 0.5 * math.pi
 _TWO_PI = 2.0 * math.pi
 #: Slack on the sign conditions of the formulas (radius 1), as in OMPL.
 _ZERO = 10.0 * sys.float_info.epsilon
+#: A goal's lateral offset or heading change (radius 1) within this of 0 is float noise
+#: of the frame's cos and sin (2e-15 at 100 m, 3e-13 at 10 km from the origin): taken as 0.
+_SNAP = 1e-12
 
 
 def _mod2pi(a: float) -> float:
@@ -243,8 +246,20 @@ def frames(x: float, y: float, phi: float) -> list[tuple[float, float, float, fl
 
     Index ``4 * backwards + k`` with ``k`` indexing :data:`_SYMMETRIES`: timeflip is
     ``(-x, y, -phi)``, reflect ``(x, -y, -phi)``; backwards first maps the goal to
-    ``(x cos phi + y sin phi, x sin phi - y cos phi, phi)``.
+    ``(x cos phi + y sin phi, x sin phi - y cos phi, phi)``. A ``y`` or ``phi`` (wrapped)
+    within :data:`_SNAP` of 0 is taken as 0.
+
+    Examples
+    --------
+    >>> frames(-0.0016, -1.5e-16, 0.0)[1][:3]  # a goal just behind, as cos/sin put it
+    (0.0016, 0.0, -0.0)
     """
+    # Float noise (1e-16 of a radius) in y or phi turns a short straight into no CSC word:
+    # over a goal 0.01 m ahead, atan2(1e-16, 0.0016) fails the sign tests' _ZERO.
+    if abs(y) <= _SNAP:
+        y = 0.0
+    if abs(_mod2pi(phi)) <= _SNAP:
+        phi = 0.0
     sp, cp = math.sin(phi), math.cos(phi)
     xb, yb = x * cp + y * sp, x * sp - y * cp
     return [
