@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.dubins import dubins_paths, shortest_dubins
+from rrtdrive.planning.hybrid.heuristic import dubins_lengths
 from rrtdrive.types import InputError, Pose
 
 coord = st.floats(-40.0, 40.0, allow_nan=False)
@@ -96,4 +97,8 @@ def test_a_goal_just_ahead_is_one_straight(x: float, y: float, yaw: float, d: fl
     goal = Pose(x + d * math.cos(yaw), y + d * math.sin(yaw), yaw)
     best = dubins_paths(start, goal, 6.0)[0]
     # The floats of the goal put it up to ~1e-12 m off the exact distance.
-    assert best.length == pytest.approx(math.hypot(goal.x - x, goal.y - y), abs=1e-9)
+    exact = math.hypot(goal.x - x, goal.y - y)
+    assert best.length == pytest.approx(exact, abs=1e-9)
+    # Hybrid A*'s forward heuristic, element-wise, agrees.
+    got = dubins_lengths(np.array([[x, y, yaw]]), goal, 6.0)[0]
+    assert got == pytest.approx(exact, abs=1e-9)

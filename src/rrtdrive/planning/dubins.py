@@ -24,7 +24,7 @@ import numpy as np
 from rrtdrive.geometry import wrap_angle
 from rrtdrive.types import InputError, Pose
 
-__all__ = ["DubinsPath", "dubins_paths", "shortest_dubins"]
+__all__ = ["LOOP_SNAP", "DubinsPath", "dubins_paths", "shortest_dubins"]
 
 _TWO_PI = 2.0 * math.pi
 #: Segment types: +1 left turn, -1 right turn, 0 straight.
@@ -40,13 +40,13 @@ _WORDS: dict[str, tuple[int, int, int]] = {
 
 #: An angle this close under a full turn (radians) is float noise of 0: a goal 1.2 cm
 #: straight ahead put the heading's atan2 1e-13 below it, and LSL drove a 37.7 m loop.
-_LOOP_SNAP = 1e-8
+LOOP_SNAP = 1e-8
 
 
 def _mod2pi(a: float) -> float:
-    """``a`` wrapped to ``[0, 2 pi)``, a hair under ``2 pi`` (:data:`_LOOP_SNAP`) as 0."""
+    """``a`` wrapped to ``[0, 2 pi)``, a hair under ``2 pi`` (:data:`LOOP_SNAP`) as 0."""
     v = a % _TWO_PI
-    return 0.0 if _TWO_PI - v <= _LOOP_SNAP else v
+    return 0.0 if _TWO_PI - v <= LOOP_SNAP else v
 
 
 @dataclass(frozen=True)

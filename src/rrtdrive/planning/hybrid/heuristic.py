@@ -26,6 +26,7 @@ from scipy import sparse
 from scipy.sparse.csgraph import dijkstra
 
 from rrtdrive.collision import CollisionChecker
+from rrtdrive.planning.dubins import LOOP_SNAP
 from rrtdrive.types import Pose
 
 __all__ = ["FreeCellGraph", "HolonomicField", "DubinsTable", "Heuristic", "dubins_lengths"]
@@ -206,7 +207,9 @@ class HolonomicField:
 
 
 def _mod2pi(a: np.ndarray) -> np.ndarray:
-    return np.mod(a, _TWO_PI)
+    """:func:`rrtdrive.planning.dubins`'s wrap, element-wise (a hair under 2 pi is 0)."""
+    v = np.mod(a, _TWO_PI)
+    return np.where(_TWO_PI - v <= LOOP_SNAP, 0.0, v)
 
 
 def dubins_lengths(poses: np.ndarray, goal: Pose, radius: float) -> np.ndarray:
