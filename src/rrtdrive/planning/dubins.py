@@ -24,7 +24,7 @@ import numpy as np
 from rrtdrive.geometry import wrap_angle
 from rrtdrive.types import InputError, Pose
 
-__all__ = ["LOOP_SNAP", "DubinsPath", "dubins_paths", "shortest_dubins"]
+__all__ = ["LOOP_SNAP", "WORD_NOISE", "DubinsPath", "dubins_paths", "shortest_dubins"]
 
 _TWO_PI = 2.0 * math.pi
 #: Segment types: +1 left turn, -1 right turn, 0 straight.
@@ -41,6 +41,12 @@ _WORDS: dict[str, tuple[int, int, int]] = {
 #: An angle this close under a full turn (radians) is float noise of 0: a goal 1.2 cm
 #: straight ahead put the heading's atan2 1e-13 below it, and LSL drove a 37.7 m loop.
 LOOP_SNAP = 1e-8
+
+
+#: Slack of the words' existence tests (radius 1): a goal on one arc makes the straight's
+#: squared length 0, and float noise put it at -1e-16 (no word then, and the shortest
+#: left was a 38 m loop). Every word found is checked to reach the goal (``tol``).
+WORD_NOISE = 1e-10
 
 
 def _mod2pi(a: float) -> float:
@@ -186,41 +192,47 @@ def _normalised(word: str, a: float, b: float, d: float) -> tuple[float, float, 
     cab = math.cos(a - b)
     if word == "LSL":
         p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb)
-        if p2 < 0:
+        if p2 < -WORD_NOISE:
             return None
+        p2 = max(p2, 0.0)
         tmp = math.atan2(cb - ca, d + sa - sb)
         return _mod2pi(tmp - a), math.sqrt(p2), _mod2pi(b - tmp)
     if word == "RSR":
         p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa)
-        if p2 < 0:
+        if p2 < -WORD_NOISE:
             return None
+        p2 = max(p2, 0.0)
         tmp = math.atan2(ca - cb, d - sa + sb)
         return _mod2pi(a - tmp), math.sqrt(p2), _mod2pi(tmp - b)
     if word == "LSR":
         p2 = -2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb)
-        if p2 < 0:
+        if p2 < -WORD_NOISE:
             return None
+        p2 = max(p2, 0.0)
         p = math.sqrt(p2)
         tmp = math.atan2(-ca - cb, d + sa + sb) - math.atan2(-2.0, p)
         return _mod2pi(tmp - a), p, _mod2pi(tmp - b)
     if word == "RSL":
         p2 = -2.0 + d * d + 2.0 * cab - 2.0 * d * (sa + sb)
-        if p2 < 0:
+        if p2 < -WORD_NOISE:
             return None
+        p2 = max(p2, 0.0)
         p = math.sqrt(p2)
         tmp = math.atan2(ca + cb, d - sa - sb) - math.atan2(2.0, p)
         return _mod2pi(a - tmp), p, _mod2pi(b - tmp)
     if word == "RLR":
         tmp = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0
-        if abs(tmp) > 1.0:
+        if abs(tmp) > 1.0 + WORD_NOISE:
             return None
+        tmp = min(1.0, max(-1.0, tmp))
         p = _mod2pi(_TWO_PI - math.acos(tmp))
         t = _mod2pi(a - math.atan2(ca - cb, d - sa + sb) + p / 2.0)
         return t, p, _mod2pi(a - b - t + p)
     # LRL
     tmp = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa)) / 8.0
-    if abs(tmp) > 1.0:
+    if abs(tmp) > 1.0 + WORD_NOISE:
         return None
+    tmp = min(1.0, max(-1.0, tmp))
     p = _mod2pi(_TWO_PI - math.acos(tmp))
     t = _mod2pi(-a + math.atan2(-ca + cb, d + sa - sb) + p / 2.0)
     return t, p, _mod2pi(b - a - t + p)

@@ -26,7 +26,7 @@ from scipy import sparse
 from scipy.sparse.csgraph import dijkstra
 
 from rrtdrive.collision import CollisionChecker
-from rrtdrive.planning.dubins import LOOP_SNAP
+from rrtdrive.planning.dubins import LOOP_SNAP, WORD_NOISE
 from rrtdrive.types import Pose
 
 __all__ = ["FreeCellGraph", "HolonomicField", "DubinsTable", "Heuristic", "dubins_lengths"]
@@ -240,38 +240,44 @@ def dubins_lengths(poses: np.ndarray, goal: Pose, radius: float) -> np.ndarray:
     with np.errstate(invalid="ignore"):
         # LSL
         p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb)
+        ok, p2 = p2 >= -WORD_NOISE, np.maximum(p2, 0.0)
         tmp = np.arctan2(cb - ca, d + sa - sb)
         total = _mod2pi(tmp - a) + np.sqrt(p2) + _mod2pi(b - tmp)
-        best = np.fmin(best, np.where(p2 >= 0, total, np.inf))
+        best = np.fmin(best, np.where(ok, total, np.inf))
         # RSR
         p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa)
+        ok, p2 = p2 >= -WORD_NOISE, np.maximum(p2, 0.0)
         tmp = np.arctan2(ca - cb, d - sa + sb)
         total = _mod2pi(a - tmp) + np.sqrt(p2) + _mod2pi(tmp - b)
-        best = np.fmin(best, np.where(p2 >= 0, total, np.inf))
+        best = np.fmin(best, np.where(ok, total, np.inf))
         # LSR
         p2 = -2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb)
+        ok, p2 = p2 >= -WORD_NOISE, np.maximum(p2, 0.0)
         q = np.sqrt(p2)
         tmp = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, q)
         total = _mod2pi(tmp - a) + q + _mod2pi(tmp - b)
-        best = np.fmin(best, np.where(p2 >= 0, total, np.inf))
+        best = np.fmin(best, np.where(ok, total, np.inf))
         # RSL
         p2 = -2.0 + d * d + 2.0 * cab - 2.0 * d * (sa + sb)
+        ok, p2 = p2 >= -WORD_NOISE, np.maximum(p2, 0.0)
         q = np.sqrt(p2)
         tmp = np.arctan2(ca + cb, d - sa - sb) - np.arctan2(2.0, q)
         total = _mod2pi(a - tmp) + q + _mod2pi(b - tmp)
-        best = np.fmin(best, np.where(p2 >= 0, total, np.inf))
+        best = np.fmin(best, np.where(ok, total, np.inf))
         # RLR
         c = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0
+        ok, c = np.abs(c) <= 1.0 + WORD_NOISE, np.clip(c, -1.0, 1.0)
         mid = _mod2pi(_TWO_PI - np.arccos(c))
         t = _mod2pi(a - np.arctan2(ca - cb, d - sa + sb) + mid / 2.0)
         total = t + mid + _mod2pi(a - b - t + mid)
-        best = np.fmin(best, np.where(np.abs(c) <= 1.0, total, np.inf))
+        best = np.fmin(best, np.where(ok, total, np.inf))
         # LRL
         c = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa)) / 8.0
+        ok, c = np.abs(c) <= 1.0 + WORD_NOISE, np.clip(c, -1.0, 1.0)
         mid = _mod2pi(_TWO_PI - np.arccos(c))
         t = _mod2pi(-a + np.arctan2(-ca + cb, d + sa - sb) + mid / 2.0)
         total = t + mid + _mod2pi(b - a - t + mid)
-        best = np.fmin(best, np.where(np.abs(c) <= 1.0, total, np.inf))
+        best = np.fmin(best, np.where(ok, total, np.inf))
     return best * radius
 
 
