@@ -80,9 +80,38 @@ STAGE_STATS = (
 OMPL = {"ompl-dubins-rrt": ("dubins", "RRT"), "ompl-rs-rrtconnect": ("rs", "RRTConnect")}
 
 
+def ompl_spec(name: str) -> tuple[str, float] | None:
+    """``(OMPL planner, body clearance)`` of an OMPL row's name, ``None`` for ours.
+
+    ``ompl-dubins-rrt`` lets states touch obstacles (0 m); ``ompl-dubins-rrt@0.15m`` keeps
+    0.15 m, as ours do (a ValueError for a clearance that is not a number of metres).
+
+    Examples
+    --------
+    >>> ompl_spec("ompl-dubins-rrt@0.15m"), ompl_spec("ompl-rs-rrtconnect"), ompl_spec("rrt")
+    (('ompl-dubins-rrt', 0.15), ('ompl-rs-rrtconnect', 0.0), None)
+    """
+    base, at, tail = name.partition("@")
+    if base not in OMPL:
+        return None
+    if not at:
+        return base, 0.0
+    try:
+        clearance = float(tail.removesuffix("m"))
+    except ValueError:
+        clearance = math.nan
+    if not tail.endswith("m") or not 0.0 <= clearance <= 1.0:
+        raise ValueError(f"{name}: expected {base}@<clearance in metres, 0-1>m, e.g. @0.15m")
+    return base, clearance
+
+
 def availability(name: str) -> str | None:
     """Why planner spec ``name`` cannot run today, or ``None`` when it can."""
-    if name in OMPL:
+    try:
+        ompl = ompl_spec(name)
+    except ValueError as exc:
+        return str(exc)
+    if ompl is not None:
         return None if importlib.util.find_spec("ompl") else "OMPL is not installed here"
     spec, _, opts = name.partition("@")
     try:
@@ -177,7 +206,8 @@ def run_ours(item: dict[str, Any]) -> dict[str, Any]:
 
 
 def solve_ompl(
-    problem: PlanningProblem, index: int, planner: str, seconds: float, clearance: float = 0.0
+    problem: PlanningProblem, index: int, planner: str, seconds: float, clearance: float = 0.0,
+    cap_at_ends: bool = False,
 ) -> tuple[float, float, float | None, Path | None]:
     """OMPL's ``planner`` on query ``index``, with our exact body test as validity checker.
 
@@ -186,7 +216,9 @@ def solve_ompl(
     with the gears of its motion and each cusp repeated
     (:func:`rrtdrive.bench.ompl_planners.reeds_shepp_path`; all forward for Dubins);
     ``clearance``: the distance every state's body must keep (0: touching is valid; our
-    planners keep 0.15 m, so a comparison at their clearance sets it to that).
+    planners keep 0.15 m, so a comparison at their clearance sets it to that);
+    ``cap_at_ends``: capped, as ours are, at the start's and goal's own body clearance
+    (else a start 0.1 m from a car is no valid state and OMPL answers nothing at once).
 
     ``None``, ``None`` without an exact solution.
     """
@@ -200,6 +232,9 @@ def solve_ompl(
     space, algorithm = OMPL[planner]
     ss, si = simple_setup(problem, space)
     free = problem.checker.pose_free
+    if cap_at_ends and clearance > 0.0:
+        ends = (problem.start.as_tuple(), problem.goal.as_tuple())
+        clearance = min(clearance, *(problem.checker.body_clearance(e) for e in ends))
     ss.setStateValidityChecker(lambda s: free((s.getX(), s.getY(), s.getYaw()), clearance))
     ou.RNG.setSeed(1 + index)  # takes effect only before a process's first draw
     search = getattr(og, algorithm)(si)
@@ -224,8 +259,11 @@ def solve_ompl(
 def run_ompl(item: dict[str, Any]) -> dict[str, Any]:
     """One query with OMPL on our exact body test."""
     m, problem = _problem(item)
+    spec = ompl_spec(item["planner"])
+    assert spec is not None
+    base, clearance = spec
     solve_s, total_s, length, path = solve_ompl(
-        problem, item["index"], item["planner"], item["ompl_time"]
+        problem, item["index"], base, item["ompl_time"], clearance, cap_at_ends=True
     )
     exact = path is not None
     row: dict[str, Any] = {"status": "solved" if exact else "no_path_in_budget", "solved": exact}
@@ -238,7 +276,7 @@ def run_ompl(item: dict[str, Any]) -> dict[str, Any]:
 
 def run_one(item: dict[str, Any]) -> dict[str, Any]:
     """A worker's job: one (query, planner) pair; the row carries its item's keys."""
-    row = run_ompl(item) if item["planner"] in OMPL else run_ours(item)
+    row = run_ompl(item) if ompl_spec(item["planner"]) else run_ours(item)
     keys = ("map", "vary", "index", "planner", "query", "seed")
     return {**{k: item[k] for k in keys if k in item}, **row}
 
@@ -316,8 +354,8 @@ def summarise(rows: list[dict[str, Any]], planners: list[str], sets: list[str]) 
             **_stages(vals),
         }
     pairs: dict[str, dict[str, Any]] = {}
-    ompl = [p for p in planners if p in OMPL]
-    for ours in (p for p in planners if p not in OMPL):
+    ompl = [p for p in planners if ompl_spec(p)]
+    for ours in (p for p in planners if not ompl_spec(p)):
         for ref in ompl:
             for s in sets:
                 a, b = cell[(ours, s)], cell[(ref, s)]

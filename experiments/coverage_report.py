@@ -26,6 +26,18 @@ def _count(v: int | None) -> str:
     return "-" if v is None else str(v)
 
 
+def _kept(payload: dict[str, Any]) -> str:
+    """The header's words on OMPL rows that keep a body clearance (``NAME@0.15m``)."""
+    kept = [p for p in payload.get("planners", []) if p.startswith("ompl-") and "@" in p]
+    if not kept:
+        return ""
+    names = ", ".join(f"`{p}`" for p in kept)
+    return (
+        f" (its states may touch obstacles; in {names} every state keeps that body "
+        "clearance, capped at the start's and goal's own, as ours)"
+    )
+
+
 def report(payload: dict[str, Any]) -> str:
     """The markdown page of one run."""
     s = payload["summary"]
@@ -33,11 +45,12 @@ def report(payload: dict[str, Any]) -> str:
         f"# Coverage on `{payload['map']}`: random goal and start poses, planners side by side",
         "",
         f"Command: `{payload['command']}`  ",
-        f"{payload['count']} random goal poses and {payload['count']} random start poses "
-        f"(seed {payload['seed']}, as `experiments/random_goals.py`); ours: planner seed 0, "
+        " and ".join(f"{payload['count']} random {v} poses"
+                     for v in payload.get("sets", ("goal", "start")))
+        + f" (seed {payload['seed']}, as `experiments/random_goals.py`); ours: planner seed 0, "
         f"{payload['max_time_s']:g} s budget; OMPL: {payload['ompl_time_s']:g} s, our exact "
-        f"body test; {payload['jobs']} worker(s) on {payload['machine']}; wall time "
-        f"{payload['wall_time_s'] / 60:.1f} min.",
+        f"body test{_kept(payload)}; {payload['jobs']} worker(s) on {payload['machine']}; "
+        f"wall time {payload['wall_time_s'] / 60:.1f} min.",
         "",
         "`verified`: every guarantee by the independent `rrtdrive.verify.verify_path`, "
         f"sharpness <= {SHARPNESS_BOUND:g} rad/m included (from the positions: OMPL's "

@@ -3,9 +3,11 @@
 Usage (OMPL lives in the lead's venv only; without it the OMPL rows are skipped)::
 
     python experiments/forward_misses.py --query start:81 --out results/forward_misses
+    python experiments/forward_misses.py --seed 2 --count 400 --variants default \\
+        --query goal:21,start:75 --out results/forward_misses_seed2
 
-For one random query of ``experiments/coverage.py`` (``parking_lot``, seed 1, 100
-poses per set) it measures, in one run:
+For random queries of ``experiments/coverage.py`` (``parking_lot``; the set of
+``--seed``, default 1, with ``--count`` poses, default 100) it measures, in one run:
 
 - OMPL's Dubins RRT path (as ``coverage.py`` plans it: our exact body test as validity
   checker, 10 s, simplified, interpolated every 0.1 m): its length, its least body
@@ -42,6 +44,13 @@ from rrtdrive.planning.smoothing import max_sharpness  # noqa: E402
 from rrtdrive.types import Budget  # noqa: E402
 from rrtdrive.verify import verify_path  # noqa: E402
 
+#: Short names of :data:`VARIANTS` for ``--variants``.
+SHORT = {
+    "default": "default",
+    "no-clearance": "no clearance, 11 curvatures, 200 connections",
+    "no-clearance-arcs": "no clearance, exact arcs (no sharpness bound)",
+    "arcs-0.05": "0.05 m clearance, exact arcs (no sharpness bound)",
+}
 #: Our planner's settings, from the default to none of the guarantees but the body's.
 VARIANTS = {
     "default": "",
@@ -57,13 +66,18 @@ VARIANTS = {
 }
 
 
-def _item(query: str) -> dict[str, Any]:
-    """The coverage item of ``goal:N`` / ``start:N`` (a ValueError naming --query else)."""
+def _item(query: str, seed: int = 1, count: int = 100) -> dict[str, Any]:
+    """The coverage item of ``goal:N`` / ``start:N`` (a ValueError naming --query else).
+
+    ``seed`` and ``count``: the random set's, as ``coverage.py --seed --count`` draws it.
+    """
     vary, _, index = query.partition(":")
-    if vary not in ("goal", "start") or not index.isdigit() or not 0 <= int(index) < 100:
-        raise ValueError(f"--query: expected goal:N or start:N with N in 0..99, got {query!r}")
+    if vary not in ("goal", "start") or not index.isdigit() or not 0 <= int(index) < count:
+        raise ValueError(
+            f"--query: expected goal:N or start:N with N in 0..{count - 1}, got {query!r}"
+        )
     i = int(index)
-    pose = cov.draw_goals("parking_lot", 100, 1, vary)[i]
+    pose = cov.draw_goals("parking_lot", count, seed, vary)[i]
     return {"map": "parking_lot", "vary": vary, "index": i, "pose": pose.as_tuple()}
 
 
@@ -111,12 +125,39 @@ def ours_row(item: dict[str, Any], options: str, expansions: int) -> dict[str, A
 
 
 def report(payload: dict[str, Any]) -> str:
-    """The results page."""
+    """The results page: a summary row per query, then each query's section."""
+    queries = payload.get("queries") or [payload]  # pages before --query took a list
+    names = ", ".join(q["query"] for q in queries)
     lines = [
-        f"# Forward-only query {payload['query']}: what it takes", "",
-        f"Command: `{payload['command']}`  ",
-        f"{payload['machine']}; wall time {payload['wall_time_s']:.0f} s.", "",
+        f"# Forward-only {'query' if len(queries) == 1 else 'queries'} {names}: what it takes",
+        "", f"Command: `{payload['command']}`  ",
+        f"{payload['machine']}; wall time {payload['wall_time_s']:.0f} s; random set seed "
+        f"{payload.get('seed', 1)}, {payload.get('count', 100)} poses.", "",
     ]  # fmt: skip
+    if len(queries) > 1:
+        names = list(queries[0]["ours"])
+        lines += [
+            "| query | OMPL Dubins RRT [m] | its least body clearance [m] | "
+            + " | ".join(f"ours: {n}" for n in names) + " |",
+            "|---|---|---|" + "---|" * len(names),
+        ]
+        for q in queries:
+            o = q["ompl"]
+            length = f"{o['length_m']:.1f}" if o and o["solved"] else "-"
+            clear = f"{o['min_clearance_m']:.4f}" if o and o["solved"] else "-"
+            ours = " | ".join(q["ours"][n]["status"] for n in names)
+            lines.append(f"| {q['query']} | {length} | {clear} | {ours} |")
+        lines.append("")
+    for k, q in enumerate(queries):
+        if len(queries) > 1:
+            lines += ([""] if k else []) + [f"## {q['query']}", ""]
+        lines += _query_lines(q, payload["expansions"])
+    return "\n".join(lines) + "\n"
+
+
+def _query_lines(payload: dict[str, Any], expansions: int) -> list[str]:
+    """One query's OMPL line, our settings' table and messages."""
+    lines: list[str] = []
     o = payload["ompl"]
     if o is None:
         lines.append("OMPL: not installed, skipped.")
@@ -130,7 +171,7 @@ def report(payload: dict[str, Any]) -> str:
             "(no steering-rate bound)."
         )
     lines += [
-        "", f"`hybrid-a-star` forward only, {payload['expansions']} expansions:", "",
+        "", f"`hybrid-a-star` forward only, {expansions} expansions:", "",
         "| settings | status | expansions | length [m] | least clearance [m] | max sharpness "
         "[rad/m] | verified |",
         "|---|---|---|---|---|---|---|",
@@ -144,35 +185,50 @@ def report(payload: dict[str, Any]) -> str:
         lines.append(f"| {name} | {r['status']} | {r['expansions']} | " + " | ".join(cells) + " |")
     lines += ["", "Messages:", ""]
     lines += [f"- {name}: {r['message']}" for name, r in payload["ours"].items()]
-    return "\n".join(lines) + "\n"
+    return lines
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--query", default="start:81", help="goal:N or start:N (default start:81)")
+    ap.add_argument("--query", default="start:81",
+                    help="goal:N or start:N, comma-separated (default start:81)")
+    ap.add_argument("--seed", type=int, default=1, help="the random set's seed (default 1)")
+    ap.add_argument("--count", type=int, default=100, help="poses per set (default 100)")
+    ap.add_argument("--variants", default=",".join(SHORT),
+                    help="our settings to run, comma-separated (default: all of "
+                    f"{', '.join(SHORT)})")
     ap.add_argument("--expansions", type=int, default=20000, help="our counted budget")
     ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time cap [s]")
     ap.add_argument("--out", default="results/forward_misses")
-    args = ap.parse_args(argv)
-    if args.expansions < 1 or args.ompl_time <= 0:
-        ap.error("--expansions must be >= 1 and --ompl-time > 0")
+    args = ap.parse_args(argv)  # fmt: skip
+    if args.expansions < 1 or args.ompl_time <= 0 or args.count < 1:
+        ap.error("--expansions and --count must be >= 1 and --ompl-time > 0")
+    variants = [v for v in args.variants.split(",") if v]
+    unknown = [v for v in variants if v not in SHORT]
+    if unknown or not variants:
+        ap.error(f"--variants: unknown {unknown}; choose from {list(SHORT)}")
+    variants = [SHORT[v] for v in variants]
     try:
-        item = _item(args.query)
+        items = [(q, _item(q, args.seed, args.count)) for q in args.query.split(",") if q]
     except ValueError as err:
         ap.error(str(err))
     t0 = time.perf_counter()
-    ompl = ompl_row(item, args.ompl_time)
-    ours = {}
-    for name, options in VARIANTS.items():
-        print(f"{name} ...", file=sys.stderr, flush=True)
-        ours[name] = ours_row(item, options, args.expansions)
+    queries = []
+    for query, item in items:
+        print(f"{query}: OMPL ...", file=sys.stderr, flush=True)
+        ompl = ompl_row(item, args.ompl_time)
+        ours = {}
+        for name in variants:
+            print(f"{query}: {name} ...", file=sys.stderr, flush=True)
+            ours[name] = ours_row(item, VARIANTS[name], args.expansions)
+        queries.append({"query": query, "ompl": ompl, "ours": ours})
     payload = {
         "command": "python experiments/forward_misses.py "
         + " ".join(sys.argv[1:] if argv is None else argv),
-        "query": args.query, "expansions": args.expansions,
+        "seed": args.seed, "count": args.count, "expansions": args.expansions,
         "machine": f"{platform.machine()} {os.cpu_count()} CPUs, "
         f"Python {platform.python_version()}",
-        "wall_time_s": time.perf_counter() - t0, "ompl": ompl, "ours": ours,
+        "wall_time_s": time.perf_counter() - t0, "queries": queries,
     }  # fmt: skip
     out = FsPath(args.out)
     out.mkdir(parents=True, exist_ok=True)
