@@ -107,3 +107,57 @@ def test_the_scalar_pose_test_with_clearance_is_the_batch_ones() -> None:
     for clearance in (0.0, 0.15, 0.4):
         batch = checker.poses_free(poses, clearance)
         assert [checker.pose_free(p, clearance) for p in poses] == batch.tolist()
+
+
+@pytest.mark.parametrize(
+    ("name", "want"),
+    [("ompl-dubins-rrt@0.15m", ("ompl-dubins-rrt", 0.15)),
+     ("ompl-rs-rrtconnect", ("ompl-rs-rrtconnect", 0.0)), ("hybrid-a-star", None),
+     ("hybrid-a-star@curve=arcs", None)],
+)  # fmt: skip
+def test_coverage_names_ompl_rows_with_their_clearance(name: str, want) -> None:  # noqa: ANN001
+    import coverage as cov
+
+    assert cov.ompl_spec(name) == want
+
+
+@pytest.mark.parametrize(
+    "name", ["ompl-dubins-rrt@0.15", "ompl-dubins-rrt@xm", "ompl-rs-rrtconnect@2m"]
+)
+def test_a_bad_ompl_clearance_is_skipped_naming_it(name: str) -> None:
+    import coverage as cov
+
+    why = cov.availability(name)
+    assert why is not None and name in why and "clearance in metres" in why
+
+
+@pytest.mark.skipif(not HAVE_OMPL, reason="OMPL is not installed (the [ompl] extra)")
+def test_ompl_keeps_at_most_what_the_start_itself_has() -> None:
+    """A start 0.05 m from an obstacle: kept to 0.15 m, OMPL had no valid start at all.
+
+    With ``cap_at_ends`` (coverage.py's rows) the clearance is capped a micron under the
+    start's own, as ours is capped, and OMPL plans; every state then keeps the cap.
+    """
+    import coverage as cov
+
+    from rrtdrive.planning import PlanningProblem
+
+    car = VehicleParams()
+    # A 1 m block ahead-left of the front-left corner, its nearest corner 0.05 m away;
+    # the goal straight ahead (the car swings a few centimetres right to pass it).
+    fx, fy = 2.0 + car.front_extent, 3.0 + car.width / 2.0
+    d = 0.05 / np.sqrt(2.0)
+    m = Map(
+        "close", (0.0, 0.0, 30.0, 12.0),
+        (Obstacle((fx + d + 0.5, fy + d + 0.5), (1.0, 1.0), 0.0),),
+        Pose(2.0, 3.0, 0.0), Pose(25.0, 3.0, 0.0),
+    )  # fmt: skip
+    problem = PlanningProblem.from_map(m, reverse=True)
+    own = problem.checker.body_clearance(m.start.as_tuple())
+    assert 0.04 < own < 0.06
+    strict = cov.solve_ompl(problem, 0, "ompl-rs-rrtconnect", 2.0, 0.15)
+    assert strict[3] is None and strict[0] < 0.5  # refused at once: no valid start
+    capped = cov.solve_ompl(problem, 0, "ompl-rs-rrtconnect", 5.0, 0.15, cap_at_ends=True)
+    assert capped[3] is not None
+    clear = [problem.checker.body_clearance(tuple(r[:3])) for r in capped[3].samples[::5]]
+    assert min(clear) > own - 0.02  # rows between its checked states come a little closer
