@@ -3,10 +3,10 @@
 A planner's ``solve`` is ``run_query(name, problem, budget, search)``: the
 stopwatch starts, :func:`~rrtdrive.planning.base.precheck` answers an invalid
 start or goal or a provably unreachable goal, :func:`already_there` a start that is
-the goal (a path of 0 m), and only then does ``search`` run. A search ends in :func:`solved`, :func:`solved_result` (a baseline's raw
-tree path), :func:`search_result` (that, or the out-of-budget failure),
-:func:`timeout_result` (the safety cap stopped it) or
-:func:`~rrtdrive.planning.base.failure`.
+the goal (a path of 0 m), and only then does ``search`` run. A search ends in
+:func:`solved`, :func:`solved_result` (a baseline's raw tree path),
+:func:`search_result` (that, or the out-of-budget failure), :func:`timeout_result`
+(the safety cap stopped it) or :func:`~rrtdrive.planning.base.failure`.
 
 Counted budgets decide a query's outcome; the wall-clock ``max_time_s`` is a
 safety cap whose only outcome is :attr:`PlanStatus.TIMEOUT` (see
