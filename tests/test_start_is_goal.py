@@ -78,3 +78,18 @@ def test_simulate_refuses_a_map_whose_goal_is_its_start(capsys, tmp_path) -> Non
     assert len(err) == 1 and "goal: the goal is the start pose (10, 10," in err[0], err
     assert main(["simulate", "parking_lot", "--goal", "5,6,0"]) == 2  # the lot's start
     assert "give another goal" in capsys.readouterr().err
+
+
+def test_bench_refuses_such_a_map_up_front(capsys, tmp_path) -> None:
+    """One exit-2 line naming the field, not an error row per seed (each retried)."""
+    from rrtdrive.bench import BenchConfig
+    from rrtdrive.types import InputError
+
+    f = tmp_path / "here.json"
+    save_map(_here_map(), f)
+    with pytest.raises(InputError, match=r"scenarios: .*here\.json'?: goal: the goal is the start"):
+        BenchConfig(scenarios=(str(f),), seeds=2)
+    assert main(["bench", "--scenarios", str(f), "--out", str(tmp_path / "out")]) == 2
+    assert not (tmp_path / "out" / "runs.jsonl").exists()
+    # Planning it is fine: the plan is 0 m.
+    assert BenchConfig(maps=(str(f),), seeds=1).maps == (str(f),)

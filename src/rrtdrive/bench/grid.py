@@ -258,6 +258,16 @@ class BenchConfig:
 
                         raise unknown_scenario("scenarios", m, tuple(STOCK_ENVS)) from None
                     raise InputError(f"{field_name}: {m!r}: {exc}") from None
+                if field_name == "scenarios":
+                    # The task every episode of it builds, checked once here: its bad input
+                    # (a goal that is the start) is one exit-2 line, not an error per run.
+                    from rrtdrive.maps import resolve_map
+                    from rrtdrive.sim.tasks import CustomTask
+
+                    try:
+                        CustomTask.from_map(resolve_map(m))
+                    except InputError as exc:
+                        raise InputError(f"scenarios: {m!r}: {exc}") from None
         object.__setattr__(self, "map_digests", digests)
         object.__setattr__(self, "map_contents", contents)
         if self.scenarios:
