@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+import os
+
 import pytest
 from hypothesis import HealthCheck, settings
 
@@ -13,7 +15,17 @@ settings.register_profile(
     suppress_health_check=[HealthCheck.too_slow],
     derandomize=True,
 )
-settings.load_profile("ci")
+# A hunt for thin properties, not for CI: ten times the examples, a fresh seed per run
+# (``HYPOTHESIS_PROFILE=stress python -m pytest -n auto tests``). CI's examples are fixed
+# per test, but not quite per run: Hypothesis also draws constants found in the modules
+# loaded so far, which depends on the test order.
+settings.register_profile(
+    "stress",
+    max_examples=600,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 
 @pytest.fixture(scope="session")

@@ -131,10 +131,28 @@ def test_solves_builtin_maps(name, map_name, problems):
 
 @settings(max_examples=8)
 @given(seed=st.integers(0, 2**32 - 1), name=st.sampled_from(BASELINES))
-def test_any_seed_gives_a_valid_path_on_the_road(seed, name, problems):
+def test_any_seed_gives_a_valid_path_or_says_its_budget_ran_out(seed, name, problems):
+    """Whatever a seed returns on the road is valid, or an honest out-of-budget failure.
+
+    A sampling baseline can miss within 6 000 iterations: rrt-connect did on 10 of 150
+    random seeds, rrt on 1 (``HYPOTHESIS_PROFILE=stress`` found one). That every seed
+    solves was never true; most do (the next test).
+    """
     result = run(name, problems["overtake"], seed)
-    assert result.success, result.message
-    assert_valid(result, problems["overtake"])
+    if result.success:
+        assert_valid(result, problems["overtake"])
+    else:
+        assert result.status is PlanStatus.NO_PATH_IN_BUDGET, result.message
+        assert "budget" in result.message
+
+
+@pytest.mark.parametrize("name", BASELINES)
+def test_the_first_seeds_all_solve_the_road(name, problems):
+    """Seeds 0-19 (deterministic): each baseline solves the road in all 20."""
+    for seed in range(20):
+        result = run(name, problems["overtake"], seed)
+        assert result.success, (seed, result.message)
+        assert_valid(result, problems["overtake"])
 
 
 @pytest.mark.parametrize("name", BASELINES)
