@@ -123,3 +123,17 @@ def test_a_goal_on_one_arc_is_that_arc(x: float, y: float, yaw: float, s: float,
     assert dubins_paths(start, goal, 6.0)[0].length == pytest.approx(s, abs=1e-6)
     got = dubins_lengths(np.array([[x, y, yaw]]), goal, 6.0)[0]
     assert got == pytest.approx(s, abs=1e-6)
+
+
+@pytest.mark.parametrize("aside", [1e-5, -1e-5, 2e-7, 1e-9])
+def test_a_heading_a_hair_off_the_line_is_a_real_angle(aside: float) -> None:
+    """Only a word's arcs lose a hair under a full turn, never the headings themselves.
+
+    Snapping the headings too, a goal 1e-5 m aside over 20 m (5e-7 rad off the line)
+    had no Dubins word at all (the stress profile found it).
+    """
+    start, goal = Pose(0.0, aside, 0.0), Pose(20.0, 0.0, 0.0)
+    best = shortest_dubins(start, goal, 1.0)
+    assert best is not None and best.length == pytest.approx(20.0, abs=1e-4)
+    got = dubins_lengths(np.array([[0.0, aside, 0.0]]), goal, 1.0)[0]
+    assert got == pytest.approx(best.length, abs=1e-6)

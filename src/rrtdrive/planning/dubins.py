@@ -52,9 +52,16 @@ WORD_NOISE = 1e-10
 
 
 def _mod2pi(a: float) -> float:
-    """``a`` wrapped to ``[0, 2 pi)``, a hair under ``2 pi`` (:data:`LOOP_SNAP`) as 0."""
-    v = a % _TWO_PI
-    return 0.0 if _TWO_PI - v <= LOOP_SNAP else v
+    return a % _TWO_PI
+
+
+def _unloop(arc: float) -> float:
+    """An arc (radians) a hair under a full turn (:data:`LOOP_SNAP`) as 0.
+
+    Only for a word's arcs once solved: a heading itself that is a hair under a full
+    turn is a real angle (a goal 1e-5 m aside over 20 m is 5e-7 rad off the line).
+    """
+    return 0.0 if _TWO_PI - arc <= LOOP_SNAP else arc
 
 
 @dataclass(frozen=True)
@@ -275,6 +282,7 @@ def dubins_paths(start: Pose, goal: Pose, radius: float, tol: float = 1e-6) -> l
         seg = _normalised(word, a, b, d)
         if seg is None:
             continue
+        seg = tuple(v if kind == "S" else _unloop(v) for kind, v in zip(word, seg, strict=True))
         path = DubinsPath(start, word, (seg[0] * radius, seg[1] * radius, seg[2] * radius), radius)
         x, y, yaw = path.end()
         dyaw = wrap_angle(yaw - goal.yaw)

@@ -207,7 +207,11 @@ class HolonomicField:
 
 
 def _mod2pi(a: np.ndarray) -> np.ndarray:
-    """:func:`rrtdrive.planning.dubins`'s wrap, element-wise (a hair under 2 pi is 0)."""
+    return np.mod(a, _TWO_PI)
+
+
+def _arc(a: np.ndarray) -> np.ndarray:
+    """A word's arc wrapped to ``[0, 2 pi)``, a hair under 2 pi as 0 (``dubins._unloop``)."""
     v = np.mod(a, _TWO_PI)
     return np.where(_TWO_PI - v <= LOOP_SNAP, 0.0, v)
 
@@ -242,41 +246,41 @@ def dubins_lengths(poses: np.ndarray, goal: Pose, radius: float) -> np.ndarray:
         p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb)
         ok, p2 = p2 >= -WORD_NOISE, np.maximum(p2, 0.0)
         tmp = np.arctan2(cb - ca, d + sa - sb)
-        total = _mod2pi(tmp - a) + np.sqrt(p2) + _mod2pi(b - tmp)
+        total = _arc(tmp - a) + np.sqrt(p2) + _arc(b - tmp)
         best = np.fmin(best, np.where(ok, total, np.inf))
         # RSR
         p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa)
         ok, p2 = p2 >= -WORD_NOISE, np.maximum(p2, 0.0)
         tmp = np.arctan2(ca - cb, d - sa + sb)
-        total = _mod2pi(a - tmp) + np.sqrt(p2) + _mod2pi(tmp - b)
+        total = _arc(a - tmp) + np.sqrt(p2) + _arc(tmp - b)
         best = np.fmin(best, np.where(ok, total, np.inf))
         # LSR
         p2 = -2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb)
         ok, p2 = p2 >= -WORD_NOISE, np.maximum(p2, 0.0)
         q = np.sqrt(p2)
         tmp = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, q)
-        total = _mod2pi(tmp - a) + q + _mod2pi(tmp - b)
+        total = _arc(tmp - a) + q + _arc(tmp - b)
         best = np.fmin(best, np.where(ok, total, np.inf))
         # RSL
         p2 = -2.0 + d * d + 2.0 * cab - 2.0 * d * (sa + sb)
         ok, p2 = p2 >= -WORD_NOISE, np.maximum(p2, 0.0)
         q = np.sqrt(p2)
         tmp = np.arctan2(ca + cb, d - sa - sb) - np.arctan2(2.0, q)
-        total = _mod2pi(a - tmp) + q + _mod2pi(b - tmp)
+        total = _arc(a - tmp) + q + _arc(b - tmp)
         best = np.fmin(best, np.where(ok, total, np.inf))
         # RLR
         c = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0
         ok, c = np.abs(c) <= 1.0 + WORD_NOISE, np.clip(c, -1.0, 1.0)
         mid = _mod2pi(_TWO_PI - np.arccos(c))
         t = _mod2pi(a - np.arctan2(ca - cb, d - sa + sb) + mid / 2.0)
-        total = t + mid + _mod2pi(a - b - t + mid)
+        total = _arc(t) + _arc(mid) + _arc(a - b - t + mid)
         best = np.fmin(best, np.where(ok, total, np.inf))
         # LRL
         c = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa)) / 8.0
         ok, c = np.abs(c) <= 1.0 + WORD_NOISE, np.clip(c, -1.0, 1.0)
         mid = _mod2pi(_TWO_PI - np.arccos(c))
         t = _mod2pi(-a + np.arctan2(-ca + cb, d + sa - sb) + mid / 2.0)
-        total = t + mid + _mod2pi(b - a - t + mid)
+        total = _arc(t) + _arc(mid) + _arc(b - a - t + mid)
         best = np.fmin(best, np.where(ok, total, np.inf))
     return best * radius
 
