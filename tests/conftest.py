@@ -15,7 +15,8 @@ settings.register_profile(
     suppress_health_check=[HealthCheck.too_slow],
     derandomize=True,
 )
-# A hunt for thin properties, not for CI: ten times the examples, a fresh seed per run
+# A hunt for thin properties, not for CI: a fresh seed per run, 600 examples where a
+# test sets no count of its own
 # (``HYPOTHESIS_PROFILE=stress python -m pytest -n auto tests``). CI's examples are fixed
 # per test, but not quite per run: Hypothesis also draws constants found in the modules
 # loaded so far, which depends on the test order.
