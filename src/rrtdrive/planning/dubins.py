@@ -38,7 +38,7 @@ _WORDS: dict[str, tuple[int, int, int]] = {
 }
 
 
-#: An angle this close under a full turn (radians) is float noise of 0: a goal 1.2 cm
+#: A word's arc this close under a full turn (radians) is float noise of 0: a goal 1.2 cm
 #: straight ahead put the heading's atan2 1e-13 below it, and LSL drove a 37.7 m loop; a
 #: goal on one arc left a straight of sqrt(1e-16) = 1e-8 and an arc 1.4e-8 under 2 pi.
 #: Snapped, a word ends at most 3e-6 m and 5e-7 rad off, inside ``dubins_paths``' check.
