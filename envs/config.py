@@ -20,7 +20,7 @@ import numpy as np
 from rrtdrive.controllers import CONTROLLERS, SpeedConfig, TrackingController, make_controller
 from rrtdrive.envs.action import CommandLimits
 from rrtdrive.envs.reward import RewardWeights
-from rrtdrive.maps import Map, names_map_file, resolve_map
+from rrtdrive.maps import Map
 from rrtdrive.planning import PLANNERS
 from rrtdrive.sim.scenes import SimConfig
 from rrtdrive.sim.tasks import (
@@ -31,7 +31,7 @@ from rrtdrive.sim.tasks import (
     TASKS,
     CustomTask,
     make_scenario,
-    unknown_scenario,
+    scenario_map,
 )
 from rrtdrive.sim.tasks import Task as Scenario
 from rrtdrive.types import Budget, InputError, require_int
@@ -184,12 +184,7 @@ class DriveEnvConfig:
         if not isinstance(scenario, str):
             raise InputError(f"scenario: expected a name, got {scenario!r}")
         if scenario not in SCENARIOS:
-            try:
-                put("map", resolve_map(scenario))
-            except InputError as exc:
-                if names_map_file(scenario):
-                    raise InputError(f"scenario: {scenario!r}: {exc}") from None
-                raise unknown_scenario("scenario", scenario) from None
+            put("map", scenario_map("scenario", scenario))
         if not isinstance(planner, str) or planner not in PLANNERS:
             raise InputError(
                 f"planner: unknown planner {planner!r}; choose from {sorted(PLANNERS)}"

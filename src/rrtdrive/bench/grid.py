@@ -24,9 +24,12 @@ import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path as FsPath
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rrtdrive.types import InputError, require_int
+
+if TYPE_CHECKING:
+    from rrtdrive.maps import Map
 
 __all__ = [
     "BenchConfig",
@@ -93,8 +96,10 @@ def _positive(field_name: str, value: object) -> float:
     return float(value)
 
 
-def map_digest(spec: str) -> tuple[str, str | None]:
+def map_digest(spec: str, m: Map | None = None) -> tuple[str, str | None]:
     """A short digest of the map ``spec`` resolves to (content and car), for run keys.
+
+    ``m``: the map ``spec`` resolved to, when the caller has read it already.
 
     Returns
     -------
@@ -111,7 +116,8 @@ def map_digest(spec: str) -> tuple[str, str | None]:
     """
     from rrtdrive.maps import BUILTIN_MAPS, resolve_map
 
-    m = resolve_map(spec)
+    if m is None:
+        m = resolve_map(spec)
     payload = {"map": m.to_json(), "vehicle": dataclasses.asdict(m.vehicle)}
     text = json.dumps(payload, sort_keys=True, separators=(",", ":"))
     content = None if spec in BUILTIN_MAPS else json.dumps(m.to_json())
@@ -241,33 +247,27 @@ class BenchConfig:
                 raise InputError(
                     f"planners: {p!r} needs OMPL; install it with pip install 'rrtdrive[ompl]'"
                 )
-        from rrtdrive.maps import names_map_file
-
         digests, contents = dict(self.map_digests), dict(self.map_contents)
-        # Maps, and the scenarios that are maps (driven from their start to their goal).
-        mapped = [("maps", m) for m in self.maps]
-        mapped += [("scenarios", s) for s in self.scenarios if is_map_scenario(s)]
-        for field_name, m in mapped:
+        for m in self.maps:
             if m not in digests or m not in contents:
                 try:
                     digests[m], contents[m] = map_digest(m)
                 except InputError as exc:
-                    if field_name == "scenarios" and not names_map_file(m):
-                        from rrtdrive.sim.stock import STOCK_ENVS
-                        from rrtdrive.sim.tasks import unknown_scenario
+                    raise InputError(f"maps: {m!r}: {exc}") from None
+        # The scenarios that are maps, driven from their start to their goal.
+        for s in self.scenarios:
+            if is_map_scenario(s) and (s not in digests or s not in contents):
+                from rrtdrive.sim.stock import STOCK_ENVS
+                from rrtdrive.sim.tasks import CustomTask, scenario_map
 
-                        raise unknown_scenario("scenarios", m, tuple(STOCK_ENVS)) from None
-                    raise InputError(f"{field_name}: {m!r}: {exc}") from None
-                if field_name == "scenarios":
+                driven = scenario_map("scenarios", s, tuple(STOCK_ENVS))
+                try:
                     # The task every episode of it builds, checked once here: its bad input
                     # (a goal that is the start) is one exit-2 line, not an error per run.
-                    from rrtdrive.maps import resolve_map
-                    from rrtdrive.sim.tasks import CustomTask
-
-                    try:
-                        CustomTask.from_map(resolve_map(m))
-                    except InputError as exc:
-                        raise InputError(f"scenarios: {m!r}: {exc}") from None
+                    CustomTask.from_map(driven)
+                except InputError as exc:
+                    raise InputError(f"scenarios: {s!r}: {exc}") from None
+                digests[s], contents[s] = map_digest(s, driven)
         object.__setattr__(self, "map_digests", digests)
         object.__setattr__(self, "map_contents", contents)
         if self.scenarios:

@@ -41,6 +41,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+from rrtdrive.maps import Map
 from rrtdrive.sim.scenes import scenario_rngs
 from rrtdrive.sim.tasks.base import (
     DEFAULT_PLANNER,
@@ -86,6 +87,7 @@ __all__ = [
     "REPLANNING_SCENARIOS",
     "make_scenario",
     "unknown_scenario",
+    "scenario_map",
     "SCENARIO_OPTIONS",
     "plan_scenario",
     "DEFAULT_PLANNER",
@@ -170,6 +172,23 @@ def unknown_scenario(field: str, name: str, stock_envs: Sequence[str] = ()) -> I
         f"{field}: unknown scenario {name!r}{hint}; choose from {', '.join(SCENARIOS)}{stock}, "
         f"a map file (.json) or a built-in map ({', '.join(maps)})"
     )
+
+
+def scenario_map(field: str, name: str, stock_envs: Sequence[str] = ()) -> Map:
+    """The map that a target which is no built-in scenario names, or the one error.
+
+    A name that :func:`~rrtdrive.maps.names_map_file` reads as a file gets the file's
+    own error after ``field`` and the name; any other unknown name
+    :func:`unknown_scenario`'s.
+    """
+    from rrtdrive.maps import names_map_file, resolve_map
+
+    try:
+        return resolve_map(name)
+    except InputError as exc:
+        if names_map_file(name):
+            raise InputError(f"{field}: {name!r}: {exc}") from None
+        raise unknown_scenario(field, name, stock_envs) from None
 
 
 def make_scenario(name: str, seed: int = 0, **options: Any) -> Task:
