@@ -55,6 +55,16 @@ def _mod2pi(a: float) -> float:
     return a % _TWO_PI
 
 
+def _root(p2: float) -> float | None:
+    """A straight's length from its square, ``None`` below :data:`WORD_NOISE` (no word)."""
+    return None if p2 < -WORD_NOISE else math.sqrt(max(p2, 0.0))
+
+
+def _cosine(c: float) -> float | None:
+    """A middle arc's cosine clipped to [-1, 1], ``None`` beyond :data:`WORD_NOISE`."""
+    return None if abs(c) > 1.0 + WORD_NOISE else min(1.0, max(-1.0, c))
+
+
 def _unloop(arc: float) -> float:
     """An arc (radians) a hair under a full turn (:data:`LOOP_SNAP`) as 0.
 
@@ -200,48 +210,40 @@ def _normalised(word: str, a: float, b: float, d: float) -> tuple[float, float, 
     sa, sb, ca, cb = math.sin(a), math.sin(b), math.cos(a), math.cos(b)
     cab = math.cos(a - b)
     if word == "LSL":
-        p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb)
-        if p2 < -WORD_NOISE:
+        p = _root(2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb))
+        if p is None:
             return None
-        p2 = max(p2, 0.0)
         tmp = math.atan2(cb - ca, d + sa - sb)
-        return _mod2pi(tmp - a), math.sqrt(p2), _mod2pi(b - tmp)
+        return _mod2pi(tmp - a), p, _mod2pi(b - tmp)
     if word == "RSR":
-        p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa)
-        if p2 < -WORD_NOISE:
+        p = _root(2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa))
+        if p is None:
             return None
-        p2 = max(p2, 0.0)
         tmp = math.atan2(ca - cb, d - sa + sb)
-        return _mod2pi(a - tmp), math.sqrt(p2), _mod2pi(tmp - b)
+        return _mod2pi(a - tmp), p, _mod2pi(tmp - b)
     if word == "LSR":
-        p2 = -2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb)
-        if p2 < -WORD_NOISE:
+        p = _root(-2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb))
+        if p is None:
             return None
-        p2 = max(p2, 0.0)
-        p = math.sqrt(p2)
         tmp = math.atan2(-ca - cb, d + sa + sb) - math.atan2(-2.0, p)
         return _mod2pi(tmp - a), p, _mod2pi(tmp - b)
     if word == "RSL":
-        p2 = -2.0 + d * d + 2.0 * cab - 2.0 * d * (sa + sb)
-        if p2 < -WORD_NOISE:
+        p = _root(-2.0 + d * d + 2.0 * cab - 2.0 * d * (sa + sb))
+        if p is None:
             return None
-        p2 = max(p2, 0.0)
-        p = math.sqrt(p2)
         tmp = math.atan2(ca + cb, d - sa - sb) - math.atan2(2.0, p)
         return _mod2pi(a - tmp), p, _mod2pi(b - tmp)
     if word == "RLR":
-        tmp = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0
-        if abs(tmp) > 1.0 + WORD_NOISE:
+        tmp = _cosine((6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0)
+        if tmp is None:
             return None
-        tmp = min(1.0, max(-1.0, tmp))
         p = _mod2pi(_TWO_PI - math.acos(tmp))
         t = _mod2pi(a - math.atan2(ca - cb, d - sa + sb) + p / 2.0)
         return t, p, _mod2pi(a - b - t + p)
     # LRL
-    tmp = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa)) / 8.0
-    if abs(tmp) > 1.0 + WORD_NOISE:
+    tmp = _cosine((6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa)) / 8.0)
+    if tmp is None:
         return None
-    tmp = min(1.0, max(-1.0, tmp))
     p = _mod2pi(_TWO_PI - math.acos(tmp))
     t = _mod2pi(-a + math.atan2(-ca + cb, d + sa - sb) + p / 2.0)
     return t, p, _mod2pi(b - a - t + p)

@@ -210,6 +210,16 @@ def _mod2pi(a: np.ndarray) -> np.ndarray:
     return np.mod(a, _TWO_PI)
 
 
+def _roots(p2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``dubins._root`` element-wise: whether each word exists, and its straight's length."""
+    return p2 >= -WORD_NOISE, np.sqrt(np.maximum(p2, 0.0))
+
+
+def _cosines(c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``dubins._cosine`` element-wise: whether each word exists, and the clipped cosine."""
+    return np.abs(c) <= 1.0 + WORD_NOISE, np.clip(c, -1.0, 1.0)
+
+
 def _arc(a: np.ndarray) -> np.ndarray:
     """A word's arc wrapped to ``[0, 2 pi)``, a hair under 2 pi as 0 (``dubins._unloop``)."""
     v = np.mod(a, _TWO_PI)
@@ -243,41 +253,33 @@ def dubins_lengths(poses: np.ndarray, goal: Pose, radius: float) -> np.ndarray:
     best = np.full(len(p), np.inf)
     with np.errstate(invalid="ignore"):
         # LSL
-        p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb)
-        ok, p2 = p2 >= -WORD_NOISE, np.maximum(p2, 0.0)
+        ok, q = _roots(2.0 + d * d - 2.0 * cab + 2.0 * d * (sa - sb))
         tmp = np.arctan2(cb - ca, d + sa - sb)
-        total = _arc(tmp - a) + np.sqrt(p2) + _arc(b - tmp)
+        total = _arc(tmp - a) + q + _arc(b - tmp)
         best = np.fmin(best, np.where(ok, total, np.inf))
         # RSR
-        p2 = 2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa)
-        ok, p2 = p2 >= -WORD_NOISE, np.maximum(p2, 0.0)
+        ok, q = _roots(2.0 + d * d - 2.0 * cab + 2.0 * d * (sb - sa))
         tmp = np.arctan2(ca - cb, d - sa + sb)
-        total = _arc(a - tmp) + np.sqrt(p2) + _arc(tmp - b)
+        total = _arc(a - tmp) + q + _arc(tmp - b)
         best = np.fmin(best, np.where(ok, total, np.inf))
         # LSR
-        p2 = -2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb)
-        ok, p2 = p2 >= -WORD_NOISE, np.maximum(p2, 0.0)
-        q = np.sqrt(p2)
+        ok, q = _roots(-2.0 + d * d + 2.0 * cab + 2.0 * d * (sa + sb))
         tmp = np.arctan2(-ca - cb, d + sa + sb) - np.arctan2(-2.0, q)
         total = _arc(tmp - a) + q + _arc(tmp - b)
         best = np.fmin(best, np.where(ok, total, np.inf))
         # RSL
-        p2 = -2.0 + d * d + 2.0 * cab - 2.0 * d * (sa + sb)
-        ok, p2 = p2 >= -WORD_NOISE, np.maximum(p2, 0.0)
-        q = np.sqrt(p2)
+        ok, q = _roots(-2.0 + d * d + 2.0 * cab - 2.0 * d * (sa + sb))
         tmp = np.arctan2(ca + cb, d - sa - sb) - np.arctan2(2.0, q)
         total = _arc(a - tmp) + q + _arc(b - tmp)
         best = np.fmin(best, np.where(ok, total, np.inf))
         # RLR
-        c = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0
-        ok, c = np.abs(c) <= 1.0 + WORD_NOISE, np.clip(c, -1.0, 1.0)
+        ok, c = _cosines((6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0)
         mid = _mod2pi(_TWO_PI - np.arccos(c))
         t = _mod2pi(a - np.arctan2(ca - cb, d - sa + sb) + mid / 2.0)
         total = _arc(t) + _arc(mid) + _arc(a - b - t + mid)
         best = np.fmin(best, np.where(ok, total, np.inf))
         # LRL
-        c = (6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa)) / 8.0
-        ok, c = np.abs(c) <= 1.0 + WORD_NOISE, np.clip(c, -1.0, 1.0)
+        ok, c = _cosines((6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa)) / 8.0)
         mid = _mod2pi(_TWO_PI - np.arccos(c))
         t = _mod2pi(-a + np.arctan2(-ca + cb, d + sa - sb) + mid / 2.0)
         total = _arc(t) + _arc(mid) + _arc(b - a - t + mid)
