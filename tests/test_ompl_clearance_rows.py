@@ -119,6 +119,9 @@ def test_coverage_names_ompl_rows_with_their_clearance(name: str, want) -> None:
     import coverage as cov
 
     assert cov.ompl_spec(name) == want
+    # The tight-map scripts write the names that coverage.py reads.
+    assert cov.ompl_spec(street_turns.ompl_label(0.15)) == (street_turns.OMPL_NAME, 0.15)
+    assert cov.ompl_spec(street_turns.ompl_label(0.0)) == (street_turns.OMPL_NAME, 0.0)
 
 
 @pytest.mark.parametrize(
