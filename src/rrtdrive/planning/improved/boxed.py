@@ -26,6 +26,7 @@ segment it finds ``r - tol`` clear is not blocked, and then nothing is proven. A
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -101,6 +102,9 @@ def root_boxed_in(checker: CollisionChecker, root: Pose, tol: float = ROOT_FAN_T
     return bool(blocked.all())
 
 
+# The last two fans: a query asks root_boxed_in, then open_share, of its start and goal
+# (a checker never changes once built; the arrays are read-only).
+@functools.lru_cache(maxsize=2)
 def _fan_room(
     checker: CollisionChecker, root: Pose, back: float, front: float, tol: float
 ) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
@@ -137,6 +141,8 @@ def _fan_room(
     edge = np.minimum.reduce(
         [ends[..., 0] - xmin, xmax - ends[..., 0], ends[..., 1] - ymin, ymax - ends[..., 1]]
     ).min(axis=1)
+    for a in (ends, field_min, edge):
+        a.setflags(write=False)
     return ends, field_min, half_gap, edge
 
 
