@@ -88,7 +88,7 @@ def report(payload: dict[str, Any]) -> str:
         share = c["share_of_ompl_solved"]
         lines.append(
             f"| {key}s | {c['ompl_solved']} | {c['both_solved']} | {c['ours_only']} | "
-            f"{'-' if share is None else f'{100 * share:.1f} %'} | "
+            f"{cell(share, 100, 1, ' %')} | "
             f"{cell(c['median_time_ratio'], 1, 3)} | {cell(c['median_length_ratio'], 1, 3)} | "
             f"{cell(c.get('time_ratio_of_medians'), 1, 3)} | "
             f"{cell(c.get('length_ratio_of_medians'), 1, 3)} |"
