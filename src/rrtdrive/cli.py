@@ -15,6 +15,7 @@ import dataclasses
 import importlib
 import json
 import math
+import pathlib
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -30,6 +31,7 @@ from rrtdrive.cli_args import (
     positive_int,
     validate_output,
 )
+from rrtdrive.cli_stdout import run_writing_stdout
 from rrtdrive.types import Budget, InputError, PlanResult, Pose, VehicleParams
 
 __all__ = ["COMMANDS", "build_parser", "main", "plan_to_json", "parse_pose"]
@@ -48,10 +50,33 @@ class _Parser(argparse.ArgumentParser):
 
 
 def parse_pose(text: str, name: str) -> Pose:
-    """Parse ``"x,y,yaw"`` (yaw in radians) into a :class:`Pose`, naming ``name`` in errors."""
+    """Parse ``"x,y,yaw"`` (yaw in radians) into a :class:`Pose`, naming ``name`` in errors.
+
+    Parameters
+    ----------
+    text : str
+        The option's value.
+    name : str
+        The option (``"--start"``), named in errors.
+
+    Returns
+    -------
+    Pose
+
+    Examples
+    --------
+    >>> parse_pose("-5,6,0", "--start")
+    Pose(x=-5.0, y=6.0, yaw=0.0)
+    >>> parse_pose("", "--start")
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: --start: expected X,Y,YAW, got an empty value
+    """
+    if not text.strip():  # "--start=" (e.g. an unset shell variable): never "not given"
+        raise InputError(f"{name}: expected X,Y,YAW, got an empty value")
     parts = text.split(",")
     if len(parts) != 3:
-        raise InputError(f"{name}: expected x,y,yaw, got {text!r}")
+        raise InputError(f"{name}: expected three numbers x,y,yaw, got {text!r}")
     try:
         values = [float(p) for p in parts]
     except ValueError:
@@ -163,8 +188,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
                 f"not {args.planner!r}"
             )
     m = resolve_map(args.map)
-    start = parse_pose(args.start, "--start") if args.start else None
-    goal = parse_pose(args.goal, "--goal") if args.goal else None
+    start = parse_pose(args.start, "--start") if args.start is not None else None
+    goal = parse_pose(args.goal, "--goal") if args.goal is not None else None
     if start or goal:
         m = m.with_query(start, goal)
     options: dict[str, object] = {}
@@ -223,26 +248,41 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
 
 def _cmd_maps(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from rrtdrive.maps import BUILTIN_MAPS, builtin_map, save_map
 
-    for name in BUILTIN_MAPS:
-        m = builtin_map(name)
+    maps = {name: builtin_map(name) for name in BUILTIN_MAPS}
+    out = None if args.export is None else _export_folder(args.export, list(maps))
+    for name, m in maps.items():
         line = (
             f"{name:12s} {len(m.obstacles):4d} obstacles  start {m.start.as_tuple()}  goal "
             + str(tuple(round(v, 3) for v in m.goal.as_tuple()))
         )
-        if args.export:
-            out = Path(args.export)
+        if out is not None:
+            target = out / f"{name}.json"
             try:
-                out.mkdir(parents=True, exist_ok=True)
+                save_map(m, target)  # atomic: a failed write leaves no temporary file
             except OSError as exc:
-                raise InputError(f"--export: cannot create folder {out}: {exc.strerror}") from None
-            save_map(m, out / f"{name}.json")
-            line += f"  -> {out / (name + '.json')}"
+                raise InputError(f"--export: cannot write {target}: {exc.strerror}") from None
+            line += f"  -> {target}"
         print(line)
     return EXIT_OK
+
+
+def _export_folder(text: str, names: Sequence[str]) -> pathlib.Path:
+    """The ``--export`` folder, created, with every ``NAME.json`` in it checked writable.
+
+    Checked before the first file is written, so a bad target leaves no partial export.
+    """
+    if not text.strip():
+        raise InputError("--export: expected a folder, got an empty value")
+    out = pathlib.Path(text)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"--export: cannot create folder {out}: {exc.strerror}") from None
+    for name in names:
+        validate_output(str(out / f"{name}.json"), "--export")
+    return out
 
 
 @dataclass(frozen=True)
@@ -440,7 +480,23 @@ def _value_options(parser: argparse.ArgumentParser) -> set[str]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the CLI; return the exit code."""
+    """Run the CLI; return the exit code.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        The arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        0 success, 1 failure (also when stdout cannot be written), 2 bad input,
+        141 when the reader of stdout went away, 130 on Ctrl-C.
+    """
+    return run_writing_stdout(lambda: _main(argv))
+
+
+def _main(argv: Sequence[str] | None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     command = _command_in(argv)
     try:

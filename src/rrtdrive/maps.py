@@ -25,7 +25,14 @@ import shapely
 
 from rrtdrive.atomic import write_text_atomic
 from rrtdrive.geometry import box_corners
-from rrtdrive.types import InputError, Pose, VehicleParams, require_finite, require_positive
+from rrtdrive.types import (
+    InputError,
+    Pose,
+    VehicleParams,
+    brief_repr,
+    require_finite,
+    require_positive,
+)
 from rrtdrive.vehicle import footprint_polygon
 
 __all__ = [
@@ -35,6 +42,7 @@ __all__ = [
     "TIGHT_MAP_NAMES",
     "builtin_map",
     "load_map",
+    "parse_json",
     "save_map",
     "resolve_map",
     "names_map_file",
@@ -111,10 +119,12 @@ class Map:
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
-            raise InputError(f"name: expected a non-empty string, got {self.name!r}")
+            raise InputError(f"name: expected a non-empty string, got {brief_repr(self.name)}")
         b = self.bounds
         if not isinstance(b, (list, tuple)) or len(b) != 4:
-            raise InputError(f"bounds: expected [xmin, ymin, xmax, ymax], got {b!r}")
+            raise InputError(
+                f"bounds: expected [xmin, ymin, xmax, ymax], got {brief_repr(b)}"
+            )
         require_finite("bounds", *b)
         b = tuple(float(v) for v in b)
         if b[2] <= b[0] or b[3] <= b[1]:
@@ -191,7 +201,7 @@ def check_endpoint(m: Map, pose: Pose, label: str, vehicle: VehicleParams) -> No
 
 def _pair(value: object, name: str) -> tuple[float, float]:
     if not isinstance(value, (list, tuple, np.ndarray)) or len(value) != 2:
-        raise InputError(f"{name}: expected two numbers, got {value!r}")
+        raise InputError(f"{name}: expected two numbers, got {brief_repr(value)}")
     require_finite(name, *value)
     return (float(value[0]), float(value[1]))
 
@@ -230,7 +240,7 @@ def map_from_json(data: object, vehicle: VehicleParams | None = None) -> Map:
     obstacles = []
     for i, item in enumerate(raw_obstacles):
         if not isinstance(item, dict):
-            raise InputError(f"obstacles[{i}]: expected an object, got {item!r}")
+            raise InputError(f"obstacles[{i}]: expected an object, got {brief_repr(item)}")
         bad = set(item) - _OBSTACLE_KEYS
         if bad:
             raise InputError(f"obstacles[{i}]: unknown key(s) {sorted(bad)}")
@@ -243,8 +253,11 @@ def map_from_json(data: object, vehicle: VehicleParams | None = None) -> Map:
             # path to the field is "obstacles[i].center".
             field = str(exc).removeprefix("obstacle.")
             raise InputError(f"obstacles[{i}].{field}") from None
+    name = data.get("name", "map")
+    if not isinstance(name, str):
+        raise InputError(f"name: expected a non-empty string, got {brief_repr(name)}")
     return Map(
-        name=str(data.get("name", "map")),
+        name=name,
         bounds=data["bounds"],
         obstacles=tuple(obstacles),
         start=Pose.from_seq(data["start"], "start"),
@@ -268,19 +281,57 @@ def load_map(path: str | os.PathLike[str], vehicle: VehicleParams | None = None)
     Map
     """
     try:
-        text = FsPath(path).read_text(encoding="utf-8")
+        raw = FsPath(path).read_bytes()
     except OSError as exc:
         raise InputError(f"map: cannot read {path}: {exc.strerror}") from None
-    except UnicodeDecodeError as exc:
-        raise InputError(
-            f"map: {path} is not a UTF-8 text file (byte {exc.start}: {exc.reason})"
-        ) from None
+    return map_from_json(parse_json(raw, "map", str(path)), vehicle)
+
+
+def parse_json(raw: bytes | str, field: str, source: str) -> object:
+    """Decode UTF-8 JSON, turning every way it can fail into one :class:`InputError` line.
+
+    NaN and Infinity literals parse to floats, so that validation names the field
+    they sit in; so do integers too large for a float.
+
+    Parameters
+    ----------
+    raw : bytes or str
+        The file's content (bytes are decoded as UTF-8).
+    field : str
+        Field named first in the message (``"map"``, ``"plan"``).
+    source : str
+        The file name (or ``"stdin"``) named in the message.
+
+    Returns
+    -------
+    object
+        The parsed JSON value.
+
+    Examples
+    --------
+    >>> parse_json(b"[1, NaN]", "map", "m.json")
+    [1, nan]
+    >>> parse_json("[" * 100_000, "map", "m.json")
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: map: malformed JSON in m.json: nested too deeply
+    """
+    if isinstance(raw, bytes):
+        try:
+            raw = raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise InputError(
+                f"{field}: {source} is not a UTF-8 text file (byte {exc.start}: {exc.reason})"
+            ) from None
+    bad = f"{field}: malformed JSON in {source}"
     try:
-        # NaN/Infinity literals parse to floats so that validation names the field they sit in.
-        data = json.loads(text, parse_constant=float)
+        return json.loads(raw, parse_constant=float)
     except json.JSONDecodeError as exc:
-        raise InputError(f"map: malformed JSON in {path}: {exc.msg} (line {exc.lineno})") from None
-    return map_from_json(data, vehicle)
+        raise InputError(f"{bad}: {exc.msg} (line {exc.lineno})") from None
+    except RecursionError:
+        raise InputError(f"{bad}: nested too deeply") from None
+    except ValueError:  # an integer literal past Python's 4300-digit conversion limit
+        raise InputError(f"{bad}: a number has too many digits") from None
 
 
 def save_map(m: Map, path: str | os.PathLike[str]) -> None:

@@ -28,6 +28,61 @@ class InputError(ValueError):
     """Bad user input; the message names the offending field."""
 
 
+def brief_repr(value: object, limit: int = 32) -> str:
+    """``repr(value)`` cut to about ``limit`` characters, for one-line error messages.
+
+    A huge integer (from a JSON literal of hundreds of digits) shows its first
+    digits and its length; numpy scalars show as plain Python numbers.
+
+    Parameters
+    ----------
+    value : object
+        The offending value.
+    limit : int
+        Longest text shown in full.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> brief_repr(10**400)
+    '1000000000...(401 digits)'
+    >>> brief_repr(np.float64(0.5)), brief_repr("1")
+    ('0.5', "'1'")
+    """
+    if isinstance(value, (np.integer, np.floating, np.bool_)):
+        value = value.item()
+    try:
+        text = repr(value)
+    except ValueError:  # an int past Python's str-conversion limit (over 4300 digits)
+        return f"an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
+    if len(text) <= limit:
+        return text
+    if isinstance(value, int):
+        return f"{text[:10]}...({len(text.lstrip('-'))} digits)"
+    return text[:limit] + "..."
+
+
+def is_finite_number(value: object) -> bool:
+    """Whether ``value`` is a real number (not a bool) that a float holds finitely.
+
+    Examples
+    --------
+    >>> is_finite_number(1), is_finite_number(10**400), is_finite_number(True)
+    (True, False, False)
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(
+        value, (int, float, np.integer, np.floating)
+    ):
+        return False
+    try:
+        return math.isfinite(float(value))
+    except OverflowError:  # an int too large for a float: as good as infinite
+        return False
+
+
 def require_finite(name: str, *values: float) -> None:
     """Raise :class:`InputError` naming ``name`` unless every value is a finite real number.
 
@@ -37,19 +92,26 @@ def require_finite(name: str, *values: float) -> None:
         Field name used in the error message.
     *values : float
         Values to check.
+
+    Examples
+    --------
+    >>> require_finite("size", 10**400)
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: size: must be finite, got 1000000000...(401 digits)
     """
     for v in values:
         if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
-            raise InputError(f"{name}: expected a number, got {type(v).__name__} {v!r}")
-        if not math.isfinite(float(v)):
-            raise InputError(f"{name}: must be finite, got {v!r}")
+            raise InputError(f"{name}: expected a number, got {type(v).__name__} {brief_repr(v)}")
+        if not is_finite_number(v):
+            raise InputError(f"{name}: must be finite, got {brief_repr(v)}")
 
 
 def require_positive(name: str, value: float) -> None:
     """Raise :class:`InputError` unless ``value`` is a finite number > 0."""
     require_finite(name, value)
     if value <= 0:
-        raise InputError(f"{name}: must be > 0, got {value!r}")
+        raise InputError(f"{name}: must be > 0, got {brief_repr(value)}")
 
 
 def require_int(name: str, value: object, minimum: int = 1, maximum: int | None = None) -> int:
@@ -87,7 +149,7 @@ def require_int(name: str, value: object, minimum: int = 1, maximum: int | None 
         or (maximum is not None and value > maximum)
     ):
         bound = f">= {minimum}" if maximum is None else f"in {minimum}..{maximum}"
-        raise InputError(f"{name}: must be an integer {bound}, got {value!r}")
+        raise InputError(f"{name}: must be an integer {bound}, got {brief_repr(value)}")
     return int(value)
 
 
@@ -109,7 +171,7 @@ class Pose:
     def from_seq(cls, values: object, name: str = "pose") -> Pose:
         """Build a pose from a ``[x, y, yaw]`` sequence, naming ``name`` in errors."""
         if not isinstance(values, (list, tuple, np.ndarray)) or len(values) != 3:
-            raise InputError(f"{name}: expected [x, y, yaw], got {values!r}")
+            raise InputError(f"{name}: expected [x, y, yaw], got {brief_repr(values)}")
         require_finite(name, *values)
         return cls(float(values[0]), float(values[1]), float(values[2]))
 
@@ -263,8 +325,8 @@ class Path:
             bad = np.flatnonzero((s[:, 4] != 1.0) & (s[:, 4] != -1.0))
             if len(bad):
                 raise InputError(
-                    f"path.gear: must be +1 (forward) or -1 (reverse), got {s[bad[0], 4]!r} "
-                    f"in row {int(bad[0])}"
+                    "path.gear: must be +1 (forward) or -1 (reverse), got "
+                    f"{float(s[bad[0], 4])!r} in row {int(bad[0])}"
                 )
         w = np.asarray(self.waypoints, dtype=float).reshape(-1, 2)
         s.setflags(write=False)

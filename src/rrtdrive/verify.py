@@ -25,7 +25,7 @@ import shapely
 
 from rrtdrive.geometry import densify, wrap_angle
 from rrtdrive.maps import Map
-from rrtdrive.types import InputError, Path
+from rrtdrive.types import InputError, Path, brief_repr, is_finite_number
 
 __all__ = ["CHECKS", "PathCheck", "verify_path", "path_from_json"]
 
@@ -176,6 +176,9 @@ def _travel_directions(seg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.arctan2(d[moving, 1], d[moving, 0]), moving
 
 
+# Rows far off the map (x = 1e308) overflow the geometry to inf and nan: the checks
+# fail on them as they should, without a screen of numpy warnings.
+@np.errstate(all="ignore")
 def verify_path(
     m: Map,
     path: Path,
@@ -244,6 +247,12 @@ def verify_path(
     )
     region = shapely.box(*m.bounds)
     obstacles = shapely.union_all([shapely.Polygon(o.corners()) for o in m.obstacles])
+    xmin, ymin, xmax, ymax = m.bounds
+    # A row off the map already fails the body check; densifying a jump of 1e6 m to
+    # 0.1 m poses would take minutes and gigabytes first.
+    on_map = bool(
+        np.all((xy[:, 0] >= xmin) & (xy[:, 0] <= xmax) & (xy[:, 1] >= ymin) & (xy[:, 1] <= ymax))
+    )
     bodies = []
     max_k = 0.0
     max_sharp = 0.0
@@ -253,10 +262,11 @@ def verify_path(
         seg = s[a:b]
         gear = seg[0, 4]
         # The body along the nose yaw (interpolated between the rows) in either gear.
-        bodies += [
-            _body(x, y, yaw, v.length, v.width, v.rear_overhang)
-            for x, y, yaw in densify(seg[:, :3], pose_spacing, angle_column=2).points
-        ]
+        if on_map:
+            bodies += [
+                _body(x, y, yaw, v.length, v.width, v.rear_overhang)
+                for x, y, yaw in densify(seg[:, :3], pose_spacing, angle_column=2).points
+            ]
         if len(seg) < 2:
             continue
         max_k = max(max_k, _segment_curvature(seg[:, :2]))
@@ -271,7 +281,7 @@ def verify_path(
         if math.isnan(first_dir):
             first_dir = float(nose[0])
         last_dir = float(nose[-1])
-    collision_free = bool(
+    collision_free = on_map and bool(
         all(region.contains(body) for body in bodies)
         and not np.any(shapely.intersects(obstacles, np.array(bodies, dtype=object)))
     )
@@ -335,7 +345,9 @@ def path_from_json(data: Mapping[str, object] | Sequence[Sequence[float]]) -> Pa
     Raises
     ------
     InputError
-        Naming ``path`` when the rows are not all 4 or all 5 numbers.
+        Naming ``path`` (and the row) when the rows are not all 4 or all 5 finite
+        numbers or a gear is not the number +1 or -1, and ``waypoints`` when those
+        are not pairs of finite numbers.
 
     Examples
     --------
@@ -343,6 +355,10 @@ def path_from_json(data: Mapping[str, object] | Sequence[Sequence[float]]) -> Pa
     [1, 1]
     >>> path_from_json([[0, 0, 0, 0, -1], [-0.25, 0, 0, 0, -1]]).is_forward_only
     False
+    >>> path_from_json([[0, 0, 0, 0, 1], [0.25, float("nan"), 0, 0, 1]])
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: path: row 1 y must be a finite number, got nan
     """
     if isinstance(data, Mapping):
         rows, waypoints = data.get("path"), data.get("waypoints") or []
@@ -350,15 +366,38 @@ def path_from_json(data: Mapping[str, object] | Sequence[Sequence[float]]) -> Pa
         rows, waypoints = data, []
     if not isinstance(rows, Sequence) or isinstance(rows, str):
         raise InputError(f"path: expected a list of rows, got {type(rows).__name__}")
-    widths = {len(r) if isinstance(r, Sequence) else -1 for r in rows}
+    widths = {len(r) if _is_list(r) else -1 for r in rows}
     if widths - {4, 5} or len(widths) > 1:
         raise InputError(
             f"path: rows must all be [x, y, yaw, kappa] or [x, y, yaw, kappa, gear], "
             f"got row lengths {sorted(widths)}"
         )
-    try:
-        samples = np.array(rows, dtype=float).reshape(len(rows), widths.pop() if rows else 5)
-        wp = np.array(waypoints, dtype=float).reshape(-1, 2)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"path: rows must be numbers ({exc})") from None
-    return Path(samples, wp)
+    # Checked here, row by row: NaN or inf would reach shapely as a broken polygon,
+    # and numpy would read "1" or true as a gear.
+    for i, row in enumerate(rows):
+        for name, value in zip(_COLUMNS, row[:4], strict=True):
+            if not is_finite_number(value):
+                raise InputError(
+                    f"path: row {i} {name} must be a finite number, got {brief_repr(value)}"
+                )
+        if len(row) == 5 and not (is_finite_number(row[4]) and row[4] in (1, -1)):
+            raise InputError(
+                f"path.gear: must be +1 (forward) or -1 (reverse), got {brief_repr(row[4])} "
+                f"in row {i}"
+            )
+    samples = np.array(rows, dtype=float).reshape(len(rows), widths.pop() if rows else 5)
+    if not _is_list(waypoints) or not all(
+        _is_list(w) and len(w) == 2 and all(is_finite_number(v) for v in w) for w in waypoints
+    ):
+        raise InputError(
+            f"waypoints: expected a list of [x, y] finite numbers, got {brief_repr(waypoints)}"
+        )
+    return Path(samples, np.array(waypoints, dtype=float).reshape(-1, 2))
+
+
+_COLUMNS = ("x", "y", "yaw", "kappa")
+
+
+def _is_list(value: object) -> bool:
+    """A JSON array (a list or tuple, not a string) or a numpy array."""
+    return isinstance(value, (Sequence, np.ndarray)) and not isinstance(value, (str, bytes))

@@ -18,6 +18,8 @@ import json
 import sys
 from typing import Any
 
+import numpy as np
+
 from rrtdrive.cli_args import positive_float, validate_output
 from rrtdrive.types import InputError, Pose
 
@@ -66,16 +68,23 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 
 def _read_plan(source: str) -> dict[str, Any]:
+    from rrtdrive.maps import parse_json
+
+    label = "stdin" if source == "-" else source
     try:
-        text = sys.stdin.read() if source == "-" else open(source, encoding="utf-8").read()
+        if source == "-":
+            # Bytes, so a file that is not UTF-8 is named as such whatever the locale
+            # (a text stream without a buffer, as a caller's StringIO, gives its text).
+            stdin = getattr(sys.stdin, "buffer", sys.stdin)
+            raw = stdin.read()
+        else:
+            with open(source, "rb") as f:
+                raw = f.read()
     except OSError as exc:
-        raise InputError(f"plan: cannot read {source}: {exc.strerror}") from None
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise InputError(f"plan: {source} is not JSON ({exc.msg}, line {exc.lineno})") from None
+        raise InputError(f"plan: cannot read {label}: {exc.strerror}") from None
+    data = parse_json(raw, "plan", label)
     if not isinstance(data, dict) or "path" not in data:
-        raise InputError(f"plan: {source} has no \"path\" (expected the JSON of rrtdrive plan)")
+        raise InputError(f"plan: {label} has no \"path\" (expected the JSON of rrtdrive plan)")
     return data
 
 
@@ -83,11 +92,8 @@ def _plan_pose(data: dict[str, Any], field: str) -> Pose | None:
     value = data.get(field)
     if value is None:
         return None
-    try:
-        x, y, yaw = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise InputError(f"plan.{field}: expected [x, y, yaw], got {value!r}") from None
-    return Pose(x, y, yaw)
+    # The plan's own field name in errors ("plan.start"), never Pose's generic "pose".
+    return Pose.from_seq(value, f"plan.{field}")
 
 
 def _map_of(args: argparse.Namespace, data: dict[str, Any]) -> Any:
@@ -104,6 +110,11 @@ def _map_of(args: argparse.Namespace, data: dict[str, Any]) -> Any:
     return resolve_map(spec)
 
 
+def _metres(value: float, spec: str = ".3f") -> str:
+    """``value`` in metres; a path row at 1e308 m shows as 1e+308 m, not 309 digits."""
+    return f"{value:{spec}} m" if abs(value) < 1e9 else f"{value:.3g} m"
+
+
 def _lines(check: Any, bounds: dict[str, float | None]) -> list[str]:
     """One line per check: its name, pass or FAIL, and the measured value against its bound."""
     mark = {True: "ok  ", False: "FAIL"}
@@ -118,7 +129,7 @@ def _lines(check: Any, bounds: dict[str, float | None]) -> list[str]:
         (check.headings_ok, "headings at start / goal",
          f"{check.start_heading_err_deg:.2f} / {check.goal_heading_err_deg:.2f} deg (max 3)"),
         (check.endpoints_ok, "ends exactly at start and goal", ""),
-        (check.spacing_ok, "sample spacing", f"{check.max_spacing_m:.3f} m (max 0.25)"),
+        (check.spacing_ok, "sample spacing", f"{_metres(check.max_spacing_m)} (max 0.25)"),
         (check.travel_ok, "direction of travel along the yaw",
          f"{check.travel_heading_err_deg:.2f} deg (max 3)"),
         (check.cusps_ok, "cusps repeat their pose", f"{check.cusps} gear change(s)"),
@@ -135,8 +146,10 @@ def run(args: argparse.Namespace) -> int:
     data = _read_plan(args.plan)
     path = path_from_json(data)
     m = _map_of(args, data)
-    start = parse_pose(args.start, "--start") if args.start else _plan_pose(data, "start")
-    goal = parse_pose(args.goal, "--goal") if args.goal else _plan_pose(data, "goal")
+    start = parse_pose(args.start, "--start") if args.start is not None else _plan_pose(
+        data, "start"
+    )
+    goal = parse_pose(args.goal, "--goal") if args.goal is not None else _plan_pose(data, "goal")
     if start or goal:
         m = m.with_query(start, goal)
     bound = args.max_sharpness
@@ -158,15 +171,17 @@ def run(args: argparse.Namespace) -> int:
             _write_output(args.json, json.dumps({"ok": False, "map": m.name, "rows": 0}) + "\n")
         return EXIT_FAILED
     check = verify_path(m, path, max_sharpness=bound)
+    with np.errstate(all="ignore"):  # a row at 1e308 m: the length is inf, quietly
+        length = path.length
     verdict = "OK, every check passed" if check.ok else "FAILED"
-    print(f"{m.name}: {label}: {verdict} ({len(path.samples)} rows, {path.length:.2f} m)",
+    print(f"{m.name}: {label}: {verdict} ({len(path.samples)} rows, {_metres(length, '.2f')})",
           file=out)
     print("\n".join(_lines(check, bounds)), file=out)
     if check.failed == ("sharpness_ok",):
         print("  (only the sharpness fails: paths of --paper-smoothing jump in curvature by "
               "design; --no-sharpness checks the rest)", file=out)
     if args.json:
-        doc = {"map": m.name, "rows": len(path.samples), "length_m": round(path.length, 6),
+        doc = {"map": m.name, "rows": len(path.samples), "length_m": round(length, 6),
                **bounds, **dataclasses.asdict(check), "failed": list(check.failed)}
         _write_output(args.json, json.dumps(doc) + "\n")
     return EXIT_OK if check.ok else EXIT_FAILED

@@ -151,6 +151,10 @@ def config_from_args(args: argparse.Namespace) -> Any:
         if args.max_time_s is not None:
             raise InputError("--max-time: --deterministic turns the planning time limit off")
         values["deterministic"] = True
+    elif values.get("deterministic") is True and args.max_time_s is not None:
+        raise InputError(
+            "--max-time: the config's deterministic = true turns the planning time limit off"
+        )
     return config_from_mapping(values)
 
 

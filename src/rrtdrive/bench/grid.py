@@ -19,14 +19,13 @@ import dataclasses
 import hashlib
 import importlib.util
 import json
-import math
 import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path as FsPath
 from typing import TYPE_CHECKING, Any
 
-from rrtdrive.types import InputError, require_int
+from rrtdrive.types import InputError, brief_repr, is_finite_number, require_int
 
 if TYPE_CHECKING:
     from rrtdrive.maps import Map
@@ -67,6 +66,11 @@ CONFIG_KEYS = (
 
 #: The planning time budget of a deterministic bench: never reached (iterations bind).
 NO_WALL_LIMIT_S = 1e6
+#: The planning time budget of a bench that gives none (and is not deterministic).
+DEFAULT_MAX_TIME_S = 5.0
+
+
+_DETERMINISTIC_TIME = "max_time_s: a deterministic bench has no planning time limit; drop it"
 
 
 def _names(field_name: str, value: object) -> tuple[str, ...]:
@@ -90,9 +94,9 @@ def _names(field_name: str, value: object) -> tuple[str, ...]:
 
 def _positive(field_name: str, value: object) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InputError(f"{field_name}: expected a number > 0, got {value!r}")
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(f"{field_name}: must be a finite number > 0, got {value!r}")
+        raise InputError(f"{field_name}: expected a number > 0, got {brief_repr(value)}")
+    if not (is_finite_number(value) and value > 0):  # an int of 400 digits too
+        raise InputError(f"{field_name}: must be a finite number > 0, got {brief_repr(value)}")
     return float(value)
 
 
@@ -153,8 +157,11 @@ class BenchConfig:
         number of runs in flight.
     out : str
         Output folder: ``runs.jsonl``, ``bench_config.json``, the summary and plots.
-    max_time_s, max_iterations : float, int
-        Planning budget of every run.
+    max_time_s : float, optional
+        Planning wall-clock safety cap of every run in seconds (``None``: the default,
+        :data:`DEFAULT_MAX_TIME_S`; a deterministic bench takes none).
+    max_iterations : int
+        Planning iteration budget of every run.
     run_timeout_s : float
         A run that takes longer is killed and counts as a crashed attempt.
     retries : int
@@ -166,7 +173,8 @@ class BenchConfig:
         Write the summary plots.
     deterministic : bool
         Wall-clock limits off: the planning budget is ``max_iterations`` alone
-        (``max_time_s`` becomes :data:`NO_WALL_LIMIT_S`; giving both is an error) and
+        (``max_time_s`` becomes :data:`NO_WALL_LIMIT_S`; giving both is an error, but for
+        that value itself, so a copy by ``dataclasses.replace`` stays valid) and
         overtake-traffic's re-planning cycles are not cut at their time budget, so a
         run depends on its seed only, not on the machine's load.
     reverse : bool
@@ -187,7 +195,7 @@ class BenchConfig:
     seeds: int = 10
     workers: int | None = None
     out: str = "bench"
-    max_time_s: float = 5.0
+    max_time_s: float | None = None
     max_iterations: int = 20_000
     run_timeout_s: float = 600.0
     retries: int = 1
@@ -215,11 +223,12 @@ class BenchConfig:
                 f"deterministic: expected true or false, got {self.deterministic!r}"
             )
         if self.deterministic:
-            if self.max_time_s not in (5.0, NO_WALL_LIMIT_S):  # 5.0: the field's default
-                raise InputError(
-                    "max_time_s: a deterministic bench has no planning time limit; drop it"
-                )
+            # None: not given. Any value given is an error, even the default's 5.0.
+            if self.max_time_s not in (None, NO_WALL_LIMIT_S):
+                raise InputError(_DETERMINISTIC_TIME)
             set_(self, "max_time_s", NO_WALL_LIMIT_S)
+        elif self.max_time_s is None:
+            set_(self, "max_time_s", DEFAULT_MAX_TIME_S)
         set_(self, "max_time_s", _positive("max_time_s", self.max_time_s))
         set_(self, "max_iterations", require_int("max_iterations", self.max_iterations, 1))
         set_(self, "run_timeout_s", _positive("run_timeout_s", self.run_timeout_s))
@@ -464,6 +473,12 @@ def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise InputError(f"config: cannot read {str(p)!r}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"config: malformed TOML in {str(p)!r}: {exc}") from None
+    except RecursionError:
+        raise InputError(f"config: malformed TOML in {str(p)!r}: nested too deeply") from None
+    except ValueError:  # an integer past Python's 4300-digit conversion limit
+        raise InputError(
+            f"config: malformed TOML in {str(p)!r}: a number has too many digits"
+        ) from None
     if "bench" in data and isinstance(data["bench"], dict) and len(data) == 1:
         data = data["bench"]  # a [bench] table is accepted too
     unknown = sorted(set(data) - set(CONFIG_KEYS))
@@ -494,6 +509,8 @@ def config_from_mapping(values: Mapping[str, Any]) -> BenchConfig:
     unknown = sorted(set(values) - set(CONFIG_KEYS))
     if unknown:
         raise InputError(f"config: unknown key {unknown[0]!r}")
+    if values.get("deterministic") is True and values.get("max_time_s") is not None:
+        raise InputError(_DETERMINISTIC_TIME)  # whatever the value, NO_WALL_LIMIT_S too
     return BenchConfig(**{k: v for k, v in values.items() if v is not None})
 
 

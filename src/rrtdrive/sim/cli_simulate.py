@@ -321,6 +321,7 @@ def _run(args: argparse.Namespace) -> int:
     else:
         scenario = _make_task(args, target, oncoming, traffic_opts, make_scenario)
         episode = run_episode(scenario, args.planner, args.controller, args.seed, config)
+    episode = _with_simulate_hint(episode)
     report = evaluate(episode)
     total = time.perf_counter() - t0
     extra: dict[str, Any] = {
@@ -400,6 +401,33 @@ def _run(args: argparse.Namespace) -> int:
     return EXIT_OK if ok else EXIT_FAILED
 
 
+def _with_simulate_hint(episode: Any) -> Any:
+    """``episode`` with the planner's timeout hint naming simulate's flag, ``--plan-time``.
+
+    The planners word it for ``rrtdrive plan`` ("raise --max-time or lower
+    --max-iterations"); simulate's planning cap is ``--plan-time``, and ``--max-time``
+    here is the drive's time limit.
+    """
+    import dataclasses
+
+    from rrtdrive.planning.result import timeout_message
+    from rrtdrive.types import Budget
+
+    # The hint as the planners write it: the last clause of their timeout message.
+    hint = timeout_message(0, Budget()).rpartition("; ")[2]
+    if hint not in episode.message:
+        return episode
+    plan = episode.plan
+    if plan is not None:
+        plan = dataclasses.replace(plan, message=plan.message.replace(hint, _PLAN_TIME_HINT))
+    return dataclasses.replace(
+        episode, message=episode.message.replace(hint, _PLAN_TIME_HINT), plan=plan
+    )
+
+
+_PLAN_TIME_HINT = "raise --plan-time"
+
+
 def _target_kind(name: str, scenarios: tuple[str, ...], stock_envs: tuple[str, ...]) -> str:
     """``"scenario"``, ``"stock"`` or ``"map"``; an unknown plain name is bad input."""
     from rrtdrive.maps import BUILTIN_MAPS, names_map_file
@@ -417,18 +445,9 @@ def _target_kind(name: str, scenarios: tuple[str, ...], stock_envs: tuple[str, .
 
 def _parse_pose(text: str | None, flag: str) -> Any:
     """``"x,y,yaw"`` as a :class:`~rrtdrive.types.Pose` (``None`` stays ``None``)."""
-    from rrtdrive.types import Pose
+    from rrtdrive.cli import parse_pose
 
-    if text is None:
-        return None
-    parts = text.split(",")
-    try:
-        values = [float(p) for p in parts]
-    except ValueError:
-        values = []
-    if len(values) != 3:
-        raise InputError(f"{flag}: expected three numbers x,y,yaw, got {text!r}")
-    return Pose.from_seq(values, flag)
+    return None if text is None else parse_pose(text, flag)
 
 
 def _make_task(
