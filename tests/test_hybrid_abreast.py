@@ -93,8 +93,11 @@ def test_angled_bay_against_the_row_turns_abreast_of_it():
     assert "multi-point turn" in res.message
     check = verify_path(m, res.path, max_sharpness=0.2)
     assert check.ok, check.failed
-    without = _plan(m, abreast_turns=0)
+    without = _plan(m, abreast_turns=0, lattice_after=0)
     assert without.iterations > 5 * res.iterations
+    # The heading lattice's guidance (after 800 expansions) finds a way too, later.
+    guided = _plan(m, abreast_turns=0)
+    assert guided.success and guided.iterations > res.iterations
 
 
 def test_abreast_turns_are_validated():

@@ -98,16 +98,26 @@ def test_middle_stage_threads_an_approach_too_tight_for_the_coarse_grid() -> Non
     # Random goal 94 forward: the only way in passes about 0.05 m from a parked car. The
     # first search spends its share, the coarse one (2 m) and the middle one keeping
     # 0.15 m (1 m) run out of ways to arrive; the middle one keeping 0.05 m finds it.
+    # The ladder as it runs where the heading lattice does not help (lattice_after=0);
+    # with it (the default) the first search finds a way keeping 0.15 m (below).
     m, problem = _random_problem("goal", 94, count=100)
-    res = _solve(problem, 20000)
+    res = _solve(problem, 20000, lattice_after=0)
     assert res.status is PlanStatus.SOLVED, res.message
     assert "keeping only 0.05 m body clearance at 1 m / 10 deg resolution" in res.message
     assert res.stats["tight_search"] == 1.0
     assert verify_path(m, res.path, max_sharpness=0.2).ok
     assert np.all(res.path.samples[:, 4] == 1)
     # Without the middle stage (coarse_factor 2 has none) the budget ends without a path.
-    without = _solve(problem, 20000, coarse_factor=2)
+    without = _solve(problem, 20000, coarse_factor=2, lattice_after=0)
     assert without.status is PlanStatus.NO_PATH_IN_BUDGET
+    # Guided by the heading lattice after 800 expansions, the first search threads it
+    # keeping the query's 0.15 m, in fewer expansions than the ladder took.
+    guided = _solve(problem, 20000)
+    assert guided.status is PlanStatus.SOLVED, guided.message
+    assert guided.message.startswith("solved by Hybrid A*: ")
+    assert guided.iterations < res.iterations
+    assert verify_path(m, guided.path, max_sharpness=0.2).ok
+    assert problem.checker.poses_free(guided.path.samples[:, :3], clearance=0.145).all()
 
 
 def test_the_wall_clock_cap_on_the_middle_branch_is_a_timeout_named_as_such(monkeypatch) -> None:
@@ -127,7 +137,7 @@ def test_the_wall_clock_cap_on_the_middle_branch_is_a_timeout_named_as_such(monk
 
     monkeypatch.setattr(query, "search_at_resolution", capped)
     _, problem = _random_problem("goal", 94, count=100)
-    res = _solve(problem, 20000)
+    res = _solve(problem, 20000, lattice_after=0)
     assert calls == [0.5, 2.0, 1.0]
     assert res.status is PlanStatus.TIMEOUT
     assert res.message.startswith(
@@ -201,7 +211,7 @@ def test_finer_search_leaves_the_tight_search_its_share() -> None:
     # one solves it.
     m, problem = _pinned_start_problem()
     assert problem.checker.body_clearance(problem.start.as_tuple()) < 0.16
-    res = _solve(problem, 20_000)
+    res = _solve(problem, 20_000, lattice_after=0)  # the ladder (the lattice: below)
     assert res.status is PlanStatus.SOLVED, res.message
     assert "keeping only 0.05 m body clearance" in res.message
     assert "the search ran out of states after 3 expansions" in res.message
@@ -214,14 +224,21 @@ def test_finer_search_leaves_the_tight_search_its_share() -> None:
     assert np.all(res.path.samples[:, 4] == 1)
     assert verify_path(m, res.path, max_sharpness=0.2).ok
     # All the rest to the finer search (the ladder before refine_share): no path.
-    old = _solve(problem, 20_000, refine_share=1.0)
+    old = _solve(problem, 20_000, refine_share=1.0, lattice_after=0)
     assert old.status is PlanStatus.NO_PATH_IN_BUDGET
     assert old.stats["tight_search"] == 0.0
+    # Guided by the heading lattice, the finer search finds a way keeping what the
+    # start has (0.15 m capped at its own), before the tight search is needed.
+    guided = _solve(problem, 20_000)
+    assert guided.status is PlanStatus.SOLVED, guided.message
+    assert "keeping only" not in guided.message and guided.stats["tight_search"] == 0.0
+    assert guided.iterations < res.iterations
+    assert verify_path(m, guided.path, max_sharpness=0.2).ok
 
 
 def test_tight_search_cut_short_after_a_shared_finer_one_proves_nothing() -> None:
     _, problem = _pinned_start_problem()
-    res = _solve(problem, 6000)  # 3 + 2999 + 2998: the tight search needs 3 626
+    res = _solve(problem, 6000, lattice_after=0)  # 3 + 2999 + 2998: the tight one needs 3 626
     assert res.status is PlanStatus.NO_PATH_IN_BUDGET, res.message
     assert res.message.startswith(
         "no path found at 0.25 m / 2.5 deg resolution within its share of 2999 expansions"
@@ -237,8 +254,10 @@ def test_default_planner_solves_the_pinned_start_forward() -> None:
     )
     assert res.status is PlanStatus.SOLVED, res.message
     assert res.stats["stage"] == "hybrid-a-star"
-    assert "keeping only 0.05 m body clearance" in res.message
-    assert res.stats["hybrid_tight_search"] == 1.0
+    # Its escalation is the Hybrid A* query: guided by the heading lattice, its finer
+    # search keeps the start's own clearance (without, only the tight search at 0.05 m).
+    assert "keeping only" not in res.message
+    assert res.stats["hybrid_tight_search"] == 0.0
     assert np.all(res.path.samples[:, 4] == 1)
     assert verify_path(m, res.path, max_sharpness=0.2).ok
 

@@ -214,6 +214,19 @@ class HybridConfig:
         wider-turning and finer searches after it, search once more at the finest
         resolution, going on through rejected connections until the budget ends
         (``False``: stop there, with the rest of the budget unspent).
+    lattice_after : int
+        When the searches of one resolution have spent this many expansions (both
+        ways together) without a path, both are guided from then on by the cost to go
+        over a coarse lattice of poses with obstacles and headings
+        (:class:`~rrtdrive.planning.hybrid.lattice.HeadingLattice`, built once per map,
+        as set-up), the larger of it and their own estimate (0: never). A query the
+        search answers sooner is unchanged.
+    lattice_cell : float
+        The lattice's cell side, metres (larger on a big map: ``lattice_nodes``).
+    lattice_headings : int
+        The lattice's heading steps per turn (>= 4); its moves turn by one.
+    lattice_nodes : int
+        Most lattice nodes (cells x headings x gears); a bigger map gets coarser cells.
 
     Examples
     --------
@@ -262,6 +275,10 @@ class HybridConfig:
     abreast_turns: int = 4
     lead_ins: int = 3
     persist: bool = True
+    lattice_after: int = 800
+    lattice_cell: float = 0.5
+    lattice_headings: int = 16
+    lattice_nodes: int = 300_000
 
     def __post_init__(self) -> None:
         for name in (
@@ -323,6 +340,10 @@ class HybridConfig:
         require_int("hybrid.abreast_turns", self.abreast_turns, minimum=0)
         require_int("hybrid.lead_ins", self.lead_ins, minimum=0)
         require_int("hybrid.coarse_factor", self.coarse_factor, minimum=2)
+        require_int("hybrid.lattice_after", self.lattice_after, minimum=0)
+        require_int("hybrid.lattice_headings", self.lattice_headings, minimum=4)
+        require_int("hybrid.lattice_nodes", self.lattice_nodes, minimum=1)
+        require_positive("hybrid.lattice_cell", self.lattice_cell)
         require_finite("hybrid.refine_share", self.refine_share)
         if not 0.0 < self.refine_share <= 1.0:
             raise InputError(f"hybrid.refine_share: must lie in (0, 1], got {self.refine_share!r}")

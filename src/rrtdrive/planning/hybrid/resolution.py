@@ -36,6 +36,7 @@ from rrtdrive.planning.hybrid.heuristic import (
     Heuristic,
     HolonomicField,
 )
+from rrtdrive.planning.hybrid.lattice import guided, heading_lattice
 from rrtdrive.planning.hybrid.leads import Lead, lead_ins
 from rrtdrive.planning.hybrid.path import BuiltPath, Ramps, SegmentMemo, build_path
 from rrtdrive.planning.hybrid.primitives import PrimitiveSet, primitive_sets
@@ -92,6 +93,9 @@ Accept = Callable[[list[Piece]], BuiltPath | None]
 #: The multi-point turn of a search (:func:`~.turn.multi_point_turn`), given the
 #: expansions it may spend.
 Turn = Callable[[int], TurnResult[BuiltPath]]
+#: The estimates that guide the searches (from the start, from the goal) from now on,
+#: or ``None`` to leave them as they are.
+Guide = Callable[[], "tuple[Heuristic, Heuristic] | None"]
 
 
 def free_cell_graph(problem: PlanningProblem, resolution: float) -> FreeCellGraph:
@@ -320,6 +324,16 @@ def search_at_resolution(
         assert table is not None
         heuristic = Heuristic(to_goal, table.to(goal), goal, table.scalar_to(goal))
     back_h = Heuristic(HolonomicField.towards(grid, start), None, start)
+
+    def guide() -> tuple[Heuristic, Heuristic] | None:
+        # A hard query: the lattice's cost to go (and from the start) guides both ways.
+        with watch.setup():
+            lattice = heading_lattice(problem.checker, problem.bounds, radius, reverse, config)
+        to_goal_cost, from_start_cost = lattice.estimate(goal, True), lattice.estimate(start, False)
+        if to_goal_cost is None or from_start_cost is None:
+            return None
+        return guided(heuristic, to_goal_cost), guided(back_h, from_start_cost)
+
     gears = (1, -1) if reverse else (1,)
     longest = 2.0 * problem.vehicle.length
 
@@ -434,8 +448,9 @@ def search_at_resolution(
             # side its hard part is a way out. Search from there sooner.
             first_turn = max(1, config.switch_after // BOXED_START_SOONER)
         path, outcome = _alternate(
-            searches, left, first_turn, watch, turn_with(search_clearance)
-        )
+            searches, left, first_turn, watch, turn_with(search_clearance),
+            guide if config.lattice_after > 0 else None, config.lattice_after,
+        )  # fmt: skip
         reason = outcome.reason
         if margin > 0.0 and reason in PROOFS:
             # Out of states keeping the margin too proves nothing for the query's own
@@ -479,6 +494,8 @@ def _alternate(
     first: int,
     watch: Stopwatch,
     turn_first: Turn | None = None,
+    guide: Guide | None = None,
+    guide_after: int = 0,
 ) -> tuple[BuiltPath | None, SearchOutcome]:
     """Run the searches in turns of ``first``, ``first``, ``2 first``, ``2 first``, ... expansions.
 
@@ -486,15 +503,24 @@ def _alternate(
     same on any machine. Either search running out of states ends the query: from
     the start it proves the goal unreachable, from the goal that no approach exists.
     ``turn_first``: the multi-point turn tried once, after the first turn from the
-    start (each of its moves counted as an expansion).
+    start (each of its moves counted as an expansion). ``guide``: the searches'
+    new estimates, taken at the first turn that starts with ``guide_after`` or more
+    expansions spent (:attr:`HybridConfig.lattice_after`).
     """
     outcomes = [SearchOutcome("expansions", 0, 0, 0, 0) for _ in searches]
     turn, used, k = max(1, first), 0, 0
     while True:
         search, accept = searches[k]
+        if guide is not None and used >= guide_after:
+            guided_by = guide()
+            guide = None
+            for (s, _), h in zip(searches, guided_by or (), strict=False):
+                s.reguide(h)
         if len(searches) == 1:
             turn = budget
         step = min(turn, budget - used)
+        if guide is not None and len(searches) == 1:
+            step = min(step, guide_after - used)  # one search: stop where the guide comes in
         before = outcomes[k].expansions
         path, outcomes[k] = search.run(accept, before + step, watch.expired)
         used += outcomes[k].expansions - before

@@ -206,6 +206,20 @@ class HybridSearch:
             kappa_max, body.disc_offsets,
         )  # fmt: skip
 
+    def reguide(self, heuristic: Heuristic) -> None:
+        """Go on with ``heuristic``: every node's estimate and the open nodes' order anew.
+
+        The nodes, their costs and the closed bins stay; the next :meth:`run` resumes
+        with the open nodes ranked by ``g + weight * heuristic``.
+        """
+        self.heuristic = heuristic
+        if not self.x:
+            return
+        h_at, w = heuristic.scalar(), self.cfg.heuristic_weight
+        self._hval = [h_at(x, y, yaw) for x, y, yaw in zip(self.x, self.y, self.yaw, strict=True)]
+        self._heap = [(self.g[i] + w * self._hval[i], i) for _, i in self._heap]
+        heapq.heapify(self._heap)
+
     def key(self, x: float, y: float, yaw: float, gear: int) -> int:
         """The closing bin of a state: its cell, heading bin and gear."""
         res = self.cfg.xy_resolution
