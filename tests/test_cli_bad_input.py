@@ -385,3 +385,24 @@ def test_readme_plan_synopsis_lists_every_option():
     options = {o for a in plan._actions for o in a.option_strings if o.startswith("--")}
     missing = sorted(o for o in options - {"--help"} if f"[{o}" not in block)
     assert missing == []
+
+
+# ------------------------------------------------ bench seeds bounded; strict verify JSON
+
+
+@pytest.mark.parametrize("seeds", ["100001", "1000000000"])
+def test_a_bench_of_endless_seeds_is_refused(capsys, tmp_path, seeds):
+    code, _, err = run(
+        capsys, "bench", "--maps", "dead_end", "--seeds", seeds, "--out", str(tmp_path / "b")
+    )
+    one_line(code, err, "seeds")
+    assert not (tmp_path / "b").exists()
+
+
+def test_verify_json_of_a_far_row_is_strict_json(capsys, tmp_path):
+    rows = plan_rows()
+    rows[3][0] = 1e308
+    code, out, _ = run(capsys, "verify", write_plan(tmp_path, rows), "--json", "-")
+    assert code == 1
+    doc = json.loads(out.strip().splitlines()[-1], parse_constant=pytest.fail)
+    assert doc["ok"] is False and doc["length_m"] is None

@@ -42,6 +42,9 @@ __all__ = [
     "is_map_scenario",
 ]
 
+#: Most seeds per cell of a bench grid.
+MAX_SEEDS = 100_000
+
 #: Version of the row schema and of the hashed fields; bump to invalidate old rows.
 SCHEMA = 1
 
@@ -151,7 +154,7 @@ class BenchConfig:
     controllers : tuple of str
         Controllers for scenario runs (ignored by planning-only runs).
     seeds : int
-        Seeds ``0 … seeds-1`` for every cell of the grid.
+        Seeds ``0 … seeds-1`` for every cell of the grid (at most :data:`MAX_SEEDS`).
     workers : int, optional
         Local worker processes (default: one per core); with Ray, the largest
         number of runs in flight.
@@ -212,7 +215,8 @@ class BenchConfig:
         set_ = object.__setattr__
         for name in ("maps", "scenarios", "planners", "controllers"):
             set_(self, name, _names(name, getattr(self, name)))
-        set_(self, "seeds", require_int("seeds", self.seeds, 1))
+        # A bound keeps a typo (seeds = 10000000) from a grid that never ends.
+        set_(self, "seeds", require_int("seeds", self.seeds, 1, MAX_SEEDS))
         if self.workers is not None:
             set_(self, "workers", require_int("workers", self.workers, 1))
         if not isinstance(self.out, (str, os.PathLike)) or not str(self.out):
