@@ -36,6 +36,7 @@ from scipy import sparse
 from scipy.sparse.csgraph import dijkstra
 
 from rrtdrive.collision import CollisionChecker
+from rrtdrive.planning.hybrid.body import BodyTest
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.heuristic import Heuristic
 from rrtdrive.types import Pose
@@ -124,22 +125,27 @@ class HeadingLattice:
         poses = np.column_stack(
             [x0 + (ii + 0.5) * cell, y0 + (jj + 0.5) * cell, _TWO_PI * kk / headings]
         )
-        free = checker.poses_free(poses)
+        # The exact test, after a screen that settles the poses surely hitting (most of a
+        # lattice's states inside obstacles) and surely clear.
+        body = BodyTest(checker, 0.0)
+        free = body.free(poses)
         arc = radius * _TWO_PI / headings
+        # Moves start from clear states only.
+        start = index[free]
+        from_poses, from_k = poses[start], kk[start]
         src_parts, dst_parts, cost_parts = [], [], []
         for gear in (1, -1) if reverse else (1,):
             for steer in (-1, 0, 1):
-                end, middle = _move(poses, gear, steer, radius, arc)
+                end, middle = _move(from_poses, gear, steer, radius, arc)
                 ei = np.floor((end[:, 0] - x0) / cell).astype(np.int64)
                 ej = np.floor((end[:, 1] - y0) / cell).astype(np.int64)
-                inside = free & (ei >= 0) & (ei < nx) & (ej >= 0) & (ej < ny)
-                src = index[inside]
-                turned = (kk[inside] + gear * steer) % headings
+                inside = np.flatnonzero((ei >= 0) & (ei < nx) & (ej >= 0) & (ej < ny))
+                turned = (from_k[inside] + gear * steer) % headings
                 dst = (ei[inside] * ny + ej[inside]) * headings + turned
                 keep = free[dst]
-                src, dst = src[keep], dst[keep]
-                clear = checker.poses_free(np.ascontiguousarray(middle[src]))
-                src, dst = src[clear], dst[clear]
+                moved, dst = inside[keep], dst[keep]
+                clear = body.free(middle[moved])
+                src, dst = start[moved[clear]], dst[clear]
                 length = arc * (reverse_cost if gear < 0 else 1.0)
                 bit = int(gear < 0)
                 for before in range(gears):
