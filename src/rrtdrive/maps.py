@@ -130,7 +130,23 @@ class Map:
         if b[2] <= b[0] or b[3] <= b[1]:
             raise InputError(f"bounds: need xmin < xmax and ymin < ymax, got {list(b)}")
         object.__setattr__(self, "bounds", b)
+        if isinstance(self.obstacles, (str, bytes)) or not isinstance(
+            self.obstacles, (list, tuple)
+        ):
+            raise InputError(
+                f"obstacles: expected a list of Obstacle, got {type(self.obstacles).__name__}"
+            )
         object.__setattr__(self, "obstacles", tuple(self.obstacles))
+        for i, o in enumerate(self.obstacles):
+            if not isinstance(o, Obstacle):
+                raise InputError(
+                    f"obstacles[{i}]: expected an Obstacle((x, y), (length, width), yaw), "
+                    f"got {brief_repr(o)}"
+                )
+        if not isinstance(self.vehicle, VehicleParams):
+            raise InputError(
+                f"vehicle: expected a VehicleParams, got {type(self.vehicle).__name__}"
+            )
         for label, pose in (("start", self.start), ("goal", self.goal)):
             if not isinstance(pose, Pose):
                 raise InputError(f"{label}: expected a Pose, got {pose!r}")

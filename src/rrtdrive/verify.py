@@ -25,7 +25,7 @@ import shapely
 
 from rrtdrive.geometry import densify, wrap_angle
 from rrtdrive.maps import Map
-from rrtdrive.types import InputError, Path, brief_repr, is_finite_number
+from rrtdrive.types import InputError, Path, brief_repr, is_finite_number, require_positive
 
 __all__ = ["CHECKS", "PathCheck", "verify_path", "path_from_json"]
 
@@ -176,6 +176,42 @@ def _travel_directions(seg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.arctan2(d[moving, 1], d[moving, 0]), moving
 
 
+#: The finest pose spacing a check may ask for, metres (finer would only take longer).
+MIN_POSE_SPACING = 1e-3
+
+
+def _check_settings(
+    pose_spacing: float,
+    max_sample_spacing: float,
+    heading_tol_deg: float,
+    curvature_tol: float,
+    max_sharpness: float | None,
+    sharpness_tol: float,
+) -> None:
+    """Raise :class:`InputError` naming a setting of :func:`verify_path` that is not usable.
+
+    A spacing of 0 or less would test no pose between the rows (the body check passed
+    through an obstacle), so it is refused rather than taken.
+    """
+    for name, value in (("pose_spacing", pose_spacing), ("max_sample_spacing", max_sample_spacing)):
+        require_positive(name, value)
+    if pose_spacing < MIN_POSE_SPACING:
+        raise InputError(
+            f"pose_spacing: must be at least {MIN_POSE_SPACING:g} m, got {pose_spacing!r}"
+        )
+    for name, value in (
+        ("heading_tol_deg", heading_tol_deg), ("curvature_tol", curvature_tol),
+        ("sharpness_tol", sharpness_tol),
+    ):  # fmt: skip
+        # A tolerance may be infinite (that check then passes whatever it measures).
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.number)):
+            raise InputError(f"{name}: expected a number, got {brief_repr(value)}")
+        if not value >= 0:
+            raise InputError(f"{name}: must be >= 0, got {value!r}")
+    if max_sharpness is not None:
+        require_positive("max_sharpness", max_sharpness)
+
+
 # Rows far off the map (x = 1e308) overflow the geometry to inf and nan: the checks
 # fail on them as they should, without a screen of numpy warnings.
 @np.errstate(all="ignore")
@@ -231,6 +267,8 @@ def verify_path(
     >>> check.ok, check.cusps
     (True, 1)
     """
+    _check_settings(pose_spacing, max_sample_spacing, heading_tol_deg, curvature_tol,
+                    max_sharpness, sharpness_tol)  # fmt: skip
     v = m.vehicle
     s = path.samples
     if len(s) < 2:

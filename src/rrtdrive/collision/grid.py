@@ -85,20 +85,32 @@ def grid_resolution(bounds: Sequence[float], config: CheckerConfig) -> float:
     if nx * ny <= limit:
         return h0
     xmin, ymin, xmax, ymax = (float(b) for b in bounds)
-    # The area alone gives a lower bound of the cell size; the border adds a few steps.
-    steps = max(int(math.ceil(h0 * 100.0)), int(math.ceil(100.0 * math.sqrt(
-        (xmax - xmin) * (ymax - ymin) / limit
-    ))))  # fmt: skip
-    while True:
-        h = round(steps / 100.0, 10)
-        fx, fy = grid_shape(bounds, h, config.pad)
-        if h > h0 and fx * fy <= limit:
-            break
-        steps += 1
     coarsest = max(h0, config.max_auto_resolution)
+    # The area alone gives a lower bound of the cell size; the border adds a few steps.
+    least = math.sqrt((xmax - xmin) * (ymax - ymin) / limit)
+    if not least <= 1e6:  # no usable cell (and the grid's shape would not fit a float)
+        h = least
+    else:
+        steps = max(int(math.ceil(h0 * 100.0)), int(math.ceil(100.0 * least)))
+        while True:
+            h = round(steps / 100.0, 10)
+            fx, fy = grid_shape(bounds, h, config.pad)
+            if h > h0 and fx * fy <= limit:
+                break
+            # 1 cm at a time, or 0.1 % once the cell is over 10 m: a cell of kilometres
+            # stepped by centimetres would take minutes.
+            steps += max(1, steps // 1000)
     if h > coarsest + 1e-12:
+        cells = nx * ny
+        count = f"{cells:,}" if cells < 10**12 else f"about 1e{len(str(cells)) - 1}"
+        if not math.isfinite(h) or h > 1e6:
+            raise InputError(
+                f"bounds: {xmax - xmin:g} x {ymax - ymin:g} m needs {count} grid cells at "
+                f"{h0:g} m; the limit is {limit:,} cells (checker.max_grid_cells): use a "
+                f"smaller map"
+            )
         raise InputError(
-            f"bounds: {xmax - xmin:g} x {ymax - ymin:g} m needs {nx * ny:,} grid cells at "
+            f"bounds: {xmax - xmin:g} x {ymax - ymin:g} m needs {count} grid cells at "
             f"{h0:g} m; the limit is {limit:,} cells (checker.max_grid_cells), which needs "
             f"{h:g} m cells, coarser than the {coarsest:g} m the checker chooses by itself; "
             f"use a smaller map or cells of {h:g} m (rrtdrive plan --resolution {h:g}; "
@@ -150,8 +162,11 @@ def rasterise(
     grow = h / math.sqrt(2.0)
     for o in obstacles:
         corners = o.corners()
-        lo = np.floor((corners.min(axis=0) - grow - origin) / h).astype(int) - 1
-        hi = np.ceil((corners.max(axis=0) + grow - origin) / h).astype(int) + 1
+        # Clipped to the grid before the cast: a rectangle reaching 1e19 m would overflow
+        # int64 and drop out of the grid (a planner would drive through it).
+        top = np.array([nx, ny], dtype=float)
+        lo = np.clip(np.floor((corners.min(axis=0) - grow - origin) / h), -1, top).astype(int) - 1
+        hi = np.clip(np.ceil((corners.max(axis=0) + grow - origin) / h), -1, top).astype(int) + 1
         i0, j0 = max(lo[0], 0), max(lo[1], 0)
         i1, j1 = min(hi[0], nx), min(hi[1], ny)
         if i0 >= i1 or j0 >= j1:

@@ -42,7 +42,7 @@ def make_planner(name: str, **options: object) -> Planner:
     """
     try:
         factory = PLANNERS[name]
-    except KeyError:
+    except (KeyError, TypeError):  # TypeError: an unhashable name (a list)
         raise InputError(
             f"planner: unknown planner {name!r}; choose from {sorted(PLANNERS)}"
         ) from None

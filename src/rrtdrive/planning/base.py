@@ -68,6 +68,19 @@ class PlanningProblem:
     reverse: bool = False
 
     def __post_init__(self) -> None:
+        for name, kind in (
+            ("map", Map), ("start", Pose), ("goal", Pose), ("vehicle", VehicleParams),
+        ):  # fmt: skip
+            value = getattr(self, name)
+            if not isinstance(value, kind):
+                raise InputError(
+                    f"problem.{name}: expected a {kind.__name__}, got {type(value).__name__}"
+                )
+        # Any checker with the collision checker's tests (the space-time one in traffic).
+        if not hasattr(self.checker, "poses_free"):
+            raise InputError(
+                f"problem.checker: expected a CollisionChecker, got {type(self.checker).__name__}"
+            )
         if not isinstance(self.reverse, (bool, np.bool_)):
             raise InputError(f"reverse: expected True or False, got {self.reverse!r}")
         object.__setattr__(self, "reverse", bool(self.reverse))
@@ -81,6 +94,10 @@ class PlanningProblem:
         reverse: bool = False,
     ) -> PlanningProblem:
         """The problem of map ``m`` with its own start and goal (gear changes if ``reverse``)."""
+        if not isinstance(m, Map):
+            raise InputError(f"map: expected a Map (rrtdrive.maps), got {type(m).__name__}")
+        if config is not None and not isinstance(config, CheckerConfig):
+            raise InputError(f"config: expected a CheckerConfig, got {type(config).__name__}")
         if checker is None:
             checker = cached_checker(m, config)
         return cls(m, checker, m.start, m.goal, m.vehicle, reverse=reverse)

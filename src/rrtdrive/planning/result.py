@@ -26,9 +26,10 @@ import numpy as np
 from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, polyline_path, precheck
 from rrtdrive.planning.diagnosis import diagnose
-from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Pose, Tree
+from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Pose, Tree
 
 __all__ = [
+    "check_query",
     "SAME_POSE_TOL",
     "Search",
     "already_there",
@@ -48,12 +49,37 @@ __all__ = [
 Search = Callable[[Stopwatch], PlanResult]
 
 
+def check_query(problem: object, rng: object, budget: object) -> None:
+    """Raise :class:`InputError` naming ``problem``, ``rng`` or ``budget`` when of the wrong type.
+
+    Examples
+    --------
+    >>> check_query(None, np.random.default_rng(0), Budget())  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: problem: expected a PlanningProblem (...), got NoneType
+    """
+    if not isinstance(problem, PlanningProblem):
+        raise InputError(
+            "problem: expected a PlanningProblem (PlanningProblem.from_map(m)), "
+            f"got {type(problem).__name__}"
+        )
+    if not isinstance(rng, np.random.Generator):
+        raise InputError(
+            "rng: expected a numpy.random.Generator (np.random.default_rng(seed)), "
+            f"got {type(rng).__name__}"
+        )
+    if not isinstance(budget, Budget):
+        raise InputError(f"budget: expected a Budget, got {type(budget).__name__}")
+
+
 def run_query(
     planner: str,
     problem: PlanningProblem,
     budget: Budget,
     search: Search,
     prepare: Callable[[], object] | None = None,
+    rng: object = "unchecked",
 ) -> PlanResult:
     """Set the map up, start the stopwatch, fail early on a hopeless query, else search.
 
@@ -77,6 +103,9 @@ def run_query(
         ``search(watch) -> PlanResult``, the planner's own work.
     prepare : callable, optional
         The planner's own per-map set-up (cached on the checker).
+    rng : numpy.random.Generator, optional
+        The planner's ``rng``, checked with ``problem`` and ``budget``
+        (:func:`check_query`); not given: only those two are checked.
 
     Returns
     -------
@@ -91,6 +120,7 @@ def run_query(
     >>> run_query("demo", problem, Budget(), lambda watch: None).status.value
     'proven_unreachable'
     """
+    check_query(problem, np.random.default_rng(0) if rng == "unchecked" else rng, budget)
     t0 = time.perf_counter()
     checker = problem.checker
     checker.component_labels  # noqa: B018 - built here, read by the precheck

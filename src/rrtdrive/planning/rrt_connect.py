@@ -133,7 +133,8 @@ class RRTConnectPlanner:
             Solved with the raw path through both trees, or a failure with both trees.
         """
         return run_query(
-            self.name, problem, budget, lambda watch: self._search(problem, rng, budget, watch)
+            self.name, problem, budget, lambda watch: self._search(problem, rng, budget, watch),
+            rng=rng,
         )
 
     def _search(

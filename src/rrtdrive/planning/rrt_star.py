@@ -132,7 +132,8 @@ class RRTStarPlanner:
             Solved with the best raw tree path, or a failure with the tree.
         """
         return run_query(
-            self.name, problem, budget, lambda watch: self._search(problem, rng, budget, watch)
+            self.name, problem, budget, lambda watch: self._search(problem, rng, budget, watch),
+            rng=rng,
         )
 
     def _search(

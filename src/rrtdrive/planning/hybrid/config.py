@@ -224,9 +224,10 @@ class HybridConfig:
     lattice_cell : float
         The lattice's cell side, metres (larger on a big map: ``lattice_nodes``).
     lattice_headings : int
-        The lattice's heading steps per turn (>= 4); its moves turn by one.
+        The lattice's heading steps per turn (4 to 72); its moves turn by one.
     lattice_nodes : int
-        Most lattice nodes (cells x headings x gears); a bigger map gets coarser cells.
+        Most lattice nodes (cells x headings x gears, at most 5 000 000); a bigger map
+        gets coarser cells.
 
     Examples
     --------
@@ -341,8 +342,8 @@ class HybridConfig:
         require_int("hybrid.lead_ins", self.lead_ins, minimum=0)
         require_int("hybrid.coarse_factor", self.coarse_factor, minimum=2)
         require_int("hybrid.lattice_after", self.lattice_after, minimum=0)
-        require_int("hybrid.lattice_headings", self.lattice_headings, minimum=4)
-        require_int("hybrid.lattice_nodes", self.lattice_nodes, minimum=1)
+        require_int("hybrid.lattice_headings", self.lattice_headings, minimum=4, maximum=72)
+        require_int("hybrid.lattice_nodes", self.lattice_nodes, minimum=1, maximum=5_000_000)
         require_positive("hybrid.lattice_cell", self.lattice_cell)
         require_finite("hybrid.refine_share", self.refine_share)
         if not 0.0 < self.refine_share <= 1.0:

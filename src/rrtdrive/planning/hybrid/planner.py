@@ -103,6 +103,9 @@ class HybridAStar:
         if reverse is not None and not isinstance(reverse, bool):
             raise InputError(f"planner.reverse: expected true or false, got {reverse!r}")
         self.reverse = reverse
+        if smoothing is not None and not isinstance(smoothing, SmoothingConfig):
+            kind = type(smoothing).__name__
+            raise InputError(f"planner.smoothing: expected a SmoothingConfig, got {kind}")
         self.smoothing = smoothing if smoothing is not None else SmoothingConfig(max_rounds=24)
 
     def __repr__(self) -> str:
@@ -132,7 +135,7 @@ class HybridAStar:
                 if not reverse:
                     dubins_table(c.radius_factor / problem.vehicle.kappa_max, c)
 
-        return run_query(NAME, problem, budget, search, prepare)
+        return run_query(NAME, problem, budget, search, prepare, rng=rng)
 
 
 @functools.lru_cache(maxsize=16)  # a validated copy once per config, not per query

@@ -112,9 +112,14 @@ def _dubins_table(radius: float, yaw_bins: int) -> DubinsTable:
     return DubinsTable.build(radius, yaw_bins=yaw_bins)
 
 
+#: Most heading bins of a Dubins table (1 degree): a search's bins can be finer, its
+#: table need not (61 x 61 x 360 lengths; at 0.01 degree it would take gigabytes).
+MAX_TABLE_BINS = 360
+
+
 def dubins_table(radius: float, config: HybridConfig) -> DubinsTable:
     """The Dubins length table of a turning radius, built once per process."""
-    return _dubins_table(float(radius), config.yaw_bins)
+    return _dubins_table(float(radius), min(config.yaw_bins, MAX_TABLE_BINS))
 
 
 #: Body tests kept per map (the last few clearances asked for).

@@ -39,7 +39,7 @@ from rrtdrive.planning.improved.growth import (
     grow_until_meet,
     rooted_edge_test,
 )
-from rrtdrive.planning.result import run_query, solved, timeout_result
+from rrtdrive.planning.result import check_query, run_query, solved, timeout_result
 from rrtdrive.planning.sampling import SampleSource
 from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, make_drivable
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Tree
@@ -101,6 +101,10 @@ class ImprovedRRTConnect:
         cfg = base.with_options(options) if options else base
         if isinstance(disable, str):
             disable = (disable,)
+        if not isinstance(disable, Iterable):
+            raise InputError(
+                f"planner.disable: expected component names, got {type(disable).__name__}"
+            )
         self.config = cfg.without(*disable)
 
     def __repr__(self) -> str:
@@ -139,9 +143,11 @@ class ImprovedRRTConnect:
             (exact, of the whole curve) and the repair counters ``fillets``,
             ``merges``, ``moves``, ``drops``, ``unprunes`` and ``edge_checks``.
         """
+        check_query(problem, rng, budget)  # before the query reads the problem
         query = _Query(problem, self.config)
         return run_query(
-            NAME, problem, budget, lambda watch: query.run(rng, budget, watch), query.prepare
+            NAME, problem, budget, lambda watch: query.run(rng, budget, watch), query.prepare,
+            rng=rng,
         )
 
 

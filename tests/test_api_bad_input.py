@@ -1,0 +1,107 @@
+"""The Python API refuses bad input with one InputError naming the field, and never hangs.
+
+Found by a QA pass of the public API (session 21): huge bounds looped for minutes, an
+obstacle reaching 1e19 m dropped out of the grid (planners drove through it), a tiny
+Hybrid A* heading bin built a table of gigabytes, and several types went unchecked.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rrtdrive.maps import Map, Obstacle, builtin_map
+from rrtdrive.planning import PLANNERS, PlanningProblem, make_planner
+from rrtdrive.planning.hybrid.config import HybridConfig
+from rrtdrive.planning.hybrid.resolution import MAX_TABLE_BINS, dubins_table
+from rrtdrive.types import Budget, InputError, Path, Pose
+from rrtdrive.verify import verify_path
+
+START, GOAL = Pose(3.0, 5.0, 0.0), Pose(25.0, 5.0, 0.0)
+OURS = ("rrt", "rrt-connect", "rrt-star", "improved-rrt-connect", "hybrid-a-star")
+
+
+@pytest.mark.parametrize("side", [1e12, 1e13, 1e15, 1e300])
+def test_huge_bounds_are_refused_at_once_naming_bounds(side: float) -> None:
+    with pytest.raises(InputError, match=r"^bounds: .* use a smaller map"):
+        PlanningProblem.from_map(Map("big", (0.0, 0.0, side, side), (), START, GOAL))
+
+
+@pytest.mark.parametrize("size", [1e18, 1e19, 1e300])
+def test_a_wall_reaching_far_beyond_the_map_still_blocks_it(size: float) -> None:
+    wall = Obstacle((15.0, size / 2), (1.0, size))
+    m = Map("wall", (0.0, 0.0, 30.0, 20.0), (wall,), START, GOAL)
+    problem = PlanningProblem.from_map(m)
+    assert not problem.checker.pose_free((15.0, 5.0, 0.0))
+    for name in ("improved-rrt-connect", "hybrid-a-star", "rrt"):
+        res = make_planner(name).solve(
+            problem, np.random.default_rng(0), Budget(max_iterations=500)
+        )
+        assert not res.success, (name, res.message)
+
+
+def test_a_fine_heading_bin_keeps_the_dubins_table_bounded() -> None:
+    fine = HybridConfig(yaw_resolution=2e-4)
+    assert fine.yaw_bins > MAX_TABLE_BINS
+    assert dubins_table(6.12, fine).lengths.shape[2] == MAX_TABLE_BINS
+
+
+@pytest.mark.parametrize(
+    ("setting", "value"),
+    [
+        ("pose_spacing", 0.0), ("pose_spacing", -1.0), ("pose_spacing", float("nan")),
+        ("pose_spacing", 1e-300), ("max_sample_spacing", 0.0), ("heading_tol_deg", -1.0),
+        ("curvature_tol", float("nan")), ("sharpness_tol", -0.1), ("max_sharpness", "0.2"),
+        ("max_sharpness", 0.0),
+    ],
+)  # fmt: skip
+def test_verify_refuses_settings_that_would_skip_checks(setting: str, value: object) -> None:
+    m = Map("dot", (0.0, 0.0, 40.0, 30.0), (Obstacle((20.0, 10.0), (0.5, 0.5)),), START, GOAL)
+    path = Path(np.array([[5.0, 10.0, 0.0, 0.0], [35.0, 10.0, 0.0, 0.0]]), np.zeros((0, 2)))
+    with pytest.raises(InputError, match=f"^{setting}: "):
+        verify_path(m, path, **{setting: value})
+
+
+@pytest.mark.parametrize(
+    ("build", "field"),
+    [
+        (lambda: Map("x", (0, 0, 30, 20), [((15, 15), (1, 1))], START, GOAL), "obstacles[0]"),
+        (lambda: Map("x", (0, 0, 30, 20), None, START, GOAL), "obstacles"),
+        (lambda: Map("x", (0, 0, 30, 20), "ab", START, GOAL), "obstacles"),
+        (lambda: Map("x", (0, 0, 30, 20), (), START, GOAL, vehicle=None), "vehicle"),
+        (lambda: PlanningProblem.from_map(None), "map"),
+        (lambda: PlanningProblem.from_map(builtin_map("overtake"), config=5), "config"),
+        (lambda: make_planner(["rrt"]), "planner"),
+        (lambda: make_planner("improved-rrt-connect", disable=5), "planner.disable"),
+        (lambda: make_planner("hybrid-a-star", smoothing="x"), "planner.smoothing"),
+    ],
+)  # fmt: skip
+def test_wrong_types_name_their_field(build, field: str) -> None:
+    with pytest.raises(InputError) as err:
+        build()
+    assert str(err.value).startswith(f"{field}: "), str(err.value)
+
+
+def test_a_problem_checks_its_fields() -> None:
+    m = builtin_map("overtake")
+    checker = PlanningProblem.from_map(m).checker
+    with pytest.raises(InputError, match=r"^problem.goal: expected a Pose, got tuple"):
+        PlanningProblem(m, checker, m.start, (25.0, 5.0, 0.0))
+    with pytest.raises(InputError, match=r"^problem.checker: "):
+        PlanningProblem(m, None, m.start, m.goal)
+
+
+@pytest.mark.parametrize("name", OURS)
+def test_every_planner_names_a_wrong_rng_problem_or_budget(name: str) -> None:
+    assert name in PLANNERS
+    problem = PlanningProblem.from_map(builtin_map("overtake"))
+    planner = make_planner(name)
+    for args, field in (
+        ((problem, 0, Budget()), "rng"),
+        ((problem, None, Budget()), "rng"),
+        ((builtin_map("overtake"), np.random.default_rng(0), Budget()), "problem"),
+        ((problem, np.random.default_rng(0), None), "budget"),
+    ):
+        with pytest.raises(InputError, match=f"^{field}: "):
+            planner.solve(*args)
+    assert planner.solve(problem, np.random.default_rng(0), Budget()).success
