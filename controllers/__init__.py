@@ -21,7 +21,7 @@ from rrtdrive.controllers.lqr import LQR
 from rrtdrive.controllers.pure_pursuit import PurePursuit
 from rrtdrive.controllers.speed import SpeedConfig, SpeedController, SpeedProfile
 from rrtdrive.controllers.stanley import Stanley
-from rrtdrive.types import InputError
+from rrtdrive.types import InputError, brief_repr
 
 __all__ = [
     "CONTROLLERS",
@@ -62,13 +62,19 @@ def make_controller(name: str, **options: object) -> TrackingController:
     Raises
     ------
     InputError
-        For an unknown name or option.
+        For an unknown name or option, or an option of the wrong type or value
+        (naming it, ``controller.vehicle: expected a VehicleParams, got str 'car'``).
 
     Examples
     --------
     >>> make_controller("stanley").name
     'stanley'
     """
+    if not isinstance(name, str):
+        raise InputError(
+            f"controller: expected a controller name, got {type(name).__name__} "
+            f"{brief_repr(name)}; choose from {sorted(CONTROLLERS)}"
+        )
     try:
         cls = CONTROLLERS[name]
     except KeyError:

@@ -25,7 +25,14 @@ from rrtdrive.controllers.projection import PathProjector, Projection
 from rrtdrive.controllers.speed import SpeedConfig, SpeedController, SpeedProfile
 from rrtdrive.geometry import wrap_angle
 from rrtdrive.speed_profile import actuator_profile
-from rrtdrive.types import InputError, Path, VehicleParams, require_positive
+from rrtdrive.types import (
+    InputError,
+    Path,
+    VehicleParams,
+    brief_repr,
+    require_finite,
+    require_positive,
+)
 
 __all__ = [
     "VehicleState",
@@ -38,6 +45,8 @@ __all__ = [
 #: Fewest samples a gear segment's speed profile is built on: a segment given by its
 #: two end rows alone would have no sample between its two stops.
 _MIN_PROFILE_SAMPLES = 3
+
+_STATE_FIELDS = ("x", "y", "yaw", "speed", "steer", "t")
 
 
 @dataclass(frozen=True)
@@ -54,6 +63,11 @@ class VehicleState:
         Front-wheel angle applied in the last step, radians.
     t : float
         Simulation time in seconds.
+
+    Raises
+    ------
+    InputError
+        Unless every field is a finite real number (naming it: ``state.x: ...``).
     """
 
     x: float
@@ -62,6 +76,20 @@ class VehicleState:
     speed: float = 0.0
     steer: float = 0.0
     t: float = 0.0
+
+    def __post_init__(self) -> None:
+        # A NaN pose failed deep in the projection (IndexError) and an infinite one
+        # steered NaN silently: refuse them here, where the field is known.
+        for name in _STATE_FIELDS:
+            require_finite(f"state.{name}", getattr(self, name))
+
+
+def _require_type(name: str, value: object, cls: type) -> None:
+    """Raise :class:`InputError` naming ``name`` unless ``value`` is ``None`` or a ``cls``."""
+    if value is not None and not isinstance(value, cls):
+        raise InputError(
+            f"{name}: expected a {cls.__name__}, got {type(value).__name__} {brief_repr(value)}"
+        )
 
 
 @runtime_checkable
@@ -116,12 +144,18 @@ class TrackingController:
 
     Parameters
     ----------
-    vehicle : VehicleParams
+    vehicle : VehicleParams, optional
         The car (wheelbase, limits).
-    speed : SpeedConfig
+    speed : SpeedConfig, optional
         Longitudinal profile and PI gains.
     steer_limit : float, optional
         Largest steering angle the controller commands, radians.
+
+    Raises
+    ------
+    InputError
+        For an option of the wrong type or value, naming it (``controller.vehicle:
+        expected a VehicleParams, got str 'car'``).
 
     Attributes
     ----------
@@ -159,6 +193,8 @@ class TrackingController:
         speed: SpeedConfig | None = None,
         steer_limit: float | None = None,
     ) -> None:
+        _require_type("controller.vehicle", vehicle, VehicleParams)
+        _require_type("controller.speed", speed, SpeedConfig)
         self.vehicle = vehicle or VehicleParams()
         self.speed_config = speed or SpeedConfig()
         limit = self.vehicle.steer_for_kappa_max if steer_limit is None else steer_limit
@@ -251,6 +287,11 @@ class TrackingController:
 
     @staticmethod
     def _split(path: Path) -> list[GearSegment]:
+        if not isinstance(path, Path):
+            raise InputError(
+                f"path: expected a rrtdrive.types.Path, got {type(path).__name__} "
+                f"{brief_repr(path)}"
+            )
         segments = gear_segments(path)
         if not segments:
             raise InputError("path: all samples coincide")

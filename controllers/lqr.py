@@ -10,7 +10,7 @@ import numpy as np
 
 from rrtdrive.controllers.base import Projection, TrackingController, VehicleState
 from rrtdrive.controllers.speed import SpeedConfig
-from rrtdrive.types import InputError, VehicleParams, require_positive
+from rrtdrive.types import InputError, VehicleParams, require_finite, require_positive
 
 __all__ = ["LQR", "lateral_error_model", "design_gain"]
 
@@ -59,6 +59,7 @@ def design_gain(q_e: float, q_psi: float, r: float) -> np.ndarray:
     """
     require_positive("lqr.q_e", q_e)
     require_positive("lqr.r", r)
+    require_finite("lqr.q_psi", q_psi)  # a string would fail the comparison below unnamed
     if not (q_psi >= 0 and math.isfinite(q_psi)):
         raise InputError(f"lqr.q_psi: must be a finite number >= 0, got {q_psi!r}")
     return np.array(_design_gain(float(q_e), float(q_psi), float(r)))

@@ -6,7 +6,7 @@ import math
 
 from rrtdrive.controllers.base import Projection, TrackingController, VehicleState
 from rrtdrive.controllers.speed import SpeedConfig
-from rrtdrive.types import InputError, VehicleParams, require_positive
+from rrtdrive.types import InputError, VehicleParams, require_finite, require_positive
 
 __all__ = ["PurePursuit"]
 
@@ -79,6 +79,7 @@ class PurePursuit(TrackingController):
         super().__init__(vehicle, speed, steer_limit)
         require_positive("pure_pursuit.ld_min", ld_min)
         require_positive("pure_pursuit.ld_max", ld_max)
+        require_finite("pure_pursuit.ld_gain", ld_gain)  # before comparing it below
         if ld_gain < 0 or ld_max < ld_min:
             raise InputError("pure_pursuit: need ld_gain >= 0 and ld_max >= ld_min")
         if not isinstance(compensate, bool):

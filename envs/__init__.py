@@ -22,7 +22,16 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
-__all__ = ["ENV_IDS", "ENV_KWARGS", "ENTRY_POINT", "register_envs"]
+__all__ = [
+    "ENV_IDS",
+    "ENV_KWARGS",
+    "ENTRY_POINT",
+    "RegisteredDict",
+    "RegisteredStr",
+    "is_registered_default",
+    "plain_value",
+    "register_envs",
+]
 
 ENTRY_POINT = "rrtdrive.envs.drive_env:DriveEnv"
 
@@ -41,10 +50,11 @@ ENV_IDS: dict[str, str] = {
     # scenario_options={"reverse": True}); the built-in parking lot by default.
     "rrtdrive/Map-v0": "parking_lot",
 }
-#: Extra keyword arguments of an id, beyond its scenario (``gym.make`` arguments
-#: override them). Parallel parking and the U-turn plan with Hybrid A*, the
-#: reversing planner, directly: the default planner would reach the same search only
-#: after its RRT-Connect stages fail, at each reset (tens of seconds on a U-turn).
+#: Extra keyword arguments of an id, beyond its scenario: defaults (``gym.make``
+#: arguments override them, and a whole ``config=`` replaces them). Parallel parking
+#: and the U-turn plan with Hybrid A*, the reversing planner, directly: the default
+#: planner would reach the same search only after its RRT-Connect stages fail, at
+#: each reset (tens of seconds on a U-turn).
 #: Reverse-in parking is the parking scenario with ``reverse_in``, planned the same
 #: way (a ``scenario_options`` given to ``gym.make`` replaces the registered one:
 #: keep ``"reverse_in": True`` in it).
@@ -57,11 +67,62 @@ ENV_KWARGS: dict[str, dict[str, object]] = {
 }
 
 
+class RegisteredStr(str):
+    """A string given by an id's registration, not by the caller of ``gym.make``.
+
+    ``gym.make`` merges the registered keyword arguments with the caller's before
+    the environment sees them; the marker type (equal to the plain value, and
+    surviving gymnasium's deep copy and pickling) tells
+    :class:`~rrtdrive.envs.drive_env.DriveEnv` which ones are the id's defaults, so
+    that a caller's whole ``config=`` is not overridden by them.
+    """
+
+    __slots__ = ()
+
+
+class RegisteredDict(dict):  # type: ignore[type-arg]
+    """A mapping given by an id's registration (see :class:`RegisteredStr`)."""
+
+
+def _registered(name: str, value: object) -> object:
+    """``value`` marked as a registration default (a str or a mapping)."""
+    if isinstance(value, str):
+        return RegisteredStr(value)
+    if isinstance(value, dict):
+        return RegisteredDict(value)
+    # A new kind of default needs a marker type, or a config= would not win over it.
+    raise TypeError(f"ENV_KWARGS: no registration marker for {name}={value!r}")
+
+
+def is_registered_default(value: object) -> bool:
+    """Whether a ``gym.make`` keyword argument came from the id's registration."""
+    return isinstance(value, (RegisteredStr, RegisteredDict))
+
+
+def plain_value(value: object) -> object:
+    """``value`` without its registration marker (a plain ``str`` or ``dict``)."""
+    if isinstance(value, RegisteredStr):
+        return str.__str__(value)
+    if isinstance(value, RegisteredDict):
+        return dict(value)
+    return value
+
+
 def register_envs() -> None:
-    """Register every id of :data:`ENV_IDS` with gymnasium (idempotent)."""
+    """Register every id of :data:`ENV_IDS` with gymnasium (idempotent).
+
+    The registered keyword arguments (the scenario and :data:`ENV_KWARGS`) are
+    marked as defaults (:class:`RegisteredStr`, :class:`RegisteredDict`): the
+    caller's keyword arguments replace them, and a caller's ``config=`` wins over
+    them.
+    """
     for env_id, scenario in ENV_IDS.items():
         if env_id not in registry:
-            kwargs = {"scenario": scenario, **ENV_KWARGS.get(env_id, {})}
+            extra = ENV_KWARGS.get(env_id, {})
+            kwargs = {
+                name: _registered(name, value)
+                for name, value in {"scenario": scenario, **extra}.items()
+            }
             register(id=env_id, entry_point=ENTRY_POINT, kwargs=kwargs)
 
 

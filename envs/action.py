@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from rrtdrive.controllers import SpeedConfig
-from rrtdrive.types import InputError
+from rrtdrive.types import InputError, brief_repr
 
 __all__ = ["RESIDUAL_FADE_M", "CommandLimits", "ResidualMixer", "action_command"]
 
@@ -87,7 +87,7 @@ def action_command(
     Raises
     ------
     InputError
-        Unless the action is two finite numbers.
+        Unless the action is two finite numbers (not strings, booleans or objects).
 
     Examples
     --------
@@ -95,9 +95,25 @@ def action_command(
     >>> action_command([0.5, -1.0], lim), action_command([-0.5, 2.0], lim, scale=0.5)
     ((1.0, -0.4), (-1.0, 0.2))
     """
-    a = np.asarray(action, dtype=np.float64).reshape(-1)
+    try:
+        raw = np.asarray(action)
+    except ValueError:  # a ragged sequence
+        raw = None
+    if raw is not None and raw.dtype.kind == "O" and all(
+        isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+        for v in raw.reshape(-1)
+    ):
+        raw = raw.astype(np.float64)
+    # Only numbers: np.asarray(..., float) would also read strings ("0.5") as numbers,
+    # and a string, None or an object would fail with a message not naming the action.
+    if raw is None or raw.dtype.kind not in "iuf":
+        raise InputError(
+            f"action: expected two finite numbers, got {type(action).__name__} "
+            f"{brief_repr(action)}"
+        )
+    a = raw.astype(np.float64).reshape(-1)
     if a.shape != (2,) or not np.all(np.isfinite(a)):
-        raise InputError(f"action: expected two finite numbers, got {action!r}")
+        raise InputError(f"action: expected two finite numbers, got {brief_repr(action)}")
     a0 = min(max(float(a[0]), -1.0), 1.0)
     a1 = min(max(float(a[1]), -1.0), 1.0)
     if scale is not None:

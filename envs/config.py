@@ -329,6 +329,14 @@ class DriveEnvConfig:
 
     def controller_for(self, scenario: Scenario, speed: SpeedConfig) -> TrackingController:
         """The tracking controller for ``scenario`` with ``controller_options``."""
+        for key in ("vehicle", "speed"):
+            # The scenario gives the car and speed_options the speed loop; a duplicate
+            # keyword would fail as a TypeError naming neither.
+            if key in self.controller_options:  # type: ignore[operator]
+                raise InputError(
+                    f"controller_options.{key}: set by the scenario"
+                    f"{' and speed_options' if key == 'speed' else ''}, not a controller gain"
+                )
         return make_controller(
             self.controller, vehicle=scenario.vehicle, speed=speed, **self.controller_options
         )

@@ -36,6 +36,7 @@ import numpy as np
 from gymnasium import spaces
 
 from rrtdrive.controllers import PathProjector
+from rrtdrive.envs import is_registered_default, plain_value
 from rrtdrive.envs.action import ResidualMixer, action_command
 from rrtdrive.envs.config import DriveEnvConfig, _require_mapping
 from rrtdrive.envs.observation import OBS_CLIP, ObservationLayout, observation_names
@@ -47,8 +48,8 @@ from rrtdrive.sim.episode import Episode, EpisodeStatus
 from rrtdrive.sim.loop import EndRule, EpisodeLoop
 from rrtdrive.sim.runner import EpisodeConfig
 from rrtdrive.sim.scenes import build_env
-from rrtdrive.sim.tasks import Reference
-from rrtdrive.types import InputError, Path, require_int
+from rrtdrive.sim.tasks import SCENARIOS, Reference
+from rrtdrive.types import InputError, Path, brief_repr, require_int
 
 # RewardWeights, observation_names and OBS_CLIP are re-exported from their modules,
 # where they lived before the split.
@@ -58,6 +59,31 @@ __all__ = ["DriveEnv", "DriveEnvConfig", "RewardWeights", "observation_names", "
 MAX_PLAN_ATTEMPTS = 20
 
 _RESET_OPTIONS = ("episode_seed",)
+
+
+def _caller_options(
+    scenario: str | None, config: DriveEnvConfig, options: dict[str, Any]
+) -> dict[str, Any]:
+    """The options that replace fields of a caller's ``config``.
+
+    ``gym.make`` merges an id's registered keyword arguments with the caller's;
+    the registered ones (marked, :func:`rrtdrive.envs.is_registered_default`) are
+    defaults for building a config, so they give way to the caller's whole config.
+
+    Raises
+    ------
+    InputError
+        When ``scenario`` differs from ``config.scenario`` (except ``Map-v0``'s
+        registered map, which gives way to a config driving another map).
+    """
+    if scenario is not None and scenario != config.scenario:
+        registered_map = is_registered_default(scenario) and scenario not in SCENARIOS
+        if not (registered_map and config.map is not None):
+            raise InputError(
+                f"scenario: {plain_value(scenario)!r} differs from config.scenario "
+                f"{config.scenario!r}"
+            )
+    return {key: value for key, value in options.items() if not is_registered_default(value)}
 
 
 class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
@@ -99,6 +125,9 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         registered ids pass it. Default ``config.scenario``, or ``"parking"``.
     config : DriveEnvConfig, optional
         The options as one value; keyword ``options`` replace some of its fields.
+        It wins over the defaults an id registers (``ParkingReverseIn-v0``'s
+        planner and ``scenario_options``, ``Map-v0``'s map, ...): only the caller's
+        own keyword arguments replace its fields.
     render_mode : str, optional
         ``"rgb_array"`` or ``None``.
     **options
@@ -139,16 +168,17 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
     ) -> None:
         super().__init__()
         if config is None:
-            config = DriveEnvConfig.from_options("parking" if scenario is None else scenario,
-                                                 **options)
+            config = DriveEnvConfig.from_options(
+                "parking" if scenario is None else plain_value(scenario),  # type: ignore[arg-type]
+                **{key: plain_value(value) for key, value in options.items()},
+            )
         elif not isinstance(config, DriveEnvConfig):
-            raise InputError(f"config: expected a DriveEnvConfig, got {config!r}")
+            raise InputError(
+                f"config: expected a DriveEnvConfig, got {type(config).__name__} "
+                f"{brief_repr(config)}"
+            )
         else:
-            if scenario is not None and scenario != config.scenario:
-                raise InputError(
-                    f"scenario: {scenario!r} differs from config.scenario {config.scenario!r}"
-                )
-            config = config.with_options(**options)
+            config = config.with_options(**_caller_options(scenario, config, options))
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise InputError(
                 f"render_mode: {render_mode!r} is not supported; choose from "

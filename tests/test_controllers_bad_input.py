@@ -1,0 +1,98 @@
+"""Bad input to the controllers: options, names, vehicle states and paths name the field."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from rrtdrive.controllers import CONTROLLERS, SpeedConfig, VehicleState, make_controller
+from rrtdrive.types import InputError, Path, VehicleParams
+
+XS = np.arange(0.0, 20.01, 0.25)
+STRAIGHT = Path(np.column_stack([XS, 0 * XS, 0 * XS, 0 * XS]), np.zeros((0, 2)))
+
+
+@pytest.mark.parametrize("name", sorted(CONTROLLERS))
+@pytest.mark.parametrize(
+    ("option", "value", "message"),
+    [
+        ("vehicle", "car", r"^controller\.vehicle: expected a VehicleParams, got str 'car'$"),
+        ("vehicle", {"wheelbase": 2.5}, r"^controller\.vehicle: expected a VehicleParams"),
+        ("speed", 5, r"^controller\.speed: expected a SpeedConfig, got int 5$"),
+        ("speed", {"v_max": 5.0}, r"^controller\.speed: expected a SpeedConfig, got dict"),
+        ("steer_limit", "0.3", r"^controller\.steer_limit: expected a number, got str"),
+        ("steer_limit", math.nan, r"^controller\.steer_limit: must be finite"),
+    ],
+)
+def test_bad_common_option_names_it(name, option, value, message):
+    with pytest.raises(InputError, match=message):
+        make_controller(name, **{option: value})
+
+
+@pytest.mark.parametrize(
+    ("name", "option", "value"),
+    [
+        ("lqr", "q_psi", "1"),
+        ("lqr", "q_e", "1"),
+        ("lqr", "bandwidth", None),
+        ("stanley", "k", "fast"),
+        ("stanley", "k_soft", math.inf),
+        ("pure-pursuit", "ld_gain", "0.6"),
+        ("pure-pursuit", "ld_min", -1.0),
+    ],
+)
+def test_bad_gain_names_it(name, option, value):
+    with pytest.raises(InputError, match=rf"^[a-z_]+\.{option}: "):
+        make_controller(name, **{option: value})
+
+
+@pytest.mark.parametrize("name", sorted(CONTROLLERS))
+def test_good_options_still_build(name):
+    c = make_controller(name, vehicle=VehicleParams(), speed=SpeedConfig(), steer_limit=0.3)
+    assert c.name == name and c.steer_limit == 0.3
+    assert make_controller(name, vehicle=None, speed=None).vehicle == VehicleParams()
+
+
+@pytest.mark.parametrize("name", [["lqr"], None, 3, ("lqr",), b"lqr"], ids=repr)
+def test_controller_name_of_the_wrong_type(name):
+    with pytest.raises(InputError, match=r"^controller: expected a controller name, got "):
+        make_controller(name)  # type: ignore[arg-type]
+
+
+def test_unknown_name_and_option_still_named():
+    with pytest.raises(InputError, match=r"^controller: unknown controller 'lqrr'"):
+        make_controller("lqrr")
+    with pytest.raises(InputError, match=r"^controller: .*bogus"):
+        make_controller("lqr", bogus=1)
+
+
+@pytest.mark.parametrize("field", ["x", "y", "yaw", "speed", "steer", "t"])
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf, 10**400])
+def test_vehicle_state_refuses_non_finite_field(field, value):
+    values = dict(x=0.0, y=0.0, yaw=0.0, speed=1.0, steer=0.0, t=0.0)
+    values[field] = value
+    with pytest.raises(InputError, match=rf"^state\.{field}: must be finite"):
+        VehicleState(**values)
+
+
+@pytest.mark.parametrize("value", ["1.0", None, True, [1.0]], ids=repr)
+def test_vehicle_state_refuses_non_numbers(value):
+    with pytest.raises(InputError, match=r"^state\.speed: expected a number"):
+        VehicleState(0.0, 0.0, 0.0, value)  # type: ignore[arg-type]
+
+
+def test_vehicle_state_takes_numpy_numbers():
+    s = VehicleState(np.float64(1.0), np.float32(0.5), np.int64(0), 2, 0.0, 0.05)
+    assert s.x == 1.0 and s.speed == 2
+
+
+@pytest.mark.parametrize("name", sorted(CONTROLLERS))
+def test_control_still_runs_and_bad_path_is_named(name):
+    c = make_controller(name)
+    with pytest.raises(InputError, match=r"^path: expected a rrtdrive\.types\.Path, got str"):
+        c.reset("path")  # type: ignore[arg-type]
+    c.reset(STRAIGHT)
+    accel, steer = c.control(VehicleState(0.0, 0.2, 0.0, 1.0, 0.0, 0.05))
+    assert math.isfinite(accel) and steer < 0.0  # left of the path: steer right

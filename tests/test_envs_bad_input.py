@@ -1,0 +1,176 @@
+"""Bad input to the gym environments, and a caller's config against an id's defaults.
+
+Fast: the environments are made (no planning) or reset on the overtake road and
+stepped at most once.
+"""
+
+from __future__ import annotations
+
+import re
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import rrtdrive  # noqa: F401  (registers the ids)
+from rrtdrive.envs import ENV_IDS, ENV_KWARGS
+from rrtdrive.envs.action import CommandLimits, action_command
+from rrtdrive.envs.config import DriveEnvConfig
+from rrtdrive.types import InputError
+
+
+def _make(env_id: str, **kwargs: object) -> DriveEnvConfig:
+    """The config ``gym.make(env_id, **kwargs)`` ends up with (the env closed)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        env = gym.make(env_id, **kwargs)
+    try:
+        return env.unwrapped.config
+    finally:
+        env.close()
+
+
+# ---------------------------------------------------------------- config= vs registration
+
+#: A config per id with registered defaults, whose fields differ from those defaults.
+CALLER_CONFIGS = {
+    "rrtdrive/ParkingReverseIn-v0": dict(
+        scenario="parking",
+        planner="hybrid-a-star",
+        scenario_options={"reverse_in": True, "spot": (0, 0, 3)},
+        controller="lqr",
+    ),
+    "rrtdrive/ParallelParking-v0": dict(
+        scenario="parallel-parking", planner="improved-rrt-connect", controller="stanley"
+    ),
+    "rrtdrive/UTurn-v0": dict(scenario="u-turn", planner="improved-rrt-connect", residual=True),
+}
+
+
+def test_every_id_with_defaults_is_covered():
+    assert sorted(CALLER_CONFIGS) == sorted(ENV_KWARGS)
+
+
+@pytest.mark.parametrize("env_id", sorted(CALLER_CONFIGS))
+def test_caller_config_wins_over_registered_defaults(env_id):
+    options = dict(CALLER_CONFIGS[env_id])
+    cfg = DriveEnvConfig.from_options(options.pop("scenario"), **options)
+    got = _make(env_id, config=cfg)
+    assert got == cfg
+    assert got.planner == cfg.planner and got.scenario_options == cfg.scenario_options
+
+
+@pytest.mark.parametrize("env_id", sorted(CALLER_CONFIGS))
+def test_caller_keywords_win_over_config_and_defaults(env_id):
+    options = dict(CALLER_CONFIGS[env_id])
+    cfg = DriveEnvConfig.from_options(options.pop("scenario"), **options)
+    # The registered planner named explicitly by the caller is the caller's choice.
+    got = _make(env_id, config=cfg, planner="hybrid-a-star", n_ref_points=4)
+    assert got == cfg.with_options(planner="hybrid-a-star", n_ref_points=4)
+
+
+@pytest.mark.parametrize("env_id", sorted(ENV_KWARGS))
+def test_registered_defaults_apply_without_config(env_id):
+    got = _make(env_id)
+    for key, value in ENV_KWARGS[env_id].items():
+        assert getattr(got, key) == value
+        # Plain values in the config, not the registration's marker types.
+        assert type(getattr(got, key)) is type(value)
+    assert _make(env_id, planner="rrt-connect").planner == "rrt-connect"
+
+
+def test_registered_scenario_options_replaced_by_the_callers():
+    # Documented in envs/__init__.py: a scenario_options given to gym.make replaces
+    # the registered one.
+    got = _make("rrtdrive/ParkingReverseIn-v0", scenario_options={"spot": (0, 0, 3)})
+    assert got.scenario_options == {"spot": (0, 0, 3)}
+
+
+def test_config_of_another_scenario_is_refused_but_map_v0_takes_any_map():
+    cfg = DriveEnvConfig.from_options("overtake")
+    with pytest.raises(InputError, match=r"^scenario: 'parking' differs from config\.scenario"):
+        _make("rrtdrive/Parking-v0", config=cfg)
+    with pytest.raises(InputError, match=r"^scenario: 'parking_lot' differs"):
+        _make("rrtdrive/Map-v0", config=cfg)  # a scenario, not a map
+    kerb = DriveEnvConfig.from_options("kerbside", scenario_options={"reverse": True})
+    assert _make("rrtdrive/Map-v0", config=kerb) == kerb
+    assert ENV_IDS["rrtdrive/Map-v0"] == "parking_lot"
+
+
+def test_config_of_the_wrong_type_names_config():
+    with pytest.raises(InputError, match=r"^config: expected a DriveEnvConfig, got dict"):
+        _make("rrtdrive/Parking-v0", config={"planner": "rrt"})
+
+
+def test_duplicate_controller_options_name_the_key():
+    with pytest.raises(InputError, match=r"^controller_options\.speed: "):
+        DriveEnvConfig.from_options("overtake", controller_options={"speed": 5})
+    with pytest.raises(InputError, match=r"^controller_options\.vehicle: "):
+        DriveEnvConfig.from_options("overtake", controller_options={"vehicle": None})
+
+
+# ---------------------------------------------------------------- actions
+
+LIMITS = CommandLimits(a_min=-4.0, a_max=2.0, steer_limit=0.4)
+
+def _id(action: object) -> str:
+    """A test id that is the same in every process (an ``object()``'s repr has its address)."""
+    return re.sub(r" at 0x[0-9a-f]+", "", repr(action))
+
+
+BAD_ACTIONS = [
+    "ab",
+    ["0.5", "0.5"],
+    np.array(["0.5", "0.5"]),
+    "0.5",
+    None,
+    [None, 0.5],
+    object(),
+    [object(), 0.5],
+    [True, False],
+    [[0.5], [0.5, 0.5]],
+    np.array([0.5, "x"], dtype=object),
+    [0.5, float("nan")],
+    [float("inf"), 0.0],
+    [0.5, 0.5, 0.5],
+    [],
+]
+
+
+@pytest.mark.parametrize("action", BAD_ACTIONS, ids=_id)
+def test_action_command_refuses_non_numbers_naming_action(action):
+    with pytest.raises(InputError, match=r"^action: expected two finite numbers"):
+        action_command(action, LIMITS)
+
+
+@pytest.mark.parametrize(
+    "action",
+    [[0.5, -1.0], (0.5, -1.0), np.array([0.5, -1.0], dtype=np.float32), [1, -1],
+     np.array([0.5, -1.0], dtype=object)],
+    ids=_id,
+)
+def test_action_command_takes_numbers(action):
+    a, d = action_command(action, LIMITS)
+    assert (a, d) == pytest.approx((1.0 if action[0] == 0.5 else 2.0, -0.4))
+
+
+@pytest.fixture(scope="module")
+def overtake_env():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        env = gym.make("rrtdrive/Overtake-v0")
+    yield env
+    env.close()
+
+
+@pytest.mark.parametrize(
+    "action", ["ab", ["0.5", "0.5"], None, object(), [float("nan"), 0.0], [0.0]], ids=_id
+)
+def test_step_refuses_bad_action_naming_action(overtake_env, action):
+    overtake_env.reset(seed=0)
+    with pytest.raises(InputError, match=r"^action: "):
+        overtake_env.step(action)
+    # Refused before any simulation step: the episode goes on.
+    obs, *_ = overtake_env.step(np.zeros(2, dtype=np.float32))
+    assert overtake_env.observation_space.contains(obs)
