@@ -8,6 +8,7 @@ search answers before ``lattice_after``, fewer expansions where it turns round.
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -174,3 +175,25 @@ def test_turning_round_against_an_angled_row_takes_fewer_expansions_with_the_lat
     again = _plan(m, lattice_after=800)
     assert again.iterations == on.iterations
     assert np.array_equal(again.path.samples, on.path.samples)
+
+
+class _SlowChecker(CollisionChecker):
+    """The same checker on a slower machine: every field look-up sleeps first."""
+
+    def axis_clearances(self, rows: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+        time.sleep(5e-5)
+        return super().axis_clearances(rows, offsets)
+
+
+def test_the_guided_answer_is_the_same_on_a_slower_machine() -> None:
+    m = _against_row(aisle=4.0)
+    fast = PlanningProblem.from_map(m, reverse=True)
+    slow = PlanningProblem(m, _SlowChecker.for_map(m), m.start, m.goal, m.vehicle, reverse=True)
+    budget = Budget(max_iterations=20_000, max_time_s=1e6)
+    a, b = (
+        make_planner("hybrid-a-star").solve(p, np.random.default_rng(0), budget)
+        for p in (fast, slow)
+    )
+    assert a.success and a.iterations > 800  # the lattice came in
+    assert (a.status, a.iterations, a.message) == (b.status, b.iterations, b.message)
+    assert np.array_equal(a.path.samples, b.path.samples)
