@@ -105,3 +105,16 @@ def test_every_planner_names_a_wrong_rng_problem_or_budget(name: str) -> None:
         with pytest.raises(InputError, match=f"^{field}: "):
             planner.solve(*args)
     assert planner.solve(problem, np.random.default_rng(0), Budget()).success
+
+
+@pytest.mark.parametrize(
+    ("samples", "waypoints", "field"),
+    [
+        ("abc", np.zeros((0, 2)), "path.samples"),
+        ([[1.0, 2.0, "x", 0.0]], [], "path.samples"),
+        (np.zeros((3, 4)), np.zeros(3), "path.waypoints"),
+    ],
+)
+def test_a_path_names_what_is_not_numbers(samples, waypoints, field: str) -> None:
+    with pytest.raises(InputError, match=f"^{field}: "):
+        Path(samples, waypoints)

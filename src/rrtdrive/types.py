@@ -310,7 +310,12 @@ class Path:
     waypoints: np.ndarray
 
     def __post_init__(self) -> None:
-        s = np.asarray(self.samples, dtype=float)
+        try:
+            s = np.asarray(self.samples, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(
+                f"path.samples: expected rows of numbers, got {brief_repr(self.samples)}"
+            ) from None
         if s.size == 0:
             s = np.zeros((0, 5))
         elif s.ndim != 2 or s.shape[1] not in (4, 5):
@@ -328,7 +333,11 @@ class Path:
                     "path.gear: must be +1 (forward) or -1 (reverse), got "
                     f"{float(s[bad[0], 4])!r} in row {int(bad[0])}"
                 )
-        w = np.asarray(self.waypoints, dtype=float).reshape(-1, 2)
+        try:
+            w = np.asarray(self.waypoints, dtype=float).reshape(-1, 2)
+        except (TypeError, ValueError):
+            got = brief_repr(self.waypoints)
+            raise InputError(f"path.waypoints: expected [x, y] pairs, got {got}") from None
         s.setflags(write=False)
         w.setflags(write=False)
         object.__setattr__(self, "samples", s)
