@@ -300,7 +300,7 @@ def test_setup_blocks_leave_planning_time_and_go_to_setup_time() -> None:
         return failure("demo", status, watch, "none")
 
     problem = PlanningProblem.from_map(builtin_map("parking_lot"))
-    res = run_query("demo", problem, Budget(max_time_s=0.1), search)
+    res = run_query("demo", problem, Budget(max_time_s=0.1), search, rng=np.random.default_rng(0))
     assert res.setup_time_s >= 0.2
     assert res.planning_time_s < 0.2
     assert res.status is PlanStatus.NO_PATH_IN_BUDGET  # the set-up did not hit the 0.1 s cap

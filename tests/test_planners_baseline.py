@@ -385,9 +385,11 @@ def test_run_query_answers_the_precheck_without_searching(problems):
         return failure("demo", PlanStatus.NO_PATH_IN_BUDGET, watch, "searched")
 
     walled = PlanningProblem.from_map(builtin_map("no_path"))
-    assert run_query("demo", walled, BUDGET, search).status is PlanStatus.PROVEN_UNREACHABLE
+    rng = np.random.default_rng(0)
+    answer = run_query("demo", walled, BUDGET, search, rng=rng)
+    assert answer.status is PlanStatus.PROVEN_UNREACHABLE
     assert calls == []
-    res = run_query("demo", problems["overtake"], BUDGET, search)
+    res = run_query("demo", problems["overtake"], BUDGET, search, rng=rng)
     assert res.message == "searched" and len(calls) == 1 and isinstance(calls[0], Stopwatch)
 
 

@@ -15,13 +15,13 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import math
 import sys
 from typing import Any
 
 import numpy as np
 
 from rrtdrive.cli_args import positive_float, validate_output
+from rrtdrive.json_safe import json_safe
 from rrtdrive.types import InputError, Pose
 
 __all__ = ["add_parser", "run", "HELP"]
@@ -185,16 +185,5 @@ def run(args: argparse.Namespace) -> int:
         doc = {"map": m.name, "rows": len(path.samples), "length_m": round(length, 6),
                **bounds, **dataclasses.asdict(check), "failed": list(check.failed)}
         # Strict JSON: a non-finite number (a row far off the map) is null, not Infinity.
-        _write_output(args.json, json.dumps(_finite(doc), allow_nan=False) + "\n")
+        _write_output(args.json, json.dumps(json_safe(doc), allow_nan=False) + "\n")
     return EXIT_OK if check.ok else EXIT_FAILED
-
-
-def _finite(value: object) -> object:
-    """``value`` with every non-finite float (nested in dicts and lists) as ``None``."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_finite(v) for v in value]
-    return value

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import json
 import logging
-import math
 import os
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path as FsPath
 from typing import Any
 
+from rrtdrive.json_safe import json_safe
 from rrtdrive.types import InputError
 
 __all__ = ["ResultStore", "RUNS_FILE", "row_key", "json_safe"]
@@ -37,28 +37,6 @@ def row_key(row: Mapping[str, Any]) -> tuple[str, int] | None:
     if isinstance(h, str) and isinstance(seed, int) and not isinstance(seed, bool):
         return (h, seed)
     return None
-
-
-def json_safe(value: Any) -> Any:
-    """``value`` with non-finite floats as ``None`` and numpy scalars as Python ones.
-
-    Examples
-    --------
-    >>> json_safe({"a": float("nan"), "b": [1.5, float("inf")]})
-    {'a': None, 'b': [1.5, None]}
-    """
-    if isinstance(value, Mapping):
-        return {str(k): json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [json_safe(v) for v in value]
-    if hasattr(value, "item") and callable(value.item) and not isinstance(value, (str, bytes)):
-        try:
-            value = value.item()
-        except (TypeError, ValueError):
-            return str(value)
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
 
 
 def _fsync_dir(path: FsPath) -> None:

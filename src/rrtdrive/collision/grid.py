@@ -47,6 +47,10 @@ def grid_shape(bounds: Sequence[float], resolution: float, pad: float) -> tuple[
     )
 
 
+#: A cell size (metres) past which no cell is suggested: the map is simply too big.
+_NO_CELL = 1e6
+
+
 def grid_resolution(bounds: Sequence[float], config: CheckerConfig) -> float:
     """The cell size for ``bounds``: ``config.resolution``, or coarser when the grid is too big.
 
@@ -88,7 +92,7 @@ def grid_resolution(bounds: Sequence[float], config: CheckerConfig) -> float:
     coarsest = max(h0, config.max_auto_resolution)
     # The area alone gives a lower bound of the cell size; the border adds a few steps.
     least = math.sqrt((xmax - xmin) * (ymax - ymin) / limit)
-    if not least <= 1e6:  # no usable cell (and the grid's shape would not fit a float)
+    if not least <= _NO_CELL:  # no usable cell (and the grid's shape would not fit a float)
         h = least
     else:
         steps = max(int(math.ceil(h0 * 100.0)), int(math.ceil(100.0 * least)))
@@ -103,7 +107,7 @@ def grid_resolution(bounds: Sequence[float], config: CheckerConfig) -> float:
     if h > coarsest + 1e-12:
         cells = nx * ny
         count = f"{cells:,}" if cells < 10**12 else f"about 1e{len(str(cells)) - 1}"
-        if not math.isfinite(h) or h > 1e6:
+        if not h <= _NO_CELL:
             raise InputError(
                 f"bounds: {xmax - xmin:g} x {ymax - ymin:g} m needs {count} grid cells at "
                 f"{h0:g} m; the limit is {limit:,} cells (checker.max_grid_cells): use a "
@@ -160,11 +164,11 @@ def rasterise(
     # A cell is occupied when its centre lies in the rectangle grown by h/sqrt2 on
     # every side: a superset of every cell that touches the rectangle.
     grow = h / math.sqrt(2.0)
+    # Cell indices are clipped to the grid before the cast: a rectangle reaching 1e19 m
+    # would overflow int64 and drop out of the grid (a planner would drive through it).
+    top = np.array([nx, ny], dtype=float)
     for o in obstacles:
         corners = o.corners()
-        # Clipped to the grid before the cast: a rectangle reaching 1e19 m would overflow
-        # int64 and drop out of the grid (a planner would drive through it).
-        top = np.array([nx, ny], dtype=float)
         lo = np.clip(np.floor((corners.min(axis=0) - grow - origin) / h), -1, top).astype(int) - 1
         hi = np.clip(np.ceil((corners.max(axis=0) + grow - origin) / h), -1, top).astype(int) + 1
         i0, j0 = max(lo[0], 0), max(lo[1], 0)

@@ -79,7 +79,8 @@ def run_query(
     budget: Budget,
     search: Search,
     prepare: Callable[[], object] | None = None,
-    rng: object = "unchecked",
+    *,
+    rng: np.random.Generator,
 ) -> PlanResult:
     """Set the map up, start the stopwatch, fail early on a hopeless query, else search.
 
@@ -103,9 +104,9 @@ def run_query(
         ``search(watch) -> PlanResult``, the planner's own work.
     prepare : callable, optional
         The planner's own per-map set-up (cached on the checker).
-    rng : numpy.random.Generator, optional
+    rng : numpy.random.Generator
         The planner's ``rng``, checked with ``problem`` and ``budget``
-        (:func:`check_query`); not given: only those two are checked.
+        (:func:`check_query`) before anything reads them.
 
     Returns
     -------
@@ -117,10 +118,11 @@ def run_query(
     --------
     >>> from rrtdrive.maps import builtin_map
     >>> problem = PlanningProblem.from_map(builtin_map("no_path"))
-    >>> run_query("demo", problem, Budget(), lambda watch: None).status.value
+    >>> rng = np.random.default_rng(0)
+    >>> run_query("demo", problem, Budget(), lambda watch: None, rng=rng).status.value
     'proven_unreachable'
     """
-    check_query(problem, np.random.default_rng(0) if rng == "unchecked" else rng, budget)
+    check_query(problem, rng, budget)
     t0 = time.perf_counter()
     checker = problem.checker
     checker.component_labels  # noqa: B018 - built here, read by the precheck

@@ -183,28 +183,33 @@ class HeadingLattice:
         states = [s for d, s in found if d <= nearest + 1e-9]
         return np.array([s * self.gears + g for s in states for g in range(self.gears)])
 
-    def costs(self, pose: Pose, to: bool) -> np.ndarray | None:
-        """Per state, the cost to drive to ``pose`` (``to``) or from it; ``None``: no state near.
+    def _costs(self, pose: Pose, to: bool) -> list[float] | None:
+        """Per state, the cost to drive to ``pose`` (``to``) or from it, 0 where it cannot.
 
-        Kept for the last few poses asked (a query's later stages ask again).
+        ``None``: no clear state near ``pose``. Kept for the last few poses asked (a
+        query's later stages ask again), as the list the look-up reads.
         """
         key = (pose.x, pose.y, pose.yaw, to)
         if key in self._tables:
             self._tables.move_to_end(key)
             return self._tables[key]
         seeds = self._seeds(pose)
-        table = None
+        values = None
         if len(seeds):
             graph = self.backward if to else self.forward
             dist = dijkstra(graph, directed=True, indices=seeds, min_only=True)
             table = dist.reshape(-1, self.gears).min(axis=1)
-        self._tables[key] = table
+            values = np.where(np.isfinite(table), table, 0.0).tolist()
+        self._tables[key] = values
         if len(self._tables) > _KEPT:
             self._tables.popitem(last=False)
-        return table
+        return values
 
     def estimate(self, pose: Pose, to: bool) -> Estimate | None:
-        """:meth:`costs` as a scalar look-up (0 off the lattice or where it cannot reach).
+        """The cost to drive to ``pose`` (``to``) or from it, as a scalar look-up.
+
+        0 off the lattice or where it cannot reach; ``None`` when no clear state is
+        near ``pose``.
 
         Examples
         --------
@@ -221,10 +226,9 @@ class HeadingLattice:
         >>> round(h(10.25, 5.25, 0.0), 1), h(-5.0, 5.0, 0.0)
         (14.1, 0.0)
         """
-        table = self.costs(pose, to)
-        if table is None:
+        values = self._costs(pose, to)
+        if values is None:
             return None
-        values = np.where(np.isfinite(table), table, 0.0).tolist()
         (x0, y0), cell, k = self.origin, self.cell, self.headings
         nx, ny = self.shape
         scale = k / _TWO_PI
