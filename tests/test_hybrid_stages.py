@@ -33,9 +33,11 @@ sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "experiments"))
 from random_goals import draw_goals  # noqa: E402
 
 
-def _random_problem(vary: str, index: int, count: int = 30, reverse: bool = False):
-    """Random ``vary`` pose ``index`` of ``coverage.py --count count``: its map and problem."""
-    pose = draw_goals("parking_lot", count, 1, vary)[index]
+def _random_problem(
+    vary: str, index: int, count: int = 30, reverse: bool = False, seed: int = 1
+):
+    """Random ``vary`` pose ``index`` of ``coverage.py --count count --seed seed``."""
+    pose = draw_goals("parking_lot", count, seed, vary)[index]
     m = dataclasses.replace(builtin_map("parking_lot"), **{vary: pose})
     return m, PlanningProblem.from_map(m, reverse=reverse)
 
@@ -160,7 +162,9 @@ def test_tight_stage_keeps_less_clearance_only_after_a_proof() -> None:
     m, problem = _random_problem("start", 7)
     proof = _solve(problem, 20_000, min_clearance=0.15)
     assert proof.status is PlanStatus.PROVEN_UNREACHABLE
-    res = _solve(problem, 20_000)
+    # Turning at 1.02 / kappa_max, as the search before it (at full lock, the default,
+    # the snug search finds a way keeping 0.10 m: the next test).
+    res = _solve(problem, 20_000, tight_radius_factor=1.02)
     assert res.status is PlanStatus.SOLVED, res.message
     assert "keeping only 0.05 m body clearance (none keeps 0.15 m)" in res.message
     assert res.stats["tight_search"] == 1.0
@@ -169,6 +173,44 @@ def test_tight_stage_keeps_less_clearance_only_after_a_proof() -> None:
     clear = min(problem.checker.body_clearance(tuple(r[:3])) for r in res.path.samples)
     # The re-check allows 5 mm below the search's clearance (interpolated rows).
     assert 0.045 - 1e-6 <= clear < 0.15
+
+
+def test_last_resorts_turn_at_full_lock() -> None:
+    # Random start 352 of the held-out set, forward: OMPL's Dubins RRT (radius
+    # 1 / kappa_max) drives out of it; turning at 1.02 / kappa_max ours cannot.
+    m, problem = _random_problem("start", 352, count=400, seed=2)
+    kappa_max = problem.vehicle.kappa_max
+    wider = _solve(problem, 20_000, tight_radius_factor=1.02)
+    assert wider.status is PlanStatus.PROVEN_UNREACHABLE, wider.message
+    res = _solve(problem, 20_000)
+    assert res.status is PlanStatus.SOLVED, res.message
+    assert "keeping only 0.10 m body clearance (none keeps 0.15 m)" in res.message
+    assert res.stats["body_clearance_m"] == pytest.approx(0.10)
+    # It turns tighter than the usual searches can, and never beyond the car's limit.
+    assert kappa_max / 1.02 + 1e-6 < res.path.max_curvature <= kappa_max + 1e-9
+    assert verify_path(m, res.path, max_sharpness=0.2).ok
+    start = _random_problem("start", 7)[1]
+    snug = _solve(start, 20_000)
+    assert snug.status is PlanStatus.SOLVED, snug.message
+    assert "keeping only 0.10 m body clearance (none keeps 0.15 m)" in snug.message
+
+
+def test_tight_search_runs_again_at_the_finest_grid() -> None:
+    # Random goal 183 of the held-out set, forward: at full lock keeping 0.05 m the
+    # first grid's search has every connection rejected, the finest grid's finds one.
+    m, problem = _random_problem("goal", 183, count=400, seed=2)
+    res = _solve(problem, 20_000)
+    assert res.status is PlanStatus.SOLVED, res.message
+    assert res.message.startswith(
+        "solved by Hybrid A* keeping only 0.05 m body clearance (none keeps 0.15 m) at "
+        "0.25 m / 2.5 deg resolution"
+    )
+    assert (
+        "at 0.5 m / 5 deg / 1 m steps keeping only 0.05 m body clearance the search had "
+        "every goal connection rejected" in res.message
+    )
+    assert res.path.max_curvature <= problem.vehicle.kappa_max + 1e-9
+    assert verify_path(m, res.path, max_sharpness=0.2).ok
 
 
 def test_wide_stage_turns_wider_after_rejected_connections() -> None:

@@ -166,6 +166,14 @@ class HybridConfig:
         less ahead needs it: random start 7 of ``experiments/coverage.py`` (0.20 m
         clearance) cannot drive forward keeping 0.15 m, or 0.10 m, and can keeping
         0.05 m (230 expansions); OMPL's planners keep none.
+    tight_radius_factor : float
+        The searches keeping less than ``body_clearance`` (the snug and tight ones)
+        turn with radius ``tight_radius_factor / kappa_max`` (``>= 1``; at most
+        ``radius_factor``): the car's own full lock by default. Their connections'
+        steering ramps have less room there, so they may reject four times
+        ``max_solutions``. OMPL's Dubins RRT turns at that radius: on the random
+        sets of ``experiments/coverage.py`` (seed 2, forward only) it solved 6 goals
+        and 6 starts that ours could not at 1.02 (session 22, ``docs/coverage_all.md``).
     wide_radius_factor : float
         When the first search ends with every goal connection rejected
         (``rejected``), a search at the first resolution turns with radius
@@ -271,6 +279,7 @@ class HybridConfig:
     coarse_factor: int = 4
     min_clearance: float = 0.05
     wide_radius_factor: float = 1.1
+    tight_radius_factor: float = 1.0
     shortcut_tries: int = 0
     turn_moves: int = 12
     abreast_turns: int = 4
@@ -308,7 +317,7 @@ class HybridConfig:
         for name, low in (
             ("radius_factor", 1.0), ("reverse_cost", 1.0), ("heuristic_weight", 1.0),
             ("retry_weight", 1.0),
-            ("wide_radius_factor", 1.0),
+            ("wide_radius_factor", 1.0), ("tight_radius_factor", 1.0),
         ):  # fmt: skip
             value = getattr(self, name)
             require_finite(f"hybrid.{name}", value)
@@ -381,7 +390,10 @@ class HybridConfig:
         >>> tight.body_clearance, tight.xy_resolution, tight.refinements, tight.coarsens
         (0.05, 0.5, 0, False)
         """
-        return self._last(body_clearance=self.min_clearance)
+        return self._last(
+            body_clearance=self.min_clearance,
+            radius_factor=min(self.radius_factor, self.tight_radius_factor),
+        )
 
     def widened(self) -> HybridConfig:
         """The last search after rejected connections: :attr:`wide_radius_factor`'s turns.

@@ -137,6 +137,9 @@ PERSIST_SOLUTIONS = 4096
 #: The searches that keep less than the usual body clearance: ``"snug"`` (half-way to
 #: ``min_clearance``, at the finest resolution) and ``"tight"`` (``min_clearance``).
 _SNUGGER = ("snug", "tight")
+#: How many times ``max_solutions`` the tight searches may reject (they turn at full
+#: lock, where the ramps' re-fit has the least room).
+TIGHT_SOLUTIONS_FACTOR = 4
 
 
 @functools.lru_cache(maxsize=16)  # each stage's config validated once, not per query
@@ -150,13 +153,18 @@ def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
     --------
     >>> ladder = _ladder(HybridConfig())
     >>> [s.name for s in ladder]
-    ['coarse', 'middle', 'tight', 'wide', 'fine', 'persist', 'snug', 'tight']
+    ['coarse', 'middle', 'tight', 'wide', 'fine', 'persist', 'snug', 'tight', 'tight']
     >>> [s.config.xy_resolution for s in ladder]
-    [2.0, 1.0, 1.0, 0.5, 0.25, 0.25, 0.25, 0.5]
+    [2.0, 1.0, 1.0, 0.5, 0.25, 0.25, 0.25, 0.5, 0.25]
     >>> [round(s.config.body_clearance, 3) for s in ladder]
-    [0.15, 0.15, 0.05, 0.15, 0.15, 0.15, 0.1, 0.05]
+    [0.15, 0.15, 0.05, 0.15, 0.15, 0.15, 0.1, 0.05, 0.05]
     >>> [s.share for s in ladder]
-    [1.0, 0.5, 1.0, 0.5, 0.5, 1.0, 0.5, 1.0]
+    [1.0, 0.5, 1.0, 0.5, 0.5, 1.0, 0.5, 0.5, 1.0]
+
+    The searches keeping less clearance turn at the car's own full lock:
+
+    >>> [s.config.radius_factor for s in ladder]
+    [1.02, 1.02, 1.0, 1.1, 1.02, 1.02, 1.0, 1.0, 1.0]
     """
     stages = []
     if config.coarsens:
@@ -174,7 +182,7 @@ def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
                 # car has most ramped connections cut the corner (random goal 94 forward:
                 # the 17th to 24th passed, 4 301 expansions).
                 tight = dataclasses.replace(
-                    middle.tightened(), max_solutions=2 * config.max_solutions
+                    middle.tightened(), max_solutions=_tight_solutions(config)
                 )
                 stages.append(_Stage("tight", tight, spent, (*PROOFS, "expansions")))
     if config.wide_radius_factor > config.radius_factor:
@@ -209,16 +217,36 @@ def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
     # body_clearance (a tighter path may exist), also after a finer search that spent
     # its share without one.
     if config.min_clearance < config.body_clearance:
+        # The last resorts turn at the car's own full lock (tight_radius_factor), and
+        # their steering ramps then have less room: more connections are rejected
+        # before one fits (session 22: random goal 73 of seed 2, forward, needed 64).
         if fine is not config:
             # First half-way, at the finest resolution: a kerbside gap of 1.4 car lengths
             # is proven out of reach at 0.15 m; its way in keeps 0.10 m, with short moves
             # (0.5 m steps) that the 0.5 m / 1 m steps of the last one do not take, and
             # 0.05 m there has every ramped connection cut a corner (session 13).
             between = 0.5 * (config.body_clearance + config.min_clearance)
-            snug = dataclasses.replace(fine.tightened(), body_clearance=between)
+            snug = dataclasses.replace(
+                fine.tightened(), body_clearance=between, max_solutions=_tight_solutions(config)
+            )
             stages.append(_Stage("snug", snug, PROOFS, PROOFS, config.refine_share))
-        stages.append(_Stage("tight", config.tightened(), PROOFS, (*PROOFS, "expansions")))
+        tight = dataclasses.replace(config.tightened(), max_solutions=_tight_solutions(config))
+        last = fine is config
+        # Also after a snug search whose every connection was rejected: its ramps cut
+        # corners that 0.05 m less clearance may leave room for.
+        stages.append(_Stage("tight", tight, PROOFS, (*PROOFS, "rejected", "expansions"),
+                             1.0 if last else config.refine_share))  # fmt: skip
+        if not last:
+            # Its proof holds on the first grid only: the finest once more keeping as
+            # little (random goal 183 of seed 2 threads a gap keeping 0.07 m there).
+            finest = dataclasses.replace(fine.tightened(), max_solutions=_tight_solutions(config))
+            stages.append(_Stage("tight", finest, PROOFS, (*PROOFS, "rejected", "expansions")))
     return tuple(stages)
+
+
+def _tight_solutions(config: HybridConfig) -> int:
+    """Goal connections a tight search may have rejected: four times the usual."""
+    return TIGHT_SOLUTIONS_FACTOR * config.max_solutions
 
 
 def hybrid_query(
@@ -240,9 +268,10 @@ def hybrid_query(
     every goal connection rejected, each with ``refine_share`` of the rest when a
     later search may follow; when those had every connection rejected too, the finest
     once more, going on through the rejections (``persist``); then, after a proof, the
-    searches keeping less clearance
-    (the snug one half-way at the finest resolution, the tight one ``min_clearance``
-    at the first). All counted, so deterministic.
+    searches keeping less clearance and turning at the car's full lock
+    (``tight_radius_factor``): the snug one half-way at the finest resolution, the
+    tight one ``min_clearance`` at the first and then at the finest. All counted, so
+    deterministic.
 
     Parameters
     ----------
