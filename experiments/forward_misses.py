@@ -50,6 +50,8 @@ SHORT = {
     "no-clearance": "no clearance, 11 curvatures, 200 connections",
     "no-clearance-arcs": "no clearance, exact arcs (no sharpness bound)",
     "arcs-0.05": "0.05 m clearance, exact arcs (no sharpness bound)",
+    "full-lock-0.05": "0.05 m clearance, full lock (radius 1.0 / kappa_max)",
+    "arcs-full-lock-0.05": "0.05 m clearance, full lock, exact arcs",
 }
 #: Our planner's settings, from the default to none of the guarantees but the body's.
 VARIANTS = {
@@ -62,6 +64,15 @@ VARIANTS = {
     ),
     "0.05 m clearance, exact arcs (no sharpness bound)": (
         "body_clearance=0.05:min_clearance=0.05:curvatures=11:curve=arcs:coarse_after=0"
+    ),
+    # Session 22: every search turning as tight as OMPL's Dubins curves (the default's
+    # last resorts do since), with the ramps; then without them.
+    "0.05 m clearance, full lock (radius 1.0 / kappa_max)": (
+        "body_clearance=0.05:min_clearance=0.05:coarse_after=0:radius_factor=1.0"
+    ),
+    "0.05 m clearance, full lock, exact arcs": (
+        "body_clearance=0.05:min_clearance=0.05:curvatures=11:curve=arcs:coarse_after=0:"
+        "radius_factor=1.0"
     ),
 }
 
