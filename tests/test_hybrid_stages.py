@@ -213,6 +213,18 @@ def test_tight_search_runs_again_at_the_finest_grid() -> None:
     assert verify_path(m, res.path, max_sharpness=0.2).ok
 
 
+def test_no_expansions_held_back_for_a_search_that_cannot_follow() -> None:
+    # Random start 131 of the held-out set, forward: every connection rejected at the
+    # first grid, then the wide and fine searches spend their shares. Only a search
+    # after rejections (persist) may follow the fine one, so the fine one gets all the
+    # rest; it had left 4 267 of the 20 000 unspent (session 21).
+    _, problem = _random_problem("start", 131, count=400, seed=2)
+    res = _solve(problem, 20_000)
+    assert res.status is PlanStatus.NO_PATH_IN_BUDGET, res.message
+    assert res.iterations == 20_000
+    assert "within its share" not in res.message.split(";")[0]
+
+
 def test_wide_stage_turns_wider_after_rejected_connections() -> None:
     m, problem = _random_problem("goal", 39, count=100, reverse=True)
     # The search of session 7 (unit steps, weight 1.5, every shot): its connections are

@@ -109,7 +109,10 @@ def _failure_message(
             f"no path found at {res} resolution within its share of {allowed} expansions "
             f"({counts})"
         )
-    return f"no path found within the expansion budget of {budget.max_iterations} ({counts})"
+    return (
+        f"no path found at {res} resolution within the expansion budget of "
+        f"{budget.max_iterations} ({counts})"
+    )
 
 
 @dataclass(frozen=True)
@@ -318,7 +321,9 @@ def hybrid_query(
         ended = found[1].reason
         if found[0] is not None or left <= 0 or watch.expired() or ended not in st.after_last:
             continue
-        later = i + 1 < len(ladder)
+        # A share holds back expansions only for a later search that may follow one
+        # that spent its share; with none left, this one gets them all (session 22).
+        later = any("expansions" in s.after_last for s in ladder[i + 1 :])
         cfg, stage = st.config, st.name
         run(cfg, st.share if later else 1.0)
     path, outcome, trees = found
