@@ -269,12 +269,12 @@ def hybrid_query(
     (``wide_radius_factor``) first; finer ones (:meth:`HybridConfig.refined`,
     ``config.refinements`` of them) after a search that ran out of states or had
     every goal connection rejected, each with ``refine_share`` of the rest when a
-    later search may follow; when those had every connection rejected too, the finest
-    once more, going on through the rejections (``persist``); then, after a proof, the
-    searches keeping less clearance and turning at the car's full lock
-    (``tight_radius_factor``): the snug one half-way at the finest resolution, the
-    tight one ``min_clearance`` at the first and then at the finest. All counted, so
-    deterministic.
+    later search may follow one that spent its share (else all of it); when those
+    had every connection rejected too, the finest once more, going on through the
+    rejections (``persist``); then, after a proof, the searches keeping less
+    clearance and turning at the car's full lock (``tight_radius_factor``): the snug
+    one half-way at the finest resolution, the tight one ``min_clearance`` at the
+    first and then at the finest. All counted, so deterministic.
 
     Parameters
     ----------
