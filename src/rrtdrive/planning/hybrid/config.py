@@ -168,8 +168,8 @@ class HybridConfig:
         0.05 m (230 expansions); OMPL's planners keep none.
     tight_radius_factor : float
         The searches keeping less than ``body_clearance`` (the snug and tight ones)
-        turn with radius ``tight_radius_factor / kappa_max`` (``>= 1``; at most
-        ``radius_factor``): the car's own full lock by default. Their connections'
+        turn with radius ``tight_radius_factor / kappa_max`` (``>= 1``; above
+        ``radius_factor`` it has no effect): the car's own full lock by default. Their connections'
         steering ramps have less room there, so they may reject four times
         ``max_solutions``. OMPL's Dubins RRT turns at that radius: on the random
         sets of ``experiments/coverage.py`` (seed 2, forward only) it solved 6 goals

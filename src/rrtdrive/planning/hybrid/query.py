@@ -222,7 +222,7 @@ def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
     if config.min_clearance < config.body_clearance:
         # The last resorts turn at the car's own full lock (tight_radius_factor), and
         # their steering ramps then have less room: more connections are rejected
-        # before one fits (session 22: random goal 73 of seed 2, forward, needed 64).
+        # before one fits (session 22: random goal 73 of seed 2, forward, needed over 16).
         if fine is not config:
             # First half-way, at the finest resolution: a kerbside gap of 1.4 car lengths
             # is proven out of reach at 0.15 m; its way in keeps 0.10 m, with short moves
