@@ -8,10 +8,13 @@ from dataclasses import dataclass
 
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
-__all__ = ["CURVES", "HybridConfig"]
+__all__ = ["CURVES", "TIGHT_SOLUTIONS_FACTOR", "HybridConfig"]
 
 #: The kinds of returned segments (:attr:`HybridConfig.curve`).
 CURVES = ("clothoid", "arcs")
+#: How many times ``max_solutions`` a tight search (:meth:`HybridConfig.tightened`) may
+#: reject: it turns at full lock, where the ramps' re-fit has the least room.
+TIGHT_SOLUTIONS_FACTOR = 4
 
 
 @dataclass(frozen=True)
@@ -384,15 +387,22 @@ class HybridConfig:
     def tightened(self) -> HybridConfig:
         """The last search: :attr:`min_clearance` kept, no finer or coarser one after it.
 
+        It turns at :attr:`tight_radius_factor` and may reject
+        :data:`TIGHT_SOLUTIONS_FACTOR` times :attr:`max_solutions` connections (at full
+        lock the ramps' re-fit has the least room).
+
         Examples
         --------
         >>> tight = HybridConfig().tightened()
         >>> tight.body_clearance, tight.xy_resolution, tight.refinements, tight.coarsens
         (0.05, 0.5, 0, False)
+        >>> tight.radius_factor, tight.max_solutions
+        (1.0, 64)
         """
         return self._last(
             body_clearance=self.min_clearance,
             radius_factor=min(self.radius_factor, self.tight_radius_factor),
+            max_solutions=TIGHT_SOLUTIONS_FACTOR * self.max_solutions,
         )
 
     def widened(self) -> HybridConfig:
@@ -459,7 +469,7 @@ class HybridConfig:
             coarse_after=0.0,
         )
 
-    def _last(self, **changes: float) -> HybridConfig:
+    def _last(self, **changes: float | int) -> HybridConfig:
         """``changes`` applied, and no finer or coarser search after this one."""
         return dataclasses.replace(
             self, refinements=0, coarse_after=0.0, **{**self._retry(), **changes}

@@ -140,9 +140,6 @@ PERSIST_SOLUTIONS = 4096
 #: The searches that keep less than the usual body clearance: ``"snug"`` (half-way to
 #: ``min_clearance``, at the finest resolution) and ``"tight"`` (``min_clearance``).
 _SNUGGER = ("snug", "tight")
-#: How many times ``max_solutions`` the tight searches may reject (they turn at full
-#: lock, where the ramps' re-fit has the least room).
-TIGHT_SOLUTIONS_FACTOR = 4
 
 
 @functools.lru_cache(maxsize=16)  # each stage's config validated once, not per query
@@ -181,13 +178,10 @@ def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
             middle = config.middled()
             stages.append(_Stage("middle", middle, spent, _REFINE_ON, config.refine_share))
             if config.min_clearance < config.body_clearance:
-                # Last of all, with twice the goal connections: an approach 0.05 m from a
-                # car has most ramped connections cut the corner (random goal 94 forward:
-                # the 17th to 24th passed, 4 301 expansions).
-                tight = dataclasses.replace(
-                    middle.tightened(), max_solutions=_tight_solutions(config)
-                )
-                stages.append(_Stage("tight", tight, spent, (*PROOFS, "expansions")))
+                # Last of all, with more goal connections (tightened(): 4 x): an approach
+                # 0.05 m from a car has most ramped connections cut the corner (random goal
+                # 94 forward: the 17th to 24th passed, 4 301 expansions).
+                stages.append(_Stage("tight", middle.tightened(), spent, (*PROOFS, "expansions")))
     if config.wide_radius_factor > config.radius_factor:
         # Every goal connection rejected: turn a little wider first (the ramps of a
         # full-lock word need steering room), at the first resolution; the finer search
@@ -229,27 +223,19 @@ def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
             # (0.5 m steps) that the 0.5 m / 1 m steps of the last one do not take, and
             # 0.05 m there has every ramped connection cut a corner (session 13).
             between = 0.5 * (config.body_clearance + config.min_clearance)
-            snug = dataclasses.replace(
-                fine.tightened(), body_clearance=between, max_solutions=_tight_solutions(config)
-            )
+            snug = dataclasses.replace(fine.tightened(), body_clearance=between)
             stages.append(_Stage("snug", snug, PROOFS, PROOFS, config.refine_share))
-        tight = dataclasses.replace(config.tightened(), max_solutions=_tight_solutions(config))
-        last = fine is config
         # Also after a snug search whose every connection was rejected: its ramps cut
         # corners that 0.05 m less clearance may leave room for.
-        stages.append(_Stage("tight", tight, PROOFS, (*PROOFS, "rejected", "expansions"),
-                             1.0 if last else config.refine_share))  # fmt: skip
+        after = (*PROOFS, "rejected", "expansions")
+        last = fine is config
+        share = 1.0 if last else config.refine_share
+        stages.append(_Stage("tight", config.tightened(), PROOFS, after, share))
         if not last:
             # Its proof holds on the first grid only: the finest once more keeping as
             # little (random goal 183 of seed 2 threads a gap keeping 0.07 m there).
-            finest = dataclasses.replace(fine.tightened(), max_solutions=_tight_solutions(config))
-            stages.append(_Stage("tight", finest, PROOFS, (*PROOFS, "rejected", "expansions")))
+            stages.append(_Stage("tight", fine.tightened(), PROOFS, after))
     return tuple(stages)
-
-
-def _tight_solutions(config: HybridConfig) -> int:
-    """Goal connections a tight search may have rejected: four times the usual."""
-    return TIGHT_SOLUTIONS_FACTOR * config.max_solutions
 
 
 def hybrid_query(
