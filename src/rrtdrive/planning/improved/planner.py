@@ -15,6 +15,7 @@ paths, the direct Dubins path, the escalation, then the fallback's tails and lea
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from collections.abc import Iterable
@@ -39,7 +40,7 @@ from rrtdrive.planning.improved.growth import (
     grow_until_meet,
     rooted_edge_test,
 )
-from rrtdrive.planning.result import check_query, run_query, solved, timeout_result
+from rrtdrive.planning.result import run_query, solved, timeout_result
 from rrtdrive.planning.sampling import SampleSource
 from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, make_drivable
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Tree
@@ -143,11 +144,11 @@ class ImprovedRRTConnect:
             (exact, of the whole curve) and the repair counters ``fillets``,
             ``merges``, ``moves``, ``drops``, ``unprunes`` and ``edge_checks``.
         """
-        check_query(problem, rng, budget)  # before the query reads the problem
-        query = _Query(problem, self.config)
+        # Built on first use, so that run_query has checked the problem before it is read.
+        query = functools.cache(lambda: _Query(problem, self.config))
         return run_query(
-            NAME, problem, budget, lambda watch: query.run(rng, budget, watch), query.prepare,
-            rng=rng,
+            NAME, problem, budget, lambda watch: query().run(rng, budget, watch),
+            lambda: query().prepare(), rng=rng,
         )
 
 
