@@ -222,12 +222,85 @@ def test_export_write_failure_is_one_line_and_leaves_no_temp_file(capsys, tmp_pa
     def full_disk(self, *args, **kwargs):
         raise OSError(28, "No space left on device")
 
-    # The write itself fails after the checks passed (the disk filled up meanwhile).
+    # The write itself fails after the checks passed (the disk filled up meanwhile):
+    # not bad input, so exit 1 (README: output that cannot be written).
     monkeypatch.setattr(rrtdrive.atomic.Path, "write_text", full_disk)
     code, _, err = run(capsys, "maps", "--export", str(tmp_path))
-    one_line(code, err, "--export: cannot write")
+    one_line(code, err, "--export: cannot write", expected_code=1)
     assert "No space left on device" in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_export_that_fails_midway_leaves_the_folder_as_it_was(capsys, tmp_path, monkeypatch):
+    from rrtdrive.maps import BUILTIN_MAPS
+
+    names = list(BUILTIN_MAPS)
+    for name in names:
+        (tmp_path / f"{name}.json").write_text("old\n")
+    real_write = Path.write_text
+    written = []
+
+    def fills_up(self, *args, **kwargs):
+        if len(written) == 2:  # the third map finds the disk full
+            raise OSError(28, "No space left on device")
+        written.append(self)
+        return real_write(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "write_text", fills_up)
+    code, _, err = run(capsys, "maps", "--export", str(tmp_path))
+    one_line(code, err, f"--export: cannot write {tmp_path / names[2]}.json", expected_code=1)
+    # All or nothing: the two maps written before stayed temporary files, now removed.
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(f"{n}.json" for n in names)
+    assert all((tmp_path / f"{n}.json").read_text() == "old\n" for n in names)
+
+
+def test_plan_json_write_failure_exits_1(capsys, tmp_path, monkeypatch):
+    import rrtdrive.atomic
+
+    def full_disk(self, *args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(rrtdrive.atomic.Path, "write_text", full_disk)
+    target = tmp_path / "p.json"
+    code, _, err = run(capsys, "plan", "overtake", "--planner", "rrt", "--json", str(target))
+    one_line(code, err, f"--json: cannot write {target}", expected_code=1)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_json_through_a_symbolic_link_replaces_the_file_it_points_to(capsys, tmp_path):
+    real = tmp_path / "real.json"
+    real.write_text("old\n")
+    real.chmod(0o640)
+    link = tmp_path / "link.json"
+    link.symlink_to(real.name)
+    code, _, _ = run(capsys, "plan", "overtake", "--planner", "rrt", "--json", str(link))
+    assert code == 0
+    assert link.is_symlink() and os.readlink(link) == real.name  # the link stays a link
+    assert json.loads(real.read_text())["planner"] == "rrt"
+    assert real.stat().st_mode & 0o777 == 0o640  # the replaced file's permissions kept
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.json", "real.json"]
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs named pipes")
+def test_json_into_a_named_pipe_is_written_into_it(capsys, tmp_path):
+    import threading
+
+    fifo = tmp_path / "plan.json"
+    os.mkfifo(fifo)
+    got = []
+    # A daemon: were the pipe renamed over, the reader would wait for ever.
+    reader = threading.Thread(target=lambda: got.append(fifo.read_text()), daemon=True)
+    reader.start()
+    code, _, _ = run(capsys, "plan", "overtake", "--planner", "rrt", "--json", str(fifo))
+    reader.join(timeout=60)
+    assert code == 0 and got, "nothing came through the pipe"
+    assert json.loads(got[0])["planner"] == "rrt"
+    assert fifo.is_fifo()  # still a pipe, not a regular file renamed over it
+    assert [p.name for p in tmp_path.iterdir()] == ["plan.json"]
+
+
+def test_empty_output_name_is_bad_input(capsys):
+    one_line(*run(capsys, "plan", "overtake", "--json", "")[::2], "--json: needs a file name")
 
 
 # ------------------------------------------------------------------- 6: deterministic bench

@@ -8,6 +8,8 @@ import math
 import numpy as np
 import pytest
 import shapely
+from hypothesis import given
+from hypothesis import strategies as st
 
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import Map, Obstacle, builtin_map
@@ -372,6 +374,42 @@ def test_envelope_gaps_by_hand():
         envelope_gaps([a, b], bounds=(-30.0, -30.0, 28.0, 30.0)), [10.0, 28 - 20 - 5]
     )
     assert envelope_gaps([a]).tolist() == [math.inf]
+
+
+def _pairwise_gaps(obstacles: list[Obstacle]) -> np.ndarray:
+    """The envelope gaps from the full distance matrix: the reference, by brute force."""
+    c = np.array([o.center for o in obstacles], dtype=float)
+    r = np.array([math.hypot(*o.size) / 2.0 for o in obstacles])
+    d = np.hypot(c[:, None, 0] - c[None, :, 0], c[:, None, 1] - c[None, :, 1])
+    gap = d - r[:, None] - r[None, :]
+    np.fill_diagonal(gap, np.inf)
+    return gap.min(axis=1)
+
+
+@given(
+    st.lists(
+        st.tuples(
+            st.integers(0, 12), st.integers(0, 12),  # a coarse lattice: ties and piles
+            st.sampled_from((0.2, 1.0, 5.0, 40.0)), st.floats(0.1, 30.0),  # radii far apart
+        ),
+        min_size=12, max_size=80,
+    )
+)
+def test_envelope_gaps_equal_the_pairwise_matrix(rows):
+    # The KD-tree search must find each circle's nearest gap exactly, ties and piled
+    # centres included, however much the radii differ.
+    obstacles = [Obstacle((2.5 * x, 2.5 * y), (w, h)) for x, y, w, h in rows]
+    assert np.array_equal(envelope_gaps(obstacles), _pairwise_gaps(obstacles))
+
+
+def test_envelope_gaps_of_a_pile_with_one_larger():
+    # 300 circles on one spot and a larger one there: each small one's nearest gap is
+    # to the large one, beyond its 256 nearest neighbours, so the blockwise comparison
+    # with all decides it.
+    obstacles = [Obstacle((3.0, 3.0), (1.0, 1.0))] * 300 + [Obstacle((3.0, 3.0), (9.0, 1.0))]
+    gaps = envelope_gaps(obstacles)
+    assert np.array_equal(gaps, _pairwise_gaps(obstacles))
+    assert gaps[0] == pytest.approx(-(math.hypot(1, 1) + math.hypot(9, 1)) / 2)
 
 
 def test_expansion_grows_only_obstacles_with_room():

@@ -1,14 +1,29 @@
-"""Whole files or nothing: write to a temporary file beside the target, then rename."""
+"""Whole files or nothing: write to a temporary file beside the target, then rename.
+
+A target that is a symbolic link is written through it (the file it points to is
+replaced, the link stays). One that is not a regular file (``/dev/null``, a named
+pipe, ``/dev/stdout``) gets the finished bytes written into it: renaming over it
+would put a regular file in its place.
+"""
 
 from __future__ import annotations
 
 import os
+import shutil
+import stat
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["atomic_target", "publish", "temp_beside", "write_text_atomic"]
+__all__ = [
+    "atomic_target",
+    "destination",
+    "is_stream",
+    "publish",
+    "temp_beside",
+    "write_text_atomic",
+]
 
 
 def _umask() -> int:
@@ -18,20 +33,61 @@ def _umask() -> int:
     return mask
 
 
+def destination(target: str | os.PathLike[str]) -> Path:
+    """The file ``target`` names: itself, or the file its symbolic link points to."""
+    return Path(os.path.realpath(target)) if os.path.islink(target) else Path(target)
+
+
+def is_stream(target: str | os.PathLike[str]) -> bool:
+    """Whether ``target`` exists and is neither a regular file nor a folder (a device, a pipe).
+
+    Examples
+    --------
+    >>> is_stream(os.devnull), is_stream(__file__)
+    (True, False)
+    """
+    try:
+        mode = os.stat(target).st_mode
+    except OSError:
+        return False
+    return not (stat.S_ISREG(mode) or stat.S_ISDIR(mode))
+
+
 def temp_beside(target: str | os.PathLike[str], suffix: str | None = None) -> Path:
-    """Create an empty hidden temporary file in ``target``'s folder and return its path."""
-    target = Path(target)
+    """Create an empty hidden temporary file in ``target``'s folder and return its path.
+
+    Beside the file a link points to; for a device or pipe, in the system's temporary
+    folder (``/dev`` takes no files).
+    """
+    target = destination(target)
+    folder = None if is_stream(target) else (target.parent if str(target.parent) else ".")
     fd, tmp = tempfile.mkstemp(
         prefix=f".{target.stem}.", suffix=target.suffix if suffix is None else suffix,
-        dir=target.parent if str(target.parent) else ".",
+        dir=folder,
     )
     os.close(fd)
     return Path(tmp)
 
 
 def publish(tmp: str | os.PathLike[str], target: str | os.PathLike[str]) -> None:
-    """Give ``tmp`` the usual permissions (mkstemp makes it 0600) and rename it to ``target``."""
-    os.chmod(tmp, 0o666 & ~_umask())
+    """Put the finished ``tmp`` in ``target``'s place.
+
+    A regular file (or none yet) is replaced by renaming ``tmp``, which keeps the
+    replaced file's permissions (else the usual ones: mkstemp makes 0600); through a
+    link, the file it points to is replaced; a device or pipe has the bytes written
+    into it.
+    """
+    target = destination(target)
+    if is_stream(target):
+        with open(tmp, "rb") as src, open(target, "wb") as dst:
+            shutil.copyfileobj(src, dst)
+        os.unlink(tmp)
+        return
+    try:
+        mode = stat.S_IMODE(os.stat(target).st_mode)
+    except OSError:
+        mode = 0o666 & ~_umask()
+    os.chmod(tmp, mode)
     os.replace(tmp, target)
 
 

@@ -1,7 +1,8 @@
 """The ``rrtdrive`` command line: ``plan``, ``maps``, ``verify``, ``simulate`` and ``bench``.
 
-Exit codes: 0 success, 1 planning or episode failure, 2 bad input (one line on
-stderr, no traceback).
+Exit codes: 0 success, 1 planning or episode failure (or an output file that could
+not be written once the checks passed: a full disk), 2 bad input (one line on stderr,
+no traceback).
 
 Start-up is kept short: only the chosen subcommand's parser is built, so
 ``rrtdrive --help``, ``--version`` and ``maps`` import no planner, simulator,
@@ -20,19 +21,24 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import numpy as np
 
 from rrtdrive.cli_args import (
+    OutputError,
     join_negative_values,
     nonneg_int,
     positive_float,
     positive_int,
     validate_output,
+    writing,
 )
 from rrtdrive.cli_stdout import run_writing_stdout
 from rrtdrive.types import Budget, InputError, PlanResult, Pose, VehicleParams
+
+if TYPE_CHECKING:
+    from rrtdrive.maps import Map
 
 __all__ = ["COMMANDS", "build_parser", "main", "plan_to_json", "parse_pose"]
 
@@ -153,10 +159,8 @@ def _write_output(target: str, text: str) -> None:
     else:
         from rrtdrive.maps import write_text_atomic
 
-        try:
+        with writing("--json", target):
             write_text_atomic(target, text)
-        except OSError as exc:
-            raise InputError(f"--json: cannot write {target}: {exc.strerror}") from None
 
 
 def _takes_option(factory: Callable[..., object], name: str) -> bool:
@@ -228,10 +232,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     if args.plot:
         from rrtdrive.plotting import plot_plan, save_figure
 
-        try:
+        with writing("--plot", args.plot):
             save_figure(plot_plan(m, result), args.plot)
-        except OSError as exc:
-            raise InputError(f"--plot: cannot write {args.plot}: {exc.strerror}") from None
     cusps = len(result.path.cusps)
     gears = f"{cusps} gear change{'s' if cusps != 1 else ''}, " if cusps else ""
     summary = f"{m.name}: {result.planner} seed {args.seed}: " + (
@@ -248,24 +250,44 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
 
 def _cmd_maps(args: argparse.Namespace) -> int:
-    from rrtdrive.maps import BUILTIN_MAPS, builtin_map, save_map
+    from rrtdrive.maps import BUILTIN_MAPS, builtin_map
 
     maps = {name: builtin_map(name) for name in BUILTIN_MAPS}
     out = None if args.export is None else _export_folder(args.export, list(maps))
+    if out is not None:
+        _export(out, maps)
     for name, m in maps.items():
         line = (
             f"{name:12s} {len(m.obstacles):4d} obstacles  start {m.start.as_tuple()}  goal "
             + str(tuple(round(v, 3) for v in m.goal.as_tuple()))
         )
         if out is not None:
-            target = out / f"{name}.json"
-            try:
-                save_map(m, target)  # atomic: a failed write leaves no temporary file
-            except OSError as exc:
-                raise InputError(f"--export: cannot write {target}: {exc.strerror}") from None
-            line += f"  -> {target}"
+            line += f"  -> {out / f'{name}.json'}"
         print(line)
     return EXIT_OK
+
+
+def _export(out: pathlib.Path, maps: dict[str, Map]) -> None:
+    """Write every map to ``out/NAME.json``: all of them, or (a full disk) none.
+
+    Each is written to a temporary file first; only when all are complete are they
+    renamed into place, so a write that fails leaves the folder as it was.
+    """
+    from rrtdrive.atomic import publish, temp_beside
+
+    temps: dict[pathlib.Path, pathlib.Path] = {}
+    try:
+        for name, m in maps.items():
+            target = out / f"{name}.json"
+            with writing("--export", target):
+                temps[target] = temp_beside(target)
+                temps[target].write_text(json.dumps(m.to_json(), indent=2) + "\n", "utf-8")
+        for target, tmp in temps.items():
+            with writing("--export", target):
+                publish(tmp, target)
+    finally:
+        for tmp in temps.values():
+            tmp.unlink(missing_ok=True)
 
 
 def _export_folder(text: str, names: Sequence[str]) -> pathlib.Path:
@@ -490,7 +512,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     Returns
     -------
     int
-        0 success, 1 failure (also when stdout cannot be written), 2 bad input,
+        0 success, 1 failure (also when stdout or an output file cannot be written),
+        2 bad input,
         141 when the reader of stdout went away, 130 on Ctrl-C.
     """
     return run_writing_stdout(lambda: _main(argv))
@@ -512,6 +535,9 @@ def _main(argv: Sequence[str] | None) -> int:
     except InputError as exc:
         print(f"rrtdrive {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except OutputError as exc:
+        print(f"rrtdrive {args.command}: error: {exc}", file=sys.stderr)
+        return EXIT_FAILED
     except KeyboardInterrupt:
         print("rrtdrive: interrupted", file=sys.stderr)
         return 130

@@ -6,19 +6,22 @@ import argparse
 import math
 import os
 import re
-from collections.abc import Callable, Collection, Sequence
+from collections.abc import Callable, Collection, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
-from rrtdrive.atomic import temp_beside
+from rrtdrive.atomic import destination, is_stream, temp_beside
 from rrtdrive.types import InputError
 
 __all__ = [
+    "OutputError",
     "int_at_least",
     "join_negative_values",
     "nonneg_int",
     "positive_float",
     "positive_int",
     "validate_output",
+    "writing",
 ]
 
 # "-5", "-5,6,0", "-.5,1e-3,0": a value, not an option (argparse only knows plain numbers).
@@ -88,6 +91,22 @@ def join_negative_values(argv: Sequence[str], value_options: Collection[str]) ->
     return out
 
 
+class OutputError(Exception):
+    """A file the command writes failed after its checks passed (a full disk): exit 1.
+
+    Not bad input (exit 2): the same command succeeds once there is room again.
+    """
+
+
+@contextmanager
+def writing(flag: str, target: str | os.PathLike[str]) -> Iterator[None]:
+    """Turn an ``OSError`` of the block into one :class:`OutputError` naming ``flag``."""
+    try:
+        yield
+    except OSError as exc:
+        raise OutputError(f"{flag}: cannot write {target}: {exc.strerror or exc}") from None
+
+
 def validate_output(
     target: str | None, flag: str, suffixes: Collection[str] = (), allow_stdout: bool = True
 ) -> None:
@@ -95,7 +114,8 @@ def validate_output(
 
     Checked before any work is done: the suffix (one of ``suffixes`` when given), an
     existing, writable folder, and that the target is not itself a folder. ``None``
-    (the option not given) and ``"-"`` (stdout, when ``allow_stdout``) pass.
+    (the option not given) and ``"-"`` (stdout, when ``allow_stdout``) pass; a device or
+    named pipe (``/dev/null``) passes when writable, and is written into, not replaced.
     """
     if target is None:
         return
@@ -103,10 +123,17 @@ def validate_output(
         if allow_stdout:
             return
         raise InputError(f"{flag}: needs a file name, not '-'")
+    if not target:
+        raise InputError(f"{flag}: needs a file name, got an empty one")
     out = Path(target)
     if suffixes and out.suffix.lower() not in suffixes:
         want = " or ".join(sorted(s for s in suffixes if s))
         raise InputError(f"{flag}: the file must end in {want}, got {target!r}")
+    if is_stream(out):  # /dev/null, a named pipe: written into, not replaced
+        if not os.access(out, os.W_OK):
+            raise InputError(f"{flag}: cannot write {target!r} (permission denied)")
+        return
+    out = destination(out)  # through a symbolic link, the file it points to
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.is_dir():
         raise InputError(f"{flag}: folder {str(parent)!r} does not exist")

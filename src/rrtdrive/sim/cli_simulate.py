@@ -30,6 +30,7 @@ from rrtdrive.cli_args import (
     positive_float,
     positive_int,
     validate_output,
+    writing,
 )
 from rrtdrive.types import InputError
 
@@ -344,7 +345,8 @@ def _run(args: argparse.Namespace) -> int:
             from rrtdrive.sim.video import write_frames
 
             fps = (1.0 / episode.log.dt) / stride
-            extra["video_frames"] = write_frames(stock.frames, args.video, fps)
+            with writing("--video", args.video):
+                extra["video_frames"] = write_frames(stock.frames, args.video, fps)
             extra["video"] = args.video
     elif args.video:
         if episode.log.steps == 0:
@@ -363,7 +365,8 @@ def _run(args: argparse.Namespace) -> int:
                     print(f"\rrrtdrive simulate: video {done}/{total} frames", end=end,
                           file=sys.stderr, flush=True)
 
-            frames = write_video(episode, args.video, stride=stride, progress=progress)
+            with writing("--video", args.video):
+                frames = write_video(episode, args.video, stride=stride, progress=progress)
             extra["video"] = args.video
             extra["video_frames"] = frames
     data = episode_json(report, extra)
@@ -372,22 +375,16 @@ def _run(args: argparse.Namespace) -> int:
         from rrtdrive.maps import write_text_atomic
         from rrtdrive.sim.episode import trajectory_csv
 
-        try:
+        with writing("--trajectory", args.trajectory):
             write_text_atomic(args.trajectory, trajectory_csv(episode))
-        except OSError as exc:
-            raise InputError(
-                f"--trajectory: cannot write {args.trajectory}: {exc.strerror}"
-            ) from None
     if args.json == "-":
         sys.stdout.write(text)
         sys.stdout.flush()
     elif args.json:
         from rrtdrive.maps import write_text_atomic
 
-        try:
+        with writing("--json", args.json):
             write_text_atomic(args.json, text)
-        except OSError as exc:
-            raise InputError(f"--json: cannot write {args.json}: {exc.strerror}") from None
     if args.json != "-":
         verdict = "success" if report.success else f"{report.outcome} ({failure_reason(report)})"
         cte = "n/a" if report.cte_rms_m is None else f"{report.cte_rms_m:.3f} m"
