@@ -89,6 +89,22 @@ def test_a_problem_checks_its_fields() -> None:
         PlanningProblem(m, checker, m.start, (25.0, 5.0, 0.0))
     with pytest.raises(InputError, match=r"^problem.checker: "):
         PlanningProblem(m, None, m.start, m.goal)
+    # A checker of another map: its path would pass through this map's obstacles.
+    other = PlanningProblem.from_map(builtin_map("parking_lot")).checker
+    with pytest.raises(InputError, match=r"^problem.checker: it was built for another map"):
+        PlanningProblem(m, other, m.start, m.goal)
+
+
+def test_verify_names_a_wrong_map_or_path() -> None:
+    m = builtin_map("overtake")
+    path = make_planner("improved-rrt-connect").solve(
+        PlanningProblem.from_map(m), np.random.default_rng(0), Budget()
+    ).path
+    with pytest.raises(InputError, match=r"^m: expected a Map"):
+        verify_path(None, path)
+    with pytest.raises(InputError, match=r"^path: expected a Path"):
+        verify_path(m, path.samples)
+    assert verify_path(m, path).ok
 
 
 @pytest.mark.parametrize("name", OURS)

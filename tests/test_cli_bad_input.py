@@ -299,6 +299,31 @@ def test_json_into_a_named_pipe_is_written_into_it(capsys, tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["plan.json"]
 
 
+def test_two_outputs_to_one_file_are_bad_input(capsys, tmp_path):
+    same = tmp_path / "out.png"
+    one_line(*run(capsys, "plan", "overtake", "--json", str(same), "--plot", str(same))[::2],
+             "--plot: " + repr(str(same)) + " is also the --json file")
+    link = tmp_path / "link.mp4"
+    link.symlink_to(tmp_path / "out.mp4")  # through a link it is the same file still
+    one_line(*run(capsys, "simulate", "parking", "--video", str(tmp_path / "out.mp4"),
+                  "--json", str(link))[::2], "is also the --video file")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.mp4"]  # nothing run
+
+
+def test_an_endless_input_is_refused_not_read_for_ever(capsys, tmp_path, monkeypatch):
+    import rrtdrive.maps
+    from rrtdrive.maps import save_map
+
+    f = tmp_path / "m.json"
+    save_map(builtin_map("overtake"), f)
+    # The cap (256 MB) made small: the same code path as /dev/zero, without reading it.
+    monkeypatch.setattr(rrtdrive.maps, "MAX_JSON_BYTES", f.stat().st_size - 1)
+    one_line(*run(capsys, "plan", str(f))[::2], f"map: {f} is larger than")
+    one_line(*run(capsys, "verify", str(f))[::2], f"plan: {f} is larger than")
+    monkeypatch.setattr(rrtdrive.maps, "MAX_JSON_BYTES", f.stat().st_size)
+    assert run(capsys, "plan", str(f))[0] == 0  # exactly the cap is read
+
+
 def test_empty_output_name_is_bad_input(capsys):
     one_line(*run(capsys, "plan", "overtake", "--json", "")[::2], "--json: needs a file name")
 

@@ -42,6 +42,27 @@ def test_every_planner_answers_zero_metres_without_searching(name: str, reverse:
     assert verify_path(m, res.path, max_sharpness=0.2).ok
 
 
+@pytest.mark.parametrize("reverse", [False, True])
+@pytest.mark.parametrize("off", [(0.0, 0.0, 1e-6), (0.0, 1e-6, -1e-6), (-7e-7, 7e-7, 0.0)])
+def test_a_goal_the_plan_json_cannot_tell_from_the_start_is_the_start(off, reverse, tmp_path):
+    # Within 1e-6 (the JSON's 6 decimals) the goal is the start: 0 m, also forward only,
+    # where a goal 1e-6 rad off the start's heading used to fail as a manoeuvre with
+    # the map's edge behind it; and the independent check of the JSON passes it.
+    m = dataclasses.replace(builtin_map("parking_lot"),
+                            goal=Pose(5.0 + off[0], 6.0 + off[1], off[2]))  # the lot's start
+    f = tmp_path / "plan.json"
+    goal = f"{5 + off[0]!r},{6 + off[1]!r},{off[2]!r}"
+    argv = ["plan", "parking_lot", "--goal", goal, "--json", str(f)]
+    assert main(argv + (["--reverse"] if reverse else [])) == 0
+    save_map(m, tmp_path / "m.json")
+    assert main(["verify", str(f), str(tmp_path / "m.json")]) == 0
+    res = make_planner("hybrid-a-star").solve(
+        PlanningProblem.from_map(m, reverse=reverse), np.random.default_rng(0), Budget()
+    )
+    assert res.success and "the start is the goal" in res.message
+    assert res.path.length <= 1.5e-6 and res.iterations == 0  # the ends, a micrometre apart
+
+
 def test_a_goal_one_centimetre_away_is_still_planned() -> None:
     m = dataclasses.replace(_here_map(), start=Pose(HERE.x + 0.01 * math.cos(HERE.yaw),
                                                     HERE.y + 0.01 * math.sin(HERE.yaw), HERE.yaw))

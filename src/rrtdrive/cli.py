@@ -27,6 +27,7 @@ import numpy as np
 
 from rrtdrive.cli_args import (
     OutputError,
+    distinct_outputs,
     join_negative_values,
     nonneg_int,
     positive_float,
@@ -184,6 +185,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
     validate_output(args.json, "--json")
     validate_output(args.plot, "--plot", PLOT_SUFFIXES, allow_stdout=False)
+    distinct_outputs(json=args.json, plot=args.plot)
     if args.disable and args.planner in PLANNERS:
         takes = sorted(n for n in PLANNERS if _takes_option(PLANNERS[n], "disable"))
         if args.planner not in takes:

@@ -15,6 +15,7 @@ from rrtdrive.types import InputError
 
 __all__ = [
     "OutputError",
+    "distinct_outputs",
     "int_at_least",
     "join_negative_values",
     "nonneg_int",
@@ -105,6 +106,25 @@ def writing(flag: str, target: str | os.PathLike[str]) -> Iterator[None]:
         yield
     except OSError as exc:
         raise OutputError(f"{flag}: cannot write {target}: {exc.strerror or exc}") from None
+
+
+def distinct_outputs(**targets: str | None) -> None:
+    """Raise :class:`InputError` when two output options name one file.
+
+    Keyword names are the flags without dashes (``json=..., plot=...``); unset ones and
+    stdout (``"-"``) are skipped. Links are followed, so ``a.json`` and a link to it clash.
+    """
+    seen: dict[str, str] = {}
+    for name, target in targets.items():
+        if not target or target == "-":
+            continue
+        flag = "--" + name.replace("_", "-")
+        key = os.path.realpath(target)
+        if key in seen:
+            raise InputError(
+                f"{flag}: {target!r} is also the {seen[key]} file; give each output its own name"
+            )
+        seen[key] = flag
 
 
 def validate_output(

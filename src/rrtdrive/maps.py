@@ -19,6 +19,7 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path as FsPath
+from typing import BinaryIO
 
 import numpy as np
 import shapely
@@ -43,6 +44,8 @@ __all__ = [
     "builtin_map",
     "load_map",
     "parse_json",
+    "read_capped",
+    "MAX_JSON_BYTES",
     "save_map",
     "resolve_map",
     "names_map_file",
@@ -297,10 +300,27 @@ def load_map(path: str | os.PathLike[str], vehicle: VehicleParams | None = None)
     Map
     """
     try:
-        raw = FsPath(path).read_bytes()
+        with open(path, "rb") as f:
+            raw = read_capped(f, "map", str(path))
     except OSError as exc:
         raise InputError(f"map: cannot read {path}: {exc.strerror}") from None
     return map_from_json(parse_json(raw, "map", str(path)), vehicle)
+
+
+#: The largest JSON file (a map, a plan) read, bytes: a map of 20 000 obstacles is 1.5 MB,
+#: and a read of /dev/zero or of a huge stream must end with a message, not a MemoryError.
+MAX_JSON_BYTES = 256 * 1024 * 1024
+
+
+def read_capped(stream: BinaryIO, field: str, source: str) -> bytes:
+    """Read ``stream`` whole; past :data:`MAX_JSON_BYTES`, an InputError naming ``field``."""
+    raw = stream.read(MAX_JSON_BYTES + 1)
+    if len(raw) > MAX_JSON_BYTES:
+        raise InputError(
+            f"{field}: {source} is larger than {MAX_JSON_BYTES // 2**20} MB; "
+            "is it the JSON file you meant?"
+        )
+    return raw
 
 
 def parse_json(raw: bytes | str, field: str, source: str) -> object:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from collections.abc import Sequence
 from pathlib import Path as FsPath
 
@@ -213,7 +214,10 @@ def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: int = 110) -> No
     """Save ``fig`` atomically (temporary file in the same folder, then rename) and close it."""
     suffix = FsPath(path).suffix or ".png"
     try:
-        with atomic_target(path, suffix) as tmp:
+        with atomic_target(path, suffix) as tmp, warnings.catch_warnings():
+            # A map name in a script the font lacks (an emoji) is drawn as a box; the
+            # figure is still right, so no two-line warning on stderr.
+            warnings.filterwarnings("ignore", message="Glyph .* missing from", category=UserWarning)
             fig.savefig(tmp, dpi=dpi)
     finally:
         plt.close(fig)

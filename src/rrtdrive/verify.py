@@ -169,10 +169,15 @@ def _segment_sharpness(xy: np.ndarray, wheelbase: float) -> float:
     return float(np.max(np.abs(np.diff(delta)) / np.diff(where)))
 
 
+#: Steps shorter than this are no move: the plan JSON's 6 decimals leave up to sqrt(2)
+#: micrometres between rows that are one pose, whose direction means nothing.
+_STILL_M = 2e-6
+
+
 def _travel_directions(seg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Chord direction of travel of a segment's non-zero steps, and those steps' indices."""
     d = np.diff(seg[:, :2], axis=0)
-    moving = np.flatnonzero(np.hypot(*d.T) > 1e-9)
+    moving = np.flatnonzero(np.hypot(*d.T) > _STILL_M)
     return np.arctan2(d[moving, 1], d[moving, 0]), moving
 
 
@@ -267,6 +272,13 @@ def verify_path(
     >>> check.ok, check.cusps
     (True, 1)
     """
+    if not isinstance(m, Map):
+        raise InputError(f"m: expected a Map (rrtdrive.maps), got {type(m).__name__}")
+    if not isinstance(path, Path):
+        raise InputError(
+            f"path: expected a Path (rrtdrive.types; Path(rows, waypoints) from an array), "
+            f"got {type(path).__name__}"
+        )
     _check_settings(pose_spacing, max_sample_spacing, heading_tol_deg, curvature_tol,
                     max_sharpness, sharpness_tol)  # fmt: skip
     v = m.vehicle
@@ -404,7 +416,12 @@ def path_from_json(data: Mapping[str, object] | Sequence[Sequence[float]]) -> Pa
         rows, waypoints = data, []
     if not isinstance(rows, Sequence) or isinstance(rows, str):
         raise InputError(f"path: expected a list of rows, got {type(rows).__name__}")
-    widths = {len(r) if _is_list(r) else -1 for r in rows}
+    for i, row in enumerate(rows):
+        if not _is_list(row):
+            raise InputError(
+                f"path: row {i} must be a list [x, y, yaw, kappa, gear], got {brief_repr(row)}"
+            )
+    widths = {len(r) for r in rows}
     if widths - {4, 5} or len(widths) > 1:
         raise InputError(
             f"path: rows must all be [x, y, yaw, kappa] or [x, y, yaw, kappa, gear], "

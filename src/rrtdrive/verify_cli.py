@@ -69,7 +69,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 
 def _read_plan(source: str) -> dict[str, Any]:
-    from rrtdrive.maps import parse_json
+    from rrtdrive.maps import parse_json, read_capped
 
     label = "stdin" if source == "-" else source
     try:
@@ -77,10 +77,10 @@ def _read_plan(source: str) -> dict[str, Any]:
             # Bytes, so a file that is not UTF-8 is named as such whatever the locale
             # (a text stream without a buffer, as a caller's StringIO, gives its text).
             stdin = getattr(sys.stdin, "buffer", sys.stdin)
-            raw = stdin.read()
+            raw = read_capped(stdin, "plan", label)
         else:
             with open(source, "rb") as f:
-                raw = f.read()
+                raw = read_capped(f, "plan", label)
     except OSError as exc:
         raise InputError(f"plan: cannot read {label}: {exc.strerror}") from None
     data = parse_json(raw, "plan", label)

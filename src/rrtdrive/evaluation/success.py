@@ -207,7 +207,7 @@ def failure_reason(report: EpisodeReport, config: EvalConfig | None = None) -> s
         if report.back_in_lane is False:
             why.append("the body is not back in the ego lane")
         if status != "arrived" and not judges:
-            why.append(f"the car did not arrive within {report.duration_s:.1f} s")
+            why.append(f"the car did not arrive within {report.duration_s:.3g} s")
     if not why:
         why.append("no success term failed, yet the episode is not a success")
     return f"{status}, but " + "; ".join(why)

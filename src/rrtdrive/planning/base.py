@@ -81,6 +81,17 @@ class PlanningProblem:
             raise InputError(
                 f"problem.checker: expected a CollisionChecker, got {type(self.checker).__name__}"
             )
+        # A checker of another map would plan around obstacles that are not there.
+        bounds, obstacles = getattr(self.checker, "bounds", None), getattr(
+            self.checker, "obstacles", None
+        )
+        if (bounds is not None and tuple(bounds) != tuple(self.map.bounds)) or (
+            obstacles is not None and tuple(obstacles) != tuple(self.map.obstacles)
+        ):
+            raise InputError(
+                "problem.checker: it was built for another map (its bounds or obstacles "
+                f"differ from map {self.map.name!r}'s); use PlanningProblem.from_map(m)"
+            )
         if not isinstance(self.reverse, (bool, np.bool_)):
             raise InputError(f"reverse: expected True or False, got {self.reverse!r}")
         object.__setattr__(self, "reverse", bool(self.reverse))

@@ -149,16 +149,25 @@ def run_query(
     return dataclasses.replace(result, setup_time_s=setup, diagnosis=found, stats=stats)
 
 
-#: Start and goal closer than this (metres, and radians of heading) are one pose.
-SAME_POSE_TOL = 1e-9
+#: Start and goal closer than this (metres, and radians of heading) are one pose: the
+#: plan JSON's 6 decimals cannot tell them apart (a goal 1e-6 rad off the start's
+#: heading was planned as a manoeuvre, and forward only it failed).
+SAME_POSE_TOL = 1e-6
 
 
 def same_pose(a: Pose, b: Pose) -> bool:
-    """Whether two poses are one (position and heading within :data:`SAME_POSE_TOL`)."""
-    return (
-        math.hypot(b.x - a.x, b.y - a.y) <= SAME_POSE_TOL
-        and abs(wrap_angle(b.yaw - a.yaw)) <= SAME_POSE_TOL
-    )
+    """Whether two poses are one (position and heading within :data:`SAME_POSE_TOL`).
+
+    Examples
+    --------
+    >>> same_pose(Pose(5.0, 6.0, 0.0), Pose(5.0, 6.0, 1e-6))
+    True
+    >>> same_pose(Pose(5.0, 6.0, 0.0), Pose(5.0, 6.0, 1e-5))
+    False
+    """
+    # A hair above the tolerance: wrap_angle(1e-6) may round to just over 1e-6.
+    tol = SAME_POSE_TOL * (1.0 + 1e-9)
+    return math.hypot(b.x - a.x, b.y - a.y) <= tol and abs(wrap_angle(b.yaw - a.yaw)) <= tol
 
 
 def at_goal(problem: PlanningProblem) -> bool:
