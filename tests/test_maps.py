@@ -76,6 +76,11 @@ def _base():
         ({"obstacles": [{"center": [1, 1], "size": [1, 2], "colour": 3}]}, "obstacles"),
         ({"obstacles": {"center": [1, 1]}}, "obstacles"),
         ({"extra": 1}, "unknown key"),
+        # Far from the origin doubles lose the micrometre paths are checked to (at 1e15 m
+        # a solved path failed its own check), and so does a heading of 1e12 rad.
+        ({"bounds": [1e15, 1e15, 1e15 + 50, 1e15 + 50]}, "bounds: .* beyond 1e\\+09 m"),
+        ({"goal": [40.0, 40.0, 1e12]}, "goal: yaw 1e\\+12 rad is beyond"),
+        ({"start": [5.0, 5.0, -2e6]}, "start: yaw"),
     ],
 )
 def test_bad_map_fields_are_named(patch, field):

@@ -130,6 +130,12 @@ class Map:
             )
         require_finite("bounds", *b)
         b = tuple(float(v) for v in b)
+        if max(abs(v) for v in b) > MAX_COORDINATE:
+            raise InputError(
+                f"bounds: {list(b)} reaches beyond {MAX_COORDINATE:g} m from the origin, "
+                "where a double keeps less than the micrometre paths are checked to; move "
+                "the map's origin near the map"
+            )
         if b[2] <= b[0] or b[3] <= b[1]:
             raise InputError(f"bounds: need xmin < xmax and ymin < ymax, got {list(b)}")
         object.__setattr__(self, "bounds", b)
@@ -188,6 +194,15 @@ class Map:
         }
 
 
+#: The largest coordinate a map may use, metres: doubles there are spaced 1.2e-7 m apart,
+#: well inside the 1e-6 m that path ends are checked to (at 1e15 m a solved path failed
+#: its own check: curvature, spacing and headings all rounded away).
+MAX_COORDINATE = 1e9
+#: The largest start or goal heading, radians (spaced 1e-10 rad apart there; 1e12 rad
+#: could not be planned).
+MAX_YAW = 1e6
+
+
 def check_endpoint(m: Map, pose: Pose, label: str, vehicle: VehicleParams) -> None:
     """Raise :class:`InputError` unless the car at ``pose`` lies in bounds and clear of obstacles.
 
@@ -203,6 +218,11 @@ def check_endpoint(m: Map, pose: Pose, label: str, vehicle: VehicleParams) -> No
         The car.
     """
     xmin, ymin, xmax, ymax = m.bounds
+    if abs(pose.yaw) > MAX_YAW:
+        raise InputError(
+            f"{label}: yaw {pose.yaw:g} rad is beyond {MAX_YAW:g} rad either way, where an "
+            "angle keeps less than the precision headings are checked to; give it in [-pi, pi]"
+        )
     if not (xmin <= pose.x <= xmax and ymin <= pose.y <= ymax):
         raise InputError(
             f"{label}: ({pose.x:g}, {pose.y:g}) lies outside the bounds {list(m.bounds)}"
