@@ -130,7 +130,9 @@ class Map:
             )
         require_finite("bounds", *b)
         b = tuple(float(v) for v in b)
-        if max(abs(v) for v in b) > MAX_COORDINATE:
+        # (A map itself that large is refused by the checker's grid limit, which says
+        # what to do about its size.)
+        if max(abs(v) for v in b) > MAX_COORDINATE >= max(b[2] - b[0], b[3] - b[1]):
             raise InputError(
                 f"bounds: {list(b)} reaches beyond {MAX_COORDINATE:g} m from the origin, "
                 "where a double keeps less than the micrometre paths are checked to; move "
