@@ -311,16 +311,16 @@ def test_two_outputs_to_one_file_are_bad_input(capsys, tmp_path):
 
 
 def test_an_endless_input_is_refused_not_read_for_ever(capsys, tmp_path, monkeypatch):
-    import rrtdrive.maps
+    import rrtdrive.json_input
     from rrtdrive.maps import save_map
 
     f = tmp_path / "m.json"
     save_map(builtin_map("overtake"), f)
     # The cap (256 MB) made small: the same code path as /dev/zero, without reading it.
-    monkeypatch.setattr(rrtdrive.maps, "MAX_JSON_BYTES", f.stat().st_size - 1)
+    monkeypatch.setattr(rrtdrive.json_input, "MAX_JSON_BYTES", f.stat().st_size - 1)
     one_line(*run(capsys, "plan", str(f))[::2], f"map: {f} is larger than")
     one_line(*run(capsys, "verify", str(f))[::2], f"plan: {f} is larger than")
-    monkeypatch.setattr(rrtdrive.maps, "MAX_JSON_BYTES", f.stat().st_size)
+    monkeypatch.setattr(rrtdrive.json_input, "MAX_JSON_BYTES", f.stat().st_size)
     assert run(capsys, "plan", str(f))[0] == 0  # exactly the cap is read
 
 

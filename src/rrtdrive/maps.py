@@ -19,13 +19,13 @@ import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path as FsPath
-from typing import BinaryIO
 
 import numpy as np
 import shapely
 
 from rrtdrive.atomic import write_text_atomic
 from rrtdrive.geometry import box_corners
+from rrtdrive.json_input import parse_json, read_capped
 from rrtdrive.types import (
     InputError,
     Pose,
@@ -44,8 +44,6 @@ __all__ = [
     "builtin_map",
     "load_map",
     "parse_json",
-    "read_capped",
-    "MAX_JSON_BYTES",
     "save_map",
     "resolve_map",
     "names_map_file",
@@ -327,69 +325,6 @@ def load_map(path: str | os.PathLike[str], vehicle: VehicleParams | None = None)
     except OSError as exc:
         raise InputError(f"map: cannot read {path}: {exc.strerror}") from None
     return map_from_json(parse_json(raw, "map", str(path)), vehicle)
-
-
-#: The largest JSON file (a map, a plan) read, bytes: a map of 20 000 obstacles is 1.5 MB,
-#: and a read of /dev/zero or of a huge stream must end with a message, not a MemoryError.
-MAX_JSON_BYTES = 256 * 1024 * 1024
-
-
-def read_capped(stream: BinaryIO, field: str, source: str) -> bytes:
-    """Read ``stream`` whole; past :data:`MAX_JSON_BYTES`, an InputError naming ``field``."""
-    raw = stream.read(MAX_JSON_BYTES + 1)
-    if len(raw) > MAX_JSON_BYTES:
-        raise InputError(
-            f"{field}: {source} is larger than {MAX_JSON_BYTES // 2**20} MB; "
-            "is it the JSON file you meant?"
-        )
-    return raw
-
-
-def parse_json(raw: bytes | str, field: str, source: str) -> object:
-    """Decode UTF-8 JSON, turning every way it can fail into one :class:`InputError` line.
-
-    NaN and Infinity literals parse to floats, so that validation names the field
-    they sit in; so do integers too large for a float.
-
-    Parameters
-    ----------
-    raw : bytes or str
-        The file's content (bytes are decoded as UTF-8).
-    field : str
-        Field named first in the message (``"map"``, ``"plan"``).
-    source : str
-        The file name (or ``"stdin"``) named in the message.
-
-    Returns
-    -------
-    object
-        The parsed JSON value.
-
-    Examples
-    --------
-    >>> parse_json(b"[1, NaN]", "map", "m.json")
-    [1, nan]
-    >>> parse_json("[" * 100_000, "map", "m.json")
-    Traceback (most recent call last):
-    ...
-    rrtdrive.types.InputError: map: malformed JSON in m.json: nested too deeply
-    """
-    if isinstance(raw, bytes):
-        try:
-            raw = raw.decode("utf-8")
-        except UnicodeDecodeError as exc:
-            raise InputError(
-                f"{field}: {source} is not a UTF-8 text file (byte {exc.start}: {exc.reason})"
-            ) from None
-    bad = f"{field}: malformed JSON in {source}"
-    try:
-        return json.loads(raw, parse_constant=float)
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{bad}: {exc.msg} (line {exc.lineno})") from None
-    except RecursionError:
-        raise InputError(f"{bad}: nested too deeply") from None
-    except ValueError:  # an integer literal past Python's 4300-digit conversion limit
-        raise InputError(f"{bad}: a number has too many digits") from None
 
 
 def save_map(m: Map, path: str | os.PathLike[str]) -> None:

@@ -69,7 +69,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 
 def _read_plan(source: str) -> dict[str, Any]:
-    from rrtdrive.maps import parse_json, read_capped
+    from rrtdrive.json_input import parse_json, read_capped
 
     label = "stdin" if source == "-" else source
     try:
