@@ -81,7 +81,23 @@ def make_controller(name: str, **options: object) -> TrackingController:
         raise InputError(
             f"controller: unknown controller {name!r}; choose from {sorted(CONTROLLERS)}"
         ) from None
+    known = _option_names(cls)
+    for key in options:
+        if known is not None and key not in known:
+            raise InputError(
+                f"controller.{key}: unknown option of {cls.__name__}; choose from {sorted(known)}"
+            )
     try:
         return cls(**options)  # type: ignore[arg-type]
     except TypeError as exc:
         raise InputError(f"controller: {exc}") from None
+
+
+def _option_names(cls: type) -> set[str] | None:
+    """The keyword options ``cls`` takes (``None``: any, it has ``**kwargs``)."""
+    import inspect
+
+    params = list(inspect.signature(cls).parameters.values())
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params):
+        return None
+    return {p.name for p in params if p.kind is not inspect.Parameter.VAR_POSITIONAL}

@@ -337,9 +337,17 @@ class DriveEnvConfig:
                     f"controller_options.{key}: set by the scenario"
                     f"{' and speed_options' if key == 'speed' else ''}, not a controller gain"
                 )
-        return make_controller(
-            self.controller, vehicle=scenario.vehicle, speed=speed, **self.controller_options
-        )
+        try:
+            return make_controller(
+                self.controller, vehicle=scenario.vehicle, speed=speed, **self.controller_options
+            )
+        except InputError as exc:
+            # make_controller names an option controller.KEY; here it came from
+            # controller_options.
+            text = str(exc)
+            if text.startswith("controller."):
+                raise InputError("controller_options." + text[len("controller."):]) from None
+            raise
 
 
 #: The scenario options of a map scenario.

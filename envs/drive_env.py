@@ -57,6 +57,9 @@ __all__ = ["DriveEnv", "DriveEnvConfig", "RewardWeights", "observation_names", "
 
 #: Episode seeds drawn before giving up when planning keeps failing.
 MAX_PLAN_ATTEMPTS = 20
+#: How near the cusp (metres along the segment, or past it) an agent driving alone must
+#: be for moving in the next segment's gear to start that segment.
+CUSP_REACH_M = 1.0
 
 _RESET_OPTIONS = ("episode_seed",)
 
@@ -103,7 +106,8 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
     at a time. With ``residual=True`` the controller changes segment (it stops at
     each cusp; the residual fades out before every stop); an agent driving alone
     moves on to the next segment once it stands still (|v| <= 0.1 m/s) within
-    0.5 m of the cusp, or moves in the next segment's gear.
+    0.5 m of the cusp, or moves in the next segment's gear within ``CUSP_REACH_M``
+    (1 m) of it or past it.
 
     **Action** (``float32``, ``[-1, 1]^2``): ``[a, d]``, an acceleration and a
     steering angle over the car's command range, or with ``residual=True`` a
@@ -514,11 +518,13 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         nxt = ctrl.segments[self._segment + 1].gear
         v = self._ego.speed
         proj = self._projector.project(*self._ego.rear[:2])
-        at_cusp = (
-            abs(v) <= self.eval_config.stop_speed
-            and abs(self._projector.length - proj.s) <= self.eval_config.goal_tol_m
-        )
-        if at_cusp or (v != 0.0 and (v > 0.0) == (nxt > 0)):
+        to_cusp = self._projector.length - proj.s  # < 0 past it
+        tol, stop = self.eval_config.goal_tol_m, self.eval_config.stop_speed
+        at_cusp = abs(v) <= stop and abs(to_cusp) <= tol
+        # Moving in the next gear counts only near the cusp: a brake at rest rolls the car
+        # back a centimetre, which must not skip a segment tens of metres long.
+        turned = v != 0.0 and (v > 0.0) == (nxt > 0) and to_cusp <= CUSP_REACH_M
+        if at_cusp or turned:
             ctrl.start_segment(self._segment + 1)
             self._use_segment(self._segment + 1)
 

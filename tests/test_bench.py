@@ -350,6 +350,29 @@ def test_statistics():
     assert "seed" not in g.stats
     assert "| m | p | 4 | 0 | 75%" in to_markdown([g])
     assert to_csv([g]).splitlines()[0].startswith("kind,map,scenario,planner,controller")
+    # Closed loop: a crashed episode has a path and a partly driven curvature; the
+    # summary counts path geometry of the successful runs only, as it says.
+    episodes = [
+        {"kind": "episode", "scenario": "s", "planner": "p", "controller": "c", "seed": i,
+         "config_hash": "h", "success": i == 0, "status": "ok", "path_length_m": 80.0 + i,
+         "executed_max_curvature": 0.1 * (i + 1), "cte_rms_m": 0.01 * (i + 1)}
+        for i in range(3)
+    ]
+    (e,) = summarise_rows(episodes)
+    assert e.stats["path_length_m"].n == 1 and e.stats["path_length_m"].mean == 80.0
+    assert e.stats["executed_max_curvature"].n == 1
+    assert e.stats["cte_rms_m"].n == 3  # the tracking error of every run
+
+
+def test_no_plots_removes_an_earlier_grids_figures(tmp_path):
+    from rrtdrive.bench.summary import PLOT_FILES
+
+    for name in PLOT_FILES:
+        (tmp_path / name).write_bytes(b"an earlier grid's figure")
+    run_bench(BenchConfig(maps=("overtake",), planners=("rrt",), seeds=1, out=str(tmp_path),
+                          plots=False))
+    assert not any((tmp_path / name).exists() for name in PLOT_FILES)
+    assert (tmp_path / "summary.md").is_file()
 
 
 # ----------------------------------------------------------------------------- OMPL

@@ -349,6 +349,14 @@ def test_deterministic_rejects_the_max_time_flag_even_at_its_default(capsys, tmp
     one_line(*run(capsys, *argv)[::2], "--max-time")
 
 
+def test_bench_refuses_reverse_for_the_scenario_that_re_plans(capsys, tmp_path):
+    # As simulate --reverse does: its re-planner drives forward only.
+    out = tmp_path / "b"
+    one_line(*run(capsys, "bench", "--scenarios", "overtake-traffic", "--reverse",
+                  "--out", str(out))[::2], "reverse: overtake-traffic re-plans while driving")
+    assert not out.exists()
+
+
 def test_bench_time_limit_defaults_are_unchanged():
     from rrtdrive.bench import BenchConfig
     from rrtdrive.bench.grid import NO_WALL_LIMIT_S, config_from_mapping

@@ -64,7 +64,7 @@ def test_controller_name_of_the_wrong_type(name):
 def test_unknown_name_and_option_still_named():
     with pytest.raises(InputError, match=r"^controller: unknown controller 'lqrr'"):
         make_controller("lqrr")
-    with pytest.raises(InputError, match=r"^controller: .*bogus"):
+    with pytest.raises(InputError, match=r"^controller\.bogus: unknown option of LQR; choose "):
         make_controller("lqr", bogus=1)
 
 

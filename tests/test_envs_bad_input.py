@@ -110,6 +110,12 @@ def test_duplicate_controller_options_name_the_key():
         DriveEnvConfig.from_options("overtake", controller_options={"vehicle": None})
 
 
+def test_an_unknown_controller_option_names_the_key():
+    # As speed_options does: the key inside the mapping, and what the controller takes.
+    with pytest.raises(InputError, match=r"^controller_options\.kk: unknown option of PurePursuit"):
+        gym.make("rrtdrive/Overtake-v0", controller_options={"kk": 1})
+
+
 # ---------------------------------------------------------------- actions
 
 LIMITS = CommandLimits(a_min=-4.0, a_max=2.0, steer_limit=0.4)

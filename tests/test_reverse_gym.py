@@ -100,3 +100,20 @@ def test_the_reverse_in_id_plans_a_reverse_entry_into_the_bay():
     assert u.config.planner == "hybrid-a-star"
     env.close()
     nose_in.close()
+
+
+@pytest.mark.parametrize("env_id", ["rrtdrive/ParkingReverseIn-v0", "rrtdrive/ParallelParking-v0"])
+def test_a_car_rolling_back_at_the_start_stays_on_its_segment(env_id):
+    # A light brake at rest rolls the car back a centimetre: far from the cusp, that is
+    # no gear change of the path (it used to start the reverse segment 11-50 m away and
+    # end the episode off the path at once).
+    env = gym.make(env_id)
+    obs, _ = env.reset(seed=0)
+    cusp = obs[CUSP]
+    assert obs[GEAR] == 1.0 and cusp > 1.0
+    for _ in range(5):
+        obs, _, terminated, _, info = env.step(np.array([-0.05, 0.0], dtype=np.float32))
+        assert not terminated, info
+    assert env.unwrapped._ego.speed < 0.0  # it did roll back
+    assert obs[GEAR] == 1.0 and obs[CUSP] == pytest.approx(cusp, abs=0.05)
+    env.close()

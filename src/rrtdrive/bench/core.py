@@ -16,7 +16,7 @@ from typing import Any, TextIO
 from rrtdrive.bench.backends import Executor, LocalBackend, RayBackend, default_workers
 from rrtdrive.bench.grid import BenchConfig, RunSpec, expand
 from rrtdrive.bench.store import ResultStore, row_key
-from rrtdrive.bench.summary import summarise_rows, write_plots, write_summary
+from rrtdrive.bench.summary import remove_plots, summarise_rows, write_plots, write_summary
 from rrtdrive.bench.worker import error_row, execute_run
 
 __all__ = ["BenchReport", "Progress", "run_bench", "grid_rows"]
@@ -252,6 +252,8 @@ def run_bench(
     groups = summarise_rows(rows)
     title = f"Bench summary ({len(rows)} runs, seeds 0–{cfg.seeds - 1})"
     files += [str(p) for p in write_summary(groups, out, title)]
+    remove_plots(out)  # those of an earlier grid in this folder (a figure without data
+    # is not written, and --no-plots writes none)
     if cfg.plots:
         files += [str(p) for p in write_plots(rows, out)]
     errors = sum(1 for r in rows if r.get("status") == "error")

@@ -283,6 +283,17 @@ class BenchConfig:
                 digests[s], contents[s] = map_digest(s, driven)
         object.__setattr__(self, "map_digests", digests)
         object.__setattr__(self, "map_contents", contents)
+        if self.reverse and self.scenarios:
+            from rrtdrive.sim.tasks import REPLANNING_SCENARIOS
+
+            forward_only = [s for s in self.scenarios if s in REPLANNING_SCENARIOS]
+            if forward_only:
+                # As rrtdrive simulate --reverse: the re-planner drives forward only, so a
+                # reverse cell would repeat the forward one under another name.
+                raise InputError(
+                    f"reverse: {forward_only[0]} re-plans while driving, forward only; "
+                    "bench it without reverse"
+                )
         if self.scenarios:
             from rrtdrive.controllers import CONTROLLERS
 

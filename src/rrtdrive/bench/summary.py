@@ -47,6 +47,10 @@ _ID_FIELDS = {
 #: non-negative quantity (time, length, count, error magnitude) and gets a bootstrap
 #: interval that cannot go below zero. Plan rows have no signed metric.
 SIGNED_METRICS = SIGNED_FIELDS
+#: Path geometry summarised over successful runs only: a crashed or timed-out episode's
+#: path and its partly driven curvature say nothing of what the planner-controller
+#: pair delivers when it works (the summary's note and ``box_length.png`` say so).
+SUCCESS_ONLY = frozenset({"length_m", "max_curvature", "path_length_m", "executed_max_curvature"})
 
 #: Metrics shown in the markdown tables (the CSV has every metric).
 _MD_COLUMNS = {
@@ -137,7 +141,7 @@ def summarise_rows(rows: Iterable[Mapping[str, Any]]) -> list[GroupSummary]:
         is_rate: dict[str, bool] = {}
         for r in ok:
             for k, v in r.items():
-                if k in _ID_FIELDS or v is None:
+                if k in _ID_FIELDS or v is None or (k in SUCCESS_ONLY and not r.get("success")):
                     continue
                 if isinstance(v, bool):
                     metrics.setdefault(k, []).append(float(v))
@@ -236,8 +240,18 @@ def _values(rows: Iterable[Mapping[str, Any]], key: str) -> list[float]:
     return [
         float(r[key]) for r in rows
         if isinstance(r.get(key), (int, float)) and not isinstance(r.get(key), bool)
-        and math.isfinite(r[key])
+        and math.isfinite(r[key]) and (key not in SUCCESS_ONLY or r.get("success"))
     ]
+
+
+#: The figures :func:`write_plots` may write.
+PLOT_FILES = ("box_length.png", "box_time.png", "success.png", "curvature_hist.png")
+
+
+def remove_plots(out: str | FsPath) -> None:
+    """Remove :data:`PLOT_FILES` from ``out`` (an earlier grid's, beside a new summary)."""
+    for name in PLOT_FILES:
+        (FsPath(out) / name).unlink(missing_ok=True)
 
 
 def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[FsPath]:
