@@ -324,6 +324,12 @@ def test_an_endless_input_is_refused_not_read_for_ever(capsys, tmp_path, monkeyp
     assert run(capsys, "plan", str(f))[0] == 0  # exactly the cap is read
 
 
+def test_simulate_max_time_shorter_than_a_step_is_bad_input(capsys):
+    # It used to drive one 0.05 s step and report both "within 0.1 s" and "within 1e-09 s".
+    one_line(*run(capsys, "simulate", "parking", "--max-time", "1e-9")[::2],
+             "--max-time: 1e-09 s is shorter than one simulation step (0.05 s at 20 Hz)")
+
+
 def test_empty_output_name_is_bad_input(capsys):
     one_line(*run(capsys, "plan", "overtake", "--json", "")[::2], "--json: needs a file name")
 

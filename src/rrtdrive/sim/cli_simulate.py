@@ -258,6 +258,12 @@ def _run(args: argparse.Namespace) -> int:
         )
     if getattr(args, "reverse", False) and not reverses(args.planner):
         print(f"rrtdrive simulate: {forward_only_note(args.planner)}", file=sys.stderr)
+    if args.max_time is not None and args.max_time < 1.0 / args.frequency:
+        # The loop runs whole steps: a shorter limit would still drive one.
+        raise InputError(
+            f"--max-time: {args.max_time:g} s is shorter than one simulation step "
+            f"({1.0 / args.frequency:g} s at {args.frequency} Hz)"
+        )
     if args.video is not None and args.video == "-":
         raise InputError("--video: needs a file name ending in .mp4")
     # Before the episode runs: a bad target should not cost a whole episode.
