@@ -233,7 +233,7 @@ def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
         stages.append(_Stage("tight", config.tightened(), PROOFS, after, share))
         if not last:
             # Its proof holds on the first grid only: the finest once more keeping as
-            # little (random goal 183 of seed 2 threads a gap keeping 0.07 m there).
+            # little (random goal 183 of seed 2 threads a gap keeping 0.058 m there).
             stages.append(_Stage("tight", fine.tightened(), PROOFS, after))
     return tuple(stages)
 
