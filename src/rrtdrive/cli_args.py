@@ -6,7 +6,7 @@ import argparse
 import math
 import os
 import re
-from collections.abc import Callable, Collection, Iterator, Sequence
+from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -16,6 +16,7 @@ from rrtdrive.types import InputError
 __all__ = [
     "OutputError",
     "distinct_outputs",
+    "flags_for",
     "int_at_least",
     "join_negative_values",
     "nonneg_int",
@@ -125,6 +126,21 @@ def distinct_outputs(**targets: str | None) -> None:
                 f"{flag}: {target!r} is also the {seen[key]} file; give each output its own name"
             )
         seen[key] = flag
+
+
+@contextmanager
+def flags_for(fields: Mapping[str, str]) -> Iterator[None]:
+    """Re-raise an InputError naming one of ``fields`` with its command-line flag instead.
+
+    ``fields`` maps an API keyword (``lead_speed``) to its flag (``--lead-speed``).
+    """
+    try:
+        yield
+    except InputError as exc:
+        field, sep, rest = str(exc).partition(": ")
+        if sep and field in fields:
+            raise InputError(f"{fields[field]}: {rest}") from None
+        raise
 
 
 def validate_output(

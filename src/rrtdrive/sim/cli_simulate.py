@@ -26,6 +26,7 @@ from typing import Any
 
 from rrtdrive.cli_args import (
     distinct_outputs,
+    flags_for,
     int_at_least,
     nonneg_int,
     positive_float,
@@ -302,15 +303,9 @@ def _run(args: argparse.Namespace) -> int:
     if replan_config is not None:
         if deterministic:
             replan_opts["wall_limit"] = False
-        try:
+        # The config names its fields (replan.rate_hz); on the command line, flags.
+        with flags_for({"replan.rate_hz": "--replan-rate", "replan.predictor": "--predictor"}):
             replan = replan_config(**replan_opts)
-        except InputError as exc:
-            # The config names its fields (replan.rate_hz); on the command line, flags.
-            field, sep, rest = str(exc).partition(": ")
-            flags = {"replan.rate_hz": "--replan-rate", "replan.predictor": "--predictor"}
-            if sep and field in flags:
-                raise InputError(f"{flags[field]}: {rest}") from None
-            raise
     elif replan_opts:
         flag = "--replan-rate" if "rate_hz" in replan_opts else "--predictor"
         raise InputError(
@@ -479,17 +474,13 @@ def _make_task(
             resolve_map(args.scenario), args.seed, start=_parse_pose(args.start, "--start"),
             goal=_parse_pose(args.goal, "--goal"), reverse=args.reverse,
         )
-    try:
+    # make_scenario names its keywords (lead_speed); on the command line they are flags.
+    keywords = ("oncoming", "density", "lead_speed", "lead_model", "reverse_in")
+    with flags_for({k: "--" + k.replace("_", "-") for k in keywords}):
         task = make_scenario(
             args.scenario, args.seed, oncoming=oncoming,
             reverse_in=True if args.reverse_in else None, **traffic_opts,
         )
-    except InputError as exc:
-        # make_scenario names its keywords (lead_speed); on the command line they are flags.
-        field, sep, rest = str(exc).partition(": ")
-        if sep and field in {"oncoming", "density", "lead_speed", "lead_model", "reverse_in"}:
-            raise InputError(f"--{field.replace('_', '-')}: {rest}") from None
-        raise
     if args.reverse and not task.reverse:
         task = dataclasses.replace(task, reverse=True)
     return task
