@@ -3,6 +3,7 @@
 Usage::
 
     python experiments/random_maps_drive.py --maps 200 --jobs 2 --out results/random_maps_drive
+    python experiments/random_maps_drive.py --seeds 36,112 --out results/random_maps_drive_two
 
 The maps of ``experiments/random_maps.py`` (seeds ``0 .. --maps - 1``), each driven
 from its start to its goal as ``rrtdrive simulate MAP --reverse`` drives it (episode
@@ -61,7 +62,8 @@ def drive(item: tuple[int, str, str]) -> dict[str, Any]:
         "collision_footprint": bool(ev["collision_footprint"]),
         "cte_max_m": ev["cte_max_m"], "goal_position_err_m": ev["goal_position_err_m"],
         "cusps": len(ep.path.cusps), "gear_changes": ev["gear_changes"],
-        "duration_s": ev["duration_s"], "message": ep.message[:200],
+        "duration_s": ev["duration_s"], "nuplan_comfortable": ev.get("nuplan_comfortable"),
+        "message": ep.message[:200],
     }  # fmt: skip
 
 
@@ -85,6 +87,14 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     return out
 
 
+def _seeds(payload: dict[str, Any]) -> str:
+    """The map seeds of a payload: a range, or the list given with ``--seeds``."""
+    seeds = sorted({r["map"] for r in payload["rows"]})
+    if seeds == list(range(len(seeds))):
+        return f"0-{len(seeds) - 1}"
+    return ", ".join(map(str, seeds))
+
+
 def report(payload: dict[str, Any]) -> str:
     """The markdown page of a payload."""
     lines = [
@@ -92,7 +102,7 @@ def report(payload: dict[str, Any]) -> str:
         "",
         f"Command: `{payload['command']}`  ",
         f"{payload['machine']}; wall time {payload['wall_time_s'] / 60:.1f} min. "
-        f"{payload['maps']} maps of `experiments/random_maps.py` (seeds 0-{payload['maps'] - 1}), "
+        f"{payload['maps']} maps of `experiments/random_maps.py` (seeds {_seeds(payload)}), "
         f"each driven from its start to its goal (`{payload['planner']}`, reverse allowed, "
         "episode seed 0).",
         "",
@@ -118,6 +128,8 @@ def report(payload: dict[str, Any]) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--maps", type=int, default=200, help="maps: seeds 0..N-1 (default 200)")
+    ap.add_argument("--seeds", default=None, metavar="S,S,...",
+                    help="these map seeds instead of 0..--maps - 1")  # fmt: skip
     ap.add_argument("--controllers", default=",".join(CONTROLLERS), help="comma-separated")
     ap.add_argument("--planner", default="improved-rrt-connect", help="planner (the default's)")
     ap.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
@@ -134,10 +146,19 @@ def main(argv: list[str] | None = None) -> int:
     if args.planner not in PLANNERS:
         ap.error(f"--planner: unknown planner {args.planner!r}; choose from {sorted(PLANNERS)}")
     t0 = time.perf_counter()
-    items = [(seed, c, args.planner) for seed in range(args.maps) for c in controllers]
+    try:
+        seeds = (
+            [int(x) for x in args.seeds.split(",") if x.strip()]
+            if args.seeds is not None else list(range(args.maps))
+        )  # fmt: skip
+    except ValueError:
+        ap.error(f"--seeds: expected comma-separated integers, got {args.seeds!r}")
+    if not seeds or min(seeds) < 0:
+        ap.error(f"--seeds: expected non-negative map seeds, got {args.seeds!r}")
+    items = [(seed, c, args.planner) for seed in seeds for c in controllers]
     rows = parallel_map(drive, items, args.jobs, episode_progress())
     payload = {
-        "command": command("random_maps_drive.py", argv), "maps": args.maps,
+        "command": command("random_maps_drive.py", argv), "maps": len(seeds),
         "planner": args.planner, "machine": machine(),
         "wall_time_s": time.perf_counter() - t0,
         "summary": summarise(rows), "rows": rows,

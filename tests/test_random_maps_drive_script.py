@@ -31,7 +31,8 @@ def test_two_maps_are_driven_and_counted(tmp_path) -> None:  # noqa: ANN001
 def test_bad_options_exit_2(capsys) -> None:  # noqa: ANN001
     import pytest
 
-    for argv in (["--controllers", "mpc"], ["--maps", "0"], ["--planner", "nope"]):
+    for argv in (["--controllers", "mpc"], ["--maps", "0"], ["--planner", "nope"],
+                 ["--seeds", "3,x"], ["--seeds", "-1"]):
         with pytest.raises(SystemExit) as exc:
             random_maps_drive.main(argv)
         assert exc.value.code == 2
