@@ -276,6 +276,7 @@ def _export(out: pathlib.Path, maps: dict[str, Map]) -> None:
     renamed into place, so a write that fails leaves the folder as it was.
     """
     from rrtdrive.atomic import publish, temp_beside
+    from rrtdrive.maps import map_text
 
     temps: dict[pathlib.Path, pathlib.Path] = {}
     try:
@@ -283,7 +284,7 @@ def _export(out: pathlib.Path, maps: dict[str, Map]) -> None:
             target = out / f"{name}.json"
             with writing("--export", target):
                 temps[target] = temp_beside(target)
-                temps[target].write_text(json.dumps(m.to_json(), indent=2) + "\n", "utf-8")
+                temps[target].write_text(map_text(m), "utf-8")
         for target, tmp in temps.items():
             with writing("--export", target):
                 publish(tmp, target)

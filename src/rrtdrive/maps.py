@@ -45,6 +45,7 @@ __all__ = [
     "load_map",
     "parse_json",
     "save_map",
+    "map_text",
     "resolve_map",
     "names_map_file",
     "check_endpoint",
@@ -327,9 +328,14 @@ def load_map(path: str | os.PathLike[str], vehicle: VehicleParams | None = None)
     return map_from_json(parse_json(raw, "map", str(path)), vehicle)
 
 
+def map_text(m: Map) -> str:
+    """``m`` in the map file format, as :func:`save_map` writes it."""
+    return json.dumps(m.to_json(), indent=2) + "\n"
+
+
 def save_map(m: Map, path: str | os.PathLike[str]) -> None:
     """Write ``m`` as JSON atomically (temporary file, then rename)."""
-    write_text_atomic(path, json.dumps(m.to_json(), indent=2) + "\n")
+    write_text_atomic(path, map_text(m))
 
 
 # ----------------------------------------------------------------------------- built-ins
