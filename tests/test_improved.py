@@ -710,3 +710,23 @@ def test_an_undrivable_goal_is_an_honest_postprocess_failure():
     assert res.status is PlanStatus.POSTPROCESS_FAILED
     assert len(res.path) == 0 and "goal heading leg" in res.message
     assert res.stats["postprocess_attempts"] >= 1 and len(res.raw_path) >= 2
+
+
+def test_fallback_rows_read_by_interpolation_stay_clear():
+    # A fuzzed map: an obstacle runs 1 mm beside the goal body, so the path may keep
+    # only that much. The Dubins fallback's exact curve kept it, but its rows, read with
+    # linear interpolation as verify_path and the controllers read them, clipped the
+    # obstacle by 34 um; that candidate is now skipped for one whose rows stay clear.
+    from rrtdrive.maps import map_from_json
+
+    m = map_from_json({
+        "name": "hug", "bounds": [0, 0, 120, 40],
+        "obstacles": [{"center": [116.855, 5.548834215235355],
+                       "size": [2.103842758164915, 0.2956684304707084], "yaw": 0}],
+        "start": [65.834, 4.72, 0.6606636003457904], "goal": [116.595, 4.5, 0],
+    })  # fmt: skip
+    res = make_planner("improved-rrt-connect").solve(
+        PlanningProblem.from_map(m), np.random.default_rng(0), Budget(max_iterations=20000)
+    )
+    assert res.success and "Dubins fallback" in res.message
+    assert verify_path(m, res.path, max_sharpness=0.2).ok
