@@ -252,8 +252,9 @@ def run_bench(
     groups = summarise_rows(rows)
     title = f"Bench summary ({len(rows)} runs, seeds 0–{cfg.seeds - 1})"
     files += [str(p) for p in write_summary(groups, out, title)]
-    remove_plots(out)  # those of an earlier grid in this folder (a figure without data
-    # is not written, and --no-plots writes none)
+    # An earlier grid's figures in this folder would stay beside the new summary: a
+    # figure without data is not written, and --no-plots writes none.
+    remove_plots(out)
     if cfg.plots:
         files += [str(p) for p in write_plots(rows, out)]
     errors = sum(1 for r in rows if r.get("status") == "error")

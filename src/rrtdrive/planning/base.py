@@ -82,9 +82,8 @@ class PlanningProblem:
                 f"problem.checker: expected a CollisionChecker, got {type(self.checker).__name__}"
             )
         # A checker of another map would plan around obstacles that are not there.
-        bounds, obstacles = getattr(self.checker, "bounds", None), getattr(
-            self.checker, "obstacles", None
-        )
+        bounds = getattr(self.checker, "bounds", None)
+        obstacles = getattr(self.checker, "obstacles", None)
         if (bounds is not None and tuple(bounds) != tuple(self.map.bounds)) or (
             obstacles is not None and tuple(obstacles) != tuple(self.map.obstacles)
         ):
