@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import dataclass
@@ -87,12 +88,33 @@ def test_goal_backing_onto_a_wall_can_only_be_reached_in_reverse():
 
 
 def test_boxed_in_between_two_walls():
-    m = wall_map(gap_ahead=0.5, gap_behind=0.6)
+    walls = wall_map(gap_ahead=0.5, gap_behind=0.6)
+    # Walls 16 m long in the 20 m room: 2 m ways round both ends join start and goal.
+    short = tuple(Obstacle(o.center, (1.0, 16.0)) for o in walls.obstacles[:2])
+    m = dataclasses.replace(walls, obstacles=short + walls.obstacles[2:])
     found = diagnose(problem(m))
     assert found.kind is DiagnosisKind.BOXED_IN
     assert found.numbers["room_ahead_m"] == pytest.approx(0.5, abs=2e-3)
     assert found.numbers["room_behind_m"] == pytest.approx(0.6, abs=2e-3)
     assert "boxed in" in found.message and "gear changes" in found.message
+
+
+def test_walled_off_comes_before_the_room_at_the_ends():
+    # The walls span the room: the goal lies beyond one. "Boxed in ... (try --reverse)"
+    # was true of the start but no gear change reaches that goal.
+    m = wall_map(gap_ahead=0.5, gap_behind=0.6)
+    for p in (problem(m), ReverseProblem(m, problem(m).checker, m.start, m.goal, m.vehicle)):
+        found = diagnose(p)
+        assert found.kind is DiagnosisKind.WALLED_OFF
+        assert found.message == "the goal is walled off from the start: no gap connects them"
+
+
+def test_tight_clearance_only_for_planners_of_tree_edges_alone():
+    # The nose 0.5 m from a wall stops tree edges, not Hybrid A*: not its diagnosis.
+    wall = Obstacle((30.0 + F + 0.5 + 0.5, 10.0), (1.0, 20.0))
+    m = Map("nose", (0.0, 0.0, 60.0, 20.0), (wall,), Pose(5.0, 10.0, 0.0), Pose(30.0, 10.0, 0.0))
+    assert diagnose(problem(m)).kind is DiagnosisKind.TIGHT_CLEARANCE
+    assert diagnose(problem(m), tree_edges=False) is None
 
 
 def test_free_run_matches_the_shapely_gap_on_straights():

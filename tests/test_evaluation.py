@@ -263,5 +263,12 @@ def test_success_terms_say_which_term_failed(overtake):
     )
     crash = replace(r, success=False, collision=True, collision_footprint=True,
                     status="timeout", outcome="collision")
-    assert failure_reason(crash) == "timeout, but a collision reported by the footprint judge"
+    assert failure_reason(crash) == "timeout: a collision reported by the footprint judge"
+    crashed = replace(crash, status="crashed", collision_highway_env=True)
+    assert failure_reason(crashed) == (
+        "crashed: a collision reported by highway-env and the footprint judge"
+    )
+    # A final speed a hair over the bound reads as over it ("0.10 m/s exceeds 0.1" did not).
+    slow = replace(bad, goal_heading_err_rad=0.0, stopped=False, final_speed=0.1026)
+    assert failure_reason(slow) == "arrived, but the final speed 0.103 m/s exceeds 0.1 m/s"
 

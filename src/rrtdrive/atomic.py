@@ -34,8 +34,15 @@ def _umask() -> int:
 
 
 def destination(target: str | os.PathLike[str]) -> Path:
-    """The file ``target`` names: itself, or the file its symbolic link points to."""
-    return Path(os.path.realpath(target)) if os.path.islink(target) else Path(target)
+    """The file ``target`` names: itself, or the file its symbolic link points to.
+
+    A link to a device or pipe is kept as it is: ``/dev/stdout`` resolves to
+    ``/proc/self/fd/1``, whose target, when stdout is a pipe, is no path at all
+    (``pipe:[N]``); opening the link itself reaches the pipe.
+    """
+    if not os.path.islink(target) or is_stream(target):
+        return Path(target)
+    return Path(os.path.realpath(target))
 
 
 def is_stream(target: str | os.PathLike[str]) -> bool:

@@ -29,12 +29,14 @@ from rrtdrive.cli_args import (
     OutputError,
     distinct_outputs,
     join_negative_values,
+    names_stdout,
     nonneg_int,
     positive_float,
     positive_int,
     validate_output,
     writing,
 )
+from rrtdrive.cli_signals import EXIT_TERMINATED, Terminated, sigterm_raises
 from rrtdrive.cli_stdout import run_writing_stdout
 from rrtdrive.types import Budget, InputError, PlanResult, Pose, VehicleParams
 
@@ -517,7 +519,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     int
         0 success, 1 failure (also when stdout or an output file cannot be written),
         2 bad input,
-        141 when the reader of stdout went away, 130 on Ctrl-C.
+        141 when the reader of stdout went away, 130 on Ctrl-C, 143 on SIGTERM.
     """
     return run_writing_stdout(lambda: _main(argv))
 
@@ -533,14 +535,20 @@ def _main(argv: Sequence[str] | None) -> int:
     if chosen is not None:
         argv = join_negative_values(argv, _value_options(chosen))
     args = parser.parse_args(argv)
+    if getattr(args, "json", None) not in (None, "-") and names_stdout(args.json):
+        args.json = "-"  # --json /dev/stdout: keep the human lines off stdout as for '-'
     try:
-        return int(args.func(args))
+        with sigterm_raises():
+            return int(args.func(args))
     except InputError as exc:
         print(f"rrtdrive {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except OutputError as exc:
         print(f"rrtdrive {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_FAILED
+    except Terminated:
+        print("rrtdrive: terminated", file=sys.stderr)
+        return EXIT_TERMINATED
     except KeyboardInterrupt:
         print("rrtdrive: interrupted", file=sys.stderr)
         return 130

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import io
 import math
 import os
 import re
+import sys
 from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -19,6 +21,7 @@ __all__ = [
     "flags_for",
     "int_at_least",
     "join_negative_values",
+    "names_stdout",
     "nonneg_int",
     "positive_float",
     "positive_int",
@@ -107,6 +110,21 @@ def writing(flag: str, target: str | os.PathLike[str]) -> Iterator[None]:
         yield
     except OSError as exc:
         raise OutputError(f"{flag}: cannot write {target}: {exc.strerror or exc}") from None
+
+
+def names_stdout(target: str) -> bool:
+    """Whether ``target`` is the file the process's stdout writes to (``/dev/stdout``).
+
+    Examples
+    --------
+    >>> names_stdout(__file__)
+    False
+    """
+    try:
+        here, there = os.fstat(sys.stdout.fileno()), os.stat(target)
+    except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
+        return False  # no such file, or a stdout with no file (captured by a test)
+    return (here.st_dev, here.st_ino) == (there.st_dev, there.st_ino)
 
 
 def distinct_outputs(**targets: str | None) -> None:

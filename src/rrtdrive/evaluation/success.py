@@ -191,16 +191,17 @@ def failure_reason(report: EpisodeReport, config: EvalConfig | None = None) -> s
     else:
         pos, head = report.goal_position_err_m, report.goal_heading_err_rad
         if pos is not None and pos > cfg.goal_tol_m:
-            why.append(f"the position error {pos:.2f} m exceeds {cfg.goal_tol_m:g} m")
+            why.append(f"the position error {_over(pos, cfg.goal_tol_m, 2)} m exceeds "
+                       f"{cfg.goal_tol_m:g} m")
         if head is not None and head > cfg.goal_tol_rad:
             why.append(
-                f"the heading error {math.degrees(head):.1f} deg exceeds "
-                f"{math.degrees(cfg.goal_tol_rad):g} deg"
+                f"the heading error {_over(math.degrees(head), math.degrees(cfg.goal_tol_rad), 1)}"
+                f" deg exceeds {math.degrees(cfg.goal_tol_rad):g} deg"
             )
         if not report.stopped and report.final_speed is not None:
             why.append(
-                f"the final speed {abs(report.final_speed):.2f} m/s exceeds "
-                f"{cfg.stop_speed:g} m/s"
+                f"the final speed {_over(abs(report.final_speed), cfg.stop_speed, 2)} m/s "
+                f"exceeds {cfg.stop_speed:g} m/s"
             )
         if report.passed_lead is False:
             why.append("the body is not past the stopped car")
@@ -210,4 +211,20 @@ def failure_reason(report: EpisodeReport, config: EvalConfig | None = None) -> s
             why.append(f"the car did not arrive within {report.duration_s:.3g} s")
     if not why:
         why.append("no success term failed, yet the episode is not a success")
-    return f"{status}, but " + "; ".join(why)
+    # "arrived, but the heading error ...": the status sounds like a success; any
+    # other ("crashed", "timeout") is what the terms after it explain.
+    joint = ", but " if status in ("arrived", "completed") else ": "
+    return status + joint + "; ".join(why)
+
+
+def _over(value: float, bound: float, digits: int) -> str:
+    """``value`` with ``digits`` decimals, or more until it reads above ``bound`` (<= 6).
+
+    Examples
+    --------
+    >>> _over(0.1026, 0.1, 2), _over(0.62, 0.5, 2)
+    ('0.103', '0.62')
+    """
+    while digits < 6 and round(value, digits) <= bound:
+        digits += 1
+    return f"{value:.{digits}f}"

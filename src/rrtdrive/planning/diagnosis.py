@@ -10,13 +10,15 @@ and measures, from the map's geometry, the first of these that holds:
    (curvatures from -kappa_max to kappa_max) with the exact body test; less than a
    car length on every arc is too little for the smallest manoeuvre. With room the
    other way the pose is reachable in reverse only; with none either way it is boxed in.
-3. ``tight_clearance``: the first tree edge along the start's (or into the goal's)
-   heading fails the swept edge test although the exact body is free along it: the
+3. ``tight_clearance`` (for planners that search by tree edges only): the first tree
+   edge along the start's (or into the goal's) heading fails the swept edge test
+   although the exact body is free along it: the
    body is closer to an obstacle than that test keeps beside it (the checker's margin,
    its grid error and trace step) or beyond its bumper (the capsule's round end too).
 4. ``narrow_passage`` / ``walled_off``: start and goal are joined only through a gap
    narrower than the swept edge test needs, or by none at all; the gap is located on
-   the distance field and measured with shapely.
+   the distance field and measured with shapely. ``walled_off`` is looked for before
+   2 and 3: nothing at the ends matters when no way joins them.
 5. ``u_turn``: start and goal headings differ by more than 120 degrees while the
    street at the start is narrower than a forward U-turn of this car needs
    (:func:`u_turn_width`), and either no place reachable from the start is that wide
@@ -495,7 +497,7 @@ def _u_turn(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagn
     return Diagnosis(DiagnosisKind.U_TURN, head + tail, numbers)
 
 
-def diagnose(problem: PlanningProblem) -> Diagnosis | None:
+def diagnose(problem: PlanningProblem, *, tree_edges: bool = True) -> Diagnosis | None:
     """The constraint that makes ``problem`` hard or impossible, or ``None``.
 
     Parameters
@@ -503,6 +505,11 @@ def diagnose(problem: PlanningProblem) -> Diagnosis | None:
     problem : PlanningProblem
         A query that failed. Reversing counts as allowed when the problem has a
         true ``reverse`` attribute.
+    tree_edges : bool
+        Whether the planner that failed searches by swept tree edges only. Without
+        (Hybrid A*, or the default's escalation to it) their keep is not what stopped
+        it, and ``tight_clearance`` is not looked for: it blamed a nose 0.5 m from a
+        wall for a bay that only a turn the car cannot make leads into.
 
     Returns
     -------
@@ -531,10 +538,15 @@ def diagnose(problem: PlanningProblem) -> Diagnosis | None:
         found = _collides(m, checker, pose, label)
         if found is not None:
             return found
+    passage = _passage(m, checker, start, goal)
+    if passage is not None and passage.kind is DiagnosisKind.WALLED_OFF:
+        # Before the room at the ends: a goal in a closed box was "boxed in ... (try
+        # --reverse)", which no gear change mends.
+        return passage
     for step in (
         lambda: _room(m, checker, start, goal, reverse),
-        lambda: _tight(m, checker, start, goal),
-        lambda: _passage(m, checker, start, goal),
+        lambda: _tight(m, checker, start, goal) if tree_edges else None,
+        lambda: passage,
         lambda: None if reverse else _u_turn(m, checker, start, goal),
     ):
         found = step()

@@ -81,6 +81,7 @@ def run_query(
     prepare: Callable[[], object] | None = None,
     *,
     rng: np.random.Generator,
+    tree_edges: bool = True,
 ) -> PlanResult:
     """Set the map up, start the stopwatch, fail early on a hopeless query, else search.
 
@@ -107,6 +108,9 @@ def run_query(
     rng : numpy.random.Generator
         The planner's ``rng``, checked with ``problem`` and ``budget``
         (:func:`check_query`) before anything reads them.
+    tree_edges : bool
+        Whether the planner's every search grows swept tree edges, so that a failure
+        may be blamed on their keep (:func:`~rrtdrive.planning.diagnosis.diagnose`).
 
     Returns
     -------
@@ -144,7 +148,7 @@ def run_query(
         return dataclasses.replace(result, setup_time_s=setup, stats=stats)
     # A failure says which constraint makes the query hard, measured after the stopwatch.
     t_diagnosis = time.perf_counter()
-    found = diagnose(problem)
+    found = diagnose(problem, tree_edges=tree_edges)
     stats["diagnosis_time_s"] = time.perf_counter() - t_diagnosis
     return dataclasses.replace(result, setup_time_s=setup, diagnosis=found, stats=stats)
 

@@ -135,7 +135,7 @@ class HybridAStar:
                 if not reverse:
                     dubins_table(c.radius_factor / problem.vehicle.kappa_max, c)
 
-        return run_query(NAME, problem, budget, search, prepare, rng=rng)
+        return run_query(NAME, problem, budget, search, prepare, rng=rng, tree_edges=False)
 
 
 @functools.lru_cache(maxsize=16)  # a validated copy once per config, not per query

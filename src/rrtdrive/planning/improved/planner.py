@@ -149,6 +149,7 @@ class ImprovedRRTConnect:
         return run_query(
             NAME, problem, budget, lambda watch: query().run(rng, budget, watch),
             lambda: query().prepare(), rng=rng,
+            tree_edges=not self.config.escalation,  # Hybrid A* searches without them
         )
 
 

@@ -1,0 +1,64 @@
+"""Outputs named by a device path, and a run stopped by SIGTERM, through real processes."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from rrtdrive.cli_args import names_stdout
+
+
+def _rrtdrive(*argv: str, **kwargs) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "rrtdrive", *argv], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, **kwargs)
+
+
+@pytest.mark.skipif(not Path("/dev/stdout").exists(), reason="needs /dev/stdout")
+def test_json_to_dev_stdout_through_a_pipe(tmp_path):
+    # /dev/stdout -> /proc/self/fd/1 -> "pipe:[N]", no path: it failed with "No such file".
+    proc = _rrtdrive("plan", "dead_end", "--reverse", "--json", "/dev/stdout")
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    data = json.loads(out)  # the JSON alone: the summary went to stderr, as for '-'
+    assert data["status"] == "solved" and data["path"]
+    assert "dead_end: improved-rrt-connect seed 0: solved" in err
+    plan = tmp_path / "plan.json"
+    plan.write_text(out)
+    proc = _rrtdrive("verify", str(plan), "--json", "/dev/stdout")
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    assert json.loads(out)["ok"] is True and "every check passed" in err
+
+
+def test_names_stdout_tells_the_file_of_stdout(tmp_path):
+    target = tmp_path / "out.json"
+    target.write_text("")
+    code = ("import sys; from rrtdrive.cli_args import names_stdout; "
+            f"print(names_stdout({str(target)!r}), names_stdout({str(tmp_path / 'x')!r}))")
+    with open(target, "w") as out:  # stdout is that very file
+        subprocess.run([sys.executable, "-c", code], stdout=out, check=True, timeout=60)
+    assert target.read_text().split() == ["True", "False"]
+    assert not names_stdout(str(target))  # not this process's stdout
+
+
+@pytest.mark.skipif(not hasattr(signal, "SIGTERM") or os.name != "posix", reason="POSIX")
+def test_sigterm_during_a_video_leaves_no_file(tmp_path):
+    proc = _rrtdrive("simulate", "parking", "--video", "p.mp4", "--json", "p.json",
+                     cwd=tmp_path)
+    # Wait until frames are being written (the progress lines on stderr), then stop it.
+    deadline = time.monotonic() + 120
+    for line in proc.stderr:
+        if "video" in line and "frames" in line or time.monotonic() > deadline:
+            break
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, err
+    assert err.strip().endswith("rrtdrive: terminated")
+    assert sorted(p.name for p in tmp_path.iterdir()) == []  # no hidden half-written video
