@@ -301,7 +301,11 @@ class SpeedController:
             # overshoots the top of a rise (and brakes harder later).
             ramp = raw / cfg.comfort_jerk
             reach = speed * (ramp + tau) + raw * ramp * ramp / 3.0
-            room = max(profile.peak(s, s + reach) - speed, 0.0)
+            # From the segment's start at the latest: a car standing behind it (past a
+            # cusp, or where a stub too short to drive ended) read only the profile's
+            # standstill before it, was capped to 0 and never moved again.
+            here = max(s, 0.0)
+            room = max(profile.peak(here, here + reach) - speed, 0.0)
             raw = min(raw, math.sqrt(2.0 * cfg.comfort_jerk * room))
         cap = self.accel_cap
         capped = cap is not None and raw > cap

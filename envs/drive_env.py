@@ -43,20 +43,21 @@ from rrtdrive.envs.observation import OBS_CLIP, ObservationLayout, observation_n
 from rrtdrive.envs.reference_speed import following_cap, stop_line_speed
 from rrtdrive.envs.render import SceneRenderer, view_for
 from rrtdrive.envs.reward import RewardWeights, state_terms
+from rrtdrive.envs.seed_draw import failure_text, start_drawn_episode
 from rrtdrive.evaluation import EpisodeReport, EvalConfig, evaluate
 from rrtdrive.sim.episode import Episode, EpisodeStatus
 from rrtdrive.sim.loop import EndRule, EpisodeLoop
 from rrtdrive.sim.runner import EpisodeConfig
 from rrtdrive.sim.scenes import build_env
 from rrtdrive.sim.tasks import SCENARIOS, Reference
+from rrtdrive.sim.tasks.base import Task
 from rrtdrive.types import InputError, Path, brief_repr, require_int
 
 # RewardWeights, observation_names and OBS_CLIP are re-exported from their modules,
 # where they lived before the split.
 __all__ = ["DriveEnv", "DriveEnvConfig", "RewardWeights", "observation_names", "OBS_CLIP"]
 
-#: Episode seeds drawn before giving up when planning keeps failing.
-MAX_PLAN_ATTEMPTS = 20
+
 #: How near the cusp (metres along the segment, or past it) an agent driving alone must
 #: be for moving in the next segment's gear to start that segment.
 CUSP_REACH_M = 1.0
@@ -216,7 +217,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
 
     # ------------------------------------------------------------------ setup
 
-    def _start_episode(self, seed: int) -> Reference:
+    def _start_episode(self, seed: int, task: Task | None = None) -> Reference:
         """Build, plan and set up the episode of ``seed``; its reference (maybe failed).
 
         The episode runs on the one episode loop (:class:`~rrtdrive.sim.loop.EpisodeLoop`)
@@ -225,7 +226,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         re-plans, else the task's rule for an agent (stopped at the goal).
         """
         cfg = self.config
-        task = cfg.scenario_for(seed)
+        task = cfg.scenario_for(seed) if task is None else task
         ref = task.reference(cfg.planner, seed, cfg.budget)
         if ref.failure is not None:
             return ref
@@ -296,7 +297,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             For an unknown option or a bad episode seed.
         RuntimeError
             When planning fails for the requested episode seed (or for
-            ``MAX_PLAN_ATTEMPTS`` drawn seeds in a row).
+            ``MAX_PLAN_ATTEMPTS`` drawn seeds in a row, :mod:`~rrtdrive.envs.seed_draw`).
         """
         super().reset(seed=seed)
         self._loop = None  # until an episode is set up
@@ -312,20 +313,10 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             ref = self._start_episode(s)
             if ref.failure is not None:
                 raise RuntimeError(
-                    f"options.episode_seed: no path for episode seed {s}: {ref.failure}"
+                    f"options.episode_seed: no path for episode seed {s}: {failure_text(ref)}"
                 )
         else:
-            lo, hi = self.config.seed_range
-            for _ in range(MAX_PLAN_ATTEMPTS):
-                s = int(self.np_random.integers(lo, hi))
-                ref = self._start_episode(s)
-                if ref.failure is None:
-                    break
-            else:
-                raise RuntimeError(
-                    f"no path for {MAX_PLAN_ATTEMPTS} episode seeds in a row "
-                    f"(last {s}: {ref.failure})"
-                )
+            start_drawn_episode(self.config, self.np_random, self._start_episode)
         info = {
             "episode_seed": self.episode_seed,
             "scenario": self.config.scenario,

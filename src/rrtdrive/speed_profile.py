@@ -437,7 +437,8 @@ def actuator_profile(
         The path is one gear segment of a manoeuvre (it starts at rest and may be
         shorter than the final approach): it may still speed up to its peak, or the
         running minimum from its standstill start would keep it at 0; the peak is
-        capped by :func:`peak_with_plateau` for its length.
+        capped by :func:`peak_with_plateau` for its length. Any path that starts at
+        rest within the final approach is treated so.
 
     Returns
     -------
@@ -465,6 +466,10 @@ def actuator_profile(
     trough = last_rise_too_short(s, first.v, config.accel + config.decel, config.comfort_jerk)
     if trough is not None and (i0 is None or trough < i0):
         i0 = trough
+    if i0 is not None and first.v[i0] <= 0.0:
+        # From rest within the final approach (a path shorter than it): held from rising,
+        # the running minimum would be 0 throughout and the car would never move.
+        rise_to_peak = True
     if i0 is not None and rise_to_peak:
         i0 = max(i0, int(np.argmax(first.v)))
     if i0 is not None:

@@ -19,6 +19,7 @@ from rrtdrive.types import InputError, Path
 
 __all__ = [
     "GearRun",
+    "UNDRIVEN_RUN_M",
     "distinct_samples",
     "gear_runs",
     "driven_segments",
@@ -54,11 +55,20 @@ class GearRun:
     samples: np.ndarray
 
 
+#: A gear segment shorter than this is not driven: the controllers stop within their
+#: ``stop_distance`` (``SpeedConfig``, 0.05 m) of a segment's end, so at the cusp before
+#: it the car is at its end already. Measured as a run, it kept the car assigned to the
+#: run before it (it never moved in the stub's gear): a 3 cm stub of a planned path
+#: made the rest of the drive read 6 m of cross-track error.
+UNDRIVEN_RUN_M = 0.05
+
+
 def gear_runs(path: Path) -> list[GearRun]:
     """The gear segments of ``path`` with at least two distinct samples, in order.
 
     A forward-only path is one run of all its distinct samples. Segments without
-    length are dropped and neighbours of the same gear then joined.
+    length, or shorter than :data:`UNDRIVEN_RUN_M` (not driven), are dropped and
+    neighbours of the same gear then joined; a path of such segments alone keeps them.
 
     Examples
     --------
@@ -70,13 +80,18 @@ def gear_runs(path: Path) -> list[GearRun]:
     """
     if path.is_forward_only:
         return [GearRun(1, 0.0, distinct_samples(path))]
+    runs = _runs(path, UNDRIVEN_RUN_M)
+    return runs if runs else _runs(path, 0.0)
+
+
+def _runs(path: Path, shortest: float) -> list[GearRun]:
     runs: list[GearRun] = []
     s0 = 0.0
     for a, b in path.segments():
         seg = distinct_samples(Path(path.samples[a:b], path.waypoints))
         gear = int(seg[0, 4])
         length = float(np.sum(np.hypot(*np.diff(seg[:, :2], axis=0).T))) if len(seg) > 1 else 0.0
-        if len(seg) >= 2:
+        if len(seg) >= 2 and length >= shortest:
             if runs and runs[-1].gear == gear:
                 joined = np.vstack([runs[-1].samples, seg[1:]])
                 runs[-1] = GearRun(gear, runs[-1].s0, joined)

@@ -390,11 +390,15 @@ def timeout_result(
     )
 
 
-def budget_message(iterations: int, watch: Stopwatch, budget: Budget, nodes: int) -> str:
-    """The failure message of a search that spent its iteration budget."""
+def budget_message(iterations: int, budget: Budget, nodes: int) -> str:
+    """The failure message of a search that spent its iteration budget.
+
+    No wall time in it: a seeded run's JSON is the same on any machine (the time is
+    ``planning_time_s``).
+    """
     return (
         f"no path found within the budget: iteration budget of {budget.max_iterations} spent "
-        f"({iterations} iterations, {watch.elapsed():.3f} s, {nodes} nodes)"
+        f"({iterations} iterations, {nodes} nodes)"
     )
 
 
@@ -443,7 +447,7 @@ def search_result(
             planner,
             PlanStatus.NO_PATH_IN_BUDGET,
             watch,
-            budget_message(iterations, watch, budget, sum(len(t) for t in trees)),
+            budget_message(iterations, budget, sum(len(t) for t in trees)),
             trees=trees,
             iterations=iterations,
             stats=stats,

@@ -564,14 +564,12 @@ class _Query:
             )
         if self.stuck_root:
             lead = (
-                f"no path: {self.stuck_words()} ({iterations} iterations, "
-                f"{watch.elapsed():.3f} s)"
+                f"no path: {self.stuck_words()} ({iterations} iterations)"
             )
         else:
             lead = (
                 f"no path within the iteration budget ({iterations} iterations"
-                f"{_share_note(self.limits, watch.budget.max_iterations)}, "
-                f"{watch.elapsed():.3f} s)"
+                f"{_share_note(self.limits, watch.budget.max_iterations)})"
             )
         return failure(
             NAME,
