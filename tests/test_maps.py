@@ -148,3 +148,16 @@ def test_saved_files_get_ordinary_permissions(tmp_path):
     finally:
         os.umask(mask)
     assert (tmp_path / "o.json").stat().st_mode & 0o777 == 0o644
+
+
+def test_a_key_given_twice_is_refused_and_a_byte_order_mark_is_read(tmp_path):
+    from rrtdrive.maps import load_map
+
+    dup = tmp_path / "dup.json"
+    dup.write_text('{"name": "d", "bounds": [0, 0, 40, 40], "obstacles": [], '
+                   '"start": [5, 5, 0], "start": [6, 6, 0], "goal": [30, 30, 1.57]}')
+    with pytest.raises(InputError, match=r"^map: .*dup.json gives 'start' twice in one object"):
+        load_map(dup)
+    bom = tmp_path / "bom.json"
+    bom.write_bytes(b"\xef\xbb\xbf" + dup.read_bytes().replace(b'"start": [6, 6, 0], ', b""))
+    assert load_map(bom).start.x == 5.0  # Windows editors write the mark: no error

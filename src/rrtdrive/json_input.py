@@ -26,11 +26,26 @@ def read_capped(stream: BinaryIO, field: str, source: str) -> bytes:
     return raw
 
 
+class _DuplicateKey(ValueError):
+    """A JSON object names one key twice (the last would silently win)."""
+
+
+def _unique_keys(pairs: list[tuple[str, object]]) -> dict[str, object]:
+    out: dict[str, object] = {}
+    for key, value in pairs:
+        if key in out:
+            raise _DuplicateKey(key)
+        out[key] = value
+    return out
+
+
 def parse_json(raw: bytes | str, field: str, source: str) -> object:
     """Decode UTF-8 JSON, turning every way it can fail into one :class:`InputError` line.
 
     NaN and Infinity literals parse to floats, so that validation names the field
-    they sit in; so do integers too large for a float.
+    they sit in; so do integers too large for a float. A key given twice in one
+    object is refused (``json`` keeps the last, silently); a byte-order mark is
+    skipped.
 
     Parameters
     ----------
@@ -50,6 +65,10 @@ def parse_json(raw: bytes | str, field: str, source: str) -> object:
     --------
     >>> parse_json(b"[1, NaN]", "map", "m.json")
     [1, nan]
+    >>> parse_json('{"start": [0, 0, 0], "start": [1, 1, 0]}', "map", "m.json")
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: map: m.json gives 'start' twice in one object; keep one
     >>> parse_json("[" * 100_000, "map", "m.json")
     Traceback (most recent call last):
     ...
@@ -57,14 +76,20 @@ def parse_json(raw: bytes | str, field: str, source: str) -> object:
     """
     if isinstance(raw, bytes):
         try:
-            raw = raw.decode("utf-8")
+            # utf-8-sig: a byte-order mark (Windows editors write one) is no error.
+            raw = raw.decode("utf-8-sig")
         except UnicodeDecodeError as exc:
             raise InputError(
                 f"{field}: {source} is not a UTF-8 text file (byte {exc.start}: {exc.reason})"
             ) from None
+    raw = raw.removeprefix("\ufeff")
     bad = f"{field}: malformed JSON in {source}"
     try:
-        return json.loads(raw, parse_constant=float)
+        return json.loads(raw, parse_constant=float, object_pairs_hook=_unique_keys)
+    except _DuplicateKey as exc:
+        raise InputError(
+            f"{field}: {source} gives {exc.args[0]!r} twice in one object; keep one"
+        ) from None
     except json.JSONDecodeError as exc:
         raise InputError(f"{bad}: {exc.msg} (line {exc.lineno})") from None
     except RecursionError:

@@ -404,6 +404,9 @@ def _run(args: argparse.Namespace) -> int:
             f"cte rms {cte}; {report.steps} steps, {report.duration_s:.2f} s simulated",
             file=sys.stdout,
         )
+        diagnosis = None if episode.plan is None else episode.plan.diagnosis
+        if diagnosis is not None:  # the planner failed: the constraint, as `plan` prints it
+            print(f"  why: {diagnosis.message}", file=sys.stdout)
         print("\n".join(metrics_block(data)), file=sys.stdout)
     ok = report.success and (stock is None or stock.highway_env_success)
     return EXIT_OK if ok else EXIT_FAILED
