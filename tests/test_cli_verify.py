@@ -116,3 +116,38 @@ def test_a_failed_plan_has_nothing_to_verify(capsys, tmp_path):
     f.write_text(json.dumps({"path": [], "map": "parking_lot", "status": "no_path_in_budget"}))
     code, out, _ = run(capsys, "verify", str(f))
     assert code == 1 and "no path (status no_path_in_budget)" in out
+
+
+def test_a_collision_is_located_at_its_first_pose_and_obstacle(capsys, tmp_path):
+    import dataclasses
+
+    from rrtdrive.maps import Obstacle
+    from rrtdrive.vehicle import footprint_polygon
+    from rrtdrive.verify import path_from_json, verify_path
+
+    assert main(["plan", "parking_lot", "--json", str(tmp_path / "p.json")]) == 0
+    plan = json.loads((tmp_path / "p.json").read_text())
+    m = builtin_map("parking_lot")
+    x, y = plan["path"][len(plan["path"]) // 2][:2]
+    block = Obstacle((x, y), (0.5, 0.5))
+    blocked = dataclasses.replace(m, obstacles=m.obstacles + (block,))
+    check = verify_path(blocked, path_from_json(plan))
+    assert not check.collision_free and check.collides_with == f"obstacle {len(m.obstacles)}"
+    # The pose named overlaps that block (the planner's footprint, drawn independently).
+    assert footprint_polygon(check.first_collision, m.vehicle).intersects(block.polygon())
+    save_map(blocked, tmp_path / "blocked.json")
+    capsys.readouterr()
+    assert main(["verify", str(tmp_path / "p.json"), str(tmp_path / "blocked.json")]) == 1
+    line = capsys.readouterr().out.splitlines()[1]
+    assert line.startswith("  FAIL body clear") and line.endswith(f"obstacle {len(m.obstacles)}")
+    assert verify_path(m, path_from_json(plan)).first_collision is None
+
+
+def test_a_row_off_the_map_is_located_at_the_bounds():
+    from rrtdrive.types import Path
+    from rrtdrive.verify import verify_path
+
+    m = builtin_map("overtake")
+    rows = np.array([[m.start.x, m.start.y, 0.0, 0.0], [1e6, m.start.y, 0.0, 0.0]])
+    check = verify_path(m, Path(rows, np.zeros((0, 2))))
+    assert check.first_collision == (1e6, m.start.y, 0.0) and check.collides_with == "the bounds"

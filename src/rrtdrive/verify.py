@@ -79,6 +79,13 @@ class PathCheck:
     sharpness_ok : bool
         ``max_discrete_sharpness`` is within the ``max_sharpness`` asked for (plus
         slack); True when none was asked for.
+    first_collision : tuple of float or None
+        Where the body check first fails along the path: the rear-axle pose
+        ``(x, y, yaw)`` of the first tested pose (or row off the map); ``None`` when
+        ``collision_free``.
+    collides_with : str
+        What the body there overlaps: ``"obstacle K"`` (its index in the map),
+        ``"the bounds"``; empty when ``collision_free``.
     """
 
     ok: bool
@@ -97,6 +104,8 @@ class PathCheck:
     travel_heading_err_deg: float = 0.0
     max_discrete_sharpness: float = 0.0
     sharpness_ok: bool = True
+    first_collision: tuple[float, float, float] | None = None
+    collides_with: str = ""
 
     @property
     def failed(self) -> tuple[str, ...]:
@@ -183,6 +192,35 @@ def _travel_directions(seg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 #: The finest pose spacing a check may ask for, metres (finer would only take longer).
 MIN_POSE_SPACING = 1e-3
+
+
+def _first_collision(
+    m: Map, rows: np.ndarray, region: shapely.Geometry, bodies: list, poses: list, on_map: bool
+) -> tuple[tuple[float, float, float] | None, str]:
+    """The first pose whose body leaves ``region`` or overlaps an obstacle, and what it hits."""
+    if not on_map:
+        xmin, ymin, xmax, ymax = m.bounds
+        off = ~((rows[:, 0] >= xmin) & (rows[:, 0] <= xmax)
+                & (rows[:, 1] >= ymin) & (rows[:, 1] <= ymax))
+        k = int(np.argmax(off))
+        return (float(rows[k, 0]), float(rows[k, 1]), float(rows[k, 2])), "the bounds"
+    if not bodies:
+        return None, ""
+    shapes = np.array(bodies, dtype=object)
+    polygons = [shapely.Polygon(o.corners()) for o in m.obstacles]
+    outside = ~shapely.contains(region, shapes)
+    hit = np.zeros(len(shapes), dtype=bool)
+    if polygons:
+        hit = shapely.intersects(shapely.union_all(polygons), shapes)
+    bad = outside | hit
+    if not bad.any():
+        return None, ""
+    k = int(np.argmax(bad))
+    x, y, yaw = (float(c) for c in np.concatenate(poses)[k])
+    if outside[k]:
+        return (x, y, yaw), "the bounds"
+    index = next(i for i, p in enumerate(polygons) if p.intersects(bodies[k]))
+    return (x, y, yaw), f"obstacle {index}"
 
 
 def _check_settings(
@@ -296,7 +334,6 @@ def verify_path(
         and np.all(np.abs(wrap_angle(s[cusps, 2] - s[cusps - 1, 2])) <= math.radians(1e-3))
     )
     region = shapely.box(*m.bounds)
-    obstacles = shapely.union_all([shapely.Polygon(o.corners()) for o in m.obstacles])
     xmin, ymin, xmax, ymax = m.bounds
     # A row off the map already fails the body check; densifying a jump of 1e6 m to
     # 0.1 m poses would take minutes and gigabytes first.
@@ -304,6 +341,7 @@ def verify_path(
         np.all((xy[:, 0] >= xmin) & (xy[:, 0] <= xmax) & (xy[:, 1] >= ymin) & (xy[:, 1] <= ymax))
     )
     bodies = []
+    poses: list[np.ndarray] = []
     max_k = 0.0
     max_sharp = 0.0
     travel_err = 0.0
@@ -313,10 +351,9 @@ def verify_path(
         gear = seg[0, 4]
         # The body along the nose yaw (interpolated between the rows) in either gear.
         if on_map:
-            bodies += [
-                _body(x, y, yaw, v.length, v.width, v.rear_overhang)
-                for x, y, yaw in densify(seg[:, :3], pose_spacing, angle_column=2).points
-            ]
+            dense = densify(seg[:, :3], pose_spacing, angle_column=2).points
+            bodies += [_body(x, y, yaw, v.length, v.width, v.rear_overhang) for x, y, yaw in dense]
+            poses.append(dense)
         if len(seg) < 2:
             continue
         max_k = max(max_k, _segment_curvature(seg[:, :2]))
@@ -331,10 +368,8 @@ def verify_path(
         if math.isnan(first_dir):
             first_dir = float(nose[0])
         last_dir = float(nose[-1])
-    collision_free = on_map and bool(
-        all(region.contains(body) for body in bodies)
-        and not np.any(shapely.intersects(obstacles, np.array(bodies, dtype=object)))
-    )
+    first_collision, collides_with = _first_collision(m, s, region, bodies, poses, on_map)
+    collision_free = first_collision is None
     # Chords of the first and last moving steps: at most 0.25 m long, so even at
     # kappa_max the chord deviates from the tangent by under 0.7 degrees.
     if math.isnan(first_dir):
@@ -374,6 +409,8 @@ def verify_path(
         travel_heading_err_deg=math.degrees(travel_err),
         max_discrete_sharpness=max_sharp,
         sharpness_ok=sharpness_ok,
+        first_collision=first_collision,
+        collides_with=collides_with,
     )
 
 

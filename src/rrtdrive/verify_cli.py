@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import sys
 from typing import Any
 
@@ -116,12 +117,22 @@ def _metres(value: float, spec: str = ".3f") -> str:
     return f"{value:{spec}} m" if abs(value) < 1e9 else f"{value:.3g} m"
 
 
+def _where(check: Any) -> str:
+    """Where the body check first fails: the pose and what the body overlaps there."""
+    if check.first_collision is None:
+        return ""
+    x, y, yaw = check.first_collision
+    return (f"first at ({_metres(x, '.2f')[:-2]}, {_metres(y, '.2f')[:-2]}), "
+            f"yaw {math.degrees(yaw):.1f} deg: {check.collides_with}")
+
+
 def _lines(check: Any, bounds: dict[str, float | None]) -> list[str]:
     """One line per check: its name, pass or FAIL, and the measured value against its bound."""
     mark = {True: "ok  ", False: "FAIL"}
     sharp = bounds["max_sharpness"]
     rows = [
-        (check.collision_free, "body clear of obstacles and inside the bounds", ""),
+        (check.collision_free, "body clear of obstacles and inside the bounds",
+         _where(check)),
         (check.curvature_ok, "curvature",
          f"{check.max_discrete_curvature:.4f} 1/m (max {bounds['kappa_max']:.4f} + 0.01)"),
         (check.sharpness_ok, "sharpness",
