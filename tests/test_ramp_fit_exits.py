@@ -109,7 +109,7 @@ def test_a_memo_fits_each_shared_segment_once_and_changes_nothing(monkeypatch) -
     assert all(p is not None for p in plain)
     assert len(fits) == 9
     fits.clear()
-    memo: hybrid_path.SegmentMemo = {}
+    memo = hybrid_path.SegmentMemo()
     kept = [build(c, memo) for c in _connections()]
     assert len(fits) == 2 + 3  # the lead and the leg once, each tail once
     assert len(memo) == 5

@@ -379,10 +379,14 @@ def _widening(lengths: np.ndarray, angles: np.ndarray, rate: float) -> np.ndarra
     probe = np.linspace(0.0, float(lengths.sum()), 4001)
     for _ in range(40):
         widths = np.maximum(np.abs(jumps) * factors / rate, 1e-9)
-        inside = (probe[None, :] >= (joints - widths / 2)[:, None]) & (
-            probe[None, :] <= (joints + widths / 2)[:, None]
-        )
-        slope = (inside * (jumps / widths)[:, None]).sum(axis=0)
+        lo, hi = joints - widths / 2, joints + widths / 2
+        # Which ramps hold a probe changes only where one starts or ends: the first probe
+        # of each run stands for the run (the same columns, ~2 J of 4 001). The running
+        # sum adds the ramps in order as the (J, 4001) sum did (not pairwise, as a
+        # single column's sum would be).
+        p = probe[_runs(probe, lo, hi)]
+        inside = (p[None, :] >= lo[:, None]) & (p[None, :] <= hi[:, None])
+        slope = _accumulate(inside * (jumps / widths)[:, None], axis=0)[-1]
         # Each ramp's steepest summed slope (0 where a ramp covers no probe point).
         worst = np.where(inside, np.abs(slope)[None, :], 0.0).max(axis=1)
         over = worst > rate * (1.0 + 1e-9)
@@ -390,6 +394,18 @@ def _widening(lengths: np.ndarray, angles: np.ndarray, rate: float) -> np.ndarra
             break
         factors = np.where(over, factors * worst / rate * 1.001, factors)
     return factors
+
+
+def _runs(probe: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The first probe index of each run of probes inside the same ramps ``[lo, hi]``.
+
+    ``probe`` is sorted; every probe, where a bound is not finite.
+    """
+    if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+        return np.arange(len(probe))
+    edges = np.concatenate([[0], probe.searchsorted(lo), probe.searchsorted(hi, side="right")])
+    edges = np.unique(edges)
+    return edges[edges < len(probe)]
 
 
 def _apart_and_within(joints: np.ndarray, jumps: np.ndarray, rate: float) -> bool:

@@ -318,7 +318,7 @@ def search_at_resolution(
         # (a validated copy: built only where it is used, not for the default ramps).
         post = dataclasses.replace(smoothing, clearance=clearance, kappa_max=kappa_max)
 
-    memo: SegmentMemo = {}
+    memo = SegmentMemo()
 
     def accept(pieces: list[Piece]) -> BuiltPath | None:
         return build_path(
@@ -448,7 +448,13 @@ def search_at_resolution(
         )
         body = body_test(problem.checker, search_clearance)
         start_leads = leads_into(start, body) if reverse else ()
+        earlier = searches
         searches = searches_with(body, start_leads)
+        if margin > 0.0 and search_clearance == clearance:
+            # The start or goal keeps less than the margin: capped, both passes keep the
+            # same clearance and search alike. The second reads the first's shots.
+            for (search, _), (done, _) in zip(searches, earlier, strict=True):
+                search.replay(done)
         left = budget - used.expansions
         first_turn = config.switch_after
         if start_leads or approach_blocked(goal, body, config.check_spacing):

@@ -200,11 +200,53 @@ class HybridSearch:
         self.expansions = 0
         self.shots_tried = 0
         self.connections = 0
+        #: Node -> how many connections its shot gave, every one rejected (shots that
+        #: ran to their end only): what a repeat of this search reads (:meth:`replay`).
+        self.shot_counts: dict[int, int] = {}
+        self._earlier: HybridSearch | None = None
+        self._same_below = 0  # nodes [0, this) are the earlier search's, checked
         # The primitives as the loop reads them: built once per primitive set and costs.
         self._open, self._tested = _arc_tables(
             primitives, tuple(long_primitives), config.reverse_cost, config.steer_cost,
             kappa_max, body.disc_offsets,
         )  # fmt: skip
+
+    def replay(self, earlier: HybridSearch) -> None:
+        """Take the shots' outcomes from ``earlier``, a search of the same query and settings.
+
+        A search run again with the same body test, shots and ``accept`` (the ramp
+        margin's pass where the query's clearance caps both passes alike) repeats
+        the earlier one: a node the same as the earlier search's (it and every node
+        before it equal, field by field: :meth:`_known`) gets the same shot, whose
+        connections ``accept`` rejected there, and rejects here. Those are counted,
+        not tried again (the shots and the ramp fits were most of the time).
+        """
+        self._earlier = earlier
+
+    def _known(self, i: int) -> int | None:
+        """The connections of node ``i``'s shot in the earlier search, or ``None`` to shoot.
+
+        Only while this search's nodes up to ``i`` are the earlier one's (its
+        chain and pose are then the same); once they differ, never again.
+        """
+        earlier = self._earlier
+        assert earlier is not None
+        count = earlier.shot_counts.get(i)
+        if count is None or i < self._same_below:
+            return count
+        a, b = self._same_below, i + 1
+        # kappa from node 1: the root's is NaN (never read by a chain).
+        same = (
+            self.x[a:b] == earlier.x[a:b] and self.y[a:b] == earlier.y[a:b]
+            and self.yaw[a:b] == earlier.yaw[a:b] and self.gear[a:b] == earlier.gear[a:b]
+            and self.parent[a:b] == earlier.parent[a:b] and self.step[a:b] == earlier.step[a:b]
+            and self.kappa[max(a, 1):b] == earlier.kappa[max(a, 1):b]
+        )  # fmt: skip
+        if not same:
+            self._earlier = None
+            return None
+        self._same_below = b
+        return count
 
     def reguide(self, heuristic: Heuristic) -> None:
         """Go on with ``heuristic``: every node's estimate and the open nodes' order anew.
@@ -406,16 +448,32 @@ class HybridSearch:
                     iyaw = int(yawi % two_pi // shot_bin)
                     sk = (int(xi // shot_cell), int(yi // shot_cell), iyaw)
                 found = 0
-                for pieces in () if sk in shot_from else self._shot(i):
-                    found += 1
-                    self.connections += 1
-                    out = accept(self.chain(i) + pieces)
-                    if out is not None:
-                        self.expansions, self._since_shot = expansions, since_shot
-                        return out, self._outcome("solved")
-                    if self.connections >= max_solutions:
-                        self.expansions, self._since_shot = expansions, since_shot
-                        return None, self._outcome("rejected")
+                if sk not in shot_from:
+                    known = None if self._earlier is None else self._known(i)
+                    if known is not None:
+                        # The earlier search's shot from this very node: rejected, counted.
+                        self.shots_tried += 1
+                        for _ in range(known):
+                            found += 1
+                            self.connections += 1
+                            if self.connections >= max_solutions:
+                                self.expansions, self._since_shot = expansions, since_shot
+                                return None, self._outcome("rejected")
+                    else:
+                        chain = None  # the node's pieces, made once for all its connections
+                        for pieces in self._shot(i):
+                            found += 1
+                            self.connections += 1
+                            if chain is None:
+                                chain = self.chain(i)
+                            out = accept(chain + pieces)
+                            if out is not None:
+                                self.expansions, self._since_shot = expansions, since_shot
+                                return out, self._outcome("solved")
+                            if self.connections >= max_solutions:
+                                self.expansions, self._since_shot = expansions, since_shot
+                                return None, self._outcome("rejected")
+                    self.shot_counts[i] = found
                 if not found and sk is not None:
                     shot_from.add(sk)
             ki = kappa_of[i]
