@@ -7,6 +7,9 @@ Usage::
     # Equivalence only: record this tree's answers, later check a changed tree against them
     python experiments/bench_hybrid.py --record /tmp/hybrid_base.pkl
     python experiments/bench_hybrid.py --check /tmp/hybrid_base.pkl
+    # Map files of your own (paths from the repository's root), with or without reverse
+    python experiments/bench_hybrid.py --ref d623b82 --out results/hybrid_tail_s24 \
+        --only file:rev:results/hybrid_tail_s24/maps/fz865.json,file:fwd:results/...
 
 The queries: ``parking_lot`` with the 30 random goal poses and the 30 random start
 poses of :func:`random_goals.draw_goals` (seed 1), each planned by ``hybrid-a-star``
@@ -79,6 +82,11 @@ class _Runner:
         from rrtdrive.planning import PlanningProblem
         from rrtdrive.sim.tasks import make_scenario
 
+        if qid.startswith("file:"):  # file:rev:MAP.json, a map file's own start and goal
+            from rrtdrive.maps import load_map
+
+            _, gear, name = qid.split(":", 2)
+            return PlanningProblem.from_map(load_map(ROOT / name), reverse=gear == "rev")
         parts = qid.split(":")
         if len(parts) == 3:
             vary, gear, i = parts
