@@ -150,3 +150,29 @@ def test_mp4_writer_errors_surface_and_leave_no_file(tmp_path):
     with Mp4Writer(out, fps=10) as ok:
         ok.append(np.full((32, 32, 3), 90, np.uint8))
     assert [p.name for p in tmp_path.iterdir()] == ["bad.mp4"] and ok.frames == 1
+
+
+def test_the_read_out_panel_goes_where_it_hides_least_of_the_drive():
+    from rrtdrive.sim.render import PANEL_CORNERS, SceneCanvas
+
+    canvas = SceneCanvas((960, 240), 14.4, (30.0, 5.0))
+    # A drive along the top-left of a narrow street: there the panel hid the start.
+    along_top = np.column_stack([np.linspace(0.0, 25.0, 50), np.full(50, 8.0)])
+    assert canvas.panel_corner(along_top, 290, 4) == "top-right"
+    # Nothing under any corner: the top left, as before.
+    middle = np.array([[30.0, 5.0]])
+    assert canvas.panel_corner(middle, 290, 4) == "top-left"
+    # The drawn panel is where it was asked for (its white fill at that corner).
+    frame = canvas.frame(["t 0.00 s"], panel_width=290, corner="bottom-right")
+    assert (frame[-10, -20] == 255).all() and not (frame[10, 20] == 255).all()
+    with pytest.raises(ValueError, match="corner"):
+        canvas.frame(["x"], corner="middle")
+    assert PANEL_CORNERS[0] == "top-left"
+
+
+def test_a_narrow_street_video_keeps_its_start_car_clear(tmp_path):
+    ep = run_episode(make_scenario("parallel-parking", 0), "hybrid-a-star", "pure-pursuit", 0)
+    first = next(iter(render_frames(ep, stride=10**6)))
+    assert first.shape == (240, 960, 3)
+    # The panel's white fill is at the top right, away from the car at the left.
+    assert (first[10, -20] == 255).all() and not (first[10, 20] == 255).all()

@@ -26,6 +26,7 @@ draws nothing). It does not go through highway-env's ``EnvViewer``, whose
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 import tempfile
@@ -314,27 +315,76 @@ class SceneCanvas:
         for p in xy:
             self._pygame.draw.circle(self.surface, color, self.surface.vec2pix(p), radius)
 
-    def frame(self, lines: Sequence[str], panel_width: int | None = None) -> np.ndarray:
+    def panel_corner(
+        self, points: np.ndarray, width: int, lines: int, reach_m: float = 3.5
+    ) -> str:
+        """The frame corner whose read-out panel covers the fewest of ``points``.
+
+        ``points`` are world ``(x, y)`` rear-axle positions (the path, the driven
+        trace) seen from the canvas's ``centre``; a point counts when the panel comes
+        within ``reach_m`` of it (the car's body around its axle). The panel is
+        ``width`` pixels wide for ``lines`` lines. Ties go to the top left, then top
+        right, bottom left, bottom right. On a narrow map (a kerbside street, 960 x
+        240) the top-left panel hid the start.
+        """
+        xy = np.asarray(points, dtype=float).reshape(-1, 2)
+        w, h = self.size
+        # World to image pixels of the flipped frame (+y up), as the surface maps them.
+        px = w / 2.0 + (xy[:, 0] - self.centre[0]) * self.scaling
+        py = h / 2.0 - (xy[:, 1] - self.centre[1]) * self.scaling
+        r = reach_m * self.scaling
+        best, fewest = "top-left", math.inf
+        for corner in PANEL_CORNERS:
+            left, top = _panel_origin(corner, self.size, width, _panel_height(lines))
+            inside = (px >= left - r) & (px <= left + width + r) & (py >= top - r)
+            inside &= py <= top + _panel_height(lines) + r
+            if int(inside.sum()) < fewest:
+                best, fewest = corner, int(inside.sum())
+        return best
+
+    def frame(
+        self, lines: Sequence[str], panel_width: int | None = None, corner: str = "top-left"
+    ) -> np.ndarray:
         """The picture as RGB, ``(height, width, 3)`` uint8, freshly allocated, +y up.
 
         Parameters
         ----------
         lines : sequence of str
-            Read-out text, one line each, in a white panel at the top left (none when empty).
+            Read-out text, one line each, in a white panel (none when empty).
         panel_width : int, optional
             Panel width in pixels (default: fitted to the text).
+        corner : str
+            Where the panel goes: one of :data:`PANEL_CORNERS` (see :meth:`panel_corner`).
         """
         pygame = self._pygame
         image = pygame.transform.flip(self.surface, False, True)
         if lines:
             font = self._text_font()
             width = panel_width or 12 + max(font.size(text)[0] for text in lines)
-            panel_h = 8 + 20 * len(lines)
-            pygame.draw.rect(image, PANEL_COLOR, (6, 6, width, panel_h))
-            pygame.draw.rect(image, TEXT_COLOR, (6, 6, width, panel_h), 1)
+            panel_h = _panel_height(len(lines))
+            left, top = _panel_origin(corner, self.size, width, panel_h)
+            pygame.draw.rect(image, PANEL_COLOR, (left, top, width, panel_h))
+            pygame.draw.rect(image, TEXT_COLOR, (left, top, width, panel_h), 1)
             for i, text in enumerate(lines):
-                image.blit(font.render(text, True, TEXT_COLOR), (12, 11 + 20 * i))
+                image.blit(font.render(text, True, TEXT_COLOR), (left + 6, top + 5 + 20 * i))
         return _rgb_array(image)
+
+
+#: The read-out panel's places, in the order ties are broken.
+PANEL_CORNERS = ("top-left", "top-right", "bottom-left", "bottom-right")
+
+
+def _panel_height(lines: int) -> int:
+    return 8 + 20 * lines
+
+
+def _panel_origin(corner: str, size: tuple[int, int], width: int, height: int) -> tuple[int, int]:
+    """The panel's top-left pixel in a frame of ``size``: 6 pixels in from its corner."""
+    if corner not in PANEL_CORNERS:
+        raise ValueError(f"corner: one of {PANEL_CORNERS}, got {corner!r}")
+    left = 6 if corner.endswith("left") else size[0] - 6 - width
+    top = 6 if corner.startswith("top") else size[1] - 6 - height
+    return left, top
 
 
 def _rgb_array(image: Any) -> np.ndarray:

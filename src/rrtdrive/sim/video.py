@@ -32,6 +32,8 @@ __all__ = [
 
 #: ``progress(frames_done, frames_total)``, called after each frame is handed to the encoder.
 Progress = Callable[[int, int], None]
+#: The read-out panel's width, pixels.
+PANEL_WIDTH = 290
 
 
 class _Camera:
@@ -162,6 +164,11 @@ def render_frames(
         path_gears = episode.path.gears if len(episode.path) else None
         gear_of = hud_gears(log.states[:, 3])
         cusps = len(episode.path.cusps) if len(episode.path) else 0
+        corner = "top-left"
+        if not follow:  # a fixed view: the panel where it hides least of path and drive
+            lines_shown = 3 + bool(cusps) + (traffic is not None)
+            route = np.vstack([np.asarray(path_xy, dtype=float).reshape(-1, 2), log.states[:, :2]])
+            corner = canvas.panel_corner(route, PANEL_WIDTH, lines_shown)
         for k in indices:
             x, y, yaw, v = log.states[k]
             steer = float(log.controls[k - 1, 1]) if k > 0 else 0.0
@@ -201,7 +208,7 @@ def render_frames(
             if traffic is not None:
                 mode = [m for tm, m in traffic.modes if tm <= log.t[k] + 1e-9]
                 lines.append(f"mode {mode[-1] if mode else 'follow'}")
-            yield canvas.frame(lines, panel_width=290)
+            yield canvas.frame(lines, panel_width=PANEL_WIDTH, corner=corner)
     finally:
         env.close()
 
