@@ -412,6 +412,10 @@ def test_solved_message_says_curvature_and_headings_are_ignored(name, problems):
     ratio = res.path.max_curvature / kappa_max
     assert "baselines ignore curvature and headings" in res.message
     assert f"max curvature {ratio:.1f} x kappa_max" in res.message
+    # The corners: the largest yaw jump between two rows, a turn the car makes standing.
+    turn = np.abs(wrap_angle(np.diff(res.path.samples[:, 2]))).max()
+    assert f"turns on the spot of up to {math.degrees(turn):.0f} deg" in res.message
+    assert turn > math.radians(10)
     err = [
         abs(math.degrees(wrap_angle(res.path.samples[k, 2] - pose.yaw)))
         for k, pose in ((0, problem.start), (-1, problem.goal))
@@ -428,5 +432,6 @@ def test_solved_message_reports_a_reversed_goal_heading(name):
     res = run(name, PlanningProblem.from_map(m), 0)
     assert res.success
     assert res.message.endswith(
-        "max curvature 0.0 x kappa_max, heading error 0 deg at the start, 180 deg at the goal"
+        "max curvature 0.0 x kappa_max, turns on the spot of up to 0 deg, heading error 0 deg "
+        "at the start, 180 deg at the goal"
     )

@@ -239,8 +239,9 @@ def baseline_caveat(path: Path, problem: PlanningProblem) -> str:
     """What a baseline's solved path does not guarantee: its curvature and end headings.
 
     The baselines return the raw tree path, with corners and whatever headings
-    its first and last edges have; the note gives its largest (Menger) curvature
-    as a multiple of the car's ``kappa_max`` and its heading errors at both ends.
+    its first and last edges have; the note gives its largest (Menger) curvature as
+    a multiple of the car's ``kappa_max``, its largest turn on the spot (a corner,
+    where the rows' yaw jumps) and its heading errors at both ends.
 
     Examples
     --------
@@ -248,19 +249,24 @@ def baseline_caveat(path: Path, problem: PlanningProblem) -> str:
     >>> from rrtdrive.planning.base import polyline_path
     >>> problem = PlanningProblem.from_map(builtin_map("overtake"))
     >>> path = polyline_path(np.array([[5.0, 44.0], [50.0, 48.0], [92.0, 44.0]]))
-    >>> baseline_caveat(path, problem).split(": ")[1]
-    'max curvature 0.0 x kappa_max, heading error 5 deg at the start, 5 deg at the goal'
+    >>> print(baseline_caveat(path, problem).split(": ")[1])  # doctest: +NORMALIZE_WHITESPACE
+    max curvature 0.0 x kappa_max, turns on the spot of up to 11 deg, heading error 5 deg
+    at the start, 5 deg at the goal
     """
     samples = path.samples
     ratio = path.max_curvature / problem.vehicle.kappa_max
     if len(samples):
         start_err = abs(math.degrees(wrap_angle(samples[0, 2] - problem.start.yaw)))
         goal_err = abs(math.degrees(wrap_angle(samples[-1, 2] - problem.goal.yaw)))
+        # A corner of the polyline is a turn on the spot, where the rows' yaw jumps: the
+        # curvature of the kappa column does not show it (0.0 x kappa_max on a polyline).
+        turn = float(np.abs(wrap_angle(np.diff(samples[:, 2]))).max(initial=0.0))
     else:
-        start_err = goal_err = math.nan
+        start_err = goal_err = turn = math.nan
     return (
         f"baselines ignore curvature and headings: max curvature {ratio:.1f} x kappa_max, "
-        f"heading error {start_err:.0f} deg at the start, {goal_err:.0f} deg at the goal"
+        f"turns on the spot of up to {math.degrees(turn):.0f} deg, heading error "
+        f"{start_err:.0f} deg at the start, {goal_err:.0f} deg at the goal"
     )
 
 
