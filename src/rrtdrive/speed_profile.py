@@ -466,9 +466,10 @@ def actuator_profile(
     trough = last_rise_too_short(s, first.v, config.accel + config.decel, config.comfort_jerk)
     if trough is not None and (i0 is None or trough < i0):
         i0 = trough
-    if i0 is not None and first.v[i0] <= 0.0:
+    if i0 is not None and i0 < len(s) - 1 and first.v[i0] <= 0.0:
         # From rest within the final approach (a path shorter than it): held from rising,
-        # the running minimum would be 0 throughout and the car would never move.
+        # the running minimum would be 0 throughout and the car would never move. (The
+        # end sample alone, of a path sampled sparsely, is no such start.)
         rise_to_peak = True
     if i0 is not None and rise_to_peak:
         i0 = max(i0, int(np.argmax(first.v)))
