@@ -37,14 +37,18 @@ def test_json_to_dev_stdout_through_a_pipe(tmp_path):
     assert json.loads(out)["ok"] is True and "every check passed" in err
 
 
-def test_names_stdout_tells_the_file_of_stdout(tmp_path):
+def test_names_stdout_tells_the_pipe_of_stdout(tmp_path):
     target = tmp_path / "out.json"
     target.write_text("")
     code = ("import sys; from rrtdrive.cli_args import names_stdout; "
-            f"print(names_stdout({str(target)!r}), names_stdout({str(tmp_path / 'x')!r}))")
-    with open(target, "w") as out:  # stdout is that very file
-        subprocess.run([sys.executable, "-c", code], stdout=out, check=True, timeout=60)
-    assert target.read_text().split() == ["True", "False"]
+            "print(names_stdout('/dev/stdout'), names_stdout(sys.argv[1]))")
+    piped = subprocess.run([sys.executable, "-c", code, str(target)], stdout=subprocess.PIPE,
+                           text=True, check=True, timeout=60)
+    assert piped.stdout.split() == ["True", "False"]
+    with open(target, "w") as out:  # stdout a regular file: its summary stays there
+        subprocess.run([sys.executable, "-c", code, str(target)], stdout=out, check=True,
+                       timeout=60)
+    assert target.read_text().split() == ["False", "False"]
     assert not names_stdout(str(target))  # not this process's stdout
 
 

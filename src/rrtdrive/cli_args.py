@@ -7,6 +7,7 @@ import io
 import math
 import os
 import re
+import stat
 import sys
 from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from contextlib import contextmanager
@@ -113,7 +114,9 @@ def writing(flag: str, target: str | os.PathLike[str]) -> Iterator[None]:
 
 
 def names_stdout(target: str) -> bool:
-    """Whether ``target`` is the file the process's stdout writes to (``/dev/stdout``).
+    """Whether ``target`` is the pipe the process's stdout writes to (``/dev/stdout | jq``).
+
+    Only a pipe or socket: ``--json /dev/null > /dev/null`` keeps its summary on stdout.
 
     Examples
     --------
@@ -124,7 +127,8 @@ def names_stdout(target: str) -> bool:
         here, there = os.fstat(sys.stdout.fileno()), os.stat(target)
     except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
         return False  # no such file, or a stdout with no file (captured by a test)
-    return (here.st_dev, here.st_ino) == (there.st_dev, there.st_ino)
+    piped = stat.S_ISFIFO(here.st_mode) or stat.S_ISSOCK(here.st_mode)
+    return piped and (here.st_dev, here.st_ino) == (there.st_dev, there.st_ino)
 
 
 def distinct_outputs(**targets: str | None) -> None:
