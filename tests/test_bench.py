@@ -643,3 +643,30 @@ def test_a_stock_highway_env_scenario_is_benched_and_judged_by_both(tmp_path):
     (row,) = [json.loads(x) for x in (tmp_path / "runs.jsonl").read_text().splitlines()]
     assert row["scenario"] == "parking-v0" and row["kind"] == "episode"
     assert row["highway_env_success"] is True and row["success"] and not row["collision"]
+
+
+def test_grid_refusals_name_the_field(tmp_path):
+    # Reeds-Shepp rows reverse whatever the grid says; OMPL has no iteration budget; one
+    # map under two names gave one run key twice ("already stored", a traceback).
+    from rrtdrive.bench.grid import BenchConfig
+    from rrtdrive.maps import builtin_map, save_map
+    from rrtdrive.types import InputError
+
+    with pytest.raises(InputError, match=r"^planners: 'ompl-rs-rrtconnect' plans Reeds-Shepp"):
+        BenchConfig(maps=("dead_end",), planners=("ompl-rs-rrtconnect",), out=str(tmp_path))
+    with pytest.raises(InputError, match=r"^planners: 'ompl-r2-rrtconnect' has no iteration"):
+        BenchConfig(maps=("dead_end",), planners=("ompl-r2-rrtconnect",), deterministic=True,
+                    out=str(tmp_path))
+    save_map(builtin_map("parking_lot"), tmp_path / "lot.json")
+    with pytest.raises(InputError, match=r"^maps: 'parking_lot' and '.*lot.json' are the same"):
+        BenchConfig(maps=("parking_lot", str(tmp_path / "lot.json")), planners=("rrt",),
+                    out=str(tmp_path / "b"))
+
+
+def test_an_output_folder_that_cannot_be_written_is_one_line(tmp_path):
+    from rrtdrive.bench.store import ResultStore
+    from rrtdrive.types import InputError
+
+    (tmp_path / "runs.jsonl").mkdir()  # a folder where the runs file goes
+    with pytest.raises(InputError, match=r"^out: cannot write into .*Is a directory"):
+        ResultStore(tmp_path)

@@ -66,7 +66,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument(
         "--planners", action="append", metavar="NAMES",
         help="planners, including OMPL rows such as ompl-r2-rrtconnect, ompl-rs-bitstar "
-        "(default: improved-rrt-connect)",
+        "(the Reeds-Shepp ompl-rs rows only with --reverse; default: improved-rrt-connect)",
     )
     p.add_argument(
         "--controllers", action="append", metavar="NAMES",

@@ -256,6 +256,19 @@ class BenchConfig:
         for p in self.planners:
             if p not in PLANNERS:
                 raise InputError(f"planners: unknown planner {p!r}; choose from {sorted(PLANNERS)}")
+            if p.startswith("ompl-rs-") and not self.reverse:
+                # Reeds-Shepp curves reverse whatever the grid says: beside forward-only
+                # planners they compared paths with gear changes to paths without.
+                raise InputError(
+                    f"planners: {p!r} plans Reeds-Shepp paths, which change gear; bench it "
+                    "with --reverse (reverse = true), or use an ompl-r2 planner"
+                )
+            if p.startswith("ompl-") and self.deterministic:
+                raise InputError(
+                    f"planners: {p!r} has no iteration budget, only a time limit, which a "
+                    "deterministic bench does not set (each unsolved run would last the "
+                    "run timeout); bench it without --deterministic"
+                )
             if p.startswith("ompl-") and not ompl_available():
                 raise InputError(
                     f"planners: {p!r} needs OMPL; install it with pip install 'rrtdrive[ompl]'"
@@ -283,6 +296,17 @@ class BenchConfig:
                 digests[s], contents[s] = map_digest(s, driven)
         object.__setattr__(self, "map_digests", digests)
         object.__setattr__(self, "map_contents", contents)
+        for field_, names in (("maps", self.maps),
+                              ("scenarios", [s for s in self.scenarios if s in digests])):
+            seen: dict[str, str] = {}
+            for m in names:
+                if digests[m] in seen:
+                    # One content, one run key: the second name's runs were "already stored".
+                    raise InputError(
+                        f"{field_}: {seen[digests[m]]!r} and {m!r} are the same map (the same "
+                        "content); give it once"
+                    )
+                seen[digests[m]] = m
         if self.reverse and self.scenarios:
             from rrtdrive.sim.tasks import REPLANNING_SCENARIOS
 

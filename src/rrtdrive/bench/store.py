@@ -81,11 +81,20 @@ class ResultStore:
             raise InputError(f"out: cannot create {str(self.dir)!r}: {exc.strerror}") from None
         self.path = self.dir / RUNS_FILE
         self._lock_fd: int | None = None
-        if lock:
-            self._acquire_lock()
-        created = not self.path.exists()
-        self._repair_tail()
-        self._fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+        self._fd = None  # type: ignore[assignment]  # until opened below
+        try:
+            if lock:
+                self._acquire_lock()
+            created = not self.path.exists()
+            self._repair_tail()
+            self._fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+        except OSError as exc:
+            # A read-only folder, or runs.jsonl a folder: one line, not a traceback.
+            self.close()
+            raise InputError(
+                f"out: cannot write into {str(self.dir)!r}: "
+                f"{exc.strerror or exc} ({exc.filename or self.path})"
+            ) from None
         if created:
             _fsync_dir(self.dir)
         self._keys: set[tuple[str, int]] = set()
