@@ -185,7 +185,8 @@ def plot_curvature(path: Path, kappa_max: float, ax: Axes | None = None) -> Figu
 
     Reverse segments are dashed in another colour, cusps dotted vertical lines.
     """
-    fig = ax.figure if ax is not None else plt.figure(figsize=(7, 3))
+    # Constrained layout: on its own figure the x label was clipped at the bottom.
+    fig = ax.figure if ax is not None else plt.figure(figsize=(7, 3), layout="constrained")
     ax = ax or fig.add_subplot(111)
     s = path.arc_length()
     u = s / max(s[-1], 1e-9) if len(s) else s
@@ -206,7 +207,8 @@ def plot_curvature(path: Path, kappa_max: float, ax: Axes | None = None) -> Figu
         )
     ax.set_xlabel("normalised path length")
     ax.set_ylabel("curvature [1/m]")
-    ax.legend(loc="upper right", fontsize=8)
+    # Beside the axes: inside, it covered the curve.
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
     return fig
 
 

@@ -340,10 +340,11 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
     save_figure(fig, out / "success.png")
     written.append(out / "success.png")
 
-    # Curvature: histograms of each run's largest path curvature, one panel per planner.
+    # Curvature: histograms of each run's largest path curvature, one panel per planner,
+    # over successful runs as the summary's curvature (a failed run's path counted too).
     by_planner: dict[str, list[float]] = {}
     for r in rows:
-        if r.get("status") == "error":
+        if r.get("status") == "error" or not r.get("success"):
             continue
         vals = _values([r], "max_curvature") + _values([r], "path_max_curvature")
         by_planner.setdefault(str(r.get("planner")), []).extend(vals)
@@ -365,7 +366,7 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
             ax.set_title(planner, fontsize=9)
         for ax in list(axes.flat)[n:]:
             ax.set_visible(False)
-        fig.supxlabel("largest path curvature of a run [1/m] (dashed: κ_max)")
+        fig.supxlabel("largest path curvature of a successful run [1/m] (dashed: κ_max)")
         fig.supylabel("runs")
         save_figure(fig, out / "curvature_hist.png")
         written.append(out / "curvature_hist.png")
