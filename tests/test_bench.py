@@ -670,3 +670,22 @@ def test_an_output_folder_that_cannot_be_written_is_one_line(tmp_path):
     (tmp_path / "runs.jsonl").mkdir()  # a folder where the runs file goes
     with pytest.raises(InputError, match=r"^out: cannot write into .*Is a directory"):
         ResultStore(tmp_path)
+
+
+def test_an_interrupted_bench_of_another_grid_leaves_no_old_summary(tmp_path):
+    out = tmp_path / "b"
+    run_bench(BenchConfig(maps=("overtake",), planners=("rrt",), seeds=1, out=str(out)))
+    assert (out / "summary.md").exists()
+
+    def stop(row):
+        raise KeyboardInterrupt
+
+    other = BenchConfig(maps=("narrow_gap",), planners=("rrt",), seeds=1, out=str(out))
+    with pytest.raises(KeyboardInterrupt):
+        run_bench(other, on_row=stop)
+    # The old grid's summary described overtake beside a config naming narrow_gap.
+    assert not (out / "summary.md").exists() and not (out / "summary.csv").exists()
+    assert "narrow_gap" in (out / "bench_config.json").read_text()
+    # Resumed to its end, the grid writes its own.
+    run_bench(other)
+    assert "narrow_gap" in (out / "summary.md").read_text()

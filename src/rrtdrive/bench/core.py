@@ -139,6 +139,14 @@ def grid_rows(cfg: BenchConfig, store: ResultStore) -> list[dict[str, Any]]:
     return [found[k] for k in sorted(found, key=wanted.__getitem__)]
 
 
+def _previous_config(out: FsPath) -> object:
+    """The ``config`` of the bench last started in ``out`` (``None``: none, or unreadable)."""
+    try:
+        return json.loads((out / "bench_config.json").read_text(encoding="utf-8"))["config"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+
+
 def run_bench(
     cfg: BenchConfig,
     *,
@@ -205,6 +213,12 @@ def run_bench(
             "python": platform.python_version(),
             "machine": f"{platform.system()} {platform.machine()}",
         }
+        if _previous_config(out) not in (None, json.loads(json.dumps(meta["config"]))):
+            # Another grid's summary and figures: gone until this one's are written, or an
+            # interrupted bench left them beside the new bench_config.json.
+            for name in ("summary.md", "summary.csv"):
+                (out / name).unlink(missing_ok=True)
+            remove_plots(out)
         write_text_atomic(out / "bench_config.json", json.dumps(meta, indent=1) + "\n")
         backend: LocalBackend | RayBackend
         if cfg.ray is not None:
@@ -250,7 +264,12 @@ def run_bench(
         files.append(str(store.path))
     files.append(str(out / "bench_config.json"))
     groups = summarise_rows(rows)
-    title = f"Bench summary ({len(rows)} runs, seeds 0–{cfg.seeds - 1})"
+    # How it was run: a forward and a reverse grid's tables looked alike.
+    how = "".join(
+        text for text, on in ((", gear changes allowed", cfg.reverse),
+                              (", deterministic", cfg.deterministic)) if on
+    )
+    title = f"Bench summary ({len(rows)} runs, seeds 0–{cfg.seeds - 1}{how})"
     files += [str(p) for p in write_summary(groups, out, title)]
     # An earlier grid's figures in this folder would stay beside the new summary: a
     # figure without data is not written, and --no-plots writes none.
