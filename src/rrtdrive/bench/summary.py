@@ -290,7 +290,10 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
     height = max(3.0, 0.35 * len(labels) + 1.5)
     written: list[FsPath] = []
 
-    def box(filename: str, keys: tuple[str, ...], xlabel: str, scale: float = 1.0) -> None:
+    def box(
+        filename: str, keys: tuple[str, ...], xlabel: str, scale: float = 1.0,
+        none: str = "no value",
+    ) -> None:
         data, names = [], []
         for lab in labels:
             vals: list[float] = []
@@ -301,7 +304,10 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
                 names.append(lab)
         if not data:
             return
-        fig = Figure(figsize=(8, max(3.0, 0.35 * len(names) + 1.5)), layout="constrained")
+        # A group without a value (no successful run) keeps its row, marked, rather than
+        # vanishing from the figure.
+        missing = [lab for lab in labels if lab not in names]
+        fig = Figure(figsize=(8, max(3.0, 0.35 * len(labels) + 1.5)), layout="constrained")
         ax = fig.add_subplot()
         try:
             ax.boxplot(data, orientation="horizontal", showmeans=True)
@@ -311,14 +317,23 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
         hi = max(float(np.max(d)) for d in data)
         if lo > 0 and hi / lo > 100:
             ax.set_xscale("log")
-        ax.set_yticks(range(1, len(names) + 1), names, fontsize=8)
-        ax.invert_yaxis()
+        rows_shown = names + [f"{lab} ({none})" for lab in missing]
+        ax.set_yticks(range(1, len(rows_shown) + 1), rows_shown, fontsize=8)
+        ax.set_ylim(len(rows_shown) + 0.5, 0.5)  # top to bottom, the empty rows last
         ax.set_xlabel(xlabel)
         ax.grid(axis="x", alpha=0.3)
+        from matplotlib.lines import Line2D
+
+        ax.legend(
+            [Line2D([], [], color="tab:orange"),
+             Line2D([], [], marker="^", color="tab:green", linestyle="none")],
+            ["median", "mean"], fontsize=8, loc="best",
+        )
         save_figure(fig, out / filename)
         written.append(out / filename)
 
-    box("box_length.png", ("length_m", "path_length_m"), "path length [m] (successful runs)")
+    box("box_length.png", ("length_m", "path_length_m"), "path length [m] (successful runs)",
+        none="no success")
     box("box_time.png", ("planning_time_s",), "planning time [ms]", 1e3)
 
     # Success rates with Wilson intervals.
