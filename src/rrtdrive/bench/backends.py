@@ -411,7 +411,9 @@ class RayBackend:
                 else:
                     ray.init(log_to_driver=False)
             except (ConnectionError, ValueError, RuntimeError) as exc:
-                raise InputError(f"ray: cannot connect to {address or 'Ray'}: {exc}") from None
+                # Ray's messages run over several lines: the error is one.
+                why = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
+                raise InputError(f"ray: cannot connect to {address or 'Ray'}: {why}") from None
             self._owns_session = True
         self.executor = executor
         self.retries = retries
