@@ -57,7 +57,7 @@ def start_drawn_episode(
     """
     lo, hi = config.seed_range  # type: ignore[attr-defined]
     failures: dict[tuple[Map, bool], int] = {}
-    last: tuple[int, Task, Reference] | None = None
+    last: tuple[int, Task, Reference, bool] | None = None
     for _ in range(MAX_PLAN_ATTEMPTS):
         seed = int(rng.integers(lo, hi))
         task = config.scenario_for(seed)  # type: ignore[attr-defined]
@@ -69,11 +69,10 @@ def start_drawn_episode(
             return seed
         proven = ref.plan is not None and ref.plan.status is PlanStatus.PROVEN_UNREACHABLE
         failures[key] = RETRIES_PER_QUERY if proven else failures.get(key, 0) + 1
-        last = (seed, task, ref)
+        last = (seed, task, ref, proven)
     assert last is not None  # the first draw is always planned
-    seed, task, ref = last
+    seed, task, ref, proven = last
     queries = f"{len(failures)} quer{'y' if len(failures) == 1 else 'ies'}"
-    proven = ref.plan is not None and ref.plan.status is PlanStatus.PROVEN_UNREACHABLE
     hint = "" if task.reverse or proven else (
         "; the path may not change gear: scenario_options={'reverse': True} allows it"
     )

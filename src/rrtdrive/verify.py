@@ -195,14 +195,15 @@ MIN_POSE_SPACING = 1e-3
 
 
 def _first_collision(
-    m: Map, rows: np.ndarray, region: shapely.Geometry, bodies: list, poses: list, on_map: bool
+    m: Map, rows: np.ndarray, region: shapely.Geometry, bodies: list, poses: list,
+    row_on_map: np.ndarray,
 ) -> tuple[tuple[float, float, float] | None, str]:
-    """The first pose whose body leaves ``region`` or overlaps an obstacle, and what it hits."""
-    if not on_map:
-        xmin, ymin, xmax, ymax = m.bounds
-        off = ~((rows[:, 0] >= xmin) & (rows[:, 0] <= xmax)
-                & (rows[:, 1] >= ymin) & (rows[:, 1] <= ymax))
-        k = int(np.argmax(off))
+    """The first pose whose body leaves ``region`` or overlaps an obstacle, and what it hits.
+
+    A row off the map (``row_on_map`` false; no bodies were drawn) is that pose.
+    """
+    if not row_on_map.all():
+        k = int(np.argmin(row_on_map))
         return (float(rows[k, 0]), float(rows[k, 1]), float(rows[k, 2])), "the bounds"
     if not bodies:
         return None, ""
@@ -337,9 +338,8 @@ def verify_path(
     xmin, ymin, xmax, ymax = m.bounds
     # A row off the map already fails the body check; densifying a jump of 1e6 m to
     # 0.1 m poses would take minutes and gigabytes first.
-    on_map = bool(
-        np.all((xy[:, 0] >= xmin) & (xy[:, 0] <= xmax) & (xy[:, 1] >= ymin) & (xy[:, 1] <= ymax))
-    )
+    row_on_map = (xy[:, 0] >= xmin) & (xy[:, 0] <= xmax) & (xy[:, 1] >= ymin) & (xy[:, 1] <= ymax)
+    on_map = bool(np.all(row_on_map))
     bodies = []
     poses: list[np.ndarray] = []
     max_k = 0.0
@@ -368,7 +368,7 @@ def verify_path(
         if math.isnan(first_dir):
             first_dir = float(nose[0])
         last_dir = float(nose[-1])
-    first_collision, collides_with = _first_collision(m, s, region, bodies, poses, on_map)
+    first_collision, collides_with = _first_collision(m, s, region, bodies, poses, row_on_map)
     collision_free = first_collision is None
     # Chords of the first and last moving steps: at most 0.25 m long, so even at
     # kappa_max the chord deviates from the tangent by under 0.7 degrees.

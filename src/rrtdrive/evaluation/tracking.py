@@ -174,16 +174,16 @@ def followed_runs(runs: list[GearRun], poses: np.ndarray, speeds: np.ndarray,
     for t in range(1, n):
         # From run i to j > i passes over i+1 .. j-1: best[i] - before[i + 1] + before[j].
         leave = best - before[1 : k + 1]
+        # arg[j]: the first run i < j where leave is least (a new minimum is strictly lower).
         lowest = np.minimum.accumulate(leave)
-        arg = np.zeros(k, dtype=np.int64)
-        for j in range(1, k):  # k is a handful of runs
-            arg[j] = arg[j - 1] if leave[arg[j - 1]] <= leave[j - 1] else j - 1
+        new_low = np.concatenate([[True], leave[1:] < lowest[:-1]])
+        first_low = np.maximum.accumulate(np.where(new_low, idx, 0))
+        arg = np.concatenate([[0], first_low[:-1]])
         jump = np.full(k, np.inf)
         jump[1:] = lowest[:-1] + before[1:k]
-        stay = best
-        take_jump = jump < stay
+        take_jump = jump < best
         back[t] = np.where(take_jump, arg, idx)
-        best = np.where(take_jump, jump, stay) + cost[t]
+        best = np.where(take_jump, jump, best) + cost[t]
     out = np.zeros(n, dtype=np.int64)
     out[-1] = int(np.argmin(best))
     for t in range(n - 1, 0, -1):

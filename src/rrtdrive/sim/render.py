@@ -333,11 +333,12 @@ class SceneCanvas:
         px = w / 2.0 + (xy[:, 0] - self.centre[0]) * self.scaling
         py = h / 2.0 - (xy[:, 1] - self.centre[1]) * self.scaling
         r = reach_m * self.scaling
+        height = _panel_height(lines)
         best, fewest = "top-left", math.inf
         for corner in PANEL_CORNERS:
-            left, top = _panel_origin(corner, self.size, width, _panel_height(lines))
+            left, top = _panel_origin(corner, self.size, width, height)
             inside = (px >= left - r) & (px <= left + width + r) & (py >= top - r)
-            inside &= py <= top + _panel_height(lines) + r
+            inside &= py <= top + height + r
             if int(inside.sum()) < fewest:
                 best, fewest = corner, int(inside.sum())
         return best
