@@ -151,3 +151,38 @@ def test_a_row_off_the_map_is_located_at_the_bounds():
     rows = np.array([[m.start.x, m.start.y, 0.0, 0.0], [1e6, m.start.y, 0.0, 0.0]])
     check = verify_path(m, Path(rows, np.zeros((0, 2))))
     assert check.first_collision == (1e6, m.start.y, 0.0) and check.collides_with == "the bounds"
+
+
+def test_a_plan_on_a_map_file_is_verified_against_that_file(capsys, tmp_path, monkeypatch):
+    # The plan records the map file's absolute path, so verify finds it from any folder.
+    import dataclasses
+
+    m = builtin_map("parking_lot")
+    f = tmp_path / "my_lot.json"
+    save_map(dataclasses.replace(m, name="my_lot"), f)
+    monkeypatch.chdir(tmp_path)
+    plan = tmp_path / "plan.json"
+    assert main(["plan", "my_lot.json", "--json", str(plan)]) == 0
+    assert json.loads(plan.read_text())["map_file"] == str(f)
+    monkeypatch.chdir(tmp_path.parent)
+    code, out, _ = run(capsys, "verify", str(plan))
+    assert code == 0 and out.startswith("my_lot: ")
+    # An obstacle put on the path in the file: verify reads the file as it is now.
+    data = json.loads(plan.read_text())
+    x, y = np.array(data["path"])[len(data["path"]) // 2, :2]
+    from rrtdrive.maps import Obstacle
+
+    on_path = Obstacle((x, y), (1, 1))
+    blocked = dataclasses.replace(m, name="my_lot", obstacles=(*m.obstacles, on_path))
+    save_map(blocked, f)
+    code, out, _ = run(capsys, "verify", str(plan))
+    assert code == 1 and "FAIL body clear of obstacles" in out
+    # The file gone: one line naming the map and how to give it.
+    f.unlink()
+    code, out, err = run(capsys, "verify", str(plan))
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "error: map:" in err and str(f) in err and "rrtdrive verify PLAN MAP.json" in err
+
+
+def test_a_builtin_map_plan_names_no_file(capsys, plans):
+    assert json.loads(plans["default"].read_text())["map_file"] is None

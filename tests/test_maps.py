@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 
 import pytest
 import shapely
@@ -17,7 +18,7 @@ from rrtdrive.maps import (
     resolve_map,
     save_map,
 )
-from rrtdrive.types import InputError, Pose
+from rrtdrive.types import InputError, InputWarning, Pose
 
 
 @pytest.mark.parametrize("name", sorted(set(BUILTIN_MAPS) - set(TIGHT_MAP_NAMES)))
@@ -161,3 +162,62 @@ def test_a_key_given_twice_is_refused_and_a_byte_order_mark_is_read(tmp_path):
     bom = tmp_path / "bom.json"
     bom.write_bytes(b"\xef\xbb\xbf" + dup.read_bytes().replace(b'"start": [6, 6, 0], ', b""))
     assert load_map(bom).start.x == 5.0  # Windows editors write the mark: no error
+
+
+def _file_map(**changes):
+    data = {"bounds": [0, 0, 40, 40], "obstacles": [{"center": [20, 20], "size": [4, 2]}],
+            "start": [5, 5, 0], "goal": [30, 30, 1.5708]}
+    data.update(changes)
+    return data
+
+
+@pytest.mark.parametrize(
+    ("changes", "field", "hint"),
+    [
+        ({"goal": [30, 30, 90]}, "goal", "for 90 deg write 1.5708"),
+        ({"start": [5, 5, -180]}, "start", "for -180 deg write -3.1416"),
+        ({"obstacles": [{"center": [20, 20], "size": [4, 2], "yaw": 45}]},
+         "obstacles[0].yaw", "for 45 deg write 0.7854"),
+        ({"obstacles": [{"center": [20, 20], "size": [4, 2]},
+                        {"center": [80, 20], "size": [4, 2]}]},
+         "obstacles[1]", "wholly outside the bounds"),
+    ],
+)
+def test_likely_mistakes_warn_naming_the_field(changes, field, hint):
+    with pytest.warns(InputWarning) as record:
+        m = map_from_json(_file_map(**changes))
+    texts = [str(w.message) for w in record]
+    assert len(texts) == 1 and texts[0].startswith(f"{field}: ") and hint in texts[0]
+    assert isinstance(m, Map)  # valid input: planned as given
+
+
+def test_a_yaw_wraps_as_radians_whatever_the_warning_says():
+    # The warning's "taken as" angle is the one the planner uses: 90 rad wraps to 116.6 deg.
+    with pytest.warns(InputWarning, match=r"taken as 116\.6 deg"):
+        m = map_from_json(_file_map(goal=[30, 30, 90]))
+    assert math.degrees(math.remainder(m.goal.yaw, 2 * math.pi)) == pytest.approx(116.62, abs=0.01)
+
+
+@pytest.mark.parametrize("name", sorted(BUILTIN_MAPS))
+def test_builtin_maps_and_sane_files_warn_nothing(name, tmp_path):
+    f = tmp_path / "m.json"
+    save_map(builtin_map(name), f)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", InputWarning)
+        load_map(f)
+        map_from_json(_file_map(goal=[30, 30, 2 * math.pi]))  # a full turn exactly: fine
+        map_from_json(_file_map(obstacles=[{"center": [41, 20], "size": [4, 2]}]))  # overhangs
+
+
+def test_the_cli_prints_each_warning_as_one_line(tmp_path, capsys):
+    from rrtdrive.cli import main
+
+    f = tmp_path / "m.json"
+    f.write_text(json.dumps(_file_map(goal=[30, 30, 90])))
+    code = main(["plan", str(f), "--json", str(tmp_path / "p.json")])
+    err = capsys.readouterr().err
+    assert code == 0
+    assert err.splitlines() == [
+        "rrtdrive plan: warning: goal: yaw 90 is more than a full turn; yaws are in radians, "
+        "so it is taken as 116.6 deg; for 90 deg write 1.5708"
+    ]

@@ -16,6 +16,7 @@ import dataclasses
 import importlib
 import json
 import math
+import os
 import pathlib
 import sys
 import time
@@ -38,6 +39,7 @@ from rrtdrive.cli_args import (
 )
 from rrtdrive.cli_signals import EXIT_TERMINATED, Terminated, sigterm_raises
 from rrtdrive.cli_stdout import run_writing_stdout
+from rrtdrive.cli_warnings import warnings_as_lines
 from rrtdrive.types import Budget, InputError, PlanResult, Pose, VehicleParams
 
 if TYPE_CHECKING:
@@ -101,11 +103,14 @@ def plan_to_json(
     reverse: bool = False,
     start: Pose | None = None,
     goal: Pose | None = None,
+    map_file: str | None = None,
 ) -> dict[str, object]:
     """The JSON contract of ``rrtdrive plan`` (SPEC §5, docs/planning.md).
 
     ``start`` and ``goal`` are the query's poses ``[x, y, yaw]`` (``null`` when not
-    given), so ``rrtdrive verify`` can check the path against them.
+    given), so ``rrtdrive verify`` can check the path against them; ``map_file`` the
+    absolute path of the map file the plan was made on (``null`` for a built-in map),
+    which ``rrtdrive verify`` reads when it is given no map.
     ``reverse`` is whether gear changes were allowed (``--reverse``); ``path`` rows
     are ``[x, y, yaw, kappa, gear]`` and ``cusps`` counts the gear changes (0 for a
     forward-only path, also when a planner that cannot reverse was allowed to).
@@ -129,6 +134,7 @@ def plan_to_json(
         # Which stage of the planner solved it (e.g. the default's Hybrid A* escalation).
         "stage": stage_of(result) if result.success else None,
         "map": map_name,
+        "map_file": None if map_file is None else os.path.abspath(map_file),
         "seed": seed,
         "reverse": bool(reverse),
         "start": None if start is None else [float(v) for v in start.as_tuple()],
@@ -176,7 +182,7 @@ def _takes_option(factory: Callable[..., object], name: str) -> bool:
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:
-    from rrtdrive.maps import resolve_map
+    from rrtdrive.maps import BUILTIN_MAPS, resolve_map
     from rrtdrive.planning import (
         PLANNERS,
         PlanningProblem,
@@ -230,8 +236,9 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     result = dataclasses.replace(result, setup_time_s=result.setup_time_s + field_s)
     if args.json:
         doc = plan_to_json(
-            result, args.seed, m.name, m.vehicle, reverse=args.reverse, start=m.start, goal=m.goal
-        )
+            result, args.seed, m.name, m.vehicle, reverse=args.reverse, start=m.start,
+            goal=m.goal, map_file=None if args.map in BUILTIN_MAPS else args.map,
+        )  # fmt: skip
         _write_output(args.json, json.dumps(doc) + "\n")
     if args.plot:
         from rrtdrive.plotting import plot_plan, save_figure
@@ -538,7 +545,7 @@ def _main(argv: Sequence[str] | None) -> int:
     if getattr(args, "json", None) not in (None, "-") and names_stdout(args.json):
         args.json = "-"  # --json /dev/stdout: keep the human lines off stdout as for '-'
     try:
-        with sigterm_raises():
+        with sigterm_raises(), warnings_as_lines(f"rrtdrive {args.command}"):
             return int(args.func(args))
     except InputError as exc:
         print(f"rrtdrive {args.command}: error: {exc}", file=sys.stderr)

@@ -16,6 +16,7 @@ import dataclasses
 import json
 import math
 import os
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path as FsPath
@@ -28,6 +29,7 @@ from rrtdrive.geometry import box_corners
 from rrtdrive.json_input import parse_json, read_capped
 from rrtdrive.types import (
     InputError,
+    InputWarning,
     Pose,
     VehicleParams,
     brief_repr,
@@ -204,6 +206,22 @@ MAX_COORDINATE = 1e9
 MAX_YAW = 1e6
 
 
+def warn_if_degrees(label: str, yaw: float) -> None:
+    """Warn (:class:`InputWarning`) when ``yaw`` is more than a full turn: likely degrees.
+
+    Such a yaw is a valid angle (it wraps), so it is planned as given; the warning
+    says what it is taken as and what to write for degrees.
+    """
+    if abs(yaw) > 2.0 * math.pi + 1e-9:
+        wrapped = math.degrees(math.remainder(yaw, 2.0 * math.pi))
+        warnings.warn(
+            f"{label}: yaw {yaw:g} is more than a full turn; yaws are in radians, so it is "
+            f"taken as {wrapped:.1f} deg; for {yaw:g} deg write {math.radians(yaw):.4f}",
+            InputWarning,
+            stacklevel=3,
+        )
+
+
 def check_endpoint(m: Map, pose: Pose, label: str, vehicle: VehicleParams) -> None:
     """Raise :class:`InputError` unless the car at ``pose`` lies in bounds and clear of obstacles.
 
@@ -224,6 +242,7 @@ def check_endpoint(m: Map, pose: Pose, label: str, vehicle: VehicleParams) -> No
             f"{label}: yaw {pose.yaw:g} rad is beyond {MAX_YAW:g} rad either way, where an "
             "angle keeps less than the precision headings are checked to; give it in [-pi, pi]"
         )
+    warn_if_degrees(label, pose.yaw)
     if not (xmin <= pose.x <= xmax and ymin <= pose.y <= ymax):
         raise InputError(
             f"{label}: ({pose.x:g}, {pose.y:g}) lies outside the bounds {list(m.bounds)}"
@@ -296,7 +315,9 @@ def map_from_json(data: object, vehicle: VehicleParams | None = None) -> Map:
     name = data.get("name", "map")
     if not isinstance(name, str):
         raise InputError(f"name: expected a non-empty string, got {brief_repr(name)}")
-    return Map(
+    for i, o in enumerate(obstacles):
+        warn_if_degrees(f"obstacles[{i}].yaw", o.yaw)
+    m = Map(
         name=name,
         bounds=data["bounds"],
         obstacles=tuple(obstacles),
@@ -304,6 +325,23 @@ def map_from_json(data: object, vehicle: VehicleParams | None = None) -> Map:
         goal=Pose.from_seq(data["goal"], "goal"),
         vehicle=vehicle or VehicleParams(),
     )
+    _warn_outside(m)
+    return m
+
+
+def _warn_outside(m: Map) -> None:
+    """Warn about obstacles lying wholly outside the bounds: they block nothing there."""
+    xmin, ymin, xmax, ymax = m.bounds
+    for i, o in enumerate(m.obstacles):
+        ox0, oy0, ox1, oy1 = o.polygon().bounds
+        if ox1 <= xmin or ox0 >= xmax or oy1 <= ymin or oy0 >= ymax:
+            warnings.warn(
+                f"obstacles[{i}]: centre {list(o.center)} lies wholly outside the bounds "
+                f"{list(m.bounds)}, where everything counts as blocked; it changes nothing "
+                "(a typo in its coordinates?)",
+                InputWarning,
+                stacklevel=3,
+            )
 
 
 def load_map(path: str | os.PathLike[str], vehicle: VehicleParams | None = None) -> Map:

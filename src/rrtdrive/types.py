@@ -14,6 +14,7 @@ import numpy as np
 
 __all__ = [
     "InputError",
+    "InputWarning",
     "Pose",
     "VehicleParams",
     "Path",
@@ -26,6 +27,13 @@ __all__ = [
 
 class InputError(ValueError):
     """Bad user input; the message names the offending field."""
+
+
+class InputWarning(UserWarning):
+    """Input that is valid but probably not what the user meant; names the field.
+
+    The CLI prints it as one ``warning:`` line on stderr and goes on.
+    """
 
 
 def brief_repr(value: object, limit: int = 32) -> str:

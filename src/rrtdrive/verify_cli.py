@@ -2,7 +2,8 @@
 
 It reads the JSON of ``rrtdrive plan --json`` (or any ``{"path": [[x, y, yaw,
 kappa(, gear)], ...]}``, so paths from other planners can be judged too), takes the
-map from the command line or the plan, the start and goal from ``--start`` /
+map from the command line, else the plan's map file (``map_file``), else the
+built-in map the plan names, the start and goal from ``--start`` /
 ``--goal``, else the plan's, else the map's own, and prints each check with its
 measured value and bound.
 
@@ -47,7 +48,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                    "`rrtdrive plan MAP --json plan.json`")
     p.add_argument(
         "map", nargs="?", default=None, metavar="MAP",
-        help="a built-in map name or a map .json file (default: the map the plan names)",
+        help="a built-in map name or a map .json file (default: the plan's map file, else "
+        "the built-in map it names)",
     )
     p.add_argument("--start", metavar="X,Y,YAW",
                    help="the start pose (default: the plan's, else the map's)")
@@ -99,15 +101,28 @@ def _plan_pose(data: dict[str, Any], field: str) -> Pose | None:
 
 
 def _map_of(args: argparse.Namespace, data: dict[str, Any]) -> Any:
+    """The map to check against: ``MAP``, else the plan's map file, else its built-in map."""
+    import os
+
     from rrtdrive.maps import BUILTIN_MAPS, resolve_map
 
-    spec = args.map or data.get("map")
+    if args.map is not None:
+        return resolve_map(args.map)
+    spec = data.get("map")
+    map_file = data.get("map_file")
+    if isinstance(map_file, str) and map_file:
+        if not os.path.isfile(map_file):
+            raise InputError(
+                f"map: the plan was made on the map file {map_file}, which is not there any "
+                "more; give the map: rrtdrive verify PLAN MAP.json"
+            )
+        return resolve_map(map_file)
     if not isinstance(spec, str) or not spec:
         raise InputError("map: the plan names no map; give one: rrtdrive verify PLAN MAP")
-    if args.map is None and spec not in BUILTIN_MAPS:
+    if spec not in BUILTIN_MAPS:
         raise InputError(
-            f"map: the plan names map {spec!r}, which is not built in; give its file: "
-            "rrtdrive verify PLAN MAP.json"
+            f"map: the plan names map {spec!r}, which is not built in, and no map file; "
+            "give its file: rrtdrive verify PLAN MAP.json"
         )
     return resolve_map(spec)
 
