@@ -186,3 +186,24 @@ def test_a_plan_on_a_map_file_is_verified_against_that_file(capsys, tmp_path, mo
 
 def test_a_builtin_map_plan_names_no_file(capsys, plans):
     assert json.loads(plans["default"].read_text())["map_file"] is None
+
+
+def test_a_path_starting_in_collision_fails_the_body_check_there(capsys, tmp_path):
+    # The plan's start lies on obstacle 0: the path fails (exit 1), located at its start;
+    # it is not bad input (exit 2) as the same start given to `rrtdrive plan` would be.
+    m = builtin_map("parking_lot")
+    (cx, cy), yaw = m.obstacles[0].center, m.obstacles[0].yaw
+    s = np.arange(0.0, 5.01, 0.1)
+    rows = np.column_stack(
+        [cx + s * np.cos(yaw), cy + s * np.sin(yaw), yaw + 0 * s, 0 * s, 1 + 0 * s]
+    )
+    f = tmp_path / "plan.json"
+    end = rows[-1, :3].tolist()
+    f.write_text(json.dumps({"path": rows.tolist(), "map": "parking_lot",
+                             "start": rows[0, :3].tolist(), "goal": end}))
+    code, out, err = run(capsys, "verify", str(f), "--json", str(tmp_path / "c.json"))
+    assert code == 1 and err == ""
+    assert "FAIL body clear of obstacles" in out and "obstacle 0" in out
+    doc = json.loads((tmp_path / "c.json").read_text())
+    assert doc["failed"] == ["collision_free"] and doc["collides_with"] == "obstacle 0"
+    assert doc["first_collision"][:2] == pytest.approx([cx, cy])

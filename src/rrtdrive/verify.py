@@ -25,7 +25,14 @@ import shapely
 
 from rrtdrive.geometry import densify, wrap_angle
 from rrtdrive.maps import Map
-from rrtdrive.types import InputError, Path, brief_repr, is_finite_number, require_positive
+from rrtdrive.types import (
+    InputError,
+    Path,
+    Pose,
+    brief_repr,
+    is_finite_number,
+    require_positive,
+)
 
 __all__ = ["CHECKS", "PathCheck", "verify_path", "path_from_json"]
 
@@ -268,6 +275,8 @@ def verify_path(
     curvature_tol: float = 0.01,
     max_sharpness: float | None = None,
     sharpness_tol: float = 0.005,
+    start: Pose | None = None,
+    goal: Pose | None = None,
 ) -> PathCheck:
     """Check a path against the map with code independent of the planner.
 
@@ -294,6 +303,10 @@ def verify_path(
     sharpness_tol : float
         Slack on ``max_sharpness``, rad/m (the estimate of an exact clothoid is
         within 0.003 rad/m of its sharpness at 0.25 m samples).
+    start, goal : Pose, optional
+        The poses the path must start and end at (default: the map's). Unlike a
+        map's own, they need not be clear: a path from a pose in collision fails
+        the body check, located there.
 
     Returns
     -------
@@ -320,6 +333,11 @@ def verify_path(
         )
     _check_settings(pose_spacing, max_sample_spacing, heading_tol_deg, curvature_tol,
                     max_sharpness, sharpness_tol)  # fmt: skip
+    for label, pose in (("start", start), ("goal", goal)):
+        if pose is not None and not isinstance(pose, Pose):
+            raise InputError(f"{label}: expected a Pose or None, got {brief_repr(pose)}")
+    start = m.start if start is None else start
+    goal = m.goal if goal is None else goal
     v = m.vehicle
     s = path.samples
     if len(s) < 2:
@@ -376,14 +394,14 @@ def verify_path(
         # A path that never moves (the start is the goal): the car keeps its heading, so
         # every row's yaw must be the start's and the goal's.
         yaws = s[:, 2]
-        err_s = float(np.max(np.abs(wrap_angle(yaws - m.start.yaw))))
-        err_g = float(np.max(np.abs(wrap_angle(yaws - m.goal.yaw))))
+        err_s = float(np.max(np.abs(wrap_angle(yaws - start.yaw))))
+        err_g = float(np.max(np.abs(wrap_angle(yaws - goal.yaw))))
     else:
-        err_s = abs(wrap_angle(first_dir - m.start.yaw))
-        err_g = abs(wrap_angle(last_dir - m.goal.yaw))
+        err_s = abs(wrap_angle(first_dir - start.yaw))
+        err_g = abs(wrap_angle(last_dir - goal.yaw))
     endpoints_ok = bool(
-        np.allclose(xy[0], (m.start.x, m.start.y), atol=1e-6)
-        and np.allclose(xy[-1], (m.goal.x, m.goal.y), atol=1e-6)
+        np.allclose(xy[0], (start.x, start.y), atol=1e-6)
+        and np.allclose(xy[-1], (goal.x, goal.y), atol=1e-6)
     )
     curvature_ok = max_k <= v.kappa_max + curvature_tol
     tol = math.radians(heading_tol_deg)

@@ -167,6 +167,7 @@ def _lines(check: Any, bounds: dict[str, float | None]) -> list[str]:
 def run(args: argparse.Namespace) -> int:
     """Run ``rrtdrive verify``; return the exit code."""
     from rrtdrive.cli import _write_output, parse_pose
+    from rrtdrive.maps import warn_if_degrees
     from rrtdrive.verify import path_from_json, verify_path
 
     validate_output(args.json, "--json")
@@ -177,8 +178,11 @@ def run(args: argparse.Namespace) -> int:
         data, "start"
     )
     goal = parse_pose(args.goal, "--goal") if args.goal is not None else _plan_pose(data, "goal")
-    if start or goal:
-        m = m.with_query(start, goal)
+    # Not m.with_query: that refuses a pose in collision as bad input, where here it is
+    # the path that fails (the body check, located at its start).
+    for field, pose in (("start", start), ("goal", goal)):
+        if pose is not None:
+            warn_if_degrees(field, pose.yaw)
     bound = args.max_sharpness
     if bound is None and not args.no_sharpness:
         from rrtdrive.planning.improved.planner import sharpness_bound
@@ -197,7 +201,7 @@ def run(args: argparse.Namespace) -> int:
         if args.json:
             _write_output(args.json, json.dumps({"ok": False, "map": m.name, "rows": 0}) + "\n")
         return EXIT_FAILED
-    check = verify_path(m, path, max_sharpness=bound)
+    check = verify_path(m, path, max_sharpness=bound, start=start, goal=goal)
     with np.errstate(all="ignore"):  # a row at 1e308 m: the length is inf, quietly
         length = path.length
     verdict = "OK, every check passed" if check.ok else "FAILED"
