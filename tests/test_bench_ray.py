@@ -76,3 +76,18 @@ def test_ray_crashed_task_is_retried_then_recorded(ray_session, tmp_path):
         rows = {r["seed"]: r for r in grid_rows(cfg, store)}
     assert rows[0]["success"] and rows[1]["success"]  # seed 1: Ray retried the dead worker
     assert rows[2]["status"] == "error" and rows[2]["attempts"] == 2
+
+
+def test_an_address_ray_cannot_reach_is_one_line_and_leaves_no_folder(tmp_path):
+    # In a fresh process: this module's Ray session would otherwise be reused.
+    import subprocess
+
+    out = tmp_path / "bench"
+    proc = subprocess.run(
+        [sys.executable, "-m", "rrtdrive", "bench", "--maps", "overtake", "--planners",
+         "rrt-connect", "--seeds", "1", "--ray", "bogus://x", "--out", str(out)],
+        capture_output=True, text=True, timeout=300, check=False,
+    )
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.count("\n") == 1 and "error: ray: cannot connect to bogus://x" in proc.stderr
+    assert not out.exists()

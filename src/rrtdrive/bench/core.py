@@ -194,74 +194,80 @@ def run_bench(
     specs = expand(cfg)
     out = FsPath(cfg.out)
     files: list[str] = []
-    with ResultStore(out) as store:
-        if retry_errors:
-            keys = {row_key(r) for r in grid_rows(cfg, store) if r.get("status") == "error"}
-            dropped = store.drop(k for k in keys if k is not None)
-            if dropped:
-                logger.info("dropped %d error rows to run them again", dropped)
-        done = store.done_keys()
-        todo: list[RunSpec] = [s for s in specs if s.key not in done]
-        skipped = len(specs) - len(todo)
-        meta = {
-            "command": command,
-            "started_at": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-            "config": cfg.to_json(),
-            "seeds": list(range(cfg.seeds)),
-            "runs": len(specs),
-            "already_done": skipped,
-            "python": platform.python_version(),
-            "machine": f"{platform.system()} {platform.machine()}",
-        }
-        if _previous_config(out) not in (None, json.loads(json.dumps(meta["config"]))):
-            # Another grid's summary and figures: gone until this one's are written, or an
-            # interrupted bench left them beside the new bench_config.json.
-            for name in ("summary.md", "summary.csv"):
-                (out / name).unlink(missing_ok=True)
-            remove_plots(out)
-        write_text_atomic(out / "bench_config.json", json.dumps(meta, indent=1) + "\n")
-        backend: LocalBackend | RayBackend
-        if cfg.ray is not None:
-            backend = RayBackend(
-                cfg.ray, executor=executor, retries=cfg.retries, max_in_flight=cfg.workers
-            )
-        else:
-            backend = LocalBackend(
-                min(cfg.workers or default_workers(), max(1, len(todo))),
-                executor=executor, retries=cfg.retries, run_timeout_s=cfg.run_timeout_s,
-            )
-        if progress is not None:
-            where = f"{len(todo)} to run on {backend.describe()}" if todo else "nothing to run"
-            progress.write(
-                f"bench: {len(specs)} runs in the grid, {skipped} already in "
-                f"{store.path}, {where}\n"
-            )
-            progress.flush()
-        bar = Progress(len(todo), progress)
-        executed = 0
-        t0 = time.perf_counter()
-        try:
-            # closing(): an interrupt stops the workers at once, not at garbage collection.
-            with contextlib.closing(backend.run(todo)) as outcomes:
-                for outcome in outcomes:
-                    if outcome.row is not None:
-                        row = dict(outcome.row)
-                        row["attempts"] = outcome.attempts
-                    else:
-                        error = outcome.error or "unknown error"
-                        row = error_row(outcome.spec, error, outcome.attempts)
-                    store.append(row)
-                    executed += 1
-                    bar.update(error=outcome.row is None)
-                    if on_row is not None:
-                        on_row(row)
-            run_wall = time.perf_counter() - t0
-        finally:
-            bar.close()
-            if isinstance(backend, RayBackend):
-                backend.close()
-        rows = grid_rows(cfg, store)
-        files.append(str(store.path))
+    # Connect first: an address Ray cannot reach leaves no output folder behind.
+    ray_backend = (
+        RayBackend(cfg.ray, executor=executor, retries=cfg.retries, max_in_flight=cfg.workers)
+        if cfg.ray is not None
+        else None
+    )
+    try:
+        with ResultStore(out) as store:
+            if retry_errors:
+                keys = {row_key(r) for r in grid_rows(cfg, store) if r.get("status") == "error"}
+                dropped = store.drop(k for k in keys if k is not None)
+                if dropped:
+                    logger.info("dropped %d error rows to run them again", dropped)
+            done = store.done_keys()
+            todo: list[RunSpec] = [s for s in specs if s.key not in done]
+            skipped = len(specs) - len(todo)
+            meta = {
+                "command": command,
+                "started_at": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+                "config": cfg.to_json(),
+                "seeds": list(range(cfg.seeds)),
+                "runs": len(specs),
+                "already_done": skipped,
+                "python": platform.python_version(),
+                "machine": f"{platform.system()} {platform.machine()}",
+            }
+            if _previous_config(out) not in (None, json.loads(json.dumps(meta["config"]))):
+                # Another grid's summary and figures: gone until this one's are written, or an
+                # interrupted bench left them beside the new bench_config.json.
+                for name in ("summary.md", "summary.csv"):
+                    (out / name).unlink(missing_ok=True)
+                remove_plots(out)
+            write_text_atomic(out / "bench_config.json", json.dumps(meta, indent=1) + "\n")
+            backend: LocalBackend | RayBackend
+            if ray_backend is not None:
+                backend = ray_backend
+            else:
+                backend = LocalBackend(
+                    min(cfg.workers or default_workers(), max(1, len(todo))),
+                    executor=executor, retries=cfg.retries, run_timeout_s=cfg.run_timeout_s,
+                )
+            if progress is not None:
+                where = f"{len(todo)} to run on {backend.describe()}" if todo else "nothing to run"
+                progress.write(
+                    f"bench: {len(specs)} runs in the grid, {skipped} already in "
+                    f"{store.path}, {where}\n"
+                )
+                progress.flush()
+            bar = Progress(len(todo), progress)
+            executed = 0
+            t0 = time.perf_counter()
+            try:
+                # closing(): an interrupt stops the workers at once, not at garbage collection.
+                with contextlib.closing(backend.run(todo)) as outcomes:
+                    for outcome in outcomes:
+                        if outcome.row is not None:
+                            row = dict(outcome.row)
+                            row["attempts"] = outcome.attempts
+                        else:
+                            error = outcome.error or "unknown error"
+                            row = error_row(outcome.spec, error, outcome.attempts)
+                        store.append(row)
+                        executed += 1
+                        bar.update(error=outcome.row is None)
+                        if on_row is not None:
+                            on_row(row)
+                run_wall = time.perf_counter() - t0
+            finally:
+                bar.close()
+            rows = grid_rows(cfg, store)
+            files.append(str(store.path))
+    finally:
+        if ray_backend is not None:
+            ray_backend.close()
     files.append(str(out / "bench_config.json"))
     groups = summarise_rows(rows)
     # How it was run: a forward and a reverse grid's tables looked alike.
