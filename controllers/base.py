@@ -45,6 +45,10 @@ __all__ = [
 #: Fewest samples a gear segment's speed profile is built on: a segment given by its
 #: two end rows alone would have no sample between its two stops.
 _MIN_PROFILE_SAMPLES = 3
+#: Widest gap between the speed profile's samples, metres (the planners' row spacing): a
+#: path given by a few rows metres apart had a profile of a few samples, whose peak the
+#: jerk-limited loop overshot (2-3 m given as 2 rows: stopped 0.2 m past the goal).
+_PROFILE_SPACING = 0.25
 
 _STATE_FIELDS = ("x", "y", "yaw", "speed", "steer", "t")
 
@@ -105,6 +109,33 @@ class Controller(Protocol):
     def control(self, state: VehicleState) -> tuple[float, float]:
         """Return ``(acceleration m/s^2, steering angle rad)`` for ``state``."""
         ...
+
+
+def _profile_samples(s: np.ndarray, kappa: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Arc lengths and curvatures a speed profile is built on: the rows', filled in.
+
+    Rows farther apart than :data:`_PROFILE_SPACING` get samples between them, and a
+    segment of its two end rows alone (a short stub of a Reeds-Shepp word) gets one
+    in the middle: its profile would otherwise stop at both, zero throughout, and the
+    car never move. Between two rows the curvature is the first row's. Rows at most
+    that far apart (every planner's path) are kept as they are.
+
+    Examples
+    --------
+    >>> s, k = _profile_samples(np.array([0.0, 1.0]), np.array([0.1, 0.0]))
+    >>> s.tolist(), k.tolist()
+    ([0.0, 0.25, 0.5, 0.75, 1.0], [0.1, 0.1, 0.1, 0.1, 0.0])
+    """
+    ds = np.diff(s)
+    if len(s) >= _MIN_PROFILE_SAMPLES and (len(ds) == 0 or ds.max() <= _PROFILE_SPACING):
+        return s, kappa
+    steps = np.maximum(1, np.ceil(ds / _PROFILE_SPACING - 1e-9)).astype(int)
+    if steps.sum() < _MIN_PROFILE_SAMPLES - 1:
+        steps[np.argmax(ds)] += _MIN_PROFILE_SAMPLES - 1 - steps.sum()
+    frac = np.concatenate([np.arange(n) / n for n in steps])
+    start = np.repeat(np.arange(len(ds)), steps)
+    dense = np.append(s[start] + frac * ds[start], s[-1])
+    return dense, np.append(kappa[start], kappa[-1])
 
 
 class TrackingController:
@@ -336,14 +367,7 @@ class TrackingController:
             config = dataclasses.replace(
                 config, accel=min(config.accel, a), decel=min(config.decel, a)
             )
-        s, kappa = np.asarray(p.s), np.asarray(p.kappa)
-        if len(s) < _MIN_PROFILE_SAMPLES:
-            # A segment of its two end rows alone (a short stub of a Reeds-Shepp word)
-            # would get a profile that stops at both, zero throughout: the car would
-            # never move. Between the rows the curvature is the first row's.
-            dense = np.linspace(0.0, float(s[-1]), _MIN_PROFILE_SAMPLES)
-            kappa = kappa[np.clip(np.searchsorted(s, dense, side="right") - 1, 0, len(s) - 1)]
-            s = dense
+        s, kappa = _profile_samples(np.asarray(p.s), np.asarray(p.kappa))
         return actuator_profile(
             s, kappa, config, v_start,
             self.vehicle.wheelbase, self.steer_rate, rise_to_peak=manoeuvre,

@@ -102,3 +102,26 @@ def test_a_stub_near_the_stop_distance_is_measured_as_driven_or_skipped(stub, be
     assert r.success
     assert r.cte_max_m < 0.05 and r.heading_err_max_rad < 0.05
     assert r.progress_m == pytest.approx(r.path_length_m, abs=0.1)
+
+
+@pytest.mark.parametrize("length", [2.0, 2.5, 3.0])
+@pytest.mark.parametrize("controller", ["pure-pursuit", "lqr"])
+def test_a_forward_path_given_as_its_two_end_rows_stops_on_the_goal(length, controller):
+    # The profile had three samples: the comfort loop overshot its peak and ran 0.2 m past.
+    ep, r = _drive(_straight(10.0, 10.0 + length, 1, 2), controller, reverse=False)
+    assert r.success and r.goal_position_err_m < 0.01, r.goal_position_err_m
+    dense_ep, dense = _drive(_straight(10.0, 10.0 + length, 1, 41), controller, reverse=False)
+    # Given as two rows or as 41, the same drive to within a few steps.
+    assert abs(r.duration_s - dense.duration_s) < 0.6
+    assert ep.log.states[:, 3].max() == pytest.approx(dense_ep.log.states[:, 3].max(), rel=0.15)
+
+
+@pytest.mark.parametrize("length", [2.0, 2.05, 2.5])
+def test_a_profile_from_rest_a_little_longer_than_the_final_approach_does_not_crawl(length):
+    # Held from the first sample inside the final approach, the car crawled at the speed
+    # of its first samples (0.47 m/s over 2.0 m; 1.99 m rose to 1.03 m/s).
+    s = np.linspace(0.0, length, 41)
+    profile = actuator_profile(s, 0 * s, SpeedConfig(), 0.0, 2.51, 0.4)
+    shorter = actuator_profile(s * 1.99 / length, 0 * s, SpeedConfig(), 0.0, 2.51, 0.4)
+    assert profile.v.max() >= shorter.v.max() - 1e-9
+    assert profile.v[0] == 0.0 and profile.v[-1] == 0.0

@@ -471,6 +471,12 @@ def actuator_profile(
         # the running minimum would be 0 throughout and the car would never move. (The
         # end sample alone, of a path sampled sparsely, is no such start.)
         rise_to_peak = True
+    elif i0 is not None and first.v[0] <= 0.0 and bool(np.all(np.diff(first.v[: i0 + 1]) > 0)):
+        # From rest and still speeding up where the final approach begins (a path of
+        # 2-4 m): that is the start's rise, not a speed-up again; held from there, the
+        # car crawled at the speed of its first samples (0.47 m/s on 2 m). Held from the
+        # profile's peak instead, as a longer path is.
+        i0 = int(np.argmax(first.v))
     if i0 is not None and rise_to_peak:
         i0 = max(i0, int(np.argmax(first.v)))
     if i0 is not None:
