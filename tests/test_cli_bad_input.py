@@ -310,6 +310,27 @@ def test_two_outputs_to_one_file_are_bad_input(capsys, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link.mp4"]  # nothing run
 
 
+def test_an_output_that_would_overwrite_an_input_file_is_bad_input(capsys, tmp_path):
+    from rrtdrive.maps import save_map
+
+    lot = tmp_path / "lot.json"
+    save_map(builtin_map("overtake"), lot)
+    before = lot.read_bytes()
+    one_line(*run(capsys, "plan", str(lot), "--json", str(lot))[::2],
+             f"--json: {str(lot)!r} is the MAP file it reads")
+    one_line(*run(capsys, "simulate", str(lot), "--json", str(lot))[::2],
+             f"--json: {str(lot)!r} is the SCENARIO file it reads")
+    plan = tmp_path / "plan.json"
+    assert run(capsys, "plan", str(lot), "--planner", "rrt", "--json", str(plan))[0] == 0
+    plan_bytes = plan.read_bytes()
+    one_line(*run(capsys, "verify", str(plan), "--json", str(plan))[::2],
+             f"--json: {str(plan)!r} is the PLAN file it reads")
+    # The map file the plan names (map_file) is read too, so it is not written over either.
+    one_line(*run(capsys, "verify", str(plan), "--json", str(lot))[::2],
+             f"--json: {str(lot)!r} is the MAP file it reads")
+    assert lot.read_bytes() == before and plan.read_bytes() == plan_bytes
+
+
 def test_an_endless_input_is_refused_not_read_for_ever(capsys, tmp_path, monkeypatch):
     import rrtdrive.json_input
     from rrtdrive.maps import save_map

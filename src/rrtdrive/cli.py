@@ -193,7 +193,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
     validate_output(args.json, "--json")
     validate_output(args.plot, "--plot", PLOT_SUFFIXES, allow_stdout=False)
-    distinct_outputs(json=args.json, plot=args.plot)
+    distinct_outputs({"MAP": args.map}, json=args.json, plot=args.plot)
     if args.disable and args.planner in PLANNERS:
         takes = sorted(n for n in PLANNERS if _takes_option(PLANNERS[n], "disable"))
         if args.planner not in takes:

@@ -131,18 +131,38 @@ def names_stdout(target: str) -> bool:
     return piped and (here.st_dev, here.st_ino) == (there.st_dev, there.st_ino)
 
 
-def distinct_outputs(**targets: str | None) -> None:
-    """Raise :class:`InputError` when two output options name one file.
+def distinct_outputs(inputs: Mapping[str, str | None] | None = None, **targets: str | None) -> None:
+    """Raise :class:`InputError` when two output options name one file, or an input file.
 
     Keyword names are the flags without dashes (``json=..., plot=...``); unset ones and
     stdout (``"-"``) are skipped. Links are followed, so ``a.json`` and a link to it clash.
+    ``inputs`` maps how an input is named (``"MAP"``, ``"PLAN"``) to its argument: an
+    output that would overwrite an existing input file is refused before any work.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> f = tempfile.NamedTemporaryFile(suffix=".json")
+    >>> distinct_outputs({"MAP": f.name}, json=f.name)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: --json: ... is the MAP file it reads; give the output another name
     """
     seen: dict[str, str] = {}
+    for label, source in (inputs or {}).items():
+        if source and source != "-" and os.path.isfile(source):
+            seen[os.path.realpath(source)] = label
+    read = set(seen)
     for name, target in targets.items():
         if not target or target == "-":
             continue
         flag = "--" + name.replace("_", "-")
         key = os.path.realpath(target)
+        if key in read:
+            raise InputError(
+                f"{flag}: {target!r} is the {seen[key]} file it reads; give the output "
+                "another name"
+            )
         if key in seen:
             raise InputError(
                 f"{flag}: {target!r} is also the {seen[key]} file; give each output its own name"

@@ -158,9 +158,30 @@ def _thin(xy: np.ndarray, min_gap: float) -> list[int]:
     return keep
 
 
+#: The finest point gaps the curvature and sharpness of a short gear segment are
+#: measured over, metres: the rows' 6 decimals (1e-6 m) err by about 1e-6 / gap^2 in
+#: curvature (0.0025 1/m at 0.02 m) and 1e-6 / gap^3 in sharpness (0.001 rad/m at 0.1 m).
+_SHORT_CURVATURE_GAP = 0.02
+_SHORT_SHARPNESS_GAP = 0.1
+
+
+def _polyline_length(xy: np.ndarray) -> float:
+    return float(np.hypot(*np.diff(xy, axis=0).T).sum())
+
+
 def _segment_curvature(xy: np.ndarray) -> float:
-    """Largest Menger curvature over points about 0.5 m apart (less noise than adjacent samples)."""
+    """Largest Menger curvature over points about 0.5 m apart (less noise than adjacent samples).
+
+    A segment too short for three such points (under about 1 m: a manoeuvre's short
+    move) is measured over points a quarter of its length apart, down to
+    :data:`_SHORT_CURVATURE_GAP`; before, it read 0 whatever its turn.
+    """
     keep = _thin(xy, 0.5)
+    if len(keep) < 3:
+        gap = _polyline_length(xy) / 4.0
+        if gap < _SHORT_CURVATURE_GAP:
+            return 0.0
+        keep = _thin(xy, gap)
     return float(_menger(xy[keep]).max()) if len(keep) >= 3 else 0.0
 
 
@@ -170,11 +191,18 @@ def _segment_sharpness(xy: np.ndarray, wheelbase: float) -> float:
     Points closer than 0.2 m are thinned out (rounding noise grows as 1 / gap^2).
     The circle through three points a, b, c with gaps ``ab``, ``bc`` has the
     curvature of the curve about ``(bc - ab) / 3`` past b (first order), so the
-    rate is taken between those positions. A segment with fewer than four such
-    points (under about 0.6 m) has fewer than two estimates and reads 0.
+    rate is taken between those positions. A segment with fewer than five such
+    points is measured over gaps of a fifth of its length, down to
+    :data:`_SHORT_SHARPNESS_GAP`; one still with fewer than four points (under
+    about 0.3 m) has fewer than two estimates and reads 0.
     """
-    keep = _thin(xy, 0.2)
-    if len(keep) > 2 and np.hypot(*(xy[keep[-1]] - xy[keep[-2]])) < 0.2:
+    gap = 0.2
+    keep = _thin(xy, gap)
+    if len(keep) < 5:
+        # Under about 0.8 m: points a fifth of its length apart (see _segment_curvature).
+        gap = max(_polyline_length(xy) / 5.0, _SHORT_SHARPNESS_GAP)
+        keep = _thin(xy, gap)
+    if len(keep) > 2 and np.hypot(*(xy[keep[-1]] - xy[keep[-2]])) < gap:
         del keep[-2]  # the last point stands in for a kept one too close to it
     pts = xy[keep]
     if len(pts) < 4:

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from rrtdrive.cli_args import positive_float, validate_output
+from rrtdrive.cli_args import distinct_outputs, positive_float, validate_output
 from rrtdrive.json_safe import json_safe
 from rrtdrive.types import InputError, Pose
 
@@ -172,6 +172,11 @@ def run(args: argparse.Namespace) -> int:
 
     validate_output(args.json, "--json")
     data = _read_plan(args.plan)
+    map_file = data.get("map_file") if args.map is None else args.map
+    distinct_outputs(
+        {"PLAN": args.plan, "MAP": map_file if isinstance(map_file, str) else None},
+        json=args.json,
+    )
     path = path_from_json(data)
     m = _map_of(args, data)
     start = parse_pose(args.start, "--start") if args.start is not None else _plan_pose(

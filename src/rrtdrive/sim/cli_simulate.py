@@ -271,7 +271,9 @@ def _run(args: argparse.Namespace) -> int:
     validate_output(args.video, "--video", (".mp4",), allow_stdout=False)
     validate_output(args.json, "--json")
     validate_output(args.trajectory, "--trajectory", (".csv",), allow_stdout=False)
-    distinct_outputs(video=args.video, json=args.json, trajectory=args.trajectory)
+    distinct_outputs(
+        {"SCENARIO": args.scenario}, video=args.video, json=args.json, trajectory=args.trajectory
+    )
     deterministic = bool(getattr(args, "deterministic", False))
     plan_time = getattr(args, "plan_time", None)
     if deterministic and plan_time is not None:

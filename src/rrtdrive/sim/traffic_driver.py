@@ -194,8 +194,11 @@ class TrafficDriver:
         self.controller.retarget(path, self.ego.speed)
         profile = self.controller.profile
         v = np.maximum(0.5 * (profile.v[1:] + profile.v[:-1]), 0.05)  # type: ignore[union-attr]
-        self._times = np.concatenate([[0.0], np.cumsum(np.diff(profile.s) / v)])  # type: ignore[union-attr]
+        times = np.concatenate([[0.0], np.cumsum(np.diff(profile.s) / v)])  # type: ignore[union-attr]
         self._proj_s = np.asarray(self.controller.projector.s)  # type: ignore[union-attr]
+        # The profile may have samples between the path's rows (rows farther apart than
+        # its spacing): the times are read at the rows (the same numbers when none are).
+        self._times = np.interp(self._proj_s, profile.s, times)  # type: ignore[union-attr]
 
     def _projection(self) -> tuple[int, float]:
         """Index of the sample at or behind the ego's projection on the current path, and its s."""
