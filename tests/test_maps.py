@@ -18,7 +18,7 @@ from rrtdrive.maps import (
     resolve_map,
     save_map,
 )
-from rrtdrive.types import InputError, InputWarning, Pose
+from rrtdrive.types import InputError, InputWarning, Pose, VehicleParams
 
 
 @pytest.mark.parametrize("name", sorted(set(BUILTIN_MAPS) - set(TIGHT_MAP_NAMES)))
@@ -221,3 +221,28 @@ def test_the_cli_prints_each_warning_as_one_line(tmp_path, capsys):
         "rrtdrive plan: warning: goal: yaw 90 is more than a full turn; yaws are in radians, "
         "so it is taken as 116.6 deg; for 90 deg write 1.5708"
     ]
+
+
+def test_a_body_touching_the_bounds_is_refused_as_one_touching_an_obstacle():
+    # The rear bumper on x = 0: highway-env's wall stands there, so the car crashed at once.
+    back = VehicleParams().rear_overhang
+    with pytest.raises(InputError, match=r"^start: .* touches the bounds"):
+        map_from_json(_file_map(start=[back, 5, 0]))
+    map_from_json(_file_map(start=[back + 1e-4, 5, 0]))  # a gap of 0.1 mm is clear
+
+
+def test_verify_fails_a_path_touching_the_bounds():
+    import numpy as np
+
+    from rrtdrive.types import Path
+    from rrtdrive.verify import verify_path
+
+    back = VehicleParams().rear_overhang
+    xs = np.arange(0.0, 3.01, 0.1)
+    rows = np.column_stack([back + xs, 5 + 0 * xs, 0 * xs, 0 * xs, 1 + 0 * xs])
+    clear = Pose(back + 1.0, 5, 0)
+    m = Map("m", (0.0, 0.0, 40.0, 40.0), (), clear, clear)
+    check = verify_path(m, Path(rows, np.zeros((0, 2))), start=Pose(back, 5, 0),
+                        goal=Pose(back + 3.0, 5, 0))
+    assert not check.collision_free and check.collides_with == "the bounds"
+    assert check.first_collision[0] == pytest.approx(back)

@@ -248,8 +248,11 @@ def check_endpoint(m: Map, pose: Pose, label: str, vehicle: VehicleParams) -> No
             f"{label}: ({pose.x:g}, {pose.y:g}) lies outside the bounds {list(m.bounds)}"
         )
     body = footprint_polygon(pose.as_tuple(), vehicle)
-    if not shapely.box(xmin, ymin, xmax, ymax).contains(body):
-        raise InputError(f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) leaves the bounds")
+    if not shapely.box(xmin, ymin, xmax, ymax).contains_properly(body):
+        # Touching counts, as for an obstacle: the simulator's walls stand on the bounds.
+        raise InputError(
+            f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) leaves or touches the bounds"
+        )
     for i, obstacle in enumerate(m.obstacles):
         if obstacle.polygon().intersects(body):
             raise InputError(

@@ -244,7 +244,8 @@ def _first_collision(
         return None, ""
     shapes = np.array(bodies, dtype=object)
     polygons = [shapely.Polygon(o.corners()) for o in m.obstacles]
-    outside = ~shapely.contains(region, shapes)
+    # Touching the bounds is a collision, as touching an obstacle is (the walls stand there).
+    outside = ~shapely.contains_properly(region, shapes)
     hit = np.zeros(len(shapes), dtype=bool)
     if polygons:
         hit = shapely.intersects(shapely.union_all(polygons), shapes)
