@@ -364,3 +364,19 @@ def test_simulate_deterministic_prints_a_metrics_block(capsys):
 def test_simulate_help_imports_no_simulator():
     heavy, planning = _modules_after("simulate", "--help")
     assert heavy == "[]" and planning == "False False"
+
+
+def test_a_good_start_replaces_a_bad_one_in_the_map_file(capsys, tmp_path):
+    # The file's own start lies outside the bounds; --start replaces it before the check.
+    data = builtin_map("overtake").to_json()
+    data["start"] = [-5.0, 44.0, 0.0]
+    f = tmp_path / "m.json"
+    f.write_text(json.dumps(data))
+    code, _, err = run(capsys, "plan", str(f), "--planner", "rrt")
+    assert code == 2 and "error: start: (-5, 44) lies outside the bounds" in err
+    code, _, err = run(capsys, "plan", str(f), "--planner", "rrt", "--start", "5,44,0")
+    assert code == 0, err
+    data["start"] = [5.0, 44.0, "east"]  # still read: a malformed pose is named
+    f.write_text(json.dumps(data))
+    code, _, err = run(capsys, "plan", str(f), "--start", "5,44,0")
+    assert code == 2 and "error: start" in err

@@ -207,3 +207,22 @@ def test_a_path_starting_in_collision_fails_the_body_check_there(capsys, tmp_pat
     doc = json.loads((tmp_path / "c.json").read_text())
     assert doc["failed"] == ["collision_free"] and doc["collides_with"] == "obstacle 0"
     assert doc["first_collision"][:2] == pytest.approx([cx, cy])
+
+
+def test_a_map_file_whose_own_start_went_bad_still_verifies_the_plan(capsys, tmp_path):
+    # A bollard put on the start after planning: the path fails there (exit 1); the
+    # map's own start is not checked as the map of `rrtdrive plan` would be (exit 2).
+    import dataclasses
+
+    from rrtdrive.maps import Obstacle
+
+    m = builtin_map("parking_lot")
+    f = tmp_path / "lot.json"
+    save_map(m, f)
+    plan = tmp_path / "plan.json"
+    assert main(["plan", str(f), "--json", str(plan)]) == 0
+    bollard = Obstacle((m.start.x, m.start.y), (0.3, 0.3))
+    save_map(dataclasses.replace(m, obstacles=(*m.obstacles, bollard), check_query=False), f)
+    code, out, err = run(capsys, "verify", str(plan))
+    assert code == 1 and err == "", err
+    assert f"obstacle {len(m.obstacles)}" in out

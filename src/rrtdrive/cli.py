@@ -201,11 +201,11 @@ def _cmd_plan(args: argparse.Namespace) -> int:
                 f"--disable: applies to the improved planner only ({', '.join(takes)}), "
                 f"not {args.planner!r}"
             )
-    m = resolve_map(args.map)
     start = parse_pose(args.start, "--start") if args.start is not None else None
     goal = parse_pose(args.goal, "--goal") if args.goal is not None else None
-    if start or goal:
-        m = m.with_query(start, goal)
+    # The poses given replace the map's before it is checked (a file's own bad start
+    # does not stop a good --start).
+    m = resolve_map(args.map, start=start, goal=goal)
     options: dict[str, object] = {}
     if args.step is not None:
         options["step"] = args.step

@@ -112,6 +112,11 @@ class Map:
         Rear-axle poses.
     vehicle : VehicleParams
         The car used to validate the start and goal footprints.
+    check_query : bool
+        Validate the start and goal (default). ``False`` for a map that only carries
+        the poses a given path is judged against (``rrtdrive verify``: a path from a
+        pose in collision fails its body check there, it is not bad input). Copies
+        (:meth:`with_query`, ``dataclasses.replace``) validate again.
     """
 
     name: str
@@ -120,8 +125,9 @@ class Map:
     start: Pose
     goal: Pose
     vehicle: VehicleParams = dataclasses.field(default_factory=VehicleParams, compare=False)
+    check_query: dataclasses.InitVar[bool] = True
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, check_query: bool = True) -> None:
         if not isinstance(self.name, str) or not self.name:
             raise InputError(f"name: expected a non-empty string, got {brief_repr(self.name)}")
         b = self.bounds
@@ -162,7 +168,10 @@ class Map:
         for label, pose in (("start", self.start), ("goal", self.goal)):
             if not isinstance(pose, Pose):
                 raise InputError(f"{label}: expected a Pose, got {pose!r}")
-            check_endpoint(self, pose, label, self.vehicle)
+            if check_query:
+                check_endpoint(self, pose, label, self.vehicle)
+            else:
+                warn_if_degrees(label, pose.yaw)
 
     @property
     def width(self) -> float:
@@ -274,7 +283,14 @@ _MAP_KEYS = {"name", "bounds", "obstacles", "start", "goal"}
 _OBSTACLE_KEYS = {"center", "size", "yaw"}
 
 
-def map_from_json(data: object, vehicle: VehicleParams | None = None) -> Map:
+def map_from_json(
+    data: object,
+    vehicle: VehicleParams | None = None,
+    *,
+    start: Pose | None = None,
+    goal: Pose | None = None,
+    check_query: bool = True,
+) -> Map:
     """Build a :class:`Map` from parsed JSON, validating every field.
 
     Parameters
@@ -283,6 +299,11 @@ def map_from_json(data: object, vehicle: VehicleParams | None = None) -> Map:
         Parsed JSON (a dict in the map file format).
     vehicle : VehicleParams, optional
         The car for the start/goal footprint checks.
+    start, goal : Pose, optional
+        Poses that replace the file's (``--start`` / ``--goal``): the file's own must
+        still be well-formed, but only the poses used are checked against the map.
+    check_query : bool
+        Check the start and goal against the map (see :class:`Map`).
 
     Returns
     -------
@@ -320,13 +341,16 @@ def map_from_json(data: object, vehicle: VehicleParams | None = None) -> Map:
         raise InputError(f"name: expected a non-empty string, got {brief_repr(name)}")
     for i, o in enumerate(obstacles):
         warn_if_degrees(f"obstacles[{i}].yaw", o.yaw)
+    file_start = Pose.from_seq(data["start"], "start")
+    file_goal = Pose.from_seq(data["goal"], "goal")
     m = Map(
         name=name,
         bounds=data["bounds"],
         obstacles=tuple(obstacles),
-        start=Pose.from_seq(data["start"], "start"),
-        goal=Pose.from_seq(data["goal"], "goal"),
+        start=start if start is not None else file_start,
+        goal=goal if goal is not None else file_goal,
         vehicle=vehicle or VehicleParams(),
+        check_query=check_query,
     )
     _warn_outside(m)
     return m
@@ -347,7 +371,14 @@ def _warn_outside(m: Map) -> None:
             )
 
 
-def load_map(path: str | os.PathLike[str], vehicle: VehicleParams | None = None) -> Map:
+def load_map(
+    path: str | os.PathLike[str],
+    vehicle: VehicleParams | None = None,
+    *,
+    start: Pose | None = None,
+    goal: Pose | None = None,
+    check_query: bool = True,
+) -> Map:
     """Load and validate a map file.
 
     Parameters
@@ -356,6 +387,9 @@ def load_map(path: str | os.PathLike[str], vehicle: VehicleParams | None = None)
         A JSON file in the map format.
     vehicle : VehicleParams, optional
         The car for the start/goal checks.
+    start, goal, check_query
+        As for :func:`map_from_json`: poses that replace the file's, and whether the
+        poses used are checked against the map.
 
     Returns
     -------
@@ -366,7 +400,9 @@ def load_map(path: str | os.PathLike[str], vehicle: VehicleParams | None = None)
             raw = read_capped(f, "map", str(path))
     except OSError as exc:
         raise InputError(f"map: cannot read {path}: {exc.strerror}") from None
-    return map_from_json(parse_json(raw, "map", str(path)), vehicle)
+    return map_from_json(
+        parse_json(raw, "map", str(path)), vehicle, start=start, goal=goal, check_query=check_query
+    )
 
 
 def map_text(m: Map) -> str:
@@ -573,11 +609,29 @@ def names_map_file(spec: str) -> bool:
     return spec.endswith(".json") or os.path.sep in spec or FsPath(spec).exists()
 
 
-def resolve_map(spec: str, vehicle: VehicleParams | None = None) -> Map:
-    """A built-in map by name, or a map file by path."""
-    if spec in BUILTIN_MAPS:
+def resolve_map(
+    spec: str,
+    vehicle: VehicleParams | None = None,
+    *,
+    start: Pose | None = None,
+    goal: Pose | None = None,
+    check_query: bool = True,
+) -> Map:
+    """A built-in map by name, or a map file by path.
+
+    ``start`` and ``goal`` replace the map's own poses, and only the poses used are
+    checked against it (unless ``check_query`` is false): a file whose own start is
+    bad still serves with a good ``--start``.
+    """
+    if spec in BUILTIN_MAPS or not names_map_file(spec):
         m = builtin_map(spec)
-        return m if vehicle is None else dataclasses.replace(m, vehicle=vehicle)
-    if names_map_file(spec):
-        return load_map(spec, vehicle)
-    return builtin_map(spec)
+        if vehicle is None and start is None and goal is None and check_query:
+            return m
+        return dataclasses.replace(
+            m,
+            vehicle=m.vehicle if vehicle is None else vehicle,
+            start=m.start if start is None else start,
+            goal=m.goal if goal is None else goal,
+            check_query=check_query,
+        )
+    return load_map(spec, vehicle, start=start, goal=goal, check_query=check_query)

@@ -100,14 +100,21 @@ def _plan_pose(data: dict[str, Any], field: str) -> Pose | None:
     return Pose.from_seq(value, f"plan.{field}")
 
 
-def _map_of(args: argparse.Namespace, data: dict[str, Any]) -> Any:
-    """The map to check against: ``MAP``, else the plan's map file, else its built-in map."""
+def _map_of(
+    args: argparse.Namespace, data: dict[str, Any], start: Pose | None, goal: Pose | None
+) -> Any:
+    """The map to check against: ``MAP``, else the plan's map file, else its built-in map.
+
+    ``start`` and ``goal`` replace the map's poses, unchecked: a path from or to a pose
+    in collision fails its body check there, it is not bad input.
+    """
     import os
 
     from rrtdrive.maps import BUILTIN_MAPS, resolve_map
 
+    query = {"start": start, "goal": goal, "check_query": False}
     if args.map is not None:
-        return resolve_map(args.map)
+        return resolve_map(args.map, **query)
     spec = data.get("map")
     map_file = data.get("map_file")
     if isinstance(map_file, str) and map_file:
@@ -116,7 +123,7 @@ def _map_of(args: argparse.Namespace, data: dict[str, Any]) -> Any:
                 f"map: the plan was made on the map file {map_file}, which is not there any "
                 "more; give the map: rrtdrive verify PLAN MAP.json"
             )
-        return resolve_map(map_file)
+        return resolve_map(map_file, **query)
     if not isinstance(spec, str) or not spec:
         raise InputError("map: the plan names no map; give one: rrtdrive verify PLAN MAP")
     if spec not in BUILTIN_MAPS:
@@ -124,7 +131,7 @@ def _map_of(args: argparse.Namespace, data: dict[str, Any]) -> Any:
             f"map: the plan names map {spec!r}, which is not built in, and no map file; "
             "give its file: rrtdrive verify PLAN MAP.json"
         )
-    return resolve_map(spec)
+    return resolve_map(spec, **query)
 
 
 def _metres(value: float, spec: str = ".3f") -> str:
@@ -167,7 +174,6 @@ def _lines(check: Any, bounds: dict[str, float | None]) -> list[str]:
 def run(args: argparse.Namespace) -> int:
     """Run ``rrtdrive verify``; return the exit code."""
     from rrtdrive.cli import _write_output, parse_pose
-    from rrtdrive.maps import warn_if_degrees
     from rrtdrive.verify import path_from_json, verify_path
 
     validate_output(args.json, "--json")
@@ -178,16 +184,11 @@ def run(args: argparse.Namespace) -> int:
         json=args.json,
     )
     path = path_from_json(data)
-    m = _map_of(args, data)
     start = parse_pose(args.start, "--start") if args.start is not None else _plan_pose(
         data, "start"
     )
     goal = parse_pose(args.goal, "--goal") if args.goal is not None else _plan_pose(data, "goal")
-    # Not m.with_query: that refuses a pose in collision as bad input, where here it is
-    # the path that fails (the body check, located at its start).
-    for field, pose in (("start", start), ("goal", goal)):
-        if pose is not None:
-            warn_if_degrees(field, pose.yaw)
+    m = _map_of(args, data, start, goal)
     bound = args.max_sharpness
     if bound is None and not args.no_sharpness:
         from rrtdrive.planning.improved.planner import sharpness_bound
@@ -206,7 +207,7 @@ def run(args: argparse.Namespace) -> int:
         if args.json:
             _write_output(args.json, json.dumps({"ok": False, "map": m.name, "rows": 0}) + "\n")
         return EXIT_FAILED
-    check = verify_path(m, path, max_sharpness=bound, start=start, goal=goal)
+    check = verify_path(m, path, max_sharpness=bound)
     with np.errstate(all="ignore"):  # a row at 1e308 m: the length is inf, quietly
         length = path.length
     verdict = "OK, every check passed" if check.ok else "FAILED"

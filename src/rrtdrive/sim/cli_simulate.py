@@ -475,9 +475,11 @@ def _make_task(
     if target == "map":
         from rrtdrive.maps import resolve_map
 
+        start, goal = _parse_pose(args.start, "--start"), _parse_pose(args.goal, "--goal")
+        # The poses given replace the file's before it is checked: a file whose own start
+        # is bad still serves with a good --start.
         return CustomTask.from_map(
-            resolve_map(args.scenario), args.seed, start=_parse_pose(args.start, "--start"),
-            goal=_parse_pose(args.goal, "--goal"), reverse=args.reverse,
+            resolve_map(args.scenario, start=start, goal=goal), args.seed, reverse=args.reverse
         )
     # make_scenario names its keywords (lead_speed); on the command line they are flags.
     keywords = ("oncoming", "density", "lead_speed", "lead_model", "reverse_in")
