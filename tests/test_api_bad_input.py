@@ -134,3 +134,16 @@ def test_every_planner_names_a_wrong_rng_problem_or_budget(name: str) -> None:
 def test_a_path_names_what_is_not_numbers(samples, waypoints, field: str) -> None:
     with pytest.raises(InputError, match=f"^{field}: "):
         Path(samples, waypoints)
+
+
+def test_a_problem_whose_checker_is_for_another_car_is_refused():
+    # The checker of the stock car cleared a 3.2 m wide car through narrow_gap's 2.8 m.
+    from rrtdrive.planning import PlanningProblem
+    from rrtdrive.planning.base import cached_checker
+    from rrtdrive.types import VehicleParams
+
+    m = builtin_map("narrow_gap")
+    wide = VehicleParams(width=3.2)
+    with pytest.raises(InputError, match=r"^problem\.vehicle: the checker was built for"):
+        PlanningProblem(m, cached_checker(m), m.start, m.goal, vehicle=wide)
+

@@ -91,6 +91,14 @@ class PlanningProblem:
                 "problem.checker: it was built for another map (its bounds or obstacles "
                 f"differ from map {self.map.name!r}'s); use PlanningProblem.from_map(m)"
             )
+        # A checker for another car would clear a wider car through gaps it cannot pass.
+        car = getattr(self.checker, "vehicle", None)
+        if isinstance(car, VehicleParams) and car != self.vehicle:
+            raise InputError(
+                "problem.vehicle: the checker was built for another car; give the map "
+                "that car (dataclasses.replace(m, vehicle=...)) and use "
+                "PlanningProblem.from_map(m)"
+            )
         if not isinstance(self.reverse, (bool, np.bool_)):
             raise InputError(f"reverse: expected True or False, got {self.reverse!r}")
         object.__setattr__(self, "reverse", bool(self.reverse))
