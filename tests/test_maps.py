@@ -246,3 +246,15 @@ def test_verify_fails_a_path_touching_the_bounds():
                         goal=Pose(back + 3.0, 5, 0))
     assert not check.collision_free and check.collides_with == "the bounds"
     assert check.first_collision[0] == pytest.approx(back)
+
+
+def test_a_name_with_half_a_surrogate_pair_is_bad_input(tmp_path, capsys):
+    from rrtdrive.cli import main
+
+    f = tmp_path / "m.json"
+    f.write_text(json.dumps(_file_map(name="lot\ud800")))  # json writes it as \\ud800
+    with pytest.raises(InputError, match=r"^name: .* surrogate"):
+        load_map(f)
+    assert main(["plan", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "error: name:" in err and "Traceback" not in err

@@ -130,6 +130,15 @@ class Map:
     def __post_init__(self, check_query: bool = True) -> None:
         if not isinstance(self.name, str) or not self.name:
             raise InputError(f"name: expected a non-empty string, got {brief_repr(self.name)}")
+        try:
+            self.name.encode("utf-8")
+        except UnicodeEncodeError:
+            # JSON's "\ud800" (half of a surrogate pair) is no character: no file or
+            # terminal takes it, and printing the name ended in a traceback.
+            raise InputError(
+                f"name: {self.name!r} holds half of a UTF-16 surrogate pair, which is no "
+                "character; write the character itself"
+            ) from None
         b = self.bounds
         if not isinstance(b, (list, tuple)) or len(b) != 4:
             raise InputError(
