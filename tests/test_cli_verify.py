@@ -111,6 +111,20 @@ def test_bad_input_is_one_line_naming_the_field(capsys, tmp_path, content, field
     assert err.count("\n") == 1 and f"error: {field}" in err and "Traceback" not in err
 
 
+def test_rows_of_mixed_widths_name_the_first_odd_row(capsys, tmp_path):
+    f = tmp_path / "plan.json"
+    f.write_text('{"path": [[0, 0, 0, 0, 1], [0.2, 0, 0, 0, 1], [0.4]], "map": "parking_lot"}')
+    code, _, err = run(capsys, "verify", str(f))
+    assert code == 2 and err.rstrip().endswith("row 2 has 1 number")
+
+
+def test_a_one_row_plan_reports_its_row(capsys, tmp_path):
+    f = tmp_path / "plan.json"
+    f.write_text('{"path": [[5, 6, 0, 0, 1]], "map": "parking_lot"}')
+    code, out, _ = run(capsys, "verify", str(f), "--json", "-")
+    assert code == 1 and json.loads(out)["rows"] == 1
+
+
 def test_a_failed_plan_has_nothing_to_verify(capsys, tmp_path):
     f = tmp_path / "failed.json"
     f.write_text(json.dumps({"path": [], "map": "parking_lot", "status": "no_path_in_budget"}))

@@ -507,9 +507,13 @@ def path_from_json(data: Mapping[str, object] | Sequence[Sequence[float]]) -> Pa
             )
     widths = {len(r) for r in rows}
     if widths - {4, 5} or len(widths) > 1:
+        # Name the first row that is odd: of a bad width, else of a width other than row 0's.
+        width = len(rows[0]) if len(rows[0]) in (4, 5) else None
+        i = next(k for k, r in enumerate(rows) if len(r) != width)
         raise InputError(
             f"path: rows must all be [x, y, yaw, kappa] or [x, y, yaw, kappa, gear], "
-            f"got row lengths {sorted(widths)}"
+            f"got row lengths {sorted(widths)}: row {i} has {len(rows[i])} "
+            + ("number" if len(rows[i]) == 1 else "numbers")
         )
     # Checked here, row by row: NaN or inf would reach shapely as a broken polygon,
     # and numpy would read "1" or true as a gear.

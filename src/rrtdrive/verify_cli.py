@@ -200,12 +200,13 @@ def run(args: argparse.Namespace) -> int:
     # With the JSON on stdout, the human lines go to stderr to keep stdout parseable.
     out = sys.stderr if args.json == "-" else sys.stdout
     label = "stdin" if args.plan == "-" else args.plan
-    if len(path.samples) < 2:
+    rows = len(path.samples)
+    if rows < 2:
         status = data.get("status", "unknown")
-        print(f"{m.name}: {label}: FAILED: the plan has no path (status {status})",
-              file=out)
+        what = "no path" if rows == 0 else "a path of one row (a path needs two)"
+        print(f"{m.name}: {label}: FAILED: the plan has {what} (status {status})", file=out)
         if args.json:
-            _write_output(args.json, json.dumps({"ok": False, "map": m.name, "rows": 0}) + "\n")
+            _write_output(args.json, json.dumps({"ok": False, "map": m.name, "rows": rows}) + "\n")
         return EXIT_FAILED
     check = verify_path(m, path, max_sharpness=bound)
     with np.errstate(all="ignore"):  # a row at 1e308 m: the length is inf, quietly
