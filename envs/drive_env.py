@@ -45,6 +45,7 @@ from rrtdrive.envs.render import SceneRenderer, view_for
 from rrtdrive.envs.reward import RewardWeights, state_terms
 from rrtdrive.envs.seed_draw import failure_text, start_drawn_episode
 from rrtdrive.evaluation import EpisodeReport, EvalConfig, evaluate
+from rrtdrive.evaluation.report import WALL_CLOCK_FIELDS
 from rrtdrive.sim.episode import Episode, EpisodeStatus
 from rrtdrive.sim.loop import EndRule, EpisodeLoop
 from rrtdrive.sim.runner import EpisodeConfig
@@ -578,10 +579,15 @@ def _metrics_dict(report: EpisodeReport) -> dict[str, Any]:
     """The report as a dict whose value types do not depend on the outcome.
 
     A float metric that does not apply is ``NaN`` rather than ``None``, so that
-    gymnasium's vector environments can batch the dicts of several episodes.
+    gymnasium's vector environments can batch the dicts of several episodes. The
+    wall-clock fields (:data:`~rrtdrive.evaluation.report.WALL_CLOCK_FIELDS`) are left
+    out, so that a seeded episode's infos are the same on every run (gymnasium's
+    ``check_env`` compares them; ``env.unwrapped.report`` has them).
     """
     out: dict[str, Any] = {}
     for f in fields(report):
+        if f.name in WALL_CLOCK_FIELDS:
+            continue
         v = getattr(report, f.name)
         if v is None and "float" in str(f.type):
             v = math.nan

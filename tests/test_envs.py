@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import re
 import subprocess
@@ -151,6 +152,22 @@ def test_observation_of_other_vehicles():
         gym.make("rrtdrive/Overtake-v0", n_vehicles=1, vehicle_range=0.0)
 
 
+def test_a_map_whose_start_is_already_at_the_goal_is_refused_for_an_agent(tmp_path):
+    # The goal 0.3 m ahead: an agent's episode ended on its first step, whose infos
+    # (NaN for metrics that do not apply) failed check_env's determinism check.
+    f = tmp_path / "tiny.json"
+    f.write_text(json.dumps({"name": "tiny", "bounds": [0, 0, 5, 2], "obstacles": [],
+                             "start": [1.0, 1.0, 0.0], "goal": [1.3, 1.0, 0.0]}))
+    env = gym.make("rrtdrive/Map-v0", scenario=str(f))
+    with pytest.raises(InputError, match=r"^goal: the start is already at the goal"):
+        env.reset(seed=1)
+    env.close()
+    # A controller drives the 0.3 m path (residual mode): the episode runs.
+    env = gym.make("rrtdrive/Map-v0", scenario=str(f), residual=True)
+    check_env(env.unwrapped, skip_render_check=True)
+    env.close()
+
+
 def test_check_env_with_vehicles():
     env = gym.make("rrtdrive/OvertakeTraffic-v0", n_vehicles=4, residual=True)
     with warnings.catch_warnings(record=True) as caught:
@@ -234,8 +251,14 @@ def test_zero_residual_reproduces_plain_controller(scenario, controller):
     ep = run_episode(scenario, controller=controller, seed=5)
     assert np.array_equal(env.episode.log.states, ep.log.states)
     assert np.array_equal(env.episode.log.controls, ep.log.controls)
-    # info["metrics"] is the report, NaN where a metric does not apply.
+    # info["metrics"] is the report, NaN where a metric does not apply, without the
+    # wall-clock fields (env.report has them).
+    from rrtdrive.evaluation.report import WALL_CLOCK_FIELDS
+
+    assert not set(WALL_CLOCK_FIELDS) & set(info["metrics"])
     for k, v in mine.items():
+        if k in WALL_CLOCK_FIELDS:
+            continue
         got = info["metrics"][k]
         assert (got == v) or (v is None and (got is None or math.isnan(got)))
     env.close()

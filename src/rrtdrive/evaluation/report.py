@@ -14,7 +14,9 @@ from typing import Any
 
 from rrtdrive.types import InputError, require_positive
 
-__all__ = ["EvalConfig", "EpisodeReport", "Outcome", "OUTCOMES", "SIGNED_FIELDS"]
+__all__ = [
+    "EvalConfig", "EpisodeReport", "Outcome", "OUTCOMES", "SIGNED_FIELDS", "WALL_CLOCK_FIELDS",
+]
 
 
 class Outcome(str, Enum):
@@ -82,6 +84,14 @@ class EvalConfig:
             require_positive(f"eval.{name}", getattr(self, name))
         if not (self.kappa_tol >= 0 and math.isfinite(self.kappa_tol)):
             raise InputError(f"eval.kappa_tol: must be >= 0, got {self.kappa_tol!r}")
+
+
+#: Report fields measured by the wall clock: they differ from run to run and machine to
+#: machine (the rest of a seeded episode's report does not).
+WALL_CLOCK_FIELDS = (
+    "wall_time_s", "planning_time_s", "replan_time_median_s", "replan_time_max_s",
+    "replans_over_budget",
+)
 
 
 @dataclass(frozen=True)

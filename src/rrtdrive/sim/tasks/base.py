@@ -11,6 +11,7 @@ classes asks which kind a task is.
 from __future__ import annotations
 
 import enum
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -337,7 +338,21 @@ class PathTask(Task):
         return STOP_AT_PATH_END.reached(ego, driver)
 
     def agent_end_rule(self, tol_m: float, tol_rad: float, stop_speed: float) -> EndRule:
-        """Stopped at the goal pose within the tolerances (no controller says it arrived)."""
+        """Stopped at the goal pose within the tolerances (no controller says it arrived).
+
+        Raises :class:`InputError` when the start already meets them: the car stands
+        there, so every episode would end on its first step.
+        """
+        a, b = self.start, self.goal
+        gap = float(np.hypot(b.x - a.x, b.y - a.y))
+        turn = abs(math.remainder(b.yaw - a.yaw, 2.0 * math.pi))
+        if gap <= tol_m and turn <= tol_rad:
+            raise InputError(
+                f"goal: the start is already at the goal within its tolerance ({gap:.2f} m, "
+                f"{math.degrees(turn):.1f} deg; tolerance {tol_m:g} m, "
+                f"{math.degrees(tol_rad):g} deg): an agent's episode would end on its first "
+                "step; give a goal farther away"
+            )
         return StopAtGoal(self.goal, tol_m, tol_rad, stop_speed)
 
     def resolve(self, config: EpisodeConfig) -> tuple[SpeedConfig, EpisodeConfig]:
