@@ -111,3 +111,23 @@ def test_an_unknown_scenario_reads_alike_in_simulate_bench_and_gym(capsys):
     assert all(m in simulate for m in BUILTIN_MAPS if m not in SCENARIOS)
     code, _, err = run(capsys, "simulate", "zzzz")
     assert code == 2 and "did you mean" not in err
+
+
+def test_simulate_a_map_plans_and_judges_on_the_grid_asked_for(capsys, tmp_path):
+    # --resolution reaches the planner's checker and the evaluators' (a map too big for
+    # any automatic grid, 5 x 5 km, could not be simulated at all: no such option).
+    from rrtdrive.collision import CheckerConfig
+    from rrtdrive.maps import load_map
+    from rrtdrive.planning.base import _CHECKERS
+
+    path = small_map(tmp_path)
+    m = load_map(path)
+    key = (m.bounds, m.obstacles, m.vehicle, CheckerConfig(resolution=0.35))
+    _CHECKERS.pop(key, None)
+    code, out, err = run(capsys, "simulate", str(path), "--resolution", "0.35",
+                         "--deterministic", "--json", "-")
+    assert code == 0, err
+    assert json.loads(out)["success"]
+    assert key in _CHECKERS and _CHECKERS[key].resolution == pytest.approx(0.35)
+    code, _, err = run(capsys, "simulate", "parking", "--resolution", "0.35")
+    assert code == 2 and "--resolution: only a map takes a grid size" in err

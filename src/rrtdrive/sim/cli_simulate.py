@@ -94,6 +94,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="time limit of the drive in seconds (default: the scenario's)",
     )
     p.add_argument(
+        "--resolution", type=positive_float, default=None, metavar="M",
+        help="a map: the planner's collision grid cell size in metres (default 0.1, "
+        "coarser up to 0.5 m on a big map; a bigger one needs it given)",
+    )
+    p.add_argument(
         "--plan-time", type=positive_float, default=None,
         help=f"planning wall-clock safety cap in seconds (default {DEFAULT_PLAN_TIME_S:g}); "
         "a plan that reaches it fails as 'timeout' (the iterations decide otherwise)",
@@ -232,7 +237,7 @@ def _run(args: argparse.Namespace) -> int:
     from rrtdrive.types import Budget
 
     for name, default in (("reverse", False), ("reverse_in", False), ("start", None),
-                          ("goal", None)):
+                          ("goal", None), ("resolution", None)):
         if not hasattr(args, name):  # a Namespace built by a caller without these flags
             setattr(args, name, default)
     target = _target_kind(args.scenario, SCENARIOS, STOCK_ENVS)
@@ -242,6 +247,10 @@ def _run(args: argparse.Namespace) -> int:
                 raise InputError(
                     f"{flag}: only a map takes a start and goal; {args.scenario} draws its own"
                 )
+        if args.resolution is not None:
+            raise InputError(
+                f"--resolution: only a map takes a grid size; {args.scenario}'s maps are small"
+            )
     if args.reverse_in and args.scenario != "parking":
         raise InputError("--reverse-in: only the parking scenario has reverse-in bays")
 
@@ -479,7 +488,8 @@ def _make_task(
         # The poses given replace the file's before it is checked: a file whose own start
         # is bad still serves with a good --start.
         return CustomTask.from_map(
-            resolve_map(args.scenario, start=start, goal=goal), args.seed, reverse=args.reverse
+            resolve_map(args.scenario, start=start, goal=goal), args.seed, reverse=args.reverse,
+            resolution=args.resolution,
         )
     # make_scenario names its keywords (lead_speed); on the command line they are flags.
     keywords = ("oncoming", "density", "lead_speed", "lead_model", "reverse_in")

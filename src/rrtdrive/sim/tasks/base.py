@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from rrtdrive.collision import CheckerConfig
 from rrtdrive.controllers import SpeedConfig, TrackingController
 from rrtdrive.maps import LANE_WIDTH, Map
 from rrtdrive.planning import PlanningProblem, make_planner
@@ -164,7 +165,9 @@ def plan_scenario(
     allowed when the task says so (``scenario.reverse``).
     """
     _, plan_rng, _ = scenario_rngs(seed)
-    problem = PlanningProblem.from_map(scenario.map, reverse=scenario.reverse)
+    resolution = getattr(scenario, "resolution", None)  # a map task's own grid
+    config = None if resolution is None else CheckerConfig(resolution=resolution)
+    problem = PlanningProblem.from_map(scenario.map, config=config, reverse=scenario.reverse)
     return make_planner(planner).solve(problem, plan_rng, budget or Budget())
 
 

@@ -18,7 +18,7 @@ from rrtdrive.maps import Map
 from rrtdrive.planning.result import same_pose
 from rrtdrive.sim.scenes import plain_network, populate_road
 from rrtdrive.sim.tasks.base import PathTask, TaskKind
-from rrtdrive.types import InputError, Pose
+from rrtdrive.types import InputError, Pose, require_positive
 
 __all__ = ["CustomTask"]
 
@@ -33,6 +33,9 @@ class CustomTask(PathTask):
         See :class:`~rrtdrive.sim.tasks.Task`.
     closed : bool
         Close the map's bounds with walls in the scene.
+    resolution : float, optional
+        Cell size of the planner's collision grid in metres (``None``: the checker's
+        own choice); a map too big for any automatic grid needs one.
 
     Examples
     --------
@@ -44,9 +47,12 @@ class CustomTask(PathTask):
     kind: ClassVar[TaskKind] = TaskKind.CUSTOM
 
     closed: bool = True
+    resolution: float | None = None
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        if self.resolution is not None:
+            require_positive("scenario.resolution", self.resolution)
         a = self.map.start
         if same_pose(a, self.map.goal):
             # A planner answers 0 m (run_query); an episode would have nothing to drive.
@@ -66,6 +72,7 @@ class CustomTask(PathTask):
         reverse: bool = False,
         v_max: float = 3.0,
         max_time_s: float | None = None,
+        resolution: float | None = None,
     ) -> CustomTask:
         """The task of driving map ``m`` from its start (or ``start``) to its goal (or ``goal``).
 
@@ -84,6 +91,9 @@ class CustomTask(PathTask):
         max_time_s : float, optional
             Time limit; by default 60 s plus 2 s per metre of the map's diagonal
             (a drive across a tight map at walking pace, with gear changes).
+        resolution : float, optional
+            The planner's collision grid cell size, metres (``rrtdrive simulate
+            --resolution``).
 
         Examples
         --------
@@ -99,7 +109,10 @@ class CustomTask(PathTask):
         if max_time_s is None:
             xmin, ymin, xmax, ymax = m.bounds
             max_time_s = 60.0 + 2.0 * math.hypot(xmax - xmin, ymax - ymin)
-        return cls(map=m, seed=seed, reverse=reverse, v_max=v_max, max_time_s=max_time_s)
+        return cls(
+            map=m, seed=seed, reverse=reverse, v_max=v_max, max_time_s=max_time_s,
+            resolution=resolution,
+        )  # fmt: skip
 
     def describe(self) -> dict[str, object]:
         """The map's name and whether gear changes were allowed."""
