@@ -371,9 +371,15 @@ class TrafficDriver:
     # ------------------------------------------------------------------ planning
 
     def _cut_in_x(
-        self, timing: ArrivalTiming, x_start: float, prediction: Prediction
+        self, timing: ArrivalTiming, x_start: float, prediction: Prediction, y_start: float
     ) -> float | None:
-        """Nearest rear-axle x for the cut-in: far enough ahead of the lead by then."""
+        """Nearest rear-axle x for the cut-in: far enough ahead of the lead by then.
+
+        At least as far as the lane changes still to drive from the stitch point
+        (out and back, or back only from the oncoming lane) at the planner's turning
+        radius, plus ``goal_slack_m``: behind a lead at walking pace the point just
+        ahead of it left too little road, and no plan could be smoothed.
+        """
         cfg = self.config
         xs = x_start + np.arange(12.0, cfg.max_plan_length_m + 1e-9, 1.0)
         if self.lead is None or len(prediction) == 0:
@@ -394,6 +400,11 @@ class TrafficDriver:
         if not ok.any():
             return None
         x = float(xs[int(np.argmax(ok))]) + cfg.goal_slack_m
+        # An S of two arcs of the turning radius across the lane width d: 2 sqrt(R d - d^2/4).
+        d, radius = self.lane_width, cfg.turning_radius_m
+        s_curve = 2.0 * math.sqrt(max(radius * d - d * d / 4.0, 0.0))
+        changes = 2 if abs(y_start - self.lane_y) < d / 2.0 else 1
+        x = max(x, x_start + changes * s_curve + cfg.goal_slack_m)
         if x > x_start + cfg.max_plan_length_m or x > self._x_end() - 20.0:
             return None
         _, t_goal = timing.band(np.array([[x, self.lane_y]]))
@@ -438,6 +449,9 @@ class TrafficDriver:
         current_ok = True
         if mode == "overtake":
             current_ok = trigger == "periodic" and self.current_safe(pred)
+            if trigger == "periodic" and not current_ok:
+                # The step's check failed here instead of in control(): it counts alike.
+                self.unsafe_steps += 1
         i0, s_now = self._projection()
         ego = self.ego
         samples = self.controller.projector.samples  # type: ignore[union-attr]
@@ -449,7 +463,7 @@ class TrafficDriver:
             0.0, float(ego.speed), self.speed.v_max, self.speed.accel,
             (float(ego.rear[0]), float(ego.rear[1])),
         )
-        goal_x = self._cut_in_x(timing, float(start[0]), pred)
+        goal_x = self._cut_in_x(timing, float(start[0]), pred, float(start[1]))
         outcome, message = "no_goal", "no cut-in point within reach"
         plan_time, iters, nodes = 0.0, 0, 0
         accepted = late = False
