@@ -147,3 +147,25 @@ def test_a_problem_whose_checker_is_for_another_car_is_refused():
     with pytest.raises(InputError, match=r"^problem\.vehicle: the checker was built for"):
         PlanningProblem(m, cached_checker(m), m.start, m.goal, vehicle=wide)
 
+
+
+@pytest.mark.parametrize(
+    ("start", "words"),
+    [
+        (Pose(49.0, 44.0, 0.0), "overlaps obstacle 2"),
+        (Pose(-5.0, 44.0, 0.0), "lies outside the bounds"),
+        (Pose(5.0, 44.0, 1e12), "yaw 1e+12 rad is beyond"),
+    ],
+)
+def test_an_invalid_start_says_why_in_the_maps_words(start, words):
+    # The problem's own constructor takes any start; the planner answers invalid_start,
+    # and said "collides there" for each of these.
+    from rrtdrive.planning.base import cached_checker
+    from rrtdrive.types import PlanStatus
+
+    m = builtin_map("overtake")
+    problem = PlanningProblem(m, cached_checker(m), start, m.goal)
+    for name in ("improved-rrt-connect", "hybrid-a-star", "rrt-connect"):
+        r = make_planner(name).solve(problem, np.random.default_rng(0), Budget())
+        assert r.status is PlanStatus.INVALID_START and r.message.startswith("start: ")
+        assert words in r.message, (name, r.message)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import math
 import time
+import warnings
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Protocol, runtime_checkable
@@ -13,10 +14,11 @@ import numpy as np
 
 from rrtdrive.collision import CheckerConfig, CollisionChecker
 from rrtdrive.geometry import densify
-from rrtdrive.maps import Map
+from rrtdrive.maps import MAX_YAW, Map, check_endpoint
 from rrtdrive.types import (
     Budget,
     InputError,
+    InputWarning,
     Path,
     PlanResult,
     PlanStatus,
@@ -318,17 +320,24 @@ def sample_point(rng: np.random.Generator, bounds: tuple[float, float, float, fl
     return rng.uniform((bounds[0], bounds[1]), (bounds[2], bounds[3]))
 
 
+def _endpoint_fault(problem: PlanningProblem, pose: Pose, label: str) -> str:
+    """Why ``pose`` cannot be planned from or to, in the words of a map's own check."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", InputWarning)
+            check_endpoint(problem.map, pose, label, problem.vehicle)
+    except InputError as exc:
+        return str(exc)
+    return f"{label}: the car's body collides there"  # within the grid's error margin
+
+
 def precheck(problem: PlanningProblem, planner: str, watch: Stopwatch) -> PlanResult | None:
     """Fail early on an invalid start or goal or a provably unreachable goal; else ``None``."""
     checker = problem.checker
-    if not checker.pose_free(problem.start.as_tuple()):
-        return failure(
-            planner, PlanStatus.INVALID_START, watch, "start: the car's body collides there"
-        )
-    if not checker.pose_free(problem.goal.as_tuple()):
-        return failure(
-            planner, PlanStatus.INVALID_GOAL, watch, "goal: the car's body collides there"
-        )
+    for label, pose, status in (("start", problem.start, PlanStatus.INVALID_START),
+                                ("goal", problem.goal, PlanStatus.INVALID_GOAL)):  # fmt: skip
+        if abs(pose.yaw) > MAX_YAW or not checker.pose_free(pose.as_tuple()):
+            return failure(planner, status, watch, _endpoint_fault(problem, pose, label))
     if checker.provably_disconnected(problem.start.xy, problem.goal.xy):
         return failure(
             planner,
