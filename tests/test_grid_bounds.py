@@ -143,7 +143,8 @@ def test_cli_refuses_10_km_bounds_with_exit_2(tmp_path, capsys, command):
     assert err.startswith(f"rrtdrive {command}: error: bounds: 10000 x 10000 m needs ")
     assert "Traceback" not in err and err.count("\n") == 1
     # simulate has no --resolution of its own: the message names the command that has.
-    assert "rrtdrive plan --resolution 1.42" in err and "CheckerConfig(resolution=1.42)" in err
+    assert "rrtdrive plan or simulate --resolution 1.42" in err
+    assert "CheckerConfig(resolution=1.42)" in err
 
 
 def big_map(n: int = 800, size: float = 500.0, seed: int = 0) -> Map:

@@ -16,7 +16,6 @@ import dataclasses
 import json
 import math
 import os
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path as FsPath
@@ -27,16 +26,21 @@ import shapely
 from rrtdrive.atomic import write_text_atomic
 from rrtdrive.geometry import box_corners
 from rrtdrive.json_input import parse_json, read_capped
+from rrtdrive.map_checks import (
+    MAX_COORDINATE,
+    MAX_YAW,
+    check_endpoint,
+    warn_if_degrees,
+    warn_outside,
+)
 from rrtdrive.types import (
     InputError,
-    InputWarning,
     Pose,
     VehicleParams,
     brief_repr,
     require_finite,
     require_positive,
 )
-from rrtdrive.vehicle import footprint_polygon
 
 __all__ = [
     "Obstacle",
@@ -51,6 +55,9 @@ __all__ = [
     "resolve_map",
     "names_map_file",
     "check_endpoint",
+    "warn_if_degrees",
+    "MAX_COORDINATE",
+    "MAX_YAW",
 ]
 
 
@@ -215,70 +222,6 @@ class Map:
         }
 
 
-#: The largest coordinate a map may use, metres: doubles there are spaced 1.2e-7 m apart,
-#: well inside the 1e-6 m that path ends are checked to (at 1e15 m a solved path failed
-#: its own check: curvature, spacing and headings all rounded away).
-MAX_COORDINATE = 1e9
-#: The largest start or goal heading, radians (spaced 1e-10 rad apart there; 1e12 rad
-#: could not be planned).
-MAX_YAW = 1e6
-
-
-def warn_if_degrees(label: str, yaw: float) -> None:
-    """Warn (:class:`InputWarning`) when ``yaw`` is more than a full turn: likely degrees.
-
-    Such a yaw is a valid angle (it wraps), so it is planned as given; the warning
-    says what it is taken as and what to write for degrees.
-    """
-    if abs(yaw) > 2.0 * math.pi + 1e-9:
-        wrapped = math.degrees(math.remainder(yaw, 2.0 * math.pi))
-        warnings.warn(
-            f"{label}: yaw {yaw:g} is more than a full turn; yaws are in radians, so it is "
-            f"taken as {wrapped:.1f} deg; for {yaw:g} deg write {math.radians(yaw):.4f}",
-            InputWarning,
-            stacklevel=3,
-        )
-
-
-def check_endpoint(m: Map, pose: Pose, label: str, vehicle: VehicleParams) -> None:
-    """Raise :class:`InputError` unless the car at ``pose`` lies in bounds and clear of obstacles.
-
-    Parameters
-    ----------
-    m : Map
-        The map (only bounds and obstacles are read).
-    pose : Pose
-        Rear-axle pose to check.
-    label : str
-        Field name for the message (``"start"`` or ``"goal"``).
-    vehicle : VehicleParams
-        The car.
-    """
-    xmin, ymin, xmax, ymax = m.bounds
-    if abs(pose.yaw) > MAX_YAW:
-        raise InputError(
-            f"{label}: yaw {pose.yaw:g} rad is beyond {MAX_YAW:g} rad either way, where an "
-            "angle keeps less than the precision headings are checked to; give it in [-pi, pi]"
-        )
-    warn_if_degrees(label, pose.yaw)
-    if not (xmin <= pose.x <= xmax and ymin <= pose.y <= ymax):
-        raise InputError(
-            f"{label}: ({pose.x:g}, {pose.y:g}) lies outside the bounds {list(m.bounds)}"
-        )
-    body = footprint_polygon(pose.as_tuple(), vehicle)
-    if not shapely.box(xmin, ymin, xmax, ymax).contains_properly(body):
-        # Touching counts, as for an obstacle: the simulator's walls stand on the bounds.
-        raise InputError(
-            f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) leaves or touches the bounds"
-        )
-    for i, obstacle in enumerate(m.obstacles):
-        if obstacle.polygon().intersects(body):
-            raise InputError(
-                f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) overlaps obstacle {i} "
-                f"at {list(obstacle.center)}"
-            )
-
-
 def _pair(value: object, name: str) -> tuple[float, float]:
     if not isinstance(value, (list, tuple, np.ndarray)) or len(value) != 2:
         raise InputError(f"{name}: expected two numbers, got {brief_repr(value)}")
@@ -361,23 +304,8 @@ def map_from_json(
         vehicle=vehicle or VehicleParams(),
         check_query=check_query,
     )
-    _warn_outside(m)
+    warn_outside(m)
     return m
-
-
-def _warn_outside(m: Map) -> None:
-    """Warn about obstacles lying wholly outside the bounds: they block nothing there."""
-    xmin, ymin, xmax, ymax = m.bounds
-    for i, o in enumerate(m.obstacles):
-        ox0, oy0, ox1, oy1 = o.polygon().bounds
-        if ox1 <= xmin or ox0 >= xmax or oy1 <= ymin or oy0 >= ymax:
-            warnings.warn(
-                f"obstacles[{i}]: centre {list(o.center)} lies wholly outside the bounds "
-                f"{list(m.bounds)}, where everything counts as blocked; it changes nothing "
-                "(a typo in its coordinates?)",
-                InputWarning,
-                stacklevel=3,
-            )
 
 
 def load_map(

@@ -117,8 +117,8 @@ def grid_resolution(bounds: Sequence[float], config: CheckerConfig) -> float:
             f"bounds: {xmax - xmin:g} x {ymax - ymin:g} m needs {count} grid cells at "
             f"{h0:g} m; the limit is {limit:,} cells (checker.max_grid_cells), which needs "
             f"{h:g} m cells, coarser than the {coarsest:g} m the checker chooses by itself; "
-            f"use a smaller map or cells of {h:g} m (--resolution {h:g} of rrtdrive plan or "
-            f"simulate; "
+            f"use a smaller map or cells of {h:g} m (rrtdrive plan or simulate "
+            f"--resolution {h:g}; "
             f"CheckerConfig(resolution={h:g}) in Python)"
         )
     return h

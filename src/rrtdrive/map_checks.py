@@ -1,0 +1,102 @@
+"""Checks of a map's start and goal, and warnings about likely slips in a map.
+
+:func:`check_endpoint` refuses a pose the car cannot stand at (outside or touching
+the bounds, on an obstacle, a yaw beyond :data:`MAX_YAW`); :func:`warn_if_degrees`
+and :func:`warn_outside` warn (:class:`~rrtdrive.types.InputWarning`) about input
+that is valid but probably not what was meant.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from typing import TYPE_CHECKING
+
+import shapely
+
+from rrtdrive.types import InputError, InputWarning, Pose, VehicleParams
+from rrtdrive.vehicle import footprint_polygon
+
+if TYPE_CHECKING:  # pragma: no cover
+    from rrtdrive.maps import Map
+
+__all__ = ["MAX_COORDINATE", "MAX_YAW", "check_endpoint", "warn_if_degrees", "warn_outside"]
+
+
+#: The largest coordinate a map may use, metres: doubles there are spaced 1.2e-7 m apart,
+#: well inside the 1e-6 m that path ends are checked to (at 1e15 m a solved path failed
+#: its own check: curvature, spacing and headings all rounded away).
+MAX_COORDINATE = 1e9
+#: The largest start or goal heading, radians (spaced 1e-10 rad apart there; 1e12 rad
+#: could not be planned).
+MAX_YAW = 1e6
+
+
+def warn_if_degrees(label: str, yaw: float) -> None:
+    """Warn (:class:`InputWarning`) when ``yaw`` is more than a full turn: likely degrees.
+
+    Such a yaw is a valid angle (it wraps), so it is planned as given; the warning
+    says what it is taken as and what to write for degrees.
+    """
+    if abs(yaw) > 2.0 * math.pi + 1e-9:
+        wrapped = math.degrees(math.remainder(yaw, 2.0 * math.pi))
+        warnings.warn(
+            f"{label}: yaw {yaw:g} is more than a full turn; yaws are in radians, so it is "
+            f"taken as {wrapped:.1f} deg; for {yaw:g} deg write {math.radians(yaw):.4f}",
+            InputWarning,
+            stacklevel=3,
+        )
+
+
+def check_endpoint(m: Map, pose: Pose, label: str, vehicle: VehicleParams) -> None:
+    """Raise :class:`InputError` unless the car at ``pose`` lies in bounds and clear of obstacles.
+
+    Parameters
+    ----------
+    m : Map
+        The map (only bounds and obstacles are read).
+    pose : Pose
+        Rear-axle pose to check.
+    label : str
+        Field name for the message (``"start"`` or ``"goal"``).
+    vehicle : VehicleParams
+        The car.
+    """
+    xmin, ymin, xmax, ymax = m.bounds
+    if abs(pose.yaw) > MAX_YAW:
+        raise InputError(
+            f"{label}: yaw {pose.yaw:g} rad is beyond {MAX_YAW:g} rad either way, where an "
+            "angle keeps less than the precision headings are checked to; give it in [-pi, pi]"
+        )
+    warn_if_degrees(label, pose.yaw)
+    if not (xmin <= pose.x <= xmax and ymin <= pose.y <= ymax):
+        raise InputError(
+            f"{label}: ({pose.x:g}, {pose.y:g}) lies outside the bounds {list(m.bounds)}"
+        )
+    body = footprint_polygon(pose.as_tuple(), vehicle)
+    if not shapely.box(xmin, ymin, xmax, ymax).contains_properly(body):
+        # Touching counts, as for an obstacle: the simulator's walls stand on the bounds.
+        raise InputError(
+            f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) leaves or touches the bounds"
+        )
+    for i, obstacle in enumerate(m.obstacles):
+        if obstacle.polygon().intersects(body):
+            raise InputError(
+                f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) overlaps obstacle {i} "
+                f"at {list(obstacle.center)}"
+            )
+
+
+def warn_outside(m: Map) -> None:
+    """Warn about obstacles lying wholly outside the bounds: they block nothing there."""
+    xmin, ymin, xmax, ymax = m.bounds
+    for i, o in enumerate(m.obstacles):
+        ox0, oy0, ox1, oy1 = o.polygon().bounds
+        if ox1 <= xmin or ox0 >= xmax or oy1 <= ymin or oy0 >= ymax:
+            warnings.warn(
+                f"obstacles[{i}]: centre {list(o.center)} lies wholly outside the bounds "
+                f"{list(m.bounds)}, where everything counts as blocked; it changes nothing "
+                "(a typo in its coordinates?)",
+                InputWarning,
+                stacklevel=3,
+            )
