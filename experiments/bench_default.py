@@ -38,8 +38,7 @@ ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
 import bench_hybrid as bh  # noqa: E402  (the sibling benchmark's worker machinery)
 
-#: The query each worker runs first, untimed (imports, caches, the map's set-up).
-WARM = "goal:rev:7"
+positive_int = bh.positive_int
 _TIME = re.compile(r"\d+\.\d+ s")
 
 
@@ -112,7 +111,8 @@ def _bench(args: argparse.Namespace, ids: list[str]) -> int:
     meta = bh.provenance(args.ref)
     rows = []
     for qid, a, b, same, why in bh.interleaved(
-        meta["ref_sha"], ids, args.count, args.repeat, args.warm, FsPath(__file__)
+        meta["ref_sha"], ids, args.count, args.repeat, args.warm or bh.warm_query(args.count),
+        FsPath(__file__),
     ):
         rows.append({
             "id": qid, "status": b["status"], "stage": b["nodes"],
@@ -143,23 +143,25 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--ref", default="6b0d9b8", help="the old code's commit")
     ap.add_argument("--out", default="results")
-    ap.add_argument("--count", type=int, default=100, help="random goals and starts each")
+    ap.add_argument("--count", type=positive_int, default=100,
+                    help="random goals and starts each")
     ap.add_argument("--gears", default="fwd,rev", help="fwd, rev or fwd,rev")
-    ap.add_argument("--repeat", type=int, default=1, help="runs per query; times: the least")
-    ap.add_argument("--warm", default=WARM, help=argparse.SUPPRESS)
+    ap.add_argument("--repeat", type=positive_int, default=1,
+                    help="runs per query; times: the least")
+    ap.add_argument("--warm", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--only", default="", help="comma-separated query ids (default: all)")
     ap.add_argument("--record", default="", help="record this tree's answers to a file")
     ap.add_argument("--check", default="", help="compare this tree's answers to a record")
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.worker:
-        return bh._worker(args.count, args.repeat, args.warm, _Runner)
+        return bh._worker(args.count, args.repeat, args.warm or bh.warm_query(args.count), _Runner)
     gears = tuple(args.gears.split(","))
     ids = args.only.split(",") if args.only else query_ids(args.count, gears)
     if not (args.record or args.check):
         return _bench(args, ids)
     runner = _Runner(args.count)
-    runner.run(WARM)
+    runner.run(args.warm or bh.warm_query(args.count))
     base = pickle.loads(FsPath(args.check).read_bytes()) if args.check else {}
     got, bad, total = {}, 0, 0.0
     for qid in ids:

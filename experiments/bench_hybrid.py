@@ -52,6 +52,22 @@ SCENARIOS = ("parking-reverse-in", "parallel-parking", "u-turn")
 SEEDS = range(10)
 #: The query each worker runs first, untimed (imports, caches, the map's set-up).
 WARM = "goal:rev:7"
+
+
+def positive_int(text: str) -> int:
+    """An argparse type: an integer >= 1 (not rrtdrive's: a worker imports an old tree)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {value}")
+    return value
+
+
+def warm_query(count: int) -> str:
+    """The warm-up query (:data:`WARM`), or the last goal of a smaller ``--count``."""
+    return f"goal:rev:{min(7, count - 1)}"
 #: Path rows agree to this (metres / radians / 1/m).
 ROW_TOL = 1e-9
 
@@ -217,15 +233,45 @@ class _Worker:
         self.proc.wait()
 
 
-def _export(ref: str, into: FsPath) -> FsPath:
-    """``src/`` of commit ``ref`` unpacked under ``into``."""
+#: Packages that live beside ``src/`` and are installed as ``rrtdrive.<name>``.
+_TOP_LEVEL = ("controllers", "envs")
+
+
+def _export(ref: str | None, into: FsPath) -> FsPath:
+    """The package of commit ``ref`` (``None``: this working tree) laid out as installed.
+
+    ``src/`` and the top-level ``controllers/`` and ``envs/`` (installed as
+    ``rrtdrive.controllers`` and ``rrtdrive.envs``) go into ``into/src/rrtdrive``, so a
+    worker importing from ``into/src`` reads every module from ``ref``: with ``src/``
+    alone, an installed package supplied today's ``controllers/`` to old code (an
+    ImportError) and a non-editable install lacked them for ``src/`` altogether.
+    """
+    import shutil
+
+    if ref is None:
+        skip = shutil.ignore_patterns("__pycache__", "*.pyc")
+        shutil.copytree(ROOT / "src", into / "src", ignore=skip)
+        for name in _TOP_LEVEL:
+            target = into / "src" / "rrtdrive" / name
+            if (ROOT / name).is_dir() and not target.exists():
+                shutil.copytree(ROOT / name, target, ignore=skip)
+        return into / "src"
+    present = [
+        name for name in ("src", *_TOP_LEVEL)
+        if subprocess.run(["git", "cat-file", "-e", f"{ref}:{name}"], cwd=ROOT,
+                          capture_output=True).returncode == 0
+    ]  # fmt: skip
     data = subprocess.run(
-        ["git", "archive", ref, "src"], cwd=ROOT, check=True, capture_output=True
+        ["git", "archive", ref, *present], cwd=ROOT, check=True, capture_output=True
     ).stdout
     tar = into / "src.tar"
     tar.write_bytes(data)
     with tarfile.open(tar) as t:
         t.extractall(into, filter="data")
+    for name in present[1:]:
+        target = into / "src" / "rrtdrive" / name
+        if not target.exists():  # older commits kept them inside src/rrtdrive already
+            (into / name).rename(target)
     return into / "src"
 
 
@@ -329,8 +375,10 @@ def interleaved(
     """``(qid, old answer, new answer, same, why)`` per query: commit ``sha``'s ``src/``
     against this tree's, each in a worker running ``script``, taking turns going first."""
     with tempfile.TemporaryDirectory(prefix=f"{script.stem}_") as tmp:
-        old = _Worker(_export(sha, FsPath(tmp)), count, repeat, warm, script)
-        new = _Worker(ROOT / "src", count, repeat, warm, script)
+        (FsPath(tmp) / "old").mkdir()
+        (FsPath(tmp) / "new").mkdir()
+        old = _Worker(_export(sha, FsPath(tmp) / "old"), count, repeat, warm, script)
+        new = _Worker(_export(None, FsPath(tmp) / "new"), count, repeat, warm, script)
         try:
             for n, qid in enumerate(ids):
                 # Alternate which runs first, so neither always meets a warm cache.
@@ -363,7 +411,8 @@ def _bench(args: argparse.Namespace, ids: list[str]) -> int:
     meta = provenance(args.ref)
     rows = []
     for qid, a, b, same, why in interleaved(
-        meta["ref_sha"], ids, args.count, args.repeat, WARM, FsPath(__file__)
+        meta["ref_sha"], ids, args.count, args.repeat, warm_query(args.count),
+        FsPath(__file__),
     ):
         rows.append({
             "id": qid, "status": b["status"], "iterations": b["iterations"],
@@ -395,22 +444,24 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--ref", default="2bf6e48", help="the old code's commit")
     ap.add_argument("--out", default="results")
-    ap.add_argument("--count", type=int, default=30, help="random goals and starts each")
-    ap.add_argument("--seeds", type=int, default=len(SEEDS), help="seeds per gear scenario")
-    ap.add_argument("--repeat", type=int, default=1, help="runs per query; times: the least")
-    ap.add_argument("--warm", default=WARM, help=argparse.SUPPRESS)
+    ap.add_argument("--count", type=positive_int, default=30, help="random goals and starts each")
+    ap.add_argument("--seeds", type=positive_int, default=len(SEEDS),
+                    help="seeds per gear scenario")
+    ap.add_argument("--repeat", type=positive_int, default=1,
+                    help="runs per query; times: the least")
+    ap.add_argument("--warm", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--only", default="", help="comma-separated query ids (default: all)")
     ap.add_argument("--record", default="", help="record this tree's answers to a file")
     ap.add_argument("--check", default="", help="compare this tree's answers to a record")
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.worker:
-        return _worker(args.count, args.repeat, args.warm)
+        return _worker(args.count, args.repeat, args.warm or warm_query(args.count))
     ids = args.only.split(",") if args.only else query_ids(args.count, args.seeds)
     if not (args.record or args.check):
         return _bench(args, ids)
     runner = _Runner(args.count)
-    runner.run(WARM)
+    runner.run(warm_query(args.count))
     base = pickle.loads(FsPath(args.check).read_bytes()) if args.check else {}
     got, bad, total = {}, 0, 0.0
     for qid in ids:

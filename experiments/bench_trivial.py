@@ -162,10 +162,13 @@ def main(argv: list[str] | None = None) -> int:
     warm = ids[0]  # imports, caches and the map's set-up before the first timed query
     with tempfile.TemporaryDirectory(prefix="bench_trivial_") as tmp:
         workers = {}
+        for side in ("old", "new"):
+            (FsPath(tmp) / side).mkdir()
         if args.ref:
-            src = bench_hybrid._export(meta["ref_sha"], FsPath(tmp))
+            src = bench_hybrid._export(meta["ref_sha"], FsPath(tmp) / "old")
             workers["old"] = bench_hybrid._Worker(src, COUNT, 1, warm)
-        workers["new"] = bench_hybrid._Worker(ROOT / "src", COUNT, 1, warm)
+        new_src = bench_hybrid._export(None, FsPath(tmp) / "new")
+        workers["new"] = bench_hybrid._Worker(new_src, COUNT, 1, warm)
         try:
             best = _rounds(workers, ids, args.repeat)
         finally:
