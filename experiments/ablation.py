@@ -26,6 +26,7 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
+from rrtdrive.cli_args import positive_int
 from rrtdrive.maps import builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem
 from rrtdrive.planning.improved import COMPONENTS, ImprovedRRTConnect, default_expansion_lmin
@@ -82,7 +83,7 @@ def table(title: str, header: str, rows: list[tuple[str, dict[str, float]]]) -> 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--runs", type=int, default=20)
+    parser.add_argument("--runs", type=positive_int, default=20)
     parser.add_argument("--maps", default="parking_lot,overtake,narrow_gap")
     parser.add_argument("--out", default="results")
     parser.add_argument("--max-time", type=float, default=5.0)
@@ -132,4 +133,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from results_io import run_main
+
+    raise SystemExit(run_main(main))

@@ -36,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rrtdrive.cli_args import positive_int
 from rrtdrive.maps import builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.types import Budget
@@ -110,7 +111,7 @@ def summarise(runs: list[dict]) -> dict:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--map", default="parking_lot")
-    parser.add_argument("--seeds", type=int, default=20)
+    parser.add_argument("--seeds", type=positive_int, default=20)
     parser.add_argument("--cap", type=float, default=5.0, help="OMPL time cap per run [s]")
     parser.add_argument("--out", default="results")
     parser.add_argument(
@@ -183,7 +184,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    code = main()
+    from results_io import run_main
+
+    code = run_main(main)
     sys.stdout.flush()
     sys.stderr.flush()
     # Skip interpreter teardown, as the bench workers do: OMPL objects (BITstar's) still

@@ -180,8 +180,11 @@ def main(argv: list[str] | None = None) -> int:
     }  # fmt: skip
     out = FsPath(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "bench_ramps.json").write_text(
-        json.dumps({"meta": meta, "summary": summary, "segments": rows}, indent=1) + "\n"
+    from rrtdrive.atomic import write_text_atomic
+
+    write_text_atomic(
+        out / "bench_ramps.json",
+        json.dumps({"meta": meta, "summary": summary, "segments": rows}, indent=1) + "\n",
     )
     s = summary
     lines = [
@@ -202,7 +205,7 @@ def main(argv: list[str] | None = None) -> int:
         f"Segments whose answers differ: {s['segments'] - s['same']}.",
     ]
     lines += [f"- segment {k} of `{r['query']}`" for k, r in enumerate(rows) if not r["same"]]
-    (out / "bench_ramps.md").write_text("\n".join(lines) + "\n")
+    write_text_atomic(out / "bench_ramps.md", "\n".join(lines) + "\n")
     print(f"{s['segments']} segments, {s['same']} same; median {s['old_median_ms']:.3f} -> "
           f"{s['new_median_ms']:.3f} ms, mean {s['old_mean_ms']:.3f} -> {s['new_mean_ms']:.3f} ms, "
           f"median ratio {s['median_ratio']:.3f}")  # fmt: skip
@@ -210,4 +213,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from results_io import run_main
+
+    raise SystemExit(run_main(main))

@@ -31,6 +31,7 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
+from rrtdrive.cli_args import positive_int
 from rrtdrive.maps import BUILTIN_MAPS, TIGHT_MAP_NAMES, builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem
 from rrtdrive.planning.improved import ImprovedRRTConnect
@@ -92,7 +93,7 @@ def summarise(rows: list[dict]) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--seeds", type=int, default=10, help="planner seeds 0..N-1 per map")
+    ap.add_argument("--seeds", type=positive_int, default=10, help="planner seeds 0..N-1 per map")
     ap.add_argument("--goals", type=int, default=100, help="random poses (0: skip part 2)")
     ap.add_argument("--goal-seed", type=int, default=1, help="seed of the random poses")
     ap.add_argument("--max-time", type=float, default=5.0, help="time budget per plan [s]")
@@ -199,4 +200,6 @@ def _line(name: str, arm: str, s: dict) -> str:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    from results_io import run_main
+
+    raise SystemExit(run_main(main))

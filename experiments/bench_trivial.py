@@ -203,10 +203,13 @@ def main(argv: list[str] | None = None) -> int:
     meta["wall_s"] = time.perf_counter() - t0
     out = FsPath(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "bench_trivial.json").write_text(
-        json.dumps({"meta": meta, "summary": summary, "queries": rows}, indent=1) + "\n"
+    from rrtdrive.atomic import write_text_atomic  # here: a worker imports an old tree
+
+    write_text_atomic(
+        out / "bench_trivial.json",
+        json.dumps({"meta": meta, "summary": summary, "queries": rows}, indent=1) + "\n",
     )
-    (out / "bench_trivial.md").write_text(_markdown(meta, rows, summary))
+    write_text_atomic(out / "bench_trivial.md", _markdown(meta, rows, summary))
     for r in rows:
         line = f"{r['id']:16s} {r['status']:8s} new {1e3 * r['new_cpu_s']:7.3f} ms"
         if args.ref:
@@ -224,4 +227,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from results_io import run_main
+
+    raise SystemExit(run_main(main))

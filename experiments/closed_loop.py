@@ -43,6 +43,7 @@ import time
 from pathlib import Path as FsPath
 
 from rrtdrive.bench.backends import episode_progress, parallel_map
+from rrtdrive.cli_args import positive_int
 from rrtdrive.evaluation import EpisodeReport, evaluate, summarise
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim.runner import EpisodeConfig, run_episode
@@ -228,7 +229,7 @@ def save_frames(figures: FsPath, planner: str, hz: int, oncoming: int) -> list[s
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
-    ap.add_argument("--seeds", type=int, default=50)
+    ap.add_argument("--seeds", type=positive_int, default=50)
     ap.add_argument(
         "--scenarios", nargs="+", default=[",".join(SCENARIOS)],
         help=f"comma- or space-separated (default {','.join(SCENARIOS)}); gear scenarios: "
@@ -355,4 +356,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from results_io import run_main
+
+    raise SystemExit(run_main(main))

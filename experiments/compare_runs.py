@@ -23,6 +23,7 @@ import math
 import os
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, os.path.dirname(__file__))
@@ -130,9 +131,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     text = f"# Closed loop, before -> after\n\nCommand: `{line}`\n\n{page}"
     print(text, end="")
     if args.out:
+        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
         write_text_atomic(args.out, text)
     return 0
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    from results_io import run_main
+
+    raise SystemExit(run_main(main))

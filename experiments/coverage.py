@@ -60,6 +60,7 @@ from random_goals import draw_goals  # noqa: E402  (the sibling script's pose se
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
 from rrtdrive.bench.backends import parallel_map  # noqa: E402
+from rrtdrive.cli_args import positive_int
 from rrtdrive.maps import builtin_map  # noqa: E402
 from rrtdrive.planning import PLANNERS, PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.planning.hybrid.escalation import stage_of  # noqa: E402
@@ -415,7 +416,7 @@ def tight_queries() -> list[tuple[str, str, Pose]]:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--map", default="parking_lot")
-    ap.add_argument("--count", type=int, default=100, help="poses per set (default 100)")
+    ap.add_argument("--count", type=positive_int, default=100, help="poses per set (default 100)")
     ap.add_argument("--sets", default="goal,start", help="goal, start or both (default)")
     ap.add_argument("--seed", type=int, default=1, help="seed of the pose sets")
     ap.add_argument("--planners", default=DEFAULT_PLANNERS)
@@ -429,7 +430,8 @@ def main(argv: list[str] | None = None) -> int:
         help="plan the tight maps' queries instead (garage bays, turning bulb, kerbside, "
         "reverse bay); writes OUT/coverage_tight.*",
     )
-    ap.add_argument("--seeds", type=int, default=3, help="with --tight: planner seeds per query")
+    ap.add_argument("--seeds", type=positive_int, default=3,
+                    help="with --tight: planner seeds per query")
     args = ap.parse_args(argv)
     sets = [s for s in args.sets.split(",") if s]
     if args.count < 1 or not set(sets) <= {"goal", "start"} or not sets:
@@ -533,7 +535,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    code = main()
+    from results_io import run_main
+
+    code = run_main(main)
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)  # no interpreter teardown: nanobind's leak warnings (FACTS.md)

@@ -75,6 +75,7 @@ def main(argv: list[str] | None = None) -> int:
         sys.argv[1:] if argv is None else argv
     )
     payload = {"command": command, "rows": rows}
+    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     write_text_atomic(Path(args.out), json.dumps(payload, indent=1) + "\n")
     for name in VARIANTS:
         held = sum(r["status"] == "proven_unreachable" for r in rows if r["variant"] == name)
@@ -83,4 +84,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from results_io import run_main
+
+    raise SystemExit(run_main(main))

@@ -49,6 +49,7 @@ def main(argv: list[str] | None = None) -> int:
         sys.argv[1:] if argv is None else argv
     )
     payload = {"command": command, "rows": rows}
+    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     write_text_atomic(Path(args.out), json.dumps(payload, indent=1) + "\n")
     solved = sum(r["solved"] for r in rows)
     print(f"{solved}/{len(rows)} solved with a {args.max_time:g} s cap")
@@ -56,4 +57,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from results_io import run_main
+
+    raise SystemExit(run_main(main))

@@ -31,6 +31,7 @@ sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 from random_goals import draw_goals  # noqa: E402
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
+from rrtdrive.cli_args import positive_int
 from rrtdrive.maps import builtin_map  # noqa: E402
 from rrtdrive.planning import PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.planning.smoothing import max_sharpness  # noqa: E402
@@ -80,7 +81,7 @@ def _num(v: float | None, digits: int) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--count", type=int, default=30)
+    ap.add_argument("--count", type=positive_int, default=30)
     ap.add_argument("--reverse", action="store_true")
     ap.add_argument("--expansions", type=int, default=20000)
     ap.add_argument("--cap", type=float, default=120.0, help="wall-clock safety cap [s]")
@@ -156,4 +157,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from results_io import run_main
+
+    raise SystemExit(run_main(main))

@@ -27,6 +27,7 @@ from pathlib import Path as FsPath
 import numpy as np
 from random_goals import draw_goals
 
+from rrtdrive.cli_args import positive_int
 from rrtdrive.maps import Map, builtin_map, write_text_atomic
 from rrtdrive.planning.base import PlanningProblem
 from rrtdrive.planning.hybrid import HybridAStar
@@ -52,7 +53,7 @@ def verify_gears(m: Map, path: Path) -> bool:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--map", default="parking_lot")
-    ap.add_argument("--goals", type=int, default=100)
+    ap.add_argument("--goals", type=positive_int, default=100)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--vary", choices=("goal", "start"), default="goal")
     ap.add_argument("--reverse", action="store_true")
@@ -140,4 +141,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    from results_io import run_main
+
+    raise SystemExit(run_main(main))

@@ -73,3 +73,25 @@ def write_results(
     text = report(payload)
     write_text_atomic(folder / f"{stem}.md", text)
     return text
+
+
+def run_main(main: Callable[[], int | None]) -> int:
+    """A script's ``main()``, with bad input as one line on stderr and exit 2.
+
+    :class:`~rrtdrive.types.InputError` (an unknown map, scenario or planner) and a
+    missing input file end the script with ``SCRIPT: error: ...`` instead of a
+    traceback; Ctrl-C with exit 130.
+    """
+    from rrtdrive.types import InputError
+
+    name = FsPath(sys.argv[0]).name
+    try:
+        return int(main() or 0)
+    except InputError as exc:
+        print(f"{name}: error: {exc}", file=sys.stderr)
+    except FileNotFoundError as exc:
+        print(f"{name}: error: {exc.filename}: no such file", file=sys.stderr)
+    except KeyboardInterrupt:
+        print(f"{name}: interrupted", file=sys.stderr)
+        return 130
+    return 2

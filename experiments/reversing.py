@@ -84,8 +84,10 @@ def main() -> int:
     table += "".join("| " + " | ".join(r) + " |\n" for r in rows)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "reversing.md", table)
+    cmd = "python experiments/reversing.py " + " ".join(sys.argv[1:])
+    write_text_atomic(out / "reversing.md", f"Command: `{cmd}`\n\n{table}")
     config = {
+        "command": cmd,
         "maps": args.maps, "controllers": CONTROLLERS, "steer_rates": RATES,
         "planner": "hybrid-a-star", "reverse": True, "seed": 0,
         "speed": dataclasses.asdict(SpeedConfig()),
@@ -96,4 +98,6 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from results_io import run_main
+
+    raise SystemExit(run_main(main))

@@ -37,6 +37,7 @@ sys.path.insert(0, str(HERE))
 from results_io import command, machine, write_results  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress  # noqa: E402
+from rrtdrive.cli_args import positive_int  # noqa: E402
 from rrtdrive.maps import BUILTIN_MAPS, builtin_map  # noqa: E402
 from rrtdrive.planning import PlanningProblem  # noqa: E402
 from rrtdrive.planning.improved import ImprovedConfig, ImprovedRRTConnect  # noqa: E402
@@ -173,8 +174,8 @@ def markdown(payload: dict) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--count", type=int, default=100, help="random goals and starts each")
-    ap.add_argument("--seeds", type=int, default=20, help="planner seeds per built-in map")
+    ap.add_argument("--count", type=positive_int, default=100, help="random goals and starts each")
+    ap.add_argument("--seeds", type=positive_int, default=20, help="planner seeds per built-in map")
     ap.add_argument("--out", required=True, help="directory for root_growth.{json,md}")
     args = ap.parse_args(argv)
     if args.count < 0 or args.seeds < 0:
@@ -194,4 +195,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    from results_io import run_main
+
+    raise SystemExit(run_main(main))

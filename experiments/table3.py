@@ -34,6 +34,7 @@ from pathlib import Path as FsPath
 import matplotlib.pyplot as plt
 import numpy as np
 
+from rrtdrive.cli_args import positive_int
 from rrtdrive.maps import builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.planning.base import polyline_curvature
@@ -160,7 +161,7 @@ def figures(map_name: str, examples: dict[str, object], out: FsPath) -> list[str
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--runs", type=int, default=20, help="seeds per planner and map")
+    parser.add_argument("--runs", type=positive_int, default=20, help="seeds per planner and map")
     parser.add_argument("--maps", default="parking_lot,overtake")
     parser.add_argument("--out", default="results")
     parser.add_argument(
@@ -303,4 +304,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from results_io import run_main
+
+    raise SystemExit(run_main(main))

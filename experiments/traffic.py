@@ -32,6 +32,7 @@ from pathlib import Path as FsPath
 import numpy as np
 
 from rrtdrive.bench.backends import episode_progress, parallel_map
+from rrtdrive.cli_args import positive_int
 from rrtdrive.evaluation import TTC_LEAST_MIN_S, EpisodeReport, evaluate, summarise
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim.replanning import ReplanConfig
@@ -215,7 +216,7 @@ def save_video(case: dict, args: argparse.Namespace, figures: FsPath) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
-    ap.add_argument("--seeds", type=int, default=100)
+    ap.add_argument("--seeds", type=positive_int, default=100)
     ap.add_argument("--densities", default=",".join(DENSITIES))
     ap.add_argument("--controller", default="pure-pursuit")
     ap.add_argument("--predictor", default="constant-velocity")
@@ -318,4 +319,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    from results_io import run_main
+
+    raise SystemExit(run_main(main))

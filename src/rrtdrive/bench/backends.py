@@ -25,6 +25,7 @@ from __future__ import annotations
 import logging
 import multiprocessing as mp
 import os
+import re
 import signal
 import sys
 import time
@@ -516,8 +517,10 @@ def parallel_map(
 
     Raises
     ------
+    InputError
+        When an item's work raised one (bad input: an unknown scenario, ...).
     RuntimeError
-        When an item failed on every attempt (its error in the message).
+        When an item failed on every attempt otherwise (its error in the message).
     """
     work = list(items)
     backend = LocalBackend(max(1, workers), executor=fn, run_timeout_s=run_timeout_s)
@@ -528,7 +531,12 @@ def parallel_map(
     rows: list[dict[str, Any] | None] = [None] * len(work)
     for done, outcome in enumerate(backend.run(work), 1):
         if outcome.row is None:
-            raise RuntimeError(f"{outcome.spec!r} failed: {outcome.error}")
+            error = outcome.error or ""
+            if error.startswith("InputError: "):
+                # Bad input is the caller's: one line naming the field, as anywhere else.
+                text = error.removeprefix("InputError: ").splitlines()[0]
+                raise InputError(re.sub(r" at \S+:\d+$", "", text))  # not _call's "at file:line"
+            raise RuntimeError(f"{outcome.spec!r} failed: {error}")
         rows[slots[id(outcome.spec)].pop(0)] = outcome.row
         if progress is not None:
             progress(done, len(work))
