@@ -42,15 +42,18 @@ import sys
 import time
 from pathlib import Path as FsPath
 
-from rrtdrive.bench.backends import episode_progress, parallel_map
-from rrtdrive.cli_args import positive_int
-from rrtdrive.evaluation import EpisodeReport, evaluate, summarise
-from rrtdrive.maps import write_text_atomic
-from rrtdrive.sim.runner import EpisodeConfig, run_episode
-from rrtdrive.sim.scenes import SimConfig
-from rrtdrive.sim.tasks import DEFAULT_PLANNER, make_scenario
-from rrtdrive.sim.tasks import Task as Scenario
-from rrtdrive.types import Budget, VehicleParams
+sys.path.insert(0, str(FsPath(__file__).resolve().parent))
+from results_io import check_doc, write_doc  # noqa: E402
+
+from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
+from rrtdrive.cli_args import positive_int  # noqa: E402
+from rrtdrive.evaluation import EpisodeReport, evaluate, summarise  # noqa: E402
+from rrtdrive.maps import write_text_atomic  # noqa: E402
+from rrtdrive.sim.runner import EpisodeConfig, run_episode  # noqa: E402
+from rrtdrive.sim.scenes import SimConfig  # noqa: E402
+from rrtdrive.sim.tasks import DEFAULT_PLANNER, make_scenario  # noqa: E402
+from rrtdrive.sim.tasks import Task as Scenario  # noqa: E402
+from rrtdrive.types import Budget, VehicleParams  # noqa: E402
 
 SCENARIOS = ("parking", "overtake", "overtake-oncoming")
 #: The gear-change scenarios (issue 14): their table has the gear columns.
@@ -265,6 +268,7 @@ def main(argv: list[str] | None = None) -> int:
         "--figures", default=None, help="with --doc: write seed 0's frames here and show them"
     )
     args = ap.parse_args(argv)
+    check_doc(args.doc, "closed_loop.py")
     raw = argv if argv is not None else sys.argv[1:]
     scenarios = [x for item in args.scenarios for x in item.split(",") if x]
     if args.stock and "--scenarios" not in raw:
@@ -351,7 +355,7 @@ def main(argv: list[str] | None = None) -> int:
             rel = os.path.relpath(figures, FsPath(args.doc).parent)
             pics = "".join(f"![{n}]({rel}/{n})\n" for n in names)
             page += "\n## Frames (seed 0)\n\n" + pics
-        write_text_atomic(FsPath(args.doc), page)
+        write_doc(args.doc, page, "closed_loop.py")
     return 0
 
 

@@ -57,10 +57,11 @@ import numpy as np
 sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 from coverage_report import SHARPNESS_BOUND, report, tight_report  # noqa: E402
 from random_goals import draw_goals  # noqa: E402  (the sibling script's pose sets)
+from results_io import check_doc, write_doc  # noqa: E402
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
 from rrtdrive.bench.backends import parallel_map  # noqa: E402
-from rrtdrive.cli_args import positive_int
+from rrtdrive.cli_args import positive_int  # noqa: E402
 from rrtdrive.maps import builtin_map  # noqa: E402
 from rrtdrive.planning import PLANNERS, PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.planning.hybrid.escalation import stage_of  # noqa: E402
@@ -433,6 +434,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", type=positive_int, default=3,
                     help="with --tight: planner seeds per query")
     args = ap.parse_args(argv)
+    check_doc(args.doc, "coverage.py")
     sets = [s for s in args.sets.split(",") if s]
     if args.count < 1 or not set(sets) <= {"goal", "start"} or not sets:
         ap.error("--count must be >= 1 and --sets a list of goal, start")
@@ -504,7 +506,7 @@ def main(argv: list[str] | None = None) -> int:
         text = tight_report(payload)
         write_text_atomic(out / "coverage_tight.md", text)
         if args.doc:
-            write_text_atomic(FsPath(args.doc), text)
+            write_doc(args.doc, text, "coverage.py")
         print(text)
         return 0
     payload = {
@@ -529,7 +531,7 @@ def main(argv: list[str] | None = None) -> int:
     text = report(payload)
     write_text_atomic(out / f"{stem}.md", text)
     if args.doc:
-        write_text_atomic(FsPath(args.doc), text)
+        write_doc(args.doc, text, "coverage.py")
     print(text)
     return 0
 
