@@ -43,7 +43,7 @@ import time
 from pathlib import Path as FsPath
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parent))
-from results_io import check_doc, write_doc  # noqa: E402
+from results_io import check_doc, write_doc, write_image_atomic  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
 from rrtdrive.cli_args import positive_int  # noqa: E402
@@ -206,7 +206,6 @@ def table(summaries: dict[str, dict]) -> str:
 
 
 def save_frames(figures: FsPath, planner: str, hz: int, oncoming: int) -> list[str]:
-    import imageio.v2 as imageio
 
     from rrtdrive.sim.video import render_frames
 
@@ -225,7 +224,7 @@ def save_frames(figures: FsPath, planner: str, hz: int, oncoming: int) -> list[s
             if i > 3:
                 break
             name = f"closed_loop_{scenario}_{i}.png"
-            imageio.imwrite(figures / name, frame)
+            write_image_atomic(figures / name, frame)
             names.append(name)
     return names
 

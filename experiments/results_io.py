@@ -134,3 +134,15 @@ def write_doc(doc: str, text: str, script: str) -> None:
             head, rest = old.split(begin, 1)
             block = head + block + rest.split(end, 1)[1].lstrip("\n")
     write_text_atomic(path, block)
+
+
+def write_image_atomic(path: FsPath, frame: Any) -> None:
+    """Write image ``frame`` to ``path`` whole or not at all (a temporary file, renamed)."""
+    import imageio.v3 as iio
+
+    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
+    try:
+        iio.imwrite(tmp, frame)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)

@@ -180,7 +180,7 @@ def _tightness(r: dict) -> tuple[float, float]:
 
 
 def save_video(case: dict, args: argparse.Namespace, figures: FsPath) -> dict:
-    import imageio.v2 as imageio
+    from results_io import write_image_atomic
 
     from rrtdrive.sim.video import render_frames, write_video
 
@@ -197,7 +197,7 @@ def save_video(case: dict, args: argparse.Namespace, figures: FsPath) -> dict:
     for i, frame in enumerate(render_frames(ep, stride=1)):
         if i in k:
             name = f"traffic{tag}_tight_{k.index(i)}.png"
-            imageio.imwrite(figures / name, frame)
+            write_image_atomic(figures / name, frame)
             names.append(name)
     return {
         "seed": case["seed"],
