@@ -176,3 +176,77 @@ def test_a_narrow_street_video_keeps_its_start_car_clear(tmp_path):
     assert first.shape == (240, 960, 3)
     # The panel's white fill is at the top right, away from the car at the left.
     assert (first[10, -20] == 255).all() and not (first[10, 20] == 255).all()
+
+
+@pytest.mark.parametrize("stride", [1, 7, 60, 1000])
+def test_a_video_lasts_the_episodes_simulated_time(episode, tmp_path, stride):
+    # The final state's frame came after fewer steps than a stride but played a whole
+    # stride: 2 frames of an episode at stride 1000 made a video 20 times too long.
+    from rrtdrive.sim.video import real_time_fps
+
+    out = tmp_path / f"s{stride}.mp4"
+    frames = write_video(episode, out, stride=stride)
+    simulated = len(episode.log.states) * episode.log.dt
+    fps = real_time_fps(frames, len(episode.log.states), episode.log.dt)
+    assert frames / fps == pytest.approx(simulated)
+    # The file's own rate (ffmpeg keeps a low rate to about two digits).
+    assert imageio.get_reader(out).get_meta_data()["fps"] == pytest.approx(fps, rel=0.05)
+    if stride == 1:
+        assert fps == pytest.approx(1.0 / episode.log.dt)
+
+
+@pytest.mark.parametrize(("option", "field"), [({"stride": 0}, "stride"),
+                                               ({"stride": -1}, "stride"),
+                                               ({"fps": 0}, "fps")])
+def test_write_video_names_a_bad_stride_or_fps(episode, tmp_path, option, field):
+    with pytest.raises(InputError, match=f"^{field}:"):
+        write_video(episode, tmp_path / "v.mp4", **option)
+    assert not (tmp_path / "v.mp4").exists()
+
+
+def test_a_map_kilometres_long_is_fitted_not_scaled_to_nothing():
+    from rrtdrive.sim.scenes import fit_view
+
+    # 9.6 km: under 0.1 px/m, which rounded to 0 (a ZeroDivisionError in the camera).
+    size, scaling, _ = fit_view((0.0, 0.0, 9600.0, 10.0))
+    assert 0.09 < scaling < 0.1 and size == (960, 240)
+    assert 0 < fit_view((0.0, 0.0, 1e6, 10.0))[1] * (1e6 + 6.5) <= 960
+
+
+def test_the_read_out_cte_is_the_evaluators_on_a_path_with_cusps(monkeypatch):
+    # It projected every pose on the whole path, not on the gear segment being driven:
+    # on a u-turn driven with a noisy residual it showed the wrong sign on 148 steps.
+    import gymnasium as gym
+
+    import rrtdrive.envs  # noqa: F401  (registers the envs)
+    from rrtdrive.evaluation.tracking import tracking_errors
+    from rrtdrive.sim.render import SceneCanvas
+
+    env = gym.make("rrtdrive/UTurn-v0", controller="pure-pursuit", residual=True)
+    env.reset(seed=0)
+    rng = np.random.default_rng(0)
+    done = False
+    while not done:
+        _, _, terminated, truncated, _ = env.step(rng.uniform(-1, 1, 2).astype(np.float32))
+        done = terminated or truncated
+    ep = env.unwrapped.episode
+    env.close()
+    lines = []
+    frame = SceneCanvas.frame
+
+    def spy(self, text, *args, **kwargs):
+        lines.append(list(text))
+        return frame(self, text, *args, **kwargs)
+
+    monkeypatch.setattr(SceneCanvas, "frame", spy)
+    stride = 4
+    for _ in render_frames(ep, stride):
+        pass
+    shown = np.array([float(next(s for s in ln if s.startswith("cte")).split()[1])
+                      for ln in lines])
+    states = ep.log.states
+    cte = tracking_errors(ep.path, states[:, :3], speeds=states[:, 3])[0]
+    want = cte[list(range(0, len(states), stride)) + ([len(states) - 1]
+                                                       if (len(states) - 1) % stride else [])]
+    assert len(ep.path.cusps) >= 1 and np.abs(want).max() > 0.05
+    np.testing.assert_allclose(shown, want, atol=0.0011)

@@ -364,9 +364,9 @@ def _run(args: argparse.Namespace) -> int:
             extra["video"] = None
             print(f"rrtdrive simulate: no video: {episode.message}", file=sys.stderr)
         else:
-            from rrtdrive.sim.video import write_frames
+            from rrtdrive.sim.video import real_time_fps, write_frames
 
-            fps = (1.0 / episode.log.dt) / stride
+            fps = real_time_fps(len(stock.frames), len(episode.log.states), episode.log.dt)
             with writing("--video", args.video):
                 extra["video_frames"] = write_frames(stock.frames, args.video, fps)
             extra["video"] = args.video

@@ -142,7 +142,7 @@ def fit_view(
     size : tuple of int
         ``(width, height)`` in pixels.
     scaling : float
-        Pixels per metre (rounded down to 0.1).
+        Pixels per metre (rounded down to 0.1; below 0.1 to two significant digits).
     centre : tuple of float
         The centre of ``bounds``.
 
@@ -159,7 +159,10 @@ def fit_view(
         raise InputError(f"bounds: need finite xmin < xmax and ymin < ymax, got {bounds!r}")
     w, h = xmax - xmin + 2 * margin, ymax - ymin + 2 * margin
     scaling = min(max_size[0] / w, max_size[1] / h, max_scaling)
-    scaling = math.floor(scaling * 10.0 + 1e-6) / 10.0
+    # Down to 0.1 px/m; a map over ~9.6 km wide needs less, which rounded to 0 (a
+    # ZeroDivisionError in highway-env's camera): two significant digits there.
+    per = 10.0 if scaling >= 0.1 else 10.0 ** (1 - math.floor(math.log10(scaling)))
+    scaling = math.floor(scaling * per + 1e-6) / per
     size = (
         max(FIT_MIN_SIZE[0], min(max_size[0], _multiple_of_16(w * scaling))),
         max(FIT_MIN_SIZE[1], min(max_size[1], _multiple_of_16(h * scaling))),

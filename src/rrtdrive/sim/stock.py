@@ -32,6 +32,7 @@ from rrtdrive.controllers import make_controller
 from rrtdrive.sim.episode import DriveLog, Episode, EpisodeStatus, end_message
 from rrtdrive.sim.extract import attach_ego, map_from_env
 from rrtdrive.sim.loop import STOP_AT_PATH_END, PathTracker
+from rrtdrive.sim.render import prepare_sdl
 from rrtdrive.sim.runner import EpisodeConfig
 from rrtdrive.sim.tasks import DEFAULT_PLANNER, CustomTask
 from rrtdrive.types import InputError, Path, PlanResult, VehicleParams
@@ -120,6 +121,8 @@ def make_stock_env(
     env = gym.make(env_id)
     env.unwrapped.configure(config)
     env.unwrapped.render_mode = "rgb_array" if render else None
+    if render:
+        prepare_sdl()  # without a runtime folder SDL prints an "error:" line on stderr
     return env
 
 

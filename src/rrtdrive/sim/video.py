@@ -27,7 +27,7 @@ from rrtdrive.types import InputError, Pose, require_int
 
 __all__ = [
     "render_frames", "write_video", "write_frames", "frame_is_blank", "frame_indices",
-    "hud_gears",
+    "hud_gears", "real_time_fps",
 ]
 
 #: ``progress(frames_done, frames_total)``, called after each frame is handed to the encoder.
@@ -76,6 +76,21 @@ def hud_gears(speeds: np.ndarray) -> np.ndarray:
             nxt = "R"
         out[k] = nxt
     return out.astype(str)
+
+
+def real_time_fps(frames: int, states: int, dt: float) -> float:
+    """Frames per second that make ``frames`` frames last as long as ``states`` logged states.
+
+    ``simulation_frequency / stride`` when the stride divides the steps; otherwise the
+    final state's extra frame (after fewer steps than a stride) no longer stretches the
+    video: 2 frames of a 5 s episode at stride 1000 played 100 s.
+
+    Examples
+    --------
+    >>> real_time_fps(101, 101, 0.05), round(real_time_fps(2, 101, 0.05), 3)
+    (20.0, 0.396)
+    """
+    return frames / (states * dt)
 
 
 def frame_indices(episode: Episode, stride: int = 1) -> list[int]:
@@ -157,7 +172,8 @@ def render_frames(
         traffic = episode.traffic
         follow = episode.scenario.camera().follow
         cte = (
-            tracking_errors(episode.path, log.states[:, :3])[0]
+            # Per gear segment, as the evaluators measure it (docs/metrics.md).
+            tracking_errors(episode.path, log.states[:, :3], speeds=log.states[:, 3])[0]
             if len(episode.path) >= 2 else np.zeros(len(log.states))
         )
         goal = episode.scenario.goal
@@ -233,7 +249,8 @@ def write_video(
     target : str or os.PathLike
         Output ``.mp4`` file.
     fps : float, optional
-        Frames per second (default: real time, ``simulation_frequency / stride``).
+        Frames per second (default: real time, :func:`real_time_fps`: the video lasts
+        the episode's simulated time, about ``simulation_frequency / stride``).
     stride : int
         Steps between frames.
     progress : callable, optional
@@ -250,10 +267,11 @@ def write_video(
         raise InputError(f"--video: the file must end in .mp4, got {str(target)!r}")
     if not out.parent.exists():
         raise InputError(f"--video: folder {str(out.parent)!r} does not exist")
-    fps = fps or (1.0 / episode.log.dt) / stride
+    total = len(frame_indices(episode, stride))  # checks stride first
+    if fps is None:
+        fps = real_time_fps(total, len(episode.log.states), episode.log.dt)
     if not (math.isfinite(fps) and fps > 0):
         raise InputError(f"fps: must be > 0, got {fps!r}")
-    total = len(frame_indices(episode, stride))
     with Mp4Writer(out, fps, quality=7, macro_block_size=16) as writer:
         for frame in render_frames(episode, stride):
             writer.append(frame)
