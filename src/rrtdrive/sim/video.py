@@ -90,7 +90,7 @@ def real_time_fps(frames: int, states: int, dt: float) -> float:
     >>> real_time_fps(101, 101, 0.05), round(real_time_fps(2, 101, 0.05), 3)
     (20.0, 0.396)
     """
-    return frames / (states * dt)
+    return (frames / states) / dt  # exactly 1 / dt when every state is a frame
 
 
 def frame_indices(episode: Episode, stride: int = 1) -> list[int]:
