@@ -103,7 +103,12 @@ def action_command(
         isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
         for v in raw.reshape(-1)
     ):
-        raw = raw.astype(np.float64)
+        try:
+            raw = raw.astype(np.float64)
+        except OverflowError:  # an int past the largest float: not a finite number
+            raise InputError(
+                f"action: expected two finite numbers, got {brief_repr(action)}"
+            ) from None
     # Only numbers: np.asarray(..., float) would also read strings ("0.5") as numbers,
     # and a string, None or an object would fail with a message not naming the action.
     if raw is None or raw.dtype.kind not in "iuf":
@@ -111,7 +116,10 @@ def action_command(
             f"action: expected two finite numbers, got {type(action).__name__} "
             f"{brief_repr(action)}"
         )
-    a = raw.astype(np.float64).reshape(-1)
+    try:
+        a = raw.astype(np.float64).reshape(-1)
+    except OverflowError:  # numpy's own big ints (uint64 fits; object arrays above)
+        raise InputError(f"action: expected two finite numbers, got {brief_repr(action)}") from None
     if a.shape != (2,) or not np.all(np.isfinite(a)):
         raise InputError(f"action: expected two finite numbers, got {brief_repr(action)}")
     a0 = min(max(float(a[0]), -1.0), 1.0)

@@ -52,6 +52,9 @@ def _require_mapping(name: str, value: Any) -> dict[str, Any]:
         return {}
     if not isinstance(value, Mapping):
         raise InputError(f"{name}: expected a mapping, got {value!r}")
+    for key in value:
+        if not isinstance(key, str):  # they become keyword arguments
+            raise InputError(f"{name}: keys must be option names (strings), got {key!r}")
     return dict(value)
 
 

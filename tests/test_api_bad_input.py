@@ -169,3 +169,32 @@ def test_an_invalid_start_says_why_in_the_maps_words(start, words):
         r = make_planner(name).solve(problem, np.random.default_rng(0), Budget())
         assert r.status is PlanStatus.INVALID_START and r.message.startswith("start: ")
         assert words in r.message, (name, r.message)
+
+
+def test_huge_integers_inside_values_are_named_not_crashed_on():
+    # An int of 5000 digits inside a list: brief_repr called .bit_length() on the list
+    # (AttributeError); a gym action or a jitter of 10**400 overflowed float().
+    import gymnasium as gym
+
+    import rrtdrive.envs  # noqa: F401  (registers the envs)
+    from rrtdrive.sim.tasks import make_scenario
+    from rrtdrive.types import brief_repr
+
+    assert brief_repr([0, 10**5000]) == "a list holding an integer too long to print"
+    with pytest.raises(InputError, match=r"^bounds: .*too long to print"):
+        Map("m", [0, 0, 10**5000], (), Pose(1, 1, 0), Pose(2, 2, 0))
+    with pytest.raises(InputError, match=r"^jitter: "):
+        make_scenario("parking", 0, jitter=(10**400, 0.5, 0.1))
+    env = gym.make("rrtdrive/Parking-v0")
+    env.reset(seed=0)
+    for action in ([0.5, 10**400], [None, 10**5000]):
+        with pytest.raises(InputError, match=r"^action: expected two finite numbers"):
+            env.step(action)
+    env.close()
+
+
+def test_option_mappings_with_keys_that_are_not_names_are_bad_input():
+    from rrtdrive.envs.config import DriveEnvConfig
+
+    with pytest.raises(InputError, match=r"^controller_options: keys must be option names"):
+        DriveEnvConfig(scenario="parking", controller_options={1: 2})

@@ -59,13 +59,18 @@ def brief_repr(value: object, limit: int = 32) -> str:
     '1000000000...(401 digits)'
     >>> brief_repr(np.float64(0.5)), brief_repr("1")
     ('0.5', "'1'")
+    >>> brief_repr([0, 10**5000])
+    'a list holding an integer too long to print'
     """
     if isinstance(value, (np.integer, np.floating, np.bool_)):
         value = value.item()
     try:
         text = repr(value)
     except ValueError:  # an int past Python's str-conversion limit (over 4300 digits)
-        return f"an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
+        if isinstance(value, int):
+            return f"an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
+        # Such an int inside a list or tuple: the container cannot be shown either.
+        return f"a {type(value).__name__} holding an integer too long to print"
     if len(text) <= limit:
         return text
     if isinstance(value, int):

@@ -132,7 +132,7 @@ def _jitter(jitter: object) -> tuple[float, float, float]:
         ok = len(values) == 3 and all(
             not isinstance(j, bool) and j >= 0 and math.isfinite(j) for j in values
         )
-    except TypeError:
+    except (TypeError, OverflowError):  # not numbers; an int past the largest float
         ok = False
     if not ok:
         raise InputError(
