@@ -112,9 +112,11 @@ def _map_of(
 
     from rrtdrive.maps import BUILTIN_MAPS, resolve_map
 
-    query = {"start": start, "goal": goal, "check_query": False}
+    def load(spec: str) -> Any:
+        return resolve_map(spec, start=start, goal=goal, check_query=False)
+
     if args.map is not None:
-        return resolve_map(args.map, **query)
+        return load(args.map)
     spec = data.get("map")
     map_file = data.get("map_file")
     if isinstance(map_file, str) and map_file:
@@ -123,7 +125,7 @@ def _map_of(
                 f"map: the plan was made on the map file {map_file}, which is not there any "
                 "more; give the map: rrtdrive verify PLAN MAP.json"
             )
-        return resolve_map(map_file, **query)
+        return load(map_file)
     if not isinstance(spec, str) or not spec:
         raise InputError("map: the plan names no map; give one: rrtdrive verify PLAN MAP")
     if spec not in BUILTIN_MAPS:
@@ -131,7 +133,7 @@ def _map_of(
             f"map: the plan names map {spec!r}, which is not built in, and no map file; "
             "give its file: rrtdrive verify PLAN MAP.json"
         )
-    return resolve_map(spec, **query)
+    return load(spec)
 
 
 def _metres(value: float, spec: str = ".3f") -> str:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import Any
 
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
@@ -475,7 +476,7 @@ class HybridConfig:
             self, refinements=0, coarse_after=0.0, **{**self._retry(), **changes}
         )
 
-    def _retry(self) -> dict[str, float]:
+    def _retry(self) -> dict[str, Any]:
         """What a search after a failure changes: :attr:`retry_weight`, every shot tried."""
         return {"heuristic_weight": self.retry_weight, "shot_cell": 0.0}
 

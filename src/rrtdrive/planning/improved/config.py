@@ -6,6 +6,7 @@ import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 from rrtdrive.planning.improved.fallback import MAX_FALLBACK_CANDIDATES
 from rrtdrive.planning.smoothing import SmoothingConfig
@@ -372,8 +373,12 @@ class ImprovedConfig:
         (False, False)
         """
         _check_components(components)
-        mine = {name: False for name in components if name not in SMOOTHING_COMPONENTS}
-        theirs = {name: False for name in components if name in SMOOTHING_COMPONENTS}
+        mine: dict[str, Any] = {
+            name: False for name in components if name not in SMOOTHING_COMPONENTS
+        }
+        theirs: dict[str, Any] = {
+            name: False for name in components if name in SMOOTHING_COMPONENTS
+        }
         if theirs:
             mine["smoothing"] = dataclasses.replace(self.smoothing, **theirs)
         return dataclasses.replace(self, **mine)

@@ -176,7 +176,7 @@ class _Query:
     def __init__(self, problem: PlanningProblem, cfg: ImprovedConfig) -> None:
         self.problem = problem
         self.cfg = cfg
-        self.watch: Stopwatch | None = None
+        self.watch: Stopwatch  # set by run(), before any stage reads it
         self._growth: tuple[CollisionChecker, EdgeFree, np.ndarray | None] | None = None
         self._growth_stats: dict[str, float] = {}
         self.checker = checker = problem.checker
