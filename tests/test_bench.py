@@ -689,3 +689,16 @@ def test_an_interrupted_bench_of_another_grid_leaves_no_old_summary(tmp_path):
     # Resumed to its end, the grid writes its own.
     run_bench(other)
     assert "narrow_gap" in (out / "summary.md").read_text()
+
+
+def test_rows_say_how_they_were_run(tmp_path):
+    # A forward and a reverse grid's rows looked alike; the summary keeps them as ids.
+    from rrtdrive.bench.summary import summarise_rows
+
+    cfg = BenchConfig(maps=("overtake",), planners=("rrt-connect",), seeds=1, workers=1,
+                      out=str(tmp_path / "b"), plots=False, reverse=True)
+    run_bench(cfg)
+    rows = [json.loads(line) for line in (tmp_path / "b" / "runs.jsonl").read_text().splitlines()]
+    assert [(r["reverse"], r["deterministic"]) for r in rows] == [(True, False)]
+    stats = summarise_rows(rows)[0].stats
+    assert "reverse" not in stats and "deterministic" not in stats

@@ -40,7 +40,8 @@ __all__ = [
 _ID_FIELDS = {
     "config_hash", "seed", "kind", "map", "scenario", "planner", "controller", "status",
     "message", "error", "worker", "finished_at", "map_name", "plan_status", "max_time_s",
-    "max_iterations", "attempts", "kappa_max", "simulation_frequency",
+    "max_iterations", "attempts", "kappa_max", "simulation_frequency", "reverse",
+    "deterministic",
 }
 
 #: Metrics that can be negative (Student's t interval); every other number is a

@@ -48,6 +48,9 @@ def base_row(spec: RunSpec) -> dict[str, Any]:
         "controller": spec.controller,
         "max_time_s": spec.max_time_s,
         "max_iterations": spec.max_iterations,
+        # How it was run: rows of a forward and a reverse grid looked alike.
+        "reverse": spec.reverse,
+        "deterministic": spec.deterministic,
     }
     return row
 
