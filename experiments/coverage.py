@@ -66,7 +66,7 @@ from rrtdrive.maps import builtin_map  # noqa: E402
 from rrtdrive.planning import PLANNERS, PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.planning.hybrid.escalation import stage_of  # noqa: E402
 from rrtdrive.planning.smoothing import max_sharpness  # noqa: E402
-from rrtdrive.types import Budget, Path, Pose  # noqa: E402
+from rrtdrive.types import Budget, InputError, Path, Pose  # noqa: E402
 from rrtdrive.verify import verify_path  # noqa: E402
 
 DEFAULT_PLANNERS = (
@@ -443,6 +443,9 @@ def main(argv: list[str] | None = None) -> int:
     planners = [p for p in wanted if p not in skipped]
     for p, why in skipped.items():
         print(f"skipping {p}: {why}", file=sys.stderr)
+    if not planners:  # a typo skipped alone would give empty tables and exit 0
+        why = "; ".join(f"{p}: {w}" for p, w in skipped.items())
+        raise InputError(f"--planners: none of them can run here ({why})")
     items = []
     if args.tight:
         for index, (name, label, goal) in enumerate(tight_queries()):

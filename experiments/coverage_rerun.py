@@ -22,6 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import coverage as cov  # noqa: E402  (the sibling script)
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
+from rrtdrive.types import InputError  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -32,6 +33,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", required=True)
     args = ap.parse_args(argv)
     d = json.loads(Path(args.run).read_text())
+    ran = sorted({r["planner"] for r in d["rows"]})
+    if args.planner not in ran:  # else: an empty re-run, exit 0
+        raise InputError(f"--planner: {args.planner!r} has no rows in {args.run}; it has {ran}")
     todo = [r for r in d["rows"] if r["planner"] == args.planner and not r["solved"]]
     poses = {v: cov.draw_goals(d["map"], d["count"], d["seed"], v) for v in d["sets"]}
     rows = []
