@@ -198,3 +198,35 @@ def test_option_mappings_with_keys_that_are_not_names_are_bad_input():
 
     with pytest.raises(InputError, match=r"^controller_options: keys must be option names"):
         DriveEnvConfig(scenario="parking", controller_options={1: 2})
+
+
+def test_a_users_car_is_taken_whole():
+    # Found by an audit of custom cars: each of these failed for a car other than the stock one.
+    import dataclasses
+
+    from rrtdrive.sim.scenes import build_env
+    from rrtdrive.sim.tasks import make_scenario
+    from rrtdrive.types import PlanStatus, VehicleParams
+
+    # A numpy steering rate, as the other fields take numpy numbers.
+    assert VehicleParams(max_steer_rate=np.float32(0.3)).max_steer_rate == pytest.approx(0.3)
+    # A turning radius whose arcs would run to gigabytes of samples: refused, named.
+    with pytest.raises(InputError, match=r"^vehicle.min_turning_radius: at most"):
+        VehicleParams(min_turning_radius=1e6)
+    # A car steering at 0.03 rad/s: the bound (0.015 rad/m) fell under the gentlest
+    # turns' sharpness and the planner raised about a setting the user never touched.
+    slow = dataclasses.replace(builtin_map("overtake"), vehicle=VehicleParams(max_steer_rate=0.03))
+    r = make_planner("improved-rrt-connect").solve(
+        PlanningProblem.from_map(slow), np.random.default_rng(0),
+        Budget(max_iterations=300, max_time_s=20),
+    )
+    assert isinstance(r.status, PlanStatus)
+    # The overtake scenario with a car of another size (its stopped car is a stock one).
+    car = VehicleParams(length=4.8, width=1.9)
+    task = make_scenario("overtake", 0, vehicle=car)
+    assert task.vehicle == car
+    # highway-env's normalised full lock is the car's own.
+    wide_lock = VehicleParams(max_steer=0.6109, min_turning_radius=3.7)
+    env = build_env(make_scenario("parking", 0, vehicle=wide_lock))
+    assert env.unwrapped.config["action"]["steering_range"] == [-0.6109, 0.6109]
+    env.close()

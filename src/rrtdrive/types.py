@@ -198,6 +198,11 @@ class Pose:
         return np.array([self.x, self.y])
 
 
+#: The largest turning radius a car may have, metres (a lorry's is about 12 m; at 1e6 m
+#: the planners' arc samples ran to gigabytes).
+MAX_TURNING_RADIUS = 1e4
+
+
 @dataclass(frozen=True)
 class VehicleParams:
     """The car of the paper (Table 2): the single source of truth for every module.
@@ -237,14 +242,23 @@ class VehicleParams:
         for name in ("length", "width", "wheelbase", "min_turning_radius", "max_steer"):
             require_positive(f"vehicle.{name}", getattr(self, name))
         rate = self.max_steer_rate
+        if isinstance(rate, (np.integer, np.floating)):
+            rate = float(rate)  # numpy numbers, as the other fields take them
+            object.__setattr__(self, "max_steer_rate", rate)
         if rate is not None and (
-            isinstance(rate, bool)
+            isinstance(rate, (bool, np.bool_))
             or not isinstance(rate, (int, float))
             or math.isnan(rate)
             or rate <= 0
         ):
             raise InputError(
                 f"vehicle.max_steer_rate: must be > 0 rad/s, inf or None, got {rate!r}"
+            )
+        if self.min_turning_radius > MAX_TURNING_RADIUS:
+            # Arcs of such a radius are sampled over kilometres (gigabytes of poses).
+            raise InputError(
+                f"vehicle.min_turning_radius: at most {MAX_TURNING_RADIUS:g} m, "
+                f"got {self.min_turning_radius:g}"
             )
         if self.wheelbase >= self.length:
             raise InputError(

@@ -545,6 +545,11 @@ def build_env(scenario: Any, sim: SimConfig | None = None, render: bool = False)
         "screen_height": sim.screen_height or view.size[1],
         "scaling": sim.scaling or view.scaling,
         "centering_position": list(view.centering),
+        # Full lock of a normalised action is the scenario's car's own (not the stock 30 deg).
+        "action": {
+            **SceneEnv.default_config()["action"],
+            "steering_range": [-scenario.vehicle.max_steer, scenario.vehicle.max_steer],
+        },
     }
     env = SceneEnv(config=config, render_mode="rgb_array" if render else None)
     _, _, sim_seed = scenario_rngs(scenario.seed)

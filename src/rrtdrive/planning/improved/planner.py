@@ -183,11 +183,15 @@ class _Query:
         self.start, self.goal = start, goal = problem.start, problem.goal
         # The config's post-processor with the query's PER_QUERY_SMOOTHING fields.
         vehicle = problem.vehicle
+        bound = sharpness_bound(cfg.smoothing.max_sharpness, vehicle.max_steer_rate)
         self.smoothing = dataclasses.replace(
             cfg.smoothing,
             kappa_max=vehicle.kappa_max,
             wheelbase=vehicle.wheelbase,
-            max_sharpness=sharpness_bound(cfg.smoothing.max_sharpness, vehicle.max_steer_rate),
+            max_sharpness=bound,
+            # A car steering slower than 0.04 rad/s brings the bound under the gentlest
+            # turns' sharpness (0.02): those may be no gentler than the bound then.
+            min_sharpness=min(cfg.smoothing.min_sharpness, bound),
             heading_leg=cfg.step,
             clearance=endpoint_capped_clearance(checker, start, goal, cfg.body_clearance),
         )

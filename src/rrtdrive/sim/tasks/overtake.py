@@ -95,7 +95,9 @@ class OvertakeTask(PathTask):
         dx, dy, dyaw = offset
         start = Pose(base.start.x + dx, base.start.y + 0.3 * dy, base.start.yaw + dyaw)
         m = base.with_query(start=start)
-        lead = _car_like(m.obstacles, vehicle)
+        # The stopped car is the map's own, a stock car whatever the ego (a user's car
+        # of another size found none and the scenario refused it).
+        lead = _car_like(m.obstacles, VehicleParams())
         cars = []
         x = m.bounds[2]
         for _ in range(count):
