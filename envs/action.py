@@ -116,10 +116,7 @@ def action_command(
             f"action: expected two finite numbers, got {type(action).__name__} "
             f"{brief_repr(action)}"
         )
-    try:
-        a = raw.astype(np.float64).reshape(-1)
-    except OverflowError:  # numpy's own big ints (uint64 fits; object arrays above)
-        raise InputError(f"action: expected two finite numbers, got {brief_repr(action)}") from None
+    a = raw.astype(np.float64).reshape(-1)
     if a.shape != (2,) or not np.all(np.isfinite(a)):
         raise InputError(f"action: expected two finite numbers, got {brief_repr(action)}")
     a0 = min(max(float(a[0]), -1.0), 1.0)

@@ -240,10 +240,9 @@ def test_verify_fails_a_path_touching_the_bounds():
     back = VehicleParams().rear_overhang
     xs = np.arange(0.0, 3.01, 0.1)
     rows = np.column_stack([back + xs, 5 + 0 * xs, 0 * xs, 0 * xs, 1 + 0 * xs])
-    clear = Pose(back + 1.0, 5, 0)
-    m = Map("m", (0.0, 0.0, 40.0, 40.0), (), clear, clear)
-    check = verify_path(m, Path(rows, np.zeros((0, 2))), start=Pose(back, 5, 0),
-                        goal=Pose(back + 3.0, 5, 0))
+    m = Map("m", (0.0, 0.0, 40.0, 40.0), (), Pose(back, 5, 0), Pose(back + 3.0, 5, 0),
+            check_query=False)
+    check = verify_path(m, Path(rows, np.zeros((0, 2))))
     assert not check.collision_free and check.collides_with == "the bounds"
     assert check.first_collision[0] == pytest.approx(back)
 

@@ -28,7 +28,6 @@ from rrtdrive.maps import Map
 from rrtdrive.types import (
     InputError,
     Path,
-    Pose,
     brief_repr,
     is_finite_number,
     require_positive,
@@ -304,8 +303,6 @@ def verify_path(
     curvature_tol: float = 0.01,
     max_sharpness: float | None = None,
     sharpness_tol: float = 0.005,
-    start: Pose | None = None,
-    goal: Pose | None = None,
 ) -> PathCheck:
     """Check a path against the map with code independent of the planner.
 
@@ -332,10 +329,6 @@ def verify_path(
     sharpness_tol : float
         Slack on ``max_sharpness``, rad/m (the estimate of an exact clothoid is
         within 0.003 rad/m of its sharpness at 0.25 m samples).
-    start, goal : Pose, optional
-        The poses the path must start and end at (default: the map's). Unlike a
-        map's own, they need not be clear: a path from a pose in collision fails
-        the body check, located there.
 
     Returns
     -------
@@ -362,11 +355,9 @@ def verify_path(
         )
     _check_settings(pose_spacing, max_sample_spacing, heading_tol_deg, curvature_tol,
                     max_sharpness, sharpness_tol)  # fmt: skip
-    for label, pose in (("start", start), ("goal", goal)):
-        if pose is not None and not isinstance(pose, Pose):
-            raise InputError(f"{label}: expected a Pose or None, got {brief_repr(pose)}")
-    start = m.start if start is None else start
-    goal = m.goal if goal is None else goal
+    # The map's poses; a map built with check_query=False may have them in collision
+    # (rrtdrive verify): the body check then fails there.
+    start, goal = m.start, m.goal
     v = m.vehicle
     s = path.samples
     if len(s) < 2:

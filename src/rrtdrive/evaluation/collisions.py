@@ -36,7 +36,6 @@ COLLISION_STOPPED_SPEED = 5e-2
 
 def map_collision(episode: Episode, spacing: float) -> bool:
     """Exact body rectangle of every (densified) logged pose against the map and its bounds."""
-    from rrtdrive.collision import CheckerConfig
     from rrtdrive.planning.base import cached_checker
 
     states = episode.log.states
@@ -46,9 +45,8 @@ def map_collision(episode: Episode, spacing: float) -> bool:
     dense = densify(states[:, :3], spacing, angle_column=2, abs_slack=1e-9).points
     # The exact test's grid screen: the planner's, so a map too big for the default grid
     # (simulate --resolution) is judged too.
-    resolution = getattr(episode.scenario, "resolution", None)
-    config = None if resolution is None else CheckerConfig(resolution=resolution)
-    return not bool(np.all(cached_checker(episode.scenario.map, config).poses_free(dense)))
+    checker = cached_checker(episode.scenario.map, episode.scenario.checker_config)
+    return not bool(np.all(checker.poses_free(dense)))
 
 
 def footprint_collisions(episode: Episode, spacing: float, map_hit: bool | None = None) -> bool:

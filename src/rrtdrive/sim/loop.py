@@ -140,15 +140,17 @@ class StopAtGoal:
         """``ARRIVED``."""
         return EpisodeStatus.ARRIVED
 
-    def reached(self, ego: EgoVehicle, driver: Any) -> bool:
-        """Stopped within the tolerances of the goal pose."""
+    def at_goal(self, x: float, y: float, yaw: float) -> bool:
+        """The rear-axle pose ``(x, y, yaw)`` lies within the tolerances of the goal pose."""
         goal = self.goal
-        x, y, yaw = ego.rear
         return bool(
-            abs(ego.speed) <= self.stop_speed
-            and math.hypot(x - goal.x, y - goal.y) <= self.tol_m
+            math.hypot(x - goal.x, y - goal.y) <= self.tol_m
             and abs(float(wrap_angle(yaw - goal.yaw))) <= self.tol_rad
         )
+
+    def reached(self, ego: EgoVehicle, driver: Any) -> bool:
+        """Stopped within the tolerances of the goal pose."""
+        return abs(ego.speed) <= self.stop_speed and self.at_goal(*ego.rear)
 
     def end_message(self, status: EpisodeStatus, t_end: float, max_time_s: float) -> str:
         """As :func:`~rrtdrive.sim.episode.end_message`, arrival worded as "at the goal"."""

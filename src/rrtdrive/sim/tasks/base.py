@@ -165,9 +165,9 @@ def plan_scenario(
     allowed when the task says so (``scenario.reverse``).
     """
     _, plan_rng, _ = scenario_rngs(seed)
-    resolution = getattr(scenario, "resolution", None)  # a map task's own grid
-    config = None if resolution is None else CheckerConfig(resolution=resolution)
-    problem = PlanningProblem.from_map(scenario.map, config=config, reverse=scenario.reverse)
+    problem = PlanningProblem.from_map(
+        scenario.map, config=scenario.checker_config, reverse=scenario.reverse
+    )
     return make_planner(planner).solve(problem, plan_rng, budget or Budget())
 
 
@@ -227,6 +227,11 @@ class Task:
             raise InputError(f"scenario.reverse: expected True or False, got {self.reverse!r}")
 
     # ------------------------------------------------------------------ data
+
+    @property
+    def checker_config(self) -> CheckerConfig | None:
+        """The collision checker's settings for planning and judging (``None``: the defaults)."""
+        return None
 
     @property
     def name(self) -> str:
@@ -346,17 +351,18 @@ class PathTask(Task):
         Raises :class:`InputError` when the start already meets them: the car stands
         there, so every episode would end on its first step.
         """
+        rule = StopAtGoal(self.goal, tol_m, tol_rad, stop_speed)
         a, b = self.start, self.goal
-        gap = float(np.hypot(b.x - a.x, b.y - a.y))
-        turn = abs(math.remainder(b.yaw - a.yaw, 2.0 * math.pi))
-        if gap <= tol_m and turn <= tol_rad:
+        if rule.at_goal(a.x, a.y, a.yaw):
+            gap = math.hypot(b.x - a.x, b.y - a.y)
+            turn = abs(math.remainder(b.yaw - a.yaw, 2.0 * math.pi))
             raise InputError(
                 f"goal: the start is already at the goal within its tolerance ({gap:.2f} m, "
                 f"{math.degrees(turn):.1f} deg; tolerance {tol_m:g} m, "
                 f"{math.degrees(tol_rad):g} deg): an agent's episode would end on its first "
                 "step; give a goal farther away"
             )
-        return StopAtGoal(self.goal, tol_m, tol_rad, stop_speed)
+        return rule
 
     def resolve(self, config: EpisodeConfig) -> tuple[SpeedConfig, EpisodeConfig]:
         """The given speed settings, else the defaults with this task's cap; ``config`` as is."""

@@ -14,6 +14,7 @@ from typing import ClassVar
 import numpy as np
 from highway_env.road.road import Road
 
+from rrtdrive.collision import CheckerConfig
 from rrtdrive.maps import Map
 from rrtdrive.planning.result import same_pose
 from rrtdrive.sim.scenes import plain_network, populate_road
@@ -113,6 +114,11 @@ class CustomTask(PathTask):
             map=m, seed=seed, reverse=reverse, v_max=v_max, max_time_s=max_time_s,
             resolution=resolution,
         )  # fmt: skip
+
+    @property
+    def checker_config(self) -> CheckerConfig | None:
+        """The collision grid of :attr:`resolution`, when one was given."""
+        return None if self.resolution is None else CheckerConfig(resolution=self.resolution)
 
     def describe(self) -> dict[str, object]:
         """The map's name and whether gear changes were allowed."""
