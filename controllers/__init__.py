@@ -8,6 +8,7 @@ steering limit. Build one by name with :func:`make_controller`.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 from rrtdrive.controllers.base import (
     Controller,
@@ -93,7 +94,7 @@ def make_controller(name: str, **options: object) -> TrackingController:
         raise InputError(f"controller: {exc}") from None
 
 
-def _option_names(cls: type) -> set[str] | None:
+def _option_names(cls: Callable[..., Any]) -> set[str] | None:
     """The keyword options ``cls`` takes (``None``: any, it has ``**kwargs``)."""
     import inspect
 

@@ -211,17 +211,18 @@ class DriveEnvConfig:
             put("max_cte", _require_number("max_cte", self.max_cte))
         put("reward", RewardWeights.from_any(self.reward))
         put("scenario_options", _require_mapping("scenario_options", self.scenario_options))
-        put("replan_options", _require_mapping("replan_options", self.replan_options))
+        replan_options = _require_mapping("replan_options", self.replan_options)
+        put("replan_options", replan_options)
         replan = None
         # None: the task plans once (a map's too).
         replan_config = None if self.map is not None else TASKS[scenario].REPLAN_CONFIG
         if replan_config is not None:
-            _check_fields("replan_options", self.replan_options, replan_config)  # type: ignore[arg-type]
+            _check_fields("replan_options", replan_options, replan_config)
             try:
-                replan = replan_config(**self.replan_options)
+                replan = replan_config(**replan_options)
             except TypeError as exc:
                 raise InputError(f"replan_options: {exc}") from None
-        elif self.replan_options:
+        elif replan_options:
             raise InputError(
                 f"replan_options: only the {' or '.join(REPLANNING_SCENARIOS)} scenario re-plans"
             )
@@ -332,17 +333,18 @@ class DriveEnvConfig:
 
     def controller_for(self, scenario: Scenario, speed: SpeedConfig) -> TrackingController:
         """The tracking controller for ``scenario`` with ``controller_options``."""
+        options = self.controller_options or {}  # a dict after __post_init__
         for key in ("vehicle", "speed"):
             # The scenario gives the car and speed_options the speed loop; a duplicate
             # keyword would fail as a TypeError naming neither.
-            if key in self.controller_options:  # type: ignore[operator]
+            if key in options:
                 raise InputError(
                     f"controller_options.{key}: set by the scenario"
                     f"{' and speed_options' if key == 'speed' else ''}, not a controller gain"
                 )
         try:
             return make_controller(
-                self.controller, vehicle=scenario.vehicle, speed=speed, **self.controller_options
+                self.controller, vehicle=scenario.vehicle, speed=speed, **options
             )
         except InputError as exc:
             # make_controller names an option controller.KEY; here it came from

@@ -266,7 +266,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         self._wall = 0.0
         self.episode = None
         self.report = None
-        self._use_reference(driver.path)  # type: ignore[attr-defined]
+        self._use_reference(driver.path)  # type: ignore[union-attr]
         self._obs64 = self._observe64()
         self._s = self._progress_s()
         return ref
@@ -495,7 +495,9 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         self._seg_s0 = seg.s0
         last = ctrl.segments[-1]
         self._to_goal = last.s0 + last.length - (seg.s0 + seg.length)
-        self._projector = PathProjector(seg.path, arc_end=not self.path.is_forward_only)
+        self._projector = PathProjector(
+            seg.path, arc_end=not self.path.is_forward_only  # type: ignore[union-attr]
+        )
         self._profile = ctrl.profile  # the driver's controller rebuilt it for this segment
 
     def _follow_segments(self) -> None:

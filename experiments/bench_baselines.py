@@ -201,8 +201,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, default=20, help="runs per planner (seeds 0..N-1)")
     parser.add_argument("--map", default="parking_lot", help="built-in map name or map file")
     parser.add_argument("--out", default="results/", help="output folder")
-    parser.add_argument("--planners", nargs="+", default=list(BASELINES), choices=BASELINES)
-    parser.add_argument("--max-iterations", type=int, default=20_000)
+    parser.add_argument("--planners", nargs="+", default=list(BASELINES), choices=BASELINES,
+                        help="baselines to time, space-separated (default: all)")
+    parser.add_argument("--max-iterations", type=int, default=20_000,
+                        help="iteration budget per query (default: %(default)s)")
     parser.add_argument("--max-time", type=float, default=10.0, help="seconds per query")
     parser.add_argument("--edges", type=int, default=20_000, help="random edges to time")
     parser.add_argument("--poses", type=int, default=5_000, help="random poses to time")

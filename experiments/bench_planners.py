@@ -110,10 +110,13 @@ def summarise(runs: list[dict]) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--map", default="parking_lot")
-    parser.add_argument("--seeds", type=positive_int, default=20)
+    parser.add_argument("--map", default="parking_lot",
+                        help="built-in map name (default: %(default)s)")
+    parser.add_argument("--seeds", type=positive_int, default=20,
+                        help="runs per planner, seeds 0..N-1 (default: %(default)s)")
     parser.add_argument("--cap", type=float, default=5.0, help="OMPL time cap per run [s]")
-    parser.add_argument("--out", default="results")
+    parser.add_argument("--out", default="results",
+                        help="directory for bench_planners_MAP.json and .md (default: %(default)s)")
     parser.add_argument(
         "--doc", default=None,
         help="also write this markdown page (docs/bench_planners.md for the docs)",

@@ -97,14 +97,22 @@ def _ompl_distance(radius: float) -> Callable[[Pose, Pose], float] | None:
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark; return 0, or 1 when a length differs from OMPL's by > 1e-6."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--pairs", type=int, default=1000)
-    ap.add_argument("--repeats", type=int, default=5)
-    ap.add_argument("--radius", type=float, default=6.0)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--table-extent", type=float, default=24.0)
-    ap.add_argument("--table-resolution", type=float, default=0.5)
-    ap.add_argument("--table-yaw-bins", type=int, default=72)
-    ap.add_argument("--out", default="results")
+    ap.add_argument("--pairs", type=int, default=1000,
+                    help="random start/goal pose pairs, >= 1 (default: %(default)s)")
+    ap.add_argument("--repeats", type=int, default=5,
+                    help="timed passes over all pairs per function, >= 1 (default: %(default)s)")
+    ap.add_argument("--radius", type=float, default=6.0,
+                    help="minimum turning radius [m], > 0 (default: %(default)s)")
+    ap.add_argument("--seed", type=int, default=0,
+                    help="seed of the random pairs and the table check (default: %(default)s)")
+    ap.add_argument("--table-extent", type=float, default=24.0,
+                    help="table covers |dx|, |dy| up to this [m] (default: %(default)s)")
+    ap.add_argument("--table-resolution", type=float, default=0.5,
+                    help="table grid spacing in x and y [m] (default: %(default)s)")
+    ap.add_argument("--table-yaw-bins", type=int, default=72,
+                    help="table heading bins over 360 degrees, >= 4 (default: %(default)s)")
+    ap.add_argument("--out", default="results",
+                    help="directory for reeds_shepp.json (default: %(default)s)")
     args = ap.parse_args(argv)
     if args.pairs < 1 or args.repeats < 1 or not args.radius > 0:
         ap.error("--pairs and --repeats must be >= 1, --radius > 0")

@@ -173,16 +173,22 @@ def trial(grid: str, workers: int, quiet: float | None, quiet_wait: float) -> di
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--grids", default="closed-loop,planning")
-    parser.add_argument("--repeats", type=int, default=2)
-    parser.add_argument("--out", default="results")
+    parser.add_argument("--grids", default="closed-loop,planning",
+                        help="comma-separated grids: closed-loop, planning (default: both)")
+    parser.add_argument("--repeats", type=int, default=2,
+                        help="1- and 2-worker trial pairs per grid (default: %(default)s)")
+    parser.add_argument("--out", default="results",
+                        help="directory for bench_scaling.json and .md (default: %(default)s)")
     parser.add_argument("--quiet-load", type=float, default=None,
                         help="wait for the 1-min load average to drop below this")
-    parser.add_argument("--quiet-wait", type=float, default=300.0)
+    parser.add_argument("--quiet-wait", type=float, default=300.0,
+                        help="longest wait for --quiet-load per trial [s] (default: %(default)s)")
     parser.add_argument("--max-foreign", type=float, default=None,
                         help="repeat a trial in which other processes took more than this "
                         "share of the CPU")
-    parser.add_argument("--attempts", type=int, default=3)
+    parser.add_argument("--attempts", type=int, default=3,
+                        help="tries per trial under --max-foreign; the last one is kept "
+                        "(default: %(default)s)")
     parser.add_argument("--probe", action="store_true",
                         help="first measure the machine's own 1 vs 2 process speed-up")
     args = parser.parse_args(argv)

@@ -70,11 +70,16 @@ def _same(a: Episode, b: Episode) -> bool:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--seeds", type=int, default=10)
-    ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--cases", default=",".join(CASES))
-    ap.add_argument("--controller", default="pure-pursuit")
-    ap.add_argument("--out", default="results")
+    ap.add_argument("--seeds", type=int, default=10,
+                    help="episodes per case, seeds 0..N-1 (default: %(default)s)")
+    ap.add_argument("--repeats", type=int, default=3,
+                    help="runs per episode and arm; the minimum counts (default: %(default)s)")
+    ap.add_argument("--cases", default=",".join(CASES),
+                    help="comma-separated cases (default: %(default)s)")
+    ap.add_argument("--controller", default="pure-pursuit",
+                    help="pure-pursuit, stanley or lqr (default: %(default)s)")
+    ap.add_argument("--out", default="results",
+                    help="directory for bench_scene_step.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     cases = [c.strip() for c in args.cases.split(",") if c.strip()]
     for c in cases:

@@ -65,11 +65,16 @@ def _encode(frames: list, path: FsPath, fps: float) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--scenario", default="parking")
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--controller", default="pure-pursuit")
-    ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--out", default="results")
+    ap.add_argument("--scenario", default="parking",
+                    help="scenario of the episode to export (default: %(default)s)")
+    ap.add_argument("--seed", type=int, default=0,
+                    help="episode seed (default: %(default)s)")
+    ap.add_argument("--controller", default="pure-pursuit",
+                    help="pure-pursuit, stanley or lqr (default: %(default)s)")
+    ap.add_argument("--repeats", type=int, default=3,
+                    help="interleaved timing rounds, >= 1; medians reported (default: %(default)s)")
+    ap.add_argument("--out", default="results",
+                    help="directory for bench_video.json and .md (default: %(default)s)")
     ap.add_argument("--doc", action="store_true", help=f"rewrite the results block of {DOC}")
     args = ap.parse_args(argv)
     if args.repeats < 1:

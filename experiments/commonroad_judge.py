@@ -66,20 +66,27 @@ def run_one(job: tuple[str, str, int, float | None, float]) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", type=int, default=10)
-    ap.add_argument("--scenarios", default="parking,overtake")
-    ap.add_argument("--controllers", default="pure-pursuit,stanley,lqr")
+    ap.add_argument("--seeds", type=int, default=10,
+                    help="seeds 0..N-1 per scenario and controller (default: %(default)s)")
+    ap.add_argument("--scenarios", default="parking,overtake",
+                    help="comma-separated scenario names (default: %(default)s)")
+    ap.add_argument("--controllers", default="pure-pursuit,stanley,lqr",
+                    help="comma-separated controllers (default: %(default)s)")
     ap.add_argument("--ego-steer-rate", type=float, default=None,
                     help="rate limit of the simulated ego's steering (default: instant)")
-    ap.add_argument("--judge-steer-rate", type=float, default=COMMONROAD_STEER_RATE)
+    ap.add_argument("--judge-steer-rate", type=float, default=COMMONROAD_STEER_RATE,
+                    help="steering-velocity limit of the judge [rad/s] (default: %(default)s)")
     ap.add_argument(
         "--random-maps", type=int, default=0, metavar="N",
         help="drive random maps 0..N-1 (experiments/random_maps.py) with reverse instead "
         "of --scenarios and --seeds",
     )
-    ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--out", default="results")
-    ap.add_argument("--tag", default="")
+    ap.add_argument("--jobs", type=int, default=2,
+                    help="worker processes (default: %(default)s)")
+    ap.add_argument("--out", default="results",
+                    help="directory for commonroad_judge[_TAG].json and .md (default: %(default)s)")
+    ap.add_argument("--tag", default="",
+                    help="output name suffix: commonroad_judge_TAG.json and .md (default: none)")
     args = ap.parse_args(argv)
     if not commonroad_available():
         print('commonroad_judge: needs the extra: pip install ".[commonroad]"', file=sys.stderr)

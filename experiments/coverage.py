@@ -114,7 +114,9 @@ def availability(name: str) -> str | None:
     except ValueError as exc:
         return str(exc)
     if ompl is not None:
-        return None if importlib.util.find_spec("ompl") else "OMPL is not installed here"
+        if importlib.util.find_spec("ompl") is None:
+            return "OMPL is not installed here (pip install '.[ompl]')"
+        return None
     spec, _, opts = name.partition("@")
     try:
         _options(opts)
@@ -416,15 +418,21 @@ def tight_queries() -> list[tuple[str, str, Pose]]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--map", default="parking_lot")
+    ap.add_argument("--map", default="parking_lot",
+                    help="built-in map name (default: %(default)s)")
     ap.add_argument("--count", type=positive_int, default=100, help="poses per set (default 100)")
     ap.add_argument("--sets", default="goal,start", help="goal, start or both (default)")
     ap.add_argument("--seed", type=int, default=1, help="seed of the pose sets")
-    ap.add_argument("--planners", default=DEFAULT_PLANNERS)
+    ap.add_argument("--planners", default=DEFAULT_PLANNERS,
+                    help="comma-separated: NAME[+reverse][@field=value:...] of a registered "
+                    "planner, ompl-dubins-rrt, ompl-rs-rrtconnect (default: %(default)s)")
     ap.add_argument("--max-time", type=float, default=5.0, help="our planners' budget [s]")
     ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time cap [s]")
-    ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--out", default="results")
+    ap.add_argument("--jobs", type=int, default=2,
+                    help="worker processes (default: %(default)s)")
+    ap.add_argument("--out", default="results",
+                    help="directory for coverage_MAP.json and .md, or coverage_tight.* "
+                    "(default: %(default)s)")
     ap.add_argument("--doc", default=None, help="also write this markdown page")
     ap.add_argument(
         "--tight", action="store_true",

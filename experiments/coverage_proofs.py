@@ -43,8 +43,10 @@ VARIANTS: dict[str, dict[str, float]] = {
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("run", help="a coverage_MAP.json of experiments/coverage.py")
-    ap.add_argument("--max-time", type=float, default=40.0)
-    ap.add_argument("--out", required=True)
+    ap.add_argument("--max-time", type=float, default=40.0,
+                    help="wall-clock cap per re-planned query [s] (default: %(default)s)")
+    ap.add_argument("--out", required=True,
+                    help="JSON file to write (its folder is created)")
     args = ap.parse_args(argv)
     d = json.loads(Path(args.run).read_text())
     by = {(r["planner"], r["vary"], r["index"]): r for r in d["rows"]}

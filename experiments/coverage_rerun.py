@@ -28,9 +28,13 @@ from rrtdrive.types import InputError  # noqa: E402
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("run", help="a coverage_MAP.json of experiments/coverage.py")
-    ap.add_argument("--planner", required=True)
-    ap.add_argument("--max-time", type=float, default=300.0)
-    ap.add_argument("--out", required=True)
+    ap.add_argument("--planner", required=True,
+                    help="planner name as in the run's rows; its unsolved queries are re-run")
+    ap.add_argument("--max-time", type=float, default=300.0,
+                    help="wall-clock cap per query [s]; OMPL keeps the run's cap "
+                    "(default: %(default)s)")
+    ap.add_argument("--out", required=True,
+                    help="JSON file to write (its folder is created)")
     args = ap.parse_args(argv)
     d = json.loads(Path(args.run).read_text())
     ran = sorted({r["planner"] for r in d["rows"]})

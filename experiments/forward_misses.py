@@ -210,7 +210,8 @@ def main(argv: list[str] | None = None) -> int:
                     f"{', '.join(SHORT)})")
     ap.add_argument("--expansions", type=int, default=20000, help="our counted budget")
     ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time cap [s]")
-    ap.add_argument("--out", default="results/forward_misses")
+    ap.add_argument("--out", default="results/forward_misses",
+                    help="directory for forward_misses.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)  # fmt: skip
     if args.expansions < 1 or args.ompl_time <= 0 or args.count < 1:
         ap.error("--expansions and --count must be >= 1 and --ompl-time > 0")

@@ -110,7 +110,8 @@ def main(argv: list[str] | None = None) -> int:
         help="start at any steering angle, lock to lock (the car turns its wheels at rest "
         "before it sets off, as the controllers do); default: wheels straight",
     )  # fmt: skip
-    ap.add_argument("--out", default="results/forward_reach")
+    ap.add_argument("--out", default="results/forward_reach",
+                    help="directory for forward_reach.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     try:
         sharpness = numbers_above(args.sharpness, "--sharpness")

@@ -81,11 +81,15 @@ def _num(v: float | None, digits: int) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--count", type=positive_int, default=30)
-    ap.add_argument("--reverse", action="store_true")
-    ap.add_argument("--expansions", type=int, default=20000)
+    ap.add_argument("--count", type=positive_int, default=30,
+                    help="random goal poses and start poses each (default: %(default)s)")
+    ap.add_argument("--reverse", action="store_true",
+                    help="plan with gear changes allowed (default: forward only)")
+    ap.add_argument("--expansions", type=int, default=20000,
+                    help="expansion budget per plan (default: %(default)s)")
     ap.add_argument("--cap", type=float, default=120.0, help="wall-clock safety cap [s]")
-    ap.add_argument("--out", default="results/hybrid_curve")
+    ap.add_argument("--out", default="results/hybrid_curve",
+                    help="directory for hybrid_curve.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     rows = []
     for vary in ("goal", "start"):

@@ -109,7 +109,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--tries", type=int, default=40, help="shortcut_tries of the 'with' runs")
     ap.add_argument("--count", type=int, default=100, help="poses per set (default 100)")
-    ap.add_argument("--out", default="results/hybrid_shortcut")
+    ap.add_argument("--out", default="results/hybrid_shortcut",
+                    help="directory for hybrid_shortcut.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     if args.tries < 1 or not 1 <= args.count <= 100:
         ap.error("--tries must be >= 1 and --count within 1..100")

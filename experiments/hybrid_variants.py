@@ -211,7 +211,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--scenario-seeds", type=int, default=10, help="seeds per gear scenario")
     ap.add_argument("--repeat", type=int, default=2,
                     help="plans per query and variant, the least CPU time kept (default 2)")
-    ap.add_argument("--out", default="results/hybrid_variants")
+    ap.add_argument("--out", default="results/hybrid_variants",
+                    help="directory for hybrid_variants.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     try:
         variants = parse_variants(args.variants)

@@ -59,12 +59,19 @@ def draw_goals(map_name: str, count: int, seed: int, field: str = "goal") -> lis
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--map", default="parking_lot")
-    ap.add_argument("--goals", type=int, default=100)
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--max-time", type=float, default=5.0)
-    ap.add_argument("--vary", choices=("goal", "start"), default="goal")
-    ap.add_argument("--out", default="results")
+    ap.add_argument("--map", default="parking_lot",
+                    help="built-in map name (default: %(default)s)")
+    ap.add_argument("--goals", type=int, default=100,
+                    help="random free poses to plan to (or from), >= 1 (default: %(default)s)")
+    ap.add_argument("--seed", type=int, default=1,
+                    help="seed of the random poses (default: %(default)s)")
+    ap.add_argument("--max-time", type=float, default=5.0,
+                    help="wall-clock safety cap per plan [s] (default: %(default)s)")
+    ap.add_argument("--vary", choices=("goal", "start"), default="goal",
+                    help="map pose the random poses replace (default: %(default)s)")
+    ap.add_argument("--out", default="results",
+                    help="directory for random_{goals,starts}_MAP.json and .md "
+                    "(default: %(default)s)")
     args = ap.parse_args(argv)
     if args.goals < 1:
         ap.error("--goals: must be >= 1")

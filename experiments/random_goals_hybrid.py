@@ -52,14 +52,23 @@ def verify_gears(m: Map, path: Path) -> bool:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--map", default="parking_lot")
-    ap.add_argument("--goals", type=positive_int, default=100)
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--vary", choices=("goal", "start"), default="goal")
-    ap.add_argument("--reverse", action="store_true")
-    ap.add_argument("--max-expansions", type=int, default=20_000)
-    ap.add_argument("--max-time", type=float, default=10.0)
-    ap.add_argument("--out", default="results")
+    ap.add_argument("--map", default="parking_lot",
+                    help="built-in map name (default: %(default)s)")
+    ap.add_argument("--goals", type=positive_int, default=100,
+                    help="random free poses to plan to (or from) (default: %(default)s)")
+    ap.add_argument("--seed", type=int, default=1,
+                    help="seed of the random poses (default: %(default)s)")
+    ap.add_argument("--vary", choices=("goal", "start"), default="goal",
+                    help="map pose the random poses replace (default: %(default)s)")
+    ap.add_argument("--reverse", action="store_true",
+                    help="plan with gear changes allowed (default: forward only)")
+    ap.add_argument("--max-expansions", type=int, default=20_000,
+                    help="expansion budget per plan (default: %(default)s)")
+    ap.add_argument("--max-time", type=float, default=10.0,
+                    help="wall-clock safety cap per plan [s] (default: %(default)s)")
+    ap.add_argument("--out", default="results",
+                    help="directory for hybrid_random_{goals,starts}_MAP[_reverse].json and "
+                    ".md (default: %(default)s)")
     args = ap.parse_args(argv)
     base = builtin_map(args.map)
     budget = Budget(max_iterations=args.max_expansions, max_time_s=args.max_time)

@@ -133,7 +133,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--controllers", default=",".join(CONTROLLERS), help="comma-separated")
     ap.add_argument("--planner", default="improved-rrt-connect", help="planner (the default's)")
     ap.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
-    ap.add_argument("--out", default="results/random_maps_drive")
+    ap.add_argument("--out", default="results/random_maps_drive",
+                    help="directory for random_maps_drive.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     controllers = [c.strip() for c in args.controllers.split(",") if c.strip()]
     unknown = sorted(set(controllers) - set(CONTROLLERS))

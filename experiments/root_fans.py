@@ -98,7 +98,8 @@ def report(payload: dict[str, Any]) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("run", help="a root_growth.json of experiments/root_growth.py")
-    ap.add_argument("--out", default="results/root_fans")
+    ap.add_argument("--out", default="results/root_fans",
+                    help="directory for root_fans.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     try:
         data = json.loads(FsPath(args.run).read_text())

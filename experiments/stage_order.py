@@ -142,7 +142,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--old", default="escalation_first=never:reverse_postprocess_attempts=6",
                     help="planner options of the old plans (field=value:...)")  # fmt: skip
     ap.add_argument("--new", default="", help="planner options of the new plans")
-    ap.add_argument("--out", default="results")
+    ap.add_argument("--out", default="results",
+                    help="directory for stage_order.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     sets = [s for s in args.sets.split(",") if s]
     unknown = sorted(set(sets) - set(SETS))

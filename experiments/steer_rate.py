@@ -201,14 +201,22 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--steer-rate", default="0.4",
                     help="the ego's steering rate limit in rad/s, or 'none' (instant)")
-    ap.add_argument("--seeds", type=int, default=50)
-    ap.add_argument("--scenarios", default="parking,overtake")
-    ap.add_argument("--controllers", default=",".join(CONTROLLERS))
+    ap.add_argument("--seeds", type=int, default=50,
+                    help="seeds 0..N-1 per scenario and controller (default: %(default)s)")
+    ap.add_argument("--scenarios", default="parking,overtake",
+                    help="comma-separated: parking, overtake, overtake-traffic\n"
+                    "(default: %(default)s)")
+    ap.add_argument("--controllers", default=",".join(CONTROLLERS),
+                    help="comma-separated controllers (default: %(default)s)")
     ap.add_argument("--density", default="default", help="overtake-traffic's traffic density")
-    ap.add_argument("--frequency", type=int, default=20)
-    ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--out", default="results")
-    ap.add_argument("--tag", default="")
+    ap.add_argument("--frequency", type=int, default=20,
+                    help="control and simulation frequency [Hz] (default: %(default)s)")
+    ap.add_argument("--jobs", type=int, default=2,
+                    help="worker processes (default: %(default)s)")
+    ap.add_argument("--out", default="results",
+                    help="directory for steer_rate[_TAG].json and .md (default: %(default)s)")
+    ap.add_argument("--tag", default="",
+                    help="output name suffix: steer_rate_TAG.json and .md (default: none)")
     ap.add_argument(
         "--no-wall-limit", action="store_true",
         help="no wall-clock cap on planning and re-planning (iteration budgets decide: "

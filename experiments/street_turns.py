@@ -134,7 +134,8 @@ def add_run_options(ap: argparse.ArgumentParser, unit: str, out: str) -> None:
         help="body clearances OMPL's states must keep, m, one OMPL row each (default "
         f"0,{OUR_CLEARANCE:g}: touching allowed, and the {OUR_CLEARANCE:g} m our planners keep)",
     )  # fmt: skip
-    ap.add_argument("--out", default=out)
+    ap.add_argument("--out", default=out, help=f"directory for {os.path.basename(out)}.json "
+                    "and .md (default: %(default)s)")
 
 
 def ompl_clearances(ap: argparse.ArgumentParser, text: str) -> tuple[float, ...]:

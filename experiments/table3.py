@@ -162,8 +162,10 @@ def figures(map_name: str, examples: dict[str, object], out: FsPath) -> list[str
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=positive_int, default=20, help="seeds per planner and map")
-    parser.add_argument("--maps", default="parking_lot,overtake")
-    parser.add_argument("--out", default="results")
+    parser.add_argument("--maps", default="parking_lot,overtake",
+                        help="comma-separated built-in map names (default: %(default)s)")
+    parser.add_argument("--out", default="results",
+                        help="directory for table3.json and .md (default: %(default)s)")
     parser.add_argument(
         "--figures", default=None,
         help="figure folder (default: OUT/figures; docs/figures for the docs)",

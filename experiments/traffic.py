@@ -216,14 +216,23 @@ def save_video(case: dict, args: argparse.Namespace, figures: FsPath) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
-    ap.add_argument("--seeds", type=positive_int, default=100)
-    ap.add_argument("--densities", default=",".join(DENSITIES))
-    ap.add_argument("--controller", default="pure-pursuit")
-    ap.add_argument("--predictor", default="constant-velocity")
-    ap.add_argument("--lead-model", default="idm")
+    ap.add_argument("--seeds", type=positive_int, default=100,
+                    help="seeds 0..N-1 per density (default: %(default)s)")
+    ap.add_argument("--densities", default=",".join(DENSITIES),
+                    help="comma-separated: low, default, high or oncoming cars per km\n"
+                    "(default: %(default)s)")
+    ap.add_argument("--controller", default="pure-pursuit",
+                    help="pure-pursuit, stanley or lqr (default: %(default)s)")
+    ap.add_argument("--predictor", default="constant-velocity",
+                    help="how the re-planner predicts the other cars: constant-velocity or\n"
+                    "lane-following (default: %(default)s)")
+    ap.add_argument("--lead-model", default="idm",
+                    help="how the lead car drives: idm or constant (default: %(default)s)")
     ap.add_argument("--rate", type=float, default=4.0, help="re-planning rate in Hz (2-5)")
-    ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--out", default="results")
+    ap.add_argument("--jobs", type=int, default=2,
+                    help="worker processes (default: %(default)s)")
+    ap.add_argument("--out", default="results",
+                    help="directory for traffic[_TAG].json and .md (default: %(default)s)")
     ap.add_argument("--tag", default="", help="suffix of the output names (variants)")
     ap.add_argument("--figures", default=None, help="write the tight-case video and frames here")
     ap.add_argument("--deterministic", action="store_true",

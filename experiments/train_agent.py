@@ -58,24 +58,33 @@ ROWS = (
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--scenario", choices=sorted(IDS), default="parking")
+    p.add_argument("--scenario", choices=sorted(IDS), default="parking",
+                   help="task to train and evaluate on (default: %(default)s)")
     p.add_argument(
-        "--controller", choices=["pure-pursuit", "stanley", "lqr"], default="pure-pursuit"
+        "--controller", choices=["pure-pursuit", "stanley", "lqr"], default="pure-pursuit",
+        help="tracking controller the residual is added to (default: %(default)s)",
     )
-    p.add_argument("--planner", default="improved-rrt-connect")
+    p.add_argument("--planner", default="improved-rrt-connect",
+                   help="registered planner name (default: %(default)s)")
     p.add_argument("--timesteps", type=int, default=60_000, help="PPO environment steps")
     p.add_argument("--envs", type=int, default=2, help="parallel training environments")
     p.add_argument("--eval-seeds", type=int, default=20, help="held-apart evaluation episodes")
     p.add_argument("--seed", type=int, default=0, help="seeds PPO and the training envs")
     p.add_argument("--action-repeat", type=int, default=2, help="simulation steps per action")
-    p.add_argument("--residual-scale", type=float, default=0.25)
+    p.add_argument("--residual-scale", type=float, default=0.25,
+                   help="fraction of the full command range the residual spans "
+                   "(default: %(default)s)")
     p.add_argument("--w-cte", type=float, default=100.0, help="reward weight, 1/(m^2 s)")
     p.add_argument("--w-heading", type=float, default=10.0, help="reward weight, 1/(rad^2 s)")
     p.add_argument("--w-speed", type=float, default=5.0, help="reward weight, s/m^2")
     p.add_argument("--n-steps", type=int, default=512, help="PPO rollout length per env")
-    p.add_argument("--log-std-init", type=float, default=-1.0)
-    p.add_argument("--gamma", type=float, default=0.99)
-    p.add_argument("--out", default="results/train_agent")
+    p.add_argument("--log-std-init", type=float, default=-1.0,
+                   help="PPO policy's initial log standard deviation (default: %(default)s)")
+    p.add_argument("--gamma", type=float, default=0.99,
+                   help="discount factor of PPO and VecNormalize (default: %(default)s)")
+    p.add_argument("--out", default="results/train_agent",
+                   help="directory for train_agent.json and .md, ppo_residual.zip and "
+                   "vecnormalize.pkl (default: %(default)s)")
     p.add_argument("--video", action="store_true", help="MP4 of the agent on the first eval seed")
     args = p.parse_args(argv)
     for name in ("timesteps", "envs", "eval_seeds", "action_repeat", "n_steps"):

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import overload
 
 import numpy as np
 
@@ -27,6 +28,10 @@ __all__ = [
 _TWO_PI = 2.0 * math.pi
 
 
+@overload
+def wrap_angle(angle: float) -> float: ...
+@overload
+def wrap_angle(angle: np.ndarray) -> np.ndarray: ...
 def wrap_angle(angle: float | np.ndarray) -> float | np.ndarray:
     """Wrap an angle (or an array of angles) to ``[-pi, pi)``.
 

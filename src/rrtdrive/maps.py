@@ -152,7 +152,7 @@ class Map:
                 f"bounds: expected [xmin, ymin, xmax, ymax], got {brief_repr(b)}"
             )
         require_finite("bounds", *b)
-        b = tuple(float(v) for v in b)
+        b = (float(b[0]), float(b[1]), float(b[2]), float(b[3]))
         # (A map itself that large is refused by the checker's grid limit, which says
         # what to do about its size.)
         if max(abs(v) for v in b) > MAX_COORDINATE >= max(b[2] - b[0], b[3] - b[1]):

@@ -9,8 +9,12 @@ from __future__ import annotations
 import enum
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:  # the diagnosis module imports this one
+    from rrtdrive.planning.diagnosis import Diagnosis
 
 __all__ = [
     "InputError",
@@ -550,7 +554,7 @@ class PlanResult:
     message: str = ""
     stats: dict[str, float] = field(default_factory=dict)
     setup_time_s: float = 0.0
-    diagnosis: object | None = None
+    diagnosis: Diagnosis | None = None
 
     @property
     def success(self) -> bool:

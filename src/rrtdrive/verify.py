@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any, TypeGuard
 
 import numpy as np
 import shapely
@@ -532,6 +533,6 @@ def path_from_json(data: Mapping[str, object] | Sequence[Sequence[float]]) -> Pa
 _COLUMNS = ("x", "y", "yaw", "kappa")
 
 
-def _is_list(value: object) -> bool:
+def _is_list(value: object) -> TypeGuard[Sequence[Any] | np.ndarray]:
     """A JSON array (a list or tuple, not a string) or a numpy array."""
     return isinstance(value, (Sequence, np.ndarray)) and not isinstance(value, (str, bytes))

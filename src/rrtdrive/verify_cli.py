@@ -18,7 +18,7 @@ import dataclasses
 import json
 import math
 import sys
-from typing import Any
+from typing import Any, BinaryIO, cast
 
 import numpy as np
 
@@ -79,7 +79,7 @@ def _read_plan(source: str) -> dict[str, Any]:
         if source == "-":
             # Bytes, so a file that is not UTF-8 is named as such whatever the locale
             # (a text stream without a buffer, as a caller's StringIO, gives its text).
-            stdin = getattr(sys.stdin, "buffer", sys.stdin)
+            stdin = cast(BinaryIO, getattr(sys.stdin, "buffer", sys.stdin))
             raw = read_capped(stdin, "plan", label)
         else:
             with open(source, "rb") as f:

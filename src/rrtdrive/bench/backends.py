@@ -31,7 +31,7 @@ import sys
 import time
 import traceback
 from collections import deque
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Generator, Iterable
 from dataclasses import dataclass
 from multiprocessing.connection import Connection, wait
 from typing import Any
@@ -233,7 +233,7 @@ class LocalBackend:
             pass
         slot.conn.close()
 
-    def run(self, specs: Iterable[RunSpec]) -> Iterator[Outcome]:
+    def run(self, specs: Iterable[RunSpec]) -> Generator[Outcome, None, None]:
         """Execute ``specs``; yield one :class:`Outcome` per spec as runs finish."""
         queue: deque[tuple[int, RunSpec, int]] = deque(
             (i, s, 1) for i, s in enumerate(specs)
@@ -255,7 +255,7 @@ class LocalBackend:
 
     def _loop(
         self, queue: deque[tuple[int, RunSpec, int]], slots: list[_Slot]
-    ) -> Iterator[Outcome]:
+    ) -> Generator[Outcome, None, None]:
         busy = 0
         startup_deaths = 0  # in a row, since a worker last became ready
         while queue or busy:
@@ -355,7 +355,7 @@ class LocalBackend:
 
     def _failed(
         self, queue: deque[tuple[int, RunSpec, int]], task: tuple[int, RunSpec, int], error: str
-    ) -> Iterator[Outcome]:
+    ) -> Generator[Outcome, None, None]:
         task_id, spec, attempt = task
         if attempt <= self.retries:
             queue.append((task_id, spec, attempt + 1))
@@ -433,7 +433,7 @@ class RayBackend:
             self._ray.shutdown()
             self._owns_session = False
 
-    def run(self, specs: Iterable[RunSpec]) -> Iterator[Outcome]:
+    def run(self, specs: Iterable[RunSpec]) -> Generator[Outcome, None, None]:
         """Execute ``specs``; yield one :class:`Outcome` per spec as runs finish."""
         ray = self._ray
         queue: deque[tuple[RunSpec, int]] = deque((s, 1) for s in specs)

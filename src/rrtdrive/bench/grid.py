@@ -433,9 +433,11 @@ def expand(cfg: BenchConfig) -> list[RunSpec]:
             for c in cfg.controllers:
                 h = config_hash(_hash_payload(cfg, "episode", s, p, c))
                 cells.append(("episode", s, p, c, h))
+    max_time_s = cfg.max_time_s
+    assert max_time_s is not None  # __post_init__ resolved it
     return [
         RunSpec(
-            kind, target, p, c, seed, cfg.max_time_s, cfg.max_iterations, h,
+            kind, target, p, c, seed, max_time_s, cfg.max_iterations, h,
             cfg.map_contents.get(target) if kind == "plan" or is_map_scenario(target) else None,
             cfg.deterministic, cfg.reverse,
         )
@@ -494,15 +496,8 @@ def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     InputError
         For a missing or malformed file or an unknown key (named in the message).
     """
-    try:
-        import tomllib  # type: ignore[import-not-found]
-    except ModuleNotFoundError:  # Python 3.10
-        try:
-            import tomli as tomllib  # type: ignore[no-redef]
-        except ModuleNotFoundError:
-            raise InputError(
-                "config: reading TOML needs Python >= 3.11 or the tomli package"
-            ) from None
+    import tomllib
+
     p = FsPath(path)
     try:
         data = tomllib.loads(p.read_text(encoding="utf-8"))

@@ -81,7 +81,7 @@ class ResultStore:
             raise InputError(f"out: cannot create {str(self.dir)!r}: {exc.strerror}") from None
         self.path = self.dir / RUNS_FILE
         self._lock_fd: int | None = None
-        self._fd = None  # type: ignore[assignment]  # until opened below
+        self._fd: int | None = None  # until opened below
         try:
             if lock:
                 self._acquire_lock()
@@ -124,10 +124,16 @@ class ResultStore:
         """Close the file and release the lock."""
         if self._fd is not None:
             os.close(self._fd)
-            self._fd = None  # type: ignore[assignment]
+            self._fd = None
         if self._lock_fd is not None:
             os.close(self._lock_fd)
             self._lock_fd = None
+
+    def _open_fd(self) -> int:
+        """The open file's descriptor; ``ValueError`` once the store is closed."""
+        if self._fd is None:
+            raise ValueError("the result store is closed")
+        return self._fd
 
     def __enter__(self) -> ResultStore:
         return self
@@ -209,11 +215,12 @@ class ResultStore:
         if key in self._keys:
             raise ValueError(f"run {key} is already stored")
         data = (json.dumps(json_safe(row), allow_nan=False) + "\n").encode()
+        fd = self._open_fd()
         view = memoryview(data)
         while view:
-            written = os.write(self._fd, view)
+            written = os.write(fd, view)
             view = view[written:]
-        os.fsync(self._fd)
+        os.fsync(fd)
         self._keys.add(key)
 
     def drop(self, keys: Iterable[tuple[str, int]]) -> int:
@@ -239,7 +246,7 @@ class ResultStore:
             fh.write("".join(line + "\n" for line in kept))
             fh.flush()
             os.fsync(fh.fileno())
-        os.close(self._fd)
+        os.close(self._open_fd())
         os.replace(tmp, self.path)
         _fsync_dir(self.dir)
         self._fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)

@@ -362,8 +362,8 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
     for r in rows:
         if r.get("status") == "error" or not r.get("success"):
             continue
-        vals = _values([r], "max_curvature") + _values([r], "path_max_curvature")
-        by_planner.setdefault(str(r.get("planner")), []).extend(vals)
+        kappas = _values([r], "max_curvature") + _values([r], "path_max_curvature")
+        by_planner.setdefault(str(r.get("planner")), []).extend(kappas)
     by_planner = {k: v for k, v in by_planner.items() if v}
     kmax = next((r.get("kappa_max") for r in rows if r.get("kappa_max")), None)
     if by_planner:
@@ -375,8 +375,8 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
         everything = np.concatenate([np.asarray(v) for v in by_planner.values()])
         top = max(float(everything.max()), float(kmax or 0.0)) * 1.05 or 1.0
         bins = np.linspace(0.0, top, 40)
-        for ax, (planner, vals) in zip(axes.flat, by_planner.items(), strict=False):
-            ax.hist(vals, bins=bins, color="tab:blue", alpha=0.75)
+        for ax, (planner, kappas) in zip(axes.flat, by_planner.items(), strict=False):
+            ax.hist(kappas, bins=bins, color="tab:blue", alpha=0.75)
             if kmax:
                 ax.axvline(float(kmax), color="k", linestyle="--", linewidth=1)
             ax.set_title(planner, fontsize=9)

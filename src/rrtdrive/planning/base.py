@@ -148,7 +148,10 @@ def cached_checker(m: Map, config: CheckerConfig | None = None) -> CollisionChec
 class Planner(Protocol):
     """What every planner offers."""
 
-    name: str
+    @property
+    def name(self) -> str:
+        """The registered name (a read-only attribute will do)."""
+        ...
 
     def solve(
         self, problem: PlanningProblem, rng: np.random.Generator, budget: Budget

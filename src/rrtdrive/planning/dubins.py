@@ -234,17 +234,17 @@ def _normalised(word: str, a: float, b: float, d: float) -> tuple[float, float, 
         tmp = math.atan2(ca + cb, d - sa - sb) - math.atan2(2.0, p)
         return _mod2pi(a - tmp), p, _mod2pi(b - tmp)
     if word == "RLR":
-        tmp = _cosine((6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0)
-        if tmp is None:
+        cos_p = _cosine((6.0 - d * d + 2.0 * cab + 2.0 * d * (sa - sb)) / 8.0)
+        if cos_p is None:
             return None
-        p = _mod2pi(_TWO_PI - math.acos(tmp))
+        p = _mod2pi(_TWO_PI - math.acos(cos_p))
         t = _mod2pi(a - math.atan2(ca - cb, d - sa + sb) + p / 2.0)
         return t, p, _mod2pi(a - b - t + p)
     # LRL
-    tmp = _cosine((6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa)) / 8.0)
-    if tmp is None:
+    cos_p = _cosine((6.0 - d * d + 2.0 * cab + 2.0 * d * (sb - sa)) / 8.0)
+    if cos_p is None:
         return None
-    p = _mod2pi(_TWO_PI - math.acos(tmp))
+    p = _mod2pi(_TWO_PI - math.acos(cos_p))
     t = _mod2pi(-a + math.atan2(-ca + cb, d + sa - sb) + p / 2.0)
     return t, p, _mod2pi(b - a - t + p)
 
@@ -284,8 +284,8 @@ def dubins_paths(start: Pose, goal: Pose, radius: float, tol: float = 1e-6) -> l
         seg = _normalised(word, a, b, d)
         if seg is None:
             continue
-        seg = tuple(v if kind == "S" else _unloop(v) for kind, v in zip(word, seg, strict=True))
-        path = DubinsPath(start, word, (seg[0] * radius, seg[1] * radius, seg[2] * radius), radius)
+        t, p, q = (v if kind == "S" else _unloop(v) for kind, v in zip(word, seg, strict=True))
+        path = DubinsPath(start, word, (t * radius, p * radius, q * radius), radius)
         x, y, yaw = path.end()
         dyaw = wrap_angle(yaw - goal.yaw)
         if math.hypot(x - goal.x, y - goal.y) <= tol * max(1.0, radius) and abs(dyaw) <= tol:

@@ -235,7 +235,7 @@ _PLAN = tuple(
         formula,
         4 * back + k,
         (_reflected(word) if refl else word)[:: -1 if back else 1],
-        _transformed(lengths, flip, back),
+        _transformed(lengths, flip, bool(back)),
         total,
     )
     for formula, word, lengths, total, has_backwards in _FAMILIES

@@ -308,7 +308,7 @@ def _run(args: argparse.Namespace) -> int:
         raise InputError(f"--reverse: {args.scenario} re-plans while driving, forward only")
     if target != "scenario":
         given = [k for k, v in traffic_opts.items() if v is not None]
-        if given or getattr(args, "oncoming", 0):
+        if given or getattr(args, "oncoming", None):
             flag = "--" + (given[0] if given else "oncoming").replace("_", "-")
             raise InputError(f"{flag}: only a built-in scenario takes it, not {args.scenario}")
     if replan_config is not None:

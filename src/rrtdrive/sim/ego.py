@@ -98,6 +98,8 @@ class EgoVehicle(Vehicle):
     LENGTH = VehicleParams().length
     WIDTH = VehicleParams().width
     MAX_SPEED = 40.0
+    #: highway-env's displacement of a predicted intersection (set by its collision check).
+    impact: np.ndarray | None
     MIN_SPEED = -10.0
 
     def __init__(
@@ -238,7 +240,7 @@ class EgoVehicle(Vehicle):
         steer = self.action["steering"]
         rate = self.params.max_steer_rate
         slewing = rate is not None and math.isfinite(rate)
-        if slewing:
+        if rate is not None and slewing:
             reach = rate * dt
             steer = min(max(steer, self.steer - reach), self.steer + reach)
         accel = self.action["acceleration"]

@@ -192,7 +192,7 @@ def _end_and_jacobian(
     start: np.ndarray,
     gear: int,
     wheelbase: float,
-) -> tuple[np.ndarray, Callable[[], np.ndarray], np.ndarray, Callable[[], np.ndarray]]:
+) -> tuple[np.ndarray, Callable[[], np.ndarray], np.ndarray, Callable[[int], np.ndarray]]:
     """End pose of ``p = [lengths, angles]``, its exact Jacobian ``(3, 2n)``, the profile.
 
     The Jacobian is returned as a function that computes it on demand: the Newton

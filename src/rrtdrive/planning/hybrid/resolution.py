@@ -90,6 +90,13 @@ def sharpness_bound_of(problem: PlanningProblem, smoothing: SmoothingConfig | No
 
 #: ``accept(pieces)``: the checked path of a connection, or ``None`` to search on.
 Accept = Callable[[list[Piece]], BuiltPath | None]
+
+
+def _after(first: Piece, accept: Accept) -> Accept:
+    """``accept`` of the pieces with ``first`` driven before them."""
+    return lambda pieces: accept([first, *pieces])
+
+
 #: The multi-point turn of a search (:func:`~.turn.multi_point_turn`), given the
 #: expansions it may spend.
 Turn = Callable[[int], TurnResult[BuiltPath]]
@@ -396,7 +403,7 @@ def search_at_resolution(
                 if left < 1:
                     break
                 again = multi_point_turn(
-                    pose, goal, body, shots, lambda p, d=drive: accept([d, *p]), 1.0 / radius,
+                    pose, goal, body, shots, _after(drive, accept), 1.0 / radius,
                     config.turn_moves, config.check_spacing, None, budget=left,
                 )  # fmt: skip
                 moves, tried = moves + again.moves + 1, tried + again.shots  # the drive: a move
@@ -417,7 +424,7 @@ def search_at_resolution(
             body, start, goal, heuristic, prims, shots, config, kappa_max, problem.bounds,
             long_prims,
         )  # fmt: skip
-        take = accept
+        take: Accept = accept
         if config.shortcut_tries > 0:
             take = _shortened(accept, body, radius, reverse, config)
         out: list[tuple[HybridSearch, Accept]] = [(ahead, take)]

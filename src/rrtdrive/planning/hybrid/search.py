@@ -203,6 +203,10 @@ class HybridSearch:
         #: Node -> how many connections its shot gave, every one rejected (shots that
         #: ran to their end only): what a repeat of this search reads (:meth:`replay`).
         self.shot_counts: dict[int, int] = {}
+        # The open list, closed cells and best costs: made by the first run().
+        self._heap: list[tuple[float, int]]
+        self._closed: set[int]
+        self._best: dict[int, float]
         self._earlier: HybridSearch | None = None
         self._same_below = 0  # nodes [0, this) are the earlier search's, checked
         # The primitives as the loop reads them: built once per primitive set and costs.
@@ -385,9 +389,9 @@ class HybridSearch:
             start = self.start
             h0 = self.heuristic.at(start.x, start.y, start.yaw)
             root = self._add(start.x, start.y, start.yaw, 0.0, 0, math.nan, -1)
-            self._heap: list[tuple[float, int]] = [(w * h0, root)]
-            self._closed: set[int] = set()
-            self._best: dict[int, float] = {}
+            self._heap = [(w * h0, root)]
+            self._closed = set()
+            self._best = {}
             self._hval = [h0]
             self._since_shot = cfg.shot_interval
             self._shot_from: set[tuple[int, int, int]] = set()

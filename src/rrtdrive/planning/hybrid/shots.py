@@ -15,10 +15,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rrtdrive.planning.dubins import dubins_paths
+from rrtdrive.planning.dubins import DubinsPath, dubins_paths
 from rrtdrive.planning.hybrid.body import BodyTest
 from rrtdrive.planning.hybrid.leads import Lead
-from rrtdrive.planning.reeds_shepp import reeds_shepp_paths
+from rrtdrive.planning.reeds_shepp import ReedsSheppPath, reeds_shepp_paths
 from rrtdrive.types import Pose
 
 __all__ = ["Piece", "Shots", "analytic_shots", "walk_hits", "walk_poses", "walks_hit"]
@@ -185,12 +185,11 @@ def analytic_shots(
 
     def words(pose: Pose, to: Pose, lead: Lead | None) -> Iterator[list[Piece]]:
         # The longer words loop through the lot: they rarely clear where the short ones fail.
-        if reverse:
-            cands = reeds_shepp_paths(
-                pose, to, radius, limit=max_candidates, cusp_cost=SHOT_CUSP_COST_M
-            )[:max_candidates]
-        else:
-            cands = dubins_paths(pose, to, radius)[:max_candidates]
+        cands: Sequence[ReedsSheppPath | DubinsPath] = (
+            reeds_shepp_paths(pose, to, radius, limit=max_candidates, cusp_cost=SHOT_CUSP_COST_M)
+            if reverse
+            else dubins_paths(pose, to, radius)
+        )[:max_candidates]
         hit = [False] * len(cands)
         if body is not None:
             hit = walks_hit(pose, [(c.word, c.lengths) for c in cands], radius, coarse, body)

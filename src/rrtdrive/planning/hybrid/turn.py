@@ -145,7 +145,8 @@ def multi_point_turn(
     for turn in (way, -way):
         # Heading still to turn, >= 0, in the turning direction ``turn``.
         left = target * turn if target * turn > 0.0 else target * turn + 2.0 * math.pi
-        pose, pieces, gear = start, [], 1
+        pose, gear = start, 1
+        pieces: list[Piece] = []
         moves = 0
         while True:
             for cand in shots(pose):

@@ -22,6 +22,7 @@ from rrtdrive.planning.dubins import DubinsPath, dubins_paths
 from rrtdrive.planning.smoothing import SmoothingConfig, make_drivable
 from rrtdrive.planning.smoothing.clothoid import turn_circle
 from rrtdrive.planning.smoothing.clothoid_batch import CurveBatch, sample_curves
+from rrtdrive.planning.smoothing.clothoid_curve import Piece as CurvePiece
 from rrtdrive.planning.smoothing.clothoid_curve import polygon_curve
 from rrtdrive.types import Path, Pose
 
@@ -74,7 +75,7 @@ def _free_end(
     r_in, d = turn_circle(kappa, sigma)
     a = Pose(start.x + d * math.cos(start.yaw), start.y + d * math.sin(start.yaw), start.yaw)
     b = Pose(goal.x - d * math.cos(goal.yaw), goal.y - d * math.sin(goal.yaw), goal.yaw)
-    found = []
+    found: list[tuple[float, int, list[CurvePiece], np.ndarray, str, float]] = []
     for step in CC_RADIUS_STEPS:
         for cand in dubins_paths(a, b, r_in * step):
             poly = np.vstack([start.xy, cand.polygon(_MAX_ARC)[1:-1], goal.xy])

@@ -242,6 +242,7 @@ class _Query:
             return out
         if self._growth is None:
             self.prepare()
+        assert self._growth is not None  # prepare() made it
         _, edge_free, passages = self._growth
         # The expansion counters describe the growth: they count once the query grows trees.
         self.stats.update(self._growth_stats)

@@ -9,7 +9,7 @@ and its exact batch body test ``poses_free``.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Protocol
+from typing import Protocol, cast
 
 import numpy as np
 import shapely
@@ -80,11 +80,11 @@ class CheckerView:
         None when the checker does not implement the whole
         :class:`~rrtdrive.checking.Checker` contract (a bare motion validator).
         """
-        return self.checker.obstacle_union if self._is(Checker) else None
+        return cast(Checker, self.checker).obstacle_union if self._is(Checker) else None
 
     def poses_free(self) -> PosesFree | None:
         """The exact batch body test of a :class:`~rrtdrive.checking.PoseValidityChecker`."""
-        checker = self.checker
+        checker = cast(PoseValidityChecker, self.checker)
         return checker.poses_free if self._is(PoseValidityChecker) else None
 
     def path_free(
@@ -117,7 +117,7 @@ class EdgeCache:
 
     def blocked_from(self, a: np.ndarray, bs: np.ndarray) -> np.ndarray:
         """True where the centre line ``a -> b`` crosses an obstacle (so the edge collides)."""
-        if len(bs) == 0 or self._union.is_empty:
+        if len(bs) == 0 or self._union is None or self._union.is_empty:
             return np.zeros(len(bs), dtype=bool)
         key = (float(a[0]), float(a[1]), bs.tobytes())
         hit = self._screens.get(key)

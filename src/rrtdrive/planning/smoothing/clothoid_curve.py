@@ -96,8 +96,10 @@ def sample_pieces(
     rows: list[np.ndarray] = []
     owners: list[np.ndarray] = []
     for k, piece in enumerate(pieces):
-        key = (piece.key(), spacing) if cache is not None else None
-        full = cache.get(key) if cache is not None else None
+        full = None
+        if cache is not None:
+            key = (piece.key(), spacing)
+            full = cache.get(key)
         if full is None:
             n = max(1, math.ceil(piece.length / spacing - 1e-9))
             full = piece.rows(np.linspace(0.0, piece.length, n + 1))
@@ -176,20 +178,20 @@ def polygon_turns(
     # which the tightest turns alone decide).
     options: list[list[ClothoidTurn] | None] = [None] * n
     for c in range(1, n - 1):
-        theta = thetas[c]
-        if theta is None:
+        angle = thetas[c]
+        if angle is None:
             continue
         if tight[c]:
-            options[c] = [_tightest(cache, theta, kappas[c], levels)]
+            options[c] = [_tightest(cache, angle, kappas[c], levels)]
             continue
-        key = (theta, float(kappas[c]))
+        key = (angle, float(kappas[c]))
         opts = cache.get(key)
         if opts is None:
             # Every radius step x sharpness level, by tangent length: the first, the
             # tightest (the corner's radius, the sharpest level), reaches least.
-            tight_turn = _tightest(cache, theta, kappas[c], levels)
+            tight_turn = _tightest(cache, angle, kappas[c], levels)
             steps = np.repeat(np.asarray(radius_steps, dtype=float), len(levels))
-            rest = clothoid_turns(theta, kappas[c] / steps, np.tile(levels, len(radius_steps)))
+            rest = clothoid_turns(angle, kappas[c] / steps, np.tile(levels, len(radius_steps)))
             opts = cache[key] = [tight_turn] + sorted(
                 (t for t in rest if t.tangent > tight_turn.tangent), key=lambda t: t.tangent
             )
@@ -264,10 +266,11 @@ def curve_pieces(
         (x0, y0), (x1, y1) = pts[i], pts[i + 1]
         ux, uy, length = unit(x1 - x0, y1 - y0)
         yaw = math.atan2(uy, ux)
-        t0 = turns[i].tangent if turns[i] is not None else 0.0
-        t1 = turns[i + 1].tangent if turns[i + 1] is not None else 0.0
-        if i > 0 and turns[i] is not None:
-            t = turns[i]
+        here, after = turns[i], turns[i + 1]
+        t0 = here.tangent if here is not None else 0.0
+        t1 = after.tangent if after is not None else 0.0
+        if i > 0 and here is not None:
+            t = here
             # The incoming leg's direction and heading: the previous leg's (vx, vy, v_yaw).
             pieces.append(
                 Piece(i, x0 - t.tangent * vx, y0 - t.tangent * vy, v_yaw, t.length, t)

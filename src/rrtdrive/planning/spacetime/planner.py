@@ -6,9 +6,11 @@ import dataclasses
 import time
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 
+from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import Map
 from rrtdrive.planning.base import PlanningProblem, cached_checker
 from rrtdrive.planning.improved import ImprovedConfig, ImprovedRRTConnect
@@ -210,7 +212,11 @@ class SpaceTimeRRTConnect(ImprovedRRTConnect):
             )
         t0 = time.perf_counter()
         checker = self.checker_for(problem)
-        inner = PlanningProblem(problem.map, checker, problem.start, problem.goal, problem.vehicle)
+        # The space-time checker answers the same calls as the map's (duck-typed).
+        as_checker = cast(CollisionChecker, checker)
+        inner = PlanningProblem(
+            problem.map, as_checker, problem.start, problem.goal, problem.vehicle
+        )
         res = ImprovedRRTConnect.solve(self, inner, rng, budget)
         tree_times = tuple(checker.timing.band(t.nodes)[0] for t in res.trees)
         times = speeds = np.zeros(0)

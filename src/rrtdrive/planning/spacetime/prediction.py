@@ -130,7 +130,7 @@ class Prediction:
 
     def shifted(self, dx: float, dy: float = 0.0) -> Prediction:
         """The same prediction with every position moved by ``(dx, dy)`` (a change of frame)."""
-        moved = []
+        moved: list[np.ndarray | None] = []
         for arr in (self.poses, self.alt):
             if arr is None:
                 moved.append(None)

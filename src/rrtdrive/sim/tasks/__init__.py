@@ -38,8 +38,8 @@ from __future__ import annotations
 
 import difflib
 import math
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Iterable, Sequence
+from typing import Any, cast
 
 from rrtdrive.maps import Map
 from rrtdrive.sim.scenes import scenario_rngs
@@ -128,7 +128,7 @@ SCENARIO_OPTIONS = ("jitter", "vehicle", *_NOT_HERE)
 
 def _jitter(jitter: object) -> tuple[float, float, float]:
     try:
-        values = tuple(jitter)  # type: ignore[call-overload]
+        values: tuple[Any, ...] = tuple(cast(Iterable[Any], jitter))
         ok = len(values) == 3 and all(
             not isinstance(j, bool) and j >= 0 and math.isfinite(j) for j in values
         )
@@ -266,4 +266,4 @@ def make_scenario(name: str, seed: int = 0, **options: Any) -> Task:
         raise InputError(f"scenario: unknown scenario {name!r}; choose from {list(SCENARIOS)}")
     vehicle = vehicle or VehicleParams()
     offset = tuple(float(rng.uniform(-j, j)) if j > 0 else 0.0 for j in jitter)
-    return cls.create(seed, rng, offset, vehicle, **options)  # type: ignore[arg-type]
+    return cls.create(seed, rng, offset, vehicle, **options)  # type: ignore[attr-defined]

@@ -207,6 +207,8 @@ class Task:
     #: The re-planning settings' type of a kind that re-plans while driving (``None``:
     #: the path is planned once, before the drive).
     REPLAN_CONFIG: ClassVar[type[ReplanConfig] | None] = None
+    #: The keyword options of :func:`~rrtdrive.sim.tasks.make_scenario` this kind takes.
+    OPTIONS: ClassVar[tuple[str, ...]] = ()
 
     map: Map
     seed: int

@@ -65,11 +65,13 @@ class OvertakeTask(PathTask):
     kind: ClassVar[TaskKind] = TaskKind.OVERTAKE
     OPTIONS: ClassVar[tuple[str, ...]] = ("oncoming",)
 
-    lead_index: int
+    # Fields where Task keeps class-level defaults for the kinds without them (mypy
+    # reads that as overriding a ClassVar).
+    lead_index: int  # type: ignore[misc]
     vehicle_obstacles: tuple[int, ...]
-    lane_y: float
-    lane_width: float = LANE_WIDTH
-    oncoming: tuple[tuple[float, float], ...] = ()
+    lane_y: float  # type: ignore[misc]
+    lane_width: float = LANE_WIDTH  # type: ignore[misc]
+    oncoming: tuple[tuple[float, float], ...] = ()  # type: ignore[misc]
 
     def __post_init__(self) -> None:
         super().__post_init__()

@@ -172,13 +172,15 @@ class OvertakeTrafficTask(Task):
     REPLAN_CONFIG: ClassVar[type[ReplanConfig] | None] = ReplanConfig
     OPTIONS: ClassVar[tuple[str, ...]] = ("density", "lead_speed", "lead_model")
 
-    lane_y: float = 44.0
-    lane_width: float = LANE_WIDTH
-    oncoming: tuple[tuple[float, float], ...] = ()
-    lead: tuple[float, float] | None = None
+    # Fields where Task keeps class-level defaults for the kinds without them (mypy
+    # reads that as overriding a ClassVar).
+    lane_y: float = 44.0  # type: ignore[misc]
+    lane_width: float = LANE_WIDTH  # type: ignore[misc]
+    oncoming: tuple[tuple[float, float], ...] = ()  # type: ignore[misc]
+    lead: tuple[float, float] | None = None  # type: ignore[misc]
     lead_model: str = "idm"
     density: float = TRAFFIC_DENSITIES["default"]
-    ego_speed: float = 0.0
+    ego_speed: float = 0.0  # type: ignore[misc]
 
     def __post_init__(self) -> None:
         super().__post_init__()

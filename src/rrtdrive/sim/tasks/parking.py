@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar, cast
 
 import numpy as np
 from highway_env.road.road import Road
@@ -48,7 +49,7 @@ def parse_spot(spot: object) -> tuple[int, int, int]:
     """
     spots = sorted(PARKING_EMPTY_SPOTS)
     try:
-        values = tuple(spot)  # type: ignore[call-overload]
+        values: tuple[Any, ...] = tuple(cast(Iterable[Any], spot))
     except TypeError:
         values = ()
     if len(values) != 3 or any(
