@@ -8,7 +8,13 @@ import math
 import control
 import numpy as np
 
-from rrtdrive.controllers.base import Projection, TrackingController, VehicleState
+from rrtdrive.controllers.base import (
+    APPROACH_ANGLE,
+    Projection,
+    TrackingController,
+    VehicleState,
+    checked_approach_angle,
+)
 from rrtdrive.controllers.speed import SpeedConfig
 from rrtdrive.types import InputError, VehicleParams, require_finite, require_positive
 
@@ -101,6 +107,13 @@ class LQR(TrackingController):
         so the corrections ask the wheels to turn no faster at speed than at parking
         speeds (a fixed arc-length gain drove the 0.4 rad/s car into a growing
         oscillation at 11 m/s).
+    approach_angle : float
+        Far from the path the lateral error counts at most ``approach_angle k_psi /
+        k_e`` (0.45 m with the default weights), so the car heads back at most this
+        many radians off the path's direction. The linear law's corrections from
+        further off ask for full lock and, on a rate-limited car, swing across the
+        path in a growing oscillation (1 m off at 3 m/s: 1.06 to 1.64 m, then a
+        crash in highway-env).
 
     Examples
     --------
@@ -123,9 +136,11 @@ class LQR(TrackingController):
         r: float = 4.0,
         steer_limit: float | None = None,
         bandwidth: float = 2.0,
+        approach_angle: float = APPROACH_ANGLE,
     ) -> None:
         super().__init__(vehicle, speed, steer_limit)
         require_positive("lqr.bandwidth", bandwidth)
+        self.approach_angle = checked_approach_angle("lqr.approach_angle", approach_angle)
         self.gain = design_gain(q_e, q_psi, r)
         self._k_e, self._k_psi = float(self.gain[0]), float(self.gain[1])
         self._weights = (float(q_e), float(q_psi), float(r))
@@ -146,5 +161,6 @@ class LQR(TrackingController):
     def steering(self, state: VehicleState, proj: Projection) -> float:
         """LQR steering angle with curvature feed-forward."""
         k_e, k_psi = self._gains(state.speed)
-        u = -(k_e * proj.cte + k_psi * self.heading_error)
+        reach = self.approach_angle * k_psi / k_e
+        u = -(k_e * min(max(proj.cte, -reach), reach) + k_psi * self.heading_error)
         return math.atan(self.vehicle.wheelbase * (self.ff_kappa(proj) + u))

@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import math
 
-from rrtdrive.controllers.base import Projection, TrackingController, VehicleState
+from rrtdrive.controllers.base import (
+    APPROACH_ANGLE,
+    Projection,
+    TrackingController,
+    VehicleState,
+    checked_approach_angle,
+)
 from rrtdrive.controllers.speed import SpeedConfig
 from rrtdrive.types import InputError, VehicleParams, require_finite, require_positive
 
@@ -51,6 +57,11 @@ class PurePursuit(TrackingController):
         paths are tracked by the plain law either way).
     steer_limit : float, optional
         Largest commanded steering angle (default: the curvature limit's).
+    approach_angle : float
+        The look-ahead is at least ``|cte| / tan(approach_angle)``, so that far from
+        the path the car heads back at most this many radians off the path's
+        direction (the point 2 m ahead of a car 1 m off asked for full lock and, on
+        a rate-limited car, swung it across the path and into a crash).
 
     Examples
     --------
@@ -75,6 +86,7 @@ class PurePursuit(TrackingController):
         ld_max: float = 10.0,
         steer_limit: float | None = None,
         compensate: bool = True,
+        approach_angle: float = APPROACH_ANGLE,
     ) -> None:
         super().__init__(vehicle, speed, steer_limit)
         require_positive("pure_pursuit.ld_min", ld_min)
@@ -86,11 +98,16 @@ class PurePursuit(TrackingController):
             raise InputError(f"pure_pursuit.compensate: expected true or false, got {compensate!r}")
         self.ld_min, self.ld_gain, self.ld_max = float(ld_min), float(ld_gain), float(ld_max)
         self.compensate = compensate
+        self.approach_angle = checked_approach_angle(
+            "pure_pursuit.approach_angle", approach_angle
+        )
+        self._far = 1.0 / math.tan(self.approach_angle)
         self.lookahead = ld_min
 
     def steering(self, state: VehicleState, proj: Projection) -> float:
         """Pure-pursuit steering angle (compensated on paths with gear changes)."""
         ld = min(max(self.ld_gain * abs(state.speed), self.ld_min), self.ld_max)
+        ld = max(ld, abs(proj.cte) * self._far)
         self.lookahead = ld
         tx, ty, _, _ = self.projector.point_at(proj.s + ld)  # type: ignore[union-attr]
         kappa = _chord_curvature(state.x, state.y, state.yaw, tx, ty)

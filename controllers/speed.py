@@ -37,6 +37,10 @@ __all__ = ["SpeedConfig", "SpeedProfile", "SpeedController", "FINAL_APPROACH_M",
 PAST_END_M = 0.05
 #: The window of that stop never shrinks below this (metres): the brake stays finite.
 PAST_END_FLOOR_M = 0.01
+#: A car more than this behind the start of its path (or gear segment) drives up to it
+#: at ``v_launch`` (metres; twice :data:`PAST_END_M`, so a car that stopped past a cusp
+#: is never behind the next segment by this much).
+BEHIND_START_M = 2 * PAST_END_M
 
 
 @dataclass(frozen=True)
@@ -241,6 +245,12 @@ class SpeedController:
             v_ref, a_ref = profile.at(s + abs(speed) * tau)
         else:
             v_ref, a_ref = profile.at(s)
+        if s < -BEHIND_START_M and v_ref < cfg.v_launch:
+            # Before the start the profile is at rest (a car starting there waits for its
+            # wheels): a car behind it crept, the integral wound up against the zero
+            # reference and it stopped for good (3.5 m or more short, or 12 cm behind a
+            # 5-20 mm segment).
+            v_ref, a_ref = cfg.v_launch, 0.0
         if remaining <= 0.0:
             # Past the end: stop within PAST_END_M of it. The window shrinks as the car
             # runs on (a fixed one, asked anew each step, lets the car crawl on: the
@@ -309,10 +319,11 @@ class SpeedController:
             raw = min(raw, math.sqrt(2.0 * cfg.comfort_jerk * room))
         cap = self.accel_cap
         capped = cap is not None and raw > cap
+        target = cap if cap is not None and capped else raw
         if self.comfort:
-            a = self._limit(cap if capped else raw, dt, cfg.comfort_jerk)
+            a = self._limit(target, dt, cfg.comfort_jerk)
         else:
-            a = self._limit(cap if capped else raw, dt, None if capped else cfg.jerk_brake_max)
+            a = self._limit(target, dt, None if capped else cfg.jerk_brake_max)
         if a == raw:
             # Conditional integration (anti-windup): only while the command is not limited.
             limit = cfg.a_max / cfg.ki if cfg.ki > 0 else 0.0

@@ -14,7 +14,7 @@ from rrtdrive.controllers.base import (
 )
 from rrtdrive.controllers.speed import SpeedConfig
 from rrtdrive.geometry import wrap_angle
-from rrtdrive.types import Path, VehicleParams, require_finite, require_positive
+from rrtdrive.types import Path, VehicleParams, require_positive
 
 __all__ = ["Stanley", "front_axle_path"]
 
@@ -89,7 +89,7 @@ class Stanley(TrackingController):
         steer_limit: float | None = None,
     ) -> None:
         super().__init__(vehicle, speed, steer_limit)
-        require_finite("stanley.k", k)
+        require_positive("stanley.k", k)
         require_positive("stanley.k_soft", k_soft)
         self.k, self.k_soft = float(k), float(k_soft)
         self.front: PathProjector | None = None

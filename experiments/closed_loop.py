@@ -38,6 +38,7 @@ import json
 import math
 import os
 import platform
+import statistics
 import sys
 import time
 from pathlib import Path as FsPath
@@ -168,7 +169,7 @@ def stock_table(reports: list[dict], envs: list[str], controllers: list[str]) ->
                 f"{sum(r['success'] for r in g)}/{n} | "
                 f"{sum(r['status'] == 'plan_failed' for r in g)} | "
                 f"{sum(r['status'] == 'crashed' for r in g)} | {stopped}/{n} | "
-                f"{_fmt(term[len(term) // 2] if term else None, 2)} | "
+                f"{_fmt(statistics.median(term) if term else None, 2)} | "
                 f"{_fmt(max(dur, default=None), 1)} ({g[0].get('max_time_s', 0):g}) | "
                 f"{_fmt(max(pos, default=None))} |"
             )
@@ -231,7 +232,8 @@ def save_frames(figures: FsPath, planner: str, hz: int, oncoming: int) -> list[s
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
-    ap.add_argument("--seeds", type=positive_int, default=50)
+    ap.add_argument("--seeds", type=positive_int, default=50,
+                    help="seeds 0..N-1 per scenario and controller (default: %(default)s)")
     ap.add_argument(
         "--scenarios", nargs="+", default=[",".join(SCENARIOS)],
         help=f"comma- or space-separated (default {','.join(SCENARIOS)}); gear scenarios: "
@@ -257,11 +259,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--oncoming", type=int, default=2, help="oncoming cars in overtake-oncoming (default 2)"
     )
-    ap.add_argument("--controllers", default=",".join(CONTROLLERS))
-    ap.add_argument("--planner", default=DEFAULT_PLANNER)
-    ap.add_argument("--frequency", type=int, default=20)
-    ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--out", default="results")
+    ap.add_argument("--controllers", default=",".join(CONTROLLERS),
+                    help="comma-separated controllers (default: %(default)s)")
+    ap.add_argument("--planner", default=DEFAULT_PLANNER,
+                    help="registered planner name (default: %(default)s)")
+    ap.add_argument("--frequency", type=int, default=20,
+                    help="control and simulation frequency [Hz] (default: %(default)s)")
+    ap.add_argument("--jobs", type=int, default=2,
+                    help="worker processes (default: %(default)s)")
+    ap.add_argument("--out", default="results",
+                    help="directory for NAME.json and .md, NAME from --name (default: %(default)s)")
     ap.add_argument("--doc", default=None, help="also write this markdown page (with frames)")
     ap.add_argument(
         "--figures", default=None, help="with --doc: write seed 0's frames here and show them"

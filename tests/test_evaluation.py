@@ -121,6 +121,27 @@ def test_both_collision_judges_are_reported_separately(overtake):
     assert r2.collision_highway_env and not r2.collision_footprint and not r2.success
 
 
+def test_a_parked_car_that_is_both_obstacle_and_vehicle_counts_once(overtake):
+    # The overtake's stopped car is a map obstacle for the planner and logged vehicle 0.
+    lead = overtake.map.obstacles[overtake.lead_index]
+    path = _lane_path(overtake)
+    x = np.arange(overtake.start.x, 48.0, 0.2)
+    states = np.column_stack([x, np.full_like(x, overtake.lane_y), 0 * x, np.full_like(x, 4.0)])
+    others = np.zeros((len(x), 1, 4))
+    others[:, 0, :2] = lead.center
+    others[:, 0, 2] = lead.yaw
+    args = dict(status="crashed", others=others, sizes=[lead.size])
+    r = evaluate(_episode(overtake, path, states, np.zeros((len(x) - 1, 2)), **args))
+    assert r.collisions_vehicles == 1 and r.collisions_at_fault == 1  # was 2
+    # Into the car and on into the road's edge: two collisions, both at fault.
+    y = np.linspace(overtake.lane_y, overtake.lane_y - 3.0, 16)
+    edge = np.vstack([states, np.column_stack([x[-1] + 0 * y, y, 0 * y, 0 * y + 1.0])])
+    others = np.concatenate([others, others[-16:]])
+    args["others"] = others
+    r = evaluate(_episode(overtake, path, edge, np.zeros((len(edge) - 1, 2)), **args))
+    assert r.collisions_vehicles == 1 and r.collisions_at_fault == 2
+
+
 def test_footprint_judge_sees_moving_vehicles(overtake):
     path = _lane_path(overtake, 40.0)
     x = np.linspace(overtake.start.x, 20.0, 50)
@@ -237,6 +258,14 @@ def test_summarise_intervals(overtake):
     assert lo == hi == pytest.approx(4.0)  # identical values: a point interval
     assert s["ttc_min_s_min"] is None and s["replan_time_max_s_ci95"] is None
     assert summarise([r])["cte_rms_m_ci95"] is None
+    # A failed plan is no drive: its 0 s duration is not averaged in; it is counted.
+    failed = evaluate(Episode(overtake, "rrt", "lqr", 0, None, Path.empty(),
+                              DriveLog.empty(DT), "plan_failed", "x", EpisodeConfig()))
+    both = summarise([r, failed])
+    assert both["duration_s_mean"] == pytest.approx(r.duration_s)
+    assert both["plan_failures"] == 1 and both["episodes"] == 2
+    assert both["max_long_accel_mean"] == r.max_long_accel
+    assert both["nuplan_comfortable"] == int(bool(r.nuplan_comfortable))
 
 
 def test_success_terms_say_which_term_failed(overtake):

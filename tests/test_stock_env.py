@@ -8,13 +8,16 @@ import gymnasium as gym
 import highway_env  # noqa: F401  (registers its envs)
 import numpy as np
 import pytest
+from highway_env.utils import lmap
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from rrtdrive.cli import main
 from rrtdrive.evaluation import evaluate
 from rrtdrive.sim.ego import EgoVehicle
 from rrtdrive.sim.extract import attach_ego, map_from_env
 from rrtdrive.sim.runner import EpisodeConfig
-from rrtdrive.sim.stock import STOCK_ENVS, drive_stock_env, make_stock_env
+from rrtdrive.sim.stock import STOCK_ENVS, _steering_action, drive_stock_env, make_stock_env
 from rrtdrive.types import Budget, InputError
 
 DETERMINISTIC = EpisodeConfig(budget=Budget(max_time_s=1e6))
@@ -35,8 +38,20 @@ def test_stock_episode_stops_at_the_goal_and_highway_env_agrees():
     assert run.highway_env_terminated_s <= report.duration_s <= run.episode.scenario.max_time_s
     assert not run.highway_env_truncated
     assert run.to_json()["highway_env_success"] is True
+    # The float32 action never decodes past the controller's steering clip.
+    assert report.executed_curvature_violation_share == 0.0
     again = drive_stock_env("parking-v0", 2, "hybrid-a-star", "pure-pursuit", DETERMINISTIC)
     assert np.array_equal(again.episode.log.states, run.episode.log.states)  # deterministic
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.floats(-0.6, 0.6))
+def test_the_steering_action_decodes_to_no_more_than_the_command(steer):
+    low, high = -0.5236, 0.5236
+    action = _steering_action(steer, low, high)
+    decoded = float(lmap(action, [-1, 1], [low, high]))  # highway-env's decoding
+    assert abs(decoded) <= abs(steer) or abs(steer) > high
+    assert abs(decoded - min(max(steer, low), high)) <= 2e-7
 
 
 def test_stock_env_steps_through_env_step_with_our_ego():

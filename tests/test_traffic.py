@@ -384,6 +384,24 @@ def test_ttc_follows_nuplans_definition():
     assert time_to_collision(_road_episode(ego, others, [[4.3, 1.8]]), [1])[1] == 0.0
 
 
+def test_a_reversing_ego_looks_the_way_it_moves():
+    # Backing at 2 m/s towards a car stopped 2.9 m (bumper to bumper) behind it: 1.5 s.
+    # The cone about the nose saw nothing while reversing (parallel parking seed 3: no
+    # TTC on any of its 190 reversing steps).
+    ego = [[10.0, 44.0, 0.0, -2.0]] * 2
+    behind_x = 10.0 - V.rear_overhang - 2.9 - 4.3 / 2
+    others = np.array([[[behind_x, 44.0, 0.0, 0.0]]] * 2)
+    assert time_to_collision(_road_episode(ego, others, [[4.3, 1.8]])) == pytest.approx([1.5] * 2)
+    # The car past its nose is now behind it.
+    ahead = others.copy()
+    ahead[..., 0] = 10.0 + V.front_extent + 1.0 + 4.3 / 2
+    assert np.all(np.isinf(time_to_collision(_road_episode(ego, ahead, [[4.3, 1.8]]))))
+    # Backing into a moving car: the ego's leading (rear) bumper, at fault.
+    hit = np.array([[[10.0 - V.rear_overhang - 4.3 / 2 + 0.1, 44.0, 0.0, 0.5]]] * 2)
+    (c,) = vehicle_collisions(_road_episode(ego, hit, [[4.3, 1.8]]))
+    assert c[2] == "active_front" and c[3]
+
+
 def test_at_fault_collisions_follow_nuplans_classification():
     size = [[4.3, 1.8]]
     # The ego drives into a stopped car: at fault.

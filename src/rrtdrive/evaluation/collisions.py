@@ -7,7 +7,9 @@ vehicles as nuPlan's ``no_ego_at_fault_collisions``. Box tests use shapely.
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -22,10 +24,12 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = [
     "COLLISION_STOPPED_SPEED",
     "map_collision",
+    "logged_vehicle_obstacles",
     "footprint_collisions",
     "boxes_intersect",
     "ego_centres",
     "relative_angles",
+    "travel_yaw",
     "between_lanes",
     "vehicle_collisions",
 ]
@@ -34,19 +38,54 @@ __all__ = [
 COLLISION_STOPPED_SPEED = 5e-2
 
 
-def map_collision(episode: Episode, spacing: float) -> bool:
-    """Exact body rectangle of every (densified) logged pose against the map and its bounds."""
+def map_collision(episode: Episode, spacing: float, skip: Sequence[int] = ()) -> bool:
+    """Exact body rectangle of every (densified) logged pose against the map and its bounds.
+
+    ``skip``: indices of map obstacles left out (those that are logged vehicles).
+    """
     from rrtdrive.planning.base import cached_checker
 
     states = episode.log.states
     if len(states) == 0:
         return False
+    m = episode.scenario.map
+    if skip:
+        left_out = set(skip)
+        kept = [o for i, o in enumerate(m.obstacles) if i not in left_out]
+        m = dataclasses.replace(m, obstacles=kept)
     # abs_slack: an exact multiple of the spacing gains no extra piece through rounding.
     dense = densify(states[:, :3], spacing, angle_column=2, abs_slack=1e-9).points
     # The exact test's grid screen: the planner's, so a map too big for the default grid
     # (simulate --resolution) is judged too.
-    checker = cached_checker(episode.scenario.map, episode.scenario.checker_config)
+    checker = cached_checker(m, episode.scenario.checker_config)
     return not bool(np.all(checker.poses_free(dense)))
+
+
+def logged_vehicle_obstacles(episode: Episode) -> tuple[int, ...]:
+    """Indices of the map obstacles that are also logged other vehicles.
+
+    A parked car of a scene (the overtake's stopped car, parallel parking's row, a
+    stock env's parked cars) is both: a map obstacle for the planner and a vehicle in
+    the log. Matched by its box at the first logged time (centre, heading and size
+    within 1 mm / 1 mrad).
+    """
+    others = episode.log.others
+    if others.size == 0:
+        return ()
+    first, sizes = others[0], episode.log.other_sizes
+    out = []
+    for i, o in enumerate(episode.scenario.map.obstacles):
+        near = (
+            (np.abs(first[:, 0] - o.center[0]) <= 1e-3)
+            & (np.abs(first[:, 1] - o.center[1]) <= 1e-3)
+            & (np.abs(sizes[:, 0] - o.size[0]) <= 1e-3)
+            & (np.abs(sizes[:, 1] - o.size[1]) <= 1e-3)
+        )
+        # A box turned by pi is the same box.
+        turned = np.abs(np.sin(first[:, 2] - o.yaw)) <= 1e-3
+        if bool(np.any(near & turned)):
+            out.append(i)
+    return tuple(out)
 
 
 def footprint_collisions(episode: Episode, spacing: float, map_hit: bool | None = None) -> bool:
@@ -99,15 +138,24 @@ def ego_centres(states: np.ndarray, vehicle: Any) -> tuple[np.ndarray, np.ndarra
     )
 
 
-def relative_angles(states: np.ndarray, others: np.ndarray) -> np.ndarray:
-    """Angle between the ego heading and the rear axle -> agent centre vector, ``(N, K)``.
+def travel_yaw(states: np.ndarray) -> np.ndarray:
+    """The direction the ego moves in: its nose heading, turned by pi while it reverses."""
+    return np.where(states[:, 3] < 0.0, states[:, 2] + math.pi, states[:, 2])
 
-    nuPlan's ``get_agent_relative_angle``.
+
+def relative_angles(states: np.ndarray, others: np.ndarray) -> np.ndarray:
+    """Angle between the ego's direction of travel and the rear axle -> agent centre, ``(N, K)``.
+
+    nuPlan's ``get_agent_relative_angle`` about the ego's heading, which is its
+    direction of travel there (nuPlan's ego never reverses); here a reversing ego
+    looks the way it moves (:func:`travel_yaw`), so the cars it backs towards are
+    ahead of it and those past its nose behind.
     """
     dx = others[..., 0] - states[:, None, 0]
     dy = others[..., 1] - states[:, None, 1]
     norm = np.maximum(np.hypot(dx, dy), 1e-12)
-    dot = (np.cos(states[:, 2])[:, None] * dx + np.sin(states[:, 2])[:, None] * dy) / norm
+    yaw = travel_yaw(states)
+    dot = (np.cos(yaw)[:, None] * dx + np.sin(yaw)[:, None] * dy) / norm
     return np.arccos(np.clip(dot, -1.0, 1.0))
 
 
@@ -173,7 +221,9 @@ def vehicle_collisions(episode: Episode) -> list[tuple[int, int, str, bool]]:
             kind, fault = "active_rear", False
         elif bool(
             shapely.intersects(
-                shapely.linestrings(ego_box[i, [1, 2]]), shapely.polygons(boxes[i, j])
+                # The bumper in the direction of travel: the rear one while reversing.
+                shapely.linestrings(ego_box[i, [1, 2] if states[i, 3] >= 0.0 else [3, 0]]),
+                shapely.polygons(boxes[i, j]),
             )
         ):
             kind, fault = "active_front", True

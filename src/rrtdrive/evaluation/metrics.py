@@ -20,6 +20,7 @@ import numpy as np
 from rrtdrive.evaluation import comfort
 from rrtdrive.evaluation.collisions import (
     footprint_collisions,
+    logged_vehicle_obstacles,
     map_collision,
     vehicle_collisions,
 )
@@ -85,6 +86,18 @@ class MetricContext:
     def map_hit(self) -> bool:
         """The exact body left the map or touched an obstacle."""
         return map_collision(self.episode, self.config.footprint_spacing)
+
+    @cached_property
+    def static_hit(self) -> bool:
+        """The body left the map or touched an obstacle that is not a logged vehicle.
+
+        A parked car that is both (:func:`logged_vehicle_obstacles`) counts among the
+        vehicle collisions, once.
+        """
+        if not self.map_hit:
+            return False
+        skip = logged_vehicle_obstacles(self.episode)
+        return not skip or map_collision(self.episode, self.config.footprint_spacing, skip)
 
     @cached_property
     def crash_footprint(self) -> bool:
@@ -219,7 +232,7 @@ METRICS: Mapping[str, Metric] = MappingProxyType({
     "collision_footprint": Metric(lambda ep, ctx: ctx.crash_footprint, empty=False),
     "collisions_vehicles": Metric(lambda ep, ctx: len(ctx.crashes), empty=0),
     "collisions_at_fault": Metric(
-        lambda ep, ctx: len(ctx.at_fault) + int(ctx.map_hit), empty=0
+        lambda ep, ctx: len(ctx.at_fault) + int(ctx.static_hit), empty=0
     ),
     # Tracking.
     "cte_rms_m": Metric(lambda ep, ctx: float(np.sqrt(np.mean(ctx.errors[0] ** 2)))),

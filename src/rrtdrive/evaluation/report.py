@@ -46,7 +46,9 @@ OUTCOMES = tuple(o.value for o in Outcome)
 #: Numeric report fields that can be negative; every other number of a report is a
 #: non-negative quantity (a time, length, count or error magnitude), which the
 #: summaries give an interval that cannot go below zero.
-SIGNED_FIELDS = frozenset({"progress_m", "final_speed"})
+SIGNED_FIELDS = frozenset(
+    {"progress_m", "final_speed", "nuplan_lon_accel_min", "nuplan_lon_accel_max"}
+)
 
 
 @dataclass(frozen=True)
