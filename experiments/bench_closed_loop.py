@@ -96,15 +96,20 @@ def time_env_step(ep, sim: SimConfig) -> float:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
-    ap.add_argument("--seeds", type=int, default=10)
-    ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--frequency", type=int, default=20)
+    ap.add_argument("--seeds", type=int, default=10,
+                    help="seeds 0..N-1 per scenario and controller (default: %(default)s)")
+    ap.add_argument("--repeats", type=int, default=3,
+                    help="timed runs per episode; the minimum counts (default: %(default)s)")
+    ap.add_argument("--frequency", type=int, default=20,
+                    help="simulation frequency of the timed runs [Hz] (default: %(default)s)")
     ap.add_argument(
         "--env-step-seeds", type=int, default=1,
         help="seeds also timed through env.step (slow: an observation every step)",
     )
-    ap.add_argument("--planner", default=DEFAULT_PLANNER)
-    ap.add_argument("--out", default="results")
+    ap.add_argument("--planner", default=DEFAULT_PLANNER,
+                    help="registered planner name (default: %(default)s)")
+    ap.add_argument("--out", default="results",
+                    help="directory for bench_closed_loop.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     sim = SimConfig(simulation_frequency=args.frequency)
     rows = []
