@@ -49,6 +49,30 @@ def test_heading_wrap_does_not_spike_yaw_rate():
     assert np.isclose(c.yaw_rate_abs_max, 0.3, rtol=1e-6)
 
 
+@settings(max_examples=20, deadline=None)
+@given(st.sampled_from([15.0, 25.0, 30.0]), st.floats(1.0, 4.0))
+def test_any_log_rate_is_judged_on_nuplans_0_1_s_grid(freq, top):
+    # The same smooth speed change logged at 20 Hz and at another rate: the same
+    # figures (every round(0.1 / dt)-th sample stepped 0.133 s at 15 Hz, 0.08 s at 25 Hz).
+    def speed(t):
+        return top / 2 * (1 - np.cos(np.pi * np.clip(t / 4.0, 0.0, 1.0)))
+
+    ref = nuplan_comfort(T, 0.05 * T, speed(T), 1.255)
+    t = np.arange(0.0, 12.0, 1.0 / freq)
+    c = nuplan_comfort(t, 0.05 * t, speed(t), 1.255)
+    assert np.isclose(c.lon_jerk_abs_max, ref.lon_jerk_abs_max, rtol=0.03)
+    assert np.isclose(c.jerk_abs_max, ref.jerk_abs_max, rtol=0.03)
+    assert np.isclose(c.lon_accel_max, ref.lon_accel_max, rtol=0.02)
+
+
+def test_too_short_a_drive_has_no_figures():
+    # Under 0.3 s there are fewer than four samples at 0.1 s: null, not zeros.
+    for n in (1, 2, 6):
+        t = np.arange(n) * 0.05
+        assert nuplan_comfort(t, 0.01 * t, np.full(n, 1.0), 1.255) is None
+    assert nuplan_comfort(np.arange(7) * 0.05, np.zeros(7), np.ones(7), 1.255) is not None
+
+
 def test_episode_report_carries_the_drivability_figures():
     from rrtdrive.evaluation import EvalConfig, evaluate
     from rrtdrive.sim.runner import run_episode

@@ -133,8 +133,8 @@ class MetricContext:
         return comfort.steering_rate(self.episode.log)
 
     @cached_property
-    def nuplan(self) -> NuplanComfort:
-        """NuPlan's comfort figures of the driven trajectory."""
+    def nuplan(self) -> NuplanComfort | None:
+        """NuPlan's comfort figures of the driven trajectory (``None`` under 0.3 s)."""
         ep = self.episode
         v = ep.scenario.vehicle
         return nuplan_comfort(
@@ -145,6 +145,11 @@ class MetricContext:
     def replan(self) -> dict[str, Any]:
         """Re-planning statistics (:func:`replan_stats`)."""
         return replan_stats(self.episode)
+
+
+def _nuplan(ctx: MetricContext, name: str) -> Any:
+    """One of the nuPlan figures, ``None`` when the drive was too short for them."""
+    return None if ctx.nuplan is None else getattr(ctx.nuplan, name)
 
 
 MetricFn = Callable[["Episode", MetricContext], Any]
@@ -270,14 +275,14 @@ METRICS: Mapping[str, Metric] = MappingProxyType({
     "path_max_sharpness": _always(
         lambda ep, ctx: comfort.path_sharpness(ep.path, ep.scenario.vehicle.wheelbase)
     ),
-    "nuplan_comfortable": Metric(lambda ep, ctx: ctx.nuplan.comfortable),
-    "nuplan_lon_accel_min": Metric(lambda ep, ctx: ctx.nuplan.lon_accel_min),
-    "nuplan_lon_accel_max": Metric(lambda ep, ctx: ctx.nuplan.lon_accel_max),
-    "nuplan_lat_accel_abs_max": Metric(lambda ep, ctx: ctx.nuplan.lat_accel_abs_max),
-    "nuplan_lon_jerk_abs_max": Metric(lambda ep, ctx: ctx.nuplan.lon_jerk_abs_max),
-    "nuplan_jerk_abs_max": Metric(lambda ep, ctx: ctx.nuplan.jerk_abs_max),
-    "nuplan_yaw_rate_abs_max": Metric(lambda ep, ctx: ctx.nuplan.yaw_rate_abs_max),
-    "nuplan_yaw_accel_abs_max": Metric(lambda ep, ctx: ctx.nuplan.yaw_accel_abs_max),
+    "nuplan_comfortable": Metric(lambda ep, ctx: _nuplan(ctx, "comfortable")),
+    "nuplan_lon_accel_min": Metric(lambda ep, ctx: _nuplan(ctx, "lon_accel_min")),
+    "nuplan_lon_accel_max": Metric(lambda ep, ctx: _nuplan(ctx, "lon_accel_max")),
+    "nuplan_lat_accel_abs_max": Metric(lambda ep, ctx: _nuplan(ctx, "lat_accel_abs_max")),
+    "nuplan_lon_jerk_abs_max": Metric(lambda ep, ctx: _nuplan(ctx, "lon_jerk_abs_max")),
+    "nuplan_jerk_abs_max": Metric(lambda ep, ctx: _nuplan(ctx, "jerk_abs_max")),
+    "nuplan_yaw_rate_abs_max": Metric(lambda ep, ctx: _nuplan(ctx, "yaw_rate_abs_max")),
+    "nuplan_yaw_accel_abs_max": Metric(lambda ep, ctx: _nuplan(ctx, "yaw_accel_abs_max")),
     # Gears (docs/metrics.md, "Gear changes").
     "path_cusps": _always(lambda ep, ctx: int(len(ep.path.cusps)) if len(ep.path) else None),
     "gear_changes": Metric(lambda ep, ctx: gear_changes(ep.log.states[:, 3]), empty=0),

@@ -21,8 +21,12 @@ kinematic bicycle sets the lateral part to zero, which would hide every lateral
 figure), shifted to the body centre by nuPlan's ``get_acceleration_shifted``
 (``a + d * (w^2 + w_dot)`` along the body axis, d the rear-axle-to-centre distance);
 the magnitude is that of the rear-axle acceleration, as in ``DynamicCarState.acceleration``.
-Our 20 Hz log is first taken every ``nuplan_step_s`` (0.1 s) so that the filter windows
-span the same time as in nuPlan.
+Our log is first taken every ``nuplan_step_s`` (0.1 s) so that the filter windows span
+the same time as in nuPlan: every other sample at 20 Hz, and linearly interpolated on
+an exact 0.1 s grid where the step does not divide 0.1 s (15 or 25 Hz: taking every
+``round(0.1 / dt)``-th sample stepped 0.133 or 0.08 s, 19-27 % off in the jerks). A
+series of fewer than :data:`MIN_SAMPLES` samples at 0.1 s (an episode under 0.3 s)
+has no figures: ``None``, not zeros.
 """
 
 from __future__ import annotations
@@ -46,6 +50,8 @@ COMFORT_BOUNDS = {
 }
 #: nuPlan's sampling interval of the ego history (s).
 NUPLAN_STEP_S = 0.1
+#: Fewest samples at that interval the figures need: the yaw acceleration's cubic fit.
+MIN_SAMPLES = 4
 
 
 @dataclass(frozen=True)
@@ -122,7 +128,7 @@ def nuplan_comfort(
     speed: np.ndarray,
     rear_to_centre: float,
     nuplan_step_s: float = NUPLAN_STEP_S,
-) -> NuplanComfort:
+) -> NuplanComfort | None:
     """The comfort figures nuPlan computes, of a trajectory sampled at equal times.
 
     Parameters
@@ -136,12 +142,13 @@ def nuplan_comfort(
     rear_to_centre : float
         Distance from the rear axle to the body centre (m).
     nuplan_step_s : float
-        nuPlan's history interval; the series is taken every ``round(nuplan_step_s / dt)``
-        samples first.
+        nuPlan's history interval; the series is taken at it first (every
+        ``nuplan_step_s / dt``-th sample, or interpolated where that is no integer).
 
     Returns
     -------
-    NuplanComfort
+    NuplanComfort or None
+        ``None`` for fewer than :data:`MIN_SAMPLES` samples at ``nuplan_step_s``.
 
     Examples
     --------
@@ -152,14 +159,20 @@ def nuplan_comfort(
     """
     t = np.asarray(t, dtype=float)
     if len(t) < 2:
-        return NuplanComfort(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, True)
+        return None
     dt_log = float(np.mean(np.diff(t)))
     stride = max(1, int(round(nuplan_step_s / dt_log)))
-    t = t[::stride]
-    heading = np.unwrap(np.asarray(yaw, dtype=float)[::stride])
-    v = np.asarray(speed, dtype=float)[::stride]
-    if len(t) < 2:
-        return NuplanComfort(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, True)
+    if abs(stride * dt_log - nuplan_step_s) <= 1e-9 * nuplan_step_s:
+        heading = np.unwrap(np.asarray(yaw, dtype=float)[::stride])
+        v = np.asarray(speed, dtype=float)[::stride]
+        t = t[::stride]
+    else:
+        grid = t[0] + nuplan_step_s * np.arange(int((t[-1] - t[0]) / nuplan_step_s + 1e-9) + 1)
+        heading = np.interp(grid, t, np.unwrap(np.asarray(yaw, dtype=float)))
+        v = np.interp(grid, t, np.asarray(speed, dtype=float))
+        t = grid
+    if len(t) < MIN_SAMPLES:
+        return None
     dt = float(np.mean(np.diff(t)))
     # The ego state's own kinematics (unfiltered, as a log's states carry them).
     omega = np.gradient(heading, t)
