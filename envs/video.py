@@ -175,7 +175,7 @@ class RecordMP4(gym.Wrapper):
             path = self._finish()
             if path is not None:
                 info = {**info, "video": str(path)}
-        return obs, reward, terminated, truncated, info
+        return obs, float(reward), terminated, truncated, info
 
     def close(self) -> None:
         """Write any unfinished video, then close the environment."""

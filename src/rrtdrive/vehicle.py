@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 import shapely
@@ -13,7 +14,9 @@ from rrtdrive.types import VehicleParams
 __all__ = ["footprint_corners", "footprint_polygon", "bicycle_step", "cover_discs"]
 
 
-def footprint_corners(poses: np.ndarray, vehicle: VehicleParams) -> np.ndarray:
+def footprint_corners(
+    poses: np.ndarray | Sequence[float], vehicle: VehicleParams
+) -> np.ndarray:
     """Corners of the body rectangle for rear-axle poses.
 
     Parameters

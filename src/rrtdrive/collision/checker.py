@@ -317,7 +317,7 @@ class CollisionChecker:
                 return True
             t = min(t + room, length)
 
-    def edge_free(self, a: Sequence[float], b: Sequence[float]) -> bool:
+    def edge_free(self, a: Sequence[float] | np.ndarray, b: Sequence[float] | np.ndarray) -> bool:
         """Fast conservative test of a tree edge a->b driven with heading along the edge.
 
         The swept body lies inside the capsule of radius ``r = W/2 + margin``
@@ -559,7 +559,9 @@ class CollisionChecker:
         """The labels of :meth:`reachable_components`, computed once per checker."""
         return self.grid.component_labels
 
-    def provably_disconnected(self, a: Sequence[float], b: Sequence[float]) -> bool:
+    def provably_disconnected(
+        self, a: Sequence[float] | np.ndarray, b: Sequence[float] | np.ndarray
+    ) -> bool:
         """True when no collision-free motion can take the rear axle from ``a`` to ``b``.
 
         Conservative in the safe direction: True is a proof (by

@@ -51,7 +51,7 @@ def map_collision(episode: Episode, spacing: float, skip: Sequence[int] = ()) ->
     m = episode.scenario.map
     if skip:
         left_out = set(skip)
-        kept = [o for i, o in enumerate(m.obstacles) if i not in left_out]
+        kept = tuple(o for i, o in enumerate(m.obstacles) if i not in left_out)
         m = dataclasses.replace(m, obstacles=kept)
     # abs_slack: an exact multiple of the spacing gains no extra piece through rounding.
     dense = densify(states[:, :3], spacing, angle_column=2, abs_slack=1e-9).points

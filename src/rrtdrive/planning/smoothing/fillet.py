@@ -35,9 +35,9 @@ class Fillet(NamedTuple):
 
 
 def fillet_points(
-    corner: Sequence[float],
-    u_in: Sequence[float],
-    u_out: Sequence[float],
+    corner: Sequence[float] | np.ndarray,
+    u_in: Sequence[float] | np.ndarray,
+    u_out: Sequence[float] | np.ndarray,
     radius: float,
     max_angle: float = math.radians(10.0),
 ) -> Fillet:

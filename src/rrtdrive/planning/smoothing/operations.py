@@ -36,8 +36,8 @@ def prune(
     keep: Sequence[int] = (),
     *,
     max_turn: float | None = None,
-    start_heading: Sequence[float] | None = None,
-    end_heading: Sequence[float] | None = None,
+    start_heading: Sequence[float] | np.ndarray | None = None,
+    end_heading: Sequence[float] | np.ndarray | None = None,
 ) -> np.ndarray | None:
     """Shortcut a polyline: from each kept node jump to the farthest later node with a free edge.
 

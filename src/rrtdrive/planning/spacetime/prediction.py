@@ -92,7 +92,7 @@ class Prediction:
     def constant_velocity(
         cls,
         states: np.ndarray,
-        sizes: Sequence[Sequence[float]],
+        sizes: Sequence[Sequence[float]] | np.ndarray,
         horizon: float,
         step: float = 0.1,
     ) -> Prediction:

@@ -81,7 +81,7 @@ class ArrivalTiming:
         t_up = (v - v0) / a
         return t_up + np.maximum(d - d_up, 0.0) / vm
 
-    def state_at(self, point: Sequence[float]) -> tuple[float, float]:
+    def state_at(self, point: Sequence[float] | np.ndarray) -> tuple[float, float]:
         """Earliest arrival time and nominal speed at ``point`` (its progress from the origin)."""
         d = max(float(self.progress(np.asarray(point, dtype=float)[:2])[0]), 0.0)
         v0 = max(self.v0, 0.0)
