@@ -101,6 +101,7 @@ def _min(rows: list[dict], key: str) -> float | None:
 def summarise(rows: list[dict]) -> dict:
     """The figures of one scenario x controller group."""
     n = len(rows)
+    drove = [r for r in rows if r.get("steps", 1) > 0]
     rms = [r["cte_rms_m"] for r in rows if r.get("cte_rms_m") is not None]
     return {
         "episodes": n,
@@ -121,7 +122,10 @@ def summarise(rows: list[dict]) -> dict:
         "nuplan_yaw_rate_abs_max": _max(rows, "nuplan_yaw_rate_abs_max"),
         "nuplan_yaw_accel_abs_max": _max(rows, "nuplan_yaw_accel_abs_max"),
         "path_max_sharpness_max": _max(rows, "path_max_sharpness"),
-        "duration_s_mean": sum(r["duration_s"] for r in rows) / n if n else None,
+        # Over the episodes that drove (a failed plan's 0 s is no drive).
+        "duration_s_mean": (
+            sum(r["duration_s"] for r in drove) / len(drove) if drove else None
+        ),
         "plans_wall_capped": sum(bool(r.get("plan_wall_capped")) for r in rows),
         "planner_runs": sum(r.get("planner_runs", 0) for r in rows),
         "wall_capped_cycles": sum(r.get("wall_capped_cycles", 0) for r in rows),

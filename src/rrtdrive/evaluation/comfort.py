@@ -40,13 +40,13 @@ def lateral_accel(log: DriveLog, kappa: np.ndarray) -> np.ndarray:
     return v_step**2 * kappa
 
 
-def max_jerk(log: DriveLog, lat: np.ndarray) -> float:
-    """Largest step-to-step jerk magnitude ``|(Δa, Δa_lat)| / dt`` (m/s³); 0 for one step."""
+def max_jerk(log: DriveLog, lat: np.ndarray) -> float | None:
+    """Largest step-to-step jerk magnitude ``|(Δa, Δa_lat)| / dt`` (m/s³); ``None`` for one step."""
     accel = log.controls[:, 0]
     if len(accel) > 1:
         jerk = np.hypot(np.diff(accel), np.diff(lat)) / log.dt
         return float(np.max(jerk))
-    return 0.0
+    return None
 
 
 def steering_rate(log: DriveLog) -> np.ndarray:
