@@ -38,7 +38,7 @@ ENTRY_POINT = "rrtdrive.envs.drive_env:DriveEnv"
 #: Registered id -> scenario name of :func:`rrtdrive.sim.scenes.make_scenario` (or, for
 #: ``Map-v0``, the map it drives unless ``scenario`` names another).
 #: A new scenario is one more line here (``tests/test_envs.py`` checks that every
-#: name in ``rrtdrive.sim.scenes.SCENARIOS`` has an id).
+#: name in ``rrtdrive.sim.tasks.SCENARIOS`` has an id).
 ENV_IDS: dict[str, str] = {
     "rrtdrive/Parking-v0": "parking",
     "rrtdrive/ParkingReverseIn-v0": "parking",

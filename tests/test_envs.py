@@ -59,7 +59,7 @@ def test_import_registers_ids_without_highway_env_or_pygame():
 
 
 def test_every_scenario_has_an_env_id():
-    # Adding a scenario to sim.scenes.SCENARIOS needs one line in envs/__init__.py: ENV_IDS.
+    # Adding a scenario to sim.tasks.SCENARIOS needs one line in envs/__init__.py: ENV_IDS.
     # Map-v0 drives a map (the parking lot unless ``scenario`` names another).
     assert sorted(set(ENV_IDS.values()) - {"parking_lot"}) == sorted(SCENARIOS)
     assert ENV_IDS["rrtdrive/Map-v0"] == "parking_lot"

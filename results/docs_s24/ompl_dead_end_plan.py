@@ -10,7 +10,7 @@ from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.types import Budget
 from rrtdrive.verify import verify_path
 
-spec = expand(BenchConfig(maps=("dead_end",), planners=("ompl-rs-rrtconnect",), seeds=1))[0]
+spec = expand(BenchConfig(maps=("dead_end",), planners=("ompl-rs-rrtconnect",), seeds=1, reverse=True))[0]
 m = _map(spec.target, spec.map_json)
 problem = PlanningProblem.from_map(m, reverse=spec.reverse)
 budget = Budget(max_iterations=spec.max_iterations, max_time_s=spec.max_time_s)
