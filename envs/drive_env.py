@@ -40,7 +40,7 @@ from rrtdrive.envs import is_registered_default, plain_value
 from rrtdrive.envs.action import ResidualMixer, action_command
 from rrtdrive.envs.config import DriveEnvConfig, _require_mapping
 from rrtdrive.envs.observation import OBS_CLIP, ObservationLayout, observation_names
-from rrtdrive.envs.reference_speed import following_cap, stop_line_speed
+from rrtdrive.envs.reference_speed import Relaunch, following_cap, stop_line_speed
 from rrtdrive.envs.render import SceneRenderer, view_for
 from rrtdrive.envs.reward import RewardWeights, state_terms
 from rrtdrive.envs.seed_draw import failure_text, start_drawn_episode
@@ -256,9 +256,11 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         self._sim, self._ego, self._road = sim, sim.unwrapped.vehicle, sim.unwrapped.road
         self._scenario, self._reference, self._speed, self._ctrl = task, ref, speed, ctrl
         self._driver, self._loop, self._episode_config = driver, loop, episode_config
-        # The agent alone drives a fixed path; a driver that plans its reference
-        # while driving runs every step even when its command is not applied.
-        self._runs_driver = cfg.residual or ref.plans_while_driving
+        # A driver that plans while driving, or that the oncoming gate holds (its stop
+        # line caps v_ref), runs every step even when its command is not applied.
+        gated = getattr(driver, "gate", None) is not None
+        self._runs_driver = cfg.residual or ref.plans_while_driving or gated
+        self._relaunch = Relaunch(speed.comfort_a_max if ctrl.speed.comfort else speed.a_max)
         self.episode_seed = seed
         self._dt = loop.dt
         self._rec = loop.recorder
@@ -310,7 +312,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
                 )
         requested = opts.get("episode_seed")
         if requested is not None:
-            s = require_int("options.episode_seed", requested, 0)
+            s = require_int("options.episode_seed", requested, 0, 2**63 - 1)
             ref = self._start_episode(s)
             if ref.failure is not None:
                 raise RuntimeError(
@@ -499,6 +501,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             seg.path, arc_end=not self.path.is_forward_only  # type: ignore[union-attr]
         )
         self._profile = ctrl.profile  # the driver's controller rebuilt it for this segment
+        self._relaunch.start, self._proj_s = None, 0.0  # arc lengths of another segment
 
     def _follow_segments(self) -> None:
         """Move on to the next gear segment when the car has (see the class docs)."""
@@ -546,16 +549,16 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
     def _v_ref_at(self) -> Callable[[float], float]:
         """The reference speed at an arc length: what the car is asked to drive now.
 
-        The speed profile, capped by the speed loop's stop line (the oncoming gate)
-        and, while the traffic driver follows a slower car, by the speed its IDM
-        settles to at the current gap (:mod:`rrtdrive.envs.reference_speed`).
+        The profile, capped by the speed loop's stop line (the oncoming gate) and the
+        rise after it, and by the speed the traffic driver's IDM settles to at the
+        current gap while it follows (:mod:`rrtdrive.envs.reference_speed`).
         """
-        profile, speed = self._profile, self._speed
-        stop_at = self._ctrl.speed.stop_at
+        profile, speed, stop_at = self._profile, self._speed, self._ctrl.speed.stop_at
         cap = following_cap(self._driver, self._ego.speed)
+        (rise := self._relaunch).update(stop_at, self._proj_s, self._ego.speed)
 
         def v_ref_at(s: float) -> float:
-            return min(stop_line_speed(profile.at(s)[0], s, stop_at, speed), cap)
+            return min(stop_line_speed(profile.at(s)[0], s, stop_at, speed), cap, rise.cap(s))
 
         return v_ref_at
 

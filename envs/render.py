@@ -82,6 +82,16 @@ class SceneRenderer:
         self.size = self.canvas.size
         self.scaling = self.canvas.scaling
 
+    def __getstate__(self) -> dict[str, Any]:
+        # The canvas holds pygame's surfaces, font and module, which do not pickle: a
+        # copied env (pickle, copy.deepcopy) draws its own on its first frame.
+        canvas = self.canvas
+        return {"args": (canvas.size, canvas.scaling, tuple(canvas.centre), canvas.reuse_static)}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        size, scaling, centre, reuse = state["args"]
+        self.__init__(size, scaling, centre, reuse_static=reuse)  # type: ignore[misc]
+
     @property
     def centre(self) -> np.ndarray:
         """World point at the centre of the frame."""
