@@ -110,8 +110,8 @@ def main(argv: list[str] | None = None) -> int:
         + ("instant" if args.ego_steer_rate is None else f"limited to {args.ego_steer_rate} rad/s")
         + f", judge's steering-velocity limit {args.judge_steer_rate} rad/s.",
         "",
-        "| scenario | controller | CommonRoad feasible | max steering rate [rad/s] "
-        "| max drift [m] | success | collisions | nuPlan comfortable |",
+        "| scenario | controller | CommonRoad feasible (inputs alone) | max steering rate "
+        "[rad/s] | max drift [m] / [rad] | success | collisions | nuPlan comfortable |",
         "|---|---|---|---|---|---|---|---|",
     ]
     for s in args.scenarios.split(","):
@@ -119,10 +119,13 @@ def main(argv: list[str] | None = None) -> int:
             g = [r for r in rows if r["scenario"] == s and r["controller"] == c]
             judged = [r for r in g if "commonroad_feasible" in r]
             feas = sum(bool(r["commonroad_feasible"]) for r in judged)
+            inputs = sum(bool(r["commonroad_inputs_feasible"]) for r in judged)
             rate = max((r["commonroad_max_steer_rate"] for r in judged), default=float("nan"))
             drift = max((r["commonroad_max_position_drift_m"] for r in judged), default=0.0)
+            turn = max((r["commonroad_max_heading_drift_rad"] for r in judged), default=0.0)
             lines.append(
-                f"| {s} | {c} | {feas}/{len(judged)} | {rate:.2f} | {drift:.3f} | "
+                f"| {s} | {c} | {feas}/{len(judged)} ({inputs}) | {rate:.2f} | "
+                f"{drift:.4f} / {turn:.5f} | "
                 f"{sum(r['success'] for r in g)}/{len(g)} | {sum(r['collision'] for r in g)} | "
                 f"{sum(bool(r['nuplan_comfortable']) for r in g)}/{len(g)} |"
             )

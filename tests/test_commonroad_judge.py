@@ -63,3 +63,34 @@ def test_a_rate_limited_episode_is_feasible_and_both_models_agree():
     assert verdict.feasible
     # The ego turns its wheels within a step as the KS model does: the two agree closely.
     assert verdict.max_position_drift_m < 0.02
+
+
+def test_logged_states_the_inputs_cannot_produce_are_infeasible():
+    # CommonRoad's input check never looks at the states after the first: a log whose
+    # positions jump 5 m sideways, with inputs that drive straight, was called feasible.
+    n = 200
+    t = np.arange(n + 1) * DT
+    straight = np.column_stack((2 * t, 0 * t, 0 * t, np.full(n + 1, 2.0)))
+    assert judge_trajectory(t, straight, np.zeros(n), np.zeros(n)).feasible
+    jumped = straight.copy()
+    jumped[100:, 1] += 5.0
+    verdict = judge_trajectory(t, jumped, np.zeros(n), np.zeros(n))
+    assert verdict.inputs_feasible and not verdict.feasible
+    assert "drifts 5 m" in verdict.why
+    turned = straight.copy()
+    turned[100:, 2] += 0.2  # heading alone off
+    assert "heading drifts" in judge_trajectory(t, turned, np.zeros(n), np.zeros(n)).why
+
+
+def test_an_angle_or_speed_past_the_limits_is_infeasible():
+    # CommonRoad caps both silently (a 0.9 rad angle, -30 m/s in reverse passed).
+    veh = VehicleParams()
+    n = 200
+    steer = np.minimum(0.3 * DT * np.arange(1, n + 1), 0.9)
+    t, states = _drive(np.minimum(steer, veh.max_steer), np.r_[np.full(40, 1.0), np.zeros(n - 40)])
+    verdict = judge_trajectory(t, states, steer, np.r_[np.full(40, 1.0), np.zeros(n - 40)])
+    assert "steering angle over" in verdict.why
+    t = np.arange(n + 1) * DT
+    fast = np.column_stack((-30 * t, 0 * t, 0 * t, np.full(n + 1, -30.0)))
+    verdict = judge_trajectory(t, fast, np.zeros(n), np.zeros(n))
+    assert not verdict.feasible and "a speed outside" in verdict.why

@@ -10,8 +10,15 @@ KS model carrying our car: wheelbase ``a + b = L`` with ``a = b = L / 2`` (so a
 CommonRoad position is our body centre, the rear axle plus ``L / 2`` along the heading),
 the steering limit ``max_steer`` and the steering-velocity limit ``max_steer_rate``
 (CommonRoad's own vehicles: 0.4 rad/s). Longitudinal limits are the BMW 320i set's.
-Besides the verdict it reports how far CommonRoad's forward simulation of those inputs
-drifts from our logged positions (the two bicycle models should agree closely).
+CommonRoad's ``input_vector_feasibility`` judges the inputs alone (steering velocity,
+acceleration, friction circle); it caps the steering angle and the speed at their limits
+without saying so, and after the initial state it never looks at the logged states.
+So the judge's verdict ``feasible`` also asks that CommonRoad's forward simulation of
+the inputs stays on the logged trajectory (:data:`DRIFT_TOL_M`, :data:`HEADING_TOL_RAD`,
+each growing with the distance driven)
+and that every applied angle and logged speed is within the car's and the model's
+limits: without that, a trajectory whose states jump 5 m sideways, or turn three
+times as fast as the inputs allow, was called feasible (the logged inputs were).
 """
 
 from __future__ import annotations
@@ -23,12 +30,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.types import InputError, VehicleParams
 
 __all__ = ["CommonRoadVerdict", "commonroad_available", "judge_trajectory"]
 
 #: CommonRoad's steering-velocity limit of all three vehicle parameter sets (rad/s).
 COMMONROAD_STEER_RATE = 0.4
+#: Largest distance between CommonRoad's simulation of the inputs and the logged body
+#: centres for a feasible trajectory: this, plus :data:`DRIFT_PER_M` of the distance
+#: driven so far (m). Our episodes drift at most 0.0014 m (the two models integrate the
+#: same ramped steering; session 25's 717 judged episodes); a log that holds the
+#: steering over each step instead drifts about 0.4 mm per metre (2.6 cm over 60 m).
+DRIFT_TOL_M = 0.02
+DRIFT_PER_M = 1e-3
+#: The same for the heading (rad, and rad per metre driven).
+HEADING_TOL_RAD = 0.01
+HEADING_PER_M = 1e-4
 
 
 @dataclass(frozen=True)
@@ -38,10 +56,18 @@ class CommonRoadVerdict:
     Attributes
     ----------
     feasible : bool
-        Every input within the KS model's bounds (steering angle and velocity,
-        acceleration) and the friction circle.
+        The judge's verdict: CommonRoad accepts the inputs, its simulation of them stays
+        on the logged trajectory (:data:`DRIFT_TOL_M`, :data:`HEADING_TOL_RAD`), and
+        every applied steering angle and logged speed is within the limits.
     first_infeasible_step : int or None
         Index of the first input CommonRoad rejects.
+    inputs_feasible : bool
+        CommonRoad's own verdict on the inputs (steering velocity, acceleration,
+        friction circle).
+    max_heading_drift_rad : float
+        Largest heading difference between CommonRoad's simulation and the log (rad).
+    why : str
+        What makes it infeasible (empty when feasible).
     max_steer_rate : float
         Largest absolute steering velocity of the inputs (rad/s).
     steer_rate_limit : float
@@ -56,6 +82,9 @@ class CommonRoadVerdict:
     max_steer_rate: float
     steer_rate_limit: float
     max_position_drift_m: float
+    inputs_feasible: bool = True
+    max_heading_drift_rad: float = 0.0
+    why: str = ""
 
     def to_json(self) -> dict[str, object]:
         """A JSON-ready dict."""
@@ -65,6 +94,9 @@ class CommonRoadVerdict:
             "commonroad_max_steer_rate": round(self.max_steer_rate, 6),
             "commonroad_steer_rate_limit": self.steer_rate_limit,
             "commonroad_max_position_drift_m": round(self.max_position_drift_m, 6),
+            "commonroad_inputs_feasible": self.inputs_feasible,
+            "commonroad_max_heading_drift_rad": round(self.max_heading_drift_rad, 6),
+            "commonroad_why": self.why,
         }
 
 
@@ -172,13 +204,45 @@ def judge_trajectory(
         feasible, simulated = checker.input_vector_feasibility(
             initial, trajectory_cls(initial_time_step=0, state_list=inputs), dyn, dt
         )
-    sim_xy = np.array([s.position for s in simulated.state_list], dtype=float)
-    drift = float(np.max(np.hypot(*(sim_xy - centres[: len(sim_xy)]).T))) if len(sim_xy) else 0.0
-    first_bad = None if feasible else len(simulated.state_list) - 1
+    sim = simulated.state_list
+    n = len(sim)
+    gaps = np.hypot(*np.diff(states[:n, :2], axis=0).T)
+    driven = np.concatenate(([0.0], np.cumsum(gaps)))
+    off = np.hypot(*(np.array([s.position for s in sim], dtype=float) - centres[:n]).T)
+    turn = np.abs(wrap_angle(np.array([s.orientation for s in sim]) - states[:n, 2]))
+    drift = float(np.max(off)) if n else 0.0
+    heading = float(np.max(turn)) if n else 0.0
+    drift = drift if math.isfinite(drift) else math.inf
+    heading = heading if math.isfinite(heading) else math.inf
+    # NaN (a diverged simulation) fails the tests below as it should.
+    off_path = not bool(np.all(off <= DRIFT_TOL_M + DRIFT_PER_M * driven))
+    turned = not bool(np.all(turn <= HEADING_TOL_RAD + HEADING_PER_M * driven))
+    lon = dyn.parameters.longitudinal
+    speed = states[:, 3]
+    why = [
+        text
+        for bad, text in (
+            (not feasible, "CommonRoad rejects an input"),
+            (off_path, f"its simulation drifts {drift:.3g} m from the log"),
+            (turned, f"its heading drifts {heading:.3g} rad from the log"),
+            (
+                bool(np.any(np.abs(steer) > vehicle.max_steer * (1 + 1e-9))),
+                f"a steering angle over {vehicle.max_steer:.4g} rad",
+            ),
+            (
+                bool(np.any((speed < lon.v_min) | (speed > lon.v_max))),
+                f"a speed outside [{lon.v_min:.3g}, {lon.v_max:.3g}] m/s",
+            ),
+        )
+        if bad
+    ]
     return CommonRoadVerdict(
-        feasible=bool(feasible),
-        first_infeasible_step=first_bad,
+        feasible=not why,
+        first_infeasible_step=None if feasible else len(sim) - 1,
         max_steer_rate=float(np.max(np.abs(rates))),
         steer_rate_limit=float(steer_rate_limit),
-        max_position_drift_m=drift if math.isfinite(drift) else float("inf"),
+        max_position_drift_m=drift,
+        inputs_feasible=bool(feasible),
+        max_heading_drift_rad=heading,
+        why="; ".join(why),
     )
