@@ -3,10 +3,12 @@
     python experiments/commonroad_judge.py --seeds 10 --jobs 2 --out results
 
 Runs scenarios x controllers x seeds closed-loop, then asks
-:func:`rrtdrive.commonroad_judge.judge_trajectory` whether the applied inputs are
+:func:`rrtdrive.commonroad_judge.judge_trajectory` whether the driven trajectory is
 feasible for CommonRoad's kinematic single-track model with our car and a 0.4 rad/s
-steering-velocity limit; reports feasible episodes, the first infeasible step, the
-largest executed steering rate, the drift between the two bicycle models, and our own
+steering-velocity limit (its inputs accepted by CommonRoad, and CommonRoad's simulation
+of them on the logged trajectory); reports feasible episodes (and how many by the
+inputs alone), the largest executed steering rate, the drift between the two bicycle
+models, and our own
 figures (success, collisions, nuPlan comfort) beside. ``--ego-steer-rate R`` drives the
 ego with a rate-limited actuator (``VehicleParams.max_steer_rate``). ``--random-maps N``
 drives the maps ``0 .. N-1`` of ``experiments/random_maps.py`` with reverse instead (one
