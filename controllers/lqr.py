@@ -78,7 +78,10 @@ def _design_gain(q_e: float, q_psi: float, r: float) -> tuple[float, float]:
     A, B = lateral_error_model()
     K, _, _ = control.lqr(A, B, np.diag([q_e, q_psi]), np.array([[r]]))
     k = np.asarray(K, dtype=float).reshape(2)
-    return (float(k[0]), float(k[1]))
+    # Rounded to 12 significant digits: the Riccati solution's last bits depend on the
+    # BLAS/LAPACK build and the CPU (0.5000000000000002, ...03 with scipy 1.10, ...04
+    # with OpenBLAS's Haswell kernels), and a seeded episode's trajectory with them.
+    return (float(f"{k[0]:.12g}"), float(f"{k[1]:.12g}"))
 
 
 class LQR(TrackingController):

@@ -29,6 +29,7 @@ import os
 import platform
 import statistics
 import sys
+import time
 from pathlib import Path as FsPath
 
 import matplotlib.pyplot as plt
@@ -170,7 +171,7 @@ def main(argv: list[str] | None = None) -> int:
         "--figures", default=None,
         help="figure folder (default: OUT/figures; docs/figures for the docs)",
     )
-    parser.add_argument("--max-time", type=float, default=10.0, help="time budget per run [s]")
+    parser.add_argument("--max-time", type=float, default=10.0, help="safety cap per run [s]")
     parser.add_argument(
         "--doc", default=None, help="also write this markdown page (docs/table3.md for the docs)"
     )
@@ -186,7 +187,10 @@ def main(argv: list[str] | None = None) -> int:
         "command": command.strip(),
         "seeds": list(range(args.runs)),
         "budget": {"max_iterations": budget.max_iterations, "max_time_s": budget.max_time_s},
-        "machine": f"{platform.machine()} Python {platform.python_version()}",
+        "machine": f"{platform.machine()} {os.cpu_count()} CPUs Python "
+        f"{platform.python_version()}",
+        "date": time.strftime("%Y-%m-%d"),
+        "load_average": [round(v, 2) for v in os.getloadavg()],
         "maps": {},
     }
     md = [
@@ -196,7 +200,9 @@ def main(argv: list[str] | None = None) -> int:
         "Cells: mean ± std [95 % CI half-width]. Baseline lengths and curvatures are of",
         "their raw tree paths (as in the paper) and, in the *pruned* columns, after the",
         "same pruning step the improved planner applies. Times exclude the one-off",
-        "checker construction per map.",
+        f"checker construction per map; measured on {report['machine']}, {report['date']}",
+        f"(load average {' '.join(map(str, report['load_average']))} at the start): the",
+        "times are this machine's that day, the other columns the same on any machine.",
         "",
     ]
     for map_name in args.maps.split(","):
