@@ -9,7 +9,8 @@ backward passes over arc length), and reaches zero at the end of the path. The
 loop adds the profile's own acceleration ``v dv/ds`` as a feed-forward to a PI
 correction on the speed error (its braking taken at the car's speed, ``speed dv/ds``,
 when the car is slower than the profile), and holds the car once it has stopped at the
-goal; a car that runs past the end stops within ``PAST_END_M``.
+goal; a car that runs past the end stops within ``PAST_END_M`` when it arrives slower
+than about 0.6 m/s (faster, within ``v^2 / (2 |a_min|)``: 0.40 m at 3 m/s).
 
 For a car with a rate-limited steering actuator (``VehicleParams.max_steer_rate``)
 the tracking controllers also cap the profile by the steering rate
@@ -33,7 +34,8 @@ from rrtdrive.types import InputError, require_finite, require_positive
 
 __all__ = ["SpeedConfig", "SpeedProfile", "SpeedController", "FINAL_APPROACH_M", "PAST_END_M"]
 
-#: A car that runs past the end of its path (or gear segment) stops within this (metres).
+#: A car that runs past the end of its path (or gear segment) stops within this (metres)
+#: when it arrives slower than about 0.6 m/s; faster, the brake's ``a_min`` decides.
 PAST_END_M = 0.05
 #: The window of that stop never shrinks below this (metres): the brake stays finite.
 PAST_END_FLOOR_M = 0.01
@@ -145,6 +147,11 @@ class SpeedConfig:
             require_finite(f"speed.{name}", getattr(self, name))
         if self.v_launch < 0 or self.kp < 0 or self.ki < 0:
             raise InputError("speed.v_launch, speed.kp, speed.ki: must be >= 0")
+        if self.v_launch > self.v_max:
+            # A car behind its path's start drives up at v_launch: 6 m/s with a 3 m/s cap.
+            raise InputError(
+                f"speed.v_launch: must be <= v_max ({self.v_max:g} m/s), got {self.v_launch!r}"
+            )
         if self.jerk_brake_max is not None:
             require_positive("speed.jerk_brake_max", self.jerk_brake_max)
         if not isinstance(self.stop_taper, bool):
@@ -245,12 +252,14 @@ class SpeedController:
             v_ref, a_ref = profile.at(s + abs(speed) * tau)
         else:
             v_ref, a_ref = profile.at(s)
-        if s < -BEHIND_START_M and v_ref < cfg.v_launch:
+        # In either gear: the profile does not say which.
+        approach = min(cfg.v_launch, cfg.v_max_reverse)
+        if s < -BEHIND_START_M and v_ref < approach:
             # Before the start the profile is at rest (a car starting there waits for its
             # wheels): a car behind it crept, the integral wound up against the zero
             # reference and it stopped for good (3.5 m or more short, or 12 cm behind a
             # 5-20 mm segment).
-            v_ref, a_ref = cfg.v_launch, 0.0
+            v_ref, a_ref = approach, 0.0
         if remaining <= 0.0:
             # Past the end: stop within PAST_END_M of it. The window shrinks as the car
             # runs on (a fixed one, asked anew each step, lets the car crawl on: the

@@ -153,3 +153,10 @@ def test_behind_the_start_the_reference_is_the_launch_speed_and_not_at_the_start
 def test_gains_that_would_steer_away_are_refused(name, options, field):
     with pytest.raises(InputError, match=field.replace(".", r"\.")):
         make_controller(name, **options)
+
+
+def test_a_launch_speed_over_the_speed_caps_is_refused():
+    # A car behind its path's start drives up at v_launch: 6 m/s was taken with a 3 m/s cap.
+    with pytest.raises(InputError, match=r"speed\.v_launch"):
+        SpeedConfig(v_max=3.0, v_launch=6.0)
+    SpeedConfig(v_max=3.0, v_launch=1.5)
