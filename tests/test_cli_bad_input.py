@@ -539,3 +539,11 @@ def test_verify_json_of_a_far_row_is_strict_json(capsys, tmp_path):
     assert code == 1
     doc = json.loads(out.strip().splitlines()[-1], parse_constant=pytest.fail)
     assert doc["ok"] is False and doc["length_m"] is None
+
+
+def test_an_output_path_ending_in_a_slash_is_bad_input(capsys, tmp_path):
+    # pathlib drops the slash: 'out.png/' wrote the file out.png.
+    for flag, target in (("--plot", "out.png/"), ("--json", "out.json/")):
+        one_line(*run(capsys, "plan", "overtake", flag, str(tmp_path) + "/" + target)[::2],
+                 f"{flag}: ")
+    assert list(tmp_path.iterdir()) == []

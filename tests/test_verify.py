@@ -265,3 +265,16 @@ def test_curvature_jump_fails_the_sharpness_bound_only_when_asked():
     assert not check.sharpness_ok and not check.ok
     assert check.max_discrete_sharpness > 0.4
     assert check.collision_free and check.curvature_ok and check.headings_ok
+
+
+def test_exact_ends_are_exact_far_from_the_origin():
+    # np.allclose's default rtol (1e-5) let a path 9.9 cm off its start and goal pass
+    # as "exact" at 10 km from the origin.
+    start, goal = Pose(10000.0, 10000.0, 0.0), Pose(10040.0, 10000.0, 0.0)
+    m = Map("far", (9990.0, 9990.0, 10060.0, 10010.0), (), start, goal)
+    xs = np.linspace(start.x, goal.x, 161)
+    rows = np.column_stack([xs, np.full_like(xs, start.y), 0 * xs, 0 * xs, 1 + 0 * xs])
+    assert verify_path(m, Path(rows, rows[[0, -1], :2])).endpoints_ok
+    off = rows.copy()
+    off[:, :2] += 0.07
+    assert not verify_path(m, Path(off, off[[0, -1], :2])).endpoints_ok

@@ -203,6 +203,9 @@ def validate_output(
         raise InputError(f"{flag}: needs a file name, not '-'")
     if not target:
         raise InputError(f"{flag}: needs a file name, got an empty one")
+    if target.endswith(("/", os.sep)):
+        # Path() drops the slash: 'out.png/' wrote the file out.png.
+        raise InputError(f"{flag}: {target!r} ends in a slash (a folder); name a file")
     out = Path(target)
     if suffixes and out.suffix.lower() not in suffixes:
         want = " or ".join(sorted(s for s in suffixes if s))

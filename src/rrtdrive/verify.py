@@ -421,8 +421,8 @@ def verify_path(
         err_s = abs(wrap_angle(first_dir - start.yaw))
         err_g = abs(wrap_angle(last_dir - goal.yaw))
     endpoints_ok = bool(
-        np.allclose(xy[0], (start.x, start.y), atol=1e-6)
-        and np.allclose(xy[-1], (goal.x, goal.y), atol=1e-6)
+        np.allclose(xy[0], (start.x, start.y), rtol=0.0, atol=1e-6)
+        and np.allclose(xy[-1], (goal.x, goal.y), rtol=0.0, atol=1e-6)
     )
     curvature_ok = max_k <= v.kappa_max + curvature_tol
     tol = math.radians(heading_tol_deg)
