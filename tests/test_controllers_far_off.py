@@ -160,3 +160,27 @@ def test_a_launch_speed_over_the_speed_caps_is_refused():
     with pytest.raises(InputError, match=r"speed\.v_launch"):
         SpeedConfig(v_max=3.0, v_launch=6.0)
     SpeedConfig(v_max=3.0, v_launch=1.5)
+
+
+def test_a_start_stub_too_short_to_drive_does_not_turn_the_wheels_first():
+    # A 3 cm reverse arc at full lock, then a forward straight: the stub ends at once
+    # (shorter than stop_distance), but the wheels turned to its lock and back first,
+    # 2.2 s standing at the start.
+    from rrtdrive.planning.hybrid.primitives import arc_poses
+
+    y, k = 44.0, 1 / 6.0
+    stub = arc_poses(5.0, y, 0.0, k, -1, np.linspace(0.0, 0.03, 3))
+    ex, ey, eyaw = stub[-1]
+    d = np.linspace(0.0, 20.0, 81)
+    fwd = np.column_stack([ex + d * math.cos(eyaw), ey + d * math.sin(eyaw), eyaw + 0 * d, 0 * d])
+    rows = np.vstack([
+        np.column_stack([stub, np.full(len(stub), k), -np.ones(len(stub))]),
+        np.column_stack([fwd, np.ones(len(fwd))]),
+    ])  # fmt: skip
+    task = CustomTask.from_map(
+        builtin_map("overtake"), start=Pose(5.0, y, 0.0), goal=Pose(*fwd[-1, :3]), max_time_s=60.0
+    )
+    ep = run_episode(task, planner=Path(rows, np.zeros((0, 2))), controller="lqr", seed=0)
+    assert ep.status.value == "arrived"
+    first_motion = ep.log.t[np.flatnonzero(np.abs(ep.log.states[:, 3]) > 1e-3)[0]]
+    assert first_motion < 0.5  # was 2.2 s
