@@ -200,7 +200,10 @@ def test_narrow_passage_located_and_measured():
     x, y = found.numbers["x"], found.numbers["y"]
     assert abs(x - 30.0) < 1.0 and abs(y - 10.0) < 0.5
     walls = shapely.union_all([o.polygon() for o in m.obstacles])
-    assert found.numbers["width_m"] == pytest.approx(2 * shapely.Point(x, y).distance(walls))
+    # The gap's own width (the two walls' distance), not twice the distance from the
+    # grid cell's centre, which lies up to half a cell off the centre line (2.00 here).
+    assert found.numbers["width_m"] == pytest.approx(2.1)
+    assert found.numbers["width_m"] >= 2 * shapely.Point(x, y).distance(walls)
     assert found.numbers["width_m"] <= 2.1 + 1e-9 and found.numbers["width_m"] > 1.8
     assert found.numbers["needed_m"] == pytest.approx(1.8 + 2 * edge_keep(problem(m).checker))
     assert "tree edges need" in found.message
@@ -291,3 +294,26 @@ def test_failed_plan_carries_the_diagnosis_into_result_and_json(tmp_path, capsys
     out = capsys.readouterr().out
     assert "why: the street at" in out
     assert json.loads((tmp_path / "out.json").read_text())["diagnosis"]["kind"] == "u_turn"
+
+
+def test_a_walled_off_goal_beside_a_wall_is_walled_off_not_needs_reverse():
+    # The goal 0.10 m from a side wall inside a closed box: the finding was "it can only
+    # be reached in reverse (try --reverse)", which no gear change mends.
+    box = [Obstacle((30.0, 7.0), (8.0, 0.2)), Obstacle((30.0, 13.0), (8.0, 0.2)),
+           Obstacle((26.0, 10.0), (0.2, 6.2)), Obstacle((34.0, 10.0), (0.2, 6.2))]
+    inside = Pose(28.0, 7.1 + 0.1 + 0.9, 0.0)  # body 0.10 m from the box's lower wall
+    m = Map("box", (0.0, 0.0, 60.0, 20.0), tuple(box), Pose(5.0, 10.0, 0.0), inside)
+    found = diagnose(problem(m))
+    assert found.kind is DiagnosisKind.WALLED_OFF
+
+
+def test_a_gap_narrower_than_the_car_comes_before_the_advice_to_reverse():
+    # Only a 1.60 m gap leads to a goal whose tail is 0.50 m from the map's edge: it was
+    # "it can only be reached in reverse (try --reverse)", which cannot help.
+    walls = (Obstacle((20.0, 7.1), (1.0, 14.2)), Obstacle((20.0, 22.9), (1.0, 14.2)))
+    m = Map("gap", (0.0, 0.0, 40.0, 30.0), walls, Pose(5.0, 15.0, 0.0),
+            Pose(38.605, 15.0, math.pi))
+    found = diagnose(problem(m))
+    assert found.kind is DiagnosisKind.NARROW_PASSAGE
+    assert found.numbers["width_m"] == pytest.approx(1.6)
+    assert "narrower than the car" in found.message

@@ -407,16 +407,23 @@ def _passage(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diag
     grid = checker.clearance_grid
     a, b = _cell(checker, (start.x, start.y)), _cell(checker, (goal.x, goal.y))
     need = checker.edge_radius + checker.config.min_trace_step
-    if a is None or b is None or min(grid[a], grid[b]) < need:
+    if a is None or b is None:
         return None
-    # Where the swept edge test can go at all: one labelling per map, kept on the checker.
-    edge_labels = checker.grid.derived(
-        ("diagnosis_edge_labels", need),
-        lambda: ndimage.label(grid >= need, structure=np.ones((3, 3), dtype=bool))[0],
-    )
-    if edge_labels[a] != 0 and edge_labels[a] == edge_labels[b]:
+    ends = float(min(grid[a], grid[b]))
+    if ends >= need:
+        # Where the swept edge test can go at all: one labelling per map, on the checker.
+        edge_labels = checker.grid.derived(
+            ("diagnosis_edge_labels", need),
+            lambda: ndimage.label(grid >= need, structure=np.ones((3, 3), dtype=bool))[0],
+        )
+        if edge_labels[a] != 0 and edge_labels[a] == edge_labels[b]:
+            return None
+    elif not checker.provably_disconnected((start.x, start.y), (goal.x, goal.y)):
+        # An end within 0.12 m of a wall: the measure below would find the end's own
+        # clearance; go on only where no motion joins them (a walled-off goal beside a
+        # wall was told "try --reverse" before, or nothing at all).
         return None
-    lo, hi = 0.0, need  # connected at lo (or nothing is), disconnected at hi
+    lo, hi = 0.0, min(need, ends)  # connected at lo (or nothing is), disconnected at hi
     if not _connected(grid, 1e-9, a, b):
         lo = -1.0
     else:
@@ -446,7 +453,7 @@ def _passage(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diag
     best = np.unravel_index(int(np.argmax(np.where(pick, grid, -np.inf))), grid.shape)
     best = (int(best[0]), int(best[1]))
     x, y = _world(checker, best)
-    width = 2.0 * float(shapely.Point(x, y).distance(_shapes(checker).solid))
+    width = _gap_width(checker, x, y)
     numbers.update(width_m=width, x=x, y=y)
     if width < v.width:
         tail = f"narrower than the car ({v.width:.2f} m)"
@@ -460,6 +467,26 @@ def _passage(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diag
         f"the passage near ({x:.1f}, {y:.1f}) is {width:.2f} m wide; {tail}",
         numbers,
     )
+
+
+def _gap_width(checker: CollisionChecker, x: float, y: float) -> float:
+    """Width of the gap at the grid cell ``(x, y)`` of its narrowest place.
+
+    Twice the distance to the nearest wall from the cell's centre, which lies up to
+    half a cell off the gap's centre line (a 1.85 m gap read 1.75 m); when the two
+    nearest walls (obstacles, or the bounds) are that far apart give or take a cell,
+    their own distance, the gap's exact width.
+    """
+    shapes = _shapes(checker)
+    p = shapely.Point(x, y)
+    around = 2.0 * float(p.distance(shapes.solid))
+    parts = [shapely.box(*checker.bounds).exterior, *shapes.polygons]
+    d = shapely.distance(np.array(parts, dtype=object), p)
+    if len(parts) < 2:
+        return around
+    i, j = (int(k) for k in np.argsort(d)[:2])
+    between = float(shapely.distance(parts[i], parts[j]))
+    return between if abs(between - around) <= 2.0 * checker.resolution else around
 
 
 def _u_turn(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagnosis | None:
@@ -539,9 +566,11 @@ def diagnose(problem: PlanningProblem, *, tree_edges: bool = True) -> Diagnosis 
         if found is not None:
             return found
     passage = _passage(m, checker, start, goal)
-    if passage is not None and passage.kind is DiagnosisKind.WALLED_OFF:
-        # Before the room at the ends: a goal in a closed box was "boxed in ... (try
-        # --reverse)", which no gear change mends.
+    if passage is not None and (
+        passage.kind is DiagnosisKind.WALLED_OFF or passage.numbers["width_m"] < m.vehicle.width
+    ):
+        # Before the room at the ends: a goal in a closed box, or behind a gap narrower
+        # than the car, was "boxed in ... (try --reverse)", which no gear change mends.
         return passage
     for step in (
         lambda: _room(m, checker, start, goal, reverse),
