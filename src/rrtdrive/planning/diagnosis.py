@@ -392,7 +392,8 @@ def _tight(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagno
             f"{side:.2f} m beside the body and {ends:.2f} m beyond {bumper} (the swept "
             f"test's round ends, the checker's {checker.config.margin:.2f} m margin, "
             f"{checker.grid_error:.2f} m grid error and {checker.config.min_trace_step:.2f} m "
-            f"trace step), so no tree edge {verb} it",
+            f"trace step), so no tree edge {verb} it (try --planner hybrid-a-star, or the "
+            f"default planner, whose Hybrid A* stage tests the body exactly)",
             {"gap_m": gap, "keep_m": side, "keep_end_m": ends, "obstacle": index},
         )
     return None
