@@ -243,6 +243,9 @@ def test_u_turn_in_a_narrow_street():
     assert found.numbers["street_width_m"] == pytest.approx(10.0, abs=1e-9)
     assert found.numbers["needed_m"] == pytest.approx(u_turn_width(CAR))
     assert found.numbers["widest_m"] < u_turn_width(CAR)
+    # The widest place is the street's own width (a disc across it), measured exactly:
+    # the distance field's value read dead_end's 7.5 m street as 7.4 m.
+    assert found.numbers["widest_m"] == pytest.approx(10.0, abs=0.02)
     assert found.message.startswith("the street at (11.3, 7.5) is 10.0 m wide; a forward U-turn "
                                     "needs 14.7 m; no place reachable from the start is wider")
     centre = shapely.Point(found.numbers["x"], found.numbers["y"])

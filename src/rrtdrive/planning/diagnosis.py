@@ -508,7 +508,21 @@ def _u_turn(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagn
     grid = np.where(labels == labels[a], checker.clearance_grid, -np.inf)
     best = np.unravel_index(int(np.argmax(grid)), grid.shape)
     bx, by = _world(checker, (int(best[0]), int(best[1])))
-    widest = 2.0 * (float(grid[best]) + checker.grid_error)
+    # Exactly (shapely) at the best cells and half a cell about them: the field's value
+    # at cell centres read dead_end's 7.5 m street as "no place wider than 7.4 m".
+    h = checker.resolution
+    top = np.flatnonzero(grid.ravel() >= grid[best] - h)
+    top = top[np.argsort(grid.ravel()[top])[::-1][:2000]]
+    ii, jj = np.unravel_index(top, grid.shape)
+    cx = checker.grid_origin[0] + (ii + 0.5) * h
+    cy = checker.grid_origin[1] + (jj + 0.5) * h
+    shift = np.array([(0.0, 0.0), (h / 2, 0.0), (-h / 2, 0.0), (0.0, h / 2), (0.0, -h / 2)])
+    px = (cx[:, None] + shift[None, :, 0]).ravel()
+    py = (cy[:, None] + shift[None, :, 1]).ravel()
+    clear = shapely.distance(_shapes(checker).solid, shapely.points(px, py))
+    k = int(np.argmax(clear))
+    bx, by = float(px[k]), float(py[k])
+    widest = max(2.0 * float(clear[k]), 2.0 * (float(grid[best]) + checker.grid_error))
     numbers = {"street_width_m": width, "needed_m": need, "widest_m": widest,
                "x": centre[0], "y": centre[1], "widest_x": bx, "widest_y": by}  # fmt: skip
     head = (
