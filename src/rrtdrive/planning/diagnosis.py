@@ -460,7 +460,7 @@ def _passage(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diag
         tail = f"narrower than the car ({v.width:.2f} m)"
     else:
         tail = (
-            f"tree edges need {needed_width:.2f} m (the car's {v.width:.2f} m and "
+            f"tree edges need at least {needed_width:.2f} m (the car's {v.width:.2f} m and "
             f"{edge_keep(checker):.2f} m each side)"
         )
     return Diagnosis(
