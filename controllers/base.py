@@ -474,9 +474,9 @@ class TrackingController:
             # At rest: CUSP_SPEED, not 0.0 (stock envs pass actions as float32, and a car
             # standing at a cusp there reads -2e-8 m/s: the wheels were not turned first).
             at_rest = abs(state.speed) <= CUSP_SPEED
-            # Not for a stub the speed loop ends at once (shorter than stop_distance): the
-            # wheels turned to a 3 cm arc's full lock and back, 2.2 s standing.
-            stub = self.speed.profile.length - proj.s <= self.speed_config.stop_distance
+            # Not for a stub the speed loop ends at once: the wheels turned to a 3 cm
+            # arc's full lock and back, 2.2 s standing.
+            stub = self.speed.ends_at(proj.s)
             if at_rest and not stub and abs(want - state.steer) > self.speed_config.start_steer_tol:
                 # Turn the wheels at rest first: the path starts at this angle.
                 self.v_ref = 0.0

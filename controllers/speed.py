@@ -228,6 +228,15 @@ class SpeedController:
         self.tapering = False
         self.line_taper = False
 
+    def ends_at(self, s: float) -> bool:
+        """Whether arc length ``s`` is within ``stop_distance`` of the profile's end.
+
+        A car at rest there has arrived: :meth:`control` holds it, and a gear segment
+        no longer than that (a stub) ends as soon as it starts.
+        """
+        profile = self.profile
+        return profile is not None and profile.length - s <= self.config.stop_distance
+
     def control(self, s: float, speed: float, t: float) -> float:
         """Acceleration command for the car at arc length ``s`` with ``speed`` at time ``t``."""
         cfg = self.config
@@ -238,7 +247,7 @@ class SpeedController:
         self.last_t = t
         remaining = profile.length - s
         stop_speed = cfg.taper_stop_speed if cfg.stop_taper else cfg.stop_speed
-        if self.arrived or (remaining <= cfg.stop_distance and abs(speed) <= stop_speed):
+        if self.arrived or (self.ends_at(s) and abs(speed) <= stop_speed):
             # At the goal: hold the car at rest.
             self.arrived = True
             self.v_ref = 0.0

@@ -32,7 +32,7 @@ from __future__ import annotations
 import enum
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import shapely
@@ -204,6 +204,7 @@ class _Shapes:
     """The map's shapes the findings measure against, built once per checker."""
 
     polygons: np.ndarray  # one shapely polygon per obstacle, in map order
+    edge: shapely.Geometry  # the bounds' outline
     walls: shapely.Geometry  # obstacle outlines and the bounds' outline
     solid: shapely.Geometry  # obstacle areas and the bounds' outline
 
@@ -214,6 +215,7 @@ def _shapes(checker: CollisionChecker) -> _Shapes:
         edge = shapely.box(*checker.bounds).exterior
         return _Shapes(
             polys,
+            edge,
             shapely.union_all([edge, *shapely.get_exterior_ring(polys)]),
             shapely.union_all([edge, *polys]),
         )
@@ -290,9 +292,10 @@ def _cell(checker: CollisionChecker, p: tuple[float, float]) -> tuple[int, int] 
     return (i, j) if 0 <= i < nx and 0 <= j < ny else None
 
 
-def _world(checker: CollisionChecker, cell: tuple[int, int]) -> tuple[float, float]:
+def _centres(checker: CollisionChecker, i: Any, j: Any) -> tuple[Any, Any]:
+    """World centres of the grid cells ``(i, j)`` (indices or arrays of them)."""
     o, h = checker.grid_origin, checker.resolution
-    return (float(o[0] + (cell[0] + 0.5) * h), float(o[1] + (cell[1] + 0.5) * h))
+    return o[0] + (i + 0.5) * h, o[1] + (j + 0.5) * h
 
 
 # ----------------------------------------------------------------------------- findings
@@ -453,7 +456,7 @@ def _passage(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diag
     pick = band if len(joins) == 0 else np.isin(parts, joins[joins > 0])
     best = np.unravel_index(int(np.argmax(np.where(pick, grid, -np.inf))), grid.shape)
     best = (int(best[0]), int(best[1]))
-    x, y = _world(checker, best)
+    x, y = (float(v) for v in _centres(checker, *best))
     width = _gap_width(checker, x, y)
     numbers.update(width_m=width, x=x, y=y)
     if width < v.width:
@@ -481,7 +484,7 @@ def _gap_width(checker: CollisionChecker, x: float, y: float) -> float:
     shapes = _shapes(checker)
     p = shapely.Point(x, y)
     around = 2.0 * float(p.distance(shapes.solid))
-    parts = [shapely.box(*checker.bounds).exterior, *shapes.polygons]
+    parts = [shapes.edge, *shapes.polygons]
     d = shapely.distance(np.array(parts, dtype=object), p)
     if len(parts) < 2:
         return around
@@ -507,15 +510,12 @@ def _u_turn(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagn
         return None
     grid = np.where(labels == labels[a], checker.clearance_grid, -np.inf)
     best = np.unravel_index(int(np.argmax(grid)), grid.shape)
-    bx, by = _world(checker, (int(best[0]), int(best[1])))
     # Exactly (shapely) at the best cells and half a cell about them: the field's value
     # at cell centres read dead_end's 7.5 m street as "no place wider than 7.4 m".
     h = checker.resolution
     top = np.flatnonzero(grid.ravel() >= grid[best] - h)
     top = top[np.argsort(grid.ravel()[top])[::-1][:2000]]
-    ii, jj = np.unravel_index(top, grid.shape)
-    cx = checker.grid_origin[0] + (ii + 0.5) * h
-    cy = checker.grid_origin[1] + (jj + 0.5) * h
+    cx, cy = _centres(checker, *np.unravel_index(top, grid.shape))
     shift = np.array([(0.0, 0.0), (h / 2, 0.0), (-h / 2, 0.0), (0.0, h / 2), (0.0, -h / 2)])
     px = (cx[:, None] + shift[None, :, 0]).ravel()
     py = (cy[:, None] + shift[None, :, 1]).ravel()
