@@ -30,6 +30,7 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
+from rrtdrive.cli_args import positive_int
 from rrtdrive.maps import builtin_map, write_text_atomic
 from rrtdrive.planning.base import PlanningProblem, cached_checker
 from rrtdrive.planning.improved import ImprovedRRTConnect
@@ -57,24 +58,28 @@ def draw_goals(map_name: str, count: int, seed: int, field: str = "goal") -> lis
     return goals
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def add_pose_set_options(ap: argparse.ArgumentParser) -> None:
+    """The options that pick the random pose set (:func:`draw_goals`): --map, --goals,
+    --seed, --vary; shared with random_goals_hybrid.py, whose sets must be the same."""
     ap.add_argument("--map", default="parking_lot",
                     help="built-in map name (default: %(default)s)")
-    ap.add_argument("--goals", type=int, default=100,
-                    help="random free poses to plan to (or from), >= 1 (default: %(default)s)")
+    ap.add_argument("--goals", type=positive_int, default=100,
+                    help="random free poses to plan to (or from) (default: %(default)s)")
     ap.add_argument("--seed", type=int, default=1,
                     help="seed of the random poses (default: %(default)s)")
-    ap.add_argument("--max-time", type=float, default=5.0,
-                    help="wall-clock safety cap per plan [s] (default: %(default)s)")
     ap.add_argument("--vary", choices=("goal", "start"), default="goal",
                     help="map pose the random poses replace (default: %(default)s)")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    add_pose_set_options(ap)
+    ap.add_argument("--max-time", type=float, default=5.0,
+                    help="wall-clock safety cap per plan [s] (default: %(default)s)")
     ap.add_argument("--out", default="results",
                     help="directory for random_{goals,starts}_MAP.json and .md "
                     "(default: %(default)s)")
     args = ap.parse_args(argv)
-    if args.goals < 1:
-        ap.error("--goals: must be >= 1")
     base = builtin_map(args.map)
     budget = Budget(max_time_s=args.max_time)
     arms = {"with fallback": (), "paper pipeline (fallback off)": ("dubins_fallback",)}

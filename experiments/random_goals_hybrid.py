@@ -25,9 +25,8 @@ import sys
 from pathlib import Path as FsPath
 
 import numpy as np
-from random_goals import draw_goals
+from random_goals import add_pose_set_options, draw_goals
 
-from rrtdrive.cli_args import positive_int
 from rrtdrive.maps import Map, builtin_map, write_text_atomic
 from rrtdrive.planning.base import PlanningProblem
 from rrtdrive.planning.hybrid import HybridAStar
@@ -52,14 +51,7 @@ def verify_gears(m: Map, path: Path) -> bool:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--map", default="parking_lot",
-                    help="built-in map name (default: %(default)s)")
-    ap.add_argument("--goals", type=positive_int, default=100,
-                    help="random free poses to plan to (or from) (default: %(default)s)")
-    ap.add_argument("--seed", type=int, default=1,
-                    help="seed of the random poses (default: %(default)s)")
-    ap.add_argument("--vary", choices=("goal", "start"), default="goal",
-                    help="map pose the random poses replace (default: %(default)s)")
+    add_pose_set_options(ap)
     ap.add_argument("--reverse", action="store_true",
                     help="plan with gear changes allowed (default: forward only)")
     ap.add_argument("--max-expansions", type=int, default=20_000,
