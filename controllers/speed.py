@@ -43,6 +43,13 @@ PAST_END_FLOOR_M = 0.01
 #: at ``v_launch`` (metres; twice :data:`PAST_END_M`, so a car that stopped past a cusp
 #: is never behind the next segment by this much).
 BEHIND_START_M = 2 * PAST_END_M
+#: Upper bound of the PI gains ``kp`` (1/s) and ``ki`` (1/s^2).
+MAX_SPEED_GAIN = 15.0
+#: Upper bound of ``stop_distance`` (metres): the evaluator's default goal tolerance.
+MAX_STOP_DISTANCE_M = 0.5
+#: Upper bound of ``stop_speed`` and ``taper_stop_speed`` (m/s): the hold cancels such a
+#: speed in one step.
+MAX_STOP_SPEED = 0.5
 
 
 @dataclass(frozen=True)
@@ -69,13 +76,14 @@ class SpeedConfig:
     v_launch : float
         Speed the profile starts from when the car is at rest, so it gets going.
     kp, ki : float
-        PI gains on the speed error (1/s and 1/s^2).
+        PI gains on the speed error (1/s and 1/s^2), at most 15 each.
     a_min, a_max : float
         Limits of the commanded acceleration in m/s^2 (``a_min`` < 0 < ``a_max``).
     stop_distance : float
-        The car counts as arrived when it is this close to the end (metres) ...
+        The car counts as arrived when it is this close to the end (metres, at most
+        0.5) ...
     stop_speed : float
-        ... and slower than this (m/s); from then on it is held at rest.
+        ... and slower than this (m/s, at most 0.5); from then on it is held at rest.
     jerk_max : float
         Largest rate of rise of the acceleration command in m/s^3 (smooth starts).
     jerk_brake_max : float or None
@@ -94,7 +102,7 @@ class SpeedConfig:
     taper_start : float
         See ``stop_taper``; in ``(0, 1]``.
     taper_stop_speed : float
-        See ``stop_taper`` (m/s).
+        See ``stop_taper`` (m/s, at most 0.5).
     steer_rate_share : float
         Rate-limited actuator only: the share of ``max_steer_rate`` the path's own
         steering may use (``v <= share * rate / |d delta/ds|``); the rest is left
@@ -147,6 +155,20 @@ class SpeedConfig:
             require_finite(f"speed.{name}", getattr(self, name))
         if self.v_launch < 0 or self.kp < 0 or self.ki < 0:
             raise InputError("speed.v_launch, speed.kp, speed.ki: must be >= 0")
+        for name in ("kp", "ki"):
+            # Larger gains make the command chatter at the slowest simulation frequency
+            # (15 Hz): kp 30 switched its sign 49 times on a 20 m straight, the default 3.
+            if getattr(self, name) > MAX_SPEED_GAIN:
+                raise InputError(
+                    f"speed.{name}: must be <= {MAX_SPEED_GAIN:g}, got {getattr(self, name)!r}"
+                )
+        for name, top in (("stop_distance", MAX_STOP_DISTANCE_M), ("stop_speed", MAX_STOP_SPEED),
+                          ("taper_stop_speed", MAX_STOP_SPEED)):  # fmt: skip
+            # The arrival window: a car held at rest farther than the evaluator's goal
+            # tolerance is not at its goal, and a gear segment no longer than
+            # stop_distance is skipped as a stub.
+            if getattr(self, name) > top:
+                raise InputError(f"speed.{name}: must be <= {top:g}, got {getattr(self, name)!r}")
         if self.v_launch > self.v_max:
             # A car behind its path's start drives up at v_launch: 6 m/s with a 3 m/s cap.
             raise InputError(

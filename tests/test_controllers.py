@@ -297,6 +297,17 @@ def test_default_braking_is_jerk_limited_and_the_stop_tapers():
         SpeedConfig(taper_start=0.0)
 
 
+@pytest.mark.parametrize(
+    "field, value",
+    [("kp", 30.0), ("ki", 1e300), ("stop_distance", 10.0), ("stop_speed", 2.0),
+     ("taper_stop_speed", 0.6)],
+)  # fmt: skip
+def test_speed_config_refuses_gains_and_stop_windows_past_their_bounds(field, value):
+    with pytest.raises(InputError, match=f"^speed.{field}: must be <= "):
+        SpeedConfig(**{field: value})
+    SpeedConfig(**{field: 0.5 if "stop" in field else 15.0})  # the bound itself is taken
+
+
 def test_a_following_cap_brakes_at_once():
     # A car-following law (accel_cap) must not wait for the comfort jerk limit.
     cfg = SpeedConfig(v_max=5.0)

@@ -30,7 +30,7 @@ from typing import Protocol
 
 import numpy as np
 
-from rrtdrive.speed_peaks import last_rise_too_short, peak_with_plateau, plateau_caps
+from rrtdrive.speed_peaks import last_rise_level, peak_with_plateau, plateau_caps
 
 __all__ = [
     "SpeedLimits",
@@ -411,15 +411,21 @@ def actuator_profile(
     rate (:func:`steering_rate_speed_cap` with ``config.steer_rate_share``), starts
     from the car's own speed (no launch speed: the comfort-mode loop would answer a
     launch step with an overshoot of its jerk-limited command), and does not speed up
-    again within :data:`FINAL_APPROACH_M` of the end, nor after the last slow stretch
-    when the speed-up would be followed at once by the final braking (after a slow
-    stretch the comfort-mode loop could not turn a rise back into the stop within its
-    jerk bound, and would overshoot the goal). The last peak of a path's profile, before
-    its final stop, is then given a plateau of ``decel / comfort_jerk`` seconds
-    (:func:`plateau_caps`): the time the command needs to swing from holding the speed
-    to braking (a manoeuvre's gear segment has its own, :func:`peak_with_plateau`).
-    Earlier peaks are left as they are: the loop keeps within them by itself
-    (``SpeedController``), and space-time planning times paths without such caps.
+    again within :data:`FINAL_APPROACH_M` of the end. A speed-up after the last slow
+    stretch that would be followed at once by the final braking is lowered until it
+    ends in a plateau of ``(accel + decel) / comfort_jerk`` seconds
+    (:func:`rrtdrive.speed_peaks.last_rise_level`; held at the slow stretch's speed when
+    no such plateau fits): without one the comfort-mode loop could not turn the rise
+    back into the stop within its jerk bound, and would overshoot the goal. The last
+    peak of a path's profile, before its final stop, is then given a plateau of
+    ``decel / comfort_jerk`` seconds (:func:`plateau_caps`): the time the command needs
+    to swing from holding the speed to braking (a manoeuvre's gear segment has its own,
+    :func:`peak_with_plateau`). Earlier peaks are left as they are: space-time planning
+    times paths without such caps, and the traffic re-planner, which re-plans every few
+    steps, would lower the peak ahead at every re-plan (all nine overtake-traffic
+    episodes of a trial took 0.1-3 s longer). A peak just before a curvature step of a
+    given path is then overrun (a 5 m straight before a step to 1/6 1/m: the car braked
+    at -2.2 m/s^2 and stood still before the step).
 
     Parameters
     ----------
@@ -452,7 +458,7 @@ def actuator_profile(
     >>> fast = actuator_profile(s, k, SpeedConfig(), 0.0, 2.51, None)
     >>> slow = actuator_profile(s, k, SpeedConfig(), 0.0, 2.51, 0.4)
     >>> float(fast.v[0]), float(slow.v[0]), float(fast.v[34]), round(float(slow.v[34]), 3)
-    (0.5, 0.0, 3.0, 0.746)
+    (0.5, 0.0, 3.0, 0.759)
     """
     s = np.asarray(s, dtype=float)
     kappa = np.asarray(kappa, dtype=float)
@@ -463,9 +469,14 @@ def actuator_profile(
     first = SpeedProfile(s, kappa, config, v_start, v_cap=cap)
     final = s > s[-1] - FINAL_APPROACH_M
     i0 = int(np.argmax(final)) if np.any(final) else None
-    trough = last_rise_too_short(s, first.v, config.accel + config.decel, config.comfort_jerk)
-    if trough is not None and (i0 is None or trough < i0):
-        i0 = trough
+    rise = last_rise_level(s, first.v, config.accel + config.decel, config.comfort_jerk)
+    if rise is not None and (i0 is None or rise[0] < i0):
+        trough, level = rise
+        if level > first.v[trough]:
+            # The last peak lowered to a plateau the loop can turn into the stop.
+            cap[trough:] = np.minimum(cap[trough:], level)
+        else:
+            i0 = trough  # no such plateau above the trough: the rest at the trough's speed
     if i0 is not None and i0 < len(s) - 1 and first.v[i0] <= 0.0:
         # From rest within the final approach (a path shorter than it): held from rising,
         # the running minimum would be 0 throughout and the car would never move. (The
