@@ -14,6 +14,7 @@ from rrtdrive.controllers import SpeedConfig, SpeedController
 from rrtdrive.controllers import SpeedProfile as ControllersProfile
 from rrtdrive.planning.spacetime import profile_times as spacetime_times
 from rrtdrive.speed_profile import (
+    SHARPNESS_WINDOW_M,
     SpeedProfile,
     actuator_profile,
     arrival_times,
@@ -22,6 +23,7 @@ from rrtdrive.speed_profile import (
     profile_times,
     speed_caps_squared,
     steering_rate_speed_cap,
+    steering_sharpness,
 )
 
 
@@ -202,3 +204,40 @@ def test_plateau_caps_give_every_peak_its_plateau_within_the_profile_bounds(
         if lower and j + 1 < len(capped) and capped[j + 1] < capped[i] - 1e-9:
             assert s[j] - s[i] >= capped[i] * lag - 1e-6
         i = j + 1
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    gaps=st.lists(st.floats(0.02, 0.6), min_size=2, max_size=30),
+    kappas=st.lists(st.floats(-0.2, 0.2), min_size=31, max_size=31),
+)
+def test_sharpness_is_the_steepest_window_over_each_sample(gaps: list[float], kappas: list[float]):
+    # Reference: every window of 0.25 m that comes within 0.25 m of the sample, slid on a
+    # fine grid of positions, on the linearly interpolated steering angle. The grid of
+    # session 26 read a curvature step between two rows up to 2x too small when offset
+    # from the rows.
+    s = np.concatenate([[0.0], np.cumsum(gaps)])
+    kappa = np.asarray(kappas[: len(s)])
+    w, wheelbase = SHARPNESS_WINDOW_M, 2.51
+    sharp = steering_sharpness(s, kappa, wheelbase)
+    delta = np.arctan(wheelbase * kappa)
+    for i, si in enumerate(s):
+        starts = np.concatenate([np.linspace(si - 2 * w, si + w, 601),
+                                 s[(s >= si - 2 * w) & (s <= si + w)],
+                                 s[(s >= si - w) & (s <= si + 2 * w)] - w])  # fmt: skip
+        change = np.abs(np.interp(starts + w, s, delta) - np.interp(starts, s, delta)) / w
+        assert change.max() == pytest.approx(sharp[i], abs=1e-9)
+
+
+@pytest.mark.parametrize("extra", [0.05, 0.1, 0.125, 0.2])
+def test_the_steering_rate_cap_at_a_step_does_not_depend_on_where_the_path_ends(extra: float):
+    # A step from straight to 0.1 1/m between two rows 0.25 m apart; one more row at the
+    # end moved session 26's grid off the rows, and the cap at the step rose from
+    # 0.285 m/s to up to 0.388 m/s (5 cm more): the wheels asked 36 % over the share.
+    s = np.arange(0.0, 15.0 + 1e-9, 0.25)
+    kappa = np.where(s > 5.0, 0.1, 0.0)
+    longer = np.append(s, s[-1] + extra)
+    cap = steering_rate_speed_cap(s, kappa, 2.51, 0.4, 0.7)
+    cap_longer = steering_rate_speed_cap(longer, np.append(kappa, 0.1), 2.51, 0.4, 0.7)
+    assert np.array_equal(cap[:-3], cap_longer[:-4])
+    assert cap.min() == pytest.approx(0.7 * 0.4 * 0.25 / np.arctan(0.251))

@@ -123,11 +123,19 @@ def steering_sharpness(
 ) -> np.ndarray:
     """``|d delta / ds|`` at each sample (rad/m), ``delta = atan(L kappa)``, robust to sampling.
 
-    The steering angle is interpolated linearly in arc length onto a grid of spacing
-    ``window``; the slope of a grid interval is its change over ``window``, and a
-    sample takes the largest slope of the grid intervals next to it. So a sample gap
-    much shorter than ``window`` (a repeated row, a cusp) cannot make the slope
-    blow up, and a jump of the angle counts as a change over ``window``.
+    The change of the steering angle (interpolated linearly in arc length) over windows
+    of ``window`` metres that start or end at a sample; a sample takes the largest of
+    those windows that come within ``window`` of it. Those windows include the steepest
+    of any placement (the change over a window is piecewise linear in its position,
+    with corners where an end crosses a sample), so a curvature step between two rows
+    counts in full; and the samples a window's length before and after a change are
+    capped too, so the jerk-limited speed loop has room to slow down for it (capped at
+    the step's two rows alone, the car reached the step too fast and ran 0.17 m off a
+    path that steps to 1/6 1/m). So a sample gap much shorter than ``window`` (a
+    repeated row, a cusp) cannot make the slope blow up, and a jump of the angle counts
+    as a change over ``window``. (Until session 27 the windows were a fixed grid from
+    the first sample: offset from the rows, it split a step between two of them and
+    read it up to 2x too small.)
 
     Parameters
     ----------
@@ -138,7 +146,7 @@ def steering_sharpness(
     wheelbase : float
         ``L`` in metres.
     window : float
-        Grid spacing in metres (> 0).
+        Window length in metres (> 0).
 
     Returns
     -------
@@ -152,21 +160,40 @@ def steering_sharpness(
     >>> sh = steering_sharpness(s, k, 2.5)
     >>> round(float(sh.max()), 3), float(sh[0])
     (0.25, 0.0)
+    >>> s = np.append(np.arange(0.0, 10.01, 0.25), 10.1)  # rows 0.25 m apart, and one more
+    >>> k = np.where(s > 5.0, 0.1, 0.0)  # a step from 0 to 0.1 1/m between two rows
+    >>> round(float(steering_sharpness(s, k, 2.5).max()), 3)  # atan(0.25) / 0.25 m (was 0.689)
+    0.98
     """
     s = np.asarray(s, dtype=float)
     delta = np.arctan(wheelbase * np.asarray(kappa, dtype=float))
-    length = float(s[-1] - s[0]) if len(s) else 0.0
-    if len(s) < 2 or length <= 0.0:
-        return np.zeros(len(s))
-    n = max(1, int(math.ceil(length / window)))
-    h = length / n
-    grid = s[0] + h * np.arange(n + 1)
-    slope = np.abs(np.diff(np.interp(grid, s, delta))) / h  # (n,)
-    cell = np.clip(((s - s[0]) / h).astype(int), 0, n - 1)
-    # A sample on a grid node touches the intervals on both sides; take the larger.
-    before = np.clip(cell - 1, 0, n - 1)
-    after = np.clip(cell + 1, 0, n - 1)
-    return np.maximum(np.maximum(slope[cell], slope[before]), slope[after])
+    n = len(s)
+    if n < 2 or float(s[-1] - s[0]) <= 0.0:
+        return np.zeros(n)
+    ahead = np.abs(np.interp(s + window, s, delta) - delta) / window  # [s_j, s_j + w]
+    behind = np.abs(delta - np.interp(s - window, s, delta)) / window  # [s_j - w, s_j]
+    # Windows that meet [s_i - w, s_i + w]: ahead of s_j for s_j in [s_i - 2w, s_i + w],
+    # behind s_j for s_j in [s_i - w, s_i + 2w].
+    index = np.arange(n)
+    lo_ahead = np.searchsorted(s, s - 2.0 * window, side="left")
+    hi_ahead = np.searchsorted(s, s + window, side="right") - 1
+    lo_behind = np.searchsorted(s, s - window, side="left")
+    hi_behind = np.searchsorted(s, s + 2.0 * window, side="right") - 1
+    # The change over a window is piecewise linear in its start, so its largest over
+    # starts in [s_i - 2w, s_i + w] is at a start where an end meets a sample (below) or
+    # at the interval's two ends (here).
+    far_back = np.abs(np.interp(s - window, s, delta) - np.interp(s - 2.0 * window, s, delta))
+    far_on = np.abs(np.interp(s + 2.0 * window, s, delta) - np.interp(s + window, s, delta))
+    out = np.maximum(np.maximum(ahead, behind), np.maximum(far_back, far_on) / window)
+    reach_back = int(max((index - lo_ahead).max(), (index - lo_behind).max()))
+    reach_on = int(max((hi_ahead - index).max(), (hi_behind - index).max()))
+    for k in range(1, max(reach_back, reach_on) + 1):
+        for values, lo, hi in ((ahead, lo_ahead, hi_ahead), (behind, lo_behind, hi_behind)):
+            back = index - k >= lo
+            out[back] = np.maximum(out[back], values[index[back] - k])
+            on = index + k <= hi
+            out[on] = np.maximum(out[on], values[index[on] + k])
+    return out
 
 
 def steering_rate_speed_cap(
@@ -458,7 +485,7 @@ def actuator_profile(
     >>> fast = actuator_profile(s, k, SpeedConfig(), 0.0, 2.51, None)
     >>> slow = actuator_profile(s, k, SpeedConfig(), 0.0, 2.51, 0.4)
     >>> float(fast.v[0]), float(slow.v[0]), float(fast.v[34]), round(float(slow.v[34]), 3)
-    (0.5, 0.0, 3.0, 0.759)
+    (0.5, 0.0, 3.0, 0.746)
     """
     s = np.asarray(s, dtype=float)
     kappa = np.asarray(kappa, dtype=float)
