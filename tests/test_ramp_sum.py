@@ -6,7 +6,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rrtdrive.planning.hybrid.ramp_sum import ramp_sum, ramp_sum_full
+from rrtdrive.planning.hybrid.ramp_sum import ramp_sum, ramp_sum_full, ramp_sum_one
 
 
 def _case(lengths: np.ndarray, angles: np.ndarray, factors: np.ndarray, rate: float):
@@ -28,6 +28,8 @@ def _same(s, t, total, joints, jumps, widths) -> None:
     )  # fmt: skip
     assert one.tobytes() == two[:1].tobytes()
     assert np.array_equal(one, ramp_sum_full(s, joints, jumps, widths))
+    flat = ramp_sum_one(s[0], t, total[0], joints[0], jumps[0], widths[0])
+    assert flat.tobytes() == one[0].tobytes()
 
 
 @settings(max_examples=80, deadline=None)
@@ -52,3 +54,13 @@ def test_equal_angles_and_signed_zeros() -> None:
     lengths = np.array([5.0, 5.0, 5.0, 5.0, 5.0])
     angles = np.array([-0.0, 0.0, -0.0, 0.3, 0.3])
     _same(*_case(lengths, angles, np.ones(4), 0.15))
+
+
+def test_one_row_not_finite_is_the_full_sum() -> None:
+    """NaN or inf in the jumps: the 1-D sum is the full sum's, NaN where it is."""
+    s, t, total, joints, jumps, widths = _case(
+        np.array([5.0, 5.0, 5.0]), np.array([0.0, np.nan, 0.3]), np.ones(2), 0.15
+    )
+    flat = ramp_sum_one(s[0], t, total[0], joints[0], jumps[0], widths[0])
+    assert np.array_equal(flat, ramp_sum_full(s, joints, jumps, widths)[0], equal_nan=True)
+    assert np.isnan(flat).any()

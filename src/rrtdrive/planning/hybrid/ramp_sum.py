@@ -6,9 +6,11 @@ order from 0.0, bit for bit as the whole ``(B, J, T)`` array sums along ``j``.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-__all__ = ["FULL_SUM_MAX", "ramp_sum", "ramp_sum_full"]
+__all__ = ["FULL_SUM_MAX", "ramp_sum", "ramp_sum_full", "ramp_sum_one"]
 
 #: The ufuncs that ``ndarray.cumsum`` / ``.sum`` call (the same floats), without their wrappers.
 _accumulate, _add_reduce = np.add.accumulate, np.add.reduce
@@ -66,6 +68,35 @@ def ramp_sum(
         if b < T:
             acc[:, b:] += jumps[:, j : j + 1]
     return acc
+
+
+def ramp_sum_one(
+    s: np.ndarray,
+    t: np.ndarray,
+    total: float,
+    joints: np.ndarray,
+    jumps: np.ndarray,
+    widths: np.ndarray,
+) -> np.ndarray:
+    """:func:`ramp_sum` of one row as 1-D arrays (``total`` a number), without the 2-D wrappers.
+
+    The same floats as ``ramp_sum(s[None], t, total[None], ...)[0]`` when ``J * T``
+    exceeds :data:`FULL_SUM_MAX`: the ramps' columns from the same quotients (the
+    minimum and maximum over one row are its own values), then :func:`_ramp_sum_row`.
+    NaN or inf anywhere (then the sum below is not finite either: an overflow of a
+    finite sum only sends it to the full sum too, which is the reference) takes the
+    full sum, as there.
+    """
+    if not math.isfinite(float(_add_reduce(jumps)) + float(_add_reduce(joints)) + float(s[-1])):
+        return ramp_sum_full(s[None], joints[None], jumps[None], widths[None])[0]
+    T = len(s)
+    if not len(joints):
+        return np.zeros(T)
+    span = np.maximum(total, 1e-300)
+    lo = t.searchsorted((joints - 0.5 * widths) / span) - 2
+    hi = t.searchsorted((joints + 0.5 * widths) / span) + 2
+    lo, hi = np.minimum(np.maximum(lo, 0), T), np.minimum(np.maximum(hi, 0), T)  # clip
+    return _ramp_sum_row(s, lo, np.maximum(hi, lo), joints, jumps, widths)
 
 
 def _ramp_sum_row(

@@ -31,6 +31,7 @@ from rrtdrive.planning.hybrid.bounded_step import bounded_step as _bounded_step
 from rrtdrive.planning.hybrid.ramp_sum import FULL_SUM_MAX as _FULL_SUM_MAX
 from rrtdrive.planning.hybrid.ramp_sum import ramp_sum as _ramp_sum
 from rrtdrive.planning.hybrid.ramp_sum import ramp_sum_full as _ramp_sum_full  # noqa: F401
+from rrtdrive.planning.hybrid.ramp_sum import ramp_sum_one as _ramp_sum_one
 
 __all__ = ["ramped_segment"]
 
@@ -223,7 +224,7 @@ def _profile(
     T = len(t)
     J = len(jumps)
     if J * T > _FULL_SUM_MAX:
-        ramp = _ramp_sum(s[None], t, total[None], joints[None], jumps[None], widths[None])[0]
+        ramp = _ramp_sum_one(s, t, total, joints, jumps, widths)
     elif J:
         u = s[None, :] - joints[:, None]
         u /= widths[:, None]
