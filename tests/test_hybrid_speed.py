@@ -209,12 +209,15 @@ def test_ramped_segment_unchanged_on_a_chain_of_arcs() -> None:
     seg = np.vstack(rows)
     args = (seg, 1, 0.17, 2.51, math.atan(2.51 / 5.9))
     fast = ramps.ramped_segment(*args)
-    full = ramps._ramp_sum
+    full, one = ramps._ramp_sum, ramps._ramp_sum_one
     try:
         ramps._ramp_sum = lambda s, t, total, j, d, w: ramps._ramp_sum_full(s, j, d, w)
+        ramps._ramp_sum_one = lambda s, t, total, j, d, w: ramps._ramp_sum_full(
+            s[None], j[None], d[None], w[None]
+        )[0]
         slow = ramps.ramped_segment(*args)
     finally:
-        ramps._ramp_sum = full
+        ramps._ramp_sum, ramps._ramp_sum_one = full, one
     assert fast is not None and slow is not None
     assert np.array_equal(fast, slow)
 

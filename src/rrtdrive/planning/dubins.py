@@ -114,7 +114,9 @@ class DubinsPath:
         """
         if not spacing > 0:
             raise InputError(f"spacing: must be > 0, got {spacing!r}")
-        rows = []
+        # Each segment's columns, written into one array (the rows column_stack and
+        # vstack made, without their wrappers: a shot samples up to three words).
+        cols: list[tuple[object, object, object, float, int]] = []
         x, y, yaw = self.start.x, self.start.y, self.start.yaw
         for turn, seg in zip(_WORDS[self.word], self.lengths, strict=True):
             if seg <= 0.0:
@@ -124,19 +126,24 @@ class DubinsPath:
             kappa = turn / self.radius
             if turn == 0:
                 xs, ys = x + u * math.cos(yaw), y + u * math.sin(yaw)
-                yaws = np.full(n, yaw)
+                cols.append((xs, ys, yaw, kappa, n))
             else:
                 yaws = yaw + u * kappa
                 xs = x + (np.sin(yaws) - math.sin(yaw)) / kappa
                 ys = y - (np.cos(yaws) - math.cos(yaw)) / kappa
-            rows.append(np.column_stack([xs, ys, yaws, np.full(n, kappa)]))
+                cols.append((xs, ys, yaws, kappa, n))
             x, y, yaw = _advance(x, y, yaw, turn, seg, self.radius)
-        if not rows:  # a path of length 0: start and end are the same pose
-            rows.append(np.array([[x, y, yaw, 0.0]]))
+        if not cols:  # a path of length 0: start and end are the same pose
+            cols.append((x, y, yaw, 0.0, 1))
+        out = np.empty((sum(c[4] for c in cols) + 1, 4))
+        a = 0
+        for xs, ys, yaws, kappa, n in cols:
+            out[a : a + n, 0], out[a : a + n, 1], out[a : a + n, 2] = xs, ys, yaws
+            out[a : a + n, 3] = kappa
+            a += n
         if self.goal is not None:
             x, y, yaw = self.goal.x, self.goal.y, self.goal.yaw
-        rows.append(np.array([[x, y, yaw, 0.0]]))
-        out = np.vstack(rows)
+        out[-1] = x, y, yaw, 0.0
         out[:, 2] = wrap_angle(out[:, 2])
         return out
 

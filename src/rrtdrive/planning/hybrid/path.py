@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -118,17 +118,33 @@ def _segment_ok(
     The poses ``path_free`` tests, each on its own (the same floats in any batch),
     the ends first: the ramps of a rejected connection mostly cut a corner by a
     tight start or goal (fuzzed maps 1180 and 865: at the first or last 3 % of the
-    poses in half of the segments), and the rest need no test then.
+    poses in half of the segments), and the rest need no test then. The start's
+    :data:`END_POSES` first of all, densified from their own rows
+    (:func:`densify` cuts each row interval on its own: the same points as the
+    whole path's first ones): on fuzzed maps 891, 842 and 1180 every rejected
+    connection failed there, and the rest of the path is then not densified.
     """
     if len(rows) < 2 or float(np.abs(rows[:, 3]).max()) > kappa_max * (1.0 + 1e-9):
         return False
+
+    def free(part: np.ndarray) -> bool:
+        return not len(part) or bool(checker.poses_free(part, clearance).all())
+
     poses = np.asarray(rows, dtype=float)[:, :3]
+    k = END_POSES
+    # The first k + 1 rows hold at least k points of the whole path's densified poses.
+    head = densify(poses[: k + 1], spacing, angle_column=2)
+    cut = head.pieces.max() > 1  # then the whole path is cut too: its poses are points
+    if cut and not free(head.points[:k]):
+        return False
     dense = densify(poses, spacing, angle_column=2)
     if dense.pieces.max() > 1:  # else dense enough already: the rows themselves
         poses = dense.points
-    k = END_POSES
+    if cut:  # the first k tested: the last k, then the middle
+        rest = poses[k:]
+        return all(free(part) for part in ((rest[-k:], rest[:-k]) if len(rest) > k else (rest,)))
     parts = (poses[:k], poses[-k:], poses[k:-k]) if len(poses) > 2 * k else (poses,)
-    return all(checker.poses_free(part, clearance).all() for part in parts if len(part))
+    return all(free(part) for part in parts)
 
 
 def _resample(rows: np.ndarray, spacing: float) -> np.ndarray:
@@ -206,13 +222,23 @@ class Ramps:
         return math.atan(self.wheelbase * self.kappa_max)
 
 
-def _ramped(seg: GearSegment, ramps: Ramps, spacing: float) -> tuple[np.ndarray, float] | None:
-    """The ramped rows of a segment and their sharpness, or ``None`` over the bound."""
+def _ramped(
+    seg: GearSegment,
+    ramps: Ramps,
+    spacing: float,
+    ok: Callable[[np.ndarray], bool] | None = None,
+) -> tuple[np.ndarray, float] | None:
+    """The ramped rows of a segment and their sharpness, or ``None`` over the bound.
+
+    With ``ok``: also ``None`` when ``ok(rows)`` is False, tested before the
+    sharpness (either one rejects the segment; on tight maps the rejected ramps
+    fail the body test, which then spares the sharpness).
+    """
     rows = ramped_segment(
         seg.rows, seg.gear, ramps.ramp_share * ramps.sharpness, ramps.wheelbase,
         ramps.delta_max, spacing=min(spacing, 0.2),
     )  # fmt: skip
-    if rows is None:
+    if rows is None or (ok is not None and not ok(rows)):
         return None
     sharp = max_sharpness(rows, ramps.wheelbase)
     return None if sharp > ramps.sharpness else (rows, sharp)
@@ -235,16 +261,16 @@ def _fitted(
     before it is most often in the memo.
     """
     out: list[tuple[np.ndarray, float]] = []
+
+    def checked(rows: np.ndarray) -> bool:
+        return _segment_ok(rows, checker, clearance, kappa_max, check_spacing)
+
     for seg in reversed(segs):
         key = (seg.gear, seg.rows.tobytes())
         if memo is not None and key in memo:
             found = memo[key]
         else:
-            found = _ramped(seg, ramps, sample_spacing)
-            if found is not None and not _segment_ok(
-                found[0], checker, clearance, kappa_max, check_spacing
-            ):
-                found = None
+            found = _ramped(seg, ramps, sample_spacing, checked)
             if memo is not None:
                 memo.keep(key, found)
         if found is None:

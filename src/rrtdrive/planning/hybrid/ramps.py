@@ -28,6 +28,10 @@ import numpy as np
 from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.hybrid.bounded_step import RIDGE as _RIDGE  # noqa: F401 (tests read it)
 from rrtdrive.planning.hybrid.bounded_step import bounded_step as _bounded_step
+from rrtdrive.planning.hybrid.ramp_sum import FULL_SUM_MAX as _FULL_SUM_MAX
+from rrtdrive.planning.hybrid.ramp_sum import ramp_sum as _ramp_sum
+from rrtdrive.planning.hybrid.ramp_sum import ramp_sum_full as _ramp_sum_full  # noqa: F401
+from rrtdrive.planning.hybrid.ramp_sum import ramp_sum_one as _ramp_sum_one
 
 __all__ = ["ramped_segment"]
 
@@ -55,8 +59,6 @@ _STUCK_AFTER = 2
 _STUCK_FROM = 1e-6
 #: Slack of the row-spacing test, metres (float rounding of rows exactly ``spacing`` apart).
 _GAP_SLACK = 1e-9
-#: Size ``B * J * T`` up to which the steering sum is the whole ``(B, J, T)`` array.
-_FULL_SUM_MAX = 4096
 
 
 def _intervals(rows: np.ndarray, gear: int) -> tuple[np.ndarray, np.ndarray]:
@@ -106,67 +108,6 @@ def _profiles(
     jumps = angles[:, 1:] - angles[:, :-1]
     widths = np.maximum(np.abs(jumps) * factors[None, :] / rate, 1e-9)
     return _ramp_sum(s, t, total, joints, jumps, widths) + angles[:, :1], total / (len(t) - 1)
-
-
-def _ramp_sum(
-    s: np.ndarray,
-    t: np.ndarray,
-    total: np.ndarray,
-    joints: np.ndarray,
-    jumps: np.ndarray,
-    widths: np.ndarray,
-) -> np.ndarray:
-    """``sum_j jumps_j * clip((s - joints_j) / widths_j + 0.5, 0, 1)``, summed in ``j`` order.
-
-    Bit for bit the sum of the ``(B, J, T)`` array along ``j`` (numpy adds along a
-    non-contiguous axis one term after the other), computed one joint at a time:
-    before a ramp's columns its term is zero (adding it changes nothing), after
-    them it is the jump itself; only the columns its ramp may cover, in some row,
-    are evaluated. ``s`` is ``total * t`` per row, ``t`` increasing from 0 to 1.
-    """
-    B, T = s.shape
-    # Small sums (the common short segment) in one piece: the joint-by-joint loop's
-    # numpy calls cost more there than the (B, J, T) array they spare.
-    if B * joints.shape[1] * T <= _FULL_SUM_MAX:
-        return _ramp_sum_full(s, joints, jumps, widths)
-    if not (np.isfinite(jumps).all() and np.isfinite(joints).all() and np.isfinite(s).all()):
-        return _ramp_sum_full(s, joints, jumps, widths)  # NaN/inf propagate as they did
-    acc = np.zeros((B, T))
-    if not joints.shape[1]:
-        return acc
-    span = np.maximum(total, 1e-300)
-    # Columns where some row's ramp may start or end, two columns of slack each way
-    # (t's spacing is far above the rounding of s = total * t); beyond them u <= 0
-    # or u >= 1 in every row, so clip gives exactly 0 or 1.
-    lo = t.searchsorted(((joints - 0.5 * widths) / span[:, None]).min(axis=0)) - 2
-    hi = t.searchsorted(((joints + 0.5 * widths) / span[:, None]).max(axis=0)) + 2
-    lo, hi = np.minimum(np.maximum(lo, 0), T), np.minimum(np.maximum(hi, 0), T)  # clip
-    for j in range(joints.shape[1]):
-        a, b = int(lo[j]), int(max(hi[j], lo[j]))
-        if b > a:
-            u = s[:, a:b] - joints[:, j : j + 1]
-            u /= widths[:, j : j + 1]
-            u += 0.5
-            np.maximum(u, 0.0, out=u)
-            np.minimum(u, 1.0, out=u)
-            u *= jumps[:, j : j + 1]
-            acc[:, a:b] += u
-        if b < T:
-            acc[:, b:] += jumps[:, j : j + 1]
-    return acc
-
-
-def _ramp_sum_full(
-    s: np.ndarray, joints: np.ndarray, jumps: np.ndarray, widths: np.ndarray
-) -> np.ndarray:
-    """:func:`_ramp_sum` over the whole ``(B, J, T)`` array (the reference)."""
-    u = s[:, None, :] - joints[:, :, None]
-    u /= widths[:, :, None]
-    u += 0.5
-    np.maximum(u, 0.0, out=u)
-    np.minimum(u, 1.0, out=u)
-    u *= jumps[:, :, None]
-    return u.sum(axis=1) if u.shape[1] else np.zeros(s.shape)
 
 
 def _integrate(
@@ -283,7 +224,7 @@ def _profile(
     T = len(t)
     J = len(jumps)
     if J * T > _FULL_SUM_MAX:
-        ramp = _ramp_sum(s[None], t, total[None], joints[None], jumps[None], widths[None])[0]
+        ramp = _ramp_sum_one(s, t, total, joints, jumps, widths)
     elif J:
         u = s[None, :] - joints[:, None]
         u /= widths[:, None]
@@ -376,7 +317,7 @@ def _widening(lengths: np.ndarray, angles: np.ndarray, rate: float) -> np.ndarra
     joints = lengths.cumsum()[:-1]
     if _apart_and_within(joints, jumps, rate):
         return factors
-    probe = np.linspace(0.0, float(lengths.sum()), 4001)
+    probe = _probes(float(lengths.sum()))
     for _ in range(40):
         widths = np.maximum(np.abs(jumps) * factors / rate, 1e-9)
         lo, hi = joints - widths / 2, joints + widths / 2
@@ -404,8 +345,33 @@ def _runs(probe: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
         return np.arange(len(probe))
     edges = np.concatenate([[0], probe.searchsorted(lo), probe.searchsorted(hi, side="right")])
-    edges = np.unique(edges)
-    return edges[edges < len(probe)]
+    edges.sort()  # np.unique's values, without its wrappers: sorted, each once
+    keep = np.empty(len(edges), dtype=bool)
+    keep[0] = True
+    np.not_equal(edges[1:], edges[:-1], out=keep[1:])
+    keep &= edges < len(probe)
+    return edges[keep]
+
+
+#: ``0.0, 1.0, ..., 4000.0``: :func:`_probes`' grid before its step (read-only).
+_PROBE_UNIT = np.arange(4001, dtype=float)
+_PROBE_UNIT.flags.writeable = False
+
+
+def _probes(total: float) -> np.ndarray:
+    """``np.linspace(0.0, total, 4001)``, the same floats, without its wrappers.
+
+    numpy's arithmetic for a scalar span: ``arange(4001) * (total / 4000)``, then
+    ``+ 0.0``, and the last probe ``total`` itself; a zero or non-finite step
+    (never for a fit's positive lengths) takes ``np.linspace`` itself.
+    """
+    step = total / 4000
+    if not (step != 0.0 and math.isfinite(step)):
+        return np.linspace(0.0, total, 4001)
+    probe = _PROBE_UNIT * step
+    probe += 0.0
+    probe[-1] = total
+    return probe
 
 
 def _apart_and_within(joints: np.ndarray, jumps: np.ndarray, rate: float) -> bool:

@@ -203,6 +203,8 @@ class HybridSearch:
         #: Node -> how many connections its shot gave, every one rejected (shots that
         #: ran to their end only): what a repeat of this search reads (:meth:`replay`).
         self.shot_counts: dict[int, int] = {}
+        #: Node -> the rows of the primitive that made it (:meth:`chain`; read-only use).
+        self._edge_made: dict[int, np.ndarray] = {}
         # The open list, closed cells and best costs: made by the first run().
         self._heap: list[tuple[float, int]]
         self._closed: set[int]
@@ -304,12 +306,16 @@ class HybridSearch:
         a, b = nodes[:-1], nodes[1:]
         lengths = [self.step[k] for k in b]
         gb = [self.gear[k] for k in b]
-        edge_rows: list[np.ndarray] = [np.empty(0)] * len(b)
-        for length in sorted(set(lengths)):
-            idx = [e for e, v in enumerate(lengths) if v == length]
+        # Each node's primitive rows, made once: the chains of a search's shots share
+        # their stems (the rows of an edge are its own arithmetic, in any batch).
+        made = self._edge_made
+        edge_rows: list[np.ndarray | None] = [made.get(k) for k in b]
+        new = [e for e, r in enumerate(edge_rows) if r is None]
+        for length in sorted({lengths[e] for e in new}):
+            idx = [e for e in new if lengths[e] == length]
             block = self._edge_rows([a[e] for e in idx], [b[e] for e in idx], length)
             for e, r in zip(idx, block, strict=True):
-                edge_rows[e] = r
+                edge_rows[e] = made[b[e]] = r
         # Consecutive primitives of one gear: one piece (junction rows not repeated).
         pieces: list[Piece] = []
         first = 0
