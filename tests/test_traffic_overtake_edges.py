@@ -29,6 +29,9 @@ def test_a_lead_at_walking_pace_is_overtaken_on_an_empty_road(lead_speed):
     report = evaluate(ep)
     assert report.outcome.value == "success", [r.message for r in ep.traffic.records][:3]
     assert report.collisions_vehicles == 0
+    # The lead, braking for the ego that cut in ahead of it, stops at worst: highway-env
+    # let it brake on into reverse (down to -0.92 m/s at 1 m/s).
+    assert ep.log.others[:, 0, 3].min() >= 0.0
 
 
 class _Speeder(Vehicle):
@@ -69,3 +72,16 @@ def test_every_failed_check_of_the_driven_plan_counts_as_an_unsafe_step(monkeypa
                 and r.outcome in ("unsafe_kept", "abandoned")]
     assert periodic, "the speeder no longer makes a plan unsafe on a periodic cycle"
     assert failed and evaluate(ep).unsafe_steps == len(failed)
+
+
+def test_a_cycle_whose_growth_the_wall_clock_cut_is_late_not_no_plan():
+    # With the wall clock on, tree growth stops at 60 % of the cycle ("stopped by the
+    # ... safety cap"); such cycles read as a plain no_plan, so a wall-clock-shaped run
+    # looked like a budget-decided one. A 20 ms cycle cuts the growth (12 ms) every time.
+    config = EpisodeConfig(replan=ReplanConfig(wall_limit=True, budget_s=0.02), max_time_s=3.0)
+    task = make_scenario("overtake-traffic", 13, density=0.5)
+    ep = run_episode(task, seed=13, config=config)
+    cut = [r for r in ep.traffic.records if "safety cap" in r.message]
+    assert cut and all(r.outcome == "late" and r.deadline_hit for r in cut), [
+        (r.outcome, r.message) for r in cut
+    ][:3]

@@ -334,6 +334,17 @@ class OncomingCar(IDMVehicle):
         accel = float(np.clip(self.acceleration(self, front, None), -self.ACC_MAX, self.ACC_MAX))
         Vehicle.act(self, {"steering": steering, "acceleration": accel})
 
+    def step(self, dt: float) -> None:
+        """highway-env's step, but a car braking to a stop stays stopped.
+
+        highway-env lets a vehicle's speed fall to ``MIN_SPEED`` (-40 m/s): an IDM car
+        close behind the car it follows kept braking into reverse (the overtake's lead
+        at 1 m/s, cut in on by the ego, drove backwards at up to 0.92 m/s).
+        """
+        super().step(dt)
+        if self.speed < 0.0:
+            self.speed = 0.0
+
 
 #: Closest lane of a static object, by (network signature, position, heading). highway-env
 #: searches every lane for every object it places (parking: 146 objects x 144 spot lanes,

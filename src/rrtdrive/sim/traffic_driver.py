@@ -64,7 +64,7 @@ from rrtdrive.sim.replanning import (
     merge_path,
 )
 from rrtdrive.speed_profile import actuator_profile
-from rrtdrive.types import Budget, InputError, Path, Pose
+from rrtdrive.types import Budget, InputError, Path, PlanStatus, Pose
 from rrtdrive.vehicle import footprint_corners
 
 __all__ = ["TrafficDriver"]
@@ -476,7 +476,12 @@ class TrafficDriver:
                 iters, nodes = plan.result.iterations, plan.result.nodes
             if cand is None:
                 outcome = "no_plan" if plan is None or not plan.success else "rejected"
-                if plan is not None and plan.deadline_hit:
+                # The 90 % deadline, or the wall-clock cap on the tree's growth (60 % of
+                # the cycle): either way the cycle's time ran out (the cap had left no
+                # trace: the cycle read as a plain no_plan).
+                if plan is not None and (
+                    plan.deadline_hit or plan.result.status is PlanStatus.TIMEOUT
+                ):
                     outcome, late = "late", True
             else:
                 path, check_end, goal_index = cand
