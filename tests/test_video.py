@@ -189,8 +189,8 @@ def test_a_video_lasts_the_episodes_simulated_time(episode, tmp_path, stride):
     simulated = len(episode.log.states) * episode.log.dt
     fps = real_time_fps(frames, len(episode.log.states), episode.log.dt)
     assert frames / fps == pytest.approx(simulated)
-    # The file's own rate (ffmpeg keeps a low rate to about two digits).
-    assert imageio.get_reader(out).get_meta_data()["fps"] == pytest.approx(fps, rel=0.05)
+    # The file's own rate (ffmpeg keeps a low rate to two decimals: 0.0543 fps reads 0.05).
+    assert imageio.get_reader(out).get_meta_data()["fps"] == pytest.approx(fps, rel=0.05, abs=0.005)
     if stride == 1:
         assert fps == pytest.approx(1.0 / episode.log.dt)
 
