@@ -350,6 +350,11 @@ def test_statistics():
     assert "seed" not in g.stats
     assert "| m | p | 4 | 0 | 75%" in to_markdown([g])
     assert to_csv([g]).splitlines()[0].startswith("kind,map,scenario,planner,controller")
+    # A cell whose every run crashed still has its line (it had none in the CSV).
+    crashed = [{"kind": "plan", "map": "m", "planner": "p", "controller": None, "seed": i,
+                "config_hash": "h", "status": "error", "error": "boom"} for i in range(2)]
+    (g_err,) = summarise_rows(crashed)
+    assert to_csv([g_err]).splitlines()[1:] == ["plan,m,,p,,2,2,,0,,,,"]
     # Closed loop: a crashed episode has a path and a partly driven curvature; the
     # summary counts path geometry of the successful runs only, as it says.
     episodes = [

@@ -384,6 +384,16 @@ def test_bench_refuses_reverse_for_the_scenario_that_re_plans(capsys, tmp_path):
     assert not out.exists()
 
 
+def test_bench_refuses_another_planner_for_the_scenario_that_re_plans(capsys, tmp_path):
+    # It re-plans with its own space-time planner: every run with another became an error
+    # row, tried twice, and the bench exited 1.
+    out = tmp_path / "b"
+    one_line(*run(capsys, "bench", "--scenarios", "parking,overtake-traffic", "--planners",
+                  "improved-rrt-connect,rrt-connect", "--out", str(out))[::2],
+             "planners: overtake-traffic re-plans with its own space-time planner")  # fmt: skip
+    assert not out.exists()
+
+
 def test_bench_time_limit_defaults_are_unchanged():
     from rrtdrive.bench import BenchConfig
     from rrtdrive.bench.grid import NO_WALL_LIMIT_S, config_from_mapping
@@ -547,3 +557,43 @@ def test_an_output_path_ending_in_a_slash_is_bad_input(capsys, tmp_path):
         one_line(*run(capsys, "plan", "overtake", flag, str(tmp_path) + "/" + target)[::2],
                  f"{flag}: ")
     assert list(tmp_path.iterdir()) == []
+
+
+def _file_size_limit(kib: int):
+    import resource
+
+    def limit() -> None:  # in the child: writes past it fail with EFBIG (File too large)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (kib * 1024, kib * 1024))
+
+    return limit
+
+
+def test_a_bench_that_runs_out_of_room_says_so_in_one_line(tmp_path):
+    # A full disk while storing rows was a traceback (OSError out of the store); the
+    # rows stored so far stay for a re-run to resume from.
+    import subprocess
+
+    out = tmp_path / "b"
+    argv = [sys.executable, "-m", "rrtdrive", "bench", "--maps", "parking_lot",
+            "--planners", "rrt-connect", "--seeds", "20", "--workers", "1", "--quiet",
+            "--out", str(out)]  # fmt: skip
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=300,
+                          preexec_fn=_file_size_limit(8))  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    line = f"rrtdrive bench: error: --out: cannot write {out}: File too large"
+    assert done.stderr.strip() == line
+
+
+def test_a_video_that_runs_out_of_room_says_so_in_one_line(tmp_path):
+    # imageio's error carried ffmpeg's command line and its output after the first line.
+    import subprocess
+
+    out = tmp_path / "v.mp4"
+    argv = [sys.executable, "-m", "rrtdrive", "simulate", "parking", "--video", str(out)]
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=300,
+                          preexec_fn=_file_size_limit(200))  # fmt: skip
+    assert done.returncode == 1, done.stderr
+    lines = [x for x in done.stderr.splitlines() if x and " video " not in x]  # progress
+    assert len(lines) == 1 and lines[0].startswith(f"rrtdrive simulate: error: --video: cannot "
+                                                   f"write {out}: "), lines  # fmt: skip
+    assert not out.exists() and os.listdir(tmp_path) == []

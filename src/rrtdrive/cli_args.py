@@ -110,7 +110,9 @@ def writing(flag: str, target: str | os.PathLike[str]) -> Iterator[None]:
     try:
         yield
     except OSError as exc:
-        raise OutputError(f"{flag}: cannot write {target}: {exc.strerror or exc}") from None
+        # The first line only: imageio's error carries ffmpeg's command and output after it.
+        why = exc.strerror or (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+        raise OutputError(f"{flag}: cannot write {target}: {why}") from None
 
 
 def names_stdout(target: str) -> bool:

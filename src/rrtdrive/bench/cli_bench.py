@@ -170,16 +170,20 @@ def run(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     from rrtdrive.bench.backends import WorkerStartupError
     from rrtdrive.bench.core import run_bench
+    from rrtdrive.cli_args import writing
 
     cfg = config_from_args(args)
     command = "rrtdrive " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     try:
-        report = run_bench(
-            cfg,
-            progress=None if args.quiet else sys.stderr,
-            retry_errors=args.retry_errors,
-            command=command,
-        )
+        # A full disk while storing rows or writing the summary: one line, exit 1 (it was
+        # a traceback); the rows stored so far stay, and a re-run resumes from them.
+        with writing("--out", cfg.out):
+            report = run_bench(
+                cfg,
+                progress=None if args.quiet else sys.stderr,
+                retry_errors=args.retry_errors,
+                command=command,
+            )
     except WorkerStartupError as exc:
         print(f"rrtdrive bench: error: {exc}", file=sys.stderr)
         return EXIT_FAILED

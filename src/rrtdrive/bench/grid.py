@@ -319,6 +319,19 @@ class BenchConfig:
                     "bench it without reverse"
                 )
         if self.scenarios:
+            from rrtdrive.sim.tasks import REPLANNING_SCENARIOS
+            from rrtdrive.sim.tasks.overtake_traffic import DEFAULT_PLANNER, TRAFFIC_PLANNER
+
+            replanning = [s for s in self.scenarios if s in REPLANNING_SCENARIOS]
+            others = [p for p in self.planners if p not in (DEFAULT_PLANNER, TRAFFIC_PLANNER)]
+            if replanning and others:
+                # Checked by the task when an episode starts: each of those runs became an
+                # error row (tried twice) and the bench exited 1.
+                raise InputError(
+                    f"planners: {replanning[0]} re-plans with its own space-time planner "
+                    f"({DEFAULT_PLANNER!r} in a grid); {others[0]!r} cannot drive it: bench "
+                    f"{replanning[0]} in a grid of its own with --planners {DEFAULT_PLANNER}"
+                )
             from rrtdrive.controllers import CONTROLLERS
 
             if not self.controllers:

@@ -166,12 +166,23 @@ def _num(x: float) -> str:
 
 
 def to_csv(groups: Sequence[GroupSummary]) -> str:
-    """Long-format CSV: one line per group and metric."""
+    """Long-format CSV: one line per group and metric.
+
+    A group without metrics (every run an error row) has one line with an empty
+    ``metric``, so that its runs and errors are there (it had none: only
+    ``summary.md`` showed that the cell ran and crashed).
+    """
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["kind", "map", "scenario", "planner", "controller", "runs", "errors",
                 "metric", "n", "mean", "std", "ci95_low", "ci95_high"])
     for g in groups:
+        if not g.stats:
+            w.writerow([
+                g.kind, g.target if g.kind == "plan" else "",
+                g.target if g.kind == "episode" else "", g.planner, g.controller or "",
+                g.runs, g.errors, "", 0, "", "", "", "",
+            ])
         for name in sorted(g.stats):
             s = g.stats[name]
             w.writerow([
