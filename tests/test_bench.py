@@ -696,6 +696,24 @@ def test_an_interrupted_bench_of_another_grid_leaves_no_old_summary(tmp_path):
     assert "narrow_gap" in (out / "summary.md").read_text()
 
 
+def test_an_interrupted_re_run_of_the_same_grid_keeps_its_summary(tmp_path):
+    # Only the workers differ: the same grid, whose summary an interrupt took away.
+    out = tmp_path / "b"
+    run_bench(BenchConfig(maps=("overtake",), planners=("rrt",), seeds=2, out=str(out),
+                          workers=1))  # fmt: skip
+    before = (out / "summary.md").read_text()
+    rows = (out / "runs.jsonl").read_text().splitlines()
+    (out / "runs.jsonl").write_text(rows[0] + "\n")  # one run left to do again
+
+    def stop(row):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_bench(BenchConfig(maps=("overtake",), planners=("rrt",), seeds=2,
+                              out=str(out) + "/", workers=2), on_row=stop)  # fmt: skip
+    assert (out / "summary.md").read_text() == before
+
+
 def test_rows_say_how_they_were_run(tmp_path):
     # A forward and a reverse grid's rows looked alike; the summary keeps them as ids.
     from rrtdrive.bench.summary import summarise_rows
@@ -707,3 +725,16 @@ def test_rows_say_how_they_were_run(tmp_path):
     assert [(r["reverse"], r["deterministic"]) for r in rows] == [(True, False)]
     stats = summarise_rows(rows)[0].stats
     assert "reverse" not in stats and "deterministic" not in stats
+
+
+def test_a_renamed_map_file_keeps_its_runs_in_one_summary_row(tmp_path):
+    # Resumed by content, the stored rows kept their old name: the summary had a row
+    # of 2 runs under lotA.json and one of 1 under lotB.json for one 3-seed cell.
+    out = tmp_path / "b"
+    first, second = tmp_path / "lotA.json", tmp_path / "lotB.json"
+    save_map(builtin_map("overtake"), first)
+    run_bench(BenchConfig(maps=(str(first),), planners=("rrt",), seeds=2, out=str(out)))
+    first.rename(second)
+    run_bench(BenchConfig(maps=(str(second),), planners=("rrt",), seeds=3, out=str(out)))
+    table = [line for line in (out / "summary.md").read_text().splitlines() if "rrt" in line]
+    assert len(table) == 1 and "lotB.json" in table[0] and "| 3 |" in table[0], table

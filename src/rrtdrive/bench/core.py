@@ -129,14 +129,35 @@ class BenchReport:
 
 
 def grid_rows(cfg: BenchConfig, store: ResultStore) -> list[dict[str, Any]]:
-    """The stored rows of ``cfg``'s grid, one per key (the first stored), in grid order."""
-    wanted = {s.key: i for i, s in enumerate(expand(cfg))}
+    """The stored rows of ``cfg``'s grid, one per key (the first stored), in grid order.
+
+    A run is found by its map's content, so a row stored under another name of the
+    same map (a copied or renamed file) carries this grid's name here: under its old
+    one it made a summary row of its own, and the cell's counts were split.
+    """
+    specs = expand(cfg)
+    wanted = {s.key: i for i, s in enumerate(specs)}
     found: dict[tuple[str, int], dict[str, Any]] = {}
     for row in store.rows():
         key = row_key(row)
         if key in wanted and key not in found:
-            found[key] = row
+            spec = specs[wanted[key]]
+            field = "map" if spec.kind == "plan" else "scenario"
+            found[key] = row if row.get(field) == spec.target else {**row, field: spec.target}
     return [found[k] for k in sorted(found, key=wanted.__getitem__)]
+
+
+#: Settings of how a grid is run, not of which runs it has: a re-run of the same grid
+#: with other workers (or the folder spelt otherwise) is the same grid, and an interrupt
+#: must not cost it the summary and figures it already had.
+_HOW_RUN = frozenset({"workers", "out", "ray", "plots", "retries", "run_timeout_s"})
+
+
+def _grid_of(config: object) -> object:
+    """``config`` without :data:`_HOW_RUN` (``None`` and non-mappings as they are)."""
+    if not isinstance(config, dict):
+        return config
+    return {k: v for k, v in config.items() if k not in _HOW_RUN}
 
 
 def _previous_config(out: FsPath) -> object:
@@ -220,7 +241,9 @@ def run_bench(
                 "python": platform.python_version(),
                 "machine": f"{platform.system()} {platform.machine()}",
             }
-            if _previous_config(out) not in (None, json.loads(json.dumps(meta["config"]))):
+            if _grid_of(_previous_config(out)) not in (
+                None, _grid_of(json.loads(json.dumps(meta["config"])))
+            ):
                 # Another grid's summary and figures: gone until this one's are written, or an
                 # interrupted bench left them beside the new bench_config.json.
                 for name in ("summary.md", "summary.csv"):
