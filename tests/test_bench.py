@@ -94,6 +94,13 @@ def test_toml_config(tmp_path):
         load_toml(unknown)
     with pytest.raises(InputError, match="^config: no such file"):
         load_toml(tmp_path / "missing.toml")
+    table = tmp_path / "table.toml"
+    table.write_text('[bench]\nmaps = ["overtake"]\nseeds = 2\n')
+    assert load_toml(table) == {"maps": ["overtake"], "seeds": 2}
+    beside = tmp_path / "beside.toml"  # read as "unknown key 'bench'"
+    beside.write_text('seeds = 2\n[bench]\nmaps = ["overtake"]\n')
+    with pytest.raises(InputError, match="^config: 'seeds' in .* is outside the .bench. table"):
+        load_toml(beside)
     wrong_type = tmp_path / "wt.toml"
     wrong_type.write_text('maps = ["overtake"]\nseeds = "ten"\n')
     with pytest.raises(InputError, match="^seeds"):

@@ -526,7 +526,15 @@ def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
         raise InputError(
             f"config: malformed TOML in {str(p)!r}: a number has too many digits"
         ) from None
-    if "bench" in data and isinstance(data["bench"], dict) and len(data) == 1:
+    if "bench" in data and isinstance(data["bench"], dict):
+        if len(data) > 1:
+            # Keys beside the table, or other tables: "unknown key 'bench'" named the one
+            # key that was right.
+            other = sorted(k for k in data if k != "bench")[0]
+            raise InputError(
+                f"config: {other!r} in {str(p)!r} is outside the [bench] table; put every "
+                "key in the table, or drop the table"
+            )
         data = data["bench"]  # a [bench] table is accepted too
     unknown = sorted(set(data) - set(CONFIG_KEYS))
     if unknown:
