@@ -174,26 +174,38 @@ def steering_sharpness(
     behind = np.abs(delta - np.interp(s - window, s, delta)) / window  # [s_j - w, s_j]
     # Windows that meet [s_i - w, s_i + w]: ahead of s_j for s_j in [s_i - 2w, s_i + w],
     # behind s_j for s_j in [s_i - w, s_i + 2w].
-    index = np.arange(n)
-    lo_ahead = np.searchsorted(s, s - 2.0 * window, side="left")
-    hi_ahead = np.searchsorted(s, s + window, side="right") - 1
-    lo_behind = np.searchsorted(s, s - window, side="left")
-    hi_behind = np.searchsorted(s, s + 2.0 * window, side="right") - 1
+    out = np.maximum(
+        _range_max(ahead, np.searchsorted(s, s - 2.0 * window, side="left"),
+                   np.searchsorted(s, s + window, side="right") - 1),
+        _range_max(behind, np.searchsorted(s, s - window, side="left"),
+                   np.searchsorted(s, s + 2.0 * window, side="right") - 1),
+    )  # fmt: skip
     # The change over a window is piecewise linear in its start, so its largest over
-    # starts in [s_i - 2w, s_i + w] is at a start where an end meets a sample (below) or
+    # starts in [s_i - 2w, s_i + w] is at a start where an end meets a sample (above) or
     # at the interval's two ends (here).
     far_back = np.abs(np.interp(s - window, s, delta) - np.interp(s - 2.0 * window, s, delta))
     far_on = np.abs(np.interp(s + 2.0 * window, s, delta) - np.interp(s + window, s, delta))
-    out = np.maximum(np.maximum(ahead, behind), np.maximum(far_back, far_on) / window)
-    reach_back = int(max((index - lo_ahead).max(), (index - lo_behind).max()))
-    reach_on = int(max((hi_ahead - index).max(), (hi_behind - index).max()))
-    for k in range(1, max(reach_back, reach_on) + 1):
-        for values, lo, hi in ((ahead, lo_ahead, hi_ahead), (behind, lo_behind, hi_behind)):
-            back = index - k >= lo
-            out[back] = np.maximum(out[back], values[index[back] - k])
-            on = index + k <= hi
-            out[on] = np.maximum(out[on], values[index[on] + k])
-    return out
+    return np.maximum(out, np.maximum(far_back, far_on) / window)
+
+
+def _range_max(values: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """``max(values[lo_i : hi_i + 1])`` for every ``i`` (``lo <= hi``), by a sparse table.
+
+    Examples
+    --------
+    >>> _range_max(np.array([3.0, 1.0, 4.0, 1.0, 5.0]), np.array([0, 1, 3]), np.array([1, 3, 3]))
+    array([3., 4., 1.])
+    """
+    count = hi - lo + 1
+    levels = [values]
+    while 2 ** len(levels) <= count.max():
+        prev, width = levels[-1], 2 ** (len(levels) - 1)
+        level = prev.copy()
+        np.maximum(prev[:-width], prev[width:], out=level[:-width])
+        levels.append(level)
+    table = np.stack(levels)
+    power = np.frexp(count)[1] - 1  # floor(log2(count)), exactly
+    return np.maximum(table[power, lo], table[power, hi - 2**power + 1])
 
 
 def steering_rate_speed_cap(
