@@ -241,3 +241,20 @@ def test_the_steering_rate_cap_at_a_step_does_not_depend_on_where_the_path_ends(
     cap_longer = steering_rate_speed_cap(longer, np.append(kappa, 0.1), 2.51, 0.4, 0.7)
     assert np.array_equal(cap[:-3], cap_longer[:-4])
     assert cap.min() == pytest.approx(0.7 * 0.4 * 0.25 / np.arctan(0.251))
+
+
+def test_a_low_last_peak_does_not_cap_the_higher_stretch_before_it():
+    # 2 m/s, a dip to 1.5 m/s, a last peak of 1.62 m/s too short to hold, then the stop:
+    # lowering the peak merged its stretch with the 2 m/s one and capped that too
+    # (parallel parking seed 3: 26 m of 2 m/s capped at 1.56 m/s).
+    s = np.linspace(0.0, 28.5, 286)  # the stop at 28.5 m cuts the last rise at 1.62 m/s
+    cap = np.where(s < 25.0, 2.0, np.where(s < 27.0, 1.5, 3.0))
+    v = SpeedProfile(s, np.zeros_like(s), SpeedConfig(v_launch=0.0), 0.0, v_cap=cap).v
+    last_top = float(v[s > 27.0].max())
+    assert 1.6 < last_top < 1.65
+    caps = plateau_caps(s, v, 1.0, last_only=True)
+    assert np.all(np.isinf(caps[v > last_top + 1e-9]))  # nothing higher is capped
+    capped = np.minimum(v, caps)
+    assert capped[s > 27.0].max() <= 1.5 + 1e-12  # the peak is lowered to the dip (a shoulder)
+    dv2 = np.diff(capped**2) / (2.0 * np.diff(s))
+    assert dv2.max() <= 1.0 + 1e-9 and dv2.min() >= -1.0 - 1e-9

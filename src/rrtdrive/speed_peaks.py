@@ -172,13 +172,31 @@ def plateau_caps(s: np.ndarray, v: np.ndarray, lag: float, last_only: bool = Fal
 def _plateau_level(
     s: np.ndarray, v: np.ndarray, i: int, j: int, lag: float
 ) -> tuple[int, int, float | None]:
-    """The level of the peak ``v[i..j]`` (see :func:`plateau_caps`) and the stretch it caps."""
+    """The level of the peak ``v[i..j]`` (see :func:`plateau_caps`) and the stretch it caps.
+
+    The stretch never runs on past a sample higher than the peak: lowered that far, the
+    peak is a shoulder of the higher part (the level is then the saddle between them,
+    and nothing needs a plateau). Before, it ran on over the higher part and capped it
+    too: parallel parking seed 3 had 26 m of a 2 m/s stretch capped at 1.56 m/s for a
+    1.67 m/s last peak.
+    """
+    top, n = float(v[i]), len(v)
+    left, right = i - 1, j + 1
+    while left >= 0 and v[left] <= top + 1e-9:
+        left -= 1
+    while right < n and v[right] <= top + 1e-9:
+        right += 1
+    # The lowest sample between the peak and a higher part on either side (its saddle):
+    # the stretch ends there, so that what it caps adjoins the profile's own samples.
+    first = left + 1 + int(np.argmin(v[left + 1 : i])) if left >= 0 else 0
+    last = j + 1 + int(np.argmin(v[j + 1 : right])) if right < n else n - 1
+    saddle = max([float(v[first])] * (left >= 0) + [float(v[last])] * (right < n), default=0.0)
 
     def stretch(c: float) -> tuple[int, int]:
         lo, hi = i, j
-        while lo > 0 and v[lo - 1] >= c:
+        while lo > first and v[lo - 1] >= c:
             lo -= 1
-        while hi + 1 < len(v) and v[hi + 1] >= c:
+        while hi < last and v[hi + 1] >= c:
             hi += 1
         return lo, hi
 
@@ -197,6 +215,7 @@ def _plateau_level(
             low = mid
         else:
             high = mid
+    low = max(low, saddle)
     lo, hi = stretch(low)
     if lo == 0:
         return lo, hi, None
