@@ -258,3 +258,44 @@ def test_a_low_last_peak_does_not_cap_the_higher_stretch_before_it():
     assert capped[s > 27.0].max() <= 1.5 + 1e-12  # the peak is lowered to the dip (a shoulder)
     dv2 = np.diff(capped**2) / (2.0 * np.diff(s))
     assert dv2.max() <= 1.0 + 1e-9 and dv2.min() >= -1.0 - 1e-9
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    caps=st.lists(st.floats(0.1, 3.0), min_size=2, max_size=10),
+    length=st.floats(3.0, 60.0),
+)
+def test_every_peak_of_a_profile_from_rest_lasts_the_time_to_swing_into_braking(
+    caps: list[float], length: float
+):
+    cfg = SpeedConfig()
+    s = np.linspace(0.0, length, int(length / 0.25) + 2)
+    # Curvature steps make steering-rate troughs between stretches of other speed caps.
+    level = np.asarray(caps)[np.minimum((s / length * len(caps)).astype(int), len(caps) - 1)]
+    _assert_every_peak_lasts(s, np.minimum(cfg.a_lat_max / level**2, 0.2), cfg)
+
+
+@pytest.mark.parametrize("straight", [3.0, 5.0, 8.0])
+def test_a_peak_before_a_curvature_step_lasts_the_time_to_swing_into_braking(straight):
+    # Any peak, not only the last: after an earlier peak the loop was still speeding up
+    # where the profile braked into a slow stretch (5 m of straight before a curvature
+    # step to 1/6 1/m: the car braked at -2.16 m/s^2 and stood still before the step).
+    s = np.arange(0.0, straight + 30.0 + 1e-9, 0.25)
+    kappa = np.where(s > straight, 1.0 / 6.0, 0.0)
+    assert _assert_every_peak_lasts(s, kappa, SpeedConfig()) == 2
+
+
+def _assert_every_peak_lasts(s: np.ndarray, kappa: np.ndarray, cfg: SpeedConfig) -> int:
+    """Every peak of the car's profile from rest (a run of equal speeds, lower on both
+    sides) lasts ``decel / comfort_jerk`` seconds; returns how many there are."""
+    v = actuator_profile(s, kappa, cfg, 0.0, 2.51, 0.4).v
+    peaks, i = 0, 1
+    while i < len(v) - 1:
+        j = i
+        while j + 1 < len(v) and abs(v[j + 1] - v[i]) <= 1e-9:
+            j += 1
+        if v[i - 1] < v[i] - 1e-9 and j + 1 < len(v) and v[j + 1] < v[i] - 1e-9:
+            assert s[j] - s[i] >= v[i] * cfg.decel / cfg.comfort_jerk - 1e-6, (s[i], v[i])
+            peaks += 1
+        i = j + 1
+    return peaks

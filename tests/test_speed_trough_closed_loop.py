@@ -55,3 +55,21 @@ def test_the_arc_after_a_curvature_step_is_not_crawled(name):
     assert np.median(states[on_arc, 3]) > 0.8
     assert ep.log.t[-1] < 15.0
     assert math.hypot(states[-1, 0] - end[0], states[-1, 1] - end[1]) < 0.02
+
+
+def test_the_car_does_not_stand_still_before_a_curvature_step():
+    # The peak before the step had no plateau: the comfort loop was still speeding up
+    # where the profile braked, braked at -2.16 m/s^2 and stood still before the step.
+    path = _straight_then_arc(5.0, 30.0, 1.0 / 6.0, 10.0, 20.0)
+    end = path.samples[-1]
+    task = CustomTask.from_map(
+        builtin_map("narrow_gap"), start=Pose(10.0, 20.0, 0.0),
+        goal=Pose(float(end[0]), float(end[1]), float(end[2])), max_time_s=90.0,
+    )  # fmt: skip
+    ep = run_episode(task, planner=path, controller="lqr", seed=0)
+    assert ep.status.value == "arrived", ep.message
+    states, t = ep.log.states, ep.log.t
+    driven = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(states[:, :2], axis=0).T))])
+    middle = (driven > 1.0) & (driven < driven[-1] - 1.0)
+    assert states[middle, 3].min() > 0.03
+    assert (np.diff(states[:, 3]) / np.diff(t)).min() > -1.8

@@ -455,16 +455,16 @@ def actuator_profile(
     ends in a plateau of ``(accel + decel) / comfort_jerk`` seconds
     (:func:`rrtdrive.speed_peaks.last_rise_level`; held at the slow stretch's speed when
     no such plateau fits): without one the comfort-mode loop could not turn the rise
-    back into the stop within its jerk bound, and would overshoot the goal. The last
-    peak of a path's profile, before its final stop, is then given a plateau of
-    ``decel / comfort_jerk`` seconds (:func:`plateau_caps`): the time the command needs
-    to swing from holding the speed to braking (a manoeuvre's gear segment has its own,
-    :func:`peak_with_plateau`). Earlier peaks are left as they are: space-time planning
-    times paths without such caps, and the traffic re-planner, which re-plans every few
-    steps, would lower the peak ahead at every re-plan (all nine overtake-traffic
-    episodes of a trial took 0.1-3 s longer). A peak just before a curvature step of a
-    given path is then overrun (a 5 m straight before a step to 1/6 1/m: the car braked
-    at -2.2 m/s^2 and stood still before the step).
+    back into the stop within its jerk bound, and would overshoot the goal. Every peak
+    of a profile from rest is then given a plateau of ``decel / comfort_jerk`` seconds
+    (:func:`plateau_caps`): the time the command needs to swing from holding the speed
+    to braking (a manoeuvre's gear segment has its own, :func:`peak_with_plateau`);
+    without one, a peak just before a curvature step of a given path was overrun (a 5 m
+    straight before a step to 1/6 1/m: the car braked at -2.2 m/s^2 and stood still
+    before the step). A car already moving (the traffic re-planner's stitched plans)
+    gets it on its last peak only: re-planning every few steps, it would lower the
+    peak ahead at every re-plan (all nine overtake-traffic episodes of a trial took
+    0.1-3 s longer). Space-time planning times paths without such caps.
 
     Parameters
     ----------
@@ -537,7 +537,12 @@ def actuator_profile(
         cap = np.minimum(cap, peak_with_plateau(float(s[-1]), accel, swing, config.comfort_jerk))
         return SpeedProfile(s, kappa, config, v_start, v_cap=cap)
     second = SpeedProfile(s, kappa, config, v_start, v_cap=cap)
-    flat = plateau_caps(second.s, second.v, config.decel / config.comfort_jerk, last_only=True)
+    # Every peak from rest (a planned or given path: an earlier peak before a curvature
+    # step was overrun, the car braking at -2.2 m/s^2 and standing before the step); the
+    # last only for a moving car (the traffic re-planner's stitched plans, whose peak
+    # ahead would be lowered at every re-plan).
+    flat = plateau_caps(second.s, second.v, config.decel / config.comfort_jerk,
+                        last_only=v_start > 0.0)  # fmt: skip
     if np.all(flat >= second.v):
         return second
     return SpeedProfile(s, kappa, config, v_start, v_cap=np.minimum(cap, flat))
