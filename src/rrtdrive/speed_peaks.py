@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-__all__ = ["last_rise_level", "last_rise_too_short", "peak_with_plateau", "plateau_caps"]
+__all__ = ["last_rise_level", "peak_with_plateau", "plateau_caps"]
 
 
 def _last_rise(v: np.ndarray) -> tuple[int, int, int]:
@@ -37,41 +37,30 @@ def _last_rise(v: np.ndarray) -> tuple[int, int, int]:
     return trough, plateau, brake
 
 
-def last_rise_too_short(s: np.ndarray, v: np.ndarray, swing: float, jerk: float) -> int | None:
-    """Start of a last speed-up the jerk-limited loop cannot turn into the final stop.
+def last_rise_level(
+    s: np.ndarray, v: np.ndarray, swing: float, jerk: float
+) -> tuple[int, float] | None:
+    """A last speed-up the jerk-limited loop cannot turn into the final stop, and its cap.
 
     The tail of a profile that stops at its end is a run where ``v`` never rises:
     a plateau, then the braking to the stop. Before it the profile may rise from a
     trough. Turning that rise into the braking swings the command through ``swing``
     m/s^2, which takes ``swing / jerk`` seconds at the comfort jerk; when the plateau
     is shorter than that at its speed, the car overshoots the profile and the stop.
-    Returns the trough's index then, else ``None`` (also when the rise starts at the
-    first sample: that is the start, not a slow stretch).
-    """
-    trough, plateau, brake = _last_rise(v)
-    if trough == plateau or trough == 0:
-        return None
-    need = v[plateau] * swing / jerk
-    return trough if s[brake] - s[plateau] < need else None
-
-
-def last_rise_level(
-    s: np.ndarray, v: np.ndarray, swing: float, jerk: float
-) -> tuple[int, float] | None:
-    """The trough of a last rise too short (:func:`last_rise_too_short`) and a cap that mends it.
+    (A rise from the first sample is the start, not a slow stretch: left alone.)
 
     The cap is the highest speed ``c`` at which the stretch after the trough where
     ``v >= c`` lasts ``swing / jerk`` seconds (``c swing / jerk`` metres, between
     samples), as :func:`plateau_caps` lowers a peak: the rise then ends in a plateau the
     loop can turn into the stop. It is never below the trough's own speed; when even
     that stretch is too short, the cap is the trough's speed (the rest of the path is
-    driven at it). Holding the rest at the trough's speed always had been the rule: a
+    driven at it). Until session 27 the rest was always held at the trough's speed: a
     10 m arc at the steering-rate cap's 0.18 m/s took 65 s where a lowered peak takes 15 s.
 
     Returns
     -------
     tuple of (int, float) or None
-        ``(trough index, cap in m/s)``; ``None`` when the last rise is long enough.
+        ``(trough index, cap in m/s)``; ``None`` when there is no such rise.
 
     Examples
     --------
@@ -81,10 +70,9 @@ def last_rise_level(
     >>> trough, round(cap, 9)  # the peak of 2.2 m/s lowered to 1.5 m/s, held over 2 m
     (4, 1.5)
     """
-    trough = last_rise_too_short(s, v, swing, jerk)
-    if trough is None:
+    trough, plateau, brake = _last_rise(v)
+    if trough == plateau or trough == 0 or s[brake] - s[plateau] >= v[plateau] * swing / jerk:
         return None
-    _, plateau, brake = _last_rise(v)
     _, _, level = _plateau_level(s, v, plateau, brake, swing / jerk)
     floor = float(v[trough])
     return trough, floor if level is None or level < floor else level
@@ -95,7 +83,7 @@ def peak_with_plateau(length: float, accel: float, swing: float, jerk: float) ->
 
     The run rises and falls at ``accel`` (m/s^2) and holds its top speed ``v`` for the
     ``swing / jerk`` seconds the jerk-limited command needs to swing from speeding up to
-    braking (as :func:`last_rise_too_short` asks of a last rise):
+    braking (as :func:`last_rise_level` asks of a last rise):
     ``v^2 / accel + v swing / jerk = length``. A manoeuvre's gear segment is such a run;
     without the plateau, a multi-point turn's 0.7 m moves (a triangle of a profile) left
     the car still speeding up when it had to brake, and it ran 0.2 m past the cusp.
@@ -190,7 +178,8 @@ def _plateau_level(
     # the stretch ends there, so that what it caps adjoins the profile's own samples.
     first = left + 1 + int(np.argmin(v[left + 1 : i])) if left >= 0 else 0
     last = j + 1 + int(np.argmin(v[j + 1 : right])) if right < n else n - 1
-    saddle = max([float(v[first])] * (left >= 0) + [float(v[last])] * (right < n), default=0.0)
+    saddles = ([float(v[first])] if left >= 0 else []) + ([float(v[last])] if right < n else [])
+    saddle = max(saddles, default=0.0)
 
     def stretch(c: float) -> tuple[int, int]:
         lo, hi = i, j
