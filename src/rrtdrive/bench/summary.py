@@ -177,20 +177,15 @@ def to_csv(groups: Sequence[GroupSummary]) -> str:
     w.writerow(["kind", "map", "scenario", "planner", "controller", "runs", "errors",
                 "metric", "n", "mean", "std", "ci95_low", "ci95_high"])
     for g in groups:
-        if not g.stats:
-            w.writerow([
-                g.kind, g.target if g.kind == "plan" else "",
+        cell = [g.kind, g.target if g.kind == "plan" else "",
                 g.target if g.kind == "episode" else "", g.planner, g.controller or "",
-                g.runs, g.errors, "", 0, "", "", "", "",
-            ])
+                g.runs, g.errors]  # fmt: skip
+        if not g.stats:
+            w.writerow([*cell, "", 0, "", "", "", ""])
         for name in sorted(g.stats):
             s = g.stats[name]
-            w.writerow([
-                g.kind, g.target if g.kind == "plan" else "",
-                g.target if g.kind == "episode" else "", g.planner, g.controller or "",
-                g.runs, g.errors, name, s.n, _num(s.mean), _num(s.std), _num(s.ci_low),
-                _num(s.ci_high),
-            ])
+            w.writerow([*cell, name, s.n, _num(s.mean), _num(s.std), _num(s.ci_low),
+                        _num(s.ci_high)])  # fmt: skip
     return buf.getvalue()
 
 
