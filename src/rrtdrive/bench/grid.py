@@ -319,19 +319,20 @@ class BenchConfig:
                     "bench it without reverse"
                 )
         if self.scenarios:
-            from rrtdrive.sim.tasks import REPLANNING_SCENARIOS
-            from rrtdrive.sim.tasks.overtake_traffic import DEFAULT_PLANNER, TRAFFIC_PLANNER
+            from rrtdrive.sim.tasks import TASKS
 
-            replanning = [s for s in self.scenarios if s in REPLANNING_SCENARIOS]
-            others = [p for p in self.planners if p not in (DEFAULT_PLANNER, TRAFFIC_PLANNER)]
-            if replanning and others:
-                # Checked by the task when an episode starts: each of those runs became an
-                # error row (tried twice) and the bench exited 1.
-                raise InputError(
-                    f"planners: {replanning[0]} re-plans with its own space-time planner "
-                    f"({DEFAULT_PLANNER!r} in a grid); {others[0]!r} cannot drive it: bench "
-                    f"{replanning[0]} in a grid of its own with --planners {DEFAULT_PLANNER}"
-                )
+            for s in self.scenarios:
+                # The task's own planners (overtake-traffic re-plans with its space-time
+                # one): checked only when an episode started, each other planner's run
+                # became an error row (tried twice) and the bench exited 1.
+                own = getattr(TASKS.get(s), "PLANNERS", None)
+                others = [p for p in self.planners if own is not None and p not in own]
+                if others:
+                    raise InputError(
+                        f"planners: {s} re-plans with its own space-time planner ({own[0]!r} "
+                        f"in a grid); {others[0]!r} cannot drive it: bench {s} in a grid of "
+                        f"its own with --planners {own[0]}"
+                    )
             from rrtdrive.controllers import CONTROLLERS
 
             if not self.controllers:

@@ -209,6 +209,8 @@ class Task:
     REPLAN_CONFIG: ClassVar[type[ReplanConfig] | None] = None
     #: The keyword options of :func:`~rrtdrive.sim.tasks.make_scenario` this kind takes.
     OPTIONS: ClassVar[tuple[str, ...]] = ()
+    #: The planner names this kind drives with (``None``: any registered planner).
+    PLANNERS: ClassVar[tuple[str, ...] | None] = None
 
     map: Map
     seed: int

@@ -171,6 +171,7 @@ class OvertakeTrafficTask(Task):
     kind: ClassVar[TaskKind] = TaskKind.OVERTAKE_TRAFFIC
     REPLAN_CONFIG: ClassVar[type[ReplanConfig] | None] = ReplanConfig
     OPTIONS: ClassVar[tuple[str, ...]] = ("density", "lead_speed", "lead_model")
+    PLANNERS: ClassVar[tuple[str, ...] | None] = (DEFAULT_PLANNER, TRAFFIC_PLANNER)
 
     # Fields where Task keeps class-level defaults for the kinds without them (mypy
     # reads that as overriding a ClassVar).
@@ -335,7 +336,7 @@ class OvertakeTrafficTask(Task):
         InputError
             For any planner but the space-time improved RRT-Connect.
         """
-        if planner not in (DEFAULT_PLANNER, TRAFFIC_PLANNER):
+        if planner not in (self.PLANNERS or ()):
             raise InputError(
                 f"planner: overtake-traffic re-plans with the improved RRT-Connect in space-time "
                 f"({DEFAULT_PLANNER!r}); got {planner!r}"
