@@ -64,12 +64,3 @@ def test_one_row_not_finite_is_the_full_sum() -> None:
     flat = ramp_sum_one(s[0], t, total[0], joints[0], jumps[0], widths[0])
     assert np.array_equal(flat, ramp_sum_full(s, joints, jumps, widths)[0], equal_nan=True)
     assert np.isnan(flat).any()
-
-
-@settings(max_examples=200, deadline=None)
-@given(st.floats(1e-9, 1e6, allow_nan=False, allow_infinity=False))
-def test_widening_probes_are_linspace(total: float) -> None:
-    """The widening's probe grid: np.linspace's floats."""
-    from rrtdrive.planning.hybrid.ramps import _probes
-
-    assert _probes(total).tobytes() == np.linspace(0.0, total, 4001).tobytes()

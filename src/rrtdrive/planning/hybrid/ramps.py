@@ -317,7 +317,7 @@ def _widening(lengths: np.ndarray, angles: np.ndarray, rate: float) -> np.ndarra
     joints = lengths.cumsum()[:-1]
     if _apart_and_within(joints, jumps, rate):
         return factors
-    probe = _probes(float(lengths.sum()))
+    probe = np.linspace(0.0, float(lengths.sum()), 4001)
     for _ in range(40):
         widths = np.maximum(np.abs(jumps) * factors / rate, 1e-9)
         lo, hi = joints - widths / 2, joints + widths / 2
@@ -345,33 +345,8 @@ def _runs(probe: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
         return np.arange(len(probe))
     edges = np.concatenate([[0], probe.searchsorted(lo), probe.searchsorted(hi, side="right")])
-    edges.sort()  # np.unique's values, without its wrappers: sorted, each once
-    keep = np.empty(len(edges), dtype=bool)
-    keep[0] = True
-    np.not_equal(edges[1:], edges[:-1], out=keep[1:])
-    keep &= edges < len(probe)
-    return edges[keep]
-
-
-#: ``0.0, 1.0, ..., 4000.0``: :func:`_probes`' grid before its step (read-only).
-_PROBE_UNIT = np.arange(4001, dtype=float)
-_PROBE_UNIT.flags.writeable = False
-
-
-def _probes(total: float) -> np.ndarray:
-    """``np.linspace(0.0, total, 4001)``, the same floats, without its wrappers.
-
-    numpy's arithmetic for a scalar span: ``arange(4001) * (total / 4000)``, then
-    ``+ 0.0``, and the last probe ``total`` itself; a zero or non-finite step
-    (never for a fit's positive lengths) takes ``np.linspace`` itself.
-    """
-    step = total / 4000
-    if not (step != 0.0 and math.isfinite(step)):
-        return np.linspace(0.0, total, 4001)
-    probe = _PROBE_UNIT * step
-    probe += 0.0
-    probe[-1] = total
-    return probe
+    edges = np.unique(edges)
+    return edges[edges < len(probe)]
 
 
 def _apart_and_within(joints: np.ndarray, jumps: np.ndarray, rate: float) -> bool:
