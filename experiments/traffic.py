@@ -47,12 +47,20 @@ def episode_config(args: argparse.Namespace) -> EpisodeConfig:
     replan = ReplanConfig(
         rate_hz=args.rate, predictor=args.predictor, wall_limit=not args.deterministic
     )
+    if args.no_pull_out:
+        # The driver before session 28: no pull-out, plain IDM gap behind a slow lead.
+        replan = dataclasses.replace(
+            replan, pull_out_speed=0.0, idm=dataclasses.replace(replan.idm, pull_out_gap=0.0)
+        )
     return EpisodeConfig(replan=replan)
 
 
 def run_one(job: tuple) -> dict:
     density, seed, args, keep_dir = job
-    scen = make_scenario("overtake-traffic", seed, density=density, lead_model=args.lead_model)
+    scen = make_scenario(
+        "overtake-traffic", seed, density=density, lead_model=args.lead_model,
+        lead_speed=args.lead_speed,
+    )
     t0 = time.perf_counter()
     ep = run_episode(scen, controller=args.controller, seed=seed, config=episode_config(args))
     total = time.perf_counter() - t0
@@ -228,6 +236,11 @@ def main(argv: list[str] | None = None) -> int:
                     "lane-following (default: %(default)s)")
     ap.add_argument("--lead-model", default="idm",
                     help="how the lead car drives: idm or constant (default: %(default)s)")
+    ap.add_argument("--lead-speed", type=float, default=None,
+                    help="the lead car's speed in m/s (default: the scenario's, 4)")
+    ap.add_argument("--no-pull-out", action="store_true",
+                    help="no pull-out past a slow lead and plain IDM's gap behind it\n"
+                    "(the re-planner before session 28)")
     ap.add_argument("--rate", type=float, default=4.0, help="re-planning rate in Hz (2-5)")
     ap.add_argument("--jobs", type=int, default=2,
                     help="worker processes (default: %(default)s)")
@@ -240,7 +253,9 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     densities = args.densities.split(",")
     for d in densities:
-        make_scenario("overtake-traffic", 0, density=d, lead_model=args.lead_model)  # validate
+        make_scenario(  # validate
+            "overtake-traffic", 0, density=d, lead_model=args.lead_model, lead_speed=args.lead_speed
+        )
     config = episode_config(args)
     keep = tempfile.mkdtemp(prefix="traffic-episodes-") if args.figures else None
     target = densities[-1]
@@ -277,6 +292,9 @@ def main(argv: list[str] | None = None) -> int:
         "densities": {d: TRAFFIC_DENSITIES.get(d, d) for d in densities},
         "controller": args.controller,
         "lead_model": args.lead_model,
+        "lead_speed": make_scenario(
+            "overtake-traffic", 0, lead_speed=args.lead_speed
+        ).lead[1],  # type: ignore[index]
         "replan": {
             k: v for k, v in dataclasses.asdict(config.replan).items()  # type: ignore[arg-type]
             if k != "planner_options"
@@ -306,7 +324,8 @@ def main(argv: list[str] | None = None) -> int:
     )
     md = (
         f"# Overtaking against oncoming traffic: {args.seeds} seeds x {len(densities)} "
-        f"densities\n\nControl `{args.controller}`, lead car `{args.lead_model}`, predictor "
+        f"densities\n\nControl `{args.controller}`, lead car `{args.lead_model}` at "
+        f"{settings['lead_speed']:g} m/s, predictor "
         f"`{args.predictor}`, re-planning at {args.rate:g} Hz (cycle budget "
         f"{1e3 * budget:.0f} ms), 20 Hz simulation in highway-env.\n"
         f"Command: `{settings['command']}` ({settings['wall_time_s']:.0f} s on "

@@ -19,7 +19,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from rrtdrive.types import VehicleParams, require_positive
+from rrtdrive.types import InputError, VehicleParams, require_finite, require_positive
 
 __all__ = ["IDMConfig", "lead_gap"]
 
@@ -44,6 +44,16 @@ class IDMConfig:
         ``s0``, gap at standstill (m).
     delta : float
         Free-road exponent.
+    pull_out_gap : float
+        Desired gap behind a stopped car (m): room to pull out round it
+        (:attr:`~rrtdrive.sim.replanning.ReplanConfig.pull_out_speed`); within
+        IDM's 4 m a car leaves a stopped lead only by reversing. ``s*`` is at least
+        ``pull_out_gap - pull_out_time * v_lead`` (braking for it as for
+        ``s0 + v T``): at the lead's speed it binds below 3.3 m/s only.
+        ``0``: plain IDM.
+    pull_out_time : float
+        Seconds the lead drives on while the ego pulls out: a moving lead leaves
+        room of its own.
 
     Examples
     --------
@@ -56,15 +66,27 @@ class IDMConfig:
     time_headway: float = 1.5
     min_gap: float = 4.0
     delta: float = 4.0
+    pull_out_gap: float = 14.0
+    pull_out_time: float = 1.5
 
     def __post_init__(self) -> None:
         for name in ("accel", "comfort_decel", "time_headway", "min_gap", "delta"):
             require_positive(f"idm.{name}", getattr(self, name))
+        for name in ("pull_out_gap", "pull_out_time"):
+            value = getattr(self, name)
+            require_finite(f"idm.{name}", value)
+            if value < 0.0:
+                raise InputError(f"idm.{name}: must be >= 0, got {value!r}")
 
     def accel_for(self, v: float, v0: float, gap: float, closing: float) -> float:
         """IDM acceleration at speed ``v`` (desired ``v0``), ``gap`` metres behind, ``closing``."""
         brake = 2.0 * math.sqrt(self.accel * self.comfort_decel)
         s_star = self.min_gap + max(0.0, v * self.time_headway + v * closing / brake)
+        # Behind a slow car keep room to pull out (the lead's speed is v - closing),
+        # braking for it as for s0 + v T.
+        floor = self.pull_out_gap - self.pull_out_time * max(v - closing, 0.0)
+        if floor > self.min_gap + v * self.time_headway:
+            s_star = max(s_star, floor + max(0.0, v * closing / brake))
         free = (max(v, 0.0) / v0) ** self.delta if v0 > 0 else 1.0
         return self.accel * (1.0 - free - (s_star / max(gap, 0.1)) ** 2)
 

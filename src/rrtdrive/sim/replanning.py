@@ -97,6 +97,13 @@ class ReplanConfig:
         Shortest start merge (metres).
     check_every : int
         The current plan's safety check runs every this many control steps.
+    pull_out_speed : float
+        Behind a lead slower than this (m/s), a cycle whose planner finds no overtake
+        tries the plain manoeuvre (:mod:`rrtdrive.sim.pull_out`): quintic lane changes
+        out and back of ``pull_out_length_m`` each, checked like a plan. ``0``: never.
+    pull_out_length_m : float
+        Length of each of its lane changes (18 m across a 4 m lane: curvature up to
+        0.07 1/m, steered at 0.4 rad/s up to about 5 m/s).
     idm : IDMConfig
         Car following while in ``follow`` mode.
     planner_options : mapping
@@ -125,6 +132,8 @@ class ReplanConfig:
     start_merge_s: float = 4.0
     start_merge_min_m: float = 10.0
     check_every: int = 1
+    pull_out_speed: float = 3.0
+    pull_out_length_m: float = 18.0
     idm: IDMConfig = field(default_factory=IDMConfig)
     planner_options: Mapping[str, Any] = field(default_factory=dict)
 
@@ -149,12 +158,12 @@ class ReplanConfig:
             )
         for name in (
             "horizon_s", "prediction_step", "complete_gap_m", "max_plan_length_m",
-            "lane_extension_m", "turning_radius_m", "start_merge_min_m",
+            "lane_extension_m", "turning_radius_m", "start_merge_min_m", "pull_out_length_m",
         ):
             require_positive(f"replan.{name}", getattr(self, name))
         for name in (
             "cut_in_gap_m", "cut_in_headway_s", "check_beyond_m", "improve_s", "goal_slack_m",
-            "start_merge_s",
+            "start_merge_s", "pull_out_speed",
         ):
             value = getattr(self, name)
             require_finite(f"replan.{name}", value)

@@ -53,8 +53,10 @@ from rrtdrive.planning.spacetime import (
     SpaceTimeRRTConnect,
     traffic_conflicts,
 )
+from rrtdrive.sim.cut_in import CutInRule
 from rrtdrive.sim.follower import lead_gap
 from rrtdrive.sim.prediction import predict
+from rrtdrive.sim.pull_out import inside_road, pull_out_candidate
 from rrtdrive.sim.replanning import (
     SPACING,
     ReplanConfig,
@@ -144,6 +146,9 @@ class TrafficDriver:
                 self.plan_vehicle,
             )
             cached_checker(window).component_labels  # noqa: B018 - warm the cache
+        self.cut_in = CutInRule(
+            config, self.vehicle, self.lead, self.lane_y, self.lane_width, self._x_end()
+        )
         self.mode = "follow"
         self.records: list[ReplanRecord] = []
         self.references: list[tuple[float, Path]] = []
@@ -335,8 +340,20 @@ class TrafficDriver:
         )
         return not bool(hit.any())
 
+    def _times_on(self, path: Path) -> np.ndarray:
+        """Seconds from now at each row of a reference starting at the ego."""
+        s = path.arc_length()
+        ctrl = self.controller
+        # The profile the controller will drive on this path (with its steering-rate cap).
+        profile = actuator_profile(
+            s, path.samples[:, 3], ctrl.speed_config, self.ego.speed, ctrl.vehicle.wheelbase,
+            ctrl.steer_rate,
+        )
+        v = np.maximum(0.5 * (profile.v[1:] + profile.v[:-1]), 0.05)
+        return np.concatenate([[0.0], np.cumsum(np.diff(s) / v)])
+
     def _validate(
-        self, path: Path, check_end: int, prediction: Prediction
+        self, path: Path, check_end: int, prediction: Prediction, horizon_end: int | None = None
     ) -> tuple[bool, float, str]:
         """Check a candidate reference (starting at the ego) timed by the controller's profile.
 
@@ -347,16 +364,8 @@ class TrafficDriver:
             Seconds until the ego reaches sample ``check_end``.
         why : str
         """
-        s = path.arc_length()
-        ctrl = self.controller
-        # The profile the controller will drive on this path (with its steering-rate cap).
-        profile = actuator_profile(
-            s, path.samples[:, 3], ctrl.speed_config, self.ego.speed, ctrl.vehicle.wheelbase,
-            ctrl.steer_rate,
-        )
-        v = np.maximum(0.5 * (profile.v[1:] + profile.v[:-1]), 0.05)
-        times = np.concatenate([[0.0], np.cumsum(np.diff(s) / v)])
-        if times[check_end] > self.config.horizon_s:
+        times = self._times_on(path)
+        if times[check_end if horizon_end is None else horizon_end] > self.config.horizon_s:
             return False, float(times[check_end]), "the plan ends beyond the prediction horizon"
         idx = np.arange(0, check_end + 1)
         hit = traffic_conflicts(
@@ -369,76 +378,6 @@ class TrafficDriver:
         return True, float(times[check_end]), ""
 
     # ------------------------------------------------------------------ planning
-
-    def _cut_in_x(
-        self, timing: ArrivalTiming, x_start: float, prediction: Prediction, y_start: float
-    ) -> float | None:
-        """Nearest rear-axle x for the cut-in: far enough ahead of the lead by then.
-
-        At least as far as the lane changes still to drive from the stitch point
-        (out and back, or back only from the oncoming lane) at the planner's turning
-        radius, plus ``goal_slack_m``: behind a lead at walking pace the point just
-        ahead of it left too little road, and no plan could be smoothed.
-        """
-        cfg = self.config
-        xs = x_start + np.arange(12.0, cfg.max_plan_length_m + 1e-9, 1.0)
-        if self.lead is None or len(prediction) == 0:
-            return float(xs[min(len(xs) - 1, 18)])
-        pts = np.column_stack([xs, np.full(len(xs), self.lane_y)])
-        _, t_hi = timing.band(pts)
-        t_check = t_hi + cfg.safety.margin(t_hi)
-        lead = prediction.poses_at(t_check)[0]  # the lead is the first vehicle
-        v_lead = float(self.lead.speed)
-        need = (
-            lead[:, 0]
-            + self.lead.LENGTH / 2.0
-            + cfg.cut_in_gap_m
-            + cfg.cut_in_headway_s * v_lead
-            + self.vehicle.rear_overhang
-        )
-        ok = xs >= need
-        if not ok.any():
-            return None
-        x = float(xs[int(np.argmax(ok))]) + cfg.goal_slack_m
-        # An S of two arcs of the turning radius across the lane width d: 2 sqrt(R d - d^2/4).
-        d, radius = self.lane_width, cfg.turning_radius_m
-        s_curve = 2.0 * math.sqrt(max(radius * d - d * d / 4.0, 0.0))
-        changes = 2 if abs(y_start - self.lane_y) < d / 2.0 else 1
-        x = max(x, x_start + changes * s_curve + cfg.goal_slack_m)
-        if x > x_start + cfg.max_plan_length_m or x > self._x_end() - 20.0:
-            return None
-        _, t_goal = timing.band(np.array([[x, self.lane_y]]))
-        if float(t_goal[0]) > cfg.horizon_s - 1.0:
-            return None
-        return x
-
-    def _gap_open(
-        self, timing: ArrivalTiming, x_start: float, goal_x: float, prediction: Prediction
-    ) -> bool:
-        """A necessary condition for any overtake: the oncoming lane is free beside the lead.
-
-        Where the lead car blocks the ego lane at the ego's nominal arrival times,
-        the ego must be laterally clear of it, i.e. in the oncoming lane; if an
-        oncoming car is predicted there and then, no plan can pass the checks.
-        """
-        if self.lead is None or len(prediction) < 2:
-            return True
-        xs = np.arange(x_start, goal_x + 1e-9, 0.5)
-        lane = np.column_stack([xs, np.full(len(xs), self.lane_y), np.zeros(len(xs))])
-        t_lo, t_hi = timing.band(lane[:, :2])
-        safety = self.config.safety
-        blocked = traffic_conflicts(
-            lane, t_lo, t_hi, prediction.select(np.array([0])), safety, self.vehicle, 0.5
-        )
-        if not blocked.any():
-            return True
-        out = lane[blocked].copy()
-        out[:, 1] = self.lane_y + 0.7 * self.lane_width
-        rest = prediction.select(np.arange(1, len(prediction)))
-        hit = traffic_conflicts(
-            out, t_lo[blocked], t_hi[blocked], rest, safety, self.vehicle, 0.5
-        )
-        return not bool(hit.any())
 
     def replan(self, t: float, trigger: str) -> ReplanRecord:
         """One re-planning cycle at simulation time ``t``; returns (and logs) its record."""
@@ -463,11 +402,11 @@ class TrafficDriver:
             0.0, float(ego.speed), self.speed.v_max, self.speed.accel,
             (float(ego.rear[0]), float(ego.rear[1])),
         )
-        goal_x = self._cut_in_x(timing, float(start[0]), pred, float(start[1]))
+        goal_x = self.cut_in.goal_x(timing, float(start[0]), pred, float(start[1]))
         outcome, message = "no_goal", "no cut-in point within reach"
         plan_time, iters, nodes = 0.0, 0, 0
         accepted = late = False
-        if goal_x is not None and not self._gap_open(timing, float(start[0]), goal_x, pred):
+        if goal_x is not None and not self.cut_in.gap_open(timing, float(start[0]), goal_x, pred):
             outcome, message = "no_gap", "the oncoming lane is taken beside the lead car"
         elif goal_x is not None:
             plan, message, cand = self._plan(i0, i_stitch, goal_x, timing, pred, wall0)
@@ -501,6 +440,23 @@ class TrafficDriver:
                     self._goal_s = float(self._proj_s[min(goal_index, len(self._proj_s) - 1)])
                     self._set_mode(t, "overtake")
                     outcome, accepted = "overtake", True
+        if (
+            not accepted
+            and mode == "follow"
+            and self.lead is not None
+            and float(self.lead.speed) < cfg.pull_out_speed
+        ):
+            cand, why = self._pull_out(i0, i_stitch, pred)
+            if cand is None:
+                message = f"{message}; pull-out: {why}"
+            else:
+                path, check_end, goal_index, t_end = cand
+                self._switch(t, path, i0)
+                self._check_end = check_end
+                self._goal_time = t + t_end
+                self._goal_s = float(self._proj_s[min(goal_index, len(self._proj_s) - 1)])
+                self._set_mode(t, "overtake")
+                outcome, message, accepted = "overtake", "pull-out past the slow lead", True
         if not accepted and mode == "overtake" and not current_ok:
             if self._in_own_lane():
                 self._set_mode(t, "follow")
@@ -515,6 +471,39 @@ class TrafficDriver:
         self.records.append(record)
         logger.debug("replan t=%.2f %s %s -> %s (%s)", t, trigger, mode, outcome, message)
         return record
+
+    def _pull_out(
+        self, i0: int, i_stitch: int, pred: Prediction
+    ) -> tuple[tuple[Path, int, int, float] | None, str]:
+        """The plain overtake of a slow lead (:mod:`rrtdrive.sim.pull_out`), checked; or why not."""
+        cfg = self.config
+        samples = self.controller.projector.samples  # type: ignore[union-attr]
+        start = samples[i_stitch]
+        if abs(float(start[1]) - self.lane_y) >= self.lane_width / 2.0:
+            return None, "not in the lane"
+        found = pull_out_candidate(
+            samples[i0:i_stitch], start, lane_y=self.lane_y,
+            out_y=self.lane_y + self.lane_width, length=cfg.pull_out_length_m,
+            max_length=cfg.max_plan_length_m, tail=cfg.lane_extension_m,
+            x_end=self._x_end(), times_of=self._times_on,
+            cut_in_x=lambda t: self.cut_in.need_at(t, pred),
+        )
+        if found is None:
+            return None, "no cut-in point within reach"
+        path, goal_index = found
+        if float(np.abs(path.samples[:, 3]).max()) > self.vehicle.kappa_max:
+            return None, "its lane changes are too sharp for the car"
+        _, ymin, _, ymax = self.road_bounds
+        if not inside_road(path, self.vehicle, ymin, ymax):
+            return None, "it leaves the road"
+        s = path.arc_length()
+        check_end = min(int(np.searchsorted(s, s[goal_index] + cfg.check_beyond_m)), len(s) - 1)
+        # Back in the lane within the prediction horizon; the check runs on past it
+        # (behind a car at walking pace the whole manoeuvre takes longer).
+        ok, t_end, why = self._validate(path, check_end, pred, horizon_end=goal_index)
+        if not ok:
+            return None, why
+        return (path, check_end, goal_index, t_end), ""
 
     def _plan(
         self,
