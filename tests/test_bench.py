@@ -357,6 +357,14 @@ def test_statistics():
     assert "seed" not in g.stats
     assert "| m | p | 4 | 0 | 75%" in to_markdown([g])
     assert to_csv([g]).splitlines()[0].startswith("kind,map,scenario,planner,controller")
+    # The CSV keeps every digit: its numbers read back as the summary's own floats.
+    thirds = [{**rows[0], "seed": i, "length_m": 10.0 + i / 3.0} for i in range(3)]
+    (g3,) = summarise_rows(thirds)
+    line = next(r for r in csv.DictReader(io.StringIO(to_csv([g3]))) if r["metric"] == "length_m")
+    stat = g3.stats["length_m"]
+    assert [float(line[k]) for k in ("mean", "std", "ci95_low", "ci95_high")] == [
+        stat.mean, stat.std, stat.ci_low, stat.ci_high
+    ]
     # A cell whose every run crashed still has its line (it had none in the CSV).
     crashed = [{"kind": "plan", "map": "m", "planner": "p", "controller": None, "seed": i,
                 "config_hash": "h", "status": "error", "error": "boom"} for i in range(2)]

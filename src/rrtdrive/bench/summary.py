@@ -162,7 +162,9 @@ def summarise_rows(rows: Iterable[Mapping[str, Any]]) -> list[GroupSummary]:
 
 
 def _num(x: float) -> str:
-    return "" if not math.isfinite(x) else f"{x:.6g}"
+    # Every digit (the shortest round-trip text): the CSV is for recomputing, the
+    # markdown for reading (6 significant digits here made the two disagree).
+    return "" if not math.isfinite(x) else repr(float(x))
 
 
 def to_csv(groups: Sequence[GroupSummary]) -> str:
