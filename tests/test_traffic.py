@@ -3,6 +3,7 @@ metrics and the command line, in real highway-env."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -94,6 +95,13 @@ def test_scenario_is_seeded_and_configurable():
 def test_scenario_bad_input_names_the_field(kwargs, field):
     with pytest.raises(InputError, match=field):
         make_scenario("overtake-traffic", 0, **kwargs)
+
+
+def test_a_traffic_task_without_a_lead_is_refused():
+    # It could only time out, and was scored as safe following (session 27's audit).
+    task = make_scenario("overtake-traffic", 0)
+    with pytest.raises(InputError, match="scenario.lead"):
+        dataclasses.replace(task, lead=None)
 
 
 def test_traffic_options_belong_to_the_traffic_scenario():

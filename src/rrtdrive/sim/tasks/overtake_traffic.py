@@ -192,6 +192,12 @@ class OvertakeTrafficTask(Task):
             )
         if not (math.isfinite(self.ego_speed) and self.ego_speed >= 0):
             raise InputError(f"scenario.ego_speed: must be >= 0, got {self.ego_speed!r}")
+        if self.lead is None:
+            # Without one the episode could only time out, and was scored as following.
+            raise InputError(
+                "scenario.lead: overtake-traffic needs a lead car to overtake, "
+                "given as (x, speed)"
+            )
 
     @classmethod
     def create(
