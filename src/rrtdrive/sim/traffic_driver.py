@@ -30,6 +30,10 @@ plan that is still safe) and tries again at the next cycle: an unchecked plan is
 never driven. If a plan becomes unsafe while the body is still in the ego's own
 lane, the driver abandons it and returns to following; once the body is in the
 oncoming lane it re-plans every step until a safe plan is found.
+
+**A slow lead.** Behind a lead slower than ``pull_out_speed`` a cycle whose planner
+found nothing tries the plain pull-out (:mod:`rrtdrive.sim.pull_out`), checked the
+same way; the IDM law keeps room for it (``IDMConfig.pull_out_gap``).
 """
 
 from __future__ import annotations
