@@ -105,6 +105,11 @@ def test_the_ego_overtakes_a_lead_at_walking_pace(lead_speed: float) -> None:
         # Behind a stopped car only the pull-out fits; at 2 m/s the room kept behind
         # the lead is enough for the planner's own lane changes.
         assert any("pull-out" in r.message for r in pulled)
+    # Each accepted reference passed its own next check (a pull-out from standstill
+    # checked without its loose start timing failed it one step later and was
+    # abandoned: 1 unsafe step here before the fix).
+    assert ep.traffic.unsafe_steps == 0
+    assert not any(r.outcome == "abandoned" for r in ep.traffic.records)
     # Every accepted reference is inside the road and within the car's curvature.
     vehicle = VehicleParams()
     for _, path in ep.traffic.references:

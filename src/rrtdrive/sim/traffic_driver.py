@@ -357,9 +357,17 @@ class TrafficDriver:
         return np.concatenate([[0.0], np.cumsum(np.diff(s) / v)])
 
     def _validate(
-        self, path: Path, check_end: int, prediction: Prediction, horizon_end: int | None = None
+        self,
+        path: Path,
+        check_end: int,
+        prediction: Prediction,
+        horizon_end: int | None = None,
+        band: tuple[float, float] = (0.0, 0.0),
     ) -> tuple[bool, float, str]:
         """Check a candidate reference (starting at the ego) timed by the controller's profile.
+
+        ``horizon_end``: the row that must be reached within the horizon (default
+        ``check_end``); ``band``: each row is checked over ``[t - band[0], t + band[1]]``.
 
         Returns
         -------
@@ -373,8 +381,8 @@ class TrafficDriver:
             return False, float(times[check_end]), "the plan ends beyond the prediction horizon"
         idx = np.arange(0, check_end + 1)
         hit = traffic_conflicts(
-            path.samples[idx, :3], times[idx], times[idx], prediction, self.config.safety,
-            self.vehicle, SPACING,
+            path.samples[idx, :3], times[idx] - band[0], times[idx] + band[1], prediction,
+            self.config.safety, self.vehicle, SPACING,
         )
         if hit.any():
             x, y = path.samples[int(np.flatnonzero(hit)[0]), :2]
@@ -503,8 +511,21 @@ class TrafficDriver:
         s = path.arc_length()
         check_end = min(int(np.searchsorted(s, s[goal_index] + cfg.check_beyond_m)), len(s) - 1)
         # Back in the lane within the prediction horizon; the check runs on past it
-        # (behind a car at walking pace the whole manoeuvre takes longer).
-        ok, t_end, why = self._validate(path, check_end, pred, horizon_end=goal_index)
+        # (behind a car at walking pace the whole manoeuvre takes longer). From
+        # (near) standstill the timing is loose at both ends: the ego is already
+        # past the first row, which the profile at walking pace reaches up to a
+        # second later (the safety check reads the ego's time there), and the speed
+        # loop ramps its command up at the comfort jerk, so the ego runs late by up
+        # to that ramp's time (seen: 0.4 s; checked as one step later, such a plan
+        # failed its check, session 28).
+        times = self._times_on(path)
+        _, s_now = self._projection()
+        early = float(np.interp(s_now - self._proj_s[i0], path.arc_length(), times))
+        speed = self.controller.speed_config
+        late = speed.accel / speed.comfort_jerk
+        ok, t_end, why = self._validate(
+            path, check_end, pred, horizon_end=goal_index, band=(early, late)
+        )
         if not ok:
             return None, why
         return (path, check_end, goal_index, t_end), ""
