@@ -126,3 +126,14 @@ def test_without_pull_out_the_ego_keeps_following() -> None:
     ep = run_episode(scen, controller="pure-pursuit", seed=1, config=EpisodeConfig(replan=replan))
     assert evaluate(ep).outcome is Outcome.SAFE_FOLLOWING
     assert not any("pull-out" in r.message for r in ep.traffic.records)
+
+
+def test_the_pull_out_is_held_to_the_cycle_budget() -> None:
+    # With the wall-clock limits on, a cycle that has spent its tree-growth share
+    # (60 % of a budget of 0.1 ms: always) does not start the pull-out (some 40 ms).
+    replan = ReplanConfig(budget_s=1e-4)
+    scen = make_scenario("overtake-traffic", 1, lead_speed=0.01)
+    scen = dataclasses.replace(scen, max_time_s=5.0)
+    ep = run_episode(scen, controller="pure-pursuit", seed=1, config=EpisodeConfig(replan=replan))
+    slow = [r for r in ep.traffic.records if "pull-out" in r.message]
+    assert slow and all("pull-out: no time left in the cycle" in r.message for r in slow)
