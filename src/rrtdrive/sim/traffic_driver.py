@@ -446,11 +446,7 @@ class TrafficDriver:
                 ):
                     outcome = "kept"
                 else:
-                    self._switch(t, path, i0)
-                    self._check_end = check_end
-                    self._goal_time = t + t_end
-                    self._goal_s = float(self._proj_s[min(goal_index, len(self._proj_s) - 1)])
-                    self._set_mode(t, "overtake")
+                    self._accept(t, i0, (path, check_end, goal_index, t_end))
                     outcome, accepted = "overtake", True
         if (
             not accepted
@@ -467,12 +463,7 @@ class TrafficDriver:
             if cand is None:
                 message = f"{message}; pull-out: {why}"
             else:
-                path, check_end, goal_index, t_end = cand
-                self._switch(t, path, i0)
-                self._check_end = check_end
-                self._goal_time = t + t_end
-                self._goal_s = float(self._proj_s[min(goal_index, len(self._proj_s) - 1)])
-                self._set_mode(t, "overtake")
+                self._accept(t, i0, cand)
                 outcome, message, accepted = "overtake", "pull-out past the slow lead", True
         if not accepted and mode == "overtake" and not current_ok:
             if self._in_own_lane():
@@ -488,6 +479,15 @@ class TrafficDriver:
         self.records.append(record)
         logger.debug("replan t=%.2f %s %s -> %s (%s)", t, trigger, mode, outcome, message)
         return record
+
+    def _accept(self, t: float, i0: int, cand: tuple[Path, int, int, float]) -> None:
+        """Drive a checked candidate ``(path, check_end, goal_index, t_end)`` from now on."""
+        path, check_end, goal_index, t_end = cand
+        self._switch(t, path, i0)
+        self._check_end = check_end
+        self._goal_time = t + t_end
+        self._goal_s = float(self._proj_s[min(goal_index, len(self._proj_s) - 1)])
+        self._set_mode(t, "overtake")
 
     def _pull_out(
         self, i0: int, i_stitch: int, pred: Prediction
