@@ -253,7 +253,7 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     densities = args.densities.split(",")
     for d in densities:
-        make_scenario(  # validate
+        probe = make_scenario(  # validate
             "overtake-traffic", 0, density=d, lead_model=args.lead_model, lead_speed=args.lead_speed
         )
     config = episode_config(args)
@@ -292,9 +292,7 @@ def main(argv: list[str] | None = None) -> int:
         "densities": {d: TRAFFIC_DENSITIES.get(d, d) for d in densities},
         "controller": args.controller,
         "lead_model": args.lead_model,
-        "lead_speed": make_scenario(
-            "overtake-traffic", 0, lead_speed=args.lead_speed
-        ).lead[1],  # type: ignore[index]
+        "lead_speed": probe.lead[1],  # type: ignore[index]
         "replan": {
             k: v for k, v in dataclasses.asdict(config.replan).items()  # type: ignore[arg-type]
             if k != "planner_options"

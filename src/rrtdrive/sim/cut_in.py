@@ -31,7 +31,7 @@ class CutInRule:
         the plan length and horizon, the safety margins.
     vehicle : VehicleParams
         The ego car.
-    lead : object or None
+    lead : object
         The lead car (highway-env vehicle: ``speed``, ``LENGTH``; read when asked,
         as it moves), the prediction's first vehicle.
     lane_y, lane_width : float
@@ -79,8 +79,6 @@ class CutInRule:
         """
         cfg = self.config
         xs = x_start + np.arange(12.0, cfg.max_plan_length_m + 1e-9, 1.0)
-        if self.lead is None or len(prediction) == 0:
-            return float(xs[min(len(xs) - 1, 18)])
         pts = np.column_stack([xs, np.full(len(xs), self.lane_y)])
         _, t_hi = timing.band(pts)
         t_check = t_hi + cfg.safety.margin(t_hi)
@@ -109,7 +107,7 @@ class CutInRule:
         the ego must be laterally clear of it, i.e. in the oncoming lane; if an
         oncoming car is predicted there and then, no plan can pass the checks.
         """
-        if self.lead is None or len(prediction) < 2:
+        if len(prediction) < 2:  # no oncoming car
             return True
         xs = np.arange(x_start, goal_x + 1e-9, 0.5)
         lane = np.column_stack([xs, np.full(len(xs), self.lane_y), np.zeros(len(xs))])

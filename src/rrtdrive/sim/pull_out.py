@@ -73,8 +73,8 @@ def pull_out_candidate(
     x_end: float,
     times_of: Callable[[Path], np.ndarray],
     cut_in_x: Callable[[float], float],
-) -> tuple[Path, int] | None:
-    """The pull-out reference from the ego on, and the index of its cut-in row.
+) -> tuple[Path, int, np.ndarray] | None:
+    """The pull-out reference from the ego on, the index of its cut-in row, its times.
 
     The cut-in point starts two lane changes ahead of ``start`` and moves forward
     until it lies at or beyond ``cut_in_x(t)``, ``t`` being when the ego gets there
@@ -102,8 +102,9 @@ def pull_out_candidate(
     Returns
     -------
     tuple or None
-        ``(path, goal_index)``; ``None`` when no cut-in point within ``max_length``
-        (or before the road's end) is far enough ahead of the lead.
+        ``(path, goal_index, times)`` (``times_of(path)``); ``None`` when no cut-in
+        point within ``max_length`` (or before the road's end) is far enough ahead of
+        the lead.
     """
     x0 = float(start[0])
     x_goal = x0 + 2.0 * length
@@ -111,12 +112,12 @@ def pull_out_candidate(
         if x_goal > x0 + max_length or x_goal + tail > x_end:
             return None
         local = pull_out_path(start, lane_y, out_y, length, x_goal - length, x_goal + tail)
-        rows = np.concatenate([head[:, :4], local.samples[:, :4]]) if len(head) else local.samples
-        path = Path(rows, np.zeros((0, 2)))
+        path = Path(np.concatenate([head[:, :4], local.samples[:, :4]]), np.zeros((0, 2)))
         goal_index = len(head) + int(np.searchsorted(local.samples[:, 0], x_goal - 1e-9))
-        need = cut_in_x(float(times_of(path)[goal_index]))
+        times = times_of(path)
+        need = cut_in_x(float(times[goal_index]))
         if x_goal >= need - 1e-9:
-            return path, goal_index
+            return path, goal_index, times
         x_goal = need
     return None
 

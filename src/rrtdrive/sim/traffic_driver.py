@@ -112,7 +112,7 @@ class TrafficDriver:
         self.scenario = scenario
         self.vehicle = scenario.vehicle
         self.others = [v for v in self.road.vehicles if v is not self.ego]
-        self.lead = self.others[0] if scenario.lead is not None and self.others else None
+        self.lead = self.others[0]  # the scene's first car (the task requires one)
         self.lane_y = float(scenario.lane_y)
         self.lane_width = float(scenario.lane_width)
         self.road_bounds = scenario.map.bounds
@@ -363,11 +363,13 @@ class TrafficDriver:
         prediction: Prediction,
         horizon_end: int | None = None,
         band: tuple[float, float] = (0.0, 0.0),
+        times: np.ndarray | None = None,
     ) -> tuple[bool, float, str]:
         """Check a candidate reference (starting at the ego) timed by the controller's profile.
 
         ``horizon_end``: the row that must be reached within the horizon (default
-        ``check_end``); ``band``: each row is checked over ``[t - band[0], t + band[1]]``.
+        ``check_end``); ``band``: each row is checked over ``[t - band[0], t + band[1]]``;
+        ``times``: :meth:`_times_on` of ``path`` when the caller has them.
 
         Returns
         -------
@@ -376,7 +378,7 @@ class TrafficDriver:
             Seconds until the ego reaches sample ``check_end``.
         why : str
         """
-        times = self._times_on(path)
+        times = self._times_on(path) if times is None else times
         if times[check_end if horizon_end is None else horizon_end] > self.config.horizon_s:
             return False, float(times[check_end]), "the plan ends beyond the prediction horizon"
         idx = np.arange(0, check_end + 1)
@@ -451,7 +453,6 @@ class TrafficDriver:
         if (
             not accepted
             and mode == "follow"
-            and self.lead is not None
             and float(self.lead.speed) < cfg.pull_out_speed
         ):
             # Held to the cycle like the tree's growth (it takes some 40 ms).
@@ -507,7 +508,7 @@ class TrafficDriver:
         )
         if found is None:
             return None, "no cut-in point within reach"
-        path, goal_index = found
+        path, goal_index, times = found
         if float(np.abs(path.samples[:, 3]).max()) > self.vehicle.kappa_max:
             return None, "its lane changes are too sharp for the car"
         _, ymin, _, ymax = self.road_bounds
@@ -518,13 +519,12 @@ class TrafficDriver:
         # Back in the lane within the horizon, checked on past it (from standstill the
         # manoeuvre takes longer). Loose timing (docs/traffic.md): the ego is past the
         # first row already, and the speed loop ramps up at the comfort jerk.
-        times = self._times_on(path)
         _, s_now = self._projection()
-        early = float(np.interp(s_now - self._proj_s[i0], path.arc_length(), times))
+        early = float(np.interp(s_now - self._proj_s[i0], s, times))
         speed = self.controller.speed_config
         late = speed.accel / speed.comfort_jerk
         ok, t_end, why = self._validate(
-            path, check_end, pred, horizon_end=goal_index, band=(early, late)
+            path, check_end, pred, horizon_end=goal_index, band=(early, late), times=times
         )
         if not ok:
             return None, why
