@@ -130,7 +130,7 @@ def test_without_pull_out_the_ego_keeps_following() -> None:
 
 def test_the_pull_out_is_held_to_the_cycle_budget() -> None:
     # With the wall-clock limits on, a cycle that has spent its tree-growth share
-    # (60 % of a budget of 0.1 ms: always) does not start the pull-out (some 40 ms).
+    # (60 % of a budget of 0.1 ms: always) does not start the pull-out (15-25 ms).
     replan = ReplanConfig(budget_s=1e-4)
     scen = make_scenario("overtake-traffic", 1, lead_speed=0.01)
     scen = dataclasses.replace(scen, max_time_s=5.0)

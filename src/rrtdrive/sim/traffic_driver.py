@@ -455,7 +455,7 @@ class TrafficDriver:
             and mode == "follow"
             and float(self.lead.speed) < cfg.pull_out_speed
         ):
-            # Held to the cycle like the tree's growth (it takes some 40 ms).
+            # Held to the cycle like the tree's growth (it takes 15-25 ms).
             spent = time.perf_counter() - wall0
             if cfg.wall_limit and spent > cfg.cycle_budget_s * (1.0 - cfg.postprocess_reserve):
                 cand, why = None, "no time left in the cycle"
