@@ -5,7 +5,6 @@ from __future__ import annotations
 import functools
 import math
 
-import control
 import numpy as np
 
 from rrtdrive.controllers.base import (
@@ -75,6 +74,10 @@ def design_gain(q_e: float, q_psi: float, r: float) -> np.ndarray:
 def _design_gain(q_e: float, q_psi: float, r: float) -> tuple[float, float]:
     # Cached: the gain depends on the weights only, and a LAPACK call per episode
     # would wake OpenBLAS's worker threads, which then spin on the other core.
+    # Imported here: python-control imports matplotlib.pyplot (0.7 s on every start of
+    # the CLI, a bench worker or a script), and the gain is computed once per weights.
+    import control
+
     A, B = lateral_error_model()
     K, _, _ = control.lqr(A, B, np.diag([q_e, q_psi]), np.array([[r]]))
     k = np.asarray(K, dtype=float).reshape(2)

@@ -23,9 +23,9 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import Enum
+from types import ModuleType
 
 import numpy as np
-import scipy.stats
 
 from rrtdrive.types import InputError
 
@@ -37,6 +37,14 @@ __all__ = ["Interval", "Stat", "describe", "wilson_interval", "BOOTSTRAP_SEED"]
 BOOTSTRAP_SEED = 0
 BOOTSTRAP_RESAMPLES = 1999
 CONFIDENCE = 0.95
+
+
+def _scipy_stats() -> ModuleType:
+    # Imported on first use: scipy.stats takes 0.5 s to import, and every CLI command,
+    # bench worker and script imports this module through the evaluation package.
+    import scipy.stats
+
+    return scipy.stats
 
 
 class Interval(str, Enum):
@@ -106,7 +114,7 @@ def wilson_interval(successes: float, n: int) -> tuple[float, float]:
     k = round(successes)
     if abs(k - successes) > 1e-9 or not 0 <= k <= n:
         raise InputError(f"successes: must be a whole number in [0, {n}], got {successes!r}")
-    ci = scipy.stats.binomtest(int(k), int(n)).proportion_ci(
+    ci = _scipy_stats().binomtest(int(k), int(n)).proportion_ci(
         confidence_level=CONFIDENCE, method="wilson"
     )
     return (float(ci.low), float(ci.high))
@@ -115,7 +123,7 @@ def wilson_interval(successes: float, n: int) -> tuple[float, float]:
 def _t_interval(x: np.ndarray, mean: float, std: float) -> tuple[float, float]:
     if std == 0.0:
         return (mean, mean)  # scipy would compute 0 * inf
-    lo, hi = scipy.stats.t.interval(
+    lo, hi = _scipy_stats().t.interval(
         CONFIDENCE, len(x) - 1, loc=mean, scale=std / math.sqrt(len(x))
     )
     return (float(lo), float(hi))
@@ -133,9 +141,9 @@ def _bootstrap_interval(x: np.ndarray) -> tuple[float, float]:
     }
     rng = np.random.default_rng(BOOTSTRAP_SEED)
     try:
-        res = scipy.stats.bootstrap((x,), np.mean, rng=rng, **kwargs)
+        res = _scipy_stats().bootstrap((x,), np.mean, rng=rng, **kwargs)
     except TypeError:  # scipy < 1.15 calls the generator random_state
-        res = scipy.stats.bootstrap((x,), np.mean, random_state=rng, **kwargs)
+        res = _scipy_stats().bootstrap((x,), np.mean, random_state=rng, **kwargs)
     ci = res.confidence_interval
     return (float(ci.low), float(ci.high))
 

@@ -34,7 +34,6 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy.signal import savgol_filter
 
 __all__ = ["COMFORT_BOUNDS", "NuplanComfort", "nuplan_comfort"]
 
@@ -119,6 +118,9 @@ def _filtered(
     w = _window(len(y), window, order)
     if w is None:
         return np.zeros_like(y) if deriv else y
+    # Imported here: scipy.signal pulls in scipy.stats (0.7 s on every process start).
+    from scipy.signal import savgol_filter
+
     return savgol_filter(y, window_length=w, polyorder=order, deriv=deriv, delta=dt)
 
 
