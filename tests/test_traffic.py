@@ -469,7 +469,7 @@ def test_cli_simulate_traffic(tmp_path, capsys):
     assert "Traceback" not in err
 
 
-def test_gym_env_replans_like_the_runner():
+def test_gym_env_replans_like_the_runner(overtaken):
     from rrtdrive.envs.drive_env import DriveEnv
 
     env = DriveEnv(
@@ -483,7 +483,7 @@ def test_gym_env_replans_like_the_runner():
         total += info["reward_terms"]["progress"]
         if terminated or truncated:
             break
-    ep = run_episode(make_scenario("overtake-traffic", 4, density="low"), seed=4, config=SEEDED)
+    ep, _ = overtaken  # the runner's episode of the same seed and density
     assert np.array_equal(env.episode.log.states, ep.log.states)
     assert info["status"] == ep.status == "completed" and info["is_success"]
     refs = len(env.episode.traffic.references)
@@ -507,12 +507,15 @@ def test_video_follows_the_ego_and_draws_the_current_reference(overtaken):
 
 
 @pytest.mark.parametrize("controller", ["pure-pursuit", "stanley", "lqr"])
-def test_every_controller_overtakes_in_traffic_without_a_collision(controller):
+def test_every_controller_overtakes_in_traffic_without_a_collision(controller, overtaken):
     # Re-planning retargets the controller on every accepted plan: each controller
     # must follow the new reference (Stanley crashed in every episode before).
-    scen = make_scenario("overtake-traffic", 4, density="low")
-    ep = run_episode(scen, controller=controller, seed=4, config=SEEDED)
-    r = evaluate(ep)
+    if controller == "pure-pursuit":  # the default: the module's episode
+        ep, r = overtaken
+    else:
+        scen = make_scenario("overtake-traffic", 4, density="low")
+        ep = run_episode(scen, controller=controller, seed=4, config=SEEDED)
+        r = evaluate(ep)
     assert not r.collision, ep.message
     assert ep.status == "completed" and r.success, ep.message
 
