@@ -278,3 +278,27 @@ def test_exact_ends_are_exact_far_from_the_origin():
     off = rows.copy()
     off[:, :2] += 0.07
     assert not verify_path(m, Path(off, off[[0, -1], :2])).endpoints_ok
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(
+        st.tuples(st.floats(-50.0, 50.0), st.floats(-50.0, 50.0), st.floats(-7.0, 7.0)),
+        min_size=1, max_size=20,
+    )
+)
+def test_body_rectangles_are_the_rotated_box(poses: list[tuple[float, float, float]]) -> None:
+    # The verifier's vectorised bodies against shapely's own rotate-and-translate of the
+    # car's box (rear axle at the origin, nose along +x).
+    from shapely import affinity
+
+    from rrtdrive.verify import _bodies
+
+    v = VehicleParams()
+    p = np.array(poses, dtype=float)
+    got = _bodies(p, v.length, v.width, v.rear_overhang)
+    box = shapely.box(-v.rear_overhang, -v.width / 2, v.length - v.rear_overhang, v.width / 2)
+    for body, (x, y, yaw) in zip(got, poses, strict=True):
+        want = affinity.translate(affinity.rotate(box, yaw, origin=(0, 0), use_radians=True), x, y)
+        assert body.is_valid and body.area == pytest.approx(v.length * v.width)
+        assert shapely.hausdorff_distance(body, want) < 1e-9

@@ -133,14 +133,20 @@ def _menger(xy: np.ndarray) -> np.ndarray:
     return np.abs(_signed_menger(xy))
 
 
-def _body(x: float, y: float, yaw: float, length: float, width: float, back: float):
-    c, s = math.cos(yaw), math.sin(yaw)
-    pts = [
-        (x + c * lx - s * ly, y + s * lx + c * ly)
-        for lx, ly in ((-back, -width / 2), (length - back, -width / 2),
-                       (length - back, width / 2), (-back, width / 2))
-    ]
-    return shapely.Polygon(pts)
+def _bodies(poses: np.ndarray, length: float, width: float, back: float) -> np.ndarray:
+    """The car's body rectangles at ``poses`` (rows ``x, y, yaw``), as shapely polygons.
+
+    One vectorised call (building them one by one took half of a bench run's time); the
+    corners are the floats of the scalar formula (``math.cos``, the same operation order).
+    """
+    yaw = poses[:, 2].tolist()
+    c = np.array([math.cos(a) for a in yaw]).reshape(-1, 1)
+    s = np.array([math.sin(a) for a in yaw]).reshape(-1, 1)
+    lx = np.array([-back, length - back, length - back, -back])
+    ly = np.array([-width / 2, -width / 2, width / 2, width / 2])
+    x = poses[:, :1] + c * lx - s * ly
+    y = poses[:, 1:2] + s * lx + c * ly
+    return shapely.polygons(np.stack([x, y], axis=-1))
 
 
 def _thin(xy: np.ndarray, min_gap: float) -> list[int]:
@@ -230,7 +236,8 @@ MIN_POSE_SPACING = 1e-3
 
 
 def _first_collision(
-    m: Map, rows: np.ndarray, region: shapely.Geometry, bodies: list, poses: list,
+    m: Map, rows: np.ndarray, region: shapely.Geometry, bodies: list[np.ndarray],
+    poses: list[np.ndarray],
     row_on_map: np.ndarray,
 ) -> tuple[tuple[float, float, float] | None, str]:
     """The first pose whose body leaves ``region`` or overlaps an obstacle, and what it hits.
@@ -242,13 +249,16 @@ def _first_collision(
         return (float(rows[k, 0]), float(rows[k, 1]), float(rows[k, 2])), "the bounds"
     if not bodies:
         return None, ""
-    shapes = np.array(bodies, dtype=object)
+    shapes = np.concatenate(bodies)
     polygons = [shapely.Polygon(o.corners()) for o in m.obstacles]
     # Touching the bounds is a collision, as touching an obstacle is (the walls stand there).
+    shapely.prepare(region)
     outside = ~shapely.contains_properly(region, shapes)
     hit = np.zeros(len(shapes), dtype=bool)
     if polygons:
-        hit = shapely.intersects(shapely.union_all(polygons), shapes)
+        walls = shapely.union_all(polygons)
+        shapely.prepare(walls)  # one geometry against thousands of bodies
+        hit = shapely.intersects(walls, shapes)
     bad = outside | hit
     if not bad.any():
         return None, ""
@@ -256,7 +266,7 @@ def _first_collision(
     x, y, yaw = (float(c) for c in np.concatenate(poses)[k])
     if outside[k]:
         return (x, y, yaw), "the bounds"
-    index = next(i for i, p in enumerate(polygons) if p.intersects(bodies[k]))
+    index = next(i for i, p in enumerate(polygons) if p.intersects(shapes[k]))
     return (x, y, yaw), f"obstacle {index}"
 
 
@@ -379,7 +389,7 @@ def verify_path(
     # 0.1 m poses would take minutes and gigabytes first.
     row_on_map = (xy[:, 0] >= xmin) & (xy[:, 0] <= xmax) & (xy[:, 1] >= ymin) & (xy[:, 1] <= ymax)
     on_map = bool(np.all(row_on_map))
-    bodies = []
+    bodies: list[np.ndarray] = []
     poses: list[np.ndarray] = []
     max_k = 0.0
     max_sharp = 0.0
@@ -391,7 +401,7 @@ def verify_path(
         # The body along the nose yaw (interpolated between the rows) in either gear.
         if on_map:
             dense = densify(seg[:, :3], pose_spacing, angle_column=2).points
-            bodies += [_body(x, y, yaw, v.length, v.width, v.rear_overhang) for x, y, yaw in dense]
+            bodies.append(_bodies(dense, v.length, v.width, v.rear_overhang))
             poses.append(dense)
         if len(seg) < 2:
             continue
