@@ -294,7 +294,8 @@ def _modules_after(*argv):
         f"    main({list(argv)!r})\n"
         "except SystemExit:\n"
         "    pass\n"
-        "heavy = ('highway_env', 'control', 'matplotlib', 'pygame', 'scipy.signal', 'ray')\n"
+        "heavy = ('highway_env', 'control', 'matplotlib', 'pygame', 'scipy.signal',\n"
+        "         'scipy.stats', 'ray')\n"
         "print(sorted(m for m in heavy if m in sys.modules))\n"
         "print('rrtdrive.planning' in sys.modules, 'rrtdrive.collision' in sys.modules)\n"
     )
@@ -322,6 +323,14 @@ def test_verify_imports_no_simulator_controller_or_plotting(tmp_path):
     assert main(["plan", "overtake", "--planner", "rrt", "--json", str(plan)]) in (0, 1)
     heavy, _ = _modules_after("verify", str(plan))
     assert heavy == "[]"
+
+
+def test_bench_imports_no_statistics_controller_or_simulator_before_it_runs():
+    # A bench worker process imports what `bench` does: scipy.stats (summaries),
+    # scipy.signal (nuPlan's comfort filter) and python-control (the LQR gain, which
+    # imports matplotlib.pyplot) load on first use (2.4 -> 1.6 s, docs/cli_startup.md).
+    heavy, planning = _modules_after("bench", "--help")
+    assert heavy == "[]" and planning.startswith("True")
 
 
 def test_simulate_video_stride_zero_rejected(capsys):
