@@ -20,15 +20,21 @@ are in :mod:`~rrtdrive.envs.observation`, :mod:`~rrtdrive.envs.action` and
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 from gymnasium.envs.registration import register, registry
+
+from rrtdrive.types import InputError
 
 __all__ = [
     "ENV_IDS",
     "ENV_KWARGS",
     "ENTRY_POINT",
+    "REGISTERED_SCENARIO_OPTIONS",
     "RegisteredDict",
     "RegisteredStr",
     "is_registered_default",
+    "merge_scenario_options",
     "plain_value",
     "register_envs",
 ]
@@ -56,8 +62,9 @@ ENV_IDS: dict[str, str] = {
 #: planner would reach the same search only after its RRT-Connect stages fail, at
 #: each reset (tens of seconds on a U-turn).
 #: Reverse-in parking is the parking scenario with ``reverse_in``, planned the same
-#: way (a ``scenario_options`` given to ``gym.make`` replaces the registered one:
-#: keep ``"reverse_in": True`` in it).
+#: way. Registered ``scenario_options`` are merged with a caller's, key by key (the
+#: caller's win): ``gym.make`` alone would replace the whole mapping, so a caller's
+#: start jitter turned reverse-in parking into nose-in parking.
 ENV_KWARGS: dict[str, dict[str, object]] = {
     "rrtdrive/ParkingReverseIn-v0": {
         "planner": "hybrid-a-star", "scenario_options": {"reverse_in": True},
@@ -108,6 +115,39 @@ def plain_value(value: object) -> object:
     return value
 
 
+#: The keyword under which an id registers its ``scenario_options`` (see
+#: :func:`merge_scenario_options`); not an option of the environment.
+REGISTERED_SCENARIO_OPTIONS = "registered_scenario_options"
+
+
+def merge_scenario_options(options: dict[str, object], merge: bool) -> dict[str, object]:
+    """``options`` with the id's registered ``scenario_options`` taken out.
+
+    With ``merge`` (no ``config=``) they go under the caller's ``scenario_options``,
+    key by key, the caller's winning; with a ``config=`` they give way to it, as every
+    registered default does. A caller's ``scenario_options`` that is not a mapping is
+    left for the configuration to refuse by name.
+
+    Raises
+    ------
+    InputError
+        When the caller, not the registration, passes ``registered_scenario_options``.
+    """
+    out = dict(options)
+    registered = out.pop(REGISTERED_SCENARIO_OPTIONS, None)
+    if registered is None:
+        return out
+    if not is_registered_default(registered):
+        raise InputError(
+            f"{REGISTERED_SCENARIO_OPTIONS}: set by an id's registration; pass "
+            "scenario_options instead"
+        )
+    given = out.get("scenario_options")
+    if merge and (given is None or isinstance(given, Mapping)):
+        out["scenario_options"] = {**plain_value(registered), **plain_value(given or {})}  # type: ignore[dict-item]
+    return out
+
+
 def register_envs() -> None:
     """Register every id of :data:`ENV_IDS` with gymnasium (idempotent).
 
@@ -120,9 +160,10 @@ def register_envs() -> None:
         if env_id not in registry:
             extra = ENV_KWARGS.get(env_id, {})
             kwargs = {
-                name: _registered(name, value)
+                REGISTERED_SCENARIO_OPTIONS if name == "scenario_options" else name:
+                _registered(name, value)
                 for name, value in {"scenario": scenario, **extra}.items()
-            }
+            }  # fmt: skip
             register(id=env_id, entry_point=ENTRY_POINT, kwargs=kwargs)
 
 

@@ -80,11 +80,33 @@ def test_registered_defaults_apply_without_config(env_id):
     assert _make(env_id, planner="rrt-connect").planner == "rrt-connect"
 
 
-def test_registered_scenario_options_replaced_by_the_callers():
-    # Documented in envs/__init__.py: a scenario_options given to gym.make replaces
-    # the registered one.
+def test_registered_scenario_options_merge_with_the_callers():
+    # gym.make alone replaces the registered mapping: a caller's start jitter turned
+    # reverse-in parking into nose-in parking (a helper's audit, session 29). Now the
+    # caller's keys go over the registered ones, key by key.
     got = _make("rrtdrive/ParkingReverseIn-v0", scenario_options={"spot": (0, 0, 3)})
-    assert got.scenario_options == {"spot": (0, 0, 3)}
+    assert got.scenario_options == {"reverse_in": True, "spot": (0, 0, 3)}
+    got = _make("rrtdrive/ParkingReverseIn-v0", scenario_options={"reverse_in": False})
+    assert got.scenario_options == {"reverse_in": False}  # the caller's value wins
+    assert _make("rrtdrive/ParkingReverseIn-v0", scenario_options=None).scenario_options == {
+        "reverse_in": True
+    }
+    # The registration's keyword is not an option for callers.
+    with pytest.raises(InputError, match=r"^registered_scenario_options: set by an id's"):
+        _make("rrtdrive/Parking-v0", registered_scenario_options={"reverse_in": True})
+    with pytest.raises(InputError, match=r"^scenario_options: expected a mapping"):
+        _make("rrtdrive/ParkingReverseIn-v0", scenario_options=5)
+
+
+def test_a_jittered_reverse_in_episode_still_backs_into_the_bay():
+    env = gym.make("rrtdrive/ParkingReverseIn-v0", scenario_options={"jitter": (0.5, 0.5, 0.05)})
+    try:
+        env.reset(seed=0)
+        path = env.unwrapped.path
+        assert env.unwrapped.config.scenario_options["reverse_in"]
+        assert -1 in path.gears and len(path.cusps) >= 1  # it reverses into the bay
+    finally:
+        env.close()
 
 
 def test_config_of_another_scenario_is_refused_but_map_v0_takes_any_map():
