@@ -19,7 +19,7 @@ from gymnasium.utils.env_checker import check_env
 
 import rrtdrive
 from rrtdrive.controllers import VehicleState, make_controller
-from rrtdrive.envs import ENV_IDS, ENV_KWARGS
+from rrtdrive.envs import ENV_IDS, ENV_KWARGS, REGISTERED_SCENARIO_OPTIONS
 from rrtdrive.envs.config import DriveEnvConfig
 from rrtdrive.envs.drive_env import DriveEnv
 from rrtdrive.envs.observation import observation_names
@@ -68,7 +68,12 @@ def test_every_scenario_has_an_env_id():
     for env_id, scenario in ENV_IDS.items():
         spec = gym.spec(env_id)
         assert spec.entry_point == "rrtdrive.envs.drive_env:DriveEnv"
-        assert spec.kwargs == {"scenario": scenario, **ENV_KWARGS.get(env_id, {})}
+        # Registered scenario_options go under their own keyword (merged, not replaced).
+        extra = {
+            REGISTERED_SCENARIO_OPTIONS if k == "scenario_options" else k: v
+            for k, v in ENV_KWARGS.get(env_id, {}).items()
+        }
+        assert spec.kwargs == {"scenario": scenario, **extra}
 
 
 @pytest.mark.parametrize("env_id", sorted(ENV_IDS))
