@@ -6,6 +6,8 @@ import warnings
 
 import pytest
 import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from rrtdrive.maps import (
     BUILTIN_MAPS,
@@ -257,3 +259,52 @@ def test_a_name_with_half_a_surrogate_pair_is_bad_input(tmp_path, capsys):
     assert main(["plan", str(f)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "error: name:" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("name", ["lot\nB", "\x1b[31mred", "tab\there", "nul\x00"])
+def test_a_name_with_a_control_character_is_bad_input(name, tmp_path, capsys):
+    # Printed raw, a newline split the one-line summary and an escape recoloured the
+    # terminal (a helper's audit, session 29).
+    from rrtdrive.cli import main
+
+    with pytest.raises(InputError, match=r"^name: .* control character"):
+        map_from_json(_file_map(name=name))
+    f = tmp_path / "m.json"
+    f.write_text(json.dumps(_file_map(name=name)))
+    assert main(["plan", str(f)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "error: name:" in err and "\x1b" not in err
+
+
+@pytest.mark.parametrize("half", [1e100, 1e200, 1e300])
+def test_huge_bounds_are_refused_for_their_size_not_the_start(half):
+    # shapely's containment test of a 1 m body in bounds of +-1e200 overflowed, and the
+    # start was said to leave the bounds.
+    data = _file_map(bounds=[-half, -half, half, half], obstacles=[])
+    m = map_from_json(data)  # the start and goal are well inside
+    with pytest.raises(InputError, match=r"^bounds: .* grid cells"):
+        from rrtdrive.planning import PlanningProblem
+
+        PlanningProblem.from_map(m)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.floats(-3.0, 43.0), st.floats(-3.0, 43.0), st.floats(-math.pi, math.pi),
+)
+def test_the_body_inside_the_bounds_is_shapelys_containment(x, y, yaw):
+    # The corner comparison against shapely's contains_properly at ordinary sizes.
+    from rrtdrive.map_checks import check_endpoint
+    from rrtdrive.vehicle import footprint_polygon
+
+    m = map_from_json(_file_map(obstacles=[]))
+    v = VehicleParams()
+    body = footprint_polygon((x, y, yaw), v)
+    want = shapely.box(*m.bounds).contains_properly(body)
+    try:
+        check_endpoint(m, Pose(x, y, yaw), "start", v)
+        got = True
+    except InputError as exc:
+        assert str(exc).startswith("start: ")
+        got = False
+    assert got == want

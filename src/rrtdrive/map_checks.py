@@ -12,7 +12,7 @@ import math
 import warnings
 from typing import TYPE_CHECKING
 
-import shapely
+import numpy as np
 
 from rrtdrive.types import InputError, InputWarning, Pose, VehicleParams
 from rrtdrive.vehicle import footprint_polygon
@@ -74,7 +74,11 @@ def check_endpoint(m: Map, pose: Pose, label: str, vehicle: VehicleParams) -> No
             f"{label}: ({pose.x:g}, {pose.y:g}) lies outside the bounds {list(m.bounds)}"
         )
     body = footprint_polygon(pose.as_tuple(), vehicle)
-    if not shapely.box(xmin, ymin, xmax, ymax).contains_properly(body):
+    # The corners strictly inside, compared as numbers: exact at any size (shapely's
+    # containment test of a 1 m body in bounds of +-1e200 overflowed and said "leaves").
+    corners = np.asarray(body.exterior.coords)
+    inside = (xmin < corners[:, 0]) & (corners[:, 0] < xmax)
+    if not np.all(inside & (ymin < corners[:, 1]) & (corners[:, 1] < ymax)):
         # Touching counts, as for an obstacle: the simulator's walls stand on the bounds.
         raise InputError(
             f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) leaves or touches the bounds"

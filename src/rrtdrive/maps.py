@@ -16,6 +16,7 @@ import dataclasses
 import json
 import math
 import os
+import unicodedata
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path as FsPath
@@ -146,6 +147,14 @@ class Map:
                 f"name: {self.name!r} holds half of a UTF-16 surrogate pair, which is no "
                 "character; write the character itself"
             ) from None
+        control = next((c for c in self.name if unicodedata.category(c) == "Cc"), None)
+        if control is not None:
+            # Printed raw, a newline split the one-line summary and an escape recoloured
+            # the terminal.
+            raise InputError(
+                f"name: {self.name!r} holds the control character {control!r}; names are "
+                "printed on one line: use printable characters"
+            )
         b = self.bounds
         if not isinstance(b, (list, tuple)) or len(b) != 4:
             raise InputError(
