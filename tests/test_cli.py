@@ -389,3 +389,20 @@ def test_a_good_start_replaces_a_bad_one_in_the_map_file(capsys, tmp_path):
     f.write_text(json.dumps(data))
     code, _, err = run(capsys, "plan", str(f), "--start", "5,44,0")
     assert code == 2 and "error: start" in err
+
+
+@pytest.mark.parametrize(
+    ("argv", "flag"),
+    [
+        (["--step", "0"], "--step"),
+        (["--planner", "rrtstar"], "--planner"),
+        (["--disable", "foo"], "--disable"),
+        (["--goal", "200,44,0"], "--goal"),
+        (["--start", "50,44,0"], "--start"),  # on obstacle 2
+    ],
+)
+def test_plan_errors_name_the_flag_typed(capsys, argv, flag):
+    # They named the API's fields (planner.step, planner, goal: ...) before session 29.
+    code, _, err = run(capsys, "plan", "overtake", *argv)
+    _one_line_error(code, err, flag)
+    assert f"error: {flag}: " in err

@@ -29,6 +29,7 @@ import numpy as np
 from rrtdrive.cli_args import (
     OutputError,
     distinct_outputs,
+    flags_for,
     join_negative_values,
     names_stdout,
     nonneg_int,
@@ -51,6 +52,8 @@ EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
 #: Suffixes ``plan --plot`` can write (matplotlib's Agg formats we promise).
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
+#: The planner's fields as ``plan``'s flags, for its messages (``planner.step: ...``).
+PLANNER_FLAGS = {"planner": "--planner", "planner.step": "--step", "planner.disable": "--disable"}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -182,6 +185,7 @@ def _takes_option(factory: Callable[..., object], name: str) -> bool:
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:
+    from rrtdrive.map_checks import check_endpoint
     from rrtdrive.maps import BUILTIN_MAPS, resolve_map
     from rrtdrive.planning import (
         PLANNERS,
@@ -205,7 +209,12 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     goal = parse_pose(args.goal, "--goal") if args.goal is not None else None
     # The poses given replace the map's before it is checked (a file's own bad start
     # does not stop a good --start).
-    m = resolve_map(args.map, start=start, goal=goal)
+    m = resolve_map(args.map, start=start, goal=goal, check_query=False)
+    for label, pose, flag_pose in (("start", m.start, start), ("goal", m.goal, goal)):
+        # Checked apart from the file's parsing: a bad --start is the flag's fault, and a
+        # malformed start in the file is the file's even when --start replaces it.
+        with flags_for({label: f"--{label}"} if flag_pose is not None else {}):
+            check_endpoint(m, pose, label, m.vehicle, warn_degrees=False)
     options: dict[str, object] = {}
     if args.step is not None:
         options["step"] = args.step
@@ -219,7 +228,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         from rrtdrive.planning.smoothing import CurveKind
 
         options["smoothing"] = {"curve": CurveKind.BSPLINE}
-    planner = make_planner(args.planner, **options)
+    with flags_for(PLANNER_FLAGS):
+        planner = make_planner(args.planner, **options)
     if args.reverse and not reverses(args.planner):
         print(f"rrtdrive plan: {forward_only_note(args.planner)}", file=sys.stderr)
     budget = Budget(max_iterations=args.max_iterations, max_time_s=args.max_time)

@@ -48,7 +48,9 @@ def warn_if_degrees(label: str, yaw: float) -> None:
         )
 
 
-def check_endpoint(m: Map, pose: Pose, label: str, vehicle: VehicleParams) -> None:
+def check_endpoint(
+    m: Map, pose: Pose, label: str, vehicle: VehicleParams, warn_degrees: bool = True
+) -> None:
     """Raise :class:`InputError` unless the car at ``pose`` lies in bounds and clear of obstacles.
 
     Parameters
@@ -61,6 +63,8 @@ def check_endpoint(m: Map, pose: Pose, label: str, vehicle: VehicleParams) -> No
         Field name for the message (``"start"`` or ``"goal"``).
     vehicle : VehicleParams
         The car.
+    warn_degrees : bool
+        Warn about a yaw that looks like degrees (off where the map already did).
     """
     xmin, ymin, xmax, ymax = m.bounds
     if abs(pose.yaw) > MAX_YAW:
@@ -68,7 +72,8 @@ def check_endpoint(m: Map, pose: Pose, label: str, vehicle: VehicleParams) -> No
             f"{label}: yaw {pose.yaw:g} rad is beyond {MAX_YAW:g} rad either way, where an "
             "angle keeps less than the precision headings are checked to; give it in [-pi, pi]"
         )
-    warn_if_degrees(label, pose.yaw)
+    if warn_degrees:
+        warn_if_degrees(label, pose.yaw)
     if not (xmin <= pose.x <= xmax and ymin <= pose.y <= ymax):
         raise InputError(
             f"{label}: ({pose.x:g}, {pose.y:g}) lies outside the bounds {list(m.bounds)}"
