@@ -240,3 +240,14 @@ def test_a_map_file_whose_own_start_went_bad_still_verifies_the_plan(capsys, tmp
     code, out, err = run(capsys, "verify", str(plan))
     assert code == 1 and err == "", err
     assert f"obstacle {len(m.obstacles)}" in out
+
+
+def test_a_bad_map_file_is_named_apart_from_the_plan(capsys, plans, tmp_path):
+    # "goal: must be finite" alone read as the plan's own goal (a helper's audit).
+    data = builtin_map("parking_lot").to_json()
+    data["goal"] = [float("nan"), 44.0, 0.0]
+    f = tmp_path / "nan.json"
+    f.write_text(json.dumps(data))  # json writes NaN
+    code, _, err = run(capsys, "verify", str(plans["default"]), str(f))
+    assert code == 2 and err.count("\n") == 1 and "Traceback" not in err
+    assert f"error: map {f}: goal: must be finite" in err

@@ -113,7 +113,13 @@ def _map_of(
     from rrtdrive.maps import BUILTIN_MAPS, resolve_map
 
     def load(spec: str) -> Any:
-        return resolve_map(spec, start=start, goal=goal, check_query=False)
+        try:
+            return resolve_map(spec, start=start, goal=goal, check_query=False)
+        except InputError as exc:
+            # "goal: must be finite" alone read as the plan's goal (named plan.goal:).
+            if str(exc).startswith("map"):
+                raise
+            raise InputError(f"map {spec}: {exc}") from None
 
     if args.map is not None:
         return load(args.map)
