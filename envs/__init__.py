@@ -30,11 +30,13 @@ __all__ = [
     "ENV_IDS",
     "ENV_KWARGS",
     "ENTRY_POINT",
+    "MAP_ID",
+    "REGISTERED_SCENARIO",
     "REGISTERED_SCENARIO_OPTIONS",
     "RegisteredDict",
     "RegisteredStr",
+    "apply_registration",
     "is_registered_default",
-    "merge_scenario_options",
     "plain_value",
     "register_envs",
 ]
@@ -115,35 +117,44 @@ def plain_value(value: object) -> object:
     return value
 
 
-#: The keyword under which an id registers its ``scenario_options`` (see
-#: :func:`merge_scenario_options`); not an option of the environment.
+#: The keywords under which an id registers its ``scenario_options`` and (except
+#: ``Map-v0``, which drives whatever map ``scenario`` names) its scenario once more; see
+#: :func:`apply_registration`. Neither is an option of the environment.
 REGISTERED_SCENARIO_OPTIONS = "registered_scenario_options"
+REGISTERED_SCENARIO = "registered_scenario"
+#: The id whose ``scenario`` a caller sets (a map name or file).
+MAP_ID = "rrtdrive/Map-v0"
 
 
-def merge_scenario_options(options: dict[str, object], merge: bool) -> dict[str, object]:
-    """``options`` with the id's registered ``scenario_options`` taken out.
+def apply_registration(
+    scenario: object, options: dict[str, object], merge: bool
+) -> dict[str, object]:
+    """``options`` with the id's registration keywords taken out and applied.
 
-    With ``merge`` (no ``config=``) they go under the caller's ``scenario_options``,
-    key by key, the caller's winning; with a ``config=`` they give way to it, as every
-    registered default does. A caller's ``scenario_options`` that is not a mapping is
-    left for the configuration to refuse by name.
+    The id's registered ``scenario_options`` go under the caller's, key by key, the
+    caller's winning, when ``merge`` (no ``config=``); with a ``config=`` they give way
+    to it, as every registered default does. A caller's ``scenario_options`` that is
+    not a mapping is left for the configuration to refuse by name. A ``scenario`` the
+    caller passes must be the id's own (``gym.make`` replaces it silently otherwise).
 
     Raises
     ------
     InputError
-        When the caller, not the registration, passes ``registered_scenario_options``.
+        When the caller passes a registration keyword, or a scenario of another id.
     """
     out = dict(options)
     registered = out.pop(REGISTERED_SCENARIO_OPTIONS, None)
-    if registered is None:
-        return out
-    if not is_registered_default(registered):
+    own = out.pop(REGISTERED_SCENARIO, None)
+    for key, value in ((REGISTERED_SCENARIO_OPTIONS, registered), (REGISTERED_SCENARIO, own)):
+        if value is not None and not is_registered_default(value):
+            raise InputError(f"{key}: set by an id's registration, not an option")
+    if own is not None and scenario is not None and plain_value(scenario) != plain_value(own):
         raise InputError(
-            f"{REGISTERED_SCENARIO_OPTIONS}: set by an id's registration; pass "
-            "scenario_options instead"
+            f"scenario: this id drives {plain_value(own)!r}, not {plain_value(scenario)!r}; "
+            f"make that scenario's own id, or {MAP_ID} for a map"
         )
     given = out.get("scenario_options")
-    if merge and (given is None or isinstance(given, Mapping)):
+    if registered is not None and merge and (given is None or isinstance(given, Mapping)):
         out["scenario_options"] = {**plain_value(registered), **plain_value(given or {})}  # type: ignore[dict-item]
     return out
 
@@ -164,6 +175,8 @@ def register_envs() -> None:
                 _registered(name, value)
                 for name, value in {"scenario": scenario, **extra}.items()
             }  # fmt: skip
+            if env_id != MAP_ID:
+                kwargs[REGISTERED_SCENARIO] = RegisteredStr(scenario)
             register(id=env_id, entry_point=ENTRY_POINT, kwargs=kwargs)
 
 

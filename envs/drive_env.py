@@ -36,7 +36,7 @@ import numpy as np
 from gymnasium import spaces
 
 from rrtdrive.controllers import PathProjector
-from rrtdrive.envs import is_registered_default, merge_scenario_options, plain_value
+from rrtdrive.envs import apply_registration, is_registered_default, plain_value
 from rrtdrive.envs.action import ResidualMixer, action_command
 from rrtdrive.envs.config import DriveEnvConfig, _require_mapping
 from rrtdrive.envs.observation import OBS_CLIP, ObservationLayout, observation_names
@@ -173,7 +173,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         **options: Any,
     ) -> None:
         super().__init__()
-        options = merge_scenario_options(options, merge=config is None)
+        options = apply_registration(scenario, options, merge=config is None)
         if config is None:
             config = DriveEnvConfig.from_options(
                 "parking" if scenario is None else plain_value(scenario),  # type: ignore[arg-type]

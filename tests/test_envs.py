@@ -19,7 +19,13 @@ from gymnasium.utils.env_checker import check_env
 
 import rrtdrive
 from rrtdrive.controllers import VehicleState, make_controller
-from rrtdrive.envs import ENV_IDS, ENV_KWARGS, REGISTERED_SCENARIO_OPTIONS
+from rrtdrive.envs import (
+    ENV_IDS,
+    ENV_KWARGS,
+    MAP_ID,
+    REGISTERED_SCENARIO,
+    REGISTERED_SCENARIO_OPTIONS,
+)
 from rrtdrive.envs.config import DriveEnvConfig
 from rrtdrive.envs.drive_env import DriveEnv
 from rrtdrive.envs.observation import observation_names
@@ -73,6 +79,8 @@ def test_every_scenario_has_an_env_id():
             REGISTERED_SCENARIO_OPTIONS if k == "scenario_options" else k: v
             for k, v in ENV_KWARGS.get(env_id, {}).items()
         }
+        if env_id != MAP_ID:  # its scenario once more, to refuse a caller's other one
+            extra[REGISTERED_SCENARIO] = scenario
         assert spec.kwargs == {"scenario": scenario, **extra}
 
 

@@ -98,6 +98,17 @@ def test_registered_scenario_options_merge_with_the_callers():
         _make("rrtdrive/ParkingReverseIn-v0", scenario_options=5)
 
 
+def test_a_scenario_of_another_id_is_refused_but_map_v0_takes_any_map():
+    # gym.make replaced the id's scenario silently: Parking-v0 drove the overtake road
+    # (a helper's audit, session 29), while a config of another scenario was refused.
+    with pytest.raises(InputError, match=r"^scenario: this id drives 'parking', not 'overtake'"):
+        _make("rrtdrive/Parking-v0", scenario="overtake")
+    assert _make("rrtdrive/Parking-v0", scenario="parking").scenario == "parking"
+    assert _make("rrtdrive/Map-v0", scenario="kerbside").map.name == "kerbside"
+    with pytest.raises(InputError, match=r"^registered_scenario: set by an id's"):
+        _make("rrtdrive/Overtake-v0", registered_scenario="overtake")
+
+
 def test_a_jittered_reverse_in_episode_still_backs_into_the_bay():
     env = gym.make("rrtdrive/ParkingReverseIn-v0", scenario_options={"jitter": (0.5, 0.5, 0.05)})
     try:
