@@ -375,7 +375,8 @@ def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
         "plan",
         help=_command("plan").help,
         description="Plan a path from the map's start to its goal (or --start/--goal). "
-        "Exit 0 when solved, 1 when no path was found, 2 on bad input.",
+        "Exit 0 when solved, 1 when no path was found (or an output could not be "
+        "written), 2 on bad input; 130 on Ctrl-C, 143 on SIGTERM.",
     )
     plan.add_argument("map", help="a built-in map name (see `rrtdrive maps`) or a map .json file")
     plan.add_argument(
