@@ -406,3 +406,10 @@ def test_plan_errors_name_the_flag_typed(capsys, argv, flag):
     code, _, err = run(capsys, "plan", "overtake", *argv)
     _one_line_error(code, err, flag)
     assert f"error: {flag}: " in err
+
+
+@pytest.mark.parametrize("value", ["9_2,44,0", "92,4_4,0", "92,44,1_0"])
+def test_a_pose_with_an_underscore_is_bad_input(capsys, value):
+    # Python's float reads "9_2" as 92: a typo went through as a number (a helper's audit).
+    code, _, err = run(capsys, "plan", "overtake", "--goal", value)
+    _one_line_error(code, err, "--goal: expected three numbers x,y,yaw")

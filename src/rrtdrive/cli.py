@@ -89,7 +89,8 @@ def parse_pose(text: str, name: str) -> Pose:
     if not text.strip():  # "--start=" (e.g. an unset shell variable): never "not given"
         raise InputError(f"{name}: expected X,Y,YAW, got an empty value")
     parts = text.split(",")
-    if len(parts) != 3:
+    # "_" too: Python's float reads "9_2" as 92, a typo no user means as a number.
+    if len(parts) != 3 or "_" in text:
         raise InputError(f"{name}: expected three numbers x,y,yaw, got {text!r}")
     try:
         values = [float(p) for p in parts]
