@@ -413,3 +413,9 @@ def test_a_pose_with_an_underscore_is_bad_input(capsys, value):
     # Python's float reads "9_2" as 92: a typo went through as a number (a helper's audit).
     code, _, err = run(capsys, "plan", "overtake", "--goal", value)
     _one_line_error(code, err, "--goal: expected three numbers x,y,yaw")
+
+
+def test_simulate_names_a_bad_goal_on_a_map_by_its_flag(capsys):
+    # The same check as plan's (cli.map_with_poses): simulate said "goal:" here.
+    code, _, err = run(capsys, "simulate", "kerbside", "--goal", "200,44,0")
+    _one_line_error(code, err, "error: --goal: (200, 44) lies outside the bounds")

@@ -99,6 +99,23 @@ def parse_pose(text: str, name: str) -> Pose:
     return Pose.from_seq(values, name)
 
 
+def map_with_poses(spec: str, start: Pose | None, goal: Pose | None) -> Map:
+    """The map ``spec`` with ``--start``/``--goal`` (when given) replacing its poses.
+
+    The file is read first, so a malformed start in it is named ``start:`` even when
+    ``--start`` replaces it; the poses used are then checked, one given on the command
+    line named by its flag (``--goal: (200, 44) lies outside the bounds ...``).
+    """
+    from rrtdrive.map_checks import check_endpoint
+    from rrtdrive.maps import resolve_map
+
+    m = resolve_map(spec, start=start, goal=goal, check_query=False)
+    for label, pose, given in (("start", m.start, start), ("goal", m.goal, goal)):
+        with flags_for({label: f"--{label}"} if given is not None else {}):
+            check_endpoint(m, pose, label, m.vehicle, warn_degrees=False)
+    return m
+
+
 def plan_to_json(
     result: PlanResult,
     seed: int,
@@ -186,8 +203,7 @@ def _takes_option(factory: Callable[..., object], name: str) -> bool:
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:
-    from rrtdrive.map_checks import check_endpoint
-    from rrtdrive.maps import BUILTIN_MAPS, resolve_map
+    from rrtdrive.maps import BUILTIN_MAPS
     from rrtdrive.planning import (
         PLANNERS,
         PlanningProblem,
@@ -210,12 +226,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     goal = parse_pose(args.goal, "--goal") if args.goal is not None else None
     # The poses given replace the map's before it is checked (a file's own bad start
     # does not stop a good --start).
-    m = resolve_map(args.map, start=start, goal=goal, check_query=False)
-    for label, pose, flag_pose in (("start", m.start, start), ("goal", m.goal, goal)):
-        # Checked apart from the file's parsing: a bad --start is the flag's fault, and a
-        # malformed start in the file is the file's even when --start replaces it.
-        with flags_for({label: f"--{label}"} if flag_pose is not None else {}):
-            check_endpoint(m, pose, label, m.vehicle, warn_degrees=False)
+    m = map_with_poses(args.map, start, goal)
     options: dict[str, object] = {}
     if args.step is not None:
         options["step"] = args.step

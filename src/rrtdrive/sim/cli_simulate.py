@@ -482,13 +482,13 @@ def _make_task(
     from rrtdrive.sim.tasks import CustomTask
 
     if target == "map":
-        from rrtdrive.maps import resolve_map
+        from rrtdrive.cli import map_with_poses
 
         start, goal = _parse_pose(args.start, "--start"), _parse_pose(args.goal, "--goal")
         # The poses given replace the file's before it is checked: a file whose own start
-        # is bad still serves with a good --start.
+        # is bad still serves with a good --start (a bad --start is named by its flag).
         return CustomTask.from_map(
-            resolve_map(args.scenario, start=start, goal=goal), args.seed, reverse=args.reverse,
+            map_with_poses(args.scenario, start, goal), args.seed, reverse=args.reverse,
             resolution=args.resolution,
         )
     # make_scenario names its keywords (lead_speed); on the command line they are flags.
