@@ -369,6 +369,18 @@ def provenance(ref: str) -> dict:
     return {"ref": ref, "ref_sha": git("rev-parse", ref), "new": new}
 
 
+def provenance_line(meta: dict) -> str:
+    """``New: ...; old: `src/` of REF (sha). MACHINE, load before / after A / B``."""
+    old = (
+        f"; old: `src/` of {meta['ref']} ({meta['ref_sha'][:10]})" if meta["ref"] is not None
+        else ""
+    )  # fmt: skip
+    return (
+        f"New: {meta['new']}{old}. {meta['machine']}, load before / after "
+        f"{meta['load_before']} / {meta['load_after']}"
+    )
+
+
 def interleaved(
     sha: str, ids: list[str], count: int, repeat: int, warm: str, script: FsPath
 ) -> Iterator[tuple[str, dict, dict, bool, str]]:

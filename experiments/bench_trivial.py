@@ -84,10 +84,7 @@ def _markdown(meta: dict, rows: list[dict], summary: dict) -> str:
         "# Hybrid A* with reverse on trivial queries: per-query CPU time",
         "",
         f"Command: `{meta['command']}`  ",
-        f"New: {meta['new']}"
-        + (f"; old: `src/` of {meta['ref']} ({meta['ref_sha'][:10]})" if has_old else "")
-        + f". {meta['machine']}, load before / after {meta['load_before']} / {meta['load_after']}; "
-        f"wall time {meta['wall_s']:.0f} s.",
+        bench_hybrid.provenance_line(meta) + f"; wall time {meta['wall_s']:.0f} s.",
         "",
         f"`parking_lot`, random start poses (draw_goals(..., {COUNT}, 1, 'start')) at the given "
         f"indices, `hybrid-a-star` with reverse; per query the least CPU time of the `solve` "

@@ -90,10 +90,7 @@ def _markdown(meta: dict, rows: list[dict], summary: dict) -> str:
         "# The independent check's cost: `verify_path` per planned path",
         "",
         f"Command: `{meta['command']}`  ",
-        f"New: {meta['new']}"
-        + (f"; old: `src/` of {meta['ref']} ({meta['ref_sha'][:10]})" if old else "")  # fmt: skip
-        + f". {meta['machine']}, load before / after {meta['load_before']} / "
-        f"{meta['load_after']}.",
+        bench_hybrid.provenance_line(meta) + ".",
         "",
         f"Per path the least CPU time of its check over {meta['repeat']} calls in each of "
         f"{meta['rounds']} rounds (fresh worker processes, the trees taking turns).",
