@@ -13,6 +13,7 @@ import warnings
 from typing import TYPE_CHECKING
 
 import numpy as np
+import shapely
 
 from rrtdrive.types import InputError, InputWarning, Pose, VehicleParams
 from rrtdrive.vehicle import footprint_polygon
@@ -88,12 +89,14 @@ def check_endpoint(
         raise InputError(
             f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) leaves or touches the bounds"
         )
-    for i, obstacle in enumerate(m.obstacles):
-        if obstacle.polygon().intersects(body):
-            raise InputError(
-                f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) overlaps obstacle {i} "
-                f"at {list(obstacle.center)}"
-            )
+    polygons = np.array([o.polygon() for o in m.obstacles], dtype=object)
+    hits = np.flatnonzero(shapely.intersects(polygons, body))
+    if len(hits):
+        i = int(hits[0])
+        raise InputError(
+            f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) overlaps obstacle {i} "
+            f"at {list(m.obstacles[i].center)}"
+        )
 
 
 def warn_outside(m: Map) -> None:

@@ -13,6 +13,7 @@ Loading validates every field and names the offending one in an
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 import os
@@ -88,8 +89,8 @@ class Obstacle:
         )
 
     def polygon(self) -> shapely.Polygon:
-        """The rectangle as a shapely polygon."""
-        return shapely.Polygon(self.corners())
+        """The rectangle as a shapely polygon (built once per distinct rectangle)."""
+        return _obstacle_polygon(self)
 
     def grown(self, amount: float) -> Obstacle:
         """This rectangle with ``amount`` added to its length and to its width."""
@@ -98,6 +99,13 @@ class Obstacle:
     def to_json(self) -> dict[str, object]:
         """JSON-ready dict."""
         return {"center": list(self.center), "size": list(self.size), "yaw": self.yaw}
+
+
+@functools.lru_cache(maxsize=1 << 16)
+def _obstacle_polygon(obstacle: Obstacle) -> shapely.Polygon:
+    # Every copy of a map (a new goal, ``dataclasses.replace``) checks its start and
+    # goal against each obstacle: building the polygons was most of a copy's cost.
+    return shapely.Polygon(obstacle.corners())
 
 
 @dataclass(frozen=True)
