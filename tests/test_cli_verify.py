@@ -251,3 +251,37 @@ def test_a_bad_map_file_is_named_apart_from_the_plan(capsys, plans, tmp_path):
     code, _, err = run(capsys, "verify", str(plans["default"]), str(f))
     assert code == 2 and err.count("\n") == 1 and "Traceback" not in err
     assert f"error: map {f}: goal: must be finite" in err
+
+
+def test_a_yaw_in_degrees_is_named_by_where_it_came_from(capsys, plans, tmp_path):
+    code, _, err = run(capsys, "verify", str(plans["default"]), "--goal", "50,40,90")
+    assert code == 1
+    assert err.startswith("rrtdrive verify: warning: --goal: yaw 90 is more than a full turn")
+    data = json.loads(plans["default"].read_text())
+    data["goal"][2] = 400.0
+    f = tmp_path / "deg.json"
+    f.write_text(json.dumps(data))
+    code, _, err = run(capsys, "verify", str(f))
+    assert code == 1 and "warning: plan.goal: yaw 400 is more than a full turn" in err
+
+
+def test_checking_a_plan_against_another_map_says_so(capsys, plans):
+    code, out, err = run(capsys, "verify", str(plans["default"]), "overtake")
+    assert code == 1 and out.startswith("overtake: ")
+    assert err.splitlines() == [
+        "rrtdrive verify: warning: MAP: the plan was made on map 'parking_lot'; it is "
+        "checked against 'overtake' as asked"
+    ]
+    code, _, err = run(capsys, "verify", str(plans["default"]), "parking_lot")
+    assert code == 0 and err == ""
+
+
+@pytest.mark.parametrize("bad", [5, [], True])
+def test_a_map_file_that_is_not_a_path_is_refused(capsys, plans, tmp_path, bad):
+    data = json.loads(plans["default"].read_text())
+    data["map_file"] = bad
+    f = tmp_path / "bad.json"
+    f.write_text(json.dumps(data))
+    code, _, err = run(capsys, "verify", str(f))
+    assert code == 2 and err.count("\n") == 1
+    assert "error: plan.map_file: expected the map file's path or null, got" in err

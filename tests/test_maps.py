@@ -223,6 +223,13 @@ def test_the_cli_prints_each_warning_as_one_line(tmp_path, capsys):
         "rrtdrive plan: warning: goal: yaw 90 is more than a full turn; yaws are in radians, "
         "so it is taken as 116.6 deg; for 90 deg write 1.5708"
     ]
+    # One given on the command line is named by its flag, as its errors are.
+    code = main(["plan", "parking_lot", "--start", "10,9,360", "--goal", "50,40,90",
+                 "--max-iterations", "1"])
+    err = capsys.readouterr().err.splitlines()
+    assert err[0].startswith("rrtdrive plan: warning: --start: yaw 360 is more than a full turn")
+    assert err[1].startswith("rrtdrive plan: warning: --goal: yaw 90 is more than a full turn")
+    assert code == 2 and err[2].startswith("rrtdrive plan: error: --goal: the car's body at")
 
 
 def test_a_body_touching_the_bounds_is_refused_as_one_touching_an_obstacle():

@@ -30,6 +30,7 @@ from rrtdrive.cli_args import (
     OutputError,
     distinct_outputs,
     flags_for,
+    flags_for_warnings,
     join_negative_values,
     names_stdout,
     nonneg_int,
@@ -109,9 +110,11 @@ def map_with_poses(spec: str, start: Pose | None, goal: Pose | None) -> Map:
     from rrtdrive.map_checks import check_endpoint
     from rrtdrive.maps import resolve_map
 
-    m = resolve_map(spec, start=start, goal=goal, check_query=False)
-    for label, pose, given in (("start", m.start, start), ("goal", m.goal, goal)):
-        with flags_for({label: f"--{label}"} if given is not None else {}):
+    flags = {k: f"--{k}" for k, v in (("start", start), ("goal", goal)) if v is not None}
+    with flags_for_warnings(flags):  # a given yaw that looks like degrees: named by its flag
+        m = resolve_map(spec, start=start, goal=goal, check_query=False)
+    with flags_for(flags):
+        for label, pose in (("start", m.start), ("goal", m.goal)):
             check_endpoint(m, pose, label, m.vehicle, warn_degrees=False)
     return m
 

@@ -9,17 +9,19 @@ import os
 import re
 import stat
 import sys
+import warnings
 from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
 from rrtdrive.atomic import destination, is_stream, temp_beside
-from rrtdrive.types import InputError
+from rrtdrive.types import InputError, InputWarning
 
 __all__ = [
     "OutputError",
     "distinct_outputs",
     "flags_for",
+    "flags_for_warnings",
     "int_at_least",
     "join_negative_values",
     "names_stdout",
@@ -185,6 +187,24 @@ def flags_for(fields: Mapping[str, str]) -> Iterator[None]:
         if sep and field in fields:
             raise InputError(f"{fields[field]}: {rest}") from None
         raise
+
+
+@contextmanager
+def flags_for_warnings(fields: Mapping[str, str]) -> Iterator[None]:
+    """Re-issue each :class:`InputWarning` naming one of ``fields`` with its flag instead.
+
+    The warnings' twin of :func:`flags_for`: ``goal: yaw 90 is more than a full turn``
+    about a ``--goal`` value reads ``--goal: yaw 90 ...``. Other warnings pass unchanged.
+    """
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        yield
+    for w in caught:
+        text = str(w.message)
+        field, sep, rest = text.partition(": ")
+        if issubclass(w.category, InputWarning) and sep and field in fields:
+            text = f"{fields[field]}: {rest}"
+        warnings.warn_explicit(text, w.category, w.filename, w.lineno)
 
 
 def validate_output(

@@ -18,13 +18,19 @@ import dataclasses
 import json
 import math
 import sys
+import warnings
 from typing import Any, BinaryIO, cast
 
 import numpy as np
 
-from rrtdrive.cli_args import distinct_outputs, positive_float, validate_output
+from rrtdrive.cli_args import (
+    distinct_outputs,
+    flags_for_warnings,
+    positive_float,
+    validate_output,
+)
 from rrtdrive.json_safe import json_safe
-from rrtdrive.types import InputError, Pose
+from rrtdrive.types import InputError, InputWarning, Pose, brief_repr
 
 __all__ = ["add_parser", "run", "HELP"]
 
@@ -112,20 +118,37 @@ def _map_of(
 
     from rrtdrive.maps import BUILTIN_MAPS, resolve_map
 
+    # A yaw that looks like degrees is named by where it came from.
+    sources = {
+        field: f"--{field}" if getattr(args, field) is not None else f"plan.{field}"
+        for field, pose in (("start", start), ("goal", goal)) if pose is not None
+    }
+
     def load(spec: str) -> Any:
         try:
-            return resolve_map(spec, start=start, goal=goal, check_query=False)
+            with flags_for_warnings(sources):
+                return resolve_map(spec, start=start, goal=goal, check_query=False)
         except InputError as exc:
             # "goal: must be finite" alone read as the plan's goal (named plan.goal:).
             if str(exc).startswith("map"):
                 raise
             raise InputError(f"map {spec}: {exc}") from None
 
-    if args.map is not None:
-        return load(args.map)
     spec = data.get("map")
     map_file = data.get("map_file")
-    if isinstance(map_file, str) and map_file:
+    if map_file is not None and not isinstance(map_file, str):
+        raise InputError(
+            f"plan.map_file: expected the map file's path or null, got {brief_repr(map_file)}"
+        )
+    if args.map is not None:
+        m = load(args.map)
+        if isinstance(spec, str) and spec and m.name != spec:
+            warnings.warn(
+                f"MAP: the plan was made on map {spec!r}; it is checked against {m.name!r} "
+                "as asked", InputWarning, stacklevel=2,
+            )
+        return m
+    if map_file:
         if not os.path.isfile(map_file):
             raise InputError(
                 f"map: the plan was made on the map file {map_file}, which is not there any "
