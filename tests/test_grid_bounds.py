@@ -11,7 +11,6 @@ coarsest grid the checker chooses by itself, one clear error naming ``bounds``
 from __future__ import annotations
 
 import json
-import logging
 import math
 
 import numpy as np
@@ -23,7 +22,7 @@ from rrtdrive.collision import CheckerConfig, CollisionChecker
 from rrtdrive.collision.grid import grid_resolution, grid_shape
 from rrtdrive.maps import Map, Obstacle, builtin_map
 from rrtdrive.planning import PlanningProblem, make_planner
-from rrtdrive.types import Budget, InputError, PlanStatus, Pose
+from rrtdrive.types import Budget, InputError, InputWarning, PlanStatus, Pose
 from rrtdrive.verify import verify_path
 
 #: Small enough that the 100 x 100 m parking lot (1.04 M cells at 0.1 m) is coarsened.
@@ -77,16 +76,15 @@ def test_the_limits_are_validated(field, value):
         CheckerConfig(**{field: value})
 
 
-def test_the_coarse_checker_reports_its_resolution(coarse, caplog):
+def test_the_coarse_checker_reports_its_resolution(coarse):
     m, checker = coarse
     assert checker.requested_resolution == 0.1
     assert 0.1 < checker.resolution <= 0.5 and checker.config.resolution == checker.resolution
     nx, ny = checker.clearance_grid.shape
     assert nx * ny <= SMALL_LIMIT.max_grid_cells
     assert checker.grid_error == pytest.approx(checker.resolution * math.sqrt(2.0))
-    with caplog.at_level(logging.WARNING, logger="rrtdrive.collision.checker"):
+    with pytest.warns(InputWarning, match=f"^bounds: .* using {checker.resolution:g} m cells"):
         CollisionChecker.for_map(m, config=SMALL_LIMIT)
-    assert f"using {checker.resolution:g} m cells" in caplog.text
     problem = PlanningProblem.from_map(m, config=SMALL_LIMIT)
     res = make_planner("rrt-connect").solve(problem, np.random.default_rng(0), Budget())
     assert res.stats["grid_resolution_m"] == checker.resolution

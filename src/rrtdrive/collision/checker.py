@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import array
 import dataclasses
-import logging
 import math
 import time
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
@@ -23,12 +23,11 @@ from rrtdrive.collision.exact import RectangleTest
 from rrtdrive.collision.grid import GridCache, grid_resolution, grid_shape, rasterise
 from rrtdrive.geometry import densify
 from rrtdrive.maps import Map, Obstacle
-from rrtdrive.types import VehicleParams
+from rrtdrive.types import InputWarning, VehicleParams
 from rrtdrive.vehicle import cover_discs, footprint_corners
 
 __all__ = ["CollisionChecker"]
 
-logger = logging.getLogger(__name__)
 
 
 class CollisionChecker:
@@ -85,12 +84,16 @@ class CollisionChecker:
         # Before anything is allocated: refuse, or coarsen, a grid too big for memory.
         h = grid_resolution(self.bounds, config)
         if h != config.resolution:
-            logger.warning(
-                "bounds: a %g x %g m map at %g m would exceed checker.max_grid_cells = %d; "
-                "using %g m cells (grid error %.3f m)",
-                self.bounds[2] - self.bounds[0], self.bounds[3] - self.bounds[1],
-                config.resolution, config.max_grid_cells, h, h * math.sqrt(2.0),
-            )  # fmt: skip
+            width, height = self.bounds[2] - self.bounds[0], self.bounds[3] - self.bounds[1]
+            # An InputWarning, as for the map's other notable input: the CLI prints it
+            # as its one-line "warning:" (a log record came out without the prefix).
+            warnings.warn(
+                f"bounds: a {width:g} x {height:g} m map at {config.resolution:g} m would "
+                f"exceed checker.max_grid_cells = {config.max_grid_cells}; using {h:g} m "
+                f"cells (grid error {h * math.sqrt(2.0):.3f} m)",
+                InputWarning,
+                stacklevel=2,
+            )
             config = dataclasses.replace(config, resolution=h)
         self.config = config
         # Cells are aligned with the bounds, so every point outside lies in an occupied cell.
