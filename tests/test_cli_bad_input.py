@@ -597,3 +597,15 @@ def test_a_video_that_runs_out_of_room_says_so_in_one_line(tmp_path):
     assert len(lines) == 1 and lines[0].startswith(f"rrtdrive simulate: error: --video: cannot "
                                                    f"write {out}: "), lines  # fmt: skip
     assert not out.exists() and os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("argv, prefix", [
+    (["maps", "foo"], "rrtdrive maps: error: unrecognized arguments: foo"),
+    (["plan", "parking_lot", "--out", "x"],
+     "rrtdrive plan: error: unrecognized arguments: --out x"),
+])
+def test_an_unknown_argument_is_named_by_its_subcommand(capsys, argv, prefix):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and err == prefix + " (see --help)\n"

@@ -567,7 +567,9 @@ def _main(argv: Sequence[str] | None) -> int:
         return EXIT_BAD_INPUT
     if chosen is not None:
         argv = join_negative_values(argv, _value_options(chosen))
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:  # named by the subcommand, whose --help lists what it takes
+        (chosen or parser).error(f"unrecognized arguments: {' '.join(extra)}")
     if getattr(args, "json", None) not in (None, "-") and names_stdout(args.json):
         args.json = "-"  # --json /dev/stdout: keep the human lines off stdout as for '-'
     try:
