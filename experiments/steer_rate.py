@@ -4,8 +4,10 @@ Usage::
 
     python experiments/steer_rate.py --steer-rate 0.4 --seeds 50 --jobs 2 --out results
     python experiments/steer_rate.py --steer-rate 0.4 --scenarios overtake-traffic --seeds 50
+    python experiments/steer_rate.py --planner rrt-connect --steer-rate none --seeds 10
 
-For every scenario (``parking``, ``overtake``, ``overtake-traffic`` at ``--density``),
+With ``--planner`` (default: the default planner), for every scenario (``parking``,
+``overtake``, ``overtake-traffic`` at ``--density``),
 controller and seed 0..seeds-1: plan, drive in highway-env with the ego's steering
 limited to ``--steer-rate`` rad/s (``VehicleParams.max_steer_rate``; ``none`` for
 instant steering), evaluate. Reports per scenario x controller: success, collisions
@@ -34,7 +36,7 @@ from rrtdrive.evaluation.nuplan_comfort import COMFORT_BOUNDS
 from rrtdrive.sim.replanning import ReplanConfig
 from rrtdrive.sim.runner import EpisodeConfig, run_episode
 from rrtdrive.sim.scenes import SimConfig
-from rrtdrive.sim.tasks import make_scenario
+from rrtdrive.sim.tasks import DEFAULT_PLANNER, make_scenario
 from rrtdrive.types import Budget, VehicleParams
 
 SCENARIOS = ("parking", "overtake", "overtake-traffic")
@@ -70,11 +72,12 @@ def wall_capped(message: str) -> bool:
     return "safety cap" in message or "deadline passed" in message
 
 
-def run_one(job: tuple[str, str, int, float | None, str, int, bool]) -> dict:
-    scenario, controller, seed, rate, density, hz, no_wall = job
+def run_one(job: tuple[str, str, int, float | None, str, int, bool, str]) -> dict:
+    scenario, controller, seed, rate, density, hz, no_wall, planner = job
     options = {"density": density} if scenario == "overtake-traffic" else {}
     task = make_scenario(scenario, seed, vehicle=VehicleParams(max_steer_rate=rate), **options)
-    ep = run_episode(task, controller=controller, seed=seed, config=episode_config(hz, no_wall))
+    ep = run_episode(task, planner, controller=controller, seed=seed,
+                     config=episode_config(hz, no_wall))
     out = evaluate(ep).to_json()
     out["scenario"] = scenario
     plan = ep.plan
@@ -213,6 +216,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--controllers", default=",".join(CONTROLLERS),
                     help="comma-separated controllers (default: %(default)s)")
     ap.add_argument("--density", default="default", help="overtake-traffic's traffic density")
+    ap.add_argument("--planner", default=DEFAULT_PLANNER,
+                    help="the reference path's planner (default: %(default)s; rrt-connect: the\n"
+                    "baseline's raw paths, which jump in curvature)")
     ap.add_argument("--frequency", type=int, default=20,
                     help="control and simulation frequency [Hz] (default: %(default)s)")
     ap.add_argument("--jobs", type=int, default=2,
@@ -231,7 +237,7 @@ def main(argv: list[str] | None = None) -> int:
     scenarios = args.scenarios.split(",")
     controllers = args.controllers.split(",")
     jobs = [
-        (s, c, seed, rate, args.density, args.frequency, args.no_wall_limit)
+        (s, c, seed, rate, args.density, args.frequency, args.no_wall_limit, args.planner)
         for s in scenarios for c in controllers for seed in range(args.seeds)
     ]
     t0 = time.perf_counter()
@@ -249,7 +255,8 @@ def main(argv: list[str] | None = None) -> int:
     command = " ".join(["python", *sys.argv])
     settings = {
         "command": command, "steer_rate": rate, "seeds": args.seeds, "scenarios": scenarios,
-        "controllers": controllers, "density": args.density, "frequency": args.frequency,
+        "controllers": controllers, "planner": args.planner, "density": args.density,
+        "frequency": args.frequency,
         "no_wall_limit": args.no_wall_limit,
         "python": platform.python_version(), "wall_time_s": round(time.perf_counter() - t0, 1),
     }
@@ -258,7 +265,8 @@ def main(argv: list[str] | None = None) -> int:
         "## Closed loop with a rate-limited steering actuator\n\n"
         f"Command: `{command}`; ego steering "
         + ("instant" if rate is None else f"limited to {rate} rad/s")
-        + f", {args.seeds} seeds, control and simulation at {args.frequency} Hz"
+        + f", planner {args.planner}, {args.seeds} seeds, control and simulation at "
+        f"{args.frequency} Hz"
         + (", no wall-clock planning limits" if args.no_wall_limit else "")
         + ".\n\n"
         + table(summaries)
