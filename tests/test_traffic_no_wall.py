@@ -48,7 +48,7 @@ def test_no_wall_limit_settings_have_no_wall_cap() -> None:
 
 def test_no_wall_limit_planning_ignores_a_slow_clock(slow_clock: None) -> None:
     sr = _steer_rate()
-    out = sr.run_one(("overtake", "lqr", 0, 0.4, "default", 20, True))
+    out = sr.run_one(("overtake", "lqr", 0, 0.4, "default", 20, True, "improved-rrt-connect"))
     assert out["success"] and not out["plan_wall_capped"]
     runs = _replan_cycles(wall_limit=False)
     assert runs, "the planner never ran: the test does not reach a plan"
