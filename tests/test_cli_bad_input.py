@@ -609,3 +609,11 @@ def test_an_unknown_argument_is_named_by_its_subcommand(capsys, argv, prefix):
         main(argv)
     err = capsys.readouterr().err
     assert exc.value.code == 2 and err == prefix + " (see --help)\n"
+
+
+def test_a_video_stride_without_a_video_is_refused(capsys):
+    # It was read and silently ignored; other options that do not apply are refused.
+    assert main(["simulate", "u-turn", "--video-stride", "5"]) == 2
+    err = capsys.readouterr().err
+    assert err == "rrtdrive simulate: error: --video-stride: only with --video (it sets the " \
+        "video's frames)\n"

@@ -45,7 +45,10 @@ def test_simulate_a_map_with_start_and_goal_flags(capsys, tmp_path):
     code, out, err = run(capsys, "simulate", str(path), "--start", "4,18,0", "--goal", "30,5,0",
                          "--deterministic", "--json", "-")
     assert code == 0, err
-    assert json.loads(out)["success"]
+    assert json.loads(out)["success"]  # stdout: the JSON alone
+    # The summary is not dropped: it goes to stderr, as plan's does.
+    assert f"{path} seed 0 improved-rrt-connect/pure-pursuit: success;" in err
+    assert "cte rms" in err
 
 
 @pytest.mark.parametrize(

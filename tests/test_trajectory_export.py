@@ -46,6 +46,15 @@ def test_csv_has_the_header_and_one_row_per_state(episode):
     assert np.allclose(np.array(rows[1:], dtype=float), episode.trajectory(), atol=1e-6)
 
 
+def test_a_negative_zero_is_written_0():
+    # A steering of -0.0 (a u-turn's straight stretches) came out as "-0".
+    class Rows:
+        def trajectory(self):
+            return np.array([[0.0, 1.5, -0.0, -0.0, 0.0, -0.0, -1e-12, -1.0]])
+
+    assert trajectory_csv(Rows()).splitlines()[1] == "0,1.5,0,0,0,0,-1e-12,-1"
+
+
 def test_cli_writes_the_trajectory_and_rejects_a_bad_suffix(tmp_path, capsys):
     out = tmp_path / "run.csv"
     assert main(["simulate", "overtake", "--seed", "2", "--trajectory", str(out)]) == 0

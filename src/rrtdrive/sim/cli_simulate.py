@@ -84,13 +84,14 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--controller", default="pure-pursuit", metavar="NAME",
         help=f"one of {', '.join(CONTROLLER_NAMES)} (default: pure-pursuit)",
     )
-    p.add_argument("--seed", type=nonneg_int, default=0, help="episode seed (default 0)")
+    p.add_argument("--seed", type=nonneg_int, default=0, metavar="N",
+                   help="episode seed (default 0)")
     p.add_argument(
-        "--frequency", type=int_at_least(15, 'Hz'), default=20,
+        "--frequency", type=int_at_least(15, 'Hz'), default=20, metavar="HZ",
         help="simulation and control frequency in Hz, >= 15 (default 20)",
     )
     p.add_argument(
-        "--max-time", type=positive_float, default=None,
+        "--max-time", type=positive_float, default=None, metavar="S",
         help="time limit of the drive in seconds (default: the scenario's)",
     )
     p.add_argument(
@@ -99,7 +100,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "coarser up to 0.5 m on a big map; a bigger one needs it given)",
     )
     p.add_argument(
-        "--plan-time", type=positive_float, default=None,
+        "--plan-time", type=positive_float, default=None, metavar="S",
         help=f"planning wall-clock safety cap in seconds (default {DEFAULT_PLAN_TIME_S:g}); "
         "a plan that reaches it fails as 'timeout' (the iterations decide otherwise)",
     )
@@ -110,7 +111,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "episode depends on its seed alone, not on the machine's speed",
     )
     p.add_argument(
-        "--oncoming", type=nonneg_int, default=0,
+        "--oncoming", type=nonneg_int, default=0, metavar="N",
         help="overtake: number of oncoming cars, 0-10 (default 0: only the stopped car)",
     )
     traffic = p.add_argument_group(
@@ -141,12 +142,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--video", metavar="FILE.mp4", help="write a headless MP4 of the episode")
     p.add_argument(
         "--trajectory", metavar="FILE.csv",
-        help="write the executed trajectory, one row per simulation step: "
+        help="write the executed trajectory, one row per logged state (the start and each "
+        "simulation step): "
         "t,x,y,yaw,speed,steer,accel,gear (rear axle, applied steering and acceleration)",
     )
     p.add_argument(
-        "--video-stride", type=positive_int, default=1,
-        help="simulation steps per video frame (default 1: every step)",
+        "--video-stride", type=positive_int, default=None, metavar="N",
+        help="simulation steps per video frame, with --video (default 1: every step)",
     )
     p.set_defaults(func=run)
     return p
@@ -287,7 +289,10 @@ def _run(args: argparse.Namespace) -> int:
     plan_time = getattr(args, "plan_time", None)
     if deterministic and plan_time is not None:
         raise InputError("--plan-time: --deterministic turns the planning time limit off")
-    stride = getattr(args, "video_stride", 1)
+    stride = getattr(args, "video_stride", None)
+    if stride is not None and args.video is None:
+        raise InputError("--video-stride: only with --video (it sets the video's frames)")
+    stride = 1 if stride is None else stride
     traffic_opts = {
         "density": getattr(args, "density", None),
         "lead_speed": getattr(args, "lead_speed", None),
@@ -407,18 +412,19 @@ def _run(args: argparse.Namespace) -> int:
 
         with writing("--json", args.json):
             write_text_atomic(args.json, text)
-    if args.json != "-":
-        verdict = "success" if report.success else f"{report.outcome} ({failure_reason(report)})"
-        cte = "n/a" if report.cte_rms_m is None else f"{report.cte_rms_m:.3f} m"
-        print(
-            f"{args.scenario} seed {args.seed} {episode.planner}/{args.controller}: {verdict}; "
-            f"cte rms {cte}; {report.steps} steps, {report.duration_s:.2f} s simulated",
-            file=sys.stdout,
-        )
-        diagnosis = None if episode.plan is None else episode.plan.diagnosis
-        if diagnosis is not None:  # the planner failed: the constraint, as `plan` prints it
-            print(f"  why: {diagnosis.message}", file=sys.stdout)
-        print("\n".join(metrics_block(data)), file=sys.stdout)
+    # With the JSON on stdout, the summary goes to stderr (as `plan` does; README).
+    out = sys.stderr if args.json == "-" else sys.stdout
+    verdict = "success" if report.success else f"{report.outcome} ({failure_reason(report)})"
+    cte = "n/a" if report.cte_rms_m is None else f"{report.cte_rms_m:.3f} m"
+    print(
+        f"{args.scenario} seed {args.seed} {episode.planner}/{args.controller}: {verdict}; "
+        f"cte rms {cte}; {report.steps} steps, {report.duration_s:.2f} s simulated",
+        file=out,
+    )
+    diagnosis = None if episode.plan is None else episode.plan.diagnosis
+    if diagnosis is not None:  # the planner failed: the constraint, as `plan` prints it
+        print(f"  why: {diagnosis.message}", file=out)
+    print("\n".join(metrics_block(data)), file=out)
     ok = report.success and (stock is None or stock.highway_env_success)
     return EXIT_OK if ok else EXIT_FAILED
 

@@ -241,6 +241,7 @@ def trajectory_csv(episode: Episode) -> str:
     rows = episode.trajectory()
     lines = [",".join(TRAJECTORY_COLUMNS)]
     lines += [
-        ",".join(f"{v:.9g}" for v in row[:-1]) + f",{int(row[-1])}" for row in rows
+        # (+ 0.0: a negative zero, a steering of -0.0, is written 0, not -0.)
+        ",".join(f"{v + 0.0:.9g}" for v in row[:-1]) + f",{int(row[-1])}" for row in rows
     ]
     return "\n".join(lines) + "\n"
