@@ -107,3 +107,20 @@ def test_parking_v0_with_reverse_drives_its_cusps(seed):
     assert report.gear_changes >= 1
     assert report.success and not report.collision_footprint, run.episode.message
     assert report.goal_position_err_m <= 0.1 and report.cte_max_m <= 0.2
+
+
+def test_a_stock_video_has_highway_envs_frames_at_real_time(tmp_path, capsys):
+    # highway-env's own 600 x 300 render, one frame every --video-stride steps plus the
+    # start: 20 steps at 20 Hz with stride 10 are frames at steps 0, 10 and 20.
+    video, out = tmp_path / "p.mp4", tmp_path / "p.json"
+    code = main(["simulate", "parking-v0", "--seed", "3", "--max-time", "1", "--video",
+                 str(video), "--video-stride", "10", "--json", str(out)])
+    assert code == 1, capsys.readouterr().err  # 1 s is too short to park: a timeout
+    data = json.loads(out.read_text())
+    assert data["steps"] == 20 and data["video_frames"] == 3
+    import imageio.v3 as iio
+
+    frames = iio.imread(video, index=None)
+    assert frames.shape == (3, 300, 600, 3) and frames.std() > 10  # drawn, not blank
+    fps = iio.immeta(video)["fps"]
+    assert len(frames) / fps == pytest.approx(data["duration_s"] + 0.05, rel=0.02)

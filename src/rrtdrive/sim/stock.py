@@ -68,6 +68,9 @@ class StockEpisode:
         The sum of highway-env's rewards over the drive.
     frames : list of numpy.ndarray
         highway-env's own rendered frames (when asked for).
+    render_time_s : float
+        Wall time spent rendering those frames: not part of the drive's
+        ``wall_time_s``, and ``rrtdrive simulate`` leaves it out of ``total_time_s``.
     """
 
     env_id: str
@@ -77,6 +80,7 @@ class StockEpisode:
     highway_env_truncated: bool
     highway_env_return: float
     frames: list[np.ndarray]
+    render_time_s: float = 0.0
 
     def to_json(self) -> dict[str, Any]:
         """The highway-env side of the drive as JSON-ready fields."""
@@ -246,12 +250,16 @@ def _drive(
     controls: list[tuple[float, float]] = []
     crashed = [bool(ego.crashed)]
     other_log = [[(v.position[0], v.position[1], v.heading, v.speed) for v in others]]
+    render_s = 0.0  # time spent drawing frames: not the closed loop's (wall_time_s)
+    t_render = time.perf_counter()
     frames = [env.render()] if render_stride > 0 else []
+    render_s += time.perf_counter() - t_render
     terminated_at: float | None = None
     truncated = reached = False
     success, total = False, 0.0
     t, steps = 0.0, 0
     max_steps = int(np.ceil(max_time / dt - 1e-9))
+    first_render_s = render_s
     wall0 = time.perf_counter()
     tracker.start()
     while steps < max_steps:
@@ -270,7 +278,9 @@ def _drive(
         crashed.append(bool(ego.crashed))
         other_log.append([(v.position[0], v.position[1], v.heading, v.speed) for v in others])
         if render_stride > 0 and steps % render_stride == 0:
+            t_render = time.perf_counter()
             frames.append(env.render())
+            render_s += time.perf_counter() - t_render
         if term and terminated_at is None:
             terminated_at = round(t, 9)
         if ego.crashed:
@@ -281,9 +291,11 @@ def _drive(
         if trunc:
             truncated = True
             break
-    wall = time.perf_counter() - wall0
+    wall = time.perf_counter() - wall0 - (render_s - first_render_s)
     if render_stride > 0 and steps % render_stride:
+        t_render = time.perf_counter()
         frames.append(env.render())
+        render_s += time.perf_counter() - t_render
     n = len(states)
     log = DriveLog(
         dt=dt, t=np.arange(n) * dt, states=np.asarray(states, dtype=float),
@@ -303,4 +315,6 @@ def _drive(
                       message, resolved)
     logger.info("stock %s seed %d: %s, highway-env success %s", env_id, task.seed, status,
                 success)
-    return StockEpisode(env_id, episode, success, terminated_at, truncated, total, frames)
+    return StockEpisode(
+        env_id, episode, success, terminated_at, truncated, total, frames, render_s
+    )
