@@ -6,10 +6,13 @@ import math
 
 import matplotlib.image as mpimg
 import numpy as np
+import pytest
 
-from rrtdrive.maps import Map
+from rrtdrive.cli import main
+from rrtdrive.maps import Map, builtin_map
+from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.plotting import plot_curvature, plot_plan, save_figure
-from rrtdrive.types import Path, PlanResult, PlanStatus, Pose
+from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Pose
 
 
 def _reverse_result() -> tuple[Map, PlanResult]:
@@ -88,3 +91,26 @@ def test_the_figure_follows_the_maps_aspect():
         pad = 0.04 * max(xmax - xmin, ymax - ymin)  # draw_map's margin, both sides
         ratio = (xmax - xmin + pad) / (ymax - ymin + pad)
         assert math.isclose(box.width / box.height, ratio, rel_tol=0.05)
+
+
+@pytest.mark.parametrize(("planner", "names"), [
+    ("rrt-connect", ["tree from the start", "tree from the goal"]), ("rrt", ["tree"]),
+])
+def test_the_legend_names_the_trees(planner, names):
+    m = builtin_map("overtake")
+    result = make_planner(planner).solve(
+        PlanningProblem.from_map(m), np.random.default_rng(0), Budget()
+    )
+    labels = [t.get_text() for t in plot_plan(m, result).axes[0].get_legend().get_texts()]
+    assert [t for t in labels if t.startswith("tree")] == names
+
+
+def test_the_plan_plot_title_names_seed_and_reverse(monkeypatch, tmp_path, capsys):
+    import rrtdrive.plotting
+
+    figures = []
+    monkeypatch.setattr(rrtdrive.plotting, "save_figure", lambda fig, _: figures.append(fig))
+    assert main(["plan", "overtake", "--seed", "5", "--reverse", "--plot",
+                 str(tmp_path / "p.png")]) == 0
+    title = figures[0].axes[0].get_title()
+    assert title.startswith("overtake: improved-rrt-connect, seed 5, reverse allowed (solved, ")

@@ -269,7 +269,12 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         from rrtdrive.plotting import plot_plan, save_figure
 
         with writing("--plot", args.plot):
-            save_figure(plot_plan(m, result), args.plot)
+            status = "solved" if result.success else result.status.value
+            title = (
+                f"{m.name}: {result.planner}, seed {args.seed}"
+                f"{', reverse allowed' if args.reverse else ''} ({status}, {result.nodes} nodes)"
+            )
+            save_figure(plot_plan(m, result, title), args.plot)
     cusps = len(result.path.cusps)
     gears = f"{cusps} gear change{'s' if cusps != 1 else ''}, " if cusps else ""
     summary = f"{m.name}: {result.planner} seed {args.seed}: " + (

@@ -75,12 +75,25 @@ def draw_pose(
     )
 
 
-def draw_trees(ax: Axes, trees: Sequence[Tree], lw: float = 0.5, alpha: float = 0.6) -> None:
-    """Draw each tree's edges (first tree blue, second red) and nodes."""
+def draw_trees(
+    ax: Axes, trees: Sequence[Tree], lw: float = 0.5, alpha: float = 0.6, label: bool = True
+) -> None:
+    """Draw each tree's edges (first tree blue, second red) and nodes.
+
+    With ``label``, the legend names the colours: "tree" for a single tree, else
+    "tree from the start" (blue) and "tree from the goal" (red), once each.
+    """
+    names = ("tree",) if len(trees) == 1 else ("tree from the start", "tree from the goal")
+    named: set[str] = set()
     for tree, colour in zip(trees, TREE_COLOURS * 4, strict=False):
         if len(tree) == 0:
             continue
-        ax.add_collection(LineCollection(tree.edges(), colors=colour, lw=lw, alpha=alpha))
+        name = names[TREE_COLOURS.index(colour) % len(names)]
+        ax.add_collection(LineCollection(
+            tree.edges(), colors=colour, lw=lw, alpha=alpha,
+            label=name if label and name not in named else None,
+        ))  # fmt: skip
+        named.add(name)
         ax.plot(tree.nodes[:, 0], tree.nodes[:, 1], ".", ms=2, color=colour, alpha=alpha)
 
 
