@@ -108,18 +108,25 @@ def test_toml_config(tmp_path):
 
 
 def test_cli_bad_input_exit_2(tmp_path, capsys):
-    for argv in (
-        ["bench", "--maps", "overtake", "--seeds", "0", "--out", str(tmp_path)],
-        ["bench", "--maps", "overtake", "--workers", "0", "--out", str(tmp_path)],
-        ["bench", "--maps", "overtake", "--planners", "nope", "--out", str(tmp_path)],
-        ["bench", "--maps", "atlantis", "--out", str(tmp_path)],
-        ["bench", "--scenarios", "moon", "--out", str(tmp_path)],
-        ["bench", "--scenarios", "overtake", "--controllers", "pid", "--out", str(tmp_path)],
-        ["bench", "--config", str(tmp_path / "none.toml")],
+    (tmp_path / "afile").write_text("")
+    # A value given by a flag is named by the flag, as plan and simulate do.
+    for argv, field in (
+        (["bench", "--maps", "overtake", "--seeds", "0", "--out", str(tmp_path)], "--seeds"),
+        (["bench", "--maps", "overtake", "--workers", "0", "--out", str(tmp_path)], "--workers"),
+        (["bench", "--maps", "overtake", "--planners", "nope", "--out", str(tmp_path)],
+         "--planners"),
+        (["bench", "--maps", "atlantis", "--out", str(tmp_path)], "--maps"),
+        (["bench", "--scenarios", "moon", "--out", str(tmp_path)], "--scenarios"),
+        (["bench", "--scenarios", "overtake", "--controllers", "pid", "--out", str(tmp_path)],
+         "--controllers"),
+        (["bench", "--maps", "overtake", "--max-time", "-1", "--out", str(tmp_path)],
+         "--max-time"),
+        (["bench", "--maps", "overtake", "--out", str(tmp_path / "afile")], "--out"),
+        (["bench", "--config", str(tmp_path / "none.toml")], "config"),
     ):
         assert main(argv) == 2
         err = capsys.readouterr().err.strip()
-        assert err.startswith("rrtdrive bench: error:") and "\n" not in err
+        assert err.startswith(f"rrtdrive bench: error: {field}: ") and "\n" not in err, err
         assert "Traceback" not in err
 
 

@@ -121,6 +121,21 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     return p
 
 
+#: The config field each flag sets, for errors naming the flag (``--seeds: ...``).
+FLAG_OF_FIELD = {
+    "maps": "--maps", "scenarios": "--scenarios", "planners": "--planners",
+    "controllers": "--controllers", "seeds": "--seeds", "workers": "--workers",
+    "out": "--out", "ray": "--ray", "max_time_s": "--max-time",
+    "max_iterations": "--max-iterations", "run_timeout_s": "--run-timeout",
+    "retries": "--retries",
+}
+
+
+def given_flags(args: argparse.Namespace) -> dict[str, str]:
+    """The fields set on the command line, each with its flag (a TOML key keeps its name)."""
+    return {k: f for k, f in FLAG_OF_FIELD.items() if getattr(args, k, None) is not None}
+
+
 def config_from_args(args: argparse.Namespace) -> Any:
     """The :class:`~rrtdrive.bench.grid.BenchConfig` of parsed arguments (flags over TOML)."""
     from rrtdrive.bench.grid import config_from_mapping, load_toml
@@ -160,8 +175,11 @@ def config_from_args(args: argparse.Namespace) -> Any:
 
 def run(args: argparse.Namespace) -> int:
     """Run the ``bench`` subcommand; return the exit code."""
+    from rrtdrive.cli_args import flags_for
+
     try:
-        return _run(args)
+        with flags_for(given_flags(args)):
+            return _run(args)
     except InputError as exc:
         print(f"rrtdrive bench: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
