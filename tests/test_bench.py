@@ -761,3 +761,25 @@ def test_a_renamed_map_file_keeps_its_runs_in_one_summary_row(tmp_path):
     run_bench(BenchConfig(maps=(str(second),), planners=("rrt",), seeds=3, out=str(out)))
     table = [line for line in (out / "summary.md").read_text().splitlines() if "rrt" in line]
     assert len(table) == 1 and "lotB.json" in table[0] and "| 3 |" in table[0], table
+
+
+def test_bench_figures_say_what_they_show(tmp_path, monkeypatch):
+    import rrtdrive.plotting
+    from rrtdrive.bench.summary import write_plots
+
+    figures = {}
+    monkeypatch.setattr(rrtdrive.plotting, "save_figure",
+                        lambda fig, path: figures.setdefault(Path(path).name, fig))
+    rows = [
+        {"kind": "plan", "map": "garage", "planner": "rrt", "controller": None, "seed": s,
+         "config_hash": "h", "success": True, "status": "solved", "length_m": 30.0 + s,
+         "planning_time_s": 0.01, "max_curvature": 0.1 + 0.1 * s, "reverse": True}
+        for s in (0, 1, 2)
+    ]
+    write_plots(rows, tmp_path)
+    assert set(figures) == {"box_length.png", "box_time.png", "success.png",
+                            "curvature_hist.png"}
+    for fig in figures.values():
+        assert fig._suptitle.get_text() == "rrtdrive bench: 3 runs, seeds 0-2, reverse allowed"
+    hist = figures["curvature_hist.png"].axes[0]
+    assert all(float(t).is_integer() for t in hist.get_yticks())  # counts of runs

@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import shlex
 import sys
+from pathlib import Path
 from typing import Any
 
 from rrtdrive.types import InputError
@@ -210,5 +211,11 @@ def _run(args: argparse.Namespace) -> int:
         f"{report.errors} errors) on {report.backend}"
         + (f"; {report.throughput:.2f} runs/s" if report.executed else "")
     )
-    print(f"results: {cfg.out}/runs.jsonl; summary: {cfg.out}/summary.md, {cfg.out}/summary.csv")
+    from rrtdrive.bench.summary import PLOT_FILES
+
+    plots = [name for name in PLOT_FILES if cfg.plots and (Path(cfg.out) / name).is_file()]
+    print(
+        f"results: {cfg.out}/runs.jsonl; summary: {cfg.out}/summary.md, {cfg.out}/summary.csv"
+        + (f"; plots: {', '.join(plots)} in {cfg.out}" if plots else "")
+    )
     return EXIT_FAILED if report.errors else EXIT_OK

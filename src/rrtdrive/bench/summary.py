@@ -263,6 +263,17 @@ def remove_plots(out: str | FsPath) -> None:
         (FsPath(out) / name).unlink(missing_ok=True)
 
 
+def _bench_title(rows: Sequence[Mapping[str, Any]]) -> str:
+    """What a figure shows, from its rows: how many runs, which seeds, how they ran."""
+    seeds = sorted({int(r["seed"]) for r in rows if isinstance(r.get("seed"), int)})
+    span = "" if not seeds else (
+        f", seed {seeds[0]}" if len(seeds) == 1 else f", seeds {seeds[0]}-{seeds[-1]}"
+    )
+    how = [w for w, key in (("reverse allowed", "reverse"), ("deterministic", "deterministic"))
+           if any(r.get(key) for r in rows)]
+    return f"rrtdrive bench: {len(rows)} runs{span}" + "".join(f", {w}" for w in how)
+
+
 def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[FsPath]:
     """Box plots of length and time, success bars and curvature histograms, as PNGs in ``out``.
 
@@ -282,6 +293,7 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
 
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
+    from matplotlib.ticker import MaxNLocator
 
     from rrtdrive.plotting import save_figure
 
@@ -295,6 +307,7 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
         groups.setdefault(label, []).append(r)
     if not groups:
         return []
+    title = _bench_title(rows)
     labels = list(groups)
     height = max(3.0, 0.35 * len(labels) + 1.5)
     written: list[FsPath] = []
@@ -333,6 +346,7 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
         ax.grid(axis="x", alpha=0.3)
         from matplotlib.lines import Line2D
 
+        fig.suptitle(title, fontsize=9)
         ax.legend(
             [Line2D([], [], color="tab:orange"),
              Line2D([], [], marker="^", color="tab:green", linestyle="none")],
@@ -361,6 +375,7 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
     ax.invert_yaxis()
     ax.set_xlim(0, 1.05)
     ax.set_xlabel("success rate (95 % Wilson interval)")
+    fig.suptitle(title, fontsize=9)
     save_figure(fig, out / "success.png")
     written.append(out / "success.png")
 
@@ -388,10 +403,12 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
             if kmax:
                 ax.axvline(float(kmax), color="k", linestyle="--", linewidth=1)
             ax.set_title(planner, fontsize=9)
+            ax.yaxis.set_major_locator(MaxNLocator(integer=True))  # counts: no 0.5 runs
         for ax in list(axes.flat)[n:]:
             ax.set_visible(False)
         fig.supxlabel("largest path curvature of a successful run [1/m] (dashed: κ_max)")
         fig.supylabel("runs")
+        fig.suptitle(title, fontsize=9)
         save_figure(fig, out / "curvature_hist.png")
         written.append(out / "curvature_hist.png")
     return written
