@@ -617,3 +617,19 @@ def test_a_video_stride_without_a_video_is_refused(capsys):
     err = capsys.readouterr().err
     assert err == "rrtdrive simulate: error: --video-stride: only with --video (it sets the " \
         "video's frames)\n"
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["simulate", "u-turn", "--video", ".mp4"],
+     "--video: '.mp4' is a suffix without a name; name the file, e.g. 'run.mp4'"),
+    (["plan", "garage", "--plot", ".PNG"],
+     "--plot: '.PNG' is a suffix without a name; name the file, e.g. 'run.png'"),
+    (["plan", "garage", "--plot", "{file}/x.png"], "--plot: '{file}' is a file, not a folder"),
+])
+def test_an_odd_output_name_is_named_for_what_it_is(capsys, tmp_path, argv, message):
+    # They said "must end in .mp4, got '.mp4'" and "folder ... does not exist".
+    file = tmp_path / "afile"
+    file.write_text("")
+    argv = [a.format(file=file) for a in argv]
+    code, _, err = run(capsys, *argv)
+    assert code == 2 and err.endswith(f"error: {message.format(file=file)}\n"), err

@@ -231,6 +231,11 @@ def validate_output(
     out = Path(target)
     if suffixes and out.suffix.lower() not in suffixes:
         want = " or ".join(sorted(s for s in suffixes if s))
+        if out.name.lower() in suffixes:  # '.mp4' alone: a hidden file without a suffix
+            raise InputError(
+                f"{flag}: {target!r} is a suffix without a name; name the file, e.g. "
+                f"'run{out.name.lower()}'"
+            )
         raise InputError(f"{flag}: the file must end in {want}, got {target!r}")
     if is_stream(out):  # /dev/null, a named pipe: written into, not replaced
         if not os.access(out, os.W_OK):
@@ -239,6 +244,8 @@ def validate_output(
     out = destination(out)  # through a symbolic link, the file it points to
     parent = out.parent if str(out.parent) else Path(".")
     if not parent.is_dir():
+        if parent.exists():
+            raise InputError(f"{flag}: {str(parent)!r} is a file, not a folder")
         raise InputError(f"{flag}: folder {str(parent)!r} does not exist")
     if out.is_dir():
         raise InputError(f"{flag}: {target!r} is a folder")
