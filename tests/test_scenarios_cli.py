@@ -38,6 +38,8 @@ def test_simulate_a_map_file_drives_it_and_fits_the_video(capsys, tmp_path):
 
     frames = iio.imread(video, index=None)
     assert frames.shape[1:3] == (640, 960)  # 40 x 24 m fitted at 20.6 px/m, not 6 px/m
+    # Progress lines, and no carriage returns when stderr is not a terminal (a log file).
+    assert f"video {len(frames)}/{len(frames)} frames" in err and "\r" not in err
 
 
 def test_simulate_a_map_with_start_and_goal_flags(capsys, tmp_path):

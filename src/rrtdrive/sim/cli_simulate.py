@@ -391,7 +391,8 @@ def _run(args: argparse.Namespace) -> int:
                 tty = sys.stderr.isatty()
                 if tty or done == total or done % max(1, total // 10) == 0:
                     end = "\n" if done == total or not tty else ""
-                    print(f"\rrrtdrive simulate: video {done}/{total} frames", end=end,
+                    start = "\r" if tty else ""  # no carriage returns in a log file
+                    print(f"{start}rrtdrive simulate: video {done}/{total} frames", end=end,
                           file=sys.stderr, flush=True)
 
             with writing("--video", args.video):
