@@ -45,11 +45,19 @@ def test_names_stdout_tells_the_pipe_of_stdout(tmp_path):
     piped = subprocess.run([sys.executable, "-c", code, str(target)], stdout=subprocess.PIPE,
                            text=True, check=True, timeout=60)
     assert piped.stdout.split() == ["True", "False"]
-    with open(target, "w") as out:  # stdout a regular file: its summary stays there
+    # stdout a regular file (> out.json): it is stdout too, by either name (replacing the
+    # file by a rename lost the summary printed into it before, a helper's audit).
+    with open(target, "w") as out:
         subprocess.run([sys.executable, "-c", code, str(target)], stdout=out, check=True,
                        timeout=60)
-    assert target.read_text().split() == ["False", "False"]
+    assert target.read_text().split() == ["True", "True"]
     assert not names_stdout(str(target))  # not this process's stdout
+    # stdout /dev/null is neither: the summary stays on stdout (--json /dev/null > /dev/null).
+    code = ("import sys; from rrtdrive.cli_args import names_stdout; "
+            "sys.stderr.write(str(names_stdout('/dev/stdout')))")
+    null = subprocess.run([sys.executable, "-c", code], stdout=subprocess.DEVNULL,
+                          stderr=subprocess.PIPE, text=True, check=True, timeout=60)
+    assert null.stderr == "False"
 
 
 @pytest.mark.skipif(not hasattr(signal, "SIGTERM") or os.name != "posix", reason="POSIX")

@@ -118,9 +118,12 @@ def writing(flag: str, target: str | os.PathLike[str]) -> Iterator[None]:
 
 
 def names_stdout(target: str) -> bool:
-    """Whether ``target`` is the pipe the process's stdout writes to (``/dev/stdout | jq``).
+    """Whether ``target`` is the pipe or file the process's stdout writes to.
 
-    Only a pipe or socket: ``--json /dev/null > /dev/null`` keeps its summary on stdout.
+    ``--json /dev/stdout | jq`` and ``--json /dev/stdout > out.json`` are ``--json -``
+    (replacing the file by a rename lost the summary printed into it before). Only a
+    pipe, socket or regular file: ``--json /dev/null > /dev/null`` keeps its summary
+    on stdout.
 
     Examples
     --------
@@ -131,8 +134,9 @@ def names_stdout(target: str) -> bool:
         here, there = os.fstat(sys.stdout.fileno()), os.stat(target)
     except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
         return False  # no such file, or a stdout with no file (captured by a test)
-    piped = stat.S_ISFIFO(here.st_mode) or stat.S_ISSOCK(here.st_mode)
-    return piped and (here.st_dev, here.st_ino) == (there.st_dev, there.st_ino)
+    mode = here.st_mode
+    kind = stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode) or stat.S_ISREG(mode)
+    return kind and (here.st_dev, here.st_ino) == (there.st_dev, there.st_ino)
 
 
 def distinct_outputs(inputs: Mapping[str, str | None] | None = None, **targets: str | None) -> None:
