@@ -85,14 +85,11 @@ class CollisionChecker:
         h = grid_resolution(self.bounds, config)
         if h != config.resolution:
             width, height = self.bounds[2] - self.bounds[0], self.bounds[3] - self.bounds[1]
-            # An InputWarning, as for the map's other notable input: the CLI prints it
-            # as its one-line "warning:" (a log record came out without the prefix).
+            # An InputWarning, as the map's others: the CLI prints it as one "warning:" line.
             warnings.warn(
                 f"bounds: a {width:g} x {height:g} m map at {config.resolution:g} m would "
                 f"exceed checker.max_grid_cells = {config.max_grid_cells}; using {h:g} m "
-                f"cells (grid error {h * math.sqrt(2.0):.3f} m)",
-                InputWarning,
-                stacklevel=2,
+                f"cells (grid error {h * math.sqrt(2.0):.3f} m)", InputWarning, stacklevel=2,
             )
             config = dataclasses.replace(config, resolution=h)
         self.config = config
