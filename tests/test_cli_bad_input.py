@@ -633,3 +633,20 @@ def test_an_odd_output_name_is_named_for_what_it_is(capsys, tmp_path, argv, mess
     argv = [a.format(file=file) for a in argv]
     code, _, err = run(capsys, *argv)
     assert code == 2 and err.endswith(f"error: {message.format(file=file)}\n"), err
+
+
+def test_flags_for_warnings_renames_only_input_warnings_of_its_fields():
+    from rrtdrive.cli_args import flags_for_warnings
+    from rrtdrive.types import InputWarning
+
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        with pytest.raises(InputError), flags_for_warnings({"goal": "--goal"}):
+            warnings.warn("goal: yaw 90 is more than a full turn", InputWarning)
+            warnings.warn("start: yaw 90 is more than a full turn", InputWarning)
+            warnings.warn("goal: not an input warning", UserWarning)
+            raise InputError("goal: an error after the warnings")  # they are still shown
+    assert [str(w.message) for w in got] == [
+        "--goal: yaw 90 is more than a full turn", "start: yaw 90 is more than a full turn",
+        "goal: not an input warning",
+    ]

@@ -200,15 +200,18 @@ def flags_for_warnings(fields: Mapping[str, str]) -> Iterator[None]:
     The warnings' twin of :func:`flags_for`: ``goal: yaw 90 is more than a full turn``
     about a ``--goal`` value reads ``--goal: yaw 90 ...``. Other warnings pass unchanged.
     """
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        yield
-    for w in caught:
-        text = str(w.message)
-        field, sep, rest = text.partition(": ")
-        if issubclass(w.category, InputWarning) and sep and field in fields:
-            text = f"{fields[field]}: {rest}"
-        warnings.warn_explicit(text, w.category, w.filename, w.lineno)
+    caught: list[warnings.WarningMessage] = []
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            yield
+    finally:  # also when the block raises: a warning before an error is still shown
+        for w in caught:
+            text = str(w.message)
+            field, sep, rest = text.partition(": ")
+            if issubclass(w.category, InputWarning) and sep and field in fields:
+                text = f"{fields[field]}: {rest}"
+            warnings.warn_explicit(text, w.category, w.filename, w.lineno)
 
 
 def validate_output(
