@@ -642,9 +642,9 @@ def test_flags_for_warnings_renames_only_input_warnings_of_its_fields():
     with warnings.catch_warnings(record=True) as got:
         warnings.simplefilter("always")
         with pytest.raises(InputError), flags_for_warnings({"goal": "--goal"}):
-            warnings.warn("goal: yaw 90 is more than a full turn", InputWarning)
-            warnings.warn("start: yaw 90 is more than a full turn", InputWarning)
-            warnings.warn("goal: not an input warning", UserWarning)
+            warnings.warn("goal: yaw 90 is more than a full turn", InputWarning, stacklevel=1)
+            warnings.warn("start: yaw 90 is more than a full turn", InputWarning, stacklevel=1)
+            warnings.warn("goal: not an input warning", UserWarning, stacklevel=1)
             raise InputError("goal: an error after the warnings")  # they are still shown
     assert [str(w.message) for w in got] == [
         "--goal: yaw 90 is more than a full turn", "start: yaw 90 is more than a full turn",
