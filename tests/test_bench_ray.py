@@ -89,5 +89,6 @@ def test_an_address_ray_cannot_reach_is_one_line_and_leaves_no_folder(tmp_path):
         capture_output=True, text=True, timeout=300, check=False,
     )
     assert proc.returncode == 2, proc.stderr
-    assert proc.stderr.count("\n") == 1 and "error: --ray: cannot connect to bogus://x" in proc.stderr
+    assert proc.stderr.count("\n") == 1
+    assert "error: --ray: cannot connect to bogus://x" in proc.stderr
     assert not out.exists()
