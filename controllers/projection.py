@@ -72,7 +72,9 @@ class PathProjector:
             raise InputError(
                 f"path: need at least two samples [x, y, yaw, kappa, gear], got {samples.shape}"
             )
-        require_finite("path", *samples.ravel().tolist())
+        finite = np.isfinite(samples)
+        if not finite.all():  # the first bad value, named as require_finite names it
+            require_finite("path", float(samples[~finite][0]))
         if not path.is_forward_only:
             n = len(path.cusps)
             what = f"has {n} gear change{'s' if n != 1 else ''}" if n else "is driven in reverse"
