@@ -5,7 +5,8 @@ Usage::
     python experiments/bench_scene_step.py --seeds 10 --repeats 3 --out results
 
 ``SceneRoad.step`` (``rrtdrive.sim.scenes``) skips the ``handle_collisions`` calls
-that highway-env's spherical pre-check would turn into no-ops, and the scenes
+that highway-env's own tests would turn into no-ops (the spherical pre-check and,
+since session 30, the separating-axis test: ``rrtdrive.sim.pair_screen``), and the scenes
 memoise highway-env's closest-lane search for static objects. This script runs the
 same episodes both ways in one process, interleaved:
 
@@ -39,13 +40,17 @@ from rrtdrive.sim.episode import Episode
 from rrtdrive.sim.replanning import ReplanConfig
 from rrtdrive.sim.runner import EpisodeConfig, run_episode
 from rrtdrive.sim.scenes import SceneRoad
+from rrtdrive.sim.tasks import make_scenario
 
-CASES: dict[str, tuple[str, EpisodeConfig | None]] = {
-    "parking": ("parking", None),
-    "overtake": ("overtake", None),
+CASES: dict[str, tuple[str, EpisodeConfig | None, dict]] = {
+    "parking": ("parking", None, {}),
+    "overtake": ("overtake", None, {}),
+    # Two oncoming cars: the road's walls pass highway-env's pre-check every step.
+    "overtake-oncoming": ("overtake", None, {"oncoming": 2}),
     # Re-planning without wall-clock limits, so that both arms make the same decisions.
     "overtake-traffic": (
-        "overtake-traffic", EpisodeConfig(max_time_s=30.0, replan=ReplanConfig(wall_limit=False))
+        "overtake-traffic",
+        EpisodeConfig(max_time_s=30.0, replan=ReplanConfig(wall_limit=False)), {},
     ),
 }
 
@@ -88,13 +93,15 @@ def main(argv: list[str] | None = None) -> int:
     screened_step = SceneRoad.step
     rows = []
     for case in cases:
-        scenario, cfg = CASES[case]
+        scenario, cfg, options = CASES[case]
         # Warm-up: the first episode of a scenario builds its planner's checkers (cached).
-        run_episode(scenario, controller=args.controller, seed=args.seeds, config=cfg)
+        run_episode(make_scenario(scenario, args.seeds, **options), controller=args.controller,
+                    seed=args.seeds, config=cfg)
         for seed in range(args.seeds):
             def run(scenario: str = scenario, seed: int = seed,
-                    cfg: EpisodeConfig | None = cfg) -> Episode:
-                return run_episode(scenario, controller=args.controller, seed=seed, config=cfg)
+                    cfg: EpisodeConfig | None = cfg, options: dict = options) -> Episode:
+                return run_episode(make_scenario(scenario, seed, **options),
+                                   controller=args.controller, seed=seed, config=cfg)
 
             t_scr, t_stock = [], []
             same = True
