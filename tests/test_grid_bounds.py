@@ -175,3 +175,19 @@ def test_a_big_maps_set_up_is_reported_apart_and_outside_the_budget():
     # before the stopwatch starts: set-up is orders of magnitude more than the search.
     assert res.planning_time_s < res.setup_time_s
     assert verify_path(m, res.path).ok
+
+
+def test_plan_announces_a_long_set_up_and_reports_it(capsys, monkeypatch):
+    # A map whose grid takes seconds to set up got no word until the result. Here the
+    # threshold is lowered so that a small map stands in for a big one.
+    import rrtdrive.collision.grid as grid
+
+    assert main(["plan", "overtake", "--max-iterations", "200"]) == 0
+    out, err = capsys.readouterr()
+    assert err == "" and "set-up" not in out
+    monkeypatch.setattr(grid, "LARGE_GRID_CELLS", 1000)
+    assert main(["plan", "overtake", "--max-iterations", "200"]) == 0
+    out, err = capsys.readouterr()
+    assert err.startswith("rrtdrive plan: setting up a 100 x 100 m map: ")
+    assert "M grid cells at 0.1 m (seconds; not planning time)" in err
+    assert out.rstrip().endswith(" s)") and "(set-up " in out

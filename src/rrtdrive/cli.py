@@ -248,11 +248,12 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     if args.reverse and not reverses(args.planner):
         print(f"rrtdrive plan: {forward_only_note(args.planner)}", file=sys.stderr)
     budget = Budget(max_iterations=args.max_iterations, max_time_s=args.max_time)
-    config = None
-    if args.resolution is not None:
-        from rrtdrive.collision import CheckerConfig
+    from rrtdrive.collision import CheckerConfig
+    from rrtdrive.collision.grid import setup_notice
 
-        config = CheckerConfig(resolution=args.resolution)
+    config = CheckerConfig(**({} if args.resolution is None else {"resolution": args.resolution}))
+    if (notice := setup_notice(m.bounds, config)) is not None:  # seconds of silence else
+        print(f"rrtdrive plan: {notice}", file=sys.stderr, flush=True)
     t_map = time.perf_counter()
     # The map's distance field: per-map set-up too (a map too big for any grid: exit 2).
     problem = PlanningProblem.from_map(m, config=config, reverse=args.reverse)
@@ -269,18 +270,14 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         from rrtdrive.plotting import plot_plan, save_figure
 
         with writing("--plot", args.plot):
-            status = "solved" if result.success else result.status.value
-            title = (
-                f"{m.name}: {result.planner}, seed {args.seed}"
-                f"{', reverse allowed' if args.reverse else ''} ({status}, {result.nodes} nodes)"
-            )
-            save_figure(plot_plan(m, result, title), args.plot)
+            save_figure(plot_plan(m, result, seed=args.seed, reverse=args.reverse), args.plot)
     cusps = len(result.path.cusps)
     gears = f"{cusps} gear change{'s' if cusps != 1 else ''}, " if cusps else ""
     summary = f"{m.name}: {result.planner} seed {args.seed}: " + (
         f"solved, length {result.path.length:.2f} m, {gears}max curvature "
         f"{result.path.max_curvature:.4f} 1/m, {result.nodes} nodes, "
         f"{1e3 * result.planning_time_s:.1f} ms"
+        + (f" (set-up {result.setup_time_s:.1f} s)" if notice is not None else "")
         if result.success
         else f"FAILED ({result.status.value}): {result.message}"
         + ("" if result.diagnosis is None else f"\n  why: {result.diagnosis.message}")

@@ -173,10 +173,15 @@ def map_figure_size(bounds: tuple[float, float, float, float]) -> tuple[float, f
     return round(w_in + _LEGEND_IN, 2), round(h_in + _TITLE_IN, 2)
 
 
-def plot_plan(m: Map, result: PlanResult, title: str | None = None) -> Figure:
+def plot_plan(
+    m: Map, result: PlanResult, title: str | None = None, seed: int | None = None,
+    reverse: bool = False,
+) -> Figure:
     """The map, the trees, the raw tree path, the waypoints and the final path of one result.
 
     The path is drawn by :func:`draw_gear_path`: reverse segments dashed, cusps marked.
+    The default title names the map, the planner, ``seed`` (when given), whether
+    ``reverse`` gears were allowed, the status and the nodes.
     """
     fig, ax = plt.subplots(figsize=map_figure_size(m.bounds), layout="constrained")
     draw_map(ax, m)
@@ -186,7 +191,8 @@ def plot_plan(m: Map, result: PlanResult, title: str | None = None) -> Figure:
         draw_path(ax, result.path.waypoints, "tab:olive", "waypoints", lw=0.8, marker="o")
         draw_gear_path(ax, result.path)
     status = "solved" if result.success else result.status.value
-    ax.set_title(title or f"{m.name}: {result.planner} ({status}, {result.nodes} nodes)")
+    how = (f", seed {seed}" if seed is not None else "") + (", reverse allowed" if reverse else "")
+    ax.set_title(title or f"{m.name}: {result.planner}{how} ({status}, {result.nodes} nodes)")
     # Beside the axes, outside them: inside, it covered a corner of the map (a goal in
     # the garage's top right bays hid under it).
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
