@@ -5,7 +5,7 @@ every vehicle-object pair. A call changes nothing unless highway-env's own test 
 the two rectangles intersecting or about to (its separating-axis test, the second
 with the step's relative displacement), after a spherical pre-check. Most pairs pass
 the pre-check and still do not touch: the walls of the overtake road lie within every
-car's pre-check circle, and those calls took 65 % of an overtake episode's time.
+car's pre-check circle, and those calls took most of an overtake episode's time.
 
 :func:`pairs_to_handle` runs the pre-check and the separating-axis test of every pair
 at once in numpy and returns the pairs neither rules out, in ``Road.step``'s order.

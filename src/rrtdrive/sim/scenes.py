@@ -192,7 +192,7 @@ class SceneRoad(Road):
     ``Road.step`` calls ``handle_collisions`` for every pair of vehicles and every
     vehicle-object pair: 146 calls a step in the parking scene; in the overtake scene
     the road's walls pass highway-env's spherical pre-check every step, and those calls
-    were 65 % of an episode's time. A call whose pair highway-env's own tests (the
+    were most of an episode's time. A call whose pair highway-env's own tests (the
     pre-check, then the separating-axis test now and with the step's displacement)
     find apart changes nothing, so :func:`~rrtdrive.sim.pair_screen.pairs_to_handle`
     runs those tests for all pairs at once and only the others are handled, by
