@@ -27,6 +27,7 @@ import argparse
 import dataclasses
 import math
 import sys
+from collections.abc import Sequence
 from pathlib import Path as FsPath
 
 import numpy as np
@@ -47,8 +48,10 @@ from rrtdrive.types import Budget  # noqa: E402
 BUDGET = Budget(max_iterations=20_000, max_time_s=1e6)
 
 
-def queries(count: int, seeds: int) -> list[tuple[str, PlanningProblem, int]]:
-    """``(id, problem, planner seed)`` of every query, both gears."""
+def queries(
+    count: int, seeds: int, maps: Sequence[str] | None = None
+) -> list[tuple[str, PlanningProblem, int]]:
+    """``(id, problem, planner seed)`` of every query, both gears (``maps``: default all)."""
     from random_goals import draw_goals
 
     out = []
@@ -58,7 +61,7 @@ def queries(count: int, seeds: int) -> list[tuple[str, PlanningProblem, int]]:
             for i, pose in enumerate(draw_goals("parking_lot", count, 1, vary)):
                 m = dataclasses.replace(builtin_map("parking_lot"), **{vary: pose})
                 out.append((f"{vary}:{gear}:{i}", PlanningProblem.from_map(m, reverse=rev), 0))
-        for name in BUILTIN_MAPS:
+        for name in BUILTIN_MAPS if maps is None else maps:
             problem = PlanningProblem.from_map(builtin_map(name), reverse=rev)
             out.extend((f"{name}:{gear}:{s}", problem, s) for s in range(seeds))
     return out
@@ -93,13 +96,13 @@ def watch_pairs(qid: str, pairs: list[dict], grow):  # noqa: ANN001, ANN201 - th
     return watched
 
 
-def run(count: int, seeds: int) -> list[dict]:
-    """Every pair of every query."""
+def run(count: int, seeds: int, maps: Sequence[str] | None = None) -> list[dict]:
+    """Every pair of every query (``maps``: the built-in maps planned, default all)."""
     pairs: list[dict] = []
     planner = ImprovedRRTConnect(ImprovedConfig(root_patience=0))
     original = improved_planner.grow_until_meet
     try:
-        todo = queries(count, seeds)
+        todo = queries(count, seeds, maps)
         progress = episode_progress(every=20)
         for i, (qid, problem, seed) in enumerate(todo, 1):
             improved_planner.grow_until_meet = watch_pairs(qid, pairs, original)
@@ -176,18 +179,25 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--count", type=positive_int, default=100, help="random goals and starts each")
     ap.add_argument("--seeds", type=positive_int, default=20, help="planner seeds per built-in map")
+    ap.add_argument("--maps", default=None,
+                    help="comma-separated built-in maps planned (default: all of them)")
     ap.add_argument("--out", required=True, help="directory for root_growth.{json,md}")
     args = ap.parse_args(argv)
+    maps = None if args.maps is None else [m.strip() for m in args.maps.split(",") if m.strip()]
+    unknown = sorted(set(maps or ()) - set(BUILTIN_MAPS))
+    if unknown:
+        ap.error(f"--maps: unknown map(s) {', '.join(unknown)}; choose from {sorted(BUILTIN_MAPS)}")
     if args.count < 0 or args.seeds < 0:
         ap.error("--count and --seeds must be >= 0")
-    pairs = run(args.count, args.seeds)
+    pairs = run(args.count, args.seeds, maps)
     s = summarise(pairs)
     meta = {
         "command": command("root_growth.py", argv),
         "machine": machine(),
         "count": args.count,
         "seeds": args.seeds,
-        "queries": len(queries(args.count, args.seeds)),
+        "maps": maps,
+        "queries": len(queries(args.count, args.seeds, maps)),
     }
     payload = {"meta": meta, "summary": s, "pairs": pairs}
     print(write_results(args.out, "root_growth", payload, markdown))
