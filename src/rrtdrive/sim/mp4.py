@@ -20,9 +20,12 @@ Examples
 
 from __future__ import annotations
 
+import errno
 import math
 import os
 import queue
+import signal
+import subprocess
 import threading
 from pathlib import Path as FsPath
 from types import TracebackType
@@ -36,6 +39,37 @@ from rrtdrive.types import InputError
 __all__ = ["Mp4Writer"]
 
 _STOP = object()
+
+
+def _encoder_process(writer: Any) -> subprocess.Popen[bytes] | None:
+    """imageio-ffmpeg's ffmpeg process behind ``writer`` (``None`` if it cannot be found).
+
+    imageio-ffmpeg never looks at ffmpeg's exit status: an ffmpeg that died (a full
+    disk, a file size limit) left a truncated file that was published as a video.
+    Its process is a local of the frame generator, read here before it is closed.
+    """
+    frame = getattr(getattr(writer, "_write_gen", None), "gi_frame", None)
+    process = frame.f_locals.get("p") if frame is not None else None
+    return process if isinstance(process, subprocess.Popen) else None
+
+
+def _check_encoder(process: subprocess.Popen[bytes] | None, path: FsPath, frames: int) -> None:
+    """Raise ``OSError`` unless ffmpeg exited cleanly (or, unseen, the file holds ``frames``)."""
+    if process is not None:
+        code = process.poll()
+        if code == 0:
+            return
+        if code == -signal.SIGXFSZ:
+            raise OSError(errno.EFBIG, os.strerror(errno.EFBIG))
+        raise OSError(f"the video encoder (ffmpeg) failed with exit code {code}")
+    import imageio_ffmpeg
+
+    try:  # no process to ask: count the frames in the file (decodes it)
+        found, _ = imageio_ffmpeg.count_frames_and_secs(str(path))
+    except (RuntimeError, OSError):
+        found = -1
+    if found != frames:
+        raise OSError(f"the video encoder (ffmpeg) wrote {max(found, 0)} of {frames} frames")
 
 
 class Mp4Writer:
@@ -127,7 +161,9 @@ class Mp4Writer:
             self._stop()
             if self._error is not None:
                 raise self._error
+            process = _encoder_process(self._writer)
             self._writer.close()
+            _check_encoder(process, self._tmp, self.frames)
             publish(self._tmp, self.target)
         except BaseException:
             self._tmp.unlink(missing_ok=True)
