@@ -250,16 +250,21 @@ def _drive(
     controls: list[tuple[float, float]] = []
     crashed = [bool(ego.crashed)]
     other_log = [[(v.position[0], v.position[1], v.heading, v.speed) for v in others]]
-    render_s = 0.0  # time spent drawing frames: not the closed loop's (wall_time_s)
-    t_render = time.perf_counter()
-    frames = [env.render()] if render_stride > 0 else []
-    render_s += time.perf_counter() - t_render
+    frames: list[np.ndarray] = []
+
+    def grab() -> float:
+        """Draw one frame into ``frames``; the seconds it took (not the closed loop's)."""
+        t_render = time.perf_counter()
+        frames.append(env.render())
+        return time.perf_counter() - t_render
+
+    render_s = grab() if render_stride > 0 else 0.0
+    loop_render_s = 0.0
     terminated_at: float | None = None
     truncated = reached = False
     success, total = False, 0.0
     t, steps = 0.0, 0
     max_steps = int(np.ceil(max_time / dt - 1e-9))
-    first_render_s = render_s
     wall0 = time.perf_counter()
     tracker.start()
     while steps < max_steps:
@@ -278,9 +283,7 @@ def _drive(
         crashed.append(bool(ego.crashed))
         other_log.append([(v.position[0], v.position[1], v.heading, v.speed) for v in others])
         if render_stride > 0 and steps % render_stride == 0:
-            t_render = time.perf_counter()
-            frames.append(env.render())
-            render_s += time.perf_counter() - t_render
+            loop_render_s += grab()
         if term and terminated_at is None:
             terminated_at = round(t, 9)
         if ego.crashed:
@@ -291,11 +294,8 @@ def _drive(
         if trunc:
             truncated = True
             break
-    wall = time.perf_counter() - wall0 - (render_s - first_render_s)
-    if render_stride > 0 and steps % render_stride:
-        t_render = time.perf_counter()
-        frames.append(env.render())
-        render_s += time.perf_counter() - t_render
+    wall = time.perf_counter() - wall0 - loop_render_s
+    render_s += loop_render_s + (grab() if render_stride > 0 and steps % render_stride else 0.0)
     n = len(states)
     log = DriveLog(
         dt=dt, t=np.arange(n) * dt, states=np.asarray(states, dtype=float),
