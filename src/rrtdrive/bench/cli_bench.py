@@ -142,23 +142,7 @@ def config_from_args(args: argparse.Namespace) -> Any:
     from rrtdrive.bench.grid import config_from_mapping, load_toml
 
     values: dict[str, Any] = load_toml(args.config) if args.config else {}
-    flags = {
-        "maps": args.maps,
-        "scenarios": args.scenarios,
-        "planners": args.planners,
-        "controllers": args.controllers,
-        "seeds": args.seeds,
-        "workers": args.workers,
-        "out": args.out,
-        "ray": args.ray,
-        "max_time_s": args.max_time_s,
-        "max_iterations": args.max_iterations,
-        "run_timeout_s": args.run_timeout_s,
-        "retries": args.retries,
-    }
-    for k, v in flags.items():
-        if v is not None:
-            values[k] = v
+    values.update({k: getattr(args, k) for k in given_flags(args)})  # flags over TOML
     if args.no_plots:
         values["plots"] = False
     if getattr(args, "reverse", False):
