@@ -178,6 +178,12 @@ def distinct_outputs(inputs: Mapping[str, str | None] | None = None, **targets: 
         seen[key] = flag
 
 
+def _flagged(text: str, fields: Mapping[str, str]) -> str | None:
+    """``text`` (``"field: ..."``) with its field replaced by its flag; ``None`` if not one."""
+    field, sep, rest = text.partition(": ")
+    return f"{fields[field]}: {rest}" if sep and field in fields else None
+
+
 @contextmanager
 def flags_for(fields: Mapping[str, str]) -> Iterator[None]:
     """Re-raise an InputError naming one of ``fields`` with its command-line flag instead.
@@ -187,9 +193,8 @@ def flags_for(fields: Mapping[str, str]) -> Iterator[None]:
     try:
         yield
     except InputError as exc:
-        field, sep, rest = str(exc).partition(": ")
-        if sep and field in fields:
-            raise InputError(f"{fields[field]}: {rest}") from None
+        if (text := _flagged(str(exc), fields)) is not None:
+            raise InputError(text) from None
         raise
 
 
@@ -208,9 +213,8 @@ def flags_for_warnings(fields: Mapping[str, str]) -> Iterator[None]:
     finally:  # also when the block raises: a warning before an error is still shown
         for w in caught:
             text = str(w.message)
-            field, sep, rest = text.partition(": ")
-            if issubclass(w.category, InputWarning) and sep and field in fields:
-                text = f"{fields[field]}: {rest}"
+            if issubclass(w.category, InputWarning):
+                text = _flagged(text, fields) or text
             warnings.warn_explicit(text, w.category, w.filename, w.lineno)
 
 
