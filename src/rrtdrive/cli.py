@@ -251,7 +251,9 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from rrtdrive.collision import CheckerConfig
     from rrtdrive.collision.grid import setup_notice
 
-    config = CheckerConfig(**({} if args.resolution is None else {"resolution": args.resolution}))
+    config = (
+        CheckerConfig() if args.resolution is None else CheckerConfig(resolution=args.resolution)
+    )
     if (notice := setup_notice(m.bounds, config)) is not None:  # seconds of silence else
         print(f"rrtdrive plan: {notice}", file=sys.stderr, flush=True)
     t_map = time.perf_counter()
