@@ -124,3 +124,38 @@ def test_a_stock_video_has_highway_envs_frames_at_real_time(tmp_path, capsys):
     assert frames.shape == (3, 300, 600, 3) and frames.std() > 10  # drawn, not blank
     fps = iio.immeta(video)["fps"]
     assert len(frames) / fps == pytest.approx(data["duration_s"] + 0.05, rel=0.02)
+
+
+def test_a_stride_one_stock_video_streams_every_state_at_the_simulation_frequency(
+    tmp_path, capsys
+):
+    # At stride 1 the frames go to the encoder as they are drawn (not kept: a 34 s drive's
+    # frames were 370 MB): one per logged state, at 20 fps, the same frames as kept ones.
+    video, out = tmp_path / "p.mp4", tmp_path / "p.json"
+    code = main(["simulate", "parking-v0", "--seed", "3", "--max-time", "0.5", "--video",
+                 str(video), "--json", str(out)])
+    assert code == 1, capsys.readouterr().err  # 0.5 s is too short to park: a timeout
+    data = json.loads(out.read_text())
+    assert data["steps"] == 10 and data["video_frames"] == 11
+    import imageio.v3 as iio
+
+    frames = iio.imread(video, index=None)
+    assert frames.shape == (11, 300, 600, 3) and frames.std() > 10
+    assert iio.immeta(video)["fps"] == pytest.approx(20.0)
+    assert {p.name for p in tmp_path.iterdir()} == {"p.json", "p.mp4"}  # no temporary left
+    kept = drive_stock_env("parking-v0", 3, config=EpisodeConfig(max_time_s=0.5),
+                           render_stride=1)
+    handed: list[np.ndarray] = []
+    streamed = drive_stock_env("parking-v0", 3, config=EpisodeConfig(max_time_s=0.5),
+                               render_stride=1, on_frame=handed.append)
+    assert streamed.frames == [] and len(handed) == len(kept.frames) == 11
+    assert all(np.array_equal(a, b) for a, b in zip(handed, kept.frames, strict=True))
+
+
+def test_a_stock_drive_that_is_not_planned_writes_no_video(tmp_path, capsys):
+    video = tmp_path / "p.mp4"
+    code = main(["simulate", "parking-v0", "--seed", "3", "--plan-time", "0.0001",
+                 "--video", str(video)])
+    assert code == 1
+    assert "no video: planning failed (timeout)" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []  # neither the video nor its temporary file

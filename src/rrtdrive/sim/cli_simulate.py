@@ -18,6 +18,7 @@ collision, goal missed, time out), 2 on bad input (one line on stderr).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -152,6 +153,50 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     p.set_defaults(func=run)
     return p
+
+
+def _drive_stock(args: argparse.Namespace, config: Any, stride: int) -> tuple[Any, int]:
+    """Drive a stock env; at ``--video-stride 1`` its frames stream into the video.
+
+    Every state is then a frame, so the real-time fps is the simulation frequency,
+    known before the drive; at another stride it depends on where the drive ends,
+    and the frames are kept (1/stride of them) to be written afterwards. Returns the
+    drive and the frames written into the video (0: none, or kept in the drive's
+    ``frames``).
+    """
+    from rrtdrive.sim.stock import drive_stock_env
+
+    def drive(render_stride: int, on_frame: Any = None) -> Any:
+        return drive_stock_env(
+            args.scenario, args.seed, args.planner, args.controller, config,
+            reverse=args.reverse, render_stride=render_stride, on_frame=on_frame,
+        )
+
+    if not args.video or stride != 1:
+        return drive(stride if args.video else 0), 0
+    from rrtdrive.sim.video import even_frame, open_frames_video
+
+    with writing("--video", args.video):
+        writer = open_frames_video(args.video, float(config.sim.simulation_frequency))
+
+    def put(frame: Any) -> None:
+        with writing("--video", args.video):  # ffmpeg's failure surfaces here
+            writer.append(even_frame(frame))
+
+    try:
+        stock = drive(1, put)
+    except BaseException:
+        writer.abort()
+        raise
+    if writer.frames == 0:  # nothing was driven: no file
+        writer.abort()
+        return stock, 0
+    t0 = time.perf_counter()
+    with writing("--video", args.video):
+        writer.close()
+    # Encoding the last frames is not the episode's time.
+    close_s = time.perf_counter() - t0
+    return dataclasses.replace(stock, render_time_s=stock.render_time_s + close_s), writer.frames
 
 
 def episode_json(report: Any, extra: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -337,14 +382,9 @@ def _run(args: argparse.Namespace) -> int:
     )
     t0 = time.perf_counter()
     oncoming = getattr(args, "oncoming", 0) or 0
-    stock = None
+    stock, streamed = None, 0
     if target == "stock":
-        from rrtdrive.sim.stock import drive_stock_env
-
-        stock = drive_stock_env(
-            args.scenario, args.seed, args.planner, args.controller, config,
-            reverse=args.reverse, render_stride=stride if args.video else 0,
-        )
+        stock, streamed = _drive_stock(args, config, stride)
         episode = stock.episode
     else:
         scenario = _make_task(args, target, oncoming, traffic_opts, make_scenario)
@@ -367,9 +407,11 @@ def _run(args: argparse.Namespace) -> int:
     if stock is not None:
         extra.update(stock.to_json())
     if args.video and stock is not None:
-        if not stock.frames:
+        if not (stock.frames or streamed):
             extra["video"] = None
             print(f"rrtdrive simulate: no video: {episode.message}", file=sys.stderr)
+        elif streamed:
+            extra["video_frames"], extra["video"] = streamed, args.video
         else:
             from rrtdrive.sim.video import real_time_fps, write_frames
 

@@ -27,7 +27,7 @@ from rrtdrive.types import InputError, Pose, require_int
 
 __all__ = [
     "render_frames", "write_video", "write_frames", "frame_is_blank", "frame_indices",
-    "hud_gears", "real_time_fps",
+    "hud_gears", "real_time_fps", "open_frames_video", "even_frame",
 ]
 
 #: ``progress(frames_done, frames_total)``, called after each frame is handed to the encoder.
@@ -280,13 +280,12 @@ def write_video(
     return writer.frames
 
 
-def write_frames(
-    frames: Iterable[np.ndarray], target: str | os.PathLike[str], fps: float
-) -> int:
-    """Write ready RGB frames (any even or odd size) as an MP4; return the frame count.
+def open_frames_video(target: str | os.PathLike[str], fps: float) -> Mp4Writer:
+    """An :class:`~rrtdrive.sim.mp4.Mp4Writer` for frames drawn elsewhere (see :func:`even_frame`).
 
-    For frames drawn elsewhere (highway-env's own ``env.render()`` of a stock env);
-    odd sides are padded by one edge pixel. The file appears only when complete.
+    For highway-env's own ``env.render()`` of a stock env: a drive can stream its frames
+    into it as they are drawn instead of keeping them all (``rrtdrive simulate
+    parking-v0 --video``). The file appears only when the writer is closed.
     """
     out = FsPath(target)
     if out.suffix.lower() != ".mp4":
@@ -295,11 +294,27 @@ def write_frames(
         raise InputError(f"--video: folder {str(out.parent)!r} does not exist")
     if not (math.isfinite(fps) and fps > 0):
         raise InputError(f"fps: must be > 0, got {fps!r}")
-    with Mp4Writer(out, fps, quality=7, macro_block_size=2) as writer:
+    return Mp4Writer(out, fps, quality=7, macro_block_size=2)
+
+
+def even_frame(frame: np.ndarray) -> np.ndarray:
+    """An RGB frame as contiguous uint8 with even sides (odd ones padded by one edge pixel)."""
+    f = np.asarray(frame, dtype=np.uint8)
+    pad_h, pad_w = f.shape[0] % 2, f.shape[1] % 2
+    if pad_h or pad_w:
+        f = np.pad(f, ((0, pad_h), (0, pad_w), (0, 0)), mode="edge")
+    return np.ascontiguousarray(f)
+
+
+def write_frames(
+    frames: Iterable[np.ndarray], target: str | os.PathLike[str], fps: float
+) -> int:
+    """Write ready RGB frames (any even or odd size) as an MP4; return the frame count.
+
+    For frames drawn elsewhere (highway-env's own ``env.render()`` of a stock env);
+    odd sides are padded by one edge pixel. The file appears only when complete.
+    """
+    with open_frames_video(target, fps) as writer:
         for frame in frames:
-            f = np.asarray(frame, dtype=np.uint8)
-            pad_h, pad_w = f.shape[0] % 2, f.shape[1] % 2
-            if pad_h or pad_w:
-                f = np.pad(f, ((0, pad_h), (0, pad_w), (0, 0)), mode="edge")
-            writer.append(np.ascontiguousarray(f))
+            writer.append(even_frame(frame))
     return writer.frames
