@@ -230,3 +230,87 @@ def test_a_users_car_is_taken_whole():
     env = build_env(make_scenario("parking", 0, vehicle=wide_lock))
     assert env.unwrapped.config["action"]["steering_range"] == [-0.6109, 0.6109]
     env.close()
+
+
+# Session 31's QA pass of the API as a student would use it.
+
+
+def test_evaluate_names_a_wrong_argument_instead_of_an_attribute_error() -> None:
+    from rrtdrive.evaluation import evaluate
+
+    for wrong in (None, "parking", {"log": None}):
+        with pytest.raises(InputError, match=r"^episode: expected an Episode .* got "):
+            evaluate(wrong)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "says"),
+    [
+        ("max_time_s", "5", r"^episode\.max_time_s: expected a number, got str"),
+        ("controller_options", [1], r"^episode\.controller_options: expected a mapping"),
+        ("budget", None, r"^episode\.budget: expected a Budget, got NoneType"),
+        ("sim", {"simulation_frequency": 20}, r"^episode\.sim: expected a SimConfig"),
+        ("speed", 3.0, r"^episode\.speed: expected a SpeedConfig or None, got float"),
+        ("replan", {"rate_hz": 2}, r"^episode\.replan: expected a ReplanConfig or None"),
+        ("stop_on_crash", "no", r"^episode\.stop_on_crash: expected true or false"),
+    ],
+)
+def test_an_episode_config_names_a_field_of_the_wrong_kind(field, value, says) -> None:
+    from rrtdrive.sim.runner import EpisodeConfig
+
+    with pytest.raises(InputError, match=says):
+        EpisodeConfig(**{field: value})
+
+
+def test_run_episode_and_the_stock_drive_refuse_a_config_that_is_not_an_episode_config() -> None:
+    from rrtdrive.sim.runner import run_episode
+    from rrtdrive.sim.stock import drive_stock_env
+
+    for run in (run_episode, drive_stock_env):
+        with pytest.raises(InputError, match=r"^config: expected an EpisodeConfig, got dict"):
+            run("parking" if run is run_episode else "parking-v0",  # type: ignore[operator]
+                config={"max_time_s": 2.0})
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_a_path_with_a_non_finite_number_is_refused_naming_row_and_column(bad) -> None:
+    rows = np.array([[5.0, 5.0, 0.0, 0.0, 1.0], [6.0, 5.0, 0.0, 0.0, 1.0], [7.0, 5.0, 0, 0, 1]])
+    rows[1, 2] = bad
+    with pytest.raises(InputError, match=r"^path\.samples: must be finite, got .* in row 1, "
+                       r"column 2$"):
+        Path(rows, np.zeros((0, 2)))
+    with pytest.raises(InputError, match=r"^path\.waypoints: must be finite"):
+        Path(rows[[0, 2]], np.array([[0.0, 0.0], [bad, 1.0]]))
+
+
+def test_a_plan_result_shares_no_writable_data_with_its_planner_or_its_copies() -> None:
+    problem = PlanningProblem.from_map(builtin_map("parking_lot"))
+    res = make_planner("improved-rrt-connect").solve(
+        problem, np.random.default_rng(0), Budget(max_iterations=3000)
+    )
+    assert res.success, res.message
+    for array in (res.path.samples, res.raw_path, *(a for t in res.trees
+                                                     for a in (t.nodes, t.parents))):
+        assert not array.flags.writeable
+        with pytest.raises(ValueError, match="read-only"):
+            array[0] = 0
+    caller_rows = np.zeros((3, 2))
+    import dataclasses
+
+    copy = dataclasses.replace(res, raw_path=caller_rows)
+    caller_rows[0, 0] = 9.0  # the caller's own array stays writable and apart
+    assert copy.raw_path[0, 0] == 0.0 and caller_rows.flags.writeable
+    copy.stats["mine"] = 1.0
+    assert "mine" not in res.stats and isinstance(copy.stats, dict)
+
+
+def test_numpy_numbers_in_bounds_and_budget_become_plain_python_numbers() -> None:
+    import json
+
+    m = Map("np", np.array([0.0, 0.0, 30.0, 20.0]), (), START, GOAL)
+    assert m.bounds == (0.0, 0.0, 30.0, 20.0) and all(type(v) is float for v in m.bounds)
+    b = Budget(max_iterations=np.int64(100), max_time_s=np.float32(2.5))
+    assert type(b.max_iterations) is int and type(b.max_time_s) is float
+    assert json.dumps([b.max_iterations, b.max_time_s]) == "[100, 2.5]"
+    with pytest.raises(InputError, match=r"^bounds: expected \[xmin, ymin, xmax, ymax\]"):
+        Map("np", np.zeros((2, 2)), (), START, GOAL)

@@ -164,6 +164,8 @@ class Map:
                 "printed on one line: use printable characters"
             )
         b = self.bounds
+        if isinstance(b, np.ndarray) and b.ndim == 1:
+            b = tuple(b.tolist())  # four numbers from numpy, as Obstacle and Pose take them
         if not isinstance(b, (list, tuple)) or len(b) != 4:
             raise InputError(
                 f"bounds: expected [xmin, ymin, xmax, ymax], got {brief_repr(b)}"

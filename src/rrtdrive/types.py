@@ -9,7 +9,7 @@ from __future__ import annotations
 import enum
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -369,6 +369,14 @@ class Path:
         except (TypeError, ValueError):
             got = brief_repr(self.waypoints)
             raise InputError(f"path.waypoints: expected [x, y] pairs, got {got}") from None
+        for name, a in (("samples", s), ("waypoints", w)):
+            bad = np.argwhere(~np.isfinite(a))
+            if len(bad):
+                row, col = (int(v) for v in bad[0])
+                raise InputError(
+                    f"path.{name}: must be finite, got {float(a[row, col])!r} in row {row}, "
+                    f"column {col}"
+                )
         s.setflags(write=False)
         w.setflags(write=False)
         object.__setattr__(self, "samples", s)
@@ -435,6 +443,15 @@ class Path:
         return np.concatenate([[0.0], np.cumsum(steps)])
 
 
+def _read_only(values: Any, dtype: Any) -> np.ndarray:
+    """A read-only array of ``values`` that shares no memory with a writable caller's array."""
+    a = np.asarray(values, dtype=dtype)
+    if a.flags.writeable:
+        a = a.copy()
+        a.setflags(write=False)
+    return a
+
+
 @dataclass(frozen=True, eq=False)
 class Tree:
     """A search tree for plotting: node positions and parent indices (-1 for the root)."""
@@ -443,8 +460,8 @@ class Tree:
     parents: np.ndarray
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "nodes", np.asarray(self.nodes, dtype=float).reshape(-1, 2))
-        object.__setattr__(self, "parents", np.asarray(self.parents, dtype=np.int64).reshape(-1))
+        object.__setattr__(self, "nodes", _read_only(self.nodes, float).reshape(-1, 2))
+        object.__setattr__(self, "parents", _read_only(self.parents, np.int64).reshape(-1))
 
     def __len__(self) -> int:
         return len(self.nodes)
@@ -503,8 +520,11 @@ class Budget:
     max_time_s: float = 30.0
 
     def __post_init__(self) -> None:
-        require_int("budget.max_iterations", self.max_iterations)
+        # Plain Python numbers: a numpy scalar kept as given fails json.dumps later.
+        its = require_int("budget.max_iterations", self.max_iterations)
         require_positive("budget.max_time_s", self.max_time_s)
+        object.__setattr__(self, "max_iterations", its)
+        object.__setattr__(self, "max_time_s", float(self.max_time_s))
 
 
 @dataclass(frozen=True, eq=False)
@@ -532,7 +552,8 @@ class PlanResult:
     message : str
         Human-readable reason on failure, or a short summary.
     stats : dict
-        Extra per-planner statistics (floats and ints).
+        Extra per-planner statistics (floats and ints): the result's own copy, a plain
+        dict (``json.dumps`` takes it).
     setup_time_s : float
         Wall time of the per-map set-up this query triggered (connectivity labels,
         sampling cells, expanded obstacles, passage cells), outside ``planning_time_s``
@@ -556,7 +577,19 @@ class PlanResult:
     setup_time_s: float = 0.0
     diagnosis: Diagnosis | None = None
 
+    def __post_init__(self) -> None:
+        # Read-only arrays and a dict of its own: a result is not changed through
+        # another object that shares its data.
+        object.__setattr__(self, "raw_path", _read_only(self.raw_path, float))
+        object.__setattr__(self, "stats", dict(self.stats))
+
     @property
     def success(self) -> bool:
-        """True when a path was found and passed every check."""
+        """True when a path was found and passed the planner's own checks.
+
+        For ``improved-rrt-connect`` and ``hybrid-a-star`` that is the car's whole body,
+        curvature and headings; the baselines (``rrt``, ``rrt-connect``, ``rrt-star``)
+        check their tree's edges only and return raw paths that ``rrtdrive.verify``
+        fails (README, "Planners").
+        """
         return self.status.success

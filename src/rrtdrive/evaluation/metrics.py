@@ -34,6 +34,7 @@ from rrtdrive.evaluation.traffic_metrics import (
     progress,
     time_to_collision,
 )
+from rrtdrive.types import InputError
 
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.sim.episode import Episode
@@ -309,6 +310,15 @@ def evaluate(episode: Episode, config: EvalConfig | None = None) -> EpisodeRepor
     >>> report.success, report.cte_rms_m  # doctest: +SKIP
     (True, 0.02)
     """
+    from rrtdrive.sim.episode import Episode  # a leaf module: numpy only
+
+    if not isinstance(episode, Episode):
+        raise InputError(
+            f"episode: expected an Episode (what run_episode returns), got "
+            f"{type(episode).__name__}"
+        )
+    if config is not None and not isinstance(config, EvalConfig):
+        raise InputError(f"config: expected an EvalConfig, got {type(config).__name__}")
     ctx = MetricContext(episode, config or EvalConfig())
     values = {
         name: metric.fn(episode, ctx) if ctx.drove or not metric.needs_drive else metric.empty

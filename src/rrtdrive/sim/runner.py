@@ -13,7 +13,6 @@ so an episode is a pure function of its arguments.
 from __future__ import annotations
 
 import logging
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -26,7 +25,7 @@ from rrtdrive.sim.loop import STOP_AT_PATH_END, EpisodeLoop, PathTracker
 from rrtdrive.sim.scenes import SimConfig, build_env
 from rrtdrive.sim.tasks import DEFAULT_PLANNER, Task, make_scenario
 from rrtdrive.sim.traffic import OncomingGate
-from rrtdrive.types import Budget, InputError, Path, PlanResult
+from rrtdrive.types import Budget, InputError, Path, PlanResult, require_positive
 
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.sim.replanning import ReplanConfig
@@ -69,10 +68,32 @@ class EpisodeConfig:
     replan: ReplanConfig | None = None
 
     def __post_init__(self) -> None:
-        if self.max_time_s is not None and not (
-            math.isfinite(self.max_time_s) and self.max_time_s > 0
-        ):
-            raise InputError(f"episode.max_time_s: must be > 0, got {self.max_time_s!r}")
+        kinds: dict[str, tuple[type, bool]] = {
+            "sim": (SimConfig, False), "speed": (SpeedConfig, True), "budget": (Budget, False)
+        }
+        if self.replan is not None:
+            # Imported only then: it pulls in the space-time planner.
+            from rrtdrive.sim.replanning import ReplanConfig
+
+            kinds["replan"] = (ReplanConfig, True)
+        for name, (kind, optional) in kinds.items():
+            value = getattr(self, name)
+            if not (isinstance(value, kind) or (optional and value is None)):
+                raise InputError(
+                    f"episode.{name}: expected a {kind.__name__}"
+                    f"{' or None' if optional else ''}, got {type(value).__name__}"
+                )
+        if not isinstance(self.controller_options, Mapping):
+            raise InputError(
+                "episode.controller_options: expected a mapping of the controller's keyword "
+                f"arguments (gains), got {type(self.controller_options).__name__}"
+            )
+        if self.max_time_s is not None:
+            require_positive("episode.max_time_s", self.max_time_s)
+        if not isinstance(self.stop_on_crash, bool):
+            raise InputError(
+                f"episode.stop_on_crash: expected true or false, got {self.stop_on_crash!r}"
+            )
 
 
 def drive(
@@ -153,6 +174,8 @@ def run_episode(
     >>> evaluate(ep).success  # doctest: +SKIP
     True
     """
+    if config is not None and not isinstance(config, EpisodeConfig):
+        raise InputError(f"config: expected an EpisodeConfig, got {type(config).__name__}")
     config = config or EpisodeConfig()
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InputError(f"seed: need an integer >= 0, got {seed!r}")

@@ -209,6 +209,8 @@ def drive_stock_env(
     from rrtdrive.sim.scenes import scenario_rngs
 
     scenario_rngs(seed)  # validates the seed
+    if config is not None and not isinstance(config, EpisodeConfig):
+        raise InputError(f"config: expected an EpisodeConfig, got {type(config).__name__}")
     config = config or EpisodeConfig()
     params = vehicle or VehicleParams()
     freq = config.sim.simulation_frequency
