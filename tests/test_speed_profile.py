@@ -299,3 +299,25 @@ def _assert_every_peak_lasts(s: np.ndarray, kappa: np.ndarray, cfg: SpeedConfig)
             peaks += 1
         i = j + 1
     return peaks
+
+
+@settings(max_examples=200)
+@given(
+    v=st.lists(st.floats(0.0, 15.0) | st.just(float("inf")), min_size=1, max_size=300),
+    steps=st.lists(st.floats(0.0, 0.6) | st.just(0.0), min_size=300, max_size=300),
+    accel=st.floats(0.05, 4.0),
+    decel=st.floats(0.05, 4.0),
+)
+def test_the_accel_and_decel_passes_are_the_numpy_loop_bit_for_bit(v, steps, accel, decel):
+    # Session 31 moved the two passes from numpy scalars to Python floats (5.8x faster);
+    # the reference is the loop as it was, element by element on the array.
+    from rrtdrive.speed_profile import _accel_decel_passes
+
+    ref, ds = np.array(v), np.array(steps[: len(v) - 1])
+    for i in range(1, len(ref)):
+        ref[i] = min(ref[i], np.sqrt(ref[i - 1] ** 2 + 2.0 * accel * ds[i - 1]))
+    ref[-1] = 0.0
+    for i in range(len(ref) - 2, -1, -1):
+        ref[i] = min(ref[i], np.sqrt(ref[i + 1] ** 2 + 2.0 * decel * ds[i]))
+    got = np.array(_accel_decel_passes(list(v), ds.tolist(), accel, decel))
+    assert got.tobytes() == ref.tobytes()

