@@ -336,13 +336,13 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         observation, reward, terminated, truncated, info
             ``info`` has ``reward_terms`` (each term of the reward), ``cte_m``,
             ``heading_err_rad``, ``speed``, ``v_ref``, ``accel`` and ``steer`` (the
-            applied command), ``time_s``, ``crashed`` and ``episode_seed``; at the
-            end also ``status``, ``is_success`` and ``metrics`` (the evaluators'
-            report as a dict, ``NaN`` for a metric that does not apply).
+            applied command), ``time_s``, ``crashed`` and ``episode_seed``; at the end
+            also ``status``, ``is_success`` and ``metrics`` (:func:`_metrics_dict`).
         """
         loop = self._loop
         if self._sim is None or loop is None or loop.done:
-            raise RuntimeError("DriveEnv.step: call reset() first (the episode is over)")
+            why = "the episode is over" if loop is not None else "none since made or closed"
+            raise RuntimeError(f"DriveEnv.step: call reset() first ({why})")
         cfg = self.config
         residual = cfg.residual
         d_accel, d_steer = action_command(
@@ -582,8 +582,9 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
 def _metrics_dict(report: EpisodeReport) -> dict[str, Any]:
     """The report as a dict whose value types do not depend on the outcome.
 
-    A float metric that does not apply is ``NaN`` rather than ``None``, so that
-    gymnasium's vector environments can batch the dicts of several episodes. The
+    A metric that may not apply (``X | None``) is a float, ``NaN`` when it does not (a
+    yes/no 1.0 / 0.0): gymnasium's vector envs type a batch by its first value, and a
+    ``None`` read ``False`` in a bool batch (``TypeError`` in an int one). The
     wall-clock fields (:data:`~rrtdrive.evaluation.report.WALL_CLOCK_FIELDS`) are left
     out, so that a seeded episode's infos are the same on every run (gymnasium's
     ``check_env`` compares them; ``env.unwrapped.report`` has them).
@@ -592,8 +593,8 @@ def _metrics_dict(report: EpisodeReport) -> dict[str, Any]:
     for f in fields(report):
         if f.name in WALL_CLOCK_FIELDS:
             continue
-        v = getattr(report, f.name)
-        if v is None and "float" in str(f.type):
-            v = math.nan
+        v, kind = getattr(report, f.name), str(f.type)
+        if "None" in kind and any(t in kind for t in ("float", "int", "bool")):
+            v = math.nan if v is None else float(v)
         out[f.name] = v
     return out

@@ -216,6 +216,48 @@ def test_make_vec(mode):
         envs.close()
 
 
+@pytest.mark.parametrize("short_first", [False, True])
+def test_a_vector_env_batches_a_metric_that_does_not_apply_as_nan(short_first):
+    # Two sub-envs end in the same vector step: one after a single simulation step
+    # (nuPlan's comfort needs 0.3 s: it does not apply), one after ten. gymnasium types a
+    # batch by its first sub-env's value: a None after a True was batched as False, and
+    # a None after a count raised TypeError. Now the same floats in either order.
+    from gymnasium.vector import SyncVectorEnv
+
+    makers = [lambda: gym.make("rrtdrive/Parking-v0", max_time_s=0.5, action_repeat=10),
+              lambda: gym.make("rrtdrive/Parking-v0", max_time_s=0.05)]
+    if short_first:
+        makers.reverse()
+    envs = SyncVectorEnv(makers)
+    try:
+        envs.reset(seed=0)
+        _, _, terminated, truncated, info = envs.step(np.zeros((2, 2), np.float32))
+        assert (terminated | truncated).all()
+        short = 0 if short_first else 1
+        for name in ("nuplan_comfortable", "path_cusps", "gear_changes", "ttc_within_bound"):
+            batch = info["metrics"][name]
+            assert batch.dtype == np.float64, (name, batch)
+            report = envs.envs[short].unwrapped.report
+            want = getattr(report, name)
+            got = batch[short]
+            assert (math.isnan(got) if want is None else got == float(want)), (name, got, want)
+        assert math.isnan(info["metrics"]["nuplan_comfortable"][short])
+        assert info["metrics"]["nuplan_comfortable"][1 - short] in (0.0, 1.0)
+    finally:
+        envs.close()
+
+
+def test_a_closed_env_says_so_when_stepped():
+    env = gym.make("rrtdrive/Parking-v0", max_time_s=0.5, disable_env_checker=True)
+    env.reset(seed=0)
+    env.close()
+    with pytest.raises(RuntimeError, match=r"call reset\(\) first \(none since made or closed\)"):
+        env.unwrapped.step(np.zeros(2, np.float32))
+    env.reset(seed=0)  # and a reset starts again
+    env.step(np.zeros(2, np.float32))
+    env.close()
+
+
 def test_deterministic_for_a_seed():
     def rollout(seed):
         env = gym.make("rrtdrive/Parking-v0")
