@@ -41,7 +41,8 @@ def reference_body(x: float, y: float, yaw: float) -> shapely.Polygon:
 @pytest.fixture(scope="module")
 def coarse():
     m = builtin_map("parking_lot")
-    return m, CollisionChecker.for_map(m, config=SMALL_LIMIT)
+    with pytest.warns(InputWarning, match="^bounds: "):
+        return m, CollisionChecker.for_map(m, config=SMALL_LIMIT)
 
 
 def test_grid_resolution_keeps_small_maps_and_coarsens_big_ones():
@@ -85,7 +86,8 @@ def test_the_coarse_checker_reports_its_resolution(coarse):
     assert checker.grid_error == pytest.approx(checker.resolution * math.sqrt(2.0))
     with pytest.warns(InputWarning, match=f"^bounds: .* using {checker.resolution:g} m cells"):
         CollisionChecker.for_map(m, config=SMALL_LIMIT)
-    problem = PlanningProblem.from_map(m, config=SMALL_LIMIT)
+    with pytest.warns(InputWarning, match="^bounds: "):
+        problem = PlanningProblem.from_map(m, config=SMALL_LIMIT)
     res = make_planner("rrt-connect").solve(problem, np.random.default_rng(0), Budget())
     assert res.stats["grid_resolution_m"] == checker.resolution
 

@@ -236,8 +236,10 @@ def _clothoid_rows(rate: float, wheelbase: float, length: float, spacing: float)
 def test_sharpness_of_an_exact_clothoid_is_measured(rate, length, spacing):
     wheelbase = VehicleParams().wheelbase  # the map's car
     rows = _clothoid_rows(rate, wheelbase, length, spacing)
+    # The rows' yaw runs on past a full turn; the goal's is the same heading in (-pi, pi].
+    end = rows[-1]
     m = Map("open", (0.0, 0.0, 100.0, 100.0), (), Pose(17.0, 20.0, 0.0),
-            Pose(*rows[-1, :3]))
+            Pose(end[0], end[1], math.remainder(end[2], 2.0 * math.pi)))
     path = Path(np.round(rows, 6), np.zeros((0, 2)))  # as the JSON carries it
     kappa_end = rate / wheelbase * length
     # The largest rate is at kappa = 0; the estimate sits between the rate at the
