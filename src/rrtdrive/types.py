@@ -370,9 +370,8 @@ class Path:
             got = brief_repr(self.waypoints)
             raise InputError(f"path.waypoints: expected [x, y] pairs, got {got}") from None
         for name, a in (("samples", s), ("waypoints", w)):
-            bad = np.argwhere(~np.isfinite(a))
-            if len(bad):
-                row, col = (int(v) for v in bad[0])
+            if not np.isfinite(a).all():
+                row, col = (int(v) for v in np.argwhere(~np.isfinite(a))[0])
                 raise InputError(
                     f"path.{name}: must be finite, got {float(a[row, col])!r} in row {row}, "
                     f"column {col}"
