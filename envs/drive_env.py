@@ -594,7 +594,7 @@ def _metrics_dict(report: EpisodeReport) -> dict[str, Any]:
         if f.name in WALL_CLOCK_FIELDS:
             continue
         v, kind = getattr(report, f.name), str(f.type)
-        if "None" in kind and any(t in kind for t in ("float", "int", "bool")):
+        if kind in ("float | None", "int | None", "bool | None"):
             v = math.nan if v is None else float(v)
         out[f.name] = v
     return out
