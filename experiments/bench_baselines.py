@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rrtdrive.cli_args import positive_int
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import resolve_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem, make_planner
@@ -198,7 +199,9 @@ def markdown(report: dict) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--seeds", type=int, default=20, help="runs per planner (seeds 0..N-1)")
+    parser.add_argument(
+        "--seeds", type=positive_int, default=20, help="runs per planner (seeds 0..N-1)"
+    )
     parser.add_argument("--map", default="parking_lot", help="built-in map name or map file")
     parser.add_argument("--out", default="results/", help="output folder")
     parser.add_argument("--planners", nargs="+", default=list(BASELINES), choices=BASELINES,

@@ -31,6 +31,7 @@ import time
 from pathlib import Path
 
 from rrtdrive.atomic import write_text_atomic
+from rrtdrive.cli_args import positive_int
 
 BEGIN, END = "<!-- bench_cli_startup: begin -->", "<!-- bench_cli_startup: end -->"
 HEAVY = (
@@ -75,7 +76,7 @@ def heavy_modules(args: list[str]) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeats", type=int, default=15,
+    ap.add_argument("--repeats", type=positive_int, default=15,
                     help="timed rounds per command, >= 1 (default: %(default)s)")
     ap.add_argument("--out", default="results",
                     help="directory for bench_cli_startup.json and .md (default: %(default)s)")

@@ -32,6 +32,7 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
+from rrtdrive.cli_args import positive_int
 from rrtdrive.controllers import SpeedConfig, make_controller
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim.runner import drive, run_episode
@@ -96,9 +97,9 @@ def time_env_step(ep, sim: SimConfig) -> float:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
-    ap.add_argument("--seeds", type=int, default=10,
+    ap.add_argument("--seeds", type=positive_int, default=10,
                     help="seeds 0..N-1 per scenario and controller (default: %(default)s)")
-    ap.add_argument("--repeats", type=int, default=3,
+    ap.add_argument("--repeats", type=positive_int, default=3,
                     help="timed runs per episode; the minimum counts (default: %(default)s)")
     ap.add_argument("--frequency", type=int, default=20,
                     help="simulation frequency of the timed runs [Hz] (default: %(default)s)")

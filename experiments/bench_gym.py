@@ -28,6 +28,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 from results_io import command, machine, write_results  # noqa: E402  (the sibling script)
 
 import rrtdrive.envs  # noqa: E402,F401  (registers the environments)
+from rrtdrive.cli_args import positive_int  # noqa: E402
 
 ENV_IDS = ("rrtdrive/Parking-v0", "rrtdrive/Overtake-v0")
 
@@ -88,7 +89,8 @@ def report(payload: dict[str, Any]) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--steps", type=int, default=400, help="steps per run (default 400)")
-    ap.add_argument("--repeats", type=int, default=3, help="runs, the best kept (default 3)")
+    ap.add_argument("--repeats", type=positive_int, default=3,
+                    help="runs, the best kept (default 3)")
     ap.add_argument("--out", default=None, help="write bench_gym.json and .md here")
     args = ap.parse_args(argv)
     if args.steps < 1 or args.repeats < 1:

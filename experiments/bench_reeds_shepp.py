@@ -38,6 +38,7 @@ from pathlib import Path as FsPath
 import numpy as np
 
 from rrtdrive.atomic import write_text_atomic
+from rrtdrive.cli_args import positive_int
 from rrtdrive.planning.reeds_shepp import (
     reeds_shepp_distance,
     reeds_shepp_paths,
@@ -99,7 +100,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--pairs", type=int, default=1000,
                     help="random start/goal pose pairs, >= 1 (default: %(default)s)")
-    ap.add_argument("--repeats", type=int, default=5,
+    ap.add_argument("--repeats", type=positive_int, default=5,
                     help="timed passes over all pairs per function, >= 1 (default: %(default)s)")
     ap.add_argument("--radius", type=float, default=6.0,
                     help="minimum turning radius [m], > 0 (default: %(default)s)")

@@ -52,6 +52,7 @@ import time
 from pathlib import Path
 
 from rrtdrive.bench import BenchConfig, run_bench
+from rrtdrive.cli_args import positive_int
 from rrtdrive.maps import write_text_atomic
 
 GRIDS = {
@@ -175,7 +176,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--grids", default="closed-loop,planning",
                         help="comma-separated grids: closed-loop, planning (default: both)")
-    parser.add_argument("--repeats", type=int, default=2,
+    parser.add_argument("--repeats", type=positive_int, default=2,
                         help="1- and 2-worker trial pairs per grid (default: %(default)s)")
     parser.add_argument("--out", default="results",
                         help="directory for bench_scaling.json and .md (default: %(default)s)")

@@ -34,6 +34,7 @@ from pathlib import Path as FsPath
 import numpy as np
 from highway_env.road.road import Road
 
+from rrtdrive.cli_args import positive_int
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim import scenes
 from rrtdrive.sim.episode import Episode
@@ -75,9 +76,9 @@ def _same(a: Episode, b: Episode) -> bool:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--seeds", type=int, default=10,
+    ap.add_argument("--seeds", type=positive_int, default=10,
                     help="episodes per case, seeds 0..N-1 (default: %(default)s)")
-    ap.add_argument("--repeats", type=int, default=3,
+    ap.add_argument("--repeats", type=positive_int, default=3,
                     help="runs per episode and arm; the minimum counts (default: %(default)s)")
     ap.add_argument("--cases", default=",".join(CASES),
                     help="comma-separated cases (default: %(default)s)")

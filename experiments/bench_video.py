@@ -37,6 +37,7 @@ from pathlib import Path as FsPath
 
 import imageio.v2 as imageio
 
+from rrtdrive.cli_args import positive_int
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim.runner import run_episode
 from rrtdrive.sim.video import frame_is_blank, render_frames, write_video
@@ -71,7 +72,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="episode seed (default: %(default)s)")
     ap.add_argument("--controller", default="pure-pursuit",
                     help="pure-pursuit, stanley or lqr (default: %(default)s)")
-    ap.add_argument("--repeats", type=int, default=3,
+    ap.add_argument("--repeats", type=positive_int, default=3,
                     help="interleaved timing rounds, >= 1; medians reported (default: %(default)s)")
     ap.add_argument("--out", default="results",
                     help="directory for bench_video.json and .md (default: %(default)s)")

@@ -3,7 +3,7 @@
 Usage::
 
     python experiments/closed_loop.py --seeds 50 --jobs 2 --out results \
-        --doc docs/closed_loop.md --figures docs/figures
+        --doc DOC.md --figures docs/figures
 
 For every scenario (``parking``, ``overtake`` with the stopped car,
 ``overtake-oncoming`` with ``--oncoming`` oncoming cars as well), controller (pure
@@ -11,7 +11,8 @@ pursuit, Stanley, LQR) and seed 0..seeds-1: plan, drive in highway-env at the
 simulation frequency, evaluate (:func:`rrtdrive.evaluation.evaluate`). Writes
 ``OUT/closed_loop.json`` (every report, the summaries, the resolved settings and
 the command) and ``OUT/closed_loop.md``; with ``--doc`` the same table and a few
-frames (PNG) of seed 0 for the docs.
+frames (PNG) of seed 0 for the docs (a new page, or one holding this script's
+generated block: docs/closed_loop.md is a hand-written log without one and is refused).
 
 The gear-change scenarios (issue 14) and stock highway-env envs::
 
@@ -44,7 +45,7 @@ import time
 from pathlib import Path as FsPath
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parent))
-from results_io import check_doc, write_doc, write_image_atomic  # noqa: E402
+from results_io import check_doc, out_folder, write_doc, write_image_atomic  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
 from rrtdrive.cli_args import positive_int  # noqa: E402
@@ -265,9 +266,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="registered planner name (default: %(default)s)")
     ap.add_argument("--frequency", type=int, default=20,
                     help="control and simulation frequency [Hz] (default: %(default)s)")
-    ap.add_argument("--jobs", type=int, default=2,
+    ap.add_argument("--jobs", type=positive_int, default=2,
                     help="worker processes (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", default="results", type=out_folder,
                     help="directory for NAME.json and .md, NAME from --name (default: %(default)s)")
     ap.add_argument("--doc", default=None, help="also write this markdown page (with frames)")
     ap.add_argument(
@@ -275,6 +276,8 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = ap.parse_args(argv)
     check_doc(args.doc, "closed_loop.py")
+    if not args.name or args.name in (".", "..") or os.sep in args.name or "/" in args.name:
+        ap.error(f"--name: a file stem inside --out, not a path, got {args.name!r}")
     raw = argv if argv is not None else sys.argv[1:]
     scenarios = [x for item in args.scenarios for x in item.split(",") if x]
     if args.stock and "--scenarios" not in raw:

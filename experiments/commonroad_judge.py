@@ -26,6 +26,7 @@ from pathlib import Path
 
 from rrtdrive.atomic import write_text_atomic
 from rrtdrive.bench.backends import episode_progress, parallel_map
+from rrtdrive.cli_args import positive_int
 from rrtdrive.commonroad_judge import COMMONROAD_STEER_RATE, commonroad_available, judge_trajectory
 from rrtdrive.evaluation import evaluate
 from rrtdrive.sim.runner import run_episode
@@ -68,7 +69,7 @@ def run_one(job: tuple[str, str, int, float | None, float]) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", type=int, default=10,
+    ap.add_argument("--seeds", type=positive_int, default=10,
                     help="seeds 0..N-1 per scenario and controller (default: %(default)s)")
     ap.add_argument("--scenarios", default="parking,overtake",
                     help="comma-separated scenario names (default: %(default)s)")
@@ -83,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
         help="drive random maps 0..N-1 (experiments/random_maps.py) with reverse instead "
         "of --scenarios and --seeds",
     )
-    ap.add_argument("--jobs", type=int, default=2,
+    ap.add_argument("--jobs", type=positive_int, default=2,
                     help="worker processes (default: %(default)s)")
     ap.add_argument("--out", default="results",
                     help="directory for commonroad_judge[_TAG].json and .md (default: %(default)s)")

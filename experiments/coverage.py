@@ -57,7 +57,7 @@ import numpy as np
 sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 from coverage_report import SHARPNESS_BOUND, report, tight_report  # noqa: E402
 from random_goals import draw_goals  # noqa: E402  (the sibling script's pose sets)
-from results_io import check_doc, write_doc  # noqa: E402
+from results_io import check_doc, out_folder, write_doc  # noqa: E402
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
 from rrtdrive.bench.backends import parallel_map  # noqa: E402
@@ -428,9 +428,9 @@ def main(argv: list[str] | None = None) -> int:
                     "planner, ompl-dubins-rrt, ompl-rs-rrtconnect (default: %(default)s)")
     ap.add_argument("--max-time", type=float, default=5.0, help="our planners' budget [s]")
     ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time cap [s]")
-    ap.add_argument("--jobs", type=int, default=2,
+    ap.add_argument("--jobs", type=positive_int, default=2,
                     help="worker processes (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", default="results", type=out_folder,
                     help="directory for coverage_MAP.json and .md, or coverage_tight.* "
                     "(default: %(default)s)")
     ap.add_argument("--doc", default=None, help="also write this markdown page")
@@ -448,6 +448,11 @@ def main(argv: list[str] | None = None) -> int:
         ap.error("--count must be >= 1 and --sets a list of goal, start")
     wanted = [p for p in args.planners.split(",") if p]
     skipped = {p: why for p in wanted if (why := availability(p)) is not None}
+    # Only an optional comparator that is not installed is skipped; a misspelt name or
+    # option is the command's mistake (it was listed as skipped, and the run exited 0).
+    wrong = {p: why for p, why in skipped.items() if not why.startswith("OMPL is not installed")}
+    if wrong:
+        raise InputError("--planners: " + "; ".join(f"{p}: {w}" for p, w in wrong.items()))
     planners = [p for p in wanted if p not in skipped]
     for p, why in skipped.items():
         print(f"skipping {p}: {why}", file=sys.stderr)

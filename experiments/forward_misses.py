@@ -39,6 +39,7 @@ sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 import coverage as cov  # noqa: E402  (the sibling script)
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
+from rrtdrive.cli_args import positive_int  # noqa: E402
 from rrtdrive.planning import make_planner  # noqa: E402
 from rrtdrive.planning.smoothing import max_sharpness  # noqa: E402
 from rrtdrive.types import Budget  # noqa: E402
@@ -204,7 +205,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--query", default="start:81",
                     help="goal:N or start:N, comma-separated (default start:81)")
     ap.add_argument("--seed", type=int, default=1, help="the random set's seed (default 1)")
-    ap.add_argument("--count", type=int, default=100, help="poses per set (default 100)")
+    ap.add_argument("--count", type=positive_int, default=100, help="poses per set (default 100)")
     ap.add_argument("--variants", default=",".join(SHORT),
                     help="our settings to run, comma-separated (default: all of "
                     f"{', '.join(SHORT)})")

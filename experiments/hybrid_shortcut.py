@@ -32,6 +32,7 @@ sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 import coverage as cov  # noqa: E402  (the sibling script)
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
+from rrtdrive.cli_args import positive_int  # noqa: E402
 from rrtdrive.planning import make_planner  # noqa: E402
 from rrtdrive.planning.smoothing import max_sharpness  # noqa: E402
 from rrtdrive.types import Budget  # noqa: E402
@@ -108,7 +109,7 @@ def report(payload: dict[str, Any]) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--tries", type=int, default=40, help="shortcut_tries of the 'with' runs")
-    ap.add_argument("--count", type=int, default=100, help="poses per set (default 100)")
+    ap.add_argument("--count", type=positive_int, default=100, help="poses per set (default 100)")
     ap.add_argument("--out", default="results/hybrid_shortcut",
                     help="directory for hybrid_shortcut.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)

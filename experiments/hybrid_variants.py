@@ -51,6 +51,7 @@ sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 from random_goals import draw_goals  # noqa: E402
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
+from rrtdrive.cli_args import positive_int  # noqa: E402
 from rrtdrive.maps import builtin_map  # noqa: E402
 from rrtdrive.planning import PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.planning.hybrid import HybridConfig  # noqa: E402
@@ -206,10 +207,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--sets", default="rev,fwd,gear", help="of rev, fwd, gear, turns (default rev,fwd,gear)"
     )
-    ap.add_argument("--count", type=int, default=30, help="random poses per set (default 30)")
+    ap.add_argument("--count", type=positive_int, default=30,
+                    help="random poses per set (default 30)")
     ap.add_argument("--seed", type=int, default=1, help="seed of the pose sets (default 1)")
     ap.add_argument("--scenario-seeds", type=int, default=10, help="seeds per gear scenario")
-    ap.add_argument("--repeat", type=int, default=2,
+    ap.add_argument("--repeat", type=positive_int, default=2,
                     help="plans per query and variant, the least CPU time kept (default 2)")
     ap.add_argument("--out", default="results/hybrid_variants",
                     help="directory for hybrid_variants.json and .md (default: %(default)s)")

@@ -30,6 +30,7 @@ import sys
 from pathlib import Path as FsPath
 
 import numpy as np
+from results_io import out_folder  # the sibling module
 
 from rrtdrive.cli_args import positive_int
 from rrtdrive.maps import builtin_map, write_text_atomic
@@ -78,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
     add_pose_set_options(ap)
     ap.add_argument("--max-time", type=float, default=5.0,
                     help="wall-clock safety cap per plan [s] (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", default="results", type=out_folder,
                     help="directory for random_{goals,starts}_MAP.json and .md "
                     "(default: %(default)s)")
     args = ap.parse_args(argv)

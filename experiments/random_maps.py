@@ -40,6 +40,7 @@ from results_io import cell, command, machine, write_results  # noqa: E402
 from street_turns import least_clearance  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
+from rrtdrive.cli_args import positive_int  # noqa: E402
 from rrtdrive.maps import Map, Obstacle  # noqa: E402
 from rrtdrive.planning import PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.types import Budget, InputError, Pose  # noqa: E402
@@ -174,14 +175,14 @@ def report(payload: dict[str, Any]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--maps", type=int, default=100, help="random maps (default 100)")
+    ap.add_argument("--maps", type=positive_int, default=100, help="random maps (default 100)")
     ap.add_argument("--planners", default=DEFAULT_PLANNERS,
                     help=f"our planner specs, comma-separated (default {DEFAULT_PLANNERS})")
     ap.add_argument("--max-time", type=float, default=10.0, help="our safety cap, s")
     ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time, s")
     ap.add_argument("--forward", action="store_true",
                     help="plan forward only (OMPL: Dubins RRT) instead of with reverse")
-    ap.add_argument("--jobs", type=int, default=1, help="worker processes")
+    ap.add_argument("--jobs", type=positive_int, default=1, help="worker processes")
     ap.add_argument("--out", required=True, help="directory for random_maps.{json,md}")
     args = ap.parse_args(argv)
     if args.maps < 1 or args.jobs < 1 or args.max_time <= 0 or args.ompl_time <= 0:

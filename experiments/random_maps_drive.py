@@ -29,6 +29,7 @@ from random_maps import random_map  # noqa: E402
 from results_io import cell, command, machine, write_results  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
+from rrtdrive.cli_args import positive_int  # noqa: E402
 from rrtdrive.types import VehicleParams  # noqa: E402
 
 CONTROLLERS = ("pure-pursuit", "stanley", "lqr")
@@ -127,12 +128,13 @@ def report(payload: dict[str, Any]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--maps", type=int, default=200, help="maps: seeds 0..N-1 (default 200)")
+    ap.add_argument("--maps", type=positive_int, default=200,
+                    help="maps: seeds 0..N-1 (default 200)")
     ap.add_argument("--seeds", default=None, metavar="S,S,...",
                     help="these map seeds instead of 0..--maps - 1")  # fmt: skip
     ap.add_argument("--controllers", default=",".join(CONTROLLERS), help="comma-separated")
     ap.add_argument("--planner", default="improved-rrt-connect", help="planner (the default's)")
-    ap.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
+    ap.add_argument("--jobs", type=positive_int, default=1, help="worker processes (default 1)")
     ap.add_argument("--out", default="results/random_maps_drive",
                     help="directory for random_maps_drive.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)

@@ -75,12 +75,37 @@ def write_results(
     return text
 
 
+def out_folder(text: str) -> str:
+    """An argparse type for an output folder: refused before the run when it cannot be one.
+
+    A file there, or a file where a parent folder should be, or a folder this user
+    cannot write into; found at the end, it lost a whole run's episodes.
+
+    Examples
+    --------
+    >>> out_folder("results/new/deeper")
+    'results/new/deeper'
+    """
+    import argparse
+
+    for folder in (FsPath(text), *FsPath(text).parents):
+        if folder.exists():
+            if not folder.is_dir():
+                why = "is" if folder == FsPath(text) else "(a parent) is"
+                raise argparse.ArgumentTypeError(f"{str(folder)!r} {why} a file, not a folder")
+            if not os.access(folder, os.W_OK | os.X_OK):
+                raise argparse.ArgumentTypeError(f"cannot write into {str(folder)!r}")
+            break
+    return text
+
+
 def run_main(main: Callable[[], int | None]) -> int:
     """A script's ``main()``, with bad input as one line on stderr and exit 2.
 
     :class:`~rrtdrive.types.InputError` (an unknown map, scenario or planner) and a
     missing input file end the script with ``SCRIPT: error: ...`` instead of a
-    traceback; Ctrl-C with exit 130.
+    traceback; Ctrl-C with exit 130; an output that cannot be written with one line and
+    exit 1.
     """
     from rrtdrive.types import InputError
 
@@ -92,8 +117,12 @@ def run_main(main: Callable[[], int | None]) -> int:
     except FileNotFoundError as exc:
         print(f"{name}: error: {exc.filename}: no such file", file=sys.stderr)
     except KeyboardInterrupt:
-        print(f"{name}: interrupted", file=sys.stderr)
+        print(f"\n{name}: interrupted", file=sys.stderr)  # after an unfinished progress line
         return 130
+    except OSError as exc:  # an output that cannot be written: a run failure, not bad input
+        where = exc.filename or "an output"
+        print(f"{name}: error: cannot write {where}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
     return 2
 
 

@@ -40,6 +40,7 @@ sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 from coverage import _options  # noqa: E402  (the "field=value:..." parser)
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
+from rrtdrive.cli_args import positive_int  # noqa: E402
 from rrtdrive.planning import PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.planning.hybrid.escalation import stage_of  # noqa: E402
 from rrtdrive.sim.scenes import scenario_rngs  # noqa: E402
@@ -137,7 +138,7 @@ def report(payload: dict[str, Any]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--seeds", type=int, default=100, help="seeds per set")
+    ap.add_argument("--seeds", type=positive_int, default=100, help="seeds per set")
     ap.add_argument("--sets", default=",".join(SETS), help=f"comma-separated of {SETS}")
     ap.add_argument("--old", default="escalation_first=never:reverse_postprocess_attempts=6",
                     help="planner options of the old plans (field=value:...)")  # fmt: skip

@@ -29,8 +29,11 @@ import time
 from collections import Counter
 from pathlib import Path as FsPath
 
+from results_io import out_folder  # the sibling module
+
 from rrtdrive.atomic import write_text_atomic
 from rrtdrive.bench.backends import episode_progress, parallel_map
+from rrtdrive.cli_args import positive_int
 from rrtdrive.evaluation import evaluate
 from rrtdrive.evaluation.nuplan_comfort import COMFORT_BOUNDS
 from rrtdrive.sim.replanning import ReplanConfig
@@ -208,7 +211,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--steer-rate", default="0.4",
                     help="the ego's steering rate limit in rad/s, or 'none' (instant)")
-    ap.add_argument("--seeds", type=int, default=50,
+    ap.add_argument("--seeds", type=positive_int, default=50,
                     help="seeds 0..N-1 per scenario and controller (default: %(default)s)")
     ap.add_argument("--scenarios", default="parking,overtake",
                     help="comma-separated: parking, overtake, overtake-traffic\n"
@@ -221,9 +224,9 @@ def main(argv: list[str] | None = None) -> int:
                     "baseline's raw paths, which jump in curvature)")
     ap.add_argument("--frequency", type=int, default=20,
                     help="control and simulation frequency [Hz] (default: %(default)s)")
-    ap.add_argument("--jobs", type=int, default=2,
+    ap.add_argument("--jobs", type=positive_int, default=2,
                     help="worker processes (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", default="results", type=out_folder,
                     help="directory for steer_rate[_TAG].json and .md (default: %(default)s)")
     ap.add_argument("--tag", default="",
                     help="output name suffix: steer_rate_TAG.json and .md (default: none)")

@@ -34,8 +34,10 @@ from pathlib import Path as FsPath
 
 import matplotlib.pyplot as plt
 import numpy as np
+from results_io import out_folder  # the sibling module
 
 from rrtdrive.cli_args import positive_int
+from rrtdrive.json_safe import json_safe
 from rrtdrive.maps import builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.planning.base import polyline_curvature
@@ -104,7 +106,8 @@ def describe(values: list[float]) -> dict[str, float]:
     if not vals:
         return {"mean": float("nan"), "std": float("nan"), "ci95": float("nan"), "n": 0}
     s = stat_describe(vals)  # Student's t, as the paper's table
-    std, half = (s.std, s.ci_high - s.mean) if s.n > 1 else (0.0, 0.0)
+    # One run has no spread: NaN (null in the JSON, "–" in the table), not 0.
+    std, half = (s.std, s.ci_high - s.mean) if s.n > 1 else (float("nan"), float("nan"))
     return {"mean": s.mean, "std": std, "ci95": float(half), "n": s.n}
 
 
@@ -112,6 +115,8 @@ def fmt(d: dict[str, float], digits: int = 2, scale: float = 1.0) -> str:
     if d["n"] == 0:
         return "–"
     m, s, c = d["mean"] * scale, d["std"] * scale, d["ci95"] * scale
+    if d["n"] == 1:
+        return f"{m:.{digits}f} ± – [±–]"
     return f"{m:.{digits}f} ± {s:.{digits}f} [±{c:.{digits}f}]"
 
 
@@ -165,7 +170,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--runs", type=positive_int, default=20, help="seeds per planner and map")
     parser.add_argument("--maps", default="parking_lot,overtake",
                         help="comma-separated built-in map names (default: %(default)s)")
-    parser.add_argument("--out", default="results",
+    parser.add_argument("--out", default="results", type=out_folder,
                         help="directory for table3.json and .md (default: %(default)s)")
     parser.add_argument(
         "--figures", default=None,
@@ -301,7 +306,9 @@ def main(argv: list[str] | None = None) -> int:
             "",
         ]
         md += [f"![{w}]({FIGURE_LINK}{w})" for w in written] + [""]
-    write_text_atomic(out / "table3.json", json.dumps(report, indent=1) + "\n")
+    # Strict JSON: a mean or spread that does not exist is null, not a bare NaN.
+    text = json.dumps(json_safe(report), indent=1, allow_nan=False)
+    write_text_atomic(out / "table3.json", text + "\n")
     text = "\n".join(md)
     for page in (out / "table3.md", *([FsPath(args.doc)] if args.doc else [])):
         rel = os.path.relpath(fig_dir, page.parent).replace(os.sep, "/") + "/"

@@ -30,6 +30,7 @@ from collections import Counter
 from pathlib import Path as FsPath
 
 import numpy as np
+from results_io import out_folder  # the sibling module
 
 from rrtdrive.bench.backends import episode_progress, parallel_map
 from rrtdrive.cli_args import positive_int
@@ -242,9 +243,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="no pull-out past a slow lead and plain IDM's gap behind it\n"
                     "(the re-planner before session 28)")
     ap.add_argument("--rate", type=float, default=4.0, help="re-planning rate in Hz (2-5)")
-    ap.add_argument("--jobs", type=int, default=2,
+    ap.add_argument("--jobs", type=positive_int, default=2,
                     help="worker processes (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", default="results", type=out_folder,
                     help="directory for traffic[_TAG].json and .md (default: %(default)s)")
     ap.add_argument("--tag", default="", help="suffix of the output names (variants)")
     ap.add_argument("--figures", default=None, help="write the tight-case video and frames here")

@@ -9,6 +9,7 @@ few scripts only: each imports heavy libraries (highway-env, shapely, ...), abou
 from __future__ import annotations
 
 import ast
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -80,3 +81,56 @@ def test_help_runs_and_lists_every_option(script):
         for flag in call.args:
             if isinstance(flag, ast.Constant) and str(flag.value).startswith("--"):
                 assert flag.value in proc.stdout, f"{script}: {flag.value} not in --help"
+
+
+#: Flags that count runs, seeds, repetitions or workers: 0 or a negative count ran
+#: nothing and wrote an empty table over real results (steer_rate.py --seeds 0, exit 0).
+COUNT_FLAGS = {"--seeds", "--runs", "--repeat", "--repeats", "--jobs", "--count"}
+
+
+@pytest.mark.parametrize("script", SCRIPTS)
+def test_a_count_flag_takes_integers_from_one(script):
+    for call in _add_argument_calls(script):
+        names = {a.value for a in call.args if isinstance(a, ast.Constant)}
+        if not names & COUNT_FLAGS:
+            continue
+        kind = next((k.value for k in call.keywords if k.arg == "type"), None)
+        if kind is None:
+            continue  # a list given as text (random_maps_drive.py --seeds S,S,...)
+        assert ast.unparse(kind).endswith("positive_int"), (script, sorted(names))
+
+
+def test_an_output_folder_that_cannot_be_one_is_refused_before_the_run(tmp_path):
+    # It was a traceback after every episode had run (the run lost).
+    sys.path.insert(0, str(EXPERIMENTS))
+    import argparse
+
+    from results_io import out_folder, run_main
+
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    for bad, why in ((afile, "is a file"), (afile / "sub", "(a parent) is a file")):
+        with pytest.raises(argparse.ArgumentTypeError, match=re.escape(why)):
+            out_folder(str(bad))
+    assert out_folder(str(tmp_path / "new" / "deeper")) == str(tmp_path / "new" / "deeper")
+    proc = subprocess.run(
+        [sys.executable, str(EXPERIMENTS / "table3.py"), "--runs", "1", "--out", str(afile)],
+        capture_output=True, text=True, timeout=120, check=False,
+    )
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert "argument --out:" in proc.stderr and "is a file, not a folder" in proc.stderr
+
+    def unwritable() -> int:
+        raise PermissionError(13, "Permission denied", str(tmp_path / "x.json"))
+
+    assert run_main(unwritable) == 1  # one line, exit 1: a run failure, not bad input
+
+
+def test_a_misspelt_planner_is_refused_not_skipped(tmp_path):
+    proc = subprocess.run(
+        [sys.executable, str(EXPERIMENTS / "coverage.py"), "--planners",
+         "improved-rrt-connect,hybrid-a-stra", "--count", "1", "--out", str(tmp_path)],
+        capture_output=True, text=True, timeout=120, check=False,
+    )
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert "--planners: hybrid-a-stra: planner 'hybrid-a-stra' is not registered" in proc.stderr
