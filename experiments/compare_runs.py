@@ -87,6 +87,8 @@ def compare(before: str, after: str) -> str:
     """The markdown page comparing the runs in files ``before`` and ``after``."""
     old, new = _load(before), _load(after)
     keys = sorted(set(old) & set(new))
+    if not keys:  # two unrelated runs gave an empty table and exit 0
+        raise ValueError("the two runs share no episode (scenario, controller and seed)")
     groups: dict[tuple[str, str], list[tuple[str, str, int]]] = {}
     for key in keys:
         groups.setdefault(key[:2], []).append(key)
@@ -122,9 +124,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("after", help="the later run's JSON")
     ap.add_argument("--out", default=None, help="also write the page to this file")
     args = ap.parse_args(argv)
+    if args.out and (args.out.endswith(("/", os.sep)) or Path(args.out).is_dir()):
+        print(f"compare_runs: error: --out: {args.out!r} is a folder; give the page's file "
+              "name", file=sys.stderr)
+        return 2
     try:
         page = compare(args.before, args.after)
-    except (OSError, KeyError, ValueError) as exc:
+    except KeyError as exc:  # another kind of JSON: say which field is missing
+        print(f"compare_runs: cannot read the runs: no field {exc} (give the JSON files that "
+              "experiments/closed_loop.py or steer_rate.py write)", file=sys.stderr)
+        return 2
+    except (OSError, ValueError) as exc:
         print(f"compare_runs: cannot read the runs: {exc}", file=sys.stderr)
         return 2
     line = command("compare_runs.py", argv)

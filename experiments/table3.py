@@ -182,6 +182,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     # Nothing under docs/ changes unless asked: --doc and --figures name those targets.
+    maps = {name: builtin_map(name) for name in args.maps.split(",")}  # every name before any work
     out = FsPath(args.out)
     fig_dir = FsPath(args.figures) if args.figures else out / "figures"
     out.mkdir(parents=True, exist_ok=True)
@@ -210,8 +211,8 @@ def main(argv: list[str] | None = None) -> int:
         "times are this machine's that day, the other columns the same on any machine.",
         "",
     ]
-    for map_name in args.maps.split(","):
-        problem = PlanningProblem.from_map(builtin_map(map_name))
+    for map_name, the_map in maps.items():
+        problem = PlanningProblem.from_map(the_map)
         rows: dict[str, list[dict]] = {}
         examples: dict[str, object] = {}
         for name in METHODS:

@@ -48,3 +48,18 @@ def test_matched_episodes_are_compared_cell_by_cell(tmp_path):
 def test_a_missing_file_is_a_clear_error(tmp_path, capsys):
     assert compare_runs.main([str(tmp_path / "none.json"), str(tmp_path / "x.json")]) == 2
     assert "cannot read the runs" in capsys.readouterr().err
+
+
+def test_unrelated_runs_another_json_and_a_folder_out_are_refused(tmp_path, capsys):
+    a, b, other = tmp_path / "a.json", tmp_path / "b.json", tmp_path / "other.json"
+    a.write_text(json.dumps({"reports": [_report(0, 10.0, 20.0, True)]}))
+    b.write_text(json.dumps({"reports": [_report(5, 10.0, 20.0, True)]}))
+    other.write_text(json.dumps({"rows": []}))
+    # No episode in common: an empty table with exit 0 before.
+    assert compare_runs.main([str(a), str(b)]) == 2
+    assert "share no episode" in capsys.readouterr().err
+    assert compare_runs.main([str(a), str(other)]) == 2
+    assert "no field 'reports'" in capsys.readouterr().err
+    # --out DIR/ wrote a file named DIR.
+    assert compare_runs.main([str(a), str(a), "--out", str(tmp_path / "pages") + "/"]) == 2
+    assert "is a folder" in capsys.readouterr().err and not (tmp_path / "pages").exists()
