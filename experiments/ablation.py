@@ -26,7 +26,7 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
-from rrtdrive.cli_args import positive_int
+from rrtdrive.cli_args import positive_float, positive_int
 from rrtdrive.maps import builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem
 from rrtdrive.planning.improved import COMPONENTS, ImprovedRRTConnect, default_expansion_lmin
@@ -89,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="comma-separated built-in map names (default: %(default)s)")
     parser.add_argument("--out", default="results",
                         help="directory for ablation.json and .md (default: %(default)s)")
-    parser.add_argument("--max-time", type=float, default=5.0,
+    parser.add_argument("--max-time", type=positive_float, default=5.0,
                         help="wall-clock safety cap per plan [s] (default: %(default)s)")
     parser.add_argument(
         "--doc", default=None, help="also write this markdown page (docs/ablation.md for the docs)"

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rrtdrive.cli_args import positive_int
+from rrtdrive.cli_args import positive_float, positive_int
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import resolve_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem, make_planner
@@ -208,7 +208,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="baselines to time, space-separated (default: all)")
     parser.add_argument("--max-iterations", type=int, default=20_000,
                         help="iteration budget per query (default: %(default)s)")
-    parser.add_argument("--max-time", type=float, default=10.0, help="seconds per query")
+    parser.add_argument("--max-time", type=positive_float, default=10.0, help="seconds per query")
     parser.add_argument("--edges", type=int, default=20_000, help="random edges to time")
     parser.add_argument("--poses", type=int, default=5_000, help="random poses to time")
     args = parser.parse_args(argv)

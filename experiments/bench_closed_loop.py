@@ -32,7 +32,7 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
-from rrtdrive.cli_args import positive_int
+from rrtdrive.cli_args import int_at_least, positive_int
 from rrtdrive.controllers import SpeedConfig, make_controller
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim.runner import drive, run_episode
@@ -101,7 +101,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="seeds 0..N-1 per scenario and controller (default: %(default)s)")
     ap.add_argument("--repeats", type=positive_int, default=3,
                     help="timed runs per episode; the minimum counts (default: %(default)s)")
-    ap.add_argument("--frequency", type=int, default=20,
+    ap.add_argument("--frequency", type=int_at_least(15, "Hz"), default=20,
                     help="simulation frequency of the timed runs [Hz] (default: %(default)s)")
     ap.add_argument(
         "--env-step-seeds", type=int, default=1,

@@ -31,7 +31,7 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
-from rrtdrive.cli_args import positive_int
+from rrtdrive.cli_args import positive_float, positive_int
 from rrtdrive.maps import BUILTIN_MAPS, TIGHT_MAP_NAMES, builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem
 from rrtdrive.planning.improved import ImprovedRRTConnect
@@ -96,7 +96,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", type=positive_int, default=10, help="planner seeds 0..N-1 per map")
     ap.add_argument("--goals", type=int, default=100, help="random poses (0: skip part 2)")
     ap.add_argument("--goal-seed", type=int, default=1, help="seed of the random poses")
-    ap.add_argument("--max-time", type=float, default=5.0, help="safety cap per plan [s]")
+    ap.add_argument("--max-time", type=positive_float, default=5.0, help="safety cap per plan [s]")
     ap.add_argument("--out", default="results",
                     help="directory for sharpness.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)

@@ -48,7 +48,7 @@ sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 from results_io import check_doc, out_folder, write_doc, write_image_atomic  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
-from rrtdrive.cli_args import positive_int  # noqa: E402
+from rrtdrive.cli_args import int_at_least, positive_int  # noqa: E402
 from rrtdrive.evaluation import EpisodeReport, evaluate, summarise  # noqa: E402
 from rrtdrive.maps import write_text_atomic  # noqa: E402
 from rrtdrive.sim.runner import EpisodeConfig, run_episode  # noqa: E402
@@ -264,7 +264,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="comma-separated controllers (default: %(default)s)")
     ap.add_argument("--planner", default=DEFAULT_PLANNER,
                     help="registered planner name (default: %(default)s)")
-    ap.add_argument("--frequency", type=int, default=20,
+    ap.add_argument("--frequency", type=int_at_least(15, "Hz"), default=20,
                     help="control and simulation frequency [Hz] (default: %(default)s)")
     ap.add_argument("--jobs", type=positive_int, default=2,
                     help="worker processes (default: %(default)s)")

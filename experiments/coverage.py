@@ -61,7 +61,7 @@ from results_io import check_doc, out_folder, write_doc  # noqa: E402
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
 from rrtdrive.bench.backends import parallel_map  # noqa: E402
-from rrtdrive.cli_args import positive_int  # noqa: E402
+from rrtdrive.cli_args import positive_float, positive_int  # noqa: E402
 from rrtdrive.maps import builtin_map  # noqa: E402
 from rrtdrive.planning import PLANNERS, PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.planning.hybrid.escalation import stage_of  # noqa: E402
@@ -426,8 +426,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--planners", default=DEFAULT_PLANNERS,
                     help="comma-separated: NAME[+reverse][@field=value:...] of a registered "
                     "planner, ompl-dubins-rrt, ompl-rs-rrtconnect (default: %(default)s)")
-    ap.add_argument("--max-time", type=float, default=5.0, help="our planners' budget [s]")
-    ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time cap [s]")
+    ap.add_argument("--max-time", type=positive_float, default=5.0, help="our planners' budget [s]")
+    ap.add_argument("--ompl-time", type=positive_float, default=10.0, help="OMPL's time cap [s]")
     ap.add_argument("--jobs", type=positive_int, default=2,
                     help="worker processes (default: %(default)s)")
     ap.add_argument("--out", default="results", type=out_folder,

@@ -28,6 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import coverage as cov  # noqa: E402  (the sibling script)
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
+from rrtdrive.cli_args import positive_float  # noqa: E402
 from rrtdrive.planning import make_planner  # noqa: E402
 from rrtdrive.types import Budget  # noqa: E402
 
@@ -43,7 +44,7 @@ VARIANTS: dict[str, dict[str, float]] = {
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("run", help="a coverage_MAP.json of experiments/coverage.py")
-    ap.add_argument("--max-time", type=float, default=40.0,
+    ap.add_argument("--max-time", type=positive_float, default=40.0,
                     help="wall-clock cap per re-planned query [s] (default: %(default)s)")
     ap.add_argument("--out", required=True,
                     help="JSON file to write (its folder is created)")

@@ -22,6 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import coverage as cov  # noqa: E402  (the sibling script)
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
+from rrtdrive.cli_args import positive_float  # noqa: E402
 from rrtdrive.types import InputError  # noqa: E402
 
 
@@ -30,7 +31,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("run", help="a coverage_MAP.json of experiments/coverage.py")
     ap.add_argument("--planner", required=True,
                     help="planner name as in the run's rows; its unsolved queries are re-run")
-    ap.add_argument("--max-time", type=float, default=300.0,
+    ap.add_argument("--max-time", type=positive_float, default=300.0,
                     help="wall-clock cap per query [s]; OMPL keeps the run's cap "
                     "(default: %(default)s)")
     ap.add_argument("--out", required=True,

@@ -39,7 +39,7 @@ sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 import coverage as cov  # noqa: E402  (the sibling script)
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
-from rrtdrive.cli_args import positive_int  # noqa: E402
+from rrtdrive.cli_args import positive_float, positive_int  # noqa: E402
 from rrtdrive.planning import make_planner  # noqa: E402
 from rrtdrive.planning.smoothing import max_sharpness  # noqa: E402
 from rrtdrive.types import Budget  # noqa: E402
@@ -210,7 +210,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="our settings to run, comma-separated (default: all of "
                     f"{', '.join(SHORT)})")
     ap.add_argument("--expansions", type=int, default=20000, help="our counted budget")
-    ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time cap [s]")
+    ap.add_argument("--ompl-time", type=positive_float, default=10.0, help="OMPL's time cap [s]")
     ap.add_argument("--out", default="results/forward_misses",
                     help="directory for forward_misses.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)  # fmt: skip

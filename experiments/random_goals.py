@@ -32,7 +32,7 @@ from pathlib import Path as FsPath
 import numpy as np
 from results_io import out_folder  # the sibling module
 
-from rrtdrive.cli_args import positive_int
+from rrtdrive.cli_args import positive_float, positive_int
 from rrtdrive.maps import builtin_map, write_text_atomic
 from rrtdrive.planning.base import PlanningProblem, cached_checker
 from rrtdrive.planning.hybrid.escalation import stage_of
@@ -77,7 +77,7 @@ def add_pose_set_options(ap: argparse.ArgumentParser) -> None:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     add_pose_set_options(ap)
-    ap.add_argument("--max-time", type=float, default=5.0,
+    ap.add_argument("--max-time", type=positive_float, default=5.0,
                     help="wall-clock safety cap per plan [s] (default: %(default)s)")
     ap.add_argument("--out", default="results", type=out_folder,
                     help="directory for random_{goals,starts}_MAP.json and .md "

@@ -27,6 +27,7 @@ from pathlib import Path as FsPath
 import numpy as np
 from random_goals import add_pose_set_options, draw_goals
 
+from rrtdrive.cli_args import positive_float
 from rrtdrive.maps import Map, builtin_map, write_text_atomic
 from rrtdrive.planning.base import PlanningProblem
 from rrtdrive.planning.hybrid import HybridAStar
@@ -56,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="plan with gear changes allowed (default: forward only)")
     ap.add_argument("--max-expansions", type=int, default=20_000,
                     help="expansion budget per plan (default: %(default)s)")
-    ap.add_argument("--max-time", type=float, default=10.0,
+    ap.add_argument("--max-time", type=positive_float, default=10.0,
                     help="wall-clock safety cap per plan [s] (default: %(default)s)")
     ap.add_argument("--out", default="results",
                     help="directory for hybrid_random_{goals,starts}_MAP[_reverse].json and "

@@ -40,7 +40,7 @@ from results_io import cell, command, machine, write_results  # noqa: E402
 from street_turns import least_clearance  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
-from rrtdrive.cli_args import positive_int  # noqa: E402
+from rrtdrive.cli_args import positive_float, positive_int  # noqa: E402
 from rrtdrive.maps import Map, Obstacle  # noqa: E402
 from rrtdrive.planning import PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.types import Budget, InputError, Pose  # noqa: E402
@@ -178,8 +178,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--maps", type=positive_int, default=100, help="random maps (default 100)")
     ap.add_argument("--planners", default=DEFAULT_PLANNERS,
                     help=f"our planner specs, comma-separated (default {DEFAULT_PLANNERS})")
-    ap.add_argument("--max-time", type=float, default=10.0, help="our safety cap, s")
-    ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time, s")
+    ap.add_argument("--max-time", type=positive_float, default=10.0, help="our safety cap, s")
+    ap.add_argument("--ompl-time", type=positive_float, default=10.0, help="OMPL's time, s")
     ap.add_argument("--forward", action="store_true",
                     help="plan forward only (OMPL: Dubins RRT) instead of with reverse")
     ap.add_argument("--jobs", type=positive_int, default=1, help="worker processes")

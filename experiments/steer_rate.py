@@ -33,7 +33,7 @@ from results_io import out_folder  # the sibling module
 
 from rrtdrive.atomic import write_text_atomic
 from rrtdrive.bench.backends import episode_progress, parallel_map
-from rrtdrive.cli_args import positive_int
+from rrtdrive.cli_args import int_at_least, positive_float, positive_int
 from rrtdrive.evaluation import evaluate
 from rrtdrive.evaluation.nuplan_comfort import COMFORT_BOUNDS
 from rrtdrive.sim.replanning import ReplanConfig
@@ -207,6 +207,15 @@ def misses(summaries: dict[str, dict], rate: float | None) -> list[str]:
     return out
 
 
+def positive_or_none(text: str, ap: argparse.ArgumentParser) -> float:
+    """``--steer-rate``'s number (rad/s); a wrong one is argparse's exit 2 naming the flag."""
+    try:
+        return positive_float(text)
+    except argparse.ArgumentTypeError as exc:
+        ap.error(f"argument --steer-rate: {exc} (or 'none' for instant steering)")
+        raise  # unreachable: ap.error exits
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--steer-rate", default="0.4",
@@ -222,7 +231,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--planner", default=DEFAULT_PLANNER,
                     help="the reference path's planner (default: %(default)s; rrt-connect: the\n"
                     "baseline's raw paths, which jump in curvature)")
-    ap.add_argument("--frequency", type=int, default=20,
+    ap.add_argument("--frequency", type=int_at_least(15, "Hz"), default=20,
                     help="control and simulation frequency [Hz] (default: %(default)s)")
     ap.add_argument("--jobs", type=positive_int, default=2,
                     help="worker processes (default: %(default)s)")
@@ -236,7 +245,7 @@ def main(argv: list[str] | None = None) -> int:
         "outcomes do not depend on the machine's load)",
     )
     args = ap.parse_args(argv)
-    rate = None if args.steer_rate.lower() == "none" else float(args.steer_rate)
+    rate = None if args.steer_rate.lower() == "none" else positive_or_none(args.steer_rate, ap)
     scenarios = args.scenarios.split(",")
     controllers = args.controllers.split(",")
     jobs = [

@@ -39,7 +39,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 import coverage as cov  # noqa: E402  (the sibling script)
 from results_io import command, machine, numbers_above, write_results  # noqa: E402
 
-from rrtdrive.cli_args import positive_int  # noqa: E402
+from rrtdrive.cli_args import positive_float, positive_int  # noqa: E402
 from rrtdrive.maps import Map  # noqa: E402
 from rrtdrive.planning import PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.planning.hybrid import HybridConfig  # noqa: E402
@@ -128,8 +128,8 @@ def add_run_options(ap: argparse.ArgumentParser, unit: str, out: str) -> None:
     """The options every side-by-side script shares: seeds, our cap, OMPL's time and
     clearances (``--ompl-clearances``: one OMPL row each), out."""
     ap.add_argument("--seeds", type=positive_int, default=3, help=f"seeds per {unit} (default 3)")
-    ap.add_argument("--max-time", type=float, default=10.0, help="our wall-clock cap, s")
-    ap.add_argument("--ompl-time", type=float, default=10.0, help="OMPL's time, s")
+    ap.add_argument("--max-time", type=positive_float, default=10.0, help="our wall-clock cap, s")
+    ap.add_argument("--ompl-time", type=positive_float, default=10.0, help="OMPL's time, s")
     ap.add_argument(
         "--ompl-clearances", default=f"0,{OUR_CLEARANCE:g}",
         help="body clearances OMPL's states must keep, m, one OMPL row each (default "

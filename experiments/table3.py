@@ -36,7 +36,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from results_io import out_folder  # the sibling module
 
-from rrtdrive.cli_args import positive_int
+from rrtdrive.cli_args import positive_float, positive_int
 from rrtdrive.json_safe import json_safe
 from rrtdrive.maps import builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem, make_planner
@@ -176,7 +176,8 @@ def main(argv: list[str] | None = None) -> int:
         "--figures", default=None,
         help="figure folder (default: OUT/figures; docs/figures for the docs)",
     )
-    parser.add_argument("--max-time", type=float, default=10.0, help="safety cap per run [s]")
+    parser.add_argument("--max-time", type=positive_float, default=10.0,
+                        help="safety cap per run [s]")
     parser.add_argument(
         "--doc", default=None, help="also write this markdown page (docs/table3.md for the docs)"
     )

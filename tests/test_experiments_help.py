@@ -134,3 +134,19 @@ def test_a_misspelt_planner_is_refused_not_skipped(tmp_path):
     )
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert "--planners: hybrid-a-stra: planner 'hybrid-a-stra' is not registered" in proc.stderr
+
+
+#: Time caps and the simulation frequency: a wrong value was refused only deep inside,
+#: by a config field's name (``budget.max_time_s``, ``sim.simulation_frequency``).
+CHECKED_TYPES = {"--max-time": "positive_float", "--ompl-time": "positive_float",
+                 "--frequency": "int_at_least(15"}
+
+
+@pytest.mark.parametrize("script", SCRIPTS)
+def test_time_caps_and_the_frequency_are_checked_by_argparse(script):
+    for call in _add_argument_calls(script):
+        names = {a.value for a in call.args if isinstance(a, ast.Constant)}
+        for flag in names & set(CHECKED_TYPES):
+            kind = next((k.value for k in call.keywords if k.arg == "type"), None)
+            assert kind is not None and ast.unparse(kind).startswith(CHECKED_TYPES[flag]), (
+                script, flag)
