@@ -141,18 +141,20 @@ def _bench(args: argparse.Namespace, ids: list[str]) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--ref", default="6b0d9b8", help="the old code's commit")
+    ap.add_argument("--ref", default="6b0d9b8", help="the old code's commit (default: %(default)s)")
     ap.add_argument("--out", default="results",
                     help="directory for bench_default.json and .md (default: %(default)s)")
     ap.add_argument("--count", type=positive_int, default=100,
-                    help="random goals and starts each")
-    ap.add_argument("--gears", default="fwd,rev", help="fwd, rev or fwd,rev")
+                    help="random goals and starts each (default: %(default)s)")
+    ap.add_argument("--gears", default="fwd,rev", help="fwd, rev or fwd,rev (default: %(default)s)")
     ap.add_argument("--repeat", type=positive_int, default=1,
                     help="runs per query; times: the least")
     ap.add_argument("--warm", default=None, help=argparse.SUPPRESS)
     ap.add_argument("--only", default="", help="comma-separated query ids (default: all)")
-    ap.add_argument("--record", default="", help="record this tree's answers to a file")
-    ap.add_argument("--check", default="", help="compare this tree's answers to a record")
+    ap.add_argument("--record", default="",
+                    help="record this tree's answers to a file (default: %(default)s)")
+    ap.add_argument("--check", default="",
+                    help="compare this tree's answers to a record (default: %(default)s)")
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.worker:

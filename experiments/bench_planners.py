@@ -114,7 +114,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="built-in map name (default: %(default)s)")
     parser.add_argument("--seeds", type=positive_int, default=20,
                         help="runs per planner, seeds 0..N-1 (default: %(default)s)")
-    parser.add_argument("--cap", type=float, default=5.0, help="OMPL time cap per run [s]")
+    parser.add_argument("--cap", type=float, default=5.0,
+                        help="OMPL time cap per run [s] (default: %(default)s)")
     parser.add_argument("--out", default="results",
                         help="directory for bench_planners_MAP.json and .md (default: %(default)s)")
     parser.add_argument(

@@ -134,12 +134,15 @@ def main(argv: list[str] | None = None) -> int:
     from bench_hybrid import positive_int  # the sibling script's (no rrtdrive import here)
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--ref", default="d4ad454", help="the old code's commit")
+    ap.add_argument("--ref", default="d4ad454", help="the old code's commit (default: %(default)s)")
     ap.add_argument("--out", default="results",
                     help="directory for bench_ramps.json and .md (default: %(default)s)")
-    ap.add_argument("--segments", default="", help="pickle of recorded segments (read or write)")
-    ap.add_argument("--only", default="", help="comma-separated bench_hybrid query ids")
-    ap.add_argument("--repeat", type=positive_int, default=3, help="runs per segment and module")
+    ap.add_argument("--segments", default="",
+                    help="pickle of recorded segments (read or write) (default: %(default)s)")
+    ap.add_argument("--only", default="",
+                    help="comma-separated bench_hybrid query ids (default: %(default)s)")
+    ap.add_argument("--repeat", type=positive_int, default=3,
+                    help="runs per segment and module (default: %(default)s)")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     seg_file = FsPath(args.segments) if args.segments else None

@@ -93,10 +93,13 @@ def summarise(rows: list[dict]) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--seeds", type=positive_int, default=10, help="planner seeds 0..N-1 per map")
-    ap.add_argument("--goals", type=int, default=100, help="random poses (0: skip part 2)")
+    ap.add_argument("--seeds", type=positive_int, default=10,
+                    help="planner seeds 0..N-1 per map (default: %(default)s)")
+    ap.add_argument("--goals", type=int, default=100,
+                    help="random poses (0: skip part 2) (default: %(default)s)")
     ap.add_argument("--goal-seed", type=int, default=1, help="seed of the random poses")
-    ap.add_argument("--max-time", type=positive_float, default=5.0, help="safety cap per plan [s]")
+    ap.add_argument("--max-time", type=positive_float, default=5.0,
+                    help="safety cap per plan [s] (default: %(default)s)")
     ap.add_argument("--out", default="results",
                     help="directory for sharpness.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)

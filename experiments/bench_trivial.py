@@ -128,12 +128,13 @@ def _markdown(meta: dict, rows: list[dict], summary: dict) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--ref", default=None, help="the old code's commit (default: no comparison)")
-    ap.add_argument("--out", default="results", help="directory of bench_trivial.{json,md}")
+    ap.add_argument("--out", default="results",
+                    help="directory of bench_trivial.{json,md} (default: %(default)s)")
     ap.add_argument("--repeat", type=bench_hybrid.positive_int, default=7,
-                    help="interleaved rounds; times: the least")
+                    help="interleaved rounds; times: the least (default: %(default)s)")
     ap.add_argument(
         "--indices", default=",".join(map(str, INDICES)),
-        help="comma-separated indices into the 100 random start poses",
+        help="comma-separated indices into the 100 random start poses (default: %(default)s)",
     )  # fmt: skip
     args = ap.parse_args(argv)
     if args.repeat < 1:

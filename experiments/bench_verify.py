@@ -119,16 +119,20 @@ def _markdown(meta: dict, rows: list[dict], summary: dict) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--ref", default=None, help="the old code's commit (default: no comparison)")
-    ap.add_argument("--out", default="results", help="directory of bench_verify.{json,md}")
+    ap.add_argument("--out", default="results",
+                    help="directory of bench_verify.{json,md} (default: %(default)s)")
     ap.add_argument("--maps", default="parking_lot,overtake,narrow_gap,garage,kerbside,reverse_bay",
-                    help="comma-separated built-in maps")  # fmt: skip
+                    help="comma-separated built-in maps (default: %(default)s)")  # fmt: skip
     ap.add_argument("--reverse-maps", default="garage,kerbside,reverse_bay",
-                    help="maps planned with --reverse")  # fmt: skip
-    ap.add_argument("--seeds", type=bench_hybrid.positive_int, default=5, help="seeds per map")
+                    help="maps planned with --reverse (default: %(default)s)")  # fmt: skip
+    ap.add_argument("--seeds", type=bench_hybrid.positive_int, default=5,
+                    help="seeds per map (default: %(default)s)")
     ap.add_argument("--rounds", type=bench_hybrid.positive_int, default=3,
-                    help="worker processes per tree, taking turns")  # fmt: skip
+                    help="worker processes per tree, taking turns"
+                         " (default: %(default)s)")  # fmt: skip
     ap.add_argument("--repeat", type=bench_hybrid.positive_int, default=3,
-                    help="checks per path in a worker; its time: the least")  # fmt: skip
+                    help="checks per path in a worker; its time: the least"
+                         " (default: %(default)s)")  # fmt: skip
     ap.add_argument("--worker", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.worker:

@@ -243,7 +243,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--stock", nargs="+", default=[], metavar="ENV",
         help="stock highway-env envs to drive through env.step (parking-v0, "
-        "parking-parked-v0); with no --scenarios given, only these",
+        "parking-parked-v0); with no --scenarios given, only these (default: %(default)s)",
     )
     ap.add_argument(
         "--reverse", action="store_true",

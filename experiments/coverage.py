@@ -426,8 +426,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--planners", default=DEFAULT_PLANNERS,
                     help="comma-separated: NAME[+reverse][@field=value:...] of a registered "
                     "planner, ompl-dubins-rrt, ompl-rs-rrtconnect (default: %(default)s)")
-    ap.add_argument("--max-time", type=positive_float, default=5.0, help="our planners' budget [s]")
-    ap.add_argument("--ompl-time", type=positive_float, default=10.0, help="OMPL's time cap [s]")
+    ap.add_argument("--max-time", type=positive_float, default=5.0,
+                    help="our planners' budget [s] (default: %(default)s)")
+    ap.add_argument("--ompl-time", type=positive_float, default=10.0,
+                    help="OMPL's time cap [s] (default: %(default)s)")
     ap.add_argument("--jobs", type=positive_int, default=2,
                     help="worker processes (default: %(default)s)")
     ap.add_argument("--out", default="results", type=out_folder,
@@ -440,7 +442,7 @@ def main(argv: list[str] | None = None) -> int:
         "reverse bay); writes OUT/coverage_tight.*",
     )
     ap.add_argument("--seeds", type=positive_int, default=3,
-                    help="with --tight: planner seeds per query")
+                    help="with --tight: planner seeds per query (default: %(default)s)")
     args = ap.parse_args(argv)
     check_doc(args.doc, "coverage.py")
     sets = [s for s in args.sets.split(",") if s]

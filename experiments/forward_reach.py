@@ -100,11 +100,15 @@ def main(argv: list[str] | None = None) -> int:
         default="0.2,0.4,1,2,5",
         help="steering-rate bounds to sweep, rad/m (default 0.2,0.4,1,2,5)",
     )
-    ap.add_argument("--cell", default="0.05", help="merge cells, m, comma-separated")
+    ap.add_argument("--cell", default="0.05",
+                    help="merge cells, m, comma-separated (default: %(default)s)")
     ap.add_argument("--clearance", type=float, default=0.0, help="body clearance kept, m")
-    ap.add_argument("--step", type=float, default=0.2, help="metres between steering moves")
-    ap.add_argument("--distance", type=float, default=30.0, help="metres a drive must reach")
-    ap.add_argument("--max-states", type=int, default=300_000, help="drives kept per step")
+    ap.add_argument("--step", type=float, default=0.2,
+                    help="metres between steering moves (default: %(default)s)")
+    ap.add_argument("--distance", type=float, default=30.0,
+                    help="metres a drive must reach (default: %(default)s)")
+    ap.add_argument("--max-states", type=int, default=300_000,
+                    help="drives kept per step (default: %(default)s)")
     ap.add_argument(
         "--turned-wheels", action="store_true",
         help="start at any steering angle, lock to lock (the car turns its wheels at rest "

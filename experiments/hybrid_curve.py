@@ -87,7 +87,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="plan with gear changes allowed (default: forward only)")
     ap.add_argument("--expansions", type=int, default=20000,
                     help="expansion budget per plan (default: %(default)s)")
-    ap.add_argument("--cap", type=float, default=120.0, help="wall-clock safety cap [s]")
+    ap.add_argument("--cap", type=float, default=120.0,
+                    help="wall-clock safety cap [s] (default: %(default)s)")
     ap.add_argument("--out", default="results/hybrid_curve",
                     help="directory for hybrid_curve.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)

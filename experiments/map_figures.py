@@ -18,6 +18,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument(
         "--out", default="results/figures", help="output folder (docs/figures for the docs)"
+                                                 " (default: %(default)s)"
     )
     args = parser.parse_args()
     out = Path(args.out)

@@ -178,8 +178,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--maps", type=positive_int, default=100, help="random maps (default 100)")
     ap.add_argument("--planners", default=DEFAULT_PLANNERS,
                     help=f"our planner specs, comma-separated (default {DEFAULT_PLANNERS})")
-    ap.add_argument("--max-time", type=positive_float, default=10.0, help="our safety cap, s")
-    ap.add_argument("--ompl-time", type=positive_float, default=10.0, help="OMPL's time, s")
+    ap.add_argument("--max-time", type=positive_float, default=10.0,
+                    help="our safety cap, s (default: %(default)s)")
+    ap.add_argument("--ompl-time", type=positive_float, default=10.0,
+                    help="OMPL's time, s (default: %(default)s)")
     ap.add_argument("--forward", action="store_true",
                     help="plan forward only (OMPL: Dubins RRT) instead of with reverse")
     ap.add_argument("--jobs", type=positive_int, default=1, help="worker processes")

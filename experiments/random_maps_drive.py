@@ -132,7 +132,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="maps: seeds 0..N-1 (default 200)")
     ap.add_argument("--seeds", default=None, metavar="S,S,...",
                     help="these map seeds instead of 0..--maps - 1")  # fmt: skip
-    ap.add_argument("--controllers", default=",".join(CONTROLLERS), help="comma-separated")
+    ap.add_argument("--controllers", default=",".join(CONTROLLERS),
+                    help="comma-separated (default: %(default)s)")
     ap.add_argument("--planner", default="improved-rrt-connect", help="planner (the default's)")
     ap.add_argument("--jobs", type=positive_int, default=1, help="worker processes (default 1)")
     ap.add_argument("--out", default="results/random_maps_drive",

@@ -61,7 +61,8 @@ def _row(map_name: str, rate: float | None, controller: str, plan) -> list[str]:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default="results/reversing", help="output folder")
+    ap.add_argument("--out", default="results/reversing",
+                    help="output folder (default: %(default)s)")
     ap.add_argument("--maps", nargs="+", default=list(MAPS), choices=MAPS,
                     help="tight maps to plan and drive, space-separated (default: all)")
     args = ap.parse_args()

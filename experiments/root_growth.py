@@ -177,8 +177,10 @@ def markdown(payload: dict) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--count", type=positive_int, default=100, help="random goals and starts each")
-    ap.add_argument("--seeds", type=positive_int, default=20, help="planner seeds per built-in map")
+    ap.add_argument("--count", type=positive_int, default=100,
+                    help="random goals and starts each (default: %(default)s)")
+    ap.add_argument("--seeds", type=positive_int, default=20,
+                    help="planner seeds per built-in map (default: %(default)s)")
     ap.add_argument("--maps", default=None,
                     help="comma-separated built-in maps planned (default: all of them)")
     ap.add_argument("--out", required=True, help="directory for root_growth.{json,md}")

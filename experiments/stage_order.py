@@ -138,11 +138,15 @@ def report(payload: dict[str, Any]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--seeds", type=positive_int, default=100, help="seeds per set")
-    ap.add_argument("--sets", default=",".join(SETS), help=f"comma-separated of {SETS}")
+    ap.add_argument("--seeds", type=positive_int, default=100,
+                    help="seeds per set (default: %(default)s)")
+    ap.add_argument("--sets", default=",".join(SETS),
+                    help=f"comma-separated of {SETS} (default: %(default)s)")
     ap.add_argument("--old", default="escalation_first=never:reverse_postprocess_attempts=6",
-                    help="planner options of the old plans (field=value:...)")  # fmt: skip
-    ap.add_argument("--new", default="", help="planner options of the new plans")
+                    help="planner options of the old plans (field=value:...)"
+                         " (default: %(default)s)")  # fmt: skip
+    ap.add_argument("--new", default="",
+                    help="planner options of the new plans (default: %(default)s)")
     ap.add_argument("--out", default="results",
                     help="directory for stage_order.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)

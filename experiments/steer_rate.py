@@ -219,7 +219,8 @@ def positive_or_none(text: str, ap: argparse.ArgumentParser) -> float:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--steer-rate", default="0.4",
-                    help="the ego's steering rate limit in rad/s, or 'none' (instant)")
+                    help="the ego's steering rate limit in rad/s, or 'none' (instant)"
+                         " (default: %(default)s)")
     ap.add_argument("--seeds", type=positive_int, default=50,
                     help="seeds 0..N-1 per scenario and controller (default: %(default)s)")
     ap.add_argument("--scenarios", default="parking,overtake",
@@ -227,7 +228,8 @@ def main(argv: list[str] | None = None) -> int:
                     "(default: %(default)s)")
     ap.add_argument("--controllers", default=",".join(CONTROLLERS),
                     help="comma-separated controllers (default: %(default)s)")
-    ap.add_argument("--density", default="default", help="overtake-traffic's traffic density")
+    ap.add_argument("--density", default="default",
+                    help="overtake-traffic's traffic density (default: %(default)s)")
     ap.add_argument("--planner", default=DEFAULT_PLANNER,
                     help="the reference path's planner (default: %(default)s; rrt-connect: the\n"
                     "baseline's raw paths, which jump in curvature)")

@@ -128,8 +128,10 @@ def add_run_options(ap: argparse.ArgumentParser, unit: str, out: str) -> None:
     """The options every side-by-side script shares: seeds, our cap, OMPL's time and
     clearances (``--ompl-clearances``: one OMPL row each), out."""
     ap.add_argument("--seeds", type=positive_int, default=3, help=f"seeds per {unit} (default 3)")
-    ap.add_argument("--max-time", type=positive_float, default=10.0, help="our wall-clock cap, s")
-    ap.add_argument("--ompl-time", type=positive_float, default=10.0, help="OMPL's time, s")
+    ap.add_argument("--max-time", type=positive_float, default=10.0,
+                    help="our wall-clock cap, s (default: %(default)s)")
+    ap.add_argument("--ompl-time", type=positive_float, default=10.0,
+                    help="OMPL's time, s (default: %(default)s)")
     ap.add_argument(
         "--ompl-clearances", default=f"0,{OUR_CLEARANCE:g}",
         help="body clearances OMPL's states must keep, m, one OMPL row each (default "
@@ -284,7 +286,8 @@ def row_cells(rows: list[dict[str, Any]]) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--widths", default="6.5,7,7.5,8,9,10,12", help="street widths, m")
+    ap.add_argument("--widths", default="6.5,7,7.5,8,9,10,12",
+                    help="street widths, m (default: %(default)s)")
     ap.add_argument("--length", type=float, default=30.0, help="street length, m (default 30)")
     add_run_options(ap, "width", "results/street_turns")
     ap.add_argument(

@@ -167,7 +167,8 @@ def figures(map_name: str, examples: dict[str, object], out: FsPath) -> list[str
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--runs", type=positive_int, default=20, help="seeds per planner and map")
+    parser.add_argument("--runs", type=positive_int, default=20,
+                        help="seeds per planner and map (default: %(default)s)")
     parser.add_argument("--maps", default="parking_lot,overtake",
                         help="comma-separated built-in map names (default: %(default)s)")
     parser.add_argument("--out", default="results", type=out_folder,
@@ -177,7 +178,7 @@ def main(argv: list[str] | None = None) -> int:
         help="figure folder (default: OUT/figures; docs/figures for the docs)",
     )
     parser.add_argument("--max-time", type=positive_float, default=10.0,
-                        help="safety cap per run [s]")
+                        help="safety cap per run [s] (default: %(default)s)")
     parser.add_argument(
         "--doc", default=None, help="also write this markdown page (docs/table3.md for the docs)"
     )

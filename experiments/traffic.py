@@ -242,12 +242,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-pull-out", action="store_true",
                     help="no pull-out past a slow lead and plain IDM's gap behind it\n"
                     "(the re-planner before session 28)")
-    ap.add_argument("--rate", type=float, default=4.0, help="re-planning rate in Hz (2-5)")
+    ap.add_argument("--rate", type=float, default=4.0,
+                    help="re-planning rate in Hz (2-5) (default: %(default)s)")
     ap.add_argument("--jobs", type=positive_int, default=2,
                     help="worker processes (default: %(default)s)")
     ap.add_argument("--out", default="results", type=out_folder,
                     help="directory for traffic[_TAG].json and .md (default: %(default)s)")
-    ap.add_argument("--tag", default="", help="suffix of the output names (variants)")
+    ap.add_argument("--tag", default="",
+                    help="suffix of the output names (variants) (default: %(default)s)")
     ap.add_argument("--figures", default=None, help="write the tight-case video and frames here")
     ap.add_argument("--deterministic", action="store_true",
                     help="re-plan without wall-time cuts (as rrtdrive simulate --deterministic)")

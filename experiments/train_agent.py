@@ -66,18 +66,26 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     )
     p.add_argument("--planner", default="improved-rrt-connect",
                    help="registered planner name (default: %(default)s)")
-    p.add_argument("--timesteps", type=int, default=60_000, help="PPO environment steps")
-    p.add_argument("--envs", type=int, default=2, help="parallel training environments")
-    p.add_argument("--eval-seeds", type=int, default=20, help="held-apart evaluation episodes")
+    p.add_argument("--timesteps", type=int, default=60_000,
+                   help="PPO environment steps (default: %(default)s)")
+    p.add_argument("--envs", type=int, default=2,
+                   help="parallel training environments (default: %(default)s)")
+    p.add_argument("--eval-seeds", type=int, default=20,
+                   help="held-apart evaluation episodes (default: %(default)s)")
     p.add_argument("--seed", type=int, default=0, help="seeds PPO and the training envs")
-    p.add_argument("--action-repeat", type=int, default=2, help="simulation steps per action")
+    p.add_argument("--action-repeat", type=int, default=2,
+                   help="simulation steps per action (default: %(default)s)")
     p.add_argument("--residual-scale", type=float, default=0.25,
                    help="fraction of the full command range the residual spans "
                    "(default: %(default)s)")
-    p.add_argument("--w-cte", type=float, default=100.0, help="reward weight, 1/(m^2 s)")
-    p.add_argument("--w-heading", type=float, default=10.0, help="reward weight, 1/(rad^2 s)")
-    p.add_argument("--w-speed", type=float, default=5.0, help="reward weight, s/m^2")
-    p.add_argument("--n-steps", type=int, default=512, help="PPO rollout length per env")
+    p.add_argument("--w-cte", type=float, default=100.0,
+                   help="reward weight, 1/(m^2 s) (default: %(default)s)")
+    p.add_argument("--w-heading", type=float, default=10.0,
+                   help="reward weight, 1/(rad^2 s) (default: %(default)s)")
+    p.add_argument("--w-speed", type=float, default=5.0,
+                   help="reward weight, s/m^2 (default: %(default)s)")
+    p.add_argument("--n-steps", type=int, default=512,
+                   help="PPO rollout length per env (default: %(default)s)")
     p.add_argument("--log-std-init", type=float, default=-1.0,
                    help="PPO policy's initial log standard deviation (default: %(default)s)")
     p.add_argument("--gamma", type=float, default=0.99,

@@ -150,3 +150,16 @@ def test_time_caps_and_the_frequency_are_checked_by_argparse(script):
             kind = next((k.value for k in call.keywords if k.arg == "type"), None)
             assert kind is not None and ast.unparse(kind).startswith(CHECKED_TYPES[flag]), (
                 script, flag)
+
+
+@pytest.mark.parametrize("script", SCRIPTS)
+def test_an_option_with_a_default_says_it_in_help(script):
+    # A researcher reproducing a results page needs the defaults the command ran with.
+    for call in _add_argument_calls(script):
+        given = {k.arg: k.value for k in call.keywords}
+        default = given.get("default")
+        if default is None or (isinstance(default, ast.Constant) and default.value in
+                               (None, False, True)):
+            continue
+        text = ast.unparse(given["help"]) if "help" in given else ""
+        assert "default" in text or "SUPPRESS" in text, (script, ast.unparse(call.args[0]))
