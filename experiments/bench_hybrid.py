@@ -24,6 +24,10 @@ archive`` of ``REF``'s ``src/``, imported in a worker process) and this tree in
 another worker, alternating query by query, and writes
 ``OUT/bench_hybrid.{json,md}``: per query both planning times and whether the
 answers agree; total and median times and the median per-query ratio new / old.
+
+Exit status: 0 when every answer agrees, 1 when any differs (the old and the new code
+plan differently: expected when ``REF`` predates a change of answers, as the default
+``--ref`` does today), 2 for bad input.
 """
 
 from __future__ import annotations

@@ -30,10 +30,10 @@ import sys
 from pathlib import Path as FsPath
 
 import numpy as np
-from results_io import out_folder  # the sibling module
+from results_io import machine, out_folder  # the sibling module
 
 from rrtdrive.cli_args import positive_float, positive_int
-from rrtdrive.maps import builtin_map, write_text_atomic
+from rrtdrive.maps import BUILTIN_MAPS, builtin_map, write_text_atomic
 from rrtdrive.planning.base import PlanningProblem, cached_checker
 from rrtdrive.planning.hybrid.escalation import stage_of
 from rrtdrive.planning.improved import ImprovedRRTConnect
@@ -83,6 +83,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="directory for random_{goals,starts}_MAP.json and .md "
                     "(default: %(default)s)")
     args = ap.parse_args(argv)
+    if args.map.lower().endswith(".json") or args.map not in BUILTIN_MAPS:
+        raise InputError(f"--map: {args.map!r} is not a built-in map; this script plans on "
+                         f"one of {sorted(BUILTIN_MAPS)}")
     base = builtin_map(args.map)
     budget = Budget(max_time_s=args.max_time)
     # The paper's pipeline alone: neither the Dubins fallback nor the Hybrid A* escalation
@@ -134,6 +137,8 @@ def main(argv: list[str] | None = None) -> int:
     stem = f"random_{args.vary}s_{args.map}"
     write_text_atomic(out / f"{stem}.json", json.dumps(
         {"command": command, "map": args.map, "seed": args.seed, "vary": args.vary,
+         # The wall-clock cap can decide a query on a slow machine: both are recorded.
+         "max_time_s": args.max_time, "machine": machine(),
          "summary": summary,
          "rows": rows}, indent=1) + "\n")
     lines = [

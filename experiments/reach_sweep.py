@@ -147,3 +147,11 @@ def _trace(
         i = int(parent[i])
     rows.append(np.array([[*start, float(kappa0[i])]]))
     return np.concatenate(rows[::-1])
+
+
+if __name__ == "__main__":
+    import sys
+
+    # Run as a script it did nothing and exited 0: say where the script is.
+    sys.exit("reach_sweep.py is the library of experiments/forward_reach.py: run that script "
+             "(python experiments/forward_reach.py --help)")
