@@ -579,7 +579,8 @@ class PlanResult:
     def __post_init__(self) -> None:
         # Read-only arrays and a dict of its own: a result is not changed through
         # another object that shares its data.
-        object.__setattr__(self, "raw_path", _read_only(self.raw_path, float))
+        raw = np.zeros((0, 2)) if self.raw_path is None else self.raw_path
+        object.__setattr__(self, "raw_path", _read_only(raw, float))
         object.__setattr__(self, "stats", dict(self.stats))
 
     @property
