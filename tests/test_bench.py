@@ -783,3 +783,25 @@ def test_bench_figures_say_what_they_show(tmp_path, monkeypatch):
         assert fig._suptitle.get_text() == "rrtdrive bench: 3 runs, seeds 0-2, reverse allowed"
     hist = figures["curvature_hist.png"].axes[0]
     assert all(float(t).is_integer() for t in hist.get_yticks())  # counts of runs
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="reads /proc for the workers")
+def test_ctrl_c_while_the_workers_import_is_one_line_not_their_tracebacks(tmp_path):
+    # The terminal sends SIGINT to the whole process group. Workers still importing
+    # (before they could ignore it) each printed a KeyboardInterrupt traceback: 119 lines.
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "rrtdrive", "bench", "--maps", "parking_lot", "--planners",
+         "rrt-connect", "--seeds", "6", "--workers", "2", "--out", str(tmp_path / "out"),
+         "--no-plots", "--quiet"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+    )
+    children = Path(f"/proc/{proc.pid}/task/{proc.pid}/children")
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and len(children.read_text().split()) < 2:
+        time.sleep(0.05)
+    time.sleep(0.3)  # the workers are importing now (they take seconds)
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err[-1500:]
+    assert err.strip().splitlines()[-1] == "rrtdrive: interrupted"

@@ -28,6 +28,7 @@ import os
 import re
 import signal
 import sys
+import threading
 import time
 import traceback
 from collections import deque
@@ -207,6 +208,12 @@ class LocalBackend:
         parent, child = self._ctx.Pipe(duplex=True)
         saved = {k: os.environ.get(k) for k in _WORKER_ENV}
         os.environ.update(_WORKER_ENV)
+        # Born ignoring Ctrl-C (an ignored signal stays ignored across exec, and Python
+        # then installs no KeyboardInterrupt handler): the terminal sends SIGINT to the
+        # whole process group, and a worker still importing printed a traceback for it.
+        # The main process handles Ctrl-C; its workers end when their pipe closes.
+        main_thread = threading.current_thread() is threading.main_thread()
+        handler = signal.signal(signal.SIGINT, signal.SIG_IGN) if main_thread else None
         try:
             proc = self._ctx.Process(
                 target=_worker_main, args=(child, self.executor), daemon=True,
@@ -214,6 +221,8 @@ class LocalBackend:
             )
             proc.start()
         finally:
+            if main_thread:
+                signal.signal(signal.SIGINT, handler)
             for k, v in saved.items():
                 if v is None:
                     os.environ.pop(k, None)
