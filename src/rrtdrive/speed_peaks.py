@@ -17,7 +17,7 @@ import numpy as np
 __all__ = ["last_rise_level", "peak_with_plateau", "plateau_caps"]
 
 
-def _last_rise(v: np.ndarray) -> tuple[int, int, int]:
+def _last_rise(v: list[float]) -> tuple[int, int, int]:
     """``(trough, plateau, brake)``: where the last rise, the plateau and the final braking start.
 
     Walking back from the end: the braking (``v`` falling to the end) starts at
@@ -25,7 +25,6 @@ def _last_rise(v: np.ndarray) -> tuple[int, int, int]:
     run (``v`` strictly rising) at ``trough``; ``trough == plateau`` when there is none.
     """
     eps = 1e-9
-    v = np.asarray(v, dtype=float).tolist()  # Python floats: the walks are 5x faster
     brake = len(v) - 1
     while brake > 0 and v[brake - 1] > v[brake] + eps:
         brake -= 1
@@ -71,11 +70,13 @@ def last_rise_level(
     >>> trough, round(cap, 9)  # the peak of 2.2 m/s lowered to 1.5 m/s, held over 2 m
     (4, 1.5)
     """
-    trough, plateau, brake = _last_rise(v)
-    if trough == plateau or trough == 0 or s[brake] - s[plateau] >= v[plateau] * swing / jerk:
+    # Python floats for the walks (the same numbers, 5x faster than numpy scalars).
+    sl, vl = np.asarray(s, dtype=float).tolist(), np.asarray(v, dtype=float).tolist()
+    trough, plateau, brake = _last_rise(vl)
+    if trough == plateau or trough == 0 or sl[brake] - sl[plateau] >= vl[plateau] * swing / jerk:
         return None
-    _, _, level = _plateau_level(s, v, plateau, brake, swing / jerk)
-    floor = float(v[trough])
+    _, _, level = _plateau_level(sl, vl, plateau, brake, swing / jerk)
+    floor = vl[trough]
     return trough, floor if level is None or level < floor else level
 
 
@@ -142,7 +143,7 @@ def plateau_caps(s: np.ndarray, v: np.ndarray, lag: float, last_only: bool = Fal
     caps = np.full(n, np.inf)
     eps = 1e-9
     peaks: list[tuple[int, int]] = []
-    w = v.tolist()  # the same numbers as Python floats: the walk is 5x faster
+    sl, w = s.tolist(), v.tolist()  # the same numbers as Python floats: walks 5x faster
     i = 1
     while i < n - 1:
         # A local peak: a run of equal speeds higher than both neighbours.
@@ -153,16 +154,19 @@ def plateau_caps(s: np.ndarray, v: np.ndarray, lag: float, last_only: bool = Fal
             peaks.append((i, j))
         i = j + 1
     for i, j in peaks[-1:] if last_only else peaks:
-        lo, hi, level = _plateau_level(s, v, i, j, lag)
+        lo, hi, level = _plateau_level(sl, w, i, j, lag)
         if level is not None:
             caps[lo : hi + 1] = np.minimum(caps[lo : hi + 1], level)
     return caps
 
 
 def _plateau_level(
-    s: np.ndarray, v: np.ndarray, i: int, j: int, lag: float
+    sl: list[float], vl: list[float], i: int, j: int, lag: float
 ) -> tuple[int, int, float | None]:
-    """The level of the peak ``v[i..j]`` (see :func:`plateau_caps`) and the stretch it caps.
+    """The level of the peak ``vl[i..j]`` (see :func:`plateau_caps`) and the stretch it caps.
+
+    ``sl``, ``vl``: the profile's arc lengths and speeds as Python floats (converted once
+    by the caller, not once per peak).
 
     The stretch never runs on past a sample higher than the peak: lowered that far, the
     peak is a shoulder of the higher part (the level is then the saddle between them,
@@ -170,9 +174,7 @@ def _plateau_level(
     too: parallel parking seed 3 had 26 m of a 2 m/s stretch capped at 1.56 m/s for a
     1.67 m/s last peak.
     """
-    top, n = float(v[i]), len(v)
-    # Python floats for the walks: the same numbers, faster than numpy scalars.
-    vl, sl = np.asarray(v, dtype=float).tolist(), np.asarray(s, dtype=float).tolist()
+    top, n = vl[i], len(vl)
     left, right = i - 1, j + 1
     while left >= 0 and vl[left] <= top + 1e-9:
         left -= 1
@@ -180,9 +182,9 @@ def _plateau_level(
         right += 1
     # The lowest sample between the peak and a higher part on either side (its saddle):
     # the stretch ends there, so that what it caps adjoins the profile's own samples.
-    first = left + 1 + int(np.argmin(v[left + 1 : i])) if left >= 0 else 0
-    last = j + 1 + int(np.argmin(v[j + 1 : right])) if right < n else n - 1
-    saddles = ([float(v[first])] if left >= 0 else []) + ([float(v[last])] if right < n else [])
+    first = left + 1 + int(np.argmin(vl[left + 1 : i])) if left >= 0 else 0
+    last = j + 1 + int(np.argmin(vl[j + 1 : right])) if right < n else n - 1
+    saddles = ([vl[first]] if left >= 0 else []) + ([vl[last]] if right < n else [])
     saddle = max(saddles, default=0.0)
 
     def stretch(c: float) -> tuple[int, int]:
