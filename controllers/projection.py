@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rrtdrive.types import InputError, Path, require_finite
+from rrtdrive.types import InputError, Path
 
 __all__ = ["Projection", "PathProjector"]
 
@@ -72,9 +72,7 @@ class PathProjector:
             raise InputError(
                 f"path: need at least two samples [x, y, yaw, kappa, gear], got {samples.shape}"
             )
-        finite = np.isfinite(samples)
-        if not finite.all():  # the first bad value, named as require_finite names it
-            require_finite("path", float(samples[~finite][0]))
+        # (Finite: a Path refuses NaN and inf when it is made, and its arrays are read-only.)
         if not path.is_forward_only:
             n = len(path.cusps)
             what = f"has {n} gear change{'s' if n != 1 else ''}" if n else "is driven in reverse"
