@@ -207,18 +207,19 @@ def misses(summaries: dict[str, dict], rate: float | None) -> list[str]:
     return out
 
 
-def positive_or_none(text: str, ap: argparse.ArgumentParser) -> float:
-    """``--steer-rate``'s number (rad/s); a wrong one is argparse's exit 2 naming the flag."""
+def rate_or_none(text: str) -> float | None:
+    """An argparse type for ``--steer-rate``: rad/s > 0, or ``none`` (instant steering)."""
+    if text.lower() == "none":
+        return None
     try:
         return positive_float(text)
     except argparse.ArgumentTypeError as exc:
-        ap.error(f"argument --steer-rate: {exc} (or 'none' for instant steering)")
-        raise  # unreachable: ap.error exits
+        raise argparse.ArgumentTypeError(f"{exc} (or 'none' for instant steering)") from None
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
-    ap.add_argument("--steer-rate", default="0.4",
+    ap.add_argument("--steer-rate", type=rate_or_none, default="0.4",
                     help="the ego's steering rate limit in rad/s, or 'none' (instant)"
                          " (default: %(default)s)")
     ap.add_argument("--seeds", type=positive_int, default=50,
@@ -247,7 +248,7 @@ def main(argv: list[str] | None = None) -> int:
         "outcomes do not depend on the machine's load)",
     )
     args = ap.parse_args(argv)
-    rate = None if args.steer_rate.lower() == "none" else positive_or_none(args.steer_rate, ap)
+    rate = args.steer_rate
     scenarios = args.scenarios.split(",")
     controllers = args.controllers.split(",")
     jobs = [
