@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rrtdrive.sim.ego import EgoVehicle
-from rrtdrive.sim.pair_screen import pairs_to_handle
+from rrtdrive.sim.pair_screen import object_boxes, pairs_to_handle
 from rrtdrive.types import Pose
 
 ROAD = Road(RoadNetwork.straight_road_network(2))  # vehicles look up their lane
@@ -70,3 +70,28 @@ def test_the_screen_drops_pairs_the_circles_keep() -> None:
     touching = _obstacle(10.0, 1.1, 0.0, 40.0, 2.2)  # top edge at y = 2.2: overlaps
     assert car._is_colliding(touching, DT)[0]
     assert pairs_to_handle([car], [touching], DT, [False]) == [(car, touching)]
+
+
+@given(st.lists(box, min_size=1, max_size=4), st.lists(box, min_size=1, max_size=6), st.booleans())
+def test_kept_object_boxes_give_the_same_pairs(cars, things, ego_first) -> None:
+    # The scenes keep their objects' boxes between steps: the same pairs come out.
+    vehicles = [_vehicle(*c, ego=ego_first and i == 0) for i, c in enumerate(cars)]
+    objects = [_obstacle(*t[:5]) for t in things]
+    both_ways = [isinstance(v, EgoVehicle) for v in vehicles]
+    fresh = pairs_to_handle(vehicles, objects, DT, both_ways)
+    assert pairs_to_handle(vehicles, objects, DT, both_ways, object_boxes(objects)) == fresh
+
+
+def test_a_scene_road_screens_an_object_added_mid_episode() -> None:
+    from rrtdrive.sim.scenes import SceneRoad
+
+    road = SceneRoad(RoadNetwork.straight_road_network(2))
+    car = Vehicle(road, np.array([10.0, 0.0]), 0.0, 5.0)
+    road.vehicles.append(car)
+    road.objects.append(Obstacle(road, np.array([60.0, 0.0])))
+    road.step(DT)
+    assert not car.crashed
+    # An obstacle dropped onto the car after a step (the kept boxes were the old list's).
+    road.objects.append(Obstacle(road, car.position.copy()))
+    road.step(DT)
+    assert car.crashed

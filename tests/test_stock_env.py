@@ -9,7 +9,7 @@ import highway_env  # noqa: F401  (registers its envs)
 import numpy as np
 import pytest
 from highway_env.utils import lmap
-from hypothesis import given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 from rrtdrive.cli import main
@@ -17,7 +17,13 @@ from rrtdrive.evaluation import evaluate
 from rrtdrive.sim.ego import EgoVehicle
 from rrtdrive.sim.extract import attach_ego, map_from_env
 from rrtdrive.sim.runner import EpisodeConfig
-from rrtdrive.sim.stock import STOCK_ENVS, _steering_action, drive_stock_env, make_stock_env
+from rrtdrive.sim.stock import (
+    STOCK_ENVS,
+    _normalise,
+    _steering_action,
+    drive_stock_env,
+    make_stock_env,
+)
 from rrtdrive.types import Budget, InputError
 
 DETERMINISTIC = EpisodeConfig(budget=Budget(max_time_s=1e6))
@@ -52,6 +58,35 @@ def test_the_steering_action_decodes_to_no_more_than_the_command(steer):
     decoded = float(lmap(action, [-1, 1], [low, high]))  # highway-env's decoding
     assert abs(decoded) <= abs(steer) or abs(steer) > high
     assert abs(decoded - min(max(steer, low), high)) <= 2e-7
+
+
+def _one_float32_at_a_time(steer: float, low: float, high: float, cap: int) -> np.float32 | None:
+    # The definition: from the rounded action toward the centre, one float32 at a time,
+    # until the decoded steering is not larger than the command (None past ``cap`` steps).
+    action = np.float32(_normalise(steer, low, high))
+    centre = np.float32(_normalise(0.5 * (low + high), low, high))
+    for _ in range(cap):
+        if abs(float(lmap(action, [-1, 1], [low, high]))) <= abs(steer) or action == centre:
+            return action
+        action = np.nextafter(action, centre)
+    return None
+
+
+@example(1e-5, -0.5236, 0.5236)  # 46 547 float32s stepped (1e-6 rad: 535 311)
+@example(-3e-5, -0.3, 0.5)
+@example(0.1, -0.3, 0.5)
+@given(
+    st.one_of(st.floats(-0.6, 0.6), st.floats(-1e-3, 1e-3)),
+    st.floats(-0.8, -0.05),
+    st.floats(0.05, 0.8),
+)
+def test_the_steering_action_is_the_first_float32_that_decodes_no_larger(steer, low, high):
+    # Found by bisection; the same float32 (bits, sign of zero included) as stepping.
+    stepped = _one_float32_at_a_time(steer, low, high, 100_000 if steer == 1e-5 else 20_000)
+    assume(stepped is not None)
+    action = _steering_action(steer, low, high)
+    assert isinstance(action, np.float32)
+    assert action.tobytes() == stepped.tobytes()
 
 
 def test_stock_env_steps_through_env_step_with_our_ego():

@@ -12,16 +12,19 @@ at once in numpy and returns the pairs neither rules out, in ``Road.step``'s ord
 A pair is ruled out only when some axis separates the rectangles by more than
 :data:`MARGIN`, both now and with the displacement, so the rounding of highway-env's
 own arithmetic cannot drop a pair it would act on; the calls left run unchanged.
+A road's objects never move (highway-env steps only its vehicles), so a caller that
+steps the same objects again passes their boxes, :func:`object_boxes`, computed once.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
-__all__ = ["MARGIN", "pairs_to_handle"]
+__all__ = ["MARGIN", "object_boxes", "pairs_to_handle"]
 
 #: Separation (m) beyond which a pair is ruled out; float error of highway-env's
 #: projections at the scenes' coordinates is about 1e-13 m.
@@ -46,6 +49,28 @@ def _boxes(items: Sequence[Any]) -> tuple[np.ndarray, ...]:
     ) + pos[:, None, :]  # fmt: skip
     velocity = speed[:, None] * np.column_stack([c, s])
     return corners, pos, diag, velocity, speed
+
+
+def object_boxes(objects: Sequence[Any]) -> tuple[np.ndarray, ...]:
+    """The boxes of static road objects, for :func:`pairs_to_handle` to reuse step after step."""
+    return _boxes(objects)
+
+
+@lru_cache(maxsize=32)
+def _pair_order(n: int, total: int) -> tuple[np.ndarray, np.ndarray]:
+    """Pair indices in ``Road.step``'s order (``n`` vehicles first among ``total`` items).
+
+    Each vehicle with the vehicles after it, then with the objects.
+    """
+    vi, vj = np.triu_indices(n, 1)
+    oi, oj = np.meshgrid(np.arange(n), np.arange(n, total), indexing="ij")
+    first = np.concatenate([vi, oi.ravel()])
+    second = np.concatenate([vj, oj.ravel()])
+    order = np.lexsort((second, first))
+    first, second = first[order], second[order]
+    first.flags.writeable = False  # shared between calls
+    second.flags.writeable = False
+    return first, second
 
 
 def _interval_distance(
@@ -80,7 +105,11 @@ def _separated(a: np.ndarray, b: np.ndarray, rel: np.ndarray) -> np.ndarray:
 
 
 def pairs_to_handle(
-    vehicles: Sequence[Any], objects: Sequence[Any], dt: float, both_ways: Sequence[bool]
+    vehicles: Sequence[Any],
+    objects: Sequence[Any],
+    dt: float,
+    both_ways: Sequence[bool],
+    objects_boxes: tuple[np.ndarray, ...] | None = None,
 ) -> list[tuple[Any, Any]]:
     """The ``(vehicle, other)`` pairs whose ``handle_collisions`` may act, in ``Road.step``'s order.
 
@@ -93,19 +122,22 @@ def pairs_to_handle(
     both_ways : sequence of bool
         Per vehicle: its pre-check widens by ``|speed| * dt`` (a car that reverses,
         :class:`~rrtdrive.sim.ego.EgoVehicle`) rather than highway-env's ``speed * dt``.
+    objects_boxes : tuple of numpy.ndarray, optional
+        :func:`object_boxes` of ``objects`` when they have not moved since (the same
+        pairs come out, sooner); computed here otherwise.
     """
     n = len(vehicles)
     items = [*vehicles, *objects]
     if n == 0 or len(items) < 2:
         return []
-    corners, pos, diag, velocity, speed = _boxes(items)
-    vi, vj = np.triu_indices(n, 1)
-    oi, oj = np.meshgrid(np.arange(n), np.arange(n, len(items)), indexing="ij")
-    first = np.concatenate([vi, oi.ravel()])
-    second = np.concatenate([vj, oj.ravel()])
-    # Road.step's order: each vehicle with the vehicles after it, then with the objects.
-    order = np.lexsort((second, first))
-    first, second = first[order], second[order]
+    if objects_boxes is None or not objects:
+        corners, pos, diag, velocity, speed = _boxes(items)
+    else:
+        corners, pos, diag, velocity, speed = (
+            np.concatenate([mine, theirs])
+            for mine, theirs in zip(_boxes(vehicles), objects_boxes, strict=True)
+        )
+    first, second = _pair_order(n, len(items))
     extra = np.where(np.asarray(both_ways, dtype=bool), np.abs(speed[:n]), speed[:n]) * dt
     reach = (diag[first] + diag[second]) / 2.0 + extra[first]
     near = np.hypot(*(pos[second] - pos[first]).T) <= reach + MARGIN

@@ -138,21 +138,65 @@ def _normalise(value: float, low: float, high: float) -> float:
     return float(np.clip(2.0 * (value - low) / (high - low) - 1.0, -1.0, 1.0))
 
 
+def _decoded(action: np.float32, low: float, high: float) -> float:
+    """The steering highway-env decodes from a float32 action (float32 arithmetic)."""
+    return float(lmap(action, [-1, 1], [low, high]))
+
+
+def _float32_key(value: np.float32) -> int:
+    """An integer that orders float32 numbers as they compare (both zeros are 0)."""
+    bits = int(np.float32(value).view(np.uint32))
+    return bits if bits < 0x80000000 else -(bits & 0x7FFFFFFF)
+
+
+def _float32_at(key: int, negative_zero: bool) -> np.float32:
+    """The float32 of :func:`_float32_key` ``key`` (zero signed as ``np.nextafter`` leaves it)."""
+    if key == 0:
+        return np.float32(-0.0 if negative_zero else 0.0)
+    bits = key if key > 0 else (-key) | 0x80000000
+    return np.array(bits, dtype=np.uint32).view(np.float32)[()]
+
+
 def _steering_action(steer: float, low: float, high: float) -> np.float32:
     """The float32 action whose steering, decoded as highway-env does, is no larger than ``steer``.
 
     Rounded to float32 (the action space's type) and decoded in float32 arithmetic,
     full lock came back 1e-7 over the command: 0.39621043 rad against the controller's
     clip 0.39621040, and the evaluators counted the curvature limit broken on 19 % of a
-    stock episode's steps. Stepped toward zero, one float32 at a time, until it is not.
+    stock episode's steps. The answer is the first float32 from the rounded action
+    toward the centre of the range whose steering is not larger (or the centre). The
+    decoding is monotone in the action, so it is found by bisection over the float32s
+    between them: stepping one float32 at a time took 190 000 steps (0.75 s) for a
+    command of 1e-6 rad, where float32s are dense and the decoding's rounding is not.
     """
     action = np.float32(_normalise(steer, low, high))
     # The centre of the range decodes to the smallest steering there is.
     centre = np.float32(_normalise(0.5 * (low + high), low, high))
-    # float(): a float32 compared with a Python float is compared in float32 (NEP 50).
-    while abs(float(lmap(action, [-1, 1], [low, high]))) > abs(steer) and action != centre:
-        action = np.nextafter(action, centre)
-    return action
+    if action == centre:
+        return action
+    bound = abs(steer)
+    start, stop = _float32_key(action), _float32_key(centre)
+    toward = -1 if start > stop else 1  # the decoding falls (rises) on the way to the centre
+    negative_zero = start < 0
+
+    def crossed(j: int) -> bool:
+        # Monotone in j: the decoding has come down to +bound (up to -bound).
+        value = _decoded(_float32_at(start + toward * j, negative_zero), low, high)
+        return value <= bound if toward < 0 else value >= -bound
+
+    lo, hi = 0, abs(stop - start)  # the answer is the first crossed step, or the centre
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if crossed(mid):
+            hi = mid
+        else:
+            lo = mid + 1
+    if lo < abs(stop - start):
+        candidate = _float32_at(start + toward * lo, negative_zero)
+        # float(): a float32 compared with a Python float is compared in float32 (NEP 50).
+        if abs(_decoded(candidate, low, high)) <= bound:
+            return candidate
+    return _float32_at(stop, negative_zero)  # it jumped past the band: the centre
 
 
 def drive_stock_env(

@@ -81,11 +81,13 @@ def traffic_conflicts(
     alt = pred.alt
     step = pred.step
     grow = radius + 0.5 * spacing + float(safety.buffer(float(t_hi.max())))
+    # Every interpolated pose at once (one call per hypothesis; _poses_at is elementwise
+    # in time): columns 0-1 the screen's span, then the band's start and end per pose.
+    times = np.concatenate([[max(float(lo.min()), 0.0), float(hi.max())], lo, hi])
+    at = _poses_at(track, step, times)  # (K, 2 + 2N, 3)
+    at_alt = None if alt is None else _poses_at(alt, step, times)
     # Screen: each vehicle's box over the whole time span against the discs' box.
-    ends = np.array([max(float(lo.min()), 0.0), float(hi.max())])
-    span = _poses_at(track, step, ends)
-    if alt is not None:
-        span = np.concatenate([span, _poses_at(alt, step, ends)], axis=1)
+    span = at[:, :2] if at_alt is None else np.concatenate([at[:, :2], at_alt[:, :2]], axis=1)
     reach = grow + 0.5 * (sizes[:, 0] + sizes[:, 1])
     keep = (
         (span[:, :, 0].max(axis=1) + reach >= dx.min())
@@ -96,17 +98,17 @@ def traffic_conflicts(
     if not keep.any():
         return np.zeros(n, dtype=bool)
     if not keep.all():
-        track, sizes = track[keep], sizes[keep]
-        alt = None if alt is None else alt[keep]
-    a_pose = _poses_at(track, step, lo)  # (K, N, 3)
-    b_pose = _poses_at(track, step, hi)
+        at, sizes = at[keep], sizes[keep]
+        at_alt = None if at_alt is None else at_alt[keep]
+    a_pose = at[:, 2 : 2 + n]  # (K, N, 3)
+    b_pose = at[:, 2 + n :]
     ux, uy = np.cos(b_pose[..., 2]), np.sin(b_pose[..., 2])  # (K, N)
     half_len = (sizes[:, 0] / 2.0)[:, None]
     # Extent along the heading of every predicted centre in the band (both hypotheses).
     ox, oy = a_pose[..., 0], a_pose[..., 1]
     along = [np.zeros_like(ox), (b_pose[..., 0] - ox) * ux + (b_pose[..., 1] - oy) * uy]
-    if alt is not None:
-        for other in (_poses_at(alt, step, lo), _poses_at(alt, step, hi)):
+    if at_alt is not None:
+        for other in (at_alt[:, 2 : 2 + n], at_alt[:, 2 + n :]):
             along.append((other[..., 0] - ox) * ux + (other[..., 1] - oy) * uy)
     first = np.minimum.reduce(along) - half_len
     last = np.maximum.reduce(along) + half_len

@@ -170,8 +170,8 @@ def _poses_at(poses: np.ndarray, step: float, t: np.ndarray) -> np.ndarray:
     u = np.maximum(t, 0.0) / step
     i = np.minimum(np.floor(u).astype(np.int64), n_t - 2)
     frac = (u - i)[None, :, None]
-    a = poses[:, i, :]
-    b = poses[:, i + 1, :]
+    a = poses.take(i, axis=1)
+    b = poses.take(i + 1, axis=1)
     out = a + frac * (b - a)
     # Headings: the nearer sample (no interpolation across a wrap).
     out[..., 2] = np.where(frac[..., 0] < 0.5, a[..., 2], b[..., 2])
