@@ -24,7 +24,7 @@ from collections.abc import Mapping
 
 from gymnasium.envs.registration import register, registry
 
-from rrtdrive.types import InputError
+from rrtdrive.types import InputError, brief_repr
 
 __all__ = [
     "ENV_IDS",
@@ -39,6 +39,7 @@ __all__ = [
     "is_registered_default",
     "plain_value",
     "register_envs",
+    "scenario_text",
 ]
 
 ENTRY_POINT = "rrtdrive.envs.drive_env:DriveEnv"
@@ -117,6 +118,15 @@ def plain_value(value: object) -> object:
     return value
 
 
+def scenario_text(value: object) -> str:
+    """A ``scenario`` as messages show it: a name quoted, a ``Map`` by its name."""
+    value = plain_value(value)
+    if isinstance(value, str):
+        return repr(value)
+    name = getattr(value, "name", None)
+    return f"the map {name!r}" if isinstance(name, str) else brief_repr(value)
+
+
 #: The keywords under which an id registers its ``scenario_options`` and (except
 #: ``Map-v0``, which drives whatever map ``scenario`` names) its scenario once more; see
 #: :func:`apply_registration`. Neither is an option of the environment.
@@ -150,7 +160,7 @@ def apply_registration(
             raise InputError(f"{key}: set by an id's registration, not an option")
     if own is not None and scenario is not None and plain_value(scenario) != plain_value(own):
         raise InputError(
-            f"scenario: this id drives {plain_value(own)!r}, not {plain_value(scenario)!r}; "
+            f"scenario: this id drives {plain_value(own)!r}, not {scenario_text(scenario)}; "
             f"make that scenario's own id, or {MAP_ID} for a map"
         )
     given = out.get("scenario_options")

@@ -34,7 +34,7 @@ from rrtdrive.sim.tasks import (
     scenario_map,
 )
 from rrtdrive.sim.tasks import Task as Scenario
-from rrtdrive.types import Budget, InputError, require_int
+from rrtdrive.types import Budget, InputError, brief_repr, require_int
 
 __all__ = ["DriveEnvConfig"]
 
@@ -76,10 +76,11 @@ class DriveEnvConfig:
 
     Parameters
     ----------
-    scenario : str
+    scenario : str or Map
         Scenario name (``parking``, ``overtake``, ``overtake-traffic``,
-        ``parallel-parking``, ``u-turn``), or a map (a built-in name or a ``.json``
-        file) driven from its start to its goal, as ``rrtdrive simulate MAP``.
+        ``parallel-parking``, ``u-turn``), or a map (a built-in name, a ``.json``
+        file or a :class:`~rrtdrive.maps.Map` built in Python) driven from its start
+        to its goal, as ``rrtdrive simulate MAP``.
     planner : str
         Registered planner that plans each episode's path.
     controller : str
@@ -154,7 +155,7 @@ class DriveEnvConfig:
     rrtdrive.types.InputError: residul: unknown option; choose from ['scenario', ...]
     """
 
-    scenario: str = "parking"
+    scenario: str | Map = "parking"
     planner: str = DEFAULT_PLANNER
     controller: str = "pure-pursuit"
     residual: bool = False
@@ -184,9 +185,14 @@ class DriveEnvConfig:
             object.__setattr__(self, name, value)
 
         scenario, planner, controller = self.scenario, self.planner, self.controller
-        if not isinstance(scenario, str):
-            raise InputError(f"scenario: expected a name, got {scenario!r}")
-        if scenario not in SCENARIOS:
+        if isinstance(scenario, Map):
+            put("map", scenario)  # validated when it was made
+        elif not isinstance(scenario, str):
+            raise InputError(
+                "scenario: expected a scenario or map name, a .json file or a rrtdrive.Map, "
+                f"got {brief_repr(scenario)}"
+            )
+        elif scenario not in SCENARIOS:
             put("map", scenario_map("scenario", scenario))
         if not isinstance(planner, str) or planner not in PLANNERS:
             raise InputError(
@@ -215,7 +221,7 @@ class DriveEnvConfig:
         put("replan_options", replan_options)
         replan = None
         # None: the task plans once (a map's too).
-        replan_config = None if self.map is not None else TASKS[scenario].REPLAN_CONFIG
+        replan_config = None if self.map is not None else TASKS[self.scenario].REPLAN_CONFIG
         if replan_config is not None:
             _check_fields("replan_options", replan_options, replan_config)
             try:
@@ -258,7 +264,7 @@ class DriveEnvConfig:
         return [f.name for f in fields(cls) if f.init]
 
     @classmethod
-    def from_options(cls, scenario: str = "parking", **options: Any) -> DriveEnvConfig:
+    def from_options(cls, scenario: str | Map = "parking", **options: Any) -> DriveEnvConfig:
         """The config of ``gym.make`` keyword arguments.
 
         Raises
@@ -282,6 +288,11 @@ class DriveEnvConfig:
                 raise InputError(f"{key}: unknown option; choose from {known}")
 
     # ------------------------------------------------------------------ per episode
+
+    @property
+    def scenario_name(self) -> str:
+        """The scenario's name as episodes report it (a :class:`Map`'s own ``name``)."""
+        return self.map.name if isinstance(self.scenario, Map) else self.scenario
 
     @property
     def sim_config(self) -> SimConfig:

@@ -36,7 +36,7 @@ import numpy as np
 from gymnasium import spaces
 
 from rrtdrive.controllers import PathProjector
-from rrtdrive.envs import apply_registration, is_registered_default, plain_value
+from rrtdrive.envs import apply_registration, is_registered_default, plain_value, scenario_text
 from rrtdrive.envs.action import ResidualMixer, action_command
 from rrtdrive.envs.config import DriveEnvConfig, _require_mapping
 from rrtdrive.envs.observation import OBS_CLIP, ObservationLayout, observation_names
@@ -46,6 +46,7 @@ from rrtdrive.envs.reward import RewardWeights, state_terms
 from rrtdrive.envs.seed_draw import failure_text, start_drawn_episode
 from rrtdrive.evaluation import EpisodeReport, EvalConfig, evaluate
 from rrtdrive.evaluation.report import WALL_CLOCK_FIELDS
+from rrtdrive.maps import Map
 from rrtdrive.sim.episode import Episode, EpisodeStatus
 from rrtdrive.sim.loop import EndRule, EpisodeLoop
 from rrtdrive.sim.runner import EpisodeConfig
@@ -67,7 +68,7 @@ _RESET_OPTIONS = ("episode_seed",)
 
 
 def _caller_options(
-    scenario: str | None, config: DriveEnvConfig, options: dict[str, Any]
+    scenario: str | Map | None, config: DriveEnvConfig, options: dict[str, Any]
 ) -> dict[str, Any]:
     """The options that replace fields of a caller's ``config``.
 
@@ -85,8 +86,8 @@ def _caller_options(
         registered_map = is_registered_default(scenario) and scenario not in SCENARIOS
         if not (registered_map and config.map is not None):
             raise InputError(
-                f"scenario: {plain_value(scenario)!r} differs from config.scenario "
-                f"{config.scenario!r}"
+                f"scenario: {scenario_text(scenario)} differs from config.scenario "
+                f"{scenario_text(config.scenario)}"
             )
     return {key: value for key, value in options.items() if not is_registered_default(value)}
 
@@ -126,9 +127,8 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
 
     Parameters
     ----------
-    scenario : str, optional
-        Scenario name (``parking``, ``overtake``, ``overtake-traffic``); the
-        registered ids pass it. Default ``config.scenario``, or ``"parking"``.
+    scenario : str or Map, optional
+        Scenario name (the ids pass it) or ``Map-v0``'s map. Default ``config.scenario``.
     config : DriveEnvConfig, optional
         The options as one value; keyword ``options`` replace some of its fields.
         It wins over the defaults an id registers (``ParkingReverseIn-v0``'s
@@ -166,7 +166,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
 
     def __init__(
         self,
-        scenario: str | None = None,
+        scenario: str | Map | None = None,
         *,
         config: DriveEnvConfig | None = None,
         render_mode: str | None = None,
@@ -321,7 +321,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             start_drawn_episode(self.config, self.np_random, self._start_episode)
         info = {
             "episode_seed": self.episode_seed,
-            "scenario": self.config.scenario,
+            "scenario": self.config.scenario_name,
             "path_length_m": float(self.path.length),  # type: ignore[union-attr]
         }
         return self._obs32(), info

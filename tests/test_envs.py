@@ -687,6 +687,20 @@ def test_a_map_is_driven_start_to_goal_with_reverse(tmp_path):
     m = builtin_map("kerbside")
     assert np.hypot(*(u.episode.log.states[-1, :2] - [m.goal.x, m.goal.y])) < 0.1
     env.close()
+    # The same map built in Python (a Map, not a file) drives the same episode.
+    from rrtdrive.maps import Map
+
+    mine = Map("my_kerb", m.bounds, m.obstacles, m.start, m.goal)
+    env = gym.make(
+        "rrtdrive/Map-v0", scenario=mine, scenario_options={"reverse": True},
+        controller="lqr", residual=True,
+    )  # fmt: skip
+    obs_2, total_2, steps_2, info_2 = run_to_end(env, zero, seed=0)
+    assert np.array_equal(env.unwrapped.episode.log.states, u.episode.log.states)
+    assert (total_2, steps_2, info_2["status"]) == (total, steps, "arrived")
+    assert np.array_equal(obs_2, obs)
+    assert env.unwrapped.config.scenario_name == "my_kerb"
+    env.close()
 
 
 @pytest.mark.parametrize(

@@ -131,6 +131,28 @@ def test_config_of_another_scenario_is_refused_but_map_v0_takes_any_map():
     assert ENV_IDS["rrtdrive/Map-v0"] == "parking_lot"
 
 
+def test_a_map_built_in_python_is_a_map_scenario():
+    from rrtdrive.maps import Map, builtin_map
+
+    m = builtin_map("kerbside")
+    mine = Map("my_kerb", m.bounds, m.obstacles, m.start, m.goal)
+    cfg = _make("rrtdrive/Map-v0", scenario=mine)
+    assert cfg.map is mine and cfg.scenario_name == "my_kerb" and cfg.replan is None
+    assert cfg.scenario_for(3).map == mine
+    # Messages name it, not its repr of every obstacle.
+    other_id = r"^scenario: this id drives 'parking', not the map 'my_kerb'; "
+    with pytest.raises(InputError, match=other_id):
+        _make("rrtdrive/Parking-v0", scenario=mine)
+    overtake = DriveEnvConfig.from_options("overtake")
+    with pytest.raises(InputError, match=r"^scenario: the map 'my_kerb' differs from config"):
+        _make("rrtdrive/Map-v0", scenario=mine, config=overtake)
+    kinds = r"^scenario: expected a scenario or map name, a \.json file or a rrtdrive\.Map, got 3"
+    with pytest.raises(InputError, match=kinds):
+        _make("rrtdrive/Map-v0", scenario=3.5)
+    with pytest.raises(InputError, match=r"^replan_options: only the overtake-traffic scenario"):
+        _make("rrtdrive/Map-v0", scenario=mine, replan_options={"budget_s": 0.1})
+
+
 def test_config_of_the_wrong_type_names_config():
     with pytest.raises(InputError, match=r"^config: expected a DriveEnvConfig, got dict"):
         _make("rrtdrive/Parking-v0", config={"planner": "rrt"})
