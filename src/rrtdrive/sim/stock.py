@@ -166,8 +166,9 @@ def _steering_action(steer: float, low: float, high: float) -> np.float32:
     stock episode's steps. The answer is the first float32 from the rounded action
     toward the centre of the range whose steering is not larger (or the centre). The
     decoding is monotone in the action, so it is found by bisection over the float32s
-    between them: stepping one float32 at a time took 190 000 steps (0.75 s) for a
-    command of 1e-6 rad, where float32s are dense and the decoding's rounding is not.
+    between them: stepping one float32 at a time took 189 485 steps (0.75 s) for a
+    command of 1e-6 rad in highway-env's +-45 deg range, where float32s are dense and
+    the decoding's rounding is not.
     """
     action = np.float32(_normalise(steer, low, high))
     # The centre of the range decodes to the smallest steering there is.
