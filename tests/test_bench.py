@@ -785,6 +785,41 @@ def test_bench_figures_say_what_they_show(tmp_path, monkeypatch):
     assert all(float(t).is_integer() for t in hist.get_yticks())  # counts of runs
 
 
+def test_the_curvature_histogram_puts_the_limit_on_a_bin_edge(tmp_path, monkeypatch):
+    # A bin straddled kappa_max once a baseline's 0.67 1/m widened the range: drivable
+    # runs (0.1638 < 1/6) were drawn across the dashed line, mostly right of it.
+    import rrtdrive.plotting
+    from rrtdrive.bench.summary import write_plots
+
+    figures = {}
+    monkeypatch.setattr(rrtdrive.plotting, "save_figure",
+                        lambda fig, path: figures.setdefault(Path(path).name, fig))
+    kmax = 1.0 / 6.0
+    kappas = {"rrt": [0.67, 0.31, 0.17], "hybrid-a-star": [0.16384, 0.16354, kmax]}
+    rows = [
+        {"kind": "plan", "map": "parking_lot", "planner": p, "controller": None, "seed": s,
+         "config_hash": p, "success": True, "status": "solved", "length_m": 30.0,
+         "planning_time_s": 0.01, "max_curvature": k, "kappa_max": kmax}
+        for p, ks in kappas.items() for s, k in enumerate(ks)
+    ]
+    write_plots(rows, tmp_path)
+    line = None
+    for ax in figures["curvature_hist.png"].axes[:2]:
+        (line,) = ax.get_lines()
+        assert line.get_xdata()[0] == pytest.approx(kmax)
+        counted = [b for b in ax.patches if b.get_height() > 0]
+        over = [b for b in counted if b.get_x() >= kmax]  # bars right of the line
+        if ax.get_title() == "hybrid-a-star":
+            assert counted and not over  # every run, the one exactly at the limit too
+        else:
+            assert sum(b.get_height() for b in over) == 3  # 0.17 > 1/6 as well
+            assert all(b.get_facecolor()[:3] == pytest.approx((0.839, 0.153, 0.157), abs=1e-3)
+                       for b in over)  # drawn red
+        for b in counted:  # no bar straddles the line
+            assert b.get_x() + b.get_width() <= kmax * (1 + 1e-9) + 1e-12 or b.get_x() >= kmax
+    assert line is not None
+
+
 @pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="reads /proc for the workers")
 def test_ctrl_c_while_the_workers_import_is_one_line_not_their_tracebacks(tmp_path):
     # The terminal sends SIGINT to the whole process group. Workers still importing

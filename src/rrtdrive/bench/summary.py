@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from rrtdrive.evaluation.report import SIGNED_FIELDS
+from rrtdrive.evaluation.report import SIGNED_FIELDS, EvalConfig
 from rrtdrive.stats import Stat, describe, wilson_interval
 
 __all__ = [
@@ -274,6 +274,20 @@ def _bench_title(rows: Sequence[Mapping[str, Any]]) -> str:
     return f"rrtdrive bench: {len(rows)} runs{span}" + "".join(f", {w}" for w in how)
 
 
+def _curvature_bins(top: float, kappa_max: float | None, count: int = 39) -> np.ndarray:
+    """About ``count`` equal bins over ``[0, top]``, one edge on ``kappa_max``.
+
+    A bin never straddles the limit, so a bar right of the dashed line holds only runs
+    over it; the edge lies the evaluators' tolerance above ``kappa_max`` (a path exactly
+    at the limit is within it, and numpy's bins are closed on the left).
+    """
+    if kappa_max is None:
+        return np.linspace(0.0, top, count + 1)
+    edge = kappa_max * (1.0 + EvalConfig().kappa_tol)
+    width = edge / max(1, round(count * edge / top))
+    return width * np.arange(math.ceil(top / width) + 1)
+
+
 def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[FsPath]:
     """Box plots of length and time, success bars and curvature histograms, as PNGs in ``out``.
 
@@ -397,11 +411,14 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
         axes = fig.subplots(nrows, ncols, squeeze=False, sharex=True)
         everything = np.concatenate([np.asarray(v) for v in by_planner.values()])
         top = max(float(everything.max()), float(kmax or 0.0)) * 1.05 or 1.0
-        bins = np.linspace(0.0, top, 40)
+        bins = _curvature_bins(top, float(kmax) if kmax else None)
         for ax, (planner, kappas) in zip(axes.flat, by_planner.items(), strict=False):
-            ax.hist(kappas, bins=bins, color="tab:blue", alpha=0.75)
+            _, _, bars = ax.hist(kappas, bins=bins, color="tab:blue", alpha=0.75)
             if kmax:
                 ax.axvline(float(kmax), color="k", linestyle="--", linewidth=1)
+                for bar, left in zip(bars, bins[:-1], strict=True):
+                    if left >= kmax:  # the bins right of the line hold runs over it
+                        bar.set_facecolor("tab:red")
             ax.set_title(planner, fontsize=9)
             ax.yaxis.set_major_locator(MaxNLocator(integer=True))  # counts: no 0.5 runs
         for ax in list(axes.flat)[n:]:
