@@ -112,5 +112,27 @@ def test_the_plan_plot_title_names_seed_and_reverse(monkeypatch, tmp_path, capsy
     monkeypatch.setattr(rrtdrive.plotting, "save_figure", lambda fig, _: figures.append(fig))
     assert main(["plan", "overtake", "--seed", "5", "--reverse", "--plot",
                  str(tmp_path / "p.png")]) == 0
-    title = figures[0].axes[0].get_title()
+    title = " ".join(figures[0].axes[0].get_title(loc="left").split())  # wrapped lines
     assert title.startswith("overtake: improved-rrt-connect, seed 5, reverse allowed (solved, ")
+    # A planner that cannot reverse is not said to have been allowed to (it plans forward).
+    assert main(["plan", "narrow_gap", "--planner", "rrt", "--reverse", "--plot",
+                 str(tmp_path / "p.png")]) == 0
+    assert figures[1].axes[0].get_title(loc="left").startswith("narrow_gap: rrt, seed 0 (solved, ")
+    # The default's escalation: the stage that solved it is named.
+    assert main(["plan", "kerbside", "--reverse", "--plot", str(tmp_path / "p.png")]) == 0
+    title = " ".join(figures[2].axes[0].get_title(loc="left").split())
+    assert title.startswith("kerbside: improved-rrt-connect (hybrid-a-star stage), seed 0, ")
+
+
+def test_a_tall_maps_plot_title_stays_inside_the_figure():
+    # A 20 m x 60 m map's figure is 4.1 in wide: the one-line title lost both ends
+    # ("roved-rrt-connect, seed 0, reverse allowed (solved, 2 node").
+    m, result = _reverse_result()
+    tall = Map("a_tall_ramp_with_a_long_name", (0.0, 0.0, 20.0, 60.0), (), Pose(5.0, 5.0, 1.57),
+               Pose(15.0, 55.0, 1.57))
+    fig = plot_plan(tall, result, seed=12345, reverse=True)
+    fig.canvas.draw()
+    text = fig.axes[0]._left_title
+    box, page = text.get_window_extent(), fig.bbox
+    assert page.x0 <= box.x0 and box.x1 <= page.x1 and box.y1 <= page.y1, (box, page)
+    assert " ".join(text.get_text().split()).startswith("a_tall_ramp_with_a_long_name: ")

@@ -272,7 +272,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         from rrtdrive.plotting import plot_plan, save_figure
 
         with writing("--plot", args.plot):
-            save_figure(plot_plan(m, result, seed=args.seed, reverse=args.reverse), args.plot)
+            allowed = args.reverse and reverses(args.planner)  # a forward-only planner's not
+            save_figure(plot_plan(m, result, seed=args.seed, reverse=allowed), args.plot)
     cusps = len(result.path.cusps)
     gears = f"{cusps} gear change{'s' if cusps != 1 else ''}, " if cusps else ""
     summary = f"{m.name}: {result.planner} seed {args.seed}: " + (

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+import textwrap
 import warnings
 from collections.abc import Sequence
 from pathlib import Path as FsPath
@@ -152,6 +153,7 @@ _MIN_SIDE_IN = 1.5
 #: Room beside and above the map: the legend (outside, to the right), title and labels.
 _LEGEND_IN = 2.6
 _TITLE_IN = 1.0
+_TITLE_PT = 12.0
 
 
 def map_figure_size(bounds: tuple[float, float, float, float]) -> tuple[float, float]:
@@ -180,8 +182,10 @@ def plot_plan(
     """The map, the trees, the raw tree path, the waypoints and the final path of one result.
 
     The path is drawn by :func:`draw_gear_path`: reverse segments dashed, cusps marked.
-    The default title names the map, the planner, ``seed`` (when given), whether
-    ``reverse`` gears were allowed, the status and the nodes.
+    The default title names the map, the planner (and its stage that solved it, when
+    another: the default's Hybrid A* escalation), ``seed`` (when given), whether
+    ``reverse`` gears were allowed, the status and the nodes; it is left-aligned and
+    wrapped to the figure (a tall map's narrow figure cut a one-line title at both ends).
     """
     fig, ax = plt.subplots(figsize=map_figure_size(m.bounds), layout="constrained")
     draw_map(ax, m)
@@ -190,9 +194,17 @@ def plot_plan(
     if len(result.path):
         draw_path(ax, result.path.waypoints, "tab:olive", "waypoints", lw=0.8, marker="o")
         draw_gear_path(ax, result.path)
+    from rrtdrive.planning.hybrid.escalation import stage_of
+
     status = "solved" if result.success else result.status.value
     how = (f", seed {seed}" if seed is not None else "") + (", reverse allowed" if reverse else "")
-    ax.set_title(title or f"{m.name}: {result.planner}{how} ({status}, {result.nodes} nodes)")
+    stage = stage_of(result) if result.success else result.planner
+    who = result.planner if stage == result.planner else f"{result.planner} ({stage} stage)"
+    text = title or f"{m.name}: {who}{how} ({status}, {result.nodes} nodes)"
+    # About 0.6 em a character; the room is the figure's width (the legend's too).
+    per_line = max(20, int((fig.get_figwidth() - 0.6) * 72 / (0.6 * _TITLE_PT)))
+    wrapped = textwrap.fill(text, per_line, break_on_hyphens=False, break_long_words=False)
+    ax.set_title(wrapped, loc="left", fontsize=_TITLE_PT)
     # Beside the axes, outside them: inside, it covered a corner of the map (a goal in
     # the garage's top right bays hid under it).
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
