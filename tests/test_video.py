@@ -178,6 +178,25 @@ def test_a_narrow_street_video_keeps_its_start_car_clear(tmp_path):
     assert (first[10, -20] == 255).all() and not (first[10, 20] == 255).all()
 
 
+def test_what_the_car_hit_turns_red_in_the_video():
+    # Driven straight at the overtake's stopped car: the replay drew the crashed ego red
+    # and the car it hit in its usual colour, as if it had hit nothing (highway-env turns
+    # both red live; docs/video.md says a hit obstacle turns red).
+    from rrtdrive.sim.video import _camera_for
+
+    scen = make_scenario("overtake", 0, jitter=(0.0, 0.0, 0.0))
+    x = np.arange(scen.start.x, 92.0 + 1e-9, 0.1)
+    zero = np.zeros_like(x)
+    path = Path(np.column_stack([x, np.full_like(x, scen.lane_y), zero, zero]), np.zeros((0, 2)))
+    ep = run_episode(scen, path, "lqr", 0)
+    assert ep.log.crashed[-1]
+    last = list(render_frames(ep, stride=10**6))[-1]
+    red_columns = np.flatnonzero(np.all(last == (255, 100, 100), axis=-1).any(axis=0))
+    scaling = _camera_for(ep)[1]
+    # Red along both cars, nose to tail (4.3 m each), not along the ego alone.
+    assert red_columns[-1] - red_columns[0] > 1.8 * scen.vehicle.length * scaling
+
+
 @pytest.mark.parametrize("stride", [1, 7, 60, 1000])
 def test_a_video_lasts_the_episodes_simulated_time(episode, tmp_path, stride):
     # The final state's frame came after fewer steps than a stride but played a whole

@@ -198,6 +198,12 @@ def render_frames(
                     ox, oy, oh, ov = log.others[k, j]
                     other.position = np.array([ox, oy])
                     other.heading, other.speed = float(oh), float(ov)
+            if ego.crashed:
+                # What the car hit turns red as it did live: highway-env's own test of
+                # the logged pose against each object and car (its flags stay set).
+                for thing in [*road.objects, *others]:
+                    ego.handle_collisions(thing, 0.0)
+                ego.crashed = True
             if follow:
                 camera.position[0] = x + 30.0
             canvas.centre = camera.position
