@@ -22,6 +22,7 @@ from rrtdrive.envs.action import CommandLimits
 from rrtdrive.envs.reward import RewardWeights
 from rrtdrive.maps import Map
 from rrtdrive.planning import PLANNERS
+from rrtdrive.sim.loop import require_episode_time
 from rrtdrive.sim.scenes import SimConfig
 from rrtdrive.sim.tasks import (
     DEFAULT_PLANNER,
@@ -212,7 +213,7 @@ class DriveEnvConfig:
         put("action_repeat", require_int("action_repeat", self.action_repeat, 1, 1000))
         put("simulation_frequency", self.sim_config.simulation_frequency)
         if self.max_time_s is not None:
-            put("max_time_s", _require_number("max_time_s", self.max_time_s))
+            put("max_time_s", require_episode_time("max_time_s", self.max_time_s))
         if self.max_cte is not None:
             put("max_cte", _require_number("max_cte", self.max_cte))
         put("reward", RewardWeights.from_any(self.reward))

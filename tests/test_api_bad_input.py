@@ -246,7 +246,7 @@ def test_evaluate_names_a_wrong_argument_instead_of_an_attribute_error() -> None
 @pytest.mark.parametrize(
     ("field", "value", "says"),
     [
-        ("max_time_s", "5", r"^episode\.max_time_s: expected a number, got str"),
+        ("max_time_s", "5", r"^episode\.max_time_s: expected a number, got '5'"),
         ("controller_options", [1], r"^episode\.controller_options: expected a mapping"),
         ("budget", None, r"^episode\.budget: expected a Budget, got NoneType"),
         ("sim", {"simulation_frequency": 20}, r"^episode\.sim: expected a SimConfig"),

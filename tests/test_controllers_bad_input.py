@@ -22,7 +22,7 @@ STRAIGHT = Path(np.column_stack([XS, 0 * XS, 0 * XS, 0 * XS]), np.zeros((0, 2)))
         ("vehicle", {"wheelbase": 2.5}, r"^controller\.vehicle: expected a VehicleParams"),
         ("speed", 5, r"^controller\.speed: expected a SpeedConfig, got int 5$"),
         ("speed", {"v_max": 5.0}, r"^controller\.speed: expected a SpeedConfig, got dict"),
-        ("steer_limit", "0.3", r"^controller\.steer_limit: expected a number, got str"),
+        ("steer_limit", "0.3", r"^controller\.steer_limit: expected a number, got '0.3'"),
         ("steer_limit", math.nan, r"^controller\.steer_limit: must be finite"),
     ],
 )

@@ -28,6 +28,7 @@ import numpy as np
 
 from rrtdrive.cli_args import (
     OutputError,
+    cell_size,
     distinct_outputs,
     flags_for,
     flags_for_warnings,
@@ -442,9 +443,9 @@ def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
         "result would depend on the machine's speed",
     )
     plan.add_argument(
-        "--resolution", type=positive_float, default=None, metavar="M",
-        help="collision grid cell size in metres (default 0.1; a map too big for that gets "
-        "a coarser grid up to 0.5 m automatically, with a warning)",
+        "--resolution", type=cell_size, default=None, metavar="M",
+        help="collision grid cell size in metres, up to 100 (default 0.1; a map too big for "
+        "that gets a coarser grid up to 0.5 m automatically, with a warning)",
     )
     plan.add_argument(
         "--reverse", action="store_true",

@@ -19,6 +19,7 @@ from rrtdrive.types import InputError, InputWarning
 
 __all__ = [
     "OutputError",
+    "cell_size",
     "distinct_outputs",
     "flags_for",
     "flags_for_warnings",
@@ -66,6 +67,19 @@ def positive_float(text: str) -> float:
         raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}") from None
     if not (math.isfinite(value) and value > 0):
         raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return value
+
+
+def cell_size(text: str) -> float:
+    """An argparse type for a collision grid cell: a number in ``(0, MAX_RESOLUTION]`` m."""
+    from rrtdrive.collision.config import MAX_RESOLUTION  # only when the flag is given
+
+    value = positive_float(text)
+    if value > MAX_RESOLUTION:
+        raise argparse.ArgumentTypeError(
+            f"at most {MAX_RESOLUTION:g} m (a cell that coarse hides streets and cars alike), "
+            f"got {text!r}"
+        )
     return value
 
 

@@ -7,7 +7,7 @@ from typing import BinaryIO
 
 from rrtdrive.types import InputError
 
-__all__ = ["MAX_JSON_BYTES", "parse_json", "read_capped"]
+__all__ = ["MAX_JSON_BYTES", "json_kind", "parse_json", "read_capped"]
 
 
 #: The largest JSON file (a map, a plan) read, bytes: a map of 20 000 obstacles is 1.5 MB,
@@ -96,3 +96,19 @@ def parse_json(raw: bytes | str, field: str, source: str) -> object:
         raise InputError(f"{bad}: nested too deeply") from None
     except ValueError:  # an integer literal past Python's 4300-digit conversion limit
         raise InputError(f"{bad}: a number has too many digits") from None
+
+
+def json_kind(value: object) -> str:
+    """What ``value`` is in JSON's words (``null``, ``array``, ...), for messages.
+
+    Examples
+    --------
+    >>> [json_kind(v) for v in (None, [1], "x", {}, True, 2.5)]
+    ['null', 'an array', 'a string', 'an object', 'true', 'a number']
+    """
+    if value is None or isinstance(value, bool):
+        return json.dumps(value)
+    for kind, name in ((dict, "an object"), (list, "an array"), (str, "a string")):
+        if isinstance(value, kind):
+            return name
+    return "a number" if isinstance(value, (int, float)) else type(value).__name__

@@ -15,13 +15,27 @@ from typing import TYPE_CHECKING
 import numpy as np
 import shapely
 
-from rrtdrive.types import InputError, InputWarning, Pose, VehicleParams
+from rrtdrive.types import (
+    InputError,
+    InputWarning,
+    Pose,
+    VehicleParams,
+    require_finite,
+    require_positive,
+)
 from rrtdrive.vehicle import footprint_polygon
 
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.maps import Map
 
-__all__ = ["MAX_COORDINATE", "MAX_YAW", "check_endpoint", "warn_if_degrees", "warn_outside"]
+__all__ = [
+    "MAX_COORDINATE",
+    "MAX_YAW",
+    "check_endpoint",
+    "check_obstacle_numbers",
+    "warn_if_degrees",
+    "warn_outside",
+]
 
 
 #: The largest coordinate a map may use, metres: doubles there are spaced 1.2e-7 m apart,
@@ -39,13 +53,32 @@ def warn_if_degrees(label: str, yaw: float) -> None:
     Such a yaw is a valid angle (it wraps), so it is planned as given; the warning
     says what it is taken as and what to write for degrees.
     """
-    if abs(yaw) > 2.0 * math.pi + 1e-9:
+    # Beyond MAX_YAW the pose is refused where it is checked: no "taken as" first.
+    if 2.0 * math.pi + 1e-9 < abs(yaw) <= MAX_YAW:
         wrapped = math.degrees(math.remainder(yaw, 2.0 * math.pi))
         warnings.warn(
             f"{label}: yaw {yaw:g} is more than a full turn; yaws are in radians, so it is "
             f"taken as {wrapped:.1f} deg; for {yaw:g} deg write {math.radians(yaw):.4f}",
             InputWarning,
             stacklevel=3,
+        )
+
+
+def check_obstacle_numbers(
+    center: tuple[float, float], size: tuple[float, float], yaw: float
+) -> None:
+    """Raise :class:`InputError` naming ``obstacle.size`` or ``obstacle.yaw``.
+
+    For numbers a map cannot use: sizes not > 0, a yaw not finite or beyond
+    :data:`MAX_YAW` (as a pose's). A centre may lie far out: a long wall reaches in.
+    """
+    require_positive("obstacle.size", size[0])
+    require_positive("obstacle.size", size[1])
+    require_finite("obstacle.yaw", yaw)
+    if abs(yaw) > MAX_YAW:
+        raise InputError(
+            f"obstacle.yaw: {yaw:g} rad is beyond {MAX_YAW:g} rad either way; give it in "
+            "[-pi, pi]"
         )
 
 

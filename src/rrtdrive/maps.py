@@ -27,11 +27,12 @@ import shapely
 
 from rrtdrive.atomic import write_text_atomic
 from rrtdrive.geometry import box_corners
-from rrtdrive.json_input import parse_json, read_capped
+from rrtdrive.json_input import json_kind, parse_json, read_capped
 from rrtdrive.map_checks import (
     MAX_COORDINATE,
     MAX_YAW,
     check_endpoint,
+    check_obstacle_numbers,
     warn_if_degrees,
     warn_outside,
 )
@@ -41,7 +42,6 @@ from rrtdrive.types import (
     VehicleParams,
     brief_repr,
     require_finite,
-    require_positive,
 )
 
 __all__ = [
@@ -74,9 +74,7 @@ class Obstacle:
     def __post_init__(self) -> None:
         center = _pair(self.center, "obstacle.center")
         size = _pair(self.size, "obstacle.size")
-        require_positive("obstacle.size", size[0])
-        require_positive("obstacle.size", size[1])
-        require_finite("obstacle.yaw", self.yaw)
+        check_obstacle_numbers(center, size, self.yaw)
         object.__setattr__(self, "center", center)
         object.__setattr__(self, "size", size)
         object.__setattr__(self, "yaw", float(self.yaw))
@@ -281,7 +279,7 @@ def map_from_json(
     Map
     """
     if not isinstance(data, dict):
-        raise InputError(f"map: expected a JSON object, got {type(data).__name__}")
+        raise InputError(f"map: expected a JSON object, got {json_kind(data)}")
     unknown = set(data) - _MAP_KEYS
     if unknown:
         raise InputError(f"map: unknown key(s) {sorted(unknown)}; allowed {sorted(_MAP_KEYS)}")

@@ -119,7 +119,7 @@ def require_finite(name: str, *values: float) -> None:
     """
     for v in values:
         if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
-            raise InputError(f"{name}: expected a number, got {type(v).__name__} {brief_repr(v)}")
+            raise InputError(f"{name}: expected a number, got {brief_repr(v)}")
         if not is_finite_number(v):
             raise InputError(f"{name}: must be finite, got {brief_repr(v)}")
 

@@ -149,6 +149,11 @@ def _map_of(
             )
         return m
     if map_file:
+        if os.path.isdir(map_file):
+            raise InputError(
+                f"map: the plan was made on the map file {map_file}, which is now a folder; "
+                "give the map: rrtdrive verify PLAN MAP.json"
+            )
         if not os.path.isfile(map_file):
             raise InputError(
                 f"map: the plan was made on the map file {map_file}, which is not there any "

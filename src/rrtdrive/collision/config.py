@@ -10,6 +10,10 @@ from rrtdrive.types import InputError, require_int, require_positive
 __all__ = ["CheckerConfig"]
 
 
+#: The coarsest collision grid cell taken, metres (the error margin is ~0.7 of a cell).
+MAX_RESOLUTION = 100.0
+
+
 @dataclass(frozen=True)
 class CheckerConfig:
     """Tunables of the checker.
@@ -49,6 +53,11 @@ class CheckerConfig:
 
     def __post_init__(self) -> None:
         require_positive("checker.resolution", self.resolution)
+        if self.resolution > MAX_RESOLUTION:  # 1e308 overflowed the grid's coordinates
+            raise InputError(
+                f"checker.resolution: at most {MAX_RESOLUTION:g} m (a cell that coarse hides "
+                f"streets and cars alike), got {self.resolution:g}"
+            )
         require_positive("checker.pad", self.pad)
         require_positive("checker.min_trace_step", self.min_trace_step)
         require_int("checker.max_grid_cells", self.max_grid_cells, minimum=16)

@@ -117,10 +117,16 @@ def grid_resolution(bounds: Sequence[float], config: CheckerConfig) -> float:
     0.15
     """
     h0, limit = config.resolution, config.max_grid_cells
-    nx, ny = grid_shape(bounds, h0, config.pad)
+    xmin, ymin, xmax, ymax = (float(b) for b in bounds)
+    try:
+        nx, ny = grid_shape(bounds, h0, config.pad)
+    except OverflowError:  # more cells than a float counts ([0, 0, 1e308, 100])
+        raise InputError(
+            f"bounds: {xmax - xmin:g} x {ymax - ymin:g} m is too big for any grid: use a "
+            "smaller map"
+        ) from None
     if nx * ny <= limit:
         return h0
-    xmin, ymin, xmax, ymax = (float(b) for b in bounds)
     coarsest = max(h0, config.max_auto_resolution)
     # The area alone gives a lower bound of the cell size; the border adds a few steps.
     least = math.sqrt((xmax - xmin) * (ymax - ymin) / limit)
@@ -202,8 +208,11 @@ def rasterise(
     top = np.array([nx, ny], dtype=float)
     for o in obstacles:
         corners = o.corners()
-        lo = np.clip(np.floor((corners.min(axis=0) - grow - origin) / h), -1, top).astype(int) - 1
-        hi = np.clip(np.ceil((corners.max(axis=0) + grow - origin) / h), -1, top).astype(int) + 1
+        with np.errstate(over="ignore"):  # a corner at 1e308 m: inf, clipped like the rest
+            low = np.floor((corners.min(axis=0) - grow - origin) / h)
+            high = np.ceil((corners.max(axis=0) + grow - origin) / h)
+        lo = np.clip(low, -1, top).astype(int) - 1
+        hi = np.clip(high, -1, top).astype(int) + 1
         i0, j0 = max(lo[0], 0), max(lo[1], 0)
         i1, j1 = min(hi[0], nx), min(hi[1], ny)
         if i0 >= i1 or j0 >= j1:

@@ -26,6 +26,7 @@ import time
 from typing import Any
 
 from rrtdrive.cli_args import (
+    cell_size,
     distinct_outputs,
     flags_for,
     int_at_least,
@@ -93,12 +94,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--max-time", type=positive_float, default=None, metavar="S",
-        help="time limit of the drive in seconds (default: the scenario's)",
+        help="time limit of the drive in seconds, up to 1e6 (default: the scenario's)",
     )
     p.add_argument(
-        "--resolution", type=positive_float, default=None, metavar="M",
-        help="a map: the planner's collision grid cell size in metres (default 0.1, "
-        "coarser up to 0.5 m on a big map; a bigger one needs it given)",
+        "--resolution", type=cell_size, default=None, metavar="M",
+        help="a map: the planner's collision grid cell size in metres, up to 100 (default "
+        "0.1, coarser up to 0.5 m on a big map; a bigger one needs it given)",
     )
     p.add_argument(
         "--plan-time", type=positive_float, default=None, metavar="S",
@@ -320,6 +321,12 @@ def _run(args: argparse.Namespace) -> int:
         raise InputError(
             f"--max-time: {args.max_time:g} s is shorter than one simulation step "
             f"({1.0 / args.frequency:g} s at {args.frequency} Hz)"
+        )
+    from rrtdrive.sim.loop import MAX_EPISODE_S
+
+    if args.max_time is not None and args.max_time > MAX_EPISODE_S:
+        raise InputError(
+            f"--max-time: at most {MAX_EPISODE_S:g} s (11.6 simulated days), got {args.max_time:g}"
         )
     if args.video is not None and args.video == "-":
         raise InputError("--video: needs a file name ending in .mp4")

@@ -51,7 +51,7 @@ from rrtdrive.sim.drivelog import DriveRecorder
 from rrtdrive.sim.ego import EgoVehicle
 from rrtdrive.sim.episode import DriveLog, EpisodeStatus, end_message
 from rrtdrive.sim.traffic import OncomingGate
-from rrtdrive.types import InputError, Path, Pose, require_finite
+from rrtdrive.types import InputError, Path, Pose, require_finite, require_positive
 
 __all__ = [
     "Driver",
@@ -61,7 +61,23 @@ __all__ = [
     "STOP_AT_PATH_END",
     "StopAtGoal",
     "EpisodeLoop",
+    "MAX_EPISODE_S",
+    "require_episode_time",
 ]
+
+#: The longest time limit an episode takes (s): 2e7 steps at 20 Hz, about 11.6 simulated
+#: days. Longer is a typo (1e307 s overflowed the step count into a traceback).
+MAX_EPISODE_S = 1e6
+
+
+def require_episode_time(name: str, value: float) -> float:
+    """``value`` as a float; :class:`InputError` naming ``name`` outside ``(0, MAX_EPISODE_S]``."""
+    require_positive(name, value)
+    if value > MAX_EPISODE_S:
+        raise InputError(
+            f"{name}: at most {MAX_EPISODE_S:g} s (11.6 simulated days), got {value:g}"
+        )
+    return float(value)
 
 
 @runtime_checkable
@@ -246,6 +262,8 @@ class EpisodeLoop:
         if not isinstance(ego, EgoVehicle):
             raise InputError("env: the controlled vehicle must be an EgoVehicle (see attach_ego)")
         require_finite("max_time_s", max_time_s)
+        if max_time_s > MAX_EPISODE_S:
+            require_episode_time("max_time_s", max_time_s)
         self.env = env
         self.ego = ego
         self.driver = driver

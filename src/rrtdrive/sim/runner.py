@@ -21,11 +21,11 @@ import numpy as np
 
 from rrtdrive.controllers import SpeedConfig, TrackingController, make_controller
 from rrtdrive.sim.episode import DriveLog, Episode, EpisodeStatus
-from rrtdrive.sim.loop import STOP_AT_PATH_END, EpisodeLoop, PathTracker
+from rrtdrive.sim.loop import STOP_AT_PATH_END, EpisodeLoop, PathTracker, require_episode_time
 from rrtdrive.sim.scenes import SimConfig, build_env
 from rrtdrive.sim.tasks import DEFAULT_PLANNER, Task, make_scenario
 from rrtdrive.sim.traffic import OncomingGate
-from rrtdrive.types import Budget, InputError, Path, PlanResult, require_positive
+from rrtdrive.types import Budget, InputError, Path, PlanResult
 
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.sim.replanning import ReplanConfig
@@ -89,7 +89,7 @@ class EpisodeConfig:
                 f"arguments (gains), got {type(self.controller_options).__name__}"
             )
         if self.max_time_s is not None:
-            require_positive("episode.max_time_s", self.max_time_s)
+            require_episode_time("episode.max_time_s", self.max_time_s)
         if not isinstance(self.stop_on_crash, bool):
             raise InputError(
                 f"episode.stop_on_crash: expected true or false, got {self.stop_on_crash!r}"

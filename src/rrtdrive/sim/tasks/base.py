@@ -27,7 +27,14 @@ from rrtdrive.sim.episode import (
     end_message,
     plan_failed_message,
 )
-from rrtdrive.sim.loop import STOP_AT_PATH_END, Driver, EndRule, PathTracker, StopAtGoal
+from rrtdrive.sim.loop import (
+    STOP_AT_PATH_END,
+    Driver,
+    EndRule,
+    PathTracker,
+    StopAtGoal,
+    require_episode_time,
+)
 from rrtdrive.sim.scenes import SceneView, fit_view, scenario_rngs
 from rrtdrive.types import (
     Budget,
@@ -226,7 +233,7 @@ class Task:
         if self.seed < 0:
             raise InputError(f"scenario.seed: need an integer >= 0, got {self.seed!r}")
         require_positive("scenario.v_max", self.v_max)
-        require_positive("scenario.max_time_s", self.max_time_s)
+        require_episode_time("scenario.max_time_s", self.max_time_s)
         if not isinstance(self.reverse, (bool, np.bool_)):
             raise InputError(f"scenario.reverse: expected True or False, got {self.reverse!r}")
 

@@ -15,6 +15,7 @@ import numpy as np
 from highway_env.road.road import Road
 
 from rrtdrive.collision import CheckerConfig
+from rrtdrive.collision.grid import grid_resolution
 from rrtdrive.maps import Map
 from rrtdrive.planning.result import same_pose
 from rrtdrive.sim.scenes import plain_network, populate_road
@@ -107,6 +108,9 @@ class CustomTask(PathTask):
             raise InputError(f"map: expected a Map, got {type(m).__name__}")
         if start is not None or goal is not None:
             m = m.with_query(start, goal)
+        # A map no grid fits, named before its time limit (60 s + 2 s/m of an inf diagonal).
+        grid = CheckerConfig() if resolution is None else CheckerConfig(resolution=resolution)
+        grid_resolution(m.bounds, grid)
         if max_time_s is None:
             xmin, ymin, xmax, ymax = m.bounds
             max_time_s = 60.0 + 2.0 * math.hypot(xmax - xmin, ymax - ymin)
