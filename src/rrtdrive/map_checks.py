@@ -64,9 +64,7 @@ def warn_if_degrees(label: str, yaw: float) -> None:
         )
 
 
-def check_obstacle_numbers(
-    center: tuple[float, float], size: tuple[float, float], yaw: float
-) -> None:
+def check_obstacle_numbers(size: tuple[float, float], yaw: float) -> None:
     """Raise :class:`InputError` naming ``obstacle.size`` or ``obstacle.yaw``.
 
     For numbers a map cannot use: sizes not > 0, a yaw not finite or beyond

@@ -74,7 +74,7 @@ class Obstacle:
     def __post_init__(self) -> None:
         center = _pair(self.center, "obstacle.center")
         size = _pair(self.size, "obstacle.size")
-        check_obstacle_numbers(center, size, self.yaw)
+        check_obstacle_numbers(size, self.yaw)
         object.__setattr__(self, "center", center)
         object.__setattr__(self, "size", size)
         object.__setattr__(self, "yaw", float(self.yaw))
