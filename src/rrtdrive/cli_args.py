@@ -71,15 +71,14 @@ def positive_float(text: str) -> float:
 
 
 def cell_size(text: str) -> float:
-    """An argparse type for a collision grid cell: a number in ``(0, MAX_RESOLUTION]`` m."""
-    from rrtdrive.collision.config import MAX_RESOLUTION  # only when the flag is given
+    """An argparse type for a collision grid cell: what ``CheckerConfig`` takes, in metres."""
+    from rrtdrive.collision.config import CheckerConfig  # only when the flag is given
 
     value = positive_float(text)
-    if value > MAX_RESOLUTION:
-        raise argparse.ArgumentTypeError(
-            f"at most {MAX_RESOLUTION:g} m (a cell that coarse hides streets and cars alike), "
-            f"got {text!r}"
-        )
+    try:
+        CheckerConfig(resolution=value)
+    except InputError as exc:  # its own bound and words, without its field name
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("checker.resolution: ")) from None
     return value
 
 

@@ -322,12 +322,10 @@ def _run(args: argparse.Namespace) -> int:
             f"--max-time: {args.max_time:g} s is shorter than one simulation step "
             f"({1.0 / args.frequency:g} s at {args.frequency} Hz)"
         )
-    from rrtdrive.sim.loop import MAX_EPISODE_S
+    if args.max_time is not None:
+        from rrtdrive.sim.loop import require_episode_time
 
-    if args.max_time is not None and args.max_time > MAX_EPISODE_S:
-        raise InputError(
-            f"--max-time: at most {MAX_EPISODE_S:g} s (11.6 simulated days), got {args.max_time:g}"
-        )
+        require_episode_time("--max-time", args.max_time)  # the episodes' own limit
     if args.video is not None and args.video == "-":
         raise InputError("--video: needs a file name ending in .mp4")
     # Before the episode runs: a bad target should not cost a whole episode.

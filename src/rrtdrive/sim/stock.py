@@ -21,6 +21,7 @@ highway-env's time limit, its ``duration``). ``highway_env_success`` is its
 
 from __future__ import annotations
 
+import bisect
 import logging
 import time
 from collections.abc import Callable
@@ -185,13 +186,8 @@ def _steering_action(steer: float, low: float, high: float) -> np.float32:
         value = _decoded(_float32_at(start + toward * j, negative_zero), low, high)
         return value <= bound if toward < 0 else value >= -bound
 
-    lo, hi = 0, abs(stop - start)  # the answer is the first crossed step, or the centre
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if crossed(mid):
-            hi = mid
-        else:
-            lo = mid + 1
+    # The answer is the first crossed step (False, ..., False, True, ...), or the centre.
+    lo = bisect.bisect_left(range(abs(stop - start)), True, key=crossed)
     if lo < abs(stop - start):
         candidate = _float32_at(start + toward * lo, negative_zero)
         # float(): a float32 compared with a Python float is compared in float32 (NEP 50).

@@ -203,7 +203,6 @@ def render_frames(
                 # the logged pose against each object and car (its flags stay set).
                 for thing in [*road.objects, *others]:
                     ego.handle_collisions(thing, 0.0)
-                ego.crashed = True
             if follow:
                 camera.position[0] = x + 30.0
             canvas.centre = camera.position
