@@ -15,9 +15,9 @@ import numpy as np
 from highway_env.road.road import Road
 
 from rrtdrive.collision import CheckerConfig
-from rrtdrive.collision.grid import grid_resolution
 from rrtdrive.maps import Map
 from rrtdrive.planning.result import same_pose
+from rrtdrive.sim.loop import MAX_EPISODE_S
 from rrtdrive.sim.scenes import plain_network, populate_road
 from rrtdrive.sim.tasks.base import PathTask, TaskKind
 from rrtdrive.types import InputError, Pose, require_positive
@@ -92,7 +92,8 @@ class CustomTask(PathTask):
             Speed cap, m/s.
         max_time_s : float, optional
             Time limit; by default 60 s plus 2 s per metre of the map's diagonal
-            (a drive across a tight map at walking pace, with gear changes).
+            (a drive across a tight map at walking pace, with gear changes), at most
+            :data:`~rrtdrive.sim.loop.MAX_EPISODE_S`.
         resolution : float, optional
             The planner's collision grid cell size, metres (``rrtdrive simulate
             --resolution``).
@@ -108,12 +109,12 @@ class CustomTask(PathTask):
             raise InputError(f"map: expected a Map, got {type(m).__name__}")
         if start is not None or goal is not None:
             m = m.with_query(start, goal)
-        # A map no grid fits, named before its time limit (60 s + 2 s/m of an inf diagonal).
-        grid = CheckerConfig() if resolution is None else CheckerConfig(resolution=resolution)
-        grid_resolution(m.bounds, grid)
         if max_time_s is None:
             xmin, ymin, xmax, ymax = m.bounds
-            max_time_s = 60.0 + 2.0 * math.hypot(xmax - xmin, ymax - ymin)
+            # Up to the longest limit an episode takes: a map too big for any grid (an inf
+            # diagonal) is then refused by the planner naming its bounds.
+            diagonal = math.hypot(xmax - xmin, ymax - ymin)
+            max_time_s = min(60.0 + 2.0 * diagonal, MAX_EPISODE_S)
         return cls(
             map=m, seed=seed, reverse=reverse, v_max=v_max, max_time_s=max_time_s,
             resolution=resolution,
