@@ -81,7 +81,7 @@ def test_a_query_the_rrt_stages_cannot_solve_is_escalated_within_the_share(monke
     # shares are about growth that runs, so here the proof says nothing.
     from rrtdrive.planning.improved import planner as improved_planner
 
-    monkeypatch.setattr(improved_planner, "root_boxed_in", lambda *a, **k: False)
+    monkeypatch.setattr(improved_planner, "boxed_end", lambda *a, **k: "")
     m = bay_map()
     problem = PlanningProblem.from_map(m, reverse=True)
     res = solve(problem, narrow_fan=0.0)  # the whole patience too (its fan is narrow)

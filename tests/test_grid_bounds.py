@@ -123,8 +123,8 @@ def test_the_coarse_grid_stays_conservative_against_shapely(coarse):
 
 
 def test_a_coarse_grid_plans_a_verified_path(coarse):
-    m, _ = coarse
-    problem = PlanningProblem.from_map(m, config=SMALL_LIMIT)
+    m, checker = coarse  # the fixture's checker: built (and warned about) there
+    problem = PlanningProblem.from_map(m, checker=checker)
     res = make_planner("improved-rrt-connect").solve(problem, np.random.default_rng(0), Budget())
     assert res.success, res.message
     assert verify_path(m, res.path).ok

@@ -128,7 +128,7 @@ def test_the_kerbside_goal_skips_the_growth_for_the_same_path(monkeypatch) -> No
     assert res.iterations == int(res.stats["hybrid_expansions"])  # no growth iteration
     assert verify_path(m, res.path, max_sharpness=0.2).ok
     # Without the proof the pair waits out root_patience, then the same escalation.
-    monkeypatch.setattr(improved_planner, "root_boxed_in", lambda *a, **k: False)
+    monkeypatch.setattr(improved_planner, "boxed_end", lambda *a, **k: "")
     waited = ImprovedRRTConnect(narrow_fan=0.0).solve(problem, np.random.default_rng(0), BUDGET)
     assert waited.success and "root_boxed_in" not in waited.stats
     assert waited.iterations == ImprovedConfig().root_patience + res.iterations

@@ -89,7 +89,7 @@ def test_a_kerbside_gap_gives_way_after_the_patience_with_the_same_path(monkeypa
     # without that proof the pair waits out the patience.
     from rrtdrive.planning.improved import planner as improved_planner
 
-    monkeypatch.setattr(improved_planner, "root_boxed_in", lambda *a, **k: False)
+    monkeypatch.setattr(improved_planner, "boxed_end", lambda *a, **k: "")
     problem = PlanningProblem.from_map(builtin_map("kerbside"), reverse=True)
     cfg = ImprovedConfig()
     # The whole patience: without narrow_fan's (its fan is narrow; test_root_boxed_in.py).

@@ -227,8 +227,7 @@ def run(args: argparse.Namespace) -> int:
     m = _map_of(args, data, start, goal)
     bound = args.max_sharpness
     if bound is None and not args.no_sharpness:
-        from rrtdrive.planning.improved.planner import sharpness_bound
-        from rrtdrive.planning.smoothing import SmoothingConfig
+        from rrtdrive.planning.smoothing.config import SmoothingConfig, sharpness_bound
 
         # The bound the default planners keep for this car.
         bound = sharpness_bound(SmoothingConfig().max_sharpness, m.vehicle.max_steer_rate)

@@ -37,6 +37,8 @@ __all__ = [
     "run_query",
     "same_pose",
     "solved",
+    "straight_ahead",
+    "straight_ahead_result",
     "solved_result",
     "search_result",
     "timeout_result",
@@ -201,6 +203,57 @@ def already_there(planner: str, problem: PlanningProblem, watch: Stopwatch) -> P
         planner, watch, Path(rows, rows[:, :2]), rows[:, :2].copy(), (), 0,
         "the start is the goal pose: nothing to drive (a path of 0 m)", {},
     )  # fmt: skip
+
+
+def straight_ahead(a: Pose, b: Pose) -> bool:
+    """Whether ``b`` lies ahead of ``a`` on its heading's line, facing the same way.
+
+    Within :data:`SAME_POSE_TOL` metres aside and radians of heading.
+
+    Examples
+    --------
+    >>> straight_ahead(Pose(0.0, 0.0, 1.0), Pose(0.54e-5, 0.84e-5, 1.0))
+    True
+    >>> straight_ahead(Pose(0.0, 0.0, 0.0), Pose(0.1, 1e-3, 0.0))
+    False
+    """
+    tol = SAME_POSE_TOL * (1.0 + 1e-9)
+    c, s = math.cos(a.yaw), math.sin(a.yaw)
+    dx, dy = b.x - a.x, b.y - a.y
+    aside = abs(dy * c - dx * s)
+    return dx * c + dy * s > 0.0 and aside <= tol and abs(wrap_angle(b.yaw - a.yaw)) <= tol
+
+
+def straight_ahead_result(
+    planner: str,
+    problem: PlanningProblem,
+    watch: Stopwatch,
+    clearance: float,
+    stats: dict[str, float],
+    spacing: float = 0.25,
+) -> PlanResult | None:
+    """The straight line to a goal :func:`straight_ahead`, when its body keeps ``clearance``.
+
+    For a goal too close for a smoother's heading legs and turns (a goal 1e-5 m
+    ahead: the rounding of its position is a turn the car cannot make in that
+    length); ``None`` when the goal is not straight ahead or the line is not clear.
+    """
+    a, b = problem.start, problem.goal
+    if not straight_ahead(a, b):
+        return None
+    length = math.hypot(b.x - a.x, b.y - a.y)
+    n = max(1, math.ceil(length / spacing * (1.0 - 1e-9)))
+    rows = np.zeros((n + 1, 5))
+    rows[:, 0] = np.linspace(a.x, b.x, n + 1)
+    rows[:, 1] = np.linspace(a.y, b.y, n + 1)
+    rows[:, 2], rows[-1, 2], rows[:, 4] = a.yaw, b.yaw, 1.0
+    if not problem.checker.path_free(rows, clearance=clearance)[0]:
+        return None
+    ends = rows[[0, -1], :2].copy()
+    message = f"solved: the goal lies straight ahead (a straight line of {length:.2g} m)"
+    path = Path(rows, ends)
+    nodes = int(stats.get("nodes", 0))
+    return solved(planner, watch, path, ends.copy(), (), 0, message, stats, nodes=nodes)
 
 
 def solved(

@@ -35,7 +35,7 @@ import shapely
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.types import Pose
 
-__all__ = ["ROOT_FAN_TOL", "open_share", "root_boxed_in"]
+__all__ = ["ROOT_FAN_TOL", "boxed_end", "open_share", "root_boxed_in", "stuck_root_words"]
 
 #: The proof's tolerance, metres: a direction counts as blocked when an obstacle lies
 #: this much inside its capsule, which covers the directions half a fan step either side.
@@ -175,3 +175,46 @@ def open_share(checker: CollisionChecker, root: Pose, tol: float = ROOT_FAN_TOL)
             far = shapely.distance(shapely.linestrings(ends[rest]), union)
         is_open[rest] = far >= radius
     return float(is_open.mean())
+
+
+def boxed_end(checker: CollisionChecker, start: Pose, goal: Pose) -> str:
+    """``"start"`` or ``"goal"``, the first that is :func:`root_boxed_in`, else ``""``."""
+    for end, pose in (("start", start), ("goal", goal)):
+        if root_boxed_in(checker, pose):
+            return end
+    return ""
+
+
+def stuck_root_words(end: str, proven: bool, patience: int, share: float | None) -> str:
+    """Why the ``end`` tree (``"start"`` or ``"goal"``) never grew, in a message's words.
+
+    Parameters
+    ----------
+    end : str
+        The stuck root.
+    proven : bool
+        Whether :func:`root_boxed_in` proved it before any iteration.
+    patience : int
+        The iterations it was given otherwise.
+    share : float or None
+        Its fan's :func:`open_share` when that was narrow, else ``None``.
+
+    Examples
+    --------
+    >>> stuck_root_words("goal", False, 400, 0.1)[:48]
+    'the goal tree never left the goal pose in 400 it'
+    """
+    if proven:
+        return (
+            f"the {end} tree cannot leave the {end} pose: every edge it may grow, within "
+            f"90 deg of the {end}'s heading, is blocked there (the {end} is boxed in "
+            "along its heading)"
+        )
+    narrow = ""
+    if share is not None:
+        narrow = f"; {100 * share:.0f} % of those directions have room for an edge there"
+    return (
+        f"the {end} tree never left the {end} pose in {patience} "
+        f"iterations (it grows only by edges within 90 deg of the {end}'s heading, and "
+        f"none tried was free{narrow}: the {end} is boxed in along its heading)"
+    )

@@ -188,6 +188,12 @@ class ImprovedConfig:
     dubins_radius_factor : float
         Turning radius of the fallback's arcs as a multiple of ``1 / kappa_max``
         (>= 1; default 1.05, a little room for tracking).
+    reverse_detour_ratio : float
+        With reverse allowed, the direct Dubins path is kept before the escalation
+        only when at most this multiple of the Reeds-Shepp distance (the shortest
+        path with reversing at the same radius, obstacles aside); a longer one (a
+        goal 0.1 m ahead and 1 mm aside: a 61 m loop forward, 8 m reversing) is
+        kept only when the escalation finds nothing shorter. ``inf`` keeps it always.
     passage_bias : float
         Share of iterations that sample passages, in ``[0, 1)``.
     expansion_a : float
@@ -244,6 +250,7 @@ class ImprovedConfig:
     reverse_postprocess_attempts: int = 1
     escalation_first: str = "reverse"
     dubins_radius_factor: float = 1.05
+    reverse_detour_ratio: float = 1.5
     passage_bias: float = 0.1
     expansion_a: float = 1.0
     expansion_lmin: float | None = None
@@ -287,6 +294,12 @@ class ImprovedConfig:
         if self.dubins_radius_factor < 1.0:
             raise InputError(
                 f"planner.dubins_radius_factor: must be >= 1, got {self.dubins_radius_factor!r}"
+            )
+        if self.reverse_detour_ratio != math.inf:  # inf: the direct Dubins path always first
+            require_finite("planner.reverse_detour_ratio", self.reverse_detour_ratio)
+        if self.reverse_detour_ratio < 1.0:
+            raise InputError(
+                f"planner.reverse_detour_ratio: must be >= 1, got {self.reverse_detour_ratio!r}"
             )
         if not 0.0 <= self.passage_bias < 1.0:
             raise InputError(f"planner.passage_bias: must lie in [0, 1), got {self.passage_bias!r}")

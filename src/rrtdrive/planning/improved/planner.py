@@ -25,7 +25,7 @@ import numpy as np
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register_planner
 from rrtdrive.planning.hybrid.escalation import ESCALATES_FROM, escalate
-from rrtdrive.planning.improved.boxed import open_share, root_boxed_in
+from rrtdrive.planning.improved.boxed import boxed_end, open_share, stuck_root_words
 from rrtdrive.planning.improved.config import ImprovedConfig, StageBudgets
 from rrtdrive.planning.improved.expansion import (
     default_expansion_lmin,
@@ -40,9 +40,11 @@ from rrtdrive.planning.improved.growth import (
     grow_until_meet,
     rooted_edge_test,
 )
-from rrtdrive.planning.result import run_query, solved, timeout_result
+from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
+from rrtdrive.planning.result import run_query, solved, straight_ahead_result, timeout_result
 from rrtdrive.planning.sampling import SampleSource
-from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, make_drivable
+from rrtdrive.planning.smoothing import make_drivable
+from rrtdrive.planning.smoothing.config import sharpness_bound
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Tree
 
 __all__ = ["NAME", "ImprovedRRTConnect"]
@@ -153,23 +155,6 @@ class ImprovedRRTConnect:
         )
 
 
-def sharpness_bound(configured: float, max_steer_rate: float | None) -> float:
-    """The query's ``max_sharpness``: the config's, or the car's rate / 2 m/s when smaller.
-
-    The config's bound (0.2 rad/m by default, for CommonRoad's 0.4 rad/s) holds for a
-    car without a rate limit too, so that the default paths are drivable by any
-    actuator at least that fast; a slower actuator tightens it.
-
-    Examples
-    --------
-    >>> sharpness_bound(0.2, None), sharpness_bound(0.2, 0.3), sharpness_bound(0.2, 1.0)
-    (0.2, 0.15, 0.2)
-    """
-    if max_steer_rate is None or not math.isfinite(max_steer_rate):
-        return configured
-    return min(configured, max_steer_rate / STEER_RATE_DESIGN_SPEED)
-
-
 class _Query:
     """Working state of one query: its settings, counters and the tree paths tried."""
 
@@ -259,11 +244,15 @@ class _Query:
             # With reverse: the direct Dubins path (cheap, forward, no cusp), then the
             # Hybrid A* search (Reeds-Shepp shots), which answers sooner than the
             # fallback's tails and leads (~70 ms a joint); those only after it.
+            detour = None
             if fallback:
                 out = self.fallback(joints=False)
-                if out is not None:
+                if out is not None and not self.detours(out):
                     return out
+                detour = out
             out = self.escalation(budget)
+            if detour is not None and out.status is not PlanStatus.TIMEOUT:
+                return self.shorter(out, detour)
             if out.success or not fallback or out.status not in ESCALATES_FROM:
                 return out
             if self.watch.capped:
@@ -276,6 +265,32 @@ class _Query:
         if self.cfg.escalation:
             return self.escalation(budget)
         return self.failure()
+
+    def detours(self, direct: PlanResult) -> bool:
+        """Whether the direct Dubins path is a detour a reversing path would cut short.
+
+        It is longer than ``reverse_detour_ratio`` times the Reeds-Shepp distance at
+        its radius (the shortest path with reversing, obstacles aside).
+        """
+        radius = self.cfg.dubins_radius_factor / self.problem.vehicle.kappa_max
+        shortest = reeds_shepp_distance(self.start, self.goal, radius)
+        ratio = direct.path.length / max(shortest, 1e-9)
+        self.stats["dubins_detour_ratio"] = ratio
+        return ratio > self.cfg.reverse_detour_ratio
+
+    def shorter(self, escalated: PlanResult, detour: PlanResult) -> PlanResult:
+        """The escalation's path when it solved shorter than the detour, else the detour."""
+        if escalated.success and escalated.path.length < detour.path.length:
+            return escalated
+        found = f"a longer path ({escalated.path.length:.1f} m)" if escalated.success else (
+            f"none ({int(escalated.stats.get('hybrid_expansions', 0))} expansions)"
+        )
+        return dataclasses.replace(
+            detour,
+            message=f"{detour.message}; Hybrid A* (with reverse) found {found}",
+            planning_time_s=self.watch.elapsed(),
+            stats={**escalated.stats, **detour.stats},
+        )
 
     def escalation(self, budget: Budget) -> PlanResult:
         """The Hybrid A* escalation on the iterations the RRT-Connect stages left."""
@@ -349,7 +364,10 @@ class _Query:
             return None
         self.stats["direct_connection"] = 1.0
         self.stats["nodes"] = 2.0
-        return self.smooth(np.vstack([s_xy, g_xy]), self.trees, 0)
+        out = self.smooth(np.vstack([s_xy, g_xy]), self.trees, 0)
+        # A goal a hair ahead is too close for the heading legs and turns.
+        clearance = self.smoothing.clearance
+        return out or straight_ahead_result(NAME, self.problem, self.watch, clearance, self.stats)
 
     def growth_edge_test(self) -> tuple[CollisionChecker, EdgeFree, dict[str, float]]:
         """The growth checker, its edge test (Sec. 3.1.4) and the expansion counters.
@@ -447,10 +465,7 @@ class _Query:
         """
         if self.limits.root_patience <= 0 or not self.cfg.obtuse_parent:
             return ""
-        for end, pose in (("start", self.start), ("goal", self.goal)):
-            if root_boxed_in(self.checker, pose):
-                return end
-        return ""
+        return boxed_end(self.checker, self.start, self.goal)
 
     def root_patience(self) -> int:
         """The pairs' patience: ``narrow_patience`` when the start's or goal's fan is narrow.
@@ -472,21 +487,8 @@ class _Query:
     def stuck_words(self) -> str:
         """Why the stuck root's tree never grew, for the messages."""
         end = self.stuck_root
-        if self.root_proof:
-            return (
-                f"the {end} tree cannot leave the {end} pose: every edge it may grow, within "
-                f"90 deg of the {end}'s heading, is blocked there (the {end} is boxed in "
-                "along its heading)"
-            )
-        narrow = ""
-        if self.stats.get("narrow_root"):
-            share = self.stats[f"{end}_open_share"]
-            narrow = f"; {100 * share:.0f} % of those directions have room for an edge there"
-        return (
-            f"the {end} tree never left the {end} pose in {self.patience} "
-            f"iterations (it grows only by edges within 90 deg of the {end}'s heading, and "
-            f"none tried was free{narrow}: the {end} is boxed in along its heading)"
-        )
+        share = self.stats[f"{end}_open_share"] if self.stats.get("narrow_root") else None
+        return stuck_root_words(end, self.root_proof, self.patience, share)
 
     def fallback(
         self, escalated: PlanResult | None = None, *, direct: bool = True, joints: bool = True

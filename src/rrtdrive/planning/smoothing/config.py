@@ -14,6 +14,7 @@ __all__ = [
     "MOVE_DIRECTIONS",
     "DEFAULT_CORNER_MOVES",
     "STEER_RATE_DESIGN_SPEED",
+    "sharpness_bound",
     "CurveKind",
     "SmoothingConfig",
     "SmoothingResult",
@@ -22,6 +23,23 @@ __all__ = [
 #: Speed (m/s) at which a path of the default sharpness bound needs exactly the
 #: actuator's largest steering rate: the bound is ``max_steer_rate / 2 m/s``.
 STEER_RATE_DESIGN_SPEED = 2.0
+
+
+def sharpness_bound(configured: float, max_steer_rate: float | None) -> float:
+    """The query's ``max_sharpness``: the config's, or the car's rate / 2 m/s when smaller.
+
+    The config's bound (0.2 rad/m by default, for CommonRoad's 0.4 rad/s) holds for a
+    car without a rate limit too, so that the default paths are drivable by any
+    actuator at least that fast; a slower actuator tightens it.
+
+    Examples
+    --------
+    >>> sharpness_bound(0.2, None), sharpness_bound(0.2, 0.3), sharpness_bound(0.2, 1.0)
+    (0.2, 0.15, 0.2)
+    """
+    if max_steer_rate is None or not math.isfinite(max_steer_rate):
+        return configured
+    return min(configured, max_steer_rate / STEER_RATE_DESIGN_SPEED)
 
 
 class CurveKind(enum.Enum):

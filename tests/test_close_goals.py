@@ -1,0 +1,102 @@
+"""Goals a few centimetres from the start.
+
+Straight ahead, the default planner drives the straight line however short it is (a
+goal under 0.111 m ahead used to get a 61 m Dubins loop: the direct connection's
+heading legs were skipped below 0.05 m). With reverse allowed, a forward Dubins path
+much longer than the Reeds-Shepp distance is kept only when the reversing search finds
+nothing shorter (``ImprovedConfig.reverse_detour_ratio``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import rrtdrive.planning.improved.planner as improved_planner
+from rrtdrive.maps import Map
+from rrtdrive.planning import PlanningProblem
+from rrtdrive.planning.hybrid.escalation import stage_of
+from rrtdrive.planning.improved import ImprovedConfig, ImprovedRRTConnect
+from rrtdrive.types import Budget, InputError, PlanStatus, Pose
+from rrtdrive.verify import verify_path
+
+BUDGET = Budget(max_time_s=600.0)
+START = Pose(50.0, 50.0, 0.0)
+
+
+def _open_map(goal: Pose, start: Pose = START) -> Map:
+    return Map("open", (0.0, 0.0, 100.0, 100.0), (), start, goal)
+
+
+def _solve(m: Map, reverse: bool = False, **options):
+    problem = PlanningProblem.from_map(m, reverse=reverse)
+    return ImprovedRRTConnect(**options).solve(problem, np.random.default_rng(0), BUDGET)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    distance=st.floats(2e-6, 0.3),
+    heading=st.floats(-math.pi, math.pi),
+)
+def test_a_goal_straight_ahead_is_the_straight_line(distance: float, heading: float) -> None:
+    start = Pose(START.x, START.y, heading)
+    goal = Pose(
+        start.x + distance * math.cos(heading), start.y + distance * math.sin(heading), heading
+    )
+    m = _open_map(goal, start)
+    res = _solve(m)
+    assert res.success, res.message
+    assert res.stats["direct_connection"] == 1.0
+    segment = shapely.LineString([(start.x, start.y), (goal.x, goal.y)])
+    rows = res.path.samples
+    assert res.path.length == pytest.approx(segment.length, abs=1e-9)
+    assert max(segment.distance(shapely.Point(x, y)) for x, y in rows[:, :2]) < 1e-9
+    assert np.allclose(rows[:, 3], 0.0)
+    assert verify_path(m, res.path, max_sharpness=0.2).ok
+
+
+def test_a_goal_a_few_centimetres_off_the_line_still_needs_the_loop_forward() -> None:
+    # Forward only a car cannot side-step 1 mm in 0.1 m: the loop is the answer.
+    m = _open_map(Pose(50.1, 50.001, 0.0))
+    res = _solve(m)
+    assert res.success and res.path.length > 40.0, res.message
+    assert verify_path(m, res.path, max_sharpness=0.2).ok
+
+
+@pytest.mark.parametrize(
+    "goal", [Pose(50.1, 50.001, 0.0), Pose(50.1, 50.0, 0.01), Pose(50.0, 50.1, math.pi / 2)]
+)
+def test_with_reverse_a_close_goal_is_not_a_forward_loop(goal: Pose) -> None:
+    m = _open_map(goal)
+    res = _solve(m, reverse=True)
+    assert res.success, res.message
+    assert stage_of(res) == "hybrid-a-star"
+    assert res.path.length < 12.0 and len(res.path.cusps) >= 1
+    assert res.stats["dubins_detour_ratio"] > ImprovedConfig().reverse_detour_ratio
+    assert verify_path(m, res.path, max_sharpness=0.2).ok
+    # The ratio switched off: the forward loop as before.
+    loop = _solve(m, reverse=True, reverse_detour_ratio=math.inf)
+    assert stage_of(loop) == "dubins-fallback" and loop.path.length > 40.0
+
+
+def test_the_detour_is_kept_when_the_reversing_search_finds_nothing(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # The search answers with the failure it escalated from, as when it finds nothing.
+    monkeypatch.setattr(improved_planner, "escalate", lambda failed, *args: failed)
+    m = _open_map(Pose(50.0, 50.1, math.pi / 2))
+    res = _solve(m, reverse=True)
+    assert res.status is PlanStatus.SOLVED and stage_of(res) == "dubins-fallback"
+    assert "; Hybrid A* (with reverse) found none (0 expansions)" in res.message
+    assert verify_path(m, res.path, max_sharpness=0.2).ok
+
+
+@pytest.mark.parametrize("value", [0.5, math.nan, -1.0])
+def test_a_bad_detour_ratio_is_named(value: float) -> None:
+    with pytest.raises(InputError, match=r"planner\.reverse_detour_ratio"):
+        ImprovedConfig(reverse_detour_ratio=value)
