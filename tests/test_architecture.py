@@ -105,3 +105,20 @@ def test_modules_stay_small():
         if (n := len(path.read_text().splitlines())) > MAX_LINES
     }
     assert not big, f"modules over {MAX_LINES} lines: {big}"
+
+
+def test_every_package_is_installed():
+    # setuptools installs only the packages pyproject.toml lists: a new subpackage left
+    # out works in the editable checkout and is missing from a regular `pip install .`.
+    import tomllib
+
+    setuptools = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    listed = set(setuptools["packages"])
+    found = set()
+    for init in (ROOT / "src" / "rrtdrive").rglob("__init__.py"):
+        rel = init.parent.relative_to(ROOT / "src")
+        found.add(".".join(rel.parts))
+    for top in ("envs", "controllers"):
+        for init in (ROOT / top).rglob("__init__.py"):
+            found.add(".".join(("rrtdrive", top, *init.parent.relative_to(ROOT / top).parts)))
+    assert found - listed == set()

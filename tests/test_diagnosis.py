@@ -256,6 +256,46 @@ def test_u_turn_in_a_narrow_street():
     assert diagnose(problem(street_map(16.0))) is None
 
 
+def corridor(width: float = 4.0, goal_x: float = 8.0, goal_yaw: float = 0.0) -> Map:
+    """A straight corridor 30 m long, the start in its middle heading +x, the goal behind."""
+    return Map("corridor", (0.0, 0.0, 30.0, width), (), Pose(15.0, width / 2, 0.0),
+               Pose(goal_x, width / 2, goal_yaw))  # fmt: skip
+
+
+def test_a_goal_behind_in_a_corridor_too_narrow_to_turn_round(tmp_path, capsys):
+    m = corridor()
+    found = diagnose(problem(m))
+    assert found.kind is DiagnosisKind.U_TURN
+    behind = shapely.Point(m.start.x, m.start.y).distance(shapely.Point(m.goal.x, m.goal.y))
+    assert found.numbers["behind_m"] == pytest.approx(behind)
+    assert found.numbers["street_width_m"] == pytest.approx(4.0, abs=1e-9)
+    assert found.message.startswith(
+        "the goal is 7.0 m behind the start, facing the same way: driving forward the car "
+        "must turn round to reach it (and back); the street at"
+    )
+    assert found.message.endswith("(try --reverse)")
+    # Reversing allowed: not the constraint (and the default drives the 7 m back).
+    rev = PlanningProblem.from_map(m, reverse=True)
+    assert diagnose(rev) is None
+    # The planner's failure carries it to the CLI's why line.
+    f = tmp_path / "corridor.json"
+    save_map(m, f)
+    assert main(["plan", str(f)]) == 1
+    out = capsys.readouterr().out
+    assert "\n  why: the goal is 7.0 m behind the start" in out
+
+
+@pytest.mark.parametrize(
+    ("width", "goal_x", "goal_yaw"),
+    [(16.0, 8.0, 0.0),  # wide enough to turn round
+     (4.0, 14.5, 0.0),  # 0.5 m back: not behind
+     (4.0, 25.0, 0.0)],  # ahead
+)
+def test_a_goal_not_behind_or_a_street_wide_enough_is_no_u_turn(width, goal_x, goal_yaw):
+    found = diagnose(problem(corridor(width, goal_x, goal_yaw)))
+    assert found is None or found.kind is not DiagnosisKind.U_TURN
+
+
 def test_body_collision_names_the_obstacle():
     m = wall_map(gap_ahead=2.0)
     inside = Pose(20.0 + F + 2.0 + 0.5, 10.0, 0.0)  # rear axle in the wall

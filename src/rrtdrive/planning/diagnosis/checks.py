@@ -1,0 +1,291 @@
+"""The findings of :func:`~rrtdrive.planning.diagnosis.diagnose`, one function each."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+from scipy import ndimage
+
+from rrtdrive.collision import CollisionChecker
+from rrtdrive.maps import Map
+from rrtdrive.planning.diagnosis.findings import Diagnosis, DiagnosisKind
+from rrtdrive.planning.diagnosis.measures import (
+    RUN_STEP,
+    arc_poses,
+    best_run,
+    body_centre,
+    cell_centres,
+    edge_keep,
+    end_keep,
+    first_hit,
+    free_run,
+    gap_width,
+    grid_cell,
+    map_shapes,
+    nearest_obstacle,
+    obstacle_name,
+    street_width,
+    u_turn_width,
+)
+from rrtdrive.types import Pose
+from rrtdrive.vehicle import footprint_polygon
+
+__all__ = [
+    "BEHIND_MIN",
+    "U_TURN_ANGLE",
+    "body_collides",
+    "goal_behind",
+    "narrow_passage",
+    "room_at_ends",
+    "tight_clearance",
+    "u_turn",
+]
+
+#: Heading change beyond which start and goal need the car turned round.
+U_TURN_ANGLE = math.radians(120.0)
+#: How far (metres) back along the start's heading a goal counts as behind it.
+BEHIND_MIN = 1.0
+
+
+def body_collides(m: Map, checker: CollisionChecker, pose: Pose, label: str) -> Diagnosis | None:
+    """``body_collides``: the ``label`` end's body overlaps an obstacle or leaves the map."""
+    if checker.pose_free(pose.as_tuple()):
+        return None
+    index = first_hit(checker, footprint_polygon(pose.as_tuple(), m.vehicle))
+    what = obstacle_name(index) if index >= 0 else "the bounds (it leaves the map)"
+    return Diagnosis(
+        DiagnosisKind.BODY_COLLIDES,
+        f"the {label}'s body at ({pose.x:.1f}, {pose.y:.1f}) overlaps {what}",
+        {"obstacle": index},
+    )
+
+
+def room_at_ends(
+    m: Map, checker: CollisionChecker, start: Pose, goal: Pose, reverse: bool
+) -> Diagnosis | None:
+    """``needs_reverse`` / ``boxed_in``: too little room ahead of the start or behind the goal."""
+    v = m.vehicle
+    need = v.length
+    least = f"less than the car length ({need:.2f} m) the smallest manoeuvre needs"
+    # (label, pose, direction of travel of a forward-gear motion there, its phrase)
+    ends = (
+        ("start", start, 1, "it can only be left in reverse"),
+        ("goal", goal, -1, "it can only be reached in reverse"),
+    )
+    for label, pose, forward, only in ends:
+        run_fwd = best_run(checker, pose, forward, v, need)
+        if run_fwd >= need:
+            continue
+        run_rev = best_run(checker, pose, -forward, v, need)
+        ahead, behind = (run_fwd, run_rev) if forward > 0 else (run_rev, run_fwd)
+        numbers = {"room_ahead_m": ahead, "room_behind_m": behind, "needed_m": need}
+        tip = "" if reverse else " (try --reverse)"
+        if run_rev < need:
+            return Diagnosis(
+                DiagnosisKind.BOXED_IN,
+                f"the {label} is boxed in: on any steady steering the car has at most "
+                f"{behind:.2f} m behind it and {ahead:.2f} m ahead of it, {least}; "
+                f"{'leaving' if label == 'start' else 'reaching'} it takes several gear "
+                f"changes{tip}",
+                numbers,
+            )
+        if reverse:
+            continue  # reversing is allowed and has room: not the constraint
+        straight = free_run(checker, pose, forward, 0.0, need)
+        probe = arc_poses(pose, forward, 0.0, straight + 2 * RUN_STEP, RUN_STEP)[-1]
+        blocker = first_hit(checker, footprint_polygon(tuple(probe), v))
+        numbers.update(straight_gap_m=straight, obstacle=blocker)
+        if forward > 0:
+            where = f"{straight:.2f} m ahead of its nose"
+            room = f"the car drives at most {run_fwd:.2f} m forward from it"
+        else:
+            where = f"{straight:.2f} m behind its rear"
+            room = (
+                f"a forward arrival comes from behind the pose, where the car has at most "
+                f"{run_fwd:.2f} m"
+            )
+        return Diagnosis(
+            DiagnosisKind.NEEDS_REVERSE,
+            f"the {label} has {obstacle_name(blocker)} {where}: on any steady steering "
+            f"{room}, {least}; {only}{tip}",
+            numbers,
+        )
+    return None
+
+
+
+def tight_clearance(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagnosis | None:
+    """``tight_clearance``: the first tree edge at an end fails where the exact body is free."""
+    side, ends = edge_keep(checker), end_keep(checker)
+    leg = 0.5
+    ways = (("start", start, 1, "its rear", "leaves"), ("goal", goal, -1, "its nose", "reaches"))
+    for label, pose, forward, bumper, verb in ways:
+        # The tree's first edge at the pose: a short one along its heading, driven forward.
+        u = np.array([math.cos(pose.yaw), math.sin(pose.yaw)])
+        far = pose.xy + forward * leg * u
+        a, b = (pose.xy, far) if forward > 0 else (far, pose.xy)
+        if checker.edge_free(a, b) or free_run(checker, pose, forward, 0.0, leg) < leg:
+            continue
+        index, gap = nearest_obstacle(m, footprint_polygon(pose.as_tuple(), m.vehicle), checker)
+        return Diagnosis(
+            DiagnosisKind.TIGHT_CLEARANCE,
+            f"the {label}'s body is {gap:.2f} m from {obstacle_name(index)}; tree edges keep "
+            f"{side:.2f} m beside the body and {ends:.2f} m beyond {bumper} (the swept "
+            f"test's round ends, the checker's {checker.config.margin:.2f} m margin, "
+            f"{checker.grid_error:.2f} m grid error and {checker.config.min_trace_step:.2f} m "
+            f"trace step), so no tree edge {verb} it (try --planner hybrid-a-star, or the "
+            f"default planner, whose Hybrid A* stage tests the body exactly)",
+            {"gap_m": gap, "keep_m": side, "keep_end_m": ends, "obstacle": index},
+        )
+    return None
+
+
+def connected(field_: np.ndarray, t: float, a: tuple[int, int], b: tuple[int, int]) -> bool:
+    labels, _ = ndimage.label(field_ >= t, structure=np.ones((3, 3), dtype=bool))
+    return bool(labels[a] != 0 and labels[a] == labels[b])
+
+
+def narrow_passage(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagnosis | None:
+    """``narrow_passage`` / ``walled_off``: the narrowest gap joining start and goal, or none."""
+    grid = checker.clearance_grid
+    a, b = grid_cell(checker, (start.x, start.y)), grid_cell(checker, (goal.x, goal.y))
+    need = checker.edge_radius + checker.config.min_trace_step
+    if a is None or b is None:
+        return None
+    ends = float(min(grid[a], grid[b]))
+    if ends >= need:
+        # Where the swept edge test can go at all: one labelling per map, on the checker.
+        edge_labels = checker.grid.derived(
+            ("diagnosis_edge_labels", need),
+            lambda: ndimage.label(grid >= need, structure=np.ones((3, 3), dtype=bool))[0],
+        )
+        if edge_labels[a] != 0 and edge_labels[a] == edge_labels[b]:
+            return None
+    elif not checker.provably_disconnected((start.x, start.y), (goal.x, goal.y)):
+        # An end within 0.12 m of a wall: the measure below would find the end's own
+        # clearance; go on only where no motion joins them (a walled-off goal beside a
+        # wall was told "try --reverse" before, or nothing at all).
+        return None
+    lo, hi = 0.0, min(need, ends)  # connected at lo (or nothing is), disconnected at hi
+    if not connected(grid, 1e-9, a, b):
+        lo = -1.0
+    else:
+        for _ in range(10):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if connected(grid, mid, a, b) else (lo, mid)
+    v = m.vehicle
+    needed_width = v.width + 2.0 * edge_keep(checker)
+    numbers = {"needed_m": needed_width, "car_width_m": v.width}
+    if lo < 0.0:
+        return Diagnosis(
+            DiagnosisKind.WALLED_OFF,
+            "the goal is walled off from the start: no gap connects them",
+            {**numbers, "width_m": 0.0},
+        )
+    # The narrowest place: the cells kept at ``lo`` but not at ``hi`` that join the
+    # start's side to the goal's; the best-cleared of them is the pass.
+    structure = np.ones((3, 3), dtype=bool)
+    low, _ = ndimage.label(grid >= lo, structure=structure)
+    high, _ = ndimage.label(grid >= hi, structure=structure)
+    band = (low == low[a]) & (high == 0)
+    parts, count = ndimage.label(band, structure=structure)
+    near_a = ndimage.binary_dilation(high == high[a], structure=structure)
+    near_b = ndimage.binary_dilation(high == high[b], structure=structure)
+    joins = np.intersect1d(np.unique(parts[near_a & band]), np.unique(parts[near_b & band]))
+    pick = band if len(joins) == 0 else np.isin(parts, joins[joins > 0])
+    best = np.unravel_index(int(np.argmax(np.where(pick, grid, -np.inf))), grid.shape)
+    best = (int(best[0]), int(best[1]))
+    x, y = (float(v) for v in cell_centres(checker, *best))
+    width = gap_width(checker, x, y)
+    numbers.update(width_m=width, x=x, y=y)
+    if width < v.width:
+        tail = f"narrower than the car ({v.width:.2f} m)"
+    else:
+        tail = (
+            f"tree edges need at least {needed_width:.2f} m (the car's {v.width:.2f} m and "
+            f"{edge_keep(checker):.2f} m each side)"
+        )
+    return Diagnosis(
+        DiagnosisKind.NARROW_PASSAGE,
+        f"the passage near ({x:.1f}, {y:.1f}) is {width:.2f} m wide; {tail}",
+        numbers,
+    )
+
+
+
+def goal_behind(start: Pose, goal: Pose) -> float | None:
+    """How far (metres) the goal lies behind the start, or ``None`` unless it does.
+
+    Behind: more than :data:`BEHIND_MIN` back along the start's heading, and no farther
+    aside than back. Driving forward, the car must then head backwards at some point
+    (its displacement along the start's heading is negative), whatever the goal's heading.
+
+    Examples
+    --------
+    >>> goal_behind(Pose(15.0, 2.0, 0.0), Pose(8.0, 2.5, 0.0))
+    7.0
+    >>> goal_behind(Pose(15.0, 2.0, 0.0), Pose(8.0, 12.0, 0.0)) is None  # more aside
+    True
+    """
+    dx, dy = goal.x - start.x, goal.y - start.y
+    c, s = math.cos(start.yaw), math.sin(start.yaw)
+    back, aside = -(dx * c + dy * s), abs(dy * c - dx * s)
+    return back if back > BEHIND_MIN and aside <= back else None
+
+
+def u_turn(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagnosis | None:
+    """``u_turn``: the car must turn round where the street is narrower than its U-turn."""
+    v = m.vehicle
+    turn = abs(math.remainder(goal.yaw - start.yaw, 2.0 * math.pi))
+    behind = goal_behind(start, goal)
+    if turn <= U_TURN_ANGLE and behind is None:
+        return None
+    need = u_turn_width(v)
+    centre = body_centre(start, v)
+    width = street_width(m, centre, start.yaw, checker=checker)
+    if width >= need:
+        return None
+    # The widest free circle the car can reach from the start (distance field).
+    labels = checker.component_labels
+    a = grid_cell(checker, (start.x, start.y))
+    if a is None or labels[a] == 0:
+        return None
+    grid = np.where(labels == labels[a], checker.clearance_grid, -np.inf)
+    best = np.unravel_index(int(np.argmax(grid)), grid.shape)
+    # Exactly (shapely) at the best cells and half a cell about them: the field's value
+    # at cell centres read dead_end's 7.5 m street as "no place wider than 7.4 m".
+    h = checker.resolution
+    top = np.flatnonzero(grid.ravel() >= grid[best] - h)
+    top = top[np.argsort(grid.ravel()[top])[::-1][:2000]]
+    cx, cy = cell_centres(checker, *np.unravel_index(top, grid.shape))
+    shift = np.array([(0.0, 0.0), (h / 2, 0.0), (-h / 2, 0.0), (0.0, h / 2), (0.0, -h / 2)])
+    px = (cx[:, None] + shift[None, :, 0]).ravel()
+    py = (cy[:, None] + shift[None, :, 1]).ravel()
+    clear = shapely.distance(map_shapes(checker).solid, shapely.points(px, py))
+    k = int(np.argmax(clear))
+    bx, by = float(px[k]), float(py[k])
+    widest = max(2.0 * float(clear[k]), 2.0 * (float(grid[best]) + checker.grid_error))
+    numbers = {"street_width_m": width, "needed_m": need, "widest_m": widest,
+               "x": centre[0], "y": centre[1], "widest_x": bx, "widest_y": by}  # fmt: skip
+    head = (
+        f"the street at ({centre[0]:.1f}, {centre[1]:.1f}) is {width:.1f} m wide; a forward "
+        f"U-turn needs {need:.1f} m"
+    )
+    if turn <= U_TURN_ANGLE and behind is not None:
+        # Facing the same way: forward, the car must head back somewhere to get there.
+        numbers["behind_m"] = behind
+        head = (
+            f"the goal is {behind:.1f} m behind the start, facing the same way: driving "
+            f"forward the car must turn round to reach it (and back); {head}"
+        )
+    if widest < need:
+        tail = f"; no place reachable from the start is wider than {widest:.1f} m (try --reverse)"
+    else:
+        tail = (
+            f"; the car must first drive to a wider place (the widest, about {widest:.0f} m "
+            f"across, is near ({bx:.0f}, {by:.0f}))"
+        )
+    return Diagnosis(DiagnosisKind.U_TURN, head + tail, numbers)
+

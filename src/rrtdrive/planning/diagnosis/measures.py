@@ -1,0 +1,269 @@
+"""The measures the findings are made of, on the map's exact geometry and its checker."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import shapely
+
+from rrtdrive.collision import CollisionChecker
+from rrtdrive.maps import Map
+from rrtdrive.types import Pose, VehicleParams
+
+__all__ = [
+    "ARC_FRACTIONS",
+    "RUN_STEP",
+    "MapShapes",
+    "along",
+    "arc_poses",
+    "best_run",
+    "body_centre",
+    "cell_centres",
+    "edge_keep",
+    "end_keep",
+    "first_hit",
+    "free_run",
+    "gap_width",
+    "grid_cell",
+    "map_shapes",
+    "nearest_obstacle",
+    "obstacle_name",
+    "street_width",
+    "u_turn_width",
+]
+
+#: Spacing of the poses tested along a free run, metres.
+RUN_STEP = 0.05
+#: Steady-steering arcs tried for a free run, as fractions of kappa_max.
+ARC_FRACTIONS = (-1.0, -0.5, 0.0, 0.5, 1.0)
+
+
+def u_turn_width(vehicle: VehicleParams) -> float:
+    """Width of the strip a forward U-turn on the tightest circle sweeps.
+
+    The outer front corner runs on radius ``hypot(R + W/2, front_extent)`` and
+    reaches that far beyond the turning centre; the outer rear corner swings
+    ``hypot(R + W/2, rear_overhang)`` to the other side of it. Their sum is
+    ``2 R`` plus the body's swept width, overhangs included.
+
+    Examples
+    --------
+    >>> round(u_turn_width(VehicleParams()), 2)
+    14.65
+    """
+    r = vehicle.min_turning_radius + vehicle.width / 2.0
+    return math.hypot(r, vehicle.front_extent) + math.hypot(r, vehicle.rear_overhang)
+
+
+def arc_poses(pose: Pose, direction: int, kappa: float, length: float, step: float) -> np.ndarray:
+    """Poses ``(N, 3)`` every ``step`` along a steady-steering arc, the start excluded.
+
+    ``direction`` +1 drives forward, -1 backs; ``kappa`` is the steering's curvature.
+    """
+    s = np.arange(1, int(math.floor(length / step + 1e-9)) + 1) * step
+    return along(pose, direction * s, kappa)
+
+
+def along(pose: Pose, s: np.ndarray, kappa: float) -> np.ndarray:
+    """Poses at signed arc lengths ``s`` on the arc of curvature ``kappa`` from ``pose``."""
+    s = np.asarray(s, dtype=float)
+    yaw = pose.yaw + kappa * s
+    if abs(kappa) < 1e-12:
+        x = pose.x + s * math.cos(pose.yaw)
+        y = pose.y + s * math.sin(pose.yaw)
+    else:
+        x = pose.x + (np.sin(yaw) - math.sin(pose.yaw)) / kappa
+        y = pose.y - (np.cos(yaw) - math.cos(pose.yaw)) / kappa
+    return np.column_stack([x, y, yaw])
+
+
+def free_run(
+    checker: CollisionChecker, pose: Pose, direction: int, kappa: float, limit: float
+) -> float:
+    """How far the car drives from ``pose`` on a steady arc before its body collides.
+
+    Parameters
+    ----------
+    checker : CollisionChecker
+        The map's checker (its exact body test is used).
+    pose : Pose
+        Rear-axle pose to leave.
+    direction : int
+        +1 forward, -1 reverse.
+    kappa : float
+        Curvature of the arc (0: straight).
+    limit : float
+        Longest run looked at; returned when nothing is hit.
+
+    Returns
+    -------
+    float
+        The run in metres: poses every :data:`RUN_STEP`, the first hit refined by
+        bisection to a millimetre (a lower bound of the true run).
+    """
+    poses = arc_poses(pose, direction, kappa, limit, RUN_STEP)
+    if len(poses) == 0:
+        return limit
+    bad = np.flatnonzero(~checker.poses_free(poses))
+    if len(bad) == 0:
+        return limit
+    lo, hi = float(bad[0]) * RUN_STEP, float(bad[0] + 1) * RUN_STEP
+    while hi - lo > 1e-3:
+        mid = 0.5 * (lo + hi)
+        if checker.pose_free(along(pose, np.array([direction * mid]), kappa)[0]):
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def best_run(
+    checker: CollisionChecker, pose: Pose, direction: int, vehicle: VehicleParams, limit: float
+) -> float:
+    """The longest :func:`free_run` over the steady arcs of :data:`ARC_FRACTIONS`."""
+    best = 0.0
+    for f in ARC_FRACTIONS:
+        best = max(best, free_run(checker, pose, direction, f * vehicle.kappa_max, limit))
+        if best >= limit:
+            break
+    return best
+
+
+@dataclass(frozen=True, eq=False)
+class MapShapes:
+    """The map's shapes the findings measure against, built once per checker."""
+
+    polygons: np.ndarray  # one shapely polygon per obstacle, in map order
+    edge: shapely.Geometry  # the bounds' outline
+    walls: shapely.Geometry  # obstacle outlines and the bounds' outline
+    solid: shapely.Geometry  # obstacle areas and the bounds' outline
+
+
+def map_shapes(checker: CollisionChecker) -> MapShapes:
+    """The map's :class:`MapShapes`, built once per checker (cached on its grid)."""
+    def build() -> MapShapes:
+        polys = np.array([o.polygon() for o in checker.obstacles], dtype=object)
+        edge = shapely.box(*checker.bounds).exterior
+        return MapShapes(
+            polys,
+            edge,
+            shapely.union_all([edge, *shapely.get_exterior_ring(polys)]),
+            shapely.union_all([edge, *polys]),
+        )
+
+    return checker.grid.derived("diagnosis_shapes", build)
+
+
+def first_hit(checker: CollisionChecker, body: shapely.Geometry) -> int:
+    """Index of the first obstacle ``body`` overlaps, -1 for none (the bounds)."""
+    hits = np.flatnonzero(shapely.intersects(map_shapes(checker).polygons, body))
+    return int(hits[0]) if len(hits) else -1
+
+
+def nearest_obstacle(
+    m: Map, body: shapely.Geometry, checker: CollisionChecker | None = None
+) -> tuple[int, float]:
+    """The obstacle nearest to ``body`` and its distance; index -1 is the map's edge.
+
+    With ``checker`` (the map's), its cached obstacle polygons are used.
+    """
+    edge = shapely.box(*m.bounds).exterior.distance(body)
+    if not m.obstacles:
+        return -1, float(edge)
+    if checker is not None:
+        polys = map_shapes(checker).polygons
+    else:
+        polys = np.array([o.polygon() for o in m.obstacles], dtype=object)
+    d = shapely.distance(polys, body)
+    i = int(np.argmin(d))
+    return (i, float(d[i])) if d[i] <= edge else (-1, float(edge))
+
+
+def street_width(
+    m: Map,
+    point: tuple[float, float],
+    yaw: float,
+    reach: float = 1e3,
+    checker: CollisionChecker | None = None,
+) -> float:
+    """Free width across heading ``yaw`` at ``point``: to the first obstacle or edge each side.
+
+    Measured exactly with shapely along the normal to the heading (with ``checker``,
+    the map's, its cached outlines are used).
+    """
+    if checker is not None:
+        walls = map_shapes(checker).walls
+    else:
+        walls = shapely.union_all(
+            [shapely.box(*m.bounds).exterior, *(o.polygon().exterior for o in m.obstacles)]
+        )
+    p = shapely.Point(point)
+    total = 0.0
+    for side in (1.0, -1.0):
+        nx, ny = -math.sin(yaw) * side, math.cos(yaw) * side
+        ray = shapely.LineString([point, (point[0] + nx * reach, point[1] + ny * reach)])
+        hit = ray.intersection(walls)
+        total += p.distance(hit) if not hit.is_empty else reach
+    return float(total)
+
+
+def body_centre(pose: Pose, vehicle: VehicleParams) -> tuple[float, float]:
+    """The centre of the car's body at rear-axle ``pose``."""
+    off = vehicle.front_extent - vehicle.length / 2.0
+    return (pose.x + off * math.cos(pose.yaw), pose.y + off * math.sin(pose.yaw))
+
+
+def obstacle_name(index: int) -> str:
+    """``"obstacle i"``, or ``"the map's edge"`` for index -1, for messages."""
+    return "the map's edge" if index < 0 else f"obstacle {index}"
+
+
+def grid_cell(checker: CollisionChecker, p: tuple[float, float]) -> tuple[int, int] | None:
+    """The checker's grid cell holding point ``p``, or ``None`` outside the grid."""
+    g = (np.asarray(p, dtype=float) - checker.grid_origin) / checker.resolution
+    i, j = int(math.floor(g[0])), int(math.floor(g[1]))
+    nx, ny = checker.clearance_grid.shape
+    return (i, j) if 0 <= i < nx and 0 <= j < ny else None
+
+
+def cell_centres(checker: CollisionChecker, i: Any, j: Any) -> tuple[Any, Any]:
+    """World centres of the grid cells ``(i, j)`` (indices or arrays of them)."""
+    o, h = checker.grid_origin, checker.resolution
+    return o[0] + (i + 0.5) * h, o[1] + (j + 0.5) * h
+
+
+
+def edge_keep(checker: CollisionChecker) -> float:
+    """The room beside the body the swept edge test needs: margin, grid error, trace step."""
+    return checker.config.margin + checker.grid_error + checker.config.min_trace_step
+
+
+def end_keep(checker: CollisionChecker) -> float:
+    """The room beyond a bumper the swept edge test needs: its round end, grid error, step."""
+    r = checker.edge_radius
+    inset = math.sqrt(max(r * r - (checker.vehicle.width / 2.0) ** 2, 0.0))
+    return r - inset + checker.grid_error + checker.config.min_trace_step
+
+
+def gap_width(checker: CollisionChecker, x: float, y: float) -> float:
+    """Width of the gap at the grid cell ``(x, y)`` of its narrowest place.
+
+    Twice the distance to the nearest wall from the cell's centre, which lies up to
+    half a cell off the gap's centre line (a 1.85 m gap read 1.75 m); when the two
+    nearest walls (obstacles, or the bounds) are that far apart give or take a cell,
+    their own distance, the gap's exact width.
+    """
+    shapes = map_shapes(checker)
+    p = shapely.Point(x, y)
+    around = 2.0 * float(p.distance(shapes.solid))
+    parts = [shapes.edge, *shapes.polygons]
+    d = shapely.distance(np.array(parts, dtype=object), p)
+    if len(parts) < 2:
+        return around
+    i, j = (int(k) for k in np.argsort(d)[:2])
+    between = float(shapely.distance(parts[i], parts[j]))
+    return between if abs(between - around) <= 2.0 * checker.resolution else around
+
