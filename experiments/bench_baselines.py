@@ -208,13 +208,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="results/", help="output folder (default: %(default)s)")
     parser.add_argument("--planners", nargs="+", default=list(BASELINES), choices=BASELINES,
                         help="baselines to time, space-separated (default: all)")
-    parser.add_argument("--max-iterations", type=int, default=20_000,
+    parser.add_argument("--max-iterations", type=positive_int, default=20_000,
                         help="iteration budget per query (default: %(default)s)")
     parser.add_argument("--max-time", type=positive_float, default=10.0,
                         help="seconds per query (default: %(default)s)")
-    parser.add_argument("--edges", type=int, default=20_000,
+    parser.add_argument("--edges", type=positive_int, default=20_000,
                         help="random edges to time (default: %(default)s)")
-    parser.add_argument("--poses", type=int, default=5_000,
+    parser.add_argument("--poses", type=positive_int, default=5_000,
                         help="random poses to time (default: %(default)s)")
     args = parser.parse_args(argv)
     if args.seeds <= 0:

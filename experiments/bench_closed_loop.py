@@ -104,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--frequency", type=int_at_least(15, "Hz"), default=20,
                     help="simulation frequency of the timed runs [Hz] (default: %(default)s)")
     ap.add_argument(
-        "--env-step-seeds", type=int, default=1,
+        "--env-step-seeds", type=positive_int, default=1,
         help="seeds also timed through env.step (slow: an observation every step)",
     )
     ap.add_argument("--planner", default=DEFAULT_PLANNER,

@@ -88,7 +88,7 @@ def report(payload: dict[str, Any]) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--steps", type=int, default=400, help="steps per run (default 400)")
+    ap.add_argument("--steps", type=positive_int, default=400, help="steps per run (default 400)")
     ap.add_argument("--repeats", type=positive_int, default=3,
                     help="runs, the best kept (default 3)")
     ap.add_argument("--out", default=None, help="write bench_gym.json and .md here")

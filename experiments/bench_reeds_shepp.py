@@ -38,7 +38,7 @@ from pathlib import Path as FsPath
 import numpy as np
 
 from rrtdrive.atomic import write_text_atomic
-from rrtdrive.cli_args import positive_int
+from rrtdrive.cli_args import int_at_least, positive_int
 from rrtdrive.planning.reeds_shepp import (
     reeds_shepp_distance,
     reeds_shepp_paths,
@@ -98,7 +98,7 @@ def _ompl_distance(radius: float) -> Callable[[Pose, Pose], float] | None:
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark; return 0, or 1 when a length differs from OMPL's by > 1e-6."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--pairs", type=int, default=1000,
+    ap.add_argument("--pairs", type=positive_int, default=1000,
                     help="random start/goal pose pairs, >= 1 (default: %(default)s)")
     ap.add_argument("--repeats", type=positive_int, default=5,
                     help="timed passes over all pairs per function, >= 1 (default: %(default)s)")
@@ -110,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="table covers |dx|, |dy| up to this [m] (default: %(default)s)")
     ap.add_argument("--table-resolution", type=float, default=0.5,
                     help="table grid spacing in x and y [m] (default: %(default)s)")
-    ap.add_argument("--table-yaw-bins", type=int, default=72,
+    ap.add_argument("--table-yaw-bins", type=int_at_least(4), default=72,
                     help="table heading bins over 360 degrees, >= 4 (default: %(default)s)")
     ap.add_argument("--out", default="results",
                     help="directory for reeds_shepp.json (default: %(default)s)")

@@ -187,7 +187,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--max-foreign", type=float, default=None,
                         help="repeat a trial in which other processes took more than this "
                         "share of the CPU")
-    parser.add_argument("--attempts", type=int, default=3,
+    parser.add_argument("--attempts", type=positive_int, default=3,
                         help="tries per trial under --max-foreign; the last one is kept "
                         "(default: %(default)s)")
     parser.add_argument("--probe", action="store_true",

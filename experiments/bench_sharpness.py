@@ -31,7 +31,7 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
-from rrtdrive.cli_args import positive_float, positive_int
+from rrtdrive.cli_args import int_at_least, positive_float, positive_int
 from rrtdrive.maps import BUILTIN_MAPS, TIGHT_MAP_NAMES, builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem
 from rrtdrive.planning.improved import ImprovedRRTConnect
@@ -95,7 +95,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", type=positive_int, default=10,
                     help="planner seeds 0..N-1 per map (default: %(default)s)")
-    ap.add_argument("--goals", type=int, default=100,
+    ap.add_argument("--goals", type=int_at_least(0), default=100,
                     help="random poses (0: skip part 2) (default: %(default)s)")
     ap.add_argument("--goal-seed", type=int, default=1, help="seed of the random poses")
     ap.add_argument("--max-time", type=positive_float, default=5.0,

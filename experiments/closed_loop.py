@@ -257,9 +257,8 @@ def main(argv: list[str] | None = None) -> int:
         "--deterministic", action="store_true",
         help="planning stops on its iteration budget only (no wall-clock cap)",
     )
-    ap.add_argument(
-        "--oncoming", type=int, default=2, help="oncoming cars in overtake-oncoming (default 2)"
-    )
+    ap.add_argument("--oncoming", type=int_at_least(0), default=2,
+                    help="oncoming cars in overtake-oncoming (default 2)")
     ap.add_argument("--controllers", default=",".join(CONTROLLERS),
                     help="comma-separated controllers (default: %(default)s)")
     ap.add_argument("--planner", default=DEFAULT_PLANNER,

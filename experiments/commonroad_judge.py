@@ -26,7 +26,7 @@ from pathlib import Path
 
 from rrtdrive.atomic import write_text_atomic
 from rrtdrive.bench.backends import episode_progress, parallel_map
-from rrtdrive.cli_args import positive_int
+from rrtdrive.cli_args import int_at_least, positive_int
 from rrtdrive.commonroad_judge import COMMONROAD_STEER_RATE, commonroad_available, judge_trajectory
 from rrtdrive.evaluation import evaluate
 from rrtdrive.sim.runner import run_episode
@@ -80,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--judge-steer-rate", type=float, default=COMMONROAD_STEER_RATE,
                     help="steering-velocity limit of the judge [rad/s] (default: %(default)s)")
     ap.add_argument(
-        "--random-maps", type=int, default=0, metavar="N",
+        "--random-maps", type=int_at_least(0), default=0, metavar="N",
         help="drive random maps 0..N-1 (experiments/random_maps.py) with reverse instead "
         "of --scenarios and --seeds",
     )

@@ -209,7 +209,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--variants", default=",".join(SHORT),
                     help="our settings to run, comma-separated (default: all of "
                     f"{', '.join(SHORT)})")
-    ap.add_argument("--expansions", type=int, default=20000,
+    ap.add_argument("--expansions", type=positive_int, default=20000,
                     help="our counted budget (default: %(default)s)")
     ap.add_argument("--ompl-time", type=positive_float, default=10.0,
                     help="OMPL's time cap [s] (default: %(default)s)")

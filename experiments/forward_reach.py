@@ -42,6 +42,7 @@ from forward_misses import _item  # noqa: E402  (the query parser of the sibling
 from reach_sweep import Reach, sweep  # noqa: E402
 from results_io import command, machine, numbers_above, write_results  # noqa: E402
 
+from rrtdrive.cli_args import positive_int  # noqa: E402
 from rrtdrive.types import Path, Pose  # noqa: E402
 from rrtdrive.verify import verify_path  # noqa: E402
 
@@ -107,7 +108,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="metres between steering moves (default: %(default)s)")
     ap.add_argument("--distance", type=float, default=30.0,
                     help="metres a drive must reach (default: %(default)s)")
-    ap.add_argument("--max-states", type=int, default=300_000,
+    ap.add_argument("--max-states", type=positive_int, default=300_000,
                     help="drives kept per step (default: %(default)s)")
     ap.add_argument(
         "--turned-wheels", action="store_true",

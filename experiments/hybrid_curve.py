@@ -85,7 +85,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="random goal poses and start poses each (default: %(default)s)")
     ap.add_argument("--reverse", action="store_true",
                     help="plan with gear changes allowed (default: forward only)")
-    ap.add_argument("--expansions", type=int, default=20000,
+    ap.add_argument("--expansions", type=positive_int, default=20000,
                     help="expansion budget per plan (default: %(default)s)")
     ap.add_argument("--cap", type=float, default=120.0,
                     help="wall-clock safety cap [s] (default: %(default)s)")

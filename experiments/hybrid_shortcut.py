@@ -108,7 +108,7 @@ def report(payload: dict[str, Any]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--tries", type=int, default=40,
+    ap.add_argument("--tries", type=positive_int, default=40,
                     help="shortcut_tries of the 'with' runs (default: %(default)s)")
     ap.add_argument("--count", type=positive_int, default=100, help="poses per set (default 100)")
     ap.add_argument("--out", default="results/hybrid_shortcut",

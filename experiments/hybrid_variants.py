@@ -210,7 +210,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--count", type=positive_int, default=30,
                     help="random poses per set (default 30)")
     ap.add_argument("--seed", type=int, default=1, help="seed of the pose sets (default 1)")
-    ap.add_argument("--scenario-seeds", type=int, default=10,
+    ap.add_argument("--scenario-seeds", type=positive_int, default=10,
                     help="seeds per gear scenario (default: %(default)s)")
     ap.add_argument("--repeat", type=positive_int, default=2,
                     help="plans per query and variant, the least CPU time kept (default 2)")

@@ -27,7 +27,7 @@ from pathlib import Path as FsPath
 import numpy as np
 from random_goals import add_pose_set_options, draw_goals
 
-from rrtdrive.cli_args import positive_float
+from rrtdrive.cli_args import positive_float, positive_int
 from rrtdrive.maps import Map, builtin_map, write_text_atomic
 from rrtdrive.planning.base import PlanningProblem
 from rrtdrive.planning.hybrid import HybridAStar
@@ -55,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
     add_pose_set_options(ap)
     ap.add_argument("--reverse", action="store_true",
                     help="plan with gear changes allowed (default: forward only)")
-    ap.add_argument("--max-expansions", type=int, default=20_000,
+    ap.add_argument("--max-expansions", type=positive_int, default=20_000,
                     help="expansion budget per plan (default: %(default)s)")
     ap.add_argument("--max-time", type=positive_float, default=10.0,
                     help="wall-clock safety cap per plan [s] (default: %(default)s)")

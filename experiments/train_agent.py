@@ -32,6 +32,7 @@ import gymnasium as gym
 import numpy as np
 
 import rrtdrive
+from rrtdrive.cli_args import positive_int
 from rrtdrive.evaluation import evaluate, summarise
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim.runner import run_episode
@@ -66,14 +67,14 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     )
     p.add_argument("--planner", default="improved-rrt-connect",
                    help="registered planner name (default: %(default)s)")
-    p.add_argument("--timesteps", type=int, default=60_000,
+    p.add_argument("--timesteps", type=positive_int, default=60_000,
                    help="PPO environment steps (default: %(default)s)")
-    p.add_argument("--envs", type=int, default=2,
+    p.add_argument("--envs", type=positive_int, default=2,
                    help="parallel training environments (default: %(default)s)")
-    p.add_argument("--eval-seeds", type=int, default=20,
+    p.add_argument("--eval-seeds", type=positive_int, default=20,
                    help="held-apart evaluation episodes (default: %(default)s)")
     p.add_argument("--seed", type=int, default=0, help="seeds PPO and the training envs")
-    p.add_argument("--action-repeat", type=int, default=2,
+    p.add_argument("--action-repeat", type=positive_int, default=2,
                    help="simulation steps per action (default: %(default)s)")
     p.add_argument("--residual-scale", type=float, default=0.25,
                    help="fraction of the full command range the residual spans "
@@ -84,7 +85,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                    help="reward weight, 1/(rad^2 s) (default: %(default)s)")
     p.add_argument("--w-speed", type=float, default=5.0,
                    help="reward weight, s/m^2 (default: %(default)s)")
-    p.add_argument("--n-steps", type=int, default=512,
+    p.add_argument("--n-steps", type=positive_int, default=512,
                    help="PPO rollout length per env (default: %(default)s)")
     p.add_argument("--log-std-init", type=float, default=-1.0,
                    help="PPO policy's initial log standard deviation (default: %(default)s)")

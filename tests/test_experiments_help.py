@@ -100,6 +100,18 @@ def test_a_count_flag_takes_integers_from_one(script):
         assert ast.unparse(kind).endswith("positive_int"), (script, sorted(names))
 
 
+@pytest.mark.parametrize("script", SCRIPTS)
+def test_a_plain_int_flag_is_a_seed(script):
+    # Every other integer counts something (pairs, timesteps, expansions, cars): a
+    # plain int let --timesteps 0 or --pairs -5 through to a traceback or an empty run.
+    for call in _add_argument_calls(script):
+        kind = next((k.value for k in call.keywords if k.arg == "type"), None)
+        if kind is None or ast.unparse(kind) != "int":
+            continue
+        names = [a.value for a in call.args if isinstance(a, ast.Constant)]
+        assert all(n.endswith("seed") for n in names), (script, names)
+
+
 def test_an_output_folder_that_cannot_be_one_is_refused_before_the_run(tmp_path):
     # It was a traceback after every episode had run (the run lost).
     sys.path.insert(0, str(EXPERIMENTS))
