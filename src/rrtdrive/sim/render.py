@@ -37,7 +37,8 @@ import numpy as np
 
 __all__ = [
     "PATH_COLOR", "REVERSE_COLOR", "CUSP_COLOR", "TRACE_COLOR", "REF_COLOR", "GOAL_COLOR",
-    "TEXT_COLOR", "PANEL_COLOR", "SceneCanvas", "is_parked", "prepare_sdl",
+    "TEXT_COLOR", "PANEL_COLOR", "PANEL_CORNERS", "SceneCanvas", "is_parked", "panel_band",
+    "prepare_sdl",
 ]
 
 PATH_COLOR = (40, 90, 255)
@@ -315,17 +316,28 @@ class SceneCanvas:
         for p in xy:
             self._pygame.draw.circle(self.surface, color, self.surface.vec2pix(p), radius)
 
-    def panel_corner(
+    def panel_hits(
         self, points: np.ndarray, width: int, lines: int, reach_m: float = 3.5
-    ) -> str:
-        """The frame corner whose read-out panel covers the fewest of ``points``.
+    ) -> dict[str, int]:
+        """How many of ``points`` the read-out panel covers in each frame corner.
 
-        ``points`` are world ``(x, y)`` rear-axle positions (the path, the driven
-        trace) seen from the canvas's ``centre``; a point counts when the panel comes
-        within ``reach_m`` of it (the car's body around its axle). The panel is
-        ``width`` pixels wide for ``lines`` lines. Ties go to the top left, then top
-        right, bottom left, bottom right. On a narrow map (a kerbside street, 960 x
-        240) the top-left panel hid the start.
+        Parameters
+        ----------
+        points : numpy.ndarray
+            World ``(x, y)`` rear-axle positions (the path, the driven trace), seen
+            from the canvas's ``centre``.
+        width : int
+            Panel width in pixels.
+        lines : int
+            Lines of text in the panel.
+        reach_m : float
+            A point counts when the panel comes within ``reach_m`` metres of it (the
+            car's body around its axle).
+
+        Returns
+        -------
+        dict of str to int
+            The count per corner of :data:`PANEL_CORNERS`, in that order.
         """
         xy = np.asarray(points, dtype=float).reshape(-1, 2)
         w, h = self.size
@@ -334,14 +346,30 @@ class SceneCanvas:
         py = h / 2.0 - (xy[:, 1] - self.centre[1]) * self.scaling
         r = reach_m * self.scaling
         height = _panel_height(lines)
-        best, fewest = "top-left", math.inf
+        hits = {}
         for corner in PANEL_CORNERS:
             left, top = _panel_origin(corner, self.size, width, height)
             inside = (px >= left - r) & (px <= left + width + r) & (py >= top - r)
             inside &= py <= top + height + r
-            if int(inside.sum()) < fewest:
-                best, fewest = corner, int(inside.sum())
-        return best
+            hits[corner] = int(inside.sum())
+        return hits
+
+    def panel_corner(
+        self, points: np.ndarray, width: int, lines: int, reach_m: float = 3.5
+    ) -> str:
+        """The frame corner whose read-out panel covers the fewest of ``points``.
+
+        ``points`` are world ``(x, y)`` rear-axle positions (the path, the driven
+        trace) seen from the canvas's ``centre``; a point counts when the panel comes
+        within ``reach_m`` of it (the car's body around its axle, :meth:`panel_hits`).
+        The panel is ``width`` pixels wide for ``lines`` lines. Ties go to the top
+        left, then top right, bottom left, bottom right. On a narrow map (a kerbside
+        street, 960 x 240) the top-left panel hid the start. When every corner covers
+        some points (a tall narrow map), the video puts the panel in a band above the
+        scene instead (:func:`panel_band`).
+        """
+        hits = self.panel_hits(points, width, lines, reach_m)
+        return min(PANEL_CORNERS, key=hits.__getitem__)  # the first of equal counts
 
     def frame(
         self, lines: Sequence[str], panel_width: int | None = None, corner: str = "top-left"
@@ -377,6 +405,21 @@ PANEL_CORNERS = ("top-left", "top-right", "bottom-left", "bottom-right")
 
 def _panel_height(lines: int) -> int:
     return 8 + 20 * lines
+
+
+def panel_band(lines: int) -> int:
+    """Height in pixels of a band above the scene that holds a read-out panel of ``lines`` lines.
+
+    The panel with 6 pixels clear above and below, rounded up to a multiple of 16 (H.264
+    macro blocks, as :func:`~rrtdrive.sim.scenes.fit_view` sizes frames). The video adds
+    it when the panel would cover some of the drive in every corner of the frame.
+
+    Examples
+    --------
+    >>> panel_band(3), panel_band(4), panel_band(5)
+    (80, 112, 128)
+    """
+    return int(16 * math.ceil((_panel_height(lines) + 12) / 16.0))
 
 
 def _panel_origin(corner: str, size: tuple[int, int], width: int, height: int) -> tuple[int, int]:

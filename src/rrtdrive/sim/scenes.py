@@ -125,7 +125,9 @@ def fit_view(
     ``max_size`` allows: a 100 m square lot gets 640 x 640 pixels at 6 px/m, a
     60 x 8 m street a wide 960 x 240 frame, a 30 x 20 m garage 30 px/m. Sides are
     multiples of 16 (H.264 macro blocks) and at least :data:`FIT_MIN_SIZE` (the
-    read-out panel), the extra pixels showing more of the ground around the map.
+    read-out panel), the extra pixels showing more of the ground around the map. A
+    video whose panel would hide some of the drive in every corner of this frame adds
+    a band above it for the panel (:func:`rrtdrive.sim.render.panel_band`).
 
     Parameters
     ----------

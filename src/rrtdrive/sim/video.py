@@ -21,7 +21,7 @@ import numpy as np
 
 from rrtdrive.sim.episode import Episode
 from rrtdrive.sim.mp4 import Mp4Writer
-from rrtdrive.sim.render import TRACE_COLOR, SceneCanvas
+from rrtdrive.sim.render import PANEL_CORNERS, TRACE_COLOR, SceneCanvas, panel_band
 from rrtdrive.sim.scenes import SimConfig, build_env
 from rrtdrive.types import InputError, Pose, require_int
 
@@ -118,6 +118,48 @@ def frame_indices(episode: Episode, stride: int = 1) -> list[int]:
     return indices
 
 
+def _panel_lines(episode: Episode) -> int:
+    """Lines of the read-out: three, plus the path's gear changes and the traffic mode."""
+    cusps = len(episode.path.cusps) if len(episode.path) else 0
+    return 3 + bool(cusps) + (episode.traffic is not None)
+
+
+def _panel_layout(
+    episode: Episode,
+    size: tuple[int, int],
+    scaling: float,
+    camera: _Camera,
+    follow: bool,
+    reuse_static: bool,
+) -> tuple[SceneCanvas, str]:
+    """The canvas of the video and the corner of its read-out panel.
+
+    A following camera keeps the panel top left. A fixed view puts it in the corner
+    that hides least of the path and the drive (:meth:`SceneCanvas.panel_corner`);
+    when every corner hides some of them (a tall narrow map: a 320 px wide frame
+    has no room for the 290 px panel beside the route), the frame grows by a band
+    above the scene (:func:`~rrtdrive.sim.render.panel_band`) that holds the panel
+    top left, and ``camera`` moves up by half the band so that the scene is drawn
+    where it was, below the band.
+    """
+    canvas = SceneCanvas(size, scaling, tuple(camera.position), reuse_static=reuse_static)
+    if follow:
+        return canvas, "top-left"
+    lines = _panel_lines(episode)
+    path_xy = np.asarray(episode.path.xy, dtype=float).reshape(-1, 2)
+    route = np.vstack([path_xy, episode.log.states[:, :2]])
+    hits = canvas.panel_hits(route, PANEL_WIDTH, lines)
+    corner = min(PANEL_CORNERS, key=hits.__getitem__)  # as panel_corner
+    if hits[corner] == 0:
+        return canvas, corner
+    band = panel_band(lines)
+    camera.position[1] += band / 2.0 / scaling
+    canvas = SceneCanvas(
+        (size[0], size[1] + band), scaling, tuple(camera.position), reuse_static=reuse_static
+    )
+    return canvas, "top-left"
+
+
 def render_frames(
     episode: Episode,
     stride: int = 1,
@@ -160,9 +202,10 @@ def render_frames(
     env = build_env(episode.scenario, sim)
     try:
         u = env.unwrapped
-        canvas = SceneCanvas(
-            (sim.screen_width, sim.screen_height), sim.scaling, tuple(camera.position),
-            reuse_static=reuse_background,
+        follow = episode.scenario.camera().follow
+        canvas, corner = _panel_layout(
+            episode, (sim.screen_width, sim.screen_height), sim.scaling, camera, follow,
+            reuse_background,
         )
         road = u.road
         ego = u.vehicle
@@ -170,7 +213,6 @@ def render_frames(
         vehicle = episode.scenario.vehicle
         path_xy = episode.path.xy
         traffic = episode.traffic
-        follow = episode.scenario.camera().follow
         cte = (
             # Per gear segment, as the evaluators measure it (docs/metrics.md).
             tracking_errors(episode.path, log.states[:, :3], speeds=log.states[:, 3])[0]
@@ -180,11 +222,6 @@ def render_frames(
         path_gears = episode.path.gears if len(episode.path) else None
         gear_of = hud_gears(log.states[:, 3])
         cusps = len(episode.path.cusps) if len(episode.path) else 0
-        corner = "top-left"
-        if not follow:  # a fixed view: the panel where it hides least of path and drive
-            lines_shown = 3 + bool(cusps) + (traffic is not None)
-            route = np.vstack([np.asarray(path_xy, dtype=float).reshape(-1, 2), log.states[:, :2]])
-            corner = canvas.panel_corner(route, PANEL_WIDTH, lines_shown)
         for k in indices:
             x, y, yaw, v = log.states[k]
             steer = float(log.controls[k - 1, 1]) if k > 0 else 0.0
