@@ -37,8 +37,8 @@ import numpy as np
 
 __all__ = [
     "PATH_COLOR", "REVERSE_COLOR", "CUSP_COLOR", "TRACE_COLOR", "REF_COLOR", "GOAL_COLOR",
-    "TEXT_COLOR", "PANEL_COLOR", "PANEL_CORNERS", "SceneCanvas", "is_parked", "panel_band",
-    "prepare_sdl",
+    "TEXT_COLOR", "PANEL_COLOR", "PANEL_CORNERS", "SceneCanvas", "fewest_hits", "is_parked",
+    "panel_band", "prepare_sdl",
 ]
 
 PATH_COLOR = (40, 90, 255)
@@ -368,8 +368,7 @@ class SceneCanvas:
         some points (a tall narrow map), the video puts the panel in a band above the
         scene instead (:func:`panel_band`).
         """
-        hits = self.panel_hits(points, width, lines, reach_m)
-        return min(PANEL_CORNERS, key=hits.__getitem__)  # the first of equal counts
+        return fewest_hits(self.panel_hits(points, width, lines, reach_m))
 
     def frame(
         self, lines: Sequence[str], panel_width: int | None = None, corner: str = "top-left"
@@ -405,6 +404,17 @@ PANEL_CORNERS = ("top-left", "top-right", "bottom-left", "bottom-right")
 
 def _panel_height(lines: int) -> int:
     return 8 + 20 * lines
+
+
+def fewest_hits(hits: dict[str, int]) -> str:
+    """The corner of :meth:`SceneCanvas.panel_hits` covering fewest points, the first of equals.
+
+    Examples
+    --------
+    >>> fewest_hits({"top-left": 3, "top-right": 0, "bottom-left": 0, "bottom-right": 1})
+    'top-right'
+    """
+    return min(PANEL_CORNERS, key=hits.__getitem__)
 
 
 def panel_band(lines: int) -> int:

@@ -21,7 +21,7 @@ import numpy as np
 
 from rrtdrive.sim.episode import Episode
 from rrtdrive.sim.mp4 import Mp4Writer
-from rrtdrive.sim.render import PANEL_CORNERS, TRACE_COLOR, SceneCanvas, panel_band
+from rrtdrive.sim.render import TRACE_COLOR, SceneCanvas, fewest_hits, panel_band
 from rrtdrive.sim.scenes import SimConfig, build_env
 from rrtdrive.types import InputError, Pose, require_int
 
@@ -149,7 +149,7 @@ def _panel_layout(
     path_xy = np.asarray(episode.path.xy, dtype=float).reshape(-1, 2)
     route = np.vstack([path_xy, episode.log.states[:, :2]])
     hits = canvas.panel_hits(route, PANEL_WIDTH, lines)
-    corner = min(PANEL_CORNERS, key=hits.__getitem__)  # as panel_corner
+    corner = fewest_hits(hits)
     if hits[corner] == 0:
         return canvas, corner
     band = panel_band(lines)
