@@ -840,3 +840,34 @@ def test_ctrl_c_while_the_workers_import_is_one_line_not_their_tracebacks(tmp_pa
     assert proc.returncode == 130
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err[-1500:]
     assert err.strip().splitlines()[-1] == "rrtdrive: interrupted"
+
+
+@pytest.mark.skipif(not hasattr(signal, "pthread_sigmask"), reason="POSIX signal masks")
+def test_a_ctrl_c_while_a_worker_starts_reaches_the_bench(monkeypatch):
+    # SIGINT was ignored in the main process while a worker started (so that the worker
+    # is born ignoring it): a Ctrl-C in that window was lost and the bench ran on (the
+    # test above then saw exit 0 on a loaded machine). Now it is held and delivered.
+    import multiprocessing as mp
+
+    from rrtdrive.bench.backends import LocalBackend
+
+    backend = LocalBackend(workers=1)
+    process = type(backend._ctx.Process())
+    real_start = process.start
+
+    def start_with_ctrl_c(self):  # noqa: ANN001, ANN202
+        os.kill(os.getpid(), signal.SIGINT)  # the terminal's Ctrl-C, mid start-up
+        real_start(self)
+
+    monkeypatch.setattr(process, "start", start_with_ctrl_c)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            backend._start()
+            time.sleep(1.0)  # the old code: nothing arrives
+    finally:
+        for child in mp.active_children():
+            if child.name == "rrtdrive-bench-worker":
+                child.kill()
+                child.join(5)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, set())

@@ -34,6 +34,7 @@ import traceback
 from collections import deque
 from collections.abc import Callable, Generator, Iterable
 from dataclasses import dataclass
+from multiprocessing import resource_tracker
 from multiprocessing.connection import Connection, wait
 from typing import Any
 
@@ -125,7 +126,11 @@ def _call(executor: Executor, spec: RunSpec) -> tuple[str, Any]:
 def _worker_main(conn: Connection, executor: Executor) -> None:
     """Body of a local worker process: receive specs, send results, until told to stop."""
     # Ctrl-C goes to the whole terminal process group: let the main process handle it.
+    # Born with SIGINT blocked (LocalBackend._start): setting SIG_IGN drops one that came
+    # while importing, and unblocked it stays ignored.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     try:
         conn.send(_READY)
     except (BrokenPipeError, OSError):
@@ -208,12 +213,21 @@ class LocalBackend:
         parent, child = self._ctx.Pipe(duplex=True)
         saved = {k: os.environ.get(k) for k in _WORKER_ENV}
         os.environ.update(_WORKER_ENV)
-        # Born ignoring Ctrl-C (an ignored signal stays ignored across exec, and Python
-        # then installs no KeyboardInterrupt handler): the terminal sends SIGINT to the
-        # whole process group, and a worker still importing printed a traceback for it.
-        # The main process handles Ctrl-C; its workers end when their pipe closes.
+        # The worker is born with Ctrl-C blocked (a thread's signal mask survives fork and
+        # exec; _worker_main then ignores and unblocks it): the terminal sends SIGINT to
+        # the whole process group, and a worker still importing printed a traceback. The
+        # main process handles Ctrl-C; its workers end when their pipe closes. Ignoring it
+        # in the main process while the worker started instead lost a Ctrl-C in that
+        # window (numpy's threads took it, ignored) and the bench ran on.
+        mask = hasattr(signal, "pthread_sigmask")
         main_thread = threading.current_thread() is threading.main_thread()
-        handler = signal.signal(signal.SIGINT, signal.SIG_IGN) if main_thread else None
+        handler = None
+        if mask:
+            # Started first: starting it unblocks SIGINT and SIGTERM, whatever was blocked.
+            resource_tracker.ensure_running()
+            signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        elif main_thread:  # no signal masks: born ignoring it (stays ignored across exec)
+            handler = signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
             proc = self._ctx.Process(
                 target=_worker_main, args=(child, self.executor), daemon=True,
@@ -221,7 +235,9 @@ class LocalBackend:
             )
             proc.start()
         finally:
-            if main_thread:
+            if mask:
+                signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+            elif main_thread:
                 signal.signal(signal.SIGINT, handler)
             for k, v in saved.items():
                 if v is None:
