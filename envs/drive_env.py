@@ -55,8 +55,7 @@ from rrtdrive.sim.tasks import SCENARIOS, Reference
 from rrtdrive.sim.tasks.base import Task
 from rrtdrive.types import InputError, Path, brief_repr, require_int
 
-# RewardWeights, observation_names and OBS_CLIP are re-exported from their modules,
-# where they lived before the split.
+# RewardWeights, observation_names, OBS_CLIP: re-exported (they lived here before the split).
 __all__ = ["DriveEnv", "DriveEnvConfig", "RewardWeights", "observation_names", "OBS_CLIP"]
 
 
@@ -227,6 +226,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         """
         cfg = self.config
         task = cfg.scenario_for(seed) if task is None else task
+        task.check_time_limit(cfg.max_time_s or task.max_time_s, "max_time_s")
         ref = task.reference(cfg.planner, seed, cfg.budget)
         if ref.failure is not None:
             return ref

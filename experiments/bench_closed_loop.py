@@ -35,6 +35,7 @@ import numpy as np
 from rrtdrive.cli_args import int_at_least, positive_int
 from rrtdrive.controllers import SpeedConfig, make_controller
 from rrtdrive.maps import write_text_atomic
+from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MIN_SIM_FREQUENCY
 from rrtdrive.sim.runner import drive, run_episode
 from rrtdrive.sim.scenes import SimConfig, build_env
 from rrtdrive.sim.tasks import DEFAULT_PLANNER
@@ -101,7 +102,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="seeds 0..N-1 per scenario and controller (default: %(default)s)")
     ap.add_argument("--repeats", type=positive_int, default=3,
                     help="timed runs per episode; the minimum counts (default: %(default)s)")
-    ap.add_argument("--frequency", type=int_at_least(15, "Hz"), default=20,
+    ap.add_argument("--frequency", default=20,
+                    type=int_at_least(MIN_SIM_FREQUENCY, "Hz", MAX_SIM_FREQUENCY),
                     help="simulation frequency of the timed runs [Hz] (default: %(default)s)")
     ap.add_argument(
         "--env-step-seeds", type=positive_int, default=1,

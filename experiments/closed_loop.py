@@ -51,6 +51,7 @@ from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
 from rrtdrive.cli_args import int_at_least, positive_int  # noqa: E402
 from rrtdrive.evaluation import EpisodeReport, evaluate, summarise  # noqa: E402
 from rrtdrive.maps import write_text_atomic  # noqa: E402
+from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MIN_SIM_FREQUENCY  # noqa: E402
 from rrtdrive.sim.runner import EpisodeConfig, run_episode  # noqa: E402
 from rrtdrive.sim.scenes import SimConfig  # noqa: E402
 from rrtdrive.sim.tasks import DEFAULT_PLANNER, make_scenario  # noqa: E402
@@ -263,7 +264,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="comma-separated controllers (default: %(default)s)")
     ap.add_argument("--planner", default=DEFAULT_PLANNER,
                     help="registered planner name (default: %(default)s)")
-    ap.add_argument("--frequency", type=int_at_least(15, "Hz"), default=20,
+    ap.add_argument("--frequency", default=20,
+                    type=int_at_least(MIN_SIM_FREQUENCY, "Hz", MAX_SIM_FREQUENCY),
                     help="control and simulation frequency [Hz] (default: %(default)s)")
     ap.add_argument("--jobs", type=positive_int, default=2,
                     help="worker processes (default: %(default)s)")

@@ -36,6 +36,7 @@ from rrtdrive.bench.backends import episode_progress, parallel_map
 from rrtdrive.cli_args import int_at_least, positive_float, positive_int
 from rrtdrive.evaluation import evaluate
 from rrtdrive.evaluation.nuplan_comfort import COMFORT_BOUNDS
+from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MIN_SIM_FREQUENCY
 from rrtdrive.sim.replanning import ReplanConfig
 from rrtdrive.sim.runner import EpisodeConfig, run_episode
 from rrtdrive.sim.scenes import SimConfig
@@ -234,7 +235,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--planner", default=DEFAULT_PLANNER,
                     help="the reference path's planner (default: %(default)s; rrt-connect: the\n"
                     "baseline's raw paths, which jump in curvature)")
-    ap.add_argument("--frequency", type=int_at_least(15, "Hz"), default=20,
+    ap.add_argument("--frequency", default=20,
+                    type=int_at_least(MIN_SIM_FREQUENCY, "Hz", MAX_SIM_FREQUENCY),
                     help="control and simulation frequency [Hz] (default: %(default)s)")
     ap.add_argument("--jobs", type=positive_int, default=2,
                     help="worker processes (default: %(default)s)")

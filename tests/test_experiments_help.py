@@ -151,7 +151,7 @@ def test_a_misspelt_planner_is_refused_not_skipped(tmp_path):
 #: Time caps and the simulation frequency: a wrong value was refused only deep inside,
 #: by a config field's name (``budget.max_time_s``, ``sim.simulation_frequency``).
 CHECKED_TYPES = {"--max-time": "positive_float", "--ompl-time": "positive_float",
-                 "--frequency": "int_at_least(15"}
+                 "--frequency": "int_at_least(MIN_SIM_FREQUENCY, 'Hz', MAX_SIM_FREQUENCY)"}
 
 
 @pytest.mark.parametrize("script", SCRIPTS)

@@ -16,6 +16,10 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _steer_rate():
+    # Its sibling modules (results_io) import from the experiments folder: alone (or on
+    # an xdist worker that ran no other experiments test first) that is not on the path.
+    if str(ROOT / "experiments") not in sys.path:
+        sys.path.insert(0, str(ROOT / "experiments"))
     path = ROOT / "experiments" / "steer_rate.py"
     spec = importlib.util.spec_from_file_location("steer_rate", path)
     module = importlib.util.module_from_spec(spec)

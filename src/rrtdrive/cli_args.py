@@ -37,19 +37,18 @@ __all__ = [
 _NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)[\d.,eE+\-]*$")
 
 
-def int_at_least(low: int, unit: str = "") -> Callable[[str], int]:
-    """An argparse type accepting integers ``>= low`` (``unit`` is named in the error)."""
+def int_at_least(low: int, unit: str = "", high: int | None = None) -> Callable[[str], int]:
+    """An argparse type accepting integers ``>= low`` (and ``<= high``; ``unit`` is named)."""
     suffix = f" ({unit})" if unit else ""
+    want = f"an integer >= {low}" + ("" if high is None else f" and <= {high}")
 
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(
-                f"expected an integer >= {low}{suffix}, got {text!r}"
-            ) from None
-        if value < low:
-            raise argparse.ArgumentTypeError(f"expected an integer >= {low}{suffix}, got {text!r}")
+            raise argparse.ArgumentTypeError(f"expected {want}{suffix}, got {text!r}") from None
+        if value < low or (high is not None and value > high):
+            raise argparse.ArgumentTypeError(f"expected {want}{suffix}, got {text!r}")
         return value
 
     return parse

@@ -87,11 +87,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument(
         "--max-time", dest="max_time_s", type=_float_arg, metavar="S",
         help="planning wall-clock safety cap per run in seconds (default 5); a plan that "
-        "reaches it fails as 'timeout' (the iterations decide otherwise)",
+        "reaches it fails as 'timeout' (the iterations decide otherwise); not for "
+        "overtake-traffic, which re-plans within its own per-cycle budget",
     )
     p.add_argument(
         "--max-iterations", type=_int_arg, metavar="N",
-        help="planning iteration budget per run (default 20000)",
+        help="planning iteration budget per run (default 20000); not for overtake-traffic, "
+        "which re-plans within its own per-cycle budget",
     )
     p.add_argument(
         "--run-timeout", dest="run_timeout_s", type=_float_arg, metavar="S",

@@ -36,6 +36,7 @@ from rrtdrive.cli_args import (
     validate_output,
     writing,
 )
+from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MIN_SIM_FREQUENCY
 from rrtdrive.types import InputError
 
 __all__ = ["add_parser", "run", "episode_json", "metrics_block", "HELP", "NO_WALL_LIMIT_S"]
@@ -89,8 +90,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=nonneg_int, default=0, metavar="N",
                    help="episode seed (default 0)")
     p.add_argument(
-        "--frequency", type=int_at_least(15, 'Hz'), default=20, metavar="HZ",
-        help="simulation and control frequency in Hz, >= 15 (default 20)",
+        "--frequency", type=int_at_least(MIN_SIM_FREQUENCY, "Hz", MAX_SIM_FREQUENCY),
+        default=20, metavar="HZ",
+        help=f"simulation and control frequency in Hz, {MIN_SIM_FREQUENCY} to "
+        f"{MAX_SIM_FREQUENCY} (default 20)",
     )
     p.add_argument(
         "--max-time", type=positive_float, default=None, metavar="S",
@@ -122,11 +125,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     traffic.add_argument(
         "--density", default=None, metavar="D",
-        help="oncoming cars per km, or low / default / high (default: default, 10 per km)",
+        help="oncoming cars per km, up to 30, or low / default / high (5, 10, 20; "
+        "default: default)",
     )
     traffic.add_argument(
         "--lead-speed", type=positive_float, default=None, metavar="V",
-        help="lead car speed in m/s (default 4)",
+        help="lead car speed in m/s, below 9 (the ego's cap is 11; default 4); the lead "
+        "reaches the end of the 1.5 km road sooner the faster it is, which caps --max-time",
     )
     traffic.add_argument(
         "--lead-model", default=None, metavar="NAME",
@@ -361,6 +366,11 @@ def _run(args: argparse.Namespace) -> int:
     replan_config = TASKS[args.scenario].REPLAN_CONFIG if target == "scenario" else None
     if replan_config is not None and args.reverse:
         raise InputError(f"--reverse: {args.scenario} re-plans while driving, forward only")
+    if replan_config is not None and plan_time is not None:
+        raise InputError(
+            f"--plan-time: {args.scenario} plans nothing ahead; it re-plans while driving, "
+            "each cycle within its deadline (set by --replan-rate)"
+        )
     if target != "scenario":
         given = [k for k, v in traffic_opts.items() if v is not None]
         if given or getattr(args, "oncoming", None):
@@ -393,7 +403,8 @@ def _run(args: argparse.Namespace) -> int:
         episode = stock.episode
     else:
         scenario = _make_task(args, target, oncoming, traffic_opts, make_scenario)
-        episode = run_episode(scenario, args.planner, args.controller, args.seed, config)
+        with flags_for({"episode.max_time_s": "--max-time"}):
+            episode = run_episode(scenario, args.planner, args.controller, args.seed, config)
     episode = _with_simulate_hint(episode)
     report = evaluate(episode)
     # Drawing a stock env's frames happens during its drive; like writing the video, it

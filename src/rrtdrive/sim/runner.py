@@ -183,6 +183,8 @@ def run_episode(
     task = make_scenario(scenario, seed) if isinstance(scenario, str) else scenario
     if not isinstance(task, Task):
         raise InputError(f"scenario: expected a name or a task, got {scenario!r}")
+    if config.max_time_s is not None:  # before planning: the scene may not last that long
+        task.check_time_limit(config.max_time_s, "episode.max_time_s")
     speed, resolved = task.resolve(config)
     ctrl = make_controller(
         controller, vehicle=task.vehicle, speed=speed, **dict(config.controller_options)

@@ -34,6 +34,7 @@ from rrtdrive.maps import (
     parking_spots,
 )
 from rrtdrive.sim.ego import EgoVehicle
+from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MIN_SIM_FREQUENCY
 from rrtdrive.sim.pair_screen import object_boxes, pairs_to_handle
 from rrtdrive.types import InputError, VehicleParams, require_int
 
@@ -60,7 +61,9 @@ class SimConfig:
     Parameters
     ----------
     simulation_frequency : int
-        Steps per second of highway-env's physics; the controller runs at this rate.
+        Steps per second of highway-env's physics; the controller runs at this rate
+        (:data:`~rrtdrive.sim.limits.MIN_SIM_FREQUENCY` to
+        :data:`~rrtdrive.sim.limits.MAX_SIM_FREQUENCY`: 15 to 1000).
     screen_width, screen_height : int
         Rendered frame size in pixels (0 picks the scenario's default).
     scaling : float
@@ -73,7 +76,10 @@ class SimConfig:
     scaling: float = 0.0
 
     def __post_init__(self) -> None:
-        require_int("sim.simulation_frequency", self.simulation_frequency, 15)
+        require_int(
+            "sim.simulation_frequency", self.simulation_frequency,
+            MIN_SIM_FREQUENCY, MAX_SIM_FREQUENCY,
+        )  # fmt: skip
         for name in ("screen_width", "screen_height"):
             require_int(f"sim.{name}", getattr(self, name), 0)
         if not (self.scaling >= 0 and math.isfinite(self.scaling)):

@@ -234,6 +234,7 @@ class Task:
             raise InputError(f"scenario.seed: need an integer >= 0, got {self.seed!r}")
         require_positive("scenario.v_max", self.v_max)
         require_episode_time("scenario.max_time_s", self.max_time_s)
+        self.check_time_limit(self.max_time_s, "scenario.max_time_s")
         if not isinstance(self.reverse, (bool, np.bool_)):
             raise InputError(f"scenario.reverse: expected True or False, got {self.reverse!r}")
 
@@ -267,6 +268,13 @@ class Task:
     def describe(self) -> dict[str, Any]:
         """Kind-specific settings worth reporting next to the metrics (JSON-ready)."""
         return {}
+
+    def check_time_limit(self, max_time_s: float, name: str) -> None:
+        """Raise :class:`InputError` naming ``name`` when the task cannot last ``max_time_s``.
+
+        Any limit up to :data:`~rrtdrive.sim.loop.MAX_EPISODE_S` by default; a task
+        whose scene runs out sooner (``overtake-traffic``'s road) says so.
+        """
 
     # ------------------------------------------------------------------ scene
 

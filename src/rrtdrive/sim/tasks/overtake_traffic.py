@@ -243,6 +243,27 @@ class OvertakeTrafficTask(Task):
             lead_model=str(model), density=dens, ego_speed=float(v_lead),  # type: ignore[arg-type]
         )
 
+    @property
+    def road_time_s(self) -> float:
+        """How long the lead car stays on the road: until its front is 10 m from the end.
+
+        Past that the scene is over: highway-env sends the lead car round into the
+        oncoming lane, and a car still following it runs out of road.
+        """
+        assert self.lead is not None  # __post_init__ refuses a task without one
+        x, speed = self.lead
+        return (TRAFFIC_ROAD_LENGTH - 10.0 - (x + self.vehicle.length / 2.0)) / speed
+
+    def check_time_limit(self, max_time_s: float, name: str) -> None:
+        """Refuse a time limit longer than :attr:`road_time_s` (an overtake judged on no road)."""
+        if self.lead is not None and max_time_s > self.road_time_s:
+            speed = self.lead[1]
+            raise InputError(
+                f"{name}: at most {math.floor(self.road_time_s):g} s, got {max_time_s:g}: the "
+                f"lead car at {speed:g} m/s reaches the end of overtake-traffic's "
+                f"{TRAFFIC_ROAD_LENGTH:g} m road by then (a slower lead car leaves more time)"
+            )
+
     def describe(self) -> dict[str, Any]:
         """Density, lead speed and lead model."""
         return {
