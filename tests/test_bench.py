@@ -820,6 +820,11 @@ def test_the_curvature_histogram_puts_the_limit_on_a_bin_edge(tmp_path, monkeypa
     assert line is not None
 
 
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
 @pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="reads /proc for the workers")
 def test_ctrl_c_while_the_workers_import_is_one_line_not_their_tracebacks(tmp_path):
     # The terminal sends SIGINT to the whole process group. Workers still importing
@@ -829,6 +834,9 @@ def test_ctrl_c_while_the_workers_import_is_one_line_not_their_tracebacks(tmp_pa
          "rrt-connect", "--seeds", "6", "--workers", "2", "--out", str(tmp_path / "out"),
          "--no-plots", "--quiet"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+        # As from a terminal: a test run started in the background (`cmd &` without job
+        # control) ignores SIGINT, and the bench would inherit that and never see Ctrl-C.
+        preexec_fn=_default_sigint,  # noqa: PLW1509 - a plain signal reset, no threads
     )
     children = Path(f"/proc/{proc.pid}/task/{proc.pid}/children")
     deadline = time.monotonic() + 60
@@ -860,14 +868,17 @@ def test_a_ctrl_c_while_a_worker_starts_reaches_the_bench(monkeypatch):
         real_start(self)
 
     monkeypatch.setattr(process, "start", start_with_ctrl_c)
+    # As from a terminal (a background test run inherits SIGINT ignored).
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         with pytest.raises(KeyboardInterrupt):
             backend._start()
             time.sleep(1.0)  # the old code: nothing arrives
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+        assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, set())
     finally:
+        signal.signal(signal.SIGINT, previous)
         for child in mp.active_children():
             if child.name == "rrtdrive-bench-worker":
                 child.kill()
                 child.join(5)
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
-    assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, set())

@@ -252,6 +252,8 @@ class OvertakeTrafficTask(Task):
         """
         assert self.lead is not None  # __post_init__ refuses a task without one
         x, speed = self.lead
+        if speed <= 0.0:  # a standing lead car (a test's obstacle) never gets there
+            return math.inf
         return (TRAFFIC_ROAD_LENGTH - 10.0 - (x + self.vehicle.length / 2.0)) / speed
 
     def check_time_limit(self, max_time_s: float, name: str) -> None:
