@@ -44,6 +44,7 @@ from rrtdrive.envs.reference_speed import Relaunch, following_cap, stop_line_spe
 from rrtdrive.envs.render import SceneRenderer, view_for
 from rrtdrive.envs.reward import RewardWeights, state_terms
 from rrtdrive.envs.seed_draw import failure_text, start_drawn_episode
+from rrtdrive.envs.segments import starts_next_segment
 from rrtdrive.evaluation import EpisodeReport, EvalConfig, evaluate
 from rrtdrive.evaluation.report import WALL_CLOCK_FIELDS
 from rrtdrive.maps import Map
@@ -58,10 +59,6 @@ from rrtdrive.types import InputError, Path, brief_repr, require_int
 # RewardWeights, observation_names, OBS_CLIP: re-exported (they lived here before the split).
 __all__ = ["DriveEnv", "DriveEnvConfig", "RewardWeights", "observation_names", "OBS_CLIP"]
 
-
-#: How near the cusp (metres along the segment, or past it) an agent driving alone must
-#: be for moving in the next segment's gear to start that segment.
-CUSP_REACH_M = 1.0
 
 _RESET_OPTIONS = ("episode_seed",)
 
@@ -109,7 +106,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
     each cusp; the residual fades out before every stop); an agent driving alone
     moves on to the next segment once it stands still (|v| <= 0.1 m/s) within
     0.5 m of the cusp, or moves in the next segment's gear within ``CUSP_REACH_M``
-    (1 m) of it or past it.
+    (1 m, at most half the segment) of it or past it (:mod:`rrtdrive.envs.segments`).
 
     **Action** (``float32``, ``[-1, 1]^2``): ``[a, d]``, an acceleration and a
     steering angle over the car's command range, or with ``residual=True`` a
@@ -511,16 +508,12 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             return
         if self._segment >= len(ctrl.segments) - 1:
             return
-        nxt = ctrl.segments[self._segment + 1].gear
-        v = self._ego.speed
         proj = self._projector.project(*self._ego.rear[:2])
-        to_cusp = self._projector.length - proj.s  # < 0 past it
-        tol, stop = self.eval_config.goal_tol_m, self.eval_config.stop_speed
-        at_cusp = abs(v) <= stop and abs(to_cusp) <= tol
-        # Moving in the next gear counts only near the cusp: a brake at rest rolls the car
-        # back a centimetre, which must not skip a segment tens of metres long.
-        turned = v != 0.0 and (v > 0.0) == (nxt > 0) and to_cusp <= CUSP_REACH_M
-        if at_cusp or turned:
+        if starts_next_segment(
+            self._ego.speed, ctrl.segments[self._segment + 1].gear,
+            self._projector.length - proj.s, ctrl.segments[self._segment].length,
+            self.eval_config.goal_tol_m, self.eval_config.stop_speed,
+        ):  # fmt: skip
             ctrl.start_segment(self._segment + 1)
             self._use_segment(self._segment + 1)
 
