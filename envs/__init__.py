@@ -136,6 +136,13 @@ REGISTERED_SCENARIO = "registered_scenario"
 MAP_ID = "rrtdrive/Map-v0"
 
 
+def _registration_values(key: str) -> list[object]:
+    """What the ids register under ``key`` (:data:`REGISTERED_SCENARIO` or the options)."""
+    if key == REGISTERED_SCENARIO:
+        return [name for env_id, name in ENV_IDS.items() if env_id != MAP_ID]
+    return [kw["scenario_options"] for kw in ENV_KWARGS.values() if "scenario_options" in kw]
+
+
 def apply_registration(
     scenario: object, options: dict[str, object], merge: bool
 ) -> dict[str, object]:
@@ -156,7 +163,12 @@ def apply_registration(
     registered = out.pop(REGISTERED_SCENARIO_OPTIONS, None)
     own = out.pop(REGISTERED_SCENARIO, None)
     for key, value in ((REGISTERED_SCENARIO_OPTIONS, registered), (REGISTERED_SCENARIO, own)):
-        if value is not None and not is_registered_default(value):
+        # A spec restored from JSON (EnvSpec.to_json / from_json) has lost every marker,
+        # the scenario's too: its plain values are still an id's registration.
+        restored = scenario is not None and not is_registered_default(scenario)
+        if value is not None and not is_registered_default(value) and not (
+            restored and value in _registration_values(key)
+        ):
             raise InputError(f"{key}: set by an id's registration, not an option")
     if own is not None and scenario is not None and plain_value(scenario) != plain_value(own):
         raise InputError(

@@ -109,6 +109,22 @@ def test_a_scenario_of_another_id_is_refused_but_map_v0_takes_any_map():
         _make("rrtdrive/Overtake-v0", registered_scenario="overtake")
 
 
+@pytest.mark.parametrize("env_id", [i for i in ENV_IDS if not i.endswith("/Map-v0")])
+def test_a_spec_saved_as_json_makes_the_same_env(env_id):
+    # EnvSpec.to_json drops the registration markers; the restored spec was refused
+    # ("registered_scenario: set by an id's registration, not an option").
+    from gymnasium.envs.registration import EnvSpec
+
+    made = gym.make(env_id)
+    again = gym.make(EnvSpec.from_json(made.spec.to_json()))
+    assert again.unwrapped.config == made.unwrapped.config
+    first, _ = made.reset(seed=3)
+    second, _ = again.reset(seed=3)
+    assert np.array_equal(first, second)
+    made.close()
+    again.close()
+
+
 def test_a_jittered_reverse_in_episode_still_backs_into_the_bay():
     env = gym.make("rrtdrive/ParkingReverseIn-v0", scenario_options={"jitter": (0.5, 0.5, 0.05)})
     try:
