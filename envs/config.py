@@ -298,7 +298,10 @@ class DriveEnvConfig:
     @property
     def sim_config(self) -> SimConfig:
         """The simulation settings (:class:`~rrtdrive.sim.scenes.SimConfig`)."""
-        return SimConfig(simulation_frequency=self.simulation_frequency)
+        try:
+            return SimConfig(simulation_frequency=self.simulation_frequency)
+        except InputError as exc:  # named as this config's field, not SimConfig's
+            raise InputError(str(exc).removeprefix("sim.")) from None
 
     def scenario_for(self, seed: int) -> Scenario:
         """The scenario of episode seed ``seed`` with ``scenario_options``."""
@@ -342,6 +345,8 @@ class DriveEnvConfig:
             return SpeedConfig(**options)
         except TypeError as exc:
             raise InputError(f"speed_options: {exc}") from None
+        except InputError as exc:  # SpeedConfig names its fields "speed.v_max"
+            raise InputError(f"speed_options.{str(exc).removeprefix('speed.')}") from None
 
     def controller_for(self, scenario: Scenario, speed: SpeedConfig) -> TrackingController:
         """The tracking controller for ``scenario`` with ``controller_options``."""

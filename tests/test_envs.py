@@ -434,14 +434,15 @@ def test_render_draws_the_scene_and_the_path(tmp_path):
         ({"n_ref_points": 0}, "n_ref_points"),
         ({"ref_spacing": float("nan")}, "ref_spacing"),
         ({"action_repeat": 1.5}, "action_repeat"),
-        ({"simulation_frequency": 5}, "simulation_frequency"),
+        ({"simulation_frequency": 5}, "^simulation_frequency: "),  # not SimConfig's name
+        ({"simulation_frequency": 1001}, "^simulation_frequency: "),
         ({"max_time_s": -1.0}, "max_time_s"),
         ({"max_cte": 0}, "max_cte"),
         ({"reward": {"progess": 1.0}}, "reward.progess"),
         ({"reward": {"cte": -1.0}}, "reward.cte"),
         ({"scenario_options": {"colour": 1}}, "scenario_options"),
         ({"scenario_options": {"oncoming": 2}, "scenario": "parking"}, "oncoming"),
-        ({"speed_options": {"v_max": 0.0}}, "speed.v_max"),
+        ({"speed_options": {"v_max": 0.0}}, "^speed_options.v_max: "),  # not SpeedConfig's
         ({"speed_options": {"vmax": 1.0}}, "speed_options"),
         ({"speed_options": {"vmax": 1.0}}, "speed_options.vmax: unknown field"),
         ({"scenario_options": {"colour": 1}}, "scenario_options.colour: unknown option"),
