@@ -80,6 +80,11 @@ def _caller_options(
     """
     if scenario is not None and scenario != config.scenario:
         registered_map = is_registered_default(scenario) and scenario not in SCENARIOS
+        if registered_map and config.map is None:  # Map-v0's default, the user's scenario
+            raise InputError(
+                f"config.scenario: {scenario_text(config.scenario)} is a scenario, not a map: "
+                "Map-v0 takes a config for a map; give scenario= beside it, or use its own id"
+            )
         if not (registered_map and config.map is not None):
             raise InputError(
                 f"scenario: {scenario_text(scenario)} differs from config.scenario "

@@ -109,6 +109,15 @@ def test_a_scenario_of_another_id_is_refused_but_map_v0_takes_any_map():
         _make("rrtdrive/Overtake-v0", registered_scenario="overtake")
 
 
+def test_map_v0_with_a_scenario_config_names_the_config_not_its_default_map():
+    # It said "scenario: 'parking_lot' differs from config.scenario 'parking'": the
+    # id's default map, which the caller never gave.
+    cfg = DriveEnvConfig.from_options("parking")
+    with pytest.raises(InputError, match=r"^config\.scenario: 'parking' is a scenario, not a map"):
+        gym.make("rrtdrive/Map-v0", config=cfg)
+    assert gym.make("rrtdrive/Map-v0", scenario="parking", config=cfg).unwrapped.config == cfg
+
+
 @pytest.mark.parametrize("env_id", [i for i in ENV_IDS if not i.endswith("/Map-v0")])
 def test_a_spec_saved_as_json_makes_the_same_env(env_id):
     # EnvSpec.to_json drops the registration markers; the restored spec was refused
@@ -140,7 +149,7 @@ def test_config_of_another_scenario_is_refused_but_map_v0_takes_any_map():
     cfg = DriveEnvConfig.from_options("overtake")
     with pytest.raises(InputError, match=r"^scenario: 'parking' differs from config\.scenario"):
         _make("rrtdrive/Parking-v0", config=cfg)
-    with pytest.raises(InputError, match=r"^scenario: 'parking_lot' differs"):
+    with pytest.raises(InputError, match=r"^config\.scenario: 'overtake' is a scenario, not"):
         _make("rrtdrive/Map-v0", config=cfg)  # a scenario, not a map
     kerb = DriveEnvConfig.from_options("kerbside", scenario_options={"reverse": True})
     assert _make("rrtdrive/Map-v0", config=kerb) == kerb
