@@ -162,10 +162,10 @@ def apply_registration(
     out = dict(options)
     registered = out.pop(REGISTERED_SCENARIO_OPTIONS, None)
     own = out.pop(REGISTERED_SCENARIO, None)
+    # A spec restored from JSON (EnvSpec.to_json / from_json) has lost every marker, the
+    # scenario's too: its plain values are still an id's registration.
+    restored = scenario is not None and not is_registered_default(scenario)
     for key, value in ((REGISTERED_SCENARIO_OPTIONS, registered), (REGISTERED_SCENARIO, own)):
-        # A spec restored from JSON (EnvSpec.to_json / from_json) has lost every marker,
-        # the scenario's too: its plain values are still an id's registration.
-        restored = scenario is not None and not is_registered_default(scenario)
         if value is not None and not is_registered_default(value) and not (
             restored and value in _registration_values(key)
         ):

@@ -228,7 +228,8 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         """
         cfg = self.config
         task = cfg.scenario_for(seed) if task is None else task
-        task.check_time_limit(cfg.max_time_s or task.max_time_s, "max_time_s")
+        if cfg.max_time_s is not None:  # the task checked its own limit when it was made
+            task.check_time_limit(cfg.max_time_s, "max_time_s")
         ref = task.reference(cfg.planner, seed, cfg.budget)
         if ref.failure is not None:
             return ref

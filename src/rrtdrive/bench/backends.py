@@ -217,8 +217,8 @@ class LocalBackend:
         # exec; _worker_main then ignores and unblocks it): the terminal sends SIGINT to
         # the whole process group, and a worker still importing printed a traceback. The
         # main process handles Ctrl-C; its workers end when their pipe closes. Ignoring it
-        # in the main process while the worker started instead lost a Ctrl-C in that
-        # window (numpy's threads took it, ignored) and the bench ran on.
+        # in the main process while the worker started instead discarded a Ctrl-C in that
+        # window (a disposition is the whole process's) and the bench ran on.
         mask = hasattr(signal, "pthread_sigmask")
         main_thread = threading.current_thread() is threading.main_thread()
         handler = None

@@ -159,6 +159,8 @@ def run_query(
 #: plan JSON's 6 decimals cannot tell them apart (a goal 1e-6 rad off the start's
 #: heading was planned as a manoeuvre, and forward only it failed).
 SAME_POSE_TOL = 1e-6
+# A hair above the tolerance: wrap_angle(1e-6) may round to just over 1e-6.
+_POSE_TOL = SAME_POSE_TOL * (1.0 + 1e-9)
 
 
 def same_pose(a: Pose, b: Pose) -> bool:
@@ -171,9 +173,8 @@ def same_pose(a: Pose, b: Pose) -> bool:
     >>> same_pose(Pose(5.0, 6.0, 0.0), Pose(5.0, 6.0, 1e-5))
     False
     """
-    # A hair above the tolerance: wrap_angle(1e-6) may round to just over 1e-6.
-    tol = SAME_POSE_TOL * (1.0 + 1e-9)
-    return math.hypot(b.x - a.x, b.y - a.y) <= tol and abs(wrap_angle(b.yaw - a.yaw)) <= tol
+    close = math.hypot(b.x - a.x, b.y - a.y) <= _POSE_TOL
+    return close and abs(wrap_angle(b.yaw - a.yaw)) <= _POSE_TOL
 
 
 def at_goal(problem: PlanningProblem) -> bool:
@@ -217,11 +218,11 @@ def straight_ahead(a: Pose, b: Pose) -> bool:
     >>> straight_ahead(Pose(0.0, 0.0, 0.0), Pose(0.1, 1e-3, 0.0))
     False
     """
-    tol = SAME_POSE_TOL * (1.0 + 1e-9)
     c, s = math.cos(a.yaw), math.sin(a.yaw)
     dx, dy = b.x - a.x, b.y - a.y
     aside = abs(dy * c - dx * s)
-    return dx * c + dy * s > 0.0 and aside <= tol and abs(wrap_angle(b.yaw - a.yaw)) <= tol
+    turn = abs(wrap_angle(b.yaw - a.yaw))
+    return dx * c + dy * s > 0.0 and aside <= _POSE_TOL and turn <= _POSE_TOL
 
 
 def straight_ahead_result(
