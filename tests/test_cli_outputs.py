@@ -74,3 +74,20 @@ def test_sigterm_during_a_video_leaves_no_file(tmp_path):
     assert proc.returncode == 143, err
     assert err.strip().endswith("rrtdrive: terminated")
     assert sorted(p.name for p in tmp_path.iterdir()) == []  # no hidden half-written video
+
+
+@pytest.mark.parametrize("phase", ["_build", "join_negative_values"])
+def test_ctrl_c_while_the_subcommand_loads_is_exit_130_without_traceback(
+    phase, monkeypatch, capsys
+):
+    # Ctrl-C while the subcommand's modules import (bench: up to 3 s) or its arguments are
+    # read ended in a 60-90 line traceback: only the command's run was guarded.
+    import rrtdrive.cli as cli
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, phase, interrupted)
+    assert cli.main(["plan", "parking_lot"]) == 130
+    assert capsys.readouterr().err == "rrtdrive: interrupted\n"
+

@@ -17,7 +17,6 @@ import importlib
 import json
 import math
 import os
-import pathlib
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -291,65 +290,6 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     return EXIT_OK if result.success else EXIT_FAILED
 
 
-def _cmd_maps(args: argparse.Namespace) -> int:
-    from rrtdrive.maps import BUILTIN_MAPS, builtin_map
-
-    maps = {name: builtin_map(name) for name in BUILTIN_MAPS}
-    out = None if args.export is None else _export_folder(args.export, list(maps))
-    if out is not None:
-        _export(out, maps)
-    for name, m in maps.items():
-        line = (
-            f"{name:12s} {len(m.obstacles):4d} obstacles  start {m.start.as_tuple()}  goal "
-            + str(tuple(round(v, 3) for v in m.goal.as_tuple()))
-        )
-        if out is not None:
-            line += f"  -> {out / f'{name}.json'}"
-        print(line)
-    return EXIT_OK
-
-
-def _export(out: pathlib.Path, maps: dict[str, Map]) -> None:
-    """Write every map to ``out/NAME.json``: all of them, or (a full disk) none.
-
-    Each is written to a temporary file first; only when all are complete are they
-    renamed into place, so a write that fails leaves the folder as it was.
-    """
-    from rrtdrive.atomic import publish, temp_beside
-    from rrtdrive.maps import map_text
-
-    temps: dict[pathlib.Path, pathlib.Path] = {}
-    try:
-        for name, m in maps.items():
-            target = out / f"{name}.json"
-            with writing("--export", target):
-                temps[target] = temp_beside(target)
-                temps[target].write_text(map_text(m), "utf-8")
-        for target, tmp in temps.items():
-            with writing("--export", target):
-                publish(tmp, target)
-    finally:
-        for tmp in temps.values():
-            tmp.unlink(missing_ok=True)
-
-
-def _export_folder(text: str, names: Sequence[str]) -> pathlib.Path:
-    """The ``--export`` folder, created, with every ``NAME.json`` in it checked writable.
-
-    Checked before the first file is written, so a bad target leaves no partial export.
-    """
-    if not text.strip():
-        raise InputError("--export: expected a folder, got an empty value")
-    out = pathlib.Path(text)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError(f"--export: cannot create folder {out}: {exc.strerror}") from None
-    for name in names:
-        validate_output(str(out / f"{name}.json"), "--export")
-    return out
-
-
 @dataclass(frozen=True)
 class Command:
     """A subcommand: its one-line help and where its full parser is built.
@@ -366,7 +306,7 @@ class Command:
 #: Every subcommand, in ``rrtdrive --help`` order.
 COMMANDS: tuple[Command, ...] = (
     Command("plan", "plan a path on a map", "rrtdrive.cli:add_plan_parser"),
-    Command("maps", "list the built-in maps", "rrtdrive.cli:add_maps_parser"),
+    Command("maps", "list the built-in maps", "rrtdrive.cli_maps:add_parser"),
     Command(
         "verify",
         "check a plan's path against its map with the independent verifier",
@@ -461,21 +401,6 @@ def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
     return plan
 
 
-def add_maps_parser(sub: Any) -> argparse.ArgumentParser:
-    """Add ``maps`` to an argparse subparsers object and return its parser."""
-    maps = sub.add_parser(
-        "maps",
-        help=_command("maps").help,
-        description="List the built-in maps; --export writes them as JSON files.",
-    )
-    maps.add_argument(
-        "--export", metavar="DIR",
-        help="write each built-in map to DIR/NAME.json (DIR is created if missing)",
-    )
-    maps.set_defaults(func=_cmd_maps)
-    return maps
-
-
 def _command(name: str) -> Command:
     return next(c for c in COMMANDS if c.name == name)
 
@@ -560,7 +485,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         2 bad input,
         141 when the reader of stdout went away, 130 on Ctrl-C, 143 on SIGTERM.
     """
-    return run_writing_stdout(lambda: _main(argv))
+    return run_writing_stdout(lambda: _interruptible(argv))
+
+
+def _interruptible(argv: Sequence[str] | None) -> int:
+    # Ctrl-C also while the subcommand's modules load (bench: up to 3 s), not just as it runs.
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        print("rrtdrive: interrupted", file=sys.stderr)
+        return 130
 
 
 def _main(argv: Sequence[str] | None) -> int:
@@ -590,9 +524,6 @@ def _main(argv: Sequence[str] | None) -> int:
     except Terminated:
         print("rrtdrive: terminated", file=sys.stderr)
         return EXIT_TERMINATED
-    except KeyboardInterrupt:
-        print("rrtdrive: interrupted", file=sys.stderr)
-        return 130
 
 
 if __name__ == "__main__":
