@@ -2,7 +2,9 @@
 
 It shares no code with the planner or the checker (only the angle wrap and the
 densifier of :mod:`rrtdrive.geometry`): the body is a shapely polygon built
-here, curvature is the discrete three-point (Menger) curvature of the samples,
+here and in :mod:`rrtdrive.verify_measures`: curvature is the discrete three-point
+(Menger) curvature of the samples and the turn of the rows' yaw per chord (a car
+cannot turn faster than its curvature allows, whatever its positions do),
 sharpness the change of the steering angle ``atan(L kappa)`` between those
 estimates per metre, and the direction of travel comes from the sample chords.
 None of them reads the rows' ``kappa`` column.
@@ -33,6 +35,13 @@ from rrtdrive.types import (
     is_finite_number,
     require_positive,
 )
+from rrtdrive.verify_measures import (
+    YAW_ROUND,
+    segment_curvature,
+    segment_sharpness,
+    travel_directions,
+    turn_curvature,
+)
 
 __all__ = ["CHECKS", "PathCheck", "verify_path", "path_from_json"]
 
@@ -40,7 +49,7 @@ _CUSP_TOL_M = 1e-6  # a cusp repeats the position (to the JSON's 6 decimals)
 #: The pass / fail fields of :class:`PathCheck`; ``ok`` is all of them.
 CHECKS = (
     "collision_free", "curvature_ok", "sharpness_ok", "headings_ok", "endpoints_ok",
-    "spacing_ok", "travel_ok", "cusps_ok",
+    "spacing_ok", "travel_ok", "cusps_ok", "clearance_ok",
 )
 
 
@@ -55,17 +64,20 @@ class PathCheck:
     collision_free : bool
         Every dense body pose lies inside the bounds and clear of the obstacles.
     curvature_ok : bool
-        The discrete curvature of every gear segment is at most κ_max (plus slack).
+        The discrete curvature of every gear segment is at most κ_max (plus slack):
+        that of its positions and the turn of its yaw between rows per chord.
     headings_ok : bool
         The direction of travel at the start and at the goal matches their yaw
         (gear-corrected: a path may leave the start or reach the goal in reverse);
         a path that never moves (the start is the goal) has every row's yaw there.
     endpoints_ok : bool
-        The first and last positions are the start's and the goal's.
+        The first and last rows are the start's and the goal's poses (position and
+        yaw).
     spacing_ok : bool
         Consecutive samples are at most the allowed spacing apart.
     max_discrete_curvature : float
-        Largest discrete curvature over the segments, 1/m.
+        Largest discrete curvature over the segments, 1/m (inf where the yaw turns
+        while the car does not move).
     start_heading_err_deg, goal_heading_err_deg : float
         Direction of travel (gear-corrected) against the start and goal yaw.
     max_spacing_m : float
@@ -93,6 +105,21 @@ class PathCheck:
     collides_with : str
         What the body there overlaps: ``"obstacle K"`` (its index in the map),
         ``"the bounds"``; empty when ``collision_free``.
+    endpoint_err_m, endpoint_yaw_err_deg : float
+        How far the first and last rows are from the start and goal: the larger
+        distance, and the larger yaw difference (``endpoints_ok`` needs both within
+        the rows' 6 decimals).
+    cusp_gap_m, cusp_yaw_err_deg : float
+        The largest jump of position and of yaw at a gear change (a cusp repeats both).
+    first_bad_cusp_row : int or None
+        The row of the first gear change that moves or turns the car; ``None`` when
+        ``cusps_ok``.
+    min_clearance_m : float
+        The least distance between the body, at the tested poses (``pose_spacing``
+        apart along the rows), and any obstacle or the edge of the bounds; 0 where
+        they touch or overlap, inf on an empty map.
+    clearance_ok : bool
+        ``min_clearance_m`` is at least the ``clearance`` asked for.
     """
 
     ok: bool
@@ -113,24 +140,18 @@ class PathCheck:
     sharpness_ok: bool = True
     first_collision: tuple[float, float, float] | None = None
     collides_with: str = ""
+    endpoint_err_m: float = 0.0
+    endpoint_yaw_err_deg: float = 0.0
+    cusp_gap_m: float = 0.0
+    cusp_yaw_err_deg: float = 0.0
+    first_bad_cusp_row: int | None = None
+    min_clearance_m: float = math.inf
+    clearance_ok: bool = True
 
     @property
     def failed(self) -> tuple[str, ...]:
         """The names of the checks (:data:`CHECKS`) that failed; empty when ``ok``."""
         return tuple(name for name in CHECKS if not getattr(self, name))
-
-
-def _signed_menger(xy: np.ndarray) -> np.ndarray:
-    """Curvature of the circle through each three consecutive points, + turning left."""
-    a, b, c = xy[:-2], xy[1:-1], xy[2:]
-    ab, bc, ca = b - a, c - b, a - c
-    cross = ab[:, 0] * bc[:, 1] - ab[:, 1] * bc[:, 0]
-    denom = np.hypot(*ab.T) * np.hypot(*bc.T) * np.hypot(*ca.T)
-    return np.where(denom > 1e-12, 2.0 * cross / np.maximum(denom, 1e-300), 0.0)
-
-
-def _menger(xy: np.ndarray) -> np.ndarray:
-    return np.abs(_signed_menger(xy))
 
 
 def _bodies(poses: np.ndarray, length: float, width: float, back: float) -> np.ndarray:
@@ -149,86 +170,30 @@ def _bodies(poses: np.ndarray, length: float, width: float, back: float) -> np.n
     return shapely.polygons(np.stack([x, y], axis=-1))
 
 
-def _thin(xy: np.ndarray, min_gap: float) -> list[int]:
-    """Indices of points of ``xy`` at least ``min_gap`` apart along the polyline, and the last."""
-    gaps = np.hypot(*np.diff(xy, axis=0).T)
-    keep = [0]
-    acc = 0.0
-    for i, g in enumerate(gaps, start=1):
-        acc += g
-        if acc >= min_gap:
-            keep.append(i)
-            acc = 0.0
-    if keep[-1] != len(xy) - 1:
-        keep.append(len(xy) - 1)
-    return keep
+def _corners(bodies: np.ndarray) -> np.ndarray:
+    """The four corners ``(n, 4, 2)`` of :func:`_bodies`' rectangles."""
+    return shapely.get_coordinates(shapely.get_exterior_ring(bodies)).reshape(len(bodies), 5, 2)[
+        :, :4
+    ]
 
 
-#: The finest point gaps the curvature and sharpness of a short gear segment are
-#: measured over, metres: the rows' 6 decimals (1e-6 m) err by about 1e-6 / gap^2 in
-#: curvature (0.0025 1/m at 0.02 m) and 1e-6 / gap^3 in sharpness (0.001 rad/m at 0.1 m).
-_SHORT_CURVATURE_GAP = 0.02
-_SHORT_SHARPNESS_GAP = 0.1
+def _least_clearance(
+    m: Map, shapes: np.ndarray, polygons: list[shapely.Geometry], corners: np.ndarray
+) -> float:
+    """The least distance between the bodies and the obstacles or the edge of the bounds.
 
-
-def _polyline_length(xy: np.ndarray) -> float:
-    return float(np.hypot(*np.diff(xy, axis=0).T).sum())
-
-
-def _segment_curvature(xy: np.ndarray) -> float:
-    """Largest Menger curvature over points about 0.5 m apart (less noise than adjacent samples).
-
-    A segment too short for three such points (under about 1 m: a manoeuvre's short
-    move) is measured over points a quarter of its length apart, down to
-    :data:`_SHORT_CURVATURE_GAP`; before, it read 0 whatever its turn.
+    ``corners``: the bodies' corners ``(n, 4, 2)``; a body inside the box is nearest to
+    its edge at a corner (both are convex).
     """
-    keep = _thin(xy, 0.5)
-    if len(keep) < 3:
-        gap = _polyline_length(xy) / 4.0
-        if gap < _SHORT_CURVATURE_GAP:
-            return 0.0
-        keep = _thin(xy, gap)
-    return float(_menger(xy[keep]).max()) if len(keep) >= 3 else 0.0
-
-
-def _segment_sharpness(xy: np.ndarray, wheelbase: float) -> float:
-    """Largest ``|d delta / ds|`` of one gear segment, from signed Menger curvature.
-
-    Points closer than 0.2 m are thinned out (rounding noise grows as 1 / gap^2).
-    The circle through three points a, b, c with gaps ``ab``, ``bc`` has the
-    curvature of the curve about ``(bc - ab) / 3`` past b (first order), so the
-    rate is taken between those positions. A segment with fewer than five such
-    points is measured over gaps of a fifth of its length, down to
-    :data:`_SHORT_SHARPNESS_GAP`; one still with fewer than four points (under
-    about 0.3 m) has fewer than two estimates and reads 0.
-    """
-    gap = 0.2
-    keep = _thin(xy, gap)
-    if len(keep) < 5:
-        # Under about 0.8 m: points a fifth of its length apart (see _segment_curvature).
-        gap = max(_polyline_length(xy) / 5.0, _SHORT_SHARPNESS_GAP)
-        keep = _thin(xy, gap)
-    if len(keep) > 2 and np.hypot(*(xy[keep[-1]] - xy[keep[-2]])) < gap:
-        del keep[-2]  # the last point stands in for a kept one too close to it
-    pts = xy[keep]
-    if len(pts) < 4:
-        return 0.0
-    gaps = np.hypot(*np.diff(pts, axis=0).T)
-    where = np.cumsum(gaps)[:-1] + (gaps[1:] - gaps[:-1]) / 3.0
-    delta = np.arctan(wheelbase * _signed_menger(pts))
-    return float(np.max(np.abs(np.diff(delta)) / np.diff(where)))
-
-
-#: Steps shorter than this are no move: the plan JSON's 6 decimals leave up to sqrt(2)
-#: micrometres between rows that are one pose, whose direction means nothing.
-_STILL_M = 2e-6
-
-
-def _travel_directions(seg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Chord direction of travel of a segment's non-zero steps, and those steps' indices."""
-    d = np.diff(seg[:, :2], axis=0)
-    moving = np.flatnonzero(np.hypot(*d.T) > _STILL_M)
-    return np.arctan2(d[moving, 1], d[moving, 0]), moving
+    xmin, ymin, xmax, ymax = m.bounds
+    x, y = corners[..., 0], corners[..., 1]
+    edge = float(np.min(np.minimum.reduce([x - xmin, xmax - x, y - ymin, ymax - y])))
+    least = max(edge, 0.0)
+    if polygons:
+        tree = shapely.STRtree(polygons)
+        _, distance = tree.query_nearest(shapes, return_distance=True, all_matches=False)
+        least = min(least, float(np.min(distance)))
+    return least
 
 
 #: The finest pose spacing a check may ask for, metres (finer would only take longer).
@@ -314,6 +279,7 @@ def verify_path(
     curvature_tol: float = 0.01,
     max_sharpness: float | None = None,
     sharpness_tol: float = 0.005,
+    clearance: float = 0.0,
 ) -> PathCheck:
     """Check a path against the map with code independent of the planner.
 
@@ -340,6 +306,10 @@ def verify_path(
     sharpness_tol : float
         Slack on ``max_sharpness``, rad/m (the estimate of an exact clothoid is
         within 0.003 rad/m of its sharpness at 0.25 m samples).
+    clearance : float
+        Least distance, metres, the body must keep from the obstacles and the edge of
+        the bounds at the tested poses (``clearance_ok``; 0: no contact, which
+        ``collision_free`` also asks). ``min_clearance_m`` is measured either way.
 
     Returns
     -------
@@ -366,6 +336,8 @@ def verify_path(
         )
     _check_settings(pose_spacing, max_sample_spacing, heading_tol_deg, curvature_tol,
                     max_sharpness, sharpness_tol)  # fmt: skip
+    if isinstance(clearance, bool) or not is_finite_number(clearance) or clearance < 0:
+        raise InputError(f"clearance: expected a finite number >= 0, got {brief_repr(clearance)}")
     # The map's poses; a map built with check_query=False may have them in collision
     # (rrtdrive verify): the body check then fails there.
     start, goal = m.start, m.goal
@@ -375,14 +347,16 @@ def verify_path(
         return PathCheck(
             False, False, False, False, False, False, math.inf, 180.0, 180.0, math.inf,
             cusps_ok=False, cusps=0, travel_ok=False, travel_heading_err_deg=180.0,
+            endpoint_err_m=math.inf, endpoint_yaw_err_deg=180.0, min_clearance_m=0.0,
+            clearance_ok=False,
         )
     xy = s[:, :2]
     gaps = np.hypot(*np.diff(xy, axis=0).T)
     cusps = path.cusps
-    cusps_ok = bool(
-        np.all(np.hypot(*(xy[cusps] - xy[cusps - 1]).T) <= _CUSP_TOL_M)
-        and np.all(np.abs(wrap_angle(s[cusps, 2] - s[cusps - 1, 2])) <= math.radians(1e-3))
-    )
+    cusp_gaps = np.hypot(*(xy[cusps] - xy[cusps - 1]).T)
+    cusp_turns = np.abs(wrap_angle(s[cusps, 2] - s[cusps - 1, 2]))
+    bad_cusps = (cusp_gaps > _CUSP_TOL_M) | (cusp_turns > math.radians(1e-3))
+    cusps_ok = not bool(bad_cusps.any())
     region = shapely.box(*m.bounds)
     xmin, ymin, xmax, ymax = m.bounds
     # A row off the map already fails the body check; densifying a jump of 1e6 m to
@@ -405,9 +379,9 @@ def verify_path(
             poses.append(dense)
         if len(seg) < 2:
             continue
-        max_k = max(max_k, _segment_curvature(seg[:, :2]))
-        max_sharp = max(max_sharp, _segment_sharpness(seg[:, :2], v.wheelbase))
-        direction, moving = _travel_directions(seg)
+        max_k = max(max_k, segment_curvature(seg[:, :2]), turn_curvature(seg))
+        max_sharp = max(max_sharp, segment_sharpness(seg[:, :2], v.wheelbase))
+        direction, moving = travel_directions(seg)
         if not len(moving):
             continue
         nose = direction if gear > 0 else direction + math.pi
@@ -430,10 +404,23 @@ def verify_path(
     else:
         err_s = abs(wrap_angle(first_dir - start.yaw))
         err_g = abs(wrap_angle(last_dir - goal.yaw))
+    end_err = max(math.hypot(xy[0, 0] - start.x, xy[0, 1] - start.y),
+                  math.hypot(xy[-1, 0] - goal.x, xy[-1, 1] - goal.y))  # fmt: skip
+    end_yaw_err = max(abs(wrap_angle(s[0, 2] - start.yaw)), abs(wrap_angle(s[-1, 2] - goal.yaw)))
+    # Each coordinate to 1e-6 m, as the JSON's 6 decimals keep them.
     endpoints_ok = bool(
         np.allclose(xy[0], (start.x, start.y), rtol=0.0, atol=1e-6)
         and np.allclose(xy[-1], (goal.x, goal.y), rtol=0.0, atol=1e-6)
+        and end_yaw_err <= YAW_ROUND
     )
+    least = 0.0
+    if collision_free and bodies:
+        shapes = np.concatenate(bodies)
+        polygons = [shapely.Polygon(o.corners()) for o in m.obstacles]
+        least = _least_clearance(m, shapes, polygons, _corners(shapes))
+    elif collision_free:
+        least = math.inf
+    clearance_ok = least >= clearance - 1e-9 and (collision_free or clearance == 0.0)
     curvature_ok = max_k <= v.kappa_max + curvature_tol
     tol = math.radians(heading_tol_deg)
     headings_ok = max(err_s, err_g) <= tol
@@ -442,7 +429,7 @@ def verify_path(
     sharpness_ok = max_sharpness is None or max_sharp <= max_sharpness + sharpness_tol
     return PathCheck(
         ok=all((collision_free, curvature_ok, sharpness_ok, headings_ok, endpoints_ok,
-                spacing_ok, travel_ok, cusps_ok)),
+                spacing_ok, travel_ok, cusps_ok, clearance_ok)),
         collision_free=collision_free,
         curvature_ok=curvature_ok,
         headings_ok=headings_ok,
@@ -460,6 +447,13 @@ def verify_path(
         sharpness_ok=sharpness_ok,
         first_collision=first_collision,
         collides_with=collides_with,
+        endpoint_err_m=end_err,
+        endpoint_yaw_err_deg=math.degrees(end_yaw_err),
+        cusp_gap_m=float(cusp_gaps.max()) if len(cusps) else 0.0,
+        cusp_yaw_err_deg=math.degrees(float(cusp_turns.max())) if len(cusps) else 0.0,
+        first_bad_cusp_row=int(cusps[np.argmax(bad_cusps)]) if not cusps_ok else None,
+        min_clearance_m=least,
+        clearance_ok=clearance_ok,
     )
 
 

@@ -26,6 +26,7 @@ import numpy as np
 from rrtdrive.cli_args import (
     distinct_outputs,
     flags_for_warnings,
+    nonneg_float,
     positive_float,
     validate_output,
 )
@@ -71,6 +72,13 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--no-sharpness", action="store_true",
         help="do not check sharpness (paths of --paper-smoothing or of planners without "
         "steering-rate limits jump in curvature by design)",
+    )
+    p.add_argument(
+        "--clearance", type=nonneg_float, default=0.0, metavar="M",
+        help="least distance in metres the body must keep from every obstacle and the edge "
+        "of the bounds at the tested poses (default 0: no contact; the default planners "
+        "keep 0.15, or less where the start or goal has less or the message says so); "
+        "the least clearance is measured and printed either way",
     )
     p.add_argument("--json", metavar="FILE|-", help="also write the checks as JSON ('-': stdout)")
     p.set_defaults(func=run)
@@ -198,13 +206,27 @@ def _lines(check: Any, bounds: dict[str, float | None]) -> list[str]:
          + ("(not checked)" if sharp is None else f"(max {sharp:g} + 0.005)")),
         (check.headings_ok, "headings at start / goal",
          f"{check.start_heading_err_deg:.2f} / {check.goal_heading_err_deg:.2f} deg (max 3)"),
-        (check.endpoints_ok, "ends exactly at start and goal", ""),
+        (check.endpoints_ok, "ends exactly at start and goal",
+         f"{_metres(check.endpoint_err_m, '.6f')} / {check.endpoint_yaw_err_deg:.4f} deg "
+         "(max 1e-06 m / 0.0001 deg)"),
         (check.spacing_ok, "sample spacing", f"{_metres(check.max_spacing_m)} (max 0.25)"),
         (check.travel_ok, "direction of travel along the yaw",
          f"{check.travel_heading_err_deg:.2f} deg (max 3)"),
-        (check.cusps_ok, "cusps repeat their pose", f"{check.cusps} gear change(s)"),
+        (check.cusps_ok, "cusps repeat their pose", _cusp_detail(check)),
+        (check.clearance_ok, "clearance to obstacles and bounds",
+         f"{_metres(check.min_clearance_m, '.4f')} (min {bounds['clearance']:g})"),
     ]
     return [f"  {mark[bool(ok)]} {name:48s} {detail}".rstrip() for ok, name, detail in rows]
+
+
+def _cusp_detail(check: Any) -> str:
+    detail = f"{check.cusps} gear change(s)"
+    if check.cusps:
+        detail += (f", largest jump {_metres(check.cusp_gap_m, '.6f')} / "
+                   f"{check.cusp_yaw_err_deg:.4f} deg (max 1e-06 m / 0.001 deg)")  # fmt: skip
+    if check.first_bad_cusp_row is not None:
+        detail += f"; first at row {check.first_bad_cusp_row}"
+    return detail
 
 
 def run(args: argparse.Namespace) -> int:
@@ -231,25 +253,23 @@ def run(args: argparse.Namespace) -> int:
 
         # The bound the default planners keep for this car.
         bound = sharpness_bound(SmoothingConfig().max_sharpness, m.vehicle.max_steer_rate)
-    bounds = {"kappa_max": m.vehicle.kappa_max, "max_sharpness": bound}
+    bounds = {"kappa_max": m.vehicle.kappa_max, "max_sharpness": bound,
+              "clearance": args.clearance}  # fmt: skip
     # With the JSON on stdout, the human lines go to stderr to keep stdout parseable.
     out = sys.stderr if args.json == "-" else sys.stdout
     label = "stdin" if args.plan == "-" else args.plan
     rows = len(path.samples)
+    check = verify_path(m, path, max_sharpness=bound, clearance=args.clearance)
+    with np.errstate(all="ignore"):  # a row at 1e308 m: the length is inf, quietly
+        length = path.length if rows else 0.0
     if rows < 2:
         status = data.get("status", "unknown")
         what = "no path" if rows == 0 else "a path of one row (a path needs two)"
         print(f"{m.name}: {label}: FAILED: the plan has {what} (status {status})", file=out)
-        if args.json:
-            _write_output(args.json, json.dumps({"ok": False, "map": m.name, "rows": rows}) + "\n")
-        return EXIT_FAILED
-    check = verify_path(m, path, max_sharpness=bound)
-    with np.errstate(all="ignore"):  # a row at 1e308 m: the length is inf, quietly
-        length = path.length
-    verdict = "OK, every check passed" if check.ok else "FAILED"
-    print(f"{m.name}: {label}: {verdict} ({len(path.samples)} rows, {_metres(length, '.2f')})",
-          file=out)
-    print("\n".join(_lines(check, bounds)), file=out)
+    else:
+        verdict = "OK, every check passed" if check.ok else "FAILED"
+        print(f"{m.name}: {label}: {verdict} ({rows} rows, {_metres(length, '.2f')})", file=out)
+        print("\n".join(_lines(check, bounds)), file=out)
     if check.failed == ("sharpness_ok",):
         print("  (only the sharpness fails: paths of --paper-smoothing jump in curvature by "
               "design; --no-sharpness checks the rest)", file=out)

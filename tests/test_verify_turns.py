@@ -1,0 +1,139 @@
+"""The verifier's turn, end-pose, cusp and clearance measures (session 34 audit findings).
+
+References are analytic: a straight drive beside an axis-aligned box, yaws that turn
+while the positions run straight, rows moved by known amounts.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rrtdrive.cli import main
+from rrtdrive.geometry import wrap_angle
+from rrtdrive.maps import Map, Obstacle, save_map
+from rrtdrive.types import Path, Pose
+from rrtdrive.verify import verify_path
+
+KAPPA_MAX = 1 / 6
+
+
+def _straight(x0: float = 10.0, x1: float = 30.0, y: float = 20.0, step: float = 0.25):
+    x = np.arange(x0, x1 + 1e-9, step)
+    return np.column_stack([x, np.full_like(x, y), np.zeros_like(x), np.zeros_like(x),
+                            np.ones_like(x)])  # fmt: skip
+
+
+def _open_map(rows: np.ndarray, obstacles=(), bounds=(0.0, 0.0, 60.0, 60.0)) -> Map:
+    return Map("open", bounds, tuple(obstacles), Pose(*rows[0, :3]), Pose(*rows[-1, :3]))
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.floats(0.3, 4.0), st.floats(0.05, 0.25))
+def test_a_yaw_that_turns_faster_than_the_car_can_fails_the_curvature(rate, step):
+    # The positions run straight (no Menger curvature at all); the yaw turns `rate` rad/m.
+    rows = _straight(step=step)
+    rows[:, 2] = wrap_angle(rate * (rows[:, 0] - rows[0, 0]))
+    m = Map("open", (0.0, 0.0, 60.0, 60.0), (), Pose(*rows[0, :3]), Pose(*rows[-1, :3]))
+    check = verify_path(m, Path(rows, np.zeros((0, 2))), heading_tol_deg=math.inf)
+    assert not check.curvature_ok
+    # 2 sin(rate step / 2) / step, the curvature of an arc turning that much over the chord.
+    # (Less 2e-6 rad of the turn that the JSON's rounding may put there: 2e-6 / step.)
+    expected = 2 * math.sin(0.5 * rate * step) / step
+    assert check.max_discrete_curvature == pytest.approx(expected, rel=1e-9, abs=2e-6 / step)
+
+
+def test_turning_on_the_spot_between_gear_changes_fails():
+    # The audit's path: 30 deg turns over 0.2 m moves, each its own two-row gear segment.
+    rows = [[10.0, 20.0, 0.0, 0.0, 1.0], [11.0, 20.0, 0.0, 0.0, 1.0]]
+    x, yaw, gear = 11.0, 0.0, -1.0
+    for _ in range(6):
+        rows.append([x, 20.0, yaw, 0.0, gear])
+        x, yaw = x + 0.2 * gear, yaw + math.radians(30)
+        rows.append([x, 20.0, yaw, 0.0, gear])
+        gear = -gear
+    m = Map("open", (0.0, 0.0, 40.0, 40.0), (), Pose(10.0, 20.0, 0.0), Pose(x, 20.0, yaw))
+    check = verify_path(m, Path(np.array(rows), np.zeros((0, 2))))
+    assert not check.curvature_ok and check.max_discrete_curvature > 2.5
+
+
+def test_a_yaw_zigzag_about_the_travel_fails():
+    # Every row's yaw +-60 deg off the travel: their mean matches each chord, their turn not.
+    rows = _straight()
+    rows[:, 2] = np.where(np.arange(len(rows)) % 2 == 0, 1.0, -1.0) * math.radians(60)
+    m = _open_map(rows)
+    check = verify_path(m, Path(rows, np.zeros((0, 2))))
+    assert check.travel_heading_err_deg < 1e-6  # the mean yaw is along every chord
+    assert not check.curvature_ok
+
+
+def test_end_rows_must_have_the_start_and_goal_yaw():
+    rows = _straight()
+    m = _open_map(rows)
+    rows[0, 2] = 0.1
+    check = verify_path(m, Path(rows, np.zeros((0, 2))), curvature_tol=math.inf)
+    assert not check.endpoints_ok
+    assert check.endpoint_yaw_err_deg == pytest.approx(math.degrees(0.1))
+    rows[0, 2], rows[-1, 0] = 0.0, rows[-1, 0] + 0.002
+    check = verify_path(m, Path(rows, np.zeros((0, 2))), max_sample_spacing=1.0)
+    assert not check.endpoints_ok and check.endpoint_err_m == pytest.approx(0.002)
+
+
+def test_a_cusp_that_moves_names_its_row():
+    ahead = _straight(10.0, 15.0)
+    back = ahead[::-1].copy()
+    back[:, 4] = -1.0
+    back[:, 1] += 0.05  # the reverse drive starts 5 cm aside: the car jumped
+    rows = np.vstack([ahead, back])
+    m = _open_map(rows)
+    check = verify_path(m, Path(rows, np.zeros((0, 2))))
+    assert not check.cusps_ok and check.first_bad_cusp_row == len(ahead)
+    assert check.cusp_gap_m == pytest.approx(0.05)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.floats(0.01, 2.0), st.floats(0.01, 2.0), st.floats(-3.0, 3.0))
+def test_least_clearance_is_the_distance_to_a_box_beside_the_drive(gap, edge_gap, shift):
+    # The body spans y in [20 - 0.9, 20 + 0.9]: a box whose lower side is `gap` above it,
+    # and the top of the bounds `edge_gap` above the body on the other side, mirrored.
+    rows = _straight()
+    box = Obstacle((20.0 + shift, 20.9 + gap + 1.0), (4.0, 2.0))
+    bounds = (0.0, 20.0 - 0.9 - edge_gap, 60.0, 60.0)
+    m = _open_map(rows, [box], bounds)
+    check = verify_path(m, Path(rows, np.zeros((0, 2))), clearance=0.0)
+    assert check.min_clearance_m == pytest.approx(min(gap, edge_gap), abs=1e-9)
+    want = min(gap, edge_gap)
+    assert verify_path(m, Path(rows, np.zeros((0, 2))), clearance=want - 1e-4).ok
+    tight = verify_path(m, Path(rows, np.zeros((0, 2))), clearance=want + 1e-4)
+    assert not tight.ok and tight.failed == ("clearance_ok",)
+
+
+def test_verify_cli_clearance_and_the_json_of_an_empty_plan(tmp_path, capsys):
+    rows = _straight()
+    box = Obstacle((20.0, 20.9 + 0.3 + 1.0), (4.0, 2.0))
+    m = _open_map(rows, [box])
+    save_map(m, tmp_path / "m.json")
+    plan = {"path": rows.tolist(), "start": rows[0, :3].tolist(), "goal": rows[-1, :3].tolist()}
+    (tmp_path / "p.json").write_text(json.dumps(plan))
+    args = ["verify", str(tmp_path / "p.json"), str(tmp_path / "m.json")]
+    assert main([*args, "--clearance", "0.25"]) == 0
+    assert main([*args, "--clearance", "0.35", "--json", str(tmp_path / "v.json")]) == 1
+    out = capsys.readouterr().out
+    assert "FAIL clearance to obstacles and bounds" in out and "0.3000 m (min 0.35)" in out
+    doc = json.loads((tmp_path / "v.json").read_text())
+    assert doc["failed"] == ["clearance_ok"] and doc["min_clearance_m"] == pytest.approx(0.3)
+    with pytest.raises(SystemExit) as bad:
+        main([*args, "--clearance", "-1"])
+    assert bad.value.code == 2 and "--clearance" in capsys.readouterr().err
+    # An empty path: the same JSON fields as any plan, every check failed (a CI gate on
+    # "failed" passed it before: the document had no such field).
+    (tmp_path / "e.json").write_text(json.dumps({"path": [], "status": "no_path_in_budget"}))
+    empty = ["verify", str(tmp_path / "e.json"), str(tmp_path / "m.json"), "--json", "-"]
+    assert main(empty) == 1
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["ok"] is False and "collision_free" in doc["failed"] and doc["rows"] == 0
