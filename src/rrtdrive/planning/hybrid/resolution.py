@@ -299,11 +299,12 @@ def search_at_resolution(
     kappa_max = problem.vehicle.kappa_max
     clearance = query_clearance(problem, config.body_clearance, have)
     radius = config.radius_factor / kappa_max
-    # The returned rows interpolate linearly between arc poses 0.25 m apart (at most
-    # 1.3 mm off the arc at kappa_max): the re-check allows 5 mm less than the search kept,
-    # so that it does not reject what the search found. The start and goal poses have
+    # The re-check of the returned rows keeps the query's clearance itself, as the
+    # improved planner's does: until session 34 it allowed 5 mm less (for rows off the
+    # search's arcs by at most 1.3 mm), and ramped rows kept 0.148 m at a row and
+    # 0.139 m between (a helper's fuzz, 4 of 621 paths). The start and goal poses have
     # at least the search's clearance (capped at theirs), never more is asked of them.
-    recheck_clearance = max(0.0, clearance - 0.005)
+    recheck_clearance = clearance
     start, goal = problem.start, problem.goal
     with watch.setup():  # built once per map (per process for the table and primitives)
         grid = free_cell_graph(problem, config.xy_resolution)
