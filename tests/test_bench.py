@@ -320,6 +320,11 @@ def test_sigkill_mid_bench_then_resume(tmp_path):
     rows = [json.loads(x) for x in results.read_text().splitlines()]
     assert Counter((r["config_hash"], r["seed"]) for r in rows) == keys  # each exactly once
     assert all(r["error"] is None for r in rows)
+    # Once more: nothing to run, so no worker ran anything ("on 1 local worker process"
+    # was printed whatever --workers said).
+    again = subprocess.run(argv, capture_output=True, text=True, timeout=300)
+    assert again.returncode == 0, again.stderr
+    assert f"({len(keys)} resumed, 0 run now, 0 errors)\n" in again.stdout, again.stdout
 
 
 @pytest.mark.skipif(
@@ -783,6 +788,27 @@ def test_bench_figures_say_what_they_show(tmp_path, monkeypatch):
         assert fig._suptitle.get_text() == "rrtdrive bench: 3 runs, seeds 0-2, reverse allowed"
     hist = figures["curvature_hist.png"].axes[0]
     assert all(float(t).is_integer() for t in hist.get_yticks())  # counts of runs
+
+
+def test_a_grid_that_solved_nothing_still_gets_its_length_box_plot(tmp_path, monkeypatch):
+    # docs/bench.md: a group without a successful run keeps its row, marked "(no success)";
+    # with no success in any group box_length.png was not written at all.
+    import rrtdrive.plotting
+    from rrtdrive.bench.summary import write_plots
+
+    figures = {}
+    monkeypatch.setattr(rrtdrive.plotting, "save_figure",
+                        lambda fig, path: figures.setdefault(Path(path).name, fig))
+    rows = [
+        {"kind": "plan", "map": "no_path", "planner": p, "controller": None, "seed": 0,
+         "config_hash": "h", "success": False, "status": "proven_unreachable",
+         "length_m": None, "planning_time_s": 0.01, "max_curvature": None}
+        for p in ("rrt", "hybrid-a-star")
+    ]
+    write_plots(rows, tmp_path)
+    ax = figures["box_length.png"].axes[0]
+    labels = [t.get_text() for t in ax.get_yticklabels()]
+    assert len(labels) == 2 and all(t.endswith("(no success)") for t in labels), labels
 
 
 def test_the_curvature_histogram_puts_the_limit_on_a_bin_edge(tmp_path, monkeypatch):

@@ -51,7 +51,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "per run goes to OUT/runs.jsonl as it finishes; a re-run resumes without redoing "
         "finished runs. Writes OUT/summary.md, OUT/summary.csv and plots. Lists are "
         "comma-separated or repeated flags; flags override --config. Exit 0 when every run "
-        "has a result, 1 when some runs crashed twice (error rows), 2 on bad input.",
+        "has a result, 1 when some runs crashed twice (error rows) or the worker processes "
+        "could not start, 2 on bad input.",
     )
     p.add_argument("--config", metavar="FILE.toml", help="read the bench from a TOML file")
     p.add_argument(
@@ -118,7 +119,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="allow gear changes in every run, as plan/simulate --reverse (a planner that "
         "cannot reverse plans forward)",
     )
-    p.add_argument("--no-plots", action="store_true", help="skip the PNG plots")
+    p.add_argument("--no-plots", action="store_true", help="skip the PNG plots (and remove "
+                   "those an earlier bench left in --out: they would describe other runs)")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(func=run)
     return p
@@ -194,7 +196,7 @@ def _run(args: argparse.Namespace) -> int:
         return EXIT_FAILED
     print(
         f"bench: {report.total} runs ({report.skipped} resumed, {report.executed} run now, "
-        f"{report.errors} errors) on {report.backend}"
+        f"{report.errors} errors)" + (f" on {report.backend}" if report.executed else "")
         + (f"; {report.throughput:.2f} runs/s" if report.executed else "")
     )
     from rrtdrive.bench.summary import PLOT_FILES

@@ -338,21 +338,23 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
             if vals:
                 data.append(np.asarray(vals) * scale)
                 names.append(lab)
-        if not data:
-            return
         # A group without a value (no successful run) keeps its row, marked, rather than
-        # vanishing from the figure.
+        # vanishing from the figure; with no value at all the figure says so (a grid
+        # that solved nothing still gets every plot the docs list).
         missing = [lab for lab in labels if lab not in names]
         fig = Figure(figsize=(8, max(3.0, 0.35 * len(labels) + 1.5)), layout="constrained")
         ax = fig.add_subplot()
-        try:
-            ax.boxplot(data, orientation="horizontal", showmeans=True)
-        except TypeError:  # matplotlib < 3.10
-            ax.boxplot(data, vert=False, showmeans=True)
-        lo = min(float(np.min(d)) for d in data)
-        hi = max(float(np.max(d)) for d in data)
-        if lo > 0 and hi / lo > 100:
-            ax.set_xscale("log")
+        if data:
+            try:
+                ax.boxplot(data, orientation="horizontal", showmeans=True)
+            except TypeError:  # matplotlib < 3.10
+                ax.boxplot(data, vert=False, showmeans=True)
+            lo = min(float(np.min(d)) for d in data)
+            hi = max(float(np.max(d)) for d in data)
+            if lo > 0 and hi / lo > 100:
+                ax.set_xscale("log")
+        else:
+            ax.text(0.5, 0.5, f"{none} in any group", transform=ax.transAxes, ha="center")
         rows_shown = names + [f"{lab} ({none})" for lab in missing]
         ax.set_yticks(range(1, len(rows_shown) + 1), rows_shown, fontsize=8)
         ax.set_ylim(len(rows_shown) + 0.5, 0.5)  # top to bottom, the empty rows last
