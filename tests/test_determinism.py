@@ -174,7 +174,7 @@ def test_stopwatch_latches_the_cap_with_a_fake_clock():
 
 
 def test_the_default_cap_is_a_safety_cap():
-    assert Budget().max_time_s == 30.0 and Budget().max_iterations == 20_000
+    assert Budget().max_time_s == 120.0 and Budget().max_iterations == 20_000
     assert PlanStatus.TIMEOUT.value == "timeout" and not PlanStatus.TIMEOUT.success
 
 
