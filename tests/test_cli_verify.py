@@ -79,7 +79,9 @@ def test_an_obstacle_on_the_path_fails_the_body_check_alone(capsys, plans, tmp_p
     code, out, _ = run(capsys, "verify", str(plans["default"]), str(f), "--json", str(report))
     assert code == 1 and "FAIL body clear of obstacles" in out
     doc = json.loads(report.read_text())
-    assert doc["ok"] is False and doc["failed"] == ["collision_free"]
+    # The body check and the clearance the plan declares (a body in contact keeps none).
+    assert doc["ok"] is False and doc["failed"] == ["collision_free", "clearance_ok"]
+    assert doc["min_clearance_m"] == 0.0 and doc["clearance"] == pytest.approx(0.148)
     assert doc["max_sharpness"] == 0.2 and doc["kappa_max"] == m.vehicle.kappa_max
 
 

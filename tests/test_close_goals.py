@@ -9,6 +9,7 @@ nothing shorter (``ImprovedConfig.reverse_detour_ratio``).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -22,7 +23,7 @@ from rrtdrive.maps import Map
 from rrtdrive.planning import PlanningProblem
 from rrtdrive.planning.hybrid.escalation import stage_of
 from rrtdrive.planning.improved import ImprovedConfig, ImprovedRRTConnect
-from rrtdrive.types import Budget, InputError, PlanStatus, Pose
+from rrtdrive.types import Budget, InputError, Path, PlanStatus, Pose
 from rrtdrive.verify import verify_path
 
 BUDGET = Budget(max_time_s=600.0)
@@ -94,6 +95,27 @@ def test_the_detour_is_kept_when_the_reversing_search_finds_nothing(
     assert res.status is PlanStatus.SOLVED and stage_of(res) == "dubins-fallback"
     assert "; Hybrid A* (with reverse) found none (0 expansions)" in res.message
     assert verify_path(m, res.path, max_sharpness=0.2).ok
+
+
+def test_a_detour_kept_over_a_longer_escalation_is_the_fallback_s(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # The escalation solves, but longer than the detour: the detour's path is returned and
+    # its stage is the fallback's (the merged counters said "hybrid-a-star"), with the
+    # clearance the detour's check kept.
+    real = improved_planner.escalate
+
+    def longer(failed, *args):
+        out = real(failed, *args)
+        rows = np.column_stack([np.linspace(0, 500, 2001), np.zeros((2001, 3)), np.ones(2001)])
+        return dataclasses.replace(out, path=Path(rows, rows[[0, -1], :2]))
+
+    monkeypatch.setattr(improved_planner, "escalate", longer)
+    m = _open_map(Pose(50.0, 50.1, math.pi / 2))
+    res = _solve(m, reverse=True)
+    assert res.success and "found a longer path (500.0 m)" in res.message, res.message
+    assert stage_of(res) == "dubins-fallback" and res.path.length < 100.0
+    assert res.stats["body_clearance_m"] == pytest.approx(0.15)
 
 
 @pytest.mark.parametrize("value", [0.5, math.nan, -1.0])

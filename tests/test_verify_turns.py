@@ -137,3 +137,23 @@ def test_verify_cli_clearance_and_the_json_of_an_empty_plan(tmp_path, capsys):
     assert main(empty) == 1
     doc = json.loads(capsys.readouterr().out)
     assert doc["ok"] is False and "collision_free" in doc["failed"] and doc["rows"] == 0
+
+
+def test_the_plan_declares_its_clearance_and_verify_requires_it(tmp_path, capsys):
+    plan = tmp_path / "plan.json"
+    assert main(["plan", "parking_lot", "--json", str(plan)]) == 0
+    doc = json.loads(plan.read_text())
+    assert doc["body_clearance_m"] == pytest.approx(0.15)
+    assert main(["verify", str(plan)]) == 0
+    out = capsys.readouterr().out
+    assert "(min 0.148: the plan's 0.15 less 2 mm)" in out, out
+    # A plan claiming more than its path keeps fails on it, by default.
+    least = float(out.split("clearance to obstacles and bounds")[1].split()[0])
+    doc["body_clearance_m"] = least + 0.01
+    plan.write_text(json.dumps(doc))
+    assert main(["verify", str(plan)]) == 1
+    assert "FAIL clearance to obstacles and bounds" in capsys.readouterr().out
+    assert main(["verify", str(plan), "--clearance", "0"]) == 0  # asked for less
+    # Baselines keep none: null, and verify asks for no contact only.
+    assert main(["plan", "parking_lot", "--planner", "rrt", "--json", str(plan)]) in (0, 1)
+    assert json.loads(plan.read_text())["body_clearance_m"] is None

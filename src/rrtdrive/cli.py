@@ -143,7 +143,9 @@ def plan_to_json(
     :func:`~rrtdrive.planning.smoothing.max_sharpness`); ``steer_rate_speed_limit``
     the speed (m/s) at which that needs exactly ``vehicle.max_steer_rate`` (null for
     instant steering or a failed plan). ``stage`` names the stage of the planner that
-    solved it (``null`` on failure).
+    solved it (``null`` on failure). ``body_clearance_m``: the body clearance the
+    path's final check kept at poses <= 0.1 m apart (``null`` on failure and for the
+    baselines, which keep none), the default of ``rrtdrive verify --clearance``.
     """
     from rrtdrive.planning.hybrid.escalation import stage_of
     from rrtdrive.planning.smoothing import max_sharpness, steer_rate_speed_limit
@@ -171,6 +173,9 @@ def plan_to_json(
         "max_curvature": round(result.path.max_curvature, 6) if result.success else None,
         "max_sharpness": _json_number(sharp),
         "steer_rate_speed_limit": _json_number(limit),
+        # The body clearance the path's final check kept (null: a planner that keeps none).
+        "body_clearance_m": _json_number(result.stats.get("body_clearance_m"))
+        if result.success else None,
         "nodes": result.nodes,
         "iterations": result.iterations,
         "planning_time_s": result.planning_time_s,

@@ -33,7 +33,7 @@ from rrtdrive.planning.result import timeout_result
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, PlanResult, PlanStatus
 
-__all__ = ["STAGES", "ESCALATES_FROM", "escalate", "stage_of"]
+__all__ = ["STAGES", "ESCALATES_FROM", "escalate", "stage_of", "with_kept_clearance"]
 
 #: The stages of ``improved-rrt-connect``, in the order they run forward only (with
 #: reverse the fallback's tails and leads come after the Hybrid A* escalation).
@@ -59,6 +59,20 @@ def stage_of(result: PlanResult) -> str:
     if result.stats.get("dubins_fallback"):
         return "dubins-fallback"
     return result.planner
+
+
+def with_kept_clearance(result: PlanResult, own: float) -> PlanResult:
+    """``result`` with ``stats["body_clearance_m"]`` when solved (the same object).
+
+    The body clearance the returned path's final check kept: the escalation's
+    search's (less in its snug and tight stages) when it solved, else ``own``, the
+    improved planner's (the query's, capped at the start's and goal's own).
+    """
+    if result.success:
+        escalated = stage_of(result) == NAME
+        kept = result.stats["hybrid_body_clearance_m"] if escalated else own
+        result.stats["body_clearance_m"] = float(kept)
+    return result
 
 
 def escalate(

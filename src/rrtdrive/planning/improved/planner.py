@@ -24,7 +24,7 @@ import numpy as np
 
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register_planner
-from rrtdrive.planning.hybrid.escalation import ESCALATES_FROM, escalate
+from rrtdrive.planning.hybrid.escalation import ESCALATES_FROM, escalate, with_kept_clearance
 from rrtdrive.planning.improved.boxed import boxed_end, open_share, stuck_root_words
 from rrtdrive.planning.improved.config import ImprovedConfig, StageBudgets
 from rrtdrive.planning.improved.expansion import (
@@ -144,13 +144,16 @@ class ImprovedRRTConnect:
             ``rrt_stages_time_s`` and ``escalation_time_s``; when solved by the
             tree path, ``key_points``, ``control_points``, ``max_curvature``
             (exact, of the whole curve) and the repair counters ``fillets``,
-            ``merges``, ``moves``, ``drops``, ``unprunes`` and ``edge_checks``.
+            ``merges``, ``moves``, ``drops``, ``unprunes`` and ``edge_checks``;
+            solved, ``body_clearance_m`` (:func:`~.escalation.with_kept_clearance`).
         """
         # Built on first use, so that run_query has checked the problem before it is read.
         query = functools.cache(lambda: _Query(problem, self.config))
+        def run(watch: Stopwatch) -> PlanResult:
+            return with_kept_clearance(query().run(rng, budget, watch), query().smoothing.clearance)
+
         return run_query(
-            NAME, problem, budget, lambda watch: query().run(rng, budget, watch),
-            lambda: query().prepare(), rng=rng,
+            NAME, problem, budget, run, lambda: query().prepare(), rng=rng,
             tree_edges=not self.config.escalation,  # Hybrid A* searches without them
         )
 
@@ -289,7 +292,8 @@ class _Query:
             detour,
             message=f"{detour.message}; Hybrid A* (with reverse) found {found}",
             planning_time_s=self.watch.elapsed(),
-            stats={**escalated.stats, **detour.stats},
+            # The escalation's counters, not its stage: the detour's path is returned.
+            stats={**{k: v for k, v in escalated.stats.items() if k != "stage"}, **detour.stats},
         )
 
     def escalation(self, budget: Budget) -> PlanResult:
