@@ -49,6 +49,12 @@ def _imports(path: pathlib.Path, mods: dict[str, pathlib.Path]) -> set[str]:
                 target = resolve(alias.name)
                 if target:
                     out.add(target)
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            # A module loaded by name: importlib.import_module("rrtdrive.x") or a
+            # "rrtdrive.x:function" builder string (the CLI's subcommands).
+            name = node.value.partition(":")[0]
+            if name in mods:
+                out.add(name)
     return out
 
 
@@ -96,6 +102,11 @@ def test_a_lazy_import_cycle_would_be_found(tmp_path):
     graph = {name: _imports(path, mods) for name, path in mods.items()}
     assert find_cycle(graph) == ["rrtdrive.a", "rrtdrive.b", "rrtdrive.a"]
     assert find_cycle({"x": {"y"}, "y": set()}) is None
+    # Loaded by name (the CLI's subcommand builders), and imported back in a function.
+    a.write_text('BUILDER = "rrtdrive.b:add_parser"\n')
+    b.write_text("def add_parser():\n    from rrtdrive.a import BUILDER\n")
+    graph = {name: _imports(path, mods) for name, path in mods.items()}
+    assert find_cycle(graph) == ["rrtdrive.a", "rrtdrive.b", "rrtdrive.a"]
 
 
 def test_modules_stay_small():

@@ -193,3 +193,13 @@ def test_plan_announces_a_long_set_up_and_reports_it(capsys, monkeypatch):
     assert err.startswith("rrtdrive plan: setting up a 100 x 100 m map: ")
     assert "M grid cells at 0.1 m (seconds; not planning time)" in err
     assert out.rstrip().endswith(" s)") and "(set-up " in out
+
+
+def test_a_failed_plan_after_a_long_set_up_reports_it_too(capsys, monkeypatch):
+    # Only a solved plan's summary gave the set-up time (a docs audit, session 34).
+    import rrtdrive.collision.grid as grid
+
+    monkeypatch.setattr(grid, "LARGE_GRID_CELLS", 1000)
+    assert main(["plan", "no_path", "--max-iterations", "50"]) == 1
+    out = capsys.readouterr().out
+    assert "FAILED (" in out and ", set-up " in out.split("):")[0], out

@@ -30,13 +30,15 @@ from rrtdrive.cli_args import (
     cell_size,
     distinct_outputs,
     flags_for,
-    flags_for_warnings,
     join_negative_values,
+    map_with_poses,
     names_stdout,
     nonneg_int,
+    parse_pose,
     positive_float,
     positive_int,
     validate_output,
+    write_output,
     writing,
 )
 from rrtdrive.cli_signals import EXIT_TERMINATED, Terminated, sigterm_raises
@@ -45,7 +47,7 @@ from rrtdrive.cli_warnings import warnings_as_lines
 from rrtdrive.types import Budget, InputError, PlanResult, Pose, VehicleParams
 
 if TYPE_CHECKING:
-    from rrtdrive.maps import Map
+    pass
 
 __all__ = ["COMMANDS", "build_parser", "main", "plan_to_json", "parse_pose"]
 
@@ -62,61 +64,6 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> NoReturn:
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message} (see --help)\n")
-
-
-def parse_pose(text: str, name: str) -> Pose:
-    """Parse ``"x,y,yaw"`` (yaw in radians) into a :class:`Pose`, naming ``name`` in errors.
-
-    Parameters
-    ----------
-    text : str
-        The option's value.
-    name : str
-        The option (``"--start"``), named in errors.
-
-    Returns
-    -------
-    Pose
-
-    Examples
-    --------
-    >>> parse_pose("-5,6,0", "--start")
-    Pose(x=-5.0, y=6.0, yaw=0.0)
-    >>> parse_pose("", "--start")
-    Traceback (most recent call last):
-    ...
-    rrtdrive.types.InputError: --start: expected X,Y,YAW, got an empty value
-    """
-    if not text.strip():  # "--start=" (e.g. an unset shell variable): never "not given"
-        raise InputError(f"{name}: expected X,Y,YAW, got an empty value")
-    parts = text.split(",")
-    # "_" too: Python's float reads "9_2" as 92, a typo no user means as a number.
-    if len(parts) != 3 or "_" in text:
-        raise InputError(f"{name}: expected three numbers x,y,yaw, got {text!r}")
-    try:
-        values = [float(p) for p in parts]
-    except ValueError:
-        raise InputError(f"{name}: expected three numbers x,y,yaw, got {text!r}") from None
-    return Pose.from_seq(values, name)
-
-
-def map_with_poses(spec: str, start: Pose | None, goal: Pose | None) -> Map:
-    """The map ``spec`` with ``--start``/``--goal`` (when given) replacing its poses.
-
-    The file is read first, so a malformed start in it is named ``start:`` even when
-    ``--start`` replaces it; the poses used are then checked, one given on the command
-    line named by its flag (``--goal: (200, 44) lies outside the bounds ...``).
-    """
-    from rrtdrive.map_checks import check_endpoint
-    from rrtdrive.maps import resolve_map
-
-    flags = {k: f"--{k}" for k, v in (("start", start), ("goal", goal)) if v is not None}
-    with flags_for_warnings(flags):  # a given yaw that looks like degrees: named by its flag
-        m = resolve_map(spec, start=start, goal=goal, check_query=False)
-    with flags_for(flags):
-        for label, pose in (("start", m.start), ("goal", m.goal)):
-            check_endpoint(m, pose, label, m.vehicle, warn_degrees=False)
-    return m
 
 
 def plan_to_json(
@@ -190,17 +137,6 @@ def _json_number(value: float | None) -> float | None:
     return None if value is None or not math.isfinite(value) else round(value, 6)
 
 
-def _write_output(target: str, text: str) -> None:
-    if target == "-":
-        sys.stdout.write(text)
-        sys.stdout.flush()
-    else:
-        from rrtdrive.maps import write_text_atomic
-
-        with writing("--json", target):
-            write_text_atomic(target, text)
-
-
 def _takes_option(factory: Callable[..., object], name: str) -> bool:
     import inspect
 
@@ -272,7 +208,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
             result, args.seed, m.name, m.vehicle, reverse=args.reverse, start=m.start,
             goal=m.goal, map_file=None if args.map in BUILTIN_MAPS else args.map,
         )  # fmt: skip
-        _write_output(args.json, json.dumps(doc) + "\n")
+        write_output(args.json, json.dumps(doc) + "\n")
     if args.plot:
         from rrtdrive.plotting import plot_plan, save_figure
 
@@ -281,13 +217,13 @@ def _cmd_plan(args: argparse.Namespace) -> int:
             save_figure(plot_plan(m, result, seed=args.seed, reverse=allowed), args.plot)
     cusps = len(result.path.cusps)
     gears = f"{cusps} gear change{'s' if cusps != 1 else ''}, " if cusps else ""
+    setup = f"set-up {result.setup_time_s:.1f} s" if notice is not None else ""
     summary = f"{m.name}: {result.planner} seed {args.seed}: " + (
         f"solved, length {result.path.length:.2f} m, {gears}max curvature "
         f"{result.path.max_curvature:.4f} 1/m, {result.nodes} nodes, "
-        f"{1e3 * result.planning_time_s:.1f} ms"
-        + (f" (set-up {result.setup_time_s:.1f} s)" if notice is not None else "")
+        f"{1e3 * result.planning_time_s:.1f} ms" + (f" ({setup})" if setup else "")
         if result.success
-        else f"FAILED ({result.status.value}): {result.message}"
+        else f"FAILED ({result.status.value}{', ' + setup if setup else ''}): {result.message}"
         + ("" if result.diagnosis is None else f"\n  why: {result.diagnosis.message}")
     )
     # With the JSON on stdout, the human summary goes to stderr to keep stdout parseable.

@@ -13,9 +13,13 @@ import warnings
 from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rrtdrive.atomic import destination, is_stream, temp_beside
-from rrtdrive.types import InputError, InputWarning
+from rrtdrive.types import InputError, InputWarning, Pose
+
+if TYPE_CHECKING:
+    from rrtdrive.maps import Map
 
 __all__ = [
     "OutputError",
@@ -25,12 +29,15 @@ __all__ = [
     "flags_for_warnings",
     "int_at_least",
     "join_negative_values",
+    "map_with_poses",
     "names_stdout",
-    "nonneg_int",
     "nonneg_float",
+    "nonneg_int",
+    "parse_pose",
     "positive_float",
     "positive_int",
     "validate_output",
+    "write_output",
     "writing",
 ]
 
@@ -293,3 +300,74 @@ def validate_output(
         raise InputError(
             f"{flag}: cannot write into folder {str(parent)!r}: {exc.strerror}"
         ) from None
+
+
+def parse_pose(text: str, name: str) -> Pose:
+    """Parse ``"x,y,yaw"`` (yaw in radians) into a :class:`Pose`, naming ``name`` in errors.
+
+    Parameters
+    ----------
+    text : str
+        The option's value.
+    name : str
+        The option (``"--start"``), named in errors.
+
+    Returns
+    -------
+    Pose
+
+    Examples
+    --------
+    >>> parse_pose("-5,6,0", "--start")
+    Pose(x=-5.0, y=6.0, yaw=0.0)
+    >>> parse_pose("", "--start")
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: --start: expected X,Y,YAW, got an empty value
+    """
+    if not text.strip():  # "--start=" (e.g. an unset shell variable): never "not given"
+        raise InputError(f"{name}: expected X,Y,YAW, got an empty value")
+    parts = text.split(",")
+    # "_" too: Python's float reads "9_2" as 92, a typo no user means as a number.
+    if len(parts) != 3 or "_" in text:
+        raise InputError(f"{name}: expected three numbers x,y,yaw, got {text!r}")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        raise InputError(f"{name}: expected three numbers x,y,yaw, got {text!r}") from None
+    return Pose.from_seq(values, name)
+
+
+def map_with_poses(spec: str, start: Pose | None, goal: Pose | None) -> Map:
+    """The map ``spec`` with ``--start``/``--goal`` (when given) replacing its poses.
+
+    The file is read first, so a malformed start in it is named ``start:`` even when
+    ``--start`` replaces it; the poses used are then checked, one given on the command
+    line named by its flag (``--goal: (200, 44) lies outside the bounds ...``).
+    """
+    from rrtdrive.map_checks import check_endpoint
+    from rrtdrive.maps import resolve_map
+
+    flags = {k: f"--{k}" for k, v in (("start", start), ("goal", goal)) if v is not None}
+    with flags_for_warnings(flags):  # a given yaw that looks like degrees: named by its flag
+        m = resolve_map(spec, start=start, goal=goal, check_query=False)
+    with flags_for(flags):
+        for label, pose in (("start", m.start), ("goal", m.goal)):
+            check_endpoint(m, pose, label, m.vehicle, warn_degrees=False)
+    return m
+
+
+def write_output(target: str, text: str) -> None:
+    """Write a command's ``--json`` text to ``target``: stdout for ``-``, else a file, atomically.
+
+    A file is written to a temporary file beside it, then renamed into place (a failed
+    write leaves none behind and raises :class:`OutputError` naming ``--json``).
+    """
+    if target == "-":
+        sys.stdout.write(text)
+        sys.stdout.flush()
+    else:
+        from rrtdrive.maps import write_text_atomic
+
+        with writing("--json", target):
+            write_text_atomic(target, text)

@@ -27,8 +27,10 @@ from rrtdrive.cli_args import (
     distinct_outputs,
     flags_for_warnings,
     nonneg_float,
+    parse_pose,
     positive_float,
     validate_output,
+    write_output,
 )
 from rrtdrive.json_safe import json_safe
 from rrtdrive.types import InputError, InputWarning, Pose, brief_repr, is_finite_number
@@ -235,7 +237,6 @@ def _cusp_detail(check: Any) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``rrtdrive verify``; return the exit code."""
-    from rrtdrive.cli import _write_output, parse_pose
     from rrtdrive.verify import path_from_json, verify_path
 
     validate_output(args.json, "--json")
@@ -286,5 +287,5 @@ def run(args: argparse.Namespace) -> int:
         doc = {"map": m.name, "rows": len(path.samples), "length_m": round(length, 6),
                **bounds, **dataclasses.asdict(check), "failed": list(check.failed)}
         # Strict JSON: a non-finite number (a row far off the map) is null, not Infinity.
-        _write_output(args.json, json.dumps(json_safe(doc), allow_nan=False) + "\n")
+        write_output(args.json, json.dumps(json_safe(doc), allow_nan=False) + "\n")
     return EXIT_OK if check.ok else EXIT_FAILED

@@ -534,7 +534,7 @@ def _target_kind(name: str, scenarios: tuple[str, ...], stock_envs: tuple[str, .
 
 def _parse_pose(text: str | None, flag: str) -> Any:
     """``"x,y,yaw"`` as a :class:`~rrtdrive.types.Pose` (``None`` stays ``None``)."""
-    from rrtdrive.cli import parse_pose
+    from rrtdrive.cli_args import parse_pose
 
     return None if text is None else parse_pose(text, flag)
 
@@ -549,7 +549,7 @@ def _make_task(
     from rrtdrive.sim.tasks import CustomTask
 
     if target == "map":
-        from rrtdrive.cli import map_with_poses
+        from rrtdrive.cli_args import map_with_poses
 
         start, goal = _parse_pose(args.start, "--start"), _parse_pose(args.goal, "--goal")
         # The poses given replace the file's before it is checked: a file whose own start
