@@ -22,6 +22,7 @@ from rrtdrive.envs.action import CommandLimits
 from rrtdrive.envs.reward import RewardWeights
 from rrtdrive.maps import Map
 from rrtdrive.planning import PLANNERS
+from rrtdrive.sim.limits import MAX_REVERSE_SPEED, MAX_SPEED
 from rrtdrive.sim.loop import require_episode_time
 from rrtdrive.sim.scenes import SimConfig
 from rrtdrive.sim.tasks import (
@@ -342,11 +343,20 @@ class DriveEnvConfig:
         _check_fields("speed_options", self.speed_options, SpeedConfig)  # type: ignore[arg-type]
         options = {**base, **self.speed_options}  # type: ignore[dict-item]
         try:
-            return SpeedConfig(**options)
+            speed = SpeedConfig(**options)
         except TypeError as exc:
             raise InputError(f"speed_options: {exc}") from None
         except InputError as exc:  # SpeedConfig names its fields "speed.v_max"
             raise InputError(f"speed_options.{str(exc).removeprefix('speed.')}") from None
+        # The simulated car clips its speed there: a higher one would be silently not driven.
+        for name, top in (("v_max", MAX_SPEED), ("v_max_reverse", MAX_REVERSE_SPEED)):
+            if getattr(speed, name) > top:
+                raise InputError(
+                    f"speed_options.{name}: {getattr(speed, name):g} m/s is above the "
+                    f"simulated car's top speed{' in reverse' if 'reverse' in name else ''}, "
+                    f"{top:g} m/s"
+                )
+        return speed
 
     def controller_for(self, scenario: Scenario, speed: SpeedConfig) -> TrackingController:
         """The tracking controller for ``scenario`` with ``controller_options``."""

@@ -196,6 +196,21 @@ def test_an_unknown_controller_option_names_the_key():
         gym.make("rrtdrive/Overtake-v0", controller_options={"kk": 1})
 
 
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [({"v_max": 100}, r"^speed_options\.v_max: 100 m/s is above the simulated car's top "
+                      r"speed, 40 m/s$"),
+     ({"v_max_reverse": 12}, r"^speed_options\.v_max_reverse: 12 m/s is above the simulated "
+                             r"car's top speed in reverse, 10 m/s$")],
+)
+def test_a_speed_the_simulated_car_cannot_reach_is_named(options, message):
+    # The car clips its speed at 40 m/s (10 in reverse): v_max 100 was accepted and never
+    # driven, beyond the observation's own 40 m/s bound too.
+    with pytest.raises(InputError, match=message):
+        gym.make("rrtdrive/Overtake-v0", speed_options=options)
+    gym.make("rrtdrive/Overtake-v0", speed_options={"v_max": 40}).close()  # the top itself
+
+
 # ---------------------------------------------------------------- actions
 
 LIMITS = CommandLimits(a_min=-4.0, a_max=2.0, steer_limit=0.4)

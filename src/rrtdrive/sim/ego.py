@@ -23,6 +23,7 @@ from highway_env.utils import are_polygons_intersecting
 from highway_env.vehicle.kinematics import Vehicle
 
 from rrtdrive.geometry import wrap_angle
+from rrtdrive.sim import limits
 from rrtdrive.types import Pose, VehicleParams
 from rrtdrive.vehicle import bicycle_step
 
@@ -97,10 +98,10 @@ class EgoVehicle(Vehicle):
 
     LENGTH = VehicleParams().length
     WIDTH = VehicleParams().width
-    MAX_SPEED = 40.0
+    MAX_SPEED = limits.MAX_SPEED
     #: highway-env's displacement of a predicted intersection (set by its collision check).
     impact: np.ndarray | None
-    MIN_SPEED = -10.0
+    MIN_SPEED = -limits.MAX_REVERSE_SPEED
 
     def __init__(
         self,
