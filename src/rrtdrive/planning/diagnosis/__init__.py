@@ -21,9 +21,12 @@ and measures, from the map's geometry, the first of these that holds:
    2 and 3: nothing at the ends matters when no way joins them.
 5. ``u_turn``: start and goal headings differ by more than 120 degrees, or the goal
    lies behind the start facing the same way (forward, the car must head back to get
-   there), while the street at the start is narrower than a forward U-turn of this
-   car needs (:func:`u_turn_width`), and either no place reachable from the start is
-   that wide or the car must first drive to one.
+   there), while the street at the start (its narrowest chord within 45 deg of the
+   heading's normal) is narrower than a forward U-turn of this car needs
+   (:func:`u_turn_width` plus the planners' 0.15 m each side), and either no place
+   reachable from the start is that wide, or the widest is narrower than the circle
+   the car turns round in (:func:`~.measures.turning_circle`), or the car must first
+   drive to it.
 
 Each finding is a frozen :class:`Diagnosis` with its numbers; ``None`` when none applies.
 The package: :mod:`.findings` (the records), :mod:`.measures` (runs, widths, the map's

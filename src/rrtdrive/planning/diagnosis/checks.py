@@ -27,6 +27,7 @@ from rrtdrive.planning.diagnosis.measures import (
     nearest_obstacle,
     obstacle_name,
     street_width,
+    turning_circle,
     u_turn_width,
 )
 from rrtdrive.types import Pose
@@ -34,6 +35,7 @@ from rrtdrive.vehicle import footprint_polygon
 
 __all__ = [
     "BEHIND_MIN",
+    "BODY_CLEARANCE",
     "U_TURN_ANGLE",
     "body_collides",
     "goal_behind",
@@ -45,6 +47,9 @@ __all__ = [
 
 #: Heading change beyond which start and goal need the car turned round.
 U_TURN_ANGLE = math.radians(120.0)
+#: The body clearance the planners keep (``ImprovedConfig`` and ``HybridConfig``
+#: ``body_clearance``; tests/test_diagnosis.py checks they agree): a turn needs it each side.
+BODY_CLEARANCE = 0.15
 #: How far (metres) back along the start's heading a goal counts as behind it.
 BEHIND_MIN = 1.0
 
@@ -87,8 +92,8 @@ def room_at_ends(
                 DiagnosisKind.BOXED_IN,
                 f"the {label} is boxed in: on any steady steering the car has at most "
                 f"{behind:.2f} m behind it and {ahead:.2f} m ahead of it, {least}; "
-                f"{'leaving' if label == 'start' else 'reaching'} it takes several gear "
-                f"changes{tip}",
+                f"{'leaving' if label == 'start' else 'reaching'} it takes at least one "
+                f"gear change{tip}",
                 numbers,
             )
         if reverse:
@@ -242,7 +247,8 @@ def u_turn(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagno
     behind = goal_behind(start, goal)
     if turn <= U_TURN_ANGLE and behind is None:
         return None
-    need = u_turn_width(v)
+    # Keeping the planners' clearance each side (a 14.8 m street failed with no word).
+    need = u_turn_width(v) + 2.0 * BODY_CLEARANCE
     centre = body_centre(start, v)
     width = street_width(m, centre, start.yaw, checker=checker)
     if width >= need:
@@ -267,11 +273,14 @@ def u_turn(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagno
     k = int(np.argmax(clear))
     bx, by = float(px[k]), float(py[k])
     widest = max(2.0 * float(clear[k]), 2.0 * (float(grid[best]) + checker.grid_error))
+    # A round place has no street to swing the rear into: the front corner's circle.
+    turn_in = turning_circle(v) + 2.0 * BODY_CLEARANCE
     numbers = {"street_width_m": width, "needed_m": need, "widest_m": widest,
+               "turning_circle_m": turn_in, "clearance_m": BODY_CLEARANCE,
                "x": centre[0], "y": centre[1], "widest_x": bx, "widest_y": by}  # fmt: skip
     head = (
         f"the street at ({centre[0]:.1f}, {centre[1]:.1f}) is {width:.1f} m wide; a forward "
-        f"U-turn needs {need:.1f} m"
+        f"U-turn keeping {BODY_CLEARANCE:g} m each side needs {need:.1f} m"
     )
     if turn <= U_TURN_ANGLE and behind is not None:
         # Facing the same way: forward, the car must head back somewhere to get there.
@@ -282,6 +291,12 @@ def u_turn(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagno
         )
     if widest < need:
         tail = f"; no place reachable from the start is wider than {widest:.1f} m (try --reverse)"
+    elif widest < turn_in:
+        tail = (
+            f"; the widest place reachable from the start, about {widest:.1f} m across near "
+            f"({bx:.0f}, {by:.0f}), is narrower than the {turn_in:.1f} m circle the car turns "
+            "round in (try --reverse)"
+        )
     else:
         tail = (
             f"; the car must first drive to a wider place (the widest, about {widest:.0f} m "
