@@ -154,7 +154,9 @@ def test_tight_clearance_names_the_obstacle_and_the_edge_tests_keep():
     assert found.numbers["gap_m"] == pytest.approx(gap, abs=1e-9)
     assert found.numbers["obstacle"] == 1
     assert found.numbers["keep_m"] == pytest.approx(edge_keep(problem(m).checker))
-    assert found.message.startswith("the goal's body is 0.08 m from obstacle 1; tree edges keep")
+    assert found.message.startswith(
+        "the goal's body is 0.08 m from obstacle 1; this planner's straight tree edges keep"
+    )
 
 
 def test_goal_nose_near_a_wall_defeats_the_edge_test_not_the_body():
@@ -168,7 +170,7 @@ def test_goal_nose_near_a_wall_defeats_the_edge_test_not_the_body():
     gap = footprint_polygon(m.goal.as_tuple(), CAR).distance(wall.polygon())
     assert found.numbers["gap_m"] == pytest.approx(gap) and gap == pytest.approx(0.5)
     assert found.numbers["keep_end_m"] == pytest.approx(end_keep(problem(m).checker))
-    assert "beyond its nose" in found.message and "no tree edge reaches it" in found.message
+    assert "beyond its nose" in found.message and "so none reaches it" in found.message
     # The swept capsule's round end pokes r - sqrt(r^2 - (W/2)^2) past the bumper (shapely).
     r = checker.edge_radius
     capsule = shapely.LineString([(0.0, 0.0), (10.0, 0.0)]).buffer(r)
@@ -207,6 +209,13 @@ def test_narrow_passage_located_and_measured():
     assert found.numbers["width_m"] <= 2.1 + 1e-9 and found.numbers["width_m"] > 1.8
     assert found.numbers["needed_m"] == pytest.approx(1.8 + 2 * edge_keep(problem(m).checker))
     assert "tree edges need at least" in found.message
+    # For Hybrid A* (or the default, which escalates to it) the gap must leave the body its
+    # least clearance, 0.05 m, each side: 2.1 m is no finding; 1.85 m is, with that need
+    # (it said "tree edges need at least 2.32 m", a planner without tree edges; an audit).
+    assert diagnose(problem(m), tree_edges=False) is None
+    hybrid = diagnose(problem(gap_wall_map(1.85)), tree_edges=False)
+    assert hybrid.kind is DiagnosisKind.NARROW_PASSAGE
+    assert hybrid.numbers["needed_m"] == pytest.approx(1.9) and "tree edge" not in hybrid.message
     # A gap narrower than the car, and none at all.
     assert "narrower than the car" in diagnose(problem(gap_wall_map(1.5))).message
     no_path = diagnose(problem(builtin_map("no_path")))
@@ -294,11 +303,29 @@ def test_a_place_too_small_to_turn_round_in_is_not_offered():
 
 
 def test_the_clearance_the_diagnosis_assumes_is_the_planners():
-    from rrtdrive.planning.diagnosis.checks import BODY_CLEARANCE
+    from rrtdrive.planning.diagnosis.checks import BODY_CLEARANCE, MIN_CLEARANCE
     from rrtdrive.planning.hybrid import HybridConfig
     from rrtdrive.planning.improved import ImprovedConfig
 
     assert BODY_CLEARANCE == ImprovedConfig().body_clearance == HybridConfig().body_clearance
+    assert MIN_CLEARANCE == HybridConfig().min_clearance
+
+
+def test_with_reverse_a_narrow_gap_is_named_before_a_boxed_start():
+    # A start parked between two cars (boxed in) behind a 1.85 m gap: with --reverse the
+    # car backs out of the box, and the gap stops it; it was told "boxed in" again.
+    obstacles = (
+        Obstacle((25.0, 0.4), (50.0, 0.8)), Obstacle((17.055, 2.0), (4.3, 1.8)),
+        Obstacle((5.455, 2.0), (4.3, 1.8)), Obstacle((30.0, 7.4375), (10.0, 13.275)),
+        Obstacle((30.0, 22.9625), (10.0, 14.075)),
+    )  # fmt: skip
+    m = Map("boxed_gap", (0.0, 0.0, 50.0, 30.0), obstacles, Pose(10.0, 2.0, 0.0),
+            Pose(45.0, 15.0, 0.0))  # fmt: skip
+    assert diagnose(problem(m)).kind is DiagnosisKind.BOXED_IN  # forward: the box first
+    reversing = PlanningProblem.from_map(m, reverse=True)
+    found = diagnose(reversing, tree_edges=False)
+    assert found.kind is DiagnosisKind.NARROW_PASSAGE, found
+    assert found.numbers["width_m"] == pytest.approx(1.85, abs=1e-6)
 
 
 def test_steady_steering_is_tried_between_the_five_arcs():

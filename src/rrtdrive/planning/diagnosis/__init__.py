@@ -114,12 +114,15 @@ def diagnose(problem: PlanningProblem, *, tree_edges: bool = True) -> Diagnosis 
         found = body_collides(m, checker, pose, label)
         if found is not None:
             return found
-    passage = narrow_passage(m, checker, start, goal)
+    passage = narrow_passage(m, checker, start, goal, tree_edges)
     if passage is not None and (
-        passage.kind is DiagnosisKind.WALLED_OFF or passage.numbers["width_m"] < m.vehicle.width
+        passage.kind is DiagnosisKind.WALLED_OFF
+        or passage.numbers["width_m"] < m.vehicle.width
+        or reverse
     ):
         # Before the room at the ends: a goal in a closed box, or behind a gap narrower
-        # than the car, was "boxed in ... (try --reverse)", which no gear change mends.
+        # than the car, was "boxed in ... (try --reverse)", which no gear change mends;
+        # with reversing allowed, gear changes leave a boxed end, not a narrow gap.
         return passage
     for step in (
         lambda: room_at_ends(m, checker, start, goal, reverse),

@@ -36,6 +36,7 @@ from rrtdrive.vehicle import footprint_polygon
 __all__ = [
     "BEHIND_MIN",
     "BODY_CLEARANCE",
+    "MIN_CLEARANCE",
     "U_TURN_ANGLE",
     "body_collides",
     "goal_behind",
@@ -50,6 +51,8 @@ U_TURN_ANGLE = math.radians(120.0)
 #: The body clearance the planners keep (``ImprovedConfig`` and ``HybridConfig``
 #: ``body_clearance``; tests/test_diagnosis.py checks they agree): a turn needs it each side.
 BODY_CLEARANCE = 0.15
+#: The least body clearance any Hybrid A* stage keeps (``HybridConfig.min_clearance``).
+MIN_CLEARANCE = 0.05
 #: How far (metres) back along the start's heading a goal counts as behind it.
 BEHIND_MIN = 1.0
 
@@ -136,13 +139,15 @@ def tight_clearance(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) 
         index, gap = nearest_obstacle(m, footprint_polygon(pose.as_tuple(), m.vehicle), checker)
         return Diagnosis(
             DiagnosisKind.TIGHT_CLEARANCE,
-            f"the {label}'s body is {gap:.2f} m from {obstacle_name(index)}; tree edges keep "
-            f"{side:.2f} m beside the body and {ends:.2f} m beyond {bumper} (the swept "
-            f"test's round ends, the checker's {checker.config.margin:.2f} m margin, "
-            f"{checker.grid_error:.2f} m grid error and {checker.config.min_trace_step:.2f} m "
-            f"trace step), so no tree edge {verb} it (try --planner hybrid-a-star, or the "
-            f"default planner, whose Hybrid A* stage tests the body exactly)",
-            {"gap_m": gap, "keep_m": side, "keep_end_m": ends, "obstacle": index},
+            f"the {label}'s body is {gap:.2f} m from {obstacle_name(index)}; this planner's "
+            f"straight tree edges keep {side:.2f} m beside the body and {ends:.2f} m beyond "
+            f"{bumper}, so none {verb} it (try --planner hybrid-a-star, or the default "
+            f"planner, whose Hybrid A* stage tests the body exactly)",
+            # The keep's parts stay in the numbers: the swept test's round ends, the
+            # checker's margin, its grid error and trace step.
+            {"gap_m": gap, "keep_m": side, "keep_end_m": ends, "obstacle": index,
+             "margin_m": checker.config.margin, "grid_error_m": checker.grid_error,
+             "trace_step_m": checker.config.min_trace_step},
         )
     return None
 
@@ -152,8 +157,15 @@ def connected(field_: np.ndarray, t: float, a: tuple[int, int], b: tuple[int, in
     return bool(labels[a] != 0 and labels[a] == labels[b])
 
 
-def narrow_passage(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagnosis | None:
-    """``narrow_passage`` / ``walled_off``: the narrowest gap joining start and goal, or none."""
+def narrow_passage(
+    m: Map, checker: CollisionChecker, start: Pose, goal: Pose, tree_edges: bool = True
+) -> Diagnosis | None:
+    """``narrow_passage`` / ``walled_off``: the narrowest gap joining start and goal, or none.
+
+    ``tree_edges``: the failed planner searches by swept tree edges only, whose keep
+    beside the body the gap must leave; else (Hybrid A*) the body and the least
+    clearance any of its stages keeps (:data:`MIN_CLEARANCE`) each side.
+    """
     grid = checker.clearance_grid
     a, b = grid_cell(checker, (start.x, start.y)), grid_cell(checker, (goal.x, goal.y))
     need = checker.edge_radius + checker.config.min_trace_step
@@ -181,7 +193,8 @@ def narrow_passage(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -
             mid = 0.5 * (lo + hi)
             lo, hi = (mid, hi) if connected(grid, mid, a, b) else (lo, mid)
     v = m.vehicle
-    needed_width = v.width + 2.0 * edge_keep(checker)
+    keep = edge_keep(checker) if tree_edges else MIN_CLEARANCE
+    needed_width = v.width + 2.0 * keep
     numbers = {"needed_m": needed_width, "car_width_m": v.width}
     if lo < 0.0:
         return Diagnosis(
@@ -207,10 +220,17 @@ def narrow_passage(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -
     numbers.update(width_m=width, x=x, y=y)
     if width < v.width:
         tail = f"narrower than the car ({v.width:.2f} m)"
+    elif width >= needed_width:
+        return None  # wide enough for the planner that failed: not what stopped it
+    elif tree_edges:
+        tail = (
+            f"this planner's straight tree edges need at least {needed_width:.2f} m (the car's "
+            f"{v.width:.2f} m and {keep:.2f} m each side; try --planner hybrid-a-star)"
+        )
     else:
         tail = (
-            f"tree edges need at least {needed_width:.2f} m (the car's {v.width:.2f} m and "
-            f"{edge_keep(checker):.2f} m each side)"
+            f"the car ({v.width:.2f} m) needs at least {needed_width:.2f} m, keeping the least "
+            f"clearance the planner allows ({keep:.2f} m) each side"
         )
     return Diagnosis(
         DiagnosisKind.NARROW_PASSAGE,
