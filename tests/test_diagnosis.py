@@ -302,6 +302,19 @@ def test_a_place_too_small_to_turn_round_in_is_not_offered():
     assert "wider place" not in found.message and found.message.endswith("(try --reverse)")
 
 
+def test_a_wide_place_behind_the_car_is_not_where_it_can_drive_forward():
+    # Facing into an 8 m dead end with a plaza behind it: "first drive to a wider place"
+    # sent the car to the plaza it can only reach by the turn it cannot make.
+    walls = (Obstacle((42.5, 5.5), (35.0, 11.0)), Obstacle((42.5, 24.5), (35.0, 11.0)))
+    m = Map("plaza_behind", (0.0, 0.0, 60.0, 30.0), walls, Pose(40.0, 13.0, 0.0),
+            Pose(35.0, 17.0, math.pi))  # fmt: skip
+    found = diagnose(problem(m))
+    assert found.kind is DiagnosisKind.U_TURN
+    assert found.numbers["widest_x"] < 40.0  # the plaza, behind the start
+    assert "lies behind the car (try --reverse)" in found.message
+    assert "first drive to a wider place" not in found.message
+
+
 def test_the_clearance_the_diagnosis_assumes_is_the_planners():
     from rrtdrive.planning.diagnosis.checks import BODY_CLEARANCE, MIN_CLEARANCE
     from rrtdrive.planning.hybrid import HybridConfig

@@ -317,6 +317,13 @@ def u_turn(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagno
             f"({bx:.0f}, {by:.0f}), is narrower than the {turn_in:.1f} m circle the car turns "
             "round in (try --reverse)"
         )
+    elif (bx - start.x) * math.cos(start.yaw) + (by - start.y) * math.sin(start.yaw) < 0.0:
+        # Behind the car: getting there forward is the turn it cannot make here (a car
+        # facing into a dead end was sent to the plaza behind it; an audit, session 34).
+        tail = (
+            f"; the widest place, about {widest:.0f} m across near ({bx:.0f}, "
+            f"{by:.0f}), lies behind the car (try --reverse)"
+        )
     else:
         tail = (
             f"; the car must first drive to a wider place (the widest, about {widest:.0f} m "
