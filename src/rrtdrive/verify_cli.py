@@ -52,8 +52,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help=HELP,
         description="Check a path against a map with code that shares nothing with the "
         "planners: the car's body (shapely) at poses <= 0.1 m apart clear of every "
-        "obstacle and inside the bounds, curvature and sharpness measured from the "
-        "positions, headings at both ends, exact start and goal, sample spacing, and per "
+        "obstacle and inside the bounds, with the least clearance it keeps, curvature "
+        "(from the positions and the yaw's turn) and sharpness measured, not read from "
+        "kappa, headings at both ends, exact start and goal poses, sample spacing, and per "
         "gear segment the direction of travel and the cusps. Exit 0 when every check "
         "passes, 1 when one fails, 2 on bad input.",
     )
