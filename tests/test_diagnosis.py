@@ -315,6 +315,16 @@ def test_a_wide_place_behind_the_car_is_not_where_it_can_drive_forward():
     assert "first drive to a wider place" not in found.message
 
 
+def test_the_widest_place_is_measured_not_bounded():
+    # A 14.9 m box: the widest place was "about 15.0 m across" (the distance field plus its
+    # grid error, an upper bound), which also took the wrong branch of the message.
+    m = Map("box", (0.0, 0.0, 40.0, 14.9), (), Pose(22.0, 7.45, 0.0), Pose(14.0, 7.45, math.pi))
+    found = diagnose(problem(m))
+    assert found.kind is DiagnosisKind.U_TURN
+    assert found.numbers["widest_m"] == pytest.approx(14.9, abs=2e-3)
+    assert "no place reachable from the start is wider than 14.9 m" in found.message
+
+
 def test_the_clearance_the_diagnosis_assumes_is_the_planners():
     from rrtdrive.planning.diagnosis.checks import BODY_CLEARANCE, MIN_CLEARANCE
     from rrtdrive.planning.hybrid import HybridConfig

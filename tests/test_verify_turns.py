@@ -157,3 +157,16 @@ def test_the_plan_declares_its_clearance_and_verify_requires_it(tmp_path, capsys
     # Baselines keep none: null, and verify asks for no contact only.
     assert main(["plan", "parking_lot", "--planner", "rrt", "--json", str(plan)]) in (0, 1)
     assert json.loads(plan.read_text())["body_clearance_m"] is None
+
+
+@pytest.mark.parametrize("claim", ["0.3", True, float("nan"), -0.1, [0.15]])
+def test_a_malformed_declared_clearance_is_bad_input(claim, tmp_path, capsys):
+    # It was ignored (exit 0, "min 0"): a claim of 0.3 m as a string passed unchecked.
+    plan = tmp_path / "plan.json"
+    assert main(["plan", "overtake", "--json", str(plan)]) == 0
+    doc = json.loads(plan.read_text())
+    doc["body_clearance_m"] = claim
+    plan.write_text(json.dumps(doc))
+    capsys.readouterr()
+    assert main(["verify", str(plan)]) == 2
+    assert "plan.body_clearance_m: expected a number >= 0" in capsys.readouterr().err

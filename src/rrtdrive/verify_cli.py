@@ -261,7 +261,13 @@ def run(args: argparse.Namespace) -> int:
         bound = sharpness_bound(SmoothingConfig().max_sharpness, m.vehicle.max_steer_rate)
     clearance, why = args.clearance, ""
     kept = data.get("body_clearance_m")
-    if clearance is None and is_finite_number(kept) and kept >= CLEARANCE_SLACK_M:
+    if kept is not None and not (is_finite_number(kept) and kept >= 0):
+        # A claim that cannot be read is bad input, not a claim of none.
+        raise InputError(
+            f"plan.body_clearance_m: expected a number >= 0 (metres) or null, got "
+            f"{brief_repr(kept)}"
+        )
+    if clearance is None and kept is not None and kept >= CLEARANCE_SLACK_M:
         clearance = float(kept) - CLEARANCE_SLACK_M
         why = f": the plan's {kept:g} less {CLEARANCE_SLACK_M * 1000:g} mm"
     clearance = clearance or 0.0
