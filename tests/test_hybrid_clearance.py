@@ -9,6 +9,8 @@ independent verifier's least clearance (shapely) at its own poses 0.1 m apart.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -78,3 +80,26 @@ def test_hybrid_paths_keep_the_clearance_they_report(data, planner, seed, revers
     assert kept == pytest.approx(0.15)  # both ends are far from obstacles: no cap
     check = verify_path(m, result.path, max_sharpness=0.2, clearance=kept)
     assert check.ok, (check.failed, check.min_clearance_m)
+
+
+def test_rejected_connections_are_no_proof():
+    # A goal 5.3e-6 rad off the start's heading on the overtake road: every goal connection
+    # is found, and every one is rejected by the steering ramps (the Reeds-Shepp word's two
+    # 3e-5 m full-lock arcs make the fitted path weave into the lane's walls); the search
+    # then ran out of states and said "proven_unreachable", though with the goal's yaw
+    # written +3.14159 the same road solves in 87.0 m (an audit, session 34).
+    from rrtdrive.maps import builtin_map
+    from rrtdrive.types import PlanStatus, Pose
+
+    m = builtin_map("overtake")
+    for goal_yaw, status in ((-3.14159, PlanStatus.NO_PATH_IN_BUDGET), (3.14159, None)):
+        ends = {"start": Pose(92.0, 40.0, 3.14159), "goal": Pose(5.0, 40.0, goal_yaw)}
+        posed = dataclasses.replace(m, **ends)
+        result = make_planner("hybrid-a-star").solve(
+            PlanningProblem.from_map(posed, reverse=True), np.random.default_rng(0), Budget()
+        )
+        if status is None:
+            assert result.success, result.message
+        else:
+            assert result.status is status, result.message
+            assert "(no proof: " in result.message and "a proof for" not in result.message

@@ -144,7 +144,7 @@ def escalate(
             failed,
             message=(
                 f"{failed.message}; Hybrid A* ({gear}) found none either: {answer.message}"
-                + proof_scope(answer.outcome.reason, answer.clearance)
+                + proof_scope(answer.outcome, answer.clearance)
             ),
             stats=stats,
             iterations=used,

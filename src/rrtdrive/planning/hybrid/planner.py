@@ -151,13 +151,13 @@ def hybrid_result(
     o = answer.outcome
     if answer.path is None:
         status = PlanStatus.NO_PATH_IN_BUDGET
-        if o.reason in ("exhausted", "no_approach"):
+        if is_proof(o):
             status = PlanStatus.PROVEN_UNREACHABLE
         elif o.reason == "time":
             # The wall-clock cap has its own status where PlanStatus has one (issue 13, item 4).
             status = getattr(PlanStatus, "TIMEOUT", PlanStatus.NO_PATH_IN_BUDGET)
         # A proof holds for the clearance its search kept, on its grid: say so.
-        message = answer.message + proof_scope(o.reason, answer.clearance)
+        message = answer.message + proof_scope(o, answer.clearance)
         return failure(
             planner, status, watch, message, trees=answer.trees, iterations=o.expansions,
             stats=stats,
@@ -176,18 +176,33 @@ def hybrid_result(
     )
 
 
-def proof_scope(reason: str, clearance: float) -> str:
+def is_proof(outcome: SearchOutcome) -> bool:
+    """Whether a failed search proved the goal out of reach.
+
+    It ran out of states and never connected to the goal: a connection whose steering
+    ramps were rejected is a path of arcs to the goal (a car that stops to steer
+    drives it), so no proof then.
+    """
+    return outcome.reason in ("exhausted", "no_approach") and not outcome.connections
+
+
+def proof_scope(outcome: SearchOutcome, clearance: float) -> str:
     """What a search that ran out of states proved: only paths that keep its clearance.
 
     Examples
     --------
-    >>> proof_scope("exhausted", 0.15)
+    >>> proof_scope(SearchOutcome("exhausted", 10, 20, 3, 0), 0.15)
     ' (a proof for paths keeping 0.15 m body clearance, on that grid only)'
-    >>> proof_scope("expansions", 0.15)
+    >>> proof_scope(SearchOutcome("expansions", 10, 20, 3, 0), 0.15)
     ''
+    >>> proof_scope(SearchOutcome("exhausted", 10, 20, 3, 2), 0.15)
+    ' (no proof: 2 goal connection(s) were found, none drivable within the steering rate)'
     """
-    if reason not in ("exhausted", "no_approach"):
+    if outcome.reason not in ("exhausted", "no_approach"):
         return ""
+    if not is_proof(outcome):
+        return (f" (no proof: {outcome.connections} goal connection(s) were found, none "
+                "drivable within the steering rate)")  # fmt: skip
     return f" (a proof for paths keeping {clearance:.2f} m body clearance, on that grid only)"
 
 
