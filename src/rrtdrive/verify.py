@@ -201,21 +201,19 @@ MIN_POSE_SPACING = 1e-3
 
 
 def _first_collision(
-    m: Map, rows: np.ndarray, region: shapely.Geometry, bodies: list[np.ndarray],
-    poses: list[np.ndarray],
-    row_on_map: np.ndarray,
+    rows: np.ndarray, region: shapely.Geometry, shapes: np.ndarray,
+    polygons: list[shapely.Geometry], poses: list[np.ndarray], row_on_map: np.ndarray,
 ) -> tuple[tuple[float, float, float] | None, str]:
     """The first pose whose body leaves ``region`` or overlaps an obstacle, and what it hits.
 
+    ``shapes``: the bodies at ``poses``; ``polygons``: the obstacles, in map order.
     A row off the map (``row_on_map`` false; no bodies were drawn) is that pose.
     """
     if not row_on_map.all():
         k = int(np.argmin(row_on_map))
         return (float(rows[k, 0]), float(rows[k, 1]), float(rows[k, 2])), "the bounds"
-    if not bodies:
+    if not len(shapes):
         return None, ""
-    shapes = np.concatenate(bodies)
-    polygons = [shapely.Polygon(o.corners()) for o in m.obstacles]
     # Touching the bounds is a collision, as touching an obstacle is (the walls stand there).
     shapely.prepare(region)
     outside = ~shapely.contains_properly(region, shapes)
@@ -336,7 +334,7 @@ def verify_path(
         )
     _check_settings(pose_spacing, max_sample_spacing, heading_tol_deg, curvature_tol,
                     max_sharpness, sharpness_tol)  # fmt: skip
-    if isinstance(clearance, bool) or not is_finite_number(clearance) or clearance < 0:
+    if not is_finite_number(clearance) or clearance < 0:  # a bool is no number there
         raise InputError(f"clearance: expected a finite number >= 0, got {brief_repr(clearance)}")
     # The map's poses; a map built with check_query=False may have them in collision
     # (rrtdrive verify): the body check then fails there.
@@ -391,7 +389,12 @@ def verify_path(
         if math.isnan(first_dir):
             first_dir = float(nose[0])
         last_dir = float(nose[-1])
-    first_collision, collides_with = _first_collision(m, s, region, bodies, poses, row_on_map)
+    # The bodies and the obstacles once, for the body check and the least clearance.
+    shapes = np.concatenate(bodies) if bodies else np.empty(0, dtype=object)
+    polygons = [shapely.Polygon(o.corners()) for o in m.obstacles]
+    first_collision, collides_with = _first_collision(
+        s, region, shapes, polygons, poses, row_on_map
+    )
     collision_free = first_collision is None
     # Chords of the first and last moving steps: at most 0.25 m long, so even at
     # kappa_max the chord deviates from the tangent by under 0.7 degrees.
@@ -414,12 +417,8 @@ def verify_path(
         and end_yaw_err <= YAW_ROUND
     )
     least = 0.0
-    if collision_free and bodies:
-        shapes = np.concatenate(bodies)
-        polygons = [shapely.Polygon(o.corners()) for o in m.obstacles]
-        least = _least_clearance(m, shapes, polygons, _corners(shapes))
-    elif collision_free:
-        least = math.inf
+    if collision_free:
+        least = _least_clearance(m, shapes, polygons, _corners(shapes)) if len(shapes) else math.inf
     clearance_ok = least >= clearance - 1e-9 and (collision_free or clearance == 0.0)
     curvature_ok = max_k <= v.kappa_max + curvature_tol
     tol = math.radians(heading_tol_deg)

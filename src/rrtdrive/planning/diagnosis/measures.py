@@ -32,6 +32,7 @@ __all__ = [
     "map_shapes",
     "nearest_obstacle",
     "obstacle_name",
+    "ray_runs",
     "street_width",
     "turning_circle",
     "u_turn_width",
@@ -225,17 +226,36 @@ def street_width(
         walls = shapely.union_all(
             [shapely.box(*m.bounds).exterior, *(o.polygon().exterior for o in m.obstacles)]
         )
-    p = shapely.Point(point)
-    best = math.inf
-    for turn in ACROSS:
-        total = 0.0
-        for side in (1.0, -1.0):
-            nx, ny = -math.sin(yaw + turn) * side, math.cos(yaw + turn) * side
-            ray = shapely.LineString([point, (point[0] + nx * reach, point[1] + ny * reach)])
-            hit = ray.intersection(walls)
-            total += p.distance(hit) if not hit.is_empty else reach
-        best = min(best, total)
-    return float(best)
+    normal = np.concatenate([yaw + ACROSS + 0.5 * math.pi, yaw + ACROSS - 0.5 * math.pi])
+    run = ray_runs(np.asarray(point, dtype=float), normal, walls, reach)
+    return float(np.min(run[: len(ACROSS)] + run[len(ACROSS):]))
+
+
+def ray_runs(
+    origin: np.ndarray, angles: np.ndarray, walls: shapely.Geometry, reach: float
+) -> np.ndarray:
+    """Distance from ``origin`` along each direction in ``angles`` to the first of ``walls``.
+
+    ``reach`` where a ray meets none. Every ray against every wall segment at once
+    (numpy): shapely's intersection took 1.2 ms a ray on parking_lot's outlines.
+    """
+    segments = [
+        np.stack([c[:-1], c[1:]], axis=1)
+        for c in (shapely.get_coordinates(line) for line in shapely.get_parts(walls))
+        if len(c) > 1
+    ]
+    if not segments:
+        return np.full(len(angles), reach)
+    seg = np.concatenate(segments)  # (S, 2, 2)
+    a, e = seg[:, 0], seg[:, 1] - seg[:, 0]
+    d = np.column_stack([np.cos(angles), np.sin(angles)])  # (R, 2)
+    w = a - origin  # origin + t d = a + u e
+    denom = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (w[None, :, 0] * e[None, :, 1] - w[None, :, 1] * e[None, :, 0]) / denom
+        u = (w[None, :, 0] * d[:, None, 1] - w[None, :, 1] * d[:, None, 0]) / denom
+    hit = (denom != 0.0) & (t >= 0.0) & (t <= reach) & (u >= 0.0) & (u <= 1.0)
+    return np.where(hit, t, reach).min(axis=1)
 
 
 def body_centre(pose: Pose, vehicle: VehicleParams) -> tuple[float, float]:

@@ -17,7 +17,7 @@ from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.path import BuiltPath
 from rrtdrive.planning.hybrid.query import HybridAnswer, hybrid_query
-from rrtdrive.planning.hybrid.resolution import dubins_table, free_cell_graph
+from rrtdrive.planning.hybrid.resolution import PROOFS, dubins_table, free_cell_graph
 from rrtdrive.planning.hybrid.search import SearchOutcome
 from rrtdrive.planning.result import run_query, solved
 from rrtdrive.planning.smoothing import SmoothingConfig
@@ -183,7 +183,7 @@ def is_proof(outcome: SearchOutcome) -> bool:
     ramps were rejected is a path of arcs to the goal (a car that stops to steer
     drives it), so no proof then.
     """
-    return outcome.reason in ("exhausted", "no_approach") and not outcome.connections
+    return outcome.reason in PROOFS and not outcome.connections
 
 
 def proof_scope(outcome: SearchOutcome, clearance: float) -> str:
@@ -198,7 +198,7 @@ def proof_scope(outcome: SearchOutcome, clearance: float) -> str:
     >>> proof_scope(SearchOutcome("exhausted", 10, 20, 3, 2), 0.15)
     ' (no proof: 2 goal connection(s) were found, none drivable within the steering rate)'
     """
-    if outcome.reason not in ("exhausted", "no_approach"):
+    if outcome.reason not in PROOFS:
         return ""
     if not is_proof(outcome):
         return (f" (no proof: {outcome.connections} goal connection(s) were found, none "
