@@ -82,24 +82,46 @@ def test_hybrid_paths_keep_the_clearance_they_report(data, planner, seed, revers
     assert check.ok, (check.failed, check.min_clearance_m)
 
 
-def test_rejected_connections_are_no_proof():
-    # A goal 5.3e-6 rad off the start's heading on the overtake road: every goal connection
-    # is found, and every one is rejected by the steering ramps (the Reeds-Shepp word's two
-    # 3e-5 m full-lock arcs make the fitted path weave into the lane's walls); the search
-    # then ran out of states and said "proven_unreachable", though with the goal's yaw
-    # written +3.14159 the same road solves in 87.0 m (an audit, session 34).
+def _overtake_road(goal_yaw: float):
     from rrtdrive.maps import builtin_map
-    from rrtdrive.types import PlanStatus, Pose
+    from rrtdrive.types import Pose
 
-    m = builtin_map("overtake")
-    for goal_yaw, status in ((-3.14159, PlanStatus.NO_PATH_IN_BUDGET), (3.14159, None)):
-        ends = {"start": Pose(92.0, 40.0, 3.14159), "goal": Pose(5.0, 40.0, goal_yaw)}
-        posed = dataclasses.replace(m, **ends)
-        result = make_planner("hybrid-a-star").solve(
-            PlanningProblem.from_map(posed, reverse=True), np.random.default_rng(0), Budget()
-        )
-        if status is None:
-            assert result.success, result.message
-        else:
-            assert result.status is status, result.message
-            assert "(no proof: " in result.message and "a proof for" not in result.message
+    ends = {"start": Pose(92.0, 40.0, 3.14159), "goal": Pose(5.0, 40.0, goal_yaw)}
+    return dataclasses.replace(builtin_map("overtake"), **ends)
+
+
+def _overtake_query(goal_yaw: float) -> PlanningProblem:
+    return PlanningProblem.from_map(_overtake_road(goal_yaw), reverse=True)
+
+
+def test_rejected_connections_are_no_proof(monkeypatch):
+    # A search that found goal connections and rejected every one for its steering ramps,
+    # then ran out of states, proves nothing: the overtake road with every ramp fit
+    # failing (as on the code before session 35, where the goal below, 5.3e-6 rad off the
+    # start's heading, had every connection rejected) said "proven_unreachable" (session 34).
+    from rrtdrive.planning.hybrid import path as hybrid_path
+    from rrtdrive.types import PlanStatus
+
+    monkeypatch.setattr(hybrid_path, "ramped_segment", lambda *a, **k: None)
+    result = make_planner("hybrid-a-star").solve(
+        _overtake_query(-3.14159), np.random.default_rng(0), Budget()
+    )
+    assert result.status is PlanStatus.NO_PATH_IN_BUDGET, result.message
+    assert "(no proof: " in result.message and "a proof for" not in result.message
+
+
+@pytest.mark.parametrize("goal_yaw", [-3.14159, 3.14159])
+def test_sliver_arcs_are_not_ramped(goal_yaw):
+    # The Reeds-Shepp word from the start to a goal 5.3e-6 rad off its heading has two
+    # full-lock arcs of 3e-5 m at its ends; ramping the steering to full lock and back for
+    # each wove the fitted path (kappa 0.08, yaw +-0.026 rad) into the lane's walls and every
+    # connection was rejected (session 34). The slivers are merged into the line now: the
+    # straight 87 m, as with the goal's yaw written +3.14159.
+    result = make_planner("hybrid-a-star").solve(
+        _overtake_query(goal_yaw), np.random.default_rng(0), Budget()
+    )
+    assert result.success, result.message
+    assert result.path.length == pytest.approx(87.0, abs=1e-3)
+    assert float(np.abs(result.path.samples[:, 3]).max()) < 1e-6
+    check = verify_path(_overtake_road(goal_yaw), result.path, max_sharpness=0.2)
+    assert check.ok, check.failed

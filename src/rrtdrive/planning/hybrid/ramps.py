@@ -92,6 +92,57 @@ def _pieces(ds: np.ndarray, kappa: np.ndarray, wheelbase: float) -> tuple[np.nda
     return lengths, angles
 
 
+#: Pieces shorter than this (metres) are slivers: merged into a neighbour before the fit.
+#: A Reeds-Shepp word between nearly aligned poses has full-lock arcs of a few 1e-5 m at
+#: its ends (a turn of about 5e-6 rad); ramping the steering to full lock and back for
+#: each took some 2 m and wove the fitted path into the walls of a lane (the overtake
+#: road with goal yaw -3.14159 against a start at 3.14159: all 132 connections rejected,
+#: session 35). A sliver turns the car at most ``kappa_max`` x 1 mm (2e-4 rad), which the
+#: end-pose fit takes up in the other pieces' lengths and angles.
+SLIVER_M = 1e-3
+
+
+def _without_slivers(lengths: np.ndarray, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``lengths``/``angles`` with every piece under :data:`SLIVER_M` merged into a neighbour.
+
+    Each sliver goes to the neighbour whose steering is nearer its own (the previous one
+    on a tie), runs of equal steering are joined again, and a segment left with one piece
+    is split into two halves, so that the fit still has the four unknowns a pose's three
+    coordinates need (a sliver's turn must be taken up somewhere). Pieces with no
+    sliver come back as they are (the same arrays).
+
+    Examples
+    --------
+    >>> lengths, angles = _without_slivers(np.array([2e-5, 87.0, 2e-5]), np.array([0.39, 0, 0.39]))
+    >>> np.round(lengths, 5).tolist(), angles.tolist()
+    ([43.50002, 43.50002], [0.0, 0.0])
+    """
+    if len(lengths) < 2 or lengths.min() >= SLIVER_M:
+        return lengths, angles
+    kept_l, kept_a = list(lengths), list(angles)
+    while len(kept_l) > 1:
+        i = min(range(len(kept_l)), key=kept_l.__getitem__)
+        if kept_l[i] >= SLIVER_M:
+            break
+        if i == 0:
+            j = 1
+        elif i == len(kept_l) - 1:
+            j = i - 1
+        else:
+            before, after = abs(kept_a[i - 1] - kept_a[i]), abs(kept_a[i + 1] - kept_a[i])
+            j = i - 1 if before <= after else i + 1
+        kept_l[j] += kept_l[i]
+        del kept_l[i], kept_a[i]
+        # Join the neighbours the sliver stood between when they steer alike.
+        k = min(i, j)
+        if 0 < k < len(kept_l) and abs(kept_a[k] - kept_a[k - 1]) <= 1e-6:
+            kept_l[k - 1] += kept_l[k]
+            del kept_l[k], kept_a[k]
+    if len(kept_l) == 1:
+        kept_l, kept_a = [0.5 * kept_l[0]] * 2, kept_a * 2
+    return np.array(kept_l), np.array(kept_a)
+
+
 def _profiles(
     lengths: np.ndarray, angles: np.ndarray, factors: np.ndarray, rate: float, t: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -454,7 +505,7 @@ def _ramped_once(
     ds, kappa = _intervals(rows, gear)
     if not len(ds):
         return None
-    lengths, angles = _pieces(ds, kappa, wheelbase)
+    lengths, angles = _without_slivers(*_pieces(ds, kappa, wheelbase))
     angles = _clip(angles, -delta_max, delta_max)
     n = len(lengths)
     start, goal = rows[0, :3].copy(), rows[-1, :3]
