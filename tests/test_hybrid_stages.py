@@ -358,3 +358,19 @@ def test_setup_blocks_leave_planning_time_and_go_to_setup_time() -> None:
     assert res.setup_time_s >= 0.2
     assert res.planning_time_s < 0.2
     assert res.status is PlanStatus.NO_PATH_IN_BUDGET  # the set-up did not hit the 0.1 s cap
+
+
+def test_searches_after_no_approach_start_from_the_goal() -> None:
+    # Random goal 20 of coverage.py --count 100 --seed 1: forward, no way arrives at it.
+    # Each search of the ladder proves it from the goal's side in 6-22 expansions; the
+    # first one spends its first turn (400 expansions) from the start, and until session
+    # 35 so did the four after it (2 056 expansions, about 90 % of them from the start).
+    _, problem = _random_problem("goal", 20, count=100)
+    result = _solve(problem, 20000)
+    assert result.status is PlanStatus.PROVEN_UNREACHABLE, result.message
+    assert "ran out of ways to arrive at the goal" in result.message
+    turn = HybridConfig().switch_after  # the first search's first turn, from the start
+    # Five searches (the last leads the message), the first 400 + 6 expansions, the four
+    # others from the goal alone.
+    assert result.message.count("ran out of ways to arrive at the goal") == 4, result.message
+    assert turn < result.iterations < 2 * turn, result.iterations

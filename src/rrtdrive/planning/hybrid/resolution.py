@@ -8,9 +8,10 @@ flipped; with reverse allowed every motion reversed in time is a motion; forward
 only, the search from the goal uses reverse arcs alone, so its reversal drives
 forward). Many queries are hard at one end only (a tight bay, a start against a
 wall): from the other end the hard part is a way out. The search from the goal
-that runs out of states proves the goal unreachable at the search's resolution.
-Where every connection found is rejected (the ramps cut a corner), the searches
-run again keeping ``ramp_margin`` more clearance. Also here: the per-map set-up
+that runs out of states proves the goal unreachable at the search's resolution
+(the ladder's next search then gives it the first turn: ``goal_first``). Where every
+connection found is rejected (the ramps cut a corner), the searches run again keeping
+``ramp_margin`` more clearance. Also here: the per-map set-up
 the searches share (:func:`free_cell_graph`, :func:`dubins_table`) and the
 query's clearance.
 """
@@ -291,10 +292,12 @@ def search_at_resolution(
     reverse: bool,
     smoothing: SmoothingConfig | None,
     have: EndClearance,
+    goal_first: bool = False,
 ) -> tuple[BuiltPath | None, SearchOutcome, tuple[Tree, ...]]:
     """The searches of :func:`hybrid_query` at one resolution, with ``budget`` expansions.
 
     ``have``: the start's and goal's own body clearance (:class:`EndClearance`).
+    ``goal_first``: the search from the goal takes the first turn (:func:`_alternate`).
     """
     kappa_max = problem.vehicle.kappa_max
     clearance = query_clearance(problem, config.body_clearance, have)
@@ -474,6 +477,7 @@ def search_at_resolution(
         path, outcome = _alternate(
             searches, left, first_turn, watch, turn_with(search_clearance),
             guide if config.lattice_after > 0 else None, config.lattice_after,
+            goal_first=goal_first,
         )  # fmt: skip
         reason = outcome.reason
         if margin > 0.0 and reason in PROOFS:
@@ -520,6 +524,7 @@ def _alternate(
     turn_first: Turn | None = None,
     guide: Guide | None = None,
     guide_after: int = 0,
+    goal_first: bool = False,
 ) -> tuple[BuiltPath | None, SearchOutcome]:
     """Run the searches in turns of ``first``, ``first``, ``2 first``, ``2 first``, ... expansions.
 
@@ -529,10 +534,12 @@ def _alternate(
     ``turn_first``: the multi-point turn tried once, after the first turn from the
     start (each of its moves counted as an expansion). ``guide``: the searches'
     new estimates, taken at the first turn that starts with ``guide_after`` or more
-    expansions spent (:attr:`HybridConfig.lattice_after`).
+    expansions spent (:attr:`HybridConfig.lattice_after`). ``goal_first``: the search
+    from the goal (the second) takes the first turn.
     """
     outcomes = [SearchOutcome("expansions", 0, 0, 0, 0) for _ in searches]
-    turn, used, k = max(1, first), 0, 0
+    k = 1 if goal_first and len(searches) > 1 else 0
+    last, turn, used = (k - 1) % len(searches), max(1, first), 0  # turns double after last
     while True:
         search, accept = searches[k]
         if guide is not None and used >= guide_after:
@@ -563,7 +570,7 @@ def _alternate(
                 return tried.result, SearchOutcome.total("solved", outcomes)
             if used >= budget:
                 break
-        if k == len(searches) - 1:
+        if k == last:
             turn *= 2
         k = (k + 1) % len(searches)
     if len(outcomes) == 1:
