@@ -60,6 +60,21 @@ def test_plan_reverse_flag_is_in_the_json(capsys):
     assert "--reverse" in capsys.readouterr().out
 
 
+def test_reverse_without_the_escalation_is_forward_only_and_says_so(capsys):
+    # The default reverses only in its Hybrid A* escalation: with --disable escalation,
+    # --reverse took no effect and nothing said so, while the failure's diagnosis asked
+    # for a gear change (a user audit, session 35).
+    argv = ["plan", "kerbside", "--reverse", "--disable", "escalation", "--json", "-"]
+    code, out, err = run(capsys, *argv)
+    data = json.loads(out)
+    assert code == 1 and data["success"] is False and data["reverse"] is True
+    assert "note: improved-rrt-connect plans forward only with --disable escalation" in err
+    # A failed plan has no path to count gear changes on: null, as length_m (was 0).
+    assert data["cusps"] is None and data["length_m"] is None
+    code, out, err = run(capsys, "plan", "kerbside", "--reverse", "--json", "-")
+    assert code == 0 and json.loads(out)["cusps"] >= 1 and "plans forward only" not in err
+
+
 def test_plan_no_path_exits_1_with_message(capsys):
     code, out, err = run(capsys, "plan", "no_path", "--planner", "rrt-connect", "--json", "-")
     assert code == 1

@@ -89,6 +89,17 @@ def test_simulate_reverse_with_a_forward_planner_says_so(capsys):
     assert "note: rrt plans forward only; --reverse takes effect with hybrid-a-star" in err
 
 
+def test_a_reversing_scenario_with_a_forward_planner_says_so(capsys):
+    # parallel-parking plans with gear changes unasked: a forward-only planner crashed
+    # with no word of why (a user audit, session 35); --reverse had the note alone.
+    code = main(["simulate", "parallel-parking", "--planner", "rrt", "--max-time", "5"])
+    err = capsys.readouterr().err
+    assert code == 1
+    assert "note: rrt plans forward only; the parallel-parking scenario's gear changes" in err
+    main(["simulate", "parking", "--planner", "rrt", "--max-time", "1"])
+    assert "plans forward only" not in capsys.readouterr().err  # parking: forward
+
+
 def test_an_unknown_scenario_reads_alike_in_simulate_bench_and_gym(capsys):
     """One wording, the closest name suggested, in each place a scenario is named."""
     from rrtdrive.bench import BenchConfig

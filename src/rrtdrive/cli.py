@@ -113,7 +113,7 @@ def plan_to_json(
         "start": None if start is None else [float(v) for v in start.as_tuple()],
         "goal": None if goal is None else [float(v) for v in goal.as_tuple()],
         "path": np.round(result.path.samples, 6).tolist(),
-        "cusps": len(result.path.cusps),
+        "cusps": len(result.path.cusps) if result.success else None,
         "waypoints": np.round(result.path.waypoints, 6).tolist(),
         # A failed plan has no path to measure: null, as in bench rows, not 0.0.
         "length_m": round(result.path.length, 6) if result.success else None,
@@ -186,8 +186,12 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         options["smoothing"] = {"curve": CurveKind.BSPLINE}
     with flags_for(PLANNER_FLAGS):
         planner = make_planner(args.planner, **options)
-    if args.reverse and not reverses(args.planner):
-        print(f"rrtdrive plan: {forward_only_note(args.planner)}", file=sys.stderr)
+    reversing = args.reverse and bool(getattr(planner, "reverses", False))
+    if args.reverse and not reversing:
+        # The default reverses only in its escalation: --disable escalation ends that.
+        why = " with --disable escalation (it reverses in that stage)"
+        why = why if reverses(args.planner) else ""
+        print(f"rrtdrive plan: {forward_only_note(args.planner, why=why)}", file=sys.stderr)
     budget = Budget(max_iterations=args.max_iterations, max_time_s=args.max_time)
     from rrtdrive.collision import CheckerConfig
     from rrtdrive.collision.grid import setup_notice
@@ -213,8 +217,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         from rrtdrive.plotting import plot_plan, save_figure
 
         with writing("--plot", args.plot):
-            allowed = args.reverse and reverses(args.planner)  # a forward-only planner's not
-            save_figure(plot_plan(m, result, seed=args.seed, reverse=allowed), args.plot)
+            save_figure(plot_plan(m, result, seed=args.seed, reverse=reversing), args.plot)
     cusps = len(result.path.cusps)
     gears = f"{cusps} gear change{'s' if cusps != 1 else ''}, " if cusps else ""
     setup = f"set-up {result.setup_time_s:.1f} s" if notice is not None else ""

@@ -63,7 +63,16 @@ def reverses(name: str) -> bool:
     return bool(getattr(PLANNERS.get(name), "reverses", False))
 
 
-def forward_only_note(name: str) -> str:
-    """The note for ``--reverse`` given to a planner that plans forward only."""
+def forward_only_note(name: str, *, why: str = "", asked: str = "--reverse takes") -> str:
+    """The note for ``--reverse`` given to a planner that plans forward only.
+
+    ``why``: a condition of its, e.g. ``" with --disable escalation"``; ``asked``: what
+    the user asked for, with its verb.
+
+    Examples
+    --------
+    >>> forward_only_note("rrt")
+    'note: rrt plans forward only; --reverse takes effect with hybrid-a-star, improved-rrt-connect'
+    """
     takes = ", ".join(sorted(n for n in PLANNERS if reverses(n)))
-    return f"note: {name} plans forward only; --reverse takes effect with {takes}"
+    return f"note: {name} plans forward only{why}; {asked} effect with {takes}"

@@ -403,6 +403,11 @@ def _run(args: argparse.Namespace) -> int:
         episode = stock.episode
     else:
         scenario = _make_task(args, target, oncoming, traffic_opts, make_scenario)
+        if scenario.reverse and not args.reverse and not reverses(args.planner):
+            # u-turn, parallel-parking, parking --reverse-in plan with gear changes unasked.
+            asked = f"the {args.scenario} scenario's gear changes take"
+            note = forward_only_note(args.planner, asked=asked)
+            print(f"rrtdrive simulate: {note}", file=sys.stderr)
         with flags_for({"episode.max_time_s": "--max-time"}):
             episode = run_episode(scenario, args.planner, args.controller, args.seed, config)
     episode = _with_simulate_hint(episode)

@@ -5,9 +5,9 @@
 connection, the growth checker, the passage cells, the growth and smoothing of
 up to ``max_postprocess_attempts`` tree paths, the Dubins fallback, the
 Hybrid A* escalation and the failure. With the escalation on, the RRT-Connect
-stages run on ``rrt_share`` of the growth iterations and
-``escalation_fallback_joints`` fallback joints (:meth:`ImprovedConfig.stage_budgets`)
-and the escalation on the iterations left. With reverse allowed
+stages run on ``rrt_share`` of the growth iterations and ``escalation_fallback_joints``
+fallback joints (:meth:`ImprovedConfig.stage_budgets`) and the escalation on the
+iterations left (it is the planner's only way to reverse). With reverse allowed
 (:meth:`ImprovedConfig.escalates_first`): ``reverse_postprocess_attempts`` tree
 paths, the direct Dubins path, the escalation, then the fallback's tails and leads.
 """
@@ -86,8 +86,7 @@ class ImprovedRRTConnect:
     """
 
     name = NAME
-    #: It honours ``PlanningProblem.reverse`` (gear changes); the baselines plan forward.
-    reverses = True
+    reverses: bool = True  #: It honours ``PlanningProblem.reverse`` (without the escalation: no)
 
     def __init__(
         self,
@@ -109,6 +108,7 @@ class ImprovedRRTConnect:
                 f"planner.disable: expected component names, got {type(disable).__name__}"
             )
         self.config = cfg.without(*disable)
+        self.reverses = self.config.escalation
 
     def __repr__(self) -> str:
         return f"ImprovedRRTConnect({self.config!r})"
