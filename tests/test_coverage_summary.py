@@ -70,7 +70,8 @@ def test_a_curvature_jump_passes_only_without_the_sharpness_bound():
     t = np.arange(0.0, 0.5, 0.1 / 6.0)
     arc = np.column_stack([x0 + 5.0 + 6.0 * np.sin(t), y0 + 6.0 - 6.0 * np.cos(t), t])
     states = np.vstack([line, arc])
-    rows = np.column_stack([states, np.zeros(len(states)), np.ones(len(states))])
+    kappa = np.concatenate([np.zeros(len(line)), np.full(len(arc), 1.0 / 6.0)])
+    rows = np.column_stack([states, kappa, np.ones(len(states))])
     m = Map("open", (0.0, 0.0, 100.0, 100.0), (), Pose(*states[0]), Pose(*states[-1]))
     check = coverage._check(m, Path(rows, states[:, :2]))
     assert check["collision_free"] and check["verified_any_sharpness"]

@@ -170,3 +170,54 @@ def test_a_malformed_declared_clearance_is_bad_input(claim, tmp_path, capsys):
     capsys.readouterr()
     assert main(["verify", str(plan)]) == 2
     assert "plan.body_clearance_m: expected a number >= 0" in capsys.readouterr().err
+
+
+def _arc(x0, y0, yaw0, kappa, gear, length, step=0.2):
+    """Rows of a steady-steering arc from its closed form, nose yaw, in either gear."""
+    s = np.linspace(0.0, length, int(round(length / step)) + 1)
+    yaw = yaw0 + gear * kappa * s
+    if kappa == 0.0:
+        x, y = x0 + gear * s * math.cos(yaw0), y0 + gear * s * math.sin(yaw0)
+    else:
+        x = x0 + (np.sin(yaw) - math.sin(yaw0)) / kappa
+        y = y0 - (np.cos(yaw) - math.cos(yaw0)) / kappa
+    return np.column_stack([x, y, yaw, np.full_like(s, kappa), np.full_like(s, float(gear))])
+
+
+@pytest.mark.parametrize("kappa", [0.16, -0.1])
+def test_the_kappa_column_must_be_the_steering_curvature_in_both_gears(kappa):
+    # kappa = tan(delta) / L in both gears: a reverse segment whose column has the other
+    # sign (the turn's curvature along the travel) or none was "OK, every check passed"
+    # (a user audit, session 35): the positions and yaws alone were checked.
+    fwd = _arc(20.0, 20.0, 0.3, kappa, 1, 6.0)
+    back = _arc(*fwd[-1, :3], kappa, -1, 6.0)
+    rows = np.vstack([fwd, back])
+    m = _open_map(rows)
+    good = verify_path(m, Path(rows, np.zeros((0, 2))))
+    assert good.ok and good.kappa_column_err < 1e-6, good.failed
+    for wrong in (-kappa, 0.0):
+        bad_rows = rows.copy()
+        bad_rows[len(fwd):, 3] = wrong  # the reverse segment only
+        bad = verify_path(m, Path(bad_rows, np.zeros((0, 2))))
+        assert bad.failed == ("kappa_ok",)
+        assert bad.kappa_column_err == pytest.approx(abs(kappa - wrong), rel=1e-3)
+        assert bad.worst_kappa_row >= len(fwd)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.floats(-KAPPA_MAX, KAPPA_MAX), st.floats(-0.09, 0.09), st.sampled_from([1, -1]))
+def test_a_clothoid_column_passes(k0, rate, gear):
+    # Curvature changing linearly along the path (a steering ramp, clipped at the lock:
+    # a peak there lies above both its steps' means by half a step of the ramp); the
+    # check must not fail true columns (closed form by fine integration).
+    n, fine = 31, 200
+    s = np.linspace(0.0, 6.0, (n - 1) * fine + 1)
+    k = np.clip(k0 + rate * s, -KAPPA_MAX, KAPPA_MAX)
+    ds = s[1] - s[0]
+    yaw = 0.2 + gear * np.concatenate([[0.0], np.cumsum(0.5 * (k[1:] + k[:-1]) * ds)])
+    mid = 0.5 * (yaw[1:] + yaw[:-1])
+    x = 20.0 + gear * np.concatenate([[0.0], np.cumsum(np.cos(mid) * ds)])
+    y = 20.0 + gear * np.concatenate([[0.0], np.cumsum(np.sin(mid) * ds)])
+    rows = np.column_stack([x, y, yaw, k, np.full_like(s, float(gear))])[::fine]
+    check = verify_path(_open_map(rows), Path(rows, np.zeros((0, 2))))
+    assert check.kappa_ok, (check.kappa_column_err, check.worst_kappa_row)

@@ -37,6 +37,7 @@ from rrtdrive.types import (
 )
 from rrtdrive.verify_measures import (
     YAW_ROUND,
+    kappa_column_error,
     segment_curvature,
     segment_sharpness,
     travel_directions,
@@ -49,7 +50,7 @@ _CUSP_TOL_M = 1e-6  # a cusp repeats the position (to the JSON's 6 decimals)
 #: The pass / fail fields of :class:`PathCheck`; ``ok`` is all of them.
 CHECKS = (
     "collision_free", "curvature_ok", "sharpness_ok", "headings_ok", "endpoints_ok",
-    "spacing_ok", "travel_ok", "cusps_ok", "clearance_ok",
+    "spacing_ok", "travel_ok", "cusps_ok", "clearance_ok", "kappa_ok",
 )
 
 
@@ -120,6 +121,16 @@ class PathCheck:
         they touch or overlap, inf on an empty map.
     clearance_ok : bool
         ``min_clearance_m`` is at least the ``clearance`` asked for.
+    kappa_ok : bool
+        Every row's ``kappa`` column (``tan delta / L``, in both gears) lies within
+        ``curvature_tol`` of the steering curvature the yaw turns at on the steps on
+        either side of the row (:func:`~rrtdrive.verify_measures.kappa_column_error`;
+        a gear segment's first and last rows, stops, are not checked): the curvature a
+        controller feeds forward is the path's, of the right sign in reverse.
+    kappa_column_err : float
+        The largest excess, 1/m, of a row's ``kappa`` over that bracket.
+    worst_kappa_row : int or None
+        The row of that excess; ``None`` when ``kappa_ok``.
     """
 
     ok: bool
@@ -147,6 +158,9 @@ class PathCheck:
     first_bad_cusp_row: int | None = None
     min_clearance_m: float = math.inf
     clearance_ok: bool = True
+    kappa_ok: bool = True
+    kappa_column_err: float = 0.0
+    worst_kappa_row: int | None = None
 
     @property
     def failed(self) -> tuple[str, ...]:
@@ -295,7 +309,8 @@ def verify_path(
         Allowed angle between the direction of travel and the yaw: at the start
         and the goal against their poses, along the path against the rows' yaw.
     curvature_tol : float
-        Slack on κ_max for the discrete curvature of 0.25 m samples.
+        Slack on κ_max for the discrete curvature of 0.25 m samples, and on the rows'
+        ``kappa`` against the yaw's turn (``kappa_ok``).
     max_sharpness : float or None
         Bound on the steering angle's change per metre, rad/m (0.2 for the default
         planners: ``max_steer_rate`` / 2 m/s); ``None`` checks none (the paper's
@@ -346,7 +361,7 @@ def verify_path(
             False, False, False, False, False, False, math.inf, 180.0, 180.0, math.inf,
             cusps_ok=False, cusps=0, travel_ok=False, travel_heading_err_deg=180.0,
             endpoint_err_m=math.inf, endpoint_yaw_err_deg=180.0, min_clearance_m=0.0,
-            clearance_ok=False,
+            clearance_ok=False, kappa_ok=False,
         )
     xy = s[:, :2]
     gaps = np.hypot(*np.diff(xy, axis=0).T)
@@ -365,6 +380,7 @@ def verify_path(
     poses: list[np.ndarray] = []
     max_k = 0.0
     max_sharp = 0.0
+    kappa_err, kappa_row = 0.0, -1
     travel_err = 0.0
     first_dir = last_dir = math.nan
     for a, b in path.segments():
@@ -378,6 +394,9 @@ def verify_path(
         if len(seg) < 2:
             continue
         max_k = max(max_k, segment_curvature(seg[:, :2]), turn_curvature(seg))
+        err, row = kappa_column_error(seg)
+        if err > kappa_err:
+            kappa_err, kappa_row = err, a + row
         max_sharp = max(max_sharp, segment_sharpness(seg[:, :2], v.wheelbase))
         direction, moving = travel_directions(seg)
         if not len(moving):
@@ -426,9 +445,10 @@ def verify_path(
     travel_ok = travel_err <= tol
     spacing_ok = float(gaps.max()) <= max_sample_spacing + 1e-6
     sharpness_ok = max_sharpness is None or max_sharp <= max_sharpness + sharpness_tol
+    kappa_ok = kappa_err <= curvature_tol
     return PathCheck(
         ok=all((collision_free, curvature_ok, sharpness_ok, headings_ok, endpoints_ok,
-                spacing_ok, travel_ok, cusps_ok, clearance_ok)),
+                spacing_ok, travel_ok, cusps_ok, clearance_ok, kappa_ok)),
         collision_free=collision_free,
         curvature_ok=curvature_ok,
         headings_ok=headings_ok,
@@ -453,6 +473,9 @@ def verify_path(
         first_bad_cusp_row=int(cusps[np.argmax(bad_cusps)]) if not cusps_ok else None,
         min_clearance_m=least,
         clearance_ok=clearance_ok,
+        kappa_ok=kappa_ok,
+        kappa_column_err=kappa_err,
+        worst_kappa_row=None if kappa_ok else kappa_row,
     )
 
 

@@ -54,7 +54,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "planners: the car's body (shapely) at poses <= 0.1 m apart clear of every "
         "obstacle and inside the bounds, with the least clearance it keeps, curvature "
         "(from the positions and the yaw's turn) and sharpness measured, not read from "
-        "kappa, headings at both ends, exact start and goal poses, sample spacing, and per "
+        "kappa (whose column must agree with the yaw's turn, by the gear), headings at "
+        "both ends, exact start and goal poses, sample spacing, and per "
         "gear segment the direction of travel and the cusps. Exit 0 when every check "
         "passes, 1 when one fails, 2 on bad input.",
     )
@@ -222,6 +223,9 @@ def _lines(check: Any, bounds: dict[str, float | None], why: str = "") -> list[s
         (check.cusps_ok, "cusps repeat their pose", _cusp_detail(check)),
         (check.clearance_ok, "clearance to obstacles and bounds",
          f"{_metres(check.min_clearance_m, '.4f')} (min {bounds['clearance']:g}{why})"),
+        (check.kappa_ok, "kappa column agrees with the yaw's turn",
+         f"{check.kappa_column_err:.4f} 1/m off (max 0.01)"
+         + ("" if check.worst_kappa_row is None else f"; worst at row {check.worst_kappa_row}")),
     ]
     return [f"  {mark[bool(ok)]} {name:48s} {detail}".rstrip() for ok, name, detail in rows]
 

@@ -6,6 +6,7 @@ code with the planners.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -137,3 +138,62 @@ def turn_curvature(seg: np.ndarray) -> float:
     if not moving.any():
         return 0.0
     return float(np.max(2.0 * np.sin(0.5 * turn[moving]) / chord[moving]))
+
+
+def kappa_column_error(seg: np.ndarray) -> tuple[float, int]:
+    """How far the rows' ``kappa`` lies outside the curvature their yaw turns at, and where.
+
+    A gear segment's steering curvature between two rows is its yaw's turn per arc
+    length, by the gear (``gear * 2 sin(dyaw / 2) / chord``: in reverse a left lock turns
+    the nose right); that is the mean over the step, the value at its middle where the
+    curvature changes linearly. A row's ``kappa`` (``tan delta / L`` in both gears) must
+    lie between the steps' values on either side of it, or their lines through the
+    steps beyond extended to the row (a steering ramp's peak lies above both of its
+    steps' means by half a step of the ramp). The segment's first and last rows are
+    stops, where the car may steer standing: their ``kappa`` is a convention (a Dubins
+    word's last row has 0, a junction row the curvature of the piece that starts there)
+    and is not checked. The excess over that bracket is returned with its row (index
+    within ``seg``; -1 when no row is checked).
+
+    Examples
+    --------
+    >>> s = np.linspace(0.0, 2.0, 11)
+    >>> arc = np.column_stack([np.sin(s / 5) * 5, (1 - np.cos(s / 5)) * 5, s / 5,
+    ...                        np.full(11, 0.2), np.ones(11)])
+    >>> err, _ = kappa_column_error(arc)
+    >>> bool(err < 1e-9)
+    True
+    >>> arc[:, 3] *= -1.0  # the sign of a reverse segment's convention
+    >>> round(kappa_column_error(arc)[0], 3)
+    0.4
+    """
+    chord = np.hypot(*np.diff(seg[:, :2], axis=0).T)
+    moving = chord > STILL_M
+    if not moving.any():
+        return 0.0, -1
+    gear = -1.0 if seg.shape[1] > 4 and seg[0, 4] < 0 else 1.0
+    turn = wrap_angle(np.diff(seg[:, 2]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        step = np.where(moving, gear * 2.0 * np.sin(0.5 * turn) / chord, np.nan)
+        # The yaws' 6 decimals (YAW_ROUND each) move a short step's value by this much.
+        slack = np.where(moving, 2.0 * YAW_ROUND / chord, np.nan)
+        # Each step's line through the step before it (``ahead``: after it), at its end.
+        share = chord[1:] / (chord[1:] + chord[:-1])
+        back = step[1:] + (step[1:] - step[:-1]) * share
+        share = chord[:-1] / (chord[:-1] + chord[1:])
+        ahead = step[:-1] + (step[:-1] - step[1:]) * share
+    none = np.array([np.nan])
+    values = (
+        np.concatenate([none, step]),  # the step before the row
+        np.concatenate([step, none]),  # the step after it
+        np.concatenate([none, none, back]),  # the step before, extended to the row
+        np.concatenate([ahead, none, none]),  # the step after, extended back to it
+    )
+    lo, hi = functools.reduce(np.fmin, values), functools.reduce(np.fmax, values)
+    pad = np.fmax(np.concatenate([none, slack]), np.concatenate([slack, none]))
+    excess = np.fmax(lo - seg[:, 3], seg[:, 3] - hi) - pad
+    excess = np.where(np.isnan(excess), 0.0, np.maximum(excess, 0.0))[1:-1]
+    if not len(excess):
+        return 0.0, -1
+    i = int(np.argmax(excess))
+    return float(excess[i]), i + 1

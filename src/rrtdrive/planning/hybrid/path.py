@@ -147,11 +147,26 @@ def _segment_ok(
     return all(free(part) for part in parts)
 
 
-def _resample(rows: np.ndarray, spacing: float) -> np.ndarray:
-    """Rows at most ``spacing`` apart (linear in position and yaw, kappa of the row before)."""
+def _resample(rows: np.ndarray, spacing: float, gear: int = 1) -> np.ndarray:
+    """Rows at most ``spacing`` apart (linear in position and yaw).
+
+    Each row takes the curvature of the interval of ``rows`` that it starts or lies in:
+    of the two rows' kappas the one the yaw's turn between them shows (the interval
+    lies on one arc or line); the last row keeps its own. A junction row carries either
+    piece's kappa, or a word's end 0 (a word sampled, or reversed in time), and the
+    rows added after one took the arc's curvature on the line that followed
+    (``rrtdrive verify``'s kappa check, session 35).
+    """
     dense = densify(rows[:, :3], spacing, angle_column=2, rel_slack=1e-5)
+    if len(rows) < 2:
+        return np.column_stack([dense.points, rows[:1, 3]])
+    step = rows[1:, :2] - rows[:-1, :2]
+    chord = np.maximum(np.hypot(step[:, 0], step[:, 1]), 1e-12)
+    turned = gear * 2.0 * np.sin(0.5 * wrap_angle(np.diff(rows[:, 2]))) / chord
+    own, next_ = rows[:-1, 3], rows[1:, 3]
+    interval = np.where(np.abs(turned - next_) < np.abs(turned - own), next_, own)
     owner = np.searchsorted(dense.vertex_index, np.arange(len(dense.points)), side="right") - 1
-    kappa = rows[np.clip(owner, 0, len(rows) - 1), 3]
+    kappa = np.append(interval, rows[-1, 3])[np.clip(owner, 0, len(rows) - 1)]
     return np.column_stack([dense.points, kappa])
 
 
@@ -358,7 +373,7 @@ def build_path(
         if not len(rows):
             if not arc_fallback:
                 return None
-            rows = _resample(seg.rows, sample_spacing)
+            rows = _resample(seg.rows, sample_spacing, seg.gear)
             if not _segment_ok(rows, checker, clearance, kappa_max, check_spacing):
                 return None
             waypoints.append(rows[[0, -1], :2])
