@@ -465,3 +465,34 @@ def test_a_gap_narrower_than_the_car_comes_before_the_advice_to_reverse():
     assert found.kind is DiagnosisKind.NARROW_PASSAGE
     assert found.numbers["width_m"] == pytest.approx(1.6)
     assert "narrower than the car" in found.message
+
+
+@pytest.mark.parametrize("planner", ["hybrid-a-star", "improved-rrt-connect"])
+def test_a_forward_arrival_proven_impossible_says_why(planner):
+    # Random goal 75 of coverage.py --count 100 --seed 1 (rounded): facing a bay's back
+    # wall with 4.74 m behind it, more than a car length, so room_at_ends says nothing;
+    # Hybrid A*'s search from the goal proves no forward way in (no_approach), and the
+    # failure had no why line (sessions 34-35). The room is measured, the proof named.
+    from rrtdrive.planning.diagnosis.measures import best_run
+
+    m = dataclasses.replace(builtin_map("parking_lot"), goal=Pose(9.17, 21.0, 3.0894))
+    problem = PlanningProblem.from_map(m)
+    result = make_planner(planner).solve(problem, np.random.default_rng(0), Budget())
+    assert not result.success and result.diagnosis is not None, result.message
+    d = result.diagnosis
+    assert d.kind is DiagnosisKind.NEEDS_REVERSE and "try --reverse" in d.message
+    room = d.numbers["room_behind_m"]
+    assert m.vehicle.length < room == pytest.approx(best_run(problem.checker, m.goal, -1,
+                                                             m.vehicle, 30.0))
+    # The straight run back ends at the obstacle it names (shapely, independently).
+    gap, wall = d.numbers["straight_gap_m"], shapely.Polygon(m.obstacles[136].corners())
+    assert d.numbers["obstacle"] == 136 and gap < room
+
+    def body(back: float) -> shapely.Polygon:
+        g = m.goal
+        pose = (g.x - back * math.cos(g.yaw), g.y - back * math.sin(g.yaw), g.yaw)
+        return shapely.Polygon(footprint_polygon(pose, m.vehicle))
+
+    assert not body(gap - 0.05).intersects(wall) and body(gap + 0.05).intersects(wall)
+    reverse = dataclasses.replace(problem, reverse=True)
+    assert make_planner(planner).solve(reverse, np.random.default_rng(0), Budget()).success

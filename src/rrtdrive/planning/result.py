@@ -150,7 +150,8 @@ def run_query(
         return dataclasses.replace(result, setup_time_s=setup, stats=stats)
     # A failure says which constraint makes the query hard, measured after the stopwatch.
     t_diagnosis = time.perf_counter()
-    found = diagnose(problem, tree_edges=tree_edges)
+    proof = stats.get("no_approach", stats.get("hybrid_no_approach", 0.0)) > 0.0
+    found = diagnose(problem, tree_edges=tree_edges, no_approach=proof)
     stats["diagnosis_time_s"] = time.perf_counter() - t_diagnosis
     return dataclasses.replace(result, setup_time_s=setup, diagnosis=found, stats=stats)
 

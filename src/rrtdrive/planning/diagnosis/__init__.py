@@ -10,6 +10,10 @@ and measures, from the map's geometry, the first of these that holds:
    (curvatures from -kappa_max to kappa_max) with the exact body test; less than a
    car length on every arc is too little for the smallest manoeuvre. With room the
    other way the pose is reachable in reverse only; with none either way it is boxed in.
+   Forward only, a goal with more room behind it that Hybrid A*'s search from the goal
+   proved no way into (``no_approach``: every pose it can be driven into from, explored,
+   and none leads to the start) is ``needs_reverse`` too, with that room measured
+   (:func:`~.checks.no_forward_arrival`; looked for after 3 and 4).
 3. ``tight_clearance`` (for planners that search by tree edges only): the first tree
    edge along the start's (or into the goal's) heading fails the swept edge test
    although the exact body is free along it: the
@@ -41,6 +45,7 @@ from rrtdrive.collision import CollisionChecker
 from rrtdrive.planning.diagnosis.checks import (
     body_collides,
     narrow_passage,
+    no_forward_arrival,
     room_at_ends,
     tight_clearance,
     u_turn,
@@ -71,7 +76,9 @@ __all__ = [
 ]
 
 
-def diagnose(problem: PlanningProblem, *, tree_edges: bool = True) -> Diagnosis | None:
+def diagnose(
+    problem: PlanningProblem, *, tree_edges: bool = True, no_approach: bool = False
+) -> Diagnosis | None:
     """The constraint that makes ``problem`` hard or impossible, or ``None``.
 
     Parameters
@@ -84,6 +91,10 @@ def diagnose(problem: PlanningProblem, *, tree_edges: bool = True) -> Diagnosis 
         (Hybrid A*, or the default's escalation to it) their keep is not what stopped
         it, and ``tight_clearance`` is not looked for: it blamed a nose 0.5 m from a
         wall for a bay that only a turn the car cannot make leads into.
+    no_approach : bool
+        Whether a Hybrid A* search from the goal proved, forward only, that no way in
+        reaches the start (``no_approach``): with room behind the goal, that proof is
+        the finding (:func:`~.checks.no_forward_arrival`), before the u-turn's.
 
     Returns
     -------
@@ -128,6 +139,7 @@ def diagnose(problem: PlanningProblem, *, tree_edges: bool = True) -> Diagnosis 
         lambda: room_at_ends(m, checker, start, goal, reverse),
         lambda: tight_clearance(m, checker, start, goal) if tree_edges else None,
         lambda: passage,
+        lambda: no_forward_arrival(m, checker, goal) if no_approach and not reverse else None,
         lambda: None if reverse else u_turn(m, checker, start, goal),
     ):
         found = step()

@@ -41,6 +41,7 @@ __all__ = [
     "body_collides",
     "goal_behind",
     "narrow_passage",
+    "no_forward_arrival",
     "room_at_ends",
     "tight_clearance",
     "u_turn",
@@ -122,6 +123,44 @@ def room_at_ends(
         )
     return None
 
+
+
+#: How far back (metres) :func:`no_forward_arrival` measures the room behind the goal.
+ARRIVAL_ROOM_CAP = 30.0
+
+
+def no_forward_arrival(m: Map, checker: CollisionChecker, goal: Pose) -> Diagnosis:
+    """``needs_reverse``: a forward arrival that Hybrid A* proved impossible, with the room.
+
+    Called when the search from the goal, driving it backwards on the search's arcs, ran
+    out of states without reaching the start (``no_approach``) while the room behind
+    the goal is a car length or more (else :func:`room_at_ends` speaks): the pocket
+    behind the goal is measured (its longest steady-steering run back, up to
+    :data:`ARRIVAL_ROOM_CAP`, and what stops the straight one) and the proof named.
+    """
+    v = m.vehicle
+    run = best_run(checker, goal, -1, v, ARRIVAL_ROOM_CAP)
+    straight = free_run(checker, goal, -1, 0.0, ARRIVAL_ROOM_CAP)
+    numbers = {"room_behind_m": run, "straight_gap_m": straight}
+    if straight < ARRIVAL_ROOM_CAP:
+        probe = arc_poses(goal, -1, 0.0, straight + 2 * RUN_STEP, RUN_STEP)[-1]
+        numbers["obstacle"] = blocker = first_hit(checker, footprint_polygon(tuple(probe), v))
+        behind = f" ({obstacle_name(blocker)} {straight:.2f} m behind its rear)"
+    else:
+        behind = ""
+    room = (
+        f"at most {run:.2f} m on any steady steering{behind}"
+        if run < ARRIVAL_ROOM_CAP
+        else f"{ARRIVAL_ROOM_CAP:g} m or more on some steady steering"
+    )
+    return Diagnosis(
+        DiagnosisKind.NEEDS_REVERSE,
+        f"a forward arrival at the goal comes from behind it, where the car has {room}, "
+        "and the search drove every way in backwards from the goal without reaching the "
+        "start: driving forward the car cannot get into position; it can only be reached "
+        "in reverse (try --reverse)",
+        numbers,
+    )
 
 
 def tight_clearance(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagnosis | None:

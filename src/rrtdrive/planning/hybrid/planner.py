@@ -45,6 +45,8 @@ def answer_stats(answer: HybridAnswer, wheelbase: float) -> dict[str, float]:
         "persist_search": float(answer.stage == "persist"),
         "turn_moves": float(o.turn_moves),
         "body_clearance_m": float(answer.clearance),
+        # The search from the goal proved that no way in reaches the start (diagnosis).
+        "no_approach": float(answer.path is None and o.reason == "no_approach"),
     }
     if answer.path is not None:
         stats["gear_segments"] = float(answer.path.segments)
