@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
 from typing import Any
@@ -21,7 +22,7 @@ from rrtdrive.controllers import CONTROLLERS, SpeedConfig, TrackingController, m
 from rrtdrive.envs.action import CommandLimits
 from rrtdrive.envs.reward import RewardWeights
 from rrtdrive.maps import Map
-from rrtdrive.planning import PLANNERS
+from rrtdrive.planning import PLANNERS, forward_only_note, reverses
 from rrtdrive.sim.limits import MAX_REVERSE_SPEED, MAX_SPEED
 from rrtdrive.sim.loop import require_episode_time
 from rrtdrive.sim.scenes import SimConfig
@@ -36,7 +37,7 @@ from rrtdrive.sim.tasks import (
     scenario_map,
 )
 from rrtdrive.sim.tasks import Task as Scenario
-from rrtdrive.types import Budget, InputError, brief_repr, require_int
+from rrtdrive.types import Budget, InputError, InputWarning, brief_repr, require_int
 
 __all__ = ["DriveEnvConfig"]
 
@@ -253,6 +254,11 @@ class DriveEnvConfig:
 
         # Validate the options once, on a scenario and controller of seed 0.
         probe = self.scenario_for(0)
+        if probe.reverse and not reverses(self.planner):
+            # Its episodes plan forward and crash where the scenario needs a gear change.
+            asked = f"the {self.scenario_name} scenario's gear changes take"
+            warnings.warn(forward_only_note(self.planner, asked=asked), InputWarning,
+                          stacklevel=3)  # fmt: skip
         speed = self.speed_for(probe)
         probe_ctrl = self.controller_for(probe, speed)
         put("limits", CommandLimits(speed.a_min, speed.a_max, probe_ctrl.steer_limit))

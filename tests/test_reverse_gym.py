@@ -117,3 +117,18 @@ def test_a_car_rolling_back_at_the_start_stays_on_its_segment(env_id):
     assert env.unwrapped._ego.speed < 0.0  # it did roll back
     assert obs[GEAR] == 1.0 and obs[CUSP] == pytest.approx(cusp, abs=0.05)
     env.close()
+
+
+def test_a_reversing_scenario_with_a_forward_planner_warns():
+    # UTurn-v0 plans with gear changes; a forward-only planner's episodes crashed with no
+    # word of why (a user audit, session 35): gym.make warns, naming the planners that do.
+    import warnings
+
+    from rrtdrive.types import InputWarning
+
+    with pytest.warns(InputWarning, match="rrt plans forward only; the u-turn scenario's"):
+        gym.make("rrtdrive/UTurn-v0", planner="rrt").close()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", InputWarning)
+        gym.make("rrtdrive/UTurn-v0").close()  # the default reverses
+        gym.make("rrtdrive/Parking-v0", planner="rrt").close()  # parking drives forward
