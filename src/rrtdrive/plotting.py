@@ -15,6 +15,7 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib import patheffects  # noqa: E402
 from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
@@ -133,9 +134,12 @@ def draw_gear_path(
             kind, colour, ls = (f"{label}, forward" if reverses else label), forward, "-"
         else:
             kind, colour, ls = f"{label}, reverse (dashed)", reverse, "--"
+        # Above the trees and waypoints, with a white edge: short reverse legs inside a
+        # tree's fan were hidden under it (a user audit, session 35).
         ax.plot(
             xy[:, 0], xy[:, 1], color=colour, lw=lw, ls=ls,
-            label=None if kind in seen else kind,
+            label=None if kind in seen else kind, zorder=4,
+            path_effects=[patheffects.withStroke(linewidth=lw + 2.0, foreground="white")],
         )
         seen.add(kind)
     cusps = path.cusps
