@@ -125,3 +125,25 @@ def test_sliver_arcs_are_not_ramped(goal_yaw):
     assert float(np.abs(result.path.samples[:, 3]).max()) < 1e-6
     check = verify_path(_overtake_road(goal_yaw), result.path, max_sharpness=0.2)
     assert check.ok, check.failed
+
+
+def test_a_fit_the_sliver_merge_breaks_is_tried_on_the_pieces_as_they_are():
+    # A 0.5 m LSL shot to a goal 3e-4 rad off and 1e-6 m aside: its first arc (8.8e-6 m) is
+    # a sliver; merged, the fit of [line, 1.8 mm arc] did not close, and the word that the
+    # code before session 35 fitted was lost (a regression audit: 26 of 9 079 such words).
+    import math
+
+    from rrtdrive.planning.hybrid.pieces import SLIVER_M, intervals, runs
+    from rrtdrive.planning.hybrid.ramps import ramped_segment
+    from rrtdrive.planning.reeds_shepp import reeds_shepp_paths
+    from rrtdrive.types import Pose
+
+    start = Pose(1.0, 2.0, -0.07257564666280425)
+    goal = Pose(1.498683844281137, 1.9637450216661678, -0.07227564666280406)
+    word = next(w for w in reeds_shepp_paths(start, goal, 6.0) if w.word == "LSL")
+    rows = word.sample(0.25)[:, :4]
+    assert runs(*intervals(rows, 1), 2.51)[0].min() < SLIVER_M
+    out = ramped_segment(rows, 1, 0.18, 2.51, math.atan(2.51 / 6.0), spacing=0.2)
+    assert out is not None
+    np.testing.assert_allclose(out[[0, -1], :3], rows[[0, -1], :3], rtol=0, atol=1e-9)
+    assert float(np.abs(out[:, 3]).max()) <= 1.0 / 6.0 + 1e-12

@@ -157,8 +157,8 @@ def no_forward_arrival(m: Map, checker: CollisionChecker, goal: Pose) -> Diagnos
         DiagnosisKind.NEEDS_REVERSE,
         f"a forward arrival at the goal comes from behind it, where the car has {room}, "
         "and the search drove every way in backwards from the goal without reaching the "
-        "start: driving forward the car cannot get into position; it can only be reached "
-        "in reverse (try --reverse)",
+        "start (a proof at its resolution): it can only be reached in reverse (try "
+        "--reverse)",
         numbers,
     )
 
