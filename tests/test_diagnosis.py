@@ -496,3 +496,33 @@ def test_a_forward_arrival_proven_impossible_says_why(planner):
     assert not body(gap - 0.05).intersects(wall) and body(gap + 0.05).intersects(wall)
     reverse = dataclasses.replace(problem, reverse=True)
     assert make_planner(planner).solve(reverse, np.random.default_rng(0), Budget()).success
+
+
+@pytest.mark.parametrize("planner", ["hybrid-a-star", "improved-rrt-connect"])
+def test_a_forward_departure_proven_to_lead_nowhere_says_why(planner):
+    # Random start 3 of coverage.py --count 100 --seed 1 (rounded): nose 2 m from a car,
+    # 5.33 m ahead on the best steady steering (more than a car length: room_at_ends says
+    # nothing); Hybrid A*'s search from the start runs out of states (a proof), and the
+    # failure had no why line (session 35). The pocket is measured, the proof named.
+    from rrtdrive.planning.diagnosis.measures import best_run
+
+    m = dataclasses.replace(builtin_map("parking_lot"), start=Pose(32.97, 78.84, -1.2366))
+    problem = PlanningProblem.from_map(m)
+    result = make_planner(planner).solve(problem, np.random.default_rng(0), Budget())
+    assert not result.success and result.diagnosis is not None, result.message
+    d = result.diagnosis
+    assert d.kind is DiagnosisKind.NEEDS_REVERSE and "left in reverse (try --reverse)" in d.message
+    room = d.numbers["room_ahead_m"]
+    assert m.vehicle.length < room == pytest.approx(best_run(problem.checker, m.start, 1,
+                                                             m.vehicle, 10.0))
+    gap, wall = d.numbers["straight_gap_m"], shapely.Polygon(m.obstacles[120].corners())
+    assert d.numbers["obstacle"] == 120 and gap < room
+
+    def body(ahead: float) -> shapely.Polygon:
+        s = m.start
+        pose = (s.x + ahead * math.cos(s.yaw), s.y + ahead * math.sin(s.yaw), s.yaw)
+        return shapely.Polygon(footprint_polygon(pose, m.vehicle))
+
+    assert not body(gap - 0.05).intersects(wall) and body(gap + 0.05).intersects(wall)
+    reverse = dataclasses.replace(problem, reverse=True)
+    assert make_planner(planner).solve(reverse, np.random.default_rng(0), Budget()).success

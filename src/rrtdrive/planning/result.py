@@ -150,8 +150,13 @@ def run_query(
         return dataclasses.replace(result, setup_time_s=setup, stats=stats)
     # A failure says which constraint makes the query hard, measured after the stopwatch.
     t_diagnosis = time.perf_counter()
-    proof = stats.get("no_approach", stats.get("hybrid_no_approach", 0.0)) > 0.0
-    found = diagnose(problem, tree_edges=tree_edges, no_approach=proof)
+    def proved(name: str) -> bool:  # a Hybrid A* stat, or the default's escalation's
+        return stats.get(name, stats.get(f"hybrid_{name}", 0.0)) > 0.0
+
+    found = diagnose(
+        problem, tree_edges=tree_edges, no_approach=proved("no_approach"),
+        start_exhausted=proved("start_exhausted"),
+    )  # fmt: skip
     stats["diagnosis_time_s"] = time.perf_counter() - t_diagnosis
     return dataclasses.replace(result, setup_time_s=setup, diagnosis=found, stats=stats)
 

@@ -13,7 +13,9 @@ and measures, from the map's geometry, the first of these that holds:
    Forward only, a goal with more room behind it that Hybrid A*'s search from the goal
    proved no way into (``no_approach``: every pose it can be driven into from, explored,
    and none leads to the start) is ``needs_reverse`` too, with that room measured
-   (:func:`~.checks.no_forward_arrival`; looked for after 3 and 4).
+   (:func:`~.checks.no_forward_arrival`; looked for after 3 and 4); so is a start whose
+   forward search ran out of states (a proof) with a pocket ahead of it, less than 10 m on
+   every steady steering (:func:`~.checks.no_forward_departure`).
 3. ``tight_clearance`` (for planners that search by tree edges only): the first tree
    edge along the start's (or into the goal's) heading fails the swept edge test
    although the exact body is free along it: the
@@ -46,6 +48,7 @@ from rrtdrive.planning.diagnosis.checks import (
     body_collides,
     narrow_passage,
     no_forward_arrival,
+    no_forward_departure,
     room_at_ends,
     tight_clearance,
     u_turn,
@@ -77,7 +80,11 @@ __all__ = [
 
 
 def diagnose(
-    problem: PlanningProblem, *, tree_edges: bool = True, no_approach: bool = False
+    problem: PlanningProblem,
+    *,
+    tree_edges: bool = True,
+    no_approach: bool = False,
+    start_exhausted: bool = False,
 ) -> Diagnosis | None:
     """The constraint that makes ``problem`` hard or impossible, or ``None``.
 
@@ -95,6 +102,10 @@ def diagnose(
         Whether a Hybrid A* search from the goal proved, forward only, that no way in
         reaches the start (``no_approach``): with room behind the goal, that proof is
         the finding (:func:`~.checks.no_forward_arrival`), before the u-turn's.
+    start_exhausted : bool
+        Likewise from the start: every forward way on explored, none reached the goal;
+        with a pocket ahead of the start (less than :data:`~.checks.POCKET_M`), the
+        finding (:func:`~.checks.no_forward_departure`).
 
     Returns
     -------
@@ -140,6 +151,9 @@ def diagnose(
         lambda: tight_clearance(m, checker, start, goal) if tree_edges else None,
         lambda: passage,
         lambda: no_forward_arrival(m, checker, goal) if no_approach and not reverse else None,
+        lambda: no_forward_departure(m, checker, start)
+        if start_exhausted and not reverse
+        else None,
         lambda: None if reverse else u_turn(m, checker, start, goal),
     ):
         found = step()

@@ -42,6 +42,7 @@ __all__ = [
     "goal_behind",
     "narrow_passage",
     "no_forward_arrival",
+    "no_forward_departure",
     "room_at_ends",
     "tight_clearance",
     "u_turn",
@@ -159,6 +160,41 @@ def no_forward_arrival(m: Map, checker: CollisionChecker, goal: Pose) -> Diagnos
         "and the search drove every way in backwards from the goal without reaching the "
         "start (a proof at its resolution): it can only be reached in reverse (try "
         "--reverse)",
+        numbers,
+    )
+
+
+#: A start whose longest steady-steering run ahead is shorter than this (metres) sits in a
+#: pocket: :func:`no_forward_departure` names it. With more room ahead the proof is about
+#: the whole region the car can drive forward in, which the room ahead does not measure.
+POCKET_M = 10.0
+
+
+def no_forward_departure(m: Map, checker: CollisionChecker, start: Pose) -> Diagnosis | None:
+    """``needs_reverse``: a forward drive from the start that Hybrid A* proved leads nowhere.
+
+    Called when the search from the start, forward only, ran out of states without
+    reaching the goal (``exhausted``) while the room ahead of the start is a car length
+    or more (else :func:`room_at_ends` speaks). Only a pocket (less than
+    :data:`POCKET_M` ahead on every steady steering) is named; ``None`` otherwise.
+    """
+    v = m.vehicle
+    run = best_run(checker, start, 1, v, POCKET_M)
+    if run >= POCKET_M:
+        return None
+    straight = free_run(checker, start, 1, 0.0, POCKET_M)
+    numbers = {"room_ahead_m": run, "straight_gap_m": straight}
+    ahead = ""
+    if straight < POCKET_M:
+        probe = arc_poses(start, 1, 0.0, straight + 2 * RUN_STEP, RUN_STEP)[-1]
+        numbers["obstacle"] = blocker = first_hit(checker, footprint_polygon(tuple(probe), v))
+        ahead = f" ({obstacle_name(blocker)} {straight:.2f} m ahead of its nose)"
+    return Diagnosis(
+        DiagnosisKind.NEEDS_REVERSE,
+        f"driving forward, the start leads into a pocket: the car has at most {run:.2f} m "
+        f"ahead of it on any steady steering{ahead}, and the search drove every way on "
+        "forward from the start without reaching the goal (a proof at its resolution): it "
+        "can only be left in reverse (try --reverse)",
         numbers,
     )
 

@@ -45,8 +45,10 @@ def answer_stats(answer: HybridAnswer, wheelbase: float) -> dict[str, float]:
         "persist_search": float(answer.stage == "persist"),
         "turn_moves": float(o.turn_moves),
         "body_clearance_m": float(answer.clearance),
-        # The search from the goal proved that no way in reaches the start (diagnosis).
-        "no_approach": float(answer.path is None and o.reason == "no_approach"),
+        # Which side's search proved the query out of reach, for the diagnosis: from the
+        # goal, no way in reaches the start; from the start, no way on reaches the goal.
+        "no_approach": float(answer.path is None and is_proof(o) and o.reason == "no_approach"),
+        "start_exhausted": float(answer.path is None and is_proof(o) and o.reason == "exhausted"),
     }
     if answer.path is not None:
         stats["gear_segments"] = float(answer.path.segments)
