@@ -467,6 +467,13 @@ def test_a_gap_narrower_than_the_car_comes_before_the_advice_to_reverse():
     assert "narrower than the car" in found.message
 
 
+def _body_along(pose: Pose, distance: float, vehicle: VehicleParams) -> shapely.Polygon:
+    """The body moved ``distance`` metres along ``pose``'s heading (negative: back)."""
+    moved = (pose.x + distance * math.cos(pose.yaw), pose.y + distance * math.sin(pose.yaw),
+             pose.yaw)  # fmt: skip
+    return shapely.Polygon(footprint_polygon(moved, vehicle))
+
+
 @pytest.mark.parametrize("planner", ["hybrid-a-star", "improved-rrt-connect"])
 def test_a_forward_arrival_proven_impossible_says_why(planner):
     # Random goal 75 of coverage.py --count 100 --seed 1 (rounded): facing a bay's back
@@ -489,9 +496,7 @@ def test_a_forward_arrival_proven_impossible_says_why(planner):
     assert d.numbers["obstacle"] == 136 and gap < room
 
     def body(back: float) -> shapely.Polygon:
-        g = m.goal
-        pose = (g.x - back * math.cos(g.yaw), g.y - back * math.sin(g.yaw), g.yaw)
-        return shapely.Polygon(footprint_polygon(pose, m.vehicle))
+        return _body_along(m.goal, -back, m.vehicle)
 
     assert not body(gap - 0.05).intersects(wall) and body(gap + 0.05).intersects(wall)
     reverse = dataclasses.replace(problem, reverse=True)
@@ -519,9 +524,7 @@ def test_a_forward_departure_proven_to_lead_nowhere_says_why(planner):
     assert d.numbers["obstacle"] == 120 and gap < room
 
     def body(ahead: float) -> shapely.Polygon:
-        s = m.start
-        pose = (s.x + ahead * math.cos(s.yaw), s.y + ahead * math.sin(s.yaw), s.yaw)
-        return shapely.Polygon(footprint_polygon(pose, m.vehicle))
+        return _body_along(m.start, ahead, m.vehicle)
 
     assert not body(gap - 0.05).intersects(wall) and body(gap + 0.05).intersects(wall)
     reverse = dataclasses.replace(problem, reverse=True)

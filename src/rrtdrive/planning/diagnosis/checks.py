@@ -30,7 +30,7 @@ from rrtdrive.planning.diagnosis.measures import (
     turning_circle,
     u_turn_width,
 )
-from rrtdrive.types import Pose
+from rrtdrive.types import Pose, VehicleParams
 from rrtdrive.vehicle import footprint_polygon
 
 __all__ = [
@@ -72,6 +72,21 @@ def body_collides(m: Map, checker: CollisionChecker, pose: Pose, label: str) -> 
     )
 
 
+def _straight_stop(
+    checker: CollisionChecker, pose: Pose, direction: int, vehicle: VehicleParams, limit: float
+) -> tuple[float, int | None]:
+    """The free straight run from ``pose`` (up to ``limit``) and what ends it.
+
+    The obstacle index (-1: the map's edge) that the body hits just past the run, or
+    ``None`` when the run reaches ``limit``.
+    """
+    straight = free_run(checker, pose, direction, 0.0, limit)
+    if straight >= limit:
+        return straight, None
+    probe = arc_poses(pose, direction, 0.0, straight + 2 * RUN_STEP, RUN_STEP)[-1]
+    return straight, first_hit(checker, footprint_polygon(tuple(probe), vehicle))
+
+
 def room_at_ends(
     m: Map, checker: CollisionChecker, start: Pose, goal: Pose, reverse: bool
 ) -> Diagnosis | None:
@@ -103,9 +118,8 @@ def room_at_ends(
             )
         if reverse:
             continue  # reversing is allowed and has room: not the constraint
-        straight = free_run(checker, pose, forward, 0.0, need)
-        probe = arc_poses(pose, forward, 0.0, straight + 2 * RUN_STEP, RUN_STEP)[-1]
-        blocker = first_hit(checker, footprint_polygon(tuple(probe), v))
+        straight, blocker = _straight_stop(checker, pose, forward, v, need)
+        assert blocker is not None  # the straight run is one of the runs, all under need
         numbers.update(straight_gap_m=straight, obstacle=blocker)
         if forward > 0:
             where = f"{straight:.2f} m ahead of its nose"
@@ -141,14 +155,12 @@ def no_forward_arrival(m: Map, checker: CollisionChecker, goal: Pose) -> Diagnos
     """
     v = m.vehicle
     run = best_run(checker, goal, -1, v, ARRIVAL_ROOM_CAP)
-    straight = free_run(checker, goal, -1, 0.0, ARRIVAL_ROOM_CAP)
+    straight, blocker = _straight_stop(checker, goal, -1, v, ARRIVAL_ROOM_CAP)
     numbers = {"room_behind_m": run, "straight_gap_m": straight}
-    if straight < ARRIVAL_ROOM_CAP:
-        probe = arc_poses(goal, -1, 0.0, straight + 2 * RUN_STEP, RUN_STEP)[-1]
-        numbers["obstacle"] = blocker = first_hit(checker, footprint_polygon(tuple(probe), v))
+    behind = ""
+    if blocker is not None:
+        numbers["obstacle"] = blocker
         behind = f" ({obstacle_name(blocker)} {straight:.2f} m behind its rear)"
-    else:
-        behind = ""
     room = (
         f"at most {run:.2f} m on any steady steering{behind}"
         if run < ARRIVAL_ROOM_CAP
@@ -182,12 +194,11 @@ def no_forward_departure(m: Map, checker: CollisionChecker, start: Pose) -> Diag
     run = best_run(checker, start, 1, v, POCKET_M)
     if run >= POCKET_M:
         return None
-    straight = free_run(checker, start, 1, 0.0, POCKET_M)
+    straight, blocker = _straight_stop(checker, start, 1, v, POCKET_M)
     numbers = {"room_ahead_m": run, "straight_gap_m": straight}
     ahead = ""
-    if straight < POCKET_M:
-        probe = arc_poses(start, 1, 0.0, straight + 2 * RUN_STEP, RUN_STEP)[-1]
-        numbers["obstacle"] = blocker = first_hit(checker, footprint_polygon(tuple(probe), v))
+    if blocker is not None:
+        numbers["obstacle"] = blocker
         ahead = f" ({obstacle_name(blocker)} {straight:.2f} m ahead of its nose)"
     return Diagnosis(
         DiagnosisKind.NEEDS_REVERSE,

@@ -33,6 +33,7 @@ NAME = "hybrid-a-star"
 def answer_stats(answer: HybridAnswer, wheelbase: float) -> dict[str, float]:
     """The search counters of an answer, for :attr:`PlanResult.stats`."""
     o = answer.outcome
+    proof = answer.path is None and is_proof(o)
     stats = {
         "expansions": float(o.expansions),
         "hybrid_nodes": float(o.nodes),
@@ -47,8 +48,8 @@ def answer_stats(answer: HybridAnswer, wheelbase: float) -> dict[str, float]:
         "body_clearance_m": float(answer.clearance),
         # Which side's search proved the query out of reach, for the diagnosis: from the
         # goal, no way in reaches the start; from the start, no way on reaches the goal.
-        "no_approach": float(answer.path is None and is_proof(o) and o.reason == "no_approach"),
-        "start_exhausted": float(answer.path is None and is_proof(o) and o.reason == "exhausted"),
+        "no_approach": float(proof and o.reason == "no_approach"),
+        "start_exhausted": float(proof and o.reason == "exhausted"),
     }
     if answer.path is not None:
         stats["gear_segments"] = float(answer.path.segments)

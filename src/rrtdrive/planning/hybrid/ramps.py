@@ -433,12 +433,14 @@ def _ramped_once(
     ds, kappa = _intervals(rows, gear)
     if not len(ds):
         return None
+    fit = functools.partial(
+        _fitted_pieces, rows, gear, rate, wheelbase, delta_max, spacing, angle_weight
+    )
     pieces = _pieces(ds, kappa, wheelbase)
     merged = _without_slivers(*pieces)
-    out = _fitted_pieces(rows, gear, rate, wheelbase, delta_max, spacing, angle_weight, *merged)
+    out = fit(*merged)
     if out is None and merged[0] is not pieces[0]:
-        out = _fitted_pieces(rows, gear, rate, wheelbase, delta_max, spacing, angle_weight,
-                             *pieces)  # fmt: skip
+        out = fit(*pieces)
     return out
 
 
