@@ -474,58 +474,43 @@ def _body_along(pose: Pose, distance: float, vehicle: VehicleParams) -> shapely.
     return shapely.Polygon(footprint_polygon(moved, vehicle))
 
 
-@pytest.mark.parametrize("planner", ["hybrid-a-star", "improved-rrt-connect"])
-def test_a_forward_arrival_proven_impossible_says_why(planner):
+#: The forward failures Hybrid A* proves from one end, with more than a car length of room
+#: there (so room_at_ends says nothing): (end, pose, direction of the run measured, its
+#: cap, the room's number, the obstacle that stops the straight run, the message's end).
+PROVEN_ENDS = [
     # Random goal 75 of coverage.py --count 100 --seed 1 (rounded): facing a bay's back
-    # wall with 4.74 m behind it, more than a car length, so room_at_ends says nothing;
-    # Hybrid A*'s search from the goal proves no forward way in (no_approach), and the
-    # failure had no why line (sessions 34-35). The room is measured, the proof named.
-    from rrtdrive.planning.diagnosis.measures import best_run
-
-    m = dataclasses.replace(builtin_map("parking_lot"), goal=Pose(9.17, 21.0, 3.0894))
-    problem = PlanningProblem.from_map(m)
-    result = make_planner(planner).solve(problem, np.random.default_rng(0), Budget())
-    assert not result.success and result.diagnosis is not None, result.message
-    d = result.diagnosis
-    assert d.kind is DiagnosisKind.NEEDS_REVERSE and "try --reverse" in d.message
-    room = d.numbers["room_behind_m"]
-    assert m.vehicle.length < room == pytest.approx(best_run(problem.checker, m.goal, -1,
-                                                             m.vehicle, 30.0))
-    # The straight run back ends at the obstacle it names (shapely, independently).
-    gap, wall = d.numbers["straight_gap_m"], shapely.Polygon(m.obstacles[136].corners())
-    assert d.numbers["obstacle"] == 136 and gap < room
-
-    def body(back: float) -> shapely.Polygon:
-        return _body_along(m.goal, -back, m.vehicle)
-
-    assert not body(gap - 0.05).intersects(wall) and body(gap + 0.05).intersects(wall)
-    reverse = dataclasses.replace(problem, reverse=True)
-    assert make_planner(planner).solve(reverse, np.random.default_rng(0), Budget()).success
+    # wall with 4.74 m behind it; the search from the goal proves no forward way in.
+    ("goal", Pose(9.17, 21.0, 3.0894), -1, 30.0, "room_behind_m", 136, "try --reverse"),
+    # Random start 3 (rounded): nose 2 m from a car, 5.33 m ahead on the best steady
+    # steering; the search from the start runs out of states.
+    ("start", Pose(32.97, 78.84, -1.2366), 1, 10.0, "room_ahead_m", 120,
+     "left in reverse (try --reverse)"),
+]  # fmt: skip
 
 
 @pytest.mark.parametrize("planner", ["hybrid-a-star", "improved-rrt-connect"])
-def test_a_forward_departure_proven_to_lead_nowhere_says_why(planner):
-    # Random start 3 of coverage.py --count 100 --seed 1 (rounded): nose 2 m from a car,
-    # 5.33 m ahead on the best steady steering (more than a car length: room_at_ends says
-    # nothing); Hybrid A*'s search from the start runs out of states (a proof), and the
-    # failure had no why line (session 35). The pocket is measured, the proof named.
+@pytest.mark.parametrize(("end", "pose", "direction", "cap", "key", "obstacle", "phrase"),
+                         PROVEN_ENDS)  # fmt: skip
+def test_a_forward_failure_proven_at_one_end_says_why(
+    planner, end, pose, direction, cap, key, obstacle, phrase
+):
+    # These failures had no why line (sessions 34-35). The room at that end is measured
+    # and the proof named; the straight run ends at the obstacle it names (shapely).
     from rrtdrive.planning.diagnosis.measures import best_run
 
-    m = dataclasses.replace(builtin_map("parking_lot"), start=Pose(32.97, 78.84, -1.2366))
+    m = dataclasses.replace(builtin_map("parking_lot"), **{end: pose})
     problem = PlanningProblem.from_map(m)
     result = make_planner(planner).solve(problem, np.random.default_rng(0), Budget())
     assert not result.success and result.diagnosis is not None, result.message
     d = result.diagnosis
-    assert d.kind is DiagnosisKind.NEEDS_REVERSE and "left in reverse (try --reverse)" in d.message
-    room = d.numbers["room_ahead_m"]
-    assert m.vehicle.length < room == pytest.approx(best_run(problem.checker, m.start, 1,
-                                                             m.vehicle, 10.0))
-    gap, wall = d.numbers["straight_gap_m"], shapely.Polygon(m.obstacles[120].corners())
-    assert d.numbers["obstacle"] == 120 and gap < room
-
-    def body(ahead: float) -> shapely.Polygon:
-        return _body_along(m.start, ahead, m.vehicle)
-
-    assert not body(gap - 0.05).intersects(wall) and body(gap + 0.05).intersects(wall)
+    assert d.kind is DiagnosisKind.NEEDS_REVERSE and phrase in d.message
+    room = d.numbers[key]
+    assert m.vehicle.length < room == pytest.approx(best_run(problem.checker, pose, direction,
+                                                             m.vehicle, cap))
+    gap, wall = d.numbers["straight_gap_m"], shapely.Polygon(m.obstacles[obstacle].corners())
+    assert d.numbers["obstacle"] == obstacle and gap < room
+    before = _body_along(pose, direction * (gap - 0.05), m.vehicle)
+    after = _body_along(pose, direction * (gap + 0.05), m.vehicle)
+    assert not before.intersects(wall) and after.intersects(wall)
     reverse = dataclasses.replace(problem, reverse=True)
     assert make_planner(planner).solve(reverse, np.random.default_rng(0), Budget()).success
