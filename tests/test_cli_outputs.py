@@ -62,8 +62,11 @@ def test_names_stdout_tells_the_pipe_of_stdout(tmp_path):
 
 @pytest.mark.skipif(not hasattr(signal, "SIGTERM") or os.name != "posix", reason="POSIX")
 def test_sigterm_during_a_video_leaves_no_file(tmp_path):
-    proc = _rrtdrive("simulate", "parking", "--video", "p.mp4", "--json", "p.json",
-                     cwd=tmp_path)
+    # At 60 Hz: 2 380 frames, some 15 s of writing after the first progress line (at 20 Hz
+    # about 5 s, which a loaded CI machine once spent before the signal went: the video
+    # was finished, exit 0; session 35).
+    proc = _rrtdrive("simulate", "parking", "--frequency", "60", "--video", "p.mp4",
+                     "--json", "p.json", cwd=tmp_path)
     # Wait until frames are being written (the progress lines on stderr), then stop it.
     deadline = time.monotonic() + 120
     for line in proc.stderr:
