@@ -4,7 +4,8 @@ Straight ahead, the default planner drives the straight line however short it is
 goal under 0.111 m ahead used to get a 61 m Dubins loop: the direct connection's
 heading legs were skipped below 0.05 m). With reverse allowed, a forward Dubins path
 much longer than the Reeds-Shepp distance is kept only when the reversing search finds
-nothing shorter (``ImprovedConfig.reverse_detour_ratio``).
+nothing shorter (``ImprovedConfig.reverse_detour_ratio``); a forward tree path too when
+``reverse_detour_tree`` is on.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import rrtdrive.planning.improved.planner as improved_planner
-from rrtdrive.maps import Map
+from rrtdrive.maps import Map, builtin_map
 from rrtdrive.planning import PlanningProblem
 from rrtdrive.planning.hybrid.escalation import stage_of
 from rrtdrive.planning.improved import ImprovedConfig, ImprovedRRTConnect
@@ -79,6 +80,7 @@ def test_with_reverse_a_close_goal_is_not_a_forward_loop(goal: Pose) -> None:
     assert stage_of(res) == "hybrid-a-star"
     assert res.path.length < 12.0 and len(res.path.cusps) >= 1
     assert res.stats["dubins_detour_ratio"] > ImprovedConfig().reverse_detour_ratio
+    assert "found only a forward detour (direct Dubins path, " in res.message, res.message
     assert verify_path(m, res.path, max_sharpness=0.2).ok
     # The ratio switched off: the forward loop as before.
     loop = _solve(m, reverse=True, reverse_detour_ratio=math.inf)
@@ -89,7 +91,7 @@ def test_the_detour_is_kept_when_the_reversing_search_finds_nothing(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     # The search answers with the failure it escalated from, as when it finds nothing.
-    monkeypatch.setattr(improved_planner, "escalate", lambda failed, *args: failed)
+    monkeypatch.setattr(improved_planner, "escalate", lambda failed, *args, **kwargs: failed)
     m = _open_map(Pose(50.0, 50.1, math.pi / 2))
     res = _solve(m, reverse=True)
     assert res.status is PlanStatus.SOLVED and stage_of(res) == "dubins-fallback"
@@ -105,8 +107,8 @@ def test_a_detour_kept_over_a_longer_escalation_is_the_fallback_s(
     # clearance the detour's check kept.
     real = improved_planner.escalate
 
-    def longer(failed, *args):
-        out = real(failed, *args)
+    def longer(failed, *args, **kwargs):
+        out = real(failed, *args, **kwargs)
         rows = np.column_stack([np.linspace(0, 500, 2001), np.zeros((2001, 3)), np.ones(2001)])
         return dataclasses.replace(out, path=Path(rows, rows[[0, -1], :2]))
 
@@ -122,3 +124,51 @@ def test_a_detour_kept_over_a_longer_escalation_is_the_fallback_s(
 def test_a_bad_detour_ratio_is_named(value: float) -> None:
     with pytest.raises(InputError, match=r"planner\.reverse_detour_ratio"):
         ImprovedConfig(reverse_detour_ratio=value)
+
+
+def _parking_lot_goal_93() -> Map:
+    # Random goal 93 of experiments/random_goals.py (parking_lot, seed 1): the paper stage's
+    # tree path loops 186 m round the lot; with one cusp the goal is 76 m away.
+    m = builtin_map("parking_lot")
+    goal = Pose(53.201107188452056, 36.30433181948137, 2.404196106990101)
+    return dataclasses.replace(m, goal=goal)
+
+
+def test_with_reverse_a_tree_path_detour_gives_way_to_a_shorter_reversing_path() -> None:
+    m = _parking_lot_goal_93()
+    kept = _solve(m, reverse=True)  # by default the paper stage's answer is kept
+    assert stage_of(kept) == "improved-rrt-connect" and len(kept.path.cusps) == 0
+    res = _solve(m, reverse=True, reverse_detour_tree=True)
+    assert res.success and stage_of(res) == "hybrid-a-star", res.message
+    assert len(res.path.cusps) >= 1
+    assert res.path.length < kept.path.length / ImprovedConfig().reverse_detour_ratio
+    assert res.stats["tree_detour_ratio"] > ImprovedConfig().reverse_detour_ratio
+    assert f"found only a forward detour (tree path, {kept.path.length:.1f} m, " in res.message
+    assert verify_path(m, res.path, max_sharpness=0.2).ok
+    # Forward only the tree path is the answer, as before.
+    forward = _solve(m, reverse_detour_tree=True)
+    assert stage_of(forward) == "improved-rrt-connect"
+    assert forward.path.length == pytest.approx(kept.path.length)
+
+
+def test_a_tree_path_detour_is_kept_over_a_longer_escalation(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    real = improved_planner.escalate
+
+    def longer(failed, *args, **kwargs):
+        out = real(failed, *args, **kwargs)
+        rows = np.column_stack([np.linspace(0, 500, 2001), np.zeros((2001, 3)), np.ones(2001)])
+        return dataclasses.replace(out, path=Path(rows, rows[[0, -1], :2]))
+
+    monkeypatch.setattr(improved_planner, "escalate", longer)
+    m = _parking_lot_goal_93()
+    res = _solve(m, reverse=True, reverse_detour_tree=True)
+    assert res.success and "found a longer path (500.0 m)" in res.message, res.message
+    assert stage_of(res) == "improved-rrt-connect" and len(res.path.cusps) == 0
+    assert verify_path(m, res.path, max_sharpness=0.2).ok
+
+
+def test_a_bad_tree_detour_switch_is_named() -> None:
+    with pytest.raises(InputError, match=r"planner\.reverse_detour_tree"):
+        ImprovedConfig(reverse_detour_tree="yes")  # type: ignore[arg-type]

@@ -101,9 +101,9 @@ def _escalation_with(monkeypatch: pytest.MonkeyPatch, expansions: int) -> None:
     """The escalation cut to ``expansions``: it fails where the full one would solve."""
     real = improved_planner.escalate
 
-    def cut(failed, problem, budget, watch, smoothing):
+    def cut(failed, problem, budget, watch, smoothing, **kwargs):
         return real(failed, problem, dataclasses.replace(budget, max_iterations=expansions),
-                    watch, smoothing)  # fmt: skip
+                    watch, smoothing, **kwargs)  # fmt: skip
 
     monkeypatch.setattr(improved_planner, "escalate", cut)
 

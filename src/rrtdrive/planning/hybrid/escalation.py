@@ -82,6 +82,7 @@ def escalate(
     watch: Stopwatch,
     smoothing: SmoothingConfig | None = None,
     config: HybridConfig | None = None,
+    before: str | None = None,
 ) -> PlanResult:
     """Rescue a failed improved-planner result with the Hybrid A* search.
 
@@ -100,6 +101,10 @@ def escalate(
         Per-segment post-processor; ``None``: the exact arcs.
     config : HybridConfig, optional
         The search's settings.
+    before : str, optional
+        What the RRT-Connect stages left, for the message (default: "the RRT-Connect
+        stages failed: " and ``failed``'s reason); the planner names a forward detour
+        it asks the search to shorten.
 
     The search's segments get continuous curvature within the query's sharpness
     bound (``HybridConfig.curve="clothoid"``, the default: steering ramps, exact end
@@ -135,8 +140,8 @@ def escalate(
             out,
             message=(
                 f"{out.message} (in the Hybrid A* escalation, {gear}, after "
-                f"{answer.outcome.expansions} expansions; the RRT-Connect stages had failed: "
-                f"{reason})"
+                f"{answer.outcome.expansions} expansions; "
+                f"{before or 'the RRT-Connect stages had failed: ' + reason})"
             ),
         )
     if answer.path is None:
@@ -176,8 +181,8 @@ def escalate(
     message = (
         f"solved by the Hybrid A* escalation{turn_note(answer.outcome)}{answer.note} ({gear}; "
         f"{answer.outcome.expansions} expansions, "
-        f"{path.length:.1f} m, {built.segments - 1} cusp(s)); the RRT-Connect stages "
-        f"failed: {reason}" + arcs_note(built)
+        f"{path.length:.1f} m, {built.segments - 1} cusp(s)); "
+        f"{before or 'the RRT-Connect stages failed: ' + reason}" + arcs_note(built)
     )
     return dataclasses.replace(
         failed,

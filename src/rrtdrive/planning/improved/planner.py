@@ -27,6 +27,7 @@ from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register
 from rrtdrive.planning.hybrid.escalation import ESCALATES_FROM, escalate, with_kept_clearance
 from rrtdrive.planning.improved.boxed import boxed_end, open_share, stuck_root_words
 from rrtdrive.planning.improved.config import ImprovedConfig, StageBudgets
+from rrtdrive.planning.improved.detour import detour_ratio, detour_words, shorter_answer
 from rrtdrive.planning.improved.expansion import (
     default_expansion_lmin,
     endpoint_capped_clearance,
@@ -40,7 +41,6 @@ from rrtdrive.planning.improved.growth import (
     grow_until_meet,
     rooted_edge_test,
 )
-from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
 from rrtdrive.planning.result import run_query, solved, straight_ahead_result, timeout_result
 from rrtdrive.planning.sampling import SampleSource
 from rrtdrive.planning.smoothing import make_drivable
@@ -237,25 +237,23 @@ class _Query:
         samples = SampleSource(self.problem, reject=True)
         out = self.grow_and_smooth(rng, budget, edge_free, samples, passages)
         if out is not None:
+            if self.problem.reverse and self.cfg.reverse_detour_tree and self.escalates_first:
+                return self.shortened(out, budget, "tree path", "tree_detour_ratio")
             return out
         self.stats["iterations"] = float(self.iterations)
         self.stats["growth_time_s"] = self.watch.elapsed() - self.stats["postprocess_time_s"]
         # The safety cap cut the growth short: a timeout (no fallback, whose answer
         # would depend on how far the growth got on this machine).
         fallback = self.cfg.dubins_fallback and not self.watch.capped
-        if self.cfg.escalation and self.cfg.escalates_first(self.problem.reverse):
+        if self.escalates_first:
             # With reverse: the direct Dubins path (cheap, forward, no cusp), then the
             # Hybrid A* search (Reeds-Shepp shots), which answers sooner than the
             # fallback's tails and leads (~70 ms a joint); those only after it.
-            detour = None
             if fallback:
                 out = self.fallback(joints=False)
-                if out is not None and not self.detours(out):
-                    return out
-                detour = out
+                if out is not None:
+                    return self.shortened(out, budget, "direct Dubins path", "dubins_detour_ratio")
             out = self.escalation(budget)
-            if detour is not None and out.status is not PlanStatus.TIMEOUT:
-                return self.shorter(out, detour)
             if out.success or not fallback or out.status not in ESCALATES_FROM:
                 return out
             if self.watch.capped:
@@ -269,35 +267,33 @@ class _Query:
             return self.escalation(budget)
         return self.failure()
 
-    def detours(self, direct: PlanResult) -> bool:
-        """Whether the direct Dubins path is a detour a reversing path would cut short.
+    @property
+    def escalates_first(self) -> bool:
+        """Whether the escalation runs before the Dubins fallback's tails and leads."""
+        return self.cfg.escalation and self.cfg.escalates_first(self.problem.reverse)
 
-        It is longer than ``reverse_detour_ratio`` times the Reeds-Shepp distance at
-        its radius (the shortest path with reversing, obstacles aside).
+    def shortened(self, out: PlanResult, budget: Budget, kind: str, stat: str) -> PlanResult:
+        """``out``, or the escalation's shorter path when ``out`` is a forward detour.
+
+        A detour is longer than ``reverse_detour_ratio`` times the Reeds-Shepp distance
+        at the fallback's radius (``stats[stat]``); the escalation's timeout is its own
+        answer (what it finds depends on the machine's speed).
         """
         radius = self.cfg.dubins_radius_factor / self.problem.vehicle.kappa_max
-        shortest = reeds_shepp_distance(self.start, self.goal, radius)
-        ratio = direct.path.length / max(shortest, 1e-9)
-        self.stats["dubins_detour_ratio"] = ratio
-        return ratio > self.cfg.reverse_detour_ratio
-
-    def shorter(self, escalated: PlanResult, detour: PlanResult) -> PlanResult:
-        """The escalation's path when it solved shorter than the detour, else the detour."""
-        if escalated.success and escalated.path.length < detour.path.length:
+        ratio = detour_ratio(out.path.length, self.start, self.goal, radius)
+        self.stats[stat] = ratio
+        if ratio <= self.cfg.reverse_detour_ratio:
+            return out
+        escalated = self.escalation(budget, detour_words(kind, out.path.length, ratio))
+        if escalated.status is PlanStatus.TIMEOUT:
             return escalated
-        found = f"a longer path ({escalated.path.length:.1f} m)" if escalated.success else (
-            f"none ({int(escalated.stats.get('hybrid_expansions', 0))} expansions)"
-        )
-        return dataclasses.replace(
-            detour,
-            message=f"{detour.message}; Hybrid A* (with reverse) found {found}",
-            planning_time_s=self.watch.elapsed(),
-            # The escalation's counters, not its stage: the detour's path is returned.
-            stats={**{k: v for k, v in escalated.stats.items() if k != "stage"}, **detour.stats},
-        )
+        return shorter_answer(escalated, out, self.watch.elapsed())
 
-    def escalation(self, budget: Budget) -> PlanResult:
-        """The Hybrid A* escalation on the iterations the RRT-Connect stages left."""
+    def escalation(self, budget: Budget, before: str | None = None) -> PlanResult:
+        """The Hybrid A* escalation on the iterations the RRT-Connect stages left.
+
+        ``before``: what those stages left, when not a failure (see :func:`escalate`).
+        """
         watch = self.watch
         t_rrt = watch.elapsed()
         self.stats["rrt_stages_time_s"] = t_rrt
@@ -306,7 +302,7 @@ class _Query:
         if left < 1:  # the growth spent the whole budget (rrt_share 1)
             return failed
         rest = dataclasses.replace(budget, max_iterations=left)
-        out = escalate(failed, self.problem, rest, watch, self.smoothing)
+        out = escalate(failed, self.problem, rest, watch, self.smoothing, before=before)
         if out is not failed:
             out.stats["escalation_time_s"] = watch.elapsed() - t_rrt
         return out
