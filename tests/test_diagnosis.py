@@ -224,6 +224,45 @@ def test_narrow_passage_located_and_measured():
     assert diagnose(problem(gap_wall_map(3.0))) is None
 
 
+def staggered_gap_map(gap: float) -> Map:
+    """A wall from below and one from above, overlapping nowhere: ``gap`` apart sideways.
+
+    A third wall beside the upper one leaves a 0.3 m slit (a decoy). From an audit's map:
+    its 1.85 m gap was reported as "the passage near (0.9, 0.9) is 1.70 m wide; narrower
+    than the car" (the map's corner, where the grid's clearance equals the gap's).
+    """
+    walls = (
+        Obstacle((19.5, 4.5), (1.0, 9.0)),
+        Obstacle((20.0 + gap + 0.7, 14.5), (1.4, 11.0)),
+        Obstacle((20.0 + gap + 2.2, 15.0), (1.0, 10.0)),
+    )
+    ends = Pose(5.0, 10.0, 0.0), Pose(35.0, 10.0, 0.0)
+    return Map("stagger", (0.0, 0.0, 40.0, 20.0), walls, *ends)
+
+
+@pytest.mark.parametrize("gap", [0.6, 1.0, 1.85])
+def test_a_staggered_gap_is_found_where_it_is(gap: float) -> None:
+    m = staggered_gap_map(gap)
+    found = diagnose(problem(m), tree_edges=False)
+    assert found.kind is DiagnosisKind.NARROW_PASSAGE, found.message
+    lower, upper = (m.obstacles[0].polygon(), m.obstacles[1].polygon())
+    assert found.numbers["width_m"] == pytest.approx(lower.distance(upper))
+    # Between the lower wall's top right corner and the upper wall's bottom left one.
+    pass_centre = shapely.Point(20.0 + gap / 2, 9.0)
+    assert shapely.Point(found.numbers["x"], found.numbers["y"]).distance(pass_centre) < 0.5
+    assert ("narrower than the car" in found.message) is (gap < 1.8)
+
+
+def test_a_gap_too_narrow_for_the_grid_is_not_called_no_gap() -> None:
+    m = staggered_gap_map(0.3)
+    found = diagnose(problem(m), tree_edges=False)
+    assert found.kind is DiagnosisKind.WALLED_OFF
+    free = shapely.box(*m.bounds).difference(shapely.union_all([o.polygon() for o in m.obstacles]))
+    assert isinstance(free, shapely.Polygon)  # one piece: a 0.3 m gap joins start and goal
+    assert found.message.startswith("the goal is cut off from the start: the only gaps")
+    assert "no gap connects them" not in found.message
+
+
 def test_u_turn_width_is_the_swept_strip_of_a_tightest_half_circle():
     r = CAR.min_turning_radius
     yaws = np.linspace(0.0, math.pi, 721)
@@ -243,6 +282,33 @@ def street_map(width: float = 10.0) -> Map:
     mid = 5.0 + width / 2
     return Map("street", (0.0, 0.0, 80.0, width + 10.0), walls, Pose(10.0, mid - 2.5, 0.0),
                Pose(30.0, mid + 2.5, math.pi))
+
+
+@pytest.mark.parametrize("width", [14.6, 14.9])
+def test_u_turn_in_a_street_a_last_resort_turn_may_fit_says_so(width: float) -> None:
+    # Keeping 0.15 m each side a forward U-turn needs 14.95 m; keeping the last resort's
+    # 0.05 m, 14.75 m: in a 14.9 m street an audit's forward path keeping 0.105 m passed
+    # verify, and the line implied there was none.
+    found = diagnose(problem(street_map(width)))
+    assert found.kind is DiagnosisKind.U_TURN
+    least = u_turn_width(CAR) + 2 * 0.05
+    may_fit = "one may fit that the search missed" in found.message
+    assert may_fit is (width >= least)
+    assert ("needed_least_m" in found.numbers) is may_fit
+    if may_fit:
+        assert found.numbers["needed_least_m"] == pytest.approx(least)
+        assert f"a U-turn needs {least:.2f} m" in found.message
+
+
+def test_a_proof_from_the_goal_is_named_only_for_a_pocket_behind_it() -> None:
+    # A 15.2 m street: the goal across it, facing back, has 30 m and more behind it. The
+    # search's exhaustion from the goal was reported as "it can only be reached in
+    # reverse"; an audit's forward path keeping 0.25 m passed verify. A goal in a pocket
+    # (less than 10 m behind on every steady steering) keeps its line (goal 75 above).
+    m = Map("wide street", (0.0, 0.0, 80.0, 15.2), (), Pose(10.0, 1.2, 0.0),
+            Pose(10.0, 14.0, math.pi))
+    found = diagnose(problem(m), no_approach=True)
+    assert found is None or found.kind is not DiagnosisKind.NEEDS_REVERSE, found.message
 
 
 def test_u_turn_in_a_narrow_street():

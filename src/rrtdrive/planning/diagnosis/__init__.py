@@ -10,12 +10,14 @@ and measures, from the map's geometry, the first of these that holds:
    (curvatures from -kappa_max to kappa_max) with the exact body test; less than a
    car length on every arc is too little for the smallest manoeuvre. With room the
    other way the pose is reachable in reverse only; with none either way it is boxed in.
-   Forward only, a goal with more room behind it that Hybrid A*'s search from the goal
-   proved no way into (``no_approach``: every pose it can be driven into from, explored,
-   and none leads to the start) is ``needs_reverse`` too, with that room measured
-   (:func:`~.checks.no_forward_arrival`; looked for after 3 and 4); so is a start whose
-   forward search ran out of states (a proof) with a pocket ahead of it, less than 10 m on
-   every steady steering (:func:`~.checks.no_forward_departure`).
+   Forward only, a goal in a pocket (less than 10 m behind it on every steady steering)
+   that Hybrid A*'s search from the goal proved no way into (``no_approach``: every pose
+   it can be driven into from, explored, and none leads to the start) is
+   ``needs_reverse`` too, with that room measured (:func:`~.checks.no_forward_arrival`;
+   looked for after 3 and 4); so is a start whose forward search ran out of states (a
+   proof at the search's resolution) with a pocket ahead of it
+   (:func:`~.checks.no_forward_departure`). With more room the search's exhaustion is
+   no proof off its lattice and is not named.
 3. ``tight_clearance`` (for planners that search by tree edges only): the first tree
    edge along the start's (or into the goal's) heading fails the swept edge test
    although the exact body is free along it: the
@@ -100,8 +102,9 @@ def diagnose(
         wall for a bay that only a turn the car cannot make leads into.
     no_approach : bool
         Whether a Hybrid A* search from the goal proved, forward only, that no way in
-        reaches the start (``no_approach``): with room behind the goal, that proof is
-        the finding (:func:`~.checks.no_forward_arrival`), before the u-turn's.
+        reaches the start (``no_approach``): with a pocket behind the goal (less than
+        :data:`~.checks.POCKET_M`), that proof is the finding
+        (:func:`~.checks.no_forward_arrival`), before the u-turn's.
     start_exhausted : bool
         Likewise from the start: every forward way on explored, none reached the goal;
         with a pocket ahead of the start (less than :data:`~.checks.POCKET_M`), the

@@ -23,6 +23,7 @@ from rrtdrive.planning.diagnosis.measures import (
     free_run,
     gap_width,
     grid_cell,
+    joined_in_free_space,
     map_shapes,
     nearest_obstacle,
     obstacle_name,
@@ -140,32 +141,35 @@ def room_at_ends(
 
 
 
-#: How far back (metres) :func:`no_forward_arrival` measures the room behind the goal.
-ARRIVAL_ROOM_CAP = 30.0
+#: A start (goal) whose longest steady-steering run ahead (behind) is shorter than this
+#: (metres) sits in a pocket: :func:`no_forward_departure` (:func:`no_forward_arrival`)
+#: names it. With more room the search's proof is about the whole region the car can
+#: drive in on its lattice, which is no proof off it: a 15.2 m street's forward U-turn to
+#: a goal 30 m clear behind was "only in reverse" (an audit; a hand-made forward path
+#: passes verify).
+POCKET_M = 10.0
 
 
-def no_forward_arrival(m: Map, checker: CollisionChecker, goal: Pose) -> Diagnosis:
+def no_forward_arrival(m: Map, checker: CollisionChecker, goal: Pose) -> Diagnosis | None:
     """``needs_reverse``: a forward arrival that Hybrid A* proved impossible, with the room.
 
     Called when the search from the goal, driving it backwards on the search's arcs, ran
     out of states without reaching the start (``no_approach``) while the room behind
-    the goal is a car length or more (else :func:`room_at_ends` speaks): the pocket
-    behind the goal is measured (its longest steady-steering run back, up to
-    :data:`ARRIVAL_ROOM_CAP`, and what stops the straight one) and the proof named.
+    the goal is a car length or more (else :func:`room_at_ends` speaks). Only a pocket
+    behind the goal (less than :data:`POCKET_M` on every steady steering) is named, with
+    what stops the straight run back; ``None`` otherwise.
     """
     v = m.vehicle
-    run = best_run(checker, goal, -1, v, ARRIVAL_ROOM_CAP)
-    straight, blocker = _straight_stop(checker, goal, -1, v, ARRIVAL_ROOM_CAP)
+    run = best_run(checker, goal, -1, v, POCKET_M)
+    if run >= POCKET_M:
+        return None
+    straight, blocker = _straight_stop(checker, goal, -1, v, POCKET_M)
     numbers = {"room_behind_m": run, "straight_gap_m": straight}
     behind = ""
     if blocker is not None:
         numbers["obstacle"] = blocker
         behind = f" ({obstacle_name(blocker)} {straight:.2f} m behind its rear)"
-    room = (
-        f"at most {run:.2f} m on any steady steering{behind}"
-        if run < ARRIVAL_ROOM_CAP
-        else f"{ARRIVAL_ROOM_CAP:g} m or more on some steady steering"
-    )
+    room = f"at most {run:.2f} m on any steady steering{behind}"
     return Diagnosis(
         DiagnosisKind.NEEDS_REVERSE,
         f"a forward arrival at the goal comes from behind it, where the car has {room}, "
@@ -174,12 +178,6 @@ def no_forward_arrival(m: Map, checker: CollisionChecker, goal: Pose) -> Diagnos
         "--reverse)",
         numbers,
     )
-
-
-#: A start whose longest steady-steering run ahead is shorter than this (metres) sits in a
-#: pocket: :func:`no_forward_departure` names it. With more room ahead the proof is about
-#: the whole region the car can drive forward in, which the room ahead does not measure.
-POCKET_M = 10.0
 
 
 def no_forward_departure(m: Map, checker: CollisionChecker, start: Pose) -> Diagnosis | None:
@@ -243,6 +241,30 @@ def connected(field_: np.ndarray, t: float, a: tuple[int, int], b: tuple[int, in
     return bool(labels[a] != 0 and labels[a] == labels[b])
 
 
+def pass_cell(
+    grid: np.ndarray, lo: float, hi: float, a: tuple[int, int], b: tuple[int, int]
+) -> tuple[int, int]:
+    """The grid cell of the narrowest place joining cells ``a`` and ``b``.
+
+    ``a`` and ``b`` are joined by cells of clearance ``>= lo`` but not ``>= hi``: the
+    pass is the cell of the band between (kept at ``lo``, not at ``hi``, on ``a``'s
+    side) nearest to both sides at once. On the grid the bottleneck's clearance runs
+    round every wall as a contour (a cell 0.85 m from a map corner has the clearance
+    of a 1.85 m gap's centre), so the band's best-cleared cell can be anywhere.
+    """
+    structure = np.ones((3, 3), dtype=bool)
+    low, _ = ndimage.label(grid >= lo, structure=structure)
+    high, _ = ndimage.label(grid >= hi, structure=structure)
+    band = (low == low[a]) & (high == 0)
+    if high[a] == 0 or high[b] == 0 or high[a] == high[b]:
+        best = np.unravel_index(int(np.argmax(np.where(band, grid, -np.inf))), grid.shape)
+        return int(best[0]), int(best[1])
+    to_a = ndimage.distance_transform_edt(high != high[a])
+    to_b = ndimage.distance_transform_edt(high != high[b])
+    best = np.unravel_index(int(np.argmin(np.where(band, to_a + to_b, np.inf))), grid.shape)
+    return int(best[0]), int(best[1])
+
+
 def narrow_passage(
     m: Map, checker: CollisionChecker, start: Pose, goal: Pose, tree_edges: bool = True
 ) -> Diagnosis | None:
@@ -283,24 +305,19 @@ def narrow_passage(
     needed_width = v.width + 2.0 * keep
     numbers = {"needed_m": needed_width, "car_width_m": v.width}
     if lo < 0.0:
+        words = "the goal is walled off from the start: no gap connects them"
+        if joined_in_free_space(checker, start, goal):
+            words = (
+                f"the goal is cut off from the start: the only gaps joining them are too "
+                f"narrow to show on the planner's {checker.resolution:.2f} m grid, far "
+                f"narrower than the car ({v.width:.2f} m)"
+            )
         return Diagnosis(
             DiagnosisKind.WALLED_OFF,
-            "the goal is walled off from the start: no gap connects them",
+            words,
             {**numbers, "width_m": 0.0},
         )
-    # The narrowest place: the cells kept at ``lo`` but not at ``hi`` that join the
-    # start's side to the goal's; the best-cleared of them is the pass.
-    structure = np.ones((3, 3), dtype=bool)
-    low, _ = ndimage.label(grid >= lo, structure=structure)
-    high, _ = ndimage.label(grid >= hi, structure=structure)
-    band = (low == low[a]) & (high == 0)
-    parts, count = ndimage.label(band, structure=structure)
-    near_a = ndimage.binary_dilation(high == high[a], structure=structure)
-    near_b = ndimage.binary_dilation(high == high[b], structure=structure)
-    joins = np.intersect1d(np.unique(parts[near_a & band]), np.unique(parts[near_b & band]))
-    pick = band if len(joins) == 0 else np.isin(parts, joins[joins > 0])
-    best = np.unravel_index(int(np.argmax(np.where(pick, grid, -np.inf))), grid.shape)
-    best = (int(best[0]), int(best[1]))
+    best = pass_cell(grid, lo, hi, a, b)
     x, y = (float(v) for v in cell_centres(checker, *best))
     width = gap_width(checker, x, y)
     numbers.update(width_m=width, x=x, y=y)
@@ -408,8 +425,17 @@ def u_turn(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagno
             f"the goal is {behind:.1f} m behind the start, facing the same way: driving "
             f"forward the car must turn round to reach it (and back); {head}"
         )
+    least = u_turn_width(v) + 2.0 * MIN_CLEARANCE
     if widest < need:
-        tail = f"; no place reachable from the start is wider than {widest:.1f} m (try --reverse)"
+        tail = f"; no place reachable from the start is wider than {widest:.1f} m"
+        if widest >= least:
+            # A 14.9 m street: a forward path keeping 0.105 m passes verify (an audit).
+            numbers["needed_least_m"] = least
+            tail += (
+                f"; keeping only {MIN_CLEARANCE:g} m each side (the default's last resort) "
+                f"a U-turn needs {least:.2f} m: one may fit that the search missed"
+            )
+        tail += " (try --reverse)"
     elif widest < turn_in:
         tail = (
             f"; the widest place reachable from the start, about {widest:.1f} m across near "

@@ -29,6 +29,7 @@ __all__ = [
     "free_run",
     "gap_width",
     "grid_cell",
+    "joined_in_free_space",
     "map_shapes",
     "nearest_obstacle",
     "obstacle_name",
@@ -175,6 +176,19 @@ def map_shapes(checker: CollisionChecker) -> MapShapes:
         )
 
     return checker.grid.derived("diagnosis_shapes", build)
+
+
+def joined_in_free_space(checker: CollisionChecker, p: Pose, q: Pose) -> bool:
+    """Whether the points ``p`` and ``q`` lie in one piece of the map's free space.
+
+    Exact (shapely): a gap of any width joins them, however narrow for the grid.
+    """
+    free = shapely.box(*checker.bounds).difference(map_shapes(checker).solid)
+    here, there = shapely.Point(p.x, p.y), shapely.Point(q.x, q.y)
+    return any(
+        piece.intersects(here) and piece.intersects(there)
+        for piece in shapely.get_parts(free)
+    )
 
 
 def first_hit(checker: CollisionChecker, body: shapely.Geometry) -> int:
