@@ -99,6 +99,27 @@ def test_missing_keys_named():
         map_from_json(data)
 
 
+def test_a_syntax_error_names_its_column_and_the_text_before_it(tmp_path):
+    # A one-line map with a trailing comma was "Expecting value (line 1)" (an audit).
+    text = json.dumps(_base(), separators=(",", ":"))
+    at = text.index("]", text.index('"obstacles"'))
+    bad = tmp_path / "comma.json"
+    bad.write_text(text[:at] + "," + text[at:])
+    with pytest.raises(InputError) as info:
+        load_map(bad)
+    message = str(info.value)
+    assert f"(line 1, column {at + 2}, near " in message
+    assert message.endswith(f"{text[at - 10 : at]},]')"), message
+
+
+@pytest.mark.parametrize("obstacle", [{"polygon": [[0, 0], [1, 0], [1, 1]]}, {"center": [1, 1]}])
+def test_an_obstacle_in_another_shape_is_told_the_rectangle_format(obstacle):
+    data = _base()
+    data["obstacles"] = [obstacle]
+    with pytest.raises(InputError, match=r"^obstacles\[0\]: .*obstacles are rectangles: center"):
+        map_from_json(data)
+
+
 def test_malformed_json_and_nan_literals(tmp_path):
     bad = tmp_path / "bad.json"
     bad.write_text("{not json")

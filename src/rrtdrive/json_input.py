@@ -13,6 +13,8 @@ __all__ = ["MAX_JSON_BYTES", "json_kind", "parse_json", "read_capped"]
 #: The largest JSON file (a map, a plan) read, bytes: a map of 20 000 obstacles is 1.5 MB,
 #: and a read of /dev/zero or of a huge stream must end with a message, not a MemoryError.
 MAX_JSON_BYTES = 256 * 1024 * 1024
+#: Characters of the text before a JSON syntax error that its message shows.
+EXCERPT = 20
 
 
 def read_capped(stream: BinaryIO, field: str, source: str) -> bytes:
@@ -69,6 +71,11 @@ def parse_json(raw: bytes | str, field: str, source: str) -> object:
     Traceback (most recent call last):
     ...
     rrtdrive.types.InputError: map: m.json gives 'start' twice in one object; keep one
+    >>> parse_json("[1, 2,]", "map", "m.json")  # doctest: +NORMALIZE_WHITESPACE
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: map: malformed JSON in m.json: Expecting value
+    (line 1, column 7, near '[1, 2,]')
     >>> parse_json("[" * 100_000, "map", "m.json")
     Traceback (most recent call last):
     ...
@@ -91,7 +98,13 @@ def parse_json(raw: bytes | str, field: str, source: str) -> object:
             f"{field}: {source} gives {exc.args[0]!r} twice in one object; keep one"
         ) from None
     except json.JSONDecodeError as exc:
-        raise InputError(f"{bad}: {exc.msg} (line {exc.lineno})") from None
+        # The column and the text up to it: a map is often one line, whose number alone
+        # says nothing (an audit: "Expecting value (line 1)" for a trailing comma).
+        near = " ".join(raw[max(0, exc.pos - EXCERPT) : exc.pos + 1].split())
+        at = f", near {near!r}" if near else ""
+        raise InputError(
+            f"{bad}: {exc.msg} (line {exc.lineno}, column {exc.colno}{at})"
+        ) from None
     except RecursionError:
         raise InputError(f"{bad}: nested too deeply") from None
     except ValueError:  # an integer literal past Python's 4300-digit conversion limit

@@ -250,6 +250,7 @@ def _pair(value: object, name: str) -> tuple[float, float]:
 
 _MAP_KEYS = {"name", "bounds", "obstacles", "start", "goal"}
 _OBSTACLE_KEYS = {"center", "size", "yaw"}
+_RECTANGLES = "obstacles are rectangles: center [x, y], size [length, width], yaw (radians)"
 
 
 def map_from_json(
@@ -295,9 +296,9 @@ def map_from_json(
             raise InputError(f"obstacles[{i}]: expected an object, got {brief_repr(item)}")
         bad = set(item) - _OBSTACLE_KEYS
         if bad:
-            raise InputError(f"obstacles[{i}]: unknown key(s) {sorted(bad)}")
+            raise InputError(f"obstacles[{i}]: unknown key(s) {sorted(bad)}; {_RECTANGLES}")
         if "center" not in item or "size" not in item:
-            raise InputError(f"obstacles[{i}]: needs 'center' and 'size'")
+            raise InputError(f"obstacles[{i}]: needs 'center' and 'size'; {_RECTANGLES}")
         try:
             obstacles.append(Obstacle(item["center"], item["size"], item.get("yaw", 0.0)))
         except InputError as exc:
