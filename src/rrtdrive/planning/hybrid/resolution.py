@@ -2,14 +2,15 @@
 
 The search from the start runs for ``switch_after`` expansions; a query still
 open then is searched from the goal back towards the start too, the two taking
-turns (:func:`_alternate`), and a path found from the goal is driven in the
+turns (:func:`~.schedule.alternate`), and a path found from the goal is driven in the
 opposite direction of time (:func:`reversed_in_time`: rows reversed, gears
 flipped; with reverse allowed every motion reversed in time is a motion; forward
 only, the search from the goal uses reverse arcs alone, so its reversal drives
 forward). Many queries are hard at one end only (a tight bay, a start against a
 wall): from the other end the hard part is a way out. The search from the goal
-that runs out of states proves the goal unreachable at the search's resolution
-(the ladder's next search then gives it the first turn: ``goal_first``). Where every
+that runs out of states within its first turn (a pocket) proves the goal unreachable
+on its lattice (the ladder's next search then gives it the first turn: ``goal_first``);
+after more, the search from the start goes on alone. Where every
 connection found is rejected (the ramps cut a corner), the searches run again keeping
 ``ramp_margin`` more clearance. Also here: the per-map set-up
 the searches share (:func:`free_cell_graph`, :func:`dubins_table`) and the
@@ -41,6 +42,7 @@ from rrtdrive.planning.hybrid.lattice import guided, heading_lattice
 from rrtdrive.planning.hybrid.leads import Lead, lead_ins
 from rrtdrive.planning.hybrid.path import BuiltPath, Ramps, SegmentMemo, build_path
 from rrtdrive.planning.hybrid.primitives import PrimitiveSet, primitive_sets
+from rrtdrive.planning.hybrid.schedule import Accept, Turn, alternate
 from rrtdrive.planning.hybrid.search import (
     HybridSearch,
     Piece,
@@ -89,8 +91,6 @@ def sharpness_bound_of(problem: PlanningProblem, smoothing: SmoothingConfig | No
     return bound
 
 
-#: ``accept(pieces)``: the checked path of a connection, or ``None`` to search on.
-Accept = Callable[[list[Piece]], BuiltPath | None]
 
 
 def _after(first: Piece, accept: Accept) -> Accept:
@@ -98,12 +98,6 @@ def _after(first: Piece, accept: Accept) -> Accept:
     return lambda pieces: accept([first, *pieces])
 
 
-#: The multi-point turn of a search (:func:`~.turn.multi_point_turn`), given the
-#: expansions it may spend.
-Turn = Callable[[int], TurnResult[BuiltPath]]
-#: The estimates that guide the searches (from the start, from the goal) from now on,
-#: or ``None`` to leave them as they are.
-Guide = Callable[[], "tuple[Heuristic, Heuristic] | None"]
 
 
 def free_cell_graph(problem: PlanningProblem, resolution: float) -> FreeCellGraph:
@@ -297,7 +291,7 @@ def search_at_resolution(
     """The searches of :func:`hybrid_query` at one resolution, with ``budget`` expansions.
 
     ``have``: the start's and goal's own body clearance (:class:`EndClearance`).
-    ``goal_first``: the search from the goal takes the first turn (:func:`_alternate`).
+    ``goal_first``: the search from the goal takes the first turn (:func:`~.schedule.alternate`).
     """
     kappa_max = problem.vehicle.kappa_max
     clearance = query_clearance(problem, config.body_clearance, have)
@@ -474,7 +468,7 @@ def search_at_resolution(
             # straight forward (a kerbside gap, a bay to reverse into): from the goal's
             # side its hard part is a way out. Search from there sooner.
             first_turn = max(1, config.switch_after // BOXED_START_SOONER)
-        path, outcome = _alternate(
+        path, outcome = alternate(
             searches, left, first_turn, watch, turn_with(search_clearance),
             guide if config.lattice_after > 0 else None, config.lattice_after,
             goal_first=goal_first,
@@ -514,71 +508,6 @@ def _shortened(
         return better
 
     return take
-
-
-def _alternate(
-    searches: list[tuple[HybridSearch, Accept]],
-    budget: int,
-    first: int,
-    watch: Stopwatch,
-    turn_first: Turn | None = None,
-    guide: Guide | None = None,
-    guide_after: int = 0,
-    goal_first: bool = False,
-) -> tuple[BuiltPath | None, SearchOutcome]:
-    """Run the searches in turns of ``first``, ``first``, ``2 first``, ``2 first``, ... expansions.
-
-    The turns are counted in expansions, never in time, so the schedule is the
-    same on any machine. Either search running out of states ends the query: from
-    the start it proves the goal unreachable, from the goal that no approach exists.
-    ``turn_first``: the multi-point turn tried once, after the first turn from the
-    start (each of its moves counted as an expansion). ``guide``: the searches'
-    new estimates, taken at the first turn that starts with ``guide_after`` or more
-    expansions spent (:attr:`HybridConfig.lattice_after`). ``goal_first``: the search
-    from the goal (the second) takes the first turn.
-    """
-    outcomes = [SearchOutcome("expansions", 0, 0, 0, 0) for _ in searches]
-    k = 1 if goal_first and len(searches) > 1 else 0
-    last, turn, used = (k - 1) % len(searches), max(1, first), 0  # turns double after last
-    while True:
-        search, accept = searches[k]
-        if guide is not None and used >= guide_after:
-            guided_by = guide()
-            guide = None
-            for (s, _), h in zip(searches, guided_by or (), strict=False):
-                s.reguide(h)
-        if len(searches) == 1:
-            turn = budget
-        step = min(turn, budget - used)
-        if guide is not None and len(searches) == 1:
-            step = min(step, guide_after - used)  # one search: stop where the guide comes in
-        before = outcomes[k].expansions
-        path, outcomes[k] = search.run(accept, before + step, watch.expired)
-        used += outcomes[k].expansions - before
-        if path is not None or outcomes[k].reason != "expansions" or used >= budget:
-            break
-        if turn_first is not None and k == 0 and not watch.expired():
-            tried = turn_first(budget - used)
-            turned = tried.result is not None
-            outcomes.append(SearchOutcome(
-                "solved" if turned else "expansions", tried.moves + tried.expansions, 0,
-                tried.shots, 0, tried.moves if turned else 0,
-            ))  # fmt: skip
-            used += tried.moves + tried.expansions
-            turn_first = None
-            if turned:
-                return tried.result, SearchOutcome.total("solved", outcomes)
-            if used >= budget:
-                break
-        if k == last:
-            turn *= 2
-        k = (k + 1) % len(searches)
-    if len(outcomes) == 1:
-        return path, outcomes[0]
-    reason = outcomes[k].reason
-    if reason == "exhausted" and k == 1:
-        reason = "no_approach"  # exhausted from the goal's side
-    return path, SearchOutcome.total(reason, outcomes)
 
 
 def prims_reverse(radius: float, config: HybridConfig) -> tuple[PrimitiveSet, ...]:
