@@ -790,6 +790,31 @@ def test_bench_figures_say_what_they_show(tmp_path, monkeypatch):
     assert all(float(t).is_integer() for t in hist.get_yticks())  # counts of runs
 
 
+def test_the_success_figure_shows_the_verified_share_of_plans(tmp_path, monkeypatch):
+    # rrt's plans "succeed" and break the curvature limit: success.png showed 100 % where
+    # the summary's table said 0 % verified (a plot audit).
+    import rrtdrive.plotting
+    from rrtdrive.bench.summary import write_plots
+
+    figures = {}
+    monkeypatch.setattr(rrtdrive.plotting, "save_figure",
+                        lambda fig, path: figures.setdefault(Path(path).name, fig))
+    rows = [
+        {"kind": "plan", "map": "parking_lot", "planner": planner, "controller": None,
+         "seed": s, "config_hash": "h", "success": True, "status": "solved",
+         "verified": planner != "rrt", "length_m": 30.0, "planning_time_s": 0.01,
+         "max_curvature": 0.1}
+        for planner in ("improved-rrt-connect", "rrt") for s in (0, 1, 2)
+    ]
+    write_plots(rows, tmp_path)
+    ax = figures["success.png"].axes[0]
+    bars = {label: [] for label in ("success", "verified (rrtdrive verify)")}
+    for container in ax.containers:
+        if container.get_label() in bars:
+            bars[container.get_label()] = [b.get_width() for b in container.patches]
+    assert bars == {"success": [1.0, 1.0], "verified (rrtdrive verify)": [1.0, 0.0]}, bars
+
+
 def test_a_grid_that_solved_nothing_still_gets_its_length_box_plot(tmp_path, monkeypatch):
     # docs/bench.md: a group without a successful run keeps its row, marked "(no success)";
     # with no success in any group box_length.png was not written at all.

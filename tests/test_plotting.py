@@ -12,7 +12,7 @@ from rrtdrive.cli import main
 from rrtdrive.maps import Map, builtin_map
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.plotting import plot_curvature, plot_plan, save_figure
-from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Pose
+from rrtdrive.types import Budget, Path, PlanResult, PlanStatus, Pose, Tree
 
 
 def _reverse_result() -> tuple[Map, PlanResult]:
@@ -136,3 +136,62 @@ def test_a_tall_maps_plot_title_stays_inside_the_figure():
     box, page = text.get_window_extent(), fig.bbox
     assert page.x0 <= box.x0 and box.x1 <= page.x1 and box.y1 <= page.y1, (box, page)
     assert " ".join(text.get_text().split()).startswith("a_tall_ramp_with_a_long_name: ")
+
+
+def test_a_solved_plots_title_gives_its_length_and_gear_changes():
+    # The title gave the status and the nodes only (a plot audit).
+    m, result = _reverse_result()
+    title = " ".join(plot_plan(m, result).axes[0].get_title(loc="left").split())
+    assert f"(solved, {result.path.length:.1f} m, 1 gear change, 0 nodes)" in title
+
+
+def test_a_failed_plots_title_says_why_and_the_figure_has_room_for_it(tmp_path):
+    # A failure showed its status alone; on a 60 x 8 m map a four-line title would have
+    # cut its first line and the axis label off the figure.
+    m = builtin_map("kerbside")
+    result = make_planner("improved-rrt-connect").solve(
+        PlanningProblem.from_map(m), np.random.default_rng(0), Budget()
+    )
+    assert not result.success and result.diagnosis is not None
+    fig = plot_plan(m, result)
+    text = fig.axes[0]._left_title
+    assert " ".join(text.get_text().split()).endswith(
+        " ".join(f"why: {result.diagnosis.message}".split())
+    )
+    fig.canvas.draw()
+    box, page = text.get_window_extent(), fig.bbox
+    assert page.y0 <= box.y0 and box.y1 <= page.y1, (box, page)
+    label = fig.axes[0].xaxis.label.get_window_extent()
+    assert label.y0 >= page.y0, (label, page)
+
+
+def test_a_hybrid_path_is_drawn_without_chords_or_a_raw_tree_path():
+    # Its waypoints (start, cusps, goal) joined by straight chords crossed obstacles, and
+    # its "raw tree path" lay under the path (a plot audit).
+    m = builtin_map("parking_lot")
+    m = Map(m.name, m.bounds, m.obstacles, m.start, Pose(66.5, 22.0, math.pi / 2))
+    result = make_planner("hybrid-a-star").solve(
+        PlanningProblem.from_map(m, reverse=True), np.random.default_rng(0), Budget()
+    )
+    assert result.success and len(result.path.cusps) >= 1
+    labels = [t.get_text() for t in plot_plan(m, result).axes[0].get_legend().get_texts()]
+    assert "waypoints" not in labels and "raw tree path" not in labels
+    assert any(t.startswith("path, reverse") for t in labels)
+
+
+def test_a_tree_of_one_node_is_not_in_the_legend():
+    m, result = _reverse_result()
+    lone = Tree(np.array([[7.0, 18.0]]), np.array([-1]))
+    grown = Tree(np.array([[10.0, 10.0], [12.0, 11.0]]), np.array([-1, 0]))
+    result = PlanResult(PlanStatus.SOLVED, "hand-made", result.path, result.raw_path,
+                        (grown, lone), 0, 0, 0.0)
+    labels = [t.get_text() for t in plot_plan(m, result).axes[0].get_legend().get_texts()]
+    assert "tree from the start" in labels and "tree from the goal" not in labels
+
+
+def test_the_start_arrow_is_drawn_above_the_path():
+    m, result = _reverse_result()
+    ax = plot_plan(m, result).axes[0]
+    path_z = max(z.get_zorder() for z in ax.get_lines() if z.get_label() == "path, forward")
+    arrows = [p for p in ax.patches if p.get_label() in ("start", "goal")]
+    assert arrows and min(a.get_zorder() for a in arrows) > path_z

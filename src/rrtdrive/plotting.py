@@ -65,6 +65,7 @@ def draw_pose(
     """Draw the car's body at ``pose`` and an arrow along its heading."""
     corners = footprint_corners(np.array(pose.as_tuple()), vehicle)
     ax.add_patch(PolygonPatch(corners, closed=True, fc=colour, ec=colour, alpha=0.35, lw=1.0))
+    # Above the path (zorder 4): a path leaves along the start's heading and hid its arrow.
     ax.arrow(
         pose.x,
         pose.y,
@@ -74,6 +75,7 @@ def draw_pose(
         length_includes_head=True,
         color=colour,
         label=label,
+        zorder=6,
     )
 
 
@@ -88,8 +90,8 @@ def draw_trees(
     names = ("tree",) if len(trees) == 1 else ("tree from the start", "tree from the goal")
     named: set[str] = set()
     for tree, colour in zip(trees, TREE_COLOURS * 4, strict=False):
-        if len(tree) == 0:
-            continue
+        if len(tree) < 2:
+            continue  # a root alone has no edge to show (the legend listed it)
         name = names[TREE_COLOURS.index(colour) % len(names)]
         ax.add_collection(LineCollection(
             tree.edges(), colors=colour, lw=lw, alpha=alpha,
@@ -186,28 +188,55 @@ def plot_plan(
     """The map, the trees, the raw tree path, the waypoints and the final path of one result.
 
     The path is drawn by :func:`draw_gear_path`: reverse segments dashed, cusps marked.
-    The default title names the map, the planner (and its stage that solved it, when
-    another: the default's Hybrid A* escalation), ``seed`` (when given), whether
-    ``reverse`` gears were allowed, the status and the nodes; it is left-aligned and
-    wrapped to the figure (a tall map's narrow figure cut a one-line title at both ends).
+    The raw tree path and the waypoints only where a tree path was grown (not for a
+    Hybrid A* or Dubins fallback path). The default title names the map, the planner
+    (and its stage that solved it, when another: the default's Hybrid A* escalation),
+    ``seed`` (when given), whether ``reverse`` gears were allowed, the status (solved: the
+    length and the gear changes) and the nodes, and under it a failure's why line; it is
+    left-aligned and wrapped to the figure (a tall map's narrow figure cut a one-line
+    title at both ends).
     """
-    fig, ax = plt.subplots(figsize=map_figure_size(m.bounds), layout="constrained")
-    draw_map(ax, m)
-    draw_trees(ax, result.trees)
-    draw_path(ax, result.raw_path, "tab:gray", "raw tree path", lw=1.0)
-    if len(result.path):
-        draw_path(ax, result.path.waypoints, "tab:olive", "waypoints", lw=0.8, marker="o")
-        draw_gear_path(ax, result.path)
     from rrtdrive.planning.hybrid.escalation import stage_of
 
-    status = "solved" if result.success else result.status.value
-    how = (f", seed {seed}" if seed is not None else "") + (", reverse allowed" if reverse else "")
+    width_in, height_in = map_figure_size(m.bounds)
+    fig, ax = plt.subplots(figsize=(width_in, height_in), layout="constrained")
+    draw_map(ax, m)
     stage = stage_of(result) if result.success else result.planner
+    # A tree path only where one was grown: a Hybrid A* path's "raw path" is the path
+    # itself, and the Dubins fallback's joins its ends with a line that crossed a car;
+    # its waypoints (start, cusps, goal) joined by chords crossed obstacles (an audit).
+    tree_path = "hybrid-a-star" not in (stage, result.planner) and stage != "dubins-fallback"
+    # A search's fan of arcs, dense about the ends, is drawn fainter: it hid a
+    # multi-point turn's short legs and both cars.
+    draw_trees(ax, result.trees, alpha=0.6 if tree_path else 0.25)
+    if tree_path:
+        draw_path(ax, result.raw_path, "tab:gray", "raw tree path", lw=1.0)
+    if len(result.path):
+        if tree_path:
+            draw_path(ax, result.path.waypoints, "tab:olive", "waypoints", lw=0.8, marker="o")
+        draw_gear_path(ax, result.path)
+
+    how = (f", seed {seed}" if seed is not None else "") + (", reverse allowed" if reverse else "")
     who = result.planner if stage == result.planner else f"{result.planner} ({stage} stage)"
+    if result.success:
+        cusps = len(result.path.cusps)
+        gears = f", {cusps} gear change{'s' if cusps != 1 else ''}" if cusps else ""
+        status = f"solved, {result.path.length:.1f} m{gears}"
+    else:
+        status = result.status.value
     text = title or f"{m.name}: {who}{how} ({status}, {result.nodes} nodes)"
+    if title is None and not result.success and result.diagnosis is not None:
+        text += f"\nwhy: {result.diagnosis.message}"
     # About 0.6 em a character; the room is the figure's width (the legend's too).
     per_line = max(20, int((fig.get_figwidth() - 0.6) * 72 / (0.6 * _TITLE_PT)))
-    wrapped = textwrap.fill(text, per_line, break_on_hyphens=False, break_long_words=False)
+    wrapped = "\n".join(
+        textwrap.fill(line, per_line, break_on_hyphens=False, break_long_words=False)
+        for line in text.split("\n")
+    )
+    # Room for each title line past two (a why line of four lines over a 60 x 8 m map cut
+    # the title's first line and the axis label off).
+    extra = max(0, wrapped.count("\n") - 1) * _TITLE_PT * 1.25 / 72
+    fig.set_figheight(height_in + extra)
     ax.set_title(wrapped, loc="left", fontsize=_TITLE_PT)
     # Beside the axes, outside them: inside, it covered a corner of the map (a goal in
     # the garage's top right bays hid under it).

@@ -375,22 +375,32 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
         none="no success")
     box("box_time.png", ("planning_time_s",), "planning time [ms]", 1e3)
 
-    # Success rates with Wilson intervals.
+    # Success rates with Wilson intervals; for plans also the share the independent
+    # verifier passed (rrt's paths "succeed" but break the curvature limit: the plot
+    # showed 100 % where the summary's table said 0 % verified; an audit).
     fig = Figure(figsize=(8, height), layout="constrained")
     ax = fig.add_subplot()
-    rates, lo, hi = [], [], []
-    for lab in labels:
-        vals = [bool(r.get("success")) for r in groups[lab]]
-        s = describe([float(v) for v in vals], rate=True)
-        rates.append(s.mean)
-        lo.append(max(0.0, s.mean - s.ci_low))
-        hi.append(max(0.0, s.ci_high - s.mean))
     y = np.arange(len(labels))
-    ax.barh(y, rates, xerr=[lo, hi], capsize=3, color="tab:green", alpha=0.8)
+    rates_of = [("success", "success", "tab:green")]
+    if any("verified" in r for lab in labels for r in groups[lab]):
+        rates_of.append(("verified", "verified (rrtdrive verify)", "tab:blue"))
+    bar = 0.8 / len(rates_of)
+    for i, (key, name, colour) in enumerate(rates_of):
+        rates, lo, hi = [], [], []
+        for lab in labels:
+            s = describe([float(bool(r.get(key))) for r in groups[lab]], rate=True)
+            rates.append(s.mean)
+            lo.append(max(0.0, s.mean - s.ci_low))
+            hi.append(max(0.0, s.ci_high - s.mean))
+        offset = (i - (len(rates_of) - 1) / 2) * bar
+        ax.barh(y + offset, rates, height=bar, xerr=[lo, hi], capsize=3, color=colour,
+                alpha=0.8, label=name)  # fmt: skip
     ax.set_yticks(y, labels, fontsize=8)
     ax.invert_yaxis()
     ax.set_xlim(0, 1.05)
-    ax.set_xlabel("success rate (95 % Wilson interval)")
+    ax.set_xlabel("share of runs (95 % Wilson interval)")
+    if len(rates_of) > 1:
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.suptitle(title, fontsize=9)
     save_figure(fig, out / "success.png")
     written.append(out / "success.png")
