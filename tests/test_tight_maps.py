@@ -234,3 +234,27 @@ def test_a_kerbside_gap_of_1_4_car_lengths_parks_keeping_less_clearance():
         PlanningProblem.from_map(m), np.random.default_rng(0), Budget()
     )
     assert not fwd.success
+
+
+def test_a_goal_in_the_middle_of_a_kerbside_gap_of_1_6_car_lengths_parks():
+    """The 6.88 m gap with 1.29 m free each way of the goal: a user's map (an audit).
+
+    The built-in kerbside parks 0.3 m from the car behind; centred, every connection of
+    the tightest search was rejected (the ramps of its full-lock words cut a corner) and
+    the query failed; since session 36 a last search turns wider (1.1 / kappa_max).
+    """
+    from rrtdrive.maps import Map, Obstacle
+    from rrtdrive.planning import make_planner
+    from rrtdrive.types import Budget, Pose
+
+    cars = [Obstacle((x, 1.1), (4.3, 1.8)) for x in (4.15, 9.45, 14.75, 20.05)]
+    cars += [Obstacle((31.23 + 5.3 * k, 1.1), (4.3, 1.8)) for k in range(4)]
+    gap_start, gap_end = 20.05 + 2.15, 31.23 - 2.15
+    goal_x = (gap_start + gap_end) / 2 - (CAR.length / 2 - CAR.rear_overhang)
+    m = Map("kerb gap", (0.0, 0.0, 52.28, 8.0), tuple(cars), Pose(2.0, 5.0, 0.0),
+            Pose(goal_x, 1.1, 0.0))
+    problem = PlanningProblem.from_map(m, reverse=True)
+    res = make_planner("improved-rrt-connect").solve(problem, np.random.default_rng(0), Budget())
+    assert res.success, res.message
+    assert len(res.path.cusps) >= 1
+    assert verify_path(m, res.path, max_sharpness=0.2, clearance=0.05).ok
