@@ -238,7 +238,7 @@ def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
             # little (random goal 183 of seed 2 threads a gap keeping 0.058 m there).
             tightest = fine.tightened()
             stages.append(_Stage("tight", tightest, PROOFS, after))
-        if config.wide_radius_factor > tightest.radius_factor:
+        if config.wide_radius_factor > config.radius_factor:  # widening on, as for "wide"
             # Every connection of the tightest search rejected (the ramps of its full-lock
             # words cut a corner): once more turning wider. A goal in the middle of a
             # kerbside gap of 1.6 car lengths (1.29 m free each way) solves so, in about
@@ -338,11 +338,13 @@ def hybrid_query(
 
     def how_of(c: HybridConfig) -> str:
         """How a last-resort search differed from the others, for the messages."""
+        wider = f"turning with radius {c.radius_factor:g} / kappa_max"
         if c.body_clearance < config.body_clearance:
             keeps = query_clearance(problem, c.body_clearance, have)
-            return f"keeping only {keeps:.2f} m body clearance"
+            tail = f", {wider}" if c.radius_factor > config.radius_factor else ""
+            return f"keeping only {keeps:.2f} m body clearance{tail}"
         if c.radius_factor > config.radius_factor:
-            return f"turning with radius {c.radius_factor:g} / kappa_max"
+            return wider
         if c.max_solutions > config.max_solutions:
             return "going on through rejected connections"
         return ""
