@@ -186,3 +186,59 @@ def test_cli_plan_on_timeout_exits_1_naming_the_cap(capsys):
     assert res["message"].startswith("stopped by the 1e-09 s safety cap after")
     assert "raise --max-time or lower --max-iterations" in res["message"]
     assert "timeout" in err and "safety cap" in err
+
+
+def _capped_at(monkeypatch, n: int | None) -> list[int]:
+    """Stopwatch.expired latches the cap from its ``n``-th call on (``None``: never)."""
+    calls = [0]
+    real = Stopwatch.expired
+
+    def expired(self: Stopwatch) -> bool:
+        calls[0] += 1
+        if n is not None and calls[0] >= n:
+            self.capped = True
+        return real(self)
+
+    monkeypatch.setattr(Stopwatch, "expired", expired)
+    return calls
+
+
+CAP_QUERIES = {
+    # The default, reverse allowed, a goal 0.1 m ahead and 1 mm aside: the cap met at the
+    # escalation's start kept the 61.3 m forward detour (exit 0) instead of a timeout.
+    "detour": ("improved-rrt-connect",
+               Map("open", (0.0, 0.0, 100.0, 100.0), (), Pose(50.0, 50.0, 0.0),
+                   Pose(50.1, 50.001, 0.0)), True),
+    # Hybrid A* forward on kerbside: the cap met between the ladder's searches ended
+    # proven_unreachable after the first grid (101-104 expansions instead of 105).
+    "ladder": ("hybrid-a-star", builtin_map("kerbside"), False),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("query", tuple(CAP_QUERIES))
+def test_the_cap_met_anywhere_is_a_timeout_or_changes_nothing(monkeypatch, query):
+    """Whichever check first finds the cap passed, the answer is the counted one or timeout.
+
+    The cap is forced at each call of ``Stopwatch.expired`` in turn (an audit forced it so
+    and found the two cases above).
+    """
+    name, m, reverse = CAP_QUERIES[query]
+    problem = PlanningProblem.from_map(m, reverse=reverse)
+
+    def solve():
+        return make_planner(name).solve(problem, np.random.default_rng(0), Budget())
+
+    calls = _capped_at(monkeypatch, None)
+    base = solve()
+    checks = calls[0]
+    assert checks > 0
+
+    def key(r):
+        return r.status, r.iterations, r.message, round(r.path.length, 9)
+
+    for n in range(1, checks + 2):
+        _capped_at(monkeypatch, n)
+        result = solve()
+        assert result.status is PlanStatus.TIMEOUT or key(result) == key(base), (n, result)
+        if result.status is PlanStatus.TIMEOUT:
+            assert "safety cap" in result.message and not result.success

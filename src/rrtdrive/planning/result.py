@@ -142,6 +142,13 @@ def run_query(
         result = already_there(planner, problem, watch)
     if result is None:
         result = search(watch)
+    if watch.capped and result.status is not PlanStatus.TIMEOUT:
+        # The cap was met on the way (an expired() check latched it) though the search
+        # answered otherwise: that answer depends on how far this machine got (item 4).
+        result = timeout_result(
+            result.planner, watch, result.iterations, result.trees, result.stats,
+            result.raw_path,
+        )  # fmt: skip
     # The grid's cell size, coarser than configured on a very big map.
     stats = {**result.stats, "grid_resolution_m": float(checker.resolution)}
     # Set-up the search met on its way (a map's first finer grid) is set-up too.

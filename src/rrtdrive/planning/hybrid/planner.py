@@ -19,7 +19,7 @@ from rrtdrive.planning.hybrid.path import BuiltPath
 from rrtdrive.planning.hybrid.query import HybridAnswer, hybrid_query
 from rrtdrive.planning.hybrid.resolution import PROOFS, dubins_table, free_cell_graph
 from rrtdrive.planning.hybrid.search import SearchOutcome
-from rrtdrive.planning.result import run_query, solved
+from rrtdrive.planning.result import run_query, solved, timeout_result
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus
 
@@ -154,6 +154,13 @@ def hybrid_result(
 ) -> PlanResult:
     """The :class:`PlanResult` of an answer: solved, or the failure its outcome names."""
     o = answer.outcome
+    if watch.capped:
+        # The cap, met anywhere (between the ladder's searches too), decides: the searches
+        # it skipped would have run on a faster machine (a ladder cut short after its first
+        # grid ended proven_unreachable, an audit).
+        return timeout_result(
+            planner, watch, o.expansions, answer.trees, stats, unit="expansions"
+        )
     if answer.path is None:
         status = PlanStatus.NO_PATH_IN_BUDGET
         if is_proof(o):
