@@ -6,12 +6,12 @@ Usage (OMPL lives in the lead's venv only; without it its rows are skipped)::
 
 The built-in ``kerbside`` map (:func:`rrtdrive.tight_maps.kerbside_map`) with its gap
 ``F`` car lengths long, for each ``F`` of ``--factors``: cars parked along the kerb, the
-goal parallel-parked in the gap 0.3 m from its rear car and from the kerb (with
-``--positions``, moved along the gap: 0 is 0.3 m from its rear car, 1 is 0.3 m from its
-front car). For each factor, position and seed (``--seeds``), in one run: the default
-planner and ``hybrid-a-star``, both with ``reverse``, on the counted 20 000-iteration
-budget (``--max-time`` is the cap), and OMPL's Reeds-Shepp RRTConnect with our exact
-body test as validity checker (``--ompl-time``; once per clearance of
+goal parallel-parked in the gap 0.3 m from its rear car and ``--kerb-offset`` (0.3 m)
+from the kerb; with ``--positions``, moved along the gap (0 is 0.3 m from its rear car,
+1 is 0.3 m from its front car). For each factor, position and seed (``--seeds``), in one
+run: the default planner and ``hybrid-a-star``, both with ``reverse``, on the counted 20
+000-iteration budget (``--max-time`` is the cap), and OMPL's Reeds-Shepp RRTConnect with
+our exact body test as validity checker (``--ompl-time``; once per clearance of
 ``--ompl-clearances``, default 0 and 0.15 m), as ``experiments/street_turns.py`` plans
 them; every path judged by ``verify_path`` with the 0.2 rad/m sharpness bound
 (``verified``) and without it (``any sharpness``). Our rows also give the body clearance
@@ -35,7 +35,7 @@ import coverage as cov  # noqa: E402  (the sibling scripts)
 import street_turns as st  # noqa: E402
 from results_io import numbers_above, write_results  # noqa: E402
 
-from rrtdrive.tight_maps import KERB_REAR_ROOM, kerbside_map  # noqa: E402
+from rrtdrive.tight_maps import KERB_OFFSET, KERB_REAR_ROOM, kerbside_map  # noqa: E402
 from rrtdrive.types import VehicleParams  # noqa: E402
 
 KERB_CAR = VehicleParams()
@@ -74,6 +74,9 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--factors", default="1.3,1.4,1.5,1.6,1.8,2.0,2.5",
                     help="gap lengths in car lengths (default 1.3,...,2.5)")  # fmt: skip
+    ap.add_argument("--kerb-offset", type=float, default=KERB_OFFSET,
+                    help=f"the parked cars' and the goal's distance from the kerb, m "
+                         f"(default {KERB_OFFSET:g})")  # fmt: skip
     ap.add_argument("--positions", default="0",
                     help="where in the gap the goal sits, 0 (0.3 m from the rear car) to 1 "
                          "(0.3 m from the front car); comma-separated (default 0)")  # fmt: skip
@@ -84,6 +87,8 @@ def main(argv: list[str] | None = None) -> int:
         positions = numbers_above(args.positions, "--positions", floor=-1e-12)
     except ValueError as err:
         ap.error(str(err))
+    if not 0.0 <= args.kerb_offset <= 1.0:
+        ap.error(f"--kerb-offset: must lie in [0, 1] m, got {args.kerb_offset:g}")
     if any(p > 1.0 for p in positions):
         ap.error(f"--positions: each must lie in [0, 1], got {args.positions!r}")
     st.check_run_options(ap, args)
@@ -93,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
     rows: dict[str, dict[str, list[dict[str, Any]]]] = {}
     for f in factors:
         for p in positions:
-            m = kerbside_map(f)
+            m = kerbside_map(f, args.kerb_offset)
             # The goal's free travel along the gap: 0.3 m from either car.
             travel = f * KERB_CAR.length - KERB_CAR.length - 2 * KERB_REAR_ROOM
             m = dataclasses.replace(m, goal=dataclasses.replace(m.goal, x=m.goal.x + p * travel))

@@ -161,11 +161,14 @@ KERB_STREET = 8.0
 KERB_REAR_ROOM = 0.3
 
 
-def kerbside_map(gap_factor: float = KERB_GAP_FACTOR) -> Map:
-    """Cars along the kerb (y = 0) with one gap of ``gap_factor`` car lengths; park in it."""
+def kerbside_map(gap_factor: float = KERB_GAP_FACTOR, kerb_offset: float = KERB_OFFSET) -> Map:
+    """Cars along the kerb (y = 0) with one gap of ``gap_factor`` car lengths; park in it.
+
+    The parked cars and the goal keep ``kerb_offset`` metres from the kerb.
+    """
     gap = gap_factor * _CAR.length
     pitch = _CAR.length + 1.0
-    y = KERB_OFFSET + _CAR.width / 2
+    y = kerb_offset + _CAR.width / 2
     gap_start = 30.0  # front bumper of the car behind the gap
     obstacles = []
     x = gap_start - _CAR.length / 2
