@@ -99,12 +99,8 @@ def test_the_detour_is_kept_when_the_reversing_search_finds_nothing(
     assert verify_path(m, res.path, max_sharpness=0.2).ok
 
 
-def test_a_detour_kept_over_a_longer_escalation_is_the_fallback_s(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    # The escalation solves, but longer than the detour: the detour's path is returned and
-    # its stage is the fallback's (the merged counters said "hybrid-a-star"), with the
-    # clearance the detour's check kept.
+def _escalation_finds_500_m(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The escalation solves, but with a 500 m straight (longer than any detour here)."""
     real = improved_planner.escalate
 
     def longer(failed, *args, **kwargs):
@@ -113,6 +109,15 @@ def test_a_detour_kept_over_a_longer_escalation_is_the_fallback_s(
         return dataclasses.replace(out, path=Path(rows, rows[[0, -1], :2]))
 
     monkeypatch.setattr(improved_planner, "escalate", longer)
+
+
+def test_a_detour_kept_over_a_longer_escalation_is_the_fallback_s(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # The escalation solves, but longer than the detour: the detour's path is returned and
+    # its stage is the fallback's (the merged counters said "hybrid-a-star"), with the
+    # clearance the detour's check kept.
+    _escalation_finds_500_m(monkeypatch)
     m = _open_map(Pose(50.0, 50.1, math.pi / 2))
     res = _solve(m, reverse=True)
     assert res.success and "found a longer path (500.0 m)" in res.message, res.message
@@ -154,14 +159,7 @@ def test_with_reverse_a_tree_path_detour_gives_way_to_a_shorter_reversing_path()
 def test_a_tree_path_detour_is_kept_over_a_longer_escalation(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    real = improved_planner.escalate
-
-    def longer(failed, *args, **kwargs):
-        out = real(failed, *args, **kwargs)
-        rows = np.column_stack([np.linspace(0, 500, 2001), np.zeros((2001, 3)), np.ones(2001)])
-        return dataclasses.replace(out, path=Path(rows, rows[[0, -1], :2]))
-
-    monkeypatch.setattr(improved_planner, "escalate", longer)
+    _escalation_finds_500_m(monkeypatch)
     m = _parking_lot_goal_93()
     res = _solve(m, reverse=True, reverse_detour_tree=True)
     assert res.success and "found a longer path (500.0 m)" in res.message, res.message
