@@ -304,11 +304,20 @@ def test_a_proof_from_the_goal_is_named_only_for_a_pocket_behind_it() -> None:
     # A 15.2 m street: the goal across it, facing back, has 30 m and more behind it. The
     # search's exhaustion from the goal was reported as "it can only be reached in
     # reverse"; an audit's forward path keeping 0.25 m passed verify. A goal in a pocket
-    # (less than 10 m behind on every steady steering) keeps its line (goal 75 above).
+    # (less than 20 m behind on every steady steering) keeps its line (goal 75 above, and
+    # the corridor below).
     m = Map("wide street", (0.0, 0.0, 80.0, 15.2), (), Pose(10.0, 1.2, 0.0),
             Pose(10.0, 14.0, math.pi))
     found = diagnose(problem(m), no_approach=True)
     assert found is None or found.kind is not DiagnosisKind.NEEDS_REVERSE, found.message
+    # A dead-end corridor 3 m wide, the goal facing out 10.1 m from its closed end: its
+    # line was lost when the pocket ended at 10 m (a regression audit).
+    walls = (Obstacle((32.5, 12.0), (15.0, 1.0)), Obstacle((32.5, 8.0), (15.0, 1.0)))
+    corridor = Map("corridor", (0.0, 0.0, 40.0, 20.0), walls, Pose(5.0, 10.0, 0.0),
+                   Pose(29.0, 10.0, math.pi))
+    found = diagnose(problem(corridor), no_approach=True)
+    assert found.kind is DiagnosisKind.NEEDS_REVERSE, found
+    assert found.numbers["room_behind_m"] == pytest.approx(10.1, abs=0.02)
 
 
 def test_u_turn_in_a_narrow_street():

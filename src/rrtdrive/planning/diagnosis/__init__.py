@@ -10,7 +10,7 @@ and measures, from the map's geometry, the first of these that holds:
    (curvatures from -kappa_max to kappa_max) with the exact body test; less than a
    car length on every arc is too little for the smallest manoeuvre. With room the
    other way the pose is reachable in reverse only; with none either way it is boxed in.
-   Forward only, a goal in a pocket (less than 10 m behind it on every steady steering)
+   Forward only, a goal in a pocket (less than 20 m behind it on every steady steering)
    that Hybrid A*'s search from the goal proved no way into (``no_approach``: every pose
    it can be driven into from, explored, and none leads to the start) is
    ``needs_reverse`` too, with that room measured (:func:`~.checks.no_forward_arrival`;
@@ -103,7 +103,7 @@ def diagnose(
     no_approach : bool
         Whether a Hybrid A* search from the goal proved, forward only, that no way in
         reaches the start (``no_approach``): with a pocket behind the goal (less than
-        :data:`~.checks.POCKET_M`), that proof is the finding
+        :data:`~.checks.ARRIVAL_POCKET_M`), that proof is the finding
         (:func:`~.checks.no_forward_arrival`), before the u-turn's.
     start_exhausted : bool
         Likewise from the start: every forward way on explored, none reached the goal;

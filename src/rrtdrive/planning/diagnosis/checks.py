@@ -141,13 +141,16 @@ def room_at_ends(
 
 
 
-#: A start (goal) whose longest steady-steering run ahead (behind) is shorter than this
-#: (metres) sits in a pocket: :func:`no_forward_departure` (:func:`no_forward_arrival`)
-#: names it. With more room the search's proof is about the whole region the car can
-#: drive in on its lattice, which is no proof off it: a 15.2 m street's forward U-turn to
-#: a goal 30 m clear behind was "only in reverse" (an audit; a hand-made forward path
-#: passes verify).
+#: A start whose longest steady-steering run ahead is shorter than this (metres) sits in a
+#: pocket: :func:`no_forward_departure` names it. With more room ahead the proof is about
+#: the whole region the car can drive forward in, which the room ahead does not measure.
 POCKET_M = 10.0
+#: Likewise behind a goal, for :func:`no_forward_arrival`. With more room the search's
+#: exhaustion from the goal is about a wide region on its lattice, which is no proof off
+#: it: a 15.2 m street's forward U-turn to a goal 30 m clear behind was "only in reverse"
+#: (an audit; a hand-made forward path passes verify). Dead-end corridors of 10-13 m are
+#: within it (a regression audit: at 10 m their lines were lost).
+ARRIVAL_POCKET_M = 20.0
 
 
 def no_forward_arrival(m: Map, checker: CollisionChecker, goal: Pose) -> Diagnosis | None:
@@ -156,14 +159,14 @@ def no_forward_arrival(m: Map, checker: CollisionChecker, goal: Pose) -> Diagnos
     Called when the search from the goal, driving it backwards on the search's arcs, ran
     out of states without reaching the start (``no_approach``) while the room behind
     the goal is a car length or more (else :func:`room_at_ends` speaks). Only a pocket
-    behind the goal (less than :data:`POCKET_M` on every steady steering) is named, with
-    what stops the straight run back; ``None`` otherwise.
+    behind the goal (less than :data:`ARRIVAL_POCKET_M` on every steady steering) is
+    named, with what stops the straight run back; ``None`` otherwise.
     """
     v = m.vehicle
-    run = best_run(checker, goal, -1, v, POCKET_M)
-    if run >= POCKET_M:
+    run = best_run(checker, goal, -1, v, ARRIVAL_POCKET_M)
+    if run >= ARRIVAL_POCKET_M:
         return None
-    straight, blocker = _straight_stop(checker, goal, -1, v, POCKET_M)
+    straight, blocker = _straight_stop(checker, goal, -1, v, ARRIVAL_POCKET_M)
     numbers = {"room_behind_m": run, "straight_gap_m": straight}
     behind = ""
     if blocker is not None:

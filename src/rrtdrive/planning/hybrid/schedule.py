@@ -40,11 +40,10 @@ def alternate(
     """Run the searches in turns of ``first``, ``first``, ``2 first``, ``2 first``, ... expansions.
 
     The turns are counted in expansions, never in time, so the schedule is the
-    same on any machine. The search from the start running out of states ends the
-    query (the goal is unreachable on its lattice); so does the search from the goal
-    (no approach exists on its lattice) when it ran out within ``first`` expansions (a
-    pocket); after more, the search from the start goes on alone (the goal's lattice
-    is not the start's: its shots may still reach the goal).
+    same on any machine. Either search running out of states ends the query: from
+    the start it proves the goal unreachable, from the goal that no approach exists,
+    each on its own lattice only (the other side's shots may reach what it cannot: a
+    15.2 m street's forward U-turn that a goal-first search "proves" impossible).
     ``turn_first``: the multi-point turn tried once, after the first turn from the
     start (each of its moves counted as an expansion). ``guide``: the searches'
     new estimates, taken at the first turn that starts with ``guide_after`` or more
@@ -54,7 +53,6 @@ def alternate(
     outcomes = [SearchOutcome("expansions", 0, 0, 0, 0) for _ in searches]
     k = 1 if goal_first and len(searches) > 1 else 0
     last, turn, used = (k - 1) % len(searches), max(1, first), 0  # turns double after last
-    goal_done = False
     while True:
         search, accept = searches[k]
         if guide is not None and used >= guide_after:
@@ -70,17 +68,6 @@ def alternate(
         before = outcomes[k].expansions
         path, outcomes[k] = search.run(accept, before + step, watch.expired)
         used += outcomes[k].expansions - before
-        if (
-            path is None and k == 1 and outcomes[1].reason == "exhausted"
-            and outcomes[1].expansions >= first and used < budget and not goal_done
-        ):
-            # The goal's side ran out of states after a wide approach: a proof on its own
-            # lattice only; the start's shots into the goal may still find a way (a 15.2 m
-            # street's forward U-turn: the goal's side ran out after 405 expansions, the
-            # start's solves in 472; an audit). A pocket's few expansions end the query.
-            goal_done = True
-            k = 0
-            continue
         if path is not None or outcomes[k].reason != "expansions" or used >= budget:
             break
         if turn_first is not None and k == 0 and not watch.expired():
@@ -98,12 +85,10 @@ def alternate(
                 break
         if k == last:
             turn *= 2
-        k = 0 if goal_done else (k + 1) % len(searches)
+        k = (k + 1) % len(searches)
     if len(outcomes) == 1:
         return path, outcomes[0]
     reason = outcomes[k].reason
     if reason == "exhausted" and k == 1:
         reason = "no_approach"  # exhausted from the goal's side
-    elif goal_done and reason == "exhausted":
-        reason = "no_approach"  # the start's side too, after the goal's
     return path, SearchOutcome.total(reason, outcomes)
