@@ -112,7 +112,9 @@ def test_a_syntax_error_names_its_column_and_the_text_before_it(tmp_path):
     assert message.endswith(f"{text[at - 10 : at]},]')"), message
 
 
-@pytest.mark.parametrize("obstacle", [{"polygon": [[0, 0], [1, 0], [1, 1]]}, {"center": [1, 1]}])
+@pytest.mark.parametrize(
+    "obstacle", [{"polygon": [[0, 0], [1, 0], [1, 1]]}, {"center": [1, 1]}, [10, 10, 2, 2]]
+)
 def test_an_obstacle_in_another_shape_is_told_the_rectangle_format(obstacle):
     data = _base()
     data["obstacles"] = [obstacle]

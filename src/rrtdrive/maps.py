@@ -293,7 +293,8 @@ def map_from_json(
     obstacles = []
     for i, item in enumerate(raw_obstacles):
         if not isinstance(item, dict):
-            raise InputError(f"obstacles[{i}]: expected an object, got {brief_repr(item)}")
+            got = brief_repr(item)
+            raise InputError(f"obstacles[{i}]: expected an object, got {got}; {_RECTANGLES}")
         bad = set(item) - _OBSTACLE_KEYS
         if bad:
             raise InputError(f"obstacles[{i}]: unknown key(s) {sorted(bad)}; {_RECTANGLES}")
