@@ -16,17 +16,18 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 import sys
 from pathlib import Path as FsPath
 
 import numpy as np
 import pytest
 
-from rrtdrive.maps import builtin_map
+from rrtdrive.maps import Map, builtin_map
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.planning.hybrid import HybridConfig
 from rrtdrive.sim.tasks import make_scenario
-from rrtdrive.types import Budget, InputError, PlanStatus
+from rrtdrive.types import Budget, InputError, PlanStatus, Pose
 from rrtdrive.verify import verify_path
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "experiments"))
@@ -374,3 +375,19 @@ def test_searches_after_no_approach_start_from_the_goal() -> None:
     # others from the goal alone.
     assert result.message.count("ran out of ways to arrive at the goal") == 4, result.message
     assert turn < result.iterations < 2 * turn, result.iterations
+
+
+def test_the_goal_side_goes_first_only_for_a_goal_in_a_pocket() -> None:
+    # A street 15.2 m wide, the goal across it facing back, 30 m clear behind it: a forward
+    # U-turn at full lock keeping 0.05 m fits. Since session 35 every search after one whose
+    # goal side ran out gave the goal's side the first turn; here it ran out after 405
+    # expansions before the start's side, whose shots solve it, had a turn, and the query
+    # ended proven_unreachable (an audit refuted it with a verified forward path). The
+    # goal's side now goes first only for a goal in a pocket (goal 20 above: it keeps its
+    # few expansions).
+    m = Map("wide street", (0.0, 0.0, 80.0, 15.2), (), Pose(10.0, 1.2, 0.0),
+            Pose(10.0, 14.0, math.pi))
+    result = _solve(PlanningProblem.from_map(m), 20000)
+    assert result.status is PlanStatus.SOLVED, result.message
+    assert len(result.path.cusps) == 0
+    assert verify_path(m, result.path, max_sharpness=0.2, clearance=0.05).ok

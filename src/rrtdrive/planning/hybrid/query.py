@@ -19,6 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
+from rrtdrive.planning.diagnosis.checks import ARRIVAL_POCKET_M
+from rrtdrive.planning.diagnosis.measures import best_run
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.path import BuiltPath
 from rrtdrive.planning.hybrid.resolution import (
@@ -303,6 +305,15 @@ def hybrid_query(
     tried: list[tuple[HybridConfig, SearchOutcome, int | None]] = []
     found: tuple[BuiltPath | None, SearchOutcome, tuple[Tree, ...]]
 
+    @functools.cache
+    def goal_in_pocket() -> bool:
+        # Only where the goal sits in a pocket (less than ARRIVAL_POCKET_M behind it on
+        # every steady steering) is the goal's side running out likely a proof off its
+        # lattice too: a 15.2 m street's goal 30 m clear behind ran out after 405
+        # expansions, before the start's side, whose shots solve it, had a turn (an audit).
+        room = best_run(problem.checker, problem.goal, -1, problem.vehicle, ARRIVAL_POCKET_M)
+        return room < ARRIVAL_POCKET_M
+
     def run(cfg: HybridConfig, share: float) -> None:
         nonlocal left, found
         allowed = math.ceil(left * share) if share < 1.0 else left
@@ -312,7 +323,7 @@ def hybrid_query(
         # would be spent for nothing. The 13 random goals that fail forward on parking_lot
         # spent 2 000-2 500 expansions so over five searches, about 90 % of them from the
         # start (session 35).
-        goal_first = bool(tried) and tried[-1][1].reason == "no_approach"
+        goal_first = bool(tried) and tried[-1][1].reason == "no_approach" and goal_in_pocket()
         found = search_at_resolution(
             problem, allowed, watch, cfg, reverse, smoothing, have, goal_first
         )
