@@ -97,6 +97,12 @@ def test_boxed_in_between_two_walls():
     assert found.numbers["room_ahead_m"] == pytest.approx(0.5, abs=2e-3)
     assert found.numbers["room_behind_m"] == pytest.approx(0.6, abs=2e-3)
     assert "boxed in" in found.message and "at least one gear change" in found.message
+    assert found.message.endswith("(try --reverse)")
+    # With reverse allowed the search had gear changes: saying it needs one told nothing.
+    rev = diagnose(PlanningProblem.from_map(m, reverse=True), tree_edges=False)
+    assert rev.kind is DiagnosisKind.BOXED_IN and rev.numbers == found.numbers
+    assert rev.message.endswith("short moves with gear changes in that room, and the search "
+                                "found none that fits")
 
 
 def test_walled_off_comes_before_the_room_at_the_ends():

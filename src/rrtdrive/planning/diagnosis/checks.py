@@ -109,12 +109,19 @@ def room_at_ends(
         numbers = {"room_ahead_m": ahead, "room_behind_m": behind, "needed_m": need}
         tip = "" if reverse else " (try --reverse)"
         if run_rev < need:
+            verb = "leaving" if label == "start" else "reaching"
+            # With reverse already allowed, "at least one gear change" told the user
+            # nothing (a user-map audit): the search had them and found no way.
+            takes = (
+                f"{verb} it takes short moves with gear changes in that room, and the search "
+                "found none that fits"
+                if reverse
+                else f"{verb} it takes at least one gear change{tip}"
+            )
             return Diagnosis(
                 DiagnosisKind.BOXED_IN,
                 f"the {label} is boxed in: on any steady steering the car has at most "
-                f"{behind:.2f} m behind it and {ahead:.2f} m ahead of it, {least}; "
-                f"{'leaving' if label == 'start' else 'reaching'} it takes at least one "
-                f"gear change{tip}",
+                f"{behind:.2f} m behind it and {ahead:.2f} m ahead of it, {least}; {takes}",
                 numbers,
             )
         if reverse:
