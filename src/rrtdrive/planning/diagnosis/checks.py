@@ -44,6 +44,7 @@ __all__ = [
     "narrow_passage",
     "no_forward_arrival",
     "no_forward_departure",
+    "pocket_run",
     "room_at_ends",
     "tight_clearance",
     "u_turn",
@@ -160,6 +161,39 @@ POCKET_M = 10.0
 ARRIVAL_POCKET_M = 20.0
 
 
+def pocket_run(
+    checker: CollisionChecker, pose: Pose, direction: int, vehicle: VehicleParams, limit: float
+) -> float | None:
+    """The longest steady-steering run from ``pose`` in ``direction`` if under ``limit``.
+
+    ``None`` when a run reaches ``limit``: no pocket. Hybrid A* gives the goal's side the
+    first turn only for a goal in such a pocket (``direction`` -1, :data:`ARRIVAL_POCKET_M`).
+    """
+    run = best_run(checker, pose, direction, vehicle, limit)
+    return run if run < limit else None
+
+
+def _pocket(
+    checker: CollisionChecker, pose: Pose, direction: int, vehicle: VehicleParams,
+    limit: float, room_key: str, beyond: str,
+) -> tuple[float, dict[str, float], str] | None:
+    """A pocket's run, its numbers and the words for what stops the straight run in it.
+
+    ``None`` without a pocket (:func:`pocket_run`); ``beyond`` places the blocker
+    ("ahead of its nose").
+    """  # fmt: skip
+    run = pocket_run(checker, pose, direction, vehicle, limit)
+    if run is None:
+        return None
+    straight, blocker = _straight_stop(checker, pose, direction, vehicle, limit)
+    numbers = {room_key: run, "straight_gap_m": straight}
+    words = ""
+    if blocker is not None:
+        numbers["obstacle"] = blocker
+        words = f" ({obstacle_name(blocker)} {straight:.2f} m {beyond})"
+    return run, numbers, words
+
+
 def no_forward_arrival(m: Map, checker: CollisionChecker, goal: Pose) -> Diagnosis | None:
     """``needs_reverse``: a forward arrival that Hybrid A* proved impossible, with the room.
 
@@ -169,23 +203,18 @@ def no_forward_arrival(m: Map, checker: CollisionChecker, goal: Pose) -> Diagnos
     behind the goal (less than :data:`ARRIVAL_POCKET_M` on every steady steering) is
     named, with what stops the straight run back; ``None`` otherwise.
     """
-    v = m.vehicle
-    run = best_run(checker, goal, -1, v, ARRIVAL_POCKET_M)
-    if run >= ARRIVAL_POCKET_M:
+    found = _pocket(
+        checker, goal, -1, m.vehicle, ARRIVAL_POCKET_M, "room_behind_m", "behind its rear"
+    )
+    if found is None:
         return None
-    straight, blocker = _straight_stop(checker, goal, -1, v, ARRIVAL_POCKET_M)
-    numbers = {"room_behind_m": run, "straight_gap_m": straight}
-    behind = ""
-    if blocker is not None:
-        numbers["obstacle"] = blocker
-        behind = f" ({obstacle_name(blocker)} {straight:.2f} m behind its rear)"
-    room = f"at most {run:.2f} m on any steady steering{behind}"
+    run, numbers, behind = found
     return Diagnosis(
         DiagnosisKind.NEEDS_REVERSE,
-        f"a forward arrival at the goal comes from behind it, where the car has {room}, "
-        "and the search drove every way in backwards from the goal without reaching the "
-        "start (a proof at its resolution): it can only be reached in reverse (try "
-        "--reverse)",
+        f"a forward arrival at the goal comes from behind it, where the car has at most "
+        f"{run:.2f} m on any steady steering{behind}, and the search drove every way in "
+        "backwards from the goal without reaching the start (a proof at its resolution): "
+        "it can only be reached in reverse (try --reverse)",
         numbers,
     )
 
@@ -198,16 +227,10 @@ def no_forward_departure(m: Map, checker: CollisionChecker, start: Pose) -> Diag
     or more (else :func:`room_at_ends` speaks). Only a pocket (less than
     :data:`POCKET_M` ahead on every steady steering) is named; ``None`` otherwise.
     """
-    v = m.vehicle
-    run = best_run(checker, start, 1, v, POCKET_M)
-    if run >= POCKET_M:
+    found = _pocket(checker, start, 1, m.vehicle, POCKET_M, "room_ahead_m", "ahead of its nose")
+    if found is None:
         return None
-    straight, blocker = _straight_stop(checker, start, 1, v, POCKET_M)
-    numbers = {"room_ahead_m": run, "straight_gap_m": straight}
-    ahead = ""
-    if blocker is not None:
-        numbers["obstacle"] = blocker
-        ahead = f" ({obstacle_name(blocker)} {straight:.2f} m ahead of its nose)"
+    run, numbers, ahead = found
     return Diagnosis(
         DiagnosisKind.NEEDS_REVERSE,
         f"driving forward, the start leads into a pocket: the car has at most {run:.2f} m "

@@ -120,15 +120,10 @@ def escalate(
         safety cap stopped the search; else ``failed`` with the search's outcome
         added to its message and ``stats``.
     """
-    if failed.success or failed.status not in ESCALATES_FROM:
+    # The cap met here latches it: run_query then answers timeout (whatever the caller
+    # made of this failure: with reverse it kept a forward detour; an audit).
+    if failed.success or failed.status not in ESCALATES_FROM or watch.expired():
         return failed
-    if watch.expired():
-        # The cap came before the search: what it would have found depends on the machine
-        # (a forward detour was kept, a failure lost the search's part; an audit).
-        out = timeout_result(
-            failed.planner, watch, failed.iterations, failed.trees, failed.stats, failed.raw_path
-        )
-        return dataclasses.replace(out, message=f"{out.message} (before the Hybrid A* escalation)")
     cfg = config or HybridConfig()
     reverse = bool(getattr(problem, "reverse", False))
     answer = hybrid_query(problem, budget, watch, cfg, reverse, smoothing)

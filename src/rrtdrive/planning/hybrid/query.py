@@ -19,8 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
-from rrtdrive.planning.diagnosis.checks import ARRIVAL_POCKET_M
-from rrtdrive.planning.diagnosis.measures import best_run
+from rrtdrive.planning.diagnosis.checks import ARRIVAL_POCKET_M, pocket_run
 from rrtdrive.planning.hybrid.config import HybridConfig
 from rrtdrive.planning.hybrid.path import BuiltPath
 from rrtdrive.planning.hybrid.resolution import (
@@ -233,8 +232,8 @@ def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
         after = (*PROOFS, "rejected", "expansions")
         last = fine is config
         share = 1.0 if last else config.refine_share
-        stages.append(_Stage("tight", config.tightened(), PROOFS, after, share))
         tightest = config.tightened()
+        stages.append(_Stage("tight", tightest, PROOFS, after, share))
         if not last:
             # Its proof holds on the first grid only: the finest once more keeping as
             # little (random goal 183 of seed 2 threads a gap keeping 0.058 m there).
@@ -311,8 +310,10 @@ def hybrid_query(
         # every steady steering) is the goal's side running out likely a proof off its
         # lattice too: a 15.2 m street's goal 30 m clear behind ran out after 405
         # expansions, before the start's side, whose shots solve it, had a turn (an audit).
-        room = best_run(problem.checker, problem.goal, -1, problem.vehicle, ARRIVAL_POCKET_M)
-        return room < ARRIVAL_POCKET_M
+        return (
+            pocket_run(problem.checker, problem.goal, -1, problem.vehicle, ARRIVAL_POCKET_M)
+            is not None
+        )
 
     def run(cfg: HybridConfig, share: float) -> None:
         nonlocal left, found
