@@ -10,7 +10,8 @@ For random queries of ``experiments/coverage.py`` (``parking_lot``; the set of
 ``--seed``, default 1, with ``--count`` poses, default 100) it measures, in one run:
 
 - OMPL's Dubins RRT path (as ``coverage.py`` plans it: our exact body test as validity
-  checker, 10 s, simplified, interpolated every 0.1 m): its length, its least body
+  checker, 10 s, simplified, interpolated every 0.1 m; ``--ompl-clearance`` the body
+  clearance its states keep, ``--ompl-tries`` the seeds tried): its length, its least body
   clearance (``CollisionChecker.body_clearance``) and where, and the largest
   curvature jump between its arcs (it has no steering-rate bound);
 - ``hybrid-a-star`` forward only under settings that drop our guarantees one by one:
@@ -53,6 +54,7 @@ SHORT = {
     "arcs-0.05": "0.05 m clearance, exact arcs (no sharpness bound)",
     "full-lock-0.05": "0.05 m clearance, full lock (radius 1.0 / kappa_max)",
     "arcs-full-lock-0.05": "0.05 m clearance, full lock, exact arcs",
+    "fine-full-lock-0.05": "0.05 m clearance, full lock, 0.2 m / 1.5 deg grid, 0.5 m steps",
 }
 #: Our planner's settings, from the default to none of the guarantees but the body's.
 VARIANTS = {
@@ -75,6 +77,11 @@ VARIANTS = {
         "body_clearance=0.05:min_clearance=0.05:curvatures=11:curve=arcs:coarse_after=0:"
         "radius_factor=1.0"
     ),
+    # Session 37: the same with ramps on a finer grid (refined once: 0.1 m / 0.75 deg).
+    "0.05 m clearance, full lock, 0.2 m / 1.5 deg grid, 0.5 m steps": (
+        "body_clearance=0.05:min_clearance=0.05:coarse_after=0:radius_factor=1.0:"
+        "xy_resolution=0.2:yaw_resolution=0.02618:step=0.5:curvatures=9"
+    ),
 }
 
 
@@ -93,14 +100,29 @@ def _item(query: str, seed: int = 1, count: int = 100) -> dict[str, Any]:
     return {"map": "parking_lot", "vary": vary, "index": i, "pose": pose.as_tuple()}
 
 
-def ompl_row(item: dict[str, Any], seconds: float) -> dict[str, Any] | None:
-    """OMPL's Dubins RRT on the query, as coverage.py runs it, with its path's figures."""
+def ompl_row(
+    item: dict[str, Any], seconds: float, clearance: float = 0.0, tries: int = 1
+) -> dict[str, Any] | None:
+    """OMPL's Dubins RRT on the query, as coverage.py runs it, with its path's figures.
+
+    ``clearance``: what OMPL's states must keep (coverage.py's ``ompl-dubins-rrt@0.05m``);
+    ``tries``: OMPL seeds tried (coverage.py's, then + 1000, + 2000, ...) until one
+    solves; the row says how many were tried and which solved.
+    """
     if cov.availability("ompl-dubins-rrt") is not None:
         return None
-    _, problem = cov._problem(item)
-    solve_s, _, length, path = cov.solve_ompl(problem, item["index"], "ompl-dubins-rrt", seconds)
+    m, problem = cov._problem(item)
+    spent = 0.0
+    for k in range(tries):
+        index = item["index"] + 1000 * k
+        solve_s, _, length, path = cov.solve_ompl(
+            problem, index, "ompl-dubins-rrt", seconds, clearance, cap_at_ends=clearance > 0
+        )
+        spent += solve_s
+        if path is not None:
+            break
     if path is None:
-        return {"solved": False, "time_s": solve_s}
+        return {"solved": False, "time_s": spent, "tries": tries, "clearance_m": clearance}
     states = path.samples[:, :3]  # forward only: Dubins curves have no cusps
     clear = np.array([problem.checker.body_clearance(p) for p in states])
     ds = np.hypot(*np.diff(states[:, :2], axis=0).T)
@@ -111,6 +133,9 @@ def ompl_row(item: dict[str, Any], seconds: float) -> dict[str, Any] | None:
         "min_clearance_m": float(clear[worst]),
         "min_clearance_at": [round(float(v), 3) for v in states[worst]],
         "max_curvature_jump": float(np.max(np.abs(np.diff(kappa)))),
+        "clearance_m": clearance, "tries": k + 1,
+        # The independent check at the clearance OMPL kept, sharpness aside (it has none).
+        "verified_but_sharpness": verify_path(m, path, clearance=clearance).ok,
     }  # fmt: skip
 
 
@@ -167,6 +192,12 @@ def report(payload: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _kept(ompl: dict[str, Any]) -> str:
+    """What OMPL's states kept, for its line (nothing said for 0 m, the default)."""
+    kept = ompl.get("clearance_m", 0.0)
+    return f" keeping {kept:g} m" if kept else ""
+
+
 def _query_lines(payload: dict[str, Any], expansions: int) -> list[str]:
     """One query's OMPL line, our settings' table and messages."""
     lines: list[str] = []
@@ -174,13 +205,18 @@ def _query_lines(payload: dict[str, Any], expansions: int) -> list[str]:
     if o is None:
         lines.append("OMPL: not installed, skipped.")
     elif not o["solved"]:
-        lines.append(f"OMPL Dubins RRT: no path in {o['time_s']:.1f} s.")
+        lines.append(
+            f"OMPL Dubins RRT{_kept(o)}: no path in {o['time_s']:.1f} s"
+            f" ({o.get('tries', 1)} seed(s))."
+        )
     else:
         lines.append(
-            f"OMPL Dubins RRT: {o['length_m']:.1f} m in {o['time_s']:.2f} s; least body "
+            f"OMPL Dubins RRT{_kept(o)}: {o['length_m']:.1f} m in {o['time_s']:.2f} s "
+            f"(seed {o.get('tries', 1)} of those tried); least body "
             f"clearance **{o['min_clearance_m']:.4f} m** at pose {o['min_clearance_at']}; "
             f"largest curvature jump between its arcs {o['max_curvature_jump']:.3f} 1/m "
-            "(no steering-rate bound)."
+            "(no steering-rate bound); `rrtdrive.verify` at that clearance, sharpness aside: "
+            + ("passes." if o.get("verified_but_sharpness") else "fails.")
         )
     lines += [
         "", f"`hybrid-a-star` forward only, {expansions} expansions:", "",
@@ -213,11 +249,17 @@ def main(argv: list[str] | None = None) -> int:
                     help="our counted budget (default: %(default)s)")
     ap.add_argument("--ompl-time", type=positive_float, default=10.0,
                     help="OMPL's time cap [s] (default: %(default)s)")
+    ap.add_argument("--ompl-clearance", type=float, default=0.0,
+                    help="body clearance OMPL's states keep, metres, 0-1 (default: 0)")
+    ap.add_argument("--ompl-tries", type=positive_int, default=1,
+                    help="OMPL seeds tried until one solves (default: %(default)s)")
     ap.add_argument("--out", default="results/forward_misses",
                     help="directory for forward_misses.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)  # fmt: skip
     if args.expansions < 1 or args.ompl_time <= 0 or args.count < 1:
         ap.error("--expansions and --count must be >= 1 and --ompl-time > 0")
+    if not 0.0 <= args.ompl_clearance <= 1.0:
+        ap.error(f"--ompl-clearance: expected metres in 0-1, got {args.ompl_clearance}")
     variants = [v for v in args.variants.split(",") if v]
     unknown = [v for v in variants if v not in SHORT]
     if unknown or not variants:
@@ -231,7 +273,7 @@ def main(argv: list[str] | None = None) -> int:
     queries = []
     for query, item in items:
         print(f"{query}: OMPL ...", file=sys.stderr, flush=True)
-        ompl = ompl_row(item, args.ompl_time)
+        ompl = ompl_row(item, args.ompl_time, args.ompl_clearance, args.ompl_tries)
         ours = {}
         for name in variants:
             print(f"{query}: {name} ...", file=sys.stderr, flush=True)

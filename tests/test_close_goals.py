@@ -4,8 +4,8 @@ Straight ahead, the default planner drives the straight line however short it is
 goal under 0.111 m ahead used to get a 61 m Dubins loop: the direct connection's
 heading legs were skipped below 0.05 m). With reverse allowed, a forward Dubins path
 much longer than the Reeds-Shepp distance is kept only when the reversing search finds
-nothing shorter (``ImprovedConfig.reverse_detour_ratio``); a forward tree path too when
-``reverse_detour_tree`` is on.
+nothing shorter (``ImprovedConfig.reverse_detour_ratio``); a forward tree path too
+(``reverse_detour_tree``, on by default), unless the obstacles make every path that long.
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ from rrtdrive.maps import Map, builtin_map
 from rrtdrive.planning import PlanningProblem
 from rrtdrive.planning.hybrid.escalation import stage_of
 from rrtdrive.planning.improved import ImprovedConfig, ImprovedRRTConnect
+from rrtdrive.planning.improved.detour import around_obstacles, detour_ratio
 from rrtdrive.types import Budget, InputError, Path, PlanStatus, Pose
 from rrtdrive.verify import verify_path
 
@@ -141,19 +142,39 @@ def _parking_lot_goal_93() -> Map:
 
 def test_with_reverse_a_tree_path_detour_gives_way_to_a_shorter_reversing_path() -> None:
     m = _parking_lot_goal_93()
-    kept = _solve(m, reverse=True)  # by default the paper stage's answer is kept
+    kept = _solve(m, reverse=True, reverse_detour_tree=False)  # the paper stage's answer
     assert stage_of(kept) == "improved-rrt-connect" and len(kept.path.cusps) == 0
-    res = _solve(m, reverse=True, reverse_detour_tree=True)
+    res = _solve(m, reverse=True)  # the default
     assert res.success and stage_of(res) == "hybrid-a-star", res.message
     assert len(res.path.cusps) >= 1
     assert res.path.length < kept.path.length / ImprovedConfig().reverse_detour_ratio
     assert res.stats["tree_detour_ratio"] > ImprovedConfig().reverse_detour_ratio
     assert f"found only a forward detour (tree path, {kept.path.length:.1f} m, " in res.message
+    assert "times the distance around the obstacles to the goal" in res.message
     assert verify_path(m, res.path, max_sharpness=0.2).ok
     # Forward only the tree path is the answer, as before.
-    forward = _solve(m, reverse_detour_tree=True)
+    forward = _solve(m)
     assert stage_of(forward) == "improved-rrt-connect"
     assert forward.path.length == pytest.approx(kept.path.length)
+
+
+def test_a_tree_path_long_only_round_the_obstacles_is_no_detour() -> None:
+    # Random start 23 (parking_lot, seed 1): the tree path is 1.67 times the Reeds-Shepp
+    # distance, but the lot's rows make any path long: 1.14 times the distance around
+    # them. The search is not asked (it found nothing shorter, in 38 ms against 9 ms).
+    m = builtin_map("parking_lot")
+    start = Pose(69.78935706830814, 12.867321231716943, -0.7776164294215255)
+    m = dataclasses.replace(m, start=start)
+    res = _solve(m, reverse=True)
+    assert res.success and stage_of(res) == "improved-rrt-connect", res.message
+    problem = PlanningProblem.from_map(m, reverse=True)
+    around = around_obstacles(problem)
+    radius = ImprovedConfig().dubins_radius_factor / problem.vehicle.kappa_max
+    limit = ImprovedConfig().reverse_detour_ratio
+    assert detour_ratio(res.path.length, m.start, m.goal, radius) > limit
+    assert res.stats["tree_detour_ratio"] == pytest.approx(res.path.length / around)
+    assert res.stats["tree_detour_ratio"] <= limit
+    assert "hybrid_expansions" not in res.stats and "Hybrid A*" not in res.message
 
 
 def test_a_tree_path_detour_is_kept_over_a_longer_escalation(
@@ -161,7 +182,7 @@ def test_a_tree_path_detour_is_kept_over_a_longer_escalation(
 ) -> None:
     _escalation_finds_500_m(monkeypatch)
     m = _parking_lot_goal_93()
-    res = _solve(m, reverse=True, reverse_detour_tree=True)
+    res = _solve(m, reverse=True)
     assert res.success and "found a longer path (500.0 m)" in res.message, res.message
     assert stage_of(res) == "improved-rrt-connect" and len(res.path.cusps) == 0
     assert verify_path(m, res.path, max_sharpness=0.2).ok

@@ -191,14 +191,16 @@ class ImprovedConfig:
     reverse_detour_ratio : float
         With reverse allowed, the direct Dubins path is kept before the escalation
         only when at most this multiple of the Reeds-Shepp distance (the shortest
-        path with reversing at the same radius, obstacles aside); a longer one (a
-        goal 0.1 m ahead and 1 mm aside: a 61 m loop forward, 8 m reversing) is
-        kept only when the escalation finds nothing shorter. ``inf`` keeps it always.
+        path with reversing at the same radius, obstacles aside) or of the distance
+        around the obstacles, whichever is longer; a longer one (a goal 0.1 m ahead
+        and 1 mm aside: a 61 m loop forward, 8 m reversing) is kept only when the
+        escalation finds nothing shorter. ``inf`` keeps it always.
     reverse_detour_tree : bool
         Whether that rule also applies to the tree path (the paper's stage) with
-        reverse allowed. Off by default: the paper's stage keeps its answer (issue
-        13 item 3). On, the issue's random goals meet its length target but the
-        random starts' median time doubles (docs/planning.md, session 36).
+        reverse allowed (default since session 37: a 186 m forward loop round the
+        lot gives way to a 76 m path with one cusp; docs/planning.md). ``False``
+        keeps the paper stage's answer as found, as before. Forward only it changes
+        nothing.
     passage_bias : float
         Share of iterations that sample passages, in ``[0, 1)``.
     expansion_a : float
@@ -256,7 +258,7 @@ class ImprovedConfig:
     escalation_first: str = "reverse"
     dubins_radius_factor: float = 1.05
     reverse_detour_ratio: float = 1.5
-    reverse_detour_tree: bool = False
+    reverse_detour_tree: bool = True
     passage_bias: float = 0.1
     expansion_a: float = 1.0
     expansion_lmin: float | None = None

@@ -27,7 +27,7 @@ from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register
 from rrtdrive.planning.hybrid.escalation import ESCALATES_FROM, escalate, with_kept_clearance
 from rrtdrive.planning.improved.boxed import boxed_end, open_share, stuck_root_words
 from rrtdrive.planning.improved.config import ImprovedConfig, StageBudgets
-from rrtdrive.planning.improved.detour import detour_ratio, detour_words, shorter_answer
+from rrtdrive.planning.improved.detour import detour_words, measured_detour, shorter_answer
 from rrtdrive.planning.improved.expansion import (
     default_expansion_lmin,
     endpoint_capped_clearance,
@@ -276,15 +276,17 @@ class _Query:
         """``out``, or the escalation's shorter path when ``out`` is a forward detour.
 
         A detour is longer than ``reverse_detour_ratio`` times the Reeds-Shepp distance
-        at the fallback's radius (``stats[stat]``); the escalation's timeout is its own
-        answer (what it finds depends on the machine's speed).
+        at the fallback's radius and the distance around the obstacles
+        (:func:`~.detour.measured_detour`, ``stats[stat]``); the escalation's timeout
+        is its own answer (what it finds depends on the machine's speed).
         """
+        length, limit = out.path.length, self.cfg.reverse_detour_ratio
         radius = self.cfg.dubins_radius_factor / self.problem.vehicle.kappa_max
-        ratio = detour_ratio(out.path.length, self.start, self.goal, radius)
-        self.stats[stat] = ratio
-        if ratio <= self.cfg.reverse_detour_ratio:
+        ratio, around = measured_detour(length, self.problem, radius, limit, self.watch)
+        self.stats[stat] = out.stats[stat] = ratio  # the kept answer says it too
+        if ratio <= limit:
             return out
-        escalated = self.escalation(budget, detour_words(kind, out.path.length, ratio))
+        escalated = self.escalation(budget, detour_words(kind, length, ratio, around))
         if escalated.status is PlanStatus.TIMEOUT:
             return escalated
         return shorter_answer(escalated, out, self.watch.elapsed())
