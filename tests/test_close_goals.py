@@ -188,6 +188,46 @@ def test_a_tree_path_detour_is_kept_over_a_longer_escalation(
     assert verify_path(m, res.path, max_sharpness=0.2).ok
 
 
+def _escalation_finds_shorter_by(monkeypatch: pytest.MonkeyPatch, metres: float) -> list:
+    """The escalation solves ``metres`` shorter than goal 93's tree path, with one cusp."""
+    real = improved_planner.escalate
+    tree: list[float] = []
+
+    def with_cusp(failed, *args, **kwargs):
+        out = real(failed, *args, **kwargs)
+        half = (tree[0] - metres) / 2.0
+        n = 1001
+        x = np.linspace(0.0, half, n)
+        ahead = np.column_stack([x, np.zeros((n, 3)), np.ones(n)])
+        back = np.column_stack([x[::-1], np.zeros((n, 3)), -np.ones(n)])
+        rows = np.vstack([ahead, back])
+        return dataclasses.replace(out, path=Path(rows, rows[[0, n, -1], :2]))
+
+    monkeypatch.setattr(improved_planner, "escalate", with_cusp)
+    return tree
+
+
+@pytest.mark.parametrize(("metres", "given_way"), [(2.0, False), (10.0, True)])
+def test_a_gear_change_weighs_as_the_searchs_cost_against_a_detour(
+    monkeypatch: pytest.MonkeyPatch, metres: float, given_way: bool
+) -> None:
+    # A path 2 m shorter than the 186 m forward loop but with a gear change (weighed 5 m,
+    # HybridConfig.gear_change_cost) does not replace it; one 10 m shorter does.
+    m = _parking_lot_goal_93()
+    tree = _escalation_finds_shorter_by(monkeypatch, metres)
+    kept = _solve(m, reverse=True, reverse_detour_tree=False)
+    tree.append(kept.path.length)
+    res = _solve(m, reverse=True)
+    assert res.success
+    if given_way:
+        assert len(res.path.cusps) == 1, res.message
+        assert res.path.length == pytest.approx(kept.path.length - metres)
+    else:
+        assert stage_of(res) == "improved-rrt-connect" and len(res.path.cusps) == 0
+        assert res.path.length == pytest.approx(kept.path.length)
+        assert "a path 2.0 m shorter with 1 gear change(s), each weighed as 5 m" in res.message
+
+
 def test_a_bad_tree_detour_switch_is_named() -> None:
     with pytest.raises(InputError, match=r"planner\.reverse_detour_tree"):
         ImprovedConfig(reverse_detour_tree="yes")  # type: ignore[arg-type]
