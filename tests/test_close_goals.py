@@ -126,6 +126,18 @@ def test_a_detour_kept_over_a_longer_escalation_is_the_fallback_s(
     assert res.stats["body_clearance_m"] == pytest.approx(0.15)
 
 
+def test_forward_only_a_kept_detour_says_the_search_was_forward_only(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # escalation_first="always" runs the detour rule forward only too: what the search
+    # found is said with its own gear (it said "with reverse").
+    _escalation_finds_500_m(monkeypatch)
+    m = _open_map(Pose(50.0, 50.1, math.pi / 2))
+    res = _solve(m, escalation_first="always")
+    assert res.success and len(res.path.cusps) == 0
+    assert "Hybrid A* (forward only) found a longer path (500.0 m)" in res.message, res.message
+
+
 @pytest.mark.parametrize("value", [0.5, math.nan, -1.0])
 def test_a_bad_detour_ratio_is_named(value: float) -> None:
     with pytest.raises(InputError, match=r"planner\.reverse_detour_ratio"):

@@ -104,14 +104,17 @@ def detour_words(kind: str, length: float, ratio: float, around: bool = False) -
     )
 
 
-def shorter_answer(escalated: PlanResult, detour: PlanResult, elapsed: float) -> PlanResult:
+def shorter_answer(
+    escalated: PlanResult, detour: PlanResult, elapsed: float, reverse: bool = True
+) -> PlanResult:
     """The escalation's path when it solved shorter than the detour, else the detour.
 
     Shorter counts each gear change as the escalation's own
     ``HybridConfig.gear_change_cost`` metres (5): a path a few metres shorter than a
     forward detour but stopping to change gear is no better (on the issue's random sets,
     seeds 1 and 2, the tree paths given way were 28-110 m longer). The detour keeps its
-    own stage and message, with what the escalation found added.
+    own stage and message, with what the escalation found added (``reverse``: whether
+    it searched with reverse; forward only with ``escalation_first="always"``).
     """
     per_cusp = HybridConfig().gear_change_cost
     if escalated.success:
@@ -129,9 +132,10 @@ def shorter_answer(escalated: PlanResult, detour: PlanResult, elapsed: float) ->
             f"a path {detour.path.length - length:.1f} m shorter with {cusps} gear change(s), "
             f"each weighed as {per_cusp:g} m"
         )
+    gear = "with reverse" if reverse else "forward only"
     return dataclasses.replace(
         detour,
-        message=f"{detour.message}; Hybrid A* (with reverse) found {found}",
+        message=f"{detour.message}; Hybrid A* ({gear}) found {found}",
         planning_time_s=elapsed,
         # The escalation's counters, not its stage: the detour's path is returned.
         stats={**{k: v for k, v in escalated.stats.items() if k != "stage"}, **detour.stats},

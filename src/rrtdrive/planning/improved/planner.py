@@ -289,7 +289,7 @@ class _Query:
         escalated = self.escalation(budget, detour_words(kind, length, ratio, around))
         if escalated.status is PlanStatus.TIMEOUT:
             return escalated
-        return shorter_answer(escalated, out, self.watch.elapsed())
+        return shorter_answer(escalated, out, self.watch.elapsed(), self.problem.reverse)
 
     def escalation(self, budget: Budget, before: str | None = None) -> PlanResult:
         """The Hybrid A* escalation on the iterations the RRT-Connect stages left.
