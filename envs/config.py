@@ -30,6 +30,7 @@ from rrtdrive.sim.tasks import (
     DEFAULT_PLANNER,
     REPLANNING_SCENARIOS,
     SCENARIO_OPTIONS,
+    SCENARIO_VARIANTS,
     SCENARIOS,
     TASKS,
     CustomTask,
@@ -195,8 +196,13 @@ class DriveEnvConfig:
                 "scenario: expected a scenario or map name, a .json file or a rrtdrive.Map, "
                 f"got {brief_repr(scenario)}"
             )
+        elif scenario in SCENARIO_VARIANTS:  # parking-reverse-in: its options, then the given
+            scenario, options = SCENARIO_VARIANTS[scenario]
+            put("scenario", scenario)
+            given = self.scenario_options if isinstance(self.scenario_options, Mapping) else {}
+            put("scenario_options", {**options, **given})
         elif scenario not in SCENARIOS:
-            put("map", scenario_map("scenario", scenario))
+            put("map", scenario_map("scenario", scenario, (), SCENARIO_VARIANTS))
         if not isinstance(planner, str) or planner not in PLANNERS:
             raise InputError(
                 f"planner: unknown planner {planner!r}; choose from {sorted(PLANNERS)}"

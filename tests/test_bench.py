@@ -4,6 +4,7 @@ SIGKILL resume, the summary and the OMPL rows."""
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import json
 import math
@@ -933,3 +934,51 @@ def test_a_ctrl_c_while_a_worker_starts_reaches_the_bench(monkeypatch):
             if child.name == "rrtdrive-bench-worker":
                 child.kill()
                 child.join(5)
+
+
+def test_a_scenario_that_always_reverses_keeps_one_run_key_and_says_it_reversed(tmp_path):
+    # u-turn changes gear with or without --reverse: its rows said reverse false without
+    # it (simulate says true), and a --reverse grid ran the same episodes again.
+    fwd = BenchConfig(scenarios=("u-turn", "parking"), seeds=1)
+    rev = BenchConfig(scenarios=("u-turn", "parking"), seeds=1, reverse=True)
+    keys = {(s.target, s.key) for s in expand(fwd)}, {(s.target, s.key) for s in expand(rev)}
+    assert {t for t, _ in keys[0] & keys[1]} == {"u-turn"}  # parking's keys differ
+    cfg = BenchConfig(
+        scenarios=("u-turn", "parking"), planners=("improved-rrt-connect",),
+        controllers=("lqr",), seeds=1, workers=1, out=str(tmp_path), plots=False,
+        deterministic=True,
+    )  # fmt: skip
+    assert run_bench(cfg).errors == 0
+    rows = {r["scenario"]: r for r in map(json.loads, (tmp_path / "runs.jsonl").open())}
+    assert rows["u-turn"]["reverse"] is True and rows["u-turn"]["path_cusps"] >= 1
+    assert rows["parking"]["reverse"] is False
+    assert main(["simulate", "u-turn", "--seed", "0", "--controller", "lqr",
+                 "--deterministic", "--json", str(tmp_path / "sim.json")]) == 0  # fmt: skip
+    sim = json.loads((tmp_path / "sim.json").read_text())
+    assert sim["reverse"] is True and sim["path_length_m"] == rows["u-turn"]["path_length_m"]
+    title = (tmp_path / "summary.md").read_text().splitlines()[0]
+    assert title.endswith("gear changes in u-turn, deterministic)"), title
+    # The --reverse grid finds u-turn's run stored and runs parking's again.
+    report = run_bench(dataclasses.replace(cfg, reverse=True))
+    assert (report.skipped, report.executed) == (1, 1)
+
+
+def test_parking_reverse_in_is_benched_as_simulate_parking_reverse_in(tmp_path):
+    cfg = BenchConfig(
+        scenarios=("parking-reverse-in",), planners=("improved-rrt-connect",),
+        controllers=("lqr",), seeds=1, workers=1, out=str(tmp_path), plots=False,
+        deterministic=True,
+    )  # fmt: skip
+    assert run_bench(cfg).errors == 0
+    (row,) = map(json.loads, (tmp_path / "runs.jsonl").open())
+    assert row["scenario"] == "parking-reverse-in" and row["success"]
+    assert row["reverse"] is True and row["reverse_in"] is True and row["path_cusps"] >= 1
+    for name in (["parking-reverse-in"], ["parking", "--reverse-in"]):
+        out = tmp_path / f"{len(name)}.json"
+        args = ["simulate", *name, "--seed", "0", "--controller", "lqr", "--deterministic"]
+        assert main([*args, "--json", str(out)]) == 0
+        sim = json.loads(out.read_text())
+        assert sim["reverse_in"] is True and sim["path_length_m"] == row["path_length_m"]
+        assert sim["goal_position_err_m"] == row["goal_position_err_m"]
+    with pytest.raises(InputError, match="did you mean 'parking-reverse-in'"):
+        BenchConfig(scenarios=("parking-revers-in",), seeds=1)

@@ -80,6 +80,28 @@ def test_registered_defaults_apply_without_config(env_id):
     assert _make(env_id, planner="rrt-connect").planner == "rrt-connect"
 
 
+def test_the_benchs_parking_reverse_in_name_is_a_gym_scenario_too():
+    # One name for reverse-in parking wherever a scenario is named (bench took it first):
+    # the parking scenario with reverse_in, the caller's options over it (an id keeps its
+    # own scenario: rrtdrive/ParkingReverseIn-v0 is this one's).
+    from rrtdrive.envs.drive_env import DriveEnv
+
+    got = DriveEnvConfig.from_options(scenario="parking-reverse-in")
+    assert (got.scenario, got.scenario_options) == ("parking", {"reverse_in": True})
+    got = DriveEnvConfig.from_options(
+        scenario="parking-reverse-in", scenario_options={"spot": (0, 0, 3)}
+    )
+    assert got.scenario_options == {"reverse_in": True, "spot": (0, 0, 3)}
+    task = got.scenario_for(0)
+    assert task.reverse_in and task.reverse
+    env = DriveEnv("parking-reverse-in")
+    try:
+        env.reset(seed=0)
+        assert len(env.path.cusps) >= 1  # entered backwards
+    finally:
+        env.close()
+
+
 def test_registered_scenario_options_merge_with_the_callers():
     # gym.make alone replaces the registered mapping: a caller's start jitter turned
     # reverse-in parking into nose-in parking (a helper's audit, session 29). Now the

@@ -62,7 +62,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument(
         "--scenarios", action="append", metavar="NAMES",
         help="closed-loop runs: built-in scenarios (parking, overtake, overtake-traffic, "
-        "parallel-parking, u-turn), stock highway-env ones (parking-v0, parking-parked-v0) "
+        "parallel-parking, u-turn, parking-reverse-in), stock highway-env ones (parking-v0, "
+        "parking-parked-v0) "
         "or maps, built-in names or .json files, driven from their start to their goal",
     )
     p.add_argument(

@@ -294,8 +294,13 @@ def run_bench(
     files.append(str(out / "bench_config.json"))
     groups = summarise_rows(rows)
     # How it was run: a forward and a reverse grid's tables looked alike.
+    # Without --reverse, the scenarios that reverse anyway are named (u-turn's rows
+    # changed gear under a title that did not say so).
+    anyway = sorted({str(r["scenario"]) for r in rows if r.get("reverse") and r.get("scenario")})
     how = "".join(
         text for text, on in ((", gear changes allowed", cfg.reverse),
+                              (f", gear changes in {', '.join(anyway)}",
+                               not cfg.reverse and bool(anyway)),
                               (", deterministic", cfg.deterministic)) if on
     )
     title = f"Bench summary ({len(rows)} runs, seeds 0–{cfg.seeds - 1}{how})"

@@ -16,6 +16,7 @@ interrupted and repeated benches.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import importlib.util
 import json
@@ -284,9 +285,9 @@ class BenchConfig:
         for s in self.scenarios:
             if is_map_scenario(s) and (s not in digests or s not in contents):
                 from rrtdrive.sim.stock import STOCK_ENVS
-                from rrtdrive.sim.tasks import CustomTask, scenario_map
+                from rrtdrive.sim.tasks import SCENARIO_VARIANTS, CustomTask, scenario_map
 
-                driven = scenario_map("scenarios", s, tuple(STOCK_ENVS))
+                driven = scenario_map("scenarios", s, tuple(STOCK_ENVS), SCENARIO_VARIANTS)
                 try:
                     # The task every episode of it builds, checked once here: its bad input
                     # (a goal that is the start) is one exit-2 line, not an error per run.
@@ -473,7 +474,9 @@ def _hash_payload(
     }
     if cfg.deterministic:  # only then: earlier benches' run keys stay valid
         payload["deterministic"] = True
-    if cfg.reverse:  # likewise
+    if cfg.reverse and not (kind == "episode" and always_reverses(target)):
+        # Likewise; a scenario that reverses anyway runs the same episodes with or
+        # without it (one key: a --reverse grid found them stored).
         payload["reverse"] = True
     if kind == "plan" or is_map_scenario(target):
         # The map's content, not its spelling: a changed file is a new configuration
@@ -487,9 +490,24 @@ def _hash_payload(
 def is_map_scenario(target: str) -> bool:
     """Whether a closed-loop target is a map (driven start to goal), not a named scenario."""
     from rrtdrive.sim.stock import STOCK_ENVS
-    from rrtdrive.sim.tasks import SCENARIOS
+    from rrtdrive.sim.tasks import SCENARIO_VARIANTS, SCENARIOS
 
-    return target not in SCENARIOS and target not in STOCK_ENVS
+    return target not in SCENARIOS and target not in SCENARIO_VARIANTS and target not in STOCK_ENVS
+
+
+@functools.cache
+def always_reverses(target: str) -> bool:
+    """Whether a named scenario plans with gear changes unasked.
+
+    u-turn, parallel-parking and parking-reverse-in: ``--reverse`` changes nothing in
+    their runs.
+    """
+    from rrtdrive.sim.stock import STOCK_ENVS
+    from rrtdrive.sim.tasks import make_variant
+
+    if is_map_scenario(target) or target in STOCK_ENVS:
+        return False
+    return bool(make_variant(target, 0).reverse)
 
 
 def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:

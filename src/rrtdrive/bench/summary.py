@@ -41,7 +41,7 @@ _ID_FIELDS = {
     "config_hash", "seed", "kind", "map", "scenario", "planner", "controller", "status",
     "message", "error", "worker", "finished_at", "map_name", "plan_status", "max_time_s",
     "max_iterations", "attempts", "kappa_max", "simulation_frequency", "reverse",
-    "deterministic",
+    "reverse_in", "deterministic",
 }
 
 #: Metrics that can be negative (Student's t interval); every other number is a

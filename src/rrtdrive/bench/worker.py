@@ -164,13 +164,13 @@ def _task(spec: RunSpec) -> Any:
     import dataclasses
 
     from rrtdrive.bench.grid import is_map_scenario
-    from rrtdrive.sim.tasks import CustomTask, make_scenario
+    from rrtdrive.sim.tasks import CustomTask, make_variant
 
     if is_map_scenario(spec.target):
         return CustomTask.from_map(
             _map(spec.target, spec.map_json), spec.seed, reverse=spec.reverse
         )
-    task = make_scenario(spec.target, spec.seed)
+    task = make_variant(spec.target, spec.seed)
     if spec.reverse and not task.reverse:  # as rrtdrive simulate --reverse
         task = dataclasses.replace(task, reverse=True)
     return task
@@ -202,6 +202,11 @@ def _episode_metrics(spec: RunSpec) -> dict[str, Any]:
         report["highway_env_success"] = stock.highway_env_success
     for k in ("scenario", "planner", "controller", "seed"):
         report.pop(k, None)
+    # Whether the path was asked for with gear changes, as simulate says: u-turn and
+    # parallel-parking always are (the grid's flag said false for them).
+    report["reverse"] = bool(getattr(episode.scenario, "reverse", spec.reverse))
+    if getattr(episode.scenario, "reverse_in", False):  # parking-reverse-in, as simulate
+        report["reverse_in"] = True
     plan_ok = episode.plan is not None and episode.plan.success
     report["plan_status"] = episode.plan.status.value if episode.plan is not None else None
     report["verified"] = (

@@ -63,7 +63,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     p.add_argument(
         "scenario", metavar="SCENARIO",
-        help="parking, overtake, overtake-traffic, parallel-parking or u-turn; a stock "
+        help="parking, overtake, overtake-traffic, parallel-parking or u-turn (and "
+        "parking-reverse-in: parking --reverse-in); a stock "
         "highway-env env (parking-v0, parking-parked-v0); or a map: a .json file or a "
         "built-in map name (garage, kerbside, ...)",
     )
@@ -283,6 +284,7 @@ def _run(args: argparse.Namespace) -> int:
     from rrtdrive.sim.tasks import (
         DEFAULT_PLANNER,
         REPLANNING_SCENARIOS,
+        SCENARIO_VARIANTS,
         SCENARIOS,
         TASKS,
         make_scenario,
@@ -293,6 +295,10 @@ def _run(args: argparse.Namespace) -> int:
                           ("goal", None), ("resolution", None)):
         if not hasattr(args, name):  # a Namespace built by a caller without these flags
             setattr(args, name, default)
+    if args.scenario in SCENARIO_VARIANTS:  # parking-reverse-in: parking --reverse-in
+        args.scenario, options = SCENARIO_VARIANTS[args.scenario]
+        for key, value in options.items():
+            setattr(args, key, value)
     target = _target_kind(args.scenario, SCENARIOS, STOCK_ENVS)
     if target != "map":
         for flag, value in (("--start", args.start), ("--goal", args.goal)):
@@ -532,9 +538,9 @@ def _target_kind(name: str, scenarios: tuple[str, ...], stock_envs: tuple[str, .
         return "stock"
     if name in BUILTIN_MAPS or names_map_file(name):
         return "map"
-    from rrtdrive.sim.tasks import unknown_scenario
+    from rrtdrive.sim.tasks import SCENARIO_VARIANTS, unknown_scenario
 
-    raise unknown_scenario("scenario", name, stock_envs)
+    raise unknown_scenario("scenario", name, stock_envs, SCENARIO_VARIANTS)
 
 
 def _parse_pose(text: str | None, flag: str) -> Any:

@@ -86,6 +86,8 @@ __all__ = [
     "VideoCamera",
     "REPLANNING_SCENARIOS",
     "make_scenario",
+    "SCENARIO_VARIANTS",
+    "make_variant",
     "unknown_scenario",
     "scenario_map",
     "SCENARIO_OPTIONS",
@@ -109,6 +111,12 @@ TASKS: dict[str, type[Task]] = {
 }
 #: Names of the built-in scenarios.
 SCENARIOS = tuple(TASKS)
+#: Named variants of built-in scenarios, benched like scenarios (``rrtdrive bench
+#: --scenarios``; the gym's ``ParkingReverseIn-v0``, ``simulate parking --reverse-in``):
+#: name -> (scenario, :func:`make_scenario` options).
+SCENARIO_VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {
+    "parking-reverse-in": ("parking", {"reverse_in": True}),
+}
 #: Names of the built-in scenarios that re-plan while driving (their tasks have a
 #: ``REPLAN_CONFIG``).
 REPLANNING_SCENARIOS = tuple(name for name, cls in TASKS.items() if cls.REPLAN_CONFIG)
@@ -142,7 +150,9 @@ def _jitter(jitter: object) -> tuple[float, float, float]:
     return values  # type: ignore[return-value]
 
 
-def unknown_scenario(field: str, name: str, stock_envs: Sequence[str] = ()) -> InputError:
+def unknown_scenario(
+    field: str, name: str, stock_envs: Sequence[str] = (), variants: Sequence[str] = ()
+) -> InputError:
     """The one error for a scenario name that is no scenario, stock env or map.
 
     Worded alike wherever a scenario is named (``rrtdrive simulate``, ``rrtdrive
@@ -156,6 +166,8 @@ def unknown_scenario(field: str, name: str, stock_envs: Sequence[str] = ()) -> I
         The name given.
     stock_envs : sequence of str
         The stock highway-env names the caller also drives (none: it drives none).
+    variants : sequence of str
+        The :data:`SCENARIO_VARIANTS` the caller also takes (none: it takes none).
 
     Examples
     --------
@@ -165,16 +177,19 @@ def unknown_scenario(field: str, name: str, stock_envs: Sequence[str] = ()) -> I
     from rrtdrive.maps import BUILTIN_MAPS
 
     maps = sorted(m for m in BUILTIN_MAPS if m not in SCENARIOS)
-    close = difflib.get_close_matches(name, [*SCENARIOS, *stock_envs, *maps], n=1)
+    close = difflib.get_close_matches(name, [*SCENARIOS, *variants, *stock_envs, *maps], n=1)
     hint = f" (did you mean {close[0]!r}?)" if close else ""
     stock = f", a stock env ({', '.join(stock_envs)})" if stock_envs else ""
     return InputError(
-        f"{field}: unknown scenario {name!r}{hint}; choose from {', '.join(SCENARIOS)}{stock}, "
+        f"{field}: unknown scenario {name!r}{hint}; choose from "
+        f"{', '.join([*SCENARIOS, *variants])}{stock}, "
         f"a map file (.json) or a built-in map ({', '.join(maps)})"
     )
 
 
-def scenario_map(field: str, name: str, stock_envs: Sequence[str] = ()) -> Map:
+def scenario_map(
+    field: str, name: str, stock_envs: Sequence[str] = (), variants: Sequence[str] = ()
+) -> Map:
     """The map that a target which is no built-in scenario names, or the one error.
 
     A name that :func:`~rrtdrive.maps.names_map_file` reads as a file gets the file's
@@ -188,7 +203,20 @@ def scenario_map(field: str, name: str, stock_envs: Sequence[str] = ()) -> Map:
     except InputError as exc:
         if names_map_file(name):
             raise InputError(f"{field}: {name!r}: {exc}") from None
-        raise unknown_scenario(field, name, stock_envs) from None
+        raise unknown_scenario(field, name, stock_envs, variants) from None
+
+
+def make_variant(name: str, seed: int = 0) -> Task:
+    """The task of a built-in scenario or of a named variant of one, for ``seed``.
+
+    Examples
+    --------
+    >>> t = make_variant("parking-reverse-in", 3)
+    >>> t.kind.value, t.reverse_in, t.reverse
+    ('parking', True, True)
+    """
+    scenario, options = SCENARIO_VARIANTS.get(name, (name, {}))
+    return make_scenario(scenario, seed, **options)
 
 
 def make_scenario(name: str, seed: int = 0, **options: Any) -> Task:
