@@ -200,33 +200,39 @@ def test_a_tree_path_detour_is_kept_over_a_longer_escalation(
     assert verify_path(m, res.path, max_sharpness=0.2).ok
 
 
-def _escalation_finds_shorter_by(monkeypatch: pytest.MonkeyPatch, metres: float) -> list:
-    """The escalation solves ``metres`` shorter than goal 93's tree path, with one cusp."""
+def _escalation_finds_shorter_by(
+    monkeypatch: pytest.MonkeyPatch, metres: float, reverse: float
+) -> list:
+    """The escalation solves ``metres`` shorter than goal 93's tree path: a straight ahead,
+    a gear change and ``reverse`` metres back."""
     real = improved_planner.escalate
     tree: list[float] = []
 
     def with_cusp(failed, *args, **kwargs):
         out = real(failed, *args, **kwargs)
-        half = (tree[0] - metres) / 2.0
-        n = 1001
-        x = np.linspace(0.0, half, n)
-        ahead = np.column_stack([x, np.zeros((n, 3)), np.ones(n)])
-        back = np.column_stack([x[::-1], np.zeros((n, 3)), -np.ones(n)])
+        ahead_m = tree[0] - metres - reverse
+        x = np.linspace(0.0, ahead_m, 1001)
+        ahead = np.column_stack([x, np.zeros((len(x), 3)), np.ones(len(x))])
+        xb = np.linspace(ahead_m, ahead_m - reverse, 101)
+        back = np.column_stack([xb, np.zeros((len(xb), 3)), -np.ones(len(xb))])
         rows = np.vstack([ahead, back])
-        return dataclasses.replace(out, path=Path(rows, rows[[0, n, -1], :2]))
+        return dataclasses.replace(out, path=Path(rows, rows[[0, len(x), -1], :2]))
 
     monkeypatch.setattr(improved_planner, "escalate", with_cusp)
     return tree
 
 
-@pytest.mark.parametrize(("metres", "given_way"), [(2.0, False), (10.0, True)])
-def test_a_gear_change_weighs_as_the_searchs_cost_against_a_detour(
-    monkeypatch: pytest.MonkeyPatch, metres: float, given_way: bool
+@pytest.mark.parametrize(
+    ("metres", "reverse", "given_way"), [(5.0, 2.0, False), (10.0, 2.0, True), (40.0, 45.0, False)]
+)
+def test_a_detour_gives_way_only_to_a_path_that_costs_the_search_less(
+    monkeypatch: pytest.MonkeyPatch, metres: float, reverse: float, given_way: bool
 ) -> None:
-    # A path 2 m shorter than the 186 m forward loop but with a gear change (weighed 5 m,
-    # HybridConfig.gear_change_cost) does not replace it; one 10 m shorter does.
+    # The search's own weights: a reverse metre twice a forward one, a gear change 5 m.
+    # 5 m shorter with 2 m in reverse costs 2 m more than the 186 m forward loop; 10 m
+    # shorter costs 3 m less; 40 m shorter but 45 m of it in reverse costs 10 m more.
     m = _parking_lot_goal_93()
-    tree = _escalation_finds_shorter_by(monkeypatch, metres)
+    tree = _escalation_finds_shorter_by(monkeypatch, metres, reverse)
     kept = _solve(m, reverse=True, reverse_detour_tree=False)
     tree.append(kept.path.length)
     res = _solve(m, reverse=True)
@@ -237,7 +243,11 @@ def test_a_gear_change_weighs_as_the_searchs_cost_against_a_detour(
     else:
         assert stage_of(res) == "improved-rrt-connect" and len(res.path.cusps) == 0
         assert res.path.length == pytest.approx(kept.path.length)
-        assert "a path 2.0 m shorter with 1 gear change(s), each weighed as 5 m" in res.message
+        more = kept.path.length + reverse + 5.0 - metres
+        assert (
+            f"a path {metres:.1f} m shorter that costs more: {more:.1f} m against "
+            f"{kept.path.length:.1f} m, a reverse metre weighed as 2, a gear change as 5 m"
+        ) in res.message, res.message
 
 
 def test_a_bad_tree_detour_switch_is_named() -> None:
