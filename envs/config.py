@@ -196,11 +196,19 @@ class DriveEnvConfig:
                 "scenario: expected a scenario or map name, a .json file or a rrtdrive.Map, "
                 f"got {brief_repr(scenario)}"
             )
-        elif scenario in SCENARIO_VARIANTS:  # parking-reverse-in: its options, then the given
-            scenario, options = SCENARIO_VARIANTS[scenario]
+        elif scenario in SCENARIO_VARIANTS:  # parking-reverse-in: its options and the given
+            name, (scenario, options) = scenario, SCENARIO_VARIANTS[scenario]
+            given = self.scenario_options
+            if isinstance(given, Mapping):
+                for key, value in options.items():
+                    if key in given and given[key] != value:
+                        raise InputError(
+                            f"scenario_options.{key}: {name} is {scenario} with {key}={value!r}; "
+                            f"for {key}={given[key]!r} give the scenario {scenario!r}"
+                        )
+                given = {**options, **given}
             put("scenario", scenario)
-            given = self.scenario_options if isinstance(self.scenario_options, Mapping) else {}
-            put("scenario_options", {**options, **given})
+            put("scenario_options", options if given is None else given)
         elif scenario not in SCENARIOS:
             put("map", scenario_map("scenario", scenario, (), SCENARIO_VARIANTS))
         if not isinstance(planner, str) or planner not in PLANNERS:

@@ -80,7 +80,7 @@ VARIANTS = {
     # Session 37: the same with ramps on a finer grid (refined once: 0.1 m / 0.75 deg).
     "0.05 m clearance, full lock, 0.2 m / 1.5 deg grid, 0.5 m steps": (
         "body_clearance=0.05:min_clearance=0.05:coarse_after=0:radius_factor=1.0:"
-        "xy_resolution=0.2:yaw_resolution=0.02618:step=0.5:curvatures=9"
+        "xy_resolution=0.2:yaw_resolution=0.026179938779914945:step=0.5:curvatures=9"
     ),
 }
 
@@ -129,7 +129,7 @@ def ompl_row(
     kappa = np.diff(np.unwrap(states[:, 2])) / np.where(ds > 0, ds, np.inf)
     worst = int(np.argmin(clear))
     return {
-        "solved": True, "time_s": solve_s, "length_m": length,
+        "solved": True, "time_s": spent, "length_m": length, "ompl_seed_index": index,
         "min_clearance_m": float(clear[worst]),
         "min_clearance_at": [round(float(v), 3) for v in states[worst]],
         "max_curvature_jump": float(np.max(np.abs(np.diff(kappa)))),
@@ -212,7 +212,8 @@ def _query_lines(payload: dict[str, Any], expansions: int) -> list[str]:
     else:
         lines.append(
             f"OMPL Dubins RRT{_kept(o)}: {o['length_m']:.1f} m in {o['time_s']:.2f} s "
-            f"(seed {o.get('tries', 1)} of those tried); least body "
+            f"(try {o.get('tries', 1)}, seed index {o.get('ompl_seed_index', '-')}, the time "
+            "of every try); least body "
             f"clearance **{o['min_clearance_m']:.4f} m** at pose {o['min_clearance_at']}; "
             f"largest curvature jump between its arcs {o['max_curvature_jump']:.3f} 1/m "
             "(no steering-rate bound); `rrtdrive.verify` at that clearance, sharpness aside: "

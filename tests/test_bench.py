@@ -982,3 +982,11 @@ def test_parking_reverse_in_is_benched_as_simulate_parking_reverse_in(tmp_path):
         assert sim["goal_position_err_m"] == row["goal_position_err_m"]
     with pytest.raises(InputError, match="did you mean 'parking-reverse-in'"):
         BenchConfig(scenarios=("parking-revers-in",), seeds=1)
+
+
+def test_an_error_row_of_a_scenario_that_reverses_anyway_says_reverse(tmp_path):
+    from rrtdrive.bench.worker import error_row
+
+    rows = {s.target: error_row(s, "crashed", 1) for s in expand(
+        BenchConfig(scenarios=("u-turn", "parking"), seeds=1))}  # fmt: skip
+    assert rows["u-turn"]["reverse"] is True and rows["parking"]["reverse"] is False

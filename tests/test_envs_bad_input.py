@@ -94,6 +94,18 @@ def test_the_benchs_parking_reverse_in_name_is_a_gym_scenario_too():
     assert got.scenario_options == {"reverse_in": True, "spot": (0, 0, 3)}
     task = got.scenario_for(0)
     assert task.reverse_in and task.reverse
+    # Not a mapping: refused as for any scenario (it was dropped); the variant's own
+    # option is not overridden under its name (nose-in parking called reverse-in).
+    with pytest.raises(InputError, match=r"^scenario_options: expected a mapping"):
+        DriveEnvConfig.from_options(scenario="parking-reverse-in", scenario_options=[1])
+    with pytest.raises(InputError, match=r"^scenario_options.reverse_in: parking-reverse-in is"):
+        DriveEnvConfig.from_options(
+            scenario="parking-reverse-in", scenario_options={"reverse_in": False}
+        )
+    from rrtdrive.sim.tasks import make_variant
+
+    with pytest.raises(InputError, match="did you mean 'parking-reverse-in'"):
+        make_variant("parking-revers-in")
     env = DriveEnv("parking-reverse-in")
     try:
         env.reset(seed=0)

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rrtdrive.bench.grid import RunSpec
+from rrtdrive.bench.grid import RunSpec, always_reverses
 
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.maps import Map
@@ -48,8 +48,9 @@ def base_row(spec: RunSpec) -> dict[str, Any]:
         "controller": spec.controller,
         "max_time_s": spec.max_time_s,
         "max_iterations": spec.max_iterations,
-        # How it was run: rows of a forward and a reverse grid looked alike.
-        "reverse": spec.reverse,
+        # How it was run: rows of a forward and a reverse grid looked alike. A scenario
+        # that reverses anyway says so whatever the grid's flag (its error rows too).
+        "reverse": spec.reverse or (spec.kind == "episode" and always_reverses(spec.target)),
         "deterministic": spec.deterministic,
     }
     return row

@@ -23,7 +23,7 @@ from rrtdrive.controllers import SpeedConfig, TrackingController, make_controlle
 from rrtdrive.sim.episode import DriveLog, Episode, EpisodeStatus
 from rrtdrive.sim.loop import STOP_AT_PATH_END, EpisodeLoop, PathTracker, require_episode_time
 from rrtdrive.sim.scenes import SimConfig, build_env
-from rrtdrive.sim.tasks import DEFAULT_PLANNER, Task, make_scenario
+from rrtdrive.sim.tasks import DEFAULT_PLANNER, Task, make_variant
 from rrtdrive.sim.traffic import OncomingGate
 from rrtdrive.types import Budget, InputError, Path, PlanResult
 
@@ -180,7 +180,7 @@ def run_episode(
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InputError(f"seed: need an integer >= 0, got {seed!r}")
     seed = int(seed)
-    task = make_scenario(scenario, seed) if isinstance(scenario, str) else scenario
+    task = make_variant(scenario, seed) if isinstance(scenario, str) else scenario
     if not isinstance(task, Task):
         raise InputError(f"scenario: expected a name or a task, got {scenario!r}")
     if config.max_time_s is not None:  # before planning: the scene may not last that long

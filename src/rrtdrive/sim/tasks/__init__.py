@@ -215,6 +215,8 @@ def make_variant(name: str, seed: int = 0) -> Task:
     >>> t.kind.value, t.reverse_in, t.reverse
     ('parking', True, True)
     """
+    if not isinstance(name, str) or (name not in TASKS and name not in SCENARIO_VARIANTS):
+        raise unknown_scenario("scenario", str(name), (), SCENARIO_VARIANTS)
     scenario, options = SCENARIO_VARIANTS.get(name, (name, {}))
     return make_scenario(scenario, seed, **options)
 
