@@ -253,3 +253,20 @@ def test_a_detour_gives_way_only_to_a_path_that_costs_the_search_less(
 def test_a_bad_tree_detour_switch_is_named() -> None:
     with pytest.raises(InputError, match=r"planner\.reverse_detour_tree"):
         ImprovedConfig(reverse_detour_tree="yes")  # type: ignore[arg-type]
+
+
+START_74 = Pose(17.020617447974907, 61.37785589494178, -2.8994299614665837)
+
+
+def test_a_direct_dubins_detour_is_measured_against_the_reeds_shepp_distance_alone() -> None:
+    # Random start 74 (parking_lot, seed 1): the direct Dubins path is 98.0 m, 1.65 times
+    # the Reeds-Shepp distance but under 1.5 times the distance around the rows; the
+    # escalation's forward path is 84.4 m. The distance around counts for tree paths only.
+    m = builtin_map("parking_lot")
+    m = dataclasses.replace(m, start=START_74)
+    res = _solve(m, reverse=True)
+    assert res.success and stage_of(res) == "hybrid-a-star", res.message
+    assert res.stats["dubins_detour_ratio"] > ImprovedConfig().reverse_detour_ratio
+    assert "direct Dubins path, 98.0 m" in res.message and "obstacles aside" in res.message
+    assert res.path.length < 90.0 and len(res.path.cusps) == 0
+    assert verify_path(m, res.path, max_sharpness=0.2).ok

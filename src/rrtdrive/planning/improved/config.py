@@ -191,14 +191,15 @@ class ImprovedConfig:
     reverse_detour_ratio : float
         With reverse allowed, the direct Dubins path is kept before the escalation
         only when at most this multiple of the Reeds-Shepp distance (the shortest
-        path with reversing at the same radius, obstacles aside) or of the distance
-        around the obstacles, whichever is longer; a longer one (a goal 0.1 m ahead
-        and 1 mm aside: a 61 m loop forward, 8 m reversing) is kept only when the
-        escalation finds nothing shorter. ``inf`` keeps it always.
+        path with reversing at the same radius, obstacles aside); a longer one (a
+        goal 0.1 m ahead and 1 mm aside: a 61 m loop forward, 8 m reversing) is
+        kept only when the escalation finds nothing that costs less as its search
+        weighs a path. ``inf`` keeps it always.
     reverse_detour_tree : bool
         Whether that rule also applies to the tree path (the paper's stage) with
-        reverse allowed (default since session 37: a 186 m forward loop round the
-        lot gives way to a 76 m path with one cusp; docs/planning.md). ``False``
+        reverse allowed, the path measured against the distance around the obstacles
+        too (default since session 37: a 186 m forward loop round the lot gives way
+        to a 76 m path with one cusp; docs/planning.md). ``False``
         keeps the paper stage's answer as found, as before. Forward only it changes
         nothing.
     passage_bias : float

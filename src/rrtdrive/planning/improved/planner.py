@@ -27,7 +27,7 @@ from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register
 from rrtdrive.planning.hybrid.escalation import ESCALATES_FROM, escalate, with_kept_clearance
 from rrtdrive.planning.improved.boxed import boxed_end, open_share, stuck_root_words
 from rrtdrive.planning.improved.config import ImprovedConfig, StageBudgets
-from rrtdrive.planning.improved.detour import detour_words, measured_detour, shorter_answer
+from rrtdrive.planning.improved.detour import DETOURS, detour_words, measured_detour, shorter_answer
 from rrtdrive.planning.improved.expansion import (
     default_expansion_lmin,
     endpoint_capped_clearance,
@@ -238,7 +238,7 @@ class _Query:
         out = self.grow_and_smooth(rng, budget, edge_free, samples, passages)
         if out is not None:
             if self.problem.reverse and self.cfg.reverse_detour_tree and self.escalates_first:
-                return self.shortened(out, budget, "tree path", "tree_detour_ratio")
+                return self.shortened(out, budget, "tree path")
             return out
         self.stats["iterations"] = float(self.iterations)
         self.stats["growth_time_s"] = self.watch.elapsed() - self.stats["postprocess_time_s"]
@@ -252,7 +252,7 @@ class _Query:
             if fallback:
                 out = self.fallback(joints=False)
                 if out is not None:
-                    return self.shortened(out, budget, "direct Dubins path", "dubins_detour_ratio")
+                    return self.shortened(out, budget, "direct Dubins path")
             out = self.escalation(budget)
             if out.success or not fallback or out.status not in ESCALATES_FROM:
                 return out
@@ -272,17 +272,19 @@ class _Query:
         """Whether the escalation runs before the Dubins fallback's tails and leads."""
         return self.cfg.escalation and self.cfg.escalates_first(self.problem.reverse)
 
-    def shortened(self, out: PlanResult, budget: Budget, kind: str, stat: str) -> PlanResult:
+    def shortened(self, out: PlanResult, budget: Budget, kind: str) -> PlanResult:
         """``out``, or the escalation's shorter path when ``out`` is a forward detour.
 
         A detour is longer than ``reverse_detour_ratio`` times the Reeds-Shepp distance
-        at the fallback's radius and the distance around the obstacles
-        (:func:`~.detour.measured_detour`, ``stats[stat]``); the escalation's timeout
-        is its own answer (what it finds depends on the machine's speed).
+        at the fallback's radius and, for a tree path, the distance around the obstacles
+        (:data:`~.detour.DETOURS`, :func:`~.detour.measured_detour`); the escalation's
+        timeout is its own answer (what it finds depends on the machine's speed).
         """
+        stat, around = DETOURS[kind]
         length, limit = out.path.length, self.cfg.reverse_detour_ratio
         radius = self.cfg.dubins_radius_factor / self.problem.vehicle.kappa_max
-        ratio, around = measured_detour(length, self.problem, radius, limit, self.watch)
+        watch = self.watch if around else None  # None: the Reeds-Shepp distance alone
+        ratio, around = measured_detour(length, self.problem, radius, limit, watch)
         self.stats[stat] = out.stats[stat] = ratio  # the kept answer says it too
         if ratio <= limit:
             return out
