@@ -434,3 +434,44 @@ def test_simulate_names_a_bad_goal_on_a_map_by_its_flag(capsys):
     # The same check as plan's (cli.map_with_poses): simulate said "goal:" here.
     code, _, err = run(capsys, "simulate", "kerbside", "--goal", "200,44,0")
     _one_line_error(code, err, "error: --goal: (200, 44) lies outside the bounds")
+
+
+GOAL_93 = "--goal=53.201107188452056,36.30433181948137,2.404196106990101"
+
+
+def test_a_planner_option_reaches_the_planners_config(capsys):
+    # Random goal 93: by default a detour's escalation path with a gear change; the
+    # option keeps the paper stage's forward loop (it could not be set from the CLI).
+    code, out, _ = run(capsys, "plan", "parking_lot", GOAL_93, "--reverse", "--json", "-")
+    default = json.loads(out)
+    code_kept, out, _ = run(capsys, "plan", "parking_lot", GOAL_93, "--reverse", "--json", "-",
+                            "--planner-option", "reverse_detour_tree=false")  # fmt: skip
+    kept = json.loads(out)
+    assert code == code_kept == 0
+    assert default["stage"] == "hybrid-a-star" and default["cusps"] == 1
+    assert kept["stage"] == "improved-rrt-connect" and kept["cusps"] == 0
+    assert kept["length_m"] > 2 * default["length_m"]
+    code, out, _ = run(capsys, "plan", "parking_lot", "--planner", "hybrid-a-star", "--json", "-",
+                       "--planner-option", "curve=arcs", "--planner-option", "step=1.5")
+    assert code == 0 and json.loads(out)["success"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["--planner-option", "reverse_detour_tree=yes"],
+         "--planner-option reverse_detour_tree: expected true or false, got 'yes'"),
+        (["--planner-option", "nonsense=1"],
+         "--planner-option nonsense: unknown option for improved-rrt-connect"),
+        (["--planner-option", "step"], "--planner-option: expected FIELD=VALUE"),
+        (["--planner-option", "step=3", "--step", "4"],
+         "--planner-option step: also given by --step"),
+        (["--planner-option", "step=3", "--planner-option", "step=4"],
+         "--planner-option step: given twice"),
+        (["--planner-option", "step=-1"], "--planner-option step: must be > 0"),
+    ],
+)
+def test_a_bad_planner_option_is_one_line_naming_it(capsys, argv, needle):
+    code, out, err = run(capsys, "plan", "parking_lot", *argv)
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert needle in err, err

@@ -34,6 +34,7 @@ from rrtdrive.cli_args import (
     map_with_poses,
     names_stdout,
     nonneg_int,
+    parse_planner_options,
     parse_pose,
     positive_float,
     positive_int,
@@ -184,8 +185,13 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         from rrtdrive.planning.smoothing import CurveKind
 
         options["smoothing"] = {"curve": CurveKind.BSPLINE}
-    with flags_for(PLANNER_FLAGS):
-        planner = make_planner(args.planner, **options)
+    extra = parse_planner_options(args.planner_options, "--planner-option")
+    flags = {**PLANNER_FLAGS, **{f"planner.{k}": f"--planner-option {k}" for k in extra}}
+    for key in extra.keys() & options.keys():
+        flag = {"smoothing": "--paper-smoothing"}.get(key, f"--{key}")
+        raise InputError(f"--planner-option {key}: also given by {flag}; give it once")
+    with flags_for(flags):
+        planner = make_planner(args.planner, **options, **extra)
     reversing = args.reverse and bool(getattr(planner, "reverses", False))
     if args.reverse and not reversing:
         # The default reverses only in its escalation: --disable escalation ends that.
@@ -305,6 +311,15 @@ def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
         metavar="COMPONENT",
         help="switch off a component of the improved planner (repeatable), for ablation; "
         "improved-rrt-connect only",
+    )
+    plan.add_argument(
+        "--planner-option",
+        action="append",
+        dest="planner_options",
+        metavar="FIELD=VALUE",
+        help="set a field of the planner's config (repeatable), e.g. reverse_detour_tree=false "
+        "(the improved planner: ImprovedConfig; hybrid-a-star: HybridConfig); values are read "
+        "as JSON (4, 0.5, true, Infinity), else as text",
     )
     plan.add_argument(
         "--paper-smoothing",

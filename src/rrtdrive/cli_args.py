@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import io
+import json
 import math
 import os
 import re
@@ -213,6 +214,35 @@ def _flagged(text: str, fields: Mapping[str, str]) -> str | None:
     """``text`` (``"field: ..."``) with its field replaced by its flag; ``None`` if not one."""
     field, sep, rest = text.partition(": ")
     return f"{fields[field]}: {rest}" if sep and field in fields else None
+
+
+def parse_planner_options(texts: Sequence[str] | None, flag: str) -> dict[str, object]:
+    """``FIELD=VALUE`` texts as planner keywords: values read as JSON, else as text.
+
+    Examples
+    --------
+    >>> parse_planner_options(["reverse_detour_tree=false", "step=4", "curve=arcs"], "-o")
+    {'reverse_detour_tree': False, 'step': 4, 'curve': 'arcs'}
+    >>> parse_planner_options(["step"], "-o")
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: -o: expected FIELD=VALUE (e.g. reverse_detour_tree=false), got 'step'
+    """
+    out: dict[str, object] = {}
+    for text in texts or ():
+        key, eq, value = text.partition("=")
+        key = key.strip()
+        if not eq or not key:
+            raise InputError(
+                f"{flag}: expected FIELD=VALUE (e.g. reverse_detour_tree=false), got {text!r}"
+            )
+        if key in out:
+            raise InputError(f"{flag} {key}: given twice")
+        try:
+            out[key] = json.loads(value)
+        except ValueError:
+            out[key] = value
+    return out
 
 
 @contextmanager
