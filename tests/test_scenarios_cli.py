@@ -147,3 +147,46 @@ def test_simulate_a_map_plans_and_judges_on_the_grid_asked_for(capsys, tmp_path)
     assert key in _CHECKERS and _CHECKERS[key].resolution == pytest.approx(0.35)
     code, _, err = run(capsys, "simulate", "parking", "--resolution", "0.35")
     assert code == 2 and "--resolution: only a map takes a grid size" in err
+
+
+GOAL_93 = "--goal=53.201107188452056,36.30433181948137,2.404196106990101"
+
+
+def test_simulate_passes_planner_options_to_the_episodes_planner(capsys):
+    # Random goal 93 with --reverse: the escalation's path with one gear change; with
+    # the escalation switched off the tree path's forward loop is driven instead.
+    args = ("simulate", "parking_lot", GOAL_93, "--reverse", "--deterministic",
+            "--controller", "lqr", "--json", "-")  # fmt: skip
+    code, out, _ = run(capsys, *args)
+    default = json.loads(out)
+    code_off, out, _ = run(capsys, *args, "--planner-option", "escalation=false")
+    forward = json.loads(out)
+    assert code == code_off == 0 and default["success"] and forward["success"]
+    assert default["path_cusps"] == 1 and forward["path_cusps"] == 0
+    assert forward["path_length_m"] > 2 * default["path_length_m"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["parking", "--planner-option", "stepp=3"],
+         "--planner-option stepp: unknown option for improved-rrt-connect"),
+        (["parking", "--planner-option", "reverse_detour_tree=maybe"],
+         "--planner-option reverse_detour_tree: expected true or false"),
+        (["overtake-traffic", "--planner-option", "step=3"],
+         "--planner-option: overtake-traffic re-plans with its own planner"),
+        (["parking", "--planner-option", "step"], "--planner-option: expected FIELD=VALUE"),
+    ],
+)
+def test_simulate_a_bad_planner_option_is_one_line(capsys, argv, needle):
+    code, out, err = run(capsys, "simulate", *argv)
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert needle in err, err
+
+
+def test_an_episode_configs_planner_options_must_be_a_mapping():
+    from rrtdrive.sim.runner import EpisodeConfig
+    from rrtdrive.types import InputError
+
+    with pytest.raises(InputError, match=r"^episode.planner_options: expected a mapping"):
+        EpisodeConfig(planner_options=[1])  # type: ignore[arg-type]

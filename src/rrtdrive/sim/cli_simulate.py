@@ -31,6 +31,7 @@ from rrtdrive.cli_args import (
     flags_for,
     int_at_least,
     nonneg_int,
+    parse_planner_options,
     positive_float,
     positive_int,
     validate_output,
@@ -83,6 +84,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--planner", default=None, metavar="NAME",
         help="registered planner (default: the runner's DEFAULT_PLANNER, "
         "improved-rrt-connect)",
+    )
+    p.add_argument(
+        "--planner-option", action="append", dest="planner_options", metavar="FIELD=VALUE",
+        help="set a field of the planner's config (repeatable), as 'rrtdrive plan "
+        "--planner-option'; not for overtake-traffic, which re-plans with its own",
     )
     p.add_argument(
         "--controller", default="pure-pursuit", metavar="NAME",
@@ -277,7 +283,7 @@ def metrics_block(data: dict[str, Any]) -> list[str]:
 
 def _run(args: argparse.Namespace) -> int:
     from rrtdrive.evaluation import evaluate, failure_reason
-    from rrtdrive.planning import PLANNERS, forward_only_note, reverses
+    from rrtdrive.planning import PLANNERS, forward_only_note, make_planner, reverses
     from rrtdrive.sim.runner import EpisodeConfig, run_episode
     from rrtdrive.sim.scenes import SimConfig
     from rrtdrive.sim.stock import STOCK_ENVS
@@ -325,6 +331,12 @@ def _run(args: argparse.Namespace) -> int:
             f"--planner: unknown planner {args.planner!r}; "
             f"choose from {', '.join(sorted(PLANNERS))}"
         )
+    options = parse_planner_options(getattr(args, "planner_options", None), "--planner-option")
+    if options:  # checked once here, named by the flag (an episode plans later)
+        if args.scenario in REPLANNING_SCENARIOS:
+            raise InputError(f"--planner-option: {args.scenario} re-plans with its own planner")
+        with flags_for({f"planner.{k}": f"--planner-option {k}" for k in options}):
+            make_planner(args.planner, **options)
     if getattr(args, "reverse", False) and not reverses(args.planner):
         print(f"rrtdrive simulate: {forward_only_note(args.planner)}", file=sys.stderr)
     if args.max_time is not None and args.max_time < 1.0 / args.frequency:
@@ -400,6 +412,7 @@ def _run(args: argparse.Namespace) -> int:
         ),
         max_time_s=args.max_time,
         replan=replan,
+        planner_options=options,
     )
     t0 = time.perf_counter()
     oncoming = getattr(args, "oncoming", 0) or 0

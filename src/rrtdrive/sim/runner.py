@@ -48,6 +48,9 @@ class EpisodeConfig:
         scenario's ``v_max``.
     controller_options : Mapping
         Extra keyword arguments for the controller (gains).
+    planner_options : Mapping
+        Extra keyword arguments for the planner (its config's fields, e.g.
+        ``{"reverse_detour_tree": False}``), as ``make_planner(name, **options)``.
     budget : Budget
         Planning budget.
     max_time_s : float, optional
@@ -62,6 +65,7 @@ class EpisodeConfig:
     sim: SimConfig = field(default_factory=SimConfig)
     speed: SpeedConfig | None = None
     controller_options: Mapping[str, Any] = field(default_factory=dict)
+    planner_options: Mapping[str, Any] = field(default_factory=dict)
     budget: Budget = field(default_factory=Budget)
     max_time_s: float | None = None
     stop_on_crash: bool = True
@@ -83,11 +87,13 @@ class EpisodeConfig:
                     f"episode.{name}: expected a {kind.__name__}"
                     f"{' or None' if optional else ''}, got {type(value).__name__}"
                 )
-        if not isinstance(self.controller_options, Mapping):
-            raise InputError(
-                "episode.controller_options: expected a mapping of the controller's keyword "
-                f"arguments (gains), got {type(self.controller_options).__name__}"
-            )
+        for name, what in (("controller", "(gains)"), ("planner", "(its config's fields)")):
+            value = getattr(self, f"{name}_options")
+            if not isinstance(value, Mapping):
+                raise InputError(
+                    f"episode.{name}_options: expected a mapping of the {name}'s keyword "
+                    f"arguments {what}, got {type(value).__name__}"
+                )
         if self.max_time_s is not None:
             require_episode_time("episode.max_time_s", self.max_time_s)
         if not isinstance(self.stop_on_crash, bool):
@@ -189,7 +195,7 @@ def run_episode(
     ctrl = make_controller(
         controller, vehicle=task.vehicle, speed=speed, **dict(config.controller_options)
     )
-    ref = task.reference(planner, seed, config.budget)
+    ref = task.reference(planner, seed, config.budget, config.planner_options)
     if ref.failure is not None:
         return Episode(
             task, ref.planner, controller, seed, ref.plan, ref.path or Path.empty(),

@@ -269,7 +269,7 @@ def drive_stock_env(
         ctrl = make_controller(
             controller, vehicle=params, speed=speed, **dict(config.controller_options)
         )
-        ref = task.reference(planner, int(seed), config.budget)
+        ref = task.reference(planner, int(seed), config.budget, config.planner_options)
         dt = 1.0 / freq
         if ref.failure is not None:
             episode = Episode(

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import enum
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -164,18 +165,20 @@ class SuccessPart:
 
 
 def plan_scenario(
-    scenario: Task, planner: str, seed: int, budget: Budget | None = None
+    scenario: Task, planner: str, seed: int, budget: Budget | None = None,
+    options: Mapping[str, Any] | None = None,
 ) -> PlanResult:
     """Plan the task's query with the registered planner ``planner``.
 
-    The planner's generator is the episode seed's planner stream; gear changes are
-    allowed when the task says so (``scenario.reverse``).
-    """
+    ``options``: the planner's keyword arguments (its config's fields). The planner's
+    generator is the episode seed's planner stream; gear changes are allowed when the
+    task says so (``scenario.reverse``).
+    """  # fmt: skip
     _, plan_rng, _ = scenario_rngs(seed)
     problem = PlanningProblem.from_map(
         scenario.map, config=scenario.checker_config, reverse=scenario.reverse
     )
-    return make_planner(planner).solve(problem, plan_rng, budget or Budget())
+    return make_planner(planner, **dict(options or {})).solve(problem, plan_rng, budget or Budget())
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -326,8 +329,13 @@ class Task:
         """The speed profile settings of the drive and the configuration the episode records."""
         raise NotImplementedError
 
-    def reference(self, planner: object, seed: int, budget: Budget) -> Reference:
-        """What to drive along: plan with ``planner`` (a name), or take a given plan or path."""
+    def reference(
+        self, planner: object, seed: int, budget: Budget, options: Mapping[str, Any] | None = None
+    ) -> Reference:
+        """What to drive along: plan with ``planner`` (a name), or take a given plan or path.
+
+        ``options``: the named planner's keyword arguments (its config's fields).
+        """
         raise NotImplementedError
 
     def make_driver(
@@ -387,8 +395,12 @@ class PathTask(Task):
         """The given speed settings, else the defaults with this task's cap; ``config`` as is."""
         return config.speed or self.default_speed(), config
 
-    def reference(self, planner: object, seed: int, budget: Budget) -> Reference:
+    def reference(
+        self, planner: object, seed: int, budget: Budget, options: Mapping[str, Any] | None = None
+    ) -> Reference:
         """Plan with the registered planner ``planner``, or take a given plan or path.
+
+        ``options``: the named planner's keyword arguments (its config's fields).
 
         Raises
         ------
@@ -397,7 +409,7 @@ class PathTask(Task):
         """
         plan: PlanResult | None
         if isinstance(planner, str):
-            plan = plan_scenario(self, planner, seed, budget)
+            plan = plan_scenario(self, planner, seed, budget, options)
             name, path = planner, plan.path
         elif isinstance(planner, PlanResult):
             plan, name, path = planner, planner.planner, planner.path

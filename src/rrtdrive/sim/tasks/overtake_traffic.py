@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -357,14 +357,22 @@ class OvertakeTrafficTask(Task):
         speed = config.speed or self.default_speed()
         return speed, dataclasses.replace(config, speed=speed, replan=replan)
 
-    def reference(self, planner: object, seed: int, budget: Budget) -> Reference:
+    def reference(
+        self, planner: object, seed: int, budget: Budget, options: Mapping[str, Any] | None = None
+    ) -> Reference:
         """Nothing planned ahead: the driver re-plans in the loop (only with its own planner).
 
         Raises
         ------
         InputError
-            For any planner but the space-time improved RRT-Connect.
+            For any planner but the space-time improved RRT-Connect, and for ``options``
+            (its re-planner takes ``ReplanConfig.planner_options``).
         """
+        if options:
+            raise InputError(
+                "planner_options: overtake-traffic re-plans with its own planner; give "
+                "ReplanConfig(planner_options=...) instead"
+            )
         if planner not in (self.PLANNERS or ()):
             raise InputError(
                 f"planner: overtake-traffic re-plans with the improved RRT-Connect in space-time "
