@@ -451,6 +451,15 @@ def test_a_planner_option_reaches_the_planners_config(capsys):
     assert default["stage"] == "hybrid-a-star" and default["cusps"] == 1
     assert kept["stage"] == "improved-rrt-connect" and kept["cusps"] == 0
     assert kept["length_m"] > 2 * default["length_m"]
+    # The JSON says what the plan was made with: the same command can be given again.
+    assert default["planner_options"] == {} and kept["planner_options"] == {
+        "reverse_detour_tree": False
+    }
+    _, out, _ = run(capsys, "plan", "parking_lot", "--step", "4", "--disable", "prune",
+                    "--planner-option", "reverse_detour_ratio=Infinity", "--json", "-")  # fmt: skip
+    assert json.loads(out)["planner_options"] == {
+        "step": 4.0, "disable": ["prune"], "reverse_detour_ratio": "Infinity"
+    }
     code, out, _ = run(capsys, "plan", "parking_lot", "--planner", "hybrid-a-star", "--json", "-",
                        "--planner-option", "curve=arcs", "--planner-option", "step=1.5")
     assert code == 0 and json.loads(out)["success"]

@@ -163,6 +163,9 @@ def test_simulate_passes_planner_options_to_the_episodes_planner(capsys):
     forward = json.loads(out)
     assert code == code_off == 0 and default["success"] and forward["success"]
     assert default["path_cusps"] == 1 and forward["path_cusps"] == 0
+    assert default["planner_options"] == {} and forward["planner_options"] == {
+        "escalation": False
+    }
     assert forward["path_length_m"] > 2 * default["path_length_m"]
 
 

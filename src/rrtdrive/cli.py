@@ -19,7 +19,7 @@ import math
 import os
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, NoReturn
 
@@ -31,6 +31,7 @@ from rrtdrive.cli_args import (
     distinct_outputs,
     flags_for,
     join_negative_values,
+    json_safe,
     map_with_poses,
     names_stdout,
     nonneg_int,
@@ -76,8 +77,13 @@ def plan_to_json(
     start: Pose | None = None,
     goal: Pose | None = None,
     map_file: str | None = None,
+    planner_options: Mapping[str, object] | None = None,
 ) -> dict[str, object]:
     """The JSON contract of ``rrtdrive plan`` (SPEC §5, docs/planning.md).
+
+    ``planner_options``: the planner's keyword arguments the plan was made with
+    (``--step``, ``--disable``, ``--paper-smoothing``, ``--planner-option``; ``{}``:
+    its defaults), so a plan can be made again from its JSON.
 
     ``start`` and ``goal`` are the query's poses ``[x, y, yaw]`` (``null`` when not
     given), so ``rrtdrive verify`` can check the path against them; ``map_file`` the
@@ -111,6 +117,7 @@ def plan_to_json(
         "map_file": None if map_file is None else os.path.abspath(map_file),
         "seed": seed,
         "reverse": bool(reverse),
+        "planner_options": json_safe(dict(planner_options or {})),
         "start": None if start is None else [float(v) for v in start.as_tuple()],
         "goal": None if goal is None else [float(v) for v in goal.as_tuple()],
         "path": np.round(result.path.samples, 6).tolist(),
@@ -217,6 +224,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         doc = plan_to_json(
             result, args.seed, m.name, m.vehicle, reverse=args.reverse, start=m.start,
             goal=m.goal, map_file=None if args.map in BUILTIN_MAPS else args.map,
+            planner_options={**options, **extra},
         )  # fmt: skip
         write_output(args.json, json.dumps(doc) + "\n")
     if args.plot:

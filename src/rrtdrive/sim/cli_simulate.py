@@ -30,6 +30,7 @@ from rrtdrive.cli_args import (
     distinct_outputs,
     flags_for,
     int_at_least,
+    json_safe,
     nonneg_int,
     parse_planner_options,
     positive_float,
@@ -440,6 +441,7 @@ def _run(args: argparse.Namespace) -> int:
         "deterministic": deterministic,
         "target": target,
         "reverse": bool(episode.scenario.reverse),
+        "planner_options": json_safe(options),  # what the plan was made with ({}: defaults)
     }
     extra.update(episode.scenario.describe())
     if target != "scenario":
