@@ -478,9 +478,29 @@ def test_a_planner_option_reaches_the_planners_config(capsys):
         (["--planner-option", "step=3", "--planner-option", "step=4"],
          "--planner-option step: given twice"),
         (["--planner-option", "step=-1"], "--planner-option step: must be > 0"),
+        # The baselines' keywords, Hybrid A*'s and the smoothing's fields: each named by
+        # the flag (they read "--planner: RRTPlanner.__init__() got ...", "hybrid.curve").
+        (["--planner", "rrt", "--planner-option", "bogus=1"],
+         "--planner-option bogus: unknown option for rrt; allowed ['exact_goal_edge'"),
+        (["--planner", "hybrid-a-star", "--planner-option", "curve=nope"],
+         "--planner-option curve: must be one of"),
+        (["--planner-option", 'smoothing={"max_rounds": "x"}'],
+         "--planner-option smoothing.max_rounds: must be an integer"),
+        # The query's gear setting is --reverse (the JSON reports it), not a planner field.
+        (["--planner", "hybrid-a-star", "--planner-option", "reverse=true"],
+         "--planner-option reverse: give --reverse"),
+        (["--disable", "escalation", "--planner-option", "escalation=true"],
+         "--planner-option escalation: also given by --disable"),
     ],
 )
 def test_a_bad_planner_option_is_one_line_naming_it(capsys, argv, needle):
     code, out, err = run(capsys, "plan", "parking_lot", *argv)
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
     assert needle in err, err
+
+
+def test_switching_the_escalation_off_by_option_says_the_plan_is_forward_only(capsys):
+    code, _, err = run(capsys, "plan", "parking_lot", "--reverse",
+                       "--planner-option", "escalation=false")  # fmt: skip
+    assert code == 0
+    assert "plans forward only with --planner-option escalation=false" in err, err

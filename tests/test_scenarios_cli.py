@@ -179,6 +179,10 @@ def test_simulate_passes_planner_options_to_the_episodes_planner(capsys):
         (["overtake-traffic", "--planner-option", "step=3"],
          "--planner-option: overtake-traffic re-plans with its own planner"),
         (["parking", "--planner-option", "step"], "--planner-option: expected FIELD=VALUE"),
+        (["parking", "--planner", "rrt", "--planner-option", "bogus=1"],
+         "--planner-option bogus: unknown option for rrt"),
+        (["u-turn", "--planner", "hybrid-a-star", "--planner-option", "persist=7"],
+         "--planner-option persist:"),
     ],
 )
 def test_simulate_a_bad_planner_option_is_one_line(capsys, argv, needle):
@@ -193,3 +197,5 @@ def test_an_episode_configs_planner_options_must_be_a_mapping():
 
     with pytest.raises(InputError, match=r"^episode.planner_options: expected a mapping"):
         EpisodeConfig(planner_options=[1])  # type: ignore[arg-type]
+    with pytest.raises(InputError, match=r"by name, got \{1: 2\}"):
+        EpisodeConfig(planner_options={1: 2})  # type: ignore[dict-item]

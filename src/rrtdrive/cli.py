@@ -37,6 +37,7 @@ from rrtdrive.cli_args import (
     nonneg_int,
     parse_planner_options,
     parse_pose,
+    planner_option_flags,
     positive_float,
     positive_int,
     validate_output,
@@ -193,16 +194,20 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
         options["smoothing"] = {"curve": CurveKind.BSPLINE}
     extra = parse_planner_options(args.planner_options, "--planner-option")
-    flags = {**PLANNER_FLAGS, **{f"planner.{k}": f"--planner-option {k}" for k in extra}}
-    for key in extra.keys() & options.keys():
-        flag = {"smoothing": "--paper-smoothing"}.get(key, f"--{key}")
+    flags = {**PLANNER_FLAGS, **planner_option_flags(extra, "--planner-option")}
+    for key in extra.keys() & {*options, *(args.disable or ())}:
+        flag = {"smoothing": "--paper-smoothing", "step": "--step"}.get(key, "--disable")
         raise InputError(f"--planner-option {key}: also given by {flag}; give it once")
     with flags_for(flags):
         planner = make_planner(args.planner, **options, **extra)
     reversing = args.reverse and bool(getattr(planner, "reverses", False))
     if args.reverse and not reversing:
         # The default reverses only in its escalation: --disable escalation ends that.
-        why = " with --disable escalation (it reverses in that stage)"
+        off = (
+            "--disable escalation" if "escalation" in (args.disable or ())
+            else "--planner-option escalation=false"
+        )  # fmt: skip
+        why = f" with {off} (it reverses in that stage)"
         why = why if reverses(args.planner) else ""
         print(f"rrtdrive plan: {forward_only_note(args.planner, why=why)}", file=sys.stderr)
     budget = Budget(max_iterations=args.max_iterations, max_time_s=args.max_time)

@@ -258,10 +258,31 @@ def parse_planner_options(texts: Sequence[str] | None, flag: str) -> dict[str, o
             )
         if key in out:
             raise InputError(f"{flag} {key}: given twice")
+        if key == "reverse":  # the query's, which the JSON reports: not the planner's own
+            raise InputError(f"{flag} reverse: give --reverse to allow gear changes")
         try:
             out[key] = json.loads(value)
         except ValueError:
             out[key] = value
+    return out
+
+
+def planner_option_flags(options: Mapping[str, object], flag: str) -> dict[str, str]:
+    """The fields the planners' errors name, mapped to ``flag FIELD`` for :func:`flags_for`.
+
+    ``planner.step``, ``hybrid.curve``, ``planner.smoothing.max_rounds``.
+
+    Examples
+    --------
+    >>> planner_option_flags({"smoothing": {"max_rounds": 8}}, "-o")["planner.smoothing.max_rounds"]
+    '-o smoothing.max_rounds'
+    """
+    out: dict[str, str] = {}
+    for key, value in options.items():
+        for prefix in ("planner", "hybrid"):
+            out[f"{prefix}.{key}"] = f"{flag} {key}"
+            if isinstance(value, Mapping):
+                out.update({f"{prefix}.{key}.{sub}": f"{flag} {key}.{sub}" for sub in value})
     return out
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import inspect
+
 from rrtdrive.planning.base import (
     PLANNERS,
     GrowingTree,
@@ -46,6 +48,16 @@ def make_planner(name: str, **options: object) -> Planner:
         raise InputError(
             f"planner: unknown planner {name!r}; choose from {sorted(PLANNERS)}"
         ) from None
+    try:
+        allowed = inspect.signature(factory).parameters
+    except (TypeError, ValueError):  # no signature to read: the factory decides
+        allowed = None
+    if allowed is not None and not any(p.kind is p.VAR_KEYWORD for p in allowed.values()):
+        for key in options:
+            if key not in allowed:
+                raise InputError(
+                    f"planner.{key}: unknown option for {name}; allowed {sorted(allowed)}"
+                )
     try:
         return factory(**options)
     except TypeError as exc:

@@ -33,6 +33,7 @@ from rrtdrive.cli_args import (
     json_safe,
     nonneg_int,
     parse_planner_options,
+    planner_option_flags,
     positive_float,
     positive_int,
     validate_output,
@@ -336,7 +337,7 @@ def _run(args: argparse.Namespace) -> int:
     if options:  # checked once here, named by the flag (an episode plans later)
         if args.scenario in REPLANNING_SCENARIOS:
             raise InputError(f"--planner-option: {args.scenario} re-plans with its own planner")
-        with flags_for({f"planner.{k}": f"--planner-option {k}" for k in options}):
+        with flags_for(planner_option_flags(options, "--planner-option")):
             make_planner(args.planner, **options)
     if getattr(args, "reverse", False) and not reverses(args.planner):
         print(f"rrtdrive simulate: {forward_only_note(args.planner)}", file=sys.stderr)

@@ -25,7 +25,7 @@ from rrtdrive.sim.loop import STOP_AT_PATH_END, EpisodeLoop, PathTracker, requir
 from rrtdrive.sim.scenes import SimConfig, build_env
 from rrtdrive.sim.tasks import DEFAULT_PLANNER, Task, make_variant
 from rrtdrive.sim.traffic import OncomingGate
-from rrtdrive.types import Budget, InputError, Path, PlanResult
+from rrtdrive.types import Budget, InputError, Path, PlanResult, brief_repr
 
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.sim.replanning import ReplanConfig
@@ -89,10 +89,10 @@ class EpisodeConfig:
                 )
         for name, what in (("controller", "(gains)"), ("planner", "(its config's fields)")):
             value = getattr(self, f"{name}_options")
-            if not isinstance(value, Mapping):
+            if not isinstance(value, Mapping) or not all(isinstance(k, str) for k in value):
                 raise InputError(
                     f"episode.{name}_options: expected a mapping of the {name}'s keyword "
-                    f"arguments {what}, got {type(value).__name__}"
+                    f"arguments {what} by name, got {brief_repr(value)}"
                 )
         if self.max_time_s is not None:
             require_episode_time("episode.max_time_s", self.max_time_s)
