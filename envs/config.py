@@ -22,7 +22,7 @@ from rrtdrive.controllers import CONTROLLERS, SpeedConfig, TrackingController, m
 from rrtdrive.envs.action import CommandLimits
 from rrtdrive.envs.reward import RewardWeights
 from rrtdrive.maps import Map
-from rrtdrive.planning import PLANNERS, forward_only_note, reverses
+from rrtdrive.planning import PLANNERS, forward_only_note, make_planner, reverses
 from rrtdrive.sim.limits import MAX_REVERSE_SPEED, MAX_SPEED
 from rrtdrive.sim.loop import require_episode_time
 from rrtdrive.sim.scenes import SimConfig
@@ -60,6 +60,21 @@ def _require_mapping(name: str, value: Any) -> dict[str, Any]:
         if not isinstance(key, str):  # they become keyword arguments
             raise InputError(f"{name}: keys must be option names (strings), got {key!r}")
     return dict(value)
+
+
+def _planner_options(options: object, planner: str, replan: object) -> dict[str, Any]:
+    """``planner_options`` checked by building the planner once (errors name the key)."""
+    checked = _require_mapping("planner_options", options)
+    if checked and replan is not None:
+        raise InputError("planner_options: overtake-traffic re-plans with its own planner; "
+                         "give replan_options={'planner_options': ...}")
+    try:
+        make_planner(planner, **checked)
+    except InputError as exc:
+        field, sep, rest = str(exc).partition(": ")
+        key = field.partition(".")[2] if field.startswith(("planner.", "hybrid.")) else ""
+        raise InputError(f"planner_options.{key}: {rest}" if key and sep else str(exc)) from None
+    return checked
 
 
 def _check_fields(name: str, options: Mapping[str, Any], cls: type) -> None:
@@ -127,6 +142,10 @@ class DriveEnvConfig:
         episode ends (``"completed"``) when the overtake is complete.
     controller_options : mapping, optional
         Controller gains.
+    planner_options : mapping, optional
+        Fields of the planner's config (``{"reverse_detour_tree": False}``), as
+        ``rrtdrive plan --planner-option``; not for ``overtake-traffic`` (its re-planner
+        takes ``replan_options["planner_options"]``).
     speed_options : mapping, optional
         :class:`~rrtdrive.controllers.SpeedConfig` fields (``v_max`` defaults to the
         scenario's).
@@ -176,6 +195,7 @@ class DriveEnvConfig:
     scenario_options: Mapping[str, Any] | None = None
     replan_options: Mapping[str, Any] | None = None
     controller_options: Mapping[str, Any] | None = None
+    planner_options: Mapping[str, Any] | None = None
     speed_options: Mapping[str, Any] | None = None
     budget: Budget | None = None
     seed_range: tuple[int, int] = (0, 2**31 - 1)
@@ -251,6 +271,7 @@ class DriveEnvConfig:
             )
         put("replan", replan)
         put("controller_options", _require_mapping("controller_options", self.controller_options))
+        put("planner_options", _planner_options(self.planner_options, planner, replan))
         put("speed_options", _require_mapping("speed_options", self.speed_options))
         budget = Budget() if self.budget is None else self.budget
         if not isinstance(budget, Budget):

@@ -230,7 +230,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         task = cfg.scenario_for(seed) if task is None else task
         if cfg.max_time_s is not None:  # the task checked its own limit when it was made
             task.check_time_limit(cfg.max_time_s, "max_time_s")
-        ref = task.reference(cfg.planner, seed, cfg.budget)
+        ref = task.reference(cfg.planner, seed, cfg.budget, cfg.planner_options)
         if ref.failure is not None:
             return ref
         speed = cfg.speed_for(task)

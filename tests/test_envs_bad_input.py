@@ -309,3 +309,30 @@ def test_step_refuses_bad_action_naming_action(overtake_env, action):
     # Refused before any simulation step: the episode goes on.
     obs, *_ = overtake_env.step(np.zeros(2, dtype=np.float32))
     assert overtake_env.observation_space.contains(obs)
+
+
+def test_planner_options_reach_the_episodes_planner():
+    # The gym's planner takes its config's fields, as `rrtdrive plan --planner-option`: the
+    # reset's path is the one plan_scenario makes with the same options.
+    import numpy as np
+
+    from rrtdrive.envs.drive_env import DriveEnv
+    from rrtdrive.sim.tasks.base import plan_scenario
+
+    options = {"curve": "arcs"}
+    env = DriveEnv("u-turn", planner="hybrid-a-star", planner_options=options)
+    plain = DriveEnv("u-turn", planner="hybrid-a-star")
+    try:
+        env.reset(seed=0, options={"episode_seed": 3})
+        plain.reset(seed=0, options={"episode_seed": 3})
+        task = env.config.scenario_for(3)
+        want = plan_scenario(task, "hybrid-a-star", 3, env.config.budget, options)
+        np.testing.assert_array_equal(env.path.samples, want.path.samples)
+        assert not np.array_equal(env.path.samples, plain.path.samples)
+    finally:
+        env.close()
+        plain.close()
+    with pytest.raises(InputError, match=r"^planner_options.bogus: unknown option for"):
+        DriveEnvConfig.from_options(planner_options={"bogus": 1})
+    with pytest.raises(InputError, match=r"^planner_options: overtake-traffic re-plans"):
+        DriveEnvConfig.from_options(scenario="overtake-traffic", planner_options={"step": 3})
