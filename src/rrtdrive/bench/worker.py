@@ -203,9 +203,8 @@ def _episode_metrics(spec: RunSpec) -> dict[str, Any]:
         report["highway_env_success"] = stock.highway_env_success
     for k in ("scenario", "planner", "controller", "seed"):
         report.pop(k, None)
-    # Whether the path was asked for with gear changes, as simulate says: u-turn and
-    # parallel-parking always are (the grid's flag said false for them).
-    report["reverse"] = bool(getattr(episode.scenario, "reverse", spec.reverse))
+    # (The row's "reverse", whether the path was asked for with gear changes, is
+    # base_row's: always_reverses covers u-turn and parallel-parking.)
     if getattr(episode.scenario, "reverse_in", False):  # parking-reverse-in, as simulate
         report["reverse_in"] = True
     plan_ok = episode.plan is not None and episode.plan.success

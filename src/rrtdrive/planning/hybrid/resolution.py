@@ -9,7 +9,8 @@ only, the search from the goal uses reverse arcs alone, so its reversal drives
 forward). Many queries are hard at one end only (a tight bay, a start against a
 wall): from the other end the hard part is a way out. The search from the goal
 that runs out of states proves the goal unreachable at the search's resolution, on its
-own lattice (the ladder's next search then gives it the first turn: ``goal_first``). Where every
+own lattice (for a goal in a pocket the ladder's next search then gives it the first turn:
+``goal_first``). Where every
 connection found is rejected (the ramps cut a corner), the searches run again keeping
 ``ramp_margin`` more clearance. Also here: the per-map set-up
 the searches share (:func:`free_cell_graph`, :func:`dubins_table`) and the

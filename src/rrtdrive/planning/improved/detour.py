@@ -163,19 +163,18 @@ def shorter_answer(
     ``escalation_first="always"``).
     """
     config = HybridConfig()
-    if escalated.success:
-        if search_cost(escalated.path, config) < search_cost(detour.path, config):
-            return escalated
     length = escalated.path.length
     if not escalated.success:
         found = f"none ({int(escalated.stats.get('hybrid_expansions', 0))} expansions)"
-    elif length >= detour.path.length:
-        found = f"a longer path ({length:.1f} m)"
     else:
+        cost, kept_cost = search_cost(escalated.path, config), search_cost(detour.path, config)
+        if cost < kept_cost:
+            return escalated
         found = (
-            f"a path {detour.path.length - length:.1f} m shorter that costs more: "
-            f"{search_cost(escalated.path, config):.1f} m against "
-            f"{search_cost(detour.path, config):.1f} m, a reverse metre weighed as "
+            f"a longer path ({length:.1f} m)"
+            if length >= detour.path.length
+            else f"a path {detour.path.length - length:.1f} m shorter that costs more: "
+            f"{cost:.1f} m against {kept_cost:.1f} m, a reverse metre weighed as "
             f"{config.reverse_cost:g}, a gear change as {config.gear_change_cost:g} m"
         )
     gear = "with reverse" if reverse else "forward only"

@@ -280,10 +280,10 @@ class _Query:
         (:data:`~.detour.DETOURS`, :func:`~.detour.measured_detour`); the escalation's
         timeout is its own answer (what it finds depends on the machine's speed).
         """
-        stat, around = DETOURS[kind]
+        stat, with_obstacles = DETOURS[kind]
         length, limit = out.path.length, self.cfg.reverse_detour_ratio
         radius = self.cfg.dubins_radius_factor / self.problem.vehicle.kappa_max
-        watch = self.watch if around else None  # None: the Reeds-Shepp distance alone
+        watch = self.watch if with_obstacles else None  # None: the Reeds-Shepp distance alone
         ratio, around = measured_detour(length, self.problem, radius, limit, watch)
         self.stats[stat] = out.stats[stat] = ratio  # the kept answer says it too
         if ratio <= limit:
