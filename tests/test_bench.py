@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 from rrtdrive.bench import BenchConfig, ResultStore, expand, run_bench
+from rrtdrive.bench.config_file import config_from_mapping, load_toml
 from rrtdrive.bench.core import grid_rows
-from rrtdrive.bench.grid import config_from_mapping, load_toml
 from rrtdrive.bench.summary import describe, summarise_rows, to_csv, to_markdown, wilson_interval
 from rrtdrive.bench.worker import execute_run
 from rrtdrive.cli import main

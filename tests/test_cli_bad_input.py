@@ -396,7 +396,8 @@ def test_bench_refuses_another_planner_for_the_scenario_that_re_plans(capsys, tm
 
 def test_bench_time_limit_defaults_are_unchanged():
     from rrtdrive.bench import BenchConfig
-    from rrtdrive.bench.grid import NO_WALL_LIMIT_S, config_from_mapping
+    from rrtdrive.bench.config_file import config_from_mapping
+    from rrtdrive.bench.grid import NO_WALL_LIMIT_S
 
     assert config_from_mapping({"maps": ["overtake"]}).to_json()["max_time_s"] == 5.0
     det = config_from_mapping({"maps": ["overtake"], "deterministic": True})

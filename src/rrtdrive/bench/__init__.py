@@ -19,8 +19,9 @@ from __future__ import annotations
 
 from rrtdrive.bench import ompl_planners as _ompl_planners  # noqa: F401  (registers OMPL rows)
 from rrtdrive.bench.backends import WorkerStartupError
+from rrtdrive.bench.config_file import load_toml
 from rrtdrive.bench.core import BenchReport, run_bench
-from rrtdrive.bench.grid import BenchConfig, RunSpec, expand, load_toml
+from rrtdrive.bench.grid import BenchConfig, RunSpec, expand
 from rrtdrive.bench.store import ResultStore
 from rrtdrive.bench.summary import summarise_rows
 

@@ -69,7 +69,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument(
         "--planners", action="append", metavar="NAMES",
         help="planners, including OMPL rows such as ompl-r2-rrtconnect, ompl-rs-bitstar "
-        "(the Reeds-Shepp ompl-rs rows only with --reverse; default: improved-rrt-connect)",
+        "(the Reeds-Shepp ompl-rs rows only with --reverse; default: improved-rrt-connect); "
+        "NAME@FIELD=VALUE:FIELD=VALUE sets fields of a planner's config, as plan "
+        "--planner-option (improved-rrt-connect@reverse_detour_tree=false)",
     )
     p.add_argument(
         "--controllers", action="append", metavar="NAMES",
@@ -144,7 +146,7 @@ def given_flags(args: argparse.Namespace) -> dict[str, str]:
 
 def config_from_args(args: argparse.Namespace) -> Any:
     """The :class:`~rrtdrive.bench.grid.BenchConfig` of parsed arguments (flags over TOML)."""
-    from rrtdrive.bench.grid import config_from_mapping, load_toml
+    from rrtdrive.bench.config_file import config_from_mapping, load_toml
 
     values: dict[str, Any] = load_toml(args.config) if args.config else {}
     values.update({k: getattr(args, k) for k in given_flags(args)})  # flags over TOML

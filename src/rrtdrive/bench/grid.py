@@ -23,7 +23,6 @@ import json
 import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from pathlib import Path as FsPath
 from typing import TYPE_CHECKING, Any
 
 from rrtdrive.types import InputError, brief_repr, is_finite_number, require_int
@@ -36,8 +35,6 @@ __all__ = [
     "RunSpec",
     "CONFIG_KEYS",
     "expand",
-    "load_toml",
-    "config_from_mapping",
     "map_digest",
     "SCHEMA",
     "is_map_scenario",
@@ -74,7 +71,7 @@ NO_WALL_LIMIT_S = 1e6
 DEFAULT_MAX_TIME_S = 5.0
 
 
-_DETERMINISTIC_TIME = "max_time_s: a deterministic bench has no planning time limit; drop it"
+DETERMINISTIC_TIME = "max_time_s: a deterministic bench has no planning time limit; drop it"
 
 
 def _names(field_name: str, value: object) -> tuple[str, ...]:
@@ -151,7 +148,10 @@ class BenchConfig:
         judged by it too) or maps (built-in names or ``.json`` files), driven from their
         start to their goal.
     planners : tuple of str
-        Registered planner names, including the OMPL rows (``ompl-r2-rrtconnect`` …).
+        Registered planner names, including the OMPL rows (``ompl-r2-rrtconnect`` …);
+        a name may carry fields of the planner's config,
+        ``improved-rrt-connect@reverse_detour_tree=false:step=4`` (see
+        :mod:`~rrtdrive.bench.planner_specs`; each row is kept in its one spelling).
     controllers : tuple of str
         Controllers for scenario runs (ignored by planning-only runs).
     seeds : int
@@ -230,7 +230,7 @@ class BenchConfig:
         if self.deterministic:
             # None: not given. Any value given is an error, even the default's 5.0.
             if self.max_time_s not in (None, NO_WALL_LIMIT_S):
-                raise InputError(_DETERMINISTIC_TIME)
+                raise InputError(DETERMINISTIC_TIME)
             set_(self, "max_time_s", NO_WALL_LIMIT_S)
         elif self.max_time_s is None:
             set_(self, "max_time_s", DEFAULT_MAX_TIME_S)
@@ -251,12 +251,15 @@ class BenchConfig:
         self._check_names()
 
     def _check_names(self) -> None:
-        import rrtdrive.bench.ompl_planners  # noqa: F401  (registers the OMPL rows)
-        from rrtdrive.planning import PLANNERS
+        from rrtdrive.bench.planner_specs import check_planner_spec, parse_planner_spec
 
-        for p in self.planners:
-            if p not in PLANNERS:
-                raise InputError(f"planners: unknown planner {p!r}; choose from {sorted(PLANNERS)}")
+        labels: list[str] = []
+        for text in self.planners:
+            spec = parse_planner_spec(text)
+            check_planner_spec(spec, "planners" if "@" not in text else f"planners: {text!r}")
+            if spec.label not in labels:  # two spellings of one row: one row
+                labels.append(spec.label)
+            p = spec.name
             if p.startswith("ompl-rs-") and not self.reverse:
                 # Reeds-Shepp curves reverse whatever the grid says: beside forward-only
                 # planners they compared paths with gear changes to paths without.
@@ -274,6 +277,7 @@ class BenchConfig:
                 raise InputError(
                     f"planners: {p!r} needs OMPL; install it with pip install 'rrtdrive[ompl]'"
                 )
+        object.__setattr__(self, "planners", tuple(labels))
         digests, contents = dict(self.map_digests), dict(self.map_contents)
         for m in self.maps:
             if m not in digests or m not in contents:
@@ -328,6 +332,11 @@ class BenchConfig:
                 # became an error row (tried twice) and the bench exited 1.
                 own = getattr(TASKS.get(s), "PLANNERS", None)
                 others = [p for p in self.planners if own is not None and p not in own]
+                if others and others[0].partition("@")[0] in own:
+                    raise InputError(
+                        f"planners: {others[0]!r}: {s} re-plans with its own planner, which "
+                        "takes no options in a bench; drop the '@...'"
+                    )
                 if others:
                     raise InputError(
                         f"planners: {s} re-plans with its own space-time planner ({own[0]!r} "
@@ -508,84 +517,6 @@ def always_reverses(target: str) -> bool:
     if is_map_scenario(target) or target in STOCK_ENVS:
         return False
     return bool(make_variant(target, 0).reverse)
-
-
-def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
-    """Read a TOML bench file and check its keys.
-
-    Parameters
-    ----------
-    path : str or path-like
-        The file.
-
-    Returns
-    -------
-    dict
-        The keys of :data:`CONFIG_KEYS` that the file sets.
-
-    Raises
-    ------
-    InputError
-        For a missing or malformed file or an unknown key (named in the message).
-    """
-    import tomllib
-
-    p = FsPath(path)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"config: no such file {str(p)!r}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"config: cannot read {str(p)!r}: {exc}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"config: malformed TOML in {str(p)!r}: {exc}") from None
-    except RecursionError:
-        raise InputError(f"config: malformed TOML in {str(p)!r}: nested too deeply") from None
-    except ValueError:  # an integer past Python's 4300-digit conversion limit
-        raise InputError(
-            f"config: malformed TOML in {str(p)!r}: a number has too many digits"
-        ) from None
-    if "bench" in data and isinstance(data["bench"], dict):
-        if len(data) > 1:
-            # Keys beside the table, or other tables: "unknown key 'bench'" named the one
-            # key that was right.
-            other = sorted(k for k in data if k != "bench")[0]
-            raise InputError(
-                f"config: {other!r} in {str(p)!r} is outside the [bench] table; put every "
-                "key in the table, or drop the table"
-            )
-        data = data["bench"]  # a [bench] table is accepted too
-    unknown = sorted(set(data) - set(CONFIG_KEYS))
-    if unknown:
-        raise InputError(
-            f"config: unknown key {unknown[0]!r} in {str(p)!r}; "
-            f"allowed keys: {', '.join(CONFIG_KEYS)}"
-        )
-    if "ray" in data:
-        ray = data["ray"]
-        if ray is True:
-            data["ray"] = ""
-        elif ray is False:
-            data["ray"] = None
-        elif not isinstance(ray, str):
-            raise InputError(f"ray: expected true, false or an address, got {ray!r}")
-    return data
-
-
-def config_from_mapping(values: Mapping[str, Any]) -> BenchConfig:
-    """Build a :class:`BenchConfig` from a mapping of :data:`CONFIG_KEYS` (``None`` = default).
-
-    Raises
-    ------
-    InputError
-        For an unknown key or an invalid value.
-    """
-    unknown = sorted(set(values) - set(CONFIG_KEYS))
-    if unknown:
-        raise InputError(f"config: unknown key {unknown[0]!r}")
-    if values.get("deterministic") is True and values.get("max_time_s") is not None:
-        raise InputError(_DETERMINISTIC_TIME)  # whatever the value, NO_WALL_LIMIT_S too
-    return BenchConfig(**{k: v for k, v in values.items() if v is not None})
 
 
 def grid_keys(specs: Iterable[RunSpec]) -> set[tuple[str, int]]:

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rrtdrive.bench.grid import RunSpec, always_reverses
+from rrtdrive.bench.planner_specs import parse_planner_spec
 
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.maps import Map
@@ -129,7 +130,8 @@ def _plan_metrics(spec: RunSpec) -> dict[str, Any]:
 
     m = _map(spec.target, spec.map_json)
     problem = PlanningProblem.from_map(m, reverse=spec.reverse)
-    planner = make_planner(spec.planner)
+    row_planner = parse_planner_spec(spec.planner)
+    planner = make_planner(row_planner.name, **row_planner.options)
     budget = Budget(max_iterations=spec.max_iterations, max_time_s=spec.max_time_s)
     result = planner.solve(problem, np.random.default_rng(spec.seed), budget)
     ok = result.success
@@ -185,19 +187,22 @@ def _episode_metrics(spec: RunSpec) -> dict[str, Any]:
     from rrtdrive.types import Budget
     from rrtdrive.verify import verify_path
 
+    row_planner = parse_planner_spec(spec.planner)
     config = EpisodeConfig(
         budget=Budget(max_iterations=spec.max_iterations, max_time_s=spec.max_time_s),
         replan=_replan_config(spec),
+        planner_options=row_planner.options,
     )
     assert spec.controller is not None
     stock = None
     if spec.target in STOCK_ENVS:
         stock = drive_stock_env(
-            spec.target, spec.seed, spec.planner, spec.controller, config, reverse=spec.reverse
+            spec.target, spec.seed, row_planner.name, spec.controller, config,
+            reverse=spec.reverse,
         )
         episode = stock.episode
     else:
-        episode = run_episode(_task(spec), spec.planner, spec.controller, spec.seed, config)
+        episode = run_episode(_task(spec), row_planner.name, spec.controller, spec.seed, config)
     report = evaluate(episode).to_json()
     if stock is not None:  # the env's own judgement beside ours
         report["highway_env_success"] = stock.highway_env_success

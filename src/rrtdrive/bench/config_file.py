@@ -1,0 +1,95 @@
+"""A bench's settings from a TOML file or a mapping of its keys (the command line's flags).
+
+The keys are :data:`~rrtdrive.bench.grid.CONFIG_KEYS`, the names of the
+:class:`~rrtdrive.bench.grid.BenchConfig` fields; a ``[bench]`` table is accepted too.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from pathlib import Path as FsPath
+from typing import Any
+
+from rrtdrive.bench.grid import CONFIG_KEYS, DETERMINISTIC_TIME, BenchConfig
+from rrtdrive.types import InputError
+
+__all__ = ["load_toml", "config_from_mapping"]
+
+
+def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Read a TOML bench file and check its keys.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file.
+
+    Returns
+    -------
+    dict
+        The keys of :data:`CONFIG_KEYS` that the file sets.
+
+    Raises
+    ------
+    InputError
+        For a missing or malformed file or an unknown key (named in the message).
+    """
+    import tomllib
+
+    p = FsPath(path)
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(f"config: no such file {str(p)!r}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"config: cannot read {str(p)!r}: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"config: malformed TOML in {str(p)!r}: {exc}") from None
+    except RecursionError:
+        raise InputError(f"config: malformed TOML in {str(p)!r}: nested too deeply") from None
+    except ValueError:  # an integer past Python's 4300-digit conversion limit
+        raise InputError(
+            f"config: malformed TOML in {str(p)!r}: a number has too many digits"
+        ) from None
+    if "bench" in data and isinstance(data["bench"], dict):
+        if len(data) > 1:
+            # Keys beside the table, or other tables: "unknown key 'bench'" named the one
+            # key that was right.
+            other = sorted(k for k in data if k != "bench")[0]
+            raise InputError(
+                f"config: {other!r} in {str(p)!r} is outside the [bench] table; put every "
+                "key in the table, or drop the table"
+            )
+        data = data["bench"]  # a [bench] table is accepted too
+    unknown = sorted(set(data) - set(CONFIG_KEYS))
+    if unknown:
+        raise InputError(
+            f"config: unknown key {unknown[0]!r} in {str(p)!r}; "
+            f"allowed keys: {', '.join(CONFIG_KEYS)}"
+        )
+    if "ray" in data:
+        ray = data["ray"]
+        if ray is True:
+            data["ray"] = ""
+        elif ray is False:
+            data["ray"] = None
+        elif not isinstance(ray, str):
+            raise InputError(f"ray: expected true, false or an address, got {ray!r}")
+    return data
+
+
+def config_from_mapping(values: Mapping[str, Any]) -> BenchConfig:
+    """Build a :class:`BenchConfig` from a mapping of :data:`CONFIG_KEYS` (``None`` = default).
+
+    Raises
+    ------
+    InputError
+        For an unknown key or an invalid value.
+    """
+    unknown = sorted(set(values) - set(CONFIG_KEYS))
+    if unknown:
+        raise InputError(f"config: unknown key {unknown[0]!r}")
+    if values.get("deterministic") is True and values.get("max_time_s") is not None:
+        raise InputError(DETERMINISTIC_TIME)  # whatever the value, NO_WALL_LIMIT_S too
+    return BenchConfig(**{k: v for k, v in values.items() if v is not None})
