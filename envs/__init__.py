@@ -170,7 +170,10 @@ def apply_registration(
             restored and value in _registration_values(key)
         ):
             raise InputError(f"{key}: set by an id's registration, not an option")
-    if own is not None and scenario is not None and plain_value(scenario) != plain_value(own):
+    if (
+        own is not None and scenario is not None and plain_value(scenario) != plain_value(own)
+        and not _names_the_id(plain_value(scenario), plain_value(own), registered)
+    ):
         raise InputError(
             f"scenario: this id drives {plain_value(own)!r}, not {scenario_text(scenario)}; "
             f"make that scenario's own id, or {MAP_ID} for a map"
@@ -179,6 +182,23 @@ def apply_registration(
     if registered is not None and merge and (given is None or isinstance(given, Mapping)):
         out["scenario_options"] = {**plain_value(registered), **plain_value(given or {})}  # type: ignore[dict-item]
     return out
+
+
+def _names_the_id(scenario: object, own: object, registered: object) -> bool:
+    """Whether ``scenario`` is a variant's name for the id's own scenario and options.
+
+    ``parking-reverse-in`` on ``rrtdrive/ParkingReverseIn-v0`` (parking with
+    ``reverse_in``): the id's own scenario under the name ``simulate`` and the bench use.
+    """
+    from rrtdrive.sim.tasks import SCENARIO_VARIANTS
+
+    if not isinstance(scenario, str) or scenario not in SCENARIO_VARIANTS:
+        return False
+    base, options = SCENARIO_VARIANTS[scenario]
+    given = plain_value(registered) if registered is not None else {}
+    return base == own and isinstance(given, Mapping) and all(
+        given.get(k) == v for k, v in options.items()
+    )
 
 
 def register_envs() -> None:

@@ -143,6 +143,17 @@ def test_a_scenario_of_another_id_is_refused_but_map_v0_takes_any_map():
         _make("rrtdrive/Overtake-v0", registered_scenario="overtake")
 
 
+def test_reverse_in_id_takes_its_own_scenario_under_its_variant_name():
+    # parking-reverse-in, the name simulate and the bench give it, was refused by the
+    # very id that drives it (session 38); on Parking-v0 it is still another scenario.
+    named = _make("rrtdrive/ParkingReverseIn-v0", scenario="parking-reverse-in")
+    plain = _make("rrtdrive/ParkingReverseIn-v0")
+    assert (named.scenario, named.scenario_options) == (plain.scenario, plain.scenario_options)
+    assert named.scenario_options == {"reverse_in": True}
+    with pytest.raises(InputError, match=r"^scenario: this id drives 'parking', not "):
+        _make("rrtdrive/Parking-v0", scenario="parking-reverse-in")
+
+
 def test_map_v0_with_a_scenario_config_names_the_config_not_its_default_map():
     # It said "scenario: 'parking_lot' differs from config.scenario 'parking'": the
     # id's default map, which the caller never gave.
