@@ -55,6 +55,8 @@ SHORT = {
     "full-lock-0.05": "0.05 m clearance, full lock (radius 1.0 / kappa_max)",
     "arcs-full-lock-0.05": "0.05 m clearance, full lock, exact arcs",
     "fine-full-lock-0.05": "0.05 m clearance, full lock, 0.2 m / 1.5 deg grid, 0.5 m steps",
+    "fine-arcs-full-lock-0.05": "0.05 m clearance, full lock, exact arcs, 0.2 m / 1.5 deg grid",
+    "fine-full-lock-0": "no clearance, full lock, 0.2 m / 1.5 deg grid, 0.5 m steps",
 }
 #: Our planner's settings, from the default to none of the guarantees but the body's.
 VARIANTS = {
@@ -80,6 +82,16 @@ VARIANTS = {
     # Session 37: the same with ramps on a finer grid (refined once: 0.1 m / 0.75 deg).
     "0.05 m clearance, full lock, 0.2 m / 1.5 deg grid, 0.5 m steps": (
         "body_clearance=0.05:min_clearance=0.05:coarse_after=0:radius_factor=1.0:"
+        "xy_resolution=0.2:yaw_resolution=0.026179938779914945:step=0.5:curvatures=9"
+    ),
+    # Session 38: the fine grid without the ramps (is the sharpness bound what stops
+    # it?), and with the ramps but no clearance (is the 0.05 m?).
+    "0.05 m clearance, full lock, exact arcs, 0.2 m / 1.5 deg grid": (
+        "body_clearance=0.05:min_clearance=0.05:coarse_after=0:radius_factor=1.0:curve=arcs:"
+        "xy_resolution=0.2:yaw_resolution=0.026179938779914945:step=0.5:curvatures=11"
+    ),
+    "no clearance, full lock, 0.2 m / 1.5 deg grid, 0.5 m steps": (
+        "body_clearance=0:min_clearance=0:coarse_after=0:radius_factor=1.0:"
         "xy_resolution=0.2:yaw_resolution=0.026179938779914945:step=0.5:curvatures=9"
     ),
 }
