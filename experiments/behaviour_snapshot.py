@@ -47,6 +47,7 @@ SEEDS = range(5)
 TIMING_KEYS = {
     "planning_time_s",
     "setup_time_s",
+    "diagnosis_time_s",
     "wall_time_s",
     "replan_time_median_s",
     "replan_time_max_s",

@@ -42,6 +42,17 @@ def test_plan_json_success_and_deterministic(capsys):
     assert first == second
 
 
+def test_plan_json_reports_the_diagnosis_time_apart(capsys):
+    # The failure's diagnosis runs after the planning stopwatch; its time was in no
+    # output (14 s on a 2 km map: a scaling audit, session 38).
+    code, out, _ = run(capsys, "plan", "no_path", "--json", "-")
+    failed = json.loads(out)
+    assert code == 1 and failed["success"] is False and failed["diagnosis"] is not None
+    assert isinstance(failed["diagnosis_time_s"], float) and failed["diagnosis_time_s"] > 0.0
+    code, out, _ = run(capsys, "plan", "parking_lot", "--json", "-")
+    assert code == 0 and json.loads(out)["diagnosis_time_s"] is None
+
+
 def test_plan_reverse_flag_is_in_the_json(capsys):
     # rrt-connect cannot reverse: allowed, it still returns a forward-only path.
     code, out, _ = run(capsys, "plan", "parking_lot", "--planner", "rrt-connect", "--reverse",

@@ -25,7 +25,7 @@ from rrtdrive.planning.result import timeout_message
 from rrtdrive.types import Budget, PlanStatus, Pose
 
 #: Timing fields of the plan JSON, and what a wall time quoted in a message would look like.
-TIMING_KEYS = {"planning_time_s", "setup_time_s"}
+TIMING_KEYS = {"planning_time_s", "setup_time_s", "diagnosis_time_s"}
 _SECONDS = re.compile(r"\b\d+\.\d+ s\b")
 
 #: (planner name, options): the default improved planner, the paper's pipeline

@@ -121,7 +121,8 @@ class SlowChecker(CollisionChecker):
 
 def _json(res, problem: PlanningProblem) -> str:
     out = plan_to_json(res, 0, problem.map.name, reverse=problem.reverse)
-    out = {k: v for k, v in out.items() if k not in ("planning_time_s", "setup_time_s")}
+    timing = ("planning_time_s", "setup_time_s", "diagnosis_time_s")
+    out = {k: v for k, v in out.items() if k not in timing}
     out["message"] = _SECONDS.sub("<t> s", out["message"])
     return json.dumps(out, sort_keys=True)
 

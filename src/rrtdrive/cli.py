@@ -136,6 +136,8 @@ def plan_to_json(
         "iterations": result.iterations,
         "planning_time_s": result.planning_time_s,
         "setup_time_s": result.setup_time_s,
+        # A failure's diagnosis runs after the planning stopwatch (null on success).
+        "diagnosis_time_s": result.stats.get("diagnosis_time_s"),
         "message": result.message,
         "diagnosis": None if result.diagnosis is None else result.diagnosis.to_json(),
     }

@@ -146,6 +146,7 @@ def _plan_metrics(spec: RunSpec) -> dict[str, Any]:
         "iterations": int(result.iterations),
         "planning_time_s": float(result.planning_time_s),
         "setup_time_s": float(result.setup_time_s),
+        "diagnosis_time_s": result.stats.get("diagnosis_time_s"),
         "verified": bool(verify_path(m, result.path).ok) if ok else None,
         "message": result.message,
     }
