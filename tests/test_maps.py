@@ -216,6 +216,18 @@ def test_likely_mistakes_warn_naming_the_field(changes, field, hint):
     assert isinstance(m, Map)  # valid input: planned as given
 
 
+def test_many_obstacle_yaws_past_a_full_turn_warn_once():
+    # A script's polygon in radians past 2 pi printed a warning per obstacle (1 250 lines).
+    boxes = [{"center": [5 + 3 * i, 20], "size": [1, 1], "yaw": 7.0 + i} for i in range(9)]
+    boxes[0]["yaw"] = 0.5  # within a full turn: not counted
+    with pytest.warns(InputWarning) as record:
+        map_from_json(_file_map(obstacles=boxes))
+    texts = [str(w.message) for w in record]
+    assert len(texts) == 1
+    assert texts[0].startswith("obstacles[1].yaw (and 7 more obstacle yaws past a full turn): ")
+    assert "for 8 deg write 0.1396" in texts[0]
+
+
 def test_a_yaw_wraps_as_radians_whatever_the_warning_says():
     # The warning's "taken as" angle is the one the planner uses: 90 rad wraps to 116.6 deg.
     with pytest.warns(InputWarning, match=r"taken as 116\.6 deg"):

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -34,6 +35,7 @@ __all__ = [
     "check_endpoint",
     "check_obstacle_numbers",
     "warn_if_degrees",
+    "warn_obstacle_yaws",
     "warn_outside",
 ]
 
@@ -62,6 +64,19 @@ def warn_if_degrees(label: str, yaw: float) -> None:
             InputWarning,
             stacklevel=3,
         )
+
+
+def warn_obstacle_yaws(yaws: Sequence[float]) -> None:
+    """:func:`warn_if_degrees` for a map file's obstacles: one warning, not one each.
+
+    The first such yaw is named and the others counted: a script's polygon of 5 000
+    segments in radians past 2 pi printed 1 250 warning lines.
+    """
+    beyond = [i for i, yaw in enumerate(yaws) if 2.0 * math.pi + 1e-9 < abs(yaw) <= MAX_YAW]
+    if beyond:
+        more = len(beyond) - 1
+        also = f" (and {more} more obstacle yaw{'s' if more > 1 else ''} past a full turn)"
+        warn_if_degrees(f"obstacles[{beyond[0]}].yaw" + (also if more else ""), yaws[beyond[0]])
 
 
 def check_obstacle_numbers(size: tuple[float, float], yaw: float) -> None:

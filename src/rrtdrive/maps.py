@@ -34,6 +34,7 @@ from rrtdrive.map_checks import (
     check_endpoint,
     check_obstacle_numbers,
     warn_if_degrees,
+    warn_obstacle_yaws,
     warn_outside,
 )
 from rrtdrive.types import (
@@ -310,8 +311,7 @@ def map_from_json(
     name = data.get("name", "map")
     if not isinstance(name, str):
         raise InputError(f"name: expected a non-empty string, got {brief_repr(name)}")
-    for i, o in enumerate(obstacles):
-        warn_if_degrees(f"obstacles[{i}].yaw", o.yaw)
+    warn_obstacle_yaws([o.yaw for o in obstacles])
     file_start = Pose.from_seq(data["start"], "start")
     file_goal = Pose.from_seq(data["goal"], "goal")
     m = Map(
