@@ -205,6 +205,8 @@ def run_ours(item: dict[str, Any]) -> dict[str, Any]:
     diagnosis = getattr(res, "diagnosis", None)
     if diagnosis is not None:
         row["diagnosis"] = diagnosis.kind.value
+    if "diagnosis_time_s" in res.stats:  # after the stopwatch, before the answer
+        row["diagnosis_time_s"] = res.stats["diagnosis_time_s"]
     row.update(_check(m, res.path) if res.success else _UNCHECKED)
     return row
 
@@ -356,6 +358,10 @@ def summarise(rows: list[dict[str, Any]], planners: list[str], sets: list[str]) 
             "median_time_solved_s": _median([r["time_s"] for r in ok]),
             "median_length_m": _median([r["length_m"] for r in ok]),
             "median_time_failed_s": _median([r["time_s"] for r in bad]),
+            # What a user waits for a failure: the search and then its diagnosis.
+            "median_answer_time_failed_s": _median(
+                [r["time_s"] + r.get("diagnosis_time_s", 0.0) for r in bad]
+            ),
             "statuses": statuses,
             **_sharpness(ok),
             **_stages(vals),

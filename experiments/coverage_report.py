@@ -58,9 +58,10 @@ def report(payload: dict[str, Any]) -> str:
         "",
         "| planner | set | solved | verified | any sharpness | collision-free "
         "| median time solved [ms] "
-        "| median length [m] | median time failed [ms] | max sharpness [rad/m] "
+        "| median length [m] | median time failed [ms] | with the diagnosis [ms] "
+        "| max sharpness [rad/m] "
         f"| within {SHARPNESS_BOUND:g} rad/m | other outcomes |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for p, sets in s["per_planner"].items():
         for name, c in sets.items():
@@ -70,6 +71,7 @@ def report(payload: dict[str, Any]) -> str:
                 f"{c.get('verified_any_sharpness', '-')} | {c['collision_free']} | "
                 f"{cell(c['median_time_solved_s'], 1e3)} | "
                 f"{cell(c['median_length_m'], 1, 2)} | {cell(c['median_time_failed_s'], 1e3)} | "
+                f"{cell(c.get('median_answer_time_failed_s'), 1e3)} | "
                 f"{_sharp(c.get('max_sharpness'))} | {_count(c.get('within_bound'))} | "
                 f"{other or '-'} |"
             )

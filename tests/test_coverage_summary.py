@@ -92,3 +92,21 @@ def test_the_share_of_ompls_solved_is_not_rounded_up_to_a_target():
     }  # fmt: skip
     page = coverage.report(payload)
     assert "| 98.9 % |" in page and "| 99 % |" not in page
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.lists(st.tuples(st.floats(0.001, 5.0), st.floats(0.0, 1.0), st.booleans()),
+                min_size=1, max_size=20))
+def test_a_failures_answer_time_adds_its_diagnosis(data):
+    # The diagnosis runs after the planning stopwatch: what a user waits for a failure is
+    # both (session 38; the rows' time_s stays the planning time alone).
+    rows = _rows("hybrid-a-star", [t for t, _, _ in data], [10.0] * len(data),
+                 [False] * len(data))
+    for row, (_, diagnosis_s, has) in zip(rows, data, strict=True):
+        if has:
+            row["diagnosis_time_s"] = diagnosis_s
+    cell = coverage.summarise(rows, ["hybrid-a-star"], ["goal"])["per_planner"][
+        "hybrid-a-star"]["goal"]
+    waited = [t + (d if has else 0.0) for t, d, has in data]
+    assert np.isclose(cell["median_answer_time_failed_s"], np.median(waited))
+    assert np.isclose(cell["median_time_failed_s"], np.median([t for t, _, _ in data]))
