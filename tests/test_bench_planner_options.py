@@ -70,6 +70,25 @@ def test_two_spellings_are_one_row_and_options_make_a_new_run_key():
     assert alone.key == plain.key  # a row without options keeps its key
 
 
+def test_an_integral_float_is_the_integer_row():
+    # step=2 and step=2.0 were two rows with two run keys (a regression audit).
+    cfg = BenchConfig(maps=("overtake",), seeds=1, planners=("rrt@step=2", "rrt@step=2.0"))
+    assert cfg.planners == ("rrt@step=2",)
+    assert parse_planner_spec("rrt@step=2.5").label == "rrt@step=2.5"
+
+
+@pytest.mark.parametrize(
+    ("planners", "match"),
+    [
+        (("hybrid-a-star@curve=arcs", "step=0.5"), r"'step=0\.5' is not a planner: .*':'"),
+        (('improved-rrt-connect@smoothing={"max_rounds":8}',), "a value cannot hold ':' or ','"),
+    ],
+)
+def test_a_comma_or_colon_in_a_value_is_explained(planners, match):
+    with pytest.raises(InputError, match=match):
+        BenchConfig(maps=("overtake",), seeds=1, planners=planners)
+
+
 def test_plan_row_is_the_planner_built_with_its_options():
     cfg = BenchConfig(maps=("parking_lot",), planners=("improved-rrt-connect", STEP4), seeds=1)
     rows = {s.planner: execute_run(s) for s in expand(cfg)}

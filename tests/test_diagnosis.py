@@ -596,25 +596,3 @@ def test_a_forward_failure_proven_at_one_end_says_why(
     reverse = dataclasses.replace(problem, reverse=True)
     assert make_planner(planner).solve(reverse, np.random.default_rng(0), Budget()).success
 
-
-@pytest.mark.parametrize("max_cells", [5_000, 20_000])
-@pytest.mark.parametrize("gap", [0.6, 1.85])
-def test_a_big_grid_finds_the_pass_on_a_coarser_stride(monkeypatch, gap, max_cells):
-    # A big map's pass is measured on every f-th cell (f = 5 and 3 here on a 92 k-cell
-    # grid), as on a 2 km map (47.7 M cells: 10.6 s and 2 GB of whole-grid distance
-    # transforms before): still between the two walls, its width exact.
-    from rrtdrive.planning.diagnosis import checks
-
-    m = staggered_gap_map(gap)
-    assert problem(m).checker.clearance_grid.size > 4 * max_cells
-    monkeypatch.setattr(checks, "PASS_CELL_MAX_CELLS", max_cells)
-    found = diagnose(problem(m), tree_edges=False)
-    assert found.kind is DiagnosisKind.NARROW_PASSAGE, found.message
-    lower, upper = (m.obstacles[0].polygon(), m.obstacles[1].polygon())
-    assert found.numbers["width_m"] == pytest.approx(lower.distance(upper))
-    # Located to within the stride's spacing of the exact grid's 0.5 m.
-    checker = problem(m).checker
-    stride = math.ceil(math.sqrt(checker.clearance_grid.size / max_cells)) * checker.resolution
-    pass_centre = shapely.Point(20.0 + gap / 2, 9.0)
-    where = shapely.Point(found.numbers["x"], found.numbers["y"])
-    assert where.distance(pass_centre) < 0.5, stride

@@ -255,7 +255,8 @@ class BenchConfig:
 
         labels: list[str] = []
         for text in self.planners:
-            spec = parse_planner_spec(text)
+            # Checked as the workers will read it: its label (step=4.0 is step=4 there).
+            spec = parse_planner_spec(parse_planner_spec(text).label)
             check_planner_spec(spec, "planners" if "@" not in text else f"planners: {text!r}")
             if spec.label not in labels:  # two spellings of one row: one row
                 labels.append(spec.label)

@@ -52,6 +52,8 @@ class PlannerSpec:
 
 
 def _text(value: object) -> str:
+    if isinstance(value, float) and value.is_integer() and abs(value) < 2**53:
+        return str(int(value))  # step=4.0 and step=4: one row
     return value if isinstance(value, str) else json.dumps(value, separators=(",", ":"))
 
 
@@ -83,7 +85,15 @@ def parse_planner_spec(text: str, field_name: str = "planners") -> PlannerSpec:
     if at and not tail.strip():
         raise InputError(f"{where}: nothing after '@'; give FIELD=VALUE or drop the '@'")
     parts = [p.strip() for p in tail.split(":") if p.strip()]
-    options = parse_planner_options(parts, where)
+    try:
+        options = parse_planner_options(parts, where)
+    except InputError as exc:
+        if "expected FIELD=VALUE" not in str(exc):
+            raise
+        raise InputError(
+            f"{exc}; fields are separated by ':', so a value cannot hold ':' or ',' (set "
+            "nested fields with rrtdrive plan --planner-option)"
+        ) from None
     return PlannerSpec(name.strip(), options)
 
 
@@ -101,6 +111,11 @@ def check_planner_spec(spec: PlannerSpec, where: str) -> None:
     import rrtdrive.bench.ompl_planners  # noqa: F401  (registers the OMPL rows)
     from rrtdrive.planning import PLANNERS, make_planner
 
+    if "=" in spec.name:  # hybrid-a-star@curve=arcs,step=0.5: the comma split the row
+        raise InputError(
+            f"{where}: {spec.name!r} is not a planner: a row's fields are separated by ':' "
+            "(a ',' starts the next planner)"
+        )
     if spec.name not in PLANNERS:
         raise InputError(
             f"{where}: unknown planner {spec.name!r}; choose from {sorted(PLANNERS)}"
