@@ -141,3 +141,19 @@ def test_cli_and_toml_take_options(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("rrtdrive bench: error: --planners: 'rrt@stepp=2': planner.stepp")
     assert len(err.splitlines()) == 1
+
+
+def test_reverse_grid_notes_each_forward_only_row(tmp_path, capsys):
+    # As plan --reverse: the rows say reverse true (asked for) but these paths cannot
+    # change gear; the bench said nothing (a regression audit).
+    code = main(["bench", "--maps", "overtake", "--reverse", "--seeds", "1", "--quiet",
+                 "--no-plots", "--out", str(tmp_path), "--planners",
+                 "rrt,improved-rrt-connect,improved-rrt-connect@escalation=false"])
+    assert code == 0
+    notes = [ln for ln in capsys.readouterr().err.splitlines() if "note:" in ln]
+    assert notes == [
+        "rrtdrive bench: note: rrt plans forward only; --reverse takes effect with "
+        "hybrid-a-star, improved-rrt-connect",
+        "rrtdrive bench: note: improved-rrt-connect plans forward only with escalation=false; "
+        "--reverse takes effect with hybrid-a-star, improved-rrt-connect",
+    ]

@@ -165,6 +165,28 @@ def config_from_args(args: argparse.Namespace) -> Any:
     return config_from_mapping(values)
 
 
+def forward_only_notes(planners: tuple[str, ...]) -> list[str]:
+    """As ``rrtdrive plan --reverse``: a note for each row whose planner plans forward only.
+
+    Its rows say ``reverse: true`` (gear changes were asked for) while its paths have
+    none; the OMPL rows are left out (``ompl-rs`` rows reverse, ``ompl-r2`` rows are
+    geometric paths, as the bench docs say).
+    """
+    from rrtdrive.bench.planner_specs import parse_planner_spec
+    from rrtdrive.planning import forward_only_note, make_planner, reverses
+
+    notes = []
+    for label in planners:
+        spec = parse_planner_spec(label)
+        if spec.name.startswith("ompl-"):
+            continue
+        if not getattr(make_planner(spec.name, **spec.options), "reverses", False):
+            # The default reverses only in its escalation, which the row's options end.
+            why = f" with {label.partition('@')[2]}" if reverses(spec.name) else ""
+            notes.append(forward_only_note(spec.name, why=why))
+    return notes
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the ``bench`` subcommand; return the exit code."""
     from rrtdrive.cli_args import flags_for
@@ -183,6 +205,9 @@ def _run(args: argparse.Namespace) -> int:
     from rrtdrive.cli_args import writing
 
     cfg = config_from_args(args)
+    if cfg.reverse:
+        for note in forward_only_notes(cfg.planners):
+            print(f"rrtdrive bench: {note}", file=sys.stderr)
     command = "rrtdrive " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     try:
         # A full disk while storing rows or writing the summary: one line, exit 1 (it was
