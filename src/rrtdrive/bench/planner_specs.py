@@ -72,11 +72,11 @@ def parse_planner_spec(text: str, field_name: str = "planners") -> PlannerSpec:
     --------
     >>> parse_planner_spec("improved-rrt-connect@reverse_detour_tree=false:step=4")
     PlannerSpec(name='improved-rrt-connect', options={'reverse_detour_tree': False, 'step': 4})
-    >>> parse_planner_spec("rrt@step")
+    >>> parse_planner_spec("rrt@step")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    rrtdrive.types.InputError: planners: 'rrt@step': expected FIELD=VALUE \
-(e.g. reverse_detour_tree=false), got 'step'
+    rrtdrive.types.InputError: planners: 'rrt@step': expected FIELD=VALUE ..., got 'step'; \
+fields are separated by ':', so a value cannot hold ':' or ',' ...
     """
     from rrtdrive.cli_args import parse_planner_options
 
