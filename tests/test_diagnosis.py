@@ -596,3 +596,72 @@ def test_a_forward_failure_proven_at_one_end_says_why(
     reverse = dataclasses.replace(problem, reverse=True)
     assert make_planner(planner).solve(reverse, np.random.default_rng(0), Budget()).success
 
+
+
+def _reference_pass_cell(grid, lo, hi, a, b):
+    """pass_cell as it was, with two whole-grid distance transforms (the reference)."""
+    from scipy import ndimage
+
+    structure = np.ones((3, 3), dtype=bool)
+    low, _ = ndimage.label(grid >= lo, structure=structure)
+    high, _ = ndimage.label(grid >= hi, structure=structure)
+    band = (low == low[a]) & (high == 0)
+    to_a = ndimage.distance_transform_edt(high != high[a])
+    to_b = ndimage.distance_transform_edt(high != high[b])
+    total = np.where(band, to_a + to_b, np.inf)
+    return total, np.unravel_index(int(np.argmin(total)), grid.shape)
+
+
+def test_pass_cell_equals_the_whole_grid_distance_transforms():
+    # Since session 38 pass_cell measures the two distances from KD-trees of the sides'
+    # edge cells (10.6 s and 2 GB of transforms on a 2 km map before): the same cell, on
+    # 300 random grids, of which the ends of at least 30 lie in two sides of a pass.
+    from scipy import ndimage
+
+    from rrtdrive.planning.diagnosis.checks import connected, pass_cell
+
+    compared = 0
+    for seed in range(300):
+        rng = np.random.default_rng(seed)
+        free = np.ones((rng.integers(20, 90), rng.integers(20, 90)), dtype=bool)
+        for _ in range(rng.integers(1, 12)):
+            i, j = rng.integers(0, free.shape[0]), rng.integers(0, free.shape[1])
+            free[i:i + rng.integers(1, 15), j:j + rng.integers(1, 15)] = False
+        grid = ndimage.distance_transform_edt(free) * 0.1
+        cells = np.argwhere(free)
+        a, b = (tuple(int(v) for v in cells[rng.integers(len(cells))]) for _ in range(2))
+        lo, hi = 1e-9, float(min(grid[a], grid[b]))
+        if not connected(grid, lo, a, b) or connected(grid, hi, a, b):
+            continue  # joined at the ends' clearance, or never: no pass between them
+        for _ in range(10):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if connected(grid, mid, a, b) else (lo, mid)
+        high, _ = ndimage.label(grid >= hi, structure=np.ones((3, 3), dtype=bool))
+        compared += bool(high[a] and high[b] and high[a] != high[b])
+        total, expected = _reference_pass_cell(grid, lo, hi, a, b)
+        got = pass_cell(grid, lo, hi, a, b)
+        assert total[got] == pytest.approx(total[expected], abs=1e-9), seed
+        assert got == tuple(int(v) for v in expected), seed
+    assert compared >= 30
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.integers(0, 2**31 - 1))
+def test_distance_to_a_side_equals_the_distance_transform(seed):
+    # pass_cell's distances, from a KD-tree of the side's edge cells, against scipy's
+    # whole-grid transform at every cell outside the side (sides touching the border too).
+    from scipy import ndimage
+
+    from rrtdrive.planning.diagnosis.checks import _distance_to
+
+    rng = np.random.default_rng(seed)
+    side = np.zeros((rng.integers(5, 60), rng.integers(5, 60)), dtype=bool)
+    for _ in range(rng.integers(1, 6)):
+        i, j = rng.integers(0, side.shape[0]), rng.integers(0, side.shape[1])
+        side[i:i + rng.integers(1, 20), j:j + rng.integers(1, 20)] = True
+    side[rng.random(side.shape) < rng.uniform(0, 0.05)] = True  # specks
+    if side.all():
+        return
+    outside = np.nonzero(~side)
+    expected = ndimage.distance_transform_edt(~side)[outside]
+    np.testing.assert_allclose(_distance_to(side, outside), expected, rtol=0, atol=1e-12)
