@@ -10,8 +10,9 @@ diagnosis finds the gap's narrowest place (:func:`rrtdrive.planning.diagnosis.ch
 pass_cell`): until session 38 with two distance transforms of the whole grid, since
 then with KD-trees of the two sides' edge cells. This script builds the maps
 (``--sizes``: a square map of that side with one wall across it, ``--gap`` metres open
-in its middle; and a 500 m map with 5 000 boxes, seeded), diagnoses each query with the
-old pass search (kept here as the reference) and the new one, alternating,
+in its middle; a 500 m map with 5 000 boxes and a 1 km map with 50 000, whose goal they
+wall off, seeded), diagnoses each query with the old pass search and walled-off check
+(kept here as the reference) and the new ones, alternating,
 ``--repeats`` times in one process, and checks that both give the same diagnosis.
 Writes ``OUT/bench_diagnosis.{json,md}``: per map the grid, the least time of each and
 the ratio new / old.
@@ -34,6 +35,7 @@ from scipy import ndimage
 sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "src"))
 
 from rrtdrive.cli_args import int_at_least, positive_float, positive_int  # noqa: E402
+from rrtdrive.collision import CollisionChecker  # noqa: E402
 from rrtdrive.maps import Map, Obstacle  # noqa: E402
 from rrtdrive.planning import PlanningProblem  # noqa: E402
 from rrtdrive.planning.diagnosis import checks, diagnose  # noqa: E402
@@ -55,6 +57,20 @@ def old_pass_cell(
     to_b = ndimage.distance_transform_edt(high != high[b])
     best = np.unravel_index(int(np.argmin(np.where(band, to_a + to_b, np.inf))), grid.shape)
     return int(best[0]), int(best[1])
+
+
+def old_joined_in_free_space(checker: Any, p: Pose, q: Pose) -> bool:
+    """The walled-off check before session 38: free space cut from a union with the edge."""
+    import shapely
+
+    polys = [o.polygon() for o in checker.obstacles]
+    edge = shapely.box(*checker.bounds).exterior
+    shapely.union_all([edge, *[poly.exterior for poly in polys]])  # built with it, unused
+    free = shapely.box(*checker.bounds).difference(shapely.union_all([edge, *polys]))
+    here, there = shapely.Point(p.x, p.y), shapely.Point(q.x, q.y)
+    return any(
+        piece.intersects(here) and piece.intersects(there) for piece in shapely.get_parts(free)
+    )
 
 
 def wall_gap_map(side: float, gap: float) -> Map:
@@ -91,22 +107,26 @@ def _diagnosis(problem: PlanningProblem) -> tuple[float, Any]:
 
 def run(m: Map, repeats: int) -> dict[str, Any]:
     """Both pass searches on one map, alternating; the least time of each."""
-    problem = PlanningProblem.from_map(m)
-    new_pass = checks.pass_cell
+    new_pass, new_joined = checks.pass_cell, checks.joined_in_free_space
+    sides = {"old": (old_pass_cell, old_joined_in_free_space), "new": (new_pass, new_joined)}
     times: dict[str, list[float]] = {"old": [], "new": []}
     answers: dict[str, Any] = {}
     try:
         for _ in range(repeats):
-            for name, fn in (("old", old_pass_cell), ("new", new_pass)):
-                checks.pass_cell = fn
+            for name, (pass_fn, joined_fn) in sides.items():
+                # A fresh checker each time: the new check shares the map's obstacle union
+                # with the exact body test, which a plan would have built already or not.
+                problem = PlanningProblem.from_map(m, checker=CollisionChecker.for_map(m))
+                checks.pass_cell, checks.joined_in_free_space = pass_fn, joined_fn
                 took, answers[name] = _diagnosis(problem)
                 times[name].append(took)
     finally:
-        checks.pass_cell = new_pass
+        checks.pass_cell, checks.joined_in_free_space = new_pass, new_joined
     old, new = min(times["old"]), min(times["new"])
     return {
         "map": m.name,
         "grid": list(problem.checker.clearance_grid.shape),
+        "obstacles": len(m.obstacles),
         "old_s": old,
         "new_s": new,
         "ratio": new / old,
@@ -124,13 +144,15 @@ def report(payload: dict[str, Any]) -> str:
         f"{payload['machine']}; {payload['repeats']} alternating rounds per map in one "
         "process; each time the least of its rounds (the whole `diagnose` call).",
         "",
-        "| map | grid cells | old [s] | new [s] | new / old | same diagnosis | diagnosis |",
-        "|---|---|---|---|---|---|---|",
+        "| map | obstacles | grid cells | old [s] | new [s] | new / old | same diagnosis "
+        "| diagnosis |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for r in payload["rows"]:
         n, m = r["grid"]
         lines.append(
-            f"| {r['map']} | {n} x {m} ({n * m / 1e6:.1f} M) | {cell(r['old_s'], 1, 2)} | "
+            f"| {r['map']} | {r['obstacles']} | {n} x {m} ({n * m / 1e6:.1f} M) | "
+            f"{cell(r['old_s'], 1, 2)} | "
             f"{cell(r['new_s'], 1, 2)} | {cell(r['ratio'], 1, 3)} | "
             f"{'yes' if r['same'] else '**no**'} | {r['diagnosis'] or '-'} |"
         )
@@ -145,6 +167,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="the wall's opening, metres (default 1.5: narrower than the car)")
     p.add_argument("--boxes", type=int_at_least(0), default=5000,
                    help="boxes on the 500 m box map, 0 for none (default 5000)")
+    p.add_argument("--walled-boxes", type=int_at_least(0), default=50000,
+                   help="boxes on a 1 km map whose goal they wall off, 0 for none "
+                   "(default 50000)")
     p.add_argument("--repeats", type=positive_int, default=2, help="rounds per map (default 2)")
     p.add_argument("--out", type=out_folder, default="results/bench_diagnosis",
                    help="folder for bench_diagnosis.{json,md} (default results/bench_diagnosis)")
@@ -157,6 +182,7 @@ def main(argv: list[str] | None = None) -> int:
         p.error(f"--sizes: expected comma-separated numbers, got {args.sizes!r}")
     maps = [wall_gap_map(s, args.gap) for s in sizes]
     maps += [box_map(500.0, args.boxes)] if args.boxes else []
+    maps += [box_map(1000.0, args.walled_boxes)] if args.walled_boxes else []
     rows = []
     for m in maps:
         print(f"{m.name} ...", file=sys.stderr, flush=True)

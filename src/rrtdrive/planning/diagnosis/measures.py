@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -155,25 +156,33 @@ def best_run(
 
 @dataclass(frozen=True, eq=False)
 class MapShapes:
-    """The map's shapes the findings measure against, built once per checker."""
+    """The map's shapes the findings measure against, built once per checker.
+
+    The unions are built when first asked for (a finding needs one or none): on a map
+    of 50 000 obstacles both took 8.5 s, and the free space cut from a union that held
+    the bounds' outline 8.4 s more (0.5 s from the obstacles' union alone).
+    """
 
     polygons: np.ndarray  # one shapely polygon per obstacle, in map order
     edge: shapely.Geometry  # the bounds' outline
-    walls: shapely.Geometry  # obstacle outlines and the bounds' outline
-    solid: shapely.Geometry  # obstacle areas and the bounds' outline
+    checker: CollisionChecker  # its obstacle union, shared with its exact body test
+
+    @functools.cached_property
+    def walls(self) -> shapely.Geometry:
+        """Obstacle outlines and the bounds' outline."""
+        return shapely.union_all([self.edge, *shapely.get_exterior_ring(self.polygons)])
+
+    @functools.cached_property
+    def solid(self) -> shapely.Geometry:
+        """Obstacle areas and the bounds' outline."""
+        return shapely.union(self.edge, self.checker.grid.obstacle_union)
 
 
 def map_shapes(checker: CollisionChecker) -> MapShapes:
     """The map's :class:`MapShapes`, built once per checker (cached on its grid)."""
     def build() -> MapShapes:
         polys = np.array([o.polygon() for o in checker.obstacles], dtype=object)
-        edge = shapely.box(*checker.bounds).exterior
-        return MapShapes(
-            polys,
-            edge,
-            shapely.union_all([edge, *shapely.get_exterior_ring(polys)]),
-            shapely.union_all([edge, *polys]),
-        )
+        return MapShapes(polys, shapely.box(*checker.bounds).exterior, checker)
 
     return checker.grid.derived("diagnosis_shapes", build)
 
@@ -183,7 +192,7 @@ def joined_in_free_space(checker: CollisionChecker, p: Pose, q: Pose) -> bool:
 
     Exact (shapely): a gap of any width joins them, however narrow for the grid.
     """
-    free = shapely.box(*checker.bounds).difference(map_shapes(checker).solid)
+    free = shapely.box(*checker.bounds).difference(checker.grid.obstacle_union)
     here, there = shapely.Point(p.x, p.y), shapely.Point(q.x, q.y)
     return any(
         piece.intersects(here) and piece.intersects(there)
