@@ -28,7 +28,7 @@ from rrtdrive.types import Path, VehicleParams
 C = 0.02
 
 
-# the command of a rate-limited controller stays within rate * dt of the current angle.
+# The command of a rate-limited controller stays within rate * dt of the current angle.
 
 RATE = 0.4
 
@@ -61,7 +61,7 @@ def test_command_moves_at_most_rate_dt_from_the_current_angle(cls, gear, speed, 
     assert (lo, hi) == pytest.approx((current - reach, current + reach), abs=1e-12)
 
 
-# every gear segment of a path with gears brakes at most accel_manoeuvre.
+# Every gear segment of a path with gears brakes at most accel_manoeuvre.
 
 def _there_and_back(length=12.0):
     xs = np.linspace(0.0, length, int(length / 0.25) + 1)
@@ -91,7 +91,7 @@ def test_manoeuvre_segments_brake_at_most_accel_manoeuvre(cls, rate):
         assert _max_decel(c.profile, seg.length) > 0.3 * cfg.accel_manoeuvre
 
 
-# the rate-limited LQR's closed-loop bandwidth in time never exceeds ``bandwidth``.
+# The rate-limited LQR's closed-loop bandwidth in time never exceeds ``bandwidth``.
 #
 # Arc-length design: natural frequency (k_e)^(1/2) per metre (k_e = sqrt(q_e / r_eff)),
 # so v * sqrt(k_e) per second; the docs promise the schedule keeps that <= bandwidth.
@@ -105,11 +105,11 @@ def test_time_bandwidth_bounded_at_every_speed(bandwidth):
         assert omega_t <= bandwidth * (1 + 1e-9), (v, omega_t)
 
 
-# with a rate-limited actuator LQR reads the feed-forward curvature ff_preview ahead.
+# With a rate-limited actuator LQR reads the feed-forward curvature ff_preview ahead.
 
 
-
-def _clothoid_lqr(length=20.0, n=2001):
+def _clothoid(length, n):
+    """A clothoid from the origin, curvature C * s, as a path; and its arc lengths."""
     s = np.linspace(0.0, length, n)
     yaw = 0.5 * C * s**2
     ds = np.diff(s)
@@ -120,7 +120,7 @@ def _clothoid_lqr(length=20.0, n=2001):
 
 
 def test_feed_forward_reads_the_curvature_one_step_ahead():
-    path, s = _clothoid_lqr()
+    path, s = _clothoid(20.0, 2001)
     L = VehicleParams().wheelbase
     c = LQR(vehicle=VehicleParams(max_steer_rate=0.4))
     c.reset(path)
@@ -135,23 +135,12 @@ def test_feed_forward_reads_the_curvature_one_step_ahead():
     assert c.steer_wanted == pytest.approx(math.atan(L * C * (s[i1] + v * dt)), abs=1e-6)
 
 
-# on a forward-only path pure pursuit is the plain law, whatever ``compensate`` says.
-
-
-
-def _clothoid_pp(length=30.0, n=301):
-    s = np.linspace(0.0, length, n)
-    yaw = 0.5 * C * s**2
-    ds = np.diff(s)
-    mid = 0.5 * (yaw[1:] + yaw[:-1])
-    x = np.concatenate([[0.0], np.cumsum(np.cos(mid) * ds)])
-    y = np.concatenate([[0.0], np.cumsum(np.sin(mid) * ds)])
-    return Path(np.column_stack([x, y, yaw, C * s]), np.zeros((0, 2)))
+# On a forward-only path pure pursuit is the plain law, whatever ``compensate`` says.
 
 
 @pytest.mark.parametrize("offset", [0.0, 0.3, -0.3])
 def test_forward_only_path_uses_the_plain_chord_law(offset):
-    path = _clothoid_pp()
+    path, _ = _clothoid(30.0, 301)
     vehicle = VehicleParams(max_steer_rate=None)
     row = path.samples[50]  # 5 m along, kappa 0.1 (under the steering limit)
     nx, ny = -math.sin(row[2]), math.cos(row[2])
@@ -174,7 +163,7 @@ def test_forward_only_path_uses_the_plain_chord_law(offset):
     assert c2.control(state)[1] == pytest.approx(steer, abs=1e-12)
 
 
-# rate-limited Stanley on a circle, car on it: steers the circle's angle atan(L k).
+# Rate-limited Stanley on a circle, car on it: steers the circle's angle atan(L k).
 
 @pytest.mark.parametrize("k", [0.1, -0.15])
 def test_on_a_circle_with_preview_steers_the_circles_angle(k):

@@ -19,7 +19,7 @@ from rrtdrive.evaluation.comfort import curvature_violation_share, path_sharpnes
 from rrtdrive.evaluation.success import success_terms
 from rrtdrive.types import Path, VehicleParams
 
-# curvature violations count right turns; path sharpness is in steering angle.
+# Curvature violations count right turns; path sharpness is in steering angle.
 
 V = VehicleParams()
 
@@ -50,7 +50,7 @@ def test_path_sharpness_is_the_steering_angle_per_metre():
     kappa = np.array([0.0, 0.2, 0.2, 0.2])
     path = Path(np.column_stack([xs, 0 * xs, 0 * xs, kappa]), np.zeros((0, 2)))
     assert path_sharpness(path, L) == pytest.approx(math.atan(L * 0.2) / 1.0)
-# max_long_accel is the largest magnitude, braking included.
+# Max_long_accel is the largest magnitude, braking included.
 
 def test_braking_counts_in_max_long_accel():
     scen = overtake(goal=(30.0, overtake().lane_y, 0.0))
@@ -61,7 +61,7 @@ def test_braking_counts_in_max_long_accel():
     r = evaluate(episode(scen, states, np.column_stack([accel, np.zeros(n - 1)])))
     assert r.max_long_accel == pytest.approx(float(np.max(np.abs(accel))))
     assert r.max_long_accel == pytest.approx(2.5)
-# steering_rate_over_limit_share is the share of steps faster than the limit.
+# Steering_rate_over_limit_share is the share of steps faster than the limit.
 
 def test_steps_between_the_limit_and_twice_it_count():
     scen = overtake(goal=(30.0, overtake().lane_y, 0.0))
@@ -78,7 +78,7 @@ def test_steps_between_the_limit_and_twice_it_count():
     expected = np.mean(np.abs(steer - prev) / DT > cfg.steer_rate_limit)
     assert expected == pytest.approx(20 / (n - 1))
     assert r.steering_rate_over_limit_share == pytest.approx(expected)
-# a car still reversing has not stopped; the goal heading error is wrapped.
+# A car still reversing has not stopped; the goal heading error is wrapped.
 
 def test_a_car_reversing_through_the_goal_has_not_stopped():
     scen = overtake(goal=(30.0, overtake().lane_y, 0.0))
