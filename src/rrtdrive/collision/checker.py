@@ -16,9 +16,9 @@ from collections.abc import Sequence
 
 import numpy as np
 import shapely
-from scipy import ndimage
 
 from rrtdrive.collision.config import CheckerConfig
+from rrtdrive.collision.distance import distance_field
 from rrtdrive.collision.exact import RectangleTest
 from rrtdrive.collision.grid import GridCache, grid_resolution, grid_shape, rasterise
 from rrtdrive.geometry import densify
@@ -104,7 +104,7 @@ class CollisionChecker:
         occupied = rasterise(self.bounds, self.obstacles, self._origin, h, nx, ny)
         # Distance from each cell centre to the nearest occupied cell centre (scaled
         # and shifted in place: big grids hold one float field, not three).
-        field = ndimage.distance_transform_edt(~occupied)
+        field = distance_field(~occupied)
         del occupied
         field *= h
         # The point-to-centre error (h/sqrt2) plus the rasterisation error (h/sqrt2).
