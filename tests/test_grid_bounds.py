@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -203,3 +204,5 @@ def test_a_failed_plan_after_a_long_set_up_reports_it_too(capsys, monkeypatch):
     assert main(["plan", "no_path", "--max-iterations", "50"]) == 1
     out = capsys.readouterr().out
     assert "FAILED (" in out and ", set-up " in out.split("):")[0], out
+    # And the diagnosis's time, which runs after the stopwatch (session 38).
+    assert re.search(r"FAILED \(\w+, set-up \d+\.\d s, diagnosis \d+\.\d s\): ", out), out

@@ -242,6 +242,9 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     cusps = len(result.path.cusps)
     gears = f"{cusps} gear change{'s' if cusps != 1 else ''}, " if cusps else ""
     setup = f"set-up {result.setup_time_s:.1f} s" if notice is not None else ""
+    diagnosis_s = result.stats.get("diagnosis_time_s")
+    if setup and not result.success and diagnosis_s is not None:  # a big map's whole grid
+        setup += f", diagnosis {diagnosis_s:.1f} s"
     summary = f"{m.name}: {result.planner} seed {args.seed}: " + (
         f"solved, length {result.path.length:.2f} m, {gears}max curvature "
         f"{result.path.max_curvature:.4f} 1/m, {result.nodes} nodes, "
