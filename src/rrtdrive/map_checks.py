@@ -49,14 +49,18 @@ MAX_COORDINATE = 1e9
 MAX_YAW = 1e6
 
 
+def _past_a_full_turn(yaw: float) -> bool:
+    # Beyond MAX_YAW the pose is refused where it is checked: no "taken as" first.
+    return 2.0 * math.pi + 1e-9 < abs(yaw) <= MAX_YAW
+
+
 def warn_if_degrees(label: str, yaw: float) -> None:
     """Warn (:class:`InputWarning`) when ``yaw`` is more than a full turn: likely degrees.
 
     Such a yaw is a valid angle (it wraps), so it is planned as given; the warning
     says what it is taken as and what to write for degrees.
     """
-    # Beyond MAX_YAW the pose is refused where it is checked: no "taken as" first.
-    if 2.0 * math.pi + 1e-9 < abs(yaw) <= MAX_YAW:
+    if _past_a_full_turn(yaw):
         wrapped = math.degrees(math.remainder(yaw, 2.0 * math.pi))
         warnings.warn(
             f"{label}: yaw {yaw:g} is more than a full turn; yaws are in radians, so it is "
@@ -72,7 +76,7 @@ def warn_obstacle_yaws(yaws: Sequence[float]) -> None:
     The first such yaw is named and the others counted: a script's polygon of 5 000
     segments in radians past 2 pi printed 1 250 warning lines.
     """
-    beyond = [i for i, yaw in enumerate(yaws) if 2.0 * math.pi + 1e-9 < abs(yaw) <= MAX_YAW]
+    beyond = [i for i, yaw in enumerate(yaws) if _past_a_full_turn(yaw)]
     if beyond:
         more = len(beyond) - 1
         also = f" (and {more} more obstacle yaw{'s' if more > 1 else ''} past a full turn)"
