@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from rrtdrive.cli_args import flags_for, planner_option_flags
 from rrtdrive.controllers import CONTROLLERS, SpeedConfig, TrackingController, make_controller
 from rrtdrive.envs.action import CommandLimits
 from rrtdrive.envs.reward import RewardWeights
@@ -68,12 +69,8 @@ def _planner_options(options: object, planner: str, replan: object) -> dict[str,
     if checked and replan is not None:
         raise InputError("planner_options: overtake-traffic re-plans with its own planner; "
                          "give replan_options={'planner_options': ...}")
-    try:
+    with flags_for(planner_option_flags(checked, "planner_options", sep=".")):
         make_planner(planner, **checked)
-    except InputError as exc:
-        field, sep, rest = str(exc).partition(": ")
-        key = field.partition(".")[2] if field.startswith(("planner.", "hybrid.")) else ""
-        raise InputError(f"planner_options.{key}: {rest}" if key and sep else str(exc)) from None
     return checked
 
 

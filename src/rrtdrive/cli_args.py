@@ -267,10 +267,13 @@ def parse_planner_options(texts: Sequence[str] | None, flag: str) -> dict[str, o
     return out
 
 
-def planner_option_flags(options: Mapping[str, object], flag: str) -> dict[str, str]:
+def planner_option_flags(
+    options: Mapping[str, object], flag: str, sep: str = " "
+) -> dict[str, str]:
     """The fields the planners' errors name, mapped to ``flag FIELD`` for :func:`flags_for`.
 
-    ``planner.step``, ``hybrid.curve``, ``planner.smoothing.max_rounds``.
+    ``planner.step``, ``hybrid.curve``, ``planner.smoothing.max_rounds``; ``sep`` between
+    the flag and the field (``"."``: ``planner_options.step``, an API keyword's field).
 
     Examples
     --------
@@ -280,9 +283,9 @@ def planner_option_flags(options: Mapping[str, object], flag: str) -> dict[str, 
     out: dict[str, str] = {}
     for key, value in options.items():
         for prefix in ("planner", "hybrid"):
-            out[f"{prefix}.{key}"] = f"{flag} {key}"
+            out[f"{prefix}.{key}"] = f"{flag}{sep}{key}"
             if isinstance(value, Mapping):
-                out.update({f"{prefix}.{key}.{sub}": f"{flag} {key}.{sub}" for sub in value})
+                out.update({f"{prefix}.{key}.{sub}": f"{flag}{sep}{key}.{sub}" for sub in value})
     return out
 
 
