@@ -29,7 +29,15 @@ from pathlib import Path as FsPath
 from typing import Any
 
 import numpy as np
-from results_io import cell, command, machine, out_folder, run_main, write_results
+from results_io import (
+    cell,
+    command,
+    machine,
+    numbers_above,
+    out_folder,
+    run_main,
+    write_results,
+)
 from scipy import ndimage
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "src"))
@@ -177,9 +185,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.gap >= 100.0:
         p.error("--gap: expected less than 100 m (the smallest map's wall)")
     try:
-        sizes = [float(v) for v in args.sizes.split(",") if v]
-    except ValueError:
-        p.error(f"--sizes: expected comma-separated numbers, got {args.sizes!r}")
+        sizes = numbers_above(args.sizes, "--sizes")
+    except ValueError as exc:
+        p.error(str(exc))
     maps = [wall_gap_map(s, args.gap) for s in sizes]
     maps += [box_map(500.0, args.boxes)] if args.boxes else []
     maps += [box_map(1000.0, args.walled_boxes)] if args.walled_boxes else []

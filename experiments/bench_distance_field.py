@@ -19,7 +19,6 @@ fields are equal. Writes ``OUT/bench_distance_field.{json,md}``.
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import time
 import tracemalloc
@@ -28,7 +27,15 @@ from typing import Any
 
 import numpy as np
 from bench_diagnosis import box_map
-from results_io import cell, command, machine, out_folder, run_main, write_results
+from results_io import (
+    cell,
+    command,
+    machine,
+    numbers_above,
+    out_folder,
+    run_main,
+    write_results,
+)
 from scipy import ndimage
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "src"))
@@ -36,7 +43,12 @@ sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "src"))
 from rrtdrive.cli_args import int_at_least, positive_int  # noqa: E402
 from rrtdrive.collision import CheckerConfig  # noqa: E402
 from rrtdrive.collision.distance import distance_field  # noqa: E402
-from rrtdrive.collision.grid import grid_resolution, grid_shape, rasterise  # noqa: E402
+from rrtdrive.collision.grid import (  # noqa: E402
+    grid_origin,
+    grid_resolution,
+    grid_shape,
+    rasterise,
+)
 
 
 def occupancy(side: float, boxes: int) -> np.ndarray:
@@ -45,8 +57,7 @@ def occupancy(side: float, boxes: int) -> np.ndarray:
     config = CheckerConfig()
     h = grid_resolution(m.bounds, config)
     nx, ny = grid_shape(m.bounds, h, config.pad)
-    n_pad = int(math.ceil(config.pad / h))  # as CollisionChecker
-    origin = np.array([m.bounds[0] - n_pad * h, m.bounds[1] - n_pad * h])
+    origin = grid_origin(m.bounds, h, config.pad)
     return ~rasterise(m.bounds, m.obstacles, origin, h, nx, ny)
 
 
@@ -119,9 +130,9 @@ def main(argv: list[str] | None = None) -> int:
                    "(default results/bench_distance_field)")
     args = p.parse_args(argv)
     try:
-        sizes = [float(v) for v in args.sizes.split(",") if v]
-    except ValueError:
-        p.error(f"--sizes: expected comma-separated numbers, got {args.sizes!r}")
+        sizes = numbers_above(args.sizes, "--sizes")
+    except ValueError as exc:
+        p.error(str(exc))
     rows = []
     for side in sizes:
         print(f"{side:g} m ...", file=sys.stderr, flush=True)

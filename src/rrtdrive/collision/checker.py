@@ -20,7 +20,7 @@ import shapely
 from rrtdrive.collision.config import CheckerConfig
 from rrtdrive.collision.distance import distance_field
 from rrtdrive.collision.exact import RectangleTest
-from rrtdrive.collision.grid import GridCache, grid_resolution, grid_shape, rasterise
+from rrtdrive.collision.grid import GridCache, grid_origin, grid_resolution, grid_shape, rasterise
 from rrtdrive.geometry import densify
 from rrtdrive.maps import Map, Obstacle
 from rrtdrive.types import InputWarning, VehicleParams
@@ -93,10 +93,7 @@ class CollisionChecker:
             )
             config = dataclasses.replace(config, resolution=h)
         self.config = config
-        # Cells are aligned with the bounds, so every point outside lies in an occupied cell.
-        n_pad = int(math.ceil(self.config.pad / h))
-        xmin, ymin, xmax, ymax = self.bounds
-        self._origin = np.array([xmin - n_pad * h, ymin - n_pad * h])
+        self._origin = grid_origin(self.bounds, h, self.config.pad)
         nx, ny = grid_shape(self.bounds, h, self.config.pad)
         self._shape = (nx, ny)
         self._inv_h = 1.0 / h
