@@ -145,7 +145,7 @@ def test_sharpness_of_clothoid_rows_is_the_design_value():
 
 def test_config_fields_are_validated():
     for kwargs, name in (
-        ({"curve": "clothoid"}, "curve"),
+        ({"curve": "spline"}, "curve"),  # "clothoid" as text is the enum
         ({"max_sharpness": 0.0}, "max_sharpness"),
         ({"min_sharpness": -1.0}, "min_sharpness"),
         ({"min_sharpness": 0.5}, "min_sharpness"),

@@ -31,7 +31,6 @@ from rrtdrive.cli_args import (
     distinct_outputs,
     flags_for,
     join_negative_values,
-    json_safe,
     map_with_poses,
     names_stdout,
     nonneg_int,
@@ -47,6 +46,7 @@ from rrtdrive.cli_args import (
 from rrtdrive.cli_signals import EXIT_TERMINATED, Terminated, sigterm_raises
 from rrtdrive.cli_stdout import run_writing_stdout
 from rrtdrive.cli_warnings import warnings_as_lines
+from rrtdrive.json_safe import options_json
 from rrtdrive.types import Budget, InputError, PlanResult, Pose, VehicleParams
 
 if TYPE_CHECKING:
@@ -116,9 +116,9 @@ def plan_to_json(
         "stage": stage_of(result) if result.success else None,
         "map": map_name,
         "map_file": None if map_file is None else os.path.abspath(map_file),
-        "seed": seed,
+        "seed": int(seed),  # np.int64 from a seed sweep: json cannot write it
         "reverse": bool(reverse),
-        "planner_options": json_safe(dict(planner_options or {})),
+        "planner_options": options_json(dict(planner_options or {})),
         "start": None if start is None else [float(v) for v in start.as_tuple()],
         "goal": None if goal is None else [float(v) for v in goal.as_tuple()],
         "path": np.round(result.path.samples, 6).tolist(),

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import enum
 import io
 import json
 import math
@@ -215,25 +214,6 @@ def _flagged(text: str, fields: Mapping[str, str]) -> str | None:
     """``text`` (``"field: ..."``) with its field replaced by its flag; ``None`` if not one."""
     field, sep, rest = text.partition(": ")
     return f"{fields[field]}: {rest}" if sep and field in fields else None
-
-
-def json_safe(value: object) -> object:
-    """``value`` as plain JSON: enums by value, tuples as lists, inf and nan as text.
-
-    Examples
-    --------
-    >>> json_safe({"disable": ("prune",), "ratio": float("inf"), "n": 3})
-    {'disable': ['prune'], 'ratio': 'Infinity', 'n': 3}
-    """
-    if isinstance(value, Mapping):
-        return {str(k): json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [json_safe(v) for v in value]
-    if isinstance(value, enum.Enum):
-        return json_safe(value.value)
-    if isinstance(value, float) and not math.isfinite(value):
-        return "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
-    return value
 
 
 def parse_planner_options(texts: Sequence[str] | None, flag: str) -> dict[str, object]:

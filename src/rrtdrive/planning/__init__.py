@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import inspect
 
+from rrtdrive.json_safe import options_from_json
 from rrtdrive.planning.base import (
     PLANNERS,
     GrowingTree,
@@ -37,6 +38,10 @@ _load_builtin_planners()
 def make_planner(name: str, **options: object) -> Planner:
     """Build the registered planner ``name`` with keyword ``options``.
 
+    Non-finite numbers may be spelt as a plan JSON's ``planner_options`` spell them
+    (``"Infinity"``, ``"-Infinity"``, ``"NaN"``: :func:`rrtdrive.json_safe.options_json`),
+    so ``make_planner(doc["planner"], **doc["planner_options"])`` rebuilds a plan's planner.
+
     Raises
     ------
     InputError
@@ -58,6 +63,7 @@ def make_planner(name: str, **options: object) -> Planner:
                 raise InputError(
                     f"planner.{key}: unknown option for {name}; allowed {sorted(allowed)}"
                 )
+    options = options_from_json(options)
     try:
         return factory(**options)
     except TypeError as exc:

@@ -30,7 +30,6 @@ from rrtdrive.cli_args import (
     distinct_outputs,
     flags_for,
     int_at_least,
-    json_safe,
     nonneg_int,
     parse_planner_options,
     planner_option_flags,
@@ -39,6 +38,7 @@ from rrtdrive.cli_args import (
     validate_output,
     writing,
 )
+from rrtdrive.json_safe import options_json
 from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MIN_SIM_FREQUENCY
 from rrtdrive.types import InputError
 
@@ -442,7 +442,7 @@ def _run(args: argparse.Namespace) -> int:
         "deterministic": deterministic,
         "target": target,
         "reverse": bool(episode.scenario.reverse),
-        "planner_options": json_safe(options),  # what the plan was made with ({}: defaults)
+        "planner_options": options_json(options),  # what the plan was made with ({}: defaults)
     }
     extra.update(episode.scenario.describe())
     if target != "scenario":

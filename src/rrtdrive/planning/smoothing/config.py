@@ -77,9 +77,10 @@ class SmoothingConfig:
     ----------
     kappa_max : float
         Largest admissible curvature in 1/m (the car's ``kappa_max``).
-    curve : CurveKind
+    curve : CurveKind or str
         ``CLOTHOID`` (default: continuous curvature, sharpness bounded by
-        ``max_sharpness``) or ``BSPLINE`` (the paper's pipeline, of ``degree``).
+        ``max_sharpness``) or ``BSPLINE`` (the paper's pipeline, of ``degree``); or
+        its value as text, as a plan JSON's ``planner_options`` give it (``"bspline"``).
     degree : int
         B-spline degree, 2 (paper) or 3; only for ``curve=BSPLINE``.
     max_sharpness : float
@@ -176,6 +177,9 @@ class SmoothingConfig:
             "wheelbase",
         ):
             require_positive(f"smoothing.{name}", getattr(self, name))
+        if isinstance(self.curve, str) and self.curve in {k.value for k in CurveKind}:
+            # The name as a plan JSON's planner_options and --planner-option spell it.
+            object.__setattr__(self, "curve", CurveKind(self.curve))
         if not isinstance(self.curve, CurveKind):
             raise InputError(
                 f"smoothing.curve: must be one of {[k.value for k in CurveKind]}, "

@@ -1,0 +1,70 @@
+"""A plan JSON's planner_options rebuild its planner; the document is strict JSON."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from rrtdrive import Budget, builtin_map
+from rrtdrive.cli import main, plan_to_json
+from rrtdrive.json_safe import options_from_json, options_json
+from rrtdrive.planning import PlanningProblem, make_planner
+from rrtdrive.types import InputError
+
+
+def _strict(text: str) -> dict:
+    def refuse(name: str) -> None:
+        raise ValueError(f"non-standard JSON constant {name}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+@pytest.mark.parametrize(
+    "flags",
+    [
+        ["--paper-smoothing"],
+        ["--planner-option", "reverse_detour_ratio=Infinity", "--reverse"],
+        ["--step", "4", "--disable", "prune"],
+    ],
+)
+def test_the_planner_options_of_a_plan_json_rebuild_the_same_path(tmp_path, flags):
+    out = tmp_path / "plan.json"
+    assert main(["plan", "overtake", "--seed", "3", *flags, "--json", str(out)]) == 0
+    doc = _strict(out.read_text())
+    m = builtin_map("overtake")
+    planner = make_planner(doc["planner"], **doc["planner_options"])
+    problem = PlanningProblem.from_map(m, reverse=doc["reverse"])
+    again = planner.solve(problem, np.random.default_rng(doc["seed"]), Budget())
+    assert again.success
+    np.testing.assert_array_equal(np.round(again.path.samples, 6), np.array(doc["path"]))
+
+
+def test_plan_to_json_writes_numpy_scalars_as_plain_numbers():
+    m = builtin_map("overtake")
+    options = {"max_postprocess_attempts": np.int64(6), "step": np.float32(2.5)}
+    result = make_planner("improved-rrt-connect", **options).solve(
+        PlanningProblem.from_map(m), np.random.default_rng(0), Budget()
+    )
+    doc = _strict(json.dumps(plan_to_json(result, np.int64(0), m.name, planner_options=options)))
+    assert doc["seed"] == 0 and doc["planner_options"] == {
+        "max_postprocess_attempts": 6,
+        "step": 2.5,
+    }
+
+
+def test_options_json_and_options_from_json_are_inverse_for_non_finite_numbers():
+    options = {"a": math.inf, "b": [-math.inf, 1.5], "c": {"d": "arcs"}}
+    text = json.dumps(options_json(options), allow_nan=False)
+    back = options_from_json(_strict(text))
+    assert back["a"] == math.inf and back["b"] == [-math.inf, 1.5] and back["c"] == {"d": "arcs"}
+    assert math.isnan(options_from_json(options_json(math.nan)))
+
+
+def test_a_curve_named_as_text_is_the_enum_and_a_wrong_name_is_refused():
+    planner = make_planner("improved-rrt-connect", smoothing={"curve": "bspline"})
+    assert planner.config.smoothing.curve.value == "bspline"
+    with pytest.raises(InputError, match=r"smoothing.curve: must be one of .*got 'spline'"):
+        make_planner("improved-rrt-connect", smoothing={"curve": "spline"})
