@@ -139,7 +139,7 @@ class Map:
     obstacles: tuple[Obstacle, ...]
     start: Pose
     goal: Pose
-    vehicle: VehicleParams = dataclasses.field(default_factory=VehicleParams, compare=False)
+    vehicle: VehicleParams = dataclasses.field(default_factory=VehicleParams)
     check_query: dataclasses.InitVar[bool] = True
 
     def __post_init__(self, check_query: bool = True) -> None:

@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rrtdrive.values import brief_repr, is_finite_number
+
 if TYPE_CHECKING:  # the diagnosis module imports this one
     from rrtdrive.planning.diagnosis import Diagnosis
 
@@ -38,66 +40,6 @@ class InputWarning(UserWarning):
 
     The CLI prints it as one ``warning:`` line on stderr and goes on.
     """
-
-
-def brief_repr(value: object, limit: int = 32) -> str:
-    """``repr(value)`` cut to about ``limit`` characters, for one-line error messages.
-
-    A huge integer (from a JSON literal of hundreds of digits) shows its first
-    digits and its length; numpy scalars show as plain Python numbers.
-
-    Parameters
-    ----------
-    value : object
-        The offending value.
-    limit : int
-        Longest text shown in full.
-
-    Returns
-    -------
-    str
-
-    Examples
-    --------
-    >>> brief_repr(10**400)
-    '1000000000...(401 digits)'
-    >>> brief_repr(np.float64(0.5)), brief_repr("1")
-    ('0.5', "'1'")
-    >>> brief_repr([0, 10**5000])
-    'a list holding an integer too long to print'
-    """
-    if isinstance(value, (np.integer, np.floating, np.bool_)):
-        value = value.item()
-    try:
-        text = repr(value)
-    except ValueError:  # an int past Python's str-conversion limit (over 4300 digits)
-        if isinstance(value, int):
-            return f"an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
-        # Such an int inside a list or tuple: the container cannot be shown either.
-        return f"a {type(value).__name__} holding an integer too long to print"
-    if len(text) <= limit:
-        return text
-    if isinstance(value, int):
-        return f"{text[:10]}...({len(text.lstrip('-'))} digits)"
-    return text[:limit] + "..."
-
-
-def is_finite_number(value: object) -> bool:
-    """Whether ``value`` is a real number (not a bool) that a float holds finitely.
-
-    Examples
-    --------
-    >>> is_finite_number(1), is_finite_number(10**400), is_finite_number(True)
-    (True, False, False)
-    """
-    if isinstance(value, (bool, np.bool_)) or not isinstance(
-        value, (int, float, np.integer, np.floating)
-    ):
-        return False
-    try:
-        return math.isfinite(float(value))
-    except OverflowError:  # an int too large for a float: as good as infinite
-        return False
 
 
 def require_finite(name: str, *values: float) -> None:
@@ -364,11 +306,15 @@ class Path:
                     "path.gear: must be +1 (forward) or -1 (reverse), got "
                     f"{float(s[bad[0], 4])!r} in row {int(bad[0])}"
                 )
-        try:
-            w = np.asarray(self.waypoints, dtype=float).reshape(-1, 2)
+        try:  # a copy: the caller's array stays theirs to change
+            w = np.array(self.waypoints, dtype=float)
         except (TypeError, ValueError):
             got = brief_repr(self.waypoints)
             raise InputError(f"path.waypoints: expected [x, y] pairs, got {got}") from None
+        if w.size == 0:
+            w = np.zeros((0, 2))
+        elif w.ndim != 2 or w.shape[1] != 2:
+            raise InputError(f"path.waypoints: expected [x, y] pairs, got shape {w.shape}")
         for name, a in (("samples", s), ("waypoints", w)):
             if not np.isfinite(a).all():
                 row, col = (int(v) for v in np.argwhere(~np.isfinite(a))[0])
@@ -461,6 +407,12 @@ class Tree:
     def __post_init__(self) -> None:
         object.__setattr__(self, "nodes", _read_only(self.nodes, float).reshape(-1, 2))
         object.__setattr__(self, "parents", _read_only(self.parents, np.int64).reshape(-1))
+        n, parents = len(self.nodes), self.parents
+        if len(parents) != n or np.any((parents < -1) | (parents >= n)):
+            raise InputError(
+                f"tree.parents: expected one index in [-1, {n}) per node ({n}), "
+                f"got {brief_repr(parents.tolist())}"
+            )
 
     def __len__(self) -> int:
         return len(self.nodes)
@@ -536,7 +488,7 @@ class PlanResult:
     Attributes
     ----------
     status : PlanStatus
-        Outcome; ``status.success`` is the success flag.
+        Outcome; ``status.success`` is the success flag (given as text, its value).
     planner : str
         Registered planner name.
     path : Path
@@ -582,9 +534,25 @@ class PlanResult:
     def __post_init__(self) -> None:
         # Read-only arrays and a dict of its own: a result is not changed through
         # another object that shares its data.
+        if not isinstance(self.status, PlanStatus):
+            try:  # its value as text ("solved"), as the JSON and bench rows spell it
+                object.__setattr__(self, "status", PlanStatus(self.status))
+            except ValueError:
+                raise InputError(
+                    f"result.status: must be one of {[k.value for k in PlanStatus]}, "
+                    f"got {brief_repr(self.status)}"
+                ) from None
         raw = np.zeros((0, 2)) if self.raw_path is None else self.raw_path
         object.__setattr__(self, "raw_path", _read_only(raw, float))
         object.__setattr__(self, "stats", dict(self.stats))
+
+    def __repr__(self) -> str:
+        # The arrays and trees run to thousands of characters: the outcome in one line.
+        return (
+            f"PlanResult({self.status.value}, planner={self.planner!r}, "
+            f"length={self.path.length:.2f} m, rows={len(self.path)}, nodes={self.nodes}, "
+            f"iterations={self.iterations}, planning_time_s={self.planning_time_s:.4f})"
+        )
 
     @property
     def success(self) -> bool:

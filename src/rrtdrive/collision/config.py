@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
-from rrtdrive.types import InputError, require_int, require_positive
+from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
 __all__ = ["CheckerConfig"]
 
@@ -62,5 +61,6 @@ class CheckerConfig:
         require_positive("checker.min_trace_step", self.min_trace_step)
         require_int("checker.max_grid_cells", self.max_grid_cells, minimum=16)
         require_positive("checker.max_auto_resolution", self.max_auto_resolution)
-        if not (self.margin >= 0 and math.isfinite(self.margin)):
+        require_finite("checker.margin", self.margin)
+        if not self.margin >= 0:
             raise InputError(f"checker.margin: must be >= 0, got {self.margin}")

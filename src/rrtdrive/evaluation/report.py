@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass
 from enum import Enum
 from typing import Any
 
-from rrtdrive.types import InputError, require_positive
+from rrtdrive.types import InputError, require_finite, require_positive
 
 __all__ = [
     "EvalConfig", "EpisodeReport", "Outcome", "OUTCOMES", "SIGNED_FIELDS", "WALL_CLOCK_FIELDS",
@@ -84,8 +84,13 @@ class EvalConfig:
             "goal_tol_m", "goal_tol_rad", "stop_speed", "footprint_spacing", "steer_rate_limit"
         ):
             require_positive(f"eval.{name}", getattr(self, name))
-        if not (self.kappa_tol >= 0 and math.isfinite(self.kappa_tol)):
+        require_finite("eval.kappa_tol", self.kappa_tol)
+        if not self.kappa_tol >= 0:
             raise InputError(f"eval.kappa_tol: must be >= 0, got {self.kappa_tol!r}")
+        if self.goal_tol_rad > math.pi:  # no heading is further off: degrees, surely
+            raise InputError(
+                f"eval.goal_tol_rad: must be at most pi (radians), got {self.goal_tol_rad!r}"
+            )
 
 
 #: Report fields measured by the wall clock: they differ from run to run and machine to

@@ -14,6 +14,7 @@ import numpy as np
 
 from rrtdrive.collision import CheckerConfig, CollisionChecker
 from rrtdrive.geometry import densify
+from rrtdrive.map_checks import warn_if_degrees
 from rrtdrive.maps import MAX_YAW, Map, check_endpoint
 from rrtdrive.types import (
     Budget,
@@ -101,9 +102,22 @@ class PlanningProblem:
                 "that car (dataclasses.replace(m, vehicle=...)) and use "
                 "PlanningProblem.from_map(m)"
             )
+        for label, pose, mapped in (
+            ("start", self.start, self.map.start),
+            ("goal", self.goal, self.map.goal),
+        ):
+            if pose != mapped:  # the map warned about its own poses already
+                warn_if_degrees(f"problem.{label}", pose.yaw)
         if not isinstance(self.reverse, (bool, np.bool_)):
             raise InputError(f"reverse: expected True or False, got {self.reverse!r}")
         object.__setattr__(self, "reverse", bool(self.reverse))
+
+    def __repr__(self) -> str:
+        # The map's obstacles and the checker's grid are too long to print.
+        return (
+            f"PlanningProblem(map={self.map.name!r}, start={self.start}, goal={self.goal}, "
+            f"reverse={self.reverse})"
+        )
 
     @classmethod
     def from_map(

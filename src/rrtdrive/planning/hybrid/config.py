@@ -305,6 +305,10 @@ class HybridConfig:
                 f"hybrid.step: must exceed the cell diagonal "
                 f"{self.xy_resolution * math.sqrt(2.0):.3f} m, got {self.step!r}"
             )
+        if self.shot_bin > math.pi:  # a heading bin wider than half a turn: degrees, surely
+            raise InputError(
+                f"hybrid.shot_bin: must be at most pi (radians), got {self.shot_bin!r}"
+            )
         if self.yaw_resolution > math.pi / 4:
             raise InputError(
                 f"hybrid.yaw_resolution: must be at most pi/4, got {self.yaw_resolution!r}"
@@ -336,8 +340,11 @@ class HybridConfig:
             if value < 0:
                 raise InputError(f"hybrid.{name}: must be >= 0, got {value!r}")
         if not isinstance(self.long_steps, tuple) or any(
-            isinstance(f, bool) or not isinstance(f, (int, float)) or not math.isfinite(f)
-            or f <= 1.0 for f in self.long_steps
+            isinstance(f, bool)
+            or not isinstance(f, (int, float))
+            or not math.isfinite(f)
+            or f <= 1.0
+            for f in self.long_steps
         ):
             raise InputError(
                 f"hybrid.long_steps: must be a tuple of finite multiples of step > 1, "
