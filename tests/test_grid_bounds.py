@@ -69,6 +69,19 @@ def test_a_too_big_map_is_refused_naming_bounds():
     assert grid_resolution((0.0, 0.0, 10_000.0, 10_000.0), CheckerConfig(resolution=1.5)) == 1.5
 
 
+@pytest.mark.parametrize("side", [1e6, 1e7])
+def test_a_map_needing_cells_past_the_coarsest_allowed_gets_no_resolution_advice(side):
+    # 1e6 m needs 141.57 m cells, which --resolution refuses (at most 100 m): the
+    # advice was to give it anyway.
+    with pytest.raises(InputError) as err:
+        grid_resolution((0.0, 0.0, side, side), CheckerConfig())
+    message = str(err.value)
+    assert message.endswith("(checker.max_grid_cells): use a smaller map"), message
+    assert "--resolution" not in message
+    with pytest.raises(InputError, match=r"checker.resolution: at most 100 m"):
+        CheckerConfig(resolution=141.57)
+
+
 @pytest.mark.parametrize(
     ("field", "value"), [("max_grid_cells", 0), ("max_grid_cells", 2.5),
                          ("max_auto_resolution", -1.0), ("max_auto_resolution", math.inf)],

@@ -383,7 +383,7 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
     y = np.arange(len(labels))
     rates_of = [("success", "success", "tab:green")]
     if any("verified" in r for lab in labels for r in groups[lab]):
-        rates_of.append(("verified", "verified (rrtdrive verify)", "tab:blue"))
+        rates_of.append(("verified", "verified (no sharpness bound)", "tab:blue"))
     bar = 0.8 / len(rates_of)
     for i, (key, name, colour) in enumerate(rates_of):
         rates, lo, hi = [], [], []

@@ -19,7 +19,7 @@ import numpy as np
 import shapely
 from scipy import ndimage
 
-from rrtdrive.collision.config import CheckerConfig
+from rrtdrive.collision.config import MAX_RESOLUTION, CheckerConfig
 from rrtdrive.maps import Obstacle
 from rrtdrive.types import InputError, VehicleParams
 
@@ -145,7 +145,7 @@ def grid_resolution(bounds: Sequence[float], config: CheckerConfig) -> float:
     if h > coarsest + 1e-12:
         cells = nx * ny
         count = f"{cells:,}" if cells < 10**12 else f"about 1e{len(str(cells)) - 1}"
-        if not h <= _NO_CELL:
+        if not h <= MAX_RESOLUTION:  # a cell --resolution refuses: no advice to give
             raise InputError(
                 f"bounds: {xmax - xmin:g} x {ymax - ymin:g} m needs {count} grid cells at "
                 f"{h0:g} m; the limit is {limit:,} cells (checker.max_grid_cells): use a "
