@@ -523,6 +523,12 @@ def test_failed_plan_carries_the_diagnosis_into_result_and_json(tmp_path, capsys
     out = capsys.readouterr().out
     assert "why: the street at" in out
     assert json.loads((tmp_path / "out.json").read_text())["diagnosis"]["kind"] == "u_turn"
+    # simulate's JSON carries the plan's diagnosis too (it printed the why line only).
+    code = main(["simulate", str(path), "--plan-time", "1000", "--json", str(tmp_path / "s.json")])
+    assert code == 1 and "why: the street at" in capsys.readouterr().out
+    simulated = json.loads((tmp_path / "s.json").read_text())
+    assert simulated["diagnosis"]["kind"] == "u_turn"
+    assert simulated["diagnosis"]["message"].startswith("the street at")
 
 
 def test_a_walled_off_goal_beside_a_wall_is_walled_off_not_needs_reverse():

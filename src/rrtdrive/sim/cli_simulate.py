@@ -436,6 +436,7 @@ def _run(args: argparse.Namespace) -> int:
     # Drawing a stock env's frames happens during its drive; like writing the video, it
     # is not the episode's time.
     total = time.perf_counter() - t0 - (stock.render_time_s if stock is not None else 0.0)
+    diagnosis = None if episode.plan is None else episode.plan.diagnosis
     extra: dict[str, Any] = {
         "total_time_s": round(total, 6),
         "oncoming": oncoming,
@@ -443,6 +444,8 @@ def _run(args: argparse.Namespace) -> int:
         "target": target,
         "reverse": bool(episode.scenario.reverse),
         "planner_options": options_json(options),  # what the plan was made with ({}: defaults)
+        # A failed plan's constraint in the user's terms, as `plan --json` gives it.
+        "diagnosis": None if diagnosis is None else diagnosis.to_json(),
     }
     extra.update(episode.scenario.describe())
     if target != "scenario":
@@ -509,7 +512,6 @@ def _run(args: argparse.Namespace) -> int:
         f"cte rms {cte}; {report.steps} steps, {report.duration_s:.2f} s simulated",
         file=out,
     )
-    diagnosis = None if episode.plan is None else episode.plan.diagnosis
     if diagnosis is not None:  # the planner failed: the constraint, as `plan` prints it
         print(f"  why: {diagnosis.message}", file=out)
     print("\n".join(metrics_block(data)), file=out)
