@@ -356,7 +356,7 @@ def _reference_widening(lengths, angles, rate: float):
     return factors
 
 
-def _reference_fit(rows, gear, rate, wheelbase, delta_max, spacing, angle_weight):
+def _reference_fit(rows, gear, rate, wheelbase, delta_max, spacing, angle_weight, pinned=(0, 0)):
     """ramps._ramped_once as it was (d4ad454): every Newton iteration one (2n+1)-row batch.
 
     The end pose and its forward-difference Jacobian from the batch ``[p, p + eps I]``,

@@ -117,6 +117,12 @@ class HybridConfig:
         (:func:`~rrtdrive.planning.smoothing.make_drivable`). Off by default: on
         ``parking_lot`` its heading legs and swept-capsule edge test rejected the
         search's segments near obstacles (4 of 4 tried), at 50-140 ms each.
+    ramp_chunks : bool
+        With ``curve="clothoid"``: a gear segment whose whole fit fails is fitted
+        again a stretch of 20 m or more at a time
+        (:func:`~rrtdrive.planning.hybrid.ramp_chunks.ramped_in_chunks`): on long
+        segments the whole fit strays metres from the checked arcs. ``False``: the
+        whole fit alone (before session 39).
     arc_fallback : bool
         When a segment cannot be smoothed, keep its exact arcs (curvature
         piecewise constant, ``|kappa| <= kappa_max``, body checked exactly), as the
@@ -274,6 +280,7 @@ class HybridConfig:
     sample_spacing: float = 0.25
     curve: str = "clothoid"
     smooth: bool = False
+    ramp_chunks: bool = True
     arc_fallback: bool = True
     max_solutions: int = 16
     ramp_margin: float = 0.1

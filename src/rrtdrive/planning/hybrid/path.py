@@ -23,6 +23,7 @@ import numpy as np
 
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.geometry import densify, wrap_angle
+from rrtdrive.planning.hybrid.ramp_chunks import ramped_in_chunks
 from rrtdrive.planning.hybrid.ramps import ramped_segment
 from rrtdrive.planning.hybrid.search import Piece
 from rrtdrive.planning.smoothing import SmoothingConfig, make_drivable, max_sharpness
@@ -224,12 +225,14 @@ class Ramps:
 
     ``ramp_share`` of ``sharpness`` goes to the ramps (the rows measure a little
     more than the ramps' own rate); every segment is checked against ``sharpness``.
+    ``chunks``: a segment whose whole fit fails is fitted a stretch at a time.
     """
 
     sharpness: float
     wheelbase: float
     kappa_max: float
     ramp_share: float = 0.9
+    chunks: bool = True
 
     @property
     def delta_max(self) -> float:
@@ -249,12 +252,16 @@ def _ramped(
     sharpness (either one rejects the segment; on tight maps the rejected ramps
     fail the body test, which then spares the sharpness).
     """
-    rows = ramped_segment(
-        seg.rows, seg.gear, ramps.ramp_share * ramps.sharpness, ramps.wheelbase,
-        ramps.delta_max, spacing=min(spacing, 0.2),
-    )  # fmt: skip
+    args = (seg.rows, seg.gear, ramps.ramp_share * ramps.sharpness, ramps.wheelbase,
+            ramps.delta_max, min(spacing, 0.2))  # fmt: skip
+    rows = ramped_segment(*args)
     if rows is None or (ok is not None and not ok(rows)):
-        return None
+        # A long segment's fit spreads its ramps' offsets over the whole (metres off the
+        # checked arcs): fitted a stretch at a time instead (only where the whole failed,
+        # so every path the whole fit gives stays as it was).
+        rows = ramped_in_chunks(*args) if ramps.chunks and seg.rows.shape[0] > 2 else None
+        if rows is None or (ok is not None and not ok(rows)):
+            return None
     sharp = max_sharpness(rows, ramps.wheelbase)
     return None if sharp > ramps.sharpness else (rows, sharp)
 

@@ -351,6 +351,7 @@ def ramped_segment(
     delta_max: float,
     spacing: float = 0.2,
     angle_weight: float = 0.1,
+    pinned: tuple[bool, bool] = (False, False),
 ) -> np.ndarray | None:
     """The segment with continuous steering at most ``rate`` rad/m, or ``None``.
 
@@ -376,6 +377,9 @@ def ramped_segment(
         Largest gap between the returned rows.
     angle_weight : float
         Scale of an angle change against a length change in the fit.
+    pinned : tuple of bool
+        Keep the first / last piece's steering angle as it is (a chunk of a longer
+        segment, :mod:`~.ramp_chunks`, meets its neighbour with that steering).
 
     Returns
     -------
@@ -398,7 +402,7 @@ def ramped_segment(
     # little beyond the raw one: sample finer until every gap keeps ``spacing``.
     step = spacing
     for _ in range(4):
-        out = _ramped_once(rows, gear, rate, wheelbase, delta_max, step, angle_weight)
+        out = _ramped_once(rows, gear, rate, wheelbase, delta_max, step, angle_weight, pinned)
         if out is None:
             return None
         d = out[1:, :2] - out[:-1, :2]
@@ -420,6 +424,7 @@ def _ramped_once(
     delta_max: float,
     spacing: float,
     angle_weight: float,
+    pinned: tuple[bool, bool] = (False, False),
 ) -> np.ndarray | None:
     """One fit of :func:`ramped_segment` with rows about ``spacing`` apart.
 
@@ -434,7 +439,7 @@ def _ramped_once(
     if not len(ds):
         return None
     fit = functools.partial(
-        _fitted_pieces, rows, gear, rate, wheelbase, delta_max, spacing, angle_weight
+        _fitted_pieces, rows, gear, rate, wheelbase, delta_max, spacing, angle_weight, pinned
     )
     pieces = _pieces(ds, kappa, wheelbase)
     merged = _without_slivers(*pieces)
@@ -452,6 +457,7 @@ def _fitted_pieces(
     delta_max: float,
     spacing: float,
     angle_weight: float,
+    pinned: tuple[bool, bool],
     lengths: np.ndarray,
     angles: np.ndarray,
 ) -> np.ndarray | None:
@@ -471,6 +477,9 @@ def _fitted_pieces(
         return _rows(poses_of(_SUBSTEPS), delta, wheelbase, start, goal)
     p = np.concatenate([lengths, angles])
     weight, lower, upper = _fit_bounds(n, angle_weight, delta_max)
+    if pinned[0] or pinned[1]:  # a zero weight holds the angle (bounded_step's "free")
+        weight = weight.copy()
+        weight[[i for i, pin in ((n, pinned[0]), (2 * n - 1, pinned[1])) if pin]] = 0.0
     factors = _widening(lengths, angles, rate)
     pose = None
     previous, flat = math.inf, 0

@@ -316,7 +316,7 @@ def search_at_resolution(
     ramps = None
     if config.curve == "clothoid":
         bound = sharpness_bound_of(problem, smoothing)
-        ramps = Ramps(bound, problem.vehicle.wheelbase, kappa_max)
+        ramps = Ramps(bound, problem.vehicle.wheelbase, kappa_max, chunks=config.ramp_chunks)
     post = None
     if config.smooth and ramps is None and smoothing is not None:
         # The per-segment post-processor keeps the query's clearance and curvature limit
