@@ -23,7 +23,7 @@ from rrtdrive.controllers import CONTROLLERS, SpeedConfig, TrackingController, m
 from rrtdrive.envs.action import CommandLimits
 from rrtdrive.envs.reward import RewardWeights
 from rrtdrive.maps import Map
-from rrtdrive.planning import PLANNERS, forward_only_note, make_planner, reverses
+from rrtdrive.planning import PLANNERS, forward_only_note, make_planner, reverses, unknown_planner
 from rrtdrive.sim.limits import MAX_REVERSE_SPEED, MAX_SPEED
 from rrtdrive.sim.loop import require_episode_time
 from rrtdrive.sim.scenes import SimConfig
@@ -229,9 +229,7 @@ class DriveEnvConfig:
         elif scenario not in SCENARIOS:
             put("map", scenario_map("scenario", scenario, (), SCENARIO_VARIANTS))
         if not isinstance(planner, str) or planner not in PLANNERS:
-            raise InputError(
-                f"planner: unknown planner {planner!r}; choose from {sorted(PLANNERS)}"
-            )
+            raise unknown_planner("planner", planner)
         if not isinstance(controller, str) or controller not in CONTROLLERS:
             raise InputError(
                 f"controller: unknown controller {controller!r}; choose from {sorted(CONTROLLERS)}"

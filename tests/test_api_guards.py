@@ -88,3 +88,33 @@ def test_maps_for_different_cars_differ_and_results_print_in_one_line():
     for text in (repr(problem), repr(result)):
         assert "\n" not in text and len(text) < 250, text
     assert repr(result).startswith("PlanResult(solved, planner='improved-rrt-connect'")
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["plan", "overtake", "--planner", "hybrid-astar"],
+        ["simulate", "parking", "--planner", "hybrid-astar"],
+        ["bench", "--maps", "overtake", "--planners", "hybrid-astar", "--out", "unused"],
+    ],
+)
+def test_a_misspelt_planner_gets_the_closest_name(argv, capsys):
+    from rrtdrive.cli import main
+
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "unknown planner 'hybrid-astar' (did you mean 'hybrid-a-star'?); choose from" in err
+    assert err.count("\n") == 1
+
+
+def test_a_misspelt_planner_in_python_gets_the_closest_name_too():
+    import gymnasium as gym
+
+    import rrtdrive.envs  # noqa: F401  (registers the ids)
+
+    with pytest.raises(InputError, match=r"^planner: .*\(did you mean 'rrt-star'\?\)"):
+        make_planner("rrtstar")
+    with pytest.raises(InputError, match=r"^planner: .*\(did you mean 'rrt-star'\?\)"):
+        gym.make("rrtdrive/Parking-v0", planner="rrtstar")
+    with pytest.raises(InputError, match=r"unknown planner 'zzz'; choose from hybrid-a-star"):
+        make_planner("zzz")

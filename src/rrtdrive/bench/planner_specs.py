@@ -109,7 +109,7 @@ def check_planner_spec(spec: PlannerSpec, where: str) -> None:
         the planner refuses (its own message, after ``where``).
     """
     import rrtdrive.bench.ompl_planners  # noqa: F401  (registers the OMPL rows)
-    from rrtdrive.planning import PLANNERS, make_planner
+    from rrtdrive.planning import PLANNERS, make_planner, unknown_planner
 
     if "=" in spec.name:  # hybrid-a-star@curve=arcs,step=0.5: the comma split the row
         raise InputError(
@@ -117,9 +117,7 @@ def check_planner_spec(spec: PlannerSpec, where: str) -> None:
             "(a ',' starts the next planner)"
         )
     if spec.name not in PLANNERS:
-        raise InputError(
-            f"{where}: unknown planner {spec.name!r}; choose from {sorted(PLANNERS)}"
-        )
+        raise unknown_planner(where, spec.name)
     if spec.options and spec.name.startswith("ompl-"):
         raise InputError(f"{where}: the OMPL rows take no options; drop the '@...'")
     if spec.options:

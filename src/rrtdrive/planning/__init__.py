@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import difflib
 import inspect
 
 from rrtdrive.json_safe import options_from_json
@@ -15,6 +16,7 @@ from rrtdrive.planning.base import (
 from rrtdrive.types import InputError
 
 __all__ = [
+    "unknown_planner",
     "PLANNERS", "GrowingTree", "Planner", "PlanningProblem", "make_planner", "polyline_path",
     "reverses",
 ]
@@ -50,9 +52,7 @@ def make_planner(name: str, **options: object) -> Planner:
     try:
         factory = PLANNERS[name]
     except (KeyError, TypeError):  # TypeError: an unhashable name (a list)
-        raise InputError(
-            f"planner: unknown planner {name!r}; choose from {sorted(PLANNERS)}"
-        ) from None
+        raise unknown_planner("planner", name) from None
     try:
         allowed = inspect.signature(factory).parameters
     except (TypeError, ValueError):  # no signature to read: the factory decides
@@ -68,6 +68,23 @@ def make_planner(name: str, **options: object) -> Planner:
         return factory(**options)
     except TypeError as exc:
         raise InputError(f"planner: {exc}") from None
+
+
+def unknown_planner(field: str, name: object) -> InputError:
+    """The error for a planner name not registered: the closest name, then all of them.
+
+    ``field`` names the option or flag that gave it (the message's first word).
+
+    Examples
+    --------
+    >>> print(unknown_planner("--planner", "hybrid-astar"))  # doctest: +ELLIPSIS
+    --planner: unknown planner 'hybrid-astar' (did you mean 'hybrid-a-star'?); choose from ...
+    """
+    close = difflib.get_close_matches(name, list(PLANNERS), n=1) if isinstance(name, str) else []
+    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    return InputError(
+        f"{field}: unknown planner {name!r}{hint}; choose from {', '.join(sorted(PLANNERS))}"
+    )
 
 
 def reverses(name: str) -> bool:

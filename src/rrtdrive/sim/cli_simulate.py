@@ -329,10 +329,9 @@ def _run(args: argparse.Namespace) -> int:
     if args.planner is None:
         args.planner = DEFAULT_PLANNER
     if args.planner not in PLANNERS:
-        raise InputError(
-            f"--planner: unknown planner {args.planner!r}; "
-            f"choose from {', '.join(sorted(PLANNERS))}"
-        )
+        from rrtdrive.planning import unknown_planner
+
+        raise unknown_planner("--planner", args.planner)
     options = parse_planner_options(getattr(args, "planner_options", None), "--planner-option")
     if options:  # checked once here, named by the flag (an episode plans later)
         if args.scenario in REPLANNING_SCENARIOS:
