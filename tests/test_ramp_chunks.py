@@ -105,3 +105,51 @@ def test_hybrid_a_star_accepts_its_first_search_on_a_long_crossing():
     assert result.success, result.message
     assert "rejected" not in result.message and "before that" not in result.message
     assert verify_path(m, result.path, max_sharpness=0.205).ok
+
+
+def fuzzed_chain(seed: int) -> tuple[np.ndarray, int, float]:
+    """A random chain of arcs and lines (a regression audit's fuzz): rows, gear, rate."""
+    rng = np.random.default_rng(seed)
+    gear, rate = int(rng.choice([1, -1])), float(rng.uniform(0.05, 0.3))
+    k_max, count = KAPPA_MAX, int(rng.integers(3, 120))
+    pose = tuple(float(rng.uniform(*span)) for span in ((-50, 50), (-50, 50), (-math.pi, math.pi)))
+    parts, mode, previous = [], rng.integers(0, 4), 0.0
+    for _ in range(count):
+        rng.random()  # drawn and unused by the audit's generator: kept for its chains
+        if mode == 0:
+            kappa = float(rng.choice([-k_max, -k_max / 2, 0, 0, k_max / 2, k_max]))
+        elif mode == 1:
+            kappa = float(rng.uniform(-k_max, k_max))
+        elif mode == 2:
+            nudge = rng.choice([0, 1e-7, -1e-7, 1e-5, -1e-5, 1e-3, k_max / 2]) * rng.choice([1, -1])
+            kappa = float(np.clip(previous + nudge, -k_max, k_max))
+        else:
+            kappa = float(rng.choice([-k_max, k_max, 0.0, k_max * 0.999999, -k_max * 0.999999]))
+        previous, draw = kappa, rng.random()
+        if draw < 0.15:
+            length = float(rng.uniform(0.01, 0.5))
+        elif draw < 0.8:
+            length = float(rng.uniform(0.5, 10))
+        else:
+            length = float(rng.uniform(10, 120))
+        samples = max(2, int(math.ceil(length / rng.choice([0.1, 0.2, 0.25, 0.3]))) + 1)
+        rows = arc_poses(*pose, kappa, gear, np.linspace(0, length, samples))
+        parts.append(rows if not parts else rows[1:])
+        pose = tuple(float(v) for v in rows[-1])
+    return np.vstack(parts), gear, rate
+
+
+@pytest.mark.parametrize("seed", [450, 560, 996, 1049, 3976])
+def test_the_steering_never_jumps_at_a_cut(seed):
+    # These chains' stretches were fitted with a ramp widened across the cut: the
+    # steering jumped there (up to 0.7 rad/m where the rate was 0.05-0.19).
+    rows, gear, rate = fuzzed_chain(seed)
+    out = ramped_in_chunks(rows, gear, rate, WHEELBASE, DELTA_MAX)
+    if out is None:
+        return
+    delta = np.arctan(WHEELBASE * out[:, 3])
+    ds = np.hypot(*np.diff(out[:, :2], axis=0).T)
+    for c in cut_rows(rows, gear, rate, WHEELBASE):
+        a = int(np.flatnonzero(np.all(out[:, :3] == rows[c, :3], axis=1))[0])
+        rates = np.abs(np.diff(delta[a - 1 : a + 2])) / ds[a - 1 : a + 1]
+        assert rates.max() <= rate * 1.001, (c, rates)
