@@ -153,3 +153,18 @@ def test_the_steering_never_jumps_at_a_cut(seed):
         a = int(np.flatnonzero(np.all(out[:, :3] == rows[c, :3], axis=1))[0])
         rates = np.abs(np.diff(delta[a - 1 : a + 2])) / ds[a - 1 : a + 1]
         assert rates.max() <= rate * 1.001, (c, rates)
+
+
+def test_a_memo_of_the_stretches_gives_the_same_rows_and_is_used():
+    rows = wiggle(1)
+    fits: dict = {}
+    first = ramped_in_chunks(rows, 1, RATE, WHEELBASE, DELTA_MAX, fits=fits)
+    assert first is not None and len(fits) == len(cut_rows(rows, 1, RATE, WHEELBASE)) + 1
+    again = ramped_in_chunks(rows, 1, RATE, WHEELBASE, DELTA_MAX, fits=fits)
+    np.testing.assert_array_equal(again, first)
+    np.testing.assert_array_equal(ramped_in_chunks(rows, 1, RATE, WHEELBASE, DELTA_MAX), first)
+    # A longer segment with the same beginning reuses its first stretches.
+    longer = np.vstack([rows, arc_poses(*rows[-1], 0.0, 1, np.linspace(0, 60, 301))[1:]])
+    before = len(fits)
+    ramped_in_chunks(longer, 1, RATE, WHEELBASE, DELTA_MAX, fits=fits)
+    assert len(fits) - before < len(cut_rows(longer, 1, RATE, WHEELBASE)) + 1

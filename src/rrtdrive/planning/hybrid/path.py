@@ -211,12 +211,34 @@ class SegmentMemo(dict[tuple[int, bytes], "tuple[np.ndarray, float] | None"]):
 
     held: int = 0
 
+    def __init__(self) -> None:
+        super().__init__()
+        #: The stretches of :func:`~.ramp_chunks.ramped_in_chunks` fitted so far (the
+        #: connections of one search share their first stretches), in the same bytes.
+        self.stretches = StretchMemo(self)
+
     def keep(self, key: tuple[int, bytes], found: tuple[np.ndarray, float] | None) -> None:
         """Remember ``found`` for ``key`` while the memo holds less than :data:`MEMO_BYTES`."""
         size = len(key[1]) + (found[0].nbytes if found is not None else 0)
         if self.held + size <= MEMO_BYTES:
             self[key] = found
             self.held += size
+
+
+class StretchMemo(dict[tuple[int, tuple[bool, bool], bytes], "np.ndarray | None"]):
+    """Fitted stretches of long segments, counted in their :class:`SegmentMemo`'s bytes."""
+
+    def __init__(self, owner: SegmentMemo) -> None:
+        super().__init__()
+        self.owner = owner
+
+    def __setitem__(
+        self, key: tuple[int, tuple[bool, bool], bytes], found: np.ndarray | None
+    ) -> None:
+        size = len(key[2]) + (found.nbytes if found is not None else 0)
+        if self.owner.held + size <= MEMO_BYTES:
+            super().__setitem__(key, found)
+            self.owner.held += size
 
 
 @dataclass(frozen=True)
@@ -245,6 +267,7 @@ def _ramped(
     ramps: Ramps,
     spacing: float,
     ok: Callable[[np.ndarray], bool] | None = None,
+    memo: SegmentMemo | None = None,
 ) -> tuple[np.ndarray, float] | None:
     """The ramped rows of a segment and their sharpness, or ``None`` over the bound.
 
@@ -259,7 +282,9 @@ def _ramped(
         # A long segment's fit spreads its ramps' offsets over the whole (metres off the
         # checked arcs): fitted a stretch at a time instead (only where the whole failed,
         # so every path the whole fit gives stays as it was).
-        rows = ramped_in_chunks(*args) if ramps.chunks and seg.rows.shape[0] > 2 else None
+        rows = None
+        if ramps.chunks and len(seg.rows) > 2:
+            rows = ramped_in_chunks(*args, fits=None if memo is None else memo.stretches)
         if rows is None or (ok is not None and not ok(rows)):
             return None
     sharp = max_sharpness(rows, ramps.wheelbase)
@@ -292,7 +317,7 @@ def _fitted(
         if memo is not None and key in memo:
             found = memo[key]
         else:
-            found = _ramped(seg, ramps, sample_spacing, checked)
+            found = _ramped(seg, ramps, sample_spacing, checked, memo)
             if memo is not None:
                 memo.keep(key, found)
         if found is None:

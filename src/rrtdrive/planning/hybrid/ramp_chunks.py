@@ -14,6 +14,8 @@ offsets are closed where they arise and the steering stays continuous across a c
 
 from __future__ import annotations
 
+from collections.abc import MutableMapping
+
 import numpy as np
 
 from rrtdrive.planning.hybrid.pieces import intervals
@@ -88,13 +90,16 @@ def ramped_in_chunks(
     wheelbase: float,
     delta_max: float,
     spacing: float = 0.2,
+    fits: MutableMapping[tuple[int, tuple[bool, bool], bytes], np.ndarray | None] | None = None,
 ) -> np.ndarray | None:
     """:func:`~.ramps.ramped_segment` a stretch at a time, or ``None`` (no cut, or a fit failed).
 
     Each stretch between cuts (:func:`cut_rows`) is fitted to its own exact end
     poses, the steering at a cut held on both sides; the stretches' rows are joined
     (the cut row once). The caller checks the result as it checks a whole fit
-    (body, curvature, sharpness across the cuts too).
+    (body, curvature, sharpness across the cuts too). ``fits``: the stretches fitted
+    before with the same other arguments (a search's connections share their first
+    ones), read and added to; the same rows as fitting them again.
     """
     cuts = cut_rows(rows, gear, rate, wheelbase)
     if not cuts:
@@ -103,9 +108,16 @@ def ramped_in_chunks(
     parts: list[np.ndarray] = []
     for k, (a, b) in enumerate(zip(bounds[:-1], bounds[1:], strict=True)):
         pinned = (k > 0, k < len(bounds) - 2)
-        part = ramped_segment(
-            rows[a : b + 1], gear, rate, wheelbase, delta_max, spacing=spacing, pinned=pinned
-        )
+        stretch = rows[a : b + 1]
+        key = (gear, pinned, stretch.tobytes())
+        if fits is not None and key in fits:
+            part = fits[key]
+        else:
+            part = ramped_segment(
+                stretch, gear, rate, wheelbase, delta_max, spacing=spacing, pinned=pinned
+            )
+            if fits is not None:
+                fits[key] = part
         if part is None:
             return None
         # The steering must meet the last stretch's at the cut: a ramp the fit widened
