@@ -213,8 +213,11 @@ def rasterise(
     ys = origin[1] + h * (np.arange(ny) + 0.5)
     xmin, ymin, xmax, ymax = bounds
     occupied = np.zeros((nx, ny), dtype=bool)
-    occupied[(xs < xmin) | (xs > xmax), :] = True
-    occupied[:, (ys < ymin) | (ys > ymax)] = True
+    # A cell that reaches past xmax / ymax touches the outside (the grid is aligned with
+    # xmin / ymin only): occupied, as a cell touching an obstacle is.
+    eps = 1e-9 * h
+    occupied[(xs < xmin) | (xs + 0.5 * h > xmax + eps), :] = True
+    occupied[:, (ys < ymin) | (ys + 0.5 * h > ymax + eps)] = True
     # A cell is occupied when its centre lies in the rectangle grown by h/sqrt2 on
     # every side: a superset of every cell that touches the rectangle.
     grow = h / math.sqrt(2.0)
