@@ -91,7 +91,8 @@ def test_toml_config(tmp_path):
         load_toml(bad)
     unknown = tmp_path / "unknown.toml"
     unknown.write_text('maps = ["overtake"]\nseedz = 3\n')
-    with pytest.raises(InputError, match="^config: unknown key 'seedz'"):
+    seeds = r"^config: unknown key 'seedz' \(did you mean 'seeds'\?\)"
+    with pytest.raises(InputError, match=seeds):
         load_toml(unknown)
     with pytest.raises(InputError, match="^config: no such file"):
         load_toml(tmp_path / "missing.toml")

@@ -6,6 +6,7 @@ The keys are :data:`~rrtdrive.bench.grid.CONFIG_KEYS`, the names of the
 
 from __future__ import annotations
 
+import difflib
 import os
 from collections.abc import Mapping
 from pathlib import Path as FsPath
@@ -64,8 +65,10 @@ def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
         data = data["bench"]  # a [bench] table is accepted too
     unknown = sorted(set(data) - set(CONFIG_KEYS))
     if unknown:
+        close = difflib.get_close_matches(unknown[0], CONFIG_KEYS, n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
         raise InputError(
-            f"config: unknown key {unknown[0]!r} in {str(p)!r}; "
+            f"config: unknown key {unknown[0]!r}{hint} in {str(p)!r}; "
             f"allowed keys: {', '.join(CONFIG_KEYS)}"
         )
     if "ray" in data:
