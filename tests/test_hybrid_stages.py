@@ -23,7 +23,7 @@ from pathlib import Path as FsPath
 import numpy as np
 import pytest
 
-from rrtdrive.maps import Map, builtin_map
+from rrtdrive.maps import Map, Obstacle, builtin_map
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.planning.hybrid import HybridConfig
 from rrtdrive.sim.tasks import make_scenario
@@ -396,3 +396,21 @@ def test_the_goal_side_goes_first_only_for_a_goal_in_a_pocket() -> None:
     assert result.status is PlanStatus.SOLVED, result.message
     assert len(result.path.cusps) == 0
     assert verify_path(m, result.path, max_sharpness=0.2, clearance=0.05).ok
+
+
+def test_a_start_whose_forward_search_runs_out_says_it_is_the_start() -> None:
+    # A car nosed into a pocket: forward, the search from the start runs out at once; the
+    # message said "the search ran out of states", which a new user read as the goal's
+    # fault (the tree stage before it had blamed the goal).
+    walls = (
+        Obstacle((18.0, 10.0), (0.6, 4.0)),
+        Obstacle((15.5, 8.3), (5.6, 0.6)),
+        Obstacle((15.5, 11.7), (5.6, 0.6)),
+    )
+    m = Map("pocket", (0.0, 0.0, 40.0, 20.0), walls, Pose(14.0, 10.0, 0.0), Pose(30.0, 10.0, 0.0))
+    forward = _solve(PlanningProblem.from_map(m), 20_000)
+    assert forward.status is PlanStatus.PROVEN_UNREACHABLE
+    assert "the search from the start ran out of states" in forward.message
+    assert "try --reverse" in forward.message
+    backing_out = _solve(PlanningProblem.from_map(m, reverse=True), 20_000)
+    assert backing_out.success and len(backing_out.path.cusps) >= 1

@@ -76,7 +76,11 @@ def _failure_message(
     res = _resolution(cfg)
     counts = f"{outcome.expansions} expansions, {outcome.nodes} nodes"
     if outcome.reason == "exhausted":
-        lead = f"no path at {res} resolution: the search ran out of states ({counts}); "
+        # "exhausted" is the search from the start's (the goal side's is "no_approach").
+        lead = (
+            f"no path at {res} resolution: the search from the start ran out of states "
+            f"({counts}); "
+        )
         if reverse:
             return lead + "the goal is unreachable for this car at this resolution"
         return lead + (
