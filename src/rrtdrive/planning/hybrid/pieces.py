@@ -11,7 +11,7 @@ import numpy as np
 
 from rrtdrive.geometry import wrap_angle
 
-__all__ = ["SLIVER_M", "intervals", "runs", "without_slivers"]
+__all__ = ["SLIVER_M", "intervals", "run_starts", "runs", "without_slivers"]
 
 
 def intervals(rows: np.ndarray, gear: int) -> tuple[np.ndarray, np.ndarray]:
@@ -33,12 +33,18 @@ def intervals(rows: np.ndarray, gear: int) -> tuple[np.ndarray, np.ndarray]:
     return ds, dyaw / (gear * ds)
 
 
-def runs(ds: np.ndarray, kappa: np.ndarray, wheelbase: float) -> tuple[np.ndarray, np.ndarray]:
-    """Runs of equal curvature merged: their lengths and steering angles."""
-    delta = np.arctan(wheelbase * kappa)
+def run_starts(delta: np.ndarray) -> np.ndarray:
+    """Whether each interval starts a new piece: its steering differs from the last by > 1e-6."""
     new = np.empty(len(delta), dtype=bool)
     new[0] = True
     np.greater(np.abs(delta[1:] - delta[:-1]), 1e-6, out=new[1:])
+    return new
+
+
+def runs(ds: np.ndarray, kappa: np.ndarray, wheelbase: float) -> tuple[np.ndarray, np.ndarray]:
+    """Runs of equal curvature merged: their lengths and steering angles."""
+    delta = np.arctan(wheelbase * kappa)
+    new = run_starts(delta)
     idx = new.cumsum() - 1
     lengths = np.bincount(idx, weights=ds)
     angles = np.bincount(idx, weights=delta * ds) / lengths

@@ -18,7 +18,7 @@ from collections.abc import MutableMapping
 
 import numpy as np
 
-from rrtdrive.planning.hybrid.pieces import intervals
+from rrtdrive.planning.hybrid.pieces import intervals, run_starts
 from rrtdrive.planning.hybrid.ramps import ramped_segment
 
 __all__ = ["CHUNK_M", "cut_rows", "ramped_in_chunks"]
@@ -57,8 +57,7 @@ def cut_rows(rows: np.ndarray, gear: int, rate: float, wheelbase: float) -> list
     delta = np.arctan(wheelbase * kappa)
     s = np.concatenate([[0.0], np.cumsum(ds)])  # arc length at each row
     # Pieces: runs of intervals with the same steering, as the fit merges them.
-    new = np.concatenate([[True], np.abs(np.diff(delta)) > 1e-6])
-    first = np.flatnonzero(new)  # first interval of each piece
+    first = np.flatnonzero(run_starts(delta))  # first interval of each piece
     last = np.concatenate([first[1:], [len(ds)]])  # one past its last interval
     angle = delta[first]
     jump = np.abs(np.diff(angle))
