@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import enum
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 __all__ = ["json_safe", "options_from_json", "options_json"]
@@ -12,6 +12,33 @@ __all__ = ["json_safe", "options_from_json", "options_json"]
 #: How :func:`options_json` spells the non-finite numbers, and :func:`options_from_json`
 #: reads them back (the spellings of Python's own JSON and of JavaScript).
 NON_FINITE = {"Infinity": math.inf, "-Infinity": -math.inf, "NaN": math.nan}
+
+
+def _plain(value: Any, non_finite: Callable[[float], Any], enums: bool) -> Any:
+    """``value`` as plain JSON, the walk both writers share.
+
+    Mappings and sequences walked, numpy scalars as Python ones, a non-finite float as
+    ``non_finite`` gives it, enums by value when ``enums``.
+    """
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v, non_finite, enums) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v, non_finite, enums) for v in value]
+    if enums and isinstance(value, enum.Enum):
+        return _plain(value.value, non_finite, enums)
+    if hasattr(value, "item") and callable(value.item) and not isinstance(value, (str, bytes)):
+        try:  # a numpy scalar (np.int64(6), np.float32(0.5)): json cannot write those
+            value = value.item()
+        except (TypeError, ValueError):
+            return str(value)
+    if isinstance(value, float) and not math.isfinite(value):
+        return non_finite(value)
+    return value
+
+
+def _spelled(value: float) -> str:
+    """A non-finite float as :data:`NON_FINITE` spells it."""
+    return "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
 
 
 def json_safe(value: Any) -> Any:
@@ -22,18 +49,7 @@ def json_safe(value: Any) -> Any:
     >>> json_safe({"a": float("nan"), "b": [1.5, float("inf")]})
     {'a': None, 'b': [1.5, None]}
     """
-    if isinstance(value, Mapping):
-        return {str(k): json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [json_safe(v) for v in value]
-    if hasattr(value, "item") and callable(value.item) and not isinstance(value, (str, bytes)):
-        try:
-            value = value.item()
-        except (TypeError, ValueError):
-            return str(value)
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
+    return _plain(value, lambda _: None, enums=False)
 
 
 def options_json(value: Any) -> Any:
@@ -50,20 +66,7 @@ def options_json(value: Any) -> Any:
     >>> options_json({"disable": ("prune",), "ratio": float("inf"), "n": 3})
     {'disable': ['prune'], 'ratio': 'Infinity', 'n': 3}
     """
-    if isinstance(value, Mapping):
-        return {str(k): options_json(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [options_json(v) for v in value]
-    if isinstance(value, enum.Enum):
-        return options_json(value.value)
-    if hasattr(value, "item") and callable(value.item) and not isinstance(value, (str, bytes)):
-        try:  # a numpy scalar (np.int64(6), np.float32(0.5)): json cannot write those
-            value = value.item()
-        except (TypeError, ValueError):
-            return str(value)
-    if isinstance(value, float) and not math.isfinite(value):
-        return "NaN" if math.isnan(value) else ("Infinity" if value > 0 else "-Infinity")
-    return value
+    return _plain(value, _spelled, enums=True)
 
 
 def options_from_json(value: Any) -> Any:
