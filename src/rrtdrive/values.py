@@ -5,11 +5,13 @@ Kept apart from :mod:`rrtdrive.types` (which re-exports both), which validates w
 
 from __future__ import annotations
 
+import difflib
 import math
+from collections.abc import Iterable
 
 import numpy as np
 
-__all__ = ["brief_repr", "is_finite_number"]
+__all__ = ["brief_repr", "did_you_mean", "is_finite_number"]
 
 
 def brief_repr(value: object, limit: int = 32) -> str:
@@ -70,3 +72,15 @@ def is_finite_number(value: object) -> bool:
         return math.isfinite(float(value))
     except OverflowError:  # an int too large for a float: as good as infinite
         return False
+
+
+def did_you_mean(name: object, choices: Iterable[str]) -> str:
+    """`` (did you mean 'X'?)`` for the choice closest to a misspelt ``name``, else ``""``.
+
+    Examples
+    --------
+    >>> did_you_mean("parkng", ["parking", "overtake"]), did_you_mean("zzz", ["parking"])
+    (" (did you mean 'parking'?)", '')
+    """
+    close = difflib.get_close_matches(name, list(choices), n=1) if isinstance(name, str) else []
+    return f" (did you mean {close[0]!r}?)" if close else ""

@@ -6,7 +6,6 @@ The keys are :data:`~rrtdrive.bench.grid.CONFIG_KEYS`, the names of the
 
 from __future__ import annotations
 
-import difflib
 import os
 from collections.abc import Mapping
 from pathlib import Path as FsPath
@@ -14,6 +13,7 @@ from typing import Any
 
 from rrtdrive.bench.grid import CONFIG_KEYS, DETERMINISTIC_TIME, BenchConfig
 from rrtdrive.types import InputError
+from rrtdrive.values import did_you_mean
 
 __all__ = ["load_toml", "config_from_mapping"]
 
@@ -65,10 +65,9 @@ def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
         data = data["bench"]  # a [bench] table is accepted too
     unknown = sorted(set(data) - set(CONFIG_KEYS))
     if unknown:
-        close = difflib.get_close_matches(unknown[0], CONFIG_KEYS, n=1)
-        hint = f" (did you mean {close[0]!r}?)" if close else ""
         raise InputError(
-            f"config: unknown key {unknown[0]!r}{hint} in {str(p)!r}; "
+            f"config: unknown key {unknown[0]!r}{did_you_mean(unknown[0], CONFIG_KEYS)} in "
+            f"{str(p)!r}; "
             f"allowed keys: {', '.join(CONFIG_KEYS)}"
         )
     if "ray" in data:

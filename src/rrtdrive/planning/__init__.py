@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
 import inspect
 
 from rrtdrive.json_safe import options_from_json
@@ -14,11 +13,11 @@ from rrtdrive.planning.base import (
     polyline_path,
 )
 from rrtdrive.types import InputError
+from rrtdrive.values import did_you_mean
 
 __all__ = [
-    "unknown_planner",
     "PLANNERS", "GrowingTree", "Planner", "PlanningProblem", "make_planner", "polyline_path",
-    "reverses",
+    "reverses", "unknown_planner",
 ]
 
 
@@ -80,10 +79,9 @@ def unknown_planner(field: str, name: object) -> InputError:
     >>> print(unknown_planner("--planner", "hybrid-astar"))  # doctest: +ELLIPSIS
     --planner: unknown planner 'hybrid-astar' (did you mean 'hybrid-a-star'?); choose from ...
     """
-    close = difflib.get_close_matches(name, list(PLANNERS), n=1) if isinstance(name, str) else []
-    hint = f" (did you mean {close[0]!r}?)" if close else ""
     return InputError(
-        f"{field}: unknown planner {name!r}{hint}; choose from {', '.join(sorted(PLANNERS))}"
+        f"{field}: unknown planner {name!r}{did_you_mean(name, PLANNERS)}; "
+        f"choose from {', '.join(sorted(PLANNERS))}"
     )
 
 

@@ -36,7 +36,6 @@ re-planning settings), so nothing else needs to ask which kind a task is.
 
 from __future__ import annotations
 
-import difflib
 import math
 from collections.abc import Iterable, Sequence
 from typing import Any, cast
@@ -68,6 +67,7 @@ from rrtdrive.sim.tasks.parallel_parking import ParallelParkingTask
 from rrtdrive.sim.tasks.parking import ParkingTask
 from rrtdrive.sim.tasks.u_turn import UTurnTask
 from rrtdrive.types import InputError, VehicleParams, require_int
+from rrtdrive.values import did_you_mean
 
 __all__ = [
     "SCENARIOS",
@@ -177,8 +177,7 @@ def unknown_scenario(
     from rrtdrive.maps import BUILTIN_MAPS
 
     maps = sorted(m for m in BUILTIN_MAPS if m not in SCENARIOS)
-    close = difflib.get_close_matches(name, [*SCENARIOS, *variants, *stock_envs, *maps], n=1)
-    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    hint = did_you_mean(name, [*SCENARIOS, *variants, *stock_envs, *maps])
     stock = f", a stock env ({', '.join(stock_envs)})" if stock_envs else ""
     return InputError(
         f"{field}: unknown scenario {name!r}{hint}; choose from "
