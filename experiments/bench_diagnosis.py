@@ -21,8 +21,6 @@ the ratio new / old.
 from __future__ import annotations
 
 import argparse
-import math
-import random
 import sys
 import time
 from pathlib import Path as FsPath
@@ -41,6 +39,8 @@ from results_io import (
 from scipy import ndimage
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "src"))
+
+from box_maps import box_map  # noqa: E402  (after src/ joins the path, as rrtdrive)
 
 from rrtdrive.cli_args import int_at_least, positive_float, positive_int  # noqa: E402
 from rrtdrive.collision import CollisionChecker  # noqa: E402
@@ -90,20 +90,6 @@ def wall_gap_map(side: float, gap: float) -> Map:
     )
     return Map(f"wall_gap_{side:g}_{gap:g}", (0.0, 0.0, side, side), wall,
                Pose(5.0, 5.0, 0.0), Pose(side - 5.0, side - 5.0, 0.0))  # fmt: skip
-
-
-def box_map(side: float, count: int, seed: int = 0) -> Map:
-    """``count`` boxes of 1-8 m at random places and headings, none near the ends."""
-    rng = random.Random(seed)
-    start, goal = Pose(5.0, 5.0, 0.0), Pose(side - 5.0, side - 5.0, 0.0)
-    boxes: list[Obstacle] = []
-    while len(boxes) < count:
-        x, y = rng.uniform(0, side), rng.uniform(0, side)
-        if min(math.hypot(x - p.x, y - p.y) for p in (start, goal)) < 15.0:
-            continue
-        size = (rng.uniform(1, 8), rng.uniform(1, 8))
-        boxes.append(Obstacle((x, y), size, rng.uniform(0, math.pi)))
-    return Map(f"boxes_{side:g}_{count}", (0.0, 0.0, side, side), tuple(boxes), start, goal)
 
 
 def _diagnosis(problem: PlanningProblem) -> tuple[float, Any]:

@@ -26,7 +26,6 @@ from pathlib import Path as FsPath
 from typing import Any
 
 import numpy as np
-from bench_diagnosis import box_map
 from results_io import (
     cell,
     command,
@@ -39,6 +38,8 @@ from results_io import (
 from scipy import ndimage
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "src"))
+
+from box_maps import box_map  # noqa: E402  (after src/ joins the path, as rrtdrive)
 
 from rrtdrive.cli_args import int_at_least, positive_int  # noqa: E402
 from rrtdrive.collision import CheckerConfig  # noqa: E402

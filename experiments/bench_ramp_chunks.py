@@ -19,8 +19,6 @@ clearance less 2 mm) and counts solved queries, expansions and lengths. Writes
 from __future__ import annotations
 
 import argparse
-import math
-import random
 import statistics
 import sys
 import time
@@ -32,29 +30,15 @@ from results_io import cell, command, machine, numbers_above, out_folder, run_ma
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "src"))
 
+from box_maps import box_map  # noqa: E402  (after src/ joins the path, as rrtdrive)
+
 from rrtdrive.cli_args import positive_int  # noqa: E402
-from rrtdrive.maps import Map, Obstacle  # noqa: E402
 from rrtdrive.planning import PlanningProblem, make_planner  # noqa: E402
-from rrtdrive.types import Budget, Pose  # noqa: E402
+from rrtdrive.types import Budget  # noqa: E402
 from rrtdrive.verify import verify_path  # noqa: E402
 
 #: Boxes per square metre (200 on a 200 m square).
 DENSITY = 200 / 200.0**2
-
-
-def box_map(side: float, seed: int) -> Map:
-    """Boxes of 1-8 m at random places and headings, none within 15 m of the corners' poses."""
-    rng = random.Random(seed)
-    start, goal = Pose(5.0, 5.0, 0.0), Pose(side - 5.0, side - 5.0, 0.0)
-    boxes: list[Obstacle] = []
-    while len(boxes) < round(DENSITY * side * side):
-        x, y = rng.uniform(0, side), rng.uniform(0, side)
-        if min(math.hypot(x - p.x, y - p.y) for p in (start, goal)) < 15.0:
-            continue
-        boxes.append(
-            Obstacle((x, y), (rng.uniform(1, 8), rng.uniform(1, 8)), rng.uniform(0, math.pi))
-        )
-    return Map(f"boxes_{side:g}_s{seed}", (0.0, 0.0, side, side), tuple(boxes), start, goal)
 
 
 def _solve(problem: PlanningProblem, chunks: bool, iterations: int) -> dict[str, Any]:
@@ -82,7 +66,7 @@ def _solve(problem: PlanningProblem, chunks: bool, iterations: int) -> dict[str,
 
 def run(side: float, seed: int, reverse: bool, iterations: int) -> dict[str, Any]:
     """One query with the stretch fit on and off (off first, then on)."""
-    m = box_map(side, seed)
+    m = box_map(side, round(DENSITY * side * side), seed, name=f"boxes_{side:g}_s{seed}")
     problem = PlanningProblem.from_map(m, reverse=reverse)
     _solve(problem, True, 200)  # the map's set-up, untimed
     off, on = _solve(problem, False, iterations), _solve(problem, True, iterations)

@@ -9,20 +9,23 @@ the ladder's later searches).
 from __future__ import annotations
 
 import math
-import random
+import sys
+from pathlib import Path as FsPath
 
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from rrtdrive.maps import Map, Obstacle
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.planning.hybrid.pieces import intervals
 from rrtdrive.planning.hybrid.primitives import arc_poses
 from rrtdrive.planning.hybrid.ramp_chunks import CHUNK_M, cut_rows, ramped_in_chunks
 from rrtdrive.planning.hybrid.ramps import ramped_segment
-from rrtdrive.types import Budget, Pose
+from rrtdrive.types import Budget
 from rrtdrive.verify import verify_path
+
+sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "experiments"))
+from box_maps import box_map  # noqa: E402  (the scaling benchmarks' maps)
 
 WHEELBASE, KAPPA_MAX, RATE = 2.51, 1.0 / 6.0, 0.18
 DELTA_MAX = math.atan(WHEELBASE * KAPPA_MAX)
@@ -79,25 +82,6 @@ def test_cuts_lie_inside_long_pieces_at_least_a_chunk_apart():
         near = (s[1:] > s[i] - 1.0) & (s[:-1] < s[i] + 1.0)
         kappa = turn[near] / np.diff(s)[near]
         assert kappa.max() - kappa.min() < 1e-6
-
-
-def box_map(side: float, count: int, seed: int) -> Map:
-    """``count`` boxes of 1-8 m at random places and headings, none near the ends.
-
-    A copy of ``experiments/bench_diagnosis.py``'s: importing that script puts ``src/``
-    first on ``sys.path``, where an installed (not editable) package's ``rrtdrive.envs``
-    is not, and the bench tests' worker processes then fail to start (CI, session 39).
-    """
-    rng = random.Random(seed)
-    start, goal = Pose(5.0, 5.0, 0.0), Pose(side - 5.0, side - 5.0, 0.0)
-    boxes: list[Obstacle] = []
-    while len(boxes) < count:
-        x, y = rng.uniform(0, side), rng.uniform(0, side)
-        if min(math.hypot(x - p.x, y - p.y) for p in (start, goal)) < 15.0:
-            continue
-        size = (rng.uniform(1, 8), rng.uniform(1, 8))
-        boxes.append(Obstacle((x, y), size, rng.uniform(0, math.pi)))
-    return Map(f"boxes_{side:g}_{count}", (0.0, 0.0, side, side), tuple(boxes), start, goal)
 
 
 def test_hybrid_a_star_accepts_its_first_search_on_a_long_crossing():
