@@ -24,6 +24,7 @@ from rrtdrive.planning.hybrid.planner import (
     NAME,
     answer_stats,
     arcs_note,
+    is_proof,
     path_of,
     proof_scope,
     turn_note,
@@ -147,12 +148,23 @@ def escalate(
             ),
         )
     if answer.path is None:
+        scope = proof_scope(answer.outcome, answer.clearance)
+        message = f"{failed.message}; Hybrid A* ({gear}) found none either: {answer.message}{scope}"
+        if is_proof(answer.outcome):
+            # A proof (every way on from the start, or in to the goal, explored) says
+            # more than the tree stage's counted failure: it leads. A new user's start
+            # nosed into parked cars read the tree stage's "the goal is boxed in along its
+            # heading" first and blamed the goal (an audit).
+            tree_part = reason.removeprefix("no path: ")
+            how = answer.message.removeprefix("no path ")  # "at <resolution>: ..."
+            how = how if how != answer.message else f": {how}"
+            message = (
+                f"no path: Hybrid A* ({gear}) proved none {how}{scope}; "
+                f"the RRT-Connect stages before it: {tree_part}"
+            )
         return dataclasses.replace(
             failed,
-            message=(
-                f"{failed.message}; Hybrid A* ({gear}) found none either: {answer.message}"
-                + proof_scope(answer.outcome, answer.clearance)
-            ),
+            message=message,
             stats=stats,
             iterations=used,
             planning_time_s=watch.elapsed(),

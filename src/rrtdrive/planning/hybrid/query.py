@@ -84,8 +84,8 @@ def _failure_message(
         if reverse:
             return lead + "the goal is unreachable for this car at this resolution"
         return lead + (
-            "driving forward, the goal is unreachable for this car at this resolution "
-            "(a path with reversing may exist: try --reverse)"
+            "driving forward from this start, the car cannot reach the goal at this "
+            "resolution (a path with reversing may exist: try --reverse)"
         )
     if outcome.reason == "no_approach":
         if reverse:
