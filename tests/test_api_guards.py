@@ -90,6 +90,21 @@ def test_maps_for_different_cars_differ_and_results_print_in_one_line():
     assert repr(result).startswith("PlanResult(solved, planner='improved-rrt-connect'")
 
 
+def test_a_map_prints_in_one_line_with_its_obstacle_count_and_a_non_default_car():
+    import dataclasses
+
+    from rrtdrive import VehicleParams, builtin_map
+
+    m = builtin_map("parking_lot")
+    text = repr(m)
+    assert "\n" not in text and len(text) < 250, text
+    assert text.startswith("Map('parking_lot', bounds=(0.0, 0.0, 100.0, 100.0), ")
+    assert f" {len(m.obstacles)} obstacles, " in text and len(m.obstacles) > 100
+    assert f"start={m.start}, goal={m.goal})" in text and "vehicle" not in text
+    wide = repr(dataclasses.replace(m, vehicle=VehicleParams(width=2.2)))
+    assert wide.endswith(f", vehicle={VehicleParams(width=2.2)})")
+
+
 @pytest.mark.parametrize(
     "argv",
     [

@@ -1,4 +1,4 @@
-"""Checks of a map's start and goal, and warnings about likely slips in a map.
+"""Checks of a map's name, start and goal, and warnings about likely slips in a map.
 
 :func:`check_endpoint` refuses a pose the car cannot stand at (outside or touching
 the bounds, on an obstacle, a yaw beyond :data:`MAX_YAW`); :func:`warn_if_degrees`
@@ -9,6 +9,7 @@ that is valid but probably not what was meant.
 from __future__ import annotations
 
 import math
+import unicodedata
 import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
@@ -21,6 +22,7 @@ from rrtdrive.types import (
     InputWarning,
     Pose,
     VehicleParams,
+    brief_repr,
     require_finite,
     require_positive,
 )
@@ -33,6 +35,7 @@ __all__ = [
     "MAX_COORDINATE",
     "MAX_YAW",
     "check_endpoint",
+    "check_name",
     "check_obstacle_numbers",
     "warn_if_degrees",
     "warn_obstacle_yaws",
@@ -96,6 +99,43 @@ def check_obstacle_numbers(size: tuple[float, float], yaw: float) -> None:
         raise InputError(
             f"obstacle.yaw: {yaw:g} rad is beyond {MAX_YAW:g} rad either way; give it in "
             "[-pi, pi]"
+        )
+
+
+def check_name(name: object) -> None:
+    """Refuse a map name that is empty, not text, or cannot be printed on one line.
+
+    Raises
+    ------
+    InputError
+        Naming ``name``.
+
+    Examples
+    --------
+    >>> check_name("lot")
+    >>> check_name("")
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: name: expected a non-empty string, got ''
+    """
+    if not isinstance(name, str) or not name:
+        raise InputError(f"name: expected a non-empty string, got {brief_repr(name)}")
+    try:
+        name.encode("utf-8")
+    except UnicodeEncodeError:
+        # JSON's "\ud800" (half of a surrogate pair) is no character: no file or
+        # terminal takes it, and printing the name ended in a traceback.
+        raise InputError(
+            f"name: {name!r} holds half of a UTF-16 surrogate pair, which is no "
+            "character; write the character itself"
+        ) from None
+    control = next((c for c in name if unicodedata.category(c) == "Cc"), None)
+    if control is not None:
+        # Printed raw, a newline split the one-line summary and an escape recoloured
+        # the terminal.
+        raise InputError(
+            f"name: {name!r} holds the control character {control!r}; names are "
+            "printed on one line: use printable characters"
         )
 
 

@@ -17,7 +17,6 @@ import functools
 import json
 import math
 import os
-import unicodedata
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path as FsPath
@@ -32,6 +31,7 @@ from rrtdrive.map_checks import (
     MAX_COORDINATE,
     MAX_YAW,
     check_endpoint,
+    check_name,
     check_obstacle_numbers,
     warn_if_degrees,
     warn_obstacle_yaws,
@@ -143,25 +143,7 @@ class Map:
     check_query: dataclasses.InitVar[bool] = True
 
     def __post_init__(self, check_query: bool = True) -> None:
-        if not isinstance(self.name, str) or not self.name:
-            raise InputError(f"name: expected a non-empty string, got {brief_repr(self.name)}")
-        try:
-            self.name.encode("utf-8")
-        except UnicodeEncodeError:
-            # JSON's "\ud800" (half of a surrogate pair) is no character: no file or
-            # terminal takes it, and printing the name ended in a traceback.
-            raise InputError(
-                f"name: {self.name!r} holds half of a UTF-16 surrogate pair, which is no "
-                "character; write the character itself"
-            ) from None
-        control = next((c for c in self.name if unicodedata.category(c) == "Cc"), None)
-        if control is not None:
-            # Printed raw, a newline split the one-line summary and an escape recoloured
-            # the terminal.
-            raise InputError(
-                f"name: {self.name!r} holds the control character {control!r}; names are "
-                "printed on one line: use printable characters"
-            )
+        check_name(self.name)
         b = self.bounds
         if isinstance(b, np.ndarray) and b.ndim == 1:
             b = tuple(b.tolist())  # four numbers from numpy, as Obstacle and Pose take them
@@ -206,6 +188,12 @@ class Map:
                 check_endpoint(self, pose, label, self.vehicle)
             else:
                 warn_if_degrees(label, pose.yaw)
+
+    def __repr__(self) -> str:
+        # Printed in full, the obstacles ran to ~10 k characters (parking_lot's 100).
+        car = "" if self.vehicle == VehicleParams() else f", vehicle={self.vehicle}"
+        return (f"Map({self.name!r}, bounds={self.bounds}, {len(self.obstacles)} obstacles, "
+                f"start={self.start}, goal={self.goal}{car})")  # fmt: skip
 
     @property
     def width(self) -> float:
