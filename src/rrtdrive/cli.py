@@ -336,8 +336,9 @@ def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
         dest="planner_options",
         metavar="FIELD=VALUE",
         help="set a field of the planner's config (repeatable), e.g. reverse_detour_tree=false "
-        "(the improved planner: ImprovedConfig; hybrid-a-star: HybridConfig); values are read "
-        "as JSON (4, 0.5, true, Infinity), else as text",
+        "(the improved planner: ImprovedConfig; hybrid-a-star: HybridConfig); a nested "
+        "config's field is dotted (smoothing.max_rounds=8); values are read as JSON (4, 0.5, "
+        "true, Infinity), else as text",
     )
     plan.add_argument(
         "--paper-smoothing",

@@ -219,16 +219,22 @@ def _flagged(text: str, fields: Mapping[str, str]) -> str | None:
 def parse_planner_options(texts: Sequence[str] | None, flag: str) -> dict[str, object]:
     """``FIELD=VALUE`` texts as planner keywords: values read as JSON, else as text.
 
+    A dotted field sets a field of a nested config (``smoothing.max_rounds=8``: the
+    keyword ``smoothing={"max_rounds": 8}``), the spelling the planners' errors use.
+
     Examples
     --------
     >>> parse_planner_options(["reverse_detour_tree=false", "step=4", "curve=arcs"], "-o")
     {'reverse_detour_tree': False, 'step': 4, 'curve': 'arcs'}
+    >>> parse_planner_options(["smoothing.max_rounds=8", "smoothing.clothoid=false"], "-o")
+    {'smoothing': {'max_rounds': 8, 'clothoid': False}}
     >>> parse_planner_options(["step"], "-o")
     Traceback (most recent call last):
     ...
     rrtdrive.types.InputError: -o: expected FIELD=VALUE (e.g. reverse_detour_tree=false), got 'step'
     """
     out: dict[str, object] = {}
+    given: list[tuple[str, ...]] = []
     for text in texts or ():
         key, eq, value = text.partition("=")
         key = key.strip()
@@ -236,14 +242,28 @@ def parse_planner_options(texts: Sequence[str] | None, flag: str) -> dict[str, o
             raise InputError(
                 f"{flag}: expected FIELD=VALUE (e.g. reverse_detour_tree=false), got {text!r}"
             )
-        if key in out:
-            raise InputError(f"{flag} {key}: given twice")
-        if key == "reverse":  # the query's, which the JSON reports: not the planner's own
+        path = tuple(part.strip() for part in key.split("."))
+        if not all(path):
+            raise InputError(
+                f"{flag} {key}: an empty field name; nested fields read "
+                "smoothing.max_rounds=8"
+            )
+        for other in given:
+            # The same field, or a config given whole and one of its fields besides.
+            if path[: len(other)] == other or other[: len(path)] == path:
+                twice = key if path == other else f"{'.'.join(other)} and {key}"
+                raise InputError(f"{flag} {twice}: given twice")
+        given.append(path)
+        if path[0] == "reverse":  # the query's, which the JSON reports: not the planner's own
             raise InputError(f"{flag} reverse: give --reverse to allow gear changes")
         try:
-            out[key] = json.loads(value)
+            parsed: object = json.loads(value)
         except ValueError:
-            out[key] = value
+            parsed = value
+        node = out
+        for part in path[:-1]:
+            node = node.setdefault(part, {})  # type: ignore[assignment]
+        node[path[-1]] = parsed
     return out
 
 

@@ -4,7 +4,8 @@
 of its config set, as ``rrtdrive plan --planner-option reverse_detour_tree=false``; a
 grid can hold the same planner with and without it (an ablation). Values are read as
 JSON (``false``, ``4``, ``0.5``), else as text (``curve=arcs``); a value cannot hold
-``:`` or ``,`` (the separators). Each row is spelled one way, its *label*: fields
+``:`` or ``,`` (the separators), so a nested config's field is dotted
+(``smoothing.max_rounds=8``). Each row is spelled one way, its *label*: fields
 sorted, values as JSON, so two spellings of one row are one run key.
 """
 
@@ -44,11 +45,24 @@ class PlannerSpec:
         'hybrid-a-star@curve=arcs:step=0.5'
         >>> PlannerSpec("rrt").label
         'rrt'
+        >>> PlannerSpec("hybrid-a-star", {"smoothing": {"max_rounds": 8}}).label
+        'hybrid-a-star@smoothing.max_rounds=8'
         """
         if not self.options:
             return self.name
-        parts = (f"{k}={_text(v)}" for k, v in sorted(self.options.items()))
+        parts = (f"{k}={_text(v)}" for k, v in sorted(_dotted(self.options)))
         return f"{self.name}@{':'.join(parts)}"
+
+
+def _dotted(options: Mapping[str, object], prefix: str = "") -> list[tuple[str, object]]:
+    """A nested config's fields as ``FIELD.FIELD`` keys: its JSON would hold ':' and ','."""
+    out: list[tuple[str, object]] = []
+    for key, value in options.items():
+        if isinstance(value, Mapping) and value:
+            out += _dotted(value, f"{prefix}{key}.")
+        else:
+            out.append((f"{prefix}{key}", value))
+    return out
 
 
 def _text(value: object) -> str:
@@ -91,8 +105,8 @@ fields are separated by ':', so a value cannot hold ':' or ',' ...
         if "expected FIELD=VALUE" not in str(exc):
             raise
         raise InputError(
-            f"{exc}; fields are separated by ':', so a value cannot hold ':' or ',' (set "
-            "nested fields with rrtdrive plan --planner-option)"
+            f"{exc}; fields are separated by ':', so a value cannot hold ':' or ',' (a "
+            "nested config's field is FIELD.FIELD=VALUE, e.g. smoothing.max_rounds=8)"
         ) from None
     return PlannerSpec(name.strip(), options)
 

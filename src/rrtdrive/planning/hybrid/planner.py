@@ -20,7 +20,7 @@ from rrtdrive.planning.hybrid.query import HybridAnswer, hybrid_query
 from rrtdrive.planning.hybrid.resolution import PROOFS, dubins_table, free_cell_graph
 from rrtdrive.planning.hybrid.search import SearchOutcome
 from rrtdrive.planning.result import run_query, solved, timeout_result
-from rrtdrive.planning.smoothing import SmoothingConfig
+from rrtdrive.planning.smoothing import SmoothingConfig, smoothing_with
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus
 
 __all__ = [
@@ -74,9 +74,9 @@ class HybridAStar:
         Full configuration; keyword ``options`` override its fields.
     reverse : bool, optional
         Allow reversing; default ``getattr(problem, "reverse", False)`` per query.
-    smoothing : SmoothingConfig, optional
+    smoothing : SmoothingConfig or mapping, optional
         The per-segment post-processor (default ``SmoothingConfig(max_rounds=24)``,
-        the improved planner's).
+        the improved planner's); a mapping changes those fields of the default.
     **options
         Any :class:`HybridConfig` field.
 
@@ -98,7 +98,7 @@ class HybridAStar:
         config: HybridConfig | None = None,
         *,
         reverse: bool | None = None,
-        smoothing: SmoothingConfig | None = None,
+        smoothing: SmoothingConfig | Mapping[str, object] | None = None,
         **options: object,
     ) -> None:
         base = config if config is not None else HybridConfig()
@@ -108,10 +108,16 @@ class HybridAStar:
         if reverse is not None and not isinstance(reverse, bool):
             raise InputError(f"planner.reverse: expected true or false, got {reverse!r}")
         self.reverse = reverse
+        own = SmoothingConfig(max_rounds=24)
+        if isinstance(smoothing, Mapping):  # fields to change (a JSON or CLI option)
+            smoothing = smoothing_with(own, smoothing)
         if smoothing is not None and not isinstance(smoothing, SmoothingConfig):
             kind = type(smoothing).__name__
-            raise InputError(f"planner.smoothing: expected a SmoothingConfig, got {kind}")
-        self.smoothing = smoothing if smoothing is not None else SmoothingConfig(max_rounds=24)
+            raise InputError(
+                f"planner.smoothing: expected a SmoothingConfig or a mapping of its fields, "
+                f"got {kind}"
+            )
+        self.smoothing = smoothing if smoothing is not None else own
 
     def __repr__(self) -> str:
         return f"HybridAStar({self.config!r}, reverse={self.reverse!r})"

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from rrtdrive.planning.improved.fallback import MAX_FALLBACK_CANDIDATES
-from rrtdrive.planning.smoothing import SmoothingConfig
+from rrtdrive.planning.smoothing import SmoothingConfig, smoothing_with
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
 __all__ = [
@@ -433,7 +433,7 @@ class ImprovedConfig:
         changes = dict(options)
         smoothing = changes.get("smoothing")
         if isinstance(smoothing, Mapping):
-            changes["smoothing"] = _smoothing_with(self.smoothing, smoothing)
+            changes["smoothing"] = smoothing_with(self.smoothing, smoothing)
         return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
 
 
@@ -448,19 +448,3 @@ def _check_components(components: tuple[str, ...]) -> None:
             raise InputError(
                 f"planner.disable: unknown component {name!r}; choose from {list(COMPONENTS)}"
             )
-
-
-def _smoothing_with(base: SmoothingConfig, changes: Mapping[str, object]) -> SmoothingConfig:
-    """``base`` with ``changes``; errors name ``planner.smoothing.<field>``."""
-    fields = {f.name for f in dataclasses.fields(SmoothingConfig)}
-    unknown = sorted(set(changes) - fields)
-    if unknown:
-        raise InputError(
-            f"planner.smoothing.{unknown[0]}: unknown field of SmoothingConfig; "
-            f"allowed {sorted(fields)}"
-        )
-    try:
-        return dataclasses.replace(base, **changes)  # type: ignore[arg-type]
-    except InputError as exc:
-        # SmoothingConfig names its fields "smoothing.<field>"; say whose they are.
-        raise InputError(f"planner.{exc}") from None

@@ -58,6 +58,7 @@ from rrtdrive.planning.smoothing.config import (
     CurveKind,
     SmoothingConfig,
     SmoothingResult,
+    smoothing_with,
 )
 from rrtdrive.planning.smoothing.drivable import make_drivable
 from rrtdrive.planning.smoothing.fillet import Fillet, fillet_points
@@ -92,6 +93,7 @@ __all__ = [
     "Fillet",
     "fillet_points",
     "SmoothingConfig",
+    "smoothing_with",
     "SmoothingResult",
     "CurveKind",
     "STEER_RATE_DESIGN_SPEED",

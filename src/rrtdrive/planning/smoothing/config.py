@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -18,6 +20,7 @@ __all__ = [
     "CurveKind",
     "SmoothingConfig",
     "SmoothingResult",
+    "smoothing_with",
 ]
 
 #: Speed (m/s) at which a path of the default sharpness bound needs exactly the
@@ -318,3 +321,30 @@ class SmoothingResult:
     message: str = ""
     stats: dict[str, float] = field(default_factory=dict)
     max_sharpness: float = math.nan
+
+
+def smoothing_with(base: SmoothingConfig, changes: Mapping[str, object]) -> SmoothingConfig:
+    """``base`` with ``changes`` (a planner option ``smoothing={...}``).
+
+    Raises
+    ------
+    InputError
+        Naming ``planner.smoothing.<field>`` for an unknown field or a bad value.
+
+    Examples
+    --------
+    >>> smoothing_with(SmoothingConfig(), {"max_rounds": 8}).max_rounds
+    8
+    """
+    fields = {f.name for f in dataclasses.fields(SmoothingConfig)}
+    unknown = sorted(set(changes) - fields)
+    if unknown:
+        raise InputError(
+            f"planner.smoothing.{unknown[0]}: unknown field of SmoothingConfig; "
+            f"allowed {sorted(fields)}"
+        )
+    try:
+        return dataclasses.replace(base, **changes)  # type: ignore[arg-type]
+    except InputError as exc:
+        # SmoothingConfig names its fields "smoothing.<field>"; say whose they are.
+        raise InputError(f"planner.{exc}") from None
