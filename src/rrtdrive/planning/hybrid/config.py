@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
-__all__ = ["CURVES", "TIGHT_SOLUTIONS_FACTOR", "HybridConfig"]
+__all__ = ["CURVES", "TIGHT_SOLUTIONS_FACTOR", "HybridConfig", "hybrid_with"]
 
 #: The kinds of returned segments (:attr:`HybridConfig.curve`).
 CURVES = ("clothoid", "arcs")
@@ -504,3 +505,33 @@ class HybridConfig:
         72
         """
         return max(1, round(2.0 * math.pi / self.yaw_resolution))
+
+
+def hybrid_with(base: HybridConfig, changes: Mapping[str, object], owner: str) -> HybridConfig:
+    """``base`` with ``changes``; errors name the field as ``<owner>.<field>``.
+
+    ``owner``: where the config sits, ``"planner"`` for ``hybrid-a-star``'s own (its
+    fields are the planner's options) or ``"planner.hybrid"`` for the improved
+    planner's escalation.
+
+    Examples
+    --------
+    >>> hybrid_with(HybridConfig(), {"gear_change_cost": 10.0}, "planner.hybrid").gear_change_cost
+    10.0
+    >>> hybrid_with(HybridConfig(), {"gear_cost": 1}, "planner.hybrid")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: planner.hybrid.gear_cost: unknown field of HybridConfig; ...
+    """
+    fields = {f.name for f in dataclasses.fields(HybridConfig)}
+    unknown = sorted(set(changes) - fields)
+    if unknown:
+        whose = "option for hybrid-a-star" if owner == "planner" else "field of HybridConfig"
+        raise InputError(f"{owner}.{unknown[0]}: unknown {whose}; allowed {sorted(fields)}")
+    try:
+        return dataclasses.replace(base, **changes)  # type: ignore[arg-type]
+    except InputError as exc:
+        # HybridConfig names its fields "hybrid.<field>"; nested, say whose they are.
+        if owner == "planner":
+            raise
+        raise InputError(f"planner.{exc}") from None

@@ -7,14 +7,13 @@
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 from collections.abc import Mapping
 
 import numpy as np
 
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register_planner
-from rrtdrive.planning.hybrid.config import HybridConfig
+from rrtdrive.planning.hybrid.config import HybridConfig, hybrid_with
 from rrtdrive.planning.hybrid.path import BuiltPath
 from rrtdrive.planning.hybrid.query import HybridAnswer, hybrid_query
 from rrtdrive.planning.hybrid.resolution import PROOFS, dubins_table, free_cell_graph
@@ -104,7 +103,7 @@ class HybridAStar:
         base = config if config is not None else HybridConfig()
         if not isinstance(base, HybridConfig):
             raise InputError(f"planner.config: expected a HybridConfig, got {type(base).__name__}")
-        self.config = _with_options(base, options) if options else base
+        self.config = hybrid_with(base, options, "planner") if options else base
         if reverse is not None and not isinstance(reverse, bool):
             raise InputError(f"planner.reverse: expected true or false, got {reverse!r}")
         self.reverse = reverse
@@ -245,13 +244,3 @@ def arcs_note(built: BuiltPath) -> str:
         "; the unsmoothed segments are exact arcs and lines: |kappa| <= kappa_max and the "
         "body are checked, but the curvature jumps where they meet (no sharpness bound)"
     )
-
-
-def _with_options(base: HybridConfig, options: Mapping[str, object]) -> HybridConfig:
-    fields = {f.name for f in dataclasses.fields(HybridConfig)}
-    unknown = sorted(set(options) - fields)
-    if unknown:
-        raise InputError(
-            f"planner.{unknown[0]}: unknown option for hybrid-a-star; allowed {sorted(fields)}"
-        )
-    return dataclasses.replace(base, **options)  # type: ignore[arg-type]

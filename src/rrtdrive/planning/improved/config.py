@@ -8,6 +8,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from rrtdrive.planning.hybrid.config import HybridConfig, hybrid_with
 from rrtdrive.planning.improved.fallback import MAX_FALLBACK_CANDIDATES
 from rrtdrive.planning.smoothing import SmoothingConfig, smoothing_with
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
@@ -229,6 +230,10 @@ class ImprovedConfig:
         ``supplement_n``, ``max_rounds`` fit-check-repair rounds per tree path (24)
         and the sampling and fillet settings. Its :data:`PER_QUERY_SMOOTHING`
         fields are set per query and must keep their defaults here.
+    hybrid : HybridConfig
+        The escalation's Hybrid A* search (default ``HybridConfig()``): its grid, steps,
+        costs (``gear_change_cost``, ``reverse_cost``: also how a forward detour is
+        weighed against the escalation's path) and the searches after the first.
 
     Examples
     --------
@@ -266,12 +271,14 @@ class ImprovedConfig:
     max_postprocess_attempts: int = 6
     body_clearance: float = 0.15
     smoothing: SmoothingConfig = field(default_factory=default_smoothing)
+    hybrid: HybridConfig = field(default_factory=HybridConfig)
 
     def __post_init__(self) -> None:
         require_positive("planner.step", self.step)
-        if not isinstance(self.smoothing, SmoothingConfig):
-            kind = type(self.smoothing).__name__
-            raise InputError(f"planner.smoothing: expected a SmoothingConfig, got {kind}")
+        for name, kind in (("smoothing", SmoothingConfig), ("hybrid", HybridConfig)):
+            if not isinstance(getattr(self, name), kind):
+                got = type(getattr(self, name)).__name__
+                raise InputError(f"planner.{name}: expected a {kind.__name__}, got {got}")
         for name in COMPONENTS:
             value = self.enabled(name)
             if not isinstance(value, bool):
@@ -411,7 +418,7 @@ class ImprovedConfig:
         return dataclasses.replace(self, **mine)
 
     def with_options(self, options: Mapping[str, object]) -> ImprovedConfig:
-        """A copy with config fields replaced; ``smoothing`` may be a mapping of its fields.
+        """A copy with config fields replaced; ``smoothing``, ``hybrid``: mappings of fields too.
 
         A mapping is applied over this config's :attr:`smoothing`, so
         ``{"smoothing": {"max_rounds": 8}}`` changes only the rounds. Errors name
@@ -431,9 +438,11 @@ class ImprovedConfig:
                 f"allowed {sorted(fields)}"
             )
         changes = dict(options)
-        smoothing = changes.get("smoothing")
+        smoothing, hybrid = changes.get("smoothing"), changes.get("hybrid")
         if isinstance(smoothing, Mapping):
             changes["smoothing"] = smoothing_with(self.smoothing, smoothing)
+        if isinstance(hybrid, Mapping):
+            changes["hybrid"] = hybrid_with(self.hybrid, hybrid, "planner.hybrid")
         return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
 
 

@@ -61,25 +61,27 @@ def detour_ratio(length: float, start: Pose, goal: Pose, radius: float) -> float
     return length / max(shortest, 1e-9)
 
 
-def around_obstacles(problem: PlanningProblem, watch: Stopwatch | None = None) -> float:
+def around_obstacles(
+    problem: PlanningProblem, watch: Stopwatch | None = None, config: HybridConfig | None = None
+) -> float:
     """The distance from the start's rear axle to the goal's around the map's obstacles.
 
     The Hybrid A* escalation's own estimate (:class:`~rrtdrive.planning.hybrid.HolonomicField`
-    on its first search's grid, the field cached for the escalation to reuse): the
-    8-connected grid distance over the cells the rear axle may stand in, less a cell
-    diagonal; ``inf`` when the grid joins no way between them. The grid is the map's
-    set-up, built once per map (timed as set-up on ``watch``); the one Dijkstra from
-    the goal's cell is the query's.
+    on its first search's grid, ``config``'s, default ``HybridConfig()``; the field cached
+    for the escalation to reuse): the 8-connected grid distance over the cells the rear
+    axle may stand in, less a cell diagonal; ``inf`` when the grid joins no way between
+    them. The grid is the map's set-up, built once per map (timed as set-up on
+    ``watch``); the one Dijkstra from the goal's cell is the query's.
     """
     with watch.setup() if watch is not None else contextlib.nullcontext():
-        grid = free_cell_graph(problem, HybridConfig().xy_resolution)
+        grid = free_cell_graph(problem, (config or HybridConfig()).xy_resolution)
     start = problem.start
     return HolonomicField.towards(grid, problem.goal).value(start.x, start.y)
 
 
 def measured_detour(
     length: float, problem: PlanningProblem, radius: float, limit: float,
-    watch: Stopwatch | None,
+    watch: Stopwatch | None, config: HybridConfig | None = None,
 ) -> tuple[float, bool]:
     """``(ratio, around)``: how far a forward path of ``length`` is a detour.
 
@@ -93,7 +95,7 @@ def measured_detour(
     if ratio > limit and watch is not None:
         # Shorter than the Reeds-Shepp distance (open ground; inf: no way found on
         # the grid, which a found path rules out) the estimate says nothing more.
-        distance = around_obstacles(problem, watch)
+        distance = around_obstacles(problem, watch, config)
         if math.isfinite(distance) and length / max(distance, 1e-9) < ratio:
             return length / distance, True
     return ratio, False
@@ -149,7 +151,8 @@ def search_cost(path: Path, config: HybridConfig) -> float:
 
 
 def shorter_answer(
-    escalated: PlanResult, detour: PlanResult, elapsed: float, reverse: bool = True
+    escalated: PlanResult, detour: PlanResult, elapsed: float, reverse: bool = True,
+    config: HybridConfig | None = None,
 ) -> PlanResult:
     """The escalation's path when it costs less than the detour, else the detour.
 
@@ -160,9 +163,9 @@ def shorter_answer(
     reversing is slow: stock parking-v0 seeds 56 and 84 take 26 and 11 % longer). The
     detour keeps its own stage and message, with what the escalation found added
     (``reverse``: whether it searched with reverse; forward only with
-    ``escalation_first="always"``).
+    ``escalation_first="always"``; ``config``: the escalation's, default ``HybridConfig()``).
     """
-    config = HybridConfig()
+    config = config or HybridConfig()
     length = escalated.path.length
     if not escalated.success:
         found = f"none ({int(escalated.stats.get('hybrid_expansions', 0))} expansions)"

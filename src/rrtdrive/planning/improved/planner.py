@@ -130,8 +130,7 @@ class ImprovedRRTConnect:
             candidate count); with the escalation on, the RRT-Connect stages get
             ``rrt_share`` of the iterations and ``escalation_fallback_joints``
             candidates, and the Hybrid A* escalation the iterations left as
-            expansions. Reaching the safety cap ``max_time_s``
-            ends the query as ``timeout``.
+            expansions. Reaching the safety cap ``max_time_s`` ends the query as ``timeout``.
 
         Returns
         -------
@@ -284,29 +283,30 @@ class _Query:
         length, limit = out.path.length, self.cfg.reverse_detour_ratio
         radius = self.cfg.dubins_radius_factor / self.problem.vehicle.kappa_max
         watch = self.watch if with_obstacles else None  # None: the Reeds-Shepp distance alone
-        ratio, around = measured_detour(length, self.problem, radius, limit, watch)
+        ratio, around = measured_detour(length, self.problem, radius, limit, watch, self.cfg.hybrid)
         self.stats[stat] = out.stats[stat] = ratio  # the kept answer says it too
         if ratio <= limit:
             return out
         escalated = self.escalation(budget, detour_words(kind, length, ratio, around))
         if escalated.status is PlanStatus.TIMEOUT:
             return escalated
-        return shorter_answer(escalated, out, self.watch.elapsed(), self.problem.reverse)
+        elapsed, hybrid = self.watch.elapsed(), self.cfg.hybrid
+        return shorter_answer(escalated, out, elapsed, self.problem.reverse, hybrid)
 
     def escalation(self, budget: Budget, before: str | None = None) -> PlanResult:
         """The Hybrid A* escalation on the iterations the RRT-Connect stages left.
 
         ``before``: what those stages left, when not a failure (see :func:`escalate`).
         """
-        watch = self.watch
-        t_rrt = watch.elapsed()
-        self.stats["rrt_stages_time_s"] = t_rrt
+        watch, hybrid = self.watch, self.cfg.hybrid
+        t_rrt = self.stats["rrt_stages_time_s"] = watch.elapsed()
         failed = self.failure()
         left = budget.max_iterations - self.iterations
         if left < 1:  # the growth spent the whole budget (rrt_share 1)
             return failed
         rest = dataclasses.replace(budget, max_iterations=left)
-        out = escalate(failed, self.problem, rest, watch, self.smoothing, before=before)
+        out = escalate(failed, self.problem, rest, watch, self.smoothing,
+                       config=hybrid, before=before)  # fmt: skip
         if out is not failed:
             out.stats["escalation_time_s"] = watch.elapsed() - t_rrt
         return out
