@@ -41,8 +41,8 @@ class PlannerSpec:
 
         Examples
         --------
-        >>> PlannerSpec("hybrid-a-star", {"step": 0.5, "curve": "arcs"}).label
-        'hybrid-a-star@curve=arcs:step=0.5'
+        >>> PlannerSpec("hybrid-a-star", {"step": 2, "curve": "arcs"}).label
+        'hybrid-a-star@curve=arcs:step=2'
         >>> PlannerSpec("rrt").label
         'rrt'
         >>> PlannerSpec("hybrid-a-star", {"smoothing": {"max_rounds": 8}}).label
