@@ -497,7 +497,11 @@ def test_make_drivable_degree_3():
     m = builtin_map("overtake")
     checker = cached_checker(m)
     raw = np.array([[5.0, 44.0], [30.0, 44.0], [42.0, 48.0], [60.0, 48.0], [92.0, 44.0]])
-    res = make_drivable(raw, m.start, m.goal, checker, SmoothingConfig(degree=3))
+    # The degree is the B-spline's: the default curve (clothoid) has none.
+    res = make_drivable(
+        raw, m.start, m.goal, checker, SmoothingConfig(degree=3, curve=CurveKind.BSPLINE)
+    )
+    assert res.ok and np.isnan(res.max_sharpness), res.message  # nan: a B-spline ran
     check_guarantees(res, m.start, m.goal, checker)
 
 

@@ -110,7 +110,7 @@ class DubinsPath:
 
         Positions are exact on the arcs and lines (closed-form integration); the
         curvature of a row is that of the segment it lies on (at a junction, of the
-        segment that starts there).
+        segment that starts there); the last row, the goal, has curvature 0.
         """
         if not spacing > 0:
             raise InputError(f"spacing: must be > 0, got {spacing!r}")
@@ -119,7 +119,11 @@ class DubinsPath:
         cols: list[tuple[object, object, object, float, int]] = []
         x, y, yaw = self.start.x, self.start.y, self.start.yaw
         for turn, seg in zip(_WORDS[self.word], self.lengths, strict=True):
-            if seg <= 0.0:
+            if seg <= 1e-9:
+                # A word's float noise (a straight ahead at heading 0.7 is LSL with
+                # 5.6e-16 m arcs): as its own row, the end position came twice with
+                # kappa 1/r then 0, a steering rate of 5.7e14 rad/m (a mutation audit).
+                x, y, yaw = _advance(x, y, yaw, turn, seg, self.radius)
                 continue
             n = max(1, math.ceil(seg / spacing))
             u = np.arange(n) * (seg / n)  # the segment's own end is the next one's start

@@ -177,8 +177,9 @@ class ReedsSheppPath:
         carrying the curvature of the segment that starts there; at a cusp the end row
         of the segment before (its curvature, its gear) is followed by the same position
         with the next segment's curvature and gear. The last row is the goal (when set)
-        with the last segment's curvature and gear; a path of length 0 is one row with
-        curvature 0 and gear +1. ``yaw`` is the nose heading, wrapped to ``[-pi, pi)``.
+        with the last segment's curvature and gear; a path of length 0 (a goal within
+        1e-10 radius of the start) is one row, the start, with curvature 0 and gear +1.
+        ``yaw`` is the nose heading, wrapped to ``[-pi, pi)``.
 
         Parameters
         ----------
