@@ -28,6 +28,8 @@ __all__ = ["inside_road", "pull_out_candidate", "pull_out_path"]
 
 #: Rounds of moving the cut-in point forward to where the lead will be by then.
 _GOAL_ROUNDS = 8
+#: How far past the secant's estimate of the settled cut-in point a round aims (m).
+_SETTLE_MARGIN_M = 0.05
 
 
 def pull_out_path(
@@ -108,6 +110,7 @@ def pull_out_candidate(
     """
     x0 = float(start[0])
     x_goal = x0 + 2.0 * length
+    last: tuple[float, float] | None = None  # the previous round's cut-in x and need
     for _ in range(_GOAL_ROUNDS):
         if x_goal > x0 + max_length or x_goal + tail > x_end:
             return None
@@ -118,7 +121,18 @@ def pull_out_candidate(
         need = cut_in_x(float(times[goal_index]))
         if x_goal >= need - 1e-9:
             return path, goal_index, times
-        x_goal = need
+        step = need
+        if last is not None and x_goal > last[0]:
+            # A moving lead moves the need on as the cut-in point moves: stepping to the
+            # need closed the shortfall only by the lead's share of the ego's speed each
+            # round, never within 8 (behind a lead at 0.5-2 m/s no pull-out was found,
+            # a mutation audit). Aim past where the secant through the last two rounds
+            # meets the need.
+            slope = (need - last[1]) / (x_goal - last[0])
+            if 0.0 <= slope < 1.0:
+                step = max(need, (need - slope * x_goal) / (1.0 - slope)) + _SETTLE_MARGIN_M
+        last = (x_goal, need)
+        x_goal = step
     return None
 
 
