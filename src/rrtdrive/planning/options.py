@@ -1,12 +1,14 @@
-"""Validation of the baselines' keyword options; errors name the option."""
+"""Validation of the planners' keyword options; errors name the option."""
 
 from __future__ import annotations
+
+from collections.abc import Iterable
 
 import numpy as np
 
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
-__all__ = ["check_probability", "check_count", "check_flag", "check_step"]
+__all__ = ["check_probability", "check_count", "check_flag", "check_step", "check_known"]
 
 def check_probability(name: str, value: float) -> float:
     """Return ``value`` as a float in ``[0, 1)`` or raise :class:`InputError` naming ``name``.
@@ -44,3 +46,22 @@ def check_step(value: float) -> float:
     """Validate the ``planner.step`` option (metres, > 0)."""
     require_positive("planner.step", value)
     return float(value)
+
+
+def check_known(names: Iterable[str], allowed: Iterable[str], where: str, what: str) -> None:
+    """Refuse the first name (sorted) not in ``allowed``, naming it as ``where.name``.
+
+    ``what``: what the names are, for the message (``"field of SmoothingConfig"``).
+
+    Examples
+    --------
+    >>> check_known(["degree"], ["degree", "prune"], "planner.smooth", "field of X")
+    >>> check_known(["degre"], ["degree", "prune"], "planner.smooth", "field of X")
+    Traceback (most recent call last):
+    ...
+    rrtdrive.types.InputError: planner.smooth.degre: unknown field of X; allowed ['degree', 'prune']
+    """
+    options = sorted(allowed)
+    unknown = sorted(set(names) - set(options))
+    if unknown:
+        raise InputError(f"{where}.{unknown[0]}: unknown {what}; allowed {options}")

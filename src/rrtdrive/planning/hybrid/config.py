@@ -8,6 +8,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from rrtdrive.planning.options import check_known
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
 __all__ = ["CURVES", "TIGHT_SOLUTIONS_FACTOR", "HybridConfig", "hybrid_with"]
@@ -523,11 +524,8 @@ def hybrid_with(base: HybridConfig, changes: Mapping[str, object], owner: str) -
     ...
     rrtdrive.types.InputError: planner.hybrid.gear_cost: unknown field of HybridConfig; ...
     """
-    fields = {f.name for f in dataclasses.fields(HybridConfig)}
-    unknown = sorted(set(changes) - fields)
-    if unknown:
-        whose = "option for hybrid-a-star" if owner == "planner" else "field of HybridConfig"
-        raise InputError(f"{owner}.{unknown[0]}: unknown {whose}; allowed {sorted(fields)}")
+    whose = "option for hybrid-a-star" if owner == "planner" else "field of HybridConfig"
+    check_known(changes, [f.name for f in dataclasses.fields(HybridConfig)], owner, whose)
     try:
         return dataclasses.replace(base, **changes)  # type: ignore[arg-type]
     except InputError as exc:

@@ -10,6 +10,7 @@ from typing import Any
 
 from rrtdrive.planning.hybrid.config import HybridConfig, hybrid_with
 from rrtdrive.planning.improved.fallback import MAX_FALLBACK_CANDIDATES
+from rrtdrive.planning.options import check_known
 from rrtdrive.planning.smoothing import SmoothingConfig, smoothing_with
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
@@ -430,13 +431,8 @@ class ImprovedConfig:
         >>> cfg.step, cfg.smoothing.degree, cfg.smoothing.max_rounds
         (4.0, 3, 24)
         """
-        fields = {f.name for f in dataclasses.fields(ImprovedConfig)}
-        unknown = sorted(set(options) - fields)
-        if unknown:
-            raise InputError(
-                f"planner.{unknown[0]}: unknown option for improved-rrt-connect; "
-                f"allowed {sorted(fields)}"
-            )
+        fields = [f.name for f in dataclasses.fields(ImprovedConfig)]
+        check_known(options, fields, "planner", "option for improved-rrt-connect")
         changes = dict(options)
         smoothing, hybrid = changes.get("smoothing"), changes.get("hybrid")
         if isinstance(smoothing, Mapping):

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rrtdrive.planning.options import check_known
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
 __all__ = [
@@ -336,13 +337,8 @@ def smoothing_with(base: SmoothingConfig, changes: Mapping[str, object]) -> Smoo
     >>> smoothing_with(SmoothingConfig(), {"max_rounds": 8}).max_rounds
     8
     """
-    fields = {f.name for f in dataclasses.fields(SmoothingConfig)}
-    unknown = sorted(set(changes) - fields)
-    if unknown:
-        raise InputError(
-            f"planner.smoothing.{unknown[0]}: unknown field of SmoothingConfig; "
-            f"allowed {sorted(fields)}"
-        )
+    fields = [f.name for f in dataclasses.fields(SmoothingConfig)]
+    check_known(changes, fields, "planner.smoothing", "field of SmoothingConfig")
     try:
         return dataclasses.replace(base, **changes)  # type: ignore[arg-type]
     except InputError as exc:
