@@ -25,18 +25,17 @@ import numpy as np
 import shapely
 
 from rrtdrive.atomic import write_text_atomic
-from rrtdrive.geometry import box_corners
 from rrtdrive.json_input import json_kind, parse_json, read_capped
 from rrtdrive.map_checks import (
     MAX_COORDINATE,
     MAX_YAW,
     check_endpoint,
     check_name,
-    check_obstacle_numbers,
     warn_if_degrees,
     warn_obstacle_yaws,
     warn_outside,
 )
+from rrtdrive.obstacles import Obstacle
 from rrtdrive.types import (
     InputError,
     Pose,
@@ -62,49 +61,6 @@ __all__ = [
     "MAX_COORDINATE",
     "MAX_YAW",
 ]
-
-
-@dataclass(frozen=True)
-class Obstacle:
-    """An oriented rectangle: centre, size ``(length along yaw, width)``, yaw."""
-
-    center: tuple[float, float]
-    size: tuple[float, float]
-    yaw: float = 0.0
-
-    def __post_init__(self) -> None:
-        center = _pair(self.center, "obstacle.center")
-        size = _pair(self.size, "obstacle.size")
-        check_obstacle_numbers(size, self.yaw)
-        object.__setattr__(self, "center", center)
-        object.__setattr__(self, "size", size)
-        object.__setattr__(self, "yaw", float(self.yaw))
-
-    def corners(self) -> np.ndarray:
-        """The four corners, shape ``(4, 2)``, counter-clockwise from rear-right."""
-        half_l, half_w = self.size[0] / 2.0, self.size[1] / 2.0
-        return box_corners(
-            self.center[0], self.center[1], self.yaw, -half_l, half_l, half_w, rotate_first=True
-        )
-
-    def polygon(self) -> shapely.Polygon:
-        """The rectangle as a shapely polygon (built once per distinct rectangle)."""
-        return _obstacle_polygon(self)
-
-    def grown(self, amount: float) -> Obstacle:
-        """This rectangle with ``amount`` added to its length and to its width."""
-        return Obstacle(self.center, (self.size[0] + amount, self.size[1] + amount), self.yaw)
-
-    def to_json(self) -> dict[str, object]:
-        """JSON-ready dict."""
-        return {"center": list(self.center), "size": list(self.size), "yaw": self.yaw}
-
-
-@functools.lru_cache(maxsize=1 << 16)
-def _obstacle_polygon(obstacle: Obstacle) -> shapely.Polygon:
-    # Every copy of a map (a new goal, ``dataclasses.replace``) checks its start and
-    # goal against each obstacle: building the polygons was most of a copy's cost.
-    return shapely.Polygon(obstacle.corners())
 
 
 @dataclass(frozen=True)
@@ -228,13 +184,6 @@ class Map:
         }
 
 
-def _pair(value: object, name: str) -> tuple[float, float]:
-    if not isinstance(value, (list, tuple, np.ndarray)) or len(value) != 2:
-        raise InputError(f"{name}: expected two numbers, got {brief_repr(value)}")
-    require_finite(name, *value)
-    return (float(value[0]), float(value[1]))
-
-
 # ----------------------------------------------------------------------------- JSON
 
 _MAP_KEYS = {"name", "bounds", "obstacles", "start", "goal"}
@@ -355,7 +304,15 @@ def map_text(m: Map) -> str:
 
 
 def save_map(m: Map, path: str | os.PathLike[str]) -> None:
-    """Write ``m`` as JSON atomically (temporary file, then rename)."""
+    """Write ``m`` as JSON atomically (temporary file, then rename).
+
+    Parameters
+    ----------
+    m : Map
+        The map (its name, bounds, obstacles, start and goal; not its car).
+    path : str or os.PathLike
+        The file to write; :func:`load_map` reads it back.
+    """
     write_text_atomic(path, map_text(m))
 
 
@@ -532,6 +489,20 @@ BUILTIN_MAPS.update({name: _shipped(name) for name in TIGHT_MAP_NAMES})
 def builtin_map(name: str) -> Map:
     """Return the built-in map called ``name`` (built once; maps are immutable).
 
+    Parameters
+    ----------
+    name : str
+        One of :data:`BUILTIN_MAPS` (``rrtdrive maps`` lists them).
+
+    Returns
+    -------
+    Map
+
+    Raises
+    ------
+    InputError
+        For an unknown name, naming ``map`` and the built-ins.
+
     Examples
     --------
     >>> builtin_map("overtake").start
@@ -573,6 +544,28 @@ def resolve_map(
     ``start`` and ``goal`` replace the map's own poses, and only the poses used are
     checked against it (unless ``check_query`` is false): a file whose own start is
     bad still serves with a good ``--start``.
+
+    Parameters
+    ----------
+    spec : str
+        A built-in map's name or the path of a map file (``.json``).
+    vehicle : VehicleParams, optional
+        The car the poses are checked for (default: the map's, or ``VehicleParams()``).
+    start, goal : Pose, optional
+        Poses replacing the map's own.
+    check_query : bool
+        Check the start and goal bodies (default); ``False`` for a map that only
+        carries the poses a given path is judged against.
+
+    Returns
+    -------
+    Map
+
+    Raises
+    ------
+    InputError
+        For an unknown name, an unreadable or malformed file, or a bad pose, naming
+        the field.
     """
     if spec in BUILTIN_MAPS or not names_map_file(spec):
         m = builtin_map(spec)

@@ -114,7 +114,15 @@ def require_int(name: str, value: object, minimum: int = 1, maximum: int | None 
 
 @dataclass(frozen=True)
 class Pose:
-    """A planar pose of the rear-axle centre: position in metres, yaw in radians (CCW from +x)."""
+    """A planar pose of the rear-axle centre: position in metres, yaw in radians (CCW from +x).
+
+    Parameters
+    ----------
+    x, y : float
+        Position of the rear-axle centre in metres.
+    yaw : float
+        Where the nose points, in radians counter-clockwise from +x (not wrapped).
+    """
 
     x: float
     y: float
@@ -399,7 +407,15 @@ def _read_only(values: Any, dtype: Any) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class Tree:
-    """A search tree for plotting: node positions and parent indices (-1 for the root)."""
+    """A search tree for plotting: node positions and parent indices (-1 for the root).
+
+    Parameters
+    ----------
+    nodes : numpy.ndarray
+        Node positions ``(N, 2)`` (kept as a read-only copy).
+    parents : numpy.ndarray
+        ``(N,)`` index of each node's parent in ``nodes``, -1 for a root.
+    """
 
     nodes: np.ndarray
     parents: np.ndarray
