@@ -18,9 +18,9 @@ and measures, from the map's geometry, the first of these that holds:
    proof at the search's resolution) with a pocket ahead of it
    (:func:`~.checks.no_forward_departure`). With more room the search's exhaustion is
    no proof off its lattice and is not named.
-3. ``tight_clearance`` (for planners that search by tree edges only): the first tree
-   edge along the start's (or into the goal's) heading fails the swept edge test
-   although the exact body is free along it: the
+3. ``tight_clearance`` (for planners that search by tree edges only): no 0.5 m tree
+   edge at the start (or the goal), in any direction and either way, passes the swept
+   edge test although the exact body is free along its heading: the
    body is closer to an obstacle than that test keeps beside it (the checker's margin,
    its grid error and trace step) or beyond its bumper (the capsule's round end too).
 4. ``narrow_passage`` / ``walled_off``: start and goal are joined only through a gap

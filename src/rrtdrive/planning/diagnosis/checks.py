@@ -242,17 +242,31 @@ def no_forward_departure(m: Map, checker: CollisionChecker, start: Pose) -> Diag
     )
 
 
+def _an_edge_passes(checker: CollisionChecker, pose: Pose, leg: float) -> bool:
+    """Whether some ``leg`` m edge at ``pose``, any direction, either way, passes the edge test.
+
+    The improved planner's root grows within 90 deg of the heading, the baselines' trees
+    any way, and a tree from the goal tests its edges leaving it: "none leaves (reaches)
+    it" holds only if every one fails. One edge along the heading was tested: a post
+    ahead-left of the nose, or a wall 0.5 m ahead of a goal's nose (which edges from
+    behind at 45 deg, and rrt-connect's edges out of the goal, pass), read "so none
+    reaches it" (a mutation audit).
+    """
+    for angle in np.radians(np.arange(0.0, 360.0, 5.0)):
+        far = pose.xy + leg * np.array([math.cos(pose.yaw + angle), math.sin(pose.yaw + angle)])
+        if checker.edge_free(pose.xy, far) or checker.edge_free(far, pose.xy):
+            return True
+    return False
+
+
 def tight_clearance(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) -> Diagnosis | None:
-    """``tight_clearance``: the first tree edge at an end fails where the exact body is free."""
+    """``tight_clearance``: no tree edge at an end passes, where the exact body is free."""
     side, ends = edge_keep(checker), end_keep(checker)
     leg = 0.5
     ways = (("start", start, 1, "its rear", "leaves"), ("goal", goal, -1, "its nose", "reaches"))
     for label, pose, forward, bumper, verb in ways:
-        # The tree's first edge at the pose: a short one along its heading, driven forward.
-        u = np.array([math.cos(pose.yaw), math.sin(pose.yaw)])
-        far = pose.xy + forward * leg * u
-        a, b = (pose.xy, far) if forward > 0 else (far, pose.xy)
-        if checker.edge_free(a, b) or free_run(checker, pose, forward, 0.0, leg) < leg:
+        # The body is free along the first edge's heading, yet no edge passes the test.
+        if free_run(checker, pose, forward, 0.0, leg) < leg or _an_edge_passes(checker, pose, leg):
             continue
         index, gap = nearest_obstacle(m, footprint_polygon(pose.as_tuple(), m.vehicle), checker)
         return Diagnosis(
