@@ -447,7 +447,10 @@ class HybridSearch:
             expansions += 1
             xi, yi, yawi, gi, geari = xs[i], ys[i], yaws[i], gs[i], gear_of[i]
             since_shot += 1
-            interval = min(shot_interval, max(1, int(hval[i] / shot_distance)))
+            h = hval[i]
+            # h = inf (no way to the goal from here, a start a caller gave directly):
+            # int(inf) raised OverflowError; its children are pruned, so it runs out.
+            interval = min(shot_interval, max(1, int(h / shot_distance))) if h < inf else 1
             if since_shot >= interval:
                 since_shot = 0
                 # A shot from near a pose whose shots all failed runs into the same
