@@ -13,6 +13,7 @@ import math
 import numpy as np
 import pytest
 import shapely
+from test_mutation_guards_collision import BOUNDS, OBSTACLES, V, _checker, _union
 
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.geometry import wrap_angle
@@ -24,7 +25,7 @@ from rrtdrive.planning.hybrid.heuristic import Heuristic, HolonomicField
 from rrtdrive.planning.hybrid.primitives import PrimitiveSet
 from rrtdrive.planning.hybrid.resolution import free_cell_graph
 from rrtdrive.planning.hybrid.search import HybridSearch, Piece, analytic_shots
-from rrtdrive.types import Pose, VehicleParams
+from rrtdrive.types import Pose
 
 RADIUS = 5.9
 #: An empty 40 x 20 m lot: every analytic shot between two poses in its middle is clear.
@@ -123,21 +124,8 @@ def test_a_root_the_goal_cannot_be_reached_from_is_out_of_states_at_once() -> No
 
 # --- The body test against shapely ---------------------------------------------------
 
-V = VehicleParams()
-BOUNDS = (0.0, 0.0, 30.0, 30.0)
-OBSTACLES = (Obstacle((20.93, 15.0), (2.0, 10.0)), Obstacle((8.0, 8.0), (3.0, 2.0), 0.6))
-
-
-@functools.cache
-def _box_checker() -> CollisionChecker:
-    return CollisionChecker(BOUNDS, OBSTACLES, V)
-
-
-@functools.cache
-def _union() -> shapely.Geometry:
-    union = shapely.union_all([shapely.Polygon(o.corners()) for o in OBSTACLES])
-    shapely.prepare(union)
-    return union
+# The collision guards' map (a box and a turned box), its checker and shapely union.
+_box_checker = _checker
 
 
 def _keeps(pose: np.ndarray, clearance: float) -> bool:
