@@ -13,7 +13,13 @@ import math
 import numpy as np
 import pytest
 import shapely
-from test_mutation_guards_collision import BOUNDS, OBSTACLES, V, _checker, _union
+from test_mutation_guards_collision import (
+    BOUNDS,
+    V,
+    _checker,
+    _union,
+)
+from test_mutation_guards_collision import _poses_near_obstacles as _near_obstacles
 
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.geometry import wrap_angle
@@ -138,15 +144,6 @@ def _keeps(pose: np.ndarray, clearance: float) -> bool:
     xmin, ymin, xmax, ymax = BOUNDS
     inner = shapely.box(xmin + clearance, ymin + clearance, xmax - clearance, ymax - clearance)
     return inner.contains(body) and _union().distance(body) > clearance
-
-
-def _near_obstacles(n: int, seed: int) -> np.ndarray:
-    """Poses about the obstacles' corners, where the screens cannot decide alone."""
-    rng = np.random.default_rng(seed)
-    corners = np.concatenate([o.corners() for o in OBSTACLES])
-    pick = corners[rng.integers(0, len(corners), n)]
-    return np.column_stack([pick + rng.normal(0.0, 2.5, pick.shape),
-                            rng.uniform(-math.pi, math.pi, n)])  # fmt: skip
 
 
 @pytest.mark.parametrize("clearance", [0.0, 0.15, 0.4])
