@@ -233,18 +233,24 @@ def test_a_narrow_root_never_waits_longer_than_the_root_patience(
     assert res.stats["iterations"] == 100
 
 
+def _spy_on(monkeypatch: pytest.MonkeyPatch, name: str) -> list[object]:
+    """The calls of the improved planner's ``name`` (still called through) from now on."""
+    calls: list[object] = []
+    real = getattr(improved_planner, name)
+
+    def spy(*args: object, **kwargs: object) -> object:
+        calls.append((args, kwargs))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(improved_planner, name, spy)
+    return calls
+
+
 def test_without_the_fallback_no_tail_or_lead_runs_after_the_escalation(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """``dubins_fallback`` off: the failed escalation is the answer, nothing of the fallback."""
-    calls: list[object] = []
-    real = improved_planner.dubins_fallback
-
-    def spy(*args: object, **kwargs: object) -> object:
-        calls.append(kwargs)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(improved_planner, "dubins_fallback", spy)
+    calls = _spy_on(monkeypatch, "dubins_fallback")
     monkeypatch.setattr(improved_planner, "escalate", lambda failed, *a, **k: failed)
     res = _solve(_open_map(Pose(50.0, 50.1, math.pi / 2)), reverse=True,
                  disable=("dubins_fallback",))  # fmt: skip
@@ -256,14 +262,7 @@ def test_without_the_escalation_a_reversing_query_gets_no_hybrid_a_star(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """The escalation is the planner's only way to reverse; switched off, it never runs."""
-    calls: list[object] = []
-    real = improved_planner.escalate
-
-    def spy(*args: object, **kwargs: object) -> PlanResult:
-        calls.append(args)
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(improved_planner, "escalate", spy)
+    calls = _spy_on(monkeypatch, "escalate")
     m = _open_map(Pose(50.0, 50.1, math.pi / 2))
     res = _solve(m, reverse=True, disable=("escalation",))
     assert calls == [] and res.success
