@@ -162,7 +162,17 @@ class Map:
         return self.bounds[3] - self.bounds[1]
 
     def with_query(self, start: Pose | None = None, goal: Pose | None = None) -> Map:
-        """A copy with another start and/or goal (validated)."""
+        """A copy with another start and/or goal (validated).
+
+        Parameters
+        ----------
+        start, goal : Pose, optional
+            The new poses; None keeps the map's own.
+
+        Returns
+        -------
+        Map
+        """
         return dataclasses.replace(
             self,
             start=start if start is not None else self.start,

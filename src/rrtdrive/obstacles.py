@@ -59,7 +59,17 @@ class Obstacle:
         return _obstacle_polygon(self)
 
     def grown(self, amount: float) -> Obstacle:
-        """This rectangle with ``amount`` added to its length and to its width."""
+        """This rectangle with ``amount`` added to its length and to its width.
+
+        Parameters
+        ----------
+        amount : float
+            Metres added to each side length (half of it on each face).
+
+        Returns
+        -------
+        Obstacle
+        """
         return Obstacle(self.center, (self.size[0] + amount, self.size[1] + amount), self.yaw)
 
     def to_json(self) -> dict[str, object]:

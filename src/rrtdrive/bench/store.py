@@ -204,6 +204,11 @@ class ResultStore:
     def append(self, row: Mapping[str, Any]) -> None:
         """Append one row as a JSON line; flushed and fsynced before returning.
 
+        Parameters
+        ----------
+        row : mapping
+            A result row with its ``config_hash`` and integer ``seed`` (its key).
+
         Raises
         ------
         ValueError
@@ -225,6 +230,11 @@ class ResultStore:
 
     def drop(self, keys: Iterable[tuple[str, int]]) -> int:
         """Remove the rows of ``keys`` (rewrite through a temporary file and a rename).
+
+        Parameters
+        ----------
+        keys : iterable of (str, int)
+            ``(config_hash, seed)`` pairs; keys not stored are ignored.
 
         Returns
         -------

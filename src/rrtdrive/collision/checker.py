@@ -7,7 +7,6 @@ lives on its :class:`~rrtdrive.collision.grid.GridCache`.
 
 from __future__ import annotations
 
-import array
 import dataclasses
 import math
 import time
@@ -21,6 +20,7 @@ from rrtdrive.collision.config import CheckerConfig
 from rrtdrive.collision.distance import distance_field
 from rrtdrive.collision.exact import RectangleTest
 from rrtdrive.collision.grid import GridCache, grid_origin, grid_resolution, grid_shape, rasterise
+from rrtdrive.collision.lookup import ClearanceLookup
 from rrtdrive.geometry import densify
 from rrtdrive.maps import Map, Obstacle
 from rrtdrive.types import InputWarning, VehicleParams
@@ -30,10 +30,11 @@ __all__ = ["CollisionChecker"]
 
 
 
-class CollisionChecker:
+class CollisionChecker(ClearanceLookup):
     """Collision queries against one map's obstacles and bounds for one car.
 
-    Implements :class:`rrtdrive.checking.Checker`. The grid-derived data lives on
+    Implements :class:`rrtdrive.checking.Checker`. The clearance look-ups are
+    :class:`~rrtdrive.collision.lookup.ClearanceLookup`'s. The grid-derived data lives on
     :attr:`grid` (a :class:`~rrtdrive.collision.grid.GridCache`), built lazily and
     timed in :attr:`setup_time_s`.
 
@@ -93,12 +94,9 @@ class CollisionChecker:
             )
             config = dataclasses.replace(config, resolution=h)
         self.config = config
-        self._origin = grid_origin(self.bounds, h, self.config.pad)
+        origin = grid_origin(self.bounds, h, self.config.pad)
         nx, ny = grid_shape(self.bounds, h, self.config.pad)
-        self._shape = (nx, ny)
-        self._inv_h = 1.0 / h
-        self._ox, self._oy = float(self._origin[0]), float(self._origin[1])
-        occupied = rasterise(self.bounds, self.obstacles, self._origin, h, nx, ny)
+        occupied = rasterise(self.bounds, self.obstacles, origin, h, nx, ny)
         # Distance from each cell centre to the nearest occupied cell centre (scaled
         # and shifted in place: big grids hold one float field, not three).
         field = distance_field(~occupied)
@@ -107,12 +105,7 @@ class CollisionChecker:
         # The point-to-centre error (h/sqrt2) plus the rasterisation error (h/sqrt2).
         self.grid_error = h * math.sqrt(2.0) + 1e-9
         field -= self.grid_error
-        self._clearance = np.ascontiguousarray(field, dtype=np.float64)
-        # A flat array of C doubles for the scalar lookups: compact in memory, so
-        # the walks along edges miss the cache far less than nested lists would.
-        self._clearance_cells = array.array("d")
-        self._clearance_cells.frombytes(memoryview(self._clearance).cast("B"))
-        self._clearance_flat = self._clearance.ravel()
+        super().__init__(field, origin, h, self.config.min_trace_step)
         self.edge_radius = vehicle.width / 2.0 + self.config.margin
         self.grid = GridCache(
             self._clearance, self._origin, h, self.grid_error, vehicle, self.bounds,
@@ -125,9 +118,6 @@ class CollisionChecker:
         self._cap_inset = math.sqrt(self.edge_radius**2 - (vehicle.width / 2.0) ** 2)
         self._cap_back = vehicle.rear_overhang - self._cap_inset
         self._cap_front = vehicle.front_extent - self._cap_inset
-        # segment_clear's constants, once: the trace step and the box a cell inside the grid.
-        self._min_step = self.config.min_trace_step
-        self._inner = (self._ox + h, self._oy + h, self._ox + (nx - 1) * h, self._oy + (ny - 1) * h)
         self._rectangles = RectangleTest(self.bounds, self._union, vehicle)
         self._disc_offsets, disc_radius = cover_discs(vehicle, 3)
         self._disc_offsets_list = [float(o) for o in self._disc_offsets]
@@ -143,7 +133,21 @@ class CollisionChecker:
     def for_map(
         cls, m: Map, vehicle: VehicleParams | None = None, config: CheckerConfig | None = None
     ) -> CollisionChecker:
-        """The checker for map ``m`` (its obstacles and bounds)."""
+        """The checker for map ``m`` (its obstacles and bounds).
+
+        Parameters
+        ----------
+        m : Map
+            The map.
+        vehicle : VehicleParams, optional
+            The car; the map's own by default.
+        config : CheckerConfig, optional
+            Grid resolution and margins; ``CheckerConfig()`` by default.
+
+        Returns
+        -------
+        CollisionChecker
+        """
         return cls(m.bounds, m.obstacles, vehicle or m.vehicle, config)
 
     # ------------------------------------------------------------------ grid
@@ -163,156 +167,7 @@ class CollisionChecker:
         """Grid cell size in metres used (coarser than requested for a very big map)."""
         return self.config.resolution
 
-    def clearance(self, x: float, y: float) -> float:
-        """A lower bound of the distance from ``(x, y)`` to the nearest obstacle or the outside.
-
-        Negative or ``-inf`` means possibly inside an obstacle. Scalar and fast
-        (about a microsecond); use :meth:`clearances` for many points.
-        """
-        gx = (x - self._ox) * self._inv_h
-        gy = (y - self._oy) * self._inv_h
-        nx, ny = self._shape
-        # Decided on the floats (for g >= 0, int(g) < n exactly when g < n), so an
-        # infinite or NaN coordinate is outside too instead of failing int().
-        if not (0.0 <= gx < nx and 0.0 <= gy < ny):
-            return -math.inf
-        return self._clearance_cells[int(gx) * ny + int(gy)]
-
-    def clearances(self, points: np.ndarray) -> np.ndarray:
-        """Vectorised :meth:`clearance` for points of shape ``(N, 2)``."""
-        p = np.asarray(points, dtype=float).reshape(-1, 2)
-        g = (p - self._origin) * self._inv_h
-        # Truncation equals floor where g >= 0, the only cells looked up.
-        with np.errstate(invalid="ignore"):
-            idx = g.astype(np.int64)
-        # On the floats, as in :meth:`clearance`: beyond 2**63 cells the cast wraps round.
-        ok = (
-            (g[:, 0] >= 0.0)
-            & (g[:, 1] >= 0.0)
-            & (g[:, 0] < self._shape[0])
-            & (g[:, 1] < self._shape[1])
-        )
-        flat = idx[:, 0] * self._shape[1] + idx[:, 1]
-        if ok.all():
-            return self._clearance_flat[flat]
-        out = np.full(len(p), -np.inf)
-        out[ok] = self._clearance_flat[flat[ok]]
-        return out
-
-    def clearances_xy(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """:meth:`clearances` for coordinates as two arrays of one shape (the same values).
-
-        The look-up of the hot loops: when every point lies inside the grid (the
-        usual case) it takes a few array operations, else it is :meth:`clearances`.
-        """
-        gx = (x - self._ox) * self._inv_h
-        gy = (y - self._oy) * self._inv_h
-        nx, ny = self._shape
-        # For g >= 0, int(g) < n exactly when g < n: the float bounds decide alone.
-        lo, hi = np.minimum.reduce, np.maximum.reduce  # the bare ufuncs: no method overhead
-        if (
-            gx.size
-            and lo(gx, axis=None) >= 0.0
-            and lo(gy, axis=None) >= 0.0
-            and hi(gx, axis=None) < nx
-            and hi(gy, axis=None) < ny
-        ):
-            return self._clearance_flat[gx.astype(np.int64) * ny + gy.astype(np.int64)]
-        pts = np.stack([np.asarray(x, dtype=float), np.asarray(y, dtype=float)], axis=-1)
-        return self.clearances(pts.reshape(-1, 2)).reshape(np.shape(x))
-
-    def axis_clearances(self, rows: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-        """:meth:`clearances` at points on the heading axis of poses, ``(K, N)``.
-
-        ``rows`` ``(3, N)`` are the poses' x, y and yaw; point ``k`` of a pose is
-        ``(cos(yaw) offsets[k] + x, sin(yaw) offsets[k] + y)``, evaluated in that
-        order (the points of the disc screens: the same floats, the same values).
-        The screens' look-up: all points in a dozen array operations.
-        """
-        n = rows.shape[1]
-        if not n:
-            return np.zeros((len(offsets), 0))
-        # Laid out (x or y, offset, pose): every operation runs over contiguous rows.
-        trig = np.empty((2, 1, n))
-        np.cos(rows[2], out=trig[0, 0])
-        np.sin(rows[2], out=trig[1, 0])
-        world = trig * offsets[:, None]
-        world += rows[:2, None, :]
-        g = world - self._origin[:, None, None]
-        g *= self._inv_h
-        nx, ny = self._shape
-        # For g >= 0, int(g) < n exactly when g < n: the float bounds decide alone.
-        hi = np.maximum.reduce(g, axis=(1, 2)).tolist()
-        if np.minimum.reduce(g, axis=None) >= 0.0 and hi[0] < nx and hi[1] < ny:
-            idx = g.astype(np.int64)
-            flat = idx[0] * ny
-            flat += idx[1]
-            return self._clearance_flat.take(flat)
-        # Some point outside the grid (or not finite): clearances() reads those as -inf.
-        points = np.stack([world[0].ravel(), world[1].ravel()], axis=1)
-        return self.clearances(points).reshape(len(offsets), n)
-
     # ------------------------------------------------------------------ fast tests
-
-    def segment_clear(self, a: Sequence[float], b: Sequence[float], radius: float) -> bool:
-        """True when the capsule of ``radius`` around segment a-b is provably clear.
-
-        Sphere tracing on the clearance field: where the field says ``d`` of room
-        beyond ``radius``, the next ``d`` metres of the segment are clear too (the
-        distance is 1-Lipschitz), so the walk takes steps of ``d``. The far end is
-        looked at first, which rejects most colliding edges with one lookup.
-        """
-        ax, ay = float(a[0]), float(a[1])
-        dx, dy = float(b[0]) - ax, float(b[1]) - ay
-        length = math.hypot(dx, dy)
-        if length < 1e-12:
-            return self.clearance(ax, ay) - radius >= 0.0
-        min_step = self._min_step
-        ux, uy = dx / length, dy / length
-        # clearance() inlined (the same arithmetic): this loop is the planners' hot spot.
-        ox, oy, inv_h = self._ox, self._oy, self._inv_h
-        nx, ny = self._shape
-        grid = self._clearance_cells
-        # The far end first (the very point the walk ends on, so the answer is the
-        # same): most colliding tree extensions end inside an obstacle.
-        x, y = ax + ux * length, ay + uy * length
-        if x < ox or y < oy:
-            return False
-        i = int((x - ox) * inv_h)
-        j = int((y - oy) * inv_h)
-        if i >= nx or j >= ny or grid[i * ny + j] - radius < min_step:
-            return False
-        t = 0.0
-        # Both ends at least a cell inside the grid: so is every point between
-        # (rounding moves them by far less), and the walk needs no bounds checks.
-        lo_x, lo_y, hi_x, hi_y = self._inner
-        if lo_x <= ax <= hi_x and lo_x <= x <= hi_x and lo_y <= ay <= hi_y and lo_y <= y <= hi_y:
-            while True:
-                room = (
-                    grid[int((ax + ux * t - ox) * inv_h) * ny + int((ay + uy * t - oy) * inv_h)]
-                    - radius
-                )
-                if room < min_step:
-                    return False
-                if t >= length:
-                    return True
-                t += room
-                if t > length:
-                    t = length
-        while True:
-            x, y = ax + ux * t, ay + uy * t
-            if x < ox or y < oy:
-                return False
-            i = int((x - ox) * inv_h)
-            j = int((y - oy) * inv_h)
-            if i >= nx or j >= ny:
-                return False
-            room = grid[i * ny + j] - radius
-            if room < min_step:
-                return False
-            if t >= length:
-                return True
-            t = min(t + room, length)
 
     def edge_free(self, a: Sequence[float] | np.ndarray, b: Sequence[float] | np.ndarray) -> bool:
         """Fast conservative test of a tree edge a->b driven with heading along the edge.
@@ -324,6 +179,17 @@ class CollisionChecker:
         (without it the caps would reach ``r`` past each bumper).
         A degenerate edge (a == b) is checked as the body at ``a`` with any heading,
         i.e. the disc that contains every orientation.
+
+        Parameters
+        ----------
+        a, b : sequence of float
+            The edge's ends, rear-axle positions ``(x, y)``.
+
+        Returns
+        -------
+        bool
+            True is a proof that the swept body keeps ``config.margin`` clear;
+            False proves nothing.
         """
         ax, ay = float(a[0]), float(a[1])
         dx, dy = float(b[0]) - ax, float(b[1]) - ay
@@ -349,11 +215,34 @@ class CollisionChecker:
 
         This is a cheap necessary condition for sampling (the inscribed disc of
         the body around the rear axle must be clear); it is not a body test.
+
+        Parameters
+        ----------
+        x, y : float
+            The rear axle's position.
+
+        Returns
+        -------
+        bool
+            False is a proof that no heading fits; True proves nothing.
         """
         return self.clearance(x, y) >= min(self.vehicle.rear_overhang, self.vehicle.width / 2)
 
     def pose_free_fast(self, x: float, y: float, yaw: float, clearance: float = 0.0) -> bool:
-        """Scalar :meth:`poses_free_fast` for one pose (no numpy overhead, about 2 µs)."""
+        """Scalar :meth:`poses_free_fast` for one pose (no numpy overhead, about 2 µs).
+
+        Parameters
+        ----------
+        x, y, yaw : float
+            The rear-axle pose.
+        clearance : float
+            Extra distance the body must keep from obstacles and bounds.
+
+        Returns
+        -------
+        bool
+            True means provably clear, False means maybe not.
+        """
         c, s = math.cos(yaw), math.sin(yaw)
         room, need = self.clearance, self.disc_radius + clearance
         for off in self._disc_offsets_list:
@@ -429,6 +318,18 @@ class CollisionChecker:
         screen is False by assumption, so it is skipped): the six-disc screen, then
         the exact shapely test. A caller that ran the three-disc screen with the
         same ``clearance`` (e.g. the Hybrid A* body test) saves repeating it.
+
+        Parameters
+        ----------
+        poses : numpy.ndarray
+            ``(N, 3)`` rear-axle poses.
+        clearance : float
+            Distance the body must keep from every obstacle and from the bounds.
+
+        Returns
+        -------
+        numpy.ndarray
+            Boolean ``(N,)``, as :meth:`poses_free`.
         """
         p = np.asarray(poses, dtype=float).reshape(-1, 3)
         free = np.zeros(len(p), dtype=bool)
@@ -457,6 +358,18 @@ class CollisionChecker:
         With ``clearance`` > 0 the body must keep that distance from obstacles and
         bounds, as in :meth:`poses_free` (the same answer, without numpy's per-call
         overhead: an outside planner's validity checker calls it once per state).
+
+        Parameters
+        ----------
+        pose : sequence of float
+            The rear-axle pose ``(x, y, yaw, ...)``; further entries are ignored.
+        clearance : float
+            Distance the body must keep from every obstacle and from the bounds.
+
+        Returns
+        -------
+        bool
+            True when the body rectangle keeps ``clearance`` and lies inside the bounds.
         """
         x, y, yaw = float(pose[0]), float(pose[1]), float(pose[2])
         return self.pose_free_fast(x, y, yaw, clearance) or bool(
@@ -467,6 +380,16 @@ class CollisionChecker:
         """Exact distance from the body at ``pose`` to the nearest obstacle or the bounds.
 
         Zero when the body touches or overlaps an obstacle or leaves the bounds.
+
+        Parameters
+        ----------
+        pose : sequence of float
+            The rear-axle pose ``(x, y, yaw, ...)``.
+
+        Returns
+        -------
+        float
+            The distance in metres (shapely's, exact up to floating point).
         """
         rect = shapely.Polygon(footprint_corners(np.asarray(pose, dtype=float)[:3], self.vehicle))
         if not self._inside.contains(rect):
@@ -486,6 +409,18 @@ class CollisionChecker:
         The same answer as :meth:`poses_free` (whose screens only save this work);
         for a handful of poses that its screens would not clear anyway it is the
         cheaper call.
+
+        Parameters
+        ----------
+        poses : numpy.ndarray
+            ``(N, 3)`` rear-axle poses.
+        clearance : float
+            Distance the body must keep from every obstacle and from the bounds.
+
+        Returns
+        -------
+        numpy.ndarray
+            Boolean ``(N,)``, as :meth:`poses_free`.
         """
         return self._exact(poses, clearance)
 
@@ -563,6 +498,15 @@ class CollisionChecker:
 
         Conservative in the safe direction: True is a proof (by
         :meth:`reachable_components`); False proves nothing.
+
+        Parameters
+        ----------
+        a, b : sequence of float
+            Rear-axle positions ``(x, y)`` (further entries are ignored).
+
+        Returns
+        -------
+        bool
         """
         la = self.grid.label_at(a)
         lb = self.grid.label_at(b)
@@ -574,6 +518,17 @@ class CollisionChecker:
         """Flat indices of the cells where the rear axle can stand, connected to ``start``.
 
         See :meth:`rrtdrive.collision.grid.GridCache.free_cells` (cached per component).
+
+        Parameters
+        ----------
+        start : sequence of float
+            A rear-axle position ``(x, y)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Flat indices into :attr:`clearance_grid` (empty when ``start`` is in no
+            kept cell).
         """
         return self.grid.free_cells(start)
 
@@ -581,6 +536,18 @@ class CollisionChecker:
         """``(K, 2)`` centres of narrow-passage cells reachable from ``start``.
 
         See :meth:`rrtdrive.collision.grid.GridCache.passage_cells` (cached).
+
+        Parameters
+        ----------
+        start : sequence of float
+            A rear-axle position ``(x, y)``.
+        width : float
+            How much wider than the edge test a passage may be, in metres.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(K, 2)`` cell centres.
         """
         return self.grid.passage_cells(start, width)
 

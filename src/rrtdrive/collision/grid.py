@@ -309,6 +309,18 @@ class GridCache:
 
         ``build()`` runs on the first call with ``key`` and is timed into
         :attr:`setup_time_s`; later calls return the same object.
+
+        Parameters
+        ----------
+        key : hashable
+            Names the data (e.g. a planner's name and the settings it depends on).
+        build : callable
+            Makes it, with no arguments.
+
+        Returns
+        -------
+        object
+            What ``build`` returned, the first time or since.
         """
         if key not in self._derived:
             t0 = time.perf_counter()
@@ -341,7 +353,17 @@ class GridCache:
         return self._labels
 
     def label_at(self, p: Sequence[float]) -> int:
-        """Component label of the cell holding point ``p`` (0: none, or outside the grid)."""
+        """Component label of the cell holding point ``p`` (0: none, or outside the grid).
+
+        Parameters
+        ----------
+        p : sequence of float
+            A position ``(x, y)``.
+
+        Returns
+        -------
+        int
+        """
         i = int(math.floor((p[0] - self.origin[0]) * self._inv_h))
         j = int(math.floor((p[1] - self.origin[1]) * self._inv_h))
         if not (0 <= i < self.shape[0] and 0 <= j < self.shape[1]):

@@ -184,6 +184,11 @@ def vehicle_collisions(episode: Episode) -> list[tuple[int, int, str, bool]]:
     front bumper touches it (a front collision, at fault); else lateral, at fault
     when the ego is in more than one lane or off the road.
 
+    Parameters
+    ----------
+    episode : Episode
+        A finished episode with its log of the other vehicles.
+
     Returns
     -------
     list of (int, int, str, bool)

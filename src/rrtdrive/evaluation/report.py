@@ -107,6 +107,12 @@ class EpisodeReport:
 
     ``None`` marks a metric that does not apply (for example tracking errors of an
     episode whose planning failed).
+
+    Attributes
+    ----------
+    scenario, planner, controller, seed, status, message, ...
+        One field per metric, named and defined in ``docs/metrics.md`` (units in
+        the names: ``_m``, ``_s``, ``_rad``); the JSON report has the same keys.
     """
 
     scenario: str

@@ -134,6 +134,15 @@ def min_vehicle_distance(episode: Episode) -> float | None:
     """Smallest distance between the ego's body and another vehicle's over the episode (m).
 
     Exact (shapely) on the logged poses; 0 when they overlap; ``None`` without other vehicles.
+
+    Parameters
+    ----------
+    episode : Episode
+        A finished episode.
+
+    Returns
+    -------
+    float or None
     """
     log = episode.log
     others, states = log.others, log.states
@@ -167,6 +176,15 @@ def progress(episode: Episode) -> float | None:
     On a path with gear changes, travelled length over all its segments, each pose
     projected on the segment being driven. ``None`` when the path has fewer than
     two samples.
+
+    Parameters
+    ----------
+    episode : Episode
+        A finished episode.
+
+    Returns
+    -------
+    float or None
     """
     path = episode.path
     if len(path) < 2:

@@ -43,6 +43,17 @@ def make_planner(name: str, **options: object) -> Planner:
     (``"Infinity"``, ``"-Infinity"``, ``"NaN"``: :func:`rrtdrive.json_safe.options_json`),
     so ``make_planner(doc["planner"], **doc["planner_options"])`` rebuilds a plan's planner.
 
+    Parameters
+    ----------
+    name : str
+        A registered name (``rrtdrive plan --help`` lists them).
+    **options
+        The planner's settings by field name (its config's fields).
+
+    Returns
+    -------
+    Planner
+
     Raises
     ------
     InputError
@@ -72,7 +83,16 @@ def make_planner(name: str, **options: object) -> Planner:
 def unknown_planner(field: str, name: object) -> InputError:
     """The error for a planner name not registered: the closest name, then all of them.
 
-    ``field`` names the option or flag that gave it (the message's first word).
+    Parameters
+    ----------
+    field : str
+        The option or flag that gave the name (the message's first word).
+    name : object
+        What the user gave.
+
+    Returns
+    -------
+    InputError
 
     Examples
     --------
@@ -87,6 +107,15 @@ def unknown_planner(field: str, name: object) -> InputError:
 
 def reverses(name: str) -> bool:
     """Whether the registered planner ``name`` plans gear changes when a problem allows them.
+
+    Parameters
+    ----------
+    name : str
+        A planner name (False for one not registered).
+
+    Returns
+    -------
+    bool
 
     Examples
     --------

@@ -170,7 +170,22 @@ class Planner(Protocol):
     def solve(
         self, problem: PlanningProblem, rng: np.random.Generator, budget: Budget
     ) -> PlanResult:
-        """Plan from ``problem.start`` to ``problem.goal`` within ``budget``; never return None."""
+        """Plan from ``problem.start`` to ``problem.goal`` within ``budget``; never return None.
+
+        Parameters
+        ----------
+        problem : PlanningProblem
+            The map's checker, the start and goal poses, the car and whether it may reverse.
+        rng : numpy.random.Generator
+            The only source of randomness (a seed decides the result).
+        budget : Budget
+            Iterations or expansions decide; the wall-clock limit is a safety cap.
+
+        Returns
+        -------
+        PlanResult
+            Its status says how it ended; a path only when solved.
+        """
         ...
 
 
@@ -274,7 +289,22 @@ class GrowingTree:
         return self.size
 
     def add(self, point: np.ndarray, parent: int, cost: float | None = None) -> int:
-        """Append ``point`` with ``parent``; return its index."""
+        """Append ``point`` with ``parent``; return its index.
+
+        Parameters
+        ----------
+        point : numpy.ndarray
+            The node's position ``(x, y)``.
+        parent : int
+            The parent's index.
+        cost : float, optional
+            Path length from the root (RRT*'s cost); by default the parent's
+            plus the straight distance to it.
+
+        Returns
+        -------
+        int
+        """
         if self.size == len(self.nodes):
             self.nodes = np.concatenate([self.nodes, np.empty_like(self.nodes)])
             self.parents = np.concatenate([self.parents, np.empty_like(self.parents)])
@@ -290,16 +320,50 @@ class GrowingTree:
         return i
 
     def sq_dists(self, point: np.ndarray) -> np.ndarray:
-        """Squared distances from every node to ``point``."""
+        """Squared distances from every node to ``point``.
+
+        Parameters
+        ----------
+        point : numpy.ndarray
+            ``(x, y)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(size,)`` in square metres, in node order.
+        """
         d = self.nodes[: self.size] - point
         return np.einsum("ij,ij->i", d, d)
 
     def nearest(self, point: np.ndarray) -> int:
-        """Index of the node nearest to ``point``."""
+        """Index of the node nearest to ``point`` (the first of equals).
+
+        Parameters
+        ----------
+        point : numpy.ndarray
+            ``(x, y)``.
+
+        Returns
+        -------
+        int
+        """
         return int(np.argmin(self.sq_dists(point)))
 
     def near(self, point: np.ndarray, radius: float) -> np.ndarray:
-        """Indices of the nodes within ``radius`` of ``point``."""
+        """Indices of the nodes within ``radius`` of ``point``.
+
+        Parameters
+        ----------
+        point : numpy.ndarray
+            ``(x, y)``.
+        radius : float
+            Metres; a node exactly at ``radius`` counts.
+
+        Returns
+        -------
+        numpy.ndarray
+            Ascending node indices.
+        """
         return np.flatnonzero(self.sq_dists(point) <= radius * radius)
 
     def parent_positions(self) -> np.ndarray:
@@ -311,7 +375,18 @@ class GrowingTree:
         return out
 
     def branch(self, i: int) -> np.ndarray:
-        """Positions from node ``i`` back to the root, ``(K, 2)``."""
+        """Positions from node ``i`` back to the root, ``(K, 2)``.
+
+        Parameters
+        ----------
+        i : int
+            The node to start from.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(K, 2)``: node ``i`` first, the root last.
+        """
         out = []
         while i >= 0:
             out.append(self.nodes[i])
@@ -420,6 +495,18 @@ def polyline_path(points: np.ndarray, spacing: float = 0.25) -> Path:
 
     Used for the baselines' raw tree paths: they have corners, and the curvature
     column reports them (the circle through each corner and its neighbours).
+
+    Parameters
+    ----------
+    points : numpy.ndarray
+        ``(N, 2)`` vertices.
+    spacing : float
+        Largest distance between samples along each segment (m).
+
+    Returns
+    -------
+    Path
+        Forward gear throughout.
     """
     p = np.asarray(points, dtype=float)
     if len(p) < 2:
