@@ -57,6 +57,16 @@ def u_turn_width(vehicle: VehicleParams) -> float:
     ``hypot(R + W/2, rear_overhang)`` to the other side of it. Their sum is
     ``2 R`` plus the body's swept width, overhangs included.
 
+    Parameters
+    ----------
+    vehicle : VehicleParams
+        The car (turning radius ``R``, width ``W``, overhangs).
+
+    Returns
+    -------
+    float
+        Metres.
+
     Examples
     --------
     >>> round(u_turn_width(VehicleParams()), 2)
@@ -212,6 +222,22 @@ def nearest_obstacle(
     """The obstacle nearest to ``body`` and its distance; index -1 is the map's edge.
 
     With ``checker`` (the map's), its cached obstacle polygons are used.
+
+    Parameters
+    ----------
+    m : Map
+        The map (its obstacles and bounds).
+    body : shapely.Geometry
+        The shape to measure from (a car's body rectangle).
+    checker : CollisionChecker, optional
+        The map's checker (``None``: the polygons are made from ``m``).
+
+    Returns
+    -------
+    index : int
+        The obstacle's index in ``m.obstacles``, -1 for the map's edge.
+    distance : float
+        Metres (0 when they touch or overlap).
     """
     edge = shapely.box(*m.bounds).exterior.distance(body)
     if not m.obstacles:
@@ -242,6 +268,24 @@ def street_width(
     obstacle or edge each side, within 45 deg of the normal to the heading; the
     narrowest is the street's width (a car at 0.5 rad to a 10 m street read 11.4 m
     along its own normal). With ``checker``, the map's cached outlines are used.
+
+    Parameters
+    ----------
+    m : Map
+        The map (its obstacles and bounds).
+    point : tuple of float
+        ``(x, y)`` in metres.
+    yaw : float
+        The heading, radians.
+    reach : float
+        Longest ray each side, metres (a side that meets nothing counts this much).
+    checker : CollisionChecker, optional
+        The map's checker (``None``: the outlines are made from ``m``).
+
+    Returns
+    -------
+    float
+        Metres.
     """
     if checker is not None:
         walls = map_shapes(checker).walls
@@ -308,12 +352,34 @@ def cell_centres(checker: CollisionChecker, i: Any, j: Any) -> tuple[Any, Any]:
 
 
 def edge_keep(checker: CollisionChecker) -> float:
-    """The room beside the body the swept edge test needs: margin, grid error, trace step."""
+    """The room beside the body the swept edge test needs: margin, grid error, trace step.
+
+    Parameters
+    ----------
+    checker : CollisionChecker
+        The map's checker (its settings and grid).
+
+    Returns
+    -------
+    float
+        Metres.
+    """
     return checker.config.margin + checker.grid_error + checker.config.min_trace_step
 
 
 def end_keep(checker: CollisionChecker) -> float:
-    """The room beyond a bumper the swept edge test needs: its round end, grid error, step."""
+    """The room beyond a bumper the swept edge test needs: its round end, grid error, step.
+
+    Parameters
+    ----------
+    checker : CollisionChecker
+        The map's checker (its edge radius, car, settings and grid).
+
+    Returns
+    -------
+    float
+        Metres.
+    """
     r = checker.edge_radius
     inset = math.sqrt(max(r * r - (checker.vehicle.width / 2.0) ** 2, 0.0))
     return r - inset + checker.grid_error + checker.config.min_trace_step

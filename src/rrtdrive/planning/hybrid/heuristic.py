@@ -108,6 +108,16 @@ class FreeCellGraph:
         ``inf`` where unreachable; one Dijkstra per node, the last
         :data:`FIELD_CACHE` of them kept (read-only), so queries to one goal, or
         from one start, share it.
+
+        Parameters
+        ----------
+        node : int
+            The goal cell's node number (see :attr:`index`).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(NX, NY)`` metres, read-only.
         """
         return self._entry(node)[0]
 
@@ -116,6 +126,16 @@ class FreeCellGraph:
 
         Kept with the field: every query to one goal reads the same copy (making it
         cost a query about 20 microseconds).
+
+        Parameters
+        ----------
+        node : int
+            The goal cell's node number.
+
+        Returns
+        -------
+        array.array
+            ``NX * NY`` doubles, cell ``(i, j)`` at ``i * NY + j``.
         """
         entry = self._entry(node)
         if entry[1] is None:
@@ -141,7 +161,17 @@ class FreeCellGraph:
         return entry
 
     def cell(self, x: float, y: float) -> tuple[int, int]:
-        """The coarse cell ``(i, j)`` holding ``(x, y)`` (possibly outside the grid)."""
+        """The coarse cell ``(i, j)`` holding ``(x, y)`` (possibly outside the grid).
+
+        Parameters
+        ----------
+        x, y : float
+            Position in metres.
+
+        Returns
+        -------
+        tuple of int
+        """
         return (
             int(math.floor((x - self.origin[0]) / self.resolution)),
             int(math.floor((y - self.origin[1]) / self.resolution)),
@@ -195,7 +225,18 @@ class HolonomicField:
         return out
 
     def value(self, x: float, y: float) -> float:
-        """The distance at one position (scalar :meth:`at`)."""
+        """The distance at one position (scalar :meth:`at`).
+
+        Parameters
+        ----------
+        x, y : float
+            Position in metres.
+
+        Returns
+        -------
+        float
+            Metres; ``inf`` outside the grid or unreachable.
+        """
         g = self.grid
         i = math.floor((x - g.origin[0]) / g.resolution)
         j = math.floor((y - g.origin[1]) / g.resolution)
@@ -205,7 +246,18 @@ class HolonomicField:
         return math.inf
 
     def at(self, xy: np.ndarray) -> np.ndarray:
-        """Distances at positions ``(N, 2)`` (``inf`` outside the grid or unreachable)."""
+        """Distances at positions ``(N, 2)`` (``inf`` outside the grid or unreachable).
+
+        Parameters
+        ----------
+        xy : numpy.ndarray
+            ``(N, 2)`` positions in metres.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(N,)`` metres.
+        """
         g = self.grid
         ij = np.floor((np.asarray(xy, dtype=float) - g.origin) / g.resolution).astype(np.int64)
         nx, ny = self.dist.shape
@@ -240,6 +292,20 @@ def dubins_lengths(poses: np.ndarray, goal: Pose, radius: float) -> np.ndarray:
 
     The six words of Shkel & Lumelsky (2001), as in :mod:`rrtdrive.planning.dubins`,
     evaluated for many start poses at once.
+
+    Parameters
+    ----------
+    poses : numpy.ndarray
+        ``(N, 3)`` rows x, y, yaw (metres, radians).
+    goal : Pose
+        The goal pose.
+    radius : float
+        Turning radius, metres.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N,)`` lengths in metres.
 
     Examples
     --------
@@ -402,7 +468,18 @@ class Heuristic:
     scalar_nonholonomic: Callable[[float, float, float], float] | None = None
 
     def at(self, x: float, y: float, yaw: float) -> float:
-        """The estimate for one pose (the search's hot path: no numpy call)."""
+        """The estimate for one pose (the search's hot path: no numpy call).
+
+        Parameters
+        ----------
+        x, y, yaw : float
+            Rear-axle pose (metres, radians).
+
+        Returns
+        -------
+        float
+            Metres (``inf``: the goal cannot be reached).
+        """
         h = self.holonomic.value(x, y)
         if h == math.inf:
             return h

@@ -34,14 +34,33 @@ __all__ = ["GearSegment", "gear_segments", "BuiltPath", "Ramps", "SegmentMemo", 
 
 @dataclass(frozen=True, eq=False)
 class GearSegment:
-    """The rows ``[x, y, yaw, kappa]`` of one gear between two stops (or the ends)."""
+    """The rows ``[x, y, yaw, kappa]`` of one gear between two stops (or the ends).
+
+    Attributes
+    ----------
+    gear : int
+        +1 forward, -1 reverse.
+    rows : numpy.ndarray
+        ``(N, 4)`` rows ``x, y, yaw, kappa`` (metres, radians, 1/m).
+    """
 
     gear: int
     rows: np.ndarray
 
 
 def gear_segments(pieces: Sequence[Piece]) -> list[GearSegment]:
-    """Consecutive pieces of one gear joined into segments (junction rows not repeated)."""
+    """Consecutive pieces of one gear joined into segments (junction rows not repeated).
+
+    Parameters
+    ----------
+    pieces : sequence of Piece
+        The path's pieces in driving order.
+
+    Returns
+    -------
+    list of GearSegment
+        One per gear between cusps, in order.
+    """
     out: list[GearSegment] = []
     for p in pieces:
         if out and out[-1].gear == p.gear:
@@ -87,6 +106,16 @@ class BuiltPath:
         Exact arcs jump in curvature where two primitives meet, so their value is
         ``inf`` unless the segment steers constantly. The largest of the segments'
         values measured while building is the same number (the same intervals).
+
+        Parameters
+        ----------
+        wheelbase : float
+            The car's wheelbase in metres (``delta = atan(wheelbase * kappa)``).
+
+        Returns
+        -------
+        float
+            Radians per metre.
         """
         if self.measured_sharpness is not None and self.measured_sharpness[0] == wheelbase:
             return self.measured_sharpness[1]
@@ -248,6 +277,19 @@ class Ramps:
     ``ramp_share`` of ``sharpness`` goes to the ramps (the rows measure a little
     more than the ramps' own rate); every segment is checked against ``sharpness``.
     ``chunks``: a segment whose whole fit fails is fitted a stretch at a time.
+
+    Attributes
+    ----------
+    sharpness : float
+        Largest ``|d delta / ds|`` a smoothed segment may have, rad/m.
+    wheelbase : float
+        The car's wheelbase, metres.
+    kappa_max : float
+        The car's largest curvature, 1/m.
+    ramp_share : float
+        Share of ``sharpness`` the ramps are built with.
+    chunks : bool
+        Fit a segment a stretch at a time when its whole fit fails.
     """
 
     sharpness: float

@@ -30,7 +30,21 @@ NAME = "hybrid-a-star"
 
 
 def answer_stats(answer: HybridAnswer, wheelbase: float) -> dict[str, float]:
-    """The search counters of an answer, for :attr:`PlanResult.stats`."""
+    """The search counters of an answer, for :attr:`PlanResult.stats`.
+
+    Parameters
+    ----------
+    answer : HybridAnswer
+        The query's answer.
+    wheelbase : float
+        The car's wheelbase in metres (for the path's ``max_sharpness``).
+
+    Returns
+    -------
+    dict of str to float
+        Counters and flags (1.0 / 0.0); the path's gear segments, cusps and
+        sharpness when there is one.
+    """
     o = answer.outcome
     proof = answer.path is None and is_proof(o)
     stats = {
@@ -128,6 +142,20 @@ class HybridAStar:
 
         The search is deterministic: ``rng`` is not used, ``budget.max_iterations``
         bounds the expansions and ``budget.max_time_s`` is only a safety cap.
+
+        Parameters
+        ----------
+        problem : PlanningProblem
+            The map, checker and query; its ``reverse`` allows gear changes unless
+            the planner's own ``reverse`` is set.
+        rng : numpy.random.Generator
+            Unused (the search is deterministic).
+        budget : Budget
+            Expansions and wall-time cap.
+
+        Returns
+        -------
+        PlanResult
         """
         reverse = self.reverse
         if reverse is None:
@@ -157,7 +185,24 @@ def _first_configs(cfg: HybridConfig) -> tuple[HybridConfig, ...]:
 def hybrid_result(
     planner: str, answer: HybridAnswer, watch: Stopwatch, stats: dict[str, float]
 ) -> PlanResult:
-    """The :class:`PlanResult` of an answer: solved, or the failure its outcome names."""
+    """The :class:`PlanResult` of an answer: solved, or the failure its outcome names.
+
+    Parameters
+    ----------
+    planner : str
+        The planner's name in the result.
+    answer : HybridAnswer
+        The query's answer.
+    watch : Stopwatch
+        The query's clock (a capped clock gives a timeout result).
+    stats : dict of str to float
+        The result's statistics (:func:`answer_stats`).
+
+    Returns
+    -------
+    PlanResult
+        Solved, timed out, proven unreachable or no path in budget.
+    """
     o = answer.outcome
     if watch.capped:
         # The cap, met anywhere (between the ladder's searches too), decides: the searches

@@ -116,6 +116,15 @@ class PrimitiveSet:
         """The same curvatures and gears, each primitive ``factor`` times as long.
 
         Its poses keep at most the spacing of these (``length / poses per primitive``).
+
+        Parameters
+        ----------
+        factor : float
+            Ratio of the new arc length to :attr:`length`.
+
+        Returns
+        -------
+        PrimitiveSet
         """
         length = self.length * factor
         spacing = self.length / self.local.shape[1]
@@ -129,7 +138,17 @@ class PrimitiveSet:
         return len(self.kappas)
 
     def gear(self, gear: int) -> PrimitiveSet:
-        """The primitives of one gear only."""
+        """The primitives of one gear only.
+
+        Parameters
+        ----------
+        gear : int
+            +1 forward, -1 reverse.
+
+        Returns
+        -------
+        PrimitiveSet
+        """
         keep = self.gears == gear
         return PrimitiveSet(self.kappas[keep], self.gears[keep], self.local[keep], self.length)
 
@@ -145,6 +164,18 @@ class PrimitiveSet:
 
         The same floats: ``x + c lx - s ly`` as ``(lx c + x) - s ly``, and so on
         (commuted operands round alike), in seven array operations.
+
+        Parameters
+        ----------
+        x, y, yaw : float
+            Rear-axle pose the primitives start from (metres, radians).
+        keep : sequence of int, optional
+            Indices of the primitives (``None``: all).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(3, P * n)`` rows of x, y and yaw (unwrapped), primitive by primitive.
         """
         c, s = math.cos(yaw), math.sin(yaw)
         loc = self.rows if keep is None else self.rows.take(keep, axis=1)  # contiguous
@@ -160,7 +191,18 @@ class PrimitiveSet:
         return out.reshape(3, -1)
 
     def poses_from(self, x: float, y: float, yaw: float) -> np.ndarray:
-        """World poses ``(P, n, 3)`` of every primitive driven from ``(x, y, yaw)``."""
+        """World poses ``(P, n, 3)`` of every primitive driven from ``(x, y, yaw)``.
+
+        Parameters
+        ----------
+        x, y, yaw : float
+            Rear-axle start pose (metres, radians).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(P, n, 3)`` rows ``x, y, yaw`` (yaw unwrapped).
+        """
         c, s = math.cos(yaw), math.sin(yaw)
         lx, ly = self.local[..., 0], self.local[..., 1]
         out = np.empty_like(self.local)

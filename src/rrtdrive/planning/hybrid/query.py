@@ -39,17 +39,31 @@ __all__ = ["HybridAnswer", "hybrid_query"]
 class HybridAnswer:
     """What one query gave: the checked path (or ``None``), the outcome and a message.
 
-    ``trees`` are the search trees of the last resolution tried, the one from the
-    start first (the one from the goal second, when the query turned to it);
-    ``refinements`` counts the finer searches run after the first, ``stage`` names
-    the last search (``"first"``, ``"fine"`` (:attr:`HybridConfig.refinements`),
-    ``"coarse"`` (:attr:`HybridConfig.coarse_after`), ``"snug"`` (half-way from
-    ``body_clearance`` to ``min_clearance``, at the finest resolution), ``"tight"``
-    (``min_clearance``), ``"wide"`` (``wide_radius_factor``) or ``"persist"``
-    (:attr:`HybridConfig.persist`)), ``clearance`` is the
-    body clearance the last search kept (less than ``body_clearance`` after the snug
-    and tight searches), and ``note`` says, for a solved
-    query, at which resolution and why (empty when the first search solved it).
+    Attributes
+    ----------
+    path : BuiltPath or None
+        The checked path (``None``: none found).
+    outcome : SearchOutcome
+        How the last search ended.
+    message : str
+        What happened, in words.
+    trees : tuple of Tree
+        The search trees of the last resolution tried, the one from the start first
+        (the one from the goal second, when the query turned to it).
+    note : str
+        For a solved query, at which resolution and why (empty when the first search
+        solved it).
+    refinements : int
+        The finer searches run after the first.
+    stage : str
+        The last search: ``"first"``, ``"fine"`` (:attr:`HybridConfig.refinements`),
+        ``"coarse"`` (:attr:`HybridConfig.coarse_after`), ``"snug"`` (half-way from
+        ``body_clearance`` to ``min_clearance``, at the finest resolution), ``"tight"``
+        (``min_clearance``), ``"wide"`` (``wide_radius_factor``) or ``"persist"``
+        (:attr:`HybridConfig.persist`).
+    clearance : float
+        The body clearance the last search kept, metres (less than ``body_clearance``
+        after the snug and tight searches).
     """
 
     path: BuiltPath | None

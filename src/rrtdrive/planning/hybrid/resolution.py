@@ -101,7 +101,19 @@ def _after(first: Piece, accept: Accept) -> Accept:
 
 
 def free_cell_graph(problem: PlanningProblem, resolution: float) -> FreeCellGraph:
-    """The map's :class:`FreeCellGraph`, built once per map (timed as set-up)."""
+    """The map's :class:`FreeCellGraph`, built once per map (timed as set-up).
+
+    Parameters
+    ----------
+    problem : PlanningProblem
+        Its checker's grid keeps the graph.
+    resolution : float
+        Coarse cell size asked for, metres (rounded to a multiple of the checker's).
+
+    Returns
+    -------
+    FreeCellGraph
+    """
     checker = problem.checker
     return checker.grid.derived(
         ("hybrid-free-cells", float(resolution)),
@@ -238,6 +250,16 @@ def query_clearance(
 
 def reversed_in_time(pieces: Sequence[Piece]) -> list[Piece]:
     """The same motion driven backwards in time: order and rows reversed, gears flipped.
+
+    Parameters
+    ----------
+    pieces : sequence of Piece
+        A motion's pieces in driving order (left unchanged).
+
+    Returns
+    -------
+    list of Piece
+        New pieces (rows copied; ``shot`` kept).
 
     Examples
     --------

@@ -226,6 +226,11 @@ class HybridSearch:
         before it equal, field by field: :meth:`_known`) gets the same shot, whose
         connections ``accept`` rejected there, and rejects here. Those are counted,
         not tried again (the shots and the ramp fits were most of the time).
+
+        Parameters
+        ----------
+        earlier : HybridSearch
+            A search of the same query and settings that has run.
         """
         self._earlier = earlier
 
@@ -259,6 +264,11 @@ class HybridSearch:
 
         The nodes, their costs and the closed bins stay; the next :meth:`run` resumes
         with the open nodes ranked by ``g + weight * heuristic``.
+
+        Parameters
+        ----------
+        heuristic : Heuristic
+            The new cost-to-go estimate.
         """
         self.heuristic = heuristic
         if not self.x:
@@ -269,7 +279,19 @@ class HybridSearch:
         heapq.heapify(self._heap)
 
     def key(self, x: float, y: float, yaw: float, gear: int) -> int:
-        """The closing bin of a state: its cell, heading bin and gear."""
+        """The closing bin of a state: its cell, heading bin and gear.
+
+        Parameters
+        ----------
+        x, y, yaw : float
+            Rear-axle pose (metres, radians; any yaw, wrapped).
+        gear : int
+            ``+1`` forward, ``-1`` reverse.
+
+        Returns
+        -------
+        int
+        """
         res = self.cfg.xy_resolution
         ix = int((x - self.xmin) // res)
         iy = int((y - self.ymin) // res)
@@ -295,6 +317,15 @@ class HybridSearch:
         Every primitive's rows are :func:`arc_poses` from its parent (evaluated for
         all primitives at once, with the same arithmetic), the last one its node's
         exact pose.
+
+        Parameters
+        ----------
+        i : int
+            A node's index (0 is the start: no pieces).
+
+        Returns
+        -------
+        list of Piece
         """
         nodes = []
         while i >= 0:

@@ -28,8 +28,14 @@ __all__ = ["Piece", "Shots", "analytic_shots", "walk_hits", "walk_poses", "walks
 class Piece:
     """A stretch of path in one gear: rows ``[x, y, yaw, kappa]``, both end poses included.
 
-    ``kappa`` is the steering curvature; ``gear`` +1 forward, -1 reverse; ``shot``:
-    part of an analytic word (the shortest path between its ends, nothing to shorten).
+    Attributes
+    ----------
+    gear : int
+        +1 forward, -1 reverse.
+    rows : numpy.ndarray
+        ``(N, 4)`` rows ``x, y, yaw, kappa``; ``kappa`` is the steering curvature (1/m).
+    shot : bool
+        Part of an analytic word (the shortest path between its ends, nothing to shorten).
     """
 
     gear: int
@@ -180,6 +186,28 @@ def analytic_shots(
     sampled finely (each one only when the caller asks for it). A Reeds-Shepp word
     is cut into one piece per gear. ``leads`` (:func:`~.leads.lead_ins`): after the
     words to ``goal``, those to each lead-in's start, followed by its straight drive in.
+
+    Parameters
+    ----------
+    goal : Pose
+        The exact rear-axle goal pose.
+    radius : float
+        Turning radius of the words, metres.
+    reverse : bool
+        Reeds-Shepp words (gear changes) instead of Dubins.
+    spacing : float
+        Distance between the sampled rows, metres.
+    body : BodyTest, optional
+        Screens out the words that surely collide (``None``: none dropped).
+    max_candidates : int
+        How many of the shortest words to try.
+    leads : sequence of Lead
+        Straight lead-ins to try after the words to ``goal``.
+
+    Returns
+    -------
+    Shots
+        ``shots(pose)``: candidate lists of pieces to the goal, shortest first, lazily.
     """
     coarse = max(spacing, 0.5)
 

@@ -349,6 +349,17 @@ class ImprovedConfig:
         ``reverse_postprocess_attempts`` of them when the query may reverse; off,
         every budget in full.
 
+        Parameters
+        ----------
+        max_iterations : int
+            The query's iteration budget.
+        reverse : bool
+            The query may change gear.
+
+        Returns
+        -------
+        StageBudgets
+
         Examples
         --------
         >>> ImprovedConfig().stage_budgets(20_000)
@@ -374,6 +385,15 @@ class ImprovedConfig:
     def escalates_first(self, reverse: bool) -> bool:
         """Whether a query (reversing or not) runs the escalation before the Dubins fallback.
 
+        Parameters
+        ----------
+        reverse : bool
+            The query may change gear.
+
+        Returns
+        -------
+        bool
+
         Examples
         --------
         >>> ImprovedConfig().escalates_first(True), ImprovedConfig().escalates_first(False)
@@ -388,6 +408,20 @@ class ImprovedConfig:
     def enabled(self, component: str) -> bool:
         """Whether the named component of :data:`COMPONENTS` is on.
 
+        Parameters
+        ----------
+        component : str
+            A name of :data:`COMPONENTS` (a smoothing one is read from :attr:`smoothing`).
+
+        Returns
+        -------
+        bool
+
+        Raises
+        ------
+        InputError
+            For a name not in :data:`COMPONENTS`.
+
         Examples
         --------
         >>> ImprovedConfig().enabled("prune"), ImprovedConfig(obtuse_parent=False).enabled(
@@ -400,6 +434,20 @@ class ImprovedConfig:
 
     def without(self, *components: str) -> ImprovedConfig:
         """A copy with the named components switched off.
+
+        Parameters
+        ----------
+        *components : str
+            Names of :data:`COMPONENTS` (smoothing ones are switched off in :attr:`smoothing`).
+
+        Returns
+        -------
+        ImprovedConfig
+
+        Raises
+        ------
+        InputError
+            For a name not in :data:`COMPONENTS`.
 
         Examples
         --------
@@ -424,6 +472,20 @@ class ImprovedConfig:
         A mapping is applied over this config's :attr:`smoothing`, so
         ``{"smoothing": {"max_rounds": 8}}`` changes only the rounds. Errors name
         the option, e.g. ``planner.smoothing.degree``.
+
+        Parameters
+        ----------
+        options : mapping of str to object
+            Field names of :class:`ImprovedConfig` and their new values.
+
+        Returns
+        -------
+        ImprovedConfig
+
+        Raises
+        ------
+        InputError
+            For an unknown option or a bad value.
 
         Examples
         --------

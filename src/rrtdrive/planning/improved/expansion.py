@@ -28,6 +28,20 @@ def endpoint_capped_clearance(
 
     A path cannot keep more room than its own end poses have; asking for it
     would make a car parked near a wall unplannable.
+
+    Parameters
+    ----------
+    checker : CollisionChecker
+        The map's checker (its exact ``body_clearance``).
+    start, goal : Pose
+        The query's rear-axle end poses.
+    wanted : float
+        The clearance asked for, metres (<= 0: none).
+
+    Returns
+    -------
+    float
+        Metres, in ``[0, wanted]`` (just under the end poses' clearance when capped).
     """
     if wanted <= 0.0:
         return 0.0
@@ -43,6 +57,20 @@ def default_expansion_lmin(width: float, margin: float, a: float) -> float:
     most ``sqrt(2) a`` of their gap. A pair whose envelope circles are more than
     ``L_min`` apart (and so the rectangles too) keeps a gap above ``W + 2 margin``,
     the width of the swept disc of the edge test: no gap the car could use is closed.
+
+    Parameters
+    ----------
+    width : float
+        The car's width ``W``, metres.
+    margin : float
+        The edge test's margin, metres.
+    a : float
+        The expansion's growth of length and width, metres.
+
+    Returns
+    -------
+    float
+        ``L_min`` in metres.
 
     Examples
     --------
@@ -61,6 +89,13 @@ def envelope_gaps(
     When ``bounds`` are given, the map boundary counts as an obstacle too (the gap
     from the circle to each side of the bounds box), so expansion never closes a
     passage along the map's edge.
+
+    Parameters
+    ----------
+    obstacles : iterable of Obstacle
+        The map's rectangles.
+    bounds : iterable of float, optional
+        ``(xmin, ymin, xmax, ymax)`` of the map (``None``: the boundary does not count).
 
     Returns
     -------
@@ -184,6 +219,22 @@ def expanded_checker(
     Returns ``(None, 0)`` when no obstacle grows (the original checker serves).
     Kept on the map checker's grid cache (:meth:`rrtdrive.collision.GridCache.derived`),
     so building it counts as per-map set-up.
+
+    Parameters
+    ----------
+    checker : CollisionChecker
+        The map's checker (its obstacles, bounds, car and settings).
+    a : float
+        Growth of length and width in metres.
+    lmin : float
+        Smallest allowed passing distance ``L_min`` (:func:`expand_obstacles`).
+
+    Returns
+    -------
+    checker : CollisionChecker or None
+        The expanded map's checker, or ``None`` when no obstacle grows.
+    grown : int
+        How many obstacles grew.
     """
 
     def build() -> tuple[CollisionChecker | None, int]:

@@ -45,6 +45,16 @@ class ObtuseTree(GrowingTree):
     along its heading, the purpose of the virtual parents (SPEC §3 item 2). A
     root without one is never obtuse but may be the nearest.
 
+    Parameters
+    ----------
+    root : numpy.ndarray
+        Root position ``(x, y)`` (the start or the goal).
+    capacity : int
+        Initial capacity; the arrays double when full.
+    virtual_parent : numpy.ndarray, optional
+        A position behind the root along its heading, the root's parent in Eq. 11
+        (``None``: the root has none).
+
     Examples
     --------
     >>> t = ObtuseTree(np.array([0.0, 0.0]), virtual_parent=np.array([-5.0, 0.0]))
@@ -84,7 +94,21 @@ class ObtuseTree(GrowingTree):
         return self._cols[2:, : self.size].T
 
     def add(self, point: Sequence[float], parent: int, cost: float | None = None) -> int:
-        """Append ``point`` (any ``(x, y)`` sequence) with ``parent``; return its index."""
+        """Append ``point`` (any ``(x, y)`` sequence) with ``parent``; return its index.
+
+        Parameters
+        ----------
+        point : sequence of float
+            Position ``(x, y)``.
+        parent : int
+            Index of its parent node.
+        cost : float, optional
+            Its path cost (``None``: the parent's plus the straight distance).
+
+        Returns
+        -------
+        int
+        """
         i = self.size
         if i == len(self.nodes):
             self.nodes = np.concatenate([self.nodes, np.empty_like(self.nodes)])
@@ -109,7 +133,18 @@ class ObtuseTree(GrowingTree):
     def choose_parent(self, q: np.ndarray, obtuse: bool = True) -> int:
         """Node to extend towards ``q``: Eq. 11 / Table 1 when ``obtuse``, else the nearest.
 
-        Returns -1 when only a root with a virtual parent qualifies and its angle is acute.
+        Parameters
+        ----------
+        q : numpy.ndarray
+            The point to extend towards, ``(x, y)``.
+        obtuse : bool
+            Apply Eq. 11 (else the nearest node).
+
+        Returns
+        -------
+        int
+            The node's index; -1 when only a root with a virtual parent qualifies and
+            its angle is acute.
         """
         q3 = self._q3
         q3[0] = q[0]
@@ -142,6 +177,16 @@ def fast_edge_test(checker: CollisionChecker) -> EdgeFree:
     The checker's sphere tracing looks at the far end of its capsule first, so
     most colliding tree extensions are answered with one clearance lookup; every
     answer is the checker's own, so the test is exactly as safe.
+
+    Parameters
+    ----------
+    checker : CollisionChecker
+        The growth checker.
+
+    Returns
+    -------
+    callable
+        ``edge_free(a, b) -> bool``.
 
     Examples
     --------
@@ -237,6 +282,17 @@ def greedy_connect(
     ``2p`` while it neither collides nor reaches the target (``p`` throughout when
     not ``adaptive``). A collision ends the loop.
 
+    Parameters
+    ----------
+    tree, towards_root, target, step, edge_free
+        As :func:`extend` (``step`` is ``p``).
+    obtuse : bool
+        Choose the first node by Eq. 11 (else the nearest).
+    adaptive : bool
+        Double the step after the first.
+    expired : callable, optional
+        ``expired() -> bool``, asked after each step; True gives up (-1).
+
     Returns
     -------
     int
@@ -280,6 +336,24 @@ def link_candidates(
     """Nodes to try for :func:`link`: the ``candidates`` nearest within ``4 step``, nearest first.
 
     With ``obtuse`` the obtuse ones (Eq. 11) come first.
+
+    Parameters
+    ----------
+    tree : ObtuseTree
+        The tree to join.
+    q : numpy.ndarray
+        The point to join, ``(x, y)``.
+    step : float
+        The growth step ``p``, metres.
+    obtuse : bool
+        Obtuse nodes first; a root with a virtual parent only when obtuse.
+    candidates : int
+        How many of the nearest nodes to keep.
+
+    Returns
+    -------
+    numpy.ndarray
+        Node indices (possibly empty).
     """
     d = tree.sq_dists(q)
     near = np.flatnonzero(d <= (4.0 * step) ** 2)
@@ -314,6 +388,17 @@ def link(
     The nodes of :func:`link_candidates` (or ``order``) are tried in turn; the
     first free edge is stored as pieces of at most ``step`` (each a part of the
     free edge's swept capsule, hence free).
+
+    Parameters
+    ----------
+    tree, towards_root, step, edge_free
+        As :func:`extend`.
+    q : numpy.ndarray
+        The point to join, ``(x, y)``.
+    obtuse, candidates
+        As :func:`link_candidates`.
+    order : numpy.ndarray, optional
+        Node indices to try, in order (``None``: :func:`link_candidates`).
 
     Returns
     -------

@@ -53,6 +53,23 @@ def clamped_uniform_knots(n_ctrl: int, degree: int) -> np.ndarray:
 def fit_bspline(control_points: np.ndarray, degree: int = 2) -> BSpline:
     """The clamped uniform B-spline with the given control points (Eqs. 13–15).
 
+    Parameters
+    ----------
+    control_points : numpy.ndarray
+        ``(M, 2)`` control points in metres, ``M > degree``.
+    degree : int
+        Spline degree ``k``.
+
+    Returns
+    -------
+    scipy.interpolate.BSpline
+        Parametrised on ``[0, 1]``, from the first control point to the last.
+
+    Raises
+    ------
+    ValueError
+        When there are no more control points than ``degree`` (:func:`clamped_uniform_knots`).
+
     Examples
     --------
     >>> spl = fit_bspline(np.array([[0.0, 0.0], [5.0, 0.0], [5.0, 5.0]]))
@@ -67,6 +84,16 @@ def fit_bspline(control_points: np.ndarray, degree: int = 2) -> BSpline:
 
 def curvature(d1: np.ndarray, d2: np.ndarray) -> np.ndarray:
     """Signed curvature ``(x'y'' - y'x'') / (x'^2 + y'^2)^1.5`` from first and second derivatives.
+
+    Parameters
+    ----------
+    d1, d2 : numpy.ndarray
+        ``(N, 2)`` first and second derivatives of a planar curve.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N,)`` curvature (positive: turning left); ``inf`` where ``d1`` vanishes.
 
     Examples
     --------
@@ -86,7 +113,20 @@ def curvature(d1: np.ndarray, d2: np.ndarray) -> np.ndarray:
 
 
 def spline_curvature(spline: BSpline, u: np.ndarray) -> np.ndarray:
-    """Curvature of a planar spline at parameters ``u`` (see :func:`curvature`)."""
+    """Curvature of a planar spline at parameters ``u`` (see :func:`curvature`).
+
+    Parameters
+    ----------
+    spline : scipy.interpolate.BSpline
+        A planar spline of degree >= 2.
+    u : numpy.ndarray
+        ``(N,)`` parameters.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N,)`` signed curvature, 1/m.
+    """
     u = np.asarray(u, dtype=float)
     return curvature(spline(u, nu=1), spline(u, nu=2))
 
@@ -193,6 +233,20 @@ def parameter_grid(spline: BSpline, spacing: float) -> np.ndarray:
 
 def sample_spline(spline: BSpline, spacing: float = 0.25) -> tuple[np.ndarray, np.ndarray]:
     """Rows ``[x, y, yaw, kappa]`` along ``spline`` at most ``spacing`` apart, and their parameters.
+
+    Parameters
+    ----------
+    spline : scipy.interpolate.BSpline
+        A planar spline (:func:`fit_bspline`).
+    spacing : float
+        Largest distance between consecutive rows, metres (:func:`parameter_grid`).
+
+    Returns
+    -------
+    rows : numpy.ndarray
+        ``(N, 4)`` rows ``x, y, yaw, kappa``, both ends included.
+    u : numpy.ndarray
+        ``(N,)`` their parameters.
 
     Examples
     --------

@@ -23,7 +23,17 @@ class EdgeChecker(Protocol):
     """Anything with the fast edge test of :class:`~rrtdrive.collision.CollisionChecker`."""
 
     def edge_free(self, a: Sequence[float], b: Sequence[float]) -> bool:
-        """True when the car driving straight from ``a`` to ``b`` is clear."""
+        """True when the car driving straight from ``a`` to ``b`` is clear.
+
+        Parameters
+        ----------
+        a, b : sequence of float
+            Rear-axle positions ``(x, y, ...)`` of the edge's ends (heading along it).
+
+        Returns
+        -------
+        bool
+        """
         ...
 
 
@@ -33,7 +43,24 @@ class PathChecker(EdgeChecker, Protocol):
     def path_free(
         self, samples: np.ndarray, spacing: float = 0.1, clearance: float = 0.0
     ) -> tuple[bool, np.ndarray]:
-        """Exact body test along ``samples``; returns ``(ok, bad segment indices)``."""
+        """Exact body test along ``samples``; returns ``(ok, bad segment indices)``.
+
+        Parameters
+        ----------
+        samples : numpy.ndarray
+            ``(N, >=3)`` rows ``x, y, yaw, ...``.
+        spacing : float
+            Largest distance between tested poses, metres.
+        clearance : float
+            Distance the body must keep from obstacles and bounds, metres.
+
+        Returns
+        -------
+        ok : bool
+            True when every tested pose is free.
+        bad : numpy.ndarray
+            Indices of segments ``i -> i+1`` with a colliding pose.
+        """
         ...
 
 

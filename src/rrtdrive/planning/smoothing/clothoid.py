@@ -201,6 +201,18 @@ def sample_turn(turn: ClothoidTurn, s: np.ndarray) -> np.ndarray:
     The frame: the turn starts at the origin heading along +x, the corner is at
     ``(tangent, 0)``. Values of ``s`` lie in ``[0, turn.length]``.
 
+    Parameters
+    ----------
+    turn : ClothoidTurn
+        The turn (:func:`clothoid_turn`).
+    s : numpy.ndarray
+        Arc lengths from the turn's start, metres (flattened to ``(N,)``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N, 4)`` rows ``x, y, yaw, kappa`` (metres, radians, 1/m).
+
     Examples
     --------
     >>> t = clothoid_turn(math.pi / 2, 1 / 6, 0.08)

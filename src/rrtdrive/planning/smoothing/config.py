@@ -327,6 +327,17 @@ class SmoothingResult:
 def smoothing_with(base: SmoothingConfig, changes: Mapping[str, object]) -> SmoothingConfig:
     """``base`` with ``changes`` (a planner option ``smoothing={...}``).
 
+    Parameters
+    ----------
+    base : SmoothingConfig
+        The settings to start from.
+    changes : mapping of str to object
+        Field names of :class:`SmoothingConfig` and their new values.
+
+    Returns
+    -------
+    SmoothingConfig
+
     Raises
     ------
     InputError

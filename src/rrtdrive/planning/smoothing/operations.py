@@ -141,6 +141,15 @@ def prune(
 def is_sharp(prev: Sequence[float], point: Sequence[float], nxt: Sequence[float]) -> bool:
     """Eq. 12: the angle at ``point`` is at most 90 degrees (``a + b >= c`` in squared lengths).
 
+    Parameters
+    ----------
+    prev, point, nxt : sequence of float
+        Consecutive vertices ``(x, y, ...)`` of a polyline.
+
+    Returns
+    -------
+    bool
+
     Examples
     --------
     >>> is_sharp((0, 0), (1, 0), (1, 1)), is_sharp((0, 0), (1, 0), (2, 0.5))
@@ -154,6 +163,16 @@ def is_sharp(prev: Sequence[float], point: Sequence[float], nxt: Sequence[float]
 
 def sharp_flags(points: np.ndarray) -> np.ndarray:
     """Eq. 12 at every interior vertex (vectorised); the two ends are never sharp.
+
+    Parameters
+    ----------
+    points : numpy.ndarray
+        ``(N, 2)`` polyline vertices.
+
+    Returns
+    -------
+    numpy.ndarray
+        Boolean ``(N,)``.
 
     Examples
     --------

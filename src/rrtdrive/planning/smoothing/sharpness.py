@@ -22,6 +22,19 @@ __all__ = ["interval_sharpness", "max_sharpness", "steer_rate_speed_limit"]
 def interval_sharpness(samples: np.ndarray, wheelbase: float) -> np.ndarray:
     """Largest ``|d delta / ds|`` (rad/m) between consecutive rows ``[x, y, yaw, kappa, ...]``.
 
+    Parameters
+    ----------
+    samples : numpy.ndarray
+        ``(N, >=4)`` rows ``x, y, yaw, kappa``; a fifth column, the gear, makes a cusp's
+        interval 0.
+    wheelbase : float
+        The car's wheelbase in metres.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N - 1,)`` rad/m (``inf`` for a curvature jump between rows on one spot).
+
     Examples
     --------
     >>> rows = np.array([[0.0, 0, 0, 0.0], [1.0, 0, 0, 0.1], [2.0, 0, 0, 0.1]])
@@ -56,6 +69,15 @@ def interval_sharpness(samples: np.ndarray, wheelbase: float) -> np.ndarray:
 def max_sharpness(samples: np.ndarray, wheelbase: float) -> float:
     """The path's largest ``|d delta / ds|`` in rad/m (0 for fewer than two rows).
 
+    Parameters
+    ----------
+    samples, wheelbase
+        As :func:`interval_sharpness`.
+
+    Returns
+    -------
+    float
+
     Examples
     --------
     >>> max_sharpness(np.array([[0.0, 0, 0, 0.0], [0.5, 0, 0, 0.05]]), 2.0)
@@ -69,6 +91,17 @@ def steer_rate_speed_limit(sharpness: float, max_steer_rate: float | None) -> fl
     """Speed (m/s) at which a path of ``sharpness`` needs exactly the actuator's rate.
 
     ``None`` for instant steering (no rate limit); ``inf`` for a path that never steers.
+
+    Parameters
+    ----------
+    sharpness : float
+        The path's largest ``|d delta / ds|``, rad/m.
+    max_steer_rate : float or None
+        The actuator's steering rate limit, rad/s (``None`` or ``inf``: instant).
+
+    Returns
+    -------
+    float or None
 
     Examples
     --------

@@ -117,7 +117,22 @@ class SpaceTimeChecker:
         t_hi: np.ndarray,
         spacing: float = 0.0,
     ) -> np.ndarray:
-        """:func:`traffic_conflicts` of ``poses`` with this checker's prediction and safety."""
+        """:func:`traffic_conflicts` of ``poses`` with this checker's prediction and safety.
+
+        Parameters
+        ----------
+        poses : numpy.ndarray
+            ``(N, 3)`` rear-axle poses.
+        t_lo, t_hi : numpy.ndarray
+            ``(N,)`` earliest and latest arrival times (seconds after the prediction).
+        spacing : float
+            Distance to the neighbouring tested poses in metres (the discs grow by half).
+
+        Returns
+        -------
+        numpy.ndarray
+            Boolean ``(N,)``: True where a pose may meet a predicted vehicle.
+        """
         self.dynamic_checks += 1
         return traffic_conflicts(
             poses, t_lo, t_hi, self.prediction, self.safety, self.static.vehicle, spacing,
@@ -125,7 +140,20 @@ class SpaceTimeChecker:
         )
 
     def clear_of_traffic(self, poses: np.ndarray, spacing: float = 0.0) -> np.ndarray:
-        """True where a pose, reached at its nominal arrival time, is clear of every vehicle."""
+        """True where a pose, reached at its nominal arrival time, is clear of every vehicle.
+
+        Parameters
+        ----------
+        poses : numpy.ndarray
+            ``(N, 3)`` rear-axle poses, timed by :meth:`ArrivalTiming.band`.
+        spacing : float
+            Distance to the neighbouring tested poses in metres (as :meth:`conflicts`).
+
+        Returns
+        -------
+        numpy.ndarray
+            Boolean ``(N,)``.
+        """
         p = np.asarray(poses, dtype=float).reshape(-1, 3)
         lo, hi = self.timing.band(p[:, :2])
         return ~self.conflicts(p, lo, hi, spacing)
@@ -188,40 +216,130 @@ class SpaceTimeChecker:
         return self.static.setup_time_s
 
     def clearance(self, x: float, y: float) -> float:
-        """Static clearance lower bound at ``(x, y)`` (see :meth:`CollisionChecker.clearance`)."""
+        """Static clearance lower bound at ``(x, y)`` (see :meth:`CollisionChecker.clearance`).
+
+        Parameters
+        ----------
+        x, y : float
+            Position in metres.
+
+        Returns
+        -------
+        float
+            Metres; negative or ``-inf`` where possibly inside an obstacle or outside.
+        """
         return self.static.clearance(x, y)
 
     def clearances(self, points: np.ndarray) -> np.ndarray:
-        """Static clearance lower bounds of ``(N, 2)`` points."""
+        """Static clearance lower bounds of ``(N, 2)`` points.
+
+        Parameters
+        ----------
+        points : numpy.ndarray
+            ``(N, 2)`` positions in metres.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(N,)`` clearances in metres (as :meth:`clearance`).
+        """
         return self.static.clearances(points)
 
     def point_free(self, x: float, y: float) -> bool:
-        """The static sampling condition (necessary; traffic passes, so it is ignored here)."""
+        """The static sampling condition (necessary; traffic passes, so it is ignored here).
+
+        Parameters
+        ----------
+        x, y : float
+            Rear-axle position in metres.
+
+        Returns
+        -------
+        bool
+            True when the car could stand there with some heading.
+        """
         return self.static.point_free(x, y)
 
     def provably_disconnected(self, a: Sequence[float], b: Sequence[float]) -> bool:
-        """Static proof of unreachability (traffic cannot make a proof, it moves on)."""
+        """Static proof of unreachability (traffic cannot make a proof, it moves on).
+
+        Parameters
+        ----------
+        a, b : sequence of float
+            Rear-axle positions ``(x, y, ...)``.
+
+        Returns
+        -------
+        bool
+            True is a proof that no motion joins them; False proves nothing.
+        """
         return self.static.provably_disconnected(a, b)
 
     def free_cells(self, start: Sequence[float]) -> np.ndarray:
-        """The static checker's sampler cells connected to ``start``."""
+        """The static checker's sampler cells connected to ``start``.
+
+        Parameters
+        ----------
+        start : sequence of float
+            Start position ``(x, y)``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Flat indices into the clearance grid (see :meth:`CollisionChecker.free_cells`).
+        """
         return self.static.free_cells(start)
 
     def passage_cells(self, start: Sequence[float], width: float = 0.6) -> np.ndarray:
-        """The static checker's narrow-passage cells reachable from ``start``."""
+        """The static checker's narrow-passage cells reachable from ``start``.
+
+        Parameters
+        ----------
+        start : sequence of float
+            A point of the component to keep (the start position).
+        width : float
+            How much wider than the edge test a passage may be, in metres.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(K, 2)`` cell centres (possibly empty).
+        """
         return self.static.passage_cells(start, width)
 
     def body_clearance(self, pose: Sequence[float]) -> float:
         """Exact distance from the body at ``pose`` to the static obstacles or bounds.
 
         Static only, as the contract says: traffic has no distance without a time.
+
+        Parameters
+        ----------
+        pose : sequence of float
+            Rear-axle pose ``(x, y, yaw)``.
+
+        Returns
+        -------
+        float
+            Metres; 0 when the body touches an obstacle or leaves the bounds.
         """
         return self.static.body_clearance(pose)
 
     # ------------------------------------------------------------------ pose and motion tests
 
     def edge_free(self, a: Sequence[float], b: Sequence[float]) -> bool:
-        """Static edge test, then the body along the edge against traffic at its arrival times."""
+        """Static edge test, then the body along the edge against traffic at its arrival times.
+
+        Parameters
+        ----------
+        a, b : sequence of float
+            Rear-axle positions of the edge's ends (the heading is along the edge);
+            poses are tested at most ``spacing`` apart.
+
+        Returns
+        -------
+        bool
+            False also once the deadline has passed.
+        """
         if self._late() or not self.static.edge_free(a, b):
             return False
         if len(self.prediction) == 0:
@@ -237,21 +355,58 @@ class SpaceTimeChecker:
         return bool(np.all(self.clear_of_traffic(poses, step)))
 
     def pose_free(self, pose: Sequence[float]) -> bool:
-        """Exact static body test and the traffic test at the pose's arrival time."""
+        """Exact static body test and the traffic test at the pose's arrival time.
+
+        Parameters
+        ----------
+        pose : sequence of float
+            Rear-axle pose ``(x, y, yaw)``.
+
+        Returns
+        -------
+        bool
+            False also once the deadline has passed.
+        """
         if self._late() or not self.static.pose_free(pose):
             return False
         p = np.asarray(pose, dtype=float)[:3]
         return bool(self.clear_of_traffic(p[None, :])[0])
 
     def poses_free(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
-        """:meth:`CollisionChecker.poses_free` and the traffic test at nominal arrival times."""
+        """:meth:`CollisionChecker.poses_free` and the traffic test at nominal arrival times.
+
+        Parameters
+        ----------
+        poses : numpy.ndarray
+            ``(N, 3)`` rear-axle poses.
+        clearance : float
+            Distance the body must keep from static obstacles and bounds, metres.
+
+        Returns
+        -------
+        numpy.ndarray
+            Boolean ``(N,)``; all False once the deadline has passed.
+        """
         p = np.asarray(poses, dtype=float).reshape(-1, 3)
         if self._late():
             return np.zeros(len(p), dtype=bool)
         return self.static.poses_free(p, clearance) & self.clear_of_traffic(p)
 
     def poses_free_fast(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
-        """:meth:`CollisionChecker.poses_free_fast` and the traffic test (conservative)."""
+        """:meth:`CollisionChecker.poses_free_fast` and the traffic test (conservative).
+
+        Parameters
+        ----------
+        poses : numpy.ndarray
+            ``(N, 3)`` rear-axle poses.
+        clearance : float
+            Extra distance the body must keep from static obstacles and bounds, metres.
+
+        Returns
+        -------
+        numpy.ndarray
+            Boolean ``(N,)``; True means provably clear; all False once the deadline has passed.
+        """
         p = np.asarray(poses, dtype=float).reshape(-1, 3)
         if self._late():
             return np.zeros(len(p), dtype=bool)
@@ -264,6 +419,12 @@ class SpaceTimeChecker:
         sample (:meth:`ArrivalTiming.state_at`: the timing's own ``t0`` and ``v0``
         when it starts at the origin). With a rate-limited actuator (``steering``)
         the speed is also capped by the steering rate, as the controllers cap it.
+
+        Parameters
+        ----------
+        samples : numpy.ndarray
+            ``(N, >=3)`` rows ``x, y, yaw`` (a fourth column, when not all zero, is the
+            curvature).
 
         Returns
         -------
@@ -289,6 +450,15 @@ class SpaceTimeChecker:
         The path is taken to start at the timing's origin at its time ``t0`` and
         speed ``v0``; every sample is tested at its arrival time, within the
         safety band.
+
+        Parameters
+        ----------
+        samples : numpy.ndarray
+            ``(N, >=3)`` rows ``x, y, yaw, ...``.
+        spacing : float
+            Largest distance between the poses of the static test, metres.
+        clearance : float
+            Distance the body must keep from static obstacles and bounds, metres.
 
         Returns
         -------

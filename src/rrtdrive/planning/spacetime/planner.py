@@ -178,7 +178,17 @@ class SpaceTimeRRTConnect(ImprovedRRTConnect):
         return f"SpaceTimeRRTConnect({self.config!r})"
 
     def checker_for(self, problem: SpaceTimeProblem) -> SpaceTimeChecker:
-        """The space-time checker of ``problem`` (static part cached per road)."""
+        """The space-time checker of ``problem`` (static part cached per road).
+
+        Parameters
+        ----------
+        problem : SpaceTimeProblem
+            Road, traffic, timing, safety, speed profile, deadline and steering.
+
+        Returns
+        -------
+        SpaceTimeChecker
+        """
         static = cached_checker(problem.map)
         return SpaceTimeChecker(
             static, problem.prediction, problem.timing, problem.safety, problem.speed,
@@ -247,7 +257,22 @@ class SpaceTimeRRTConnect(ImprovedRRTConnect):
     def solve(
         self, problem: PlanningProblem, rng: np.random.Generator, budget: Budget
     ) -> PlanResult:
-        """The improved planner; a :class:`SpaceTimeProblem` goes to :meth:`solve_spacetime`."""
+        """The improved planner; a :class:`SpaceTimeProblem` goes to :meth:`solve_spacetime`.
+
+        Parameters
+        ----------
+        problem : PlanningProblem
+            A static problem, or a :class:`SpaceTimeProblem`.
+        rng : numpy.random.Generator
+            The only source of randomness.
+        budget : Budget
+            Iteration and wall-time limits.
+
+        Returns
+        -------
+        PlanResult
+            The space-time plan's ``result`` for a :class:`SpaceTimeProblem`.
+        """
         if isinstance(problem, SpaceTimeProblem):
             return self.solve_spacetime(problem, rng, budget).result
         return ImprovedRRTConnect.solve(self, problem, rng, budget)

@@ -124,12 +124,32 @@ class Prediction:
         return cls(times, np.zeros((0, len(times), 3)), np.zeros((0, 2)))
 
     def select(self, keep: np.ndarray) -> Prediction:
-        """Only the vehicles where ``keep`` is True (or whose indices are given)."""
+        """Only the vehicles where ``keep`` is True (or whose indices are given).
+
+        Parameters
+        ----------
+        keep : numpy.ndarray
+            Boolean ``(K,)`` mask, or integer indices of the vehicles to keep.
+
+        Returns
+        -------
+        Prediction
+        """
         alt = None if self.alt is None else self.alt[keep]
         return Prediction(self.times, self.poses[keep], self.sizes[keep], self.method, alt)
 
     def shifted(self, dx: float, dy: float = 0.0) -> Prediction:
-        """The same prediction with every position moved by ``(dx, dy)`` (a change of frame)."""
+        """The same prediction with every position moved by ``(dx, dy)`` (a change of frame).
+
+        Parameters
+        ----------
+        dx, dy : float
+            Shift in metres (``alt`` moved alike; headings unchanged).
+
+        Returns
+        -------
+        Prediction
+        """
         moved: list[np.ndarray | None] = []
         for arr in (self.poses, self.alt):
             if arr is None:
@@ -146,11 +166,32 @@ class Prediction:
 
         Linear interpolation on the grid; before 0 the first pose; past the horizon
         the last grid interval is extrapolated (constant velocity).
+
+        Parameters
+        ----------
+        t : numpy.ndarray
+            ``(N,)`` times in seconds (any shape, flattened).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(K, N, 3)`` body-centre ``x, y, heading`` (the heading of the nearer sample).
         """
         return _poses_at(self.poses, self.step, t)
 
     def centres_at(self, t: np.ndarray) -> np.ndarray:
-        """Body-centre positions at times ``t``, shape ``(K, N, 2)``."""
+        """Body-centre positions at times ``t``, shape ``(K, N, 2)``.
+
+        Parameters
+        ----------
+        t : numpy.ndarray
+            ``(N,)`` times in seconds from the prediction (as :meth:`poses_at`).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(K, N, 2)`` body-centre ``x, y``.
+        """
         return self.poses_at(t)[..., :2]
 
     def x_range(self) -> np.ndarray:

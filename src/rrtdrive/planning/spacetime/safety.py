@@ -53,9 +53,31 @@ class SafetyConfig:
                 raise InputError(f"safety.{name}: must be >= 0, got {value!r}")
 
     def buffer(self, t: float | np.ndarray) -> Any:
-        """Distance to keep at prediction time ``t``."""
+        """Distance to keep at prediction time ``t``.
+
+        Parameters
+        ----------
+        t : float or numpy.ndarray
+            Seconds after the prediction (negative counts as 0).
+
+        Returns
+        -------
+        float or numpy.ndarray
+            ``buffer_m + buffer_growth * t`` in metres, shaped like ``t``.
+        """
         return self.buffer_m + self.buffer_growth * np.maximum(t, 0.0)
 
     def margin(self, t: float | np.ndarray) -> Any:
-        """Half-width of the time band at prediction time ``t``."""
+        """Half-width of the time band at prediction time ``t``.
+
+        Parameters
+        ----------
+        t : float or numpy.ndarray
+            Seconds after the prediction (negative counts as 0).
+
+        Returns
+        -------
+        float or numpy.ndarray
+            ``time_margin_s + time_margin_growth * t`` in seconds, shaped like ``t``.
+        """
         return self.time_margin_s + self.time_margin_growth * np.maximum(t, 0.0)

@@ -72,7 +72,18 @@ class ArrivalTiming:
         object.__setattr__(self, "direction", (self.direction[0] / n, self.direction[1] / n))
 
     def time_for(self, distance: np.ndarray) -> np.ndarray:
-        """Seconds the nominal profile needs to cover ``distance`` metres from the origin."""
+        """Seconds the nominal profile needs to cover ``distance`` metres from the origin.
+
+        Parameters
+        ----------
+        distance : numpy.ndarray
+            Distances in metres (negative counts as 0).
+
+        Returns
+        -------
+        numpy.ndarray
+            Seconds after ``t0`` (not including it), shaped like ``distance``.
+        """
         d = np.maximum(np.asarray(distance, dtype=float), 0.0)
         v0 = max(self.v0, 0.0)
         a, vm = self.accel, max(self.v_max, v0)
@@ -82,25 +93,68 @@ class ArrivalTiming:
         return t_up + np.maximum(d - d_up, 0.0) / vm
 
     def state_at(self, point: Sequence[float] | np.ndarray) -> tuple[float, float]:
-        """Earliest arrival time and nominal speed at ``point`` (its progress from the origin)."""
+        """Earliest arrival time and nominal speed at ``point`` (its progress from the origin).
+
+        Parameters
+        ----------
+        point : sequence of float or numpy.ndarray
+            ``(x, y, ...)``; only the first two entries are used.
+
+        Returns
+        -------
+        tuple of (float, float)
+            Seconds after the prediction (``t0`` included) and speed in m/s.
+        """
         d = max(float(self.progress(np.asarray(point, dtype=float)[:2])[0]), 0.0)
         v0 = max(self.v0, 0.0)
         v = min(math.sqrt(v0 * v0 + 2.0 * self.accel * d), max(self.v_max, v0))
         return self.t0 + float(self.time_for(np.array([d]))[0]), v
 
     def progress(self, points: np.ndarray) -> np.ndarray:
-        """Progress of ``(N, 2)`` points along the road from the origin (may be negative)."""
+        """Progress of ``(N, 2)`` points along the road from the origin (may be negative).
+
+        Parameters
+        ----------
+        points : numpy.ndarray
+            ``(N, 2)`` positions in metres.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``(N,)`` signed distances along ``direction``, metres.
+        """
         p = np.asarray(points, dtype=float).reshape(-1, 2)
         ux, uy = self.direction
         return (p[:, 0] - self.origin[0]) * ux + (p[:, 1] - self.origin[1]) * uy
 
     def band(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Earliest and latest arrival times at ``(N, 2)`` points (seconds after the prediction)."""
+        """Earliest and latest arrival times at ``(N, 2)`` points (seconds after the prediction).
+
+        Parameters
+        ----------
+        points : numpy.ndarray
+            ``(N, 2)`` positions; points behind the origin arrive at ``t0``.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``(N,)`` earliest and ``(N,)`` latest times.
+        """
         s = np.maximum(self.progress(points), 0.0)
         return self.t0 + self.time_for(s), self.t0 + self.time_for(s * self.length_factor)
 
     def shifted(self, dx: float, dy: float = 0.0) -> ArrivalTiming:
-        """The same timing in a frame moved by ``(dx, dy)``."""
+        """The same timing in a frame moved by ``(dx, dy)``.
+
+        Parameters
+        ----------
+        dx, dy : float
+            Shift of the origin in metres.
+
+        Returns
+        -------
+        ArrivalTiming
+        """
         return dataclasses.replace(self, origin=(self.origin[0] + dx, self.origin[1] + dy))
 
 

@@ -194,6 +194,20 @@ def scenario_map(
     A name that :func:`~rrtdrive.maps.names_map_file` reads as a file gets the file's
     own error after ``field`` and the name; any other unknown name
     :func:`unknown_scenario`'s.
+
+    Parameters
+    ----------
+    field, name, stock_envs, variants
+        As :func:`unknown_scenario`; ``name`` is a map file or a built-in map's name.
+
+    Returns
+    -------
+    Map
+
+    Raises
+    ------
+    InputError
+        When ``name`` is no readable map file and no built-in map.
     """
     from rrtdrive.maps import names_map_file, resolve_map
 
@@ -207,6 +221,22 @@ def scenario_map(
 
 def make_variant(name: str, seed: int = 0) -> Task:
     """The task of a built-in scenario or of a named variant of one, for ``seed``.
+
+    Parameters
+    ----------
+    name : str
+        A name of :data:`SCENARIOS` or :data:`SCENARIO_VARIANTS`.
+    seed : int
+        As :func:`make_scenario`.
+
+    Returns
+    -------
+    Task
+
+    Raises
+    ------
+    InputError
+        For any other name (:func:`unknown_scenario`).
 
     Examples
     --------

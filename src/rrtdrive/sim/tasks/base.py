@@ -170,9 +170,22 @@ def plan_scenario(
 ) -> PlanResult:
     """Plan the task's query with the registered planner ``planner``.
 
-    ``options``: the planner's keyword arguments (its config's fields). The planner's
-    generator is the episode seed's planner stream; gear changes are allowed when the
-    task says so (``scenario.reverse``).
+    The planner's generator is the episode seed's planner stream; gear changes are
+    allowed when the task says so (``scenario.reverse``).
+
+    Parameters
+    ----------
+    scenario : Task
+    planner : str
+    seed : int
+    budget : Budget, optional
+        ``None``: the default :class:`Budget`.
+    options : mapping of str to Any, optional
+        The planner's keyword arguments (its config's fields).
+
+    Returns
+    -------
+    PlanResult
     """  # fmt: skip
     _, plan_rng, _ = scenario_rngs(seed)
     problem = PlanningProblem.from_map(
@@ -277,12 +290,30 @@ class Task:
 
         Any limit up to :data:`~rrtdrive.sim.loop.MAX_EPISODE_S` by default; a task
         whose scene runs out sooner (``overtake-traffic``'s road) says so.
+
+        Parameters
+        ----------
+        max_time_s : float
+            The time limit, seconds.
+        name : str
+            The field that gave it (the message's first word).
         """
 
     # ------------------------------------------------------------------ scene
 
     def build_road(self, np_random: np.random.Generator, history: bool) -> Road:
-        """The highway-env road of this task (lanes, obstacles, other vehicles)."""
+        """The highway-env road of this task (lanes, obstacles, other vehicles).
+
+        Parameters
+        ----------
+        np_random : numpy.random.Generator
+        history : bool
+            Record vehicle histories (highway-env's ``show_trajectories``).
+
+        Returns
+        -------
+        Road
+        """
         raise NotImplementedError
 
     def scene_view(self) -> SceneView:
@@ -302,11 +333,33 @@ class Task:
         raise NotImplementedError
 
     def reached(self, ego: EgoVehicle, driver: Any) -> bool:
-        """True when the task is done (the episode loop asks after every step)."""
+        """True when the task is done (the episode loop asks after every step).
+
+        Parameters
+        ----------
+        ego : EgoVehicle
+        driver : Driver
+            The episode's driver (:meth:`make_driver`).
+
+        Returns
+        -------
+        bool
+        """
         raise NotImplementedError
 
     def end_message(self, status: EpisodeStatus, t_end: float, max_time_s: float) -> str:
-        """The message of an episode of this task that ended with ``status`` at ``t_end``."""
+        """The message of an episode of this task that ended with ``status`` at ``t_end``.
+
+        Parameters
+        ----------
+        status : EpisodeStatus
+        t_end, max_time_s : float
+            Simulation time of the last step and the time limit, seconds.
+
+        Returns
+        -------
+        str
+        """
         return end_message(status, t_end, max_time_s, self.success_status)
 
     def agent_end_rule(self, tol_m: float, tol_rad: float, stop_speed: float) -> EndRule:
@@ -314,11 +367,29 @@ class Task:
 
         The task itself (its rule does not depend on a controller); a path task
         overrides this. The arguments are the evaluators' goal tolerances.
+
+        Parameters
+        ----------
+        tol_m, tol_rad, stop_speed : float
+            Goal distance (m), heading error (rad), standing-still speed (m/s).
+
+        Returns
+        -------
+        EndRule
         """
         return self
 
     def success_part(self, episode: Episode) -> SuccessPart:
-        """The kind-specific success terms of a driven ``episode`` of this task (none here)."""
+        """The kind-specific success terms of a driven ``episode`` of this task (none here).
+
+        Parameters
+        ----------
+        episode : Episode
+
+        Returns
+        -------
+        SuccessPart
+        """
         return SuccessPart()
 
     def default_speed(self) -> SpeedConfig:
@@ -326,7 +397,17 @@ class Task:
         return SpeedConfig(v_max=self.v_max)
 
     def resolve(self, config: EpisodeConfig) -> tuple[SpeedConfig, EpisodeConfig]:
-        """The speed profile settings of the drive and the configuration the episode records."""
+        """The speed profile settings of the drive and the configuration the episode records.
+
+        Parameters
+        ----------
+        config : EpisodeConfig
+            The episode's settings as given (``speed`` ``None``: the task's default).
+
+        Returns
+        -------
+        tuple of (SpeedConfig, EpisodeConfig)
+        """
         raise NotImplementedError
 
     def reference(
@@ -334,7 +415,18 @@ class Task:
     ) -> Reference:
         """What to drive along: plan with ``planner`` (a name), or take a given plan or path.
 
-        ``options``: the named planner's keyword arguments (its config's fields).
+        Parameters
+        ----------
+        planner : str, PlanResult or Path
+        seed : int
+            The episode seed (its planner stream seeds the planner).
+        budget : Budget
+        options : mapping of str to Any, optional
+            The named planner's keyword arguments (its config's fields).
+
+        Returns
+        -------
+        Reference
         """
         raise NotImplementedError
 
@@ -347,12 +439,39 @@ class Task:
         config: EpisodeConfig,
         seed: int,
     ) -> Driver:
-        """The driver of this task in the built scene ``env``."""
+        """The driver of this task in the built scene ``env``.
+
+        Parameters
+        ----------
+        env : SceneEnv
+        controller : TrackingController
+        reference : Reference
+            From :meth:`reference`.
+        speed, config : SpeedConfig, EpisodeConfig
+            From :meth:`resolve`.
+        seed : int
+
+        Returns
+        -------
+        Driver
+        """
         raise NotImplementedError
 
     def outcome(self, driver: Any, reference: Reference, completion_time: float | None
                 ) -> tuple[Path, TrafficLog | None]:
-        """After the drive: the path the episode records as tracked, and the re-planner's log."""
+        """After the drive: the path the episode records as tracked, and the re-planner's log.
+
+        Parameters
+        ----------
+        driver : Driver
+        reference : Reference
+        completion_time : float or None
+            Simulation time the task was done, seconds (``None``: it was not).
+
+        Returns
+        -------
+        tuple of (Path, TrafficLog or None)
+        """
         raise NotImplementedError
 
 
@@ -361,6 +480,11 @@ class PathTask(Task):
     """A task driven by tracking one planned path to its end and stopping there.
 
     Done when the controller has stopped the car at the end of the path.
+
+    Parameters
+    ----------
+    map, seed, v_max, max_time_s, reverse
+        See :class:`Task`.
     """
 
     @property
@@ -375,8 +499,20 @@ class PathTask(Task):
     def agent_end_rule(self, tol_m: float, tol_rad: float, stop_speed: float) -> EndRule:
         """Stopped at the goal pose within the tolerances (no controller says it arrived).
 
-        Raises :class:`InputError` when the start already meets them: the car stands
-        there, so every episode would end on its first step.
+        Parameters
+        ----------
+        tol_m, tol_rad, stop_speed : float
+            Goal distance (m), heading error (rad), standing-still speed (m/s).
+
+        Returns
+        -------
+        StopAtGoal
+
+        Raises
+        ------
+        InputError
+            When the start already meets them: the car stands there, so every episode
+            would end on its first step.
         """
         rule = StopAtGoal(self.goal, tol_m, tol_rad, stop_speed)
         a, b = self.start, self.goal
@@ -392,7 +528,16 @@ class PathTask(Task):
         return rule
 
     def resolve(self, config: EpisodeConfig) -> tuple[SpeedConfig, EpisodeConfig]:
-        """The given speed settings, else the defaults with this task's cap; ``config`` as is."""
+        """The given speed settings, else the defaults with this task's cap; ``config`` as is.
+
+        Parameters
+        ----------
+        config : EpisodeConfig
+
+        Returns
+        -------
+        tuple of (SpeedConfig, EpisodeConfig)
+        """
         return config.speed or self.default_speed(), config
 
     def reference(
@@ -400,7 +545,14 @@ class PathTask(Task):
     ) -> Reference:
         """Plan with the registered planner ``planner``, or take a given plan or path.
 
-        ``options``: the named planner's keyword arguments (its config's fields).
+        Parameters
+        ----------
+        planner, seed, budget, options
+            As :meth:`Task.reference`; ``seed``, ``budget`` and ``options`` plan a name.
+
+        Returns
+        -------
+        Reference
 
         Raises
         ------

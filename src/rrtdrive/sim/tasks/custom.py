@@ -130,7 +130,17 @@ class CustomTask(PathTask):
         return {"map": self.map.name, "reverse": bool(self.reverse)}
 
     def build_road(self, np_random: np.random.Generator, history: bool) -> Road:
-        """One undrawn lane; the map's obstacles (and walls when ``closed``)."""
+        """One undrawn lane; the map's obstacles (and walls when ``closed``).
+
+        Parameters
+        ----------
+        np_random, history
+            As :meth:`Task.build_road`.
+
+        Returns
+        -------
+        Road
+        """
         return populate_road(
             plain_network(self.map.bounds), self.map, np_random, history, walls=self.closed
         )

@@ -112,7 +112,17 @@ class OvertakeTask(PathTask):
         )
 
     def build_road(self, np_random: np.random.Generator, history: bool) -> Road:
-        """The two-way road, the stopped car and the road edges, the oncoming cars."""
+        """The two-way road, the stopped car and the road edges, the oncoming cars.
+
+        Parameters
+        ----------
+        np_random, history
+            As :meth:`Task.build_road`.
+
+        Returns
+        -------
+        Road
+        """
         net = two_way_network(self.map.bounds, self.lane_y, self.lane_width)
         return populate_road(
             net, self.map, np_random, history, vehicle_obstacles=self.vehicle_obstacles,
@@ -130,7 +140,18 @@ class OvertakeTask(PathTask):
         return VideoCamera((960, 320), 9.0, ((m.bounds[0] + m.bounds[2]) / 2, lane_y + 2.0))
 
     def success_part(self, episode: Episode) -> SuccessPart:
-        """Past the stopped car (all body corners beyond its front) and back in the ego lane."""
+        """Past the stopped car (all body corners beyond its front) and back in the ego lane.
+
+        Parameters
+        ----------
+        episode : Episode
+            A finished episode of this task (its final state is judged).
+
+        Returns
+        -------
+        SuccessPart
+            ``passed_lead`` and ``back_in_lane`` set, both required.
+        """
         final = episode.log.states[-1]
         lead = self.map.obstacles[self.lead_index]
         body = footprint_corners(final[:3], self.vehicle)
@@ -145,6 +166,19 @@ class OvertakeTask(PathTask):
         """The gate that holds the ego before the oncoming lane, and the cars it watches.
 
         ``None`` without oncoming cars or when ``path`` never enters the oncoming lane.
+
+        Parameters
+        ----------
+        env : SceneEnv
+            The built scene; the gate watches its moving vehicles other than the ego.
+        path : Path
+            The path to be tracked.
+        speed : SpeedConfig
+            The controller's speed profile settings (they time the crossing).
+
+        Returns
+        -------
+        tuple of (OncomingGate, sequence of highway-env vehicles) or None
         """
         if not self.oncoming:
             return None
@@ -167,7 +201,17 @@ class OvertakeTask(PathTask):
         config: EpisodeConfig,
         seed: int,
     ) -> Driver:
-        """A path tracker held by the oncoming-traffic gate (when there is oncoming traffic)."""
+        """A path tracker held by the oncoming-traffic gate (when there is oncoming traffic).
+
+        Parameters
+        ----------
+        env, controller, reference, speed, config, seed
+            As :meth:`Task.make_driver`; ``config`` and ``seed`` are unused.
+
+        Returns
+        -------
+        PathTracker
+        """
         assert reference.path is not None
         gate = self.oncoming_gate(env, reference.path, speed)
         if gate is None:

@@ -77,6 +77,25 @@ def overtake_complete(
     within the ego lane, its heading is within 10° of the lane's, and its rear
     bumper is at least ``gap`` metres beyond the lead car's front bumper.
 
+    Parameters
+    ----------
+    ego_rear : sequence of float
+        The ego's rear-axle pose ``(x, y, yaw)`` (metres, radians; extra entries ignored).
+    lead_centre : sequence of float
+        ``(x, y)`` of the lead car's body centre.
+    lead_length : float
+        The lead car's length in metres.
+    lane_y, lane_width : float
+        Centre line and width of the ego lane, metres.
+    vehicle : VehicleParams
+        The ego car (its body).
+    gap : float
+        Least distance from the lead's front bumper to the ego's rearmost corner, metres.
+
+    Returns
+    -------
+    bool
+
     Examples
     --------
     >>> from rrtdrive.types import VehicleParams
@@ -97,6 +116,17 @@ def traffic_map(vehicle: VehicleParams | None = None, start: Pose | None = None)
     ego lane is centred on y = 44 (driving +x), the oncoming lane on y = 48. No
     static obstacles: the lead car and the oncoming cars move. The goal is the far
     end of the ego lane (the episode ends earlier, when the overtake is complete).
+
+    Parameters
+    ----------
+    vehicle : VehicleParams, optional
+        The ego car (``None``: the default car).
+    start : Pose, optional
+        Rear-axle start pose (``None``: x = 5 m on the ego lane's centre, heading +x).
+
+    Returns
+    -------
+    Map
     """
     vehicle = vehicle or VehicleParams()
     return Map(
@@ -116,6 +146,15 @@ def traffic_speed_config(scenario: Task) -> SpeedConfig:
     one (``jerk_brake_max=None``, ``stop_taper=False``): the re-planner's space-time
     checks time plans by the speed profile itself, and the traffic results
     (docs/traffic.md) were measured with these settings.
+
+    Parameters
+    ----------
+    scenario : Task
+        Gives the cap ``v_max`` (m/s).
+
+    Returns
+    -------
+    SpeedConfig
     """
     return SpeedConfig(
         v_max=scenario.v_max, accel=1.5, a_lat_max=2.0, jerk_brake_max=None, stop_taper=False
@@ -257,7 +296,20 @@ class OvertakeTrafficTask(Task):
         return (TRAFFIC_ROAD_LENGTH - 10.0 - (x + self.vehicle.length / 2.0)) / speed
 
     def check_time_limit(self, max_time_s: float, name: str) -> None:
-        """Refuse a time limit longer than :attr:`road_time_s` (an overtake judged on no road)."""
+        """Refuse a time limit longer than :attr:`road_time_s` (an overtake judged on no road).
+
+        Parameters
+        ----------
+        max_time_s : float
+            The time limit, seconds.
+        name : str
+            The field that gave it (the message's first word).
+
+        Raises
+        ------
+        InputError
+            When ``max_time_s`` exceeds :attr:`road_time_s`.
+        """
         if self.lead is not None and max_time_s > self.road_time_s:
             speed = self.lead[1]
             raise InputError(
@@ -277,7 +329,17 @@ class OvertakeTrafficTask(Task):
     # ------------------------------------------------------------------ scene
 
     def build_road(self, np_random: np.random.Generator, history: bool) -> Road:
-        """The long two-way road, the moving lead car first, then the oncoming stream."""
+        """The long two-way road, the moving lead car first, then the oncoming stream.
+
+        Parameters
+        ----------
+        np_random, history
+            As :meth:`Task.build_road`.
+
+        Returns
+        -------
+        Road
+        """
         net = two_way_network(self.map.bounds, self.lane_y, self.lane_width)
         return populate_road(
             net, self.map, np_random, history, lead=self.lead, lead_model=self.lead_model,
@@ -303,14 +365,36 @@ class OvertakeTrafficTask(Task):
         self, ego_rear: Sequence[float], lead_centre: Sequence[float], lead_length: float,
         gap: float,
     ) -> bool:
-        """:func:`overtake_complete` in this task's lane, for this task's car."""
+        """:func:`overtake_complete` in this task's lane, for this task's car.
+
+        Parameters
+        ----------
+        ego_rear, lead_centre, lead_length, gap
+            As :func:`overtake_complete`.
+
+        Returns
+        -------
+        bool
+        """
         return overtake_complete(
             ego_rear, lead_centre, lead_length, float(self.lane_y), float(self.lane_width),
             self.vehicle, gap,
         )
 
     def reached(self, ego: EgoVehicle, driver: Any) -> bool:
-        """The overtake is complete and the ego never crashed (highway-env's flag stays set)."""
+        """The overtake is complete and the ego never crashed (highway-env's flag stays set).
+
+        Parameters
+        ----------
+        ego : EgoVehicle
+            The ego car after the step.
+        driver : TrafficDriver
+            The re-planner; its ``lead`` car (``None``: not done) and ``config.complete_gap_m``.
+
+        Returns
+        -------
+        bool
+        """
         lead = driver.lead
         if lead is None or ego.crashed:
             return False
@@ -325,6 +409,15 @@ class OvertakeTrafficTask(Task):
 
         It ends on the move and has no goal pose to report; a timeout without a
         collision is safe following.
+
+        Parameters
+        ----------
+        episode : Episode
+            A finished episode of this task (its last logged state and lead car are judged).
+
+        Returns
+        -------
+        SuccessPart
         """
         log = episode.log
         final = log.states[-1]
@@ -346,6 +439,16 @@ class OvertakeTrafficTask(Task):
     def resolve(self, config: EpisodeConfig) -> tuple[SpeedConfig, EpisodeConfig]:
         """The traffic speed settings and the re-planning defaults, recorded in the config.
 
+        Parameters
+        ----------
+        config : EpisodeConfig
+            The episode's settings; ``speed`` and ``replan`` ``None`` take the defaults.
+
+        Returns
+        -------
+        tuple of (SpeedConfig, EpisodeConfig)
+            The speed settings, and ``config`` with both filled in.
+
         Raises
         ------
         InputError
@@ -361,6 +464,20 @@ class OvertakeTrafficTask(Task):
         self, planner: object, seed: int, budget: Budget, options: Mapping[str, Any] | None = None
     ) -> Reference:
         """Nothing planned ahead: the driver re-plans in the loop (only with its own planner).
+
+        Parameters
+        ----------
+        planner : object
+            Must be one of :attr:`PLANNERS` (a name).
+        seed, budget
+            Unused (the driver plans with the episode seed's planner stream).
+        options : mapping of str to Any, optional
+            Must be empty.
+
+        Returns
+        -------
+        Reference
+            No plan, no path: :attr:`Reference.plans_while_driving`.
 
         Raises
         ------
@@ -389,7 +506,18 @@ class OvertakeTrafficTask(Task):
         config: EpisodeConfig,
         seed: int,
     ) -> TrafficDriver:
-        """The re-planner, its planner drawing from the episode seed's planner stream."""
+        """The re-planner, its planner drawing from the episode seed's planner stream.
+
+        Parameters
+        ----------
+        env, controller, reference, speed, config, seed
+            As :meth:`Task.make_driver`; ``config.replan`` set by :meth:`resolve`,
+            ``reference`` unused.
+
+        Returns
+        -------
+        TrafficDriver
+        """
         _, plan_rng, _ = scenario_rngs(seed)
         replan = config.replan
         assert isinstance(replan, ReplanConfig)  # resolved by :meth:`resolve`
@@ -397,6 +525,20 @@ class OvertakeTrafficTask(Task):
 
     def outcome(self, driver: Any, reference: Reference, completion_time: float | None
                 ) -> tuple[Path, TrafficLog | None]:
-        """The reference actually tracked (stitched from the plans) and the re-planner's log."""
+        """The reference actually tracked (stitched from the plans) and the re-planner's log.
+
+        Parameters
+        ----------
+        driver : TrafficDriver
+            The re-planner after the drive.
+        reference : Reference
+            Unused.
+        completion_time : float or None
+            When the overtake was complete, seconds (``None``: it was not).
+
+        Returns
+        -------
+        tuple of (Path, TrafficLog)
+        """
         traffic = driver.finish(completion_time)
         return traffic.executed, traffic

@@ -145,7 +145,17 @@ class ParallelParkingTask(PathTask):
         }
 
     def build_road(self, np_random: np.random.Generator, history: bool) -> Road:
-        """The street as one drawn lane (kerb and far side solid); parked cars; walls."""
+        """The street as one drawn lane (kerb and far side solid); parked cars; walls.
+
+        Parameters
+        ----------
+        np_random, history
+            As :meth:`Task.build_road`.
+
+        Returns
+        -------
+        Road
+        """
         xmin, ymin, xmax, ymax = self.map.bounds
         net = RoadNetwork()
         solid = (LineType.CONTINUOUS_LINE, LineType.CONTINUOUS_LINE)

@@ -135,5 +135,15 @@ class ParkingTask(PathTask):
         )
 
     def build_road(self, np_random: np.random.Generator, history: bool) -> Road:
-        """One lane per spot; the lot's obstacles and the walls."""
+        """One lane per spot; the lot's obstacles and the walls.
+
+        Parameters
+        ----------
+        np_random, history
+            As :meth:`Task.build_road`.
+
+        Returns
+        -------
+        Road
+        """
         return populate_road(parking_network(), self.map, np_random, history, walls=True)

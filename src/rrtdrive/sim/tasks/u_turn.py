@@ -121,7 +121,17 @@ class UTurnTask(PathTask):
         }
 
     def build_road(self, np_random: np.random.Generator, history: bool) -> Road:
-        """Two drawn lanes (one each way) between solid kerbs; the walls close the street."""
+        """Two drawn lanes (one each way) between solid kerbs; the walls close the street.
+
+        Parameters
+        ----------
+        np_random, history
+            As :meth:`Task.build_road`.
+
+        Returns
+        -------
+        Road
+        """
         xmin, ymin, xmax, ymax = self.map.bounds
         half = (ymax - ymin) / 2
         net = RoadNetwork()
