@@ -26,6 +26,12 @@ PACKAGES = (
     "rrtdrive.evaluation",
     "rrtdrive.collision",
     "rrtdrive.bench",
+    "rrtdrive.sim.tasks",
+    "rrtdrive.planning.spacetime",
+    "rrtdrive.planning.hybrid",
+    "rrtdrive.planning.smoothing",
+    "rrtdrive.planning.improved",
+    "rrtdrive.planning.diagnosis",
 )
 
 DOCS = pathlib.Path(__file__).resolve().parents[1] / "docs"

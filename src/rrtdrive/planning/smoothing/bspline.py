@@ -194,6 +194,18 @@ def parameter_grid(spline: BSpline, spacing: float) -> np.ndarray:
     the bound between neighbours is at most ``spacing``, which bounds the arc
     length between them. Both ends are included.
 
+    Parameters
+    ----------
+    spline : scipy.interpolate.BSpline
+        A planar curve (coefficients ``(n, 2)``).
+    spacing : float
+        Largest arc length between consecutive parameters (m).
+
+    Returns
+    -------
+    numpy.ndarray
+        Sorted parameters, from the start of the domain to its end.
+
     Examples
     --------
     >>> spl = fit_bspline(np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]))

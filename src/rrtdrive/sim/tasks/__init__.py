@@ -44,7 +44,6 @@ from rrtdrive.maps import Map
 from rrtdrive.sim.scenes import scenario_rngs
 from rrtdrive.sim.tasks.base import (
     DEFAULT_PLANNER,
-    PathTask,
     Reference,
     SuccessPart,
     Task,
@@ -65,6 +64,7 @@ from rrtdrive.sim.tasks.overtake_traffic import (
 )
 from rrtdrive.sim.tasks.parallel_parking import ParallelParkingTask
 from rrtdrive.sim.tasks.parking import ParkingTask
+from rrtdrive.sim.tasks.path_task import PathTask
 from rrtdrive.sim.tasks.u_turn import UTurnTask
 from rrtdrive.types import InputError, VehicleParams, require_int
 from rrtdrive.values import did_you_mean

@@ -19,7 +19,8 @@ from rrtdrive.maps import Map
 from rrtdrive.planning.result import same_pose
 from rrtdrive.sim.loop import MAX_EPISODE_S
 from rrtdrive.sim.scenes import plain_network, populate_road
-from rrtdrive.sim.tasks.base import PathTask, TaskKind
+from rrtdrive.sim.tasks.base import TaskKind
+from rrtdrive.sim.tasks.path_task import PathTask
 from rrtdrive.types import InputError, Pose, require_positive
 
 __all__ = ["CustomTask"]

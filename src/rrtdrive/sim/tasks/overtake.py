@@ -14,7 +14,8 @@ from rrtdrive.controllers import SpeedConfig, TrackingController
 from rrtdrive.maps import LANE_WIDTH, Obstacle, overtake_map
 from rrtdrive.sim.loop import Driver, PathTracker
 from rrtdrive.sim.scenes import SceneView, populate_road, two_way_network
-from rrtdrive.sim.tasks.base import PathTask, Reference, SuccessPart, TaskKind, VideoCamera
+from rrtdrive.sim.tasks.base import Reference, SuccessPart, TaskKind, VideoCamera
+from rrtdrive.sim.tasks.path_task import PathTask
 from rrtdrive.sim.traffic import OncomingGate, conflict_zone
 from rrtdrive.types import InputError, Path, Pose, VehicleParams, require_int
 from rrtdrive.vehicle import footprint_corners

@@ -12,7 +12,8 @@ from highway_env.road.road import Road, RoadNetwork
 
 from rrtdrive.maps import Map, Obstacle
 from rrtdrive.sim.scenes import populate_road
-from rrtdrive.sim.tasks.base import PathTask, TaskKind
+from rrtdrive.sim.tasks.base import TaskKind
+from rrtdrive.sim.tasks.path_task import PathTask
 from rrtdrive.types import InputError, Pose, VehicleParams
 
 __all__ = [

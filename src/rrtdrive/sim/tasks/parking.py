@@ -13,7 +13,8 @@ from highway_env.road.road import Road
 
 from rrtdrive.maps import PARKING_EMPTY_SPOTS, parking_goal_pose, parking_lot_map
 from rrtdrive.sim.scenes import parking_network, populate_road
-from rrtdrive.sim.tasks.base import PathTask, TaskKind
+from rrtdrive.sim.tasks.base import TaskKind
+from rrtdrive.sim.tasks.path_task import PathTask
 from rrtdrive.types import InputError, Pose, VehicleParams
 
 __all__ = ["ParkingTask", "parse_spot", "reverse_in_goal"]
