@@ -10,6 +10,7 @@ from __future__ import annotations
 import functools
 
 import numpy as np
+import pytest
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -29,7 +30,8 @@ def _reference_exact(checker: CollisionChecker, poses: np.ndarray, clearance: fl
         xmin, ymin = xmin + clearance, ymin + clearance
         xmax, ymax = xmax - clearance, ymax - clearance
     x, y = corners[..., 0], corners[..., 1]
-    inside = ((x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax)).all(axis=1)
+    # Strict since session 41 (a corner on the bounds touches them); 44c06ab had <=.
+    inside = ((x > xmin) & (x < xmax) & (y > ymin) & (y < ymax)).all(axis=1)
     union = checker.obstacle_union
     if union.is_empty:
         return inside
@@ -108,3 +110,36 @@ def test_polygons_are_shapelys() -> None:
         got, want = test.polygons(corners), shapely.polygons(corners)
         assert len(got) == n
         assert all(shapely.to_wkb(a) == shapely.to_wkb(b) for a, b in zip(got, want, strict=True))
+
+
+def test_a_body_touching_the_bounds_collides_as_the_verifier_says() -> None:
+    """A corner exactly on the bounds (or on the bounds shrunk by the clearance) is not free.
+
+    As touching an obstacle (``intersects``) and as :func:`rrtdrive.verify.verify_path`
+    and the map checks judge it; a tenth of a millimetre inside is free.
+    """
+    from rrtdrive.maps import Map
+    from rrtdrive.types import Path, Pose, VehicleParams
+    from rrtdrive.verify import verify_path
+
+    car = VehicleParams()
+    back, half = car.rear_overhang, car.width / 2.0
+    checker = CollisionChecker((0.0, 0.0, 40.0, 40.0), (), car)
+    for wanted in (0.0, 0.15):
+        for pose, axis in (([back + wanted, 5.0, 0.0], 0), ([8.0, half + wanted, 0.0], 1)):
+            on = np.array([pose])
+            # The clearance the nearest corner lands on exactly (0.15 itself rounds).
+            clearance = float(footprint_corners(on, car)[0, :, axis].min())
+            assert clearance == pytest.approx(wanted, abs=1e-12)
+            assert not checker.poses_free(on, clearance).any()
+            assert not checker.rectangles_free(on, clearance).any()
+            assert not checker.pose_free(pose, clearance)
+            off = on.copy()
+            off[0, axis] += 1e-4
+            assert checker.poses_free(off, clearance).all()
+    xs = np.arange(0.0, 3.01, 0.1)
+    rows = np.column_stack([back + xs, 5 + 0 * xs, 0 * xs, 0 * xs, 1 + 0 * xs])
+    m = Map("m", (0.0, 0.0, 40.0, 40.0), (), Pose(back, 5, 0), Pose(back + 3.0, 5, 0),
+            check_query=False)
+    assert verify_path(m, Path(rows, np.zeros((0, 2)))).collides_with == "the bounds"
+    assert not checker.path_free(rows)[0]

@@ -2,7 +2,7 @@
 
 :class:`RectangleTest` is what :class:`~rrtdrive.collision.CollisionChecker`'s
 exact test runs once its disc screens cannot decide: the body rectangle must lie
-inside the bounds box shrunk by the clearance (compared exactly, corner by corner)
+strictly inside the bounds box shrunk by the clearance (compared exactly, corner by corner)
 and keep the clearance from the prepared shapely union of the obstacles. It is
 called thousands of times per search with a handful of poses, so its fixed cost
 (the array calls around one shapely predicate) is what it is written for.
@@ -108,8 +108,8 @@ class RectangleTest:
     def free(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
         """Boolean ``(N,)``: True where the rectangle keeps ``clearance`` from everything.
 
-        That is: inside the bounds shrunk by ``clearance`` and farther than
-        ``clearance`` from the union (not touching it when ``clearance`` is 0).
+        That is: strictly inside the bounds shrunk by ``clearance`` and farther than
+        ``clearance`` from the union (touching neither when ``clearance`` is 0).
         """
         p = np.asarray(poses, dtype=float).reshape(-1, 3)
         if not len(p):
@@ -125,11 +125,13 @@ class RectangleTest:
             )
         lo = np.minimum.reduce(corners, axis=(0, 1)).tolist()
         hi = np.maximum.reduce(corners, axis=(0, 1)).tolist()
-        if lo[0] >= xmin and lo[1] >= ymin and hi[0] <= xmax and hi[1] <= ymax:
+        # Strictly inside: a corner on the (shrunk) bounds touches them, as a body
+        # touching an obstacle, or at exactly ``clearance`` from one, collides.
+        if lo[0] > xmin and lo[1] > ymin and hi[0] < xmax and hi[1] < ymax:
             inside, test = None, corners
         else:
             x, y = corners[..., 0], corners[..., 1]
-            inside = ((x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax)).all(axis=1)
+            inside = ((x > xmin) & (x < xmax) & (y > ymin) & (y < ymax)).all(axis=1)
             test = corners[inside]
             if not len(test):
                 return inside
