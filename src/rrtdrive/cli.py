@@ -59,7 +59,10 @@ EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 #: Suffixes ``plan --plot`` can write (matplotlib's Agg formats we promise).
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 #: The planner's fields as ``plan``'s flags, for its messages (``planner.step: ...``).
-PLANNER_FLAGS = {"planner": "--planner", "planner.step": "--step", "planner.disable": "--disable"}
+PLANNER_FLAGS = {
+    "planner": "--planner", "planner.step": "--step", "hybrid.step": "--step",
+    "planner.disable": "--disable",
+}
 
 
 class _Parser(argparse.ArgumentParser):

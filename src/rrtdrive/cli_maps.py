@@ -84,6 +84,8 @@ def _export_folder(text: str, names: Sequence[str]) -> pathlib.Path:
     if not text.strip():
         raise InputError("--export: expected a folder, got an empty value")
     out = pathlib.Path(text)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--export: {out} is a file; give a folder (it is created if missing)")
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

@@ -577,6 +577,8 @@ def resolve_map(
         For an unknown name, an unreadable or malformed file, or a bad pose, naming
         the field.
     """
+    if spec == "":  # an unset shell variable; as a path it is the current folder
+        raise InputError("map: needs a built-in map name or a map .json file, got an empty one")
     if spec in BUILTIN_MAPS or not names_map_file(spec):
         m = builtin_map(spec)
         if vehicle is None and start is None and goal is None and check_query:

@@ -237,7 +237,9 @@ def plot_plan(
     # the title's first line and the axis label off).
     extra = max(0, wrapped.count("\n") - 1) * _TITLE_PT * 1.25 / 72
     fig.set_figheight(height_in + extra)
-    ax.set_title(wrapped, loc="left", fontsize=_TITLE_PT)
+    # The default title is free text: a map named "$x^$" is no formula (mathtext raised);
+    # a title given is matplotlib's to read, as anywhere else.
+    ax.set_title(wrapped, loc="left", fontsize=_TITLE_PT, parse_math=title is not None)
     # Beside the axes, outside them: inside, it covered a corner of the map (a goal in
     # the garage's top right bays hid under it).
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)

@@ -97,6 +97,8 @@ def _read_plan(source: str) -> dict[str, Any]:
     from rrtdrive.json_input import parse_json, read_capped
 
     label = "stdin" if source == "-" else source
+    if source == "":
+        raise InputError("plan: needs a plan .json file (or - for stdin), got an empty one")
     try:
         if source == "-":
             # Bytes, so a file that is not UTF-8 is named as such whatever the locale
@@ -111,6 +113,14 @@ def _read_plan(source: str) -> dict[str, Any]:
     data = parse_json(raw, "plan", label)
     if not isinstance(data, dict) or "path" not in data:
         raise InputError(f"plan: {label} has no \"path\" (expected the JSON of rrtdrive plan)")
+    from rrtdrive.types import PlanStatus
+
+    # Printed in the verdict line: only a status rrtdrive writes (a newline split the line).
+    statuses = [s.value for s in PlanStatus]
+    if "status" in data and data["status"] not in statuses:
+        raise InputError(
+            f"plan.status: must be one of {statuses}, got {brief_repr(data['status'])}"
+        )
     return data
 
 

@@ -294,7 +294,9 @@ class LocalBackend:
             timeouts = [
                 slot.started + self.run_timeout_s - now for slot in slots if slot.task is not None
             ] + [slot.started + self.startup_timeout_s - now for slot in slots if not slot.ready]
-            timeout = max(0.0, min(timeouts)) if timeouts else None
+            # An hour at most per wait (the loop re-checks the deadlines): the OS wait
+            # overflows on a timeout past ~1e9 s, which a generous --run-timeout can be.
+            timeout = min(max(0.0, min(timeouts)), 3600.0) if timeouts else None
             ready = set(wait(waitables, timeout=timeout))
             retired: list[int] = []
             for k, slot in enumerate(slots):

@@ -148,7 +148,9 @@ def config_from_args(args: argparse.Namespace) -> Any:
     """The :class:`~rrtdrive.bench.grid.BenchConfig` of parsed arguments (flags over TOML)."""
     from rrtdrive.bench.config_file import config_from_mapping, load_toml
 
-    values: dict[str, Any] = load_toml(args.config) if args.config else {}
+    if args.config == "":  # an unset shell variable: not "no config"
+        raise InputError("--config: needs a file name, got an empty one")
+    values: dict[str, Any] = load_toml(args.config) if args.config is not None else {}
     values.update({k: getattr(args, k) for k in given_flags(args)})  # flags over TOML
     if args.no_plots:
         values["plots"] = False

@@ -40,7 +40,8 @@ def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
 
     p = FsPath(path)
     try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
+        # utf-8-sig: a byte-order mark (Windows editors write one) is no error, as in maps.
+        data = tomllib.loads(p.read_text(encoding="utf-8-sig"))
     except FileNotFoundError:
         raise InputError(f"config: no such file {str(p)!r}") from None
     except (OSError, UnicodeDecodeError) as exc:

@@ -344,15 +344,16 @@ class BenchConfig:
                         f"in a grid); {others[0]!r} cannot drive it: bench {s} in a grid of "
                         f"its own with --planners {own[0]}"
                     )
-            from rrtdrive.controllers import CONTROLLERS
-
             if not self.controllers:
                 raise InputError("controllers: scenario runs need at least one controller")
-            for c in self.controllers:
-                if c not in CONTROLLERS:
-                    raise InputError(
-                        f"controllers: unknown controller {c!r}; choose from {sorted(CONTROLLERS)}"
-                    )
+        from rrtdrive.controllers import CONTROLLERS
+
+        # Named even where no run drives (a bench of maps): a typo is no silent no-op.
+        for c in self.controllers:
+            if c not in CONTROLLERS:
+                raise InputError(
+                    f"controllers: unknown controller {c!r}; choose from {sorted(CONTROLLERS)}"
+                )
 
     @property
     def runs(self) -> int:

@@ -306,6 +306,12 @@ def write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[Fs
     import matplotlib
 
     matplotlib.use("Agg")
+    # Names are free text: a map called "$x^$" is no formula (mathtext raised on it).
+    with matplotlib.rc_context({"text.parse_math": False}):
+        return _write_plots(rows, out)
+
+
+def _write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[FsPath]:
     from matplotlib.figure import Figure
     from matplotlib.ticker import MaxNLocator
 

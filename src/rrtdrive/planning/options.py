@@ -8,7 +8,31 @@ import numpy as np
 
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
-__all__ = ["check_probability", "check_count", "check_flag", "check_step", "check_known"]
+__all__ = [
+    "MAX_NODES",
+    "MAX_RADIUS_FACTOR",
+    "MAX_STEP_M",
+    "MAX_TREE_STEP_M",
+    "MIN_SPACING_M",
+    "check_probability",
+    "check_count",
+    "check_flag",
+    "check_step",
+    "check_known",
+]
+
+# Upper (or lower) bounds on options that size arrays or overflow arithmetic: beyond
+# them a typo ("1e20") would end in a MemoryError or an OverflowError, not an answer.
+#: Longest tree step (m): nothing is sampled along a tree edge, but squares of it are.
+MAX_TREE_STEP_M = 1000.0
+#: Longest Hybrid A* primitive step (m): each is sampled every ``check_spacing``.
+MAX_STEP_M = 100.0
+#: Shortest sampling or checking spacing along a primitive or shot (m).
+MIN_SPACING_M = 0.01
+#: Largest turning radius, as a multiple of the car's smallest, for a planned turn.
+MAX_RADIUS_FACTOR = 100.0
+#: Largest tree a planner may preallocate (nodes).
+MAX_NODES = 10_000_000
 
 def check_probability(name: str, value: float) -> float:
     """Return ``value`` as a float in ``[0, 1)`` or raise :class:`InputError` naming ``name``.
@@ -43,8 +67,16 @@ def check_flag(name: str, value: bool) -> bool:
 
 
 def check_step(value: float) -> float:
-    """Validate the ``planner.step`` option (metres, > 0)."""
+    """Validate the ``planner.step`` option (metres, > 0 and at most :data:`MAX_TREE_STEP_M`).
+
+    Examples
+    --------
+    >>> check_step(2)
+    2.0
+    """
     require_positive("planner.step", value)
+    if value > MAX_TREE_STEP_M:
+        raise InputError(f"planner.step: must be at most {MAX_TREE_STEP_M:g} m, got {value!r}")
     return float(value)
 
 

@@ -27,7 +27,13 @@ from rrtdrive.planning.base import (
     step_towards,
 )
 from rrtdrive.planning.edges import EdgeTester
-from rrtdrive.planning.options import check_count, check_flag, check_probability, check_step
+from rrtdrive.planning.options import (
+    MAX_NODES,
+    check_count,
+    check_flag,
+    check_probability,
+    check_step,
+)
 from rrtdrive.planning.result import run_query, search_result
 from rrtdrive.planning.sampling import SampleSource
 from rrtdrive.types import Budget, InputError, PlanResult, require_positive
@@ -98,6 +104,10 @@ class RRTStarPlanner:
         if self.max_nodes < 2:
             raise InputError(
                 f"planner.max_nodes: must be >= 2 (start and goal), got {self.max_nodes}"
+            )
+        if self.max_nodes > MAX_NODES:  # the tree is preallocated
+            raise InputError(
+                f"planner.max_nodes: must be at most {MAX_NODES}, got {self.max_nodes}"
             )
         if goal_radius is not None:
             require_positive("planner.goal_radius", goal_radius)

@@ -8,7 +8,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from rrtdrive.planning.options import check_known
+from rrtdrive.planning.options import MAX_RADIUS_FACTOR, MAX_STEP_M, MIN_SPACING_M, check_known
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
 __all__ = ["CURVES", "TIGHT_SOLUTIONS_FACTOR", "HybridConfig", "hybrid_with"]
@@ -309,10 +309,24 @@ class HybridConfig:
             "check_spacing", "sample_spacing",
         ):  # fmt: skip
             require_positive(f"hybrid.{name}", getattr(self, name))
+        # Bounds that keep the primitives' and shots' sampled arrays in memory: a
+        # primitive is sampled every check_spacing metres, a turn's length is its radius's.
+        for name in ("check_spacing", "sample_spacing"):
+            if getattr(self, name) < MIN_SPACING_M:
+                raise InputError(
+                    f"hybrid.{name}: must be at least {MIN_SPACING_M:g} m, "
+                    f"got {getattr(self, name)!r}"
+                )
         if self.step <= self.xy_resolution * math.sqrt(2.0):
+            diagonal = self.xy_resolution * math.sqrt(2.0)
+            # Named by the field the user changed (a default is nobody's typo).
+            if self.step == HybridConfig.step and self.xy_resolution != HybridConfig.xy_resolution:
+                raise InputError(
+                    f"hybrid.xy_resolution: the cell diagonal ({diagonal:.3f} m) must be "
+                    f"shorter than the step ({self.step:g} m), got {self.xy_resolution!r}"
+                )
             raise InputError(
-                f"hybrid.step: must exceed the cell diagonal "
-                f"{self.xy_resolution * math.sqrt(2.0):.3f} m, got {self.step!r}"
+                f"hybrid.step: must exceed the cell diagonal {diagonal:.3f} m, got {self.step!r}"
             )
         if self.shot_bin > math.pi:  # a heading bin wider than half a turn: degrees, surely
             raise InputError(
@@ -340,6 +354,10 @@ class HybridConfig:
             require_finite(f"hybrid.{name}", value)
             if value < low:
                 raise InputError(f"hybrid.{name}: must be >= {low:g}, got {value!r}")
+            if name.endswith("radius_factor") and value > MAX_RADIUS_FACTOR:
+                raise InputError(
+                    f"hybrid.{name}: must be at most {MAX_RADIUS_FACTOR:g}, got {value!r}"
+                )
         for name in (
         "gear_change_cost", "steer_change_cost", "steer_cost", "body_clearance", "ramp_margin",
         "min_clearance", "shot_cell",
@@ -369,7 +387,7 @@ class HybridConfig:
         require_int("hybrid.turn_moves", self.turn_moves, minimum=0)
         require_int("hybrid.abreast_turns", self.abreast_turns, minimum=0)
         require_int("hybrid.lead_ins", self.lead_ins, minimum=0)
-        require_int("hybrid.coarse_factor", self.coarse_factor, minimum=2)
+        require_int("hybrid.coarse_factor", self.coarse_factor, minimum=2, maximum=64)
         require_int("hybrid.lattice_after", self.lattice_after, minimum=0)
         require_int("hybrid.lattice_headings", self.lattice_headings, minimum=4, maximum=72)
         require_int("hybrid.lattice_nodes", self.lattice_nodes, minimum=1, maximum=5_000_000)
@@ -381,6 +399,14 @@ class HybridConfig:
         if not 0.0 <= self.coarse_after <= 1.0:
             raise InputError(
                 f"hybrid.coarse_after: must be within [0, 1], got {self.coarse_after!r}"
+            )
+        # After coarse_factor and coarse_after: the coarse search's step is coarse_factor
+        # times this one (its own config, with no coarse stage, is checked as given).
+        factor = self.coarse_factor if self.coarsens else 1
+        if self.step * factor > MAX_STEP_M:
+            within = f" / coarse_factor = {MAX_STEP_M / factor:g} m" if factor > 1 else " m"
+            raise InputError(
+                f"hybrid.step: must be at most {MAX_STEP_M:g}{within}, got {self.step!r}"
             )
         for name in ("smooth", "arc_fallback", "reeds_shepp_heuristic", "persist"):
             if not isinstance(getattr(self, name), bool):

@@ -77,6 +77,8 @@ class FreeCellGraph:
         # Coarser on a huge map only: the built-in and benchmark maps (100 m a side or
         # less) are far below the limit; a 500 m map's finest search (0.25 m) gets 0.3 m.
         f = max(f, math.ceil(math.sqrt(nx * ny / MAX_FREE_CELLS)))
+        # A coarse cell bigger than the whole grid is the whole grid (bounds the padding).
+        f = min(f, max(nx, ny))
         while -(-nx // f) * -(-ny // f) > MAX_FREE_CELLS:
             f += 1
         NX, NY = -(-nx // f), -(-ny // f)

@@ -10,9 +10,9 @@ from typing import Any
 
 from rrtdrive.planning.hybrid.config import HybridConfig, hybrid_with
 from rrtdrive.planning.improved.fallback import MAX_FALLBACK_CANDIDATES
-from rrtdrive.planning.options import check_known
+from rrtdrive.planning.options import MAX_RADIUS_FACTOR, check_known, check_step
 from rrtdrive.planning.smoothing import SmoothingConfig, smoothing_with
-from rrtdrive.types import InputError, require_finite, require_int, require_positive
+from rrtdrive.types import InputError, require_finite, require_int
 
 __all__ = [
     "COMPONENTS",
@@ -275,7 +275,7 @@ class ImprovedConfig:
     hybrid: HybridConfig = field(default_factory=HybridConfig)
 
     def __post_init__(self) -> None:
-        require_positive("planner.step", self.step)
+        check_step(self.step)
         for name, kind in (("smoothing", SmoothingConfig), ("hybrid", HybridConfig)):
             if not isinstance(getattr(self, name), kind):
                 got = type(getattr(self, name)).__name__
@@ -308,9 +308,10 @@ class ImprovedConfig:
             )
         require_finite("planner.passage_bias", self.passage_bias)
         require_finite("planner.dubins_radius_factor", self.dubins_radius_factor)
-        if self.dubins_radius_factor < 1.0:
+        if not 1.0 <= self.dubins_radius_factor <= MAX_RADIUS_FACTOR:
             raise InputError(
-                f"planner.dubins_radius_factor: must be >= 1, got {self.dubins_radius_factor!r}"
+                f"planner.dubins_radius_factor: must lie in [1, {MAX_RADIUS_FACTOR:g}], "
+                f"got {self.dubins_radius_factor!r}"
             )
         if self.reverse_detour_ratio != math.inf:  # inf: the direct Dubins path always first
             require_finite("planner.reverse_detour_ratio", self.reverse_detour_ratio)

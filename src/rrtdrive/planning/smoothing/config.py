@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rrtdrive.planning.options import check_known
+from rrtdrive.planning.options import MAX_RADIUS_FACTOR, check_known
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
 
 __all__ = [
@@ -200,9 +200,11 @@ class SmoothingConfig:
             raise InputError(
                 f"smoothing.supplement_n: must lie in (0, 1), got {self.supplement_n!r}"
             )
-        if not 0.0 < self.kappa_safety <= 1.0:
+        # At least 1 / MAX_RADIUS_FACTOR: the design radius is 1 / (kappa_safety kappa_max).
+        if not 1.0 / MAX_RADIUS_FACTOR <= self.kappa_safety <= 1.0:
             raise InputError(
-                f"smoothing.kappa_safety: must lie in (0, 1], got {self.kappa_safety!r}"
+                f"smoothing.kappa_safety: must lie in [{1.0 / MAX_RADIUS_FACTOR:g}, 1], "
+                f"got {self.kappa_safety!r}"
             )
         if not 0.0 < self.fillet_max_angle <= math.pi / 2:
             raise InputError("smoothing.fillet_max_angle: must lie in (0, pi/2]")
