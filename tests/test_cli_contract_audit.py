@@ -127,6 +127,10 @@ def test_a_huge_run_timeout_is_no_traceback(capsys, tmp_path):
         "--no-plots", "--quiet",
     )
     within_contract(code, err, "--run-timeout")
+    if code == 0:  # the command recorded is the one run (main(argv), not sys.argv)
+        config = json.loads((tmp_path / "b" / "bench_config.json").read_text())
+        assert config["command"].startswith("rrtdrive bench --maps garage --planners")
+        assert "--run-timeout 1e10" in config["command"]
 
 
 def test_a_bench_file_with_a_byte_order_mark_is_read_or_named_so(capsys, tmp_path):

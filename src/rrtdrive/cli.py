@@ -493,6 +493,7 @@ def _main(argv: Sequence[str] | None) -> int:
         (chosen or parser).error(f"unrecognized arguments: {' '.join(extra)}")
     if getattr(args, "json", None) not in (None, "-") and names_stdout(args.json):
         args.json = "-"  # --json /dev/stdout: keep the human lines off stdout as for '-'
+    args.argv = argv  # what was run, for the records (main(argv) is not sys.argv)
     try:
         with sigterm_raises(), warnings_as_lines(f"rrtdrive {args.command}"):
             return int(args.func(args))

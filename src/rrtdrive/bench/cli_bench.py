@@ -210,7 +210,9 @@ def _run(args: argparse.Namespace) -> int:
     if cfg.reverse:
         for note in forward_only_notes(cfg.planners):
             print(f"rrtdrive bench: {note}", file=sys.stderr)
-    command = "rrtdrive " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    argv = getattr(args, "argv", None)
+    argv = sys.argv[1:] if argv is None else argv
+    command = "rrtdrive " + " ".join(shlex.quote(a) for a in argv)
     try:
         # A full disk while storing rows or writing the summary: one line, exit 1 (it was
         # a traceback); the rows stored so far stay, and a re-run resumes from them.
