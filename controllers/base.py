@@ -118,11 +118,28 @@ class Controller(Protocol):
     name: str
 
     def reset(self, path: Path) -> None:
-        """Start tracking ``path`` (clears all internal state)."""
+        """Start tracking ``path`` (clears all internal state).
+
+        Parameters
+        ----------
+        path : Path
+            The path to track: rear-axle samples ``[x, y, yaw, kappa, gear]``.
+        """
         ...
 
     def control(self, state: VehicleState) -> tuple[float, float]:
-        """Return ``(acceleration m/s^2, steering angle rad)`` for ``state``."""
+        """Return ``(acceleration m/s^2, steering angle rad)`` for ``state``.
+
+        Parameters
+        ----------
+        state : VehicleState
+            The car now: rear-axle pose, signed speed, current steering, time.
+
+        Returns
+        -------
+        accel, steer : float
+            Acceleration command (m/s^2) and front-wheel angle (rad, left positive).
+        """
         ...
 
 
@@ -296,6 +313,11 @@ class TrackingController:
         for a caller that drives the car otherwise (an agent) and tells the controller
         where it is, so that its profile and projection are the segment's.
 
+        Parameters
+        ----------
+        index : int
+            Index into :attr:`segments` (0: the path's first gear segment).
+
         Raises
         ------
         InputError
@@ -316,7 +338,21 @@ class TrackingController:
         return seg.s0 + seg.length
 
     def reset(self, path: Path, v_start: float = 0.0) -> None:
-        """Start tracking ``path`` (its first gear segment) from speed ``v_start``."""
+        """Start tracking ``path`` (its first gear segment) from speed ``v_start``.
+
+        Parameters
+        ----------
+        path : Path
+            The path to track, split into gear segments (:func:`gear_segments`).
+        v_start : float
+            The car's speed now, m/s (positive forward); the speed profile starts from it
+            (at least ``speed.v_launch`` with an instant actuator).
+
+        Raises
+        ------
+        InputError
+            When ``path`` is not a :class:`Path` or all its samples coincide.
+        """
         self.segments = self._split(path)
         self._manoeuvre = not path.is_forward_only
         self._start_segment(0, v_start, keep_state=False)
@@ -329,6 +365,18 @@ class TrackingController:
         ``v_start``) are rebuilt, but the PI integral, the last acceleration
         command (the jerk limit) and any steering memory carry on, so the commands
         do not jump when the reference is continuous. :meth:`reset` starts afresh.
+
+        Parameters
+        ----------
+        path : Path
+            The new path, split into gear segments as by :meth:`reset`.
+        v_start : float
+            The car's speed now, m/s (positive forward); the new profile starts from it.
+
+        Raises
+        ------
+        InputError
+            When ``path`` is not a :class:`Path` or all its samples coincide.
         """
         self.segments = self._split(path)
         self._manoeuvre = not path.is_forward_only
@@ -396,6 +444,11 @@ class TrackingController:
 
         A stop line for the speed loop (an oncoming-traffic gate); it stays until
         changed, and :meth:`reset` / :meth:`retarget` clear it.
+
+        Parameters
+        ----------
+        s : float or None
+            Arc length of the stop line from the start of the whole path, metres.
         """
         self.speed.stop_at = None if s is None else s - self._s0
 
@@ -403,6 +456,11 @@ class TrackingController:
         """Cap the acceleration command at ``accel`` m/s^2 (``None``: no cap).
 
         For a car-following law; it stays until changed and :meth:`reset` clears it.
+
+        Parameters
+        ----------
+        accel : float or None
+            Upper bound of the acceleration command, m/s^2 (a negative cap brakes).
         """
         self.speed.accel_cap = accel
 
@@ -410,7 +468,24 @@ class TrackingController:
         """Clear steering-controller state (override when there is some)."""
 
     def control(self, state: VehicleState) -> tuple[float, float]:
-        """``(acceleration, steering)`` for ``state``; see :class:`Controller`."""
+        """``(acceleration, steering)`` for ``state``; see :class:`Controller`.
+
+        Parameters
+        ----------
+        state : VehicleState
+            The car now: rear-axle pose, signed speed, current steering, time.
+
+        Returns
+        -------
+        accel, steer : float
+            Acceleration (m/s^2) and steering angle (rad, left positive) of the real
+            car; in reverse, the mirrored car's commands negated.
+
+        Raises
+        ------
+        RuntimeError
+            When called before :meth:`reset`.
+        """
         if self.projector is None:
             raise RuntimeError(f"{type(self).__name__}.control called before reset")
         if (
@@ -487,11 +562,36 @@ class TrackingController:
         return accel, steer
 
     def ff_kappa(self, proj: Projection) -> float:
-        """The path curvature for feed-forward: at :attr:`ff_preview` ahead of ``proj``."""
+        """The path curvature for feed-forward: at :attr:`ff_preview` ahead of ``proj``.
+
+        Parameters
+        ----------
+        proj : Projection
+            The rear axle's projection on the gear segment being driven.
+
+        Returns
+        -------
+        float
+            Curvature in 1/m (``proj.kappa`` with an instant actuator).
+        """
         if self.ff_preview <= 0.0:
             return proj.kappa
         return self.projector.point_at(proj.s + self.ff_preview)[3]  # type: ignore[union-attr]
 
     def steering(self, state: VehicleState, proj: Projection) -> float:
-        """Steering angle for ``state`` given its rear-axle projection ``proj``."""
+        """Steering angle for ``state`` given its rear-axle projection ``proj``.
+
+        Parameters
+        ----------
+        state : VehicleState
+            The car; in reverse, the mirrored car of the forward problem.
+        proj : Projection
+            Its rear axle's projection on the gear segment being driven.
+
+        Returns
+        -------
+        float
+            Steering angle in rad (left positive), before :meth:`control` clips it to
+            ``steer_limit`` and the actuator's reach.
+        """
         raise NotImplementedError

@@ -64,6 +64,16 @@ class GearSegment:
 def mirror_path(path: Path) -> Path:
     """The forward image of a reverse path: yaw turned by pi, curvature negated, gear +1.
 
+    Parameters
+    ----------
+    path : Path
+        The path to mirror (normally one reverse gear segment); its waypoints are kept.
+
+    Returns
+    -------
+    Path
+        The same positions with ``yaw + pi`` (not wrapped), ``-kappa`` and gear +1.
+
     Examples
     --------
     >>> xs = np.linspace(0.0, 2.0, 3)
@@ -101,6 +111,16 @@ def gear_segments(path: Path) -> list[GearSegment]:
     A forward-only path gives one segment whose ``path`` is ``path`` itself (so
     forward tracking is exactly what it was before gears existed). Segments with
     no length (a repeated row) are dropped.
+
+    Parameters
+    ----------
+    path : Path
+        The path to split at its cusps.
+
+    Returns
+    -------
+    list of GearSegment
+        In driving order; ``s0`` and ``length`` measured along ``path``.
 
     Examples
     --------

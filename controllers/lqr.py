@@ -165,7 +165,22 @@ class LQR(TrackingController):
         return k_e, k_psi
 
     def steering(self, state: VehicleState, proj: Projection) -> float:
-        """LQR steering angle with curvature feed-forward."""
+        """LQR steering angle with curvature feed-forward.
+
+        As :meth:`TrackingController.steering`.
+
+        Parameters
+        ----------
+        state : VehicleState
+            The car; in reverse, the mirrored car of the forward problem.
+        proj : Projection
+            Its rear axle's projection on the gear segment being driven.
+
+        Returns
+        -------
+        float
+            Steering angle in rad (left positive), before the steering limit.
+        """
         k_e, k_psi = self._gains(state.speed)
         reach = self.approach_angle * k_psi / k_e
         u = -(k_e * min(max(proj.cte, -reach), reach) + k_psi * self.heading_error)

@@ -104,7 +104,13 @@ class PathProjector:
         self.hint = 0
 
     def reset_hint(self, index: int = 0) -> None:
-        """Restart the local search at segment ``index``."""
+        """Restart the local search at segment ``index``.
+
+        Parameters
+        ----------
+        index : int
+            Segment from sample ``index`` to ``index + 1``; clipped to the path's segments.
+        """
         self.hint = max(0, min(index, self.n - 2))
 
     def _seg_dist2(self, i: int, px: float, py: float) -> float:
@@ -123,6 +129,17 @@ class PathProjector:
         Walks forward while the next segment is at least as near, else backward while
         the previous one is nearer: a few evaluations per control step, and progress
         stays continuous even where the path comes back near itself.
+
+        Parameters
+        ----------
+        px, py : float
+            The point, metres, in the path's frame.
+
+        Returns
+        -------
+        int
+            ``i``, the segment from sample ``i`` to ``i + 1`` (repeated samples dropped);
+            the next search starts there.
         """
         i = self.hint
         last = self.n - 2
@@ -143,7 +160,19 @@ class PathProjector:
         return i
 
     def project(self, px: float, py: float) -> Projection:
-        """Foot point of ``(px, py)`` on the path (with straight extensions at the ends)."""
+        """Foot point of ``(px, py)`` on the path (with straight extensions at the ends).
+
+        Parameters
+        ----------
+        px, py : float
+            The point, metres, in the path's frame.
+
+        Returns
+        -------
+        Projection
+            Foot point, arc length, heading, curvature (0 on the extensions) and signed
+            offset ``cte`` (left positive) of the point.
+        """
         i = self.nearest_segment(px, py)
         dx, dy = px - self.x[i], py - self.y[i]
         ux, uy = self.ux[i], self.uy[i]
@@ -176,6 +205,17 @@ class PathProjector:
 
         With ``arc_end`` the path goes on past its end on the circle of its last
         curvature instead.
+
+        Parameters
+        ----------
+        s : float
+            Arc length from the first sample, metres (negative before it).
+
+        Returns
+        -------
+        x, y, yaw, kappa : float
+            Position (m), heading (rad, unwrapped) and curvature (1/m), interpolated linearly
+            between samples; curvature 0 on a straight extension.
         """
         if s <= 0.0:
             yaw = self.yaw[0]

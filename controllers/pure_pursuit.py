@@ -105,7 +105,23 @@ class PurePursuit(TrackingController):
         self.lookahead = ld_min
 
     def steering(self, state: VehicleState, proj: Projection) -> float:
-        """Pure-pursuit steering angle (compensated on paths with gear changes)."""
+        """Pure-pursuit steering angle (compensated on paths with gear changes).
+
+        As :meth:`TrackingController.steering`.
+
+        Parameters
+        ----------
+        state : VehicleState
+            The car; in reverse, the mirrored car of the forward problem.
+        proj : Projection
+            Its rear axle's projection on the gear segment being driven.
+
+        Returns
+        -------
+        float
+            Steering angle in rad (left positive), before the steering limit; the
+            look-ahead used is kept in :attr:`lookahead` (metres).
+        """
         ld = min(max(self.ld_gain * abs(state.speed), self.ld_min), self.ld_max)
         ld = max(ld, abs(proj.cte) * self._far)
         self.lookahead = ld

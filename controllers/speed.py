@@ -230,6 +230,11 @@ class SpeedController:
 
         For a path that continues the current one (stitched at the car's position),
         so that the command does not jump; :meth:`reset` starts from scratch.
+
+        Parameters
+        ----------
+        profile : SpeedProfile
+            The new reference; arrival and any stop line (:attr:`stop_at`) are cleared.
         """
         self.profile = profile
         self.arrived = False
@@ -238,7 +243,13 @@ class SpeedController:
         self.line_taper = False
 
     def reset(self, profile: SpeedProfile) -> None:
-        """Track ``profile`` from scratch."""
+        """Track ``profile`` from scratch.
+
+        Parameters
+        ----------
+        profile : SpeedProfile
+            The reference; the integral, last command, stop line and cap are cleared.
+        """
         self.profile = profile
         self.integral = 0.0
         self.last_t = None
@@ -255,12 +266,44 @@ class SpeedController:
 
         A car at rest there has arrived: :meth:`control` holds it, and a gear segment
         no longer than that (a stub) ends as soon as it starts.
+
+        Parameters
+        ----------
+        s : float
+            Arc length along the profile, metres.
+
+        Returns
+        -------
+        bool
+            False before :meth:`reset`.
         """
         profile = self.profile
         return profile is not None and profile.length - s <= self.config.stop_distance
 
     def control(self, s: float, speed: float, t: float) -> float:
-        """Acceleration command for the car at arc length ``s`` with ``speed`` at time ``t``."""
+        """Acceleration command for the car at arc length ``s`` with ``speed`` at time ``t``.
+
+        Parameters
+        ----------
+        s : float
+            The car's arc length along the profile, metres (negative behind its start,
+            above ``profile.length`` past its end).
+        speed : float
+            The car's speed in the profile's direction of travel, m/s.
+        t : float
+            Simulation time, seconds; the step since the last call drives the integral
+            and the jerk limits.
+
+        Returns
+        -------
+        float
+            Acceleration command in m/s^2, within ``[a_min, a_max]``.
+
+        Raises
+        ------
+        RuntimeError
+            When called before :meth:`reset`.
+        """
         cfg = self.config
         profile = self.profile
         if profile is None:

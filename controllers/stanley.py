@@ -105,7 +105,23 @@ class Stanley(TrackingController):
         self.front = PathProjector(front_axle_path(path, self.vehicle.wheelbase))
 
     def steering(self, state: VehicleState, proj: Projection) -> float:
-        """Stanley steering angle."""
+        """Stanley steering angle.
+
+        As :meth:`TrackingController.steering`.
+
+        Parameters
+        ----------
+        state : VehicleState
+            The car; in reverse, the mirrored car of the forward problem.
+        proj : Projection
+            Its rear axle's projection; the front axle's search on the trace starts
+            at its segment.
+
+        Returns
+        -------
+        float
+            Steering angle in rad (left positive), before the steering limit.
+        """
         L = self.vehicle.wheelbase
         fx, fy = state.x + L * math.cos(state.yaw), state.y + L * math.sin(state.yaw)
         self.front.reset_hint(proj.index)  # type: ignore[union-attr]

@@ -105,12 +105,35 @@ def _registered(name: str, value: object) -> object:
 
 
 def is_registered_default(value: object) -> bool:
-    """Whether a ``gym.make`` keyword argument came from the id's registration."""
+    """Whether a ``gym.make`` keyword argument came from the id's registration.
+
+    Parameters
+    ----------
+    value : object
+        The argument's value as the environment receives it.
+
+    Returns
+    -------
+    bool
+        True for a :class:`RegisteredStr` or :class:`RegisteredDict`.
+    """
     return isinstance(value, (RegisteredStr, RegisteredDict))
 
 
 def plain_value(value: object) -> object:
-    """``value`` without its registration marker (a plain ``str`` or ``dict``)."""
+    """``value`` without its registration marker (a plain ``str`` or ``dict``).
+
+    Parameters
+    ----------
+    value : object
+        Any value; one that carries no marker is returned as it is.
+
+    Returns
+    -------
+    object
+        A :class:`RegisteredDict` as a new (shallow) ``dict``, a
+        :class:`RegisteredStr` as a ``str``, anything else unchanged.
+    """
     if isinstance(value, RegisteredStr):
         return str.__str__(value)
     if isinstance(value, RegisteredDict):
@@ -119,7 +142,18 @@ def plain_value(value: object) -> object:
 
 
 def scenario_text(value: object) -> str:
-    """A ``scenario`` as messages show it: a name quoted, a ``Map`` by its name."""
+    """A ``scenario`` as messages show it: a name quoted, a ``Map`` by its name.
+
+    Parameters
+    ----------
+    value : object
+        A scenario name (marked or not), a map, or anything a caller passed.
+
+    Returns
+    -------
+    str
+        ``'parking'``, ``the map 'lot'``, or a short repr of anything else.
+    """
     value = plain_value(value)
     if isinstance(value, str):
         return repr(value)
@@ -153,6 +187,23 @@ def apply_registration(
     to it, as every registered default does. A caller's ``scenario_options`` that is
     not a mapping is left for the configuration to refuse by name. A ``scenario`` the
     caller passes must be the id's own (``gym.make`` replaces it silently otherwise).
+
+    Parameters
+    ----------
+    scenario : object
+        The environment's ``scenario`` argument (the id's marked default, a caller's
+        name or map, or ``None``).
+    options : dict
+        The other keyword arguments ``gym.make`` passed; not modified.
+    merge : bool
+        Merge the registered ``scenario_options`` under the caller's (true when no
+        ``config=`` is given); else they are dropped.
+
+    Returns
+    -------
+    dict
+        A copy of ``options`` without the registration keywords, its
+        ``scenario_options`` merged when ``merge``.
 
     Raises
     ------

@@ -32,6 +32,17 @@ PACKAGES = (
     "rrtdrive.planning.smoothing",
     "rrtdrive.planning.improved",
     "rrtdrive.planning.diagnosis",
+    "rrtdrive.controllers",
+    "rrtdrive.envs",
+    "rrtdrive.maps",
+    "rrtdrive.vehicle",
+    "rrtdrive.speed_profile",
+    "rrtdrive.plotting",
+    "rrtdrive.verify",
+    "rrtdrive.types",
+    "rrtdrive.geometry",
+    "rrtdrive.stats",
+    "rrtdrive.commonroad_judge",
 )
 
 DOCS = pathlib.Path(__file__).resolve().parents[1] / "docs"

@@ -62,6 +62,14 @@ def warn_if_degrees(label: str, yaw: float) -> None:
 
     Such a yaw is a valid angle (it wraps), so it is planned as given; the warning
     says what it is taken as and what to write for degrees.
+
+    Parameters
+    ----------
+    label : str
+        What the yaw belongs to, as the warning names it (``"problem.start"``).
+    yaw : float
+        The angle as given, radians; warned about when ``2 pi < |yaw| <=``
+        :data:`MAX_YAW` (a larger one is refused where the pose is checked).
     """
     if _past_a_full_turn(yaw):
         wrapped = math.degrees(math.remainder(yaw, 2.0 * math.pi))

@@ -6,8 +6,7 @@ The JSON format (SPEC §2)::
      "obstacles": [{"center": [50.0, 20.0], "size": [4.3, 1.8], "yaw": 0.0}],
      "start": [5.0, 5.0, 0.0], "goal": [90.0, 80.0, 1.5708]}
 
-Loading validates every field and names the offending one in an
-:class:`~rrtdrive.types.InputError`.
+Loading validates every field and names the offending one in an :class:`~rrtdrive.types.InputError`.
 """
 
 from __future__ import annotations
@@ -67,9 +66,8 @@ __all__ = [
 class Map:
     """A planning map: the region, its obstacles and one start/goal query.
 
-    Construction validates the start and goal against ``vehicle``: each must lie
-    within the bounds and the car's body there must be clear of every obstacle
-    and inside the bounds.
+    Construction validates the start and goal against ``vehicle``: each must lie within the bounds
+    and the car's body there must be clear of every obstacle and inside the bounds.
 
     Parameters
     ----------
@@ -309,7 +307,13 @@ def load_map(
 
 
 def map_text(m: Map) -> str:
-    """``m`` in the map file format, as :func:`save_map` writes it."""
+    """``m`` in the map file format, as :func:`save_map` writes it.
+
+    Parameters
+    ----------
+    m : Map
+        The map (its name, bounds, obstacles, start and goal; not its car).
+    """
     return json.dumps(m.to_json(), indent=2) + "\n"
 
 
@@ -537,6 +541,10 @@ def names_map_file(spec: str) -> bool:
     """Whether ``spec`` names a map file (``.json``, a path, or a file that exists).
 
     :func:`resolve_map` reads such a name as a file, so its error is the file's.
+
+    Parameters
+    ----------
+    spec : str
     """
     return spec.endswith(".json") or os.path.sep in spec or FsPath(spec).exists()
 
@@ -574,8 +582,7 @@ def resolve_map(
     Raises
     ------
     InputError
-        For an unknown name, an unreadable or malformed file, or a bad pose, naming
-        the field.
+        For an unknown name, an unreadable or malformed file, or a bad pose, naming the field.
     """
     if spec == "":  # an unset shell variable; as a path it is the current folder
         raise InputError("map: needs a built-in map name or a map .json file, got an empty one")

@@ -43,7 +43,18 @@ TREE_COLOURS = ("tab:blue", "tab:red")
 
 
 def draw_map(ax: Axes, m: Map, show_query: bool = True) -> None:
-    """Draw the bounds, the obstacles and (optionally) the start and goal cars."""
+    """Draw the bounds, the obstacles and (optionally) the start and goal cars.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes to draw on; its limits (the bounds and a 2 % margin), equal aspect
+        and axis labels (metres) are set.
+    m : Map
+        The map; its car (``m.vehicle``) is drawn at the start and the goal.
+    show_query : bool
+        Draw the start (green) and goal (purple) cars.
+    """
     xmin, ymin, xmax, ymax = m.bounds
     ax.add_patch(Rectangle((xmin, ymin), xmax - xmin, ymax - ymin, fill=False, lw=2.0, ec="black"))
     for o in m.obstacles:
@@ -62,7 +73,21 @@ def draw_map(ax: Axes, m: Map, show_query: bool = True) -> None:
 def draw_pose(
     ax: Axes, pose: Pose, vehicle: VehicleParams, colour: str, label: str | None = None
 ) -> None:
-    """Draw the car's body at ``pose`` and an arrow along its heading."""
+    """Draw the car's body at ``pose`` and an arrow along its heading.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes to draw on.
+    pose : Pose
+        Rear-axle pose (metres, radians).
+    vehicle : VehicleParams
+        The car whose body is drawn.
+    colour : str
+        Matplotlib colour of the body and the arrow.
+    label : str, optional
+        Legend entry of the arrow; ``None``: none.
+    """
     corners = footprint_corners(np.array(pose.as_tuple()), vehicle)
     ax.add_patch(PolygonPatch(corners, closed=True, fc=colour, ec=colour, alpha=0.35, lw=1.0))
     # Above the path (zorder 4): a path leaves along the start's heading and hid its arrow.
@@ -86,6 +111,17 @@ def draw_trees(
 
     With ``label``, the legend names the colours: "tree" for a single tree, else
     "tree from the start" (blue) and "tree from the goal" (red), once each.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes to draw on.
+    trees : sequence of Tree
+        The search trees, the start's first; a tree of its root alone is skipped.
+    lw, alpha : float
+        Line width of the edges (points) and opacity of edges and nodes.
+    label : bool
+        Name the trees in the legend.
     """
     names = ("tree",) if len(trees) == 1 else ("tree from the start", "tree from the goal")
     named: set[str] = set()
@@ -109,7 +145,23 @@ def draw_path(
     lw: float = 2.0,
     marker: str | None = None,
 ) -> None:
-    """Draw a polyline or sampled path ``(N, >=2)``."""
+    """Draw a polyline or sampled path ``(N, >=2)``.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes to draw on.
+    xy : numpy.ndarray
+        ``(N, >=2)`` rows whose first two columns are x, y (metres); empty: nothing.
+    colour : str
+        Matplotlib colour of the line.
+    label : str, optional
+        Legend entry; ``None``: none.
+    lw : float
+        Line width in points.
+    marker : str, optional
+        Matplotlib marker drawn at each row; ``None``: none.
+    """
     xy = np.asarray(xy)
     if len(xy):
         ax.plot(xy[:, 0], xy[:, 1], color=colour, lw=lw, label=label, marker=marker, ms=4)
@@ -127,6 +179,19 @@ def draw_gear_path(
 
     The legend gets one entry per kind present: ``"<label>"`` (``"<label>, forward"``
     when the path reverses), ``"<label>, reverse (dashed)"`` and ``"cusp (gear change)"``.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes to draw on.
+    path : Path
+        The path to draw.
+    forward, reverse : str
+        Matplotlib colours of the forward and the reverse segments.
+    lw : float
+        Line width in points.
+    label : str
+        The path's name in the legend.
     """
     reverses = not path.is_forward_only
     seen: set[str] = set()
@@ -165,6 +230,16 @@ _TITLE_PT = 12.0
 def map_figure_size(bounds: tuple[float, float, float, float]) -> tuple[float, float]:
     """A figure size (inches) whose map axes follow the bounds' aspect, legend beside.
 
+    Parameters
+    ----------
+    bounds : tuple of float
+        The map's ``(xmin, ymin, xmax, ymax)`` in metres.
+
+    Returns
+    -------
+    width, height : float
+        Inches, rounded to 0.01; the map's longer side takes 6.5 of them.
+
     Examples
     --------
     >>> map_figure_size((0.0, 0.0, 60.0, 60.0))
@@ -195,6 +270,24 @@ def plot_plan(
     length and the gear changes) and the nodes, and under it a failure's why line; it is
     left-aligned and wrapped to the figure (a tall map's narrow figure cut a one-line
     title at both ends).
+
+    Parameters
+    ----------
+    m : Map
+        The map planned on.
+    result : PlanResult
+        The planner's result (its trees, raw path, path, status and diagnosis).
+    title : str, optional
+        Replaces the default title (read by matplotlib as given, math included).
+    seed : int, optional
+        Named in the default title.
+    reverse : bool
+        Say "reverse allowed" in the default title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        A new figure; :func:`save_figure` saves and closes it.
     """
     from rrtdrive.planning.hybrid.escalation import stage_of
 
@@ -250,6 +343,20 @@ def plot_curvature(path: Path, kappa_max: float, ax: Axes | None = None) -> Figu
     """Curvature against normalised path length (the paper's Figs. 14 and 16).
 
     Reverse segments are dashed in another colour, cusps dotted vertical lines.
+
+    Parameters
+    ----------
+    path : Path
+        The path whose curvature column is drawn.
+    kappa_max : float
+        The curvature limit (1/m), drawn as dashed lines at ``+-kappa_max``.
+    ax : matplotlib.axes.Axes, optional
+        The axes to draw on; ``None``: a new 7 x 3 inch figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure of ``ax``, or the new one.
     """
     # Constrained layout: on its own figure the x label was clipped at the bottom.
     fig = ax.figure if ax is not None else plt.figure(figsize=(7, 3), layout="constrained")
@@ -279,7 +386,17 @@ def plot_curvature(path: Path, kappa_max: float, ax: Axes | None = None) -> Figu
 
 
 def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: int = 110) -> None:
-    """Save ``fig`` atomically (temporary file in the same folder, then rename) and close it."""
+    """Save ``fig`` atomically (temporary file in the same folder, then rename) and close it.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure; closed afterwards, also when saving fails.
+    path : str or os.PathLike
+        The file to write; its suffix picks the format (PNG without one).
+    dpi : int
+        Resolution in dots per inch.
+    """
     suffix = FsPath(path).suffix or ".png"
     try:
         with atomic_target(path, suffix) as tmp, warnings.catch_warnings():

@@ -90,6 +90,23 @@ def peak_with_plateau(length: float, accel: float, swing: float, jerk: float) ->
     without the plateau, a multi-point turn's 0.7 m moves (a triangle of a profile) left
     the car still speeding up when it had to brake, and it ran 0.2 m past the cusp.
 
+    Parameters
+    ----------
+    length : float
+        Length of the run, metres.
+    accel : float
+        Rate at which the run's speed rises and falls, m/s^2.
+    swing : float
+        Range the command swings through from speeding up to braking, m/s^2
+        (:func:`~rrtdrive.speed_profile.actuator_profile` passes ``accel + decel``).
+    jerk : float
+        The loop's jerk bound, m/s^3.
+
+    Returns
+    -------
+    float
+        Top speed ``v`` in m/s.
+
     Examples
     --------
     >>> round(peak_with_plateau(0.7, 0.5, 1.0, 2.0), 3)

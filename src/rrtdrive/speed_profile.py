@@ -260,6 +260,18 @@ def arrival_times(s: np.ndarray, v: np.ndarray, v_floor: float = 0.05) -> np.nda
     Each interval is driven at the mean of its end speeds, at least ``v_floor`` m/s
     (so a stop does not take forever).
 
+    Parameters
+    ----------
+    s, v : numpy.ndarray
+        ``(N,)`` arc lengths (metres, increasing) and speeds (m/s) of the samples.
+    v_floor : float
+        Lowest speed an interval is driven at, m/s.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(N,)`` arrival times in seconds.
+
     Examples
     --------
     >>> arrival_times(np.array([0.0, 1.0, 3.0]), np.array([1.0, 1.0, 3.0])).tolist()
@@ -387,7 +399,18 @@ class SpeedProfile:
         self.config = config
 
     def at(self, s: float) -> tuple[float, float]:
-        """``(v_ref, a_ref)`` at arc length ``s`` (0 speed past the end)."""
+        """``(v_ref, a_ref)`` at arc length ``s`` (0 speed past the end).
+
+        Parameters
+        ----------
+        s : float
+            Arc length, metres (before 0: the first sample's values).
+
+        Returns
+        -------
+        v_ref, a_ref : float
+            Speed in m/s (``v^2`` linear between samples), the interval's acceleration in m/s^2.
+        """
         if s >= self.length:
             return 0.0, 0.0
         if s <= 0.0:
@@ -401,7 +424,18 @@ class SpeedProfile:
         return math.sqrt(v0 * v0 + frac * (v1 * v1 - v0 * v0)), self._a[i]
 
     def peak(self, s0: float, s1: float) -> float:
-        """The highest reference speed on the stretch ``[s0, s1]`` of arc length."""
+        """The highest reference speed on the stretch ``[s0, s1]`` of arc length.
+
+        Parameters
+        ----------
+        s0, s1 : float
+            Ends of the stretch, metres (``s0 <= s1``).
+
+        Returns
+        -------
+        float
+            Speed in m/s: the larger of :meth:`at` at both ends and the samples between.
+        """
         top = max(self.at(s0)[0], self.at(s1)[0])
         i = bisect.bisect_right(self._s, s0)
         j = bisect.bisect_left(self._s, s1)

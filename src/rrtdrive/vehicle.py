@@ -47,7 +47,20 @@ def footprint_corners(
 
 
 def footprint_polygon(pose: tuple[float, float, float], vehicle: VehicleParams) -> shapely.Polygon:
-    """The body rectangle at ``pose`` as a shapely polygon."""
+    """The body rectangle at ``pose`` as a shapely polygon.
+
+    Parameters
+    ----------
+    pose : tuple of float
+        Rear-axle ``(x, y, yaw)`` in metres and radians.
+    vehicle : VehicleParams
+        The car.
+
+    Returns
+    -------
+    shapely.Polygon
+        The four corners of :func:`footprint_corners`, counter-clockwise from rear-right.
+    """
     return shapely.Polygon(footprint_corners(np.asarray(pose, dtype=float), vehicle))
 
 
