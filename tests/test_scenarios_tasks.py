@@ -12,7 +12,8 @@ from shapely.geometry import Polygon, box
 from shapely.ops import unary_union
 
 from rrtdrive.geometry import box_corners
-from rrtdrive.maps import builtin_map, parking_goal_pose
+from rrtdrive.maps import builtin_map
+from rrtdrive.parking_layout import parking_goal_pose
 from rrtdrive.sim.scenes import build_env, fit_view
 from rrtdrive.sim.tasks import (
     SCENARIOS,

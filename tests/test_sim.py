@@ -18,7 +18,7 @@ from highway_env.vehicle.objects import Landmark
 from highway_env.vehicle.objects import Obstacle as HwObstacle
 
 from rrtdrive.evaluation import evaluate
-from rrtdrive.maps import PARKING_EMPTY_SPOTS, parking_goal_pose
+from rrtdrive.parking_layout import PARKING_EMPTY_SPOTS, parking_goal_pose
 from rrtdrive.planning import PLANNERS, PlanningProblem, make_planner
 from rrtdrive.sim import cli_simulate
 from rrtdrive.sim.ego import EgoVehicle

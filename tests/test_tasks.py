@@ -8,7 +8,8 @@ import math
 
 import pytest
 
-from rrtdrive.maps import PARKING_EMPTY_SPOTS, builtin_map
+from rrtdrive.maps import builtin_map
+from rrtdrive.parking_layout import PARKING_EMPTY_SPOTS
 from rrtdrive.sim.episode import EpisodeStatus, end_message
 from rrtdrive.sim.scenes import build_env
 from rrtdrive.sim.tasks import (

@@ -14,7 +14,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import json
-import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -35,6 +34,7 @@ from rrtdrive.map_checks import (
     warn_outside,
 )
 from rrtdrive.obstacles import Obstacle
+from rrtdrive.parking_layout import parking_goal_pose, parking_lot_obstacles
 from rrtdrive.types import (
     InputError,
     Pose,
@@ -313,6 +313,11 @@ def map_text(m: Map) -> str:
     ----------
     m : Map
         The map (its name, bounds, obstacles, start and goal; not its car).
+
+    Returns
+    -------
+    str
+        Indented JSON ending in a newline.
     """
     return json.dumps(m.to_json(), indent=2) + "\n"
 
@@ -359,85 +364,17 @@ def overtake_map() -> Map:
     )
 
 
-#: Parking-lot geometry, shared with the highway-env scene builder.
-PARKING_SPOT_WIDTH = 3.0
-PARKING_SPOT_DEPTH = 5.5
-PARKING_ROW_CENTRES = (20.0, 45.0, 70.0)
-PARKING_ROW_X = (14.0, 86.0)
-#: Empty spots per (row index, side, spot index); side 0 faces -y, side 1 faces +y.
-PARKING_EMPTY_SPOTS = frozenset(
-    {(0, 0, 3), (0, 1, 17), (1, 0, 9), (1, 1, 4), (1, 1, 20), (2, 0, 14), (2, 1, 19), (2, 1, 6)}
-)
-#: Spots replaced by solid blocks (islands with lamp posts, trolley bays).
-PARKING_BLOCK_SPOTS = frozenset({(0, 0, 11), (0, 0, 12), (1, 1, 11), (1, 1, 12), (2, 0, 2)})
-
-
-def parking_spots() -> list[tuple[int, int, int, float, float]]:
-    """Every spot of the lot as ``(row, side, index, x_centre, y_centre)``."""
-    spots = []
-    count = int(round((PARKING_ROW_X[1] - PARKING_ROW_X[0]) / PARKING_SPOT_WIDTH))
-    for r, yc in enumerate(PARKING_ROW_CENTRES):
-        for side in (0, 1):
-            y = yc - PARKING_SPOT_DEPTH / 2 if side == 0 else yc + PARKING_SPOT_DEPTH / 2
-            for i in range(count):
-                x = PARKING_ROW_X[0] + PARKING_SPOT_WIDTH * (i + 0.5)
-                spots.append((r, side, i, x, y))
-    return spots
-
-
-#: How far a parked car's body centre sits from its spot's centre towards the aisle.
-PARKING_SETBACK = 0.5
-
-
-def parking_goal_pose(
-    row: int, side: int, index: int, vehicle: VehicleParams | None = None
-) -> Pose:
-    """The rear-axle pose of a car parked nose-in in the given spot.
-
-    The body is centred across the spot and set back :data:`PARKING_SETBACK`
-    towards the aisle, so its nose stays 0.9 m clear of the kerb.
-    """
-    vehicle = vehicle or VehicleParams()
-    for r, s, i, x, y in parking_spots():
-        if (r, s, i) == (row, side, index):
-            # Nose-in: a side-1 spot (upper half of a row) opens upward, so the car faces -y.
-            yaw = -math.pi / 2 if s == 1 else math.pi / 2
-            back = vehicle.length / 2 - vehicle.rear_overhang + PARKING_SETBACK
-            return Pose(x - back * math.cos(yaw), y - back * math.sin(yaw), yaw)
-    raise InputError(f"spot: no spot {(row, side, index)}")
-
-
 def parking_lot_map() -> Map:
     """Three double rows of parked cars, solid blocks, aisles; the goal far from the entrance.
 
     The entrance is at the bottom-left (start heading +x); the goal is an empty
-    nose-in spot on the upper side of the top row, near the right end.
+    nose-in spot on the upper side of the top row, near the right end
+    (:mod:`rrtdrive.parking_layout` lays it out).
     """
-    obstacles: list[Obstacle] = []
-    for r, side, i, x, y in parking_spots():
-        key = (r, side, i)
-        if key in PARKING_BLOCK_SPOTS:
-            obstacles.append(Obstacle((x, y), (PARKING_SPOT_WIDTH, PARKING_SPOT_DEPTH)))
-        elif key not in PARKING_EMPTY_SPOTS:
-            obstacles.append(Obstacle((x, y), (4.3, 1.8), math.pi / 2))
-    # A kerb between the two halves of each double row keeps cars from driving through it.
-    for yc in PARKING_ROW_CENTRES:
-        obstacles.append(
-            Obstacle(
-                ((PARKING_ROW_X[0] + PARKING_ROW_X[1]) / 2, yc),
-                (PARKING_ROW_X[1] - PARKING_ROW_X[0], 0.4),
-            )
-        )
-    # Solid blocks: a kiosk building, a ticket booth by the entrance, a planter on the right.
-    obstacles += [
-        Obstacle((35.0, 90.0), (24.0, 10.0)),
-        Obstacle((6.0, 30.0), (6.0, 6.0)),
-        Obstacle((93.0, 57.0), (6.0, 10.0)),
-    ]
     return Map(
         "parking_lot",
         (0.0, 0.0, 100.0, 100.0),
-        tuple(obstacles),
+        parking_lot_obstacles(),
         Pose(5.0, 6.0, 0.0),
         parking_goal_pose(2, 1, 19),
     )
@@ -545,6 +482,11 @@ def names_map_file(spec: str) -> bool:
     Parameters
     ----------
     spec : str
+        What the user gave as the map (a built-in name or a path).
+
+    Returns
+    -------
+    bool
     """
     return spec.endswith(".json") or os.path.sep in spec or FsPath(spec).exists()
 

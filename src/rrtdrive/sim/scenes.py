@@ -25,12 +25,11 @@ from highway_env.vehicle.graphics import VehicleGraphics
 from highway_env.vehicle.kinematics import Vehicle
 from highway_env.vehicle.objects import Obstacle as HwObstacle
 
-from rrtdrive.maps import (
+from rrtdrive.maps import Map, Obstacle
+from rrtdrive.parking_layout import (
     PARKING_ROW_CENTRES,
     PARKING_SPOT_DEPTH,
     PARKING_SPOT_WIDTH,
-    Map,
-    Obstacle,
     parking_spots,
 )
 from rrtdrive.sim.ego import EgoVehicle

@@ -293,7 +293,7 @@ def make_scenario(name: str, seed: int = 0, **options: Any) -> Task:
 
     Examples
     --------
-    >>> from rrtdrive.maps import PARKING_EMPTY_SPOTS
+    >>> from rrtdrive.parking_layout import PARKING_EMPTY_SPOTS
     >>> s = make_scenario("parking", 3)
     >>> s.spot in PARKING_EMPTY_SPOTS, s == make_scenario("parking", 3)
     (True, True)

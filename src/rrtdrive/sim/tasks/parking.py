@@ -11,7 +11,8 @@ from typing import Any, ClassVar, cast
 import numpy as np
 from highway_env.road.road import Road
 
-from rrtdrive.maps import PARKING_EMPTY_SPOTS, parking_goal_pose, parking_lot_map
+from rrtdrive.maps import parking_lot_map
+from rrtdrive.parking_layout import PARKING_EMPTY_SPOTS, parking_goal_pose
 from rrtdrive.sim.scenes import parking_network, populate_road
 from rrtdrive.sim.tasks.base import TaskKind
 from rrtdrive.sim.tasks.path_task import PathTask
