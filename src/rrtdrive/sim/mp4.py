@@ -124,6 +124,7 @@ class Mp4Writer:
         self._queue: queue.Queue[Any] = queue.Queue(maxsize=queue_size)
         self._error: BaseException | None = None
         self._done = False
+        self._published = False
         self._thread = threading.Thread(target=self._run, name="rrtdrive-mp4", daemon=True)
         self._thread.start()
 
@@ -154,9 +155,18 @@ class Mp4Writer:
         self._thread.join()
 
     def close(self) -> FsPath:
-        """Encode the queued frames, close ffmpeg and move the file into place; return it."""
+        """Encode the queued frames, close ffmpeg and move the file into place; return it.
+
+        Again after it succeeded: the same file. After a failed close or an :meth:`abort`
+        there is no file to return: a RuntimeError.
+        """
         if self._done:
-            return self.target
+            if self._published:
+                return self.target
+            raise RuntimeError(
+                f"Mp4Writer.close: {self.target} was not written (an earlier close failed "
+                "or the writer was aborted)"
+            )
         try:
             self._stop()
             if self._error is not None:
@@ -165,6 +175,7 @@ class Mp4Writer:
             self._writer.close()
             _check_encoder(process, self._tmp, self.frames)
             publish(self._tmp, self.target)
+            self._published = True
         except BaseException:
             self._tmp.unlink(missing_ok=True)
             raise
