@@ -991,3 +991,16 @@ def test_an_error_row_of_a_scenario_that_reverses_anyway_says_reverse(tmp_path):
     rows = {s.target: error_row(s, "crashed", 1) for s in expand(
         BenchConfig(scenarios=("u-turn", "parking"), seeds=1))}  # fmt: skip
     assert rows["u-turn"]["reverse"] is True and rows["parking"]["reverse"] is False
+
+
+def test_local_workers_are_capped_per_core_with_a_note(monkeypatch):
+    """``--workers 200`` on a 2-core machine starts 8 processes and says why, not 200."""
+    import rrtdrive.bench.core as core
+
+    monkeypatch.setattr(core, "default_workers", lambda: 2)
+    assert core.local_workers(None, 100) == (2, None)  # one per core by default
+    assert core.local_workers(200, 3) == (3, None)  # never more than the runs
+    assert core.local_workers(8, 100) == (8, None)  # up to 4 per core as asked
+    workers, note = core.local_workers(200, 1000)
+    assert workers == 8 and note is not None
+    assert note.startswith("--workers 200 capped at 8")

@@ -168,6 +168,39 @@ def _previous_config(out: FsPath) -> object:
         return None
 
 
+#: Local worker processes per usable core at the most: bench runs are CPU-bound, so more
+#: only contend for the cores (stretching each run's wall-clock timeout) and memory.
+WORKERS_PER_CORE = 4
+
+
+def local_workers(requested: int | None, runs: int) -> tuple[int, str | None]:
+    """How many local worker processes to start for ``runs`` runs, and why fewer if so.
+
+    Parameters
+    ----------
+    requested : int or None
+        ``--workers`` (None: one per usable core).
+    runs : int
+        Runs still to do.
+
+    Returns
+    -------
+    workers : int
+        At most ``runs`` (at least 1) and at most :data:`WORKERS_PER_CORE` per core.
+    note : str or None
+        Said on the progress line when ``requested`` was cut to the per-core cap.
+    """
+    cores = default_workers()
+    workers = min(requested or cores, max(1, runs))
+    cap = WORKERS_PER_CORE * cores
+    if workers <= cap:
+        return workers, None
+    return cap, (
+        f"--workers {requested} capped at {cap} ({WORKERS_PER_CORE} per core here: more "
+        "only contend for the cores and memory)"
+    )
+
+
 def run_bench(
     cfg: BenchConfig,
     *,
@@ -251,15 +284,18 @@ def run_bench(
                 remove_plots(out)
             write_text_atomic(out / "bench_config.json", json.dumps(meta, indent=1) + "\n")
             backend: LocalBackend | RayBackend
+            capped: str | None = None
             if ray_backend is not None:
                 backend = ray_backend
             else:
+                workers, capped = local_workers(cfg.workers, len(todo))
                 backend = LocalBackend(
-                    min(cfg.workers or default_workers(), max(1, len(todo))),
-                    executor=executor, retries=cfg.retries, run_timeout_s=cfg.run_timeout_s,
+                    workers, executor=executor, retries=cfg.retries,
+                    run_timeout_s=cfg.run_timeout_s,
                 )
             if progress is not None:
                 where = f"{len(todo)} to run on {backend.describe()}" if todo else "nothing to run"
+                where += f"; {capped}" if capped and todo else ""
                 progress.write(
                     f"bench: {len(specs)} runs in the grid, {skipped} already in "
                     f"{store.path}, {where}\n"
