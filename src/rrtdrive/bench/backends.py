@@ -40,7 +40,7 @@ from typing import Any
 
 from rrtdrive.bench.grid import RunSpec
 from rrtdrive.bench.worker import execute_run
-from rrtdrive.types import InputError
+from rrtdrive.types import InputError, brief_repr
 
 __all__ = [
     "parallel_map",
@@ -111,6 +111,12 @@ def default_workers() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - not on Linux
         return max(1, os.cpu_count() or 1)
+
+
+def _label(item: Any) -> str:
+    """A run's description for the log; :func:`parallel_map`'s items need not have one."""
+    describe = getattr(item, "describe", None)
+    return describe() if callable(describe) else brief_repr(item)
 
 
 def _call(executor: Executor, spec: RunSpec) -> tuple[str, Any]:
@@ -359,7 +365,7 @@ class LocalBackend:
                 slots[k] = self._start()
                 if task is not None:
                     busy -= 1
-                    logger.warning("%s: %s", task[1].describe(), failure)
+                    logger.warning("%s: %s", _label(task[1]), failure)
                     yield from self._failed(queue, task, failure)
             for k in reversed(retired):
                 del slots[k]
