@@ -345,19 +345,18 @@ class HybridConfig:
             raise InputError(
                 f"hybrid.curvatures: must be an odd integer >= 1, got {self.curvatures!r}"
             )
-        for name, low in (
-            ("radius_factor", 1.0), ("reverse_cost", 1.0), ("heuristic_weight", 1.0),
-            ("retry_weight", 1.0),
-            ("wide_radius_factor", 1.0), ("tight_radius_factor", 1.0),
+        turns = MAX_RADIUS_FACTOR  # a turn's samples grow with its radius
+        for name, low, high in (
+            ("radius_factor", 1.0, turns), ("reverse_cost", 1.0, math.inf),
+            ("heuristic_weight", 1.0, math.inf), ("retry_weight", 1.0, math.inf),
+            ("wide_radius_factor", 1.0, turns), ("tight_radius_factor", 1.0, turns),
         ):  # fmt: skip
             value = getattr(self, name)
             require_finite(f"hybrid.{name}", value)
             if value < low:
                 raise InputError(f"hybrid.{name}: must be >= {low:g}, got {value!r}")
-            if name.endswith("radius_factor") and value > MAX_RADIUS_FACTOR:
-                raise InputError(
-                    f"hybrid.{name}: must be at most {MAX_RADIUS_FACTOR:g}, got {value!r}"
-                )
+            if value > high:
+                raise InputError(f"hybrid.{name}: must be at most {high:g}, got {value!r}")
         for name in (
         "gear_change_cost", "steer_change_cost", "steer_cost", "body_clearance", "ramp_margin",
         "min_clearance", "shot_cell",
