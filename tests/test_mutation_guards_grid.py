@@ -14,6 +14,7 @@ import math
 import numpy as np
 import pytest
 import shapely
+from test_mutation_guards_collision import _body
 
 from rrtdrive.collision import CheckerConfig, CollisionChecker
 from rrtdrive.collision.exact import RectangleTest
@@ -49,14 +50,6 @@ TALL_OBSTACLES = (
 @functools.cache
 def _tall_checker() -> CollisionChecker:
     return CollisionChecker(TALL, TALL_OBSTACLES, V)
-
-
-def _body(x: float, y: float, yaw: float) -> shapely.Polygon:
-    """The body rectangle from first principles (rear axle at x, y; nose along yaw)."""
-    c, s = math.cos(yaw), math.sin(yaw)
-    local = ((-V.rear_overhang, -V.width / 2), (V.front_extent, -V.width / 2),
-             (V.front_extent, V.width / 2), (-V.rear_overhang, V.width / 2))
-    return shapely.Polygon([(x + c * u - s * v, y + s * u + c * v) for u, v in local])
 
 
 def _true_clearance(bounds: tuple[float, ...], obstacles, points: np.ndarray) -> np.ndarray:
