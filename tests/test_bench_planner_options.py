@@ -3,6 +3,8 @@ run, one run key per row, and the options reach the planner in plan and episode 
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -157,3 +159,19 @@ def test_reverse_grid_notes_each_forward_only_row(tmp_path, capsys):
         "rrtdrive bench: note: improved-rrt-connect plans forward only with escalation=false; "
         "--reverse takes effect with hybrid-a-star, improved-rrt-connect",
     ]
+
+
+def test_map_only_grid_notes_the_controllers_it_leaves_out(tmp_path, capsys):
+    # --maps runs plan only: --controllers lqr was dropped without a word (a user's
+    # first bench of a map file); the default controller alone says nothing.
+    out = tmp_path / "b"
+    args = ["bench", "--maps", "overtake", "--seeds", "1", "--quiet", "--no-plots"]
+    assert main([*args, "--controllers", "lqr,stanley", "--out", str(out)]) == 0
+    notes = [ln for ln in capsys.readouterr().err.splitlines() if "note:" in ln]
+    assert notes == [
+        "rrtdrive bench: note: --controllers lqr,stanley applies to --scenarios runs; "
+        "--maps runs plan only (to drive a map: --scenarios MAP)"
+    ]
+    assert [json.loads(ln)["controller"] for ln in (out / "runs.jsonl").open()] == [None]
+    assert main([*args, "--out", str(tmp_path / "c")]) == 0
+    assert "note:" not in capsys.readouterr().err

@@ -189,6 +189,22 @@ def forward_only_notes(planners: tuple[str, ...]) -> list[str]:
     return notes
 
 
+def unused_controllers_note(cfg: Any) -> str | None:
+    """A note when controllers other than the default were asked for but no run drives.
+
+    ``--maps`` runs plan only; the controllers apply to ``--scenarios`` runs (a map is
+    driven with ``--scenarios MAP``). Without the note they were silently left out.
+    """
+    from rrtdrive.bench.grid import BenchConfig
+
+    if cfg.scenarios or cfg.controllers == BenchConfig.controllers:
+        return None
+    return (
+        f"note: --controllers {','.join(cfg.controllers)} applies to --scenarios runs; "
+        "--maps runs plan only (to drive a map: --scenarios MAP)"
+    )
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the ``bench`` subcommand; return the exit code."""
     from rrtdrive.cli_args import flags_for
@@ -207,6 +223,9 @@ def _run(args: argparse.Namespace) -> int:
     from rrtdrive.cli_args import writing
 
     cfg = config_from_args(args)
+    note = unused_controllers_note(cfg)
+    if note is not None:
+        print(f"rrtdrive bench: {note}", file=sys.stderr)
     if cfg.reverse:
         for note in forward_only_notes(cfg.planners):
             print(f"rrtdrive bench: {note}", file=sys.stderr)
