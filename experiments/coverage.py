@@ -188,6 +188,7 @@ def run_ours(item: dict[str, Any]) -> dict[str, Any]:
         "solved": res.success,
         "time_s": res.planning_time_s,
         "length_m": res.path.length if res.success else None,
+        "cusps": len(res.path.cusps) if res.success else None,
         "message": res.message[:300],
         "iterations": res.iterations,
     }
@@ -279,7 +280,8 @@ def run_ompl(item: dict[str, Any]) -> dict[str, Any]:
     if path is None:
         row.update(time_s=solve_s, solve_s=solve_s, length_m=None, **_UNCHECKED)
         return row
-    row.update(time_s=total_s, solve_s=solve_s, length_m=length, **_check(m, path))
+    row.update(time_s=total_s, solve_s=solve_s, length_m=length, cusps=len(path.cusps),
+               **_check(m, path))
     return row
 
 
@@ -331,6 +333,24 @@ def _stages(vals: list[dict[str, Any]]) -> dict[str, Any]:
         "median_escalation_time_s": _median(
             [r["escalation_time_s"] for r in escalated if "escalation_time_s" in r]
         ),
+    }
+
+
+def _cusp_pair(ours: list[dict[str, Any]], ref: list[dict[str, Any]]) -> dict[str, Any]:
+    """Gear changes (each a stop) on the queries both solve: means and per-query order.
+
+    Empty when a row has no count (a results file from before the count was kept).
+    """
+    if not ours or any(r.get("cusps") is None for r in (*ours, *ref)):
+        return {}
+    diff = [a["cusps"] - b["cusps"] for a, b in zip(ours, ref, strict=True)]
+    return {
+        "mean_cusps_ours": statistics.fmean(r["cusps"] for r in ours),
+        "mean_cusps_ompl": statistics.fmean(r["cusps"] for r in ref),
+        "median_cusps_ours": _median([r["cusps"] for r in ours]),
+        "median_cusps_ompl": _median([r["cusps"] for r in ref]),
+        "cusps_fewer_equal_more": [sum(d < 0 for d in diff), sum(d == 0 for d in diff),
+                                   sum(d > 0 for d in diff)],
     }
 
 
@@ -396,6 +416,7 @@ def summarise(rows: list[dict[str, Any]], planners: list[str], sets: list[str]) 
                         _median([a[i]["length_m"] for i in both]),
                         _median([b[i]["length_m"] for i in both]),
                     ),
+                    **_cusp_pair([a[i] for i in both], [b[i] for i in both]),
                 }
     return {"per_planner": per, "pairs": pairs}
 

@@ -95,6 +95,25 @@ def report(payload: dict[str, Any]) -> str:
             f"{cell(c.get('time_ratio_of_medians'), 1, 3)} | "
             f"{cell(c.get('length_ratio_of_medians'), 1, 3)} |"
         )
+    geared = [(k, c) for k, c in s["pairs"].items() if "mean_cusps_ours" in c]
+    if geared and any(c["mean_cusps_ours"] or c["mean_cusps_ompl"] for _, c in geared):
+        lines += [
+            "",
+            "Gear changes (cusps; each is a stop) on the queries both solve: mean and median "
+            "per path, and on how many queries ours has fewer, as many or more than OMPL's "
+            "simplified path (read off its motion).",
+            "",
+            "| pair / set | both | mean cusps ours / OMPL | median cusps ours / OMPL "
+            "| ours fewer / equal / more |",
+            "|---|---|---|---|---|",
+        ]
+        for key, c in geared:
+            fewer, equal, more = c["cusps_fewer_equal_more"]
+            lines.append(
+                f"| {key}s | {c['both_solved']} | {c['mean_cusps_ours']:.2f} / "
+                f"{c['mean_cusps_ompl']:.2f} | {c['median_cusps_ours']:g} / "
+                f"{c['median_cusps_ompl']:g} | {fewer} / {equal} / {more} |"
+            )
     staged = [(p, name, c) for p, sets in s["per_planner"].items()
               for name, c in sets.items() if "solved_by_stage" in c]  # fmt: skip
     if staged:

@@ -110,3 +110,43 @@ def test_a_failures_answer_time_adds_its_diagnosis(data):
     waited = [t + (d if has else 0.0) for t, d, has in data]
     assert np.isclose(cell["median_answer_time_failed_s"], np.median(waited))
     assert np.isclose(cell["median_time_failed_s"], np.median([t for t, _, _ in data]))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(2, 25).flatmap(lambda n: st.tuples(
+    st.lists(st.integers(0, 6), min_size=n, max_size=n),
+    st.lists(st.integers(0, 6), min_size=n, max_size=n),
+    st.lists(st.booleans(), min_size=n, max_size=n),
+)))
+def test_cusp_figures_count_the_queries_both_solve(data):
+    # Each cusp is a stop: the pair's counts are compared on the queries both solve only.
+    ours_c, ompl_c, ours_ok = data
+    n = len(ours_c)
+    rows = _rows("hybrid-a-star", [0.1] * n, [50.0] * n, ours_ok) + _rows(
+        "ompl-rs-rrtconnect", [0.2] * n, [60.0] * n, [True] * n)
+    for r, c in zip(rows, ours_c + ompl_c, strict=True):
+        r["cusps"] = c if r["solved"] else None
+    pair = coverage.summarise(rows, ["hybrid-a-star", "ompl-rs-rrtconnect"], ["goal"])[
+        "pairs"]["hybrid-a-star vs ompl-rs-rrtconnect / goal"]
+    both = [i for i, ok in enumerate(ours_ok) if ok]
+    if not both:
+        assert "mean_cusps_ours" not in pair
+        return
+    a, b = np.array(ours_c)[both], np.array(ompl_c)[both]
+    assert np.isclose(pair["mean_cusps_ours"], a.mean())
+    assert np.isclose(pair["mean_cusps_ompl"], b.mean())
+    assert pair["median_cusps_ours"] == np.median(a) and pair["median_cusps_ompl"] == np.median(b)
+    assert pair["cusps_fewer_equal_more"] == [int((a < b).sum()), int((a == b).sum()),
+                                              int((a > b).sum())]
+    page = coverage_report_page(rows)
+    assert f"| {pair['mean_cusps_ours']:.2f} / {pair['mean_cusps_ompl']:.2f} |" in page or (
+        not a.any() and not b.any())
+
+
+def coverage_report_page(rows):
+    """The markdown page of rows, through the script's own report."""
+    summary = coverage.summarise(rows, ["hybrid-a-star", "ompl-rs-rrtconnect"], ["goal"])
+    payload = {"summary": summary, "map": "m", "command": "c", "count": 1, "seed": 1,
+               "max_time_s": 1, "ompl_time_s": 1, "jobs": 1, "machine": "x",
+               "wall_time_s": 60, "skipped": {}, "sets": ["goal"]}
+    return coverage.report(payload)
