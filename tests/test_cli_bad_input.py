@@ -498,7 +498,7 @@ def test_verify_far_row_fails_without_warnings(capsys, tmp_path, x):
 
 def test_simulate_timeout_hint_names_plan_time():
     from rrtdrive.planning.result import timeout_message
-    from rrtdrive.sim.cli_simulate import _with_simulate_hint
+    from rrtdrive.sim.cli_targets import with_simulate_hint as _with_simulate_hint
     from rrtdrive.types import Budget
 
     @dataclasses.dataclass(frozen=True)

@@ -39,6 +39,7 @@ from rrtdrive.cli_args import (
     writing,
 )
 from rrtdrive.json_safe import options_json
+from rrtdrive.sim.cli_targets import make_task, target_kind, with_simulate_hint
 from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MIN_SIM_FREQUENCY
 from rrtdrive.types import InputError
 
@@ -307,7 +308,7 @@ def _run(args: argparse.Namespace) -> int:
         args.scenario, options = SCENARIO_VARIANTS[args.scenario]
         for key, value in options.items():
             setattr(args, key, value)
-    target = _target_kind(args.scenario, SCENARIOS, STOCK_ENVS)
+    target = target_kind(args.scenario, SCENARIOS, STOCK_ENVS)
     if target != "map":
         for flag, value in (("--start", args.start), ("--goal", args.goal)):
             if value is not None:
@@ -422,7 +423,7 @@ def _run(args: argparse.Namespace) -> int:
         stock, streamed = _drive_stock(args, config, stride)
         episode = stock.episode
     else:
-        scenario = _make_task(args, target, oncoming, traffic_opts, make_scenario)
+        scenario = make_task(args, target, oncoming, traffic_opts, make_scenario)
         if scenario.reverse and not args.reverse and not reverses(args.planner):
             # u-turn, parallel-parking, parking --reverse-in plan with gear changes unasked.
             asked = f"the {args.scenario} scenario's gear changes take"
@@ -430,7 +431,7 @@ def _run(args: argparse.Namespace) -> int:
             print(f"rrtdrive simulate: {note}", file=sys.stderr)
         with flags_for({"episode.max_time_s": "--max-time"}):
             episode = run_episode(scenario, args.planner, args.controller, args.seed, config)
-    episode = _with_simulate_hint(episode)
+    episode = with_simulate_hint(episode)
     report = evaluate(episode)
     # Drawing a stock env's frames happens during its drive; like writing the video, it
     # is not the episode's time.
@@ -516,83 +517,3 @@ def _run(args: argparse.Namespace) -> int:
     print("\n".join(metrics_block(data)), file=out)
     ok = report.success and (stock is None or stock.highway_env_success)
     return EXIT_OK if ok else EXIT_FAILED
-
-
-def _with_simulate_hint(episode: Any) -> Any:
-    """``episode`` with the planner's timeout hint naming simulate's flag, ``--plan-time``.
-
-    The planners word it for ``rrtdrive plan`` ("raise --max-time or lower
-    --max-iterations"); simulate's planning cap is ``--plan-time``, and ``--max-time``
-    here is the drive's time limit.
-    """
-    import dataclasses
-
-    from rrtdrive.planning.result import timeout_message
-    from rrtdrive.types import Budget
-
-    # The hint as the planners write it: the last clause of their timeout message.
-    hint = timeout_message(0, Budget()).rpartition("; ")[2]
-    if hint not in episode.message:
-        return episode
-    plan = episode.plan
-    if plan is not None:
-        plan = dataclasses.replace(plan, message=plan.message.replace(hint, _PLAN_TIME_HINT))
-    return dataclasses.replace(
-        episode, message=episode.message.replace(hint, _PLAN_TIME_HINT), plan=plan
-    )
-
-
-_PLAN_TIME_HINT = "raise --plan-time"
-
-
-def _target_kind(name: str, scenarios: tuple[str, ...], stock_envs: tuple[str, ...]) -> str:
-    """``"scenario"``, ``"stock"`` or ``"map"``; an unknown plain name is bad input."""
-    from rrtdrive.maps import BUILTIN_MAPS, names_map_file
-
-    if name in scenarios:
-        return "scenario"
-    if name in stock_envs:
-        return "stock"
-    if name in BUILTIN_MAPS or names_map_file(name):
-        return "map"
-    from rrtdrive.sim.tasks import SCENARIO_VARIANTS, unknown_scenario
-
-    raise unknown_scenario("scenario", name, stock_envs, SCENARIO_VARIANTS)
-
-
-def _parse_pose(text: str | None, flag: str) -> Any:
-    """``"x,y,yaw"`` as a :class:`~rrtdrive.types.Pose` (``None`` stays ``None``)."""
-    from rrtdrive.cli_args import parse_pose
-
-    return None if text is None else parse_pose(text, flag)
-
-
-def _make_task(
-    args: argparse.Namespace, target: str, oncoming: int, traffic_opts: dict[str, Any],
-    make_scenario: Any,
-) -> Any:
-    """The task of a built-in scenario or of a map, with ``--reverse`` applied."""
-    import dataclasses
-
-    from rrtdrive.sim.tasks import CustomTask
-
-    if target == "map":
-        from rrtdrive.cli_args import map_with_poses
-
-        start, goal = _parse_pose(args.start, "--start"), _parse_pose(args.goal, "--goal")
-        # The poses given replace the file's before it is checked: a file whose own start
-        # is bad still serves with a good --start (a bad --start is named by its flag).
-        return CustomTask.from_map(
-            map_with_poses(args.scenario, start, goal), args.seed, reverse=args.reverse,
-            resolution=args.resolution,
-        )
-    # make_scenario names its keywords (lead_speed); on the command line they are flags.
-    keywords = ("oncoming", "density", "lead_speed", "lead_model", "reverse_in")
-    with flags_for({k: "--" + k.replace("_", "-") for k in keywords}):
-        task = make_scenario(
-            args.scenario, args.seed, oncoming=oncoming,
-            reverse_in=True if args.reverse_in else None, **traffic_opts,
-        )
-    if args.reverse and not task.reverse:
-        task = dataclasses.replace(task, reverse=True)
-    return task
