@@ -19,7 +19,7 @@ import json
 import math
 import sys
 import warnings
-from typing import Any, BinaryIO, cast
+from typing import Any
 
 import numpy as np
 
@@ -33,6 +33,7 @@ from rrtdrive.cli_args import (
     write_output,
 )
 from rrtdrive.json_safe import json_safe
+from rrtdrive.plan_file import read_plan_json
 from rrtdrive.types import InputError, InputWarning, Pose, brief_repr, is_finite_number
 
 __all__ = ["add_parser", "run", "HELP"]
@@ -91,37 +92,6 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument("--json", metavar="FILE|-", help="also write the checks as JSON ('-': stdout)")
     p.set_defaults(func=run)
     return p
-
-
-def _read_plan(source: str) -> dict[str, Any]:
-    from rrtdrive.json_input import parse_json, read_capped
-
-    label = "stdin" if source == "-" else source
-    if source == "":
-        raise InputError("plan: needs a plan .json file (or - for stdin), got an empty one")
-    try:
-        if source == "-":
-            # Bytes, so a file that is not UTF-8 is named as such whatever the locale
-            # (a text stream without a buffer, as a caller's StringIO, gives its text).
-            stdin = cast(BinaryIO, getattr(sys.stdin, "buffer", sys.stdin))
-            raw = read_capped(stdin, "plan", label)
-        else:
-            with open(source, "rb") as f:
-                raw = read_capped(f, "plan", label)
-    except OSError as exc:
-        raise InputError(f"plan: cannot read {label}: {exc.strerror}") from None
-    data = parse_json(raw, "plan", label)
-    if not isinstance(data, dict) or "path" not in data:
-        raise InputError(f"plan: {label} has no \"path\" (expected the JSON of rrtdrive plan)")
-    from rrtdrive.types import PlanStatus
-
-    # Printed in the verdict line: only a status rrtdrive writes (a newline split the line).
-    statuses = [s.value for s in PlanStatus]
-    if "status" in data and data["status"] not in statuses:
-        raise InputError(
-            f"plan.status: must be one of {statuses}, got {brief_repr(data['status'])}"
-        )
-    return data
 
 
 def _plan_pose(data: dict[str, Any], field: str) -> Pose | None:
@@ -255,7 +225,7 @@ def run(args: argparse.Namespace) -> int:
     from rrtdrive.verify import path_from_json, verify_path
 
     validate_output(args.json, "--json")
-    data = _read_plan(args.plan)
+    data = read_plan_json(args.plan, "plan")
     map_file = data.get("map_file") if args.map is None else args.map
     distinct_outputs(
         {"PLAN": args.plan, "MAP": map_file if isinstance(map_file, str) else None},

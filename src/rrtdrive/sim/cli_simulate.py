@@ -39,7 +39,7 @@ from rrtdrive.cli_args import (
     writing,
 )
 from rrtdrive.json_safe import options_json
-from rrtdrive.sim.cli_targets import make_task, target_kind, with_simulate_hint
+from rrtdrive.sim.cli_targets import given_path, make_task, target_kind, with_simulate_hint
 from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MIN_SIM_FREQUENCY
 from rrtdrive.types import InputError
 
@@ -92,6 +92,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--planner-option", action="append", dest="planner_options", metavar="FIELD=VALUE",
         help="set a field of the planner's config (repeatable), as 'rrtdrive plan "
         "--planner-option'; not for overtake-traffic, which re-plans with its own",
+    )
+    p.add_argument(
+        "--path", default=None, metavar="PLAN.json",
+        help="a map: drive this plan's path as it is instead of planning one (the JSON of "
+        "'rrtdrive plan --json', or any {\"path\": [[x, y, yaw, kappa(, gear)], ...]}); "
+        "the drive starts at its first row and ends at its last",
     )
     p.add_argument(
         "--controller", default="pure-pursuit", metavar="NAME",
@@ -321,6 +327,9 @@ def _run(args: argparse.Namespace) -> int:
             )
     if args.reverse_in and args.scenario != "parking":
         raise InputError("--reverse-in: only the parking scenario has reverse-in bays")
+    path, made_on = (
+        given_path(args, target) if getattr(args, "path", None) is not None else (None, None)
+    )
 
     if args.controller not in CONTROLLER_NAMES:
         raise InputError(
@@ -358,7 +367,8 @@ def _run(args: argparse.Namespace) -> int:
     validate_output(args.json, "--json")
     validate_output(args.trajectory, "--trajectory", (".csv",), allow_stdout=False)
     distinct_outputs(
-        {"SCENARIO": args.scenario}, video=args.video, json=args.json, trajectory=args.trajectory
+        {"SCENARIO": args.scenario, "--path": getattr(args, "path", None)},
+        video=args.video, json=args.json, trajectory=args.trajectory,
     )
     deterministic = bool(getattr(args, "deterministic", False))
     plan_time = getattr(args, "plan_time", None)
@@ -423,14 +433,17 @@ def _run(args: argparse.Namespace) -> int:
         stock, streamed = _drive_stock(args, config, stride)
         episode = stock.episode
     else:
-        scenario = make_task(args, target, oncoming, traffic_opts, make_scenario)
-        if scenario.reverse and not args.reverse and not reverses(args.planner):
+        scenario = make_task(args, target, oncoming, traffic_opts, make_scenario, path, made_on)
+        if path is None and scenario.reverse and not args.reverse and not reverses(args.planner):
             # u-turn, parallel-parking, parking --reverse-in plan with gear changes unasked.
             asked = f"the {args.scenario} scenario's gear changes take"
             note = forward_only_note(args.planner, asked=asked)
             print(f"rrtdrive simulate: {note}", file=sys.stderr)
         with flags_for({"episode.max_time_s": "--max-time"}):
-            episode = run_episode(scenario, args.planner, args.controller, args.seed, config)
+            episode = run_episode(
+                scenario, args.planner if path is None else path, args.controller, args.seed,
+                config,
+            )
     episode = with_simulate_hint(episode)
     report = evaluate(episode)
     # Drawing a stock env's frames happens during its drive; like writing the video, it
@@ -450,6 +463,8 @@ def _run(args: argparse.Namespace) -> int:
     extra.update(episode.scenario.describe())
     if target != "scenario":
         extra["scenario"] = args.scenario  # the name asked for, not the task kind "custom"
+    if path is not None:
+        extra["path_file"] = args.path  # the driven path's plan file (planner "given")
     if stock is not None:
         extra.update(stock.to_json())
     if args.video and stock is not None:

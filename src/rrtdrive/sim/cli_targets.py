@@ -9,8 +9,16 @@ import argparse
 from typing import Any
 
 from rrtdrive.cli_args import flags_for
+from rrtdrive.types import InputError
 
-__all__ = ["make_task", "target_kind", "with_simulate_hint"]
+__all__ = ["given_path", "make_task", "target_kind", "with_simulate_hint"]
+
+#: The flags that plan, which a given path (``--path``) leaves nothing to do: (attribute, flag).
+PLANNING_FLAGS = (
+    ("planner", "--planner"), ("planner_options", "--planner-option"),
+    ("plan_time", "--plan-time"), ("deterministic", "--deterministic"),
+    ("reverse", "--reverse"), ("start", "--start"), ("goal", "--goal"),
+)
 
 
 def with_simulate_hint(episode: Any) -> Any:
@@ -62,15 +70,89 @@ def _parse_pose(text: str | None, flag: str) -> Any:
     return None if text is None else parse_pose(text, flag)
 
 
+def given_path(args: argparse.Namespace, target: str) -> tuple[Any, str | None]:
+    """The path of ``--path``'s plan file and the map it names (``None``: none).
+
+    The path is driven on the map as it is (nothing planned).
+
+    Raises
+    ------
+    InputError
+        Naming ``--path``: the target is not a map, the file is unreadable or not a plan,
+        its rows are bad, or it has under two rows; naming a planning flag given with it.
+    """
+    from rrtdrive.plan_file import read_plan_json
+    from rrtdrive.verify import path_from_json
+
+    source = args.path
+    if target != "map":
+        raise InputError(
+            f"--path: only a map drives a given path; {args.scenario} sets its own start "
+            "and goal (give a map: a .json file or a built-in map name)"
+        )
+    for attr, flag in PLANNING_FLAGS:
+        if getattr(args, attr, None) not in (None, False):
+            raise InputError(
+                f"{flag}: --path gives the path to drive; nothing is planned"
+                + (" (the drive starts at its first row and ends at its last)"
+                   if attr in ("start", "goal") else "")
+            )
+    data = read_plan_json(source, "--path")
+    try:
+        path = path_from_json(data)
+    except InputError as exc:
+        raise InputError(f"--path: {exc}") from None
+    if len(path) < 2:
+        status = data.get("status", "unknown")
+        raise InputError(
+            f"--path: {source} has no path to drive (status {status}): "
+            + ("no rows" if len(path) == 0 else "one row; a path needs two")
+        )
+    made_on = data.get("map")
+    return path, made_on if isinstance(made_on, str) and made_on else None
+
+
 def make_task(
     args: argparse.Namespace, target: str, oncoming: int, traffic_opts: dict[str, Any],
-    make_scenario: Any,
+    make_scenario: Any, path: Any = None, made_on: str | None = None,
 ) -> Any:
-    """The task of a built-in scenario or of a map, with ``--reverse`` applied."""
+    """The task of a built-in scenario or of a map, with ``--reverse`` applied.
+
+    A given ``path`` (``--path``) sets the map's start and goal to its first and last
+    rows, and allows gear changes when it has any; a plan made on another map
+    (``made_on``) is driven as asked, with a warning.
+    """
     import dataclasses
 
     from rrtdrive.sim.tasks import CustomTask
 
+    if target == "map" and path is not None:
+        from rrtdrive.cli_args import map_with_poses
+        from rrtdrive.types import Pose
+
+        ends = Pose(*path.samples[0, :3]), Pose(*path.samples[-1, :3])
+        try:
+            m = map_with_poses(args.scenario, *ends)
+            if made_on is not None and m.name != made_on:
+                import warnings
+
+                from rrtdrive.types import InputWarning
+
+                warnings.warn(
+                    f"--path: the plan was made on map {made_on!r}; it is driven on "
+                    f"{m.name!r} as asked", InputWarning, stacklevel=2,
+                )
+            return CustomTask.from_map(
+                m, args.seed, reverse=not path.is_forward_only, resolution=args.resolution
+            )
+        except InputError as exc:
+            # The poses are the path's ends, not flags the user gave.
+            text = str(exc)
+            for flag, row in (("--start", "first"), ("--goal", "last"), ("goal", "last")):
+                if text.startswith(flag + ":"):
+                    text = f"--path: the path's {row} row:" + text[len(flag) + 1:]
+                    break
+            raise InputError(text) from None
     if target == "map":
         from rrtdrive.cli_args import map_with_poses
 
