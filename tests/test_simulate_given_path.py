@@ -57,6 +57,24 @@ def test_a_given_reversing_path_is_driven_from_its_first_row_to_its_last(
     assert int(np.count_nonzero(np.diff(gears))) == plan["cusps"] == 3
 
 
+def test_poses_alone_are_driven_with_the_gears_of_their_motion(kerbside_plan, tmp_path, capsys):
+    # Another planner's output: [x, y, yaw] rows, each cusp's pose once.
+    plan = json.loads(open(kerbside_plan).read())
+    poses = []
+    for row in plan["path"]:
+        if not poses or poses[-1] != row[:3]:
+            poses.append(row[:3])
+    f, traj = tmp_path / "poses.json", tmp_path / "t.csv"
+    f.write_text(json.dumps({"path": poses}))
+    code, _, err = _run(capsys, "simulate", "kerbside", "--path", str(f), "--trajectory",
+                        str(traj), "--json", str(tmp_path / "s.json"))
+    assert code == 0, err
+    data = json.loads((tmp_path / "s.json").read_text())
+    assert data["path_cusps"] == plan["cusps"] == 3 and data["reverse"] is True
+    gears = [int(float(r["gear"])) for r in csv.DictReader(traj.open())]
+    assert sum(a != b for a, b in zip(gears, gears[1:], strict=False)) == 3
+
+
 def test_a_path_of_another_map_is_driven_as_asked_and_crashes_where_verify_says(
     kerbside_plan, tmp_path, capsys
 ):
@@ -113,7 +131,7 @@ def test_bad_given_paths_are_named_by_the_flag(kerbside_plan, tmp_path, capsys):
     assert refused("kerbside", "--path", str(failed)) == (
         f"--path: {failed} has no path to drive (status no_path_in_budget): no rows")
     bad = tmp_path / "bad.json"
-    bad.write_text(json.dumps({"path": [[0, 0, 0], [1, 0, 0]]}))
+    bad.write_text(json.dumps({"path": [[0, 0], [1, 0]]}))
     assert refused("kerbside", "--path", str(bad)).startswith("--path: path: rows must all be")
     # The path's first row off the map: named as the path's, not as a --start.
     off = tmp_path / "off.json"

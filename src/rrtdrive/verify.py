@@ -483,7 +483,9 @@ def path_from_json(data: Mapping[str, object] | Sequence[Sequence[float]]) -> Pa
     """The :class:`Path` of a ``rrtdrive plan`` JSON object, or of its list of rows.
 
     Rows with 4 numbers (``[x, y, yaw, kappa]``, JSON written before gears) are
-    forward rows; rows with 5 carry their gear.
+    forward rows; rows with 5 carry their gear; rows with 3 (``[x, y, yaw]``, another
+    planner's poses) get their gears, cusps and ``kappa`` from the motion
+    (:func:`rrtdrive.pose_rows.path_from_poses`).
 
     Parameters
     ----------
@@ -497,7 +499,7 @@ def path_from_json(data: Mapping[str, object] | Sequence[Sequence[float]]) -> Pa
     Raises
     ------
     InputError
-        Naming ``path`` (and the row) when the rows are not all 4 or all 5 finite
+        Naming ``path`` (and the row) when the rows are not all 3, all 4 or all 5 finite
         numbers or a gear is not the number +1 or -1, and ``waypoints`` when those
         are not pairs of finite numbers.
 
@@ -524,19 +526,20 @@ def path_from_json(data: Mapping[str, object] | Sequence[Sequence[float]]) -> Pa
                 f"path: row {i} must be a list [x, y, yaw, kappa, gear], got {brief_repr(row)}"
             )
     widths = {len(r) for r in rows}
-    if widths - {4, 5} or len(widths) > 1:
+    if widths - {3, 4, 5} or len(widths) > 1:
         # Name the first row that is odd: of a bad width, else of a width other than row 0's.
-        width = len(rows[0]) if len(rows[0]) in (4, 5) else None
+        width = len(rows[0]) if len(rows[0]) in (3, 4, 5) else None
         i = next(k for k, r in enumerate(rows) if len(r) != width)
         raise InputError(
-            f"path: rows must all be [x, y, yaw, kappa] or [x, y, yaw, kappa, gear], "
+            f"path: rows must all be [x, y, yaw], [x, y, yaw, kappa] or "
+            f"[x, y, yaw, kappa, gear], "
             f"got row lengths {sorted(widths)}: row {i} has {len(rows[i])} "
             + ("number" if len(rows[i]) == 1 else "numbers")
         )
     # Checked here, row by row: NaN or inf would reach shapely as a broken polygon,
     # and numpy would read "1" or true as a gear.
     for i, row in enumerate(rows):
-        for name, value in zip(_COLUMNS, row[:4], strict=True):
+        for name, value in zip(_COLUMNS, row[:4], strict=False):
             if not is_finite_number(value):
                 raise InputError(
                     f"path: row {i} {name} must be a finite number, got {brief_repr(value)}"
@@ -546,14 +549,20 @@ def path_from_json(data: Mapping[str, object] | Sequence[Sequence[float]]) -> Pa
                 f"path.gear: must be +1 (forward) or -1 (reverse), got {brief_repr(row[4])} "
                 f"in row {i}"
             )
-    samples = np.array(rows, dtype=float).reshape(len(rows), widths.pop() if rows else 5)
+    width = widths.pop() if rows else 5
+    samples = np.array(rows, dtype=float).reshape(len(rows), width)
     if not _is_list(waypoints) or not all(
         _is_list(w) and len(w) == 2 and all(is_finite_number(v) for v in w) for w in waypoints
     ):
         raise InputError(
             f"waypoints: expected a list of [x, y] finite numbers, got {brief_repr(waypoints)}"
         )
-    return Path(samples, np.array(waypoints, dtype=float).reshape(-1, 2))
+    points = np.array(waypoints, dtype=float).reshape(-1, 2)
+    if width == 3:
+        from rrtdrive.pose_rows import path_from_poses
+
+        return Path(path_from_poses(samples).samples, points)
+    return Path(samples, points)
 
 
 _COLUMNS = ("x", "y", "yaw", "kappa")

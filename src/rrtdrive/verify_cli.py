@@ -1,7 +1,8 @@
 """The ``rrtdrive verify`` subcommand: check a plan's path with :func:`rrtdrive.verify.verify_path`.
 
 It reads the JSON of ``rrtdrive plan --json`` (or any ``{"path": [[x, y, yaw,
-kappa(, gear)], ...]}``, so paths from other planners can be judged too), takes the
+kappa(, gear)], ...]}`` or ``{"path": [[x, y, yaw], ...]}``, so paths from other planners
+can be judged too: poses alone get their gears and kappa from the motion), takes the
 map from the command line, else the plan's map file (``map_file``), else the
 built-in map the plan names, the start and goal from ``--start`` /
 ``--goal``, else the plan's, else the map's own, and prints each check with its
@@ -61,7 +62,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "passes, 1 when one fails, 2 on bad input.",
     )
     p.add_argument("plan", metavar="PLAN", help="the plan JSON ('-' for stdin), e.g. from "
-                   "`rrtdrive plan MAP --json plan.json`")
+                   "`rrtdrive plan MAP --json plan.json`, or another planner's {\"path\": "
+                   "rows}: [x, y, yaw, kappa(, gear)], or [x, y, yaw] whose gears and kappa "
+                   "are read off the motion")
     p.add_argument(
         "map", nargs="?", default=None, metavar="MAP",
         help="a built-in map name or a map .json file (default: the plan's map file, else "
@@ -180,8 +183,14 @@ def _where(check: Any) -> str:
             f"yaw {math.degrees(yaw):.1f} deg: {check.collides_with}")
 
 
-def _lines(check: Any, bounds: dict[str, float | None], why: str = "") -> list[str]:
-    """One line per check: its name, pass or FAIL, and the measured value against its bound."""
+def _lines(
+    check: Any, bounds: dict[str, float | None], why: str = "", kappa_given: bool = True
+) -> list[str]:
+    """One line per check: its name, pass or FAIL, and the measured value against its bound.
+
+    ``kappa_given`` false: the rows were poses alone, their ``kappa`` read off the yaw's
+    turn, so its line says so instead of judging it.
+    """
     mark = {True: "ok  ", False: "FAIL"}
     sharp = bounds["max_sharpness"]
     rows = [
@@ -205,7 +214,8 @@ def _lines(check: Any, bounds: dict[str, float | None], why: str = "") -> list[s
          f"{_metres(check.min_clearance_m, '.4f')} (min {bounds['clearance']:g}{why})"),
         (check.kappa_ok, "kappa column agrees with the yaw's turn",
          f"{check.kappa_column_err:.4f} 1/m off (max 0.01)"
-         + ("" if check.worst_kappa_row is None else f"; worst at row {check.worst_kappa_row}")),
+         + ("" if check.worst_kappa_row is None else f"; worst at row {check.worst_kappa_row}")
+         if kappa_given else "not given: rows [x, y, yaw], gears and kappa read off the motion"),
     ]
     return [f"  {mark[bool(ok)]} {name:48s} {detail}".rstrip() for ok, name, detail in rows]
 
@@ -232,6 +242,8 @@ def run(args: argparse.Namespace) -> int:
         json=args.json,
     )
     path = path_from_json(data)
+    rows_given = data["path"]
+    kappa_given = not (isinstance(rows_given, list) and rows_given and len(rows_given[0]) == 3)
     start = parse_pose(args.start, "--start") if args.start is not None else _plan_pose(
         data, "start"
     )
@@ -270,12 +282,13 @@ def run(args: argparse.Namespace) -> int:
     else:
         verdict = "OK, every check passed" if check.ok else "FAILED"
         print(f"{m.name}: {label}: {verdict} ({rows} rows, {_metres(length, '.2f')})", file=out)
-        print("\n".join(_lines(check, bounds, why)), file=out)
+        print("\n".join(_lines(check, bounds, why, kappa_given)), file=out)
     if check.failed == ("sharpness_ok",):
         print("  (only the sharpness fails: paths of --paper-smoothing jump in curvature by "
               "design; --no-sharpness checks the rest)", file=out)
     if args.json:
-        doc = {"map": m.name, "rows": len(path.samples), "length_m": round(length, 6),
+        doc = {"map": m.name, "rows": len(path.samples), "kappa_given": kappa_given,
+               "length_m": round(length, 6),
                **bounds, **dataclasses.asdict(check), "failed": list(check.failed)}
         # Strict JSON: a non-finite number (a row far off the map) is null, not Infinity.
         write_output(args.json, json.dumps(json_safe(doc), allow_nan=False) + "\n")

@@ -96,7 +96,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument(
         "--path", default=None, metavar="PLAN.json",
         help="a map: drive this plan's path as it is instead of planning one (the JSON of "
-        "'rrtdrive plan --json', or any {\"path\": [[x, y, yaw, kappa(, gear)], ...]}); "
+        "'rrtdrive plan --json', or any {\"path\": [[x, y, yaw, kappa(, gear)], ...]} or "
+        "[[x, y, yaw], ...] whose gears and kappa are read off the motion); "
         "the drive starts at its first row and ends at its last",
     )
     p.add_argument(
