@@ -287,3 +287,46 @@ def test_a_map_file_that_is_not_a_path_is_refused(capsys, plans, tmp_path, bad):
     code, _, err = run(capsys, "verify", str(f))
     assert code == 2 and err.count("\n") == 1
     assert "error: plan.map_file: expected the map file's path or null, got" in err
+
+
+def test_the_plot_draws_the_body_where_the_path_first_collides(capsys, plans, tmp_path):
+    import dataclasses
+
+    import shapely
+    from matplotlib.patches import Polygon as PolygonPatch
+
+    from rrtdrive.maps import Obstacle
+    from rrtdrive.plotting import plot_check
+    from rrtdrive.verify import path_from_json, verify_path
+
+    data = json.loads(plans["default"].read_text())
+    x, y = np.array(data["path"])[len(data["path"]) // 2, :2]
+    m = builtin_map("parking_lot")
+    block = Obstacle((x, y), (1.0, 1.0))
+    blocked = dataclasses.replace(m, obstacles=(*m.obstacles, block))
+    path = path_from_json(data)
+    check = verify_path(blocked, path)
+    fig = plot_check(blocked, path, check, "p.json")
+    title = fig.axes[0].get_title(loc="left")
+    assert title == "parking_lot: p.json: FAILED: collision (697 rows, 170.7 m)".replace(
+        "697", str(len(path))).replace("170.7", f"{path.length:.1f}")
+    # The red body (tab:red): the car at the first colliding pose, which overlaps the block.
+    bodies = [shapely.Polygon(p.get_xy()) for p in fig.axes[0].patches
+              if type(p) is PolygonPatch  # not its subclass FancyArrow, the heading
+              and np.allclose(p.get_facecolor()[:3], (0.839, 0.153, 0.157), atol=0.01)]
+    assert len(bodies) == 1 and bodies[0].intersects(block.polygon())
+    cx, cy, yaw = check.first_collision
+    length, rear = m.vehicle.length, m.vehicle.rear_overhang
+    centre = (cx + (length / 2 - rear) * np.cos(yaw), cy + (length / 2 - rear) * np.sin(yaw))
+    assert np.allclose(bodies[0].centroid.coords[0], centre, atol=1e-6)
+    assert bodies[0].area == pytest.approx(length * m.vehicle.width)
+    # From the command line: a PNG; a suffix matplotlib does not promise is refused.
+    save = tmp_path / "blocked.json"
+    save_map(blocked, save)
+    png = tmp_path / "check.png"
+    code, _, _ = run(capsys, "verify", str(plans["default"]), str(save), "--plot", str(png))
+    assert code == 1 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    code, _, err = run(capsys, "verify", str(plans["default"]), "--plot", str(tmp_path / "c.txt"))
+    assert code == 2 and err.startswith("rrtdrive verify: error: --plot:")
+    code, _, err = run(capsys, "verify", str(plans["default"]), "--plot", str(plans["default"]))
+    assert code == 2 and "--plot" in err

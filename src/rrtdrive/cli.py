@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any, NoReturn
 import numpy as np
 
 from rrtdrive.cli_args import (
+    PLOT_SUFFIXES,
     OutputError,
     cell_size,
     distinct_outputs,
@@ -56,8 +57,6 @@ __all__ = ["COMMANDS", "build_parser", "main", "plan_to_json", "parse_pose"]
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT = 0, 1, 2
 
-#: Suffixes ``plan --plot`` can write (matplotlib's Agg formats we promise).
-PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 #: The planner's fields as ``plan``'s flags, for its messages (``planner.step: ...``).
 PLANNER_FLAGS = {
     "planner": "--planner", "planner.step": "--step", "hybrid.step": "--step",

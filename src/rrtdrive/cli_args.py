@@ -42,6 +42,10 @@ __all__ = [
     "writing",
 ]
 
+#: Suffixes ``plan --plot`` and ``verify --plot`` can write (matplotlib's Agg formats we
+#: promise).
+PLOT_SUFFIXES = (".png", ".pdf", ".svg")
+
 # "-5", "-5,6,0", "-.5,1e-3,0": a value, not an option (argparse only knows plain numbers).
 _NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)[\d.,eE+\-]*$")
 

@@ -8,6 +8,7 @@ import textwrap
 import warnings
 from collections.abc import Sequence
 from pathlib import Path as FsPath
+from typing import Any
 
 import matplotlib
 
@@ -34,6 +35,7 @@ __all__ = [
     "draw_gear_path",
     "draw_pose",
     "plot_plan",
+    "plot_check",
     "plot_curvature",
     "map_figure_size",
     "save_figure",
@@ -320,6 +322,14 @@ def plot_plan(
     text = title or f"{m.name}: {who}{how} ({status}, {result.nodes} nodes)"
     if title is None and not result.success and result.diagnosis is not None:
         text += f"\nwhy: {result.diagnosis.message}"
+    _title_and_legend(fig, ax, text, height_in, parse_math=title is not None)
+    return fig
+
+
+def _title_and_legend(
+    fig: Figure, ax: Axes, text: str, height_in: float, parse_math: bool
+) -> None:
+    """A left-aligned title wrapped to the figure, the figure grown for it, and the legend."""
     # About 0.6 em a character; the room is the figure's width (the legend's too).
     per_line = max(20, int((fig.get_figwidth() - 0.6) * 72 / (0.6 * _TITLE_PT)))
     wrapped = "\n".join(
@@ -332,10 +342,53 @@ def plot_plan(
     fig.set_figheight(height_in + extra)
     # The default title is free text: a map named "$x^$" is no formula (mathtext raised);
     # a title given is matplotlib's to read, as anywhere else.
-    ax.set_title(wrapped, loc="left", fontsize=_TITLE_PT, parse_math=title is not None)
+    ax.set_title(wrapped, loc="left", fontsize=_TITLE_PT, parse_math=parse_math)
     # Beside the axes, outside them: inside, it covered a corner of the map (a goal in
     # the garage's top right bays hid under it).
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+
+
+#: How the title of :func:`plot_check` names a failed check (else its field, less ``_ok``).
+_CHECK_NAMES = {"collision_free": "collision", "endpoints_ok": "ends", "kappa_ok": "kappa column",
+                "travel_ok": "direction of travel"}
+
+
+def plot_check(m: Map, path: Path, check: Any, name: str = "") -> Figure:
+    """The map, a checked path and where the check failed: ``rrtdrive verify --plot``.
+
+    The path is drawn by :func:`draw_gear_path`; the car's body at the first pose that
+    collides (``check.first_collision``) in red, named with what it hits. The title
+    names the map and ``name`` (the plan file), the verdict and the failed checks.
+
+    Parameters
+    ----------
+    m : Map
+        The map checked against (its start and goal drawn).
+    path : Path
+        The path checked.
+    check : PathCheck
+        :func:`rrtdrive.verify.verify_path`'s result for them.
+    name : str
+        The plan's name in the title (its file); empty: none.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        A new figure; :func:`save_figure` saves and closes it.
+    """
+    width_in, height_in = map_figure_size(m.bounds)
+    fig, ax = plt.subplots(figsize=(width_in, height_in), layout="constrained")
+    draw_map(ax, m)
+    if len(path):
+        draw_gear_path(ax, path)
+    if check.first_collision is not None:
+        draw_pose(ax, Pose(*check.first_collision), m.vehicle, "tab:red",
+                  label=f"first collision: {check.collides_with}")  # fmt: skip
+    failed = [_CHECK_NAMES.get(f, f.removesuffix("_ok").replace("_", " ")) for f in check.failed]
+    verdict = "OK, every check passed" if check.ok else "FAILED: " + ", ".join(failed)
+    what = f"{m.name}: {name}" if name else m.name
+    text = f"{what}: {verdict} ({len(path)} rows, {path.length:.1f} m)"
+    _title_and_legend(fig, ax, text, height_in, parse_math=False)
     return fig
 
 

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from rrtdrive.cli_args import (
+    PLOT_SUFFIXES,
     distinct_outputs,
     flags_for_warnings,
     nonneg_float,
@@ -32,6 +33,7 @@ from rrtdrive.cli_args import (
     positive_float,
     validate_output,
     write_output,
+    writing,
 )
 from rrtdrive.json_safe import json_safe
 from rrtdrive.plan_file import read_plan_json
@@ -93,6 +95,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "measured and printed either way",
     )
     p.add_argument("--json", metavar="FILE|-", help="also write the checks as JSON ('-': stdout)")
+    p.add_argument(
+        "--plot", metavar="FILE.png",
+        help="draw the map, the path (reverse dashed, cusps marked) and the body at the "
+        "first pose that collides to a figure (.png, .pdf or .svg)",
+    )
     p.set_defaults(func=run)
     return p
 
@@ -234,12 +241,14 @@ def run(args: argparse.Namespace) -> int:
     """Run ``rrtdrive verify``; return the exit code."""
     from rrtdrive.verify import path_from_json, verify_path
 
+    plot = getattr(args, "plot", None)  # a Namespace built by a caller may lack it
     validate_output(args.json, "--json")
+    validate_output(plot, "--plot", PLOT_SUFFIXES, allow_stdout=False)
     data = read_plan_json(args.plan, "plan")
     map_file = data.get("map_file") if args.map is None else args.map
     distinct_outputs(
         {"PLAN": args.plan, "MAP": map_file if isinstance(map_file, str) else None},
-        json=args.json,
+        json=args.json, plot=plot,
     )
     path = path_from_json(data)
     rows_given = data["path"]
@@ -292,4 +301,9 @@ def run(args: argparse.Namespace) -> int:
                **bounds, **dataclasses.asdict(check), "failed": list(check.failed)}
         # Strict JSON: a non-finite number (a row far off the map) is null, not Infinity.
         write_output(args.json, json.dumps(json_safe(doc), allow_nan=False) + "\n")
+    if plot:
+        from rrtdrive.plotting import plot_check, save_figure
+
+        with writing("--plot", plot):
+            save_figure(plot_check(m, path, check, label), plot)
     return EXIT_OK if check.ok else EXIT_FAILED
