@@ -36,6 +36,7 @@ __all__ = [
     "draw_pose",
     "plot_plan",
     "plot_check",
+    "title_and_legend",
     "plot_curvature",
     "map_figure_size",
     "save_figure",
@@ -322,14 +323,29 @@ def plot_plan(
     text = title or f"{m.name}: {who}{how} ({status}, {result.nodes} nodes)"
     if title is None and not result.success and result.diagnosis is not None:
         text += f"\nwhy: {result.diagnosis.message}"
-    _title_and_legend(fig, ax, text, height_in, parse_math=title is not None)
+    title_and_legend(fig, ax, text, height_in, parse_math=title is not None)
     return fig
 
 
-def _title_and_legend(
+def title_and_legend(
     fig: Figure, ax: Axes, text: str, height_in: float, parse_math: bool
 ) -> None:
-    """A left-aligned title wrapped to the figure, the figure grown for it, and the legend."""
+    """A left-aligned title wrapped to the figure, the figure grown for it, and the legend.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure, whose height grows by a line for each title line past two.
+    ax : matplotlib.axes.Axes
+        The map's axes: the title goes above it, the legend beside it.
+    text : str
+        The title; its lines are wrapped to the figure's width.
+    height_in : float
+        The figure's height before the title, inches.
+    parse_math : bool
+        Let matplotlib read ``$...$`` as math (a title the caller gave), or not (free
+        text such as a map's name).
+    """
     # About 0.6 em a character; the room is the figure's width (the legend's too).
     per_line = max(20, int((fig.get_figwidth() - 0.6) * 72 / (0.6 * _TITLE_PT)))
     wrapped = "\n".join(
@@ -388,7 +404,7 @@ def plot_check(m: Map, path: Path, check: Any, name: str = "") -> Figure:
     verdict = "OK, every check passed" if check.ok else "FAILED: " + ", ".join(failed)
     what = f"{m.name}: {name}" if name else m.name
     text = f"{what}: {verdict} ({len(path)} rows, {path.length:.1f} m)"
-    _title_and_legend(fig, ax, text, height_in, parse_math=False)
+    title_and_legend(fig, ax, text, height_in, parse_math=False)
     return fig
 
 

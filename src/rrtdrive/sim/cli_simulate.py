@@ -26,6 +26,7 @@ import time
 from typing import Any
 
 from rrtdrive.cli_args import (
+    PLOT_SUFFIXES,
     cell_size,
     distinct_outputs,
     flags_for,
@@ -164,6 +165,12 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     p.add_argument("--json", metavar="FILE|-", help="write the metrics as JSON ('-' for stdout)")
     p.add_argument("--video", metavar="FILE.mp4", help="write a headless MP4 of the episode")
+    p.add_argument(
+        "--plot", metavar="FILE.png",
+        help="draw the map, the planned path and the driven trajectory, with the speed, "
+        "steering angle and rate against the car's limits and the cross-track error over "
+        "time, to a figure (.png, .pdf or .svg)",
+    )
     p.add_argument(
         "--trajectory", metavar="FILE.csv",
         help="write the executed trajectory, one row per logged state (the start and each "
@@ -367,9 +374,11 @@ def _run(args: argparse.Namespace) -> int:
     validate_output(args.video, "--video", (".mp4",), allow_stdout=False)
     validate_output(args.json, "--json")
     validate_output(args.trajectory, "--trajectory", (".csv",), allow_stdout=False)
+    plot = getattr(args, "plot", None)  # a Namespace built by a caller may lack it
+    validate_output(plot, "--plot", PLOT_SUFFIXES, allow_stdout=False)
     distinct_outputs(
         {"SCENARIO": args.scenario, "--path": getattr(args, "path", None)},
-        video=args.video, json=args.json, trajectory=args.trajectory,
+        video=args.video, json=args.json, trajectory=args.trajectory, plot=plot,
     )
     deterministic = bool(getattr(args, "deterministic", False))
     plan_time = getattr(args, "plan_time", None)
@@ -503,6 +512,13 @@ def _run(args: argparse.Namespace) -> int:
                 frames = write_video(episode, args.video, stride=stride, progress=progress)
             extra["video"] = args.video
             extra["video_frames"] = frames
+    if plot:
+        from rrtdrive.plotting import save_figure
+        from rrtdrive.sim.episode_plot import plot_episode
+
+        with writing("--plot", plot):
+            save_figure(plot_episode(episode), plot)
+        extra["plot"] = plot
     data = episode_json(report, extra)
     text = json.dumps(data, indent=2) + "\n"
     if args.trajectory:
