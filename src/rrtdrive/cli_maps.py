@@ -7,7 +7,7 @@ import pathlib
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from rrtdrive.cli_args import validate_output, writing
+from rrtdrive.cli_args import flags_for, positive_float, validate_output, writing
 from rrtdrive.types import InputError
 
 if TYPE_CHECKING:
@@ -23,20 +23,104 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     maps = sub.add_parser(
         "maps",
         help=HELP,
-        description="List the built-in maps; --export writes them as JSON files.",
+        description="List the built-in maps; --export writes them as JSON files; --import "
+        "makes a map file from an occupancy image (a ROS map_server .yaml and its image, or "
+        "a PNG/PGM with --resolution).",
     )
     maps.add_argument(
         "--export", metavar="DIR",
         help="write each built-in map to DIR/NAME.json (DIR is created if missing)",
     )
+    imp = maps.add_argument_group("import an occupancy image (--import)")
+    imp.add_argument(
+        "--import", dest="import_from", metavar="MAP.yaml|IMAGE",
+        help="a ROS map_server map (.yaml naming its image, resolution, origin, thresholds) "
+        "or an image (.png, .pgm, ...: dark is occupied); occupied and unknown cells become "
+        "rectangles; needs --start, --goal and --out",
+    )
+    imp.add_argument("--start", metavar="X,Y,YAW", help="the map's rear-axle start pose")
+    imp.add_argument("--goal", metavar="X,Y,YAW", help="the map's rear-axle goal pose")
+    imp.add_argument("--out", metavar="FILE.json", help="the map file to write")
+    imp.add_argument("--name", metavar="NAME",
+                     help="the map's name (default: the file name without its suffix)")
+    imp.add_argument("--resolution", type=positive_float, metavar="M",
+                     help="an image: metres per pixel (a .yaml gives its own)")
+    imp.add_argument("--origin", metavar="X,Y",
+                     help="an image: its lower left corner in metres (default 0,0)")
+    imp.add_argument("--unknown-free", action="store_true",
+                     help="read the cells between ROS's thresholds (grey, unknown) as free; "
+                     "by default they are obstacles")
     maps.set_defaults(func=_cmd_maps)
     return maps
+
+
+#: The flags that only an import takes.
+IMPORT_FLAGS = (("start", "--start"), ("goal", "--goal"), ("out", "--out"), ("name", "--name"),
+                ("resolution", "--resolution"), ("origin", "--origin"),
+                ("unknown_free", "--unknown-free"))  # fmt: skip
+
+
+def _cmd_import(args: argparse.Namespace) -> int:
+    """``rrtdrive maps --import``: write the map of an occupancy image; return the exit code."""
+    from rrtdrive.cli_args import distinct_outputs, parse_pose
+    from rrtdrive.maps import save_map
+    from rrtdrive.occupancy import map_from_image, read_image_map, read_ros_map
+
+    source = args.import_from
+    if args.export is not None:
+        raise InputError("--export: writes the built-in maps; --import makes one map, to --out")
+    for attr, flag in (("start", "--start"), ("goal", "--goal"), ("out", "--out")):
+        if getattr(args, attr) is None:
+            raise InputError(f"{flag}: --import needs it (a map file has a start, a goal)")
+    validate_output(args.out, "--out", (".json",), allow_stdout=False)
+    distinct_outputs({"--import": source}, out=args.out)
+    start, goal = parse_pose(args.start, "--start"), parse_pose(args.goal, "--goal")
+    is_yaml = source.lower().endswith((".yaml", ".yml"))
+    if is_yaml:
+        for attr, flag in (("resolution", "--resolution"), ("origin", "--origin")):
+            if getattr(args, attr) is not None:
+                raise InputError(f"{flag}: the .yaml gives it; only an image takes {flag}")
+        with flags_for({"map": "--import"}):
+            grid = read_ros_map(source, args.unknown_free)
+    else:
+        if args.resolution is None:
+            raise InputError("--resolution: an image needs its metres per pixel (e.g. 0.05)")
+        origin = (0.0, 0.0)
+        if args.origin is not None:
+            parts = args.origin.split(",")
+            try:
+                origin = (float(parts[0]), float(parts[1]))
+                if len(parts) != 2:
+                    raise ValueError
+            except (ValueError, IndexError):
+                raise InputError(f"--origin: expected X,Y in metres, got {args.origin!r}") from None
+        with flags_for({"image": "--import", "resolution": "--resolution", "origin": "--origin"}):
+            grid = read_image_map(source, args.resolution, origin, unknown_free=args.unknown_free)
+    name = args.name if args.name is not None else pathlib.Path(source).stem
+    with flags_for({"start": "--start", "goal": "--goal", "name": "--name"}):
+        m = map_from_image(grid, name, start, goal)
+    with writing("--out", args.out):
+        save_map(m, args.out)
+    rows, cols = grid.occupied.shape
+    xmin, ymin, xmax, ymax = m.bounds
+    print(
+        f"{source}: {cols} x {rows} cells at {grid.resolution:g} m, {xmax - xmin:g} x "
+        f"{ymax - ymin:g} m; {int(grid.occupied.sum())} occupied cells ({grid.unknown} unknown, "
+        f"read as {'free' if args.unknown_free else 'occupied'}) as {len(m.obstacles)} "
+        f"rectangles -> {args.out}"
+    )
+    return 0
 
 
 
 def _cmd_maps(args: argparse.Namespace) -> int:
     from rrtdrive.maps import BUILTIN_MAPS, builtin_map
 
+    if getattr(args, "import_from", None) is not None:
+        return _cmd_import(args)
+    for attr, flag in IMPORT_FLAGS:
+        if getattr(args, attr, None) not in (None, False):
+            raise InputError(f"{flag}: only with --import (it describes the map imported)")
     maps = {name: builtin_map(name) for name in BUILTIN_MAPS}
     out = None if args.export is None else _export_folder(args.export, list(maps))
     if out is not None:

@@ -1,0 +1,296 @@
+"""Maps from occupancy images: a ROS ``map_server`` map (``.yaml`` + image) or a plain image.
+
+A pixel's occupancy probability is ``(255 - v) / 255`` (``v / 255`` with ``negate``;
+a colour pixel's ``v`` is the mean of its channels), as ROS ``map_server`` reads its
+``trinary`` images: above ``occupied_thresh`` the cell is occupied, below
+``free_thresh`` free, and in between unknown, which counts as occupied here unless
+asked otherwise (a planner should not drive where nobody has looked). Occupied cells
+become axis-aligned rectangles: each row's runs of occupied cells, merged down the
+rows while a run keeps the same columns, so a wall is one rectangle, not a thousand.
+The image's first row is its top: row ``r``, column ``c`` is the cell whose lower
+left corner is ``origin + (c, rows - 1 - r) * resolution``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import warnings
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from rrtdrive.types import InputError, Pose, brief_repr, is_finite_number
+
+if TYPE_CHECKING:
+    from rrtdrive.maps import Map
+    from rrtdrive.obstacles import Obstacle
+
+__all__ = [
+    "ImageMap", "read_image_map", "read_ros_map", "grid_rectangles", "image_obstacles",
+    "map_from_image",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class ImageMap:
+    """Occupied cells of an image and where they lie.
+
+    Parameters
+    ----------
+    occupied : numpy.ndarray
+        Bool ``(rows, cols)``, the image's first row at the top.
+    resolution : float
+        Cell side, metres.
+    origin : tuple of float
+        ``(x, y)`` of the lower left corner of the bottom left cell, metres.
+    unknown : int
+        Cells between the thresholds (counted in ``occupied`` unless read as free).
+    """
+
+    occupied: np.ndarray
+    resolution: float
+    origin: tuple[float, float]
+    unknown: int = 0
+
+    @property
+    def bounds(self) -> tuple[float, float, float, float]:
+        """The image's extent ``(xmin, ymin, xmax, ymax)`` in metres."""
+        rows, cols = self.occupied.shape
+        x0, y0 = self.origin
+        return (x0, y0, x0 + cols * self.resolution, y0 + rows * self.resolution)
+
+
+def _number(value: object, field: str, low: float, high: float) -> float:
+    if not is_finite_number(value) or not low <= float(value) <= high:  # type: ignore[arg-type]
+        raise InputError(f"{field}: expected a number from {low:g} to {high:g}, got "
+                         f"{brief_repr(value)}")  # fmt: skip
+    return float(value)  # type: ignore[arg-type]
+
+
+def read_image_map(
+    image: str | os.PathLike[str],
+    resolution: float,
+    origin: tuple[float, float] = (0.0, 0.0),
+    negate: bool = False,
+    occupied_thresh: float = 0.65,
+    free_thresh: float = 0.196,
+    unknown_free: bool = False,
+) -> ImageMap:
+    """Read an occupancy image (PNG, PGM, ...) as ROS ``map_server`` reads a trinary map.
+
+    Parameters
+    ----------
+    image : str or os.PathLike
+        The image file.
+    resolution : float
+        Metres per pixel (> 0).
+    origin : tuple of float
+        ``(x, y)`` of the image's lower left corner, metres.
+    negate : bool
+        White is occupied (ROS ``negate: 1``).
+    occupied_thresh, free_thresh : float
+        Occupancy probabilities above which a pixel is occupied and below which it is
+        free (ROS's defaults, 0.65 and 0.196).
+    unknown_free : bool
+        Read the pixels in between as free (default: occupied).
+
+    Returns
+    -------
+    ImageMap
+
+    Raises
+    ------
+    InputError
+        Naming the argument: a file that cannot be read as an image, a resolution or
+        threshold out of range, ``free_thresh`` not below ``occupied_thresh``.
+    """
+    import imageio.v3 as iio
+
+    res = _number(resolution, "resolution", 1e-6, 1e3)
+    occ = _number(occupied_thresh, "occupied_thresh", 0.0, 1.0)
+    free = _number(free_thresh, "free_thresh", 0.0, 1.0)
+    if free >= occ:
+        raise InputError(f"free_thresh: must be below occupied_thresh ({occ:g}), got {free:g}")
+    x0 = _number(origin[0], "origin", -1e6, 1e6)
+    y0 = _number(origin[1], "origin", -1e6, 1e6)
+    name = os.fspath(image)
+    if not os.path.isfile(name):
+        raise InputError(f"image: {name} is not a file")
+    try:
+        with warnings.catch_warnings():  # imageio's plugin probe warns about its DICOM one
+            warnings.simplefilter("ignore", DeprecationWarning)
+            raw = np.asarray(iio.imread(name))
+    except (OSError, ValueError, SyntaxError) as exc:  # pillow's and imageio's failures
+        # imageio's own text runs to several lines of plugins to install: one line here.
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise InputError(
+            f"image: cannot read {name} as an image (PNG, PGM, ...): {first}"
+        ) from None
+    # White is the type's largest value: 255, or 65535 for a 16-bit image.
+    scale = float(np.iinfo(raw.dtype).max) if np.issubdtype(raw.dtype, np.integer) else 1.0
+    pixels = raw.astype(float)
+    if pixels.ndim == 3:
+        # map_server averages the colour channels (an alpha channel left out).
+        pixels = pixels[..., :3].mean(axis=2) if pixels.shape[2] >= 3 else pixels[..., 0]
+    if pixels.ndim != 2 or pixels.size == 0:
+        raise InputError(f"image: expected a 2-D image, got shape {pixels.shape}")
+    p = pixels / scale if negate else (scale - pixels) / scale
+    occupied = p > occ
+    unknown = ~occupied & ~(p < free)
+    return ImageMap(occupied | (unknown & (not unknown_free)), res, (x0, y0), int(unknown.sum()))
+
+
+def read_ros_map(yaml_file: str | os.PathLike[str], unknown_free: bool = False) -> ImageMap:
+    """Read a ROS ``map_server`` map: its ``.yaml`` and the image it names.
+
+    Parameters
+    ----------
+    yaml_file : str or os.PathLike
+        The ``.yaml`` (``image``, ``resolution``, ``origin: [x, y, yaw]``, ``negate``,
+        ``occupied_thresh``, ``free_thresh``, ``mode``); the image path is relative to
+        the file's folder.
+    unknown_free : bool
+        Read the pixels between the thresholds as free (default: occupied).
+
+    Returns
+    -------
+    ImageMap
+
+    Raises
+    ------
+    InputError
+        Naming the field: a missing or malformed one, a rotated origin (yaw != 0: our
+        maps' bounds are axis-aligned), a ``mode`` other than ``trinary`` or ``scale``.
+    """
+    import yaml
+
+    try:
+        with open(yaml_file, encoding="utf-8") as f:
+            data = yaml.safe_load(f)
+    except OSError as exc:
+        raise InputError(f"map: cannot read {os.fspath(yaml_file)}: {exc.strerror}") from None
+    except (yaml.YAMLError, UnicodeDecodeError) as exc:
+        raise InputError(f"map: {os.fspath(yaml_file)} is not YAML: {exc}") from None
+    if not isinstance(data, dict):
+        raise InputError(f"map: {os.fspath(yaml_file)} is not a ROS map .yaml (a mapping)")
+    for key in ("image", "resolution", "origin"):
+        if key not in data:
+            raise InputError(f"{key}: missing in {os.fspath(yaml_file)} (a ROS map .yaml)")
+    origin = data["origin"]
+    if not isinstance(origin, list) or len(origin) not in (2, 3):
+        raise InputError(f"origin: expected [x, y, yaw], got {brief_repr(origin)}")
+    if len(origin) == 3:
+        yaw = _number(origin[2], "origin", -1e3, 1e3)
+        if abs(math.remainder(yaw, math.tau)) > 1e-9:
+            raise InputError(
+                f"origin: the map is rotated (yaw {yaw:g} rad); rrtdrive maps are axis-aligned: "
+                "rotate the image so that its yaw is 0"
+            )
+    mode = data.get("mode", "trinary")
+    if mode not in ("trinary", "scale"):
+        raise InputError(f"mode: only trinary and scale maps are read, got {brief_repr(mode)}")
+    negate = data.get("negate", 0)
+    if negate not in (0, 1, True, False):
+        raise InputError(f"negate: expected 0 or 1, got {brief_repr(negate)}")
+    image = data["image"]
+    if not isinstance(image, str) or not image:
+        raise InputError(f"image: expected the image's file name, got {brief_repr(image)}")
+    path = os.path.join(os.path.dirname(os.fspath(yaml_file)), image)
+    return read_image_map(
+        path, data["resolution"], (origin[0], origin[1]), bool(negate),
+        data.get("occupied_thresh", 0.65), data.get("free_thresh", 0.196), unknown_free,
+    )  # fmt: skip
+
+
+def grid_rectangles(occupied: np.ndarray) -> np.ndarray:
+    """Disjoint rectangles of cells covering exactly the occupied ones.
+
+    Each row's runs of occupied cells; a run continues the rectangle above it when
+    that rectangle spans exactly the same columns.
+
+    Parameters
+    ----------
+    occupied : numpy.ndarray
+        Bool ``(rows, cols)``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Int ``(K, 4)`` rows ``[r0, c0, r1, c1]``: rows ``r0 .. r1 - 1`` and columns
+        ``c0 .. c1 - 1``.
+
+    Examples
+    --------
+    >>> grid_rectangles(np.array([[1, 1, 0], [1, 1, 0], [0, 1, 1]], dtype=bool)).tolist()
+    [[0, 0, 2, 2], [2, 1, 3, 3]]
+    """
+    occ = np.asarray(occupied, dtype=bool)
+    done: list[list[int]] = []
+    open_: dict[tuple[int, int], list[int]] = {}
+    for r, row in enumerate(occ):
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], row.astype(np.int8), [0]])))
+        runs = {(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2], strict=True)}
+        for key in list(open_):
+            if key not in runs:
+                done.append(open_.pop(key))
+        for a, b in sorted(runs):
+            if (a, b) in open_:
+                open_[(a, b)][2] = r + 1
+            else:
+                open_[(a, b)] = [r, a, r + 1, b]
+    done.extend(open_.values())
+    out = np.array(sorted(done), dtype=np.int64).reshape(-1, 4)
+    return out
+
+
+def image_obstacles(grid: ImageMap) -> tuple[Obstacle, ...]:
+    """The obstacles of an image's occupied cells: :func:`grid_rectangles` placed in metres.
+
+    Parameters
+    ----------
+    grid : ImageMap
+        The image read.
+
+    Returns
+    -------
+    tuple of Obstacle
+        Axis-aligned rectangles, coordinates rounded to the nanometre.
+    """
+    from rrtdrive.obstacles import Obstacle
+
+    rows = grid.occupied.shape[0]
+    res = grid.resolution
+    x0, y0 = grid.origin
+    out = []
+    for r0, c0, r1, c1 in grid_rectangles(grid.occupied).tolist():
+        # Image rows count down from the top; y counts up from the origin.
+        ylo, yhi = y0 + (rows - r1) * res, y0 + (rows - r0) * res
+        xlo, xhi = x0 + c0 * res, x0 + c1 * res
+        # To the nanometre: 3 x 0.05 m is 0.15000000000000002 in binary, noise in the file.
+        centre = (round((xlo + xhi) / 2, 9), round((ylo + yhi) / 2, 9))
+        out.append(Obstacle(centre, (round(xhi - xlo, 9), round(yhi - ylo, 9))))
+    return tuple(out)
+
+
+def map_from_image(grid: ImageMap, name: str, start: Pose, goal: Pose) -> Map:
+    """The :class:`~rrtdrive.maps.Map` of an image's occupied cells, bounds its extent.
+
+    Parameters
+    ----------
+    grid : ImageMap
+        The image read (:func:`read_image_map`, :func:`read_ros_map`).
+    name : str
+        The map's name.
+    start, goal : Pose
+        Rear-axle poses; checked against the obstacles as any map's.
+
+    Returns
+    -------
+    Map
+    """
+    from rrtdrive.maps import Map
+
+    bounds = (round(v, 9) for v in grid.bounds)
+    return Map(name, tuple(bounds), image_obstacles(grid), start, goal)  # type: ignore[arg-type]

@@ -1,0 +1,186 @@
+"""``rrtdrive maps --import``: maps from occupancy images (ROS map_server or plain images).
+
+References: the rectangles painted back into a grid (numpy), shapely's union of the
+obstacles against each cell centre, and the ROS trinary thresholds worked by hand.
+"""
+
+from __future__ import annotations
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from rrtdrive.cli import main
+from rrtdrive.maps import load_map
+from rrtdrive.occupancy import ImageMap, grid_rectangles, image_obstacles, read_image_map
+from rrtdrive.types import InputError
+
+grids = st.tuples(st.integers(1, 12), st.integers(1, 15)).flatmap(
+    lambda shape: arrays(bool, shape)
+)
+
+
+@settings(max_examples=80, deadline=None)
+@given(grids)
+def test_rectangles_cover_exactly_the_occupied_cells_once(occupied):
+    painted = np.zeros(occupied.shape, dtype=int)
+    for r0, c0, r1, c1 in grid_rectangles(occupied):
+        assert r0 < r1 and c0 < c1
+        painted[r0:r1, c0:c1] += 1
+    assert np.array_equal(painted, occupied.astype(int))
+
+
+@settings(max_examples=40, deadline=None)
+@given(grids, st.sampled_from([0.05, 0.25, 1.0]))
+def test_obstacles_lie_on_the_occupied_cells_image_rows_from_the_top(occupied, res):
+    rows, cols = occupied.shape
+    grid = ImageMap(occupied, res, (-3.0, 2.0))
+    assert grid.bounds == pytest.approx((-3.0, 2.0, -3.0 + cols * res, 2.0 + rows * res))
+    obstacles = image_obstacles(grid)
+    union = shapely.union_all([o.polygon() for o in obstacles])
+    for r in range(rows):
+        for c in range(cols):
+            # Row r counts from the top: its cell centre is rows - 1 - r cells up, + 0.5.
+            centre = shapely.Point(-3.0 + (c + 0.5) * res, 2.0 + (rows - 1 - r + 0.5) * res)
+            assert union.contains(centre) == bool(occupied[r, c])
+    assert union.area == pytest.approx(occupied.sum() * res * res)
+    assert sum(o.polygon().area for o in obstacles) == pytest.approx(union.area)
+
+
+def _write(tmp_path, pixels: np.ndarray, name: str = "lot.pgm"):
+    f = tmp_path / name
+    iio.imwrite(f, pixels)
+    return f
+
+
+def test_ros_trinary_thresholds_and_negate(tmp_path):
+    # p = (255 - v) / 255: occupied above 0.65 (v <= 89), free below 0.196 (v >= 206),
+    # unknown between (ROS's grey 205 is unknown: p = 0.19608).
+    values = np.array([[0, 89, 90, 205, 206, 254]], dtype=np.uint8)
+    f = _write(tmp_path, values)
+    grid = read_image_map(f, 0.1)
+    assert grid.occupied.tolist() == [[True, True, True, True, False, False]]
+    assert grid.unknown == 2
+    assert read_image_map(f, 0.1, unknown_free=True).occupied.tolist() == [
+        [True, True, False, False, False, False]]
+    # negate: p = v / 255 = 0, .349, .353, .804, .808, .996: white is occupied, 89 and
+    # 90 unknown (read as free here), only 0 free by the threshold.
+    flipped = read_image_map(f, 0.1, negate=True, unknown_free=True)
+    assert flipped.occupied.tolist() == [[False, False, False, True, True, True]]
+    assert flipped.unknown == 2
+
+
+def test_thresholds_are_strict_as_map_servers(tmp_path):
+    # map_server: occupied when p > occupied_thresh, free when p < free_thresh. With
+    # thresholds 0.6 and 0.2, v = 102 gives p = 153/255 = 0.6 and v = 204 p = 0.2 exactly:
+    # both unknown.
+    f = _write(tmp_path, np.array([[101, 102, 204, 205]], dtype=np.uint8))
+    grid = read_image_map(f, 0.1, occupied_thresh=0.6, free_thresh=0.2, unknown_free=True)
+    assert grid.occupied.tolist() == [[True, False, False, False]] and grid.unknown == 2
+    with pytest.raises(InputError, match="^free_thresh: must be below occupied_thresh"):
+        read_image_map(f, 0.1, occupied_thresh=0.5, free_thresh=0.5)
+
+
+def test_colour_and_sixteen_bit_images(tmp_path):
+    rgb = np.zeros((1, 3, 3), dtype=np.uint8)
+    rgb[0, 1] = (255, 255, 255)
+    rgb[0, 2] = (255, 0, 255)  # mean 170: p = 0.333, unknown
+    f = _write(tmp_path, rgb, "c.png")
+    grid = read_image_map(f, 0.5, unknown_free=True)
+    assert grid.occupied.tolist() == [[True, False, False]] and grid.unknown == 1
+    # 16 bits: p = (65535 - v) / 65535, whatever the brightest pixel: 200 is p = 0.997,
+    # occupied; 30000 is p = 0.54, unknown.
+    wide = np.array([[0, 200, 30000, 65535]], dtype=np.uint16)
+    grid = read_image_map(_write(tmp_path, wide, "w.png"), 0.5, unknown_free=True)
+    assert grid.occupied.tolist() == [[True, True, False, False]] and grid.unknown == 1
+
+
+def _garage(tmp_path, origin="[-2.0, -1.0, 0.0]", extra=""):
+    img = np.full((140, 300), 254, dtype=np.uint8)
+    img[:3, :] = img[-3:, :] = 0
+    img[:, :3] = img[:, -3:] = 0
+    img[60:80, 130:170] = 0  # a 4 x 2 m block at x 11..15, y 5..7 (origin -2, -1)
+    _write(tmp_path, img, "garage.pgm")
+    y = tmp_path / "garage.yaml"
+    y.write_text(f"image: garage.pgm\nresolution: 0.1\norigin: {origin}\n{extra}")
+    return y
+
+
+def test_a_ros_map_imports_and_plans(tmp_path, capsys):
+    y = _garage(tmp_path)
+    out = tmp_path / "g.json"
+    code = main(["maps", "--import", str(y), "--start", "2,2,0", "--goal", "22,10,0",
+                 "--out", str(out)])  # fmt: skip
+    assert code == 0
+    line = capsys.readouterr().out
+    assert "300 x 140 cells at 0.1 m, 30 x 14 m" in line and "as 5 rectangles" in line
+    m = load_map(out)
+    assert m.name == "garage" and m.bounds == (-2.0, -1.0, 28.0, 13.0)
+    block = [o for o in m.obstacles if o.size == (4.0, 2.0)]
+    assert len(block) == 1 and block[0].center == pytest.approx((13.0, 6.0))
+    assert main(["plan", str(out), "--json", str(tmp_path / "p.json")]) == 0
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["--start", "2,2,0", "--goal", "22,10,0"], "--out: --import needs it"),
+        (["--goal", "22,10,0", "--out", "g.json"], "--start: --import needs it"),
+        (["--start", "13,6,0", "--goal", "22,10,0", "--out", "g.json"], "--start: "),
+        (["--start", "2,2,0", "--goal", "22,10,0", "--out", "g.txt"], "--out: "),
+        (["--start", "2,2,0", "--goal", "22,10,0", "--out", "g.json", "--resolution", "0.1"],
+         "--resolution: the .yaml gives it"),
+        (["--start", "2,2,0", "--goal", "22,10,0", "--out", "g.json", "--export", "d"],
+         "--export: writes the built-in maps"),
+    ],
+)
+def test_bad_imports_are_one_line_naming_the_flag(tmp_path, capsys, monkeypatch, argv, needle):
+    y = _garage(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    code = main(["maps", "--import", str(y), *argv])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "Traceback" not in err
+    assert err.startswith(f"rrtdrive maps: error: {needle}"), err
+    assert not (tmp_path / "g.json").exists()
+
+
+@pytest.mark.parametrize(
+    ("origin", "extra", "needle"),
+    [
+        ("[-2.0, -1.0, 0.3]", "", "origin: the map is rotated (yaw 0.3 rad)"),
+        ("[-2.0]", "", "origin: expected [x, y, yaw]"),
+        ("[0, 0, 0]", "free_thresh: 0.7\n", "free_thresh: must be below occupied_thresh"),
+        ("[0, 0, 0]", "mode: raw\n", "mode: only trinary and scale maps are read"),
+    ],
+)
+def test_bad_ros_yaml_fields_are_named(tmp_path, capsys, origin, extra, needle):
+    y = _garage(tmp_path, origin, extra)
+    code = main(["maps", "--import", str(y), "--start", "2,2,0", "--goal", "22,10,0",
+                 "--out", str(tmp_path / "g.json")])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith(f"rrtdrive maps: error: {needle}"), err
+
+
+def test_plain_images_need_a_resolution_and_bad_files_are_named(tmp_path, capsys):
+    img = np.full((50, 80), 254, dtype=np.uint8)
+    f = _write(tmp_path, img, "open.png")
+    base = ["maps", "--import", str(f), "--start", "3,4.5,0", "--goal", "4,4.5,0",
+            "--out", str(tmp_path / "o.json")]  # fmt: skip
+    assert main(base) == 2
+    assert "--resolution: an image needs its metres per pixel" in capsys.readouterr().err
+    assert main([*base, "--resolution", "0.1", "--origin", "1,2"]) == 0
+    assert load_map(tmp_path / "o.json").bounds == (1.0, 2.0, 9.0, 7.0)
+    capsys.readouterr()
+    (tmp_path / "junk.png").write_text("not an image")
+    assert main(["maps", "--import", str(tmp_path / "junk.png"), "--resolution", "0.1",
+                 "--start", "3,4.5,0", "--goal", "4,4.5,0", "--out", str(tmp_path / "j.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("rrtdrive maps: error: --import: cannot read") and err.count("\n") == 1
+    assert main(["maps", "--start", "1,1,0"]) == 2
+    assert "--start: only with --import" in capsys.readouterr().err
+    with pytest.raises(InputError, match="^resolution: expected a number"):
+        read_image_map(f, 0.0)
