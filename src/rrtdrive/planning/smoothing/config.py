@@ -209,6 +209,16 @@ class SmoothingConfig:
         if not 0.0 < self.fillet_max_angle <= math.pi / 2:
             raise InputError("smoothing.fillet_max_angle: must lie in (0, pi/2]")
         require_int("smoothing.max_rounds", self.max_rounds)
+        # A negative clearance let the exact body test call a pose 2 m inside a car free
+        # (a mutation audit; only the Python API could set it, the planners set their own).
+        require_finite("smoothing.clearance", self.clearance)
+        if self.clearance < 0.0:
+            raise InputError(f"smoothing.clearance: must be >= 0 (metres), got {self.clearance!r}")
+        for name in ("prune", "sharp_repair", "supplement"):
+            if not isinstance(getattr(self, name), bool):  # "no" is truthy: pruning on
+                raise InputError(
+                    f"smoothing.{name}: expected true or false, got {getattr(self, name)!r}"
+                )
         self._check_repair_constants()
 
     def _check_repair_constants(self) -> None:
