@@ -538,6 +538,10 @@ def main(argv: list[str] | None = None) -> int:
                 "diagnoses": sorted({r["diagnosis"] for r in rs if r.get("diagnosis")}),
                 **_sharpness([r for r in rs if r["solved"]]),
                 "median_time_solved_s": _median([r["time_s"] for r in rs if r["solved"]]),
+                "median_length_m": _median([r["length_m"] for r in rs if r["solved"]]),
+                "median_cusps": _median(
+                    [r["cusps"] for r in rs if r["solved"] and r.get("cusps") is not None]
+                ),
             }
             for (q, p), rs in cells.items()
         ]  # fmt: skip

@@ -159,16 +159,18 @@ def tight_report(payload: dict[str, Any]) -> str:
         "gears and cusps); `any sharpness`: the same without that bound; "
         f"{payload['machine']}; wall time {payload['wall_time_s'] / 60:.1f} min.", "",
         "| query | planner | solved | verified | any sharpness | collision-free "
-        "| median time solved [ms] "
+        "| median time solved [ms] | median length [m] | median cusps "
         f"| max sharpness [rad/m] | within {SHARPNESS_BOUND:g} rad/m | outcomes | diagnosis |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for c in payload["summary"]:
         outcomes = ", ".join(f"{k} {v}" for k, v in sorted(c["statuses"].items()))
+        cusps = c.get("median_cusps")
         lines.append(
             f"| {c['query']} | {c['planner']} | {c['solved']}/{c['runs']} | {c['verified']} | "
             f"{c.get('verified_any_sharpness', '-')} | {c['collision_free']} | "
             f"{cell(c.get('median_time_solved_s'), 1e3)} | "
+            f"{cell(c.get('median_length_m'), 1, 2)} | {'-' if cusps is None else f'{cusps:g}'} | "
             f"{_sharp(c.get('max_sharpness'))} | {_count(c.get('within_bound'))} | {outcomes} | "
             f"{', '.join(c['diagnoses']) or '-'} |"
         )
