@@ -19,6 +19,7 @@ import shapely
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
+from test_smoothing import random_free_walk
 
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import Map, Obstacle, builtin_map
@@ -538,26 +539,11 @@ def _farthest_free_reference(pts: np.ndarray, free: object) -> list[int]:
     return out
 
 
-def _free_walk(checker: CollisionChecker, rng: np.random.Generator, n: int) -> np.ndarray:
-    """A polyline of ``n`` nodes with free edges, wandering through the map."""
-    while True:
-        start = rng.uniform(5, 95, 2)
-        if checker.point_free(*start) and checker.clearance(*start) > 3.0:
-            break
-    pts = [start]
-    while len(pts) < n:
-        ang = rng.uniform(-math.pi, math.pi)
-        q = pts[-1] + rng.uniform(2.0, 6.0) * np.array([math.cos(ang), math.sin(ang)])
-        if checker.edge_free(pts[-1], q):
-            pts.append(q)
-    return np.array(pts)
-
-
 @pytest.mark.parametrize("seed", range(6))
 def test_the_obstacle_screen_never_changes_the_pruning(seed: int) -> None:
     """prune() with the edge cache's screen (proven collisions skipped) = brute force without it."""
     checker = cached_checker(builtin_map("parking_lot"))
-    pts = _free_walk(checker, np.random.default_rng(seed), 25)
+    pts = random_free_walk(checker, np.random.default_rng(seed), 25)
     edges = _edges(checker)
     assert edges.blocked_from is not None  # the screen is on
     assert prune(pts, edges).tolist() == _farthest_free_reference(pts, checker.edge_free)
