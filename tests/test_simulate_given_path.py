@@ -106,6 +106,7 @@ def test_a_path_of_another_map_is_driven_as_asked_and_crashes_where_verify_says(
         (["--start", "3,5,0"], "--start: --path gives the path to drive; nothing is planned "
                                "(the drive starts at its first row and ends at its last)"),
         (["--goal", "30,1.2,0"], "--goal: --path gives the path"),
+        (["--resolution", "0.2"], "--resolution: --path gives the path"),
     ],
 )
 def test_planning_flags_beside_a_given_path_are_refused(kerbside_plan, capsys, extra, needle):

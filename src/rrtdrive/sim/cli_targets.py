@@ -18,6 +18,7 @@ PLANNING_FLAGS = (
     ("planner", "--planner"), ("planner_options", "--planner-option"),
     ("plan_time", "--plan-time"), ("deterministic", "--deterministic"),
     ("reverse", "--reverse"), ("start", "--start"), ("goal", "--goal"),
+    ("resolution", "--resolution"),
 )
 
 
