@@ -225,7 +225,13 @@ def test_tracking_errors_do_not_change_under_a_rigid_motion(
     a = tracking_errors(Path(base, np.zeros((0, 2))), pose)
     b = tracking_errors(Path(moved(base), np.zeros((0, 2))), moved(pose))
     assert b[0][0] == pytest.approx(a[0][0], abs=1e-6)
-    assert abs(math.remainder(b[1][0] - a[1][0], 2 * math.pi)) < 1e-6
+    # A pose level with a row, dy inside the bend, is as near to the segments either side:
+    # the tie may go either way after the move. Its feet lie dy sin(0.0125) from the row,
+    # where the yaw interpolated over the 0.25 m segments is 0.1 rad/m * that off the row's,
+    # so the two answers differ by 2.5e-3 * dy rad (6.25e-4 at dy = 0.25 m; fresh-seed runs
+    # found it): far below any wrap or sign slip.
+    tie = 2.5e-3 * abs(dy) * 1.01 + 1e-9
+    assert abs(math.remainder(b[1][0] - a[1][0], 2 * math.pi)) < tie
     assert -math.pi <= b[1][0] < math.pi
     # And both are what the pose was built with: dy left of the arc, dyaw off its tangent
     # (up to the 0.25 m chords' sagitta, under 1 mm, and their yaw step).
