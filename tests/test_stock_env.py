@@ -194,3 +194,29 @@ def test_a_stock_drive_that_is_not_planned_writes_no_video(tmp_path, capsys):
     assert code == 1
     assert "no video: planning failed (timeout)" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []  # neither the video nor its temporary file
+
+
+@pytest.mark.parametrize("goal", [(40.0, 0.0, 0.0), (-20.0, -26.0, -1.5708)])
+def test_a_goal_beyond_the_scene_gets_bounds_round_its_whole_body(goal):
+    # The bounds held the goal's rear axle plus pad (1 m): a goal past the scene's edge was
+    # refused, its nose leaving the bounds (an audit's find). Now its body, plus pad.
+    import shapely
+
+    from rrtdrive.types import Pose
+    from rrtdrive.vehicle import footprint_polygon
+
+    env = gym.make("parking-v0")
+    env.reset(seed=0)
+    try:
+        m = map_from_env(env, goal=Pose(*goal))
+    finally:
+        env.close()
+    body = footprint_polygon(goal, m.vehicle)
+    inner = shapely.box(*m.bounds).buffer(-1.0 + 1e-9, join_style="mitre")
+    assert inner.contains(body)
+    # The side the goal pokes out of ends exactly pad beyond its body.
+    xmin, ymin, xmax, ymax = m.bounds
+    bx0, by0, bx1, by1 = body.bounds
+    assert max(xmax - bx1, bx0 - xmin, ymax - by1, by0 - ymin) >= 1.0
+    assert min(abs(xmax - bx1 - 1.0), abs(bx0 - xmin - 1.0), abs(ymax - by1 - 1.0),
+               abs(by0 - ymin - 1.0)) < 1e-9

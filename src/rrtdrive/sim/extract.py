@@ -22,6 +22,7 @@ from highway_env.vehicle.objects import Landmark
 from rrtdrive.maps import Map, Obstacle
 from rrtdrive.sim.ego import EgoVehicle, centre_to_rear_axle
 from rrtdrive.types import InputError, Pose, VehicleParams, require_positive
+from rrtdrive.vehicle import footprint_corners
 
 __all__ = ["map_from_env", "attach_ego", "lane_line_obstacles"]
 
@@ -155,7 +156,9 @@ def map_from_env(
         pts.append(np.array([lane.position(0.0, -w), lane.position(0.0, w),
                              lane.position(lane.length, -w), lane.position(lane.length, w)]))
     for p in (start, goal):
-        pts.append(np.array([[p.x, p.y]]))
+        # The whole car, not its rear axle: a goal given beyond the scene's edge was
+        # refused as "leaves the bounds" by its nose unless pad was raised (an audit).
+        pts.append(footprint_corners(np.array(p.as_tuple()), params))
     allp = np.vstack(pts)
     lo = allp.min(axis=0) - pad
     hi = allp.max(axis=0) + pad
