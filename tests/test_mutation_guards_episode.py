@@ -815,10 +815,10 @@ def test_a_curved_solid_line_is_cut_into_short_pieces_along_the_arc() -> None:
 
 def test_the_extracted_map_bounds_hold_a_goal_away_from_the_scene() -> None:
     """A goal given beyond everything in the stock scene lies inside the extracted map's
-    bounds, ``pad`` (here 5 m, room for the car's body) inside their edge.
+    bounds, its whole body ``pad`` (here 5 m) inside their edge.
 
     Reference: the documented ``pad`` (margin of the bounds around everything in the scene,
-    the start and goal included).
+    the start's and goal's bodies included), the body's box from shapely.
     """
     env = make_stock_env("parking-v0", 20)
     try:
@@ -830,4 +830,7 @@ def test_the_extracted_map_bounds_hold_a_goal_away_from_the_scene() -> None:
     finally:
         env.close()
     assert m.goal == goal
-    assert m.bounds[2] == pytest.approx(goal.x + 5.0) and m.bounds[3] == pytest.approx(goal.y + 5.0)
+    from rrtdrive.vehicle import footprint_polygon
+
+    _, _, bx1, by1 = footprint_polygon(goal.as_tuple(), m.vehicle).bounds
+    assert m.bounds[2] == pytest.approx(bx1 + 5.0) and m.bounds[3] == pytest.approx(by1 + 5.0)
