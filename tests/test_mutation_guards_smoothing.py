@@ -19,7 +19,8 @@ import shapely
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
-from test_smoothing import random_free_walk
+from test_improved import densify
+from test_smoothing import menger, random_free_walk
 
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import Map, Obstacle, builtin_map
@@ -74,26 +75,9 @@ def _edges(checker: object) -> EdgeCache:
 # ----------------------------------------------------------------------------- references
 
 
-def _three_point_curvature(xy: np.ndarray) -> np.ndarray:
-    """Signed curvature of the circle through each three consecutive points."""
-    a, b, c = xy[:-2], xy[1:-1], xy[2:]
-    ab, bc, ca = b - a, c - b, a - c
-    cross = ab[:, 0] * bc[:, 1] - ab[:, 1] * bc[:, 0]
-    return 2.0 * cross / (np.hypot(*ab.T) * np.hypot(*bc.T) * np.hypot(*ca.T))
-
-
 def _bodies_between(rows: np.ndarray, car: object, spacing: float = 0.1) -> np.ndarray:
     """Shapely bodies at the rows and at poses interpolated at most ``spacing`` apart."""
-    seg = np.hypot(*np.diff(rows[:, :2], axis=0).T)
-    poses = []
-    for i, r in enumerate(np.maximum(1, np.ceil(seg / spacing).astype(int))):
-        f = np.arange(r) / r
-        dyaw = (rows[i + 1, 2] - rows[i, 2] + math.pi) % (2 * math.pi) - math.pi
-        poses.append(np.column_stack([rows[i, 0] + f * (rows[i + 1, 0] - rows[i, 0]),
-                                      rows[i, 1] + f * (rows[i + 1, 1] - rows[i, 1]),
-                                      rows[i, 2] + f * dyaw]))  # fmt: skip
-    poses.append(rows[-1:, :3])
-    return shapely.polygons(footprint_corners(np.vstack(poses), car))
+    return shapely.polygons(footprint_corners(densify(rows, spacing), car))
 
 
 def _thinned(xy: np.ndarray, gap: float) -> np.ndarray:
@@ -117,7 +101,7 @@ def _numerical_sharpness(xy: np.ndarray, wheelbase: float, gap: float = 0.2) -> 
     pts = _thinned(xy, gap)
     gaps = np.hypot(*np.diff(pts, axis=0).T)
     where = np.cumsum(gaps)[:-1] + (gaps[1:] - gaps[:-1]) / 3.0
-    delta = np.arctan(wheelbase * _three_point_curvature(pts))
+    delta = np.arctan(wheelbase * menger(pts))
     return float(np.max(np.abs(np.diff(delta)) / np.diff(where)))
 
 
@@ -140,7 +124,7 @@ def assert_drivable(
     for (a, b), yaw in (((0, 1), start.yaw), ((-2, -1), goal.yaw)):
         chord = math.atan2(rows[b, 1] - rows[a, 1], rows[b, 0] - rows[a, 0])
         assert abs(math.remainder(chord - yaw, 2 * math.pi)) < math.radians(3.0)
-    k = _three_point_curvature(_thinned(rows[:, :2], 0.05))
+    k = menger(_thinned(rows[:, :2], 0.05))
     assert np.abs(k).max() <= cfg.kappa_max + 1e-3
     if sharpness is not None:
         assert _numerical_sharpness(rows[:, :2], cfg.wheelbase) <= sharpness + 0.005
