@@ -416,17 +416,22 @@ def parse_pose(text: str, name: str) -> Pose:
     return Pose.from_seq(values, name)
 
 
-def map_with_poses(spec: str, start: Pose | None, goal: Pose | None) -> Map:
+def map_with_poses(
+    spec: str, start: Pose | None, goal: Pose | None, names: Mapping[str, str] | None = None
+) -> Map:
     """The map ``spec`` with ``--start``/``--goal`` (when given) replacing its poses.
 
     The file is read first, so a malformed start in it is named ``start:`` even when
     ``--start`` replaces it; the poses used are then checked, one given on the command
-    line named by its flag (``--goal: (200, 44) lies outside the bounds ...``).
+    line named by its flag (``--goal: (200, 44) lies outside the bounds ...``), or by
+    ``names[field]`` where the poses came from elsewhere (``simulate --path``: the path's
+    first and last rows).
     """
     from rrtdrive.map_checks import check_endpoint
     from rrtdrive.maps import resolve_map
 
-    flags = {k: f"--{k}" for k, v in (("start", start), ("goal", goal)) if v is not None}
+    names = names or {"start": "--start", "goal": "--goal"}
+    flags = {k: names[k] for k, v in (("start", start), ("goal", goal)) if v is not None}
     with flags_for_warnings(flags):  # a given yaw that looks like degrees: named by its flag
         m = resolve_map(spec, start=start, goal=goal, check_query=False)
     with flags_for(flags):

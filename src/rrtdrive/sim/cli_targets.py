@@ -132,28 +132,22 @@ def make_task(
         from rrtdrive.types import Pose
 
         ends = Pose(*path.samples[0, :3]), Pose(*path.samples[-1, :3])
-        try:
-            m = map_with_poses(args.scenario, *ends)
-            if made_on is not None and m.name != made_on:
-                import warnings
+        # The poses are the path's ends, not flags the user gave.
+        rows = {"start": "--path: the path's first row", "goal": "--path: the path's last row"}
+        m = map_with_poses(args.scenario, *ends, names=rows)
+        if made_on is not None and m.name != made_on:
+            import warnings
 
-                from rrtdrive.types import InputWarning
+            from rrtdrive.types import InputWarning
 
-                warnings.warn(
-                    f"--path: the plan was made on map {made_on!r}; it is driven on "
-                    f"{m.name!r} as asked", InputWarning, stacklevel=2,
-                )
+            warnings.warn(
+                f"--path: the plan was made on map {made_on!r}; it is driven on "
+                f"{m.name!r} as asked", InputWarning, stacklevel=2,
+            )
+        with flags_for(rows):  # a path that ends where it starts: nothing to drive
             return CustomTask.from_map(
                 m, args.seed, reverse=not path.is_forward_only, resolution=args.resolution
             )
-        except InputError as exc:
-            # The poses are the path's ends, not flags the user gave.
-            text = str(exc)
-            for flag, row in (("--start", "first"), ("--goal", "last"), ("goal", "last")):
-                if text.startswith(flag + ":"):
-                    text = f"--path: the path's {row} row:" + text[len(flag) + 1:]
-                    break
-            raise InputError(text) from None
     if target == "map":
         from rrtdrive.cli_args import map_with_poses
 
