@@ -24,7 +24,6 @@ import argparse
 import collections
 import dataclasses
 import json
-import math
 import statistics
 import sys
 from pathlib import Path as FsPath
@@ -34,31 +33,21 @@ from results_io import machine, out_folder  # the sibling module
 
 from rrtdrive.cli_args import positive_float, positive_int
 from rrtdrive.maps import BUILTIN_MAPS, builtin_map, write_text_atomic
-from rrtdrive.planning.base import PlanningProblem, cached_checker
+from rrtdrive.planning.base import PlanningProblem
 from rrtdrive.planning.hybrid.escalation import stage_of
 from rrtdrive.planning.improved import ImprovedRRTConnect
+from rrtdrive.pose_sets import random_free_poses
 from rrtdrive.types import Budget, InputError, Pose
 from rrtdrive.verify import verify_path
 
 
 def draw_goals(map_name: str, count: int, seed: int, field: str = "goal") -> list[Pose]:
-    """``count`` seeded poses where the body is free and the map accepts them as ``field``."""
-    base = builtin_map(map_name)
-    checker = cached_checker(base)
-    rng = np.random.default_rng(seed)
-    xmin, ymin, xmax, ymax = base.bounds
-    goals: list[Pose] = []
-    while len(goals) < count:
-        x, y = rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)
-        pose = Pose(x, y, rng.uniform(-math.pi, math.pi))
-        if not checker.pose_free(pose.as_tuple()):
-            continue
-        try:
-            dataclasses.replace(base, **{field: pose})
-        except InputError:
-            continue
-        goals.append(pose)
-    return goals
+    """``count`` seeded poses where the body is free and the map accepts them as ``field``.
+
+    The package's :func:`rrtdrive.pose_sets.random_free_poses`, under the name the
+    benchmark scripts and their records use.
+    """
+    return random_free_poses(map_name, count, seed, field)
 
 
 def add_pose_set_options(ap: argparse.ArgumentParser) -> None:

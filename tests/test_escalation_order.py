@@ -11,8 +11,6 @@ tree path or the direct Dubins path solves is solved as before either way.
 from __future__ import annotations
 
 import dataclasses
-import sys
-from pathlib import Path as FsPath
 
 import numpy as np
 import pytest
@@ -22,11 +20,9 @@ from rrtdrive.maps import builtin_map
 from rrtdrive.planning import PlanningProblem
 from rrtdrive.planning.hybrid.escalation import stage_of
 from rrtdrive.planning.improved import ImprovedConfig, ImprovedRRTConnect
+from rrtdrive.pose_sets import random_free_poses
 from rrtdrive.types import Budget, InputError, PlanStatus
 from rrtdrive.verify import verify_path
-
-sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "experiments"))
-from random_goals import draw_goals  # noqa: E402
 
 BUDGET = Budget(max_time_s=600.0)
 #: The order and tree paths before session 8.
@@ -35,7 +31,7 @@ OLD = {"escalation_first": "never", "reverse_postprocess_attempts": 6}
 
 def _goal_problem(index: int, reverse: bool = True):
     """Random goal ``index`` of ``experiments/coverage.py --count 30`` on ``parking_lot``."""
-    pose = draw_goals("parking_lot", 30, 1, "goal")[index]
+    pose = random_free_poses("parking_lot", 30, 1, "goal")[index]
     m = dataclasses.replace(builtin_map("parking_lot"), goal=pose)
     return m, PlanningProblem.from_map(m, reverse=reverse)
 

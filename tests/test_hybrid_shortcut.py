@@ -8,8 +8,6 @@ checked like any connection, and kept only when accepted and shorter.
 from __future__ import annotations
 
 import dataclasses
-import sys
-from pathlib import Path as FsPath
 
 import numpy as np
 import pytest
@@ -18,15 +16,13 @@ from rrtdrive.maps import builtin_map
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.planning.hybrid import HybridConfig
 from rrtdrive.planning.smoothing import max_sharpness
+from rrtdrive.pose_sets import random_free_poses
 from rrtdrive.types import Budget, InputError, PlanStatus
 from rrtdrive.verify import verify_path
 
-sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "experiments"))
-from random_goals import draw_goals  # noqa: E402
-
 
 def _query(vary: str, index: int):
-    pose = draw_goals("parking_lot", 100, 1, vary)[index]
+    pose = random_free_poses("parking_lot", 100, 1, vary)[index]
     m = dataclasses.replace(builtin_map("parking_lot"), **{vary: pose})
     return m, PlanningProblem.from_map(m, reverse=True)
 

@@ -17,8 +17,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import sys
-from pathlib import Path as FsPath
 
 import numpy as np
 import pytest
@@ -26,19 +24,17 @@ import pytest
 from rrtdrive.maps import Map, Obstacle, builtin_map
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.planning.hybrid import HybridConfig
+from rrtdrive.pose_sets import random_free_poses
 from rrtdrive.sim.tasks import make_scenario
 from rrtdrive.types import Budget, InputError, PlanStatus, Pose
 from rrtdrive.verify import verify_path
-
-sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "experiments"))
-from random_goals import draw_goals  # noqa: E402
 
 
 def _random_problem(
     vary: str, index: int, count: int = 30, reverse: bool = False, seed: int = 1
 ):
     """Random ``vary`` pose ``index`` of ``coverage.py --count count --seed seed``."""
-    pose = draw_goals("parking_lot", count, seed, vary)[index]
+    pose = random_free_poses("parking_lot", count, seed, vary)[index]
     m = dataclasses.replace(builtin_map("parking_lot"), **{vary: pose})
     return m, PlanningProblem.from_map(m, reverse=reverse)
 

@@ -14,8 +14,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import sys
-from pathlib import Path as FsPath
 
 import numpy as np
 import pytest
@@ -27,10 +25,8 @@ from rrtdrive.planning.base import cached_checker
 from rrtdrive.planning.improved import ImprovedRRTConnect
 from rrtdrive.planning.smoothing import checks, drivable, make_drivable
 from rrtdrive.planning.smoothing.repair import Repairer
+from rrtdrive.pose_sets import random_free_poses
 from rrtdrive.types import Budget
-
-sys.path.insert(0, str(FsPath(__file__).resolve().parents[1] / "experiments"))
-from random_goals import draw_goals  # noqa: E402
 
 
 def _tree_paths() -> list[tuple]:
@@ -43,8 +39,8 @@ def _tree_paths() -> list[tuple]:
         return real(raw, start, goal, checker, cfg)
 
     base = builtin_map("parking_lot")
-    starts = draw_goals("parking_lot", 100, 1, "start")
-    goals = draw_goals("parking_lot", 100, 1, "goal")
+    starts = random_free_poses("parking_lot", 100, 1, "start")
+    goals = random_free_poses("parking_lot", 100, 1, "goal")
     queries = [(dataclasses.replace(base, start=starts[i]), True) for i in (30, 31, 33, 44)]
     queries += [(dataclasses.replace(base, goal=goals[i]), False) for i in (3, 9, 12)]
     planner = ImprovedRRTConnect(escalation=False, dubins_fallback=False)
