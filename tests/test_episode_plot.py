@@ -91,3 +91,61 @@ def test_plot_outputs_are_checked_before_the_drive(drive, capsys):
     assert err.startswith("rrtdrive simulate: error: --plot:") and err.count("\n") == 1
     assert main([*args, "--plot", str(out["png"]), "--json", str(out["png"])]) == 2
     assert "--plot" in capsys.readouterr().err
+
+
+def test_other_cars_are_drawn_where_the_log_has_them():
+    """Traffic: each other car's body at the last step, and a track for each that moved."""
+    import shapely
+    from shapely import affinity
+
+    from rrtdrive.sim.episode_plot import plot_episode
+    from rrtdrive.sim.runner import EpisodeConfig, run_episode
+
+    episode = run_episode("overtake-traffic", seed=0, config=EpisodeConfig(max_time_s=4.0))
+    others, sizes = episode.log.others, episode.log.other_sizes
+    assert others.shape[1] >= 2  # the lead car and oncoming cars
+    ax = plot_episode(episode).axes[0]
+    bodies = {p.get_gid(): p for p in ax.patches if (p.get_gid() or "").startswith("other-car")}
+    assert len(bodies) == others.shape[1]
+    for k, ((x, y, heading, _), (length, width)) in enumerate(zip(others[-1], sizes, strict=True)):
+        patch = bodies[f"other-car-{k}"]
+        expected = affinity.translate(
+            affinity.rotate(shapely.box(-length / 2, -width / 2, length / 2, width / 2),
+                            heading, origin=(0, 0), use_radians=True), x, y)  # fmt: skip
+        drawn = shapely.Polygon(patch.get_xy())
+        assert drawn.symmetric_difference(expected).area < 1e-9
+    moved = [k for k in range(others.shape[1]) if np.ptp(others[:, k, :2], axis=0).max() > 0.1]
+    assert moved  # the oncoming cars drive
+    tracks = {ln.get_gid(): ln for ln in ax.lines if (ln.get_gid() or "").startswith("other-")}
+    assert sorted(tracks) == sorted(f"other-track-{k}" for k in moved)
+    for k in moved:
+        assert np.allclose(tracks[f"other-track-{k}"].get_xydata(), others[:, k, :2])
+
+
+def test_other_car_bodies_turn_with_their_heading_and_parked_cars_have_no_track():
+    """Any heading (not only the road's 0 or pi) and a car that never moves: body, no track."""
+    from types import SimpleNamespace
+
+    import matplotlib.pyplot as plt
+    import shapely
+    from shapely import affinity
+
+    from rrtdrive.sim.episode_plot import _draw_others
+
+    steps = np.linspace(0.0, 1.0, 5)
+    mover = np.column_stack([10 + 3 * steps, 5 + 2 * steps, 0.7 + 0 * steps, 1 + 0 * steps])
+    parked = np.tile([30.0, 8.0, -2.0, 0.0], (5, 1))
+    log = SimpleNamespace(others=np.stack([mover, parked], axis=1),
+                          other_sizes=np.array([[5.0, 2.0], [4.0, 1.6]]))  # fmt: skip
+    fig, ax = plt.subplots()
+    _draw_others(ax, log)
+    gids = sorted(a.get_gid() for a in [*ax.lines, *ax.patches] if a.get_gid())
+    assert gids == ["other-car-0", "other-car-1", "other-track-0"]
+    for k, (x, y, heading, _) in enumerate(log.others[-1]):
+        length, width = log.other_sizes[k]
+        expected = affinity.translate(
+            affinity.rotate(shapely.box(-length / 2, -width / 2, length / 2, width / 2),
+                            heading, origin=(0, 0), use_radians=True), x, y)  # fmt: skip
+        [patch] = [p for p in ax.patches if p.get_gid() == f"other-car-{k}"]
+        assert shapely.Polygon(patch.get_xy()).symmetric_difference(expected).area < 1e-9
+    plt.close(fig)

@@ -1,10 +1,11 @@
 """A static figure of one closed-loop episode: ``rrtdrive simulate --plot``.
 
-Left, the map with the planned path (reverse dashed, cusps marked) and the driven
-rear-axle trajectory; right, against time, the signed speed, the front-wheel angle
-and its rate against the car's limits, and the cross-track error as the evaluators
-measure it (against the gear segment being driven). The figure a report needs where
-the video cannot go.
+Left, the map with the planned path (reverse dashed, cusps marked), the driven
+rear-axle trajectory and the other cars (their tracks, their bodies at the last
+step); right, against time, the signed speed, the front-wheel angle and its rate
+against the car's limits, and the cross-track error as the evaluators measure it
+(against the gear segment being driven). The figure a report needs where the video
+cannot go.
 """
 
 from __future__ import annotations
@@ -14,7 +15,9 @@ from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.patches import Polygon as PolygonPatch
 
+from rrtdrive.obstacles import Obstacle
 from rrtdrive.plotting import (  # sets the Agg backend, read by pyplot's first figure
     draw_gear_path,
     draw_map,
@@ -67,6 +70,29 @@ def _series(episode: Any) -> dict[str, np.ndarray]:
     return out
 
 
+def _draw_others(ax: Any, log: Any) -> None:
+    """Every other car: its centre's track and its body at the drive's last step.
+
+    The last step is the crash's when the drive ended in one, so the figure shows
+    what the ego hit; a parked car that is also a map obstacle gets an outline on top.
+    """
+    others, sizes = log.others, log.other_sizes
+    if others.size == 0:
+        return
+    track_label = "other cars' tracks"
+    for k, (length, width) in enumerate(sizes):
+        track = others[:, k, :2]
+        if np.ptp(track, axis=0).max() > 0.1:  # it moved
+            ax.plot(track[:, 0], track[:, 1], color="tab:cyan", lw=0.8, alpha=0.6,
+                    label=track_label, zorder=4, gid=f"other-track-{k}")  # fmt: skip
+            track_label = None
+        x, y, heading = others[-1, k, :3]
+        body = Obstacle((float(x), float(y)), (float(length), float(width)), float(heading))
+        ax.add_patch(PolygonPatch(body.corners(), closed=True, fc="tab:cyan", alpha=0.5,
+                                  ec="tab:cyan", lw=1.0, zorder=6, gid=f"other-car-{k}",
+                                  label="other cars (last step)" if k == 0 else None))  # fmt: skip
+
+
 def plot_episode(episode: Any, title: str | None = None) -> Any:
     """The map, the planned path, the driven trajectory and the drive's time series.
 
@@ -98,6 +124,7 @@ def plot_episode(episode: Any, title: str | None = None) -> Any:
     if len(episode.path):
         draw_gear_path(ax, episode.path, label="planned path")
     data = _series(episode)
+    _draw_others(ax, episode.log)
     states = episode.log.states
     if len(states):
         ax.plot(states[:, 0], states[:, 1], color="black", lw=1.0, label="driven (rear axle)",
