@@ -101,6 +101,7 @@ def test_a_path_of_another_map_is_driven_as_asked_and_crashes_where_verify_says(
         (["--planner", "rrt"], "--planner: --path gives the path to drive; nothing is planned"),
         (["--planner-option", "step=3"], "--planner-option: --path gives the path"),
         (["--plan-time", "3"], "--plan-time: --path gives the path"),
+        (["--max-iterations", "300"], "--max-iterations: --path gives the path"),
         (["--deterministic"], "--deterministic: --path gives the path"),
         (["--reverse"], "--reverse: --path gives the path"),
         (["--start", "3,5,0"], "--start: --path gives the path to drive; nothing is planned "

@@ -55,9 +55,10 @@ def test_the_cli_names_max_time_and_the_lead_speed(capsys):
                           "lead car at 8 m/s reaches the end")
 
 
-def test_plan_time_is_refused_where_nothing_is_planned_ahead(capsys):
-    assert main(["simulate", "overtake-traffic", "--plan-time", "0.001"]) == 2
-    assert "--plan-time: overtake-traffic plans nothing ahead" in capsys.readouterr().err
+@pytest.mark.parametrize("flag", ["--plan-time", "--max-iterations"])
+def test_plan_budgets_are_refused_where_nothing_is_planned_ahead(capsys, flag):
+    assert main(["simulate", "overtake-traffic", flag, "1"]) == 2
+    assert f"{flag}: overtake-traffic plans nothing ahead" in capsys.readouterr().err
 
 
 def test_the_simulation_frequency_has_an_upper_bound(capsys):

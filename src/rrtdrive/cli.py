@@ -354,6 +354,7 @@ def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
         "--max-iterations",
         type=positive_int,
         default=20_000,
+        metavar="N",
         help="iteration budget: with the seed it decides the outcome (default 20000)",
     )
     plan.add_argument(

@@ -128,6 +128,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "a plan that reaches it fails as 'timeout' (the iterations decide otherwise)",
     )
     p.add_argument(
+        "--max-iterations", type=positive_int, default=None, metavar="N",
+        help="planning iteration budget, as 'rrtdrive plan --max-iterations': with the seed "
+        "it decides the plan (default 20000)",
+    )
+    p.add_argument(
         "--deterministic", action="store_true",
         help="wall-clock limits off: planning stops on its iteration budget only and "
         "overtake-traffic's re-planning cycles are not cut at their time budget, so an "
@@ -407,11 +412,13 @@ def _run(args: argparse.Namespace) -> int:
     replan_config = TASKS[args.scenario].REPLAN_CONFIG if target == "scenario" else None
     if replan_config is not None and args.reverse:
         raise InputError(f"--reverse: {args.scenario} re-plans while driving, forward only")
-    if replan_config is not None and plan_time is not None:
-        raise InputError(
-            f"--plan-time: {args.scenario} plans nothing ahead; it re-plans while driving, "
-            "each cycle within its deadline (set by --replan-rate)"
-        )
+    max_iterations = getattr(args, "max_iterations", None)
+    for flag, value in (("--plan-time", plan_time), ("--max-iterations", max_iterations)):
+        if replan_config is not None and value is not None:
+            raise InputError(
+                f"{flag}: {args.scenario} plans nothing ahead; it re-plans while driving, "
+                "each cycle within its deadline (set by --replan-rate)"
+            )
     if target != "scenario":
         given = [k for k, v in traffic_opts.items() if v is not None]
         if given or getattr(args, "oncoming", None):
@@ -431,7 +438,8 @@ def _run(args: argparse.Namespace) -> int:
     config = EpisodeConfig(
         sim=SimConfig(simulation_frequency=args.frequency),
         budget=Budget(
-            max_time_s=NO_WALL_LIMIT_S if deterministic else plan_time or DEFAULT_PLAN_TIME_S
+            max_iterations=max_iterations or Budget().max_iterations,
+            max_time_s=NO_WALL_LIMIT_S if deterministic else plan_time or DEFAULT_PLAN_TIME_S,
         ),
         max_time_s=args.max_time,
         replan=replan,

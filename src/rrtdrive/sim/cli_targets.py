@@ -16,7 +16,8 @@ __all__ = ["given_path", "make_task", "target_kind", "with_simulate_hint"]
 #: The flags that plan, which a given path (``--path``) leaves nothing to do: (attribute, flag).
 PLANNING_FLAGS = (
     ("planner", "--planner"), ("planner_options", "--planner-option"),
-    ("plan_time", "--plan-time"), ("deterministic", "--deterministic"),
+    ("plan_time", "--plan-time"), ("max_iterations", "--max-iterations"),
+    ("deterministic", "--deterministic"),
     ("reverse", "--reverse"), ("start", "--start"), ("goal", "--goal"),
     ("resolution", "--resolution"),
 )

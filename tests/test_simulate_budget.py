@@ -1,0 +1,48 @@
+"""``rrtdrive simulate --max-iterations``: the planning budget that decides, as ``plan``'s."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from rrtdrive.cli import main
+
+
+def _json(capsys, *argv: str) -> tuple[int, dict]:
+    code = main([*argv, "--json", "-"])
+    return code, json.loads(capsys.readouterr().out)
+
+
+@pytest.mark.parametrize("budget", ["60", "400"])
+def test_simulate_plans_what_plan_plans_with_the_same_budget(capsys, budget):
+    """The same map, seed and iteration budget: simulate drives the plan `plan` makes."""
+    plan_code, plan = _json(capsys, "plan", "parking_lot", "--max-iterations", budget)
+    sim_code, sim = _json(capsys, "simulate", "parking_lot", "--max-iterations", budget)
+    assert sim["planner"] == plan["planner"] == "improved-rrt-connect"
+    if plan["success"]:
+        assert sim_code in (0, 1) and sim["status"] != "plan_failed"
+        # simulate reports the length to the millimetre
+        assert sim["path_length_m"] == pytest.approx(plan["length_m"], abs=5e-4)
+        assert sim["path_cusps"] == plan["cusps"]
+    else:
+        assert (plan_code, sim_code) == (1, 1) and sim["status"] == "plan_failed"
+        assert plan["message"] in sim["message"]
+
+
+def test_a_budget_too_small_fails_the_plan_by_count(capsys):
+    """Five iterations cannot reach the bay: the plan fails on its budget, not its clock."""
+    code, data = _json(capsys, "simulate", "parking_lot", "--max-iterations", "5")
+    assert code == 1 and data["status"] == "plan_failed"
+    assert "iteration budget" in data["message"] and "safety cap" not in data["message"]
+    code, data = _json(capsys, "simulate", "parking_lot")
+    assert code == 0 and data["success"]
+
+
+@pytest.mark.parametrize("value", ["0", "-3", "2.5", "many"])
+def test_a_bad_budget_is_one_error_naming_the_flag(capsys, value):
+    with pytest.raises(SystemExit) as stop:  # argparse's own exit, with our message
+        main(["simulate", "parking_lot", "--max-iterations", value])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--max-iterations" in err and "Traceback" not in err
