@@ -276,7 +276,11 @@ class Command:
 #: Every subcommand, in ``rrtdrive --help`` order.
 COMMANDS: tuple[Command, ...] = (
     Command("plan", "plan a path on a map", "rrtdrive.cli:add_plan_parser"),
-    Command("maps", "list the built-in maps", "rrtdrive.cli_maps:add_parser"),
+    Command(
+        "maps",
+        "list or export the built-in maps, import an occupancy image",
+        "rrtdrive.cli_maps:add_parser",
+    ),
     Command(
         "verify",
         "check a plan's path against its map with the independent verifier",

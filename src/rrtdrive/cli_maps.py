@@ -1,4 +1,4 @@
-"""The ``rrtdrive maps`` subcommand: list the built-in maps, ``--export`` them as JSON files."""
+"""``rrtdrive maps``: list the built-in maps, ``--export`` them, ``--import`` an image."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ if TYPE_CHECKING:
 
 __all__ = ["add_parser", "HELP"]
 
-HELP = "list the built-in maps"
+HELP = "list or export the built-in maps, import an occupancy image"
 
 
 def add_parser(sub: Any) -> argparse.ArgumentParser:
