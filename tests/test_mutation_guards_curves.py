@@ -15,6 +15,8 @@ import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_clothoid import integrate_turn
+from test_improved import densify
+from test_smoothing import menger
 
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import Map, Obstacle, builtin_map
@@ -335,14 +337,6 @@ def test_make_drivable_reports_the_sharpness_its_samples_show() -> None:
     assert 0.9 * res.max_sharpness <= measured <= res.max_sharpness + 1e-9
 
 
-def _menger(xy: np.ndarray) -> np.ndarray:
-    """Curvature of the circle through each three consecutive points."""
-    a, b, c = xy[:-2], xy[1:-1], xy[2:]
-    cross = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    la, lb, lc = (np.hypot(*(p - q).T) for p, q in ((b, a), (c, b), (c, a)))
-    return 2.0 * cross / (la * lb * lc)
-
-
 @pytest.mark.parametrize("degree", [2, 3])
 def test_the_bspline_pipeline_keeps_its_guarantees(degree: int) -> None:
     """``curve=BSPLINE`` (the paper's pipeline): ends, curvature bound and a free body.
@@ -362,18 +356,9 @@ def test_the_bspline_pipeline_keeps_its_guarantees(degree: int) -> None:
     assert np.array_equal(s[0, :2], [m.start.x, m.start.y])
     assert np.array_equal(s[-1, :2], [g.x, g.y])
     assert res.max_curvature <= cfg.kappa_max
-    assert np.abs(_menger(s[:, :2])).max() <= cfg.kappa_max * 1.01
+    assert np.abs(menger(s[:, :2])).max() <= cfg.kappa_max * 1.01
     assert np.abs(s[:, 3]).max() <= cfg.kappa_max + 1e-9
-    seg = np.hypot(*np.diff(s[:, :2], axis=0).T)
-    reps = np.maximum(1, np.ceil(seg / 0.1).astype(int))
-    poses = [s[-1:, :3]]
-    for i, n in enumerate(reps):
-        f = np.arange(n) / n
-        dyaw = math.remainder(s[i + 1, 2] - s[i, 2], 2 * math.pi)
-        poses.append(np.column_stack([s[i, 0] + f * (s[i + 1, 0] - s[i, 0]),
-                                      s[i, 1] + f * (s[i + 1, 1] - s[i, 1]),
-                                      s[i, 2] + f * dyaw]))  # fmt: skip
-    bodies = shapely.polygons(footprint_corners(np.vstack(poses), checker.vehicle))
+    bodies = shapely.polygons(footprint_corners(densify(s), checker.vehicle))
     union = shapely.union_all([o.polygon() for o in checker.obstacles])
     assert not shapely.intersects(union, bodies).any()
 

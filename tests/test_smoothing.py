@@ -9,6 +9,7 @@ import pytest
 import shapely
 from hypothesis import example, given
 from hypothesis import strategies as st
+from test_improved import densify
 
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.maps import Map, Obstacle, builtin_map
@@ -465,17 +466,8 @@ def check_guarantees(res, start: Pose, goal: Pose, checker: CollisionChecker) ->
     assert np.abs(menger(s[:, :2])).max() <= KAPPA * 1.01
     assert res.max_curvature <= KAPPA
     # The exact body at poses <= 0.1 m apart, with shapely.
-    seg = np.hypot(*np.diff(s[:, :2], axis=0).T)
-    reps = np.maximum(1, np.ceil(seg / 0.1).astype(int))
-    poses = []
-    for i, r in enumerate(reps):
-        f = np.arange(r) / r
-        dyaw = (s[i + 1, 2] - s[i, 2] + math.pi) % (2 * math.pi) - math.pi
-        poses.append(np.column_stack([s[i, 0] + f * (s[i + 1, 0] - s[i, 0]),
-                                      s[i, 1] + f * (s[i + 1, 1] - s[i, 1]),
-                                      s[i, 2] + f * dyaw]))  # fmt: skip
-    poses.append(s[-1:, :3])
-    bodies = shapely.polygons(footprint_corners(np.vstack(poses), checker.vehicle))
+    poses = densify(s)
+    bodies = shapely.polygons(footprint_corners(poses, checker.vehicle))
     union = shapely.union_all([o.polygon() for o in checker.obstacles])
     assert not shapely.intersects(union, bodies).any()
     assert shapely.contains(shapely.box(*checker.bounds), bodies).all()
