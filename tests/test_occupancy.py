@@ -16,7 +16,13 @@ from hypothesis.extra.numpy import arrays
 
 from rrtdrive.cli import main
 from rrtdrive.maps import load_map
-from rrtdrive.occupancy import ImageMap, grid_rectangles, image_obstacles, read_image_map
+from rrtdrive.occupancy import (
+    ImageMap,
+    despeckle,
+    grid_rectangles,
+    image_obstacles,
+    read_image_map,
+)
 from rrtdrive.types import InputError
 
 grids = st.tuples(st.integers(1, 12), st.integers(1, 15)).flatmap(
@@ -184,3 +190,79 @@ def test_plain_images_need_a_resolution_and_bad_files_are_named(tmp_path, capsys
     assert "--start: only with --import" in capsys.readouterr().err
     with pytest.raises(InputError, match="^resolution: expected a number"):
         read_image_map(f, 0.0)
+
+
+def _groups(occupied: np.ndarray) -> list[set[tuple[int, int]]]:
+    """Occupied cells grouped with their eight neighbours, by a plain flood fill."""
+    seen: set[tuple[int, int]] = set()
+    out = []
+    rows, cols = occupied.shape
+    for r0 in range(rows):
+        for c0 in range(cols):
+            if not occupied[r0, c0] or (r0, c0) in seen:
+                continue
+            group, todo = set(), [(r0, c0)]
+            while todo:
+                r, c = todo.pop()
+                if (r, c) in group:
+                    continue
+                group.add((r, c))
+                for dr in (-1, 0, 1):
+                    for dc in (-1, 0, 1):
+                        rr, cc = r + dr, c + dc
+                        if 0 <= rr < rows and 0 <= cc < cols and occupied[rr, cc]:
+                            todo.append((rr, cc))
+            seen |= group
+            out.append(group)
+    return out
+
+
+@settings(max_examples=80, deadline=None)
+@given(grids, st.integers(0, 5))
+def test_despeckle_drops_exactly_the_small_groups(occupied, max_cells):
+    """Each group of <= max_cells touching cells (corners too) goes, every other cell stays."""
+    grid = ImageMap(occupied, 0.1, (1.0, 2.0), unknown=3)
+    clean, groups, cells = despeckle(grid, max_cells)
+    small = [g for g in _groups(occupied) if len(g) <= max_cells]
+    expected = occupied.copy()
+    for g in small:
+        for r, c in g:
+            expected[r, c] = False
+    assert np.array_equal(clean.occupied, expected)
+    assert (groups, cells) == (len(small), sum(len(g) for g in small))
+    assert (clean.resolution, clean.origin, clean.unknown) == (0.1, (1.0, 2.0), 3)
+
+
+def test_despeckle_refuses_a_bad_size():
+    grid = ImageMap(np.ones((2, 2), dtype=bool), 0.1, (0.0, 0.0))
+    for bad in (-1, 1.5, True, "2"):
+        with pytest.raises(InputError, match="^max_cells: expected an integer >= 0"):
+            despeckle(grid, bad)
+
+
+def test_import_despeckle_clears_a_scan_and_keeps_a_speck_on_the_wall(tmp_path, capsys):
+    """A walled yard with noise: --despeckle 2 leaves the walls, the block and the speck
+    that touches the block at a corner; without it the noise blocks the start."""
+    pixels = np.full((60, 100), 254, dtype=np.uint8)  # 0.5 m cells: 50 x 30 m
+    pixels[:2, :] = pixels[-2:, :] = 0
+    pixels[:, :2] = pixels[:, -2:] = 0
+    pixels[20:40, 60:70] = 0  # a 5 x 10 m block
+    noise = [(50, 10), (50, 11), (30, 30), (10, 80)]  # a pair and two single cells
+    for r, c in noise:
+        pixels[r, c] = 0
+    pixels[19, 59] = 0  # touches the block's top left cell at a corner only
+    source = _write(tmp_path, pixels, "yard.png")
+    out = tmp_path / "yard.json"
+    argv = ["maps", "--import", str(source), "--resolution", "0.5", "--start", "4,5.25,0",
+            "--goal", "20,15,0", "--out", str(out)]  # fmt: skip
+    assert main(argv) == 2  # the pair of noise cells at rows 50, cols 10-11 is on the start
+    assert "--start: the car's body" in capsys.readouterr().err
+    assert main([*argv, "--despeckle", "2"]) == 0
+    said = capsys.readouterr().out
+    assert "(3 specks of <= 2 cells dropped: 4 cells)" in said
+    union = shapely.union_all([o.polygon() for o in load_map(out).obstacles])
+    kept = (pixels < 128)
+    for r, c in noise:
+        kept[r, c] = False
+    assert union.area == pytest.approx(kept.sum() * 0.25)
+    assert union.contains(shapely.Point(59.5 * 0.5, (60 - 19 - 0.5) * 0.5))  # the corner speck

@@ -7,7 +7,7 @@ import pathlib
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from rrtdrive.cli_args import flags_for, positive_float, validate_output, writing
+from rrtdrive.cli_args import flags_for, nonneg_int, positive_float, validate_output, writing
 from rrtdrive.types import InputError
 
 if TYPE_CHECKING:
@@ -50,6 +50,10 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     imp.add_argument("--unknown-free", action="store_true",
                      help="read the cells between ROS's thresholds (grey, unknown) as free; "
                      "by default they are obstacles")
+    imp.add_argument("--despeckle", type=nonneg_int, metavar="N",
+                     help="drop groups of at most N occupied cells (touching, corners "
+                     "included): a scan's noise; a post or kerb stone that small goes too "
+                     "(default: keep every cell)")
     maps.set_defaults(func=_cmd_maps)
     return maps
 
@@ -57,14 +61,14 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 #: The flags that only an import takes.
 IMPORT_FLAGS = (("start", "--start"), ("goal", "--goal"), ("out", "--out"), ("name", "--name"),
                 ("resolution", "--resolution"), ("origin", "--origin"),
-                ("unknown_free", "--unknown-free"))  # fmt: skip
+                ("unknown_free", "--unknown-free"), ("despeckle", "--despeckle"))  # fmt: skip
 
 
 def _cmd_import(args: argparse.Namespace) -> int:
     """``rrtdrive maps --import``: write the map of an occupancy image; return the exit code."""
     from rrtdrive.cli_args import distinct_outputs, parse_pose
     from rrtdrive.maps import save_map
-    from rrtdrive.occupancy import map_from_image, read_image_map, read_ros_map
+    from rrtdrive.occupancy import despeckle, map_from_image, read_image_map, read_ros_map
 
     source = args.import_from
     if args.export is not None:
@@ -96,6 +100,9 @@ def _cmd_import(args: argparse.Namespace) -> int:
                 raise InputError(f"--origin: expected X,Y in metres, got {args.origin!r}") from None
         with flags_for({"image": "--import", "resolution": "--resolution", "origin": "--origin"}):
             grid = read_image_map(source, args.resolution, origin, unknown_free=args.unknown_free)
+    groups, cells = 0, 0
+    if args.despeckle:
+        grid, groups, cells = despeckle(grid, args.despeckle)
     name = args.name if args.name is not None else pathlib.Path(source).stem
     with flags_for({"start": "--start", "goal": "--goal", "name": "--name"}):
         m = map_from_image(grid, name, start, goal)
@@ -107,8 +114,11 @@ def _cmd_import(args: argparse.Namespace) -> int:
         f"{source}: {cols} x {rows} cells at {grid.resolution:g} m, {xmax - xmin:g} x "
         f"{ymax - ymin:g} m; {int(grid.occupied.sum())} occupied cells ({grid.unknown} unknown, "
         f"read as {'free' if args.unknown_free else 'occupied'}) as {len(m.obstacles)} "
-        f"rectangles -> {args.out}"
-    )
+        f"rectangles"
+        + (f" ({groups} specks of <= {args.despeckle} cells dropped: {cells} cells)"
+           if args.despeckle else "")
+        + f" -> {args.out}"
+    )  # fmt: skip
     return 0
 
 
