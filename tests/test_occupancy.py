@@ -236,7 +236,7 @@ def test_despeckle_drops_exactly_the_small_groups(occupied, max_cells):
 def test_despeckle_refuses_a_bad_size():
     grid = ImageMap(np.ones((2, 2), dtype=bool), 0.1, (0.0, 0.0))
     for bad in (-1, 1.5, True, "2"):
-        with pytest.raises(InputError, match="^max_cells: expected an integer >= 0"):
+        with pytest.raises(InputError, match="^max_cells: must be an integer >= 0"):
             despeckle(grid, bad)
 
 

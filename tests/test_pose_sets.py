@@ -65,4 +65,6 @@ def test_bad_arguments_name_the_field() -> None:
         random_free_poses("parking_lot", 2, seed=0, field="middle")
     with pytest.raises(InputError, match="^count:"):
         random_free_poses("parking_lot", -1, seed=0)
+    with pytest.raises(InputError, match="^count:"):
+        random_free_poses("parking_lot", 2.5, seed=0)
     assert random_free_poses("parking_lot", 0, seed=0) == []

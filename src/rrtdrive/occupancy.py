@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rrtdrive.types import InputError, Pose, brief_repr, is_finite_number
+from rrtdrive.types import InputError, Pose, brief_repr, is_finite_number, require_int
 
 if TYPE_CHECKING:
     from rrtdrive.maps import Map
@@ -233,8 +233,7 @@ def despeckle(grid: ImageMap, max_cells: int) -> tuple[ImageMap, int, int]:
     """
     from scipy import ndimage
 
-    if isinstance(max_cells, bool) or not isinstance(max_cells, (int, np.integer)) or max_cells < 0:
-        raise InputError(f"max_cells: expected an integer >= 0, got {brief_repr(max_cells)}")
+    max_cells = require_int("max_cells", max_cells, 0)
     if max_cells == 0:
         return grid, 0, 0
     labels, count = ndimage.label(grid.occupied, structure=np.ones((3, 3), dtype=bool))

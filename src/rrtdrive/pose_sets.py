@@ -9,7 +9,7 @@ import numpy as np
 
 from rrtdrive.maps import Map, builtin_map
 from rrtdrive.planning.base import cached_checker
-from rrtdrive.types import InputError, Pose
+from rrtdrive.types import InputError, Pose, require_int
 
 #: Draws allowed per pose asked for before giving up (a map with almost no free room).
 DRAWS_PER_POSE = 10_000
@@ -43,8 +43,8 @@ def random_free_poses(map_: Map | str, count: int, seed: int, field: str = "goal
     Raises
     ------
     InputError
-        If ``field`` is neither ``"start"`` nor ``"goal"``, ``count`` is
-        negative, or the map has so little free room that
+        If ``field`` is neither ``"start"`` nor ``"goal"``, ``count`` is not
+        an integer >= 0, or the map has so little free room that
         ``DRAWS_PER_POSE * count`` draws do not find ``count`` poses.
 
     Examples
@@ -55,8 +55,7 @@ def random_free_poses(map_: Map | str, count: int, seed: int, field: str = "goal
     """
     if field not in ("start", "goal"):
         raise InputError(f"field: must be 'start' or 'goal', got {field!r}")
-    if count < 0:
-        raise InputError(f"count: must be >= 0, got {count}")
+    count = require_int("count", count, 0)
     base = builtin_map(map_) if isinstance(map_, str) else map_
     checker = cached_checker(base)
     rng = np.random.default_rng(seed)

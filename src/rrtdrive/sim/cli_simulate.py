@@ -173,9 +173,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument(
         "--plot", metavar="FILE.png",
         help="draw the map, the planned path, the driven trajectory and the other cars, "
-        "with the speed, "
-        "steering angle and rate against the car's limits and the cross-track error over "
-        "time, to a figure (.png, .pdf or .svg)",
+        "with the speed, steering angle and rate against the car's limits and the "
+        "cross-track error over time, to a figure (.png, .pdf or .svg)",
     )
     p.add_argument(
         "--trajectory", metavar="FILE.csv",
