@@ -22,6 +22,7 @@ from rrtdrive.occupancy import (
     grid_rectangles,
     image_obstacles,
     read_image_map,
+    read_ros_map,
 )
 from rrtdrive.types import InputError
 
@@ -103,6 +104,31 @@ def test_colour_and_sixteen_bit_images(tmp_path):
     wide = np.array([[0, 200, 30000, 65535]], dtype=np.uint16)
     grid = read_image_map(_write(tmp_path, wide, "w.png"), 0.5, unknown_free=True)
     assert grid.occupied.tolist() == [[True, True, False, False]] and grid.unknown == 1
+
+
+def test_alpha_is_averaged_in_as_map_server_does_in_trinary_mode_only(tmp_path):
+    """map_server's image_loader: in trinary mode the mean takes every channel, alpha
+    too; in scale mode the colour channels only. Worked by hand (thresholds 0.65, 0.196):
+    opaque (60, 60, 60, 255): trinary mean 108.75, p = 0.574, unknown; scale mean 60,
+    p = 0.765, occupied. Opaque ROS grey (205, 205, 205, 255): trinary mean 217.5,
+    p = 0.147, free; scale mean 205, p = 0.196, not below free_thresh: unknown.
+    Grey-alpha (60, 255): trinary mean 157.5, p = 0.382, unknown; scale 60: occupied."""
+    rgba = np.array([[[60, 60, 60, 255], [205, 205, 205, 255]]], dtype=np.uint8)
+    f = _write(tmp_path, rgba, "rgba.png")
+    grid = read_image_map(f, 0.1, unknown_free=True)
+    assert grid.occupied.tolist() == [[False, False]] and grid.unknown == 1
+    grid = read_image_map(f, 0.1, unknown_free=True, mode="scale")
+    assert grid.occupied.tolist() == [[True, False]] and grid.unknown == 1
+    la = np.array([[[60, 255]]], dtype=np.uint8)
+    g = _write(tmp_path, la, "la.png")
+    assert read_image_map(g, 0.1, unknown_free=True).unknown == 1
+    assert read_image_map(g, 0.1, unknown_free=True, mode="scale").occupied.tolist() == [[True]]
+    # A ROS map's mode reaches the reader.
+    (tmp_path / "s.yaml").write_text(
+        "image: rgba.png\nresolution: 0.1\norigin: [0.0, 0.0, 0.0]\nmode: scale\n")
+    assert read_ros_map(tmp_path / "s.yaml", unknown_free=True).occupied.tolist() == [[True, False]]
+    with pytest.raises(InputError, match="^mode: only trinary and scale"):
+        read_image_map(f, 0.1, mode="raw")
 
 
 def _garage(tmp_path, origin="[-2.0, -1.0, 0.0]", extra=""):

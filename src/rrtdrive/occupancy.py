@@ -77,8 +77,13 @@ def read_image_map(
     occupied_thresh: float = 0.65,
     free_thresh: float = 0.196,
     unknown_free: bool = False,
+    mode: str = "trinary",
 ) -> ImageMap:
     """Read an occupancy image (PNG, PGM, ...) as ROS ``map_server`` reads a trinary map.
+
+    A pixel's value is the mean of its channels. As map_server's ``image_loader``
+    (ROS 1 and nav2) does, that mean takes in an alpha channel too in ``trinary``
+    mode, and only the colour channels in ``scale`` mode.
 
     Parameters
     ----------
@@ -95,6 +100,9 @@ def read_image_map(
         free (ROS's defaults, 0.65 and 0.196).
     unknown_free : bool
         Read the pixels in between as free (default: occupied).
+    mode : str
+        The ROS map's ``mode``, ``"trinary"`` (the default) or ``"scale"``: which
+        channels a pixel's mean takes (both read the thresholds alike here).
 
     Returns
     -------
@@ -104,7 +112,8 @@ def read_image_map(
     ------
     InputError
         Naming the argument: a file that cannot be read as an image, a resolution or
-        threshold out of range, ``free_thresh`` not below ``occupied_thresh``.
+        threshold out of range, ``free_thresh`` not below ``occupied_thresh``, an
+        unknown ``mode``.
     """
     import imageio.v3 as iio
 
@@ -113,6 +122,8 @@ def read_image_map(
     free = _number(free_thresh, "free_thresh", 0.0, 1.0)
     if free >= occ:
         raise InputError(f"free_thresh: must be below occupied_thresh ({occ:g}), got {free:g}")
+    if mode not in ("trinary", "scale"):
+        raise InputError(f"mode: only trinary and scale maps are read, got {brief_repr(mode)}")
     x0 = _number(origin[0], "origin", -1e6, 1e6)
     y0 = _number(origin[1], "origin", -1e6, 1e6)
     name = os.fspath(image)
@@ -132,8 +143,11 @@ def read_image_map(
     scale = float(np.iinfo(raw.dtype).max) if np.issubdtype(raw.dtype, np.integer) else 1.0
     pixels = raw.astype(float)
     if pixels.ndim == 3:
-        # map_server averages the colour channels (an alpha channel left out).
-        pixels = pixels[..., :3].mean(axis=2) if pixels.shape[2] >= 3 else pixels[..., 0]
+        # map_server averages every channel in trinary mode, alpha too ("to preserve
+        # existing behavior"), and leaves alpha (a 2- or 4-channel image's last) out in
+        # scale mode.
+        has_alpha = pixels.shape[2] in (2, 4)
+        pixels = (pixels[..., :-1] if mode == "scale" and has_alpha else pixels).mean(axis=2)
     if pixels.ndim != 2 or pixels.size == 0:
         raise InputError(f"image: expected a 2-D image, got shape {pixels.shape}")
     p = pixels / scale if negate else (scale - pixels) / scale
@@ -200,7 +214,7 @@ def read_ros_map(yaml_file: str | os.PathLike[str], unknown_free: bool = False) 
     path = os.path.join(os.path.dirname(os.fspath(yaml_file)), image)
     return read_image_map(
         path, data["resolution"], (origin[0], origin[1]), bool(negate),
-        data.get("occupied_thresh", 0.65), data.get("free_thresh", 0.196), unknown_free,
+        data.get("occupied_thresh", 0.65), data.get("free_thresh", 0.196), unknown_free, mode,
     )  # fmt: skip
 
 
