@@ -94,7 +94,8 @@ def _cmd_import(args: argparse.Namespace) -> int:
             parts = args.origin.split(",")
             try:
                 origin = (float(parts[0]), float(parts[1]))
-                if len(parts) != 2:
+                # "_" too, as parse_pose: float reads "1_0" as 10, a typo, not a number.
+                if len(parts) != 2 or "_" in args.origin:
                     raise ValueError
             except (ValueError, IndexError):
                 raise InputError(f"--origin: expected X,Y in metres, got {args.origin!r}") from None
