@@ -49,12 +49,19 @@ class _Side:
         return self.extend_from(i, q, step)
 
     def extend_from(self, i: int, q: np.ndarray, step: float) -> tuple[int, int]:
-        """Step from node ``i`` towards ``q``; return (outcome, new node index or -1)."""
+        """Step from node ``i`` towards ``q``; return (outcome, new node index or -1).
+
+        A node ``i`` already at ``q`` is reached: its own index comes back, no node is
+        added.
+        """
         tree = self.tree
         a = tree.nodes[i].copy()
+        if math.dist(a, q) < 1e-9:
+            # Node i already is the target (the start tree stepped onto the goal, say):
+            # reached, as Kuffner & LaValle's CONNECT has it, with no new node; reporting
+            # it trapped missed the meeting and the path drove past the goal and back.
+            return _REACHED, i
         new, reached = step_towards(a, q, step)
-        if math.dist(a, new) < 1e-9:
-            return _TRAPPED, -1
         if not self.towards_root:
             ok = self.edges.edge(a, new)
         elif i == 0:
