@@ -373,6 +373,10 @@ def narrow_passage(
     v = m.vehicle
     keep = edge_keep(checker) if tree_edges else MIN_CLEARANCE
     needed_width = v.width + 2.0 * keep
+    # The clearance field may read a gap low by up to a second grid error, as the gap's
+    # walls fall on the cells: below needed_width no tree edge crosses, at sure_width
+    # every alignment lets one (a 2.4 m gap no edge crosses read as wide enough).
+    sure_width = needed_width + (2.0 * checker.grid_error if tree_edges else 0.0)
     numbers = {"needed_m": needed_width, "car_width_m": v.width}
     if lo < 0.0:
         words = "the goal is walled off from the start: no gap connects them"
@@ -393,8 +397,16 @@ def narrow_passage(
     numbers.update(width_m=width, x=x, y=y)
     if width < v.width:
         tail = f"narrower than the car ({v.width:.2f} m)"
-    elif width >= needed_width:
+    elif width >= sure_width:
         return None  # wide enough for the planner that failed: not what stopped it
+    elif tree_edges and width >= needed_width:
+        numbers["needed_up_to_m"] = sure_width
+        tail = (
+            f"this planner's straight tree edges need {needed_width:.2f} to "
+            f"{sure_width:.2f} m here, as the gap falls on its {checker.resolution:.2f} m "
+            f"grid (the car's {v.width:.2f} m and {keep:.2f} m each side, plus up to "
+            f"{checker.grid_error:.2f} m of grid error each side); try --planner hybrid-a-star"
+        )
     elif tree_edges:
         tail = (
             f"this planner's straight tree edges need at least {needed_width:.2f} m (the car's "

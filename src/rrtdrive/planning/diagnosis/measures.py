@@ -390,13 +390,19 @@ def gap_width(checker: CollisionChecker, x: float, y: float) -> float:
 
     Twice the distance to the nearest wall from the cell's centre, which lies up to
     half a cell off the gap's centre line (a 1.85 m gap read 1.75 m); when the two
-    nearest walls (obstacles, or the bounds) are that far apart give or take a cell,
-    their own distance, the gap's exact width.
+    nearest walls (obstacles, or sides of the bounds) are that far apart give or take
+    a cell, their own distance, the gap's exact width.
     """
     shapes = map_shapes(checker)
     p = shapely.Point(x, y)
     around = 2.0 * float(p.distance(shapes.solid))
-    parts = [shapes.edge, *shapes.polygons]
+    # Each side of the bounds is a wall of its own: as one outline, a block touching
+    # the top edge was 0 m from "the edge" and a gap between it and the bottom side
+    # fell back to the cell-centre reading (1.83 m read 1.76 m, narrower than the car).
+    xmin, ymin, xmax, ymax = checker.bounds
+    corners = [(xmin, ymin), (xmax, ymin), (xmax, ymax), (xmin, ymax), (xmin, ymin)]
+    sides = [shapely.LineString(corners[k : k + 2]) for k in range(4)]
+    parts = [*sides, *shapes.polygons]
     d = shapely.distance(np.array(parts, dtype=object), p)
     if len(parts) < 2:
         return around
