@@ -373,9 +373,10 @@ def narrow_passage(
     v = m.vehicle
     keep = edge_keep(checker) if tree_edges else MIN_CLEARANCE
     needed_width = v.width + 2.0 * keep
-    # The clearance field may read a gap low by up to a second grid error, as the gap's
-    # walls fall on the cells: below needed_width no tree edge crosses, at sure_width
-    # every alignment lets one (a 2.4 m gap no edge crosses read as wide enough).
+    # Besides the grid error the checker subtracts, its clearance field may read a gap
+    # low by up to one more (rasterisation), as the gap's walls fall on the cells: below
+    # needed_width no tree edge crosses; between it and sure_width the alignment decides
+    # (a 2.4 m gap no edge crosses was taken as wide enough).
     sure_width = needed_width + (2.0 * checker.grid_error if tree_edges else 0.0)
     numbers = {"needed_m": needed_width, "car_width_m": v.width}
     if lo < 0.0:
