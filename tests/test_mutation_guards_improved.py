@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 import shapely
 
+import rrtdrive.planning.improved.ending as improved_ending
 import rrtdrive.planning.improved.planner as improved_planner
 from rrtdrive.maps import Map, Obstacle
 from rrtdrive.planning.base import PlanningProblem, cached_checker
@@ -233,16 +234,20 @@ def test_a_narrow_root_never_waits_longer_than_the_root_patience(
     assert res.stats["iterations"] == 100
 
 
-def _spy_on(monkeypatch: pytest.MonkeyPatch, name: str) -> list[object]:
-    """The calls of the improved planner's ``name`` (still called through) from now on."""
+def _spy_on(monkeypatch: pytest.MonkeyPatch, name: str, module: object = None) -> list[object]:
+    """The calls of the improved planner's ``name`` (still called through) from now on.
+
+    ``module``: where the planner looks ``name`` up (default its ``planner`` module).
+    """
     calls: list[object] = []
-    real = getattr(improved_planner, name)
+    module = improved_planner if module is None else module
+    real = getattr(module, name)
 
     def spy(*args: object, **kwargs: object) -> object:
         calls.append((args, kwargs))
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(improved_planner, name, spy)
+    monkeypatch.setattr(module, name, spy)
     return calls
 
 
@@ -250,7 +255,7 @@ def test_without_the_fallback_no_tail_or_lead_runs_after_the_escalation(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """``dubins_fallback`` off: the failed escalation is the answer, nothing of the fallback."""
-    calls = _spy_on(monkeypatch, "dubins_fallback")
+    calls = _spy_on(monkeypatch, "dubins_fallback", improved_ending)
     monkeypatch.setattr(improved_planner, "escalate", lambda failed, *a, **k: failed)
     res = _solve(_open_map(Pose(50.0, 50.1, math.pi / 2)), reverse=True,
                  disable=("dubins_fallback",))  # fmt: skip

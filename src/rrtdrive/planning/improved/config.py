@@ -15,6 +15,7 @@ from rrtdrive.planning.smoothing import SmoothingConfig, smoothing_with
 from rrtdrive.types import InputError, require_finite, require_int
 
 __all__ = [
+    "NAME",
     "COMPONENTS",
     "ESCALATION_FIRST",
     "SMOOTHING_COMPONENTS",
@@ -23,6 +24,9 @@ __all__ = [
     "StageBudgets",
     "default_smoothing",
 ]
+
+#: The planner's registered name.
+NAME = "improved-rrt-connect"
 
 #: Names of the switchable components, for ablations and the CLI.
 COMPONENTS: tuple[str, ...] = (

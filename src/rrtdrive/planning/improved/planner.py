@@ -23,17 +23,17 @@ from collections.abc import Iterable
 import numpy as np
 
 from rrtdrive.collision import CollisionChecker
-from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register_planner
+from rrtdrive.planning.base import PlanningProblem, Stopwatch, register_planner
 from rrtdrive.planning.hybrid.escalation import ESCALATES_FROM, escalate, with_kept_clearance
+from rrtdrive.planning.improved import ending
 from rrtdrive.planning.improved.boxed import boxed_end, open_share, stuck_root_words
-from rrtdrive.planning.improved.config import ImprovedConfig, StageBudgets
+from rrtdrive.planning.improved.config import NAME, ImprovedConfig, StageBudgets
 from rrtdrive.planning.improved.detour import DETOURS, detour_words, measured_detour, shorter_answer
 from rrtdrive.planning.improved.expansion import (
     default_expansion_lmin,
     endpoint_capped_clearance,
     expanded_checker,
 )
-from rrtdrive.planning.improved.fallback import dubins_fallback
 from rrtdrive.planning.improved.growth import (
     EdgeFree,
     ObtuseTree,
@@ -41,15 +41,13 @@ from rrtdrive.planning.improved.growth import (
     grow_until_meet,
     rooted_edge_test,
 )
-from rrtdrive.planning.result import run_query, solved, straight_ahead_result, timeout_result
+from rrtdrive.planning.result import run_query, solved, straight_ahead_result
 from rrtdrive.planning.sampling import SampleSource
 from rrtdrive.planning.smoothing import make_drivable
 from rrtdrive.planning.smoothing.config import sharpness_bound
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Tree
 
 __all__ = ["NAME", "ImprovedRRTConnect"]
-
-NAME = "improved-rrt-connect"
 
 
 @register_planner(NAME)
@@ -503,98 +501,12 @@ class _Query:
         ``escalated``: the failed Hybrid A* escalation it runs after (with reverse,
         :meth:`ImprovedConfig.escalates_first`), whose counts and stats it keeps.
         """
-        stats, watch = self.stats, self.watch
-        self.fallback_tried = "all" if joints else "direct"
-        t0 = time.perf_counter()
-        found = dubins_fallback(
-            self.checker, self.start, self.goal,
-            self.cfg.dubins_radius_factor / self.problem.vehicle.kappa_max,
-            self.smoothing.clearance, self.failed_raws[::-1], self.smoothing, watch.expired,
-            max_candidates=self.limits.candidates if joints else 0, direct=direct,
-        )  # fmt: skip
-        stats["dubins_time_s"] = stats.get("dubins_time_s", 0.0) + time.perf_counter() - t0
-        if found is None:
-            return None
-        path, word = found
-        stats["dubins_fallback"] = 1.0
-        stats["max_curvature"] = float(np.abs(path.samples[:, 3]).max())
-        if self.last_message:
-            # make_drivable's messages open with "post-processing failed: "; the query did not.
-            reason = self.last_message.removeprefix("post-processing failed: ")
-            note = f"no tree path could be made drivable ({reason})"
-        elif self.stuck_root:
-            note = self.stuck_words()
-        else:
-            note = "the trees did not meet within the budget"
-        raw = self.last_raw if self.last_raw is not None else np.vstack([self.s_xy, self.g_xy])
-        iterations = self.iterations
-        if escalated is not None:
-            stats = {**escalated.stats, **stats}
-            iterations = escalated.iterations
-            expansions = int(stats.get("hybrid_expansions", 0.0))
-            gear = "with reverse" if self.problem.reverse else "forward only"
-            note += f"; Hybrid A* ({gear}) found none ({expansions} expansions)"
-        message = f"solved by the Dubins fallback ({word}; {path.length:.1f} m); {note}"
-        return solved(
-            NAME, watch, path, raw, self.trees, iterations, message, stats,
-            nodes=int(stats["nodes"]),
-        )  # fmt: skip
+        return ending.fallback_result(self, escalated, direct=direct, joints=joints)
 
     def fallback_failed(self, escalated: PlanResult) -> PlanResult:
         """The failed escalation's result, saying that the Dubins fallback after it failed too."""
-        if self.watch.capped:
-            return self.failure()
-        stats = {**escalated.stats, "dubins_time_s": self.stats["dubins_time_s"]}
-        return dataclasses.replace(
-            escalated,
-            message=f"{escalated.message}; no clear Dubins tail or lead either",
-            stats=stats,
-            planning_time_s=self.watch.elapsed(),
-        )
+        return ending.fallback_failed(self, escalated)
 
     def failure(self) -> PlanResult:
         """The honest failure: the safety cap, post-processing failed, or no path in the budget."""
-        stats, watch, iterations = self.stats, self.watch, self.iterations
-        if watch.capped:
-            return timeout_result(NAME, watch, iterations, self.trees, stats, self.last_raw)
-        if stats["postprocess_attempts"] > 0 and self.last_message:
-            tail = {
-                "all": "; no clear Dubins path, tail or lead either)",
-                "direct": "; no clear Dubins path)",
-            }.get(self.fallback_tried, ")")
-            return failure(
-                NAME,
-                PlanStatus.POSTPROCESS_FAILED,
-                watch,
-                f"{self.last_message} (after {int(stats['postprocess_attempts'])} tree path(s)"
-                + tail,
-                trees=self.trees,
-                iterations=iterations,
-                raw_path=self.last_raw,
-                stats=stats,
-            )
-        if self.stuck_root:
-            lead = (
-                f"no path: {self.stuck_words()} ({iterations} iterations)"
-            )
-        else:
-            lead = (
-                f"no path within the iteration budget ({iterations} iterations"
-                f"{_share_note(self.limits, watch.budget.max_iterations)})"
-            )
-        return failure(
-            NAME,
-            PlanStatus.NO_PATH_IN_BUDGET,
-            watch,
-            lead,
-            trees=self.trees,
-            iterations=iterations,
-            stats=stats,
-        )
-
-
-def _share_note(limits: StageBudgets, max_iterations: int) -> str:
-    """``", the RRT-Connect stages' share ..."`` for a failure message, when they had one."""
-    if limits.iterations >= max_iterations:
-        return ""
-    return f", the RRT-Connect stages' share of {max_iterations}"
+        return ending.failure_result(self)
