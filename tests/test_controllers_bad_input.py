@@ -96,3 +96,27 @@ def test_control_still_runs_and_bad_path_is_named(name):
     c.reset(STRAIGHT)
     accel, steer = c.control(VehicleState(0.0, 0.2, 0.0, 1.0, 0.0, 0.05))
     assert math.isfinite(accel) and steer < 0.0  # left of the path: steer right
+
+
+@pytest.mark.parametrize(
+    ("fields", "message"),
+    [
+        # The taper starts within the stop's own deceleration: a share of it, (0, 1].
+        ({"taper_start": 1.5}, r"^speed\.taper_start: must lie in \(0, 1\], got 1\.5$"),
+        # Both signs matter: a loop that cannot brake (a_min > 0) or cannot speed up.
+        ({"a_min": 0.5, "a_max": 2.0}, r"^speed\.a_min/a_max: need a_min < 0 < a_max"),
+        ({"a_min": -2.0, "a_max": -0.5}, r"^speed\.a_min/a_max: need a_min < 0 < a_max"),
+    ],
+)
+def test_speed_limits_out_of_their_range_are_named(fields, message):
+    """A speed config outside its range is refused by field; the range's ends are valid."""
+    with pytest.raises(InputError, match=message):
+        SpeedConfig(**fields)
+    assert SpeedConfig(taper_start=1.0).taper_start == 1.0
+
+
+def test_a_look_ahead_whose_longest_is_below_its_shortest_is_refused():
+    """Pure pursuit's look-ahead is clipped to [ld_min, ld_max]: an empty range is refused."""
+    with pytest.raises(InputError, match=r"^pure_pursuit: need ld_gain >= 0 and ld_max >= ld_min"):
+        make_controller("pure-pursuit", ld_min=5.0, ld_max=2.0)
+    assert make_controller("pure-pursuit", ld_min=2.0, ld_max=2.0) is not None
