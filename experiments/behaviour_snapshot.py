@@ -87,7 +87,10 @@ def plan_entries(paper: bool = False) -> dict[str, dict]:
                     problem, np.random.default_rng(seed), budget
                 )
                 out[f"plan/{name}/{planner}/{seed}"] = _drop_timing(
-                    plan_to_json(result, seed, name)
+                    plan_to_json(
+                        result, seed, name, budget=budget,
+                        resolution=problem.checker.resolution,
+                    )
                 )
     return out
 
@@ -145,6 +148,11 @@ def with_gears(entry: dict) -> dict:
     return out
 
 
+#: Plan JSON keys added since session 44 (the budget and grid a plan was made with): a
+#: record older than them is compared on the rest.
+ADDED_FIELDS = frozenset({"max_iterations", "max_time_s", "resolution_m"})
+
+
 def compare(before: dict[str, dict], after: dict[str, dict]) -> list[str]:
     """Human-readable differences between two snapshots (older plan entries read with gears)."""
     diffs = []
@@ -155,6 +163,8 @@ def compare(before: dict[str, dict], after: dict[str, dict]) -> list[str]:
             diffs.append(f"{key}: only in {'after' if a is None else 'before'}")
             continue
         for field in sorted(set(a) | set(b)):
+            if field in ADDED_FIELDS and field not in a:
+                continue
             if a.get(field) != b.get(field):
                 va, vb = repr(a.get(field))[:80], repr(b.get(field))[:80]
                 diffs.append(f"{key}.{field}: {va} -> {vb}")

@@ -68,3 +68,38 @@ def test_a_curve_named_as_text_is_the_enum_and_a_wrong_name_is_refused():
     assert planner.config.smoothing.curve.value == "bspline"
     with pytest.raises(InputError, match=r"smoothing.curve: must be one of .*got 'spline'"):
         make_planner("improved-rrt-connect", smoothing={"curve": "spline"})
+
+
+def test_a_plan_json_names_the_budget_and_grid_that_decided_it(tmp_path):
+    """A plan cut short by ``--max-iterations`` is made again from its JSON alone.
+
+    The JSON kept the seed and planner options but not the budget or the grid, so a
+    failed plan at 20 iterations read like the default's (which solves this query).
+    """
+    out = tmp_path / "plan.json"
+    flags = ["--max-iterations", "20", "--max-time", "60", "--resolution", "0.2"]
+    assert main(["plan", "parking_lot", "--seed", "3", *flags, "--json", str(out)]) == 1
+    doc = _strict(out.read_text())
+    assert (doc["max_iterations"], doc["max_time_s"], doc["resolution_m"]) == (20, 60.0, 0.2)
+    from rrtdrive.collision import CheckerConfig
+
+    problem = PlanningProblem.from_map(
+        builtin_map("parking_lot"), config=CheckerConfig(resolution=doc["resolution_m"])
+    )
+    planner = make_planner(doc["planner"], **doc["planner_options"])
+    budget = Budget(max_iterations=doc["max_iterations"], max_time_s=doc["max_time_s"])
+    again = planner.solve(problem, np.random.default_rng(doc["seed"]), budget)
+    assert (again.status.value, again.iterations) == (doc["status"], doc["iterations"])
+    default = planner.solve(problem, np.random.default_rng(doc["seed"]), Budget())
+    assert default.success and not again.success
+
+
+def test_the_plan_json_defaults_name_the_default_budget_and_grid(tmp_path):
+    out = tmp_path / "plan.json"
+    assert main(["plan", "overtake", "--json", str(out)]) == 0
+    doc = _strict(out.read_text())
+    from rrtdrive.collision import CheckerConfig
+
+    assert doc["max_iterations"] == Budget().max_iterations
+    assert doc["max_time_s"] == Budget().max_time_s
+    assert doc["resolution_m"] == CheckerConfig().resolution

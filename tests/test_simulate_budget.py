@@ -35,8 +35,26 @@ def test_a_budget_too_small_fails_the_plan_by_count(capsys):
     code, data = _json(capsys, "simulate", "parking_lot", "--max-iterations", "5")
     assert code == 1 and data["status"] == "plan_failed"
     assert "iteration budget" in data["message"] and "safety cap" not in data["message"]
+    # The JSON names the budget that cut the plan short, beside its wall-clock cap.
+    assert (data["max_iterations"], data["plan_max_time_s"]) == (5, 5.0)
     code, data = _json(capsys, "simulate", "parking_lot")
     assert code == 0 and data["success"]
+    assert (data["max_iterations"], data["plan_max_time_s"]) == (20000, 5.0)
+
+
+def test_the_json_has_no_plan_budget_where_nothing_is_planned_or_the_clock_is_off(
+    capsys, tmp_path
+):
+    """--deterministic has no wall-clock cap; a given path has no plan at all."""
+    code, data = _json(capsys, "simulate", "parking_lot", "--deterministic",
+                       "--max-iterations", "400")
+    assert (data["max_iterations"], data["plan_max_time_s"]) == (400, None)
+    plan = tmp_path / "plan.json"
+    assert main(["plan", "parking_lot", "--json", str(plan)]) == 0
+    capsys.readouterr()
+    code, data = _json(capsys, "simulate", "parking_lot", "--path", str(plan))
+    assert data["planner"] == "given"
+    assert (data["max_iterations"], data["plan_max_time_s"]) == (None, None)
 
 
 @pytest.mark.parametrize("value", ["0", "-3", "2.5", "many"])

@@ -81,12 +81,17 @@ def plan_to_json(
     goal: Pose | None = None,
     map_file: str | None = None,
     planner_options: Mapping[str, object] | None = None,
+    budget: Budget | None = None,
+    resolution: float | None = None,
 ) -> dict[str, object]:
     """The JSON contract of ``rrtdrive plan`` (SPEC §5, docs/planning.md).
 
     ``planner_options``: the planner's keyword arguments the plan was made with
     (``--step``, ``--disable``, ``--paper-smoothing``, ``--planner-option``; ``{}``:
-    its defaults), so a plan can be made again from its JSON.
+    its defaults), so a plan can be made again from its JSON, with the ``budget``
+    (``max_iterations``, ``max_time_s``) and the collision grid's cell size
+    ``resolution`` (``resolution_m``: the one used, coarser than ``--resolution`` on a
+    map too big for it) it was made with; each ``null`` when not given.
 
     ``start`` and ``goal`` are the query's poses ``[x, y, yaw]`` (``null`` when not
     given), so ``rrtdrive verify`` can check the path against them; ``map_file`` the
@@ -121,6 +126,11 @@ def plan_to_json(
         "seed": int(seed),  # np.int64 from a seed sweep: json cannot write it
         "reverse": bool(reverse),
         "planner_options": options_json(dict(planner_options or {})),
+        # What decided the outcome besides the seed and options: a plan cut short by
+        # --max-iterations must not read like the default's.
+        "max_iterations": None if budget is None else int(budget.max_iterations),
+        "max_time_s": None if budget is None else _json_number(budget.max_time_s),
+        "resolution_m": None if resolution is None else float(resolution),
         "start": None if start is None else [float(v) for v in start.as_tuple()],
         "goal": None if goal is None else [float(v) for v in goal.as_tuple()],
         "path": np.round(result.path.samples, 6).tolist(),
@@ -233,7 +243,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         doc = plan_to_json(
             result, args.seed, m.name, m.vehicle, reverse=args.reverse, start=m.start,
             goal=m.goal, map_file=None if args.map in BUILTIN_MAPS else args.map,
-            planner_options={**options, **extra},
+            planner_options={**options, **extra}, budget=budget,
+            resolution=problem.checker.resolution,
         )  # fmt: skip
         write_output(args.json, json.dumps(doc) + "\n")
     if args.plot:

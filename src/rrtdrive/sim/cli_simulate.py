@@ -468,6 +468,7 @@ def _run(args: argparse.Namespace) -> int:
     # is not the episode's time.
     total = time.perf_counter() - t0 - (stock.render_time_s if stock is not None else 0.0)
     diagnosis = None if episode.plan is None else episode.plan.diagnosis
+    plans_nothing = path is not None or replan_config is not None
     extra: dict[str, Any] = {
         "total_time_s": round(total, 6),
         "oncoming": oncoming,
@@ -475,6 +476,9 @@ def _run(args: argparse.Namespace) -> int:
         "target": target,
         "reverse": bool(episode.scenario.reverse),
         "planner_options": options_json(options),  # what the plan was made with ({}: defaults)
+        # The plan's budget, so a failed plan names what cut it short (null: no plan ahead).
+        "max_iterations": None if plans_nothing else config.budget.max_iterations,
+        "plan_max_time_s": None if plans_nothing or deterministic else config.budget.max_time_s,
         # A failed plan's constraint in the user's terms, as `plan --json` gives it.
         "diagnosis": None if diagnosis is None else diagnosis.to_json(),
     }
