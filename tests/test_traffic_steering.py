@@ -95,4 +95,4 @@ def test_the_replanner_sets_the_road_sharpness_unless_given(options, expected) -
     smoothing = driver.planner.config.smoothing
     assert smoothing.max_sharpness == pytest.approx(road if expected is None else expected)
     assert smoothing.max_rounds == 8  # the driver's own default is kept
-    assert driver._speed_tuple()[4] == 0.0  # no launch speed for a rate-limited car
+    assert driver.window.speed_tuple()[4] == 0.0  # no launch speed for a rate-limited car

@@ -13,12 +13,13 @@ simulation step. It is in one of two modes:
 **Re-planning.** At a fixed rate (``rate_hz``, 2-5 Hz) and whenever the current
 plan fails its safety check (run every control step with fresh predictions),
 the driver predicts the other vehicles (:mod:`rrtdrive.sim.prediction`), picks a
-cut-in point ahead of the lead car's predicted position, and plans from a
-*stitch point*: the pose on the current reference that the ego reaches once the
-planning budget has elapsed. The new reference is the current one up to the
-stitch point, then the plan, then the lane; so the controller sees a continuous
-reference and never waits on the planner (a plan that took the whole budget
-would take over exactly where this one does). A plan is accepted only when the
+cut-in point ahead of the lead car's predicted position, and plans (in a window of
+the road, :mod:`rrtdrive.sim.traffic_window`) from a *stitch point*: the pose on
+the current reference that the ego reaches once the planning budget has elapsed.
+The new reference is the current one up to the stitch point, then the plan, then
+the lane; so the controller sees a continuous reference and never waits on the
+planner (a plan that took the whole budget would take over exactly where this one
+does). A plan is accepted only when the
 whole stitched reference, timed by the controller's own speed profile from the
 ego's current speed, passes the space-time check up to the cut-in point and a
 little beyond, within the prediction horizon. In ``overtake`` mode a new plan
@@ -38,25 +39,15 @@ same way; the IDM law keeps room for it (``IDMConfig.pull_out_gap``).
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
 import time
-from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from rrtdrive.controllers import SpeedConfig, TrackingController, VehicleState
-from rrtdrive.maps import Map
-from rrtdrive.planning.base import cached_checker
-from rrtdrive.planning.spacetime import (
-    ArrivalTiming,
-    Prediction,
-    SpaceTimeProblem,
-    SpaceTimeRRTConnect,
-    traffic_conflicts,
-)
+from rrtdrive.planning.spacetime import ArrivalTiming, Prediction, traffic_conflicts
 from rrtdrive.sim.cut_in import CutInRule
 from rrtdrive.sim.follower import lead_gap
 from rrtdrive.sim.prediction import predict
@@ -69,8 +60,9 @@ from rrtdrive.sim.replanning import (
     lane_path,
     merge_path,
 )
+from rrtdrive.sim.traffic_window import WindowPlanner
 from rrtdrive.speed_profile import actuator_profile
-from rrtdrive.types import Budget, InputError, Path, PlanStatus, Pose
+from rrtdrive.types import Path, PlanStatus
 from rrtdrive.vehicle import footprint_corners
 
 __all__ = ["TrafficDriver"]
@@ -119,37 +111,11 @@ class TrafficDriver:
         self.controller = controller
         self.speed = speed
         self.config = config
-        self.rng = rng
-        smoothing: dict[str, Any] = {"max_rounds": 8}
-        steering = self._steering()
-        if steering is not None:
-            # Plans a rate-limited car can drive at the road's lane-change speed: the
-            # speed the lateral-acceleration cap allows on the tightest planned turn.
-            v_turn = min(speed.v_max, math.sqrt(speed.a_lat_max * config.turning_radius_m))
-            smoothing["max_sharpness"] = steering[0] * steering[1] / v_turn
-        options: dict[str, Any] = {"max_postprocess_attempts": 2}
-        user = dict(config.planner_options)
-        given = user.pop("smoothing", None)
-        if isinstance(given, Mapping):
-            smoothing.update(given)
-        options.update(user)
-        options["smoothing"] = smoothing if given is None or isinstance(given, Mapping) else given
-        self.planner = SpaceTimeRRTConnect(**options)
-        self.plan_vehicle = dataclasses.replace(
-            self.vehicle,
-            min_turning_radius=max(config.turning_radius_m, self.vehicle.min_turning_radius),
+        # The planner, its car and the road windows: built once, before driving.
+        self.window = WindowPlanner(
+            config, self.vehicle, speed, self._steering(), self.road_bounds, self.lane_y, rng
         )
-        # The static part of every plan window (the road between its edges) is built
-        # once here, like a map loaded before driving, not inside a planning cycle.
-        _, ymin, _, ymax = self.road_bounds
-        longest = config.max_plan_length_m + config.check_beyond_m + 45.0
-        for length in np.arange(20.0, longest, 20.0):
-            window = Map(
-                "traffic-window", (0.0, ymin, float(length), ymax), (),
-                Pose(5.0, self.lane_y, 0.0), Pose(float(length) - 5.0, self.lane_y, 0.0),
-                self.plan_vehicle,
-            )
-            cached_checker(window).component_labels  # noqa: B018 - warm the cache
+        self.planner = self.window.planner
         self.cut_in = CutInRule(
             config, self.vehicle, self.lead, self.lane_y, self.lane_width, self._x_end()
         )
@@ -171,12 +137,6 @@ class TrafficDriver:
         self.planning_wall_s = 0.0
 
     # ------------------------------------------------------------------ helpers
-
-    def _speed_tuple(self) -> tuple[float, float, float, float, float]:
-        c = self.speed
-        # A rate-limited car starts from its own speed, no launch speed (actuator_profile).
-        v_launch = c.v_launch if self._steering() is None else 0.0
-        return (c.v_max, c.accel, c.decel, c.a_lat_max, v_launch)
 
     def _steering(self) -> tuple[float, float] | None:
         """``(max_steer_rate, share)`` of the controller's actuator; ``None``: instant."""
@@ -245,7 +205,7 @@ class TrafficDriver:
         self._goal_s = math.inf
 
     def _x_end(self) -> float:
-        return self.road_bounds[2] - 1.0
+        return self.window.x_end
 
     # ------------------------------------------------------------------ public
 
@@ -423,7 +383,9 @@ class TrafficDriver:
         if goal_x is not None and not self.cut_in.gap_open(timing, float(start[0]), goal_x, pred):
             outcome, message = "no_gap", "the oncoming lane is taken beside the lead car"
         elif goal_x is not None:
-            plan, message, cand = self._plan(i0, i_stitch, goal_x, timing, pred, wall0)
+            plan, message, cand = self.window.plan(
+                samples, i0, i_stitch, goal_x, timing, pred, wall0
+            )
             plan_time = plan.wall_time_s if plan is not None else 0.0
             if plan is not None:
                 iters, nodes = plan.result.iterations, plan.result.nodes
@@ -529,72 +491,3 @@ class TrafficDriver:
         if not ok:
             return None, why
         return (path, check_end, goal_index, t_end), ""
-
-    def _plan(
-        self,
-        i0: int,
-        i_stitch: int,
-        goal_x: float,
-        timing: ArrivalTiming,
-        pred: Prediction,
-        wall0: float,
-    ) -> tuple[Any, str, tuple[Path, int, int] | None]:
-        """Plan from the stitch sample ``i_stitch`` to the cut-in point; the stitched candidate.
-
-        ``i0`` is the sample at the ego's projection: the candidate starts there.
-        """
-        cfg = self.config
-        samples = self.controller.projector.samples  # type: ignore[union-attr]
-        start = samples[i_stitch]
-        x_off = float(start[0]) - 5.0
-        length = math.ceil((goal_x - x_off + cfg.check_beyond_m + 5.0) / 20.0) * 20.0
-        _, ymin, _, ymax = self.road_bounds
-        goal = Pose(goal_x - x_off, self.lane_y, 0.0)
-        try:
-            window = Map(
-                "traffic-window", (0.0, ymin, length, ymax), (),
-                Pose(float(start[0]) - x_off, float(start[1]), float(start[2])), goal,
-                self.plan_vehicle,
-            )
-        except InputError as exc:
-            return None, f"no plan window: {exc}", None
-        local = pred.shifted(-x_off)
-        if len(local):
-            xr = local.x_range()
-            near = (xr[:, 1] >= -20.0) & (xr[:, 0] <= length + 20.0)
-            local = local.select(near)
-        problem = SpaceTimeProblem(
-            window, local, timing.shifted(-x_off), cfg.safety, self._speed_tuple(),
-            steering=self._steering(),
-        )
-        deadline = None
-        left = 1e6
-        if cfg.wall_limit:
-            # Tree growth may use what is left of the cycle minus a reserve for the
-            # post-processing; at the deadline every check fails, so that a long
-            # post-processing gives up too, leaving a little time for the final check.
-            spent = time.perf_counter() - wall0
-            left = max(cfg.cycle_budget_s * (1.0 - cfg.postprocess_reserve) - spent, 1e-3)
-            deadline = wall0 + 0.9 * cfg.cycle_budget_s
-        problem = dataclasses.replace(problem, deadline=deadline)
-        plan = self.planner.solve_spacetime(
-            problem, self.rng, Budget(max_iterations=cfg.max_iterations, max_time_s=left)
-        )
-        if not plan.success:
-            return plan, plan.result.message, None
-        local_path = plan.result.path.samples.copy()
-        local_path[:, 0] += x_off
-        # Stitch: current reference from the ego to the stitch pose, the plan, then the lane.
-        x_goal = float(local_path[-1, 0])
-        lane = lane_path(
-            x_goal, min(x_goal + cfg.lane_extension_m, self._x_end()), self.lane_y
-        ).samples
-        stitched = np.concatenate([samples[i0:i_stitch], local_path, lane[1:]])
-        keep = np.concatenate([[True], np.hypot(*np.diff(stitched[:, :2], axis=0).T) > 1e-9])
-        stitched = stitched[keep]
-        path = Path(stitched, plan.result.path.waypoints + np.array([x_off, 0.0]))
-        goal_index = (i_stitch - i0) + len(local_path) - 1
-        s = path.arc_length()
-        goal_index = min(goal_index, len(s) - 1)
-        check_end = int(np.searchsorted(s, s[goal_index] + cfg.check_beyond_m))
-        return plan, plan.result.message, (path, min(check_end, len(s) - 1), goal_index)
