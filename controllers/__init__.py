@@ -10,18 +10,13 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from rrtdrive.controllers.base import (
-    Controller,
-    PathProjector,
-    Projection,
-    TrackingController,
-    VehicleState,
-)
+from rrtdrive.controllers.base import PathProjector, Projection, TrackingController
 from rrtdrive.controllers.gears import GearSegment, gear_segments, mirror_path
 from rrtdrive.controllers.lqr import LQR
 from rrtdrive.controllers.pure_pursuit import PurePursuit
 from rrtdrive.controllers.speed import SpeedConfig, SpeedController, SpeedProfile
 from rrtdrive.controllers.stanley import Stanley
+from rrtdrive.controllers.state import Controller, VehicleState
 from rrtdrive.types import InputError, brief_repr
 
 __all__ = [

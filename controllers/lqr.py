@@ -7,14 +7,9 @@ import math
 
 import numpy as np
 
-from rrtdrive.controllers.base import (
-    APPROACH_ANGLE,
-    Projection,
-    TrackingController,
-    VehicleState,
-    checked_approach_angle,
-)
+from rrtdrive.controllers.base import Projection, TrackingController
 from rrtdrive.controllers.speed import SpeedConfig
+from rrtdrive.controllers.state import APPROACH_ANGLE, VehicleState, checked_approach_angle
 from rrtdrive.types import InputError, VehicleParams, require_finite, require_positive
 
 __all__ = ["LQR", "lateral_error_model", "design_gain"]

@@ -4,14 +4,9 @@ from __future__ import annotations
 
 import math
 
-from rrtdrive.controllers.base import (
-    APPROACH_ANGLE,
-    Projection,
-    TrackingController,
-    VehicleState,
-    checked_approach_angle,
-)
+from rrtdrive.controllers.base import Projection, TrackingController
 from rrtdrive.controllers.speed import SpeedConfig
+from rrtdrive.controllers.state import APPROACH_ANGLE, VehicleState, checked_approach_angle
 from rrtdrive.types import InputError, VehicleParams, require_finite, require_positive
 
 __all__ = ["PurePursuit"]

@@ -6,13 +6,9 @@ import math
 
 import numpy as np
 
-from rrtdrive.controllers.base import (
-    PathProjector,
-    Projection,
-    TrackingController,
-    VehicleState,
-)
+from rrtdrive.controllers.base import PathProjector, Projection, TrackingController
 from rrtdrive.controllers.speed import SpeedConfig
+from rrtdrive.controllers.state import VehicleState
 from rrtdrive.geometry import wrap_angle
 from rrtdrive.types import Path, VehicleParams, require_positive
 
