@@ -20,6 +20,7 @@ import numpy as np
 
 from rrtdrive.cli_args import flags_for, planner_option_flags
 from rrtdrive.controllers import CONTROLLERS, SpeedConfig, TrackingController, make_controller
+from rrtdrive.envs import is_registered_default, scenario_text
 from rrtdrive.envs.action import CommandLimits
 from rrtdrive.envs.reward import RewardWeights
 from rrtdrive.maps import Map
@@ -433,3 +434,33 @@ def _map_task(m: Map, seed: int, options: Mapping[str, Any]) -> Scenario:
     if not isinstance(reverse, bool):
         raise InputError(f"scenario_options.reverse: expected True or False, got {reverse!r}")
     return CustomTask.from_map(m, seed, reverse=reverse)
+
+
+def caller_options(
+    scenario: str | Map | None, config: DriveEnvConfig, options: dict[str, Any]
+) -> dict[str, Any]:
+    """The options that replace fields of a caller's ``config``.
+
+    ``gym.make`` merges an id's registered keyword arguments with the caller's;
+    the registered ones (marked, :func:`rrtdrive.envs.is_registered_default`) are
+    defaults for building a config, so they give way to the caller's whole config.
+
+    Raises
+    ------
+    InputError
+        When ``scenario`` differs from ``config.scenario`` (except ``Map-v0``'s
+        registered map, which gives way to a config driving another map).
+    """
+    if scenario is not None and scenario != config.scenario:
+        registered_map = is_registered_default(scenario) and scenario not in SCENARIOS
+        if registered_map and config.map is None:  # Map-v0's default, the user's scenario
+            raise InputError(
+                f"config.scenario: {scenario_text(config.scenario)} is a scenario, not a map: "
+                "Map-v0 takes a config for a map; give scenario= beside it, or use its own id"
+            )
+        if not (registered_map and config.map is not None):
+            raise InputError(
+                f"scenario: {scenario_text(scenario)} differs from config.scenario "
+                f"{scenario_text(config.scenario)}"
+            )
+    return {key: value for key, value in options.items() if not is_registered_default(value)}

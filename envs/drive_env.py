@@ -36,9 +36,9 @@ import numpy as np
 from gymnasium import spaces
 
 from rrtdrive.controllers import PathProjector
-from rrtdrive.envs import apply_registration, is_registered_default, plain_value, scenario_text
+from rrtdrive.envs import apply_registration, plain_value
 from rrtdrive.envs.action import ResidualMixer, action_command
-from rrtdrive.envs.config import DriveEnvConfig, _require_mapping
+from rrtdrive.envs.config import DriveEnvConfig, _require_mapping, caller_options
 from rrtdrive.envs.observation import OBS_CLIP, ObservationLayout, observation_names
 from rrtdrive.envs.reference_speed import Relaunch, following_cap, stop_line_speed
 from rrtdrive.envs.render import SceneRenderer, view_for
@@ -52,7 +52,7 @@ from rrtdrive.sim.episode import Episode, EpisodeStatus
 from rrtdrive.sim.loop import EndRule, EpisodeLoop
 from rrtdrive.sim.runner import EpisodeConfig
 from rrtdrive.sim.scenes import build_env
-from rrtdrive.sim.tasks import SCENARIOS, Reference
+from rrtdrive.sim.tasks import Reference
 from rrtdrive.sim.tasks.base import Task
 from rrtdrive.types import InputError, Path, brief_repr, require_int
 
@@ -61,36 +61,6 @@ __all__ = ["DriveEnv", "DriveEnvConfig", "RewardWeights", "observation_names", "
 
 
 _RESET_OPTIONS = ("episode_seed",)
-
-
-def _caller_options(
-    scenario: str | Map | None, config: DriveEnvConfig, options: dict[str, Any]
-) -> dict[str, Any]:
-    """The options that replace fields of a caller's ``config``.
-
-    ``gym.make`` merges an id's registered keyword arguments with the caller's;
-    the registered ones (marked, :func:`rrtdrive.envs.is_registered_default`) are
-    defaults for building a config, so they give way to the caller's whole config.
-
-    Raises
-    ------
-    InputError
-        When ``scenario`` differs from ``config.scenario`` (except ``Map-v0``'s
-        registered map, which gives way to a config driving another map).
-    """
-    if scenario is not None and scenario != config.scenario:
-        registered_map = is_registered_default(scenario) and scenario not in SCENARIOS
-        if registered_map and config.map is None:  # Map-v0's default, the user's scenario
-            raise InputError(
-                f"config.scenario: {scenario_text(config.scenario)} is a scenario, not a map: "
-                "Map-v0 takes a config for a map; give scenario= beside it, or use its own id"
-            )
-        if not (registered_map and config.map is not None):
-            raise InputError(
-                f"scenario: {scenario_text(scenario)} differs from config.scenario "
-                f"{scenario_text(config.scenario)}"
-            )
-    return {key: value for key, value in options.items() if not is_registered_default(value)}
 
 
 class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
@@ -184,7 +154,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             kind = type(config).__name__
             raise InputError(f"config: expected a DriveEnvConfig, got {kind} {brief_repr(config)}")
         else:
-            config = config.with_options(**_caller_options(scenario, config, options))
+            config = config.with_options(**caller_options(scenario, config, options))
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise InputError(
                 f"render_mode: {render_mode!r} is not supported; choose from "
