@@ -36,10 +36,14 @@ def test_a_budget_too_small_fails_the_plan_by_count(capsys):
     assert code == 1 and data["status"] == "plan_failed"
     assert "iteration budget" in data["message"] and "safety cap" not in data["message"]
     # The JSON names the budget that cut the plan short, beside its wall-clock cap.
-    assert (data["max_iterations"], data["plan_max_time_s"]) == (5, 5.0)
+    assert (data["max_iterations"], data["plan_max_time_s"]) == (5, 120.0)
     code, data = _json(capsys, "simulate", "parking_lot")
     assert code == 0 and data["success"]
-    assert (data["max_iterations"], data["plan_max_time_s"]) == (20000, 5.0)
+    # The default budget is plan's, the wall-clock cap too: the iterations decide alike.
+    code, plan = _json(capsys, "plan", "parking_lot")
+    assert (data["max_iterations"], data["plan_max_time_s"]) == (
+        plan["max_iterations"], plan["max_time_s"]
+    )
 
 
 def test_the_json_has_no_plan_budget_where_nothing_is_planned_or_the_clock_is_off(

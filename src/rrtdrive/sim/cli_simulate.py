@@ -42,7 +42,7 @@ from rrtdrive.cli_args import (
 from rrtdrive.json_safe import options_json
 from rrtdrive.sim.cli_targets import given_path, make_task, target_kind, with_simulate_hint
 from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MIN_SIM_FREQUENCY
-from rrtdrive.types import InputError
+from rrtdrive.types import Budget, InputError
 
 __all__ = ["add_parser", "run", "episode_json", "metrics_block", "HELP", "NO_WALL_LIMIT_S"]
 
@@ -51,7 +51,10 @@ CONTROLLER_NAMES = ("pure-pursuit", "stanley", "lqr")
 HELP = "plan and drive one closed-loop episode in highway-env"
 #: ``--deterministic``'s planning time budget: never reached, the iteration budget binds.
 NO_WALL_LIMIT_S = 1e6
-DEFAULT_PLAN_TIME_S = 5.0
+#: The plan's wall-clock safety cap, ``rrtdrive plan``'s: 5 s cut off plans the iterations
+#: would finish (the forward-only proof for a random lot start takes 1.5 s on one machine,
+#: so about 5 s on a 3-4x slower one), and the episode then hung on the machine's speed.
+DEFAULT_PLAN_TIME_S = Budget().max_time_s
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -317,7 +320,6 @@ def _run(args: argparse.Namespace) -> int:
         TASKS,
         make_scenario,
     )
-    from rrtdrive.types import Budget
 
     for name, default in (("reverse", False), ("reverse_in", False), ("start", None),
                           ("goal", None), ("resolution", None)):
