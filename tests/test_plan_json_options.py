@@ -103,3 +103,17 @@ def test_the_plan_json_defaults_name_the_default_budget_and_grid(tmp_path):
     assert doc["max_iterations"] == Budget().max_iterations
     assert doc["max_time_s"] == Budget().max_time_s
     assert doc["resolution_m"] == CheckerConfig().resolution
+
+
+def test_numpy_arrays_are_written_as_lists_with_their_non_finite_numbers_spelled():
+    """An array was written as its text ("[ 1. nan]"): a string where a list belongs."""
+    from rrtdrive.json_safe import json_safe
+
+    grid = np.array([[1.0, np.nan], [np.inf, -2.5]])
+    doc = _strict(json.dumps(json_safe({"rows": grid}), allow_nan=False))
+    assert doc == {"rows": [[1.0, None], [None, -2.5]]}
+    options = {"weights": np.array([0.5, np.inf]), "ids": np.arange(3)}
+    back = options_from_json(_strict(json.dumps(options_json(options), allow_nan=False)))
+    np.testing.assert_array_equal(back["weights"], options["weights"])
+    assert back["ids"] == [0, 1, 2] and all(type(i) is int for i in back["ids"])
+    assert json_safe(np.float32(0.25)) == 0.25 and json_safe(np.array(3.0)) == 3.0

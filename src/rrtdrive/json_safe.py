@@ -17,9 +17,13 @@ NON_FINITE = {"Infinity": math.inf, "-Infinity": -math.inf, "NaN": math.nan}
 def _plain(value: Any, non_finite: Callable[[float], Any], enums: bool) -> Any:
     """``value`` as plain JSON, the walk both writers share.
 
-    Mappings and sequences walked, numpy scalars as Python ones, a non-finite float as
-    ``non_finite`` gives it, enums by value when ``enums``.
+    Mappings, sequences and numpy arrays walked, numpy scalars as Python ones, a
+    non-finite float as ``non_finite`` gives it, enums by value when ``enums``.
     """
+    if getattr(value, "ndim", 0) and callable(getattr(value, "tolist", None)):
+        # A numpy array: item() refuses more than one element, and str() wrote the array
+        # as one string ("[ 1. nan]").
+        return _plain(value.tolist(), non_finite, enums)
     if isinstance(value, Mapping):
         return {str(k): _plain(v, non_finite, enums) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
@@ -42,12 +46,17 @@ def _spelled(value: float) -> str:
 
 
 def json_safe(value: Any) -> Any:
-    """``value`` with non-finite floats as ``None`` and numpy scalars as Python ones.
+    """``value`` with non-finite floats as ``None`` and numpy values as Python ones.
+
+    Numpy scalars become Python numbers, numpy arrays (nested) lists.
 
     Examples
     --------
     >>> json_safe({"a": float("nan"), "b": [1.5, float("inf")]})
     {'a': None, 'b': [1.5, None]}
+    >>> import numpy as np
+    >>> json_safe(np.array([[1.0, np.nan], [np.inf, 2.0]]))
+    [[1.0, None], [None, 2.0]]
     """
     return _plain(value, lambda _: None, enums=False)
 
