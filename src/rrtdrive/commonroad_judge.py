@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rrtdrive.geometry import wrap_angle
-from rrtdrive.types import InputError, VehicleParams
+from rrtdrive.types import InputError, VehicleParams, require_positive
 
 __all__ = ["CommonRoadVerdict", "commonroad_available", "judge_trajectory"]
 
@@ -158,7 +158,7 @@ def judge_trajectory(
     vehicle : VehicleParams, optional
         The car (default the paper's).
     steer_rate_limit : float
-        Steering-velocity limit of the judge (rad/s).
+        Steering-velocity limit of the judge (rad/s), a finite number > 0.
 
     Notes
     -----
@@ -169,7 +169,15 @@ def judge_trajectory(
     Returns
     -------
     CommonRoadVerdict
+
+    Raises
+    ------
+    InputError
+        For a ``steer_rate_limit`` that is no finite positive number (a negative or NaN
+        one made every trajectory, a straight line too, read as infeasible), arrays of
+        the wrong lengths, a number that is not finite, or times not equally spaced.
     """
+    require_positive("steer_rate_limit", steer_rate_limit)
     vehicle = vehicle or VehicleParams()
     initial_state_cls, input_state_cls, trajectory_cls, checker, *_ = _modules()
     states = np.asarray(states, dtype=float)
@@ -177,9 +185,19 @@ def judge_trajectory(
     accel = np.asarray(accel, dtype=float)
     if len(states) != len(steer) + 1 or len(accel) != len(steer) or len(t) != len(states):
         raise InputError("trajectory: need N + 1 times and states, N steering and N accelerations")
+    t = np.asarray(t, dtype=float)
+    if not all(np.isfinite(a).all() for a in (t, states, steer, accel)):
+        # A NaN spread into the distance driven and loosened every later tolerance.
+        raise InputError("trajectory: times, states, steering and accelerations must be finite")
     if len(steer) == 0:
         return CommonRoadVerdict(True, None, 0.0, steer_rate_limit, 0.0)
-    dt = float(np.mean(np.diff(t)))
+    steps = np.diff(t)
+    dt = float(np.mean(steps))
+    if not dt > 0.0 or np.abs(steps - dt).max() > 1e-6 * dt + 1e-12:
+        raise InputError(
+            f"trajectory: times must be equally spaced and increasing (steps {steps.min():.6g}"
+            f" to {steps.max():.6g} s); CommonRoad's model steps at one dt"
+        )
     rates = np.diff(np.concatenate(([0.0], steer))) / dt
     half = vehicle.wheelbase / 2.0
     centres = states[:, :2] + half * np.column_stack((np.cos(states[:, 2]), np.sin(states[:, 2])))

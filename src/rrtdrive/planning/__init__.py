@@ -99,9 +99,16 @@ def unknown_planner(field: str, name: object) -> InputError:
     >>> print(unknown_planner("--planner", "hybrid-astar"))  # doctest: +ELLIPSIS
     --planner: unknown planner 'hybrid-astar' (did you mean 'hybrid-a-star'?); choose from ...
     """
+    hint = ""
+    if isinstance(name, str) and name.startswith("ompl-") and name not in PLANNERS:
+        # The OMPL comparators register when the bench loads (planning knows no bench).
+        hint = (
+            "; the OMPL comparators (ompl-r2-*, ompl-rs-*) are registered by "
+            "'import rrtdrive.bench' (OMPL itself: pip install 'rrtdrive[ompl]')"
+        )
     return InputError(
         f"{field}: unknown planner {name!r}{did_you_mean(name, PLANNERS)}; "
-        f"choose from {', '.join(sorted(PLANNERS))}"
+        f"choose from {', '.join(sorted(PLANNERS))}{hint}"
     )
 
 
