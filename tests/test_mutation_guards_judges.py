@@ -485,7 +485,8 @@ def test_a_blocked_start_or_goal_is_named() -> None:
     """A start or goal pose inside an obstacle is ``invalid_start`` / ``invalid_goal``,
     found before the search (the docstring's promise), with no OMPL tree; one 5 cm from
     the wall (free by shapely, not by the covering discs OMPL checks) gets the same
-    statuses from OMPL's own answer.
+    statuses before the search too, saying why (OMPL searched such a goal to the end of
+    its budget).
 
     Catches: the statuses swapped, either end check skipped (left to OMPL), OMPL's
     "Invalid start" mapped to invalid_goal."""
@@ -504,9 +505,10 @@ def test_a_blocked_start_or_goal_is_named() -> None:
             q, np.random.default_rng(0), Budget(max_time_s=0.2)
         )
         assert res.status.value == want
-        if inside in (start, goal):
-            # Ended before the search, by our exact body test (not by OMPL's start check).
-            assert res.message.startswith(want.split("_")[1]) and res.nodes == 0
+        # Ended before the search, by our own tests (not by OMPL's start check).
+        assert res.message.startswith(want.split("_")[1]) and res.nodes == 0
+        if inside not in (start, goal):
+            assert "covering discs" in res.message
 
 
 @needs_ompl
@@ -936,3 +938,22 @@ def test_an_ompl_name_before_the_bench_is_loaded_says_how_to_register_it() -> No
     assert first.startswith("InputError planner: unknown planner 'ompl-rs-rrtconnect'")
     assert "'import rrtdrive.bench'" in first and "rrtdrive[ompl]" in first
     assert second == "OmplPlanner"
+
+
+@needs_ompl
+def test_an_r2_start_free_but_inside_the_edge_capsule_is_refused_before_the_search() -> None:
+    """A start whose body is clear of the wall (shapely) but whose rear axle is nearer than
+    the R² edge capsule's radius is no valid OMPL state: invalid_start at once, saying so."""
+    import rrtdrive.bench.ompl_planners  # noqa: F401  (registers the OMPL rows)
+    from rrtdrive.planning import PlanningProblem, make_planner
+
+    m = _wall_map()
+    base = _problem(m)
+    gap = 0.5 * (m.vehicle.width / 2.0 + base.checker.edge_radius)  # between the two
+    start = Pose(29.9 - gap, 15.0, math.pi / 2.0)
+    assert _body_free(m, start.as_tuple())
+    assert base.checker.clearance(start.x, start.y) < base.checker.edge_radius
+    q = PlanningProblem(m, base.checker, start, m.goal, m.vehicle)
+    res = make_planner("ompl-r2-rrtconnect").solve(q, np.random.default_rng(0), Budget())
+    assert res.status.value == "invalid_start" and res.nodes == 0
+    assert "edge capsule" in res.message

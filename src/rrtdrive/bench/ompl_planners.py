@@ -51,7 +51,7 @@ from rrtdrive.planning.base import (
     failure,
     polyline_path,
 )
-from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus
+from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Pose
 
 __all__ = [
     "OmplPlanner",
@@ -234,6 +234,19 @@ class OmplPlanner:
                 self.name, PlanStatus.INVALID_GOAL, watch, "goal: the car's body collides there"
             )
         r2 = self.space == "r2"
+        for pose, status, label in (
+            (problem.start, PlanStatus.INVALID_START, "start"),
+            (problem.goal, PlanStatus.INVALID_GOAL, "goal"),
+        ):
+            # Free, yet no valid OMPL state (its conservative test, see simple_setup): said
+            # now, where OMPL searched a goal like that to the end of its budget.
+            if not _ompl_valid(checker, pose, r2):
+                test = "the rear axle's edge capsule" if r2 else "the body's covering discs"
+                return failure(
+                    self.name, status, watch,
+                    f"{label}: free, but too near an obstacle for the OMPL comparator, whose "
+                    f"states must clear {test} (a conservative test; move it a little off)",
+                )
         ss, si = simple_setup(problem, self.space)
         ou.RNG.setSeed(int(rng.integers(1, 2**31 - 1)))  # before the planner is built
         planner = getattr(og, ALGORITHMS[self.algorithm])(si)
@@ -280,6 +293,13 @@ class OmplPlanner:
             message=f"OMPL {ALGORITHMS[self.algorithm]} in {self.space}: {text}",
             stats=stats,
         )
+
+
+def _ompl_valid(checker: Any, pose: Pose, r2: bool) -> bool:
+    """Whether ``pose`` is a valid state for the OMPL comparators (as in simple_setup)."""
+    if r2:
+        return bool(checker.clearance(pose.x, pose.y) >= checker.edge_radius)
+    return bool(checker.pose_free_fast(pose.x, pose.y, pose.yaw))
 
 
 def _with_nodes(result: PlanResult, nodes: int) -> PlanResult:
