@@ -269,3 +269,36 @@ def test_the_read_out_cte_is_the_evaluators_on_a_path_with_cusps(monkeypatch):
                                                        if (len(states) - 1) % stride else [])]
     assert len(ep.path.cusps) >= 1 and np.abs(want).max() > 0.05
     np.testing.assert_allclose(shown, want, atol=0.0011)
+
+
+def test_abort_returns_although_the_queue_lock_is_held_and_kills_the_encoder(tmp_path):
+    """An interrupt inside append() can leave the frame queue's lock held in the caller's
+    thread; abort() put a stop mark on that queue and joined the writer thread, so the
+    process hung (a SIGTERM during a video in CI). Now it kills ffmpeg and returns."""
+    import threading
+
+    from rrtdrive.sim.mp4 import Mp4Writer, _encoder_process
+
+    out = tmp_path / "cut.mp4"
+    w = Mp4Writer(out, fps=10)
+    for _ in range(3):
+        w.append(np.full((32, 32, 3), 60, np.uint8))
+    while w._queue.qsize():  # the writer thread has handed them to ffmpeg
+        threading.Event().wait(0.01)
+    process = _encoder_process(w._writer)
+    assert process is not None and process.poll() is None
+    assert w._queue.mutex.acquire(timeout=5)  # as a Terminated raised inside put() leaves it
+    try:
+        done = threading.Thread(target=w.abort, daemon=True)
+        done.start()
+        done.join(timeout=30)  # a hang detector, not a speed limit
+        assert not done.is_alive(), "abort() blocked on the frame queue"
+    finally:
+        w._queue.mutex.release()
+    assert process.poll() is not None  # ffmpeg killed, not left encoding
+    w._thread.join(timeout=30)
+    assert not w._thread.is_alive()  # the writer thread ended by itself
+    assert list(tmp_path.iterdir()) == []
+    w.abort()  # idempotent
+    with pytest.raises(RuntimeError, match="aborted"):
+        w.close()

@@ -39,6 +39,8 @@ from rrtdrive.types import InputError
 __all__ = ["Mp4Writer"]
 
 _STOP = object()
+#: How often (s) an idle writer thread looks whether the writer was aborted.
+_POLL_S = 0.2
 
 
 def _encoder_process(writer: Any) -> subprocess.Popen[bytes] | None:
@@ -124,6 +126,7 @@ class Mp4Writer:
         self._queue: queue.Queue[Any] = queue.Queue(maxsize=queue_size)
         self._error: BaseException | None = None
         self._done = False
+        self._aborted = False
         self._published = False
         self._thread = threading.Thread(target=self._run, name="rrtdrive-mp4", daemon=True)
         self._thread.start()
@@ -131,14 +134,24 @@ class Mp4Writer:
     def _run(self) -> None:
         # Keep taking frames after a failure so that a blocked append() wakes up.
         while True:
-            item = self._queue.get()
+            try:
+                item = self._queue.get(timeout=_POLL_S)
+            except queue.Empty:
+                if self._aborted:
+                    break
+                continue
             if item is _STOP:
                 return
-            if self._error is None:
+            if self._error is None and not self._aborted:
                 try:
                     self._writer.append_data(item)
                 except BaseException as exc:  # re-raised in the caller's thread
                     self._error = exc
+        # Aborted: what is left of the encoder is closed here, off the caller's thread.
+        try:
+            self._writer.close()
+        except Exception:  # ffmpeg was killed: its pipe may be broken
+            pass
 
     def append(self, frame: np.ndarray) -> None:
         """Queue one ``H x W x 3`` uint8 frame; it is encoded later, so do not modify it."""
@@ -182,11 +195,20 @@ class Mp4Writer:
         return self.target
 
     def abort(self) -> None:
-        """Stop without publishing: the temporary file is removed (idempotent)."""
+        """Stop without publishing: ffmpeg is killed, the temporary file removed (idempotent).
+
+        Nothing here waits on the writer thread or its queue: an interrupt (Ctrl-C,
+        SIGTERM) raised while this thread was inside ``append`` may have left the queue's
+        lock held, and joining the thread then hung the process (a SIGTERM during a video,
+        once in CI). The thread sees the flag and ends by itself.
+        """
+        self._done = True
+        self._aborted = True
         try:
-            if not self._done:
-                self._stop()
-            self._writer.close()
+            process = _encoder_process(self._writer)
+            if process is not None and process.poll() is None:
+                process.kill()
+                process.wait()
         finally:
             self._tmp.unlink(missing_ok=True)
 
