@@ -366,14 +366,6 @@ class GrowingTree:
         """
         return np.flatnonzero(self.sq_dists(point) <= radius * radius)
 
-    def parent_positions(self) -> np.ndarray:
-        """Each node's parent position (the root's virtual parent, or NaN), shape ``(size, 2)``."""
-        par = self.parents[: self.size]
-        out = self.nodes[np.maximum(par, 0)].copy()
-        root_parent = self.virtual_parent if self.virtual_parent is not None else (np.nan, np.nan)
-        out[par < 0] = root_parent
-        return out
-
     def branch(self, i: int) -> np.ndarray:
         """Positions from node ``i`` back to the root, ``(K, 2)``.
 
@@ -405,11 +397,6 @@ def step_towards(a: np.ndarray, b: np.ndarray, step: float) -> tuple[np.ndarray,
     if dist <= step:
         return b.copy(), True
     return a + d * (step / dist), False
-
-
-def sample_point(rng: np.random.Generator, bounds: tuple[float, float, float, float]) -> np.ndarray:
-    """A uniform point in the bounds."""
-    return rng.uniform((bounds[0], bounds[1]), (bounds[2], bounds[3]))
 
 
 def _endpoint_fault(problem: PlanningProblem, pose: Pose, label: str) -> str:

@@ -21,7 +21,7 @@ class SampleSource:
     grid cells, so instead of rejecting draws this picks a uniform random cell
     among the accepted ones and a uniform point inside it: the same distribution
     as rejection sampling, without the wasted draws. Without ``reject``, samples
-    are uniform in the bounds, as :func:`~rrtdrive.planning.base.sample_point`.
+    are uniform in the bounds.
     Numbers are drawn from ``rng`` in batches, so results depend only on the seed.
 
     Parameters
