@@ -94,3 +94,21 @@ def test_ctrl_c_while_the_subcommand_loads_is_exit_130_without_traceback(
     assert cli.main(["plan", "parking_lot"]) == 130
     assert capsys.readouterr().err == "rrtdrive: interrupted\n"
 
+
+
+@pytest.mark.parametrize("command", ["plan", "verify"])
+def test_files_asked_for_are_written_when_the_reader_of_stdout_has_gone(tmp_path, command):
+    """`rrtdrive verify PLAN --json v.json --plot v.png | head -1` wrote neither file: the
+    printing ended at the closed pipe before the files were written (plan wrote them
+    first already; a new user's find)."""
+    plan = tmp_path / "plan.json"
+    done = subprocess.run([sys.executable, "-m", "rrtdrive", "plan", "overtake", "--json",
+                           str(plan)], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    target = "overtake" if command == "plan" else str(plan)
+    proc = _rrtdrive(command, target, "--json", "out.json", "--plot", "out.png", cwd=tmp_path)
+    proc.stdout.close()  # the reader leaves before a line is printed
+    proc.communicate(timeout=120)
+    assert proc.returncode != 2  # a broken pipe is no bad input
+    assert json.loads((tmp_path / "out.json").read_text())["length_m"] > 80.0
+    assert (tmp_path / "out.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

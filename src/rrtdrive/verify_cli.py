@@ -284,6 +284,20 @@ def run(args: argparse.Namespace) -> int:
     check = verify_path(m, path, max_sharpness=bound, clearance=clearance)
     with np.errstate(all="ignore"):  # a row at 1e308 m: the length is inf, quietly
         length = path.length if rows else 0.0
+    doc = {"map": m.name, "rows": len(path.samples), "kappa_given": kappa_given,
+           "length_m": round(length, 6),
+           **bounds, **dataclasses.asdict(check), "failed": list(check.failed)}
+    # Strict JSON: a non-finite number (a row far off the map) is null, not Infinity.
+    text = json.dumps(json_safe(doc), allow_nan=False) + "\n"
+    # The files first: a reader of stdout that goes away (| head) ends the printing,
+    # and the files asked for were then never written.
+    if plot:
+        from rrtdrive.plotting import plot_check, save_figure
+
+        with writing("--plot", plot):
+            save_figure(plot_check(m, path, check, label), plot)
+    if args.json and args.json != "-":
+        write_output(args.json, text)
     if rows < 2:
         status = data.get("status", "unknown")
         what = "no path" if rows == 0 else "a path of one row (a path needs two)"
@@ -295,15 +309,6 @@ def run(args: argparse.Namespace) -> int:
     if check.failed == ("sharpness_ok",):
         print("  (only the sharpness fails: paths of --paper-smoothing jump in curvature by "
               "design; --no-sharpness checks the rest)", file=out)
-    if args.json:
-        doc = {"map": m.name, "rows": len(path.samples), "kappa_given": kappa_given,
-               "length_m": round(length, 6),
-               **bounds, **dataclasses.asdict(check), "failed": list(check.failed)}
-        # Strict JSON: a non-finite number (a row far off the map) is null, not Infinity.
-        write_output(args.json, json.dumps(json_safe(doc), allow_nan=False) + "\n")
-    if plot:
-        from rrtdrive.plotting import plot_check, save_figure
-
-        with writing("--plot", plot):
-            save_figure(plot_check(m, path, check, label), plot)
+    if args.json == "-":
+        write_output(args.json, text)
     return EXIT_OK if check.ok else EXIT_FAILED
