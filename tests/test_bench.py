@@ -1004,3 +1004,25 @@ def test_local_workers_are_capped_per_core_with_a_note(monkeypatch):
     workers, note = core.local_workers(200, 1000)
     assert workers == 8 and note is not None
     assert note.startswith("--workers 200 capped at 8")
+
+
+@pytest.mark.parametrize("flag", ["--maps", "--scenarios"])
+def test_a_map_too_big_for_any_grid_is_refused_before_any_run(tmp_path, capsys, flag):
+    """A 20 km map was a crash in every run (retried, an error row each, exit 1), where a
+    start in collision was refused at once: bench has no --resolution, so say it now."""
+    from rrtdrive.collision import CheckerConfig
+    from rrtdrive.collision.grid import grid_resolution
+    from rrtdrive.maps import Map, save_map
+    from rrtdrive.types import Pose
+
+    huge = Map("huge", (0.0, 0.0, 20000.0, 20000.0), (), Pose(50.0, 50.0, 0.0),
+               Pose(150.0, 150.0, 1.57))
+    with pytest.raises(InputError, match="^bounds"):  # the grid's own verdict
+        grid_resolution(huge.bounds, CheckerConfig())
+    path = tmp_path / "huge.json"
+    save_map(huge, str(path))
+    out = tmp_path / "out"
+    assert main(["bench", flag, str(path), "--seeds", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"rrtdrive bench: error: {flag}: '{path}': bounds: 20000 x 20000 m")
+    assert "\n" not in err and not out.exists()

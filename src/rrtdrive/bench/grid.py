@@ -129,6 +129,18 @@ def map_digest(spec: str, m: Map | None = None) -> tuple[str, str | None]:
     return hashlib.sha256(text.encode()).hexdigest()[:16], content
 
 
+def _check_grid(m: Map) -> None:
+    """Refuse, once before any run, a map too big for any collision grid bench would use.
+
+    Bench plans on the default grid (it has no ``--resolution``): such a map failed in
+    every run, each retried as a crash and kept as an error row.
+    """
+    from rrtdrive.collision import CheckerConfig
+    from rrtdrive.collision.grid import grid_resolution
+
+    grid_resolution(m.bounds, CheckerConfig())
+
+
 def ompl_available() -> bool:
     """True when the optional ``ompl`` package can be imported."""
     return importlib.util.find_spec("ompl") is not None
@@ -283,7 +295,11 @@ class BenchConfig:
         for m in self.maps:
             if m not in digests or m not in contents:
                 try:
-                    digests[m], contents[m] = map_digest(m)
+                    from rrtdrive.maps import resolve_map
+
+                    resolved = resolve_map(m)
+                    _check_grid(resolved)
+                    digests[m], contents[m] = map_digest(m, resolved)
                 except InputError as exc:
                     raise InputError(f"maps: {m!r}: {exc}") from None
         # The scenarios that are maps, driven from their start to their goal.
@@ -297,6 +313,7 @@ class BenchConfig:
                     # The task every episode of it builds, checked once here: its bad input
                     # (a goal that is the start) is one exit-2 line, not an error per run.
                     CustomTask.from_map(driven)
+                    _check_grid(driven)
                 except InputError as exc:
                     raise InputError(f"scenarios: {s!r}: {exc}") from None
                 digests[s], contents[s] = map_digest(s, driven)
