@@ -84,3 +84,23 @@ def test_a_bad_budget_is_one_error_naming_the_flag(capsys, value):
     assert stop.value.code == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--max-iterations" in err and "Traceback" not in err
+
+
+def test_a_big_map_says_its_set_up_and_the_json_reports_it_apart(capsys, tmp_path):
+    """A map of more than 4 M grid cells set up for seconds without a word in simulate
+    (plan said it), and its JSON had no setup_time_s (a new user's find)."""
+    from rrtdrive.maps import Map, save_map
+    from rrtdrive.types import Pose
+
+    big = Map("big", (0.0, 0.0, 210.0, 210.0), (), Pose(20.0, 20.0, 0.0), Pose(32.0, 20.0, 0.0))
+    path = tmp_path / "big.json"
+    save_map(big, str(path))
+    code = main(["simulate", str(path), "--json", "-"])
+    out, err = capsys.readouterr()
+    data = json.loads(out)
+    assert code == 0 and data["success"]
+    assert "rrtdrive simulate: setting up a 210 x 210 m map" in err
+    assert data["setup_time_s"] > 0.0 and data["planning_time_s"] >= 0.0
+    code = main(["simulate", "parking_lot", "--json", "-"])  # under 4 M cells: no line
+    out, err = capsys.readouterr()
+    assert "setting up" not in err and json.loads(out)["setup_time_s"] >= 0.0

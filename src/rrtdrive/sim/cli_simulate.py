@@ -454,6 +454,14 @@ def _run(args: argparse.Namespace) -> int:
         episode = stock.episode
     else:
         scenario = make_task(args, target, oncoming, traffic_opts, make_scenario, path, made_on)
+        if path is None:
+            from rrtdrive.collision import CheckerConfig
+            from rrtdrive.collision.grid import setup_notice
+
+            grid = scenario.checker_config or CheckerConfig()
+            if (notice := setup_notice(scenario.map.bounds, grid)) is not None:
+                # As plan says it: seconds of silence else (a 20 km map at 2.83 m: 13-20 s).
+                print(f"rrtdrive simulate: {notice}", file=sys.stderr, flush=True)
         if path is None and scenario.reverse and not args.reverse and not reverses(args.planner):
             # u-turn, parallel-parking, parking --reverse-in plan with gear changes unasked.
             asked = f"the {args.scenario} scenario's gear changes take"
@@ -478,6 +486,8 @@ def _run(args: argparse.Namespace) -> int:
         "target": target,
         "reverse": bool(episode.scenario.reverse),
         "planner_options": options_json(options),  # what the plan was made with ({}: defaults)
+        # Per-map set-up (distance field, grids), never planning time (null: no plan ahead).
+        "setup_time_s": None if episode.plan is None else round(episode.plan.setup_time_s, 6),
         # The plan's budget, so a failed plan names what cut it short (null: no plan ahead).
         "max_iterations": None if plans_nothing else config.budget.max_iterations,
         "plan_max_time_s": None if plans_nothing or deterministic else config.budget.max_time_s,
