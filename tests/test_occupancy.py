@@ -292,3 +292,23 @@ def test_import_despeckle_clears_a_scan_and_keeps_a_speck_on_the_wall(tmp_path, 
         kept[r, c] = False
     assert union.area == pytest.approx(kept.sum() * 0.25)
     assert union.contains(shapely.Point(59.5 * 0.5, (60 - 19 - 0.5) * 0.5))  # the corner speck
+
+
+def test_a_transparent_background_is_named_when_the_start_lands_in_it(tmp_path, capsys):
+    """matplotlib's transparent=True: white with alpha 0 reads as unknown (map_server's
+    trinary mean takes in the alpha), the whole image became one obstacle, and the only
+    word was "--start: ... overlaps obstacle 0" (a new user's find)."""
+    rgba = np.zeros((100, 200, 4), np.uint8)
+    rgba[..., :3] = 255  # a white, fully transparent background
+    rgba[40:60, 90:110] = (0, 0, 0, 255)  # one opaque black block
+    png = tmp_path / "mpl.png"
+    iio.imwrite(png, rgba)
+    argv = ["maps", "--import", str(png), "--resolution", "0.1", "--start", "3,3,0",
+            "--goal", "14,7,0", "--out", str(tmp_path / "m.json")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("rrtdrive maps: error: --start: ") and err.count("\n") == 1
+    # All but the 20 x 20 block of 100 x 200 cells.
+    assert "98% of the image's cells read as unknown" in err and "--unknown-free" in err
+    assert main([*argv, "--unknown-free"]) == 0  # the block alone is an obstacle then
+    assert len(load_map(str(tmp_path / "m.json")).obstacles) == 1

@@ -105,8 +105,20 @@ def _cmd_import(args: argparse.Namespace) -> int:
     if args.despeckle:
         grid, groups, cells = despeckle(grid, args.despeckle)
     name = args.name if args.name is not None else pathlib.Path(source).stem
-    with flags_for({"start": "--start", "goal": "--goal", "name": "--name"}):
-        m = map_from_image(grid, name, start, goal)
+    try:
+        with flags_for({"start": "--start", "goal": "--goal", "name": "--name"}):
+            m = map_from_image(grid, name, start, goal)
+    except InputError as exc:
+        if grid.unknown and not args.unknown_free and str(exc).startswith(("--start", "--goal")):
+            # A transparent background (matplotlib's transparent=True) reads as unknown:
+            # the whole image became one obstacle and the pose "overlaps" it, unexplained.
+            share = grid.unknown / grid.occupied.size
+            raise InputError(
+                f"{exc} ({share:.0%} of the image's cells read as unknown, between the "
+                "free and occupied thresholds, and count as occupied: a grey or transparent "
+                "background reads so; --unknown-free reads them as free)"
+            ) from None
+        raise
     with writing("--out", args.out):
         save_map(m, args.out)
     rows, cols = grid.occupied.shape
