@@ -13,6 +13,7 @@ from collections.abc import Callable
 import numpy as np
 
 from rrtdrive.maps import Map
+from rrtdrive.planning.diagnosis import DiagnosisKind
 from rrtdrive.sim.tasks import Reference
 from rrtdrive.sim.tasks.base import Task
 from rrtdrive.types import PlanStatus
@@ -73,7 +74,14 @@ def start_drawn_episode(
     assert last is not None  # the first draw is always planned
     seed, task, ref, proven = last
     queries = f"{len(failures)} quer{'y' if len(failures) == 1 else 'ies'}"
-    hint = "" if task.reverse or proven else (
+    # No gear change opens a wall: the goal walled off (proven before any search, or so
+    # diagnosed). A forward-only search's proof leaves reversing open, so it keeps the hint.
+    plan = ref.plan
+    walled = plan is not None and (
+        (proven and plan.iterations == 0)
+        or (plan.diagnosis is not None and plan.diagnosis.kind is DiagnosisKind.WALLED_OFF)
+    )
+    hint = "" if task.reverse or walled else (
         "; the path may not change gear: scenario_options={'reverse': True} allows it"
     )
     raise RuntimeError(

@@ -35,7 +35,7 @@ def _pocket_map() -> Map:
 
 def test_a_start_in_a_pocket_leads_with_the_proof_about_the_start() -> None:
     res = _default(_pocket_map())
-    assert res.status is PlanStatus.NO_PATH_IN_BUDGET
+    assert res.status is PlanStatus.PROVEN_UNREACHABLE  # as the lead says (session 44)
     lead, _, tree_part = res.message.partition("; the RRT-Connect stages before it: ")
     assert lead.startswith("no path: Hybrid A* (forward only) proved none at "), res.message
     assert "the search from the start ran out of states" in lead

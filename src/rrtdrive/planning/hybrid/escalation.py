@@ -150,7 +150,12 @@ def escalate(
     if answer.path is None:
         scope = proof_scope(answer.outcome, answer.clearance)
         message = f"{failed.message}; Hybrid A* ({gear}) found none either: {answer.message}{scope}"
+        status = failed.status
         if is_proof(answer.outcome):
+            # The status says what the message leads with, as hybrid-a-star alone says it
+            # (the tree stage's postprocess_failed read as a counted failure; a new user's
+            # find): scripts and bench tables read the status.
+            status = PlanStatus.PROVEN_UNREACHABLE
             # A proof (every way on from the start, or in to the goal, explored) says
             # more than the tree stage's counted failure: it leads. A new user's start
             # nosed into parked cars read the tree stage's "the goal is boxed in along its
@@ -164,6 +169,7 @@ def escalate(
             )
         return dataclasses.replace(
             failed,
+            status=status,
             message=message,
             stats=stats,
             iterations=used,
