@@ -67,7 +67,8 @@ def test_start_facing_a_wall_needs_reverse_with_the_gap_shapely_measures():
     assert found.numbers["straight_gap_m"] == pytest.approx(gap, abs=2e-3)
     assert found.numbers["straight_gap_m"] <= gap  # a lower bound
     assert found.numbers["obstacle"] == 0
-    assert "obstacle 0 0.40 m ahead of its nose" in found.message
+    cx, cy = m.obstacles[0].center  # named with its centre, as the map file gives it
+    assert f"obstacle 0 at ({cx:.1f}, {cy:.1f}) 0.40 m ahead of its nose" in found.message
     assert "can only be left in reverse (try --reverse)" in found.message
 
 
@@ -162,7 +163,8 @@ def test_tight_clearance_names_the_obstacle_and_the_edge_tests_keep():
     assert found.numbers["obstacle"] == 1
     assert found.numbers["keep_m"] == pytest.approx(edge_keep(problem(m).checker))
     assert found.message.startswith(
-        "the goal's body is 0.08 m from obstacle 1; this planner's straight tree edges keep"
+        f"the goal's body is 0.08 m from obstacle 1 at ({side.center[0]:.1f}, "
+        f"{side.center[1]:.1f}); this planner's straight tree edges keep"
     )
 
 

@@ -79,7 +79,10 @@ def test_a_body_overlapping_two_obstacles_names_the_first_of_them() -> None:
     found = diagnose(PlanningProblem(m, p.checker, m.start, goal, m.vehicle))
     assert found.kind is DiagnosisKind.BODY_COLLIDES
     assert found.numbers["obstacle"] == hits[0]
-    assert found.message == "the goal's body at (30.0, 10.0) overlaps obstacle 1"
+    cx, cy = obstacles[1].center
+    assert found.message == (
+        f"the goal's body at (30.0, 10.0) overlaps obstacle 1 at ({cx:.1f}, {cy:.1f})"
+    )
 
 
 def test_a_body_overlapping_obstacle_0_names_it_not_the_bounds() -> None:
@@ -97,7 +100,10 @@ def test_a_body_overlapping_obstacle_0_names_it_not_the_bounds() -> None:
     found = diagnose(PlanningProblem(m, p.checker, start, m.goal, m.vehicle))
     assert found.kind is DiagnosisKind.BODY_COLLIDES
     assert found.numbers["obstacle"] == 0
-    assert found.message == "the start's body at (20.0, 10.0) overlaps obstacle 0"
+    cx, cy = wall.center
+    assert found.message == (
+        f"the start's body at (20.0, 10.0) overlaps obstacle 0 at ({cx:.1f}, {cy:.1f})"
+    )
 
 
 # ---------------------------------------------------------------------- room at the ends
@@ -451,7 +457,10 @@ def test_needs_reverse_names_the_wall_that_stops_the_start() -> None:
     hit = [i for i, o in enumerate(m.obstacles) if past.intersects(o.polygon())]
     assert hit == [1]
     assert found.numbers["obstacle"] == 1
-    assert "the start has obstacle 1 0.40 m ahead of its nose" in found.message
+    cx, cy = wall.center
+    assert f"the start has obstacle 1 at ({cx:.1f}, {cy:.1f}) 0.40 m ahead of its nose" in (
+        found.message
+    )
 
 
 def _pocket_ahead() -> Map:
@@ -545,4 +554,5 @@ def test_both_ends_at_fault_the_start_is_named_first() -> None:
     m = Map("blocks", (0.0, 0.0, 60.0, 20.0), beside, start, goal)
     found = diagnose(_problem(m))
     assert found is not None and found.kind is DiagnosisKind.TIGHT_CLEARANCE, found
-    assert found.message.startswith("the start's body is 0.08 m from obstacle 0")
+    cx, cy = beside[0].center
+    assert found.message.startswith(f"the start's body is 0.08 m from obstacle 0 at ({cx:.1f}, ")

@@ -126,9 +126,9 @@ def diagnose(
     >>> m = Map("wall", (0.0, 0.0, 40.0, 20.0), (wall,), Pose(10.0, 10.0, 0.0),
     ...         Pose(6.0, 10.0, math.pi))
     >>> print(diagnose(PlanningProblem.from_map(m)).message)  # doctest: +NORMALIZE_WHITESPACE
-    the start has obstacle 0 0.40 m ahead of its nose: on any steady steering the car
-    drives at most 0.40 m forward from it, less than the car length (4.30 m) the smallest
-    manoeuvre needs; it can only be left in reverse (try --reverse)
+    the start has obstacle 0 at (14.3, 10.0) 0.40 m ahead of its nose: on any steady
+    steering the car drives at most 0.40 m forward from it, less than the car length
+    (4.30 m) the smallest manoeuvre needs; it can only be left in reverse (try --reverse)
     """
     checker = problem.checker
     if not isinstance(checker, CollisionChecker):

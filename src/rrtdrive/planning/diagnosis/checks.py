@@ -67,7 +67,7 @@ def body_collides(m: Map, checker: CollisionChecker, pose: Pose, label: str) -> 
     if checker.pose_free(pose.as_tuple()):
         return None
     index = first_hit(checker, footprint_polygon(pose.as_tuple(), m.vehicle))
-    what = obstacle_name(index) if index >= 0 else "the bounds (it leaves the map)"
+    what = obstacle_name(index, m.obstacles) if index >= 0 else "the bounds (it leaves the map)"
     return Diagnosis(
         DiagnosisKind.BODY_COLLIDES,
         f"the {label}'s body at ({pose.x:.1f}, {pose.y:.1f}) overlaps {what}",
@@ -142,7 +142,8 @@ def room_at_ends(
             )
         return Diagnosis(
             DiagnosisKind.NEEDS_REVERSE,
-            f"the {label} has {obstacle_name(blocker)} {where}: on any steady steering "
+            f"the {label} has {obstacle_name(blocker, checker.obstacles)} {where}: on any "
+            "steady steering "
             f"{room}, {least}; {only}{tip}",
             numbers,
         )
@@ -191,7 +192,7 @@ def _pocket(
     words = ""
     if blocker is not None:
         numbers["obstacle"] = blocker
-        words = f" ({obstacle_name(blocker)} {straight:.2f} m {beyond})"
+        words = f" ({obstacle_name(blocker, checker.obstacles)} {straight:.2f} m {beyond})"
     return run, numbers, words
 
 
@@ -271,7 +272,8 @@ def tight_clearance(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) 
         index, gap = nearest_obstacle(m, footprint_polygon(pose.as_tuple(), m.vehicle), checker)
         return Diagnosis(
             DiagnosisKind.TIGHT_CLEARANCE,
-            f"the {label}'s body is {gap:.2f} m from {obstacle_name(index)}; this planner's "
+            f"the {label}'s body is {gap:.2f} m from {obstacle_name(index, m.obstacles)}; "
+            "this planner's "
             f"straight tree edges keep {side:.2f} m beside the body and {ends:.2f} m beyond "
             f"{bumper}, so none {verb} it (try --planner hybrid-a-star, or the default "
             f"planner, whose Hybrid A* stage tests the body exactly)",

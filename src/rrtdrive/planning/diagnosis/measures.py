@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -11,7 +12,7 @@ import numpy as np
 import shapely
 
 from rrtdrive.collision import CollisionChecker
-from rrtdrive.maps import Map
+from rrtdrive.maps import Map, Obstacle
 from rrtdrive.types import Pose, VehicleParams
 
 __all__ = [
@@ -331,9 +332,25 @@ def body_centre(pose: Pose, vehicle: VehicleParams) -> tuple[float, float]:
     return (pose.x + off * math.cos(pose.yaw), pose.y + off * math.sin(pose.yaw))
 
 
-def obstacle_name(index: int) -> str:
-    """``"obstacle i"``, or ``"the map's edge"`` for index -1, for messages."""
-    return "the map's edge" if index < 0 else f"obstacle {index}"
+def obstacle_name(index: int, obstacles: Sequence[Obstacle] = ()) -> str:
+    """``"obstacle i at (x, y)"``, or ``"the map's edge"`` for index -1, for messages.
+
+    The centre is given when ``obstacles`` has it: on an imported map of thousands of
+    rectangles an index alone told the user nothing (a new user's find).
+
+    Examples
+    --------
+    >>> obstacle_name(1, (Obstacle((2.0, 3.0), (1.0, 1.0)), Obstacle((10.26, -4.0), (2.0, 1.0))))
+    'obstacle 1 at (10.3, -4.0)'
+    >>> obstacle_name(-1), obstacle_name(3)
+    ("the map's edge", 'obstacle 3')
+    """
+    if index < 0:
+        return "the map's edge"
+    if index < len(obstacles):
+        cx, cy = obstacles[index].center
+        return f"obstacle {index} at ({cx:.1f}, {cy:.1f})"
+    return f"obstacle {index}"
 
 
 def grid_cell(checker: CollisionChecker, p: tuple[float, float]) -> tuple[int, int] | None:
