@@ -209,6 +209,11 @@ class Mp4Writer:
             if process is not None and process.poll() is None:
                 process.kill()
                 process.wait()
+            if not self._thread.is_alive():  # after a failed close: nobody else closes it
+                try:
+                    self._writer.close()
+                except Exception:  # its ffmpeg killed or failed: the pipe may be broken
+                    pass
         finally:
             self._tmp.unlink(missing_ok=True)
 
