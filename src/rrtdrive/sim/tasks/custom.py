@@ -48,6 +48,7 @@ class CustomTask(PathTask):
     """
 
     kind: ClassVar[TaskKind] = TaskKind.CUSTOM
+    video_frames_drive: ClassVar[bool] = True
 
     closed: bool = True
     resolution: float | None = None
