@@ -302,30 +302,3 @@ def test_abort_returns_although_the_queue_lock_is_held_and_kills_the_encoder(tmp
     w.abort()  # idempotent
     with pytest.raises(RuntimeError, match="aborted"):
         w.close()
-
-
-def test_a_small_drive_on_a_big_map_is_framed_as_the_plot_frames_it():
-    """A 100 m drive on a big map was a dot in one corner of the video (the whole map
-    was framed; a new user's find on a 20 km map); simulate --plot already cut the view
-    to the drive. Built-in scenarios keep their own framing."""
-    from rrtdrive.maps import Map
-    from rrtdrive.sim.episode import drive_window
-    from rrtdrive.sim.scenes import fit_view
-    from rrtdrive.sim.tasks import CustomTask
-    from rrtdrive.sim.video import _camera_for
-
-    m = Map("big", (0.0, 0.0, 400.0, 300.0), (), Pose(20.0, 20.0, 0.0), Pose(60.0, 20.0, 0.0))
-    x = np.arange(20.0, 60.0 + 1e-9, 0.25)
-    path = Path(np.column_stack([x, np.full_like(x, 20.0), 0 * x, 0 * x]), np.zeros((0, 2)))
-    ep = run_episode(CustomTask.from_map(m, 0), path, "pure-pursuit", 0)
-    assert ep.log.steps > 0
-    size, scaling, camera = _camera_for(ep)
-    _, whole, _ = fit_view(m.bounds)
-    assert scaling >= 3 * whole  # the car is no dot
-    half_w, half_h = size[0] / 2 / scaling, size[1] / 2 / scaling
-    for px, py in ((20.0, 20.0), (60.0, 20.0)):  # the drive's ends are in the frame
-        assert abs(px - camera.position[0]) <= half_w and abs(py - camera.position[1]) <= half_h
-    lo_x, lo_y, hi_x, hi_y = drive_window(ep)
-    assert (lo_x, lo_y) == (10.0, 10.0) and hi_x < 0.5 * 400.0  # 10 m around the drive
-    frame = next(iter(render_frames(ep, stride=10_000)))
-    assert frame.shape[:2] == (size[1], size[0]) and not frame_is_blank(frame)

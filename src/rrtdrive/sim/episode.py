@@ -30,11 +30,7 @@ __all__ = [
     "end_message",
     "plan_failed_message",
     "SHORT_PATH_MESSAGE",
-    "drive_window",
 ]
-
-#: Room around the drive when a view is cut from a big map, metres.
-DRIVE_VIEW_MARGIN_M = 10.0
 
 
 class EpisodeStatus(enum.StrEnum):
@@ -256,23 +252,3 @@ def _exact(value: float) -> str:
     """
     text = repr(float(value) + 0.0)  # + 0.0: a steering of -0.0 is written 0, not -0
     return text[:-2] if text.endswith(".0") else text
-
-
-def drive_window(episode: Episode) -> tuple[float, float, float, float] | None:
-    """The part of the map around the drive, when the drive is small on it; else ``None``.
-
-    The box around the planned path, the driven trajectory and the start, with
-    :data:`DRIVE_VIEW_MARGIN_M` around it and within the bounds, when it covers under
-    half of the map along a side (a 1.5 km road of which an overtake uses 200 m, a 20 km
-    map with a 100 m drive: the car was a dot); ``None`` when the whole map is the view.
-    ``simulate --plot`` and the video frame the same window.
-    """
-    m = episode.scenario.map
-    xmin, ymin, xmax, ymax = m.bounds
-    points = [episode.path.xy, episode.log.states[:, :2], np.array([m.start.as_tuple()[:2]])]
-    pts = np.vstack([p for p in points if len(p)])
-    lo, hi = pts.min(axis=0) - DRIVE_VIEW_MARGIN_M, pts.max(axis=0) + DRIVE_VIEW_MARGIN_M
-    view = (max(xmin, lo[0]), max(ymin, lo[1]), min(xmax, hi[0]), min(ymax, hi[1]))
-    if view[2] - view[0] < 0.5 * (xmax - xmin) or view[3] - view[1] < 0.5 * (ymax - ymin):
-        return tuple(float(v) for v in view)  # type: ignore[return-value]
-    return None

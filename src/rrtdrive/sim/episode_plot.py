@@ -25,20 +25,32 @@ from rrtdrive.plotting import (  # sets the Agg backend, read by pyplot's first 
     map_figure_size,
     title_and_legend,
 )
-from rrtdrive.sim.episode import drive_window
 from rrtdrive.types import Pose
 
 __all__ = ["plot_episode"]
 
 #: Width of the time-series column, inches.
 _SERIES_IN = 4.2
-def _view(episode: Any) -> tuple[float, float, float, float]:
-    """The part of the map to draw: :func:`~rrtdrive.sim.episode.drive_window`, or all of it.
+#: Room around the drive when the view is cut from a big map, metres.
+_VIEW_MARGIN_M = 10.0
 
-    A 1.5 km road of which the overtake uses 200 m was a thin line across the figure; its
-    goal, the road's far end, is not part of the drive.
+
+def _view(episode: Any) -> tuple[float, float, float, float]:
+    """The part of the map to draw: the drive (path, trajectory, start) and a margin.
+
+    The whole map unless the drive covers under half of it along a side (a 1.5 km road
+    of which the overtake uses 200 m was a thin line across the figure; its goal, the
+    road's far end, is not part of the drive).
     """
-    return drive_window(episode) or episode.scenario.map.bounds
+    m = episode.scenario.map
+    xmin, ymin, xmax, ymax = m.bounds
+    points = [episode.path.xy, episode.log.states[:, :2], np.array([m.start.as_tuple()[:2]])]
+    pts = np.vstack([p for p in points if len(p)])
+    lo, hi = pts.min(axis=0) - _VIEW_MARGIN_M, pts.max(axis=0) + _VIEW_MARGIN_M
+    view = (max(xmin, lo[0]), max(ymin, lo[1]), min(xmax, hi[0]), min(ymax, hi[1]))
+    if view[2] - view[0] < 0.5 * (xmax - xmin) or view[3] - view[1] < 0.5 * (ymax - ymin):
+        return view
+    return m.bounds
 
 
 def _series(episode: Any) -> dict[str, np.ndarray]:

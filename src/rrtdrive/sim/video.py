@@ -19,10 +19,10 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
-from rrtdrive.sim.episode import Episode, drive_window
+from rrtdrive.sim.episode import Episode
 from rrtdrive.sim.mp4 import Mp4Writer
 from rrtdrive.sim.render import TRACE_COLOR, SceneCanvas, fewest_hits, panel_band
-from rrtdrive.sim.scenes import SimConfig, build_env, fit_view
+from rrtdrive.sim.scenes import SimConfig, build_env
 from rrtdrive.types import InputError, Pose, require_int
 
 __all__ = [
@@ -51,13 +51,6 @@ def frame_is_blank(frame: np.ndarray, min_std: float = 5.0) -> bool:
 def _camera_for(episode: Episode) -> tuple[tuple[int, int], float, _Camera]:
     # The task frames itself (a long road: a window that follows the ego, moved every frame).
     view = episode.scenario.camera()
-    crop = episode.scenario.video_frames_drive and not view.follow
-    window = drive_window(episode) if crop else None
-    if window is not None:
-        # A small drive on a big map: frame the drive, as simulate --plot does (a 100 m
-        # drive on a 20 km map was a dot in one corner; a new user's find).
-        size, scaling, centre = fit_view(window)
-        return size, scaling, _Camera(*centre)
     return view.size, view.scaling, _Camera(*view.centre)
 
 

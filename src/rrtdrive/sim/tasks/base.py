@@ -228,9 +228,6 @@ class Task:
     oncoming: ClassVar[tuple[tuple[float, float], ...]] = ()
     lead: ClassVar[tuple[float, float] | None] = None
     ego_speed: ClassVar[float] = 0.0
-    #: The video frames the drive, not the whole map, when the drive is small on it
-    #: (:func:`~rrtdrive.sim.episode.drive_window`): a user's map may be kilometres wide.
-    video_frames_drive: ClassVar[bool] = False
     #: The re-planning settings' type of a kind that re-plans while driving (``None``:
     #: the path is planned once, before the drive).
     REPLAN_CONFIG: ClassVar[type[ReplanConfig] | None] = None

@@ -48,7 +48,6 @@ class CustomTask(PathTask):
     """
 
     kind: ClassVar[TaskKind] = TaskKind.CUSTOM
-    video_frames_drive: ClassVar[bool] = True
 
     closed: bool = True
     resolution: float | None = None
