@@ -350,3 +350,42 @@ def test_the_body_inside_the_bounds_is_shapelys_containment(x, y, yaw):
         assert str(exc).startswith("start: ")
         got = False
     assert got == want
+
+
+_RECT = st.tuples(
+    st.floats(-5.0, 5.0), st.floats(-5.0, 5.0), st.floats(0.2, 6.0), st.floats(0.2, 6.0),
+    st.floats(-math.pi, math.pi),
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(_RECT, _RECT)
+def test_overlap_depth_is_the_minimum_translation_of_two_rectangles(ra, rb):
+    """The depth a start or goal error gives: against the Minkowski difference (shapely's
+    convex hull of every vertex difference), whose boundary is that far from the origin
+    when the two overlap."""
+    import numpy as np
+
+    from rrtdrive.map_checks import overlap_depth
+    from rrtdrive.obstacles import Obstacle
+
+    a, b = (Obstacle((r[0], r[1]), (r[2], r[3]), r[4]).polygon() for r in (ra, rb))
+    pa, pb = (np.asarray(p.exterior.coords)[:-1] for p in (a, b))
+    diff = shapely.MultiPoint((pa[:, None, :] - pb[None, :, :]).reshape(-1, 2)).convex_hull
+    origin = shapely.Point(0.0, 0.0)
+    want = diff.exterior.distance(origin) if diff.contains(origin) else 0.0
+    assert overlap_depth(pa, pb) == pytest.approx(want, abs=1e-9)
+
+
+def test_a_start_into_a_wall_is_refused_with_how_far_in():
+    """A start 4.5 cm into a wall was refused without saying by how much (a new user's find)."""
+    car = VehicleParams()
+    wall = Obstacle((2.0, 10.0), (1.0, 6.0))  # x 1.5 .. 2.5
+    rear = car.length - car.front_extent  # the body reaches this far behind the rear axle
+    start = Pose(2.5 + rear - 0.045, 10.0, 0.0)
+    m = Map("w", (0.0, 0.0, 30.0, 20.0), (wall,), Pose(20.0, 5.0, 0.0), Pose(20.0, 10.0, 0.0))
+    from rrtdrive.maps import check_endpoint
+
+    with pytest.raises(InputError, match=r"^start: .* overlaps obstacle 0 at \[2\.0, 10\.0\] "
+                                         r"by 0\.045 m \(the least shift that clears it\)$"):
+        check_endpoint(m, start, "start", car)

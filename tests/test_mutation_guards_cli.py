@@ -321,7 +321,8 @@ def test_a_pose_on_two_obstacles_names_the_first() -> None:
     obstacles = (Obstacle((30.0, 30.0), (1.0, 1.0)), Obstacle((19.5, 10.0), (1.0, 1.0)),
                  Obstacle((23.0, 10.0), (1.0, 1.0)))  # fmt: skip
     m = Map("m", (0.0, 0.0, 40.0, 40.0), obstacles, Pose(5.0, 30.0, 0.0), Pose(10.0, 30.0, 0.0))
-    with pytest.raises(InputError, match=r"overlaps obstacle 1 at \[19\.5, 10\.0\]$"):
+    # By 0.895 m: the body's rear (x 19.105) must pass the block's right side (x 20.0).
+    with pytest.raises(InputError, match=r"overlaps obstacle 1 at \[19\.5, 10\.0\] by 0\.895 m "):
         check_endpoint(m, pose, "goal", VehicleParams())
 
 

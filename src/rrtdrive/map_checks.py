@@ -191,10 +191,50 @@ def check_endpoint(
     hits = np.flatnonzero(shapely.intersects(polygons, body))
     if len(hits):
         i = int(hits[0])
+        depth = overlap_depth(corners[:-1], np.asarray(polygons[i].exterior.coords)[:-1])
         raise InputError(
             f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) overlaps obstacle {i} "
-            f"at {list(m.obstacles[i].center)}"
+            f"at {list(m.obstacles[i].center)} by {depth:.3g} m (the least shift that "
+            "clears it)"
         )
+
+
+def overlap_depth(a: np.ndarray, b: np.ndarray) -> float:
+    """How far convex polygon ``a`` must move, at least, to stop overlapping convex ``b``.
+
+    The separating-axis theorem: over every edge normal of both polygons, the least
+    shift that parts the two projections is the length of the minimum translation (0
+    when they are apart). A start 4.5 cm into a wall was refused without saying by how much.
+
+    Parameters
+    ----------
+    a, b : numpy.ndarray
+        ``(n, 2)`` vertices of each polygon, in order, not repeated at the end.
+
+    Returns
+    -------
+    float
+        Metres.
+
+    Examples
+    --------
+    >>> square = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]])
+    >>> round(overlap_depth(square, square + [1.7, 0.5]), 12)
+    0.3
+    >>> overlap_depth(square, square + [3.0, 0.0])
+    0.0
+    """
+    least = np.inf
+    for poly in (a, b):
+        edges = np.roll(poly, -1, axis=0) - poly
+        normals = np.column_stack([-edges[:, 1], edges[:, 0]])
+        normals /= np.hypot(normals[:, 0], normals[:, 1])[:, None]
+        pa, pb = a @ normals.T, b @ normals.T
+        # The shift along each normal that parts the projections, either way (not their
+        # common length: one inside the other needs more than that).
+        shift = np.minimum(pa.max(axis=0) - pb.min(axis=0), pb.max(axis=0) - pa.min(axis=0))
+        least = min(least, float(shift.min()))
+    return max(least, 0.0)
 
 
 def warn_outside(m: Map) -> None:
