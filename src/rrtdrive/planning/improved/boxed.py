@@ -216,5 +216,6 @@ def stuck_root_words(end: str, proven: bool, patience: int, share: float | None)
     return (
         f"the {end} tree never left the {end} pose in {patience} "
         f"iterations (it grows only by edges within 90 deg of the {end}'s heading, and "
-        f"none tried was free{narrow}: the {end} is boxed in along its heading)"
+        f"none tried was free{narrow}: the {end} is boxed in along its heading, or its "
+        "body nearer to an obstacle or the map's edge than the edges keep)"
     )
