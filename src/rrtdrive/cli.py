@@ -12,13 +12,11 @@ controller or plotting code, and ``plan`` imports plotting only for ``--plot``.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import importlib
 import json
 import math
 import os
 import sys
-import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, NoReturn
@@ -173,10 +171,10 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from rrtdrive.maps import BUILTIN_MAPS
     from rrtdrive.planning import (
         PLANNERS,
-        PlanningProblem,
         forward_only_note,
         make_planner,
         reverses,
+        solve_on_map,
     )
 
     validate_output(args.json, "--json")
@@ -233,12 +231,11 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     )
     if (notice := setup_notice(m.bounds, config)) is not None:  # seconds of silence else
         print(f"rrtdrive plan: {notice}", file=sys.stderr, flush=True)
-    t_map = time.perf_counter()
     # The map's distance field: per-map set-up too (a map too big for any grid: exit 2).
-    problem = PlanningProblem.from_map(m, config=config, reverse=args.reverse)
-    field_s = time.perf_counter() - t_map
-    result = planner.solve(problem, np.random.default_rng(args.seed), budget)
-    result = dataclasses.replace(result, setup_time_s=result.setup_time_s + field_s)
+    problem, result = solve_on_map(
+        lambda: planner, m, np.random.default_rng(args.seed), budget, config=config,
+        reverse=args.reverse,
+    )  # fmt: skip
     if args.json:
         doc = plan_to_json(
             result, args.seed, m.name, m.vehicle, reverse=args.reverse, start=m.start,

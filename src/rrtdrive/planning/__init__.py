@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from rrtdrive.json_safe import options_from_json
 from rrtdrive.planning.base import (
@@ -12,12 +16,18 @@ from rrtdrive.planning.base import (
     PlanningProblem,
     polyline_path,
 )
-from rrtdrive.types import InputError
+from rrtdrive.types import Budget, InputError, PlanResult
 from rrtdrive.values import did_you_mean
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from rrtdrive.collision import CheckerConfig
+    from rrtdrive.maps import Map
 
 __all__ = [
     "PLANNERS", "GrowingTree", "Planner", "PlanningProblem", "make_planner", "polyline_path",
-    "reverses", "unknown_planner",
+    "reverses", "solve_on_map", "unknown_planner",
 ]
 
 
@@ -78,6 +88,49 @@ def make_planner(name: str, **options: object) -> Planner:
         return factory(**options)
     except TypeError as exc:
         raise InputError(f"planner: {exc}") from None
+
+
+def solve_on_map(
+    planner: Callable[[], Planner],
+    m: Map,
+    rng: np.random.Generator,
+    budget: Budget,
+    *,
+    config: CheckerConfig | None = None,
+    reverse: bool = False,
+) -> tuple[PlanningProblem, PlanResult]:
+    """Build the query on map ``m`` and solve it; the map's set-up counts as set-up.
+
+    The distance field :meth:`PlanningProblem.from_map` builds (once per map) is added
+    to the result's ``setup_time_s``, never to ``planning_time_s``: as ``rrtdrive plan``
+    and ``rrtdrive simulate`` report it.
+
+    Parameters
+    ----------
+    planner : callable
+        Gives the planner, called after the problem is built (so that a map's bad
+        bounds are named before a planner's bad option).
+    m : Map
+        The map, its start and goal.
+    rng : numpy.random.Generator
+        The planner's randomness.
+    budget : Budget
+        The query's budget.
+    config : CheckerConfig, optional
+        The collision grid (``None``: the default).
+    reverse : bool
+        Whether the path may change gear.
+
+    Returns
+    -------
+    problem : PlanningProblem
+    result : PlanResult
+    """
+    t0 = time.perf_counter()
+    problem = PlanningProblem.from_map(m, config=config, reverse=reverse)
+    field_s = time.perf_counter() - t0
+    result = planner().solve(problem, rng, budget)
+    return problem, dataclasses.replace(result, setup_time_s=result.setup_time_s + field_s)
 
 
 def unknown_planner(field: str, name: object) -> InputError:

@@ -10,9 +10,7 @@ classes asks which kind a task is.
 
 from __future__ import annotations
 
-import dataclasses
 import enum
-import time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -22,7 +20,7 @@ import numpy as np
 from rrtdrive.collision import CheckerConfig
 from rrtdrive.controllers import SpeedConfig, TrackingController
 from rrtdrive.maps import LANE_WIDTH, Map
-from rrtdrive.planning import PlanningProblem, make_planner
+from rrtdrive.planning import make_planner, solve_on_map
 from rrtdrive.sim.episode import (
     EpisodeStatus,
     end_message,
@@ -183,16 +181,11 @@ def plan_scenario(
     PlanResult
     """  # fmt: skip
     _, plan_rng, _ = scenario_rngs(seed)
-    t0 = time.perf_counter()
-    problem = PlanningProblem.from_map(
-        scenario.map, config=scenario.checker_config, reverse=scenario.reverse
-    )
-    # The map's distance field is per-map set-up too, as rrtdrive plan counts it.
-    field_s = time.perf_counter() - t0
-    result = make_planner(planner, **dict(options or {})).solve(
-        problem, plan_rng, budget or Budget()
-    )
-    return dataclasses.replace(result, setup_time_s=result.setup_time_s + field_s)
+    _, result = solve_on_map(
+        lambda: make_planner(planner, **dict(options or {})), scenario.map, plan_rng,
+        budget or Budget(), config=scenario.checker_config, reverse=scenario.reverse,
+    )  # fmt: skip
+    return result
 
 
 @dataclass(frozen=True, kw_only=True)
