@@ -284,11 +284,13 @@ def run(args: argparse.Namespace) -> int:
     check = verify_path(m, path, max_sharpness=bound, clearance=clearance)
     with np.errstate(all="ignore"):  # a row at 1e308 m: the length is inf, quietly
         length = path.length if rows else 0.0
-    doc = {"map": m.name, "rows": len(path.samples), "kappa_given": kappa_given,
-           "length_m": round(length, 6),
-           **bounds, **dataclasses.asdict(check), "failed": list(check.failed)}
-    # Strict JSON: a non-finite number (a row far off the map) is null, not Infinity.
-    text = json.dumps(json_safe(doc), allow_nan=False) + "\n"
+    text = ""
+    if args.json:
+        doc = {"map": m.name, "rows": rows, "kappa_given": kappa_given,
+               "length_m": round(length, 6),
+               **bounds, **dataclasses.asdict(check), "failed": list(check.failed)}
+        # Strict JSON: a non-finite number (a row far off the map) is null, not Infinity.
+        text = json.dumps(json_safe(doc), allow_nan=False) + "\n"
     # The files first: a reader of stdout that goes away (| head) ends the printing,
     # and the files asked for were then never written.
     if plot:
