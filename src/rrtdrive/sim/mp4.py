@@ -148,9 +148,13 @@ class Mp4Writer:
                 except BaseException as exc:  # re-raised in the caller's thread
                     self._error = exc
         # Aborted: what is left of the encoder is closed here, off the caller's thread.
+        self._close_killed()
+
+    def _close_killed(self) -> None:
+        """Close imageio's writer after an abort, whose ffmpeg was killed or failed."""
         try:
             self._writer.close()
-        except Exception:  # ffmpeg was killed: its pipe may be broken
+        except Exception:  # the killed ffmpeg's pipe may be broken
             pass
 
     def append(self, frame: np.ndarray) -> None:
@@ -210,10 +214,7 @@ class Mp4Writer:
                 process.kill()
                 process.wait()
             if not self._thread.is_alive():  # after a failed close: nobody else closes it
-                try:
-                    self._writer.close()
-                except Exception:  # its ffmpeg killed or failed: the pipe may be broken
-                    pass
+                self._close_killed()
         finally:
             self._tmp.unlink(missing_ok=True)
 
