@@ -143,8 +143,7 @@ def room_at_ends(
         return Diagnosis(
             DiagnosisKind.NEEDS_REVERSE,
             f"the {label} has {obstacle_name(blocker, checker.obstacles)} {where}: on any "
-            "steady steering "
-            f"{room}, {least}; {only}{tip}",
+            f"steady steering {room}, {least}; {only}{tip}",
             numbers,
         )
     return None
@@ -273,10 +272,9 @@ def tight_clearance(m: Map, checker: CollisionChecker, start: Pose, goal: Pose) 
         return Diagnosis(
             DiagnosisKind.TIGHT_CLEARANCE,
             f"the {label}'s body is {gap:.2f} m from {obstacle_name(index, m.obstacles)}; "
-            "this planner's "
-            f"straight tree edges keep {side:.2f} m beside the body and {ends:.2f} m beyond "
-            f"{bumper}, so none {verb} it (try --planner hybrid-a-star, or the default "
-            f"planner, whose Hybrid A* stage tests the body exactly)",
+            f"this planner's straight tree edges keep {side:.2f} m beside the body and "
+            f"{ends:.2f} m beyond {bumper}, so none {verb} it (try --planner hybrid-a-star, "
+            "or the default planner, whose Hybrid A* stage tests the body exactly)",
             # The keep's parts stay in the numbers: the swept test's round ends, the
             # checker's margin, its grid error and trace step.
             {"gap_m": gap, "keep_m": side, "keep_end_m": ends, "obstacle": index,
