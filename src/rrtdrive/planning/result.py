@@ -25,7 +25,7 @@ import numpy as np
 
 from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, polyline_path, precheck
-from rrtdrive.planning.diagnosis import diagnose
+from rrtdrive.planning.diagnosis import Diagnosis, diagnose
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Pose, Tree
 
 __all__ = [
@@ -84,6 +84,7 @@ def run_query(
     *,
     rng: np.random.Generator,
     tree_edges: bool = True,
+    probe: Callable[[], Diagnosis | None] | None = None,
 ) -> PlanResult:
     """Set the map up, start the stopwatch, fail early on a hopeless query, else search.
 
@@ -113,6 +114,11 @@ def run_query(
     tree_edges : bool
         Whether the planner's every search grows swept tree edges, so that a failure
         may be blamed on their keep (:func:`~rrtdrive.planning.diagnosis.diagnose`).
+    probe : callable, optional
+        The planner's own last look at a counted failure that
+        :func:`~rrtdrive.planning.diagnosis.diagnose` found nothing in (the reversing
+        planners: :func:`~rrtdrive.planning.hybrid.probe.reverse_probe`); timed with
+        the diagnosis.
 
     Returns
     -------
@@ -164,9 +170,17 @@ def run_query(
         problem, tree_edges=tree_edges, no_approach=proved("no_approach"),
         start_exhausted=proved("start_exhausted"),
     )  # fmt: skip
+    if found is None and probe is not None and result.status in _PROBED:
+        found = probe()
     stats["diagnosis_time_s"] = time.perf_counter() - t_diagnosis
     return dataclasses.replace(result, setup_time_s=setup, diagnosis=found, stats=stats)
 
+
+#: The failures a planner's probe looks at: counted ones (a timeout's would depend on the
+#: machine; an invalid start or goal has its own finding).
+_PROBED = frozenset(
+    {PlanStatus.NO_PATH_IN_BUDGET, PlanStatus.POSTPROCESS_FAILED, PlanStatus.PROVEN_UNREACHABLE}
+)
 
 #: Start and goal closer than this (metres, and radians of heading) are one pose: the
 #: plan JSON's 6 decimals cannot tell them apart (a goal 1e-6 rad off the start's

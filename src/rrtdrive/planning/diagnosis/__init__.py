@@ -37,6 +37,10 @@ and measures, from the map's geometry, the first of these that holds:
    drive to it.
 
 Each finding is a frozen :class:`Diagnosis` with its numbers; ``None`` when none applies.
+After these, the reversing planners look once more at a forward-only failure with no
+finding (:func:`~rrtdrive.planning.result.run_query`'s ``probe``,
+:func:`~rrtdrive.planning.hybrid.probe.reverse_probe`): ``needs_reverse`` when a small
+Hybrid A* search with reversing allowed finds a path.
 The package: :mod:`.findings` (the records), :mod:`.measures` (runs, widths, the map's
 shapes), :mod:`.checks` (one function per finding) and :func:`diagnose` here.
 """

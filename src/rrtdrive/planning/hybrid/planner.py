@@ -13,8 +13,10 @@ from collections.abc import Mapping
 import numpy as np
 
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register_planner
+from rrtdrive.planning.diagnosis import Diagnosis
 from rrtdrive.planning.hybrid.config import HybridConfig, hybrid_with
 from rrtdrive.planning.hybrid.path import BuiltPath
+from rrtdrive.planning.hybrid.probe import reverse_probe
 from rrtdrive.planning.hybrid.query import HybridAnswer, hybrid_query
 from rrtdrive.planning.hybrid.resolution import PROOFS, dubins_table, free_cell_graph
 from rrtdrive.planning.hybrid.search import SearchOutcome
@@ -173,7 +175,13 @@ class HybridAStar:
                 if not reverse:
                     dubins_table(c.radius_factor / problem.vehicle.kappa_max, c)
 
-        return run_query(NAME, problem, budget, search, prepare, rng=rng, tree_edges=False)
+        def probe() -> Diagnosis | None:
+            return reverse_probe(problem, cfg, self.smoothing, budget.max_time_s)
+
+        return run_query(
+            NAME, problem, budget, search, prepare, rng=rng, tree_edges=False,
+            probe=None if reverse else probe,
+        )
 
 
 @functools.lru_cache(maxsize=16)  # a validated copy once per config, not per query

@@ -24,7 +24,9 @@ import numpy as np
 
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, register_planner
+from rrtdrive.planning.diagnosis import Diagnosis
 from rrtdrive.planning.hybrid.escalation import ESCALATES_FROM, escalate, with_kept_clearance
+from rrtdrive.planning.hybrid.probe import reverse_probe
 from rrtdrive.planning.improved import ending
 from rrtdrive.planning.improved.boxed import boxed_end, open_share, stuck_root_words
 from rrtdrive.planning.improved.config import NAME, ImprovedConfig, StageBudgets
@@ -149,9 +151,13 @@ class ImprovedRRTConnect:
         def run(watch: Stopwatch) -> PlanResult:
             return with_kept_clearance(query().run(rng, budget, watch), query().smoothing.clearance)
 
+        def probe() -> Diagnosis | None:
+            return reverse_probe(problem, self.config.hybrid, query().smoothing, budget.max_time_s)
+
         return run_query(
             NAME, problem, budget, run, lambda: query().prepare(), rng=rng,
             tree_edges=not self.config.escalation,  # Hybrid A* searches without them
+            probe=probe if self.config.escalation else None,
         )
 
 
