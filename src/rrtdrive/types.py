@@ -19,6 +19,7 @@ if TYPE_CHECKING:  # the diagnosis module imports this one
     from rrtdrive.planning.diagnosis import Diagnosis
 
 __all__ = [
+    "read_only_array",
     "InputError",
     "InputWarning",
     "Pose",
@@ -396,8 +397,17 @@ class Path:
         return np.concatenate([[0.0], np.cumsum(steps)])
 
 
-def _read_only(values: Any, dtype: Any) -> np.ndarray:
-    """A read-only array of ``values`` that shares no memory with a writable caller's array."""
+def read_only_array(values: Any, dtype: Any = None) -> np.ndarray:
+    """A read-only array of ``values`` that shares no memory with a writable caller's array.
+
+    Examples
+    --------
+    >>> mine = np.zeros(3)
+    >>> kept = read_only_array(mine)
+    >>> mine[0] = 1.0
+    >>> float(kept[0]), kept.flags.writeable
+    (0.0, False)
+    """
     a = np.asarray(values, dtype=dtype)
     if a.flags.writeable:
         a = a.copy()
@@ -421,8 +431,8 @@ class Tree:
     parents: np.ndarray
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "nodes", _read_only(self.nodes, float).reshape(-1, 2))
-        object.__setattr__(self, "parents", _read_only(self.parents, np.int64).reshape(-1))
+        object.__setattr__(self, "nodes", read_only_array(self.nodes, float).reshape(-1, 2))
+        object.__setattr__(self, "parents", read_only_array(self.parents, np.int64).reshape(-1))
         n, parents = len(self.nodes), self.parents
         if len(parents) != n or np.any((parents < -1) | (parents >= n)):
             raise InputError(
@@ -559,7 +569,7 @@ class PlanResult:
                     f"got {brief_repr(self.status)}"
                 ) from None
         raw = np.zeros((0, 2)) if self.raw_path is None else self.raw_path
-        object.__setattr__(self, "raw_path", _read_only(raw, float))
+        object.__setattr__(self, "raw_path", read_only_array(raw, float))
         object.__setattr__(self, "stats", dict(self.stats))
 
     def __repr__(self) -> str:

@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rrtdrive.types import read_only_array
+
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.sim.replanning import TrafficLog
     from rrtdrive.sim.runner import EpisodeConfig
@@ -127,6 +129,12 @@ class DriveLog:
     other_sizes: np.ndarray
     arrived: bool
     wall_time_s: float
+
+    def __post_init__(self) -> None:
+        # Read-only, as Path's and PlanResult's: evaluate() scores what was driven, and a
+        # consumer's edit of a log it was handed must not rewrite it (an audit).
+        for name in ("t", "states", "controls", "crashed", "others", "other_sizes"):
+            object.__setattr__(self, name, read_only_array(getattr(self, name)))
 
     @property
     def steps(self) -> int:
