@@ -23,7 +23,7 @@ from rrtdrive.controllers import CONTROLLERS, SpeedConfig, TrackingController, m
 from rrtdrive.envs import is_registered_default, scenario_text
 from rrtdrive.envs.action import CommandLimits
 from rrtdrive.envs.reward import RewardWeights
-from rrtdrive.maps import Map
+from rrtdrive.maps import Map, map_from_json
 from rrtdrive.planning import PLANNERS, forward_only_note, make_planner, reverses, unknown_planner
 from rrtdrive.sim.limits import MAX_REVERSE_SPEED, MAX_SPEED
 from rrtdrive.sim.loop import require_episode_time
@@ -40,7 +40,14 @@ from rrtdrive.sim.tasks import (
     scenario_map,
 )
 from rrtdrive.sim.tasks import Task as Scenario
-from rrtdrive.types import Budget, InputError, InputWarning, brief_repr, require_int
+from rrtdrive.types import (
+    Budget,
+    InputError,
+    InputWarning,
+    VehicleParams,
+    brief_repr,
+    require_int,
+)
 
 __all__ = ["DriveEnvConfig"]
 
@@ -207,6 +214,9 @@ class DriveEnvConfig:
             object.__setattr__(self, name, value)
 
         scenario, planner, controller = self.scenario, self.planner, self.controller
+        if isinstance(scenario, Mapping) and "obstacles" in scenario:
+            scenario = map_of_fields(scenario)
+            put("scenario", scenario)
         if isinstance(scenario, Map):
             put("map", scenario)  # validated when it was made
         elif not isinstance(scenario, str):
@@ -464,3 +474,37 @@ def caller_options(
                 f"{scenario_text(config.scenario)}"
             )
     return {key: value for key, value in options.items() if not is_registered_default(value)}
+
+
+def map_of_fields(fields: Mapping[str, Any]) -> Map:
+    """The :class:`~rrtdrive.maps.Map` of its fields as a dict, as an env's spec saves it.
+
+    gymnasium's ``EnvSpec.to_json`` keeps ``scenario=Map(...)`` as
+    ``dataclasses.asdict(map)``: poses as ``{"x", "y", "yaw"}``, the car's fields as
+    ``vehicle``. ``gym.make`` of that spec reads it back here (a map built in Python
+    did not survive the round trip docs/gym.md promises; an audit).
+
+    Examples
+    --------
+    >>> from rrtdrive.maps import builtin_map
+    >>> m = builtin_map("parking_lot")
+    >>> map_of_fields(dataclasses.asdict(m)) == m
+    True
+    """
+    data = dict(fields)
+    car = data.pop("vehicle", None)
+    for end in ("start", "goal"):
+        pose = data.get(end)
+        if isinstance(pose, Mapping):
+            data[end] = [pose.get("x"), pose.get("y"), pose.get("yaw")]
+    if isinstance(data.get("obstacles"), tuple | list):
+        data["obstacles"] = [dict(o) if isinstance(o, Mapping) else o for o in data["obstacles"]]
+    vehicle = None
+    if car is not None:
+        if not isinstance(car, Mapping):
+            raise InputError(f"scenario.vehicle: expected the car's fields, got {brief_repr(car)}")
+        try:
+            vehicle = VehicleParams(**car)
+        except TypeError as exc:
+            raise InputError(f"scenario.vehicle: {exc}") from None
+    return map_from_json(data, vehicle)

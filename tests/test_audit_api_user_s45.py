@@ -322,13 +322,6 @@ def test_gym_spec_json_round_trip_for_a_map_name():
     assert np.array_equal(env.reset(seed=0)[0], again.reset(seed=0)[0])
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: docs/gym.md says an env's spec saved as JSON makes "
-    "the same env again for every id, and that scenario= takes a rrtdrive.Map; "
-    "to_json turns the Map into a dict (dataclasses.asdict) that gym.make then "
-    "refuses ('scenario: expected a scenario or map name ...', envs/config.py)",
-)
 def test_gym_spec_json_round_trip_for_a_map_built_in_python():
     env = gym.make("rrtdrive/Map-v0", scenario=SMALL)
     again = gym.make(EnvSpec.from_json(env.spec.to_json()))
@@ -346,3 +339,17 @@ def test_gym_config_is_frozen_all_the_way_down():
     with pytest.raises(TypeError):
         config.scenario_options["reverse"] = False  # type: ignore[index]
     hash(config)
+
+
+def test_ompl_comparators_answer_a_start_that_is_the_goal_as_every_planner_does():
+    pytest.importorskip("ompl")
+    import rrtdrive.bench  # noqa: F401  (registers the OMPL comparators)
+
+    same = PlanningProblem(LOT, PlanningProblem.from_map(LOT).checker, LOT.start, LOT.start)
+    names = [n for n in sorted(PLANNERS) if n.startswith("ompl-")]
+    assert names
+    for name in names:
+        out = make_planner(name).solve(same, np.random.default_rng(0), Budget(max_time_s=1.0))
+        assert out.status is PlanStatus.SOLVED, name
+        assert len(out.path) == 2 and out.path.length == 0.0, name
+        assert np.allclose(out.path.samples[:, :3], [LOT.start.as_tuple()] * 2)
