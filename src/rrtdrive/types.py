@@ -400,6 +400,13 @@ class Path:
 def read_only_array(values: Any, dtype: Any = None) -> np.ndarray:
     """A read-only array of ``values`` that shares no memory with a writable caller's array.
 
+    Parameters
+    ----------
+    values : array_like
+        The data; a read-only array is kept as it is.
+    dtype : data-type, optional
+        The array's type (default: numpy's choice).
+
     Examples
     --------
     >>> mine = np.zeros(3)

@@ -30,7 +30,14 @@ from rrtdrive.planning.smoothing.clothoid import (
     sharpness_levels,
 )
 from rrtdrive.planning.smoothing.config import SmoothingConfig
-from rrtdrive.planning.smoothing.corners import Corner, Ends, signed_deflection, unit
+from rrtdrive.planning.smoothing.corners import (
+    Corner,
+    Ends,
+    polygon_legs,
+    signed_deflection,
+    turn_angles,
+    unit,
+)
 
 __all__ = [
     "Piece",
@@ -150,25 +157,12 @@ def polygon_turns(
     """
     n = len(pts)
     cache = {} if cache is None else cache
-    dirs, lengths = [], []
-    for i in range(n - 1):
-        ux, uy, length = unit(pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1])
-        dirs.append((ux, uy))
-        lengths.append(length)
+    dirs, lengths = polygon_legs(pts)
     thetas: list[float | None] = [None] * n
     tmin = [0.0] * n
     for c in range(1, n - 1):
-        theta = signed_deflection(dirs[c - 1], dirs[c])
-        if abs(theta) < 1e-9 or lengths[c - 1] == 0.0 or lengths[c] == 0.0:
-            if lengths[c - 1] == 0.0 or lengths[c] == 0.0:
-                tmin[c] = math.inf  # a repeated point: no direction to turn from
-            continue
-        thetas[c] = theta
-        tmin[c] = _tightest(cache, theta, kappas[c], levels).tangent
-    gaps = [0.0] * (n - 1)
-    if n > 2:
-        gaps[0] = end_gap if tmin[1] > 0.0 else 0.0
-        gaps[-1] = end_gap if tmin[n - 2] > 0.0 else 0.0
+        thetas[c], tmin[c] = _corner_tightest(dirs, lengths, c, kappas[c], levels, cache)
+    gaps = _end_gaps(tmin, end_gap)
     conflicts = [
         i for i in range(n - 1) if not tmin[i] + tmin[i + 1] + gaps[i] <= lengths[i] + 1e-9
     ]
@@ -225,6 +219,65 @@ def polygon_turns(
         if opts is not None:
             turns[c] = opts[int(chosen[c])]
     return turns, []
+
+
+def _corner_tightest(
+    dirs: Sequence[tuple[float, float]],
+    lengths: Sequence[float],
+    c: int,
+    kappa: float,
+    levels: np.ndarray,
+    cache: dict[tuple, list[ClothoidTurn]],
+) -> tuple[float | None, float]:
+    """Inner corner ``c``'s deflection (None when straight) and its tightest turn's tangent."""
+    if lengths[c - 1] == 0.0 or lengths[c] == 0.0:
+        return None, math.inf  # a repeated point: no direction to turn from
+    theta = signed_deflection(dirs[c - 1], dirs[c])
+    if abs(theta) < 1e-9:
+        return None, 0.0
+    return theta, _tightest(cache, theta, kappa, levels).tangent
+
+
+def _end_gaps(tmin: Sequence[float], end_gap: float) -> list[float]:
+    """Per leg, the straight kept before its turn: ``end_gap`` at the start and goal legs."""
+    n = len(tmin)
+    gaps = [0.0] * (n - 1)
+    if n > 2:
+        gaps[0] = end_gap if tmin[1] > 0.0 else 0.0
+        gaps[-1] = end_gap if tmin[n - 2] > 0.0 else 0.0
+    return gaps
+
+
+def leg_room(
+    pts: Sequence[Sequence[float]],
+    kappas: Sequence[float],
+    levels: np.ndarray,
+    end_gap: float,
+    leg: int,
+    cache: dict[tuple, list[ClothoidTurn]] | None = None,
+) -> tuple[float, float, float, float]:
+    """Leg ``leg`` of polygon ``pts``: its length, what its turns need, and their angles.
+
+    The need is :func:`polygon_turns`' test: the tightest turns' tangents at both its
+    corners plus the straight kept at the start or goal. The angles are the signed
+    deflections at the leg's two corners in radians (0 at an end or a straight corner).
+
+    Examples
+    --------
+    >>> levels = np.array([0.08])
+    >>> length, need, a, b = leg_room([(0, 0), (5, 0), (5, 5)], [0, 1 / 6, 0], levels, 0.5, 0)
+    >>> length, bool(need > length), a, round(math.degrees(b))
+    (5.0, True, 0.0, 90)
+    """
+    cache = {} if cache is None else cache
+    n = len(pts)
+    dirs, lengths = polygon_legs(pts)
+    tmin = [0.0] * n
+    for c in range(1, n - 1):
+        tmin[c] = _corner_tightest(dirs, lengths, c, kappas[c], levels, cache)[1]
+    need = tmin[leg] + tmin[leg + 1] + _end_gaps(tmin, end_gap)[leg]
+    turn_a, turn_b = turn_angles(dirs, lengths, (leg, leg + 1))
+    return lengths[leg], need, turn_a, turn_b
 
 
 def _tightest(
@@ -362,6 +415,13 @@ class ClothoidFitter:
         max_k = max((t.kappa for t in real), default=0.0)
         max_sharp = max((cfg.wheelbase * t.sigma for t in real), default=0.0)
         return ClothoidCurve(pieces, np.array(pts), max_k, max_sharp), []
+
+    def leg_room(self, corners: Sequence[Corner], leg: int) -> tuple[float, float, float, float]:
+        """:func:`leg_room` of the corners' polygon (as :meth:`build` turns it)."""
+        r0 = self.cfg.design_radius
+        kappas = [1.0 / (c.radius if c.radius > 0.0 else r0) for c in corners]
+        pts = [c.point.tolist() for c in corners]
+        return leg_room(pts, kappas, self.levels, self.cfg.end_gap, leg, self._turns)
 
     def check_limits(self, curve: ClothoidCurve, n_corners: int) -> list[int]:
         """Corners whose turns exceed ``kappa_max`` or ``max_sharpness`` (exact per turn)."""

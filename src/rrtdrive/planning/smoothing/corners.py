@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import enum
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -30,6 +31,8 @@ __all__ = [
     "build_key_polygon",
     "unit",
     "unit_between",
+    "polygon_legs",
+    "turn_angles",
     "deflection",
     "signed_deflection",
     "kind_of",
@@ -200,6 +203,41 @@ def unit(dx: float, dy: float) -> tuple[float, float, float]:
     if n < 1e-12:
         return 0.0, 0.0, 0.0
     return dx / n, dy / n, n
+
+
+def polygon_legs(
+    pts: Sequence[Sequence[float]],
+) -> tuple[list[tuple[float, float]], list[float]]:
+    """Each leg's unit direction and length (:func:`unit`) of polygon ``pts``.
+
+    Examples
+    --------
+    >>> polygon_legs([(0, 0), (3, 4), (3, 4)])
+    ([(0.6, 0.8), (0.0, 0.0)], [5.0, 0.0])
+    """
+    dirs: list[tuple[float, float]] = []
+    lengths: list[float] = []
+    for i in range(len(pts) - 1):
+        ux, uy, length = unit(pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1])
+        dirs.append((ux, uy))
+        lengths.append(length)
+    return dirs, lengths
+
+
+def turn_angles(
+    dirs: Sequence[tuple[float, float]], lengths: Sequence[float], at: Sequence[int]
+) -> list[float]:
+    """The signed deflection (:func:`signed_deflection`) at each corner index in ``at``.
+
+    0 at the polygon's ends and where a leg has no length (no direction to turn from).
+    """
+    n = len(lengths) + 1
+    return [
+        signed_deflection(dirs[c - 1], dirs[c])
+        if 0 < c < n - 1 and lengths[c - 1] > 0.0 and lengths[c] > 0.0
+        else 0.0
+        for c in at
+    ]
 
 
 def unit_between(a: np.ndarray, b: np.ndarray) -> tuple[float, float, float]:

@@ -27,7 +27,7 @@ from rrtdrive.planning.smoothing.bspline import (
 )
 from rrtdrive.planning.smoothing.checks import CheckerView
 from rrtdrive.planning.smoothing.config import SmoothingConfig
-from rrtdrive.planning.smoothing.corners import Corner, Ends, unit
+from rrtdrive.planning.smoothing.corners import Corner, Ends, polygon_legs, turn_angles
 from rrtdrive.planning.smoothing.fillet import Fillet, fillet_points, outer_reach
 from rrtdrive.planning.smoothing.operations import supplement_fractions
 
@@ -59,6 +59,21 @@ class CurveFitter:
 
     # ------------------------------------------------------------- control points
 
+    def leg_room(self, corners: Sequence[Corner], leg: int) -> tuple[float, float, float, float]:
+        """Leg ``leg``'s length, what its fillets need (:meth:`control_points`' test), angles.
+
+        As :meth:`~.clothoid_curve.ClothoidFitter.leg_room`, for the paper's fillets:
+        both corners' reach along the leg plus the straight kept at the start or goal.
+        """
+        pts = [c.point.tolist() for c in corners]
+        n = len(pts)
+        dirs, lengths = polygon_legs(pts)
+        reach = self._corner_points(pts, dirs, [c.radius for c in corners])[1]
+        end_leg = (leg == 0 and reach[1] > 0) or (leg == n - 2 and reach[leg] > 0)
+        need = reach[leg] + reach[leg + 1] + (self.cfg.end_gap if end_leg else 0.0)
+        turn_a, turn_b = turn_angles(dirs, lengths, (leg, leg + 1))
+        return lengths[leg], need, turn_a, turn_b
+
     def control_points(
         self, corners: Sequence[Corner]
     ) -> tuple[np.ndarray, np.ndarray, list[int]]:
@@ -67,12 +82,7 @@ class CurveFitter:
         # Plain floats throughout (the polygon is small; numpy per corner costs more).
         pts = [c.point.tolist() for c in corners]
         n = len(pts)
-        dirs: list[tuple[float, float]] = []
-        lengths: list[float] = []
-        for i in range(n - 1):
-            ux, uy, length = unit(pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1])
-            dirs.append((ux, uy))
-            lengths.append(length)
+        dirs, lengths = polygon_legs(pts)
         corner_pts, reach = self._corner_points(pts, dirs, [c.radius for c in corners])
         conflicts: list[int] = []
         fr = supplement_fractions(cfg.supplement_n)

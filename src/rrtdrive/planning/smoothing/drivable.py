@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -20,7 +21,13 @@ from rrtdrive.planning.smoothing.checks import CheckerView, EdgeCache, PathCheck
 from rrtdrive.planning.smoothing.clothoid import ClothoidTurn
 from rrtdrive.planning.smoothing.clothoid_curve import ClothoidFitter
 from rrtdrive.planning.smoothing.config import SmoothingConfig, SmoothingResult
-from rrtdrive.planning.smoothing.corners import Corner, Ends, KeyPolygon, build_key_polygon
+from rrtdrive.planning.smoothing.corners import (
+    Corner,
+    CornerKind,
+    Ends,
+    KeyPolygon,
+    build_key_polygon,
+)
 from rrtdrive.planning.smoothing.curve import CurveFitter
 from rrtdrive.planning.smoothing.repair import Repairer
 from rrtdrive.types import Pose
@@ -221,7 +228,7 @@ def _repair_loop(repairer: Repairer, fitter: CurveFitter, cfg: SmoothingConfig) 
         if conflicts:
             failed = _fix_conflicts(repairer, conflicts)
             if failed is not None:
-                message = _turns_too_close(corners, failed)
+                message = turns_too_close(corners, failed, fitter.leg_room(corners, failed))
                 break
             continue
         if len(ctrl) <= cfg.degree:
@@ -255,7 +262,7 @@ def _clothoid_loop(repairer: Repairer, fitter: ClothoidFitter, cfg: SmoothingCon
         if curve is None:
             failed = _fix_conflicts(repairer, conflicts)
             if failed is not None:
-                message = _turns_too_close(corners, failed)
+                message = turns_too_close(corners, failed, fitter.leg_room(corners, failed))
                 break
             continue
         bad = fitter.check_limits(curve, len(corners))
@@ -281,13 +288,52 @@ def _clothoid_loop(repairer: Repairer, fitter: ClothoidFitter, cfg: SmoothingCon
     return _Attempt(None, message, key, key, rounds)
 
 
-def _turns_too_close(corners: list[Corner], leg: int) -> str:
-    """The failure message of a leg too short for the turns at both its ends."""
+def turns_too_close(
+    corners: Sequence[Corner], leg: int, room: tuple[float, float, float, float]
+) -> str:
+    """The failure message of a leg too short for the turns at its ends, with the numbers.
+
+    ``room``: the leg's length, what its turns need and their signed angles
+    (:meth:`~.clothoid_curve.ClothoidFitter.leg_room`). The start's and the goal's
+    corners do not turn: there the need is the one turn's room from (or to) the pose's
+    heading (it read "the turns at (3.0, 6.0) and (9.9, 6.0) are too close", the first
+    one the start; a new user's find).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> pts = [(3.0, 6.0), (9.8, 6.0), (10.0, 13.4)]
+    >>> kinds = [CornerKind.START, CornerKind.NODE, CornerKind.GOAL]
+    >>> cs = [Corner.at(np.array(p), k, i) for i, (p, k) in enumerate(zip(pts, kinds))]
+    >>> print(turns_too_close(cs, 0, (6.8, 7.4, 0.0, 1.54)))  # doctest: +NORMALIZE_WHITESPACE
+    the path the tree found turns 88 deg left at (9.8, 6.0), 6.8 m after the start; from
+    the start's heading the car's tightest turn needs 7.4 m
+    """
+    length, need, turn_a, turn_b = room
     a, b = corners[leg].point, corners[leg + 1].point
+    at_a, at_b = f"({a[0]:.1f}, {a[1]:.1f})", f"({b[0]:.1f}, {b[1]:.1f})"
+    if not math.isfinite(need):  # a repeated point: no direction to turn from
+        return f"the turns at {at_a} and {at_b} are too close for the car"
+    found = "the path the tree found turns"
+    if corners[leg].kind is CornerKind.START and turn_b:
+        return (
+            f"{found} {_turn_words(turn_b)} at {at_b}, {length:.1f} m after the start; from "
+            f"the start's heading the car's tightest turn needs {need:.1f} m"
+        )
+    if corners[leg + 1].kind is CornerKind.GOAL and turn_a:
+        return (
+            f"{found} {_turn_words(turn_a)} at {at_a}, {length:.1f} m before the goal; onto "
+            f"the goal's heading the car's tightest turn needs {need:.1f} m"
+        )
     return (
-        f"the turns at ({a[0]:.1f}, {a[1]:.1f}) and ({b[0]:.1f}, {b[1]:.1f}) "
-        "are too close for the car"
+        f"{found} {_turn_words(turn_a)} at {at_a} and {_turn_words(turn_b)} at {at_b}, "
+        f"{length:.1f} m apart; the car's tightest turns need {need:.1f} m between them"
     )
+
+
+def _turn_words(angle: float) -> str:
+    """A signed deflection in words: ``'88 deg left'``."""
+    return f"{abs(math.degrees(angle)):.0f} deg {'left' if angle > 0 else 'right'}"
 
 
 def _unrepaired(what: str, where: np.ndarray) -> str:
