@@ -373,7 +373,9 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         terminated = over and not truncated
         info: dict[str, Any] = {
             "episode_seed": self.episode_seed,
-            "time_s": loop.t,
+            # The drive log's time of this step (steps x dt): the loop's running sum of dt
+            # drifts (149.44999999999973 s for 149.45; an audit).
+            "time_s": loop.steps * dt,
             "cte_m": e,
             "heading_err_rad": psi,
             "speed": v,

@@ -353,3 +353,13 @@ def test_ompl_comparators_answer_a_start_that_is_the_goal_as_every_planner_does(
         assert out.status is PlanStatus.SOLVED, name
         assert len(out.path) == 2 and out.path.length == 0.0, name
         assert np.allclose(out.path.samples[:, :3], [LOT.start.as_tuple()] * 2)
+
+
+def test_gym_info_time_is_the_step_count_times_dt():
+    env = gym.make("rrtdrive/Map-v0", scenario=SMALL)
+    env.reset(seed=0)
+    dt = 1.0 / env.unwrapped.config.simulation_frequency
+    for k in range(1, 31):
+        *_, info = env.step(np.zeros(2, dtype=np.float32))
+        assert info["time_s"] == k * dt  # no running sum's drift
+    env.close()
