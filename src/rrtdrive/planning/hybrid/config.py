@@ -213,6 +213,13 @@ class HybridConfig:
         (:func:`~rrtdrive.planning.hybrid.shortcut.shortcut`); the shortened connection
         is built and checked like any other and kept only when accepted and shorter.
         0 (default): never.
+    stub_tries : int
+        With reverse, a path whose first or last gear segment is a stub (at most
+        :data:`~rrtdrive.planning.hybrid.shortcut.STUB_M`) is tried without it: up to
+        this many anchor poses at each end
+        (:func:`~rrtdrive.planning.hybrid.shortcut.drop_end_stubs`), the result built
+        and checked like any connection and kept when it costs less (length plus
+        0.5 m a gear change). 0: never.
     abreast_turns : int
         With reverse, when the multi-point turn from the start fails and the goal
         faces more than 100 deg away from the start's heading (the car turns round), it
@@ -294,6 +301,7 @@ class HybridConfig:
     wide_radius_factor: float = 1.1
     tight_radius_factor: float = 1.0
     shortcut_tries: int = 0
+    stub_tries: int = 12
     turn_moves: int = 12
     abreast_turns: int = 4
     lead_ins: int = 3
@@ -383,6 +391,7 @@ class HybridConfig:
         require_int("hybrid.switch_after", self.switch_after, minimum=0)
         require_int("hybrid.refinements", self.refinements, minimum=0)
         require_int("hybrid.shortcut_tries", self.shortcut_tries, minimum=0)
+        require_int("hybrid.stub_tries", self.stub_tries, minimum=0)
         require_int("hybrid.turn_moves", self.turn_moves, minimum=0)
         require_int("hybrid.abreast_turns", self.abreast_turns, minimum=0)
         require_int("hybrid.lead_ins", self.lead_ins, minimum=0)

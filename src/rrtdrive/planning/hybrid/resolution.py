@@ -51,7 +51,8 @@ from rrtdrive.planning.hybrid.search import (
     analytic_shots,
     walks_hit,
 )
-from rrtdrive.planning.hybrid.shortcut import polyline_length, shortcut
+from rrtdrive.planning.hybrid.shortcut import drop_end_stubs, polyline_length, shortcut
+from rrtdrive.planning.hybrid.shots import SHOT_CUSP_COST_M
 from rrtdrive.planning.hybrid.turn import TurnResult, abreast, multi_point_turn
 from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
 from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, SmoothingConfig
@@ -447,6 +448,8 @@ def search_at_resolution(
         take: Accept = accept
         if config.shortcut_tries > 0:
             take = _shortened(accept, body, radius, reverse, config)
+        if reverse and config.stub_tries > 0:
+            take = _destubbed(take, accept, body, radius, config)
         out: list[tuple[HybridSearch, Accept]] = [(ahead, take)]
         if config.switch_after > 0:
             back_prims, *back_long = back_sets
@@ -530,6 +533,29 @@ def _shortened(
         return better
 
     return take
+
+
+def _destubbed(
+    take: Accept, accept: Accept, body: BodyTest, radius: float, config: HybridConfig
+) -> Accept:
+    """``take`` followed by :func:`~.shortcut.drop_end_stubs` (kept when accepted and cheaper)."""
+
+    def cost(built: BuiltPath) -> float:
+        return polyline_length(built.rows) + SHOT_CUSP_COST_M * (built.segments - 1)
+
+    def destubbed(pieces: list[Piece]) -> BuiltPath | None:
+        built = take(pieces)
+        if built is None or built.segments < 2:
+            return built
+        fewer = drop_end_stubs(
+            pieces,
+            lambda t: analytic_shots(t, radius, True, config.check_spacing, body),
+            body, config.stub_tries, SHOT_CUSP_COST_M,
+        )  # fmt: skip
+        better = None if fewer is None else accept(fewer)
+        return built if better is None or cost(better) >= cost(built) else better
+
+    return destubbed
 
 
 def prims_reverse(radius: float, config: HybridConfig) -> tuple[PrimitiveSet, ...]:

@@ -20,7 +20,14 @@ from rrtdrive.planning.hybrid.body import BodyTest
 from rrtdrive.planning.hybrid.shots import Piece, Shots
 from rrtdrive.types import Pose
 
-__all__ = ["pieces_length", "polyline_length", "shortcut"]
+__all__ = [
+    "STUB_M",
+    "drop_end_stubs",
+    "gear_changes",
+    "pieces_length",
+    "polyline_length",
+    "shortcut",
+]
 
 
 def polyline_length(rows: np.ndarray) -> float:
@@ -130,3 +137,86 @@ def shortcut(
         if not taken:
             i += 1
     return _merge(atoms) if changed else None
+
+
+#: A gear segment at most this long (metres) at either end of a path is a stub: a move
+#: the car makes for a few centimetres (a 0.086 m reverse out of a garage, a 0.3 m one at
+#: the goal after a 22 m drive; a new user's find) that :func:`drop_end_stubs` tries to do
+#: without.
+STUB_M = 1.0
+
+
+def gear_changes(pieces: Sequence[Piece]) -> int:
+    """Cusps of a connection: where one piece's gear differs from the one before it."""
+    return sum(a.gear != b.gear for a, b in zip(pieces, pieces[1:], strict=False))
+
+
+def drop_end_stubs(
+    pieces: Sequence[Piece],
+    shots_to: Callable[[Pose], Shots],
+    body: BodyTest,
+    tries: int,
+    cusp_cost: float,
+    spacing: float = 2.0,
+) -> list[Piece] | None:
+    """The connection without its stub at the start or the goal, or ``None``.
+
+    A stub (a first or last gear segment of at most :data:`STUB_M`) is replaced, with
+    the stretch next to it, by an analytic word from the start to an anchor pose along
+    the connection (or from an anchor to the goal), the anchors ``spacing`` apart and
+    nearest the stub first. A word is taken when it is clear and the result has fewer
+    gear changes and costs less, its length plus ``cusp_cost`` a gear change (the
+    shots' order), than the original.
+
+    Parameters
+    ----------
+    pieces : sequence of Piece
+        The connection, start to goal.
+    shots_to : callable
+        ``shots_to(target)``: the analytic expansions to ``target``.
+    body : BodyTest
+        The search's body test.
+    tries : int
+        Most anchors tried at each end: the counted budget.
+    cusp_cost : float
+        Metres a gear change costs in the comparison.
+    spacing : float
+        Distance between anchors, metres.
+
+    Returns
+    -------
+    list of Piece or None
+    """
+    out = list(pieces)
+
+    def cost(ps: Sequence[Piece]) -> float:
+        return pieces_length(ps) + cusp_cost * gear_changes(ps)
+
+    changed = False
+    for at_goal in (True, False):
+        if len(out) < 2 or tries <= 0:
+            break
+        stub = out[-1] if at_goal else out[0]
+        if pieces_length([stub]) > STUB_M:
+            continue
+        rest = _atoms(out[:-1] if at_goal else out[1:], spacing)
+        best, cusps = cost(out) - 1e-9, gear_changes(out)
+        found = None
+        order = range(len(rest) - 1, -1, -1) if at_goal else range(1, len(rest) + 1)
+        for j in list(order)[:tries]:
+            if at_goal:
+                anchor, end = _pose(rest[j].rows, 0), _pose(stub.rows, -1)
+            else:
+                anchor, end = _pose(stub.rows, 0), _pose(rest[j - 1].rows, -1)
+            for word in shots_to(end)(anchor):
+                new = [*rest[:j], *word] if at_goal else [*word, *rest[j:]]
+                if gear_changes(new) >= cusps or cost(new) >= best:
+                    continue  # a stub's gear change kept, or dearer than the stub
+                if body.all_free(np.vstack([w.rows[:, :3] for w in word])):
+                    found = _merge(new)
+                    break
+            if found is not None:
+                break
+        if found is not None:
+            out, changed = found, True
+    return out if changed else None
