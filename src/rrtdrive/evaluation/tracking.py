@@ -5,7 +5,9 @@
 (:func:`rrtdrive.geometry.project_to_polyline`). A path with gear changes is measured
 against the segment being driven (:func:`driven_segments`): a three-point turn drives
 back over its own ground, so a projection on the whole polyline could pick the
-wrong leg.
+wrong leg. Within one segment, a path that drives over its own ground (a forward
+loop back along its way in) keeps each pose on the stretch being driven
+(:func:`followed_projection`).
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rrtdrive.geometry import project_to_polyline, wrap_angle
+from rrtdrive.geometry import PolylineProjection, project_to_polyline, wrap_angle
 from rrtdrive.types import InputError, Path
 
 __all__ = [
@@ -23,6 +25,7 @@ __all__ = [
     "gear_runs",
     "driven_segments",
     "followed_runs",
+    "followed_projection",
     "gear_changes",
     "tracking_errors",
     "along_path",
@@ -204,11 +207,66 @@ def gear_changes(speeds: np.ndarray) -> int:
     return int(np.count_nonzero(sign[1:] != sign[:-1]))
 
 
+#: Between two logged poses the foot point may move along the path this much more than
+#: the car moved (metres) before it counts as a jump to another stretch of the path.
+FOLLOW_SLACK_M = 2.0
+
+
+def followed_projection(
+    vertices: np.ndarray, points: np.ndarray, chunk: int = 256
+) -> PolylineProjection:
+    """The nearest points of a drive's positions, kept on the stretch being driven.
+
+    Each point's nearest point on the polyline (:func:`~rrtdrive.geometry.project_to_polyline`)
+    unless that jumps along it, between two consecutive points, by more than the car
+    moved plus :data:`FOLLOW_SLACK_M`: a path that comes back over its own ground
+    (east 20 m, a loop, back west along the same line) had the way out measured
+    against the way back, 180 degrees of heading error at 0.1 m of cross-track (an
+    audit). Then the points are followed in order instead: each one's nearest point
+    within that reach of the one before (the first's: its nearest, or within its
+    distance of the polyline's start when that is nearer along). Without such a jump
+    the answer is the nearest point's.
+
+    Examples
+    --------
+    >>> # East along y = 0, round a square, and east again along y = 0.2.
+    >>> loop = np.array([[0, 0], [10, 0], [10, 10], [0, 10], [0, 0.2], [10, 0.2]], float)
+    >>> drive = np.array([[1, 0.15], [5, 0.15], [9, 0.15], [10.1, 5.0]])  # out, then up
+    >>> project_to_polyline(loop, drive).segment.tolist()  # the first three: the way back
+    [4, 4, 4, 1]
+    >>> followed_projection(loop, drive).segment.tolist()
+    [0, 0, 0, 1]
+    """
+    q = np.asarray(points, dtype=float).reshape(-1, 2)
+    xy = np.asarray(vertices, dtype=float)[:, :2]
+    near = project_to_polyline(xy, q, chunk)
+    moved = np.hypot(*np.diff(q, axis=0).T)
+    if not np.any(np.abs(np.diff(near.s)) > moved + FOLLOW_SLACK_M):
+        return near
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
+    seg, frac = near.segment.copy(), near.fraction.copy()
+    foot, dist, s = near.foot.copy(), near.distance.copy(), near.s.copy()
+    # The first point: its nearest, unless that lies farther along than the car could
+    # be from the start (a drive begins at the path's start: the way back was nearer).
+    first = float(np.hypot(*(q[0] - xy[0]))) + FOLLOW_SLACK_M
+    here, reach = (float(near.s[0]), 0.0) if near.s[0] <= first else (0.0, first)
+    for i in range(len(q)):
+        if i:
+            reach = moved[i - 1] + FOLLOW_SLACK_M
+        lo = max(0, int(np.searchsorted(arc, here - reach, side="right")) - 1)
+        hi = min(len(xy) - 1, max(lo + 1, int(np.searchsorted(arc, here + reach, side="left"))))
+        one = project_to_polyline(xy[lo : hi + 1], q[i])
+        seg[i], frac[i], foot[i] = lo + one.segment[0], one.fraction[0], one.foot[0]
+        dist[i], s[i] = one.distance[0], arc[lo] + one.s[0]
+        here = float(s[i])
+    return PolylineProjection(seg, frac, foot, dist, s)
+
+
 def _errors_on(s: np.ndarray, p: np.ndarray, chunk: int) -> tuple[np.ndarray, np.ndarray]:
     """Cross-track and heading errors of poses ``p`` against distinct samples ``s``."""
     d = np.diff(s[:, :2], axis=0)
     yaw = np.unwrap(s[:, 2])
-    proj = project_to_polyline(s[:, :2], p[:, :2], chunk)
+    proj = followed_projection(s[:, :2], p[:, :2], chunk)
     j, tj = proj.segment, proj.fraction
     off = p[:, :2] - proj.foot
     cross = d[j, 0] * off[:, 1] - d[j, 1] * off[:, 0]
@@ -295,11 +353,11 @@ def along_path(path: Path, poses: np.ndarray, speeds: np.ndarray | None = None) 
     p = np.asarray(poses, dtype=float)[:, :2]
     runs = gear_runs(path)
     if len(runs) == 1:
-        return project_to_polyline(runs[0].samples[:, :2], p).s
+        return followed_projection(runs[0].samples[:, :2], p).s
     which = _assign(path, runs, np.column_stack([p, np.zeros(len(p))]), speeds, 256)
     out = np.zeros(len(p))
     for k, run in enumerate(runs):
         mask = which == k
         if np.any(mask):
-            out[mask] = run.s0 + project_to_polyline(run.samples[:, :2], p[mask]).s
+            out[mask] = run.s0 + followed_projection(run.samples[:, :2], p[mask]).s
     return out

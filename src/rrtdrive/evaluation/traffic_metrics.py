@@ -21,8 +21,8 @@ from rrtdrive.evaluation.collisions import (
     relative_angles,
     vehicle_collisions,
 )
-from rrtdrive.evaluation.tracking import along_path, distinct_samples
-from rrtdrive.geometry import box_corners, project_to_polyline
+from rrtdrive.evaluation.tracking import along_path
+from rrtdrive.geometry import box_corners
 
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.sim.episode import Episode
@@ -174,8 +174,9 @@ def progress(episode: Episode) -> float | None:
     """Arc length along the tracked path between the first and last logged rear axle (m).
 
     On a path with gear changes, travelled length over all its segments, each pose
-    projected on the segment being driven. ``None`` when the path has fewer than
-    two samples.
+    projected on the segment being driven; within one, on the stretch being driven
+    (:func:`~rrtdrive.evaluation.tracking.followed_projection`). ``None`` when the path
+    has fewer than two samples.
 
     Parameters
     ----------
@@ -189,9 +190,9 @@ def progress(episode: Episode) -> float | None:
     path = episode.path
     if len(path) < 2:
         return None
-    if not path.is_forward_only:
-        states = episode.log.states
-        s_all = along_path(path, states[:, :2], states[:, 3])
-        return float(s_all[-1] - s_all[0])
-    s_ends = project_to_polyline(distinct_samples(path)[:, :2], episode.log.states[[0, -1], :2]).s
-    return float(s_ends[1] - s_ends[0])
+    # Every pose, not only the two ends: on a path over its own ground the last one's
+    # nearest point may lie on the way out (3.0 m for an 88.3 m path driven to its end,
+    # an audit); along_path follows the drive (followed_projection).
+    states = episode.log.states
+    s_all = along_path(path, states[:, :2], states[:, 3])
+    return float(s_all[-1] - s_all[0])
