@@ -160,7 +160,14 @@ def main(argv: list[str] | None = None) -> int:
     if args.worker:
         return bh._worker(args.count, args.repeat, args.warm or bh.warm_query(args.count), _Runner)
     gears = tuple(args.gears.split(","))
+    if not gears or any(g not in ("fwd", "rev") for g in gears):
+        ap.error(f"--gears: expected fwd, rev or fwd,rev, got {args.gears!r}")
     ids = args.only.split(",") if args.only else query_ids(args.count, gears)
+    known = set(query_ids(args.count))
+    unknown = [q for q in ids if q not in known]
+    if unknown:
+        ap.error(f"--only: unknown query id(s) {unknown}; ids are VARY:GEAR:I, e.g. goal:rev:7 "
+                 f"(VARY goal or start, GEAR fwd or rev, I below --count {args.count})")
     if not (args.record or args.check):
         return _bench(args, ids)
     runner = _Runner(args.count)

@@ -104,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="timed passes over all pairs per function, >= 1 (default: %(default)s)")
     ap.add_argument("--radius", type=float, default=6.0,
                     help="minimum turning radius [m], > 0 (default: %(default)s)")
-    ap.add_argument("--seed", type=int, default=0,
+    ap.add_argument("--seed", type=int_at_least(0), default=0,
                     help="seed of the random pairs and the table check (default: %(default)s)")
     ap.add_argument("--table-extent", type=float, default=24.0,
                     help="table covers |dx|, |dy| up to this [m] (default: %(default)s)")

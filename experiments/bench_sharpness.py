@@ -97,7 +97,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="planner seeds 0..N-1 per map (default: %(default)s)")
     ap.add_argument("--goals", type=int_at_least(0), default=100,
                     help="random poses (0: skip part 2) (default: %(default)s)")
-    ap.add_argument("--goal-seed", type=int, default=1, help="seed of the random poses")
+    ap.add_argument("--goal-seed", type=int_at_least(0), default=1, help="seed of the random poses")
     ap.add_argument("--max-time", type=positive_float, default=5.0,
                     help="safety cap per plan [s] (default: %(default)s)")
     ap.add_argument("--out", default="results",

@@ -34,6 +34,7 @@ from pathlib import Path as FsPath
 HERE = FsPath(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 import bench_hybrid  # noqa: E402  (the export of an old tree, provenance, results)
+from results_io import out_folder  # noqa: E402
 
 
 def _worker(plans_file: str, repeat: int) -> int:
@@ -119,7 +120,7 @@ def _markdown(meta: dict, rows: list[dict], summary: dict) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--ref", default=None, help="the old code's commit (default: no comparison)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", default="results", type=out_folder,
                     help="directory of bench_verify.{json,md} (default: %(default)s)")
     ap.add_argument("--maps", default="parking_lot,overtake,narrow_gap,garage,kerbside,reverse_bay",
                     help="comma-separated built-in maps (default: %(default)s)")  # fmt: skip

@@ -61,7 +61,7 @@ from results_io import check_doc, out_folder, write_doc  # noqa: E402
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
 from rrtdrive.bench.backends import parallel_map  # noqa: E402
-from rrtdrive.cli_args import positive_float, positive_int  # noqa: E402
+from rrtdrive.cli_args import int_at_least, positive_float, positive_int  # noqa: E402
 from rrtdrive.maps import builtin_map  # noqa: E402
 from rrtdrive.planning import PLANNERS, PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.planning.hybrid.escalation import stage_of  # noqa: E402
@@ -449,7 +449,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="built-in map name (default: %(default)s)")
     ap.add_argument("--count", type=positive_int, default=100, help="poses per set (default 100)")
     ap.add_argument("--sets", default="goal,start", help="goal, start or both (default)")
-    ap.add_argument("--seed", type=int, default=1, help="seed of the pose sets")
+    ap.add_argument("--seed", type=int_at_least(0), default=1, help="seed of the pose sets")
     ap.add_argument("--planners", default=DEFAULT_PLANNERS,
                     help="comma-separated: NAME[+reverse][@field=value:...] of a registered "
                     "planner, ompl-dubins-rrt, ompl-rs-rrtconnect (default: %(default)s)")

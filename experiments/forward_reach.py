@@ -42,7 +42,7 @@ from forward_misses import _item  # noqa: E402  (the query parser of the sibling
 from reach_sweep import Reach, sweep  # noqa: E402
 from results_io import command, machine, numbers_above, write_results  # noqa: E402
 
-from rrtdrive.cli_args import positive_int  # noqa: E402
+from rrtdrive.cli_args import nonneg_float, positive_float, positive_int  # noqa: E402
 from rrtdrive.types import Path, Pose  # noqa: E402
 from rrtdrive.verify import verify_path  # noqa: E402
 
@@ -103,10 +103,10 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--cell", default="0.05",
                     help="merge cells, m, comma-separated (default: %(default)s)")
-    ap.add_argument("--clearance", type=float, default=0.0, help="body clearance kept, m")
-    ap.add_argument("--step", type=float, default=0.2,
+    ap.add_argument("--clearance", type=nonneg_float, default=0.0, help="body clearance kept, m")
+    ap.add_argument("--step", type=positive_float, default=0.2,
                     help="metres between steering moves (default: %(default)s)")
-    ap.add_argument("--distance", type=float, default=30.0,
+    ap.add_argument("--distance", type=positive_float, default=30.0,
                     help="metres a drive must reach (default: %(default)s)")
     ap.add_argument("--max-states", type=positive_int, default=300_000,
                     help="drives kept per step (default: %(default)s)")

@@ -51,7 +51,7 @@ sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 from random_goals import draw_goals  # noqa: E402
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
-from rrtdrive.cli_args import positive_int  # noqa: E402
+from rrtdrive.cli_args import int_at_least, positive_int  # noqa: E402
 from rrtdrive.maps import builtin_map  # noqa: E402
 from rrtdrive.planning import PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.planning.hybrid import HybridConfig  # noqa: E402
@@ -209,7 +209,8 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--count", type=positive_int, default=30,
                     help="random poses per set (default 30)")
-    ap.add_argument("--seed", type=int, default=1, help="seed of the pose sets (default 1)")
+    ap.add_argument("--seed", type=int_at_least(0), default=1,
+                    help="seed of the pose sets (default 1)")
     ap.add_argument("--scenario-seeds", type=positive_int, default=10,
                     help="seeds per gear scenario (default: %(default)s)")
     ap.add_argument("--repeat", type=positive_int, default=2,

@@ -6,19 +6,23 @@ Usage: python experiments/map_figures.py [--out docs/figures]   (default: result
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 import matplotlib.pyplot as plt
 
-from rrtdrive.maps import BUILTIN_MAPS, builtin_map
-from rrtdrive.plotting import draw_map, save_figure
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from results_io import out_folder  # noqa: E402
+
+from rrtdrive.maps import BUILTIN_MAPS, builtin_map  # noqa: E402
+from rrtdrive.plotting import draw_map, save_figure  # noqa: E402
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument(
-        "--out", default="results/figures", help="output folder (docs/figures for the docs)"
-                                                 " (default: %(default)s)"
+        "--out", default="results/figures", type=out_folder,
+        help="output folder (docs/figures for the docs) (default: %(default)s)",
     )
     args = parser.parse_args()
     out = Path(args.out)

@@ -31,7 +31,7 @@ from pathlib import Path as FsPath
 import numpy as np
 from results_io import machine, out_folder  # the sibling module
 
-from rrtdrive.cli_args import positive_float, positive_int
+from rrtdrive.cli_args import int_at_least, positive_float, positive_int
 from rrtdrive.maps import BUILTIN_MAPS, builtin_map, write_text_atomic
 from rrtdrive.planning.base import PlanningProblem
 from rrtdrive.planning.hybrid.escalation import stage_of
@@ -57,7 +57,7 @@ def add_pose_set_options(ap: argparse.ArgumentParser) -> None:
                     help="built-in map name (default: %(default)s)")
     ap.add_argument("--goals", type=positive_int, default=100,
                     help="random free poses to plan to (or from) (default: %(default)s)")
-    ap.add_argument("--seed", type=int, default=1,
+    ap.add_argument("--seed", type=int_at_least(0), default=1,
                     help="seed of the random poses (default: %(default)s)")
     ap.add_argument("--vary", choices=("goal", "start"), default="goal",
                     help="map pose the random poses replace (default: %(default)s)")
