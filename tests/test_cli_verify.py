@@ -221,7 +221,9 @@ def test_a_path_starting_in_collision_fails_the_body_check_there(capsys, tmp_pat
     assert code == 1 and err == ""
     assert "FAIL body clear of obstacles" in out and "obstacle 0" in out
     doc = json.loads((tmp_path / "c.json").read_text())
-    assert doc["failed"] == ["collision_free"] and doc["collides_with"] == "obstacle 0"
+    # Contact is no clearance either (it read "ok clearance 0.0000 m (min 0)").
+    assert doc["failed"] == ["collision_free", "clearance_ok"]
+    assert doc["collides_with"] == "obstacle 0"
     assert doc["first_collision"][:2] == pytest.approx([cx, cy])
 
 
@@ -308,7 +310,7 @@ def test_the_plot_draws_the_body_where_the_path_first_collides(capsys, plans, tm
     check = verify_path(blocked, path)
     fig = plot_check(blocked, path, check, "p.json")
     title = fig.axes[0].get_title(loc="left")
-    assert title == "parking_lot: p.json: FAILED: collision (697 rows, 170.7 m)".replace(
+    assert title == "parking_lot: p.json: FAILED: collision, clearance (697 rows, 170.7 m)".replace(
         "697", str(len(path))).replace("170.7", f"{path.length:.1f}")
     # The red body (tab:red): the car at the first colliding pose, which overlaps the block.
     bodies = [shapely.Polygon(p.get_xy()) for p in fig.axes[0].patches

@@ -120,7 +120,8 @@ class PathCheck:
         apart along the rows), and any obstacle or the edge of the bounds; 0 where
         they touch or overlap, inf on an empty map.
     clearance_ok : bool
-        ``min_clearance_m`` is at least the ``clearance`` asked for.
+        The body touches nothing and ``min_clearance_m`` is at least the ``clearance``
+        asked for.
     kappa_ok : bool
         Every row's ``kappa`` column (``tan delta / L``, in both gears) lies within
         ``curvature_tol`` of the steering curvature the yaw turns at on the steps on
@@ -438,7 +439,9 @@ def verify_path(
     least = 0.0
     if collision_free:
         least = _least_clearance(m, shapes, polygons, _corners(shapes)) if len(shapes) else math.inf
-    clearance_ok = least >= clearance - 1e-9 and (collision_free or clearance == 0.0)
+    # Contact is no clearance, whatever was asked (a path 0.7 m out of the bounds read "ok
+    # clearance ... 0.0000 m (min 0)"; a student's find).
+    clearance_ok = collision_free and least >= clearance - 1e-9
     curvature_ok = max_k <= v.kappa_max + curvature_tol
     tol = math.radians(heading_tol_deg)
     headings_ok = max(err_s, err_g) <= tol
