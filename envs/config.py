@@ -23,6 +23,7 @@ from rrtdrive.controllers import CONTROLLERS, SpeedConfig, TrackingController, m
 from rrtdrive.envs import is_registered_default, scenario_text
 from rrtdrive.envs.action import CommandLimits
 from rrtdrive.envs.reward import RewardWeights
+from rrtdrive.frozen import FrozenOptions
 from rrtdrive.maps import Map, map_from_json
 from rrtdrive.planning import PLANNERS, forward_only_note, make_planner, reverses, unknown_planner
 from rrtdrive.sim.limits import MAX_REVERSE_SPEED, MAX_SPEED
@@ -69,6 +70,11 @@ def _require_mapping(name: str, value: Any) -> dict[str, Any]:
         if not isinstance(key, str):  # they become keyword arguments
             raise InputError(f"{name}: keys must be option names (strings), got {key!r}")
     return dict(value)
+
+
+def _frozen(name: str, value: Any) -> FrozenOptions:
+    """A checked option mapping, read-only and hashable as the frozen config that holds it."""
+    return FrozenOptions(_require_mapping(name, value))
 
 
 def _planner_options(options: object, planner: str, replan: object) -> dict[str, Any]:
@@ -259,9 +265,9 @@ class DriveEnvConfig:
         if self.max_cte is not None:
             put("max_cte", _require_number("max_cte", self.max_cte))
         put("reward", RewardWeights.from_any(self.reward))
-        put("scenario_options", _require_mapping("scenario_options", self.scenario_options))
+        put("scenario_options", _frozen("scenario_options", self.scenario_options))
         replan_options = _require_mapping("replan_options", self.replan_options)
-        put("replan_options", replan_options)
+        put("replan_options", FrozenOptions(replan_options))
         replan = None
         # None: the task plans once (a map's too).
         replan_config = None if self.map is not None else TASKS[self.scenario].REPLAN_CONFIG
@@ -276,9 +282,10 @@ class DriveEnvConfig:
                 f"replan_options: only the {' or '.join(REPLANNING_SCENARIOS)} scenario re-plans"
             )
         put("replan", replan)
-        put("controller_options", _require_mapping("controller_options", self.controller_options))
-        put("planner_options", _planner_options(self.planner_options, planner, replan))
-        put("speed_options", _require_mapping("speed_options", self.speed_options))
+        put("controller_options", _frozen("controller_options", self.controller_options))
+        checked = _planner_options(self.planner_options, planner, replan)
+        put("planner_options", FrozenOptions(checked))
+        put("speed_options", _frozen("speed_options", self.speed_options))
         budget = Budget() if self.budget is None else self.budget
         if not isinstance(budget, Budget):
             raise InputError(f"budget: expected a rrtdrive.Budget, got {budget!r}")

@@ -331,17 +331,22 @@ def test_gym_spec_json_round_trip_for_a_map_built_in_python():
     assert np.array_equal(env.reset(seed=0)[0], again.reset(seed=0)[0])
 
 
-@pytest.mark.xfail(strict=True, reason="BUG: DriveEnvConfig is documented as one frozen, "
-                   "validated dataclass, but its option mappings (scenario_options, "
-                   "controller_options, ...) are plain dicts: env.unwrapped.config can be "
-                   "changed in place past validation, and hash(config) raises TypeError "
-                   "(envs/config.py)")  # fmt: skip
 def test_gym_config_is_frozen_all_the_way_down():
     env = gym.make("rrtdrive/Map-v0", scenario="kerbside", scenario_options={"reverse": True})
     config = env.unwrapped.config
     with pytest.raises(TypeError):
         config.scenario_options["reverse"] = False  # type: ignore[index]
-    hash(config)
+    assert hash(config) == hash(config.with_options())
+    assert config.scenario_options == {"reverse": True}
+    import copy
+    import pickle
+
+    assert pickle.loads(pickle.dumps(config.scenario_options)) == config.scenario_options
+    assert copy.deepcopy(config) == config
+    episode = EpisodeConfig(controller_options={"lookahead": {"min": 2.0}})
+    with pytest.raises(TypeError):
+        episode.controller_options["lookahead"]["min"] = 3.0  # type: ignore[index]
+    assert hash(episode) == hash(EpisodeConfig(controller_options={"lookahead": {"min": 2.0}}))
 
 
 def test_ompl_comparators_answer_a_start_that_is_the_goal_as_every_planner_does():

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import re
 import warnings
+from collections.abc import Mapping
 
 import gymnasium as gym
 import numpy as np
@@ -17,6 +18,7 @@ import rrtdrive  # noqa: F401  (registers the ids)
 from rrtdrive.envs import ENV_IDS, ENV_KWARGS
 from rrtdrive.envs.action import CommandLimits, action_command
 from rrtdrive.envs.config import DriveEnvConfig
+from rrtdrive.frozen import FrozenOptions
 from rrtdrive.types import InputError
 
 
@@ -75,8 +77,10 @@ def test_registered_defaults_apply_without_config(env_id):
     got = _make(env_id)
     for key, value in ENV_KWARGS[env_id].items():
         assert getattr(got, key) == value
-        # Plain values in the config, not the registration's marker types.
-        assert type(getattr(got, key)) is type(value)
+        # Plain values in the config, not the registration's marker types; option
+        # mappings read-only (FrozenOptions, as every config's).
+        kind = FrozenOptions if isinstance(value, Mapping) else type(value)
+        assert type(getattr(got, key)) is kind
     assert _make(env_id, planner="rrt-connect").planner == "rrt-connect"
 
 

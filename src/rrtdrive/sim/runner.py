@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rrtdrive.controllers import SpeedConfig, TrackingController, make_controller
+from rrtdrive.frozen import FrozenOptions
 from rrtdrive.sim.episode import DriveLog, Episode, EpisodeStatus
 from rrtdrive.sim.loop import STOP_AT_PATH_END, EpisodeLoop, PathTracker, require_episode_time
 from rrtdrive.sim.scenes import SimConfig, build_env
@@ -94,6 +95,8 @@ class EpisodeConfig:
                     f"episode.{name}_options: expected a mapping of the {name}'s keyword "
                     f"arguments {what} by name, got {brief_repr(value)}"
                 )
+            # Read-only past validation, and hashable as the frozen config around it.
+            object.__setattr__(self, f"{name}_options", FrozenOptions(value))
         if self.max_time_s is not None:
             require_episode_time("episode.max_time_s", self.max_time_s)
         if not isinstance(self.stop_on_crash, bool):
