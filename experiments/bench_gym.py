@@ -25,7 +25,7 @@ import gymnasium as gym
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
-from results_io import command, machine, write_results  # noqa: E402  (the sibling script)
+from results_io import command, machine, out_folder, write_results  # noqa: E402  (the sibling script)
 
 import rrtdrive.envs  # noqa: E402,F401  (registers the environments)
 from rrtdrive.cli_args import positive_int  # noqa: E402
@@ -91,7 +91,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--steps", type=positive_int, default=400, help="steps per run (default 400)")
     ap.add_argument("--repeats", type=positive_int, default=3,
                     help="runs, the best kept (default 3)")
-    ap.add_argument("--out", default=None, help="write bench_gym.json and .md here")
+    ap.add_argument("--out", type=out_folder, default=None,
+                    help="write bench_gym.json and .md here")
     args = ap.parse_args(argv)
     if args.steps < 1 or args.repeats < 1:
         ap.error("--steps and --repeats must be at least 1")

@@ -130,12 +130,14 @@ def _summary(rows: list[dict]) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     sys.path.insert(0, str(HERE))
     from bench_hybrid import positive_int  # the sibling script's (no rrtdrive import here)
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--ref", default="d4ad454", help="the old code's commit (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", type=out_folder, default="results",
                     help="directory for bench_ramps.json and .md (default: %(default)s)")
     ap.add_argument("--segments", default="",
                     help="pickle of recorded segments (read or write) (default: %(default)s)")

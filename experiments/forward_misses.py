@@ -250,6 +250,8 @@ def _query_lines(payload: dict[str, Any], expansions: int) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--query", default="start:81",
                     help="goal:N or start:N, comma-separated (default start:81)")
@@ -266,7 +268,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="body clearance OMPL's states keep, metres, 0-1 (default: 0)")
     ap.add_argument("--ompl-tries", type=positive_int, default=1,
                     help="OMPL seeds tried until one solves (default: %(default)s)")
-    ap.add_argument("--out", default="results/forward_misses",
+    ap.add_argument("--out", type=out_folder, default="results/forward_misses",
                     help="directory for forward_misses.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)  # fmt: skip
     if args.expansions < 1 or args.ompl_time <= 0 or args.count < 1:

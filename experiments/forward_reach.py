@@ -40,7 +40,7 @@ sys.path.insert(0, os.path.dirname(__file__))
 import coverage as cov  # noqa: E402  (the sibling script)
 from forward_misses import _item  # noqa: E402  (the query parser of the sibling script)
 from reach_sweep import Reach, sweep  # noqa: E402
-from results_io import command, machine, numbers_above, write_results  # noqa: E402
+from results_io import command, machine, numbers_above, out_folder, write_results  # noqa: E402
 
 from rrtdrive.cli_args import nonneg_float, positive_float, positive_int  # noqa: E402
 from rrtdrive.types import Path, Pose  # noqa: E402
@@ -115,7 +115,7 @@ def main(argv: list[str] | None = None) -> int:
         help="start at any steering angle, lock to lock (the car turns its wheels at rest "
         "before it sets off, as the controllers do); default: wheels straight",
     )  # fmt: skip
-    ap.add_argument("--out", default="results/forward_reach",
+    ap.add_argument("--out", type=out_folder, default="results/forward_reach",
                     help="directory for forward_reach.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     try:

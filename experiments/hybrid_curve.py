@@ -80,6 +80,8 @@ def _num(v: float | None, digits: int) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--count", type=positive_int, default=30,
                     help="random goal poses and start poses each (default: %(default)s)")
@@ -89,7 +91,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="expansion budget per plan (default: %(default)s)")
     ap.add_argument("--cap", type=float, default=120.0,
                     help="wall-clock safety cap [s] (default: %(default)s)")
-    ap.add_argument("--out", default="results/hybrid_curve",
+    ap.add_argument("--out", type=out_folder, default="results/hybrid_curve",
                     help="directory for hybrid_curve.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     rows = []

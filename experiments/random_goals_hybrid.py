@@ -51,6 +51,8 @@ def verify_gears(m: Map, path: Path) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     add_pose_set_options(ap)
     ap.add_argument("--reverse", action="store_true",
@@ -59,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="expansion budget per plan (default: %(default)s)")
     ap.add_argument("--max-time", type=positive_float, default=10.0,
                     help="wall-clock safety cap per plan [s] (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", type=out_folder, default="results",
                     help="directory for hybrid_random_{goals,starts}_MAP[_reverse].json and "
                     ".md (default: %(default)s)")
     args = ap.parse_args(argv)

@@ -36,7 +36,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 import coverage as cov  # noqa: E402  (the sibling scripts)
-from results_io import cell, command, machine, write_results  # noqa: E402
+from results_io import cell, command, machine, out_folder, write_results  # noqa: E402
 from street_turns import least_clearance  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
@@ -185,7 +185,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--forward", action="store_true",
                     help="plan forward only (OMPL: Dubins RRT) instead of with reverse")
     ap.add_argument("--jobs", type=positive_int, default=1, help="worker processes")
-    ap.add_argument("--out", required=True, help="directory for random_maps.{json,md}")
+    ap.add_argument("--out", type=out_folder, required=True,
+                    help="directory for random_maps.{json,md}")
     args = ap.parse_args(argv)
     if args.maps < 1 or args.jobs < 1 or args.max_time <= 0 or args.ompl_time <= 0:
         ap.error("--maps and --jobs must be >= 1, --max-time and --ompl-time > 0")

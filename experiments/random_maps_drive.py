@@ -26,7 +26,7 @@ from typing import Any
 
 sys.path.insert(0, os.path.dirname(__file__))
 from random_maps import random_map  # noqa: E402
-from results_io import cell, command, machine, write_results  # noqa: E402
+from results_io import cell, command, machine, out_folder, write_results  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
 from rrtdrive.cli_args import positive_int  # noqa: E402
@@ -136,7 +136,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="comma-separated (default: %(default)s)")
     ap.add_argument("--planner", default="improved-rrt-connect", help="planner (the default's)")
     ap.add_argument("--jobs", type=positive_int, default=1, help="worker processes (default 1)")
-    ap.add_argument("--out", default="results/random_maps_drive",
+    ap.add_argument("--out", type=out_folder, default="results/random_maps_drive",
                     help="directory for random_maps_drive.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     controllers = [c.strip() for c in args.controllers.split(",") if c.strip()]

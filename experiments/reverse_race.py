@@ -33,7 +33,7 @@ from collections.abc import Sequence
 from typing import Any
 
 sys.path.insert(0, os.path.dirname(__file__))
-from results_io import command, write_results  # noqa: E402  (the sibling script)
+from results_io import command, out_folder, write_results  # noqa: E402  (the sibling script)
 
 DEFAULT, HYBRID = "improved-rrt-connect+reverse", "hybrid-a-star+reverse"
 OMPL = "ompl-rs-rrtconnect"
@@ -120,7 +120,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("runs", nargs="+", metavar="RUN.json",
                     help="coverage.py results with the three planners")  # fmt: skip
-    ap.add_argument("--out", default=None, help="write reverse_race.json and .md here")
+    ap.add_argument("--out", type=out_folder, default=None,
+                    help="write reverse_race.json and .md here")
     args = ap.parse_args(argv)
     rows = []
     for path in args.runs:

@@ -60,8 +60,10 @@ def _row(map_name: str, rate: float | None, controller: str, plan) -> list[str]:
 
 
 def main() -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", default="results/reversing",
+    ap.add_argument("--out", type=out_folder, default="results/reversing",
                     help="output folder (default: %(default)s)")
     ap.add_argument("--maps", nargs="+", default=list(MAPS), choices=MAPS,
                     help="tight maps to plan and drive, space-separated (default: all)")

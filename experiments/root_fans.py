@@ -27,7 +27,7 @@ from typing import Any
 HERE = FsPath(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from results_io import command, machine, write_results  # noqa: E402
+from results_io import command, machine, out_folder, write_results  # noqa: E402
 
 from rrtdrive.planning.improved.boxed import open_share  # noqa: E402
 
@@ -98,7 +98,7 @@ def report(payload: dict[str, Any]) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("run", help="a root_growth.json of experiments/root_growth.py")
-    ap.add_argument("--out", default="results/root_fans",
+    ap.add_argument("--out", type=out_folder, default="results/root_fans",
                     help="directory for root_fans.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     try:

@@ -35,7 +35,7 @@ import numpy as np
 HERE = FsPath(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-from results_io import command, machine, write_results  # noqa: E402
+from results_io import command, machine, out_folder, write_results  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress  # noqa: E402
 from rrtdrive.cli_args import positive_int  # noqa: E402
@@ -183,7 +183,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="planner seeds per built-in map (default: %(default)s)")
     ap.add_argument("--maps", default=None,
                     help="comma-separated built-in maps planned (default: all of them)")
-    ap.add_argument("--out", required=True, help="directory for root_growth.{json,md}")
+    ap.add_argument("--out", type=out_folder, required=True,
+                    help="directory for root_growth.{json,md}")
     args = ap.parse_args(argv)
     maps = None if args.maps is None else [m.strip() for m in args.maps.split(",") if m.strip()]
     unknown = sorted(set(maps or ()) - set(BUILTIN_MAPS))

@@ -37,7 +37,7 @@ import shapely
 
 sys.path.insert(0, os.path.dirname(__file__))
 import coverage as cov  # noqa: E402  (the sibling script)
-from results_io import command, machine, numbers_above, write_results  # noqa: E402
+from results_io import command, machine, numbers_above, out_folder, write_results  # noqa: E402
 
 from rrtdrive.cli_args import positive_float, positive_int  # noqa: E402
 from rrtdrive.maps import Map  # noqa: E402
@@ -137,7 +137,8 @@ def add_run_options(ap: argparse.ArgumentParser, unit: str, out: str) -> None:
         help="body clearances OMPL's states must keep, m, one OMPL row each (default "
         f"0,{OUR_CLEARANCE:g}: touching allowed, and the {OUR_CLEARANCE:g} m our planners keep)",
     )  # fmt: skip
-    ap.add_argument("--out", default=out, help=f"directory for {os.path.basename(out)}.json "
+    ap.add_argument("--out", type=out_folder, default=out,
+                    help=f"directory for {os.path.basename(out)}.json "
                     "and .md (default: %(default)s)")
 
 
