@@ -55,6 +55,7 @@ def start_drawn_episode(
     RuntimeError
         After :data:`MAX_PLAN_ATTEMPTS` draws without a plan: the last failure, its
         diagnosis, and how to allow gear changes when the scenario plans forward only.
+        At once when a plan hits the budget's wall-clock safety cap (``timeout``).
     """
     lo, hi = config.seed_range  # type: ignore[attr-defined]
     failures: dict[tuple[Map, bool], int] = {}
@@ -68,6 +69,16 @@ def start_drawn_episode(
         ref = start(seed, task)
         if ref.failure is None:
             return seed
+        if ref.plan is not None and ref.plan.status is PlanStatus.TIMEOUT:
+            # Not a counted failure: a faster machine would have planned this seed, so
+            # drawing on would make which episode plays depend on the machine (an audit).
+            budget = config.budget  # type: ignore[attr-defined]
+            raise RuntimeError(
+                f"planning episode seed {seed} hit the safety cap of {budget.max_time_s:g} s "
+                "(budget.max_time_s): the episode drawn would depend on this machine's "
+                "speed; give a higher cap, budget=Budget(max_time_s=...), or fewer "
+                "iterations, budget=Budget(max_iterations=...)"
+            )
         proven = ref.plan is not None and ref.plan.status is PlanStatus.PROVEN_UNREACHABLE
         failures[key] = RETRIES_PER_QUERY if proven else failures.get(key, 0) + 1
         last = (seed, task, ref, proven)
