@@ -493,6 +493,9 @@ def _run(args: argparse.Namespace) -> int:
         "plan_max_time_s": None if plans_nothing or deterministic else config.budget.max_time_s,
         # A failed plan's constraint in the user's terms, as `plan --json` gives it.
         "diagnosis": None if diagnosis is None else diagnosis.to_json(),
+        # The plan's own status (a capped plan's `timeout` read only in the message; an
+        # audit), as bench's episode rows give it.
+        "plan_status": None if episode.plan is None else episode.plan.status.value,
     }
     extra.update(episode.scenario.describe())
     if target != "scenario":
