@@ -410,9 +410,12 @@ def timeout_message(iterations: int, budget: Budget, unit: str = "iterations") -
     'stopped by the 5 s safety cap after 1234 iterations'
     >>> msg.split("; ")[1]
     'raise --max-time or lower --max-iterations'
+    >>> timeout_message(1, Budget(max_time_s=5.0)).split(":")[0]
+    'stopped by the 5 s safety cap after 1 iteration'
     """
+    count = unit.removesuffix("s") if iterations == 1 else unit
     return (
-        f"stopped by the {budget.max_time_s:g} s safety cap after {iterations} {unit}: "
+        f"stopped by the {budget.max_time_s:g} s safety cap after {iterations} {count}: "
         "the result depends on this machine's speed; raise --max-time or lower --max-iterations"
     )
 
