@@ -6,31 +6,19 @@ import math
 
 import numpy as np
 import shapely
+from gear_paths import integrate_pieces
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rrtdrive.evaluation.tracking import followed_projection, tracking_errors
+from rrtdrive.evaluation.tracking import distinct_samples, followed_projection, tracking_errors
 from rrtdrive.geometry import project_to_polyline
 from rrtdrive.types import Path
 
 
-def arcs(pieces, step=0.1):
-    """Rows ``[x, y, yaw, kappa]`` of (length, kappa) pieces from the origin heading east."""
-    x = y = yaw = 0.0
-    rows = [(x, y, yaw, 0.0)]
-    for length, kappa in pieces:
-        n = max(1, math.ceil(length / step))
-        for _ in range(n):
-            ds = length / n
-            if abs(kappa) < 1e-6:
-                x, y = x + ds * math.cos(yaw), y + ds * math.sin(yaw)
-            else:
-                new = yaw + kappa * ds
-                x += (math.sin(new) - math.sin(yaw)) / kappa
-                y -= (math.cos(new) - math.cos(yaw)) / kappa
-                yaw = new
-            rows.append((x, y, yaw, kappa))
-    return np.array(rows)
+def arcs(pieces) -> np.ndarray:
+    """Distinct rows ``[x, y, yaw, kappa, gear]`` of forward (length, kappa) pieces."""
+    path = integrate_pieces([(1, kappa, length) for length, kappa in pieces])
+    return distinct_samples(path)
 
 
 # East 20 m, out round a bulb (60 deg right, 300 deg left, 60 deg right at 6 m) and
