@@ -120,10 +120,18 @@ def room_at_ends(
                 if reverse
                 else f"{verb} it takes at least one gear change{tip}"
             )
+            # The space as a user measures it (a kerbside gap's length): the body's length
+            # and the straight runs both ways (the runs above are the best steady steering's).
+            space = v.length + free_run(checker, pose, 1, 0.0, need) + free_run(
+                checker, pose, -1, 0.0, need
+            )
+            numbers["space_along_m"] = space
             return Diagnosis(
                 DiagnosisKind.BOXED_IN,
                 f"the {label} is boxed in: on any steady steering the car has at most "
-                f"{behind:.2f} m behind it and {ahead:.2f} m ahead of it, {least}; {takes}",
+                f"{behind:.2f} m behind it and {ahead:.2f} m ahead of it, {least} (along "
+                f"its heading the space is {space:.2f} m, {space / v.length:.2f} car "
+                f"lengths); {takes}",
                 numbers,
             )
         if reverse:
