@@ -27,3 +27,4 @@ def test_a_planned_drive_says_solved_and_a_given_path_null(capsys, tmp_path):
     capsys.readouterr()
     code, data = simulate(capsys, "parking_lot", "--path", str(plan))
     assert code == 0 and data["plan_status"] is None
+

@@ -66,6 +66,10 @@ class _Parser(argparse.ArgumentParser):
     """An argparse parser whose errors are one line on stderr, exit code 2."""
 
     def error(self, message: str) -> NoReturn:
+        if self.prog.endswith(" bench") and message.startswith("unrecognized arguments"):
+            # `--scenarios a.json b.json`: bench's lists are one comma-separated value
+            # (or the flag repeated); b.json read as a stray argument (an audit).
+            message += "; bench's lists are comma-separated (--scenarios a.json,b.json)"
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message} (see --help)\n")
 
 

@@ -1,0 +1,15 @@
+"""`rrtdrive bench` names its comma-separated lists when a second value stands alone."""
+
+from __future__ import annotations
+
+import pytest
+
+from rrtdrive.cli import main
+
+
+def test_bench_names_its_comma_separated_lists_for_a_stray_argument(capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["bench", "--scenarios", "a.json", "b.json"])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "b.json" in err[0] and "comma-separated" in err[0]
