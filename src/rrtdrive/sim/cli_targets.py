@@ -110,8 +110,40 @@ def given_path(args: argparse.Namespace, target: str) -> tuple[Any, str | None]:
             f"--path: {source} has no path to drive (status {status}): "
             + ("no rows" if len(path) == 0 else "one row; a path needs two")
         )
+    _warn_gearless_reverse(data, path)
     made_on = data.get("map")
     return path, made_on if isinstance(made_on, str) and made_on else None
+
+
+def _warn_gearless_reverse(data: Any, path: Any) -> None:
+    """Warn when rows without a gear column move against their yaw (a reverse plan cut short).
+
+    Such rows read as forward (README), so the car drives a reversing plan nose first
+    and crashes where ``verify`` would flag it at once (an audit: a plan's gear column
+    dropped, the car hit the kerb at t = 48.85 s).
+    """
+    import numpy as np
+
+    rows = data.get("path") if isinstance(data, dict) else data
+    if not rows or len(rows[0]) != 4 or not path.is_forward_only:
+        return
+    s = path.samples
+    step = np.diff(s[:, :2], axis=0)
+    along = step[:, 0] * np.cos(s[:-1, 2]) + step[:, 1] * np.sin(s[:-1, 2])
+    back = np.flatnonzero(along < -1e-6)
+    if len(back) == 0:
+        return
+    import warnings
+
+    from rrtdrive.types import InputWarning
+
+    warnings.warn(
+        f"--path: rows without a gear column drive forward, but from row {int(back[0])} "
+        "the path moves against its yaw (a reversing plan without its gear column?): add "
+        "the gear column, [x, y, yaw, kappa, gear] with -1 in reverse, as plan --json "
+        "writes it",
+        InputWarning, stacklevel=2,
+    )
 
 
 def make_task(
