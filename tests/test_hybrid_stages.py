@@ -238,7 +238,7 @@ def test_wide_stage_turns_wider_after_rejected_connections() -> None:
     assert "could not be made drivable" in rejected.message
     res = _solve(problem, 20_000, **before)
     assert res.status is PlanStatus.SOLVED, res.message
-    assert "turning with radius 1.1 / kappa_max" in res.message
+    assert "turning with radius 6.6 m (1.1 x the car's tightest)" in res.message
     assert res.stats["wide_search"] == 1.0 and len(res.path.cusps) >= 1
     assert verify_path(m, res.path, max_sharpness=0.2).ok
     assert res.path.max_curvature <= problem.vehicle.kappa_max + 1e-9

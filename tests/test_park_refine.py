@@ -103,7 +103,8 @@ def test_reverse_in_bay_with_rejected_connections_is_solved_finer(
     wide = HybridAStar(**before).solve(problem, np.random.default_rng(0), BUDGET)
     assert wide.success, wide.message
     assert wide.stats["wide_search"] == 1.0 and wide.stats["refinements"] == 0
-    assert "turning with radius 1.1 / kappa_max at 0.5 m / 5 deg resolution" in wide.message
+    wider = "turning with radius 6.6 m (1.1 x the car's tightest) at 0.5 m / 5 deg resolution"
+    assert wider in wide.message
     assert wide.path.samples[-1, 4] == -1.0
     _assert_guarantees(task, wide.path, problem)
     # With the goal-side search brought in sooner (session 17) the first coarse search

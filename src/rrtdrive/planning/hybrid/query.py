@@ -368,7 +368,8 @@ def hybrid_query(
 
     def how_of(c: HybridConfig) -> str:
         """How a last-resort search differed from the others, for the messages."""
-        wider = f"turning with radius {c.radius_factor:g} / kappa_max"
+        r = c.radius_factor / problem.vehicle.kappa_max
+        wider = f"turning with radius {r:.1f} m ({c.radius_factor:g} x the car's tightest)"
         if c.body_clearance < config.body_clearance:
             keeps = query_clearance(problem, c.body_clearance, have)
             tail = f", {wider}" if c.radius_factor > config.radius_factor else ""
