@@ -117,3 +117,15 @@ def test_numpy_arrays_are_written_as_lists_with_their_non_finite_numbers_spelled
     np.testing.assert_array_equal(back["weights"], options["weights"])
     assert back["ids"] == [0, 1, 2] and all(type(i) is int for i in back["ids"])
     assert json_safe(np.float32(0.25)) == 0.25 and json_safe(np.array(3.0)) == 3.0
+
+
+def test_a_tiny_cap_is_written_as_given_so_the_plan_can_be_made_again(tmp_path, capsys):
+    from rrtdrive.cli import main
+
+    out = tmp_path / "p.json"
+    assert main(["plan", "narrow_gap", "--max-time", "1e-9", "--json", str(out)]) == 1
+    doc = json.loads(out.read_text())
+    assert doc["status"] == "timeout" and doc["max_time_s"] == 1e-9
+    again = tmp_path / "again.json"
+    code = main(["plan", "narrow_gap", "--max-time", repr(doc["max_time_s"]), "--json", str(again)])
+    assert code == 1 and json.loads(again.read_text())["status"] == "timeout"

@@ -131,7 +131,12 @@ def plan_to_json(
         # What decided the outcome besides the seed and options: a plan cut short by
         # --max-iterations must not read like the default's.
         "max_iterations": None if budget is None else int(budget.max_iterations),
-        "max_time_s": None if budget is None else _json_number(budget.max_time_s),
+        # As given, unrounded: the plan is made again from its JSON (a 1e-9 s cap read 0.0,
+        # which --max-time refuses; an audit).
+        "max_time_s": (
+            None if budget is None or not math.isfinite(budget.max_time_s)
+            else float(budget.max_time_s)
+        ),
         "resolution_m": None if resolution is None else float(resolution),
         "start": None if start is None else [float(v) for v in start.as_tuple()],
         "goal": None if goal is None else [float(v) for v in goal.as_tuple()],
