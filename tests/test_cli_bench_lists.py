@@ -13,3 +13,11 @@ def test_bench_names_its_comma_separated_lists_for_a_stray_argument(capsys):
     assert stop.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "b.json" in err[0] and "comma-separated" in err[0]
+
+
+def test_jobs_is_workers_as_the_experiment_scripts_call_it(tmp_path, capsys):
+    out = tmp_path / "bench"
+    code = main(["bench", "--maps", "parking_lot", "--jobs", "1", "--seeds", "1",
+                 "--out", str(out), "--no-plots"])  # fmt: skip
+    assert code == 0
+    assert "on 1 local worker process" in capsys.readouterr().out

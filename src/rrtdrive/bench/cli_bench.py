@@ -79,8 +79,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     p.add_argument("--seeds", type=_int_arg, metavar="N", help="seeds 0..N-1 (default 10)")
     p.add_argument(
-        "--workers", type=_int_arg, metavar="N",
-        help="local worker processes (default: one per core); with --ray, runs in flight",
+        "--workers", "--jobs", type=_int_arg, metavar="N", dest="workers",
+        help="local worker processes (default: one per core); with --ray, runs in flight "
+        "(--jobs: the same, as the experiment scripts call it)",
     )
     p.add_argument("--out", metavar="DIR", help="output folder (default: bench)")
     p.add_argument(
