@@ -35,3 +35,11 @@ def box_map(side: float, count: int, seed: int = 0, name: str | None = None) -> 
         boxes.append(Obstacle((x, y), size, rng.uniform(0, math.pi)))
     label = f"boxes_{side:g}_{count}" if name is None else name
     return Map(label, (0.0, 0.0, side, side), tuple(boxes), start, goal)
+
+
+if __name__ == "__main__":
+    import sys
+
+    # Run as a script it did nothing and exited 0: say what it is.
+    sys.exit("box_maps.py is a library module of experiments/bench_diagnosis.py, "
+             "bench_distance_field.py and bench_ramp_chunks.py: run one of those (--help)")

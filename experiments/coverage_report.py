@@ -177,3 +177,11 @@ def tight_report(payload: dict[str, Any]) -> str:
     if payload["skipped"]:
         lines += ["", "Skipped:", ""] + [f"- `{k}`: {v}" for k, v in payload["skipped"].items()]
     return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":
+    import sys
+
+    # Run as a script it did nothing and exited 0: say what it is.
+    sys.exit("coverage_report.py is a library module of experiments/coverage.py: "
+             "run that instead (--help)")

@@ -175,3 +175,11 @@ def write_image_atomic(path: FsPath, frame: Any) -> None:
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
+
+
+if __name__ == "__main__":
+    import sys
+
+    # Run as a script it did nothing and exited 0: say what it is.
+    sys.exit("results_io.py is a library module of every experiment script: "
+             "run one of those (--help)")
