@@ -256,11 +256,12 @@ class BenchConfig:
             raise InputError(f"plots: expected true or false, got {self.plots!r}")
         if not isinstance(self.reverse, bool):
             raise InputError(f"reverse: expected true or false, got {self.reverse!r}")
-        if not self.maps and not self.scenarios:
-            raise InputError("maps/scenarios: give at least one map or one scenario")
         if not self.planners:
             raise InputError("planners: give at least one planner")
+        # The names first: `--controllers foo` alone was told to give a map (an audit).
         self._check_names()
+        if not self.maps and not self.scenarios:
+            raise InputError("maps/scenarios: give at least one map or one scenario")
 
     def _check_names(self) -> None:
         from rrtdrive.bench.planner_specs import check_planner_spec, parse_planner_spec
