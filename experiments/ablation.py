@@ -82,12 +82,14 @@ def table(title: str, header: str, rows: list[tuple[str, dict[str, float]]]) -> 
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=positive_int, default=20,
                         help="runs per configuration, seeds 0..N-1 (default: %(default)s)")
     parser.add_argument("--maps", default="parking_lot,overtake,narrow_gap",
                         help="comma-separated built-in map names (default: %(default)s)")
-    parser.add_argument("--out", default="results",
+    parser.add_argument("--out", type=out_folder, default="results",
                         help="directory for ablation.json and .md (default: %(default)s)")
     parser.add_argument("--max-time", type=positive_float, default=5.0,
                         help="wall-clock safety cap per plan [s] (default: %(default)s)")

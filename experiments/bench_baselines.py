@@ -198,6 +198,8 @@ def markdown(report: dict) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument(
         "--seeds", type=positive_int, default=20, help="runs per planner (seeds 0..N-1)"
@@ -205,7 +207,8 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--map", default="parking_lot",
                         help="built-in map name or map file (default: %(default)s)")
-    parser.add_argument("--out", default="results/", help="output folder (default: %(default)s)")
+    parser.add_argument("--out", type=out_folder, default="results/",
+                        help="output folder (default: %(default)s)")
     parser.add_argument("--planners", nargs="+", default=list(BASELINES), choices=BASELINES,
                         help="baselines to time, space-separated (default: all)")
     parser.add_argument("--max-iterations", type=positive_int, default=20_000,

@@ -75,10 +75,12 @@ def heavy_modules(args: list[str]) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=positive_int, default=15,
                     help="timed rounds per command, >= 1 (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", type=out_folder, default="results",
                     help="directory for bench_cli_startup.json and .md (default: %(default)s)")
     ap.add_argument("--doc", default=None, help="also put the section into this markdown page")
     args = ap.parse_args(argv)

@@ -97,6 +97,8 @@ def time_env_step(ep, sim: SimConfig) -> float:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--seeds", type=positive_int, default=10,
                     help="seeds 0..N-1 per scenario and controller (default: %(default)s)")
@@ -111,7 +113,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--planner", default=DEFAULT_PLANNER,
                     help="registered planner name (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", type=out_folder, default="results",
                     help="directory for bench_closed_loop.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     sim = SimConfig(simulation_frequency=args.frequency)

@@ -457,9 +457,11 @@ def _bench(args: argparse.Namespace, ids: list[str]) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--ref", default="2bf6e48", help="the old code's commit (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", type=out_folder, default="results",
                     help="directory for bench_hybrid.json and .md (default: %(default)s)")
     ap.add_argument("--count", type=positive_int, default=30,
                     help="random goals and starts each (default: %(default)s)")

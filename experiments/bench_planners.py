@@ -109,6 +109,8 @@ def summarise(runs: list[dict]) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--map", default="parking_lot",
                         help="built-in map name (default: %(default)s)")
@@ -116,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="runs per planner, seeds 0..N-1 (default: %(default)s)")
     parser.add_argument("--cap", type=float, default=5.0,
                         help="OMPL time cap per run [s] (default: %(default)s)")
-    parser.add_argument("--out", default="results",
+    parser.add_argument("--out", type=out_folder, default="results",
                         help="directory for bench_planners_MAP.json and .md (default: %(default)s)")
     parser.add_argument(
         "--doc", default=None,

@@ -97,6 +97,8 @@ def _ompl_distance(radius: float) -> Callable[[Pose, Pose], float] | None:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark; return 0, or 1 when a length differs from OMPL's by > 1e-6."""
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--pairs", type=positive_int, default=1000,
                     help="random start/goal pose pairs, >= 1 (default: %(default)s)")
@@ -112,7 +114,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="table grid spacing in x and y [m] (default: %(default)s)")
     ap.add_argument("--table-yaw-bins", type=int_at_least(4), default=72,
                     help="table heading bins over 360 degrees, >= 4 (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", type=out_folder, default="results",
                     help="directory for reeds_shepp.json (default: %(default)s)")
     args = ap.parse_args(argv)
     if args.pairs < 1 or args.repeats < 1 or not args.radius > 0:

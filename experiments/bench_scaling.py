@@ -173,12 +173,14 @@ def trial(grid: str, workers: int, quiet: float | None, quiet_wait: float) -> di
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--grids", default="closed-loop,planning",
                         help="comma-separated grids: closed-loop, planning (default: both)")
     parser.add_argument("--repeats", type=positive_int, default=2,
                         help="1- and 2-worker trial pairs per grid (default: %(default)s)")
-    parser.add_argument("--out", default="results",
+    parser.add_argument("--out", type=out_folder, default="results",
                         help="directory for bench_scaling.json and .md (default: %(default)s)")
     parser.add_argument("--quiet-load", type=float, default=None,
                         help="wait for the 1-min load average to drop below this")

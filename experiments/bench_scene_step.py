@@ -75,6 +75,8 @@ def _same(a: Episode, b: Episode) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", type=positive_int, default=10,
                     help="episodes per case, seeds 0..N-1 (default: %(default)s)")
@@ -84,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="comma-separated cases (default: %(default)s)")
     ap.add_argument("--controller", default="pure-pursuit",
                     help="pure-pursuit, stanley or lqr (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", type=out_folder, default="results",
                     help="directory for bench_scene_step.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     cases = [c.strip() for c in args.cases.split(",") if c.strip()]

@@ -92,6 +92,8 @@ def summarise(rows: list[dict]) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", type=positive_int, default=10,
                     help="planner seeds 0..N-1 per map (default: %(default)s)")
@@ -100,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--goal-seed", type=int_at_least(0), default=1, help="seed of the random poses")
     ap.add_argument("--max-time", type=positive_float, default=5.0,
                     help="safety cap per plan [s] (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", type=out_folder, default="results",
                     help="directory for sharpness.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     command = "python experiments/bench_sharpness.py " + " ".join(

@@ -126,9 +126,11 @@ def _markdown(meta: dict, rows: list[dict], summary: dict) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--ref", default=None, help="the old code's commit (default: no comparison)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", type=out_folder, default="results",
                     help="directory of bench_trivial.{json,md} (default: %(default)s)")
     ap.add_argument("--repeat", type=bench_hybrid.positive_int, default=7,
                     help="interleaved rounds; times: the least (default: %(default)s)")

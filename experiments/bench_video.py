@@ -65,6 +65,8 @@ def _encode(frames: list, path: FsPath, fps: float) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scenario", default="parking",
                     help="scenario of the episode to export (default: %(default)s)")
@@ -74,7 +76,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="pure-pursuit, stanley or lqr (default: %(default)s)")
     ap.add_argument("--repeats", type=positive_int, default=3,
                     help="interleaved timing rounds, >= 1; medians reported (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", type=out_folder, default="results",
                     help="directory for bench_video.json and .md (default: %(default)s)")
     ap.add_argument("--doc", action="store_true", help=f"rewrite the results block of {DOC}")
     args = ap.parse_args(argv)

@@ -68,6 +68,8 @@ def run_one(job: tuple[str, str, int, float | None, float]) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=positive_int, default=10,
                     help="seeds 0..N-1 per scenario and controller (default: %(default)s)")
@@ -86,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--jobs", type=positive_int, default=2,
                     help="worker processes (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", type=out_folder, default="results",
                     help="directory for commonroad_judge[_TAG].json and .md (default: %(default)s)")
     ap.add_argument("--tag", default="",
                     help="output name suffix: commonroad_judge_TAG.json and .md (default: none)")

@@ -107,11 +107,13 @@ def report(payload: dict[str, Any]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--tries", type=positive_int, default=40,
                     help="shortcut_tries of the 'with' runs (default: %(default)s)")
     ap.add_argument("--count", type=positive_int, default=100, help="poses per set (default 100)")
-    ap.add_argument("--out", default="results/hybrid_shortcut",
+    ap.add_argument("--out", type=out_folder, default="results/hybrid_shortcut",
                     help="directory for hybrid_shortcut.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     if args.tries < 1 or not 1 <= args.count <= 100:

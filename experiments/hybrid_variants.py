@@ -201,6 +201,8 @@ def render(summary: list[dict[str, Any]], names: list[str], meta: dict[str, Any]
 
 def main(argv: list[str] | None = None) -> int:
     """Run the variants and write the results."""
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--variants", default=DEFAULT_VARIANTS,
                     help="name=field=value,...;name=... (default: session 7 and the steps since)")
@@ -215,7 +217,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="seeds per gear scenario (default: %(default)s)")
     ap.add_argument("--repeat", type=positive_int, default=2,
                     help="plans per query and variant, the least CPU time kept (default 2)")
-    ap.add_argument("--out", default="results/hybrid_variants",
+    ap.add_argument("--out", type=out_folder, default="results/hybrid_variants",
                     help="directory for hybrid_variants.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     try:

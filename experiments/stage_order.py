@@ -137,6 +137,8 @@ def report(payload: dict[str, Any]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seeds", type=positive_int, default=100,
                     help="seeds per set (default: %(default)s)")
@@ -147,7 +149,7 @@ def main(argv: list[str] | None = None) -> int:
                          " (default: %(default)s)")  # fmt: skip
     ap.add_argument("--new", default="",
                     help="planner options of the new plans (default: %(default)s)")
-    ap.add_argument("--out", default="results",
+    ap.add_argument("--out", type=out_folder, default="results",
                     help="directory for stage_order.json and .md (default: %(default)s)")
     args = ap.parse_args(argv)
     sets = [s for s in args.sets.split(",") if s]

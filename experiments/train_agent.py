@@ -58,6 +58,8 @@ ROWS = (
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    from results_io import out_folder  # the sibling module (run as a script)
+
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--scenario", choices=sorted(IDS), default="parking",
                    help="task to train and evaluate on (default: %(default)s)")
@@ -91,7 +93,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                    help="PPO policy's initial log standard deviation (default: %(default)s)")
     p.add_argument("--gamma", type=float, default=0.99,
                    help="discount factor of PPO and VecNormalize (default: %(default)s)")
-    p.add_argument("--out", default="results/train_agent",
+    p.add_argument("--out", type=out_folder, default="results/train_agent",
                    help="directory for train_agent.json and .md, ppo_residual.zip and "
                    "vecnormalize.pkl (default: %(default)s)")
     p.add_argument("--video", action="store_true", help="MP4 of the agent on the first eval seed")
