@@ -132,15 +132,22 @@ def read_image_map(
     try:
         with warnings.catch_warnings():  # imageio's plugin probe warns about its DICOM one
             warnings.simplefilter("ignore", DeprecationWarning)
-            raw = np.asarray(iio.imread(name))
+            # The first frame of a GIF or page of a TIFF (all of them read as one array:
+            # a GIF was refused, a two-page TIFF read as two colour channels; an audit).
+            raw = np.asarray(iio.imread(name, index=0, plugin="pillow"))
     except (OSError, ValueError, SyntaxError) as exc:  # pillow's and imageio's failures
         # imageio's own text runs to several lines of plugins to install: one line here.
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise InputError(
             f"image: cannot read {name} as an image (PNG, PGM, ...): {first}"
         ) from None
-    # White is the type's largest value: 255, or 65535 for a 16-bit image.
+    # White is the type's largest value: 255, or 65535 for a 16-bit image; a PGM's own
+    # maxval where it gives one (Pillow reads a 16-bit PGM as int32: white read 2**31 - 1,
+    # every cell an obstacle; an audit).
     scale = float(np.iinfo(raw.dtype).max) if np.issubdtype(raw.dtype, np.integer) else 1.0
+    maxval = _pnm_maxval(name)
+    if maxval is not None:
+        scale = float(maxval)
     pixels = raw.astype(float)
     if pixels.ndim == 3:
         # map_server averages every channel in trinary mode, alpha too ("to preserve
@@ -154,6 +161,53 @@ def read_image_map(
     occupied = p > occ
     unknown = ~occupied & ~(p < free)
     return ImageMap(occupied | (unknown & (not unknown_free)), res, (x0, y0), int(unknown.sum()))
+
+
+def _pnm_maxval(name: str) -> int | None:
+    """The white value of a PGM/PPM/PNM file's header (its ``maxval``), else ``None``."""
+    try:
+        with open(name, "rb") as f:
+            head = f.read(512)
+    except OSError:
+        return None
+    if head[:2] not in (b"P2", b"P3", b"P5", b"P6"):
+        return None
+    # magic, width, height, maxval; '#' comments run to the end of a line.
+    tokens = [t for line in head.split(b"\n") for t in line.split(b"#")[0].split()]
+    try:
+        value = int(tokens[3])
+    except (IndexError, ValueError):
+        return None
+    return value if 0 < value < 65536 else None
+
+
+class _YamlLoader:
+    """PyYAML's safe loader reading ``5e-2`` and ``1e-12`` as numbers (YAML 1.2, yaml-cpp).
+
+    YAML 1.1 wants a dot in a float, so PyYAML read ``resolution: 5e-2`` as text, which
+    ROS's map_server (yaml-cpp) reads as 0.05 (an audit).
+    """
+
+    _cls: type | None = None
+
+    @classmethod
+    def get(cls) -> type:
+        if cls._cls is None:
+            import re
+
+            import yaml
+
+            class Loader(yaml.SafeLoader):
+                pass
+
+            number = re.compile(
+                r"^[-+]?(?:[0-9][0-9_]*\.[0-9_]*(?:[eE][-+]?[0-9]+)?"
+                r"|[0-9][0-9_]*[eE][-+]?[0-9]+|\.[0-9_]+(?:[eE][-+]?[0-9]+)?)$"
+            )
+            Loader.add_implicit_resolver("tag:yaml.org,2002:float", number,
+                                         list("-+0123456789."))  # fmt: skip
+            cls._cls = Loader
+        return cls._cls
 
 
 def read_ros_map(yaml_file: str | os.PathLike[str], unknown_free: bool = False) -> ImageMap:
@@ -182,7 +236,7 @@ def read_ros_map(yaml_file: str | os.PathLike[str], unknown_free: bool = False) 
 
     try:
         with open(yaml_file, encoding="utf-8") as f:
-            data = yaml.safe_load(f)
+            data = yaml.load(f, Loader=_YamlLoader.get())  # noqa: S506 - a SafeLoader
     except OSError as exc:
         raise InputError(f"map: cannot read {os.fspath(yaml_file)}: {exc.strerror}") from None
     except (yaml.YAMLError, UnicodeDecodeError) as exc:
@@ -197,7 +251,8 @@ def read_ros_map(yaml_file: str | os.PathLike[str], unknown_free: bool = False) 
         raise InputError(f"origin: expected [x, y, yaw], got {brief_repr(origin)}")
     if len(origin) == 3:
         yaw = _number(origin[2], "origin", -1e3, 1e3)
-        if abs(math.remainder(yaw, math.tau)) > 1e-9:
+        # A full turn written to 6 decimals (6.283185) is a yaw of 0 too (an audit).
+        if abs(math.remainder(yaw, math.tau)) > 1e-6:
             raise InputError(
                 f"origin: the map is rotated (yaw {yaw:g} rad); rrtdrive maps are axis-aligned: "
                 "rotate the image so that its yaw is 0"

@@ -207,7 +207,10 @@ def _least_clearance(
     if polygons:
         tree = shapely.STRtree(polygons)
         _, distance = tree.query_nearest(shapes, return_distance=True, all_matches=False)
-        least = min(least, float(np.min(distance)))
+        # No pair at all when the distances overflow (an obstacle at 1e200 m: accepted by
+        # plan, a traceback here; an audit): such an obstacle is as far as can be.
+        if len(distance):
+            least = min(least, float(np.min(distance)))
     return least
 
 
