@@ -195,6 +195,17 @@ class ResultStore:
                 if isinstance(row, dict):
                     yield row
 
+    def _lines(self) -> Iterator[str]:
+        """Every non-empty complete line of the file, without its newline."""
+        if not self.path.exists():
+            return
+        with open(self.path, encoding="utf-8") as fh:
+            for line in fh:
+                if not line.endswith("\n"):
+                    break  # a line still being written
+                if line.strip():
+                    yield line.rstrip("\n")
+
     def done_keys(self) -> set[tuple[str, int]]:
         """Keys of every run in the file."""
         return set(self._keys)
@@ -244,11 +255,18 @@ class ResultStore:
         drop = set(keys)
         kept: list[str] = []
         removed = 0
-        for row in self.rows():
-            if row_key(row) in drop:
+        # Every other line as it is, byte for byte: re-serialised, a row holding NaN (as
+        # Python's json writes it) ended --retry-errors in a traceback, and malformed or
+        # unfinished lines of other runs were lost (an audit).
+        for line in self._lines():
+            try:
+                row = json.loads(line)
+            except json.JSONDecodeError:
+                row = None
+            if isinstance(row, dict) and row_key(row) in drop:
                 removed += 1
             else:
-                kept.append(json.dumps(row, allow_nan=False))
+                kept.append(line)
         if not removed:
             return 0
         tmp = self.dir / f".{RUNS_FILE}.tmp"
