@@ -26,3 +26,8 @@ def test_jobs_is_workers_as_the_experiment_scripts_call_it(tmp_path, capsys):
 def test_an_unknown_controller_is_named_before_the_missing_maps(capsys):
     assert main(["bench", "--controllers", "foo"]) == 2
     assert "--controllers: unknown controller 'foo'" in capsys.readouterr().err
+
+
+def test_an_empty_controller_list_is_refused(capsys):
+    assert main(["bench", "--maps", "overtake", "--controllers", "", "--seeds", "1"]) == 2
+    assert "controllers: give at least one controller" in capsys.readouterr().err

@@ -258,6 +258,8 @@ class BenchConfig:
             raise InputError(f"reverse: expected true or false, got {self.reverse!r}")
         if not self.planners:
             raise InputError("planners: give at least one planner")
+        if not self.controllers:  # `--controllers ""` read as none (a garbled note; an audit)
+            raise InputError("controllers: give at least one controller")
         # The names first: `--controllers foo` alone was told to give a map (an audit).
         self._check_names()
         if not self.maps and not self.scenarios:
