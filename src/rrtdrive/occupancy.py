@@ -141,13 +141,16 @@ def read_image_map(
         raise InputError(
             f"image: cannot read {name} as an image (PNG, PGM, ...): {first}"
         ) from None
-    # White is the type's largest value: 255, or 65535 for a 16-bit image; a PGM's own
-    # maxval where it gives one (Pillow reads a 16-bit PGM as int32: white read 2**31 - 1,
-    # every cell an obstacle; an audit).
-    scale = float(np.iinfo(raw.dtype).max) if np.issubdtype(raw.dtype, np.integer) else 1.0
-    maxval = _pnm_maxval(name)
-    if maxval is not None:
-        scale = float(maxval)
+    # White is the type's largest value: 255, or 65535 for a 16-bit image. Pillow reads a
+    # 16-bit PGM as int32, its values scaled to 0..65535 whatever its maxval (white read
+    # 2**31 - 1 made every cell an obstacle; an audit); an 8-bit one with a maxval under
+    # 255 comes scaled to 0..255.
+    if raw.dtype == np.int32 and raw.size and 0 <= raw.min() and raw.max() <= 65535:
+        scale = 65535.0
+    elif np.issubdtype(raw.dtype, np.integer):
+        scale = float(np.iinfo(raw.dtype).max)
+    else:
+        scale = 1.0
     pixels = raw.astype(float)
     if pixels.ndim == 3:
         # map_server averages every channel in trinary mode, alpha too ("to preserve
@@ -161,24 +164,6 @@ def read_image_map(
     occupied = p > occ
     unknown = ~occupied & ~(p < free)
     return ImageMap(occupied | (unknown & (not unknown_free)), res, (x0, y0), int(unknown.sum()))
-
-
-def _pnm_maxval(name: str) -> int | None:
-    """The white value of a PGM/PPM/PNM file's header (its ``maxval``), else ``None``."""
-    try:
-        with open(name, "rb") as f:
-            head = f.read(512)
-    except OSError:
-        return None
-    if head[:2] not in (b"P2", b"P3", b"P5", b"P6"):
-        return None
-    # magic, width, height, maxval; '#' comments run to the end of a line.
-    tokens = [t for line in head.split(b"\n") for t in line.split(b"#")[0].split()]
-    try:
-        value = int(tokens[3])
-    except (IndexError, ValueError):
-        return None
-    return value if 0 < value < 65536 else None
 
 
 class _YamlLoader:
