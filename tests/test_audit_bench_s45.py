@@ -279,7 +279,13 @@ def _kill_mid_bench(out: Path, sig: int) -> subprocess.CompletedProcess:
            "--planners", "improved-rrt-connect", "--seeds", str(KILL_SEEDS),
            "--max-iterations", "2000",
            "--workers", "2", "--no-plots", "--out", str(out)]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # SIGINT at its default in the child: a test run started in the background (nohup ...
+    # &, as a CI script may) hands its children SIGINT ignored, and Python then keeps it so
+    # (the bench ran to the end: exit 0 where 130 was asked for).
+    proc = subprocess.Popen(
+        cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )  # fmt: skip
     runs = out / "runs.jsonl"
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:
