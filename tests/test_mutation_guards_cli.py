@@ -116,7 +116,7 @@ def test_thresholds_may_sit_at_the_ends_of_their_range(tmp_path: Path) -> None:
         ({"occupied_thresh": 1.5}, "occupied_thresh"),
         ({"free_thresh": -0.1}, "free_thresh"),
         ({"resolution": 1e-7}, "resolution"),
-        ({"origin": (2e6, 0.0)}, "origin"),
+        ({"origin": (2e9, 0.0)}, "origin"),
     ],
 )
 def test_numbers_out_of_range_are_named(tmp_path: Path, kwargs: dict, field: str) -> None:

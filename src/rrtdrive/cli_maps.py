@@ -127,7 +127,7 @@ def _cmd_import(args: argparse.Namespace) -> int:
         f"{source}: {cols} x {rows} cells at {grid.resolution:g} m, {xmax - xmin:g} x "
         f"{ymax - ymin:g} m; {int(grid.occupied.sum())} occupied cells ({grid.unknown} unknown, "
         f"read as {'free' if args.unknown_free else 'occupied'}) as {len(m.obstacles)} "
-        f"rectangles"
+        f"rectangle{'' if len(m.obstacles) == 1 else 's'}"
         + (f" ({groups} specks of <= {args.despeckle} cells dropped: {cells} cells)"
            if args.despeckle else "")
         + f" -> {args.out}"

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rrtdrive.map_checks import MAX_COORDINATE
 from rrtdrive.types import InputError, Pose, brief_repr, is_finite_number, require_int
 
 if TYPE_CHECKING:
@@ -124,8 +125,10 @@ def read_image_map(
         raise InputError(f"free_thresh: must be below occupied_thresh ({occ:g}), got {free:g}")
     if mode not in ("trinary", "scale"):
         raise InputError(f"mode: only trinary and scale maps are read, got {brief_repr(mode)}")
-    x0 = _number(origin[0], "origin", -1e6, 1e6)
-    y0 = _number(origin[1], "origin", -1e6, 1e6)
+    # As far out as a map's own coordinates may lie (a ROS map in UTM coordinates, a
+    # northing about 5e6 m, was refused at 1e6; an audit).
+    x0 = _number(origin[0], "origin", -MAX_COORDINATE, MAX_COORDINATE)
+    y0 = _number(origin[1], "origin", -MAX_COORDINATE, MAX_COORDINATE)
     name = os.fspath(image)
     if not os.path.isfile(name):
         raise InputError(f"image: {name} is not a file")
