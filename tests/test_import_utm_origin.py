@@ -25,3 +25,15 @@ def test_a_map_at_utm_coordinates_imports(tmp_path, capsys):
     assert m.bounds == (500000.0, 5400000.0, 500020.0, 5400010.0)
     assert "1 rectangle " in capsys.readouterr().out
     assert main(["plan", str(out)]) == 0
+
+
+def test_a_name_taken_from_the_file_blames_the_file_not_name(tmp_path, capsys):
+    img = np.full((100, 200), 254, dtype=np.uint8)
+    image = tmp_path / "a\tb.png"
+    Image.fromarray(img).save(image)
+    args = ["maps", "--import", str(image), "--resolution", "0.1", "--start", "2,3,0",
+            "--goal", "15,3,0", "--out", str(tmp_path / "m.json")]  # fmt: skip
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "the image's file name (give --name)" in err and "--name:" not in err
+    assert main([*args, "--name", "site"]) == 0

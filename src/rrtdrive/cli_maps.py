@@ -106,7 +106,10 @@ def _cmd_import(args: argparse.Namespace) -> int:
         grid, groups, cells = despeckle(grid, args.despeckle)
     name = args.name if args.name is not None else pathlib.Path(source).stem
     try:
-        with flags_for({"start": "--start", "goal": "--goal", "name": "--name"}):
+        # A name taken from the file is the file's fault, not a --name never given (an
+        # image named with a tab was blamed on --name; an audit).
+        named = "--name" if args.name is not None else "the image's file name (give --name)"
+        with flags_for({"start": "--start", "goal": "--goal", "name": named}):
             m = map_from_image(grid, name, start, goal)
     except InputError as exc:
         if grid.unknown and not args.unknown_free and str(exc).startswith(("--start", "--goal")):
