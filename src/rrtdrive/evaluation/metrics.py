@@ -27,11 +27,10 @@ from rrtdrive.evaluation.collisions import (
 from rrtdrive.evaluation.nuplan_comfort import NuplanComfort, nuplan_comfort
 from rrtdrive.evaluation.report import EpisodeReport, EvalConfig
 from rrtdrive.evaluation.success import SuccessTerms, success_terms
-from rrtdrive.evaluation.tracking import gear_changes, tracking_errors
+from rrtdrive.evaluation.tracking import gear_changes, tracking_measures
 from rrtdrive.evaluation.traffic_metrics import (
     TTC_LEAST_MIN_S,
     min_vehicle_distance,
-    progress,
     time_to_collision,
 )
 from rrtdrive.types import InputError
@@ -63,10 +62,24 @@ class MetricContext:
         return self.episode.log.steps > 0
 
     @cached_property
+    def measures(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Cross-track and heading errors and the travelled length of every logged pose."""
+        states = self.episode.log.states
+        return tracking_measures(self.episode.path, states[:, :3], speeds=states[:, 3])
+
+    @cached_property
     def errors(self) -> tuple[np.ndarray, np.ndarray]:
         """Cross-track and heading errors of every logged pose."""
-        states = self.episode.log.states
-        return tracking_errors(self.episode.path, states[:, :3], speeds=states[:, 3])
+        cte, herr, _ = self.measures
+        return cte, herr
+
+    @property
+    def progress(self) -> float | None:
+        """:func:`~rrtdrive.evaluation.traffic_metrics.progress`, from :attr:`measures`."""
+        if len(self.episode.path) < 2:
+            return None
+        along = self.measures[2]
+        return float(along[-1] - along[0])
 
     @cached_property
     def kappa(self) -> np.ndarray:
@@ -258,7 +271,7 @@ METRICS: Mapping[str, Metric] = MappingProxyType({
     "max_steering_rate": Metric(lambda ep, ctx: float(np.max(ctx.steering_rates))),
     "final_speed": Metric(lambda ep, ctx: float(ep.log.states[-1, 3])),
     # Other vehicles and progress.
-    "progress_m": Metric(lambda ep, ctx: progress(ep)),
+    "progress_m": Metric(lambda ep, ctx: ctx.progress),
     "ttc_min_s": Metric(_ttc_min),
     "ttc_within_bound": Metric(_ttc_within),
     "min_distance_m": Metric(lambda ep, ctx: min_vehicle_distance(ep)),

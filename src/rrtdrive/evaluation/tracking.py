@@ -28,6 +28,7 @@ __all__ = [
     "followed_projection",
     "gear_changes",
     "tracking_errors",
+    "tracking_measures",
     "along_path",
 ]
 
@@ -262,8 +263,13 @@ def followed_projection(
     return PolylineProjection(seg, frac, foot, dist, s)
 
 
-def _errors_on(s: np.ndarray, p: np.ndarray, chunk: int) -> tuple[np.ndarray, np.ndarray]:
-    """Cross-track and heading errors of poses ``p`` against distinct samples ``s``."""
+def _errors_on(
+    s: np.ndarray, p: np.ndarray, chunk: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Cross-track and heading errors of poses ``p`` on distinct samples ``s``, and arc length.
+
+    The foot points' arc length along ``s`` too: one projection for all three.
+    """
     d = np.diff(s[:, :2], axis=0)
     yaw = np.unwrap(s[:, 2])
     proj = followed_projection(s[:, :2], p[:, :2], chunk)
@@ -273,7 +279,7 @@ def _errors_on(s: np.ndarray, p: np.ndarray, chunk: int) -> tuple[np.ndarray, np
     cte = np.where(cross < 0, -proj.distance, proj.distance)
     path_yaw = yaw[j] + tj * (yaw[j + 1] - yaw[j])
     herr = wrap_angle(p[:, 2] - path_yaw)
-    return cte, herr
+    return cte, herr, proj.s
 
 
 def _assign(path: Path, runs: list[GearRun], p: np.ndarray, speeds: np.ndarray | None,
@@ -325,6 +331,42 @@ def tracking_errors(
     >>> round(float(cte[0]), 6), round(float(he[0]), 6)
     (-0.3, 0.1)
     """
+    cte, herr, _ = tracking_measures(path, poses, chunk, speeds)
+    return cte, herr
+
+
+def tracking_measures(
+    path: Path, poses: np.ndarray, chunk: int = 256, speeds: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`tracking_errors` and :func:`along_path` from one projection of the poses.
+
+    The evaluators score both of every episode: each projects every pose on the path
+    (a path over its own ground with :func:`followed_projection`), which this does once.
+
+    Parameters
+    ----------
+    path : Path
+        At least two distinct samples.
+    poses : numpy.ndarray
+        As :func:`tracking_errors` takes them.
+    chunk : int
+        Poses per vectorised block.
+    speeds : numpy.ndarray, optional
+        As :func:`tracking_errors` takes them.
+
+    Returns
+    -------
+    cte, heading_err, along : numpy.ndarray
+        Shape ``(N,)`` each; ``along`` is :func:`along_path`'s travelled length.
+
+    Examples
+    --------
+    >>> xs = np.linspace(0.0, 10.0, 11)
+    >>> p = Path(np.column_stack([xs, 0 * xs, 0 * xs, 0 * xs]), np.zeros((0, 2)))
+    >>> cte, he, along = tracking_measures(p, np.array([[2.5, -0.3, 0.1]]))
+    >>> round(float(cte[0]), 6), round(float(he[0]), 6), round(float(along[0]), 6)
+    (-0.3, 0.1, 2.5)
+    """
     poses = np.asarray(poses, dtype=float)
     if speeds is None and poses.ndim == 2 and poses.shape[1] == 4:
         speeds = poses[:, 3]
@@ -335,29 +377,21 @@ def tracking_errors(
     if len(runs) == 1:
         return _errors_on(runs[0].samples, p, chunk)
     which = _assign(path, runs, p, speeds, chunk)
-    cte = np.zeros(len(p))
-    herr = np.zeros(len(p))
+    cte, herr, along = np.zeros(len(p)), np.zeros(len(p)), np.zeros(len(p))
     for k, run in enumerate(runs):
         mask = which == k
         if np.any(mask):
-            cte[mask], herr[mask] = _errors_on(run.samples, p[mask], chunk)
-    return cte, herr
+            cte[mask], herr[mask], s = _errors_on(run.samples, p[mask], chunk)
+            along[mask] = run.s0 + s
+    return cte, herr, along
 
 
 def along_path(path: Path, poses: np.ndarray, speeds: np.ndarray | None = None) -> np.ndarray:
     """Travelled length along ``path`` (metres) of the foot point of each pose.
 
     Per gear segment, as :func:`tracking_errors`: the segment's start length plus
-    the foot point's arc length on it.
+    the foot point's arc length on it (:func:`tracking_measures`; only positions are
+    read from ``poses``).
     """
     p = np.asarray(poses, dtype=float)[:, :2]
-    runs = gear_runs(path)
-    if len(runs) == 1:
-        return followed_projection(runs[0].samples[:, :2], p).s
-    which = _assign(path, runs, np.column_stack([p, np.zeros(len(p))]), speeds, 256)
-    out = np.zeros(len(p))
-    for k, run in enumerate(runs):
-        mask = which == k
-        if np.any(mask):
-            out[mask] = run.s0 + followed_projection(run.samples[:, :2], p[mask]).s
-    return out
+    return tracking_measures(path, np.column_stack([p, np.zeros(len(p))]), speeds=speeds)[2]
