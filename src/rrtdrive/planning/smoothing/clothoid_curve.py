@@ -35,7 +35,6 @@ from rrtdrive.planning.smoothing.corners import (
     Ends,
     polygon_legs,
     signed_deflection,
-    turn_angles,
     unit,
 )
 
@@ -272,12 +271,12 @@ def leg_room(
     cache = {} if cache is None else cache
     n = len(pts)
     dirs, lengths = polygon_legs(pts)
-    tmin = [0.0] * n
+    tmin, angles = [0.0] * n, [0.0] * n
     for c in range(1, n - 1):
-        tmin[c] = _corner_tightest(dirs, lengths, c, kappas[c], levels, cache)[1]
+        theta, tmin[c] = _corner_tightest(dirs, lengths, c, kappas[c], levels, cache)
+        angles[c] = theta or 0.0
     need = tmin[leg] + tmin[leg + 1] + _end_gaps(tmin, end_gap)[leg]
-    turn_a, turn_b = turn_angles(dirs, lengths, (leg, leg + 1))
-    return lengths[leg], need, turn_a, turn_b
+    return lengths[leg], need, angles[leg], angles[leg + 1]
 
 
 def _tightest(
