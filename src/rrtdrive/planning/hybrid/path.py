@@ -27,9 +27,11 @@ from rrtdrive.planning.hybrid.ramp_chunks import ramped_in_chunks
 from rrtdrive.planning.hybrid.ramps import ramped_segment
 from rrtdrive.planning.hybrid.search import Piece
 from rrtdrive.planning.smoothing import SmoothingConfig, make_drivable, max_sharpness
-from rrtdrive.types import Pose
+from rrtdrive.types import Path, Pose
 
-__all__ = ["GearSegment", "gear_segments", "BuiltPath", "Ramps", "SegmentMemo", "build_path"]
+__all__ = [
+    "GearSegment", "gear_segments", "BuiltPath", "path_of", "Ramps", "SegmentMemo", "build_path",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,6 +70,11 @@ def gear_segments(pieces: Sequence[Piece]) -> list[GearSegment]:
         else:
             out.append(GearSegment(p.gear, np.asarray(p.rows, dtype=float)))
     return out
+
+
+def path_of(built: BuiltPath) -> Path:
+    """The :class:`~rrtdrive.types.Path` of a built path (rows with their gear column)."""
+    return Path(built.rows, built.waypoints)
 
 
 @dataclass(frozen=True, eq=False)

@@ -15,14 +15,14 @@ import numpy as np
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, register_planner
 from rrtdrive.planning.diagnosis import Diagnosis
 from rrtdrive.planning.hybrid.config import HybridConfig, hybrid_with
-from rrtdrive.planning.hybrid.path import BuiltPath
+from rrtdrive.planning.hybrid.path import BuiltPath, path_of
 from rrtdrive.planning.hybrid.probe import reverse_probe
 from rrtdrive.planning.hybrid.query import HybridAnswer, hybrid_query
 from rrtdrive.planning.hybrid.resolution import PROOFS, dubins_table, free_cell_graph
 from rrtdrive.planning.hybrid.search import SearchOutcome
 from rrtdrive.planning.result import run_query, solved, timeout_result
 from rrtdrive.planning.smoothing import SmoothingConfig, smoothing_with
-from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus
+from rrtdrive.types import Budget, InputError, PlanResult, PlanStatus
 
 __all__ = [
     "NAME", "HybridAStar", "hybrid_result", "answer_stats", "arcs_note", "path_of", "proof_scope",
@@ -72,11 +72,6 @@ def answer_stats(answer: HybridAnswer, wheelbase: float) -> dict[str, float]:
         stats["cusps"] = float(answer.path.segments - 1)
         stats["max_sharpness"] = answer.path.max_sharpness(wheelbase)
     return stats
-
-
-def path_of(built: BuiltPath) -> Path:
-    """The :class:`Path` of a built path (rows with their gear column)."""
-    return Path(built.rows, built.waypoints)
 
 
 @register_planner(NAME)

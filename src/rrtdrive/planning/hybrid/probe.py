@@ -15,9 +15,10 @@ from __future__ import annotations
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.diagnosis.findings import Diagnosis, DiagnosisKind
 from rrtdrive.planning.hybrid.config import HybridConfig
+from rrtdrive.planning.hybrid.path import path_of
 from rrtdrive.planning.hybrid.query import hybrid_query
 from rrtdrive.planning.smoothing import SmoothingConfig
-from rrtdrive.types import Budget, Path
+from rrtdrive.types import Budget
 
 __all__ = ["PROBE_EXPANSIONS", "reverse_probe"]
 
@@ -69,7 +70,7 @@ def reverse_probe(
         # A forward path after all (the probe searched on another lattice): not a
         # reason to reverse; the failure stands as the planner reported it.
         return None
-    length = Path(answer.path.rows, answer.path.waypoints).length
+    length = path_of(answer.path).length
     return Diagnosis(
         DiagnosisKind.NEEDS_REVERSE,
         f"driving forward no path was found; with reversing allowed, Hybrid A* finds one "
