@@ -178,33 +178,25 @@ class ResultStore:
 
     def rows(self) -> Iterator[dict[str, Any]]:
         """Every complete, well-formed row in file order (others are skipped with a warning)."""
+        for n, line in self._lines():
+            try:
+                row = json.loads(line)
+            except json.JSONDecodeError:
+                logger.warning("%s:%d: skipping a malformed line", self.path, n)
+                continue
+            if isinstance(row, dict):
+                yield row
+
+    def _lines(self) -> Iterator[tuple[int, str]]:
+        """Every non-empty complete line of the file with its number, without its newline."""
         if not self.path.exists():
             return
         with open(self.path, encoding="utf-8") as fh:
             for n, line in enumerate(fh, start=1):
                 if not line.endswith("\n"):
                     break  # a line still being written
-                line = line.strip()
-                if not line:
-                    continue
-                try:
-                    row = json.loads(line)
-                except json.JSONDecodeError:
-                    logger.warning("%s:%d: skipping a malformed line", self.path, n)
-                    continue
-                if isinstance(row, dict):
-                    yield row
-
-    def _lines(self) -> Iterator[str]:
-        """Every non-empty complete line of the file, without its newline."""
-        if not self.path.exists():
-            return
-        with open(self.path, encoding="utf-8") as fh:
-            for line in fh:
-                if not line.endswith("\n"):
-                    break  # a line still being written
                 if line.strip():
-                    yield line.rstrip("\n")
+                    yield n, line.rstrip("\n")
 
     def done_keys(self) -> set[tuple[str, int]]:
         """Keys of every run in the file."""
@@ -258,7 +250,7 @@ class ResultStore:
         # Every other line as it is, byte for byte: re-serialised, a row holding NaN (as
         # Python's json writes it) ended --retry-errors in a traceback, and malformed or
         # unfinished lines of other runs were lost (an audit).
-        for line in self._lines():
+        for _, line in self._lines():
             try:
                 row = json.loads(line)
             except json.JSONDecodeError:
