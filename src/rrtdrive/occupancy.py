@@ -13,6 +13,7 @@ left corner is ``origin + (c, rows - 1 - r) * resolution``.
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import warnings
@@ -169,33 +170,26 @@ def read_image_map(
     return ImageMap(occupied | (unknown & (not unknown_free)), res, (x0, y0), int(unknown.sum()))
 
 
-class _YamlLoader:
+@functools.cache
+def _yaml_loader() -> type:
     """PyYAML's safe loader reading ``5e-2`` and ``1e-12`` as numbers (YAML 1.2, yaml-cpp).
 
     YAML 1.1 wants a dot in a float, so PyYAML read ``resolution: 5e-2`` as text, which
     ROS's map_server (yaml-cpp) reads as 0.05 (an audit).
     """
+    import re
 
-    _cls: type | None = None
+    import yaml
 
-    @classmethod
-    def get(cls) -> type:
-        if cls._cls is None:
-            import re
+    class Loader(yaml.SafeLoader):
+        pass
 
-            import yaml
-
-            class Loader(yaml.SafeLoader):
-                pass
-
-            number = re.compile(
-                r"^[-+]?(?:[0-9][0-9_]*\.[0-9_]*(?:[eE][-+]?[0-9]+)?"
-                r"|[0-9][0-9_]*[eE][-+]?[0-9]+|\.[0-9_]+(?:[eE][-+]?[0-9]+)?)$"
-            )
-            Loader.add_implicit_resolver("tag:yaml.org,2002:float", number,
-                                         list("-+0123456789."))  # fmt: skip
-            cls._cls = Loader
-        return cls._cls
+    number = re.compile(
+        r"^[-+]?(?:[0-9][0-9_]*\.[0-9_]*(?:[eE][-+]?[0-9]+)?"
+        r"|[0-9][0-9_]*[eE][-+]?[0-9]+|\.[0-9_]+(?:[eE][-+]?[0-9]+)?)$"
+    )
+    Loader.add_implicit_resolver("tag:yaml.org,2002:float", number, list("-+0123456789."))
+    return Loader
 
 
 def read_ros_map(yaml_file: str | os.PathLike[str], unknown_free: bool = False) -> ImageMap:
@@ -224,7 +218,7 @@ def read_ros_map(yaml_file: str | os.PathLike[str], unknown_free: bool = False) 
 
     try:
         with open(yaml_file, encoding="utf-8") as f:
-            data = yaml.load(f, Loader=_YamlLoader.get())  # noqa: S506 - a SafeLoader
+            data = yaml.load(f, Loader=_yaml_loader())  # noqa: S506 - a SafeLoader
     except OSError as exc:
         raise InputError(f"map: cannot read {os.fspath(yaml_file)}: {exc.strerror}") from None
     except (yaml.YAMLError, UnicodeDecodeError) as exc:

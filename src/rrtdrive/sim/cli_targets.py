@@ -122,15 +122,20 @@ def _warn_gearless_reverse(data: Any, path: Any) -> None:
     and crashes where ``verify`` would flag it at once (an audit: a plan's gear column
     dropped, the car hit the kerb at t = 48.85 s).
     """
+    import math
+
     import numpy as np
+
+    from rrtdrive.geometry import wrap_angle
+    from rrtdrive.verify_measures import travel_directions
 
     rows = data.get("path") if isinstance(data, dict) else data
     if not rows or len(rows[0]) != 4 or not path.is_forward_only:
         return
-    s = path.samples
-    step = np.diff(s[:, :2], axis=0)
-    along = step[:, 0] * np.cos(s[:-1, 2]) + step[:, 1] * np.sin(s[:-1, 2])
-    back = np.flatnonzero(along < -1e-6)
+    # verify's own reading of the rows' motion: a step more than 90 deg off its yaw.
+    direction, moving = travel_directions(path.samples)
+    off = np.abs(wrap_angle(direction - path.samples[moving, 2]))
+    back = moving[off > math.pi / 2]
     if len(back) == 0:
         return
     import warnings
