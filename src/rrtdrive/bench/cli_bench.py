@@ -84,10 +84,15 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "(--jobs: the same, as the experiment scripts call it)",
     )
     p.add_argument("--out", metavar="DIR", help="output folder (default: bench)")
-    p.add_argument(
+    ray = p.add_mutually_exclusive_group()
+    ray.add_argument(
         "--ray", nargs="?", const="", default=None, metavar="ADDRESS",
         help="run on Ray: no ADDRESS starts a local Ray (or uses RAY_ADDRESS); "
         "'auto' or 'ray://host:10001' connects to a cluster",
+    )
+    ray.add_argument(
+        "--no-ray", action="store_true",
+        help="run in local processes although the --config file sets ray",
     )
     p.add_argument(
         "--max-time", dest="max_time_s", type=_float_arg, metavar="S",
@@ -112,19 +117,23 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "--retry-errors", action="store_true",
         help="run the grid's stored error rows again (they are replaced)",
     )
+    # On/off pairs (--no-reverse ...): a flag turns off what the --config file turns on.
     p.add_argument(
-        "--deterministic", action="store_true",
+        "--deterministic", action=argparse.BooleanOptionalAction, default=None,
         help="wall-clock limits off: planning stops on --max-iterations only and "
         "overtake-traffic re-plans without cutting cycles at their time budget, so rows "
-        "depend on the seed alone (not with --max-time)",
+        "depend on the seed alone (not with --max-time; default: off)",
     )
     p.add_argument(
-        "--reverse", action="store_true",
+        "--reverse", action=argparse.BooleanOptionalAction, default=None,
         help="allow gear changes in every run, as plan/simulate --reverse (a planner that "
-        "cannot reverse plans forward)",
+        "cannot reverse plans forward; default: off)",
     )
-    p.add_argument("--no-plots", action="store_true", help="skip the PNG plots (and remove "
-                   "those an earlier bench left in --out: they would describe other runs)")
+    p.add_argument(
+        "--plots", action=argparse.BooleanOptionalAction, default=None,
+        help="write the PNG plots (default); --no-plots skips them and removes those an "
+        "earlier bench left in --out: they would describe other runs",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.set_defaults(func=run)
     return p
@@ -153,14 +162,18 @@ def config_from_args(args: argparse.Namespace) -> Any:
         raise InputError("--config: needs a file name, got an empty one")
     values: dict[str, Any] = load_toml(args.config) if args.config is not None else {}
     values.update({k: getattr(args, k) for k in given_flags(args)})  # flags over TOML
-    if args.no_plots:
-        values["plots"] = False
-    if getattr(args, "reverse", False):
-        values["reverse"] = True
-    if getattr(args, "deterministic", False):
+    for key in ("plots", "reverse"):
+        if getattr(args, key, None) is not None:
+            values[key] = getattr(args, key)
+    if getattr(args, "no_ray", False):
+        values["ray"] = None
+    deterministic = getattr(args, "deterministic", None)
+    if deterministic:
         if args.max_time_s is not None:
             raise InputError("--max-time: --deterministic turns the planning time limit off")
         values["deterministic"] = True
+    elif deterministic is False:
+        values["deterministic"] = False
     elif values.get("deterministic") is True and args.max_time_s is not None:
         raise InputError(
             "--max-time: the config's deterministic = true turns the planning time limit off"
