@@ -6,6 +6,8 @@ obstacles against each cell centre, and the ROS trinary thresholds worked by han
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import imageio.v3 as iio
 import numpy as np
 import pytest
@@ -187,6 +189,9 @@ def test_bad_imports_are_one_line_naming_the_flag(tmp_path, capsys, monkeypatch,
         ("[-2.0]", "", "origin: expected [x, y, yaw]"),
         ("[0, 0, 0]", "free_thresh: 0.7\n", "free_thresh: must be below occupied_thresh"),
         ("[0, 0, 0]", "mode: raw\n", "mode: only trinary and scale maps are read"),
+        # PyYAML kept the last of two equal keys silently: a 0.05 m map read at 0.1 m.
+        ("[0, 0, 0]", "resolution: 0.05\n", "resolution: given twice in"),
+        ("[0, 0, 0]", "meta: {a: 1, a: 2}\n", "a: given twice in"),
     ],
 )
 def test_bad_ros_yaml_fields_are_named(tmp_path, capsys, origin, extra, needle):
@@ -195,6 +200,8 @@ def test_bad_ros_yaml_fields_are_named(tmp_path, capsys, origin, extra, needle):
                  "--out", str(tmp_path / "g.json")])  # fmt: skip
     err = capsys.readouterr().err
     assert code == 2 and err.startswith(f"rrtdrive maps: error: {needle}"), err
+    if "twice" in needle:  # the lines, as an editor numbers them
+        assert err.rstrip().endswith(("(lines 2 and 4); keep one", "(line 4); keep one")), err
 
 
 def test_plain_images_need_a_resolution_and_bad_files_are_named(tmp_path, capsys):
@@ -312,3 +319,18 @@ def test_a_transparent_background_is_named_when_the_start_lands_in_it(tmp_path, 
     assert "98% of the image's cells read as unknown" in err and "--unknown-free" in err
     assert main([*argv, "--unknown-free"]) == 0  # the block alone is an obstacle then
     assert len(load_map(str(tmp_path / "m.json")).obstacles) == 1
+
+
+def test_the_readme_import_example_prints_what_the_readme_says(tmp_path, capsys, monkeypatch):
+    root = Path(__file__).resolve().parents[1]
+    readme = (root / "README.md").read_text(encoding="utf-8")
+    lines = readme.splitlines()
+    command = next(ln for ln in lines if ln.startswith("rrtdrive maps --import docs/"))
+    printed = readme.split(command + "\n# ", 1)[1].splitlines()[0]
+    argv = command.split()[1:]
+    argv[argv.index("--out") + 1] = str(tmp_path / "lot.json")
+    monkeypatch.chdir(root)
+    assert main(argv) == 0
+    out = capsys.readouterr().out.strip()
+    assert out.split(" -> ")[0] == printed.split(" -> ")[0]
+    assert load_map(tmp_path / "lot.json").bounds == (0.0, 0.0, 40.0, 20.0)

@@ -17,8 +17,9 @@ import functools
 import math
 import os
 import warnings
+from collections.abc import Hashable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -189,7 +190,29 @@ def _yaml_loader() -> type:
         r"|[0-9][0-9_]*[eE][-+]?[0-9]+|\.[0-9_]+(?:[eE][-+]?[0-9]+)?)$"
     )
     Loader.add_implicit_resolver("tag:yaml.org,2002:float", number, list("-+0123456789."))
+
+    def construct_mapping(loader: Any, node: Any, deep: bool = False) -> Any:
+        # PyYAML keeps the last of two equal keys without a word; which resolution did
+        # the user mean? (YAML 1.2 says keys are unique.)
+        first_line: dict[Any, int] = {}
+        for key_node, _ in node.value:
+            key = loader.construct_object(key_node, deep=True)
+            line = key_node.start_mark.line + 1
+            if isinstance(key, Hashable) and key in first_line:
+                raise _DuplicateKey(key, first_line[key], line)
+            first_line.setdefault(key, line)
+        return yaml.SafeLoader.construct_mapping(loader, node, deep=deep)
+
+    Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, construct_mapping)
     return Loader
+
+
+class _DuplicateKey(Exception):
+    """A key written twice in one mapping of a map's ``.yaml``."""
+
+    def __init__(self, key: Any, first: int, second: int) -> None:
+        super().__init__(key, first, second)
+        self.key, self.first, self.second = key, first, second
 
 
 def read_ros_map(yaml_file: str | os.PathLike[str], unknown_free: bool = False) -> ImageMap:
@@ -223,6 +246,14 @@ def read_ros_map(yaml_file: str | os.PathLike[str], unknown_free: bool = False) 
         raise InputError(f"map: cannot read {os.fspath(yaml_file)}: {exc.strerror}") from None
     except (yaml.YAMLError, UnicodeDecodeError) as exc:
         raise InputError(f"map: {os.fspath(yaml_file)} is not YAML: {exc}") from None
+    except _DuplicateKey as dup:
+        where = (
+            f"line {dup.first}" if dup.first == dup.second
+            else f"lines {dup.first} and {dup.second}"
+        )
+        raise InputError(
+            f"{dup.key}: given twice in {os.fspath(yaml_file)} ({where}); keep one"
+        ) from None
     if not isinstance(data, dict):
         raise InputError(f"map: {os.fspath(yaml_file)} is not a ROS map .yaml (a mapping)")
     for key in ("image", "resolution", "origin"):
