@@ -27,6 +27,7 @@ from rrtdrive.occupancy import (
     read_ros_map,
 )
 from rrtdrive.types import InputError
+from rrtdrive.vehicle import VehicleParams, footprint_polygon
 
 grids = st.tuples(st.integers(1, 12), st.integers(1, 15)).flatmap(
     lambda shape: arrays(bool, shape)
@@ -315,8 +316,16 @@ def test_a_transparent_background_is_named_when_the_start_lands_in_it(tmp_path, 
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("rrtdrive maps: error: --start: ") and err.count("\n") == 1
-    # All but the 20 x 20 block of 100 x 200 cells.
-    assert "98% of the image's cells read as unknown" in err and "--unknown-free" in err
+    # All but the 20 x 20 block of 100 x 200 cells; under the body, every cell it covers.
+    body = footprint_polygon((3.0, 3.0, 0.0), VehicleParams())
+    covered = sum(
+        shapely.box(c * 0.1, 10 - (r + 1) * 0.1, (c + 1) * 0.1, 10 - r * 0.1)
+        .intersection(body).area > 1e-12
+        for r in range(100) for c in range(200)
+        if not (40 <= r < 60 and 90 <= c < 110)
+    )
+    assert f"{covered} cells under the car's body and 98% of the image read as unknown" in err
+    assert "--unknown-free" in err
     assert main([*argv, "--unknown-free"]) == 0  # the block alone is an obstacle then
     assert len(load_map(str(tmp_path / "m.json")).obstacles) == 1
 
@@ -334,3 +343,29 @@ def test_the_readme_import_example_prints_what_the_readme_says(tmp_path, capsys,
     out = capsys.readouterr().out.strip()
     assert out.split(" -> ")[0] == printed.split(" -> ")[0]
     assert load_map(tmp_path / "lot.json").bounds == (0.0, 0.0, 40.0, 20.0)
+
+
+def test_the_unknown_hint_only_for_a_body_on_unknown_cells(tmp_path, capsys):
+    """A start on a dark speck said "0% of the image's cells read as unknown ...
+    --unknown-free" where reading grey as free changes nothing (an audit)."""
+    img = np.full((100, 200), 254, np.uint8)
+    img[70:75, 20:25] = 0  # a dark speck at x 2..2.5, y 2.5..3
+    img[10:30, 150:170] = 205  # a grey patch at x 15..17, y 7..9
+    png = tmp_path / "g.png"
+    iio.imwrite(png, img)
+    base = ["maps", "--import", str(png), "--resolution", "0.1", "--out", str(tmp_path / "m.json")]
+    assert main([*base, "--start", "2,2.75,0", "--goal", "8,5,0"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("rrtdrive maps: error: --start: ") and "unknown" not in err
+    # The goal's body over the patch's corner: the hint counts the cells it covers.
+    goal = (14.0, 7.5, 0.0)
+    body = footprint_polygon(goal, VehicleParams())
+    patch = [shapely.box(15 + c * 0.1, 7 + r * 0.1, 15 + (c + 1) * 0.1, 7 + (r + 1) * 0.1)
+             for r in range(20) for c in range(20)]  # fmt: skip
+    covered = sum(cell.intersection(body).area > 1e-12 for cell in patch)
+    assert 0 < covered < 400
+    assert main([*base, "--start", "5,5,0", "--goal", "14,7.5,0"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("rrtdrive maps: error: --goal: ")
+    assert f"({covered} cells under the car's body and 2% of the image read as unknown" in err
+    assert main([*base, "--start", "5,5,0", "--goal", "14,7.5,0", "--unknown-free"]) == 0

@@ -112,15 +112,9 @@ def _cmd_import(args: argparse.Namespace) -> int:
         with flags_for({"start": "--start", "goal": "--goal", "name": named}):
             m = map_from_image(grid, name, start, goal)
     except InputError as exc:
-        if grid.unknown and not args.unknown_free and str(exc).startswith(("--start", "--goal")):
-            # A transparent background (matplotlib's transparent=True) reads as unknown:
-            # the whole image became one obstacle and the pose "overlaps" it, unexplained.
-            share = grid.unknown / grid.occupied.size
-            raise InputError(
-                f"{exc} ({share:.0%} of the image's cells read as unknown, between the "
-                "free and occupied thresholds, and count as occupied: a grey or transparent "
-                "background reads so; --unknown-free reads them as free)"
-            ) from None
+        hint = None if args.unknown_free else _unknown_hint(grid, str(exc), start, goal)
+        if hint:
+            raise InputError(f"{exc} ({hint})") from None
         raise
     with writing("--out", args.out):
         save_map(m, args.out)
@@ -203,3 +197,28 @@ def _export_folder(text: str, names: Sequence[str]) -> pathlib.Path:
     for name in names:
         validate_output(str(out / f"{name}.json"), "--export")
     return out
+
+
+def _unknown_hint(grid: Any, error: str, start: Any, goal: Any) -> str | None:
+    """Why a pose the image refuses may lie on unknown cells, or None when it does not."""
+    from rrtdrive.occupancy import unknown_cells_under
+    from rrtdrive.vehicle import VehicleParams, footprint_polygon
+
+    flag = error.split(":", 1)[0]
+    if flag not in ("--start", "--goal"):
+        return None
+    pose = start if flag == "--start" else goal
+    # A transparent background (matplotlib's transparent=True) reads as unknown: the
+    # whole image becomes one obstacle and the pose "overlaps" it, unexplained. A pose on
+    # a dark cell alone gets no such hint (it said "0% ... unknown"; an audit).
+    body = footprint_polygon((pose.x, pose.y, pose.yaw), VehicleParams())  # the Map's car
+    under = unknown_cells_under(grid, body)
+    if not under:
+        return None
+    share = grid.unknown / grid.occupied.size
+    return (
+        f"{under} cell{'' if under == 1 else 's'} under the car's body and {share:.0%} of the "
+        "image read as unknown, between the free and occupied thresholds, and count as "
+        "occupied: a grey or transparent background reads so; --unknown-free reads them "
+        "as free"
+    )

@@ -13,6 +13,7 @@ left corner is ``origin + (c, rows - 1 - r) * resolution``.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import os
@@ -27,12 +28,14 @@ from rrtdrive.map_checks import MAX_COORDINATE
 from rrtdrive.types import InputError, Pose, brief_repr, is_finite_number, require_int
 
 if TYPE_CHECKING:
+    import shapely
+
     from rrtdrive.maps import Map
     from rrtdrive.obstacles import Obstacle
 
 __all__ = [
     "ImageMap", "read_image_map", "read_ros_map", "despeckle", "grid_rectangles",
-    "image_obstacles", "map_from_image",
+    "image_obstacles", "map_from_image", "unknown_cells_under",
 ]
 
 
@@ -50,12 +53,15 @@ class ImageMap:
         ``(x, y)`` of the lower left corner of the bottom left cell, metres.
     unknown : int
         Cells between the thresholds (counted in ``occupied`` unless read as free).
+    unknown_cells : numpy.ndarray or None
+        Bool ``(rows, cols)``: which cells those are (``None``: not known).
     """
 
     occupied: np.ndarray
     resolution: float
     origin: tuple[float, float]
     unknown: int = 0
+    unknown_cells: np.ndarray | None = None
 
     @property
     def bounds(self) -> tuple[float, float, float, float]:
@@ -168,7 +174,9 @@ def read_image_map(
     p = pixels / scale if negate else (scale - pixels) / scale
     occupied = p > occ
     unknown = ~occupied & ~(p < free)
-    return ImageMap(occupied | (unknown & (not unknown_free)), res, (x0, y0), int(unknown.sum()))
+    return ImageMap(
+        occupied | (unknown & (not unknown_free)), res, (x0, y0), int(unknown.sum()), unknown
+    )
 
 
 @functools.cache
@@ -323,7 +331,7 @@ def despeckle(grid: ImageMap, max_cells: int) -> tuple[ImageMap, int, int]:
     small = sizes <= max_cells
     small[0] = False  # label 0: the free cells
     drop = small[labels]
-    kept = ImageMap(grid.occupied & ~drop, grid.resolution, grid.origin, grid.unknown)
+    kept = dataclasses.replace(grid, occupied=grid.occupied & ~drop)
     return kept, int(small.sum()), int(drop.sum())
 
 
@@ -395,6 +403,46 @@ def image_obstacles(grid: ImageMap) -> tuple[Obstacle, ...]:
         centre = (round((xlo + xhi) / 2, 9), round((ylo + yhi) / 2, 9))
         out.append(Obstacle(centre, (round(xhi - xlo, 9), round(yhi - ylo, 9))))
     return tuple(out)
+
+
+def unknown_cells_under(grid: ImageMap, body: shapely.Polygon) -> int:
+    """How many of the image's unknown cells a shape overlaps (shares area with).
+
+    Parameters
+    ----------
+    grid : ImageMap
+        The image read, with its ``unknown_cells``.
+    body : shapely.Polygon
+        A shape in metres, e.g. the car's footprint at a pose.
+
+    Returns
+    -------
+    int
+        The count; 0 when ``grid.unknown_cells`` is ``None``.
+
+    Examples
+    --------
+    >>> import shapely
+    >>> unknown = np.array([[0, 1], [0, 0]], dtype=bool)
+    >>> grid = ImageMap(unknown, 1.0, (0.0, 0.0), 1, unknown)
+    >>> unknown_cells_under(grid, shapely.box(1.5, 1.5, 3.0, 3.0))
+    1
+    >>> unknown_cells_under(grid, shapely.box(0.0, 0.0, 0.9, 2.0))
+    0
+    """
+    import shapely
+
+    if grid.unknown_cells is None or not grid.unknown_cells.any():
+        return 0
+    rows, cols = np.nonzero(grid.unknown_cells)
+    x0, y0 = grid.origin
+    res = grid.resolution
+    top = y0 + grid.occupied.shape[0] * res  # the image's first row is at the top
+    cells = shapely.box(x0 + cols * res, top - (rows + 1) * res, x0 + (cols + 1) * res,
+                        top - rows * res)  # fmt: skip
+    # Sharing an edge is no overlap: the map checks call a body touching an obstacle free.
+    shared = shapely.area(shapely.intersection(cells, body))
+    return int(np.count_nonzero(shared > 1e-12))
 
 
 def map_from_image(grid: ImageMap, name: str, start: Pose, goal: Pose) -> Map:
