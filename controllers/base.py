@@ -160,7 +160,8 @@ class TrackingController:
         (within ``steer_limit``); the command itself when the actuator is instant.
     steer_window : tuple of float or None
         ``(low, high)``: the angles the actuator can reach in the last call's step
-        (the command lies within them); ``None`` with an instant actuator. A residual
+        (the command lies within them, unless the wheels stand beyond ``steer_limit``:
+        then it is the limit); ``None`` with an instant actuator. A residual
         added to the command (the gym env's residual mode) is added to
         :attr:`steer_wanted` and clipped to this window, so that the clip does not
         only ever cut the residual that turns the wheels against the controller.
@@ -222,7 +223,10 @@ class TrackingController:
         return self.projector.length - (self.s - self._s0)
 
     def start_segment(self, index: int) -> None:
-        """Drive gear segment ``index`` from rest from now on (state as after :meth:`reset`).
+        """Drive gear segment ``index`` from rest from now on.
+
+        The state is as after :meth:`reset` but for the time of the last call, so that
+        the next command keeps to the actuator's reach.
 
         The controller changes segment by itself at each cusp while it drives; this is
         for a caller that drives the car otherwise (an agent) and tells the controller
@@ -270,6 +274,7 @@ class TrackingController:
         """
         self.segments = self._split(path)
         self._manoeuvre = not path.is_forward_only
+        self._last_t = None
         self._start_segment(0, v_start, keep_state=False)
 
     def retarget(self, path: Path, v_start: float) -> None:
@@ -324,7 +329,8 @@ class TrackingController:
             self.speed.reset(self.profile)
             self.cte = self.heading_error = self.s = self.v_ref = 0.0
             self.ff_preview = 0.0
-            self._last_t = None
+            # _last_t carries on over a cusp: the step since the last call is known, and
+            # the first command of the new gear is held to the actuator's reach too.
             self._launched = False
             self._reset_steering()
         self._track(seg.path)
@@ -460,6 +466,9 @@ class TrackingController:
             reach = rate * dt
             self.steer_window = (state.steer - reach, state.steer + reach)
             steer = min(max(steer, state.steer - reach), state.steer + reach)
+            # Wheels standing beyond the limit (a car parked at full lock): the limit
+            # wins; the actuator turns them back as fast as it can.
+            steer = min(max(steer, -limit), limit)
         if not self._launched:
             # At rest: CUSP_SPEED, not 0.0 (stock envs pass actions as float32, and a car
             # standing at a cusp there reads -2e-8 m/s: the wheels were not turned first).
