@@ -31,6 +31,8 @@ from rrtdrive.types import (
     Path,
     VehicleParams,
     brief_repr,
+    require_finite,
+    require_int,
     require_positive,
 )
 
@@ -242,6 +244,7 @@ class TrackingController:
         InputError
             For an index outside the path's segments.
         """
+        require_int("segment", index, 0)
         if not 0 <= index < len(self.segments):
             raise InputError(
                 f"segment: need 0 <= index < {len(self.segments)}, got {index!r}"
@@ -272,6 +275,7 @@ class TrackingController:
         InputError
             When ``path`` is not a :class:`Path` or all its samples coincide.
         """
+        require_finite("v_start", v_start)  # NaN started the profile at v_max silently
         self.segments = self._split(path)
         self._manoeuvre = not path.is_forward_only
         self._last_t = None
@@ -298,6 +302,7 @@ class TrackingController:
         InputError
             When ``path`` is not a :class:`Path` or all its samples coincide.
         """
+        require_finite("v_start", v_start)
         self.segments = self._split(path)
         self._manoeuvre = not path.is_forward_only
         self._start_segment(0, v_start, keep_state=True)
@@ -371,6 +376,8 @@ class TrackingController:
         s : float or None
             Arc length of the stop line from the start of the whole path, metres.
         """
+        if s is not None:
+            require_finite("stop line s", s)
         self.speed.stop_at = None if s is None else s - self._s0
 
     def cap_accel(self, accel: float | None) -> None:
@@ -383,6 +390,8 @@ class TrackingController:
         accel : float or None
             Upper bound of the acceleration command, m/s^2 (a negative cap brakes).
         """
+        if accel is not None:
+            require_finite("accel cap", accel)
         self.speed.accel_cap = accel
 
     def _reset_steering(self) -> None:

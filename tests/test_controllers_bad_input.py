@@ -120,3 +120,36 @@ def test_a_look_ahead_whose_longest_is_below_its_shortest_is_refused():
     with pytest.raises(InputError, match=r"^pure_pursuit: need ld_gain >= 0 and ld_max >= ld_min"):
         make_controller("pure-pursuit", ld_min=5.0, ld_max=2.0)
     assert make_controller("pure-pursuit", ld_min=2.0, ld_max=2.0) is not None
+
+
+@pytest.mark.parametrize("name", sorted(CONTROLLERS))
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        # NaN started the speed profile at v_max; "1" was a bare TypeError (an audit).
+        (lambda c: c.reset(STRAIGHT, math.nan), r"^v_start: must be finite"),
+        (lambda c: c.reset(STRAIGHT, "1"), r"^v_start: expected a number, got '1'"),
+        (lambda c: c.retarget(STRAIGHT, math.inf), r"^v_start: must be finite"),
+        (lambda c: c.hold_at(math.nan), r"^stop line s: must be finite"),
+        (lambda c: c.cap_accel(math.nan), r"^accel cap: must be finite"),
+        (lambda c: c.cap_accel("x"), r"^accel cap: expected a number"),
+        (lambda c: c.start_segment(0.5), r"^segment: must be an integer >= 0, got 0.5"),
+    ],
+)
+def test_bad_arguments_to_the_tracking_calls_name_them(name, call, message):
+    c = make_controller(name)
+    c.reset(STRAIGHT)
+    with pytest.raises(InputError, match=message):
+        call(c)
+
+
+@pytest.mark.parametrize("name", sorted(CONTROLLERS))
+def test_good_arguments_to_the_tracking_calls_pass(name):
+    c = make_controller(name)
+    c.reset(STRAIGHT, np.float64(1.5))
+    c.hold_at(12.0)
+    c.hold_at(None)
+    c.cap_accel(-0.5)
+    c.cap_accel(None)
+    c.start_segment(0)
+    assert c.segment == 0
