@@ -219,13 +219,9 @@ def test_rows_that_leave_the_map(capsys, tmp_path):
     assert {"collision_free", "clearance_ok"} <= set(doc["failed"])
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: when any row lies off the map, first_collision is "
-    "that row and collides_with 'the bounds', even where the body hit an obstacle "
-    "(or left the map) earlier along the path; --plot marks the wrong place",
-)
 def test_first_collision_is_the_first_along_the_path(capsys, tmp_path):
+    # Was a bug: with any row off the map, that row was "the first collision", named
+    # "the bounds", even where the body hit an obstacle earlier (and --plot marked it).
     rows = drive(5.0, 15.0, 0.0, straight, 60.0)  # to x = 65 on a 60 m map
     box = {"center": [30.0, 16.5], "size": [2.0, 2.0], "yaw": 0.0}  # overlaps the body by 0.4 m
     mapf = write_map(tmp_path, "rammed", [box], rows[0][:3], [50.0, 15.0, 0.0])

@@ -101,8 +101,8 @@ class PathCheck:
         slack); True when none was asked for.
     first_collision : tuple of float or None
         Where the body check first fails along the path: the rear-axle pose
-        ``(x, y, yaw)`` of the first tested pose (or row off the map); ``None`` when
-        ``collision_free``.
+        ``(x, y, yaw)`` of the first tested pose (or the first row off the map, when no
+        body before it collides); ``None`` when ``collision_free``.
     collides_with : str
         What the body there overlaps: ``"obstacle K"`` (its index in the map),
         ``"the bounds"``; empty when ``collision_free``.
@@ -225,13 +225,15 @@ def _first_collision(
     """The first pose whose body leaves ``region`` or overlaps an obstacle, and what it hits.
 
     ``shapes``: the bodies at ``poses``; ``polygons``: the obstacles, in map order.
-    A row off the map (``row_on_map`` false; no bodies were drawn) is that pose.
+    Bodies are drawn up to the first row off the map (``row_on_map`` false), which is
+    the first collision when none of them collides.
     """
+    off = None
     if not row_on_map.all():
         k = int(np.argmin(row_on_map))
-        return (float(rows[k, 0]), float(rows[k, 1]), float(rows[k, 2])), "the bounds"
+        off = (float(rows[k, 0]), float(rows[k, 1]), float(rows[k, 2])), "the bounds"
     if not len(shapes):
-        return None, ""
+        return off if off is not None else (None, "")
     # Touching the bounds is a collision, as touching an obstacle is (the walls stand there).
     shapely.prepare(region)
     outside = ~shapely.contains_properly(region, shapes)
@@ -242,7 +244,7 @@ def _first_collision(
         hit = shapely.intersects(walls, shapes)
     bad = outside | hit
     if not bad.any():
-        return None, ""
+        return off if off is not None else (None, "")
     k = int(np.argmax(bad))
     x, y, yaw = (float(c) for c in np.concatenate(poses)[k])
     if outside[k]:
@@ -379,7 +381,9 @@ def verify_path(
     # A row off the map already fails the body check; densifying a jump of 1e6 m to
     # 0.1 m poses would take minutes and gigabytes first.
     row_on_map = (xy[:, 0] >= xmin) & (xy[:, 0] <= xmax) & (xy[:, 1] >= ymin) & (xy[:, 1] <= ymax)
-    on_map = bool(np.all(row_on_map))
+    # Bodies are drawn up to the first row off the map, so that a collision before it is
+    # still the first one reported (an obstacle hit at 25 m was named "the bounds" at 60).
+    drawn = len(s) if row_on_map.all() else int(np.argmin(row_on_map))
     bodies: list[np.ndarray] = []
     poses: list[np.ndarray] = []
     max_k = 0.0
@@ -391,8 +395,8 @@ def verify_path(
         seg = s[a:b]
         gear = seg[0, 4]
         # The body along the nose yaw (interpolated between the rows) in either gear.
-        if on_map:
-            dense = densify(seg[:, :3], pose_spacing, angle_column=2).points
+        if a < drawn:
+            dense = densify(s[a:min(b, drawn), :3], pose_spacing, angle_column=2).points
             bodies.append(_bodies(dense, v.length, v.width, v.rear_overhang))
             poses.append(dense)
         if len(seg) < 2:
