@@ -573,13 +573,8 @@ def test_judge_real_episodes_instant_steering_infeasible_rate_limited_feasible()
     assert verdicts[0.4].feasible and verdicts[0.4].max_steer_rate <= 0.4 + 1e-9
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: the CommonRoad judge never compares the logged "
-    "speed with its simulation: a log moving at 2 m/s that says 12 m/s "
-    "(or -2 m/s) is feasible (commonroad_judge.py, drift checks)",
-)
 def test_judge_rejects_a_speed_column_the_inputs_cannot_produce():
+    # Was a bug: the judge never compared the logged speed with its simulation.
     pytest.importorskip("commonroad_dc.feasibility.feasibility_checker")
     from rrtdrive.commonroad_judge import judge_trajectory
 
@@ -588,4 +583,6 @@ def test_judge_rejects_a_speed_column_the_inputs_cannot_produce():
     log = np.column_stack((2 * t, 0 * t, 0 * t, np.full(n + 1, 2.0)))
     assert judge_trajectory(t, log, np.zeros(n), np.zeros(n)).feasible
     log[1:, 3] = 12.0  # positions still advance 0.1 m a step: 2 m/s
-    assert not judge_trajectory(t, log, np.zeros(n), np.zeros(n)).feasible
+    verdict = judge_trajectory(t, log, np.zeros(n), np.zeros(n))
+    assert not verdict.feasible and "its speed drifts 10 m/s" in verdict.why
+    assert verdict.max_speed_drift_mps == pytest.approx(10.0)

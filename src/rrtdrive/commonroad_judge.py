@@ -15,7 +15,7 @@ acceleration, friction circle); it caps the steering angle and the speed at thei
 without saying so, and after the initial state it never looks at the logged states.
 So the judge's verdict ``feasible`` also asks that CommonRoad's forward simulation of
 the inputs stays on the logged trajectory (:data:`DRIFT_TOL_M`, :data:`HEADING_TOL_RAD`,
-each growing with the distance driven)
+each growing with the distance driven, and :data:`SPEED_TOL_MPS`)
 and that every applied angle and logged speed is within the car's and the model's
 limits: without that, a trajectory whose states jump 5 m sideways, or turn three
 times as fast as the inputs allow, was called feasible (the logged inputs were).
@@ -47,6 +47,10 @@ DRIFT_PER_M = 1e-3
 #: The same for the heading (rad, and rad per metre driven).
 HEADING_TOL_RAD = 0.01
 HEADING_PER_M = 1e-4
+#: Largest difference between CommonRoad's simulated speed and the logged one (m/s): a
+#: log whose speed column disagrees with its own accelerations (12 m/s logged on a 2 m/s
+#: drive) was judged feasible on its positions alone (an audit).
+SPEED_TOL_MPS = 0.05
 
 
 @dataclass(frozen=True)
@@ -57,7 +61,8 @@ class CommonRoadVerdict:
     ----------
     feasible : bool
         The judge's verdict: CommonRoad accepts the inputs, its simulation of them stays
-        on the logged trajectory (:data:`DRIFT_TOL_M`, :data:`HEADING_TOL_RAD`), and
+        on the logged trajectory (:data:`DRIFT_TOL_M`, :data:`HEADING_TOL_RAD`,
+        :data:`SPEED_TOL_MPS`), and
         every applied steering angle and logged speed is within the limits.
     first_infeasible_step : int or None
         Index of the first input CommonRoad rejects.
@@ -66,6 +71,9 @@ class CommonRoadVerdict:
         friction circle).
     max_heading_drift_rad : float
         Largest heading difference between CommonRoad's simulation and the log (rad).
+    max_speed_drift_mps : float
+        Largest speed difference between CommonRoad's simulation and the log (m/s;
+        :data:`SPEED_TOL_MPS`).
     why : str
         What makes it infeasible (empty when feasible).
     max_steer_rate : float
@@ -85,6 +93,7 @@ class CommonRoadVerdict:
     inputs_feasible: bool = True
     max_heading_drift_rad: float = 0.0
     why: str = ""
+    max_speed_drift_mps: float = 0.0
 
     def to_json(self) -> dict[str, object]:
         """A JSON-ready dict."""
@@ -96,6 +105,7 @@ class CommonRoadVerdict:
             "commonroad_max_position_drift_m": round(self.max_position_drift_m, 6),
             "commonroad_inputs_feasible": self.inputs_feasible,
             "commonroad_max_heading_drift_rad": round(self.max_heading_drift_rad, 6),
+            "commonroad_max_speed_drift_mps": round(self.max_speed_drift_mps, 6),
             "commonroad_why": self.why,
         }
 
@@ -230,8 +240,11 @@ def judge_trajectory(
     turn = np.abs(wrap_angle(np.array([s.orientation for s in sim]) - states[:n, 2]))
     drift = float(np.max(off)) if n else 0.0
     heading = float(np.max(turn)) if n else 0.0
+    gap = np.abs(np.array([s.velocity for s in sim], dtype=float) - states[:n, 3])
+    speed_drift = float(np.max(gap)) if n else 0.0
     drift = drift if math.isfinite(drift) else math.inf
     heading = heading if math.isfinite(heading) else math.inf
+    speed_drift = speed_drift if math.isfinite(speed_drift) else math.inf
     # NaN (a diverged simulation) fails the tests below as it should.
     off_path = not bool(np.all(off <= DRIFT_TOL_M + DRIFT_PER_M * driven))
     turned = not bool(np.all(turn <= HEADING_TOL_RAD + HEADING_PER_M * driven))
@@ -243,6 +256,10 @@ def judge_trajectory(
             (not feasible, "CommonRoad rejects an input"),
             (off_path, f"its simulation drifts {drift:.3g} m from the log"),
             (turned, f"its heading drifts {heading:.3g} rad from the log"),
+            (
+                not speed_drift <= SPEED_TOL_MPS,
+                f"its speed drifts {speed_drift:.3g} m/s from the log",
+            ),
             (
                 bool(np.any(np.abs(steer) > vehicle.max_steer * (1 + 1e-9))),
                 f"a steering angle over {vehicle.max_steer:.4g} rad",
@@ -263,4 +280,5 @@ def judge_trajectory(
         inputs_feasible=bool(feasible),
         max_heading_drift_rad=heading,
         why="; ".join(why),
+        max_speed_drift_mps=speed_drift,
     )
