@@ -50,7 +50,9 @@ def test_positions_turning_tighter_than_the_yaw_fail_the_curvature():
     begin = lead + arc / 2 - window / 2
     yaw = np.clip((s - begin) * KAPPA_MAX, 0.0, turn)
     kappa = np.where((s > begin) & (s < begin + window), KAPPA_MAX, 0.0)
-    check = _verify(np.column_stack([x, y, yaw, kappa, np.ones_like(s)]))
+    # At the 3 deg travel tolerance of before session 46 (1 deg now fails travel_ok too):
+    # the positions' curvature alone must catch it.
+    check = _verify(np.column_stack([x, y, yaw, kappa, np.ones_like(s)]), travel_tol_deg=3.0)
     assert check.failed == ("curvature_ok",), check.failed
     assert check.max_discrete_curvature > 0.2
 
@@ -62,7 +64,8 @@ def test_a_short_gear_segment_on_a_tight_arc_fails_the_curvature():
     s = np.arange(0.0, 0.5 + 1e-9, 0.05)
     x, y = _integrate(s, s / 3.0)
     yaw = 0.25 * KAPPA_MAX + KAPPA_MAX * s
-    check = _verify(np.column_stack([x, y, yaw, np.full_like(s, KAPPA_MAX), np.ones_like(s)]))
+    check = _verify(np.column_stack([x, y, yaw, np.full_like(s, KAPPA_MAX), np.ones_like(s)]),
+                    travel_tol_deg=3.0)  # as above
     assert check.failed == ("curvature_ok",), check.failed
     assert check.max_discrete_curvature == pytest.approx(1 / 3, rel=0.02)
 

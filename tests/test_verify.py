@@ -294,11 +294,11 @@ def test_body_rectangles_are_the_rotated_box(poses: list[tuple[float, float, flo
     # car's box (rear axle at the origin, nose along +x).
     from shapely import affinity
 
-    from rrtdrive.verify import _bodies
+    from rrtdrive.verify_bodies import body_polygons
 
     v = VehicleParams()
     p = np.array(poses, dtype=float)
-    got = _bodies(p, v.length, v.width, v.rear_overhang)
+    got = body_polygons(p, v.length, v.width, v.rear_overhang)
     box = shapely.box(-v.rear_overhang, -v.width / 2, v.length - v.rear_overhang, v.width / 2)
     for body, (x, y, yaw) in zip(got, poses, strict=True):
         want = affinity.translate(affinity.rotate(box, yaw, origin=(0, 0), use_radians=True), x, y)

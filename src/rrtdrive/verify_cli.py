@@ -198,29 +198,39 @@ def _lines(
     ``kappa_given`` false: the rows were poses alone, their ``kappa`` read off the yaw's
     turn, so its line says so instead of judging it.
     """
+    from rrtdrive.verify import (
+        CURVATURE_TOL,
+        HEADING_TOL_DEG,
+        KAPPA_TOL,
+        SHARPNESS_TOL,
+        TRAVEL_TOL_DEG,
+    )
+
     mark = {True: "ok  ", False: "FAIL"}
     sharp = bounds["max_sharpness"]
     rows = [
         (check.collision_free, "body clear of obstacles and inside the bounds",
          _where(check)),
         (check.curvature_ok, "curvature",
-         f"{check.max_discrete_curvature:.4f} 1/m (max {bounds['kappa_max']:.4f} + 0.01)"),
+         f"{check.max_discrete_curvature:.4f} 1/m "
+         f"(max {bounds['kappa_max']:.4f} + {CURVATURE_TOL:g})"),
         (check.sharpness_ok, "sharpness",
          f"{check.max_discrete_sharpness:.4f} rad/m "
-         + ("(not checked)" if sharp is None else f"(max {sharp:g} + 0.005)")),
+         + ("(not checked)" if sharp is None else f"(max {sharp:g} + {SHARPNESS_TOL:g})")),
         (check.headings_ok, "headings at start / goal",
-         f"{check.start_heading_err_deg:.2f} / {check.goal_heading_err_deg:.2f} deg (max 3)"),
+         f"{check.start_heading_err_deg:.2f} / {check.goal_heading_err_deg:.2f} deg "
+         f"(max {HEADING_TOL_DEG:g})"),
         (check.endpoints_ok, "ends exactly at start and goal",
          f"{_metres(check.endpoint_err_m, '.6f')} / {check.endpoint_yaw_err_deg:.4f} deg "
          "(max 1e-06 m / 0.0001 deg)"),
         (check.spacing_ok, "sample spacing", f"{_metres(check.max_spacing_m)} (max 0.25)"),
         (check.travel_ok, "direction of travel along the yaw",
-         f"{check.travel_heading_err_deg:.2f} deg (max 3)"),
+         f"{check.travel_heading_err_deg:.2f} deg (max {TRAVEL_TOL_DEG:g})"),
         (check.cusps_ok, "cusps repeat their pose", _cusp_detail(check)),
         (check.clearance_ok, "clearance to obstacles and bounds",
          f"{_metres(check.min_clearance_m, '.4f')} (min {bounds['clearance']:g}{why})"),
         (check.kappa_ok, "kappa column agrees with the yaw's turn",
-         f"{check.kappa_column_err:.4f} 1/m off (max 0.01)"
+         f"{check.kappa_column_err:.4f} 1/m off (max {KAPPA_TOL:g})"
          + ("" if check.worst_kappa_row is None else f"; worst at row {check.worst_kappa_row}")
          if kappa_given else "not given: rows [x, y, yaw], gears and kappa read off the motion"),
     ]
