@@ -18,7 +18,6 @@ Examples
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Callable
 from pathlib import Path as FsPath
@@ -28,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 
 from rrtdrive.sim.mp4 import Mp4Writer
-from rrtdrive.types import InputError
+from rrtdrive.types import InputError, is_finite_number
 
 __all__ = ["RecordMP4", "record_episode"]
 
@@ -89,10 +88,9 @@ class RecordMP4(gym.Wrapper):
         if not isinstance(name_prefix, str) or not name_prefix or os.sep in name_prefix:
             raise InputError(f"name_prefix: need a non-empty file-name prefix, got {name_prefix!r}")
         fps = fps if fps is not None else env.metadata.get("render_fps") or 30
-        if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not (
-            math.isfinite(fps) and fps > 0
-        ):
-            raise InputError(f"fps: must be a number > 0, got {fps!r}")
+        if not is_finite_number(fps) or not fps > 0:  # numpy numbers too
+            raise InputError(f"fps: must be a finite number > 0, got {fps!r}")
+        fps = float(fps)
         if isinstance(quality, bool) or not isinstance(quality, int) or not 0 <= quality <= 10:
             raise InputError(f"quality: need an integer in 0..10, got {quality!r}")
         self.folder = FsPath(folder)

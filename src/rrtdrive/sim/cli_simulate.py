@@ -40,6 +40,7 @@ from rrtdrive.cli_args import (
     writing,
 )
 from rrtdrive.json_safe import options_json
+from rrtdrive.sim.cli_media import write_media
 from rrtdrive.sim.cli_targets import given_path, make_task, target_kind, with_simulate_hint
 from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MIN_SIM_FREQUENCY
 from rrtdrive.types import Budget, InputError
@@ -504,48 +505,9 @@ def _run(args: argparse.Namespace) -> int:
         extra["path_file"] = args.path  # the driven path's plan file (planner "given")
     if stock is not None:
         extra.update(stock.to_json())
-    if args.video and stock is not None:
-        if not (stock.frames or streamed):
-            extra["video"] = None
-            print(f"rrtdrive simulate: no video: {episode.message}", file=sys.stderr)
-        elif streamed:
-            extra["video_frames"], extra["video"] = streamed, args.video
-        else:
-            from rrtdrive.sim.video import real_time_fps, write_frames
-
-            fps = real_time_fps(len(stock.frames), len(episode.log.states), episode.log.dt)
-            with writing("--video", args.video):
-                extra["video_frames"] = write_frames(stock.frames, args.video, fps)
-            extra["video"] = args.video
-    elif args.video:
-        if episode.log.steps == 0:
-            extra["video"] = None
-            print(
-                f"rrtdrive simulate: no video: {episode.message}", file=sys.stderr
-            )
-        else:
-            from rrtdrive.sim.video import write_video
-
-            def progress(done: int, total: int) -> None:
-                # One line on stderr, rewritten in place on a terminal, else every 10 %.
-                tty = sys.stderr.isatty()
-                if tty or done == total or done % max(1, total // 10) == 0:
-                    end = "\n" if done == total or not tty else ""
-                    start = "\r" if tty else ""  # no carriage returns in a log file
-                    print(f"{start}rrtdrive simulate: video {done}/{total} frames", end=end,
-                          file=sys.stderr, flush=True)
-
-            with writing("--video", args.video):
-                frames = write_video(episode, args.video, stride=stride, progress=progress)
-            extra["video"] = args.video
-            extra["video_frames"] = frames
-    if plot:
-        from rrtdrive.plotting import save_figure
-        from rrtdrive.sim.episode_plot import plot_episode
-
-        with writing("--plot", plot):
-            save_figure(plot_episode(episode), plot)
-        extra["plot"] = plot
+    # A video or plot that cannot be written fails the run (exit 1) after the JSON, the
+    # trajectory and the summary are out: the drive's metrics are not lost with it.
+    unwritten = write_media(args, episode, stock, streamed, stride, plot, extra)
     data = episode_json(report, extra)
     text = json.dumps(data, indent=2) + "\n"
     if args.trajectory:
@@ -574,5 +536,9 @@ def _run(args: argparse.Namespace) -> int:
     if diagnosis is not None:  # the planner failed: the constraint, as `plan` prints it
         print(f"  why: {diagnosis.message}", file=out)
     print("\n".join(metrics_block(data)), file=out)
+    for exc in unwritten[1:]:
+        print(f"rrtdrive simulate: error: {exc}", file=sys.stderr)
+    if unwritten:
+        raise unwritten[0]
     ok = report.success and (stock is None or stock.highway_env_success)
     return EXIT_OK if ok else EXIT_FAILED

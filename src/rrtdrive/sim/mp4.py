@@ -21,7 +21,6 @@ Examples
 from __future__ import annotations
 
 import errno
-import math
 import os
 import queue
 import signal
@@ -34,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from rrtdrive.atomic import publish, temp_beside
-from rrtdrive.types import InputError
+from rrtdrive.types import InputError, is_finite_number
 
 __all__ = ["Mp4Writer"]
 
@@ -106,10 +105,10 @@ class Mp4Writer:
     ) -> None:
         import imageio.v2 as imageio
 
-        if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not (
-            math.isfinite(fps) and fps > 0
-        ):
-            raise InputError(f"fps: must be a number > 0, got {fps!r}")
+        # numpy numbers too (np.int64(20) was "not a number > 0"; an audit).
+        if not is_finite_number(fps) or not fps > 0:
+            raise InputError(f"fps: must be a finite number > 0, got {fps!r}")
+        fps = float(fps)
         if isinstance(queue_size, bool) or not isinstance(queue_size, int) or queue_size < 1:
             raise InputError(f"queue_size: need an integer >= 1, got {queue_size!r}")
         self.target = FsPath(target)
