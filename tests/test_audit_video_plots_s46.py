@@ -322,14 +322,6 @@ def test_write_video_rejects_a_folder_target_before_rendering(
     assert rendered == [], "nothing rendered for a target that cannot be written"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: with SDL_VIDEODRIVER=dummy (the usual "
-    "headless-pygame advice) 'simulate parking-v0 --video' silently writes "
-    "an all-black MP4 (highway-env's own render); rrtdrive's scenarios are "
-    "fine. Expected: real frames, or an error/warning naming "
-    "SDL_VIDEODRIVER (sim/cli_simulate.py _drive_stock / sim/stock.py)",
-)
 def test_stock_env_video_is_not_silently_black_under_sdl_dummy(tmp_path):
     out = tmp_path / "stock.mp4"
     env = {**os.environ, "SDL_VIDEODRIVER": "dummy"}

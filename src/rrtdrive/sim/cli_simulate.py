@@ -499,6 +499,8 @@ def _run(args: argparse.Namespace) -> int:
         "plan_status": None if episode.plan is None else episode.plan.status.value,
     }
     extra.update(episode.scenario.describe())
+    if replan is not None:  # the re-planning settings asked for, as the traffic's above
+        extra["replan_rate_hz"], extra["predictor"] = replan.rate_hz, replan.predictor
     if target != "scenario":
         extra["scenario"] = args.scenario  # the name asked for, not the task kind "custom"
     if path is not None:

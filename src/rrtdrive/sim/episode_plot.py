@@ -33,6 +33,8 @@ __all__ = ["plot_episode"]
 _SERIES_IN = 4.2
 #: Room around the drive when the view is cut from a big map, metres.
 _VIEW_MARGIN_M = 10.0
+#: Other cars this near the ego at the last step are in the view too, metres.
+_NEAR_CARS_M = 40.0
 
 
 def _view(episode: Any) -> tuple[float, float, float, float]:
@@ -40,11 +42,18 @@ def _view(episode: Any) -> tuple[float, float, float, float]:
 
     The whole map unless the drive covers under half of it along a side (a 1.5 km road
     of which the overtake uses 200 m was a thin line across the figure; its goal, the
-    road's far end, is not part of the drive).
+    road's far end, is not part of the drive). The other cars within
+    :data:`_NEAR_CARS_M` of the ego at the last step are part of it (the lead car a
+    following drive ended behind was cut off; an audit).
     """
     m = episode.scenario.map
     xmin, ymin, xmax, ymax = m.bounds
-    points = [episode.path.xy, episode.log.states[:, :2], np.array([m.start.as_tuple()[:2]])]
+    states = episode.log.states
+    points = [episode.path.xy, states[:, :2], np.array([m.start.as_tuple()[:2]])]
+    others = episode.log.others
+    if others.size and len(states):
+        last = others[-1, :, :2]
+        points.append(last[np.hypot(*(last - states[-1, :2]).T) <= _NEAR_CARS_M])
     pts = np.vstack([p for p in points if len(p)])
     lo, hi = pts.min(axis=0) - _VIEW_MARGIN_M, pts.max(axis=0) + _VIEW_MARGIN_M
     view = (max(xmin, lo[0]), max(ymin, lo[1]), min(xmax, hi[0]), min(ymax, hi[1]))

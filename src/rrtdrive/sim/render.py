@@ -26,11 +26,12 @@ draws nothing). It does not go through highway-env's ``EnvViewer``, whose
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import sys
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import Any
 
 import numpy as np
@@ -38,7 +39,7 @@ import numpy as np
 __all__ = [
     "PATH_COLOR", "REVERSE_COLOR", "CUSP_COLOR", "TRACE_COLOR", "REF_COLOR", "GOAL_COLOR",
     "TEXT_COLOR", "PANEL_COLOR", "PANEL_CORNERS", "SceneCanvas", "fewest_hits", "is_parked",
-    "panel_band", "prepare_sdl",
+    "panel_band", "prepare_sdl", "sdl_that_draws",
 ]
 
 PATH_COLOR = (40, 90, 255)
@@ -62,6 +63,26 @@ def prepare_sdl() -> None:
     """Give SDL a runtime folder when there is none (it complains on stderr without one)."""
     if not os.environ.get("XDG_RUNTIME_DIR"):
         os.environ["XDG_RUNTIME_DIR"] = tempfile.mkdtemp(prefix="rrtdrive-sdl-")
+
+
+@contextlib.contextmanager
+def sdl_that_draws() -> Iterator[None]:
+    """Lift ``SDL_VIDEODRIVER=dummy`` for the block: highway-env's own viewer draws then.
+
+    highway-env's ``EnvViewer`` turns itself off (``enabled`` false) when it is created
+    under the dummy driver, the usual headless-pygame advice, so every ``env.render()``
+    of a stock env came back black (an audit); an ``rgb_array`` frame needs no display
+    without it either. The variable is put back after the block.
+    """
+    driver = os.environ.get("SDL_VIDEODRIVER")
+    if driver != "dummy":
+        yield
+        return
+    del os.environ["SDL_VIDEODRIVER"]
+    try:
+        yield
+    finally:
+        os.environ["SDL_VIDEODRIVER"] = driver
 
 
 def is_parked(vehicle: Any) -> bool:

@@ -35,7 +35,7 @@ from rrtdrive.controllers import make_controller
 from rrtdrive.sim.episode import DriveLog, Episode, EpisodeStatus, end_message
 from rrtdrive.sim.extract import attach_ego, map_from_env
 from rrtdrive.sim.loop import STOP_AT_PATH_END, PathTracker
-from rrtdrive.sim.render import prepare_sdl
+from rrtdrive.sim.render import prepare_sdl, sdl_that_draws
 from rrtdrive.sim.runner import EpisodeConfig
 from rrtdrive.sim.tasks import DEFAULT_PLANNER, CustomTask
 from rrtdrive.types import InputError, Path, PlanResult, VehicleParams
@@ -307,7 +307,9 @@ def _drive(
     def grab() -> float:
         """Draw one frame and keep or hand it on; the seconds it took (not the closed loop's)."""
         t_render = time.perf_counter()
-        keep(env.render())
+        with sdl_that_draws():
+            frame = env.render()
+        keep(frame)
         return time.perf_counter() - t_render
 
     render_s = grab() if render_stride > 0 else 0.0

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import time
 from collections.abc import Mapping
 from typing import Any
@@ -33,7 +34,7 @@ from rrtdrive.planning.spacetime import (
 from rrtdrive.sim.replanning import ReplanConfig, lane_path
 from rrtdrive.types import Budget, InputError, Path, Pose, VehicleParams
 
-__all__ = ["Candidate", "WindowPlanner"]
+__all__ = ["Candidate", "WindowPlanner", "road_frame_message"]
 
 #: A stitched reference ready for the safety check: ``(path, check_end, goal_index)``,
 #: the rows to check up to and the row of the cut-in point.
@@ -181,7 +182,7 @@ class WindowPlanner:
             problem, self.rng, Budget(max_iterations=cfg.max_iterations, max_time_s=left)
         )
         if not plan.success:
-            return plan, plan.result.message, None
+            return plan, road_frame_message(plan.result.message, x_off), None
         local_path = plan.result.path.samples.copy()
         local_path[:, 0] += x_off
         # Stitch: current reference from the ego to the stitch pose, the plan, then the lane.
@@ -196,3 +197,26 @@ class WindowPlanner:
         goal_index = min(goal_index, len(s) - 1)
         check_end = int(np.searchsorted(s, s[goal_index] + cfg.check_beyond_m))
         return plan, plan.result.message, (path, min(check_end, len(s) - 1), goal_index)
+
+
+_POINT = re.compile(r"\((-?\d+(?:\.(\d+))?), (-?\d+(?:\.\d+)?)\)")
+
+
+def road_frame_message(message: str, x_off: float) -> str:
+    """A planner's message with its points ``(x, y)`` moved from the window's frame to the road's.
+
+    The planner plans in a window shifted by ``-x_off`` along the road; its messages
+    named a conflict at x = 22 with the car at x = 88 (an audit). Each point keeps its
+    number of decimals.
+
+    Examples
+    --------
+    >>> road_frame_message("traffic conflict at (22.1, 46.3) on the final check", 65.8)
+    'traffic conflict at (87.9, 46.3) on the final check'
+    """
+
+    def shift(m: re.Match[str]) -> str:
+        decimals = len(m.group(2) or "")
+        return f"({float(m.group(1)) + x_off:.{decimals}f}, {m.group(3)})"
+
+    return _POINT.sub(shift, message)
