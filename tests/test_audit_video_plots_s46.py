@@ -277,6 +277,9 @@ def test_interrupting_a_video_keeps_the_old_file_and_leaves_no_temp(tmp_path):
             ],
             stdout=subprocess.DEVNULL,
             stderr=err,
+            # A pytest-xdist worker hands its children SIGINT ignored, and Python keeps an
+            # inherited SIG_IGN: the child would never see the Ctrl-C (as the test_bench one).
+            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # noqa: PLW1509
         )
         deadline = time.monotonic() + 40
         while time.monotonic() < deadline and b"video " not in errfile.read_bytes():
