@@ -60,10 +60,10 @@ def test_simulate_a_map_with_start_and_goal_flags(capsys, tmp_path):
         (["parking", "--start", "1,2,0"], "--start: only a map takes a start"),
         (["overtake", "--reverse-in"], "--reverse-in: only the parking scenario"),
         (["overtake-traffic", "--reverse"], "--reverse: overtake-traffic re-plans"),
-        (["garage", "--oncoming", "2"], "--oncoming: only a built-in scenario"),
+        (["garage", "--oncoming", "2"], "--oncoming: only the overtake scenario has"),
         (["garage", "--goal", "1,2"], "--goal: expected three numbers"),
         (["garage", "--goal", "-5,2,0"], "goal"),
-        (["parking-v0", "--density", "low"], "--density: only a built-in scenario"),
+        (["parking-v0", "--density", "low"], "--density: only the overtake-traffic scenario"),
     ],
 )
 def test_simulate_bad_input_exits_2_with_one_line(capsys, argv, message):
@@ -199,3 +199,25 @@ def test_an_episode_configs_planner_options_must_be_a_mapping():
         EpisodeConfig(planner_options=[1])  # type: ignore[arg-type]
     with pytest.raises(InputError, match=r"by name, got \{1: 2\}"):
         EpisodeConfig(planner_options={1: 2})  # type: ignore[dict-item]
+
+
+@pytest.mark.parametrize(
+    ("argv", "line"),
+    [
+        # "only a built-in scenario takes it" sent a user to parking, which has no lead car.
+        (["garage", "--lead-model", "idm"],
+         "--lead-model: only the overtake-traffic scenario has it, not garage"),
+        (["garage", "--oncoming", "1"],
+         "--oncoming: only the overtake scenario has a count of oncoming cars, not garage"),
+        # The scenario's own error named its field, "planner:", not the flag.
+        (["overtake-traffic", "--planner", "hybrid-a-star"],
+         "--planner: overtake-traffic re-plans with the improved RRT-Connect in space-time"),
+        # overtake-traffic's road is 1.5 km: not "small".
+        (["overtake-traffic", "--resolution", "0.2"],
+         "--resolution: only a map takes a grid size; overtake-traffic sets its own"),
+    ],
+)
+def test_scenario_only_flags_name_the_scenario_that_takes_them(capsys, argv, line):
+    code, _, err = run(capsys, "simulate", *argv, "--max-time", "0.1")
+    assert code == 2 and err.count("\n") == 1
+    assert err.startswith(f"rrtdrive simulate: error: {line}"), err

@@ -339,7 +339,7 @@ def _run(args: argparse.Namespace) -> int:
                 )
         if args.resolution is not None:
             raise InputError(
-                f"--resolution: only a map takes a grid size; {args.scenario}'s maps are small"
+                f"--resolution: only a map takes a grid size; {args.scenario} sets its own"
             )
     if args.reverse_in and args.scenario != "parking":
         raise InputError("--reverse-in: only the parking scenario has reverse-in bays")
@@ -425,7 +425,11 @@ def _run(args: argparse.Namespace) -> int:
         given = [k for k, v in traffic_opts.items() if v is not None]
         if given or getattr(args, "oncoming", None):
             flag = "--" + (given[0] if given else "oncoming").replace("_", "-")
-            raise InputError(f"{flag}: only a built-in scenario takes it, not {args.scenario}")
+            # As the scenarios word it ("only a built-in scenario" sent a user to parking).
+            owner = "overtake-traffic scenario has it"
+            if not given:
+                owner = "overtake scenario has a count of oncoming cars"
+            raise InputError(f"{flag}: only the {owner}, not {args.scenario}")
     if replan_config is not None:
         if deterministic:
             replan_opts["wall_limit"] = False
@@ -468,7 +472,7 @@ def _run(args: argparse.Namespace) -> int:
             asked = f"the {args.scenario} scenario's gear changes take"
             note = forward_only_note(args.planner, asked=asked)
             print(f"rrtdrive simulate: {note}", file=sys.stderr)
-        with flags_for({"episode.max_time_s": "--max-time"}):
+        with flags_for({"episode.max_time_s": "--max-time", "planner": "--planner"}):
             episode = run_episode(
                 scenario, args.planner if path is None else path, args.controller, args.seed,
                 config,
