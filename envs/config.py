@@ -277,6 +277,13 @@ class DriveEnvConfig:
                 replan = replan_config(**replan_options)
             except TypeError as exc:
                 raise InputError(f"replan_options: {exc}") from None
+            except InputError as exc:
+                # The config names its fields "replan.rate_hz"; here they are keys of
+                # replan_options, as an unknown key's error says (an audit).
+                text = str(exc)
+                if text.startswith("replan."):
+                    raise InputError("replan_options." + text[len("replan."):]) from None
+                raise
         elif replan_options:
             raise InputError(
                 f"replan_options: only the {' or '.join(REPLANNING_SCENARIOS)} scenario re-plans"

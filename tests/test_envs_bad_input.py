@@ -351,3 +351,16 @@ def test_planner_options_reach_the_episodes_planner():
         DriveEnvConfig.from_options(planner_options={"bogus": 1})
     with pytest.raises(InputError, match=r"^planner_options: overtake-traffic re-plans"):
         DriveEnvConfig.from_options(scenario="overtake-traffic", planner_options={"step": 3})
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        # The config's own "replan.rate_hz" named no key the user wrote (an audit).
+        ({"rate_hz": -1}, r"^replan_options\.rate_hz: must lie in \[2, 5\] Hz, got -1$"),
+        ({"bogus": 1}, r"^replan_options\.bogus: unknown field of ReplanConfig"),
+    ],
+)
+def test_bad_replan_options_name_the_key_as_given(options, message):
+    with pytest.raises(InputError, match=message):
+        _make("rrtdrive/OvertakeTraffic-v0", replan_options=options)
