@@ -467,11 +467,18 @@ def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: int = 110) -> No
         Resolution in dots per inch.
     """
     suffix = FsPath(path).suffix or ".png"
+    # The same figure, the same bytes, in every format (PNG already was): no creation
+    # date in an SVG or PDF, and an SVG's clip-path ids from a fixed salt (an audit).
+    metadata = {".svg": {"Date": None}, ".pdf": {"CreationDate": None}}.get(suffix.lower())
     try:
-        with atomic_target(path, suffix) as tmp, warnings.catch_warnings():
+        with (
+            atomic_target(path, suffix) as tmp,
+            warnings.catch_warnings(),
+            plt.rc_context({"svg.hashsalt": "rrtdrive"}),
+        ):
             # A map name in a script the font lacks (an emoji) is drawn as a box; the
             # figure is still right, so no two-line warning on stderr.
             warnings.filterwarnings("ignore", message="Glyph .* missing from", category=UserWarning)
-            fig.savefig(tmp, dpi=dpi)
+            fig.savefig(tmp, dpi=dpi, metadata=metadata)
     finally:
         plt.close(fig)
