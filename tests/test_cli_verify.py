@@ -332,3 +332,30 @@ def test_the_plot_draws_the_body_where_the_path_first_collides(capsys, plans, tm
     assert code == 2 and err.startswith("rrtdrive verify: error: --plot:")
     code, _, err = run(capsys, "verify", str(plans["default"]), "--plot", str(plans["default"]))
     assert code == 2 and "--plot" in err
+
+
+@pytest.mark.parametrize(
+    ("edit", "said"),
+    [
+        ({"reverse": False}, "it says reverse: false, but its path changes gear"),
+        ({"cusps": 0}, "it says cusps: 0, but its path changes gear"),
+    ],
+)
+def test_a_plan_whose_own_claims_disagree_with_its_gears_fails(capsys, plans, tmp_path, edit, said):
+    # A file saying "forward only" over a reversing path passed every check (an audit).
+    data = json.loads(plans["reverse"].read_text())
+    cusps = data["cusps"]
+    assert data["reverse"] is True and cusps >= 1
+    doctored = tmp_path / "claims.json"
+    doctored.write_text(json.dumps({**data, **edit}))
+    code, out, _ = run(capsys, "verify", str(doctored))
+    assert code == 1 and "FAILED" in out.splitlines()[0]
+    assert "FAIL the plan says what its path does" in out
+    assert f"{said} {cusps} time(s)" in out
+    code, out, _ = run(capsys, "verify", str(doctored), "--json", "-")
+    doc = json.loads(out)
+    assert code == 1 and doc["claims_ok"] is False and doc["failed"] == ["claims_ok"]
+    assert doc["ok"] is False
+    # The plan as written claims what it does.
+    code, out, _ = run(capsys, "verify", str(plans["reverse"]), "--json", "-")
+    assert code == 0 and json.loads(out)["claims_ok"] is True

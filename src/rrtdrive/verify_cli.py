@@ -20,6 +20,7 @@ import json
 import math
 import sys
 import warnings
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -294,11 +295,14 @@ def run(args: argparse.Namespace) -> int:
     check = verify_path(m, path, max_sharpness=bound, clearance=clearance)
     with np.errstate(all="ignore"):  # a row at 1e308 m: the length is inf, quietly
         length = path.length if rows else 0.0
+    claims = _claims(data, check.cusps)
+    failed = [*check.failed, *(["claims_ok"] if claims else [])]
     text = ""
     if args.json:
         doc = {"map": m.name, "rows": rows, "kappa_given": kappa_given,
                "length_m": round(length, 6),
-               **bounds, **dataclasses.asdict(check), "failed": list(check.failed)}
+               **bounds, **dataclasses.asdict(check), "claims_ok": not claims,
+               "ok": not failed, "failed": failed}
         # Strict JSON: a non-finite number (a row far off the map) is null, not Infinity.
         text = json.dumps(json_safe(doc), allow_nan=False) + "\n"
     # The files first: a reader of stdout that goes away (| head) ends the printing,
@@ -315,12 +319,31 @@ def run(args: argparse.Namespace) -> int:
         what = "no path" if rows == 0 else "a path of one row (a path needs two)"
         print(f"{m.name}: {label}: FAILED: the plan has {what} (status {status})", file=out)
     else:
-        verdict = "OK, every check passed" if check.ok else "FAILED"
+        verdict = "OK, every check passed" if not failed else "FAILED"
         print(f"{m.name}: {label}: {verdict} ({rows} rows, {_metres(length, '.2f')})", file=out)
         print("\n".join(_lines(check, bounds, why, kappa_given)), file=out)
+        if "reverse" in data or "cusps" in data:
+            mark = "FAIL" if claims else "ok  "
+            detail = "; ".join(claims) or "reverse and cusps as its path"
+            print(f"  {mark} {'the plan says what its path does':48s} {detail}", file=out)
     if check.failed == ("sharpness_ok",):
         print("  (only the sharpness fails: paths of --paper-smoothing jump in curvature by "
               "design; --no-sharpness checks the rest)", file=out)
     if args.json == "-":
         write_output(args.json, text)
-    return EXIT_OK if check.ok else EXIT_FAILED
+    return EXIT_OK if not failed else EXIT_FAILED
+
+
+def _claims(data: Mapping[str, Any], cusps: int) -> list[str]:
+    """Where a plan file's own ``reverse`` and ``cusps`` disagree with its path's gears.
+
+    A plan that says it is forward only and changes gear passed every check (an audit):
+    a user who planned without ``--reverse`` relies on that claim.
+    """
+    out = []
+    if data.get("reverse") is False and cusps:
+        out.append(f"it says reverse: false, but its path changes gear {cusps} time(s)")
+    said = data.get("cusps")
+    if isinstance(said, int) and not isinstance(said, bool) and said != cusps:
+        out.append(f"it says cusps: {said}, but its path changes gear {cusps} time(s)")
+    return out
