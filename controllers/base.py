@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 
 import numpy as np
 
@@ -28,6 +29,7 @@ from rrtdrive.geometry import wrap_angle
 from rrtdrive.speed_profile import actuator_profile
 from rrtdrive.types import (
     InputError,
+    InputWarning,
     Path,
     VehicleParams,
     brief_repr,
@@ -183,6 +185,13 @@ class TrackingController:
         self.speed_config = speed or SpeedConfig()
         limit = self.vehicle.steer_for_kappa_max if steer_limit is None else steer_limit
         require_positive("controller.steer_limit", limit)
+        if limit > self.vehicle.max_steer:
+            # The lock is taken, but not silently: a tuned limit that never acts is a bug.
+            warnings.warn(
+                f"controller.steer_limit: {float(limit):g} rad is beyond the car's "
+                f"{self.vehicle.max_steer:g} rad lock; the controller commands at most the lock",
+                InputWarning, stacklevel=3,
+            )
         self.steer_limit = min(float(limit), self.vehicle.max_steer)
         rate = self.vehicle.max_steer_rate
         self.steer_rate: float | None = (

@@ -87,8 +87,12 @@ class PurePursuit(TrackingController):
         require_positive("pure_pursuit.ld_min", ld_min)
         require_positive("pure_pursuit.ld_max", ld_max)
         require_finite("pure_pursuit.ld_gain", ld_gain)  # before comparing it below
-        if ld_gain < 0 or ld_max < ld_min:
-            raise InputError("pure_pursuit: need ld_gain >= 0 and ld_max >= ld_min")
+        if ld_gain < 0:
+            raise InputError(f"pure_pursuit.ld_gain: must be >= 0, got {ld_gain!r}")
+        if ld_max < ld_min:
+            raise InputError(
+                f"pure_pursuit.ld_max: must be >= ld_min ({ld_min!r}), got {ld_max!r}"
+            )
         if not isinstance(compensate, bool):
             raise InputError(f"pure_pursuit.compensate: expected true or false, got {compensate!r}")
         self.ld_min, self.ld_gain, self.ld_max = float(ld_min), float(ld_gain), float(ld_max)

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
 
 from rrtdrive.controllers import CONTROLLERS, SpeedConfig, VehicleState, make_controller
-from rrtdrive.types import InputError, Path, VehicleParams
+from rrtdrive.types import InputError, InputWarning, Path, VehicleParams
 
 XS = np.arange(0.0, 20.01, 0.25)
 STRAIGHT = Path(np.column_stack([XS, 0 * XS, 0 * XS, 0 * XS]), np.zeros((0, 2)))
@@ -117,9 +118,13 @@ def test_speed_limits_out_of_their_range_are_named(fields, message):
 
 def test_a_look_ahead_whose_longest_is_below_its_shortest_is_refused():
     """Pure pursuit's look-ahead is clipped to [ld_min, ld_max]: an empty range is refused."""
-    with pytest.raises(InputError, match=r"^pure_pursuit: need ld_gain >= 0 and ld_max >= ld_min"):
+    empty = r"^pure_pursuit\.ld_max: must be >= ld_min \(5\.0\), got 2\.0$"
+    with pytest.raises(InputError, match=empty):
         make_controller("pure-pursuit", ld_min=5.0, ld_max=2.0)
     assert make_controller("pure-pursuit", ld_min=2.0, ld_max=2.0) is not None
+    # The message named both parameters whichever was wrong (an audit).
+    with pytest.raises(InputError, match=r"^pure_pursuit\.ld_gain: must be >= 0, got -0\.1$"):
+        make_controller("pure-pursuit", ld_gain=-0.1)
 
 
 @pytest.mark.parametrize("name", sorted(CONTROLLERS))
@@ -153,3 +158,14 @@ def test_good_arguments_to_the_tracking_calls_pass(name):
     c.cap_accel(None)
     c.start_segment(0)
     assert c.segment == 0
+
+
+@pytest.mark.parametrize("name", sorted(CONTROLLERS))
+def test_a_steer_limit_beyond_the_lock_warns_and_takes_the_lock(name):
+    lock = VehicleParams().max_steer
+    with pytest.warns(InputWarning, match=r"^controller\.steer_limit: 0\.7 rad is beyond"):
+        c = make_controller(name, steer_limit=0.7)
+    assert c.steer_limit == lock
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # at or under the lock: no word
+        assert make_controller(name, steer_limit=lock).steer_limit == lock

@@ -302,3 +302,24 @@ def test_abort_returns_although_the_queue_lock_is_held_and_kills_the_encoder(tmp
     w.abort()  # idempotent
     with pytest.raises(RuntimeError, match="aborted"):
         w.close()
+
+
+@pytest.mark.parametrize(("frequency", "fps"), [(20, 20.0), (60, 60.0), (200, 50.0)])
+def test_a_high_frequency_video_keeps_within_60_fps(tmp_path, capsys, frequency, fps):
+    """``--frequency 1000 --video`` wrote a 1000 fps MP4, which players (and imageio) read
+    as 0 fps (an audit); by default every step up to 60 Hz, above it every n-th."""
+    import json
+
+    import imageio_ffmpeg
+
+    from rrtdrive.cli import main
+
+    out, js = tmp_path / "v.mp4", tmp_path / "v.json"
+    assert main(["simulate", "parking", "--frequency", str(frequency), "--max-time", "1",
+                 "--video", str(out), "--json", str(js)]) in (0, 1)  # fmt: skip
+    steps = json.loads(js.read_text())["steps"]
+    stride = math.ceil(frequency / 60)
+    frames, seconds = imageio_ffmpeg.count_frames_and_secs(str(out))
+    assert frames == len(range(0, steps + 1, stride)) + (steps % stride != 0)
+    assert imageio.get_reader(out).get_meta_data()["fps"] == pytest.approx(fps, rel=0.02)
+    assert seconds == pytest.approx(steps / frequency, abs=1.5 / fps)

@@ -42,7 +42,7 @@ from rrtdrive.cli_args import (
 from rrtdrive.json_safe import options_json
 from rrtdrive.sim.cli_media import write_media
 from rrtdrive.sim.cli_targets import given_path, make_task, target_kind, with_simulate_hint
-from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MIN_SIM_FREQUENCY
+from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MAX_VIDEO_FPS, MIN_SIM_FREQUENCY
 from rrtdrive.types import Budget, InputError
 
 __all__ = ["add_parser", "run", "episode_json", "metrics_block", "HELP", "NO_WALL_LIMIT_S"]
@@ -188,7 +188,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--video-stride", type=positive_int, default=None, metavar="N",
-        help="simulation steps per video frame, with --video (default 1: every step)",
+        help="simulation steps per video frame, with --video (default: every step up to "
+        f"{MAX_VIDEO_FPS} Hz, above it the fewest that keep the video within {MAX_VIDEO_FPS} "
+        "fps)",
     )
     p.set_defaults(func=run)
     return p
@@ -395,7 +397,11 @@ def _run(args: argparse.Namespace) -> int:
     stride = getattr(args, "video_stride", None)
     if stride is not None and args.video is None:
         raise InputError("--video-stride: only with --video (it sets the video's frames)")
-    stride = 1 if stride is None else stride
+    if stride is None:
+        # Every step up to MAX_VIDEO_FPS Hz; above it every n-th, so the video stays real
+        # time at a rate players take (--frequency 1000 made a 1000 fps MP4 that imageio
+        # read as 0 fps; an audit).
+        stride = max(1, math.ceil(args.frequency / MAX_VIDEO_FPS))
     traffic_opts = {
         "density": getattr(args, "density", None),
         "lead_speed": getattr(args, "lead_speed", None),

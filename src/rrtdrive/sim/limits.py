@@ -5,7 +5,9 @@ A light module (no highway-env): the command line's argument types read it at st
 
 from __future__ import annotations
 
-__all__ = ["MAX_REVERSE_SPEED", "MAX_SIM_FREQUENCY", "MAX_SPEED", "MIN_SIM_FREQUENCY"]
+__all__ = [
+    "MAX_REVERSE_SPEED", "MAX_SIM_FREQUENCY", "MAX_SPEED", "MAX_VIDEO_FPS", "MIN_SIM_FREQUENCY",
+]
 
 #: Lowest simulation frequency, Hz (the controllers' gain limits are set for it).
 MIN_SIM_FREQUENCY = 15
@@ -16,3 +18,6 @@ MAX_SIM_FREQUENCY = 1000
 #: clips its speed to them, as highway-env's vehicles do).
 MAX_SPEED = 40.0
 MAX_REVERSE_SPEED = 10.0
+#: Highest frame rate ``simulate --video`` writes by default (players and imageio read a
+#: 1000 fps MP4's rate as 0); a higher ``--frequency`` keeps every n-th step.
+MAX_VIDEO_FPS = 60
