@@ -1,8 +1,9 @@
 """An independent check of a planned path's guarantees, for tests and experiments.
 
 It shares no code with the planner or the checker (only the angle wrap and the
-densifier of :mod:`rrtdrive.geometry`): the body is a shapely polygon built
-here and in :mod:`rrtdrive.verify_measures`: curvature is the discrete three-point
+densifier of :mod:`rrtdrive.geometry`): the body is a shapely polygon built in
+:mod:`rrtdrive.verify_bodies`, the measures are :mod:`rrtdrive.verify_measures`'s:
+curvature is the discrete three-point
 (Menger) curvature of the samples and the turn of the rows' yaw per chord (a car
 cannot turn faster than its curvature allows, whatever its positions do),
 sharpness the change of the steering angle ``atan(L kappa)`` between those
