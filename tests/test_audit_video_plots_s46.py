@@ -383,3 +383,19 @@ def test_write_video_names_a_bad_fps_and_writes_nothing(reversing_episode, tmp_p
     with pytest.raises(InputError, match="^fps:"):
         write_video(reversing_episode, tmp_path / "v.mp4", fps=fps)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_no_video_says_an_older_file_at_the_target_is_not_this_runs(tmp_path, capsys):
+    # A failed plan writes no video; an older file there could pass for this drive's.
+    from rrtdrive.cli import main
+
+    target = tmp_path / "v.mp4"
+    target.write_bytes(b"an older video")
+    assert main(["simulate", "no_path", "--video", str(target)]) == 1
+    err = capsys.readouterr().err
+    assert "no video: planning failed" in err
+    assert f"{target} is an earlier run's, left as it was" in err
+    assert target.read_bytes() == b"an older video"
+    target.unlink()
+    assert main(["simulate", "no_path", "--video", str(target)]) == 1
+    assert "earlier run" not in capsys.readouterr().err and not target.exists()

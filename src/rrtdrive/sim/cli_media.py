@@ -8,6 +8,7 @@ metrics (it did; an audit).
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from typing import Any
 
@@ -73,7 +74,7 @@ def _write_video(
     if args.video and stock is not None:
         if not (stock.frames or streamed):
             extra["video"] = None
-            print(f"rrtdrive simulate: no video: {episode.message}", file=sys.stderr)
+            _no_video(args.video, episode.message)
         elif streamed:
             extra["video_frames"], extra["video"] = streamed, args.video
         else:
@@ -86,9 +87,7 @@ def _write_video(
     elif args.video:
         if episode.log.steps == 0:
             extra["video"] = None
-            print(
-                f"rrtdrive simulate: no video: {episode.message}", file=sys.stderr
-            )
+            _no_video(args.video, episode.message)
         else:
             from rrtdrive.sim.video import write_video
 
@@ -105,3 +104,12 @@ def _write_video(
                 frames = write_video(episode, args.video, stride=stride, progress=progress)
             extra["video"] = args.video
             extra["video_frames"] = frames
+
+
+def _no_video(target: str, why: str) -> None:
+    """Say that no video was written, and that a file already at ``target`` is not this run's."""
+    old = ""
+    if os.path.exists(target):
+        # Left as it was (it is the user's), but not to be taken for this drive (an audit).
+        old = f"; {target} is an earlier run's, left as it was"
+    print(f"rrtdrive simulate: no video: {why}{old}", file=sys.stderr)
