@@ -136,7 +136,8 @@ def plot_episode(episode: Any, title: str | None = None) -> Any:
     _draw_others(ax, episode.log)
     states = episode.log.states
     if len(states):
-        ax.plot(states[:, 0], states[:, 1], color="black", lw=1.0, label="driven (rear axle)",
+        # Thin: the planned path (reverse legs dashed cyan) shows either side of it.
+        ax.plot(states[:, 0], states[:, 1], color="black", lw=0.6, label="driven (rear axle)",
                 zorder=5)  # fmt: skip
         end = Pose(*states[-1, :3])
         crashed = episode.status.value == "crashed"
