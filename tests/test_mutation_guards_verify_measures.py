@@ -120,3 +120,25 @@ def test_the_peak_of_a_steering_ramp_passes_the_kappa_column(gear):
     check = _verify(rows)
     assert check.kappa_ok, (check.kappa_column_err, check.worst_kappa_row)
     assert check.ok, check.failed
+
+
+@pytest.mark.parametrize("gear", [1.0, -1.0])
+def test_an_end_row_steering_beyond_the_car_fails_kappa_ok(gear):
+    # A gear segment's end rows are stops whose kappa is a convention (0, or the next
+    # piece's), but the controller turns the wheels to it before moving: 5 1/m on a
+    # straight path passed every check (an audit).
+    s = np.arange(0.0, 10.0 + 1e-9, 0.25)
+    x = 20.0 + gear * s
+    rows = np.column_stack([x, np.full_like(s, 20.0), np.zeros_like(s), np.zeros_like(s),
+                            np.full_like(s, gear)])  # fmt: skip
+    assert _verify(rows).ok
+    for end in (0, -1):
+        bad = rows.copy()
+        bad[end, 3] = 5.0
+        check = _verify(bad)
+        assert check.failed == ("kappa_ok",), check.failed
+        assert check.kappa_column_err == pytest.approx(5.0 - KAPPA_MAX)
+        assert check.worst_kappa_row == (len(rows) - 1 if end else 0)
+    within = rows.copy()
+    within[[0, -1], 3] = (KAPPA_MAX, -KAPPA_MAX)  # the lock either way: a convention kept
+    assert _verify(within).ok

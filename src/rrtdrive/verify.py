@@ -134,10 +134,12 @@ class PathCheck:
         Every row's ``kappa`` column (``tan delta / L``, in both gears) lies within
         ``kappa_tol`` of the steering curvature the yaw turns at on the steps on
         either side of the row (:func:`~rrtdrive.verify_measures.kappa_column_error`;
-        a gear segment's first and last rows, stops, are not checked): the curvature a
-        controller feeds forward is the path's, of the right sign in reverse.
+        a gear segment's first and last rows, stops, only within ``kappa_tol`` of
+        ±κ_max): the curvature a controller feeds forward is the path's, of the right
+        sign in reverse.
     kappa_column_err : float
-        The largest excess, 1/m, of a row's ``kappa`` over that bracket.
+        The largest excess, 1/m, of a row's ``kappa`` over that bracket (an end row's:
+        over κ_max).
     worst_kappa_row : int or None
         The row of that excess; ``None`` when ``kappa_ok``.
     """
@@ -345,6 +347,18 @@ def verify_path(
             continue
         max_k = max(max_k, segment_curvature(seg[:, :2]), turn_curvature(seg))
         err, row = kappa_column_error(seg)
+        # The end rows' kappa is a convention, but the car must be able to steer it: a
+        # start row at 5 1/m turned the wheels to full lock before the car moved (an audit).
+        # Its reach: kappa_max, or the first (last) step's own turn where that is more
+        # (then curvature_ok fails, and kappa_ok need not say it twice).
+        ends = seg[[0, 1, -2, -1]]
+        chords = np.hypot(*(ends[[1, 3], :2] - ends[[0, 2], :2]).T)
+        turns = np.abs(wrap_angle(ends[[1, 3], 2] - ends[[0, 2], 2]))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            steps = np.where(chords > 1e-9, 2.0 * np.sin(0.5 * turns) / chords, 0.0)
+        over = np.abs(ends[[0, 3], 3]) - np.maximum(v.kappa_max, steps)
+        if over.max() > err:
+            err, row = float(over.max()), (0 if over[0] >= over[1] else len(seg) - 1)
         if err > kappa_err:
             kappa_err, kappa_row = err, a + row
         max_sharp = max(max_sharp, segment_sharpness(seg[:, :2], v.wheelbase))
