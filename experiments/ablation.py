@@ -26,7 +26,7 @@ from pathlib import Path as FsPath
 
 import numpy as np
 
-from rrtdrive.cli_args import positive_float, positive_int
+from rrtdrive.cli_args import flags_for, positive_float, positive_int
 from rrtdrive.maps import builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem
 from rrtdrive.planning.improved import COMPONENTS, ImprovedRRTConnect, default_expansion_lmin
@@ -82,7 +82,7 @@ def table(title: str, header: str, rows: list[tuple[str, dict[str, float]]]) -> 
 
 
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import out_file, out_folder  # the sibling module (run as a script)
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=positive_int, default=20,
@@ -94,17 +94,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--max-time", type=positive_float, default=5.0,
                         help="wall-clock safety cap per plan [s] (default: %(default)s)")
     parser.add_argument(
-        "--doc", default=None, help="also write this markdown page (docs/ablation.md for the docs)"
+        "--doc", default=None, type=out_file,
+        help="also write this markdown page (docs/ablation.md for the docs)",
     )
     args = parser.parse_args(argv)
+    with flags_for({"map": "--maps"}):  # every name before any work, named by its flag
+        maps = {name: builtin_map(name) for name in args.maps.split(",")}
     budget = Budget(max_iterations=20_000, max_time_s=args.max_time)
     command = "python experiments/ablation.py " + " ".join(sys.argv[1:] if argv is None else argv)
     report: dict[str, object] = {"command": command.strip(), "seeds": list(range(args.runs)),
                                  "components": {}, "expansion": {}}
     md = ["# Ablation of the improved RRT-Connect", "",
           f"Command: `{report['command']}` (seeds 0–{args.runs - 1}).", ""]
-    for map_name in args.maps.split(","):
-        problem = PlanningProblem.from_map(builtin_map(map_name))
+    for map_name, m in maps.items():
+        problem = PlanningProblem.from_map(m)
         rows = [("all on", evaluate(ImprovedRRTConnect(), problem, args.runs, budget))]
         for comp in COMPONENTS:
             rows.append((f"no {comp}", evaluate(ImprovedRRTConnect(disable=(comp,)), problem,
@@ -133,6 +136,7 @@ def main(argv: list[str] | None = None) -> int:
     write_text_atomic(out / "ablation.json", json.dumps(report, indent=1) + "\n")
     write_text_atomic(out / "ablation.md", "\n".join(md))
     if args.doc:  # docs/ changes only when asked
+        FsPath(args.doc).parent.mkdir(parents=True, exist_ok=True)  # as --out's folder
         write_text_atomic(FsPath(args.doc), "\n".join(md))
     print("\n".join(md))
     return 0

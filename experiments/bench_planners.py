@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rrtdrive.cli_args import positive_int
+from rrtdrive.cli_args import positive_float, positive_int
 from rrtdrive.maps import builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem, make_planner
 from rrtdrive.types import Budget
@@ -116,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="built-in map name (default: %(default)s)")
     parser.add_argument("--seeds", type=positive_int, default=20,
                         help="runs per planner, seeds 0..N-1 (default: %(default)s)")
-    parser.add_argument("--cap", type=float, default=5.0,
+    parser.add_argument("--cap", type=positive_float, default=5.0,
                         help="OMPL time cap per run [s] (default: %(default)s)")
     parser.add_argument("--out", type=out_folder, default="results",
                         help="directory for bench_planners_MAP.json and .md (default: %(default)s)")

@@ -45,7 +45,7 @@ import time
 from pathlib import Path as FsPath
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parent))
-from results_io import check_doc, out_folder, write_doc, write_image_atomic  # noqa: E402
+from results_io import check_doc, out_file, out_folder, write_doc, write_image_atomic  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
 from rrtdrive.cli_args import int_at_least, positive_int  # noqa: E402
@@ -271,9 +271,11 @@ def main(argv: list[str] | None = None) -> int:
                     help="worker processes (default: %(default)s)")
     ap.add_argument("--out", default="results", type=out_folder,
                     help="directory for NAME.json and .md, NAME from --name (default: %(default)s)")
-    ap.add_argument("--doc", default=None, help="also write this markdown page (with frames)")
+    ap.add_argument("--doc", default=None, type=out_file,
+                    help="also write this markdown page (with frames)")
     ap.add_argument(
-        "--figures", default=None, help="with --doc: write seed 0's frames here and show them"
+        "--figures", default=None, type=out_folder,
+        help="with --doc: write seed 0's frames here and show them",
     )
     args = ap.parse_args(argv)
     check_doc(args.doc, "closed_loop.py")

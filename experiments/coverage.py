@@ -61,7 +61,7 @@ from results_io import check_doc, out_folder, write_doc  # noqa: E402
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
 from rrtdrive.bench.backends import parallel_map  # noqa: E402
-from rrtdrive.cli_args import int_at_least, positive_float, positive_int  # noqa: E402
+from rrtdrive.cli_args import flags_for, int_at_least, positive_float, positive_int  # noqa: E402
 from rrtdrive.maps import builtin_map  # noqa: E402
 from rrtdrive.planning import PLANNERS, PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.planning.hybrid.escalation import stage_of  # noqa: E402
@@ -472,6 +472,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="with --tight: planner seeds per query (default: %(default)s)")
     args = ap.parse_args(argv)
     check_doc(args.doc, "coverage.py")
+    if not args.tight:
+        with flags_for({"map": "--map"}):  # before any work, named by its flag
+            builtin_map(args.map)
     sets = [s for s in args.sets.split(",") if s]
     if args.count < 1 or not set(sets) <= {"goal", "start"} or not sets:
         ap.error("--count must be >= 1 and --sets a list of goal, start")

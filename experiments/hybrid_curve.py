@@ -31,7 +31,7 @@ sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 from random_goals import draw_goals  # noqa: E402
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
-from rrtdrive.cli_args import positive_int
+from rrtdrive.cli_args import positive_float, positive_int
 from rrtdrive.maps import builtin_map  # noqa: E402
 from rrtdrive.planning import PlanningProblem, make_planner  # noqa: E402
 from rrtdrive.planning.smoothing import max_sharpness  # noqa: E402
@@ -89,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="plan with gear changes allowed (default: forward only)")
     ap.add_argument("--expansions", type=positive_int, default=20000,
                     help="expansion budget per plan (default: %(default)s)")
-    ap.add_argument("--cap", type=float, default=120.0,
+    ap.add_argument("--cap", type=positive_float, default=120.0,
                     help="wall-clock safety cap [s] (default: %(default)s)")
     ap.add_argument("--out", type=out_folder, default="results/hybrid_curve",
                     help="directory for hybrid_curve.json and .md (default: %(default)s)")

@@ -27,7 +27,7 @@ from pathlib import Path as FsPath
 import numpy as np
 from random_goals import add_pose_set_options, draw_goals
 
-from rrtdrive.cli_args import positive_float, positive_int
+from rrtdrive.cli_args import flags_for, positive_float, positive_int
 from rrtdrive.maps import Map, builtin_map, write_text_atomic
 from rrtdrive.planning.base import PlanningProblem
 from rrtdrive.planning.hybrid import HybridAStar
@@ -65,7 +65,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="directory for hybrid_random_{goals,starts}_MAP[_reverse].json and "
                     ".md (default: %(default)s)")
     args = ap.parse_args(argv)
-    base = builtin_map(args.map)
+    with flags_for({"map": "--map"}):
+        base = builtin_map(args.map)
     budget = Budget(max_iterations=args.max_expansions, max_time_s=args.max_time)
     planner = HybridAStar()
     rows = []

@@ -99,6 +99,26 @@ def out_folder(text: str) -> str:
     return text
 
 
+def out_file(text: str) -> str:
+    """An argparse type for an output file (``--doc``): refused before the run when it cannot be.
+
+    Not a folder, and its folder one that :func:`out_folder` takes (a missing one is
+    made when the file is written): found at the end, it lost a whole run and named a
+    hidden temporary file (an audit).
+
+    Examples
+    --------
+    >>> out_file("new/page.md")
+    'new/page.md'
+    """
+    import argparse
+
+    if FsPath(text).is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is a folder, not a file")
+    out_folder(str(FsPath(text).parent))
+    return text
+
+
 def run_main(main: Callable[[], int | None]) -> int:
     """A script's ``main()``, with bad input as one line on stderr and exit 2.
 
@@ -157,6 +177,7 @@ def write_doc(doc: str, text: str, script: str) -> None:
     begin, end = _doc_markers(script)
     block = f"{begin}\n{text.rstrip()}\n{end}\n"
     path = FsPath(doc)
+    path.parent.mkdir(parents=True, exist_ok=True)  # as --out's folder is made
     if path.exists():
         old = path.read_text(encoding="utf-8")
         if begin in old and end in old:

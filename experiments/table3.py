@@ -34,9 +34,9 @@ from pathlib import Path as FsPath
 
 import matplotlib.pyplot as plt
 import numpy as np
-from results_io import out_folder  # the sibling module
+from results_io import out_file, out_folder  # the sibling module
 
-from rrtdrive.cli_args import positive_float, positive_int
+from rrtdrive.cli_args import flags_for, positive_float, positive_int
 from rrtdrive.json_safe import json_safe
 from rrtdrive.maps import builtin_map, write_text_atomic
 from rrtdrive.planning import PlanningProblem, make_planner
@@ -174,17 +174,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="results", type=out_folder,
                         help="directory for table3.json and .md (default: %(default)s)")
     parser.add_argument(
-        "--figures", default=None,
+        "--figures", default=None, type=out_folder,
         help="figure folder (default: OUT/figures; docs/figures for the docs)",
     )
     parser.add_argument("--max-time", type=positive_float, default=10.0,
                         help="safety cap per run [s] (default: %(default)s)")
     parser.add_argument(
-        "--doc", default=None, help="also write this markdown page (docs/table3.md for the docs)"
+        "--doc", default=None, type=out_file,
+        help="also write this markdown page (docs/table3.md for the docs)",
     )
     args = parser.parse_args(argv)
     # Nothing under docs/ changes unless asked: --doc and --figures name those targets.
-    maps = {name: builtin_map(name) for name in args.maps.split(",")}  # every name before any work
+    with flags_for({"map": "--maps"}):  # every name before any work, named by its flag
+        maps = {name: builtin_map(name) for name in args.maps.split(",")}
     out = FsPath(args.out)
     fig_dir = FsPath(args.figures) if args.figures else out / "figures"
     out.mkdir(parents=True, exist_ok=True)
@@ -315,6 +317,7 @@ def main(argv: list[str] | None = None) -> int:
     text = "\n".join(md)
     for page in (out / "table3.md", *([FsPath(args.doc)] if args.doc else [])):
         rel = os.path.relpath(fig_dir, page.parent).replace(os.sep, "/") + "/"
+        page.parent.mkdir(parents=True, exist_ok=True)  # --doc's folder, as --out's
         write_text_atomic(page, text.replace(FIGURE_LINK, rel))
     # On the terminal the figures' links are relative to where the script was run.
     print(text.replace(FIGURE_LINK, os.path.relpath(fig_dir).replace(os.sep, "/") + "/"))

@@ -28,12 +28,13 @@ import tempfile
 import time
 from collections import Counter
 from pathlib import Path as FsPath
+from typing import Any
 
 import numpy as np
 from results_io import out_folder  # the sibling module
 
 from rrtdrive.bench.backends import episode_progress, parallel_map
-from rrtdrive.cli_args import positive_int
+from rrtdrive.cli_args import flags_for, positive_int
 from rrtdrive.evaluation import TTC_LEAST_MIN_S, EpisodeReport, evaluate, summarise
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim.replanning import ReplanConfig
@@ -250,17 +251,36 @@ def main(argv: list[str] | None = None) -> int:
                     help="directory for traffic[_TAG].json and .md (default: %(default)s)")
     ap.add_argument("--tag", default="",
                     help="suffix of the output names (variants) (default: %(default)s)")
-    ap.add_argument("--figures", default=None, help="write the tight-case video and frames here")
+    ap.add_argument("--figures", default=None, type=out_folder,
+                    help="write the tight-case video and frames here")
     ap.add_argument("--deterministic", action="store_true",
                     help="re-plan without wall-time cuts (as rrtdrive simulate --deterministic)")
     args = ap.parse_args(argv)
     densities = args.densities.split(",")
-    for d in densities:
-        probe = make_scenario(  # validate
-            "overtake-traffic", 0, density=d, lead_model=args.lead_model, lead_speed=args.lead_speed
-        )
-    config = episode_config(args)
+    # The scenario's and the config's fields named as this script's flags (an audit).
+    flags = {"density": "--densities", "lead_model": "--lead-model",
+             "lead_speed": "--lead-speed", "replan.rate_hz": "--rate",
+             "replan.predictor": "--predictor"}  # fmt: skip
+    with flags_for(flags):
+        for d in densities:
+            probe = make_scenario(  # validate
+                "overtake-traffic", 0, density=d, lead_model=args.lead_model,
+                lead_speed=args.lead_speed,
+            )
+        config = episode_config(args)
     keep = tempfile.mkdtemp(prefix="traffic-episodes-") if args.figures else None
+    try:
+        return _run(args, densities, probe, config, keep)
+    finally:
+        if keep is not None:  # also after a failure: the kept episodes are pickles, large
+            shutil.rmtree(keep, ignore_errors=True)
+
+
+def _run(
+    args: argparse.Namespace, densities: list[str], probe: Any, config: EpisodeConfig,
+    keep: str | None,
+) -> int:
+    """Drive the episodes and write the results (``main`` after its checks)."""
     target = densities[-1]
     jobs = [
         (d, seed, args, keep if d == target else None)
