@@ -1065,3 +1065,15 @@ def test_nuplan_yaw_acceleration_is_a_cubic_fit_up_to_the_last_sample() -> None:
     t = np.arange(0.0, 4.0 + 1e-9, DT)
     c = nuplan_comfort(t, 0.01 * t**3, np.full_like(t, 2.0), D)
     assert c.yaw_accel_abs_max == pytest.approx(0.24, rel=1e-6)
+
+
+def test_a_long_time_limit_reads_in_seconds_not_notation():
+    # A 500 m map's limit is about 1474 s: "within 1.23e+03 s" (an audit).
+    import dataclasses
+
+    from rrtdrive.evaluation import failure_reason
+
+    r = evaluate(_episode(_overtake(), _clean_overtake_states(), status="timeout"))
+    for duration, text in ((1234.5, "1234.5 s"), (30.0, "30 s"), (7.25, "7.25 s")):
+        late = dataclasses.replace(r, duration_s=duration)
+        assert f"did not arrive within {text}" in failure_reason(late)

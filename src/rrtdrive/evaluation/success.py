@@ -208,7 +208,8 @@ def failure_reason(report: EpisodeReport, config: EvalConfig | None = None) -> s
         if report.back_in_lane is False:
             why.append("the body is not back in the ego lane")
         if status != "arrived" and not judges:
-            why.append(f"the car did not arrive within {report.duration_s:.3g} s")
+            # Not .3g: a 20-minute limit read "within 1.23e+03 s" (an audit).
+            why.append(f"the car did not arrive within {round(report.duration_s, 2):g} s")
     if not why:
         why.append("no success term failed, yet the episode is not a success")
     # "arrived, but the heading error ...": the status sounds like a success; any
