@@ -33,7 +33,7 @@ from rrtdrive.controllers import (
     make_controller,
 )
 from rrtdrive.controllers.lqr import design_gain
-from rrtdrive.types import InputError, Path, VehicleParams
+from rrtdrive.types import InputError, InputWarning, Path, VehicleParams
 
 #: Instant steering: the law's output is the command (no rate window).
 INSTANT = VehicleParams(max_steer_rate=None)
@@ -273,14 +273,17 @@ def test_a_steer_limit_past_full_lock_is_cut_to_full_lock(cls: type) -> None:
 
     Guards the cap of the limit by the actuator's own angle.
     """
-    c = cls(vehicle=INSTANT, steer_limit=1.2)
+    # ... and says so (since session 46: a tuned limit that never acts was silent).
+    with pytest.warns(InputWarning, match="beyond the car's"):
+        c = cls(vehicle=INSTANT, steer_limit=1.2)
     assert c.steer_limit == pytest.approx(INSTANT.max_steer)
     c.reset(line_path())
     for yaw in (1.2, -1.2):  # heading far off the path: every law asks for more than lock
         _, steer = c.control(VehicleState(5.0, 0.0, yaw, 0.5))
         assert steer == pytest.approx(-math.copysign(INSTANT.max_steer, yaw))
     # A slow actuator: the law's angle (before the actuator's reach) is cut the same way.
-    slow = cls(vehicle=VehicleParams(max_steer_rate=0.4), steer_limit=1.2)
+    with pytest.warns(InputWarning, match="beyond the car's"):
+        slow = cls(vehicle=VehicleParams(max_steer_rate=0.4), steer_limit=1.2)
     slow.reset(line_path())
     for yaw in (1.2, -1.2):
         slow.control(VehicleState(5.0, 0.0, yaw, 0.5))
