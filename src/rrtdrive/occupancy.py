@@ -54,7 +54,8 @@ class ImageMap:
     unknown : int
         Cells between the thresholds (counted in ``occupied`` unless read as free).
     unknown_cells : numpy.ndarray or None
-        Bool ``(rows, cols)``: which cells those are (``None``: not known).
+        Bool ``(rows, cols)``: which cells those are, less any :func:`despeckle` dropped
+        (``None``: not known).
     """
 
     occupied: np.ndarray
@@ -331,7 +332,8 @@ def despeckle(grid: ImageMap, max_cells: int) -> tuple[ImageMap, int, int]:
     small = sizes <= max_cells
     small[0] = False  # label 0: the free cells
     drop = small[labels]
-    kept = dataclasses.replace(grid, occupied=grid.occupied & ~drop)
+    unknown = None if grid.unknown_cells is None else grid.unknown_cells & ~drop
+    kept = dataclasses.replace(grid, occupied=grid.occupied & ~drop, unknown_cells=unknown)
     return kept, int(small.sum()), int(drop.sum())
 
 
