@@ -369,3 +369,26 @@ def test_the_unknown_hint_only_for_a_body_on_unknown_cells(tmp_path, capsys):
     assert err.startswith("rrtdrive maps: error: --goal: ")
     assert f"({covered} cells under the car's body and 2% of the image read as unknown" in err
     assert main([*base, "--start", "5,5,0", "--goal", "14,7.5,0", "--unknown-free"]) == 0
+
+
+def test_negate_reads_a_dark_floor_image_and_the_refusal_suggests_it(tmp_path, capsys):
+    """A plain image had no way to say "light is occupied" (a .yaml has negate: 1); a
+    dark floor made the whole image one obstacle, with no word why."""
+    img = np.full((100, 100), 1, np.uint8)  # a black floor
+    img[40:60, 40:60] = 255  # one white block: x 20..30, y 20..30 at 0.5 m
+    png = _write(tmp_path, img, "neg.png")
+    base = ["maps", "--import", str(png), "--resolution", "0.5", "--start", "5,5,0",
+            "--goal", "40,40,0", "--out", str(tmp_path / "n.json")]  # fmt: skip
+    assert main(base) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("rrtdrive maps: error: --start: ") and err.count("\n") == 1
+    assert "(96% of the image reads as occupied: if its floor is the dark part, --negate" in err
+    assert main([*base, "--negate"]) == 0
+    got = load_map(tmp_path / "n.json")
+    assert got.obstacle_union().symmetric_difference(shapely.box(20, 20, 30, 30)).area < 1e-9
+    capsys.readouterr()
+    # A .yaml gives its own negate.
+    y = _garage(tmp_path)
+    assert main(["maps", "--import", str(y), "--negate", "--start", "2,2,0", "--goal",
+                 "22,10,0", "--out", str(tmp_path / "g.json")]) == 2  # fmt: skip
+    assert "--negate: the .yaml gives it" in capsys.readouterr().err

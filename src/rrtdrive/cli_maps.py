@@ -47,6 +47,9 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
                      help="an image: metres per pixel (a .yaml gives its own)")
     imp.add_argument("--origin", metavar="X,Y",
                      help="an image: its lower left corner in metres (default 0,0)")
+    imp.add_argument("--negate", action="store_true",
+                     help="an image: light is occupied, dark free (ROS's negate: 1; a .yaml "
+                     "gives its own)")
     imp.add_argument("--unknown-free", action="store_true",
                      help="read the cells between ROS's thresholds (grey, unknown) as free; "
                      "by default they are obstacles")
@@ -60,7 +63,7 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 
 #: The flags that only an import takes.
 IMPORT_FLAGS = (("start", "--start"), ("goal", "--goal"), ("out", "--out"), ("name", "--name"),
-                ("resolution", "--resolution"), ("origin", "--origin"),
+                ("resolution", "--resolution"), ("origin", "--origin"), ("negate", "--negate"),
                 ("unknown_free", "--unknown-free"), ("despeckle", "--despeckle"))  # fmt: skip
 
 
@@ -81,8 +84,9 @@ def _cmd_import(args: argparse.Namespace) -> int:
     start, goal = parse_pose(args.start, "--start"), parse_pose(args.goal, "--goal")
     is_yaml = source.lower().endswith((".yaml", ".yml"))
     if is_yaml:
-        for attr, flag in (("resolution", "--resolution"), ("origin", "--origin")):
-            if getattr(args, attr) is not None:
+        for attr, flag in (("resolution", "--resolution"), ("origin", "--origin"),
+                           ("negate", "--negate")):  # fmt: skip
+            if getattr(args, attr, None) not in (None, False):
                 raise InputError(f"{flag}: the .yaml gives it; only an image takes {flag}")
         with flags_for({"map": "--import"}):
             grid = read_ros_map(source, args.unknown_free)
@@ -100,7 +104,9 @@ def _cmd_import(args: argparse.Namespace) -> int:
             except (ValueError, IndexError):
                 raise InputError(f"--origin: expected X,Y in metres, got {args.origin!r}") from None
         with flags_for({"image": "--import", "resolution": "--resolution", "origin": "--origin"}):
-            grid = read_image_map(source, args.resolution, origin, unknown_free=args.unknown_free)
+            grid = read_image_map(source, args.resolution, origin,
+                                  negate=getattr(args, "negate", False),
+                                  unknown_free=args.unknown_free)  # fmt: skip
     groups, cells = 0, 0
     if args.despeckle:
         grid, groups, cells = despeckle(grid, args.despeckle)
@@ -113,6 +119,8 @@ def _cmd_import(args: argparse.Namespace) -> int:
             m = map_from_image(grid, name, start, goal)
     except InputError as exc:
         hint = None if args.unknown_free else _unknown_hint(grid, str(exc), start, goal)
+        if hint is None and not is_yaml and not getattr(args, "negate", False):
+            hint = _dark_floor_hint(grid, str(exc))
         if hint:
             raise InputError(f"{exc} ({hint})") from None
         raise
@@ -221,4 +229,19 @@ def _unknown_hint(grid: Any, error: str, start: Any, goal: Any) -> str | None:
         "image read as unknown, between the free and occupied thresholds, and count as "
         "occupied: a grey or transparent background reads so; --unknown-free reads them "
         "as free"
+    )
+
+
+def _dark_floor_hint(grid: Any, error: str) -> str | None:
+    """For a pose refused on an image mostly occupied: its floor may be the dark part."""
+    if not error.startswith(("--start", "--goal")):
+        return None
+    share = float(grid.occupied.mean())
+    if share <= 0.5:
+        return None
+    # Dark is occupied (map_server's default): a plot with a black floor and white
+    # walls becomes one big obstacle; ROS's negate reads it the other way round.
+    return (
+        f"{share:.0%} of the image reads as occupied: if its floor is the dark part, "
+        "--negate reads light as occupied"
     )
