@@ -196,6 +196,13 @@ class Checker(PoseValidityChecker, MotionValidator, Protocol):
         """
         ...
 
+    def too_narrow_between(self, a: Sequence[float], b: Sequence[float]) -> bool:
+        """True proves every way for the rear axle from ``a`` to ``b`` is too narrow for the car.
+
+        The exact twin of :meth:`provably_disconnected`; False proves nothing.
+        """
+        ...
+
     def free_cells(self, start: Sequence[float]) -> np.ndarray:
         """Flat indices (into ``clearance_grid.ravel()``) of cells a sampler may draw from.
 

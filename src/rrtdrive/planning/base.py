@@ -425,6 +425,16 @@ def precheck(problem: PlanningProblem, planner: str, watch: Stopwatch) -> PlanRe
             "goal unreachable: start and goal lie in different free components of the "
             "clearance grid (no collision-free motion connects them)",
         )
+    if checker.too_narrow_between(problem.start.xy, problem.goal.xy):
+        v = problem.vehicle
+        return failure(
+            planner,
+            PlanStatus.PROVEN_UNREACHABLE,
+            watch,
+            f"goal unreachable: every way from the start to the goal is too narrow for the "
+            f"car ({v.width:g} m wide): the {min(v.rear_overhang, v.width / 2):g} m disc about "
+            "its rear axle cannot pass (no collision-free motion connects them)",
+        )
     return None
 
 

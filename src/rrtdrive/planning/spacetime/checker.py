@@ -275,6 +275,21 @@ class SpaceTimeChecker:
         """
         return self.static.provably_disconnected(a, b)
 
+    def too_narrow_between(self, a: Sequence[float], b: Sequence[float]) -> bool:
+        """The static map's exact proof that every way from ``a`` to ``b`` is too narrow.
+
+        Parameters
+        ----------
+        a, b : sequence of float
+            Rear-axle positions ``(x, y, ...)``.
+
+        Returns
+        -------
+        bool
+            True is a proof; False proves nothing.
+        """
+        return self.static.too_narrow_between(a, b)
+
     def free_cells(self, start: Sequence[float]) -> np.ndarray:
         """The static checker's sampler cells connected to ``start``.
 
