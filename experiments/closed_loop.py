@@ -48,7 +48,7 @@ sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 from results_io import check_doc, out_file, out_folder, write_doc, write_image_atomic  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
-from rrtdrive.cli_args import int_at_least, positive_int  # noqa: E402
+from rrtdrive.cli_args import flags_for, int_at_least, positive_int  # noqa: E402
 from rrtdrive.evaluation import EpisodeReport, evaluate, summarise  # noqa: E402
 from rrtdrive.maps import write_text_atomic  # noqa: E402
 from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MIN_SIM_FREQUENCY  # noqa: E402
@@ -74,6 +74,27 @@ def scenario_for(label: str, seed: int, oncoming: int) -> Scenario:
     if label == "parking-reverse-in":
         return make_scenario("parking", seed, reverse_in=True)
     return make_scenario(label, seed)
+
+
+def _check_names(
+    scenarios: list[str], stock: list[str], controllers: list[str], planner: str, oncoming: int
+) -> None:
+    """Every name before any episode, each error naming its flag (not ``scenario:``)."""
+    from rrtdrive.controllers import make_controller
+    from rrtdrive.planning import make_planner
+    from rrtdrive.sim.stock import STOCK_ENVS
+    from rrtdrive.types import InputError
+
+    with flags_for({"scenario": "--scenarios", "controller": "--controllers",
+                    "planner": "--planner"}):  # fmt: skip
+        for s in scenarios:
+            scenario_for(s, 0, oncoming)
+        for c in controllers:
+            make_controller(c)
+        make_planner(planner)
+    for e in stock:
+        if e not in STOCK_ENVS:
+            raise InputError(f"--stock: unknown env {e!r}; choose from {sorted(STOCK_ENVS)}")
 
 
 def _config(hz: int, deterministic: bool) -> EpisodeConfig:
@@ -289,6 +310,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.reverse and not stock:
         ap.error("--reverse: only stock envs (--stock) take it")
     controllers = args.controllers.split(",")
+    _check_names(scenarios, stock, controllers, args.planner, args.oncoming)
     labels = scenarios + [f"stock:{e}" for e in stock]
     jobs = [
         (s, args.planner, c, seed, args.frequency, args.oncoming, args.deterministic,

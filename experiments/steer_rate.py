@@ -33,9 +33,11 @@ from results_io import out_folder  # the sibling module
 
 from rrtdrive.atomic import write_text_atomic
 from rrtdrive.bench.backends import episode_progress, parallel_map
-from rrtdrive.cli_args import int_at_least, positive_float, positive_int
+from rrtdrive.cli_args import flags_for, int_at_least, positive_float, positive_int
+from rrtdrive.controllers import make_controller
 from rrtdrive.evaluation import evaluate
 from rrtdrive.evaluation.nuplan_comfort import COMFORT_BOUNDS
+from rrtdrive.planning import make_planner
 from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MIN_SIM_FREQUENCY
 from rrtdrive.sim.replanning import ReplanConfig
 from rrtdrive.sim.runner import EpisodeConfig, run_episode
@@ -253,6 +255,15 @@ def main(argv: list[str] | None = None) -> int:
     rate = args.steer_rate
     scenarios = args.scenarios.split(",")
     controllers = args.controllers.split(",")
+    # Every name before any episode, each error naming its flag (not "scenario:").
+    with flags_for({"scenario": "--scenarios", "controller": "--controllers",
+                    "planner": "--planner", "density": "--density"}):  # fmt: skip
+        for s in scenarios:
+            options = {"density": args.density} if s == "overtake-traffic" else {}
+            make_scenario(s, 0, **options)
+        for c in controllers:
+            make_controller(c)
+        make_planner(args.planner)
     jobs = [
         (s, c, seed, rate, args.density, args.frequency, args.no_wall_limit, args.planner)
         for s in scenarios for c in controllers for seed in range(args.seeds)

@@ -606,3 +606,17 @@ def test_map_figures_draws_every_built_in_map(tmp_path):
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert sorted(p.name for p in (tmp_path / "figs").iterdir()) == sorted(
         f"map_{n}.png" for n in BUILTIN_MAPS)
+
+
+@pytest.mark.parametrize("script", ["closed_loop", "steer_rate"])
+@pytest.mark.parametrize(
+    ("flag", "word"),
+    [("--scenarios", "unknown scenario"), ("--controllers", "unknown controller"),
+     ("--planner", "unknown planner")],
+)
+def test_closed_loop_scripts_name_their_flags_before_any_episode(tmp_path, script, flag, word):
+    # They said "scenario:", "controller:", "planner:" from inside the first worker.
+    proc = run(script, flag, "nosuch", "--out", str(tmp_path / "o"), cwd=tmp_path, timeout=60)
+    assert proc.returncode == 2, proc.stderr
+    assert f"error: {flag}: {word} 'nosuch'" in proc.stderr
+    assert "Traceback" not in proc.stderr and not (tmp_path / "o").exists()
