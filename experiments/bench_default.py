@@ -188,7 +188,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{qid:16s} {r['status']:18s} {r['nodes']:22s} {1e3 * r['cpu_s']:8.1f} ms  {note}",
               flush=True)  # fmt: skip
     if args.record:
-        FsPath(args.record).write_bytes(pickle.dumps(got))
+        from rrtdrive.atomic import atomic_target  # this tree's, in the main process
+
+        with atomic_target(args.record) as tmp:  # whole or not at all (Ctrl-C)
+            tmp.write_bytes(pickle.dumps(got))
     print(f"total CPU {total:.2f} s" + (f"; {bad} answers differ" if args.check else ""))
     return 1 if bad else 0
 

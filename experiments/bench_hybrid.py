@@ -499,7 +499,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{qid:24s} {r['status']:20s} {r['iterations']:6d} {1e3 * r['time_s']:8.1f} ms  "
               f"{note}", flush=True)  # fmt: skip
     if args.record:
-        FsPath(args.record).write_bytes(pickle.dumps(got))
+        from rrtdrive.atomic import atomic_target  # this tree's, in the main process
+
+        with atomic_target(args.record) as tmp:  # whole or not at all (Ctrl-C)
+            tmp.write_bytes(pickle.dumps(got))
     print(f"total planning {total:.2f} s" + (f"; {bad} answers differ" if args.check else ""))
     return 1 if bad else 0
 

@@ -157,7 +157,10 @@ def main(argv: list[str] | None = None) -> int:
         ids = args.only.split(",") if args.only else bench_hybrid.query_ids()
         calls = record(ids)
         if seg_file is not None:
-            seg_file.write_bytes(pickle.dumps(calls))
+            from rrtdrive.atomic import atomic_target  # this tree's, in the main process
+
+            with atomic_target(seg_file) as tmp:  # whole or not at all (Ctrl-C)
+                tmp.write_bytes(pickle.dumps(calls))
     sha = subprocess.run(
         ["git", "rev-parse", args.ref], cwd=ROOT, check=True, capture_output=True, text=True
     ).stdout.strip()

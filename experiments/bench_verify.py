@@ -34,7 +34,7 @@ from pathlib import Path as FsPath
 HERE = FsPath(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 import bench_hybrid  # noqa: E402  (the export of an old tree, provenance, results)
-from results_io import out_folder  # noqa: E402
+from results_io import out_folder, run_main  # noqa: E402
 
 
 def _worker(plans_file: str, repeat: int) -> int:
@@ -205,4 +205,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_main(main))  # Ctrl-C: one line and exit 130, no traceback

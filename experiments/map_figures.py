@@ -12,7 +12,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from results_io import out_folder  # noqa: E402
+from results_io import out_folder, run_main  # noqa: E402
 
 from rrtdrive.maps import BUILTIN_MAPS, builtin_map  # noqa: E402
 from rrtdrive.plotting import draw_map, save_figure  # noqa: E402
@@ -39,4 +39,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_main(main))  # Ctrl-C: one line and exit 130, no traceback
