@@ -159,7 +159,9 @@ def figures(map_name: str, examples: dict[str, object], out: FsPath) -> list[str
 
     fig = plot_curvature(res.path, m.vehicle.kappa_max)
     fig.axes[0].set_title(f"{map_name}: curvature of the improved planner's path")
-    fig.tight_layout()
+    # The docs' figures were laid out tight; switched outright, not by tight_layout(),
+    # which warned on stderr that the constrained layout had changed.
+    fig.set_layout_engine("tight")
     save_figure(fig, out / f"table3_{map_name}_curvature.png", dpi=90)
     written.append(f"table3_{map_name}_curvature.png")
     return written
@@ -302,7 +304,8 @@ def main(argv: list[str] | None = None) -> int:
             "",
             "Improved mean length over each baseline's (raw / pruned): "
             + ", ".join(
-                f"{LABELS[n]} {r['raw']:.3f} / {r['pruned']:.3f}" for n, r in ratios.items()
+                f"{LABELS[n]} {_ratio(r['raw'])} / {_ratio(r['pruned'])}"
+                for n, r in ratios.items()
             )
             + ".  ",
             f"Improved paths passing every guarantee (independent check): "
@@ -322,6 +325,12 @@ def main(argv: list[str] | None = None) -> int:
     # On the terminal the figures' links are relative to where the script was run.
     print(text.replace(FIGURE_LINK, os.path.relpath(fig_dir).replace(os.sep, "/") + "/"))
     return 0
+
+
+
+def _ratio(value: float | None) -> str:
+    """A length ratio, "–" where there is none (a baseline that never solved read "nan")."""
+    return "–" if value is None or not math.isfinite(value) else f"{value:.3f}"
 
 
 if __name__ == "__main__":
