@@ -232,8 +232,9 @@ def main(argv: list[str] | None = None) -> int:
                     "(default: %(default)s)")
     ap.add_argument("--controllers", default=",".join(CONTROLLERS),
                     help="comma-separated controllers (default: %(default)s)")
-    ap.add_argument("--density", default="default",
-                    help="overtake-traffic's traffic density (default: %(default)s)")
+    ap.add_argument("--density", default=None,
+                    help="overtake-traffic's traffic density (default: default), only with "
+                    "overtake-traffic among --scenarios")
     ap.add_argument("--planner", default=DEFAULT_PLANNER,
                     help="the reference path's planner (default: %(default)s; rrt-connect: the\n"
                     "baseline's raw paths, which jump in curvature)")
@@ -255,6 +256,11 @@ def main(argv: list[str] | None = None) -> int:
     rate = args.steer_rate
     scenarios = args.scenarios.split(",")
     controllers = args.controllers.split(",")
+    if args.density is not None and "overtake-traffic" not in scenarios:
+        # It was ignored without a word (an audit).
+        ap.error("--density: only overtake-traffic takes it; --scenarios has none")
+    if args.density is None:
+        args.density = "default"
     # Every name before any episode, each error naming its flag (not "scenario:").
     with flags_for({"scenario": "--scenarios", "controller": "--controllers",
                     "planner": "--planner", "density": "--density"}):  # fmt: skip
