@@ -323,3 +323,28 @@ def test_a_high_frequency_video_keeps_within_60_fps(tmp_path, capsys, frequency,
     assert frames == len(range(0, steps + 1, stride)) + (steps % stride != 0)
     assert imageio.get_reader(out).get_meta_data()["fps"] == pytest.approx(fps, rel=0.02)
     assert seconds == pytest.approx(steps / frequency, abs=1.5 / fps)
+
+
+def test_video_fps_sets_the_rate_and_needs_video(tmp_path, capsys):
+    """Slow motion: the same frames at the rate asked for (there was no way to set it)."""
+    import json
+
+    import imageio_ffmpeg
+
+    from rrtdrive.cli import main
+
+    out, js = tmp_path / "slow.mp4", tmp_path / "slow.json"
+    assert main(["simulate", "parking", "--max-time", "1", "--video", str(out),
+                 "--video-fps", "5", "--json", str(js)]) in (0, 1)  # fmt: skip
+    steps = json.loads(js.read_text())["steps"]
+    frames, seconds = imageio_ffmpeg.count_frames_and_secs(str(out))
+    assert frames == steps + 1  # every step at 20 Hz, as without --video-fps
+    assert imageio.get_reader(out).get_meta_data()["fps"] == pytest.approx(5.0)
+    assert seconds == pytest.approx(frames / 5.0, abs=0.25)
+    capsys.readouterr()
+    assert main(["simulate", "parking", "--video-fps", "5"]) == 2
+    assert "--video-fps: only with --video" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:  # argparse's own refusal of the value
+        main(["simulate", "parking", "--video", str(out), "--video-fps", "0"])
+    assert exc.value.code == 2
+    assert "--video-fps: expected a finite number > 0" in capsys.readouterr().err

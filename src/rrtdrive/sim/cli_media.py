@@ -80,7 +80,9 @@ def _write_video(
         else:
             from rrtdrive.sim.video import real_time_fps, write_frames
 
-            fps = real_time_fps(len(stock.frames), len(episode.log.states), episode.log.dt)
+            fps = getattr(args, "video_fps", None) or real_time_fps(
+                len(stock.frames), len(episode.log.states), episode.log.dt
+            )
             with writing("--video", args.video):
                 extra["video_frames"] = write_frames(stock.frames, args.video, fps)
             extra["video"] = args.video
@@ -101,7 +103,8 @@ def _write_video(
                           file=sys.stderr, flush=True)
 
             with writing("--video", args.video):
-                frames = write_video(episode, args.video, stride=stride, progress=progress)
+                frames = write_video(episode, args.video, stride=stride, progress=progress,
+                                     fps=getattr(args, "video_fps", None))  # fmt: skip
             extra["video"] = args.video
             extra["video_frames"] = frames
 

@@ -187,6 +187,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "t,x,y,yaw,speed,steer,accel,gear (rear axle, applied steering and acceleration)",
     )
     p.add_argument(
+        "--video-fps", type=positive_float, default=None, metavar="FPS",
+        help="the video's frame rate, with --video (default: real time, the simulation's "
+        "frequency over the stride; less plays slower)",
+    )
+    p.add_argument(
         "--video-stride", type=positive_int, default=None, metavar="N",
         help="simulation steps per video frame, with --video (default: every step up to "
         f"{MAX_VIDEO_FPS} Hz, above it the fewest that keep the video within {MAX_VIDEO_FPS} "
@@ -218,7 +223,8 @@ def _drive_stock(args: argparse.Namespace, config: Any, stride: int) -> tuple[An
     from rrtdrive.sim.video import even_frame, open_frames_video
 
     with writing("--video", args.video):
-        writer = open_frames_video(args.video, float(config.sim.simulation_frequency))
+        fps = getattr(args, "video_fps", None) or float(config.sim.simulation_frequency)
+        writer = open_frames_video(args.video, fps)
 
     def put(frame: Any) -> None:
         with writing("--video", args.video):  # ffmpeg's failure surfaces here
@@ -397,6 +403,8 @@ def _run(args: argparse.Namespace) -> int:
     stride = getattr(args, "video_stride", None)
     if stride is not None and args.video is None:
         raise InputError("--video-stride: only with --video (it sets the video's frames)")
+    if getattr(args, "video_fps", None) is not None and args.video is None:
+        raise InputError("--video-fps: only with --video (it sets the video's frame rate)")
     if stride is None:
         # Every step up to MAX_VIDEO_FPS Hz; above it every n-th, so the video stays real
         # time at a rate players take (--frequency 1000 made a 1000 fps MP4 that imageio
