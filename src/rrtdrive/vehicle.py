@@ -11,7 +11,24 @@ import shapely
 from rrtdrive.geometry import box_corners
 from rrtdrive.types import VehicleParams
 
-__all__ = ["footprint_corners", "footprint_polygon", "bicycle_step", "cover_discs"]
+__all__ = [
+    "footprint_corners", "footprint_polygon", "bicycle_step", "cover_discs", "axle_disc_radius",
+]
+
+
+def axle_disc_radius(vehicle: VehicleParams) -> float:
+    """The radius of the disc about the rear axle that the body holds in every pose.
+
+    ``min(rear_overhang, width / 2)``: a rear axle nearer than this to an obstacle or
+    the map's edge has the body there, whatever its heading (the connectivity proofs
+    and the sampler's test stand on it).
+
+    Examples
+    --------
+    >>> axle_disc_radius(VehicleParams())
+    0.895
+    """
+    return min(vehicle.rear_overhang, vehicle.width / 2.0)
 
 
 def footprint_corners(

@@ -25,7 +25,7 @@ from rrtdrive.collision.width_proof import free_parts, parts_disconnected
 from rrtdrive.geometry import densify
 from rrtdrive.maps import Map, Obstacle
 from rrtdrive.types import InputWarning, VehicleParams
-from rrtdrive.vehicle import cover_discs, footprint_corners
+from rrtdrive.vehicle import axle_disc_radius, cover_discs, footprint_corners
 
 __all__ = ["CollisionChecker"]
 
@@ -227,7 +227,7 @@ class CollisionChecker(ClearanceLookup):
         bool
             False is a proof that no heading fits; True proves nothing.
         """
-        return self.clearance(x, y) >= min(self.vehicle.rear_overhang, self.vehicle.width / 2)
+        return self.clearance(x, y) >= axle_disc_radius(self.vehicle)
 
     def pose_free_fast(self, x: float, y: float, yaw: float, clearance: float = 0.0) -> bool:
         """Scalar :meth:`poses_free_fast` for one pose (no numpy overhead, about 2 µs).
@@ -520,7 +520,7 @@ class CollisionChecker(ClearanceLookup):
 
         The exact twin of :meth:`provably_disconnected`, free of the grid's error
         (:mod:`rrtdrive.collision.width_proof`): it proves gaps up to the car's width
-        where the grid proves them up to about 1.45 m. Its region is built once per map
+        where the grid proves them up to about 1.45-1.6 m. Its region is built once per map
         and timed into :attr:`setup_time_s`.
 
         Parameters
@@ -533,7 +533,7 @@ class CollisionChecker(ClearanceLookup):
         bool
             True is a proof; False proves nothing.
         """
-        r = min(self.vehicle.rear_overhang, self.vehicle.width / 2.0)
+        r = axle_disc_radius(self.vehicle)
         parts = self.grid.derived(
             ("width_proof", r),
             lambda: free_parts(self.bounds, [o.corners() for o in self.obstacles], r),

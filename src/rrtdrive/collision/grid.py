@@ -22,6 +22,7 @@ from scipy import ndimage
 from rrtdrive.collision.config import MAX_RESOLUTION, CheckerConfig
 from rrtdrive.maps import Obstacle
 from rrtdrive.types import InputError, VehicleParams
+from rrtdrive.vehicle import axle_disc_radius
 
 T = TypeVar("T")
 
@@ -337,7 +338,7 @@ class GridCache:
         # h of the true obstacle (grown by h/sqrt2 per side), and any point of a cell
         # is within h/sqrt2 of its centre.
         slack = h + h / math.sqrt(2.0)
-        r = min(self.vehicle.rear_overhang, self.vehicle.width / 2.0)
+        r = axle_disc_radius(self.vehicle)
         upper = self.clearance + self.grid_error + slack
         kept = upper >= r
         labels, _ = ndimage.label(kept, structure=np.ones((3, 3), dtype=bool))
@@ -406,8 +407,7 @@ class GridCache:
             if label == 0:
                 cells = np.zeros(0, dtype=np.int64)
             else:
-                vehicle = self.vehicle
-                stand = self.clearance >= min(vehicle.rear_overhang, vehicle.width / 2.0)
+                stand = self.clearance >= axle_disc_radius(self.vehicle)
                 cells = np.flatnonzero(stand & (self.component_labels == label))
             self._free[label] = cells
             self.setup_time_s += time.perf_counter() - t0

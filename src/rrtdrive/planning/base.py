@@ -27,6 +27,7 @@ from rrtdrive.types import (
     Tree,
     VehicleParams,
 )
+from rrtdrive.vehicle import axle_disc_radius
 
 __all__ = [
     "PlanningProblem",
@@ -432,7 +433,7 @@ def precheck(problem: PlanningProblem, planner: str, watch: Stopwatch) -> PlanRe
             PlanStatus.PROVEN_UNREACHABLE,
             watch,
             f"goal unreachable: every way from the start to the goal is too narrow for the "
-            f"car ({v.width:g} m wide): the {min(v.rear_overhang, v.width / 2):g} m disc about "
+            f"car ({v.width:g} m wide): the {axle_disc_radius(v):g} m disc about "
             "its rear axle cannot pass (no collision-free motion connects them)",
         )
     return None
