@@ -434,12 +434,21 @@ def unknown_cells_under(grid: ImageMap, body: shapely.Polygon) -> int:
     """
     import shapely
 
-    if grid.unknown_cells is None or not grid.unknown_cells.any():
+    if grid.unknown_cells is None:
         return 0
-    rows, cols = np.nonzero(grid.unknown_cells)
     x0, y0 = grid.origin
     res = grid.resolution
-    top = y0 + grid.occupied.shape[0] * res  # the image's first row is at the top
+    n_rows, n_cols = grid.unknown_cells.shape
+    top = y0 + n_rows * res  # the image's first row is at the top
+    # Only the cells under the shape's bounding box can overlap it: a transparent
+    # background is millions of unknown cells, each a shapely box otherwise.
+    xmin, ymin, xmax, ymax = body.bounds
+    c0, c1 = max(0, math.floor((xmin - x0) / res)), min(n_cols, math.ceil((xmax - x0) / res))
+    r0, r1 = max(0, math.floor((top - ymax) / res)), min(n_rows, math.ceil((top - ymin) / res))
+    if c0 >= c1 or r0 >= r1:
+        return 0
+    rows, cols = np.nonzero(grid.unknown_cells[r0:r1, c0:c1])
+    rows, cols = rows + r0, cols + c0
     cells = shapely.box(x0 + cols * res, top - (rows + 1) * res, x0 + (cols + 1) * res,
                         top - rows * res)  # fmt: skip
     # Sharing an edge is no overlap: the map checks call a body touching an obstacle free.
