@@ -162,22 +162,15 @@ def config_from_args(args: argparse.Namespace) -> Any:
         raise InputError("--config: needs a file name, got an empty one")
     values: dict[str, Any] = load_toml(args.config) if args.config is not None else {}
     values.update({k: getattr(args, k) for k in given_flags(args)})  # flags over TOML
-    for key in ("plots", "reverse"):
+    for key in ("plots", "reverse", "deterministic"):  # on/off flags over the file's too
         if getattr(args, key, None) is not None:
             values[key] = getattr(args, key)
     if getattr(args, "no_ray", False):
         values["ray"] = None
-    deterministic = getattr(args, "deterministic", None)
-    if deterministic:
-        if args.max_time_s is not None:
-            raise InputError("--max-time: --deterministic turns the planning time limit off")
-        values["deterministic"] = True
-    elif deterministic is False:
-        values["deterministic"] = False
-    elif values.get("deterministic") is True and args.max_time_s is not None:
-        raise InputError(
-            "--max-time: the config's deterministic = true turns the planning time limit off"
-        )
+    if values.get("deterministic") is True and args.max_time_s is not None:
+        flag = getattr(args, "deterministic", None)
+        whose = "--deterministic" if flag else "the config's deterministic = true"
+        raise InputError(f"--max-time: {whose} turns the planning time limit off")
     return config_from_mapping(values)
 
 
