@@ -23,6 +23,16 @@ def axle_disc_radius(vehicle: VehicleParams) -> float:
     the map's edge has the body there, whatever its heading (the connectivity proofs
     and the sampler's test stand on it).
 
+    Parameters
+    ----------
+    vehicle : VehicleParams
+        The car.
+
+    Returns
+    -------
+    float
+        The radius, metres.
+
     Examples
     --------
     >>> axle_disc_radius(VehicleParams())
