@@ -26,8 +26,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from rrtdrive.sim.mp4 import Mp4Writer
-from rrtdrive.types import InputError, is_finite_number
+from rrtdrive.sim.mp4 import Mp4Writer, require_fps
+from rrtdrive.types import InputError
 
 __all__ = ["RecordMP4", "record_episode"]
 
@@ -88,9 +88,7 @@ class RecordMP4(gym.Wrapper):
         if not isinstance(name_prefix, str) or not name_prefix or os.sep in name_prefix:
             raise InputError(f"name_prefix: need a non-empty file-name prefix, got {name_prefix!r}")
         fps = fps if fps is not None else env.metadata.get("render_fps") or 30
-        if not is_finite_number(fps) or not fps > 0:  # numpy numbers too
-            raise InputError(f"fps: must be a finite number > 0, got {fps!r}")
-        fps = float(fps)
+        fps = require_fps(fps)  # at once, not at the first episode's writer
         if isinstance(quality, bool) or not isinstance(quality, int) or not 0 <= quality <= 10:
             raise InputError(f"quality: need an integer in 0..10, got {quality!r}")
         self.folder = FsPath(folder)

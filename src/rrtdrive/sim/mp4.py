@@ -35,7 +35,7 @@ import numpy as np
 from rrtdrive.atomic import publish, temp_beside
 from rrtdrive.types import InputError, is_finite_number
 
-__all__ = ["Mp4Writer"]
+__all__ = ["Mp4Writer", "require_fps"]
 
 _STOP = object()
 #: How often (s) an idle writer thread looks whether the writer was aborted.
@@ -73,6 +73,21 @@ def _check_encoder(process: subprocess.Popen[bytes] | None, path: FsPath, frames
         raise OSError(f"the video encoder (ffmpeg) wrote {max(found, 0)} of {frames} frames")
 
 
+def require_fps(fps: object) -> float:
+    """``fps`` as a float, or :class:`InputError` naming ``fps`` unless a finite number > 0.
+
+    numpy numbers too (``np.int64(20)`` was "not a number > 0"; an audit).
+
+    Examples
+    --------
+    >>> require_fps(25)
+    25.0
+    """
+    if not is_finite_number(fps) or not fps > 0:  # type: ignore[operator]
+        raise InputError(f"fps: must be a finite number > 0, got {fps!r}")
+    return float(fps)  # type: ignore[arg-type]
+
+
 class Mp4Writer:
     """Encode RGB frames to an MP4 file in a writer thread.
 
@@ -105,10 +120,7 @@ class Mp4Writer:
     ) -> None:
         import imageio.v2 as imageio
 
-        # numpy numbers too (np.int64(20) was "not a number > 0"; an audit).
-        if not is_finite_number(fps) or not fps > 0:
-            raise InputError(f"fps: must be a finite number > 0, got {fps!r}")
-        fps = float(fps)
+        fps = require_fps(fps)
         if isinstance(queue_size, bool) or not isinstance(queue_size, int) or queue_size < 1:
             raise InputError(f"queue_size: need an integer >= 1, got {queue_size!r}")
         self.target = FsPath(target)
