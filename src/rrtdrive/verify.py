@@ -346,19 +346,8 @@ def verify_path(
         if len(seg) < 2:
             continue
         max_k = max(max_k, segment_curvature(seg[:, :2]), turn_curvature(seg))
-        err, row = kappa_column_error(seg)
-        # The end rows' kappa is a convention, but the car must be able to steer it: a
-        # start row at 5 1/m turned the wheels to full lock before the car moved (an audit).
-        # Its reach: kappa_max, or the first (last) step's own turn where that is more
-        # (then curvature_ok fails, and kappa_ok need not say it twice).
-        ends = seg[[0, 1, -2, -1]]
-        chords = np.hypot(*(ends[[1, 3], :2] - ends[[0, 2], :2]).T)
-        turns = np.abs(wrap_angle(ends[[1, 3], 2] - ends[[0, 2], 2]))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            steps = np.where(chords > 1e-9, 2.0 * np.sin(0.5 * turns) / chords, 0.0)
-        over = np.abs(ends[[0, 3], 3]) - np.maximum(v.kappa_max, steps)
-        if over.max() > err:
-            err, row = float(over.max()), (0 if over[0] >= over[1] else len(seg) - 1)
+        # The end rows too, within the car's reach (kappa_column_error's docs).
+        err, row = kappa_column_error(seg, v.kappa_max)
         if err > kappa_err:
             kappa_err, kappa_row = err, a + row
         max_sharp = max(max_sharp, segment_sharpness(seg[:, :2], v.wheelbase))

@@ -140,7 +140,7 @@ def turn_curvature(seg: np.ndarray) -> float:
     return float(np.max(2.0 * np.sin(0.5 * turn[moving]) / chord[moving]))
 
 
-def kappa_column_error(seg: np.ndarray) -> tuple[float, int]:
+def kappa_column_error(seg: np.ndarray, kappa_max: float | None = None) -> tuple[float, int]:
     """How far the rows' ``kappa`` lies outside the curvature their yaw turns at, and where.
 
     A gear segment's steering curvature between two rows is its yaw's turn per arc
@@ -152,8 +152,11 @@ def kappa_column_error(seg: np.ndarray) -> tuple[float, int]:
     steps' means by half a step of the ramp). The segment's first and last rows are
     stops, where the car may steer standing: their ``kappa`` is a convention (a Dubins
     word's last row has 0, a junction row the curvature of the piece that starts there)
-    and is not checked. The excess over that bracket is returned with its row (index
-    within ``seg``; -1 when no row is checked).
+    and is not checked against the bracket; given ``kappa_max``, it must lie within the
+    car's reach: ``kappa_max``, or the first (last) step's own turn where that is more
+    (then the curvature check fails, and this one need not say it twice). The excess
+    over the bound is returned with its row (index within ``seg``; -1 when no row is
+    checked).
 
     Examples
     --------
@@ -170,7 +173,7 @@ def kappa_column_error(seg: np.ndarray) -> tuple[float, int]:
     chord = np.hypot(*np.diff(seg[:, :2], axis=0).T)
     moving = chord > STILL_M
     if not moving.any():
-        return 0.0, -1
+        return _end_excess(seg, kappa_max, np.zeros(2)) if kappa_max is not None else (0.0, -1)
     gear = -1.0 if seg.shape[1] > 4 and seg[0, 4] < 0 else 1.0
     turn = wrap_angle(np.diff(seg[:, 2]))
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -193,7 +196,18 @@ def kappa_column_error(seg: np.ndarray) -> tuple[float, int]:
     pad = np.fmax(np.concatenate([none, slack]), np.concatenate([slack, none]))
     excess = np.fmax(lo - seg[:, 3], seg[:, 3] - hi) - pad
     excess = np.where(np.isnan(excess), 0.0, np.maximum(excess, 0.0))[1:-1]
-    if not len(excess):
-        return 0.0, -1
-    i = int(np.argmax(excess))
-    return float(excess[i]), i + 1
+    err, row = (float(np.max(excess)), int(np.argmax(excess)) + 1) if len(excess) else (0.0, -1)
+    if kappa_max is not None:
+        reach = np.abs(np.where(np.isnan(step[[0, -1]]), 0.0, step[[0, -1]]))
+        end_err, end_row = _end_excess(seg, kappa_max, reach)
+        if end_err > err:
+            err, row = end_err, end_row
+    return err, row
+
+
+def _end_excess(seg: np.ndarray, kappa_max: float, steps: np.ndarray) -> tuple[float, int]:
+    """How far the end rows' ``|kappa|`` exceeds ``kappa_max`` or their steps' turn."""
+    # A start row at 5 1/m turned the wheels to full lock before the car moved (an audit).
+    over = np.abs(seg[[0, -1], 3]) - np.maximum(kappa_max, steps)
+    k = 0 if over[0] >= over[1] else 1
+    return float(over[k]), (0, len(seg) - 1)[k]
