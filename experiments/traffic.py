@@ -332,8 +332,6 @@ def _run(
         figures = FsPath(args.figures)
         figures.mkdir(parents=True, exist_ok=True)
         video = save_video(best, args, figures)
-    if keep is not None:
-        shutil.rmtree(keep, ignore_errors=True)
     for r in reports:
         r.pop("kept")
     out = FsPath(args.out)
