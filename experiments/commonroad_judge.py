@@ -96,8 +96,6 @@ def main(argv: list[str] | None = None) -> int:
     if not commonroad_available():
         print('commonroad_judge: needs the extra: pip install ".[commonroad]"', file=sys.stderr)
         return 2
-    if args.random_maps < 0:
-        ap.error("--random-maps must be >= 0")
     if args.random_maps:
         args.scenarios, args.seeds = RANDOM_MAPS, args.random_maps
     jobs = [

@@ -1,8 +1,8 @@
 """Coverage benchmark: which random queries each planner solves, side by side in one run.
 
-Usage (OMPL lives in the lead's venv only)::
+Usage (the OMPL rows need ``pip install "ompl>=2.0.1"`` in the same environment)::
 
-    PYTHONPATH=src:. /work/venv/bin/python experiments/coverage.py --map parking_lot \
+    python experiments/coverage.py --map parking_lot \
         --count 100 --jobs 2 --out results --doc docs/coverage.md
 
 The random goal poses and the random start poses of ``experiments/random_goals.py``

@@ -29,6 +29,7 @@ import numpy as np
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 from random_goals import draw_goals  # noqa: E402
+from results_io import command, out_folder  # noqa: E402
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
 from rrtdrive.cli_args import positive_float, positive_int
@@ -80,7 +81,6 @@ def _num(v: float | None, digits: int) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--count", type=positive_int, default=30,
@@ -104,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
     lines = [
         "# Hybrid A*: continuous curvature (clothoid) against exact arcs",
         "",
-        "Command: `python experiments/hybrid_curve.py " + " ".join(sys.argv[1:]) + "`  ",
+        f"Command: `{command('hybrid_curve.py', argv)}`  ",
         f"parking_lot, {args.count} random goals and starts (seed 1), "
         f"{'with' if args.reverse else 'without'} reverse, {args.expansions} expansions, "
         f"{args.cap:g} s safety cap.",
@@ -152,7 +152,10 @@ def main(argv: list[str] | None = None) -> int:
         )
     out = FsPath(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    payload = {"args": vars(args), "summary": summary, "both": both, "rows": rows}
+    payload = {
+        "command": command("hybrid_curve.py", argv), "args": vars(args),
+        "summary": summary, "both": both, "rows": rows,
+    }
     for s in summary.values():
         if s["max_sharpness"] == math.inf:
             s["max_sharpness"] = "inf"

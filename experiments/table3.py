@@ -122,6 +122,7 @@ def fmt(d: dict[str, float], digits: int = 2, scale: float = 1.0) -> str:
 
 def figures(map_name: str, examples: dict[str, object], out: FsPath) -> list[str]:
     m = builtin_map(map_name)
+    out.mkdir(parents=True, exist_ok=True)
     written = []
     fig, axes = plt.subplots(2, 2, figsize=(11, 11))
     for ax, name in zip(axes.ravel(), PLANNERS, strict=True):
@@ -192,7 +193,6 @@ def main(argv: list[str] | None = None) -> int:
     out = FsPath(args.out)
     fig_dir = FsPath(args.figures) if args.figures else out / "figures"
     out.mkdir(parents=True, exist_ok=True)
-    fig_dir.mkdir(parents=True, exist_ok=True)
     budget = Budget(max_iterations=100_000, max_time_s=args.max_time)
     command = "python experiments/table3.py " + " ".join(sys.argv[1:] if argv is None else argv)
     report: dict[str, object] = {
@@ -263,8 +263,12 @@ def main(argv: list[str] | None = None) -> int:
             for name in PLANNERS
             if name != "improved-rrt-connect"
         }
-        have_all = all(name in examples for name in PLANNERS)
-        written = figures(map_name, examples, fig_dir) if have_all else []
+        # The figures set the four planners side by side: one that never solved leaves none.
+        unsolved = [LABELS[name] for name in PLANNERS if name not in examples]
+        written = [] if unsolved else figures(map_name, examples, fig_dir)
+        if unsolved:
+            print(f"table3: no figures for {map_name}: {', '.join(unsolved)} solved no run",
+                  file=sys.stderr)
         report["maps"][map_name] = {"summary": summary, "length_ratios": ratios,
                                     "runs": rows, "figures": written}
         md += [
@@ -313,6 +317,8 @@ def main(argv: list[str] | None = None) -> int:
             f"{'–' if g_cc is None else f'{100 * g_cc:.0f} %'} (default).",
             "",
         ]
+        if unsolved:
+            md += [f"No figures: {', '.join(unsolved)} solved no run on this map.", ""]
         md += [f"![{w}]({FIGURE_LINK}{w})" for w in written] + [""]
     # Strict JSON: a mean or spread that does not exist is null, not a bare NaN.
     text = json.dumps(json_safe(report), indent=1, allow_nan=False)

@@ -109,6 +109,22 @@ def test_toml_config(tmp_path):
         config_from_mapping(load_toml(wrong_type))
 
 
+def test_toml_paths_are_read_from_the_working_folder(tmp_path, monkeypatch, capsys):
+    # docs/bench.md: a relative `out` or map file in the TOML is read from the folder the
+    # command runs in, as the same flags are, not from the TOML file's folder.
+    (tmp_path / "cfg").mkdir()
+    (tmp_path / "maps").mkdir()
+    save_map(builtin_map("narrow_gap"), tmp_path / "maps" / "mine.json")
+    toml = tmp_path / "cfg" / "b.toml"
+    toml.write_text('maps = ["maps/mine.json"]\nplanners = ["rrt-connect"]\nseeds = 1\n'
+                    'workers = 1\nout = "o"\nmax_iterations = 300\nplots = false\n')
+    monkeypatch.chdir(tmp_path)
+    assert main(["bench", "--config", "cfg/b.toml"]) == 0, capsys.readouterr().err
+    rows = [json.loads(line) for line in (tmp_path / "o" / "runs.jsonl").read_text().splitlines()]
+    assert len(rows) == 1 and rows[0]["map"].endswith("mine.json")
+    assert not (tmp_path / "cfg" / "o").exists()
+
+
 def test_cli_bad_input_exit_2(tmp_path, capsys):
     (tmp_path / "afile").write_text("")
     # A value given by a flag is named by the flag, as plan and simulate do.
