@@ -234,7 +234,10 @@ def test_a_vector_env_batches_a_metric_that_does_not_apply_as_nan(short_first):
         _, _, terminated, truncated, info = envs.step(np.zeros((2, 2), np.float32))
         assert (terminated | truncated).all()
         short = 0 if short_first else 1
-        for name in ("nuplan_comfortable", "path_cusps", "gear_changes", "ttc_within_bound"):
+        # A count that always applies stays a count (0 gear changes on either sub-env).
+        gears = info["metrics"]["gear_changes"]
+        assert gears.dtype.kind == "i" and gears.tolist() == [0, 0], gears
+        for name in ("nuplan_comfortable", "path_cusps", "ttc_within_bound"):
             batch = info["metrics"][name]
             assert batch.dtype == np.float64, (name, batch)
             report = envs.envs[short].unwrapped.report

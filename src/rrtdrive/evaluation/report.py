@@ -176,7 +176,7 @@ class EpisodeReport:
     nuplan_yaw_rate_abs_max: float | None = None
     nuplan_yaw_accel_abs_max: float | None = None
     path_cusps: int | None = None
-    gear_changes: int | None = None
+    gear_changes: int = 0  # always applies: 0 when the car never drove
 
     def __post_init__(self) -> None:
         # Reports read back from JSON carry the outcome as its string.

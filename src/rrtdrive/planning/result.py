@@ -85,6 +85,8 @@ def run_query(
     rng: np.random.Generator,
     tree_edges: bool = True,
     probe: Callable[[], Diagnosis | None] | None = None,
+    reverses: bool = False,
+    exact_goal_edges: bool = False,
 ) -> PlanResult:
     """Set the map up, start the stopwatch, fail early on a hopeless query, else search.
 
@@ -119,6 +121,13 @@ def run_query(
         :func:`~rrtdrive.planning.diagnosis.diagnose` found nothing in (the reversing
         planners: :func:`~rrtdrive.planning.hybrid.probe.reverse_probe`); timed with
         the diagnosis.
+    reverses : bool
+        Whether the planner changes gear where ``problem.reverse`` allows it; one that
+        plans forward only is diagnosed as a forward query (its failure says that a
+        reversing path may exist).
+    exact_goal_edges : bool
+        Whether the planner tests an edge into the goal exactly when its swept test
+        fails (the tree baselines): the diagnosis then blames no keep at the goal.
 
     Returns
     -------
@@ -166,14 +175,21 @@ def run_query(
     def proved(name: str) -> bool:  # a Hybrid A* stat, or the default's escalation's
         return stats.get(name, stats.get(f"hybrid_{name}", 0.0)) > 0.0
 
+    # A planner that plans forward only failed forward, whatever the problem allows.
+    asked = problem if reverses else _forward(problem)
     found = diagnose(
-        problem, tree_edges=tree_edges, no_approach=proved("no_approach"),
-        start_exhausted=proved("start_exhausted"),
+        asked, tree_edges=tree_edges, no_approach=proved("no_approach"),
+        start_exhausted=proved("start_exhausted"), exact_goal_edges=exact_goal_edges,
     )  # fmt: skip
     if found is None and probe is not None and result.status in _PROBED:
         found = probe()
     stats["diagnosis_time_s"] = time.perf_counter() - t_diagnosis
     return dataclasses.replace(result, setup_time_s=setup, diagnosis=found, stats=stats)
+
+
+def _forward(problem: PlanningProblem) -> PlanningProblem:
+    """``problem`` with reversing not allowed (itself when it was not)."""
+    return dataclasses.replace(problem, reverse=False) if problem.reverse else problem
 
 
 #: The failures a planner's probe looks at: counted ones (a timeout's would depend on the

@@ -91,6 +91,7 @@ def diagnose(
     tree_edges: bool = True,
     no_approach: bool = False,
     start_exhausted: bool = False,
+    exact_goal_edges: bool = False,
 ) -> Diagnosis | None:
     """The constraint that makes ``problem`` hard or impossible, or ``None``.
 
@@ -113,6 +114,10 @@ def diagnose(
         Likewise from the start: every forward way on explored, none reached the goal;
         with a pocket ahead of the start (less than :data:`~.checks.POCKET_M`), the
         finding (:func:`~.checks.no_forward_departure`).
+    exact_goal_edges : bool
+        Whether the tree planner tests an edge into the goal exactly when its swept test
+        fails (:class:`~rrtdrive.planning.edges.EdgeTester`): then an edge the body
+        passes reaches the goal, and its keep does not stop it there.
 
     Returns
     -------
@@ -155,7 +160,9 @@ def diagnose(
         return passage
     for step in (
         lambda: room_at_ends(m, checker, start, goal, reverse),
-        lambda: tight_clearance(m, checker, start, goal) if tree_edges else None,
+        lambda: (
+            tight_clearance(m, checker, start, goal, exact_goal_edges) if tree_edges else None
+        ),
         lambda: passage,
         lambda: no_forward_arrival(m, checker, goal) if no_approach and not reverse else None,
         lambda: no_forward_departure(m, checker, start)

@@ -208,8 +208,9 @@ def stuck_root_words(end: str, proven: bool, patience: int, share: float | None)
         return (
             f"the {end} tree cannot leave the {end} pose: every edge it may grow, within "
             f"90 deg of the {end}'s heading, is blocked there (the {end} is boxed in "
-            "along its heading)"
-        )
+            "along its heading, or its body nearer to an obstacle or the map's edge than "
+            "the edges keep)"
+        )  # the proof is about the edges' keep: a wall 0.05 m beside a goal blocks them all
     narrow = ""
     if share is not None:
         narrow = f"; {100 * share:.0f} % of those directions have room for an edge there"

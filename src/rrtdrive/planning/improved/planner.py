@@ -157,7 +157,7 @@ class ImprovedRRTConnect:
         return run_query(
             NAME, problem, budget, run, lambda: query().prepare(), rng=rng,
             tree_edges=not self.config.escalation,  # Hybrid A* searches without them
-            probe=probe if self.config.escalation else None,
+            probe=probe if self.config.escalation else None, reverses=self.reverses,
         )
 
 
