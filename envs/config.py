@@ -251,8 +251,9 @@ class DriveEnvConfig:
             raise InputError(
                 f"controller: unknown controller {controller!r}; choose from {sorted(CONTROLLERS)}"
             )
-        if not isinstance(self.residual, bool):
+        if not isinstance(self.residual, (bool, np.bool_)):  # numpy's too, as for the ints
             raise InputError(f"residual: expected True or False, got {self.residual!r}")
+        put("residual", bool(self.residual))
         put("residual_scale", _require_number("residual_scale", self.residual_scale))
         put("n_ref_points", require_int("n_ref_points", self.n_ref_points, 1, 200))
         put("ref_spacing", _require_number("ref_spacing", self.ref_spacing))
@@ -455,9 +456,9 @@ def _map_task(m: Map, seed: int, options: Mapping[str, Any]) -> Scenario:
                 f"scenario_options.{key}: not an option of a map; choose from {list(MAP_OPTIONS)}"
             )
     reverse = options.get("reverse", False)
-    if not isinstance(reverse, bool):
+    if not isinstance(reverse, (bool, np.bool_)):
         raise InputError(f"scenario_options.reverse: expected True or False, got {reverse!r}")
-    return CustomTask.from_map(m, seed, reverse=reverse)
+    return CustomTask.from_map(m, seed, reverse=bool(reverse))
 
 
 def caller_options(

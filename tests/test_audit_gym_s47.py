@@ -561,3 +561,20 @@ def test_the_action_maps_to_the_documented_command_range():
     with pytest.raises(InputError, match="^action"):
         env.step(np.array([np.nan, 0.0], np.float32))
     env.close()
+
+
+def test_numpy_bools_are_taken_as_numpy_ints_are():
+    # A config sweep built from numpy arrays: np.True_ was refused where np.int64 was taken.
+    env = gym.make("rrtdrive/Parking-v0", residual=np.True_, n_ref_points=np.int64(3))
+    try:
+        assert env.unwrapped.config.residual is True
+        env.reset(seed=0)
+    finally:
+        env.close()
+    m = builtin_map("reverse_bay")
+    env = gym.make("rrtdrive/Map-v0", scenario=m, scenario_options={"reverse": np.True_})
+    try:
+        env.reset(seed=0)
+        assert env.unwrapped.config.scenario_for(0).reverse is True
+    finally:
+        env.close()

@@ -389,3 +389,20 @@ def test_a_start_into_a_wall_is_refused_with_how_far_in():
     with pytest.raises(InputError, match=r"^start: .* overlaps obstacle 0 at \[2\.0, 10\.0\] "
                                          r"by 0\.045 m \(the least shift that clears it\)$"):
         check_endpoint(m, start, "start", car)
+
+
+def test_a_start_touching_a_wall_is_refused_as_touching_not_by_0_m():
+    # The body's rear edge exactly on the wall's face: shapely says they intersect, the
+    # separating-axis depth is 0; "overlaps ... by 0 m (the least shift that clears it)"
+    # read as if no shift were needed (an audit).
+    car = VehicleParams()
+    wall = Obstacle((2.0, 10.0), (1.0, 6.0))  # x 1.5 .. 2.5
+    start = Pose(2.5 + car.rear_overhang, 10.0, 0.0)
+    m = Map("w", (0.0, 0.0, 30.0, 20.0), (wall,), Pose(20.0, 5.0, 0.0), Pose(20.0, 10.0, 0.0))
+    from rrtdrive.maps import check_endpoint
+    from rrtdrive.vehicle import footprint_polygon
+
+    assert footprint_polygon(start.as_tuple(), car).distance(wall.polygon()) == 0.0
+    with pytest.raises(InputError, match=r"^start: .* touches obstacle 0 at \[2\.0, 10\.0\] "
+                                         r"\(touching counts as a collision: move it clear\)$"):
+        check_endpoint(m, start, "start", car)

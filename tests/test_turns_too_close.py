@@ -116,3 +116,23 @@ def test_the_paper_fillets_start_leg_keeps_the_end_gap():
     (length, need, _, _), conflicts = room(bare + 0.25, 0.5)
     assert need == bare + 0.5 and need > length
     assert 0 in conflicts
+
+
+@pytest.mark.parametrize("deg", [150.0, 179.0])
+def test_a_hairpin_is_named_as_one_not_by_a_runaway_tangent(deg):
+    # A tree path that doubles back: rounding the corner needs R tan(deflection / 2), which
+    # the message quoted as "6177.8 m between them" at 179.9 deg (an audit). The words say
+    # what it takes instead; below the hairpin the needed length stays.
+    from rrtdrive.planning.smoothing.drivable import turns_too_close
+
+    turn = math.radians(deg)
+    pts = [(0.0, 0.0), (10.0, 0.0), (10.0 + 20.0 * math.cos(turn), 20.0 * math.sin(turn)),
+           (0.0, 30.0)]
+    kinds = [CornerKind.START, CornerKind.NODE, CornerKind.NODE, CornerKind.GOAL]
+    cs = [Corner.at(np.array(p), k, i) for i, (p, k) in enumerate(zip(pts, kinds, strict=True))]
+    room = leg_room(pts, [0.0, 1 / 6, 1 / 6, 0.0], LEVELS, 0.5, 0)
+    assert math.degrees(abs(room[3])) == pytest.approx(deg)
+    text = turns_too_close(cs, 0, room)
+    assert f"a corner of {deg:.0f} deg doubles back" in text and "needs" not in text
+    gentle = turns_too_close(cs, 0, (room[0], 7.4, 0.0, math.radians(120.0)))
+    assert "needs 7.4 m" in gentle and "doubles back" not in gentle

@@ -192,11 +192,15 @@ def check_endpoint(
     if len(hits):
         i = int(hits[0])
         depth = overlap_depth(corners[:-1], np.asarray(polygons[i].exterior.coords)[:-1])
-        raise InputError(
-            f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) overlaps obstacle {i} "
-            f"at {list(m.obstacles[i].center)} by {depth:.3g} m (the least shift that "
-            "clears it)"
+        # Touching counts as a collision; "overlaps by 0 m (the least shift ...)" read as
+        # if no shift were needed.
+        how = (
+            f"overlaps obstacle {i} at {list(m.obstacles[i].center)} by {depth:.3g} m (the "
+            "least shift that clears it)" if depth > 0.0
+            else f"touches obstacle {i} at {list(m.obstacles[i].center)} (touching counts "
+            "as a collision: move it clear)"
         )
+        raise InputError(f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) {how}")
 
 
 def overlap_depth(a: np.ndarray, b: np.ndarray) -> float:

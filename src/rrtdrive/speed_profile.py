@@ -36,6 +36,8 @@ from rrtdrive.steering_sharpness import (
     steering_rate_speed_cap,
     steering_sharpness,
 )
+from rrtdrive.types import InputError
+from rrtdrive.values import brief_repr, is_finite_number
 
 __all__ = [
     "SpeedLimits",
@@ -46,6 +48,7 @@ __all__ = [
     "SpeedProfile",
     "RateLimitedLimits",
     "actuator_profile",
+    "checked_samples",
     "peak_with_plateau",
     "plateau_caps",
     "FINAL_APPROACH_M",
@@ -148,6 +151,60 @@ def arrival_times(s: np.ndarray, v: np.ndarray, v_floor: float = 0.05) -> np.nda
     return np.concatenate([[0.0], np.cumsum(np.diff(s) / mean)])
 
 
+def checked_samples(
+    s: np.ndarray, kappa: np.ndarray, v_start: float, v_cap: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """``s`` and ``kappa`` as float arrays, or one :class:`InputError` naming what is wrong.
+
+    A profile needs one sample at least, finite values and arc lengths that never
+    decrease (a cusp's repeated row is a zero-length interval): an empty path raised
+    numpy's IndexError, and a NaN speed or arc length gave a profile that started at
+    ``v_max`` or jumped past the acceleration limit without a word (an audit).
+
+    Parameters
+    ----------
+    s, kappa : numpy.ndarray
+        Arc length and curvature of the samples.
+    v_start : float
+        Speed at the first sample, m/s.
+    v_cap : numpy.ndarray, optional
+        Further per-sample caps, m/s (``inf``: none there).
+
+    Returns
+    -------
+    s, kappa : numpy.ndarray
+
+    Raises
+    ------
+    InputError
+        Naming the argument that is empty, not finite, decreasing or mis-shaped.
+
+    Examples
+    --------
+    >>> checked_samples(np.array([0.0, 1.0]), np.array([0.1, 0.0]), 0.0)[0].tolist()
+    [0.0, 1.0]
+    """
+    s = np.asarray(s, dtype=float)
+    kappa = np.asarray(kappa, dtype=float)
+    if s.ndim != 1 or kappa.shape != s.shape or len(s) == 0:
+        raise InputError(
+            f"s, kappa: expected two 1-D arrays of the same length, one sample at least; got "
+            f"shapes {s.shape} and {kappa.shape}"
+        )
+    for name, values in (("s", s), ("kappa", kappa)):
+        if not np.isfinite(values).all():
+            raise InputError(f"{name}: expected finite numbers, got {brief_repr(values)}")
+    if (np.diff(s) < 0.0).any():
+        raise InputError(f"s: arc lengths must not decrease, got {brief_repr(s)}")
+    if not is_finite_number(v_start):  # a car rolling back a hair below 0 is no error
+        raise InputError(f"v_start: expected a finite speed in m/s, got {v_start!r}")
+    if v_cap is not None:
+        cap = np.asarray(v_cap, dtype=float)
+        if cap.shape != s.shape or np.isnan(cap).any() or (cap < 0.0).any():  # inf: none
+            raise InputError(f"v_cap: expected {len(s)} speeds >= 0 m/s, got {brief_repr(cap)}")
+    return s, kappa
+
+
 def profile_times(
     s: np.ndarray,
     kappa: np.ndarray,
@@ -192,7 +249,7 @@ def profile_times(
     >>> round(float(t[-1]), 3), round(float(v[-1]), 3)  # 8 m from rest at 1 m/s^2
     (4.0, 4.0)
     """
-    s = np.asarray(s, dtype=float)
+    s, kappa = checked_samples(s, kappa, v0, v_cap)
     cap2 = speed_caps_squared(kappa, v_max, a_lat_max, max(v0, v_launch))
     if v_cap is not None:
         cap2 = np.minimum(cap2, np.square(np.asarray(v_cap, dtype=float)))
@@ -237,8 +294,8 @@ class SpeedProfile:
         v_start: float = 0.0,
         v_cap: np.ndarray | None = None,
     ) -> None:
-        s = np.asarray(s, dtype=float)
-        kappa = np.abs(np.asarray(kappa, dtype=float))
+        s, kappa = checked_samples(s, kappa, v_start, v_cap)
+        kappa = np.abs(kappa)
         with np.errstate(divide="ignore"):
             v_curve = np.sqrt(config.a_lat_max / np.maximum(kappa, 1e-12))
         # The square root of the shared caps is min(v_curve, v_max) bit for bit (sqrt is
@@ -416,8 +473,7 @@ def actuator_profile(
     >>> float(fast.v[0]), float(slow.v[0]), float(fast.v[34]), round(float(slow.v[34]), 3)
     (0.5, 0.0, 3.0, 0.746)
     """
-    s = np.asarray(s, dtype=float)
-    kappa = np.asarray(kappa, dtype=float)
+    s, kappa = checked_samples(s, kappa, v_start)
     if max_steer_rate is None or not math.isfinite(max_steer_rate):
         return SpeedProfile(s, kappa, config, v_start)
     config = dataclasses.replace(config, v_launch=0.0)  # type: ignore[type-var]

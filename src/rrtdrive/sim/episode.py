@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rrtdrive.types import read_only_array
+from rrtdrive.types import InputError, read_only_array
 
 if TYPE_CHECKING:  # pragma: no cover
     from rrtdrive.sim.replanning import TrafficLog
@@ -135,6 +135,13 @@ class DriveLog:
         # consumer's edit of a log it was handed must not rewrite it (an audit).
         for name in ("t", "states", "controls", "crashed", "others", "other_sizes"):
             object.__setattr__(self, name, read_only_array(getattr(self, name)))
+        # A NaN scored as a collision, or a success with a NaN lateral acceleration, or
+        # ended in numpy's "zero-size array" error (an audit): one error names it here.
+        for name in ("t", "states", "controls", "others", "other_sizes"):
+            values = getattr(self, name)
+            if values.dtype.kind == "f" and not np.isfinite(values).all():
+                row = int(np.argwhere(~np.isfinite(values))[0][0])
+                raise InputError(f"log.{name}: row {row} is not finite ({values[row]!r})")
 
     @property
     def steps(self) -> int:

@@ -317,17 +317,40 @@ def turns_too_close(
     found = "the path the tree found turns"
     if corners[leg].kind is CornerKind.START and turn_b:
         return (
-            f"{found} {_turn_words(turn_b)} at {at_b}, {length:.1f} m after the start; from "
-            f"the start's heading the car's tightest turn needs {need:.1f} m"
+            f"{found} {_turn_words(turn_b)} at {at_b}, {length:.1f} m after the start; "
+            + _hairpin(
+                turn_b, f"from the start's heading the car's tightest turn needs {need:.1f} m"
+            )
         )
     if corners[leg + 1].kind is CornerKind.GOAL and turn_a:
         return (
-            f"{found} {_turn_words(turn_a)} at {at_a}, {length:.1f} m before the goal; onto "
-            f"the goal's heading the car's tightest turn needs {need:.1f} m"
+            f"{found} {_turn_words(turn_a)} at {at_a}, {length:.1f} m before the goal; "
+            + _hairpin(
+                turn_a, f"onto the goal's heading the car's tightest turn needs {need:.1f} m"
+            )
         )
     return (
         f"{found} {_turn_words(turn_a)} at {at_a} and {_turn_words(turn_b)} at {at_b}, "
-        f"{length:.1f} m apart; the car's tightest turns need {need:.1f} m between them"
+        f"{length:.1f} m apart; "
+        + _hairpin(
+            max(turn_a, turn_b, key=abs),
+            f"the car's tightest turns need {need:.1f} m between them",
+        )
+    )
+
+
+#: A corner deflecting this much or more is a hairpin: rounding it needs a tangent of
+#: R tan(deflection / 2), which grows without bound (6177.8 m was quoted at 179.9 deg).
+HAIRPIN = math.radians(150.0)
+
+
+def _hairpin(turn: float, otherwise: str) -> str:
+    """``otherwise``, or for a hairpin ``turn`` the words that say no turn rounds it."""
+    if abs(turn) < HAIRPIN:
+        return otherwise
+    return (
+        f"a corner of {abs(math.degrees(turn)):.0f} deg doubles back: the car turns round "
+        "only in a loop of at least its turning circle, or with gear changes"
     )
 
 
