@@ -694,15 +694,6 @@ def test_kerbside_goal_is_boxed_in_with_the_runs_and_space_shapely_measures(caps
     assert float(found.group(3)) == pytest.approx(L + straight, abs=TOL_2DP)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason=(
-        "BUG: a 1.85 m gap the default planner can never pass (its diagnosis: the car needs at "
-        "least 1.90 m keeping its least clearance, 0.05 m each side) fails as no_path_in_budget "
-        "whose message ends 'a larger budget may find a path'; the default 20000 iterations fail "
-        "the same way: the message's advice contradicts its own diagnosis"
-    ),
-)
 def test_a_gap_the_planner_can_never_pass_does_not_ask_for_a_larger_budget(tmp_path, capsys):
     f, obstacles = wall_with_gap(tmp_path, 1.85)
     rc, doc, _, _ = plan(capsys, [f, "--max-iterations", "500"])

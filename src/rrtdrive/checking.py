@@ -196,10 +196,13 @@ class Checker(PoseValidityChecker, MotionValidator, Protocol):
         """
         ...
 
-    def too_narrow_between(self, a: Sequence[float], b: Sequence[float]) -> bool:
+    def too_narrow_between(
+        self, a: Sequence[float], b: Sequence[float], keep: float = 0.0
+    ) -> bool:
         """True proves every way for the rear axle from ``a`` to ``b`` is too narrow for the car.
 
-        The exact twin of :meth:`provably_disconnected`; False proves nothing.
+        The exact twin of :meth:`provably_disconnected`; False proves nothing. ``keep``:
+        for a car that keeps this body clearance, metres.
         """
         ...
 

@@ -514,7 +514,7 @@ class CollisionChecker(ClearanceLookup):
         return la == 0 or lb == 0 or la != lb
 
     def too_narrow_between(
-        self, a: Sequence[float] | np.ndarray, b: Sequence[float] | np.ndarray
+        self, a: Sequence[float] | np.ndarray, b: Sequence[float] | np.ndarray, keep: float = 0.0
     ) -> bool:
         """True proves every way for the rear axle from ``a`` to ``b`` is too narrow for the car.
 
@@ -527,13 +527,15 @@ class CollisionChecker(ClearanceLookup):
         ----------
         a, b : sequence of float
             Rear-axle positions ``(x, y)`` (further entries are ignored).
+        keep : float
+            Body clearance the car keeps, metres: a proof for paths keeping it.
 
         Returns
         -------
         bool
             True is a proof; False proves nothing.
         """
-        r = axle_disc_radius(self.vehicle)
+        r = axle_disc_radius(self.vehicle) + keep
         parts = self.grid.derived(
             ("width_proof", r),
             lambda: free_parts(self.bounds, [o.corners() for o in self.obstacles], r),

@@ -411,8 +411,20 @@ def _endpoint_fault(problem: PlanningProblem, pose: Pose, label: str) -> str:
     return f"{label}: the car's body collides there"  # within the grid's error margin
 
 
-def precheck(problem: PlanningProblem, planner: str, watch: Stopwatch) -> PlanResult | None:
-    """Fail early on an invalid start or goal or a provably unreachable goal; else ``None``."""
+#: The share of a planner's kept clearance its width proof assumes: its paths are checked
+#: exactly at poses a few centimetres apart, and between two the body may pass a corner
+#: a few millimetres closer.
+PROOF_KEEP_SHARE = 0.8
+
+
+def precheck(
+    problem: PlanningProblem, planner: str, watch: Stopwatch, keeps: float = 0.0
+) -> PlanResult | None:
+    """Fail early on an invalid start or goal or a provably unreachable goal; else ``None``.
+
+    ``keeps``: the least body clearance the planner's paths keep (the ends' own, when
+    theirs is less, is kept instead and nothing more is proven).
+    """
     checker = problem.checker
     for label, pose, status in (("start", problem.start, PlanStatus.INVALID_START),
                                 ("goal", problem.goal, PlanStatus.INVALID_GOAL)):  # fmt: skip
@@ -436,7 +448,34 @@ def precheck(problem: PlanningProblem, planner: str, watch: Stopwatch) -> PlanRe
             f"car ({v.width:g} m wide): the {axle_disc_radius(v):g} m disc about "
             "its rear axle cannot pass (no collision-free motion connects them)",
         )
-    return None
+    return _too_narrow_for_the_keep(problem, planner, watch, keeps)
+
+
+def _too_narrow_for_the_keep(
+    problem: PlanningProblem, planner: str, watch: Stopwatch, keeps: float
+) -> PlanResult | None:
+    """``PROVEN_UNREACHABLE`` when every way is too narrow for the car and what it keeps.
+
+    A 1.85 m gap, which the 1.8 m car fits but not with the 0.05 m the default keeps at
+    least, ran its whole budget and asked for a larger one (an audit).
+    """
+    checker = problem.checker
+    ends = (problem.start.as_tuple(), problem.goal.as_tuple())
+    if keeps <= 0.0 or min(checker.body_clearance(e) for e in ends) * 0.999 < keeps:
+        return None  # the ends' own clearance is kept instead: nothing more to prove
+    proof = PROOF_KEEP_SHARE * keeps
+    if not checker.too_narrow_between(problem.start.xy, problem.goal.xy, proof):
+        return None
+    v = problem.vehicle
+    return failure(
+        planner,
+        PlanStatus.PROVEN_UNREACHABLE,
+        watch,
+        f"goal unreachable for this planner: every way from the start to the goal is "
+        f"narrower than the car ({v.width:g} m wide) with {proof:g} m each side, and its "
+        f"paths keep {keeps:g} m of body clearance: the {axle_disc_radius(v) + proof:g} m "
+        "disc about the rear axle cannot pass (a path keeping less clearance may exist)",
+    )
 
 
 def failure(

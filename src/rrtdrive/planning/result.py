@@ -87,6 +87,7 @@ def run_query(
     probe: Callable[[], Diagnosis | None] | None = None,
     reverses: bool = False,
     exact_goal_edges: bool = False,
+    keeps: float = 0.0,
 ) -> PlanResult:
     """Set the map up, start the stopwatch, fail early on a hopeless query, else search.
 
@@ -128,6 +129,9 @@ def run_query(
     exact_goal_edges : bool
         Whether the planner tests an edge into the goal exactly when its swept test
         fails (the tree baselines): the diagnosis then blames no keep at the goal.
+    keeps : float
+        The least body clearance the planner's paths keep, metres (capped at the
+        ends' own): the precheck proves a gap too narrow for the car and that.
 
     Returns
     -------
@@ -152,7 +156,7 @@ def run_query(
         prepare()
     setup = time.perf_counter() - t0
     watch = Stopwatch(budget)
-    result = precheck(problem, planner, watch)
+    result = precheck(problem, planner, watch, keeps)
     if result is None and at_goal(problem):
         result = already_there(planner, problem, watch)
     if result is None:

@@ -422,6 +422,11 @@ class HybridConfig:
                     f"hybrid.{name}: expected true or false, got {getattr(self, name)!r}"
                 )
 
+    @property
+    def least_clearance(self) -> float:
+        """The least body clearance any of its searches keeps, metres (before the ends' cap)."""
+        return min(self.body_clearance, self.min_clearance)
+
     def refined(self) -> HybridConfig:
         """The next finer search: half the cell, heading bin and step, one refinement fewer.
 

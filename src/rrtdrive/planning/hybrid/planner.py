@@ -175,7 +175,7 @@ class HybridAStar:
 
         return run_query(
             NAME, problem, budget, search, prepare, rng=rng, tree_edges=False,
-            probe=None if reverse else probe, reverses=True,
+            probe=None if reverse else probe, reverses=True, keeps=cfg.least_clearance,
         )
 
 

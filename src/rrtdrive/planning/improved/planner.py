@@ -158,7 +158,14 @@ class ImprovedRRTConnect:
             NAME, problem, budget, run, lambda: query().prepare(), rng=rng,
             tree_edges=not self.config.escalation,  # Hybrid A* searches without them
             probe=probe if self.config.escalation else None, reverses=self.reverses,
+            keeps=self._least_clearance(),
         )
+
+
+    def _least_clearance(self) -> float:
+        """The least body clearance its paths keep: its own, or its escalation's less."""
+        own = self.config.body_clearance
+        return min(own, self.config.hybrid.least_clearance) if self.config.escalation else own
 
 
 class _Query:

@@ -275,20 +275,24 @@ class SpaceTimeChecker:
         """
         return self.static.provably_disconnected(a, b)
 
-    def too_narrow_between(self, a: Sequence[float], b: Sequence[float]) -> bool:
+    def too_narrow_between(
+        self, a: Sequence[float], b: Sequence[float], keep: float = 0.0
+    ) -> bool:
         """The static map's exact proof that every way from ``a`` to ``b`` is too narrow.
 
         Parameters
         ----------
         a, b : sequence of float
             Rear-axle positions ``(x, y, ...)``.
+        keep : float
+            Body clearance the car keeps, metres.
 
         Returns
         -------
         bool
             True is a proof; False proves nothing.
         """
-        return self.static.too_narrow_between(a, b)
+        return self.static.too_narrow_between(a, b, keep)
 
     def free_cells(self, start: Sequence[float]) -> np.ndarray:
         """The static checker's sampler cells connected to ``start``.
