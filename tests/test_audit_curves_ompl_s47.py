@@ -469,12 +469,6 @@ def test_bug_tiny_dubins_straight_is_shorter_than_the_distance(start, d, r):
     assert shortest_dubins(start, g, r).length == pytest.approx(dist, rel=1e-6)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: reeds_shepp_table.shortest_lengths (documented equal to "
-    "reeds_shepp_words.shortest_length element by element) lacks the scalar's _SNAP/_ZERO "
-    "fixes: a 0.125 m straight with 1e-16 frame noise comes out 0.302 m (as OMPL's)",
-)
 @pytest.mark.parametrize(
     ("s", "g", "r"),
     [
