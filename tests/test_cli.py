@@ -311,6 +311,18 @@ def test_command_help_lines_match_their_modules():
     assert helps["verify"] == verify_cli.HELP
 
 
+def test_plan_help_lists_every_component_disable_takes(capsys):
+    # The list is written out in the help (the CLI imports no planner to print it): it
+    # must stay the config's own.
+    from rrtdrive.planning.improved.config import COMPONENTS
+
+    with pytest.raises(SystemExit):
+        main(["plan", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    listed = text.split("improved-rrt-connect only: ")[1].split(" --")[0]
+    assert [c.strip() for c in listed.replace("- ", "").split(",")] == list(COMPONENTS)
+
+
 def _modules_after(*argv):
     # A fresh interpreter: which heavy libraries did the command import?
     code = (

@@ -344,14 +344,17 @@ def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
     )
     plan.add_argument("--seed", type=nonneg_int, default=0, help="random seed (default 0)")
     plan.add_argument(
-        "--step", type=float, default=None, help="tree step in metres (planner default)"
+        "--step", type=float, default=None,
+        help="step in metres: the tree's, or hybrid-a-star's expansion step (planner default)",
     )
     plan.add_argument(
         "--disable",
         action="append",
         metavar="COMPONENT",
         help="switch off a component of the improved planner (repeatable), for ablation; "
-        "improved-rrt-connect only",
+        "improved-rrt-connect only: direct_connect, obtuse_parent, adaptive_step, "
+        "obstacle_expansion, prune, sharp_repair, supplement, passage_sampling, "
+        "dubins_fallback, escalation",
     )
     plan.add_argument(
         "--planner-option",

@@ -33,7 +33,11 @@ def wrap_angle(angle: float) -> float: ...
 @overload
 def wrap_angle(angle: np.ndarray) -> np.ndarray: ...
 def wrap_angle(angle: float | np.ndarray) -> float | np.ndarray:
-    """Wrap an angle (or an array of angles) to ``[-pi, pi)``.
+    """Wrap an angle (or an array of angles) to ``[-pi, pi)``, up to rounding.
+
+    An angle a hair below ``-pi`` (``-3.1415926535897936``) comes out as ``+pi``: the
+    sum ``angle + pi`` rounds before the modulo. Compare wrapped angles with a tolerance
+    (or wrap their difference), never ``== -pi``.
 
     Parameters
     ----------

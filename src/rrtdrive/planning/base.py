@@ -435,8 +435,9 @@ def precheck(
             planner,
             PlanStatus.PROVEN_UNREACHABLE,
             watch,
-            "goal unreachable: start and goal lie in different free components of the "
-            "clearance grid (no collision-free motion connects them)",
+            "goal unreachable: no collision-free motion connects the start and the goal: "
+            "they lie in different parts of the map's free space (walled off from each "
+            "other, or joined only where the car cannot pass)",
         )
     if checker.too_narrow_between(problem.start.xy, problem.goal.xy):
         v = problem.vehicle

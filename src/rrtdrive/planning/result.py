@@ -504,11 +504,18 @@ def budget_message(iterations: int, budget: Budget, nodes: int) -> str:
     """The failure message of a search that spent its iteration budget.
 
     No wall time in it: a seeded run's JSON is the same on any machine (the time is
-    ``planning_time_s``).
+    ``planning_time_s``). It says what to change, as :func:`timeout_message` does.
+
+    Examples
+    --------
+    >>> budget_message(1, Budget(max_iterations=1), 2)  # doctest: +NORMALIZE_WHITESPACE
+    'no path found within the budget: iteration budget of 1 spent (1 iteration, 2 nodes);
+    raise --max-iterations'
     """
+    count = "iteration" if iterations == 1 else "iterations"
     return (
         f"no path found within the budget: iteration budget of {budget.max_iterations} spent "
-        f"({iterations} iterations, {nodes} nodes)"
+        f"({iterations} {count}, {nodes} nodes); raise --max-iterations"
     )
 
 
