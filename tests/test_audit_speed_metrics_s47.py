@@ -757,3 +757,9 @@ def test_speed_profile_docs_agree_with_the_defaults():
     veh = make_variant("overtake", 0).vehicle
     assert "≈ 22.7°" in doc
     assert round(math.degrees(math.atan(veh.wheelbase * veh.kappa_max)), 1) == 22.7
+
+
+def test_a_nan_arc_length_read_from_a_profile_is_one_clear_error():
+    prof = SpeedProfile(np.linspace(0.0, 5.0, 6), np.zeros(6), SpeedConfig())
+    with pytest.raises(InputError, match="^s: "):
+        prof.at(float("nan"))

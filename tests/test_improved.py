@@ -142,6 +142,7 @@ def test_components_can_be_disabled_by_name_or_keyword():
     ("options", "field"),
     [
         ({"step": 0.0}, "planner.step"),
+        ({"step": 0.001}, "planner.step"),  # a node a millimetre: millions per iteration
         ({"step": float("nan")}, "planner.step"),
         ({"smoothing": {"prune": "yes"}}, "planner.smoothing.prune"),
         ({"smoothing": {"degree": 4}}, "planner.smoothing.degree"),

@@ -333,6 +333,8 @@ class SpeedProfile:
         v_ref, a_ref : float
             Speed in m/s (``v^2`` linear between samples), the interval's acceleration in m/s^2.
         """
+        if s != s:  # NaN: every comparison below is false, and the index ran past the end
+            raise InputError("s: expected an arc length in metres, got nan")
         if s >= self.length:
             return 0.0, 0.0
         if s <= 0.0:

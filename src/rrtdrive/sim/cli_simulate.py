@@ -101,9 +101,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     p.add_argument(
         "--path", default=None, metavar="PLAN.json",
         help="a map: drive this plan's path as it is instead of planning one (the JSON of "
-        "'rrtdrive plan --json', or any {\"path\": [[x, y, yaw, kappa(, gear)], ...]} or "
-        "[[x, y, yaw], ...] whose gears and kappa are read off the motion); "
-        "the drive starts at its first row and ends at its last",
+        "'rrtdrive plan --json', or any {\"path\": ROWS} with ROWS [[x, y, yaw, kappa(, "
+        "gear)], ...] or [[x, y, yaw], ...], whose gears and kappa are then read off the "
+        "motion); the drive starts at its first row and ends at its last",
     )
     p.add_argument(
         "--controller", default="pure-pursuit", metavar="NAME",
@@ -372,8 +372,12 @@ def _run(args: argparse.Namespace) -> int:
             raise InputError(f"--planner-option: {args.scenario} re-plans with its own planner")
         with flags_for(planner_option_flags(options, "--planner-option")):
             make_planner(args.planner, **options)
-    if getattr(args, "reverse", False) and not reverses(args.planner):
-        print(f"rrtdrive simulate: {forward_only_note(args.planner)}", file=sys.stderr)
+    # Printed once the input has passed every check: a note, then an error, was two lines.
+    forward_note = (
+        forward_only_note(args.planner)
+        if getattr(args, "reverse", False) and not reverses(args.planner)
+        else None
+    )
     if args.max_time is not None and args.max_time < 1.0 / args.frequency:
         # The loop runs whole steps: a shorter limit would still drive one.
         raise InputError(
@@ -469,10 +473,14 @@ def _run(args: argparse.Namespace) -> int:
     oncoming = getattr(args, "oncoming", 0) or 0
     stock, streamed = None, 0
     if target == "stock":
+        if forward_note is not None:
+            print(f"rrtdrive simulate: {forward_note}", file=sys.stderr)
         stock, streamed = _drive_stock(args, config, stride)
         episode = stock.episode
     else:
         scenario = make_task(args, target, oncoming, traffic_opts, make_scenario, path, made_on)
+        if forward_note is not None:
+            print(f"rrtdrive simulate: {forward_note}", file=sys.stderr)
         if path is None:
             from rrtdrive.collision import CheckerConfig
             from rrtdrive.collision.grid import setup_notice

@@ -192,10 +192,16 @@ def make_task(
         start, goal = _parse_pose(args.start, "--start"), _parse_pose(args.goal, "--goal")
         # The poses given replace the file's before it is checked: a file whose own start
         # is bad still serves with a good --start (a bad --start is named by its flag).
-        return CustomTask.from_map(
-            map_with_poses(args.scenario, start, goal), args.seed, reverse=args.reverse,
-            resolution=args.resolution,
-        )
+        m = map_with_poses(args.scenario, start, goal)
+        # A goal that is the start pose is named by the flag that made it so (it read
+        # "goal: ..." for a --start on the file's goal; an audit).
+        named = {"start": "--start"} if start is not None else {}
+        if goal is not None or start is not None:
+            named["goal"] = "--goal" if goal is not None else "--start"
+        with flags_for(named):
+            return CustomTask.from_map(
+                m, args.seed, reverse=args.reverse, resolution=args.resolution
+            )
     # make_scenario names its keywords (lead_speed); on the command line they are flags.
     keywords = ("oncoming", "density", "lead_speed", "lead_model", "reverse_in")
     with flags_for({k: "--" + k.replace("_", "-") for k in keywords}):

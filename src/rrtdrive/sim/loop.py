@@ -244,7 +244,8 @@ class EpisodeLoop:
     rule : EndRule
         The task (or :data:`STOP_AT_PATH_END`).
     max_time_s : float
-        Time limit; the episode has at most ``ceil(max_time_s / dt)`` steps.
+        Time limit; the episode has at most ``floor(max_time_s / dt)`` steps (a whole
+        step past the limit let a car arriving after it count as a success).
     stop_on_crash : bool
         End the episode at highway-env's first ``crashed``.
     """
@@ -271,7 +272,7 @@ class EpisodeLoop:
         self.max_time_s = float(max_time_s)
         self.stop_on_crash = stop_on_crash
         self.dt = 1.0 / u.config["simulation_frequency"]
-        self.max_steps = int(math.ceil(max_time_s / self.dt - 1e-9))
+        self.max_steps = int(math.floor(max_time_s / self.dt + 1e-9))
         self.t = 0.0
         self.steps = 0
         self.crashed = False

@@ -224,7 +224,7 @@ def drive_stock_env(
     config : EpisodeConfig, optional
         Frequency (default 20 Hz; highway-env's policy frequency is set to it),
         speed profile, gains, planning budget; ``max_time_s`` defaults to the
-        env's ``duration``.
+        env's ``duration`` (a longer one lengthens the env's ``duration`` to it).
     reverse : bool
         Plan with gear changes.
     vehicle : VehicleParams, optional
@@ -262,6 +262,10 @@ def drive_stock_env(
         attach_ego(env, params)
         duration = float(u.config["duration"])
         max_time = config.max_time_s or duration
+        if max_time > duration:
+            # The env's own limit would end the drive first, under a message quoting
+            # --max-time (an audit): the env is given the time asked for, and a second.
+            u.config["duration"] = max_time + 1.0
         m = map_from_env(env, vehicle=params, name=env_id)
         task = CustomTask(map=m, seed=int(seed), reverse=reverse, max_time_s=max_time,
                           closed=False)
@@ -318,7 +322,7 @@ def _drive(
     truncated = reached = False
     success, total = False, 0.0
     t, steps = 0.0, 0
-    max_steps = int(np.ceil(max_time / dt - 1e-9))
+    max_steps = int(np.floor(max_time / dt + 1e-9))  # never past the limit, as loop.py
     wall0 = time.perf_counter()
     tracker.start()
     while steps < max_steps:
