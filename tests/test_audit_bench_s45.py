@@ -47,6 +47,14 @@ PLAN_GRID = ["--maps", "overtake,narrow_gap", "--planners", "rrt-connect,rrt",
              "--quiet"]
 
 
+def _sigint_deliverable() -> None:
+    # In the child before exec: a pytest-xdist worker hands SIGINT down ignored, and a
+    # worker that ran a bench may hand it down blocked (a mask survives exec); either way
+    # the child never saw the Ctrl-C and ran to the end (exit 0 in CI, session 47).
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
 def _cli(capsys, *argv: str) -> tuple[int, str, str]:
     argv = argv if argv[:1] == ("bench",) else ("bench", *argv)
     try:
@@ -284,7 +292,7 @@ def _kill_mid_bench(out: Path, sig: int) -> subprocess.CompletedProcess:
     # (the bench ran to the end: exit 0 where 130 was asked for).
     proc = subprocess.Popen(
         cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        preexec_fn=_sigint_deliverable,
     )  # fmt: skip
     runs = out / "runs.jsonl"
     deadline = time.monotonic() + 60

@@ -41,6 +41,14 @@ SCRIPTS = sorted(p.stem for p in EXP.glob("*.py") if p.stem not in LIBRARIES)
 pytestmark = pytest.mark.skipif(not EXP.is_dir(), reason="needs the repository's experiments/")
 
 
+def _sigint_deliverable() -> None:
+    # In the child before exec: a pytest-xdist worker hands SIGINT down ignored, and a
+    # worker that ran a bench may hand it down blocked (a mask survives exec); either way
+    # the child never saw the Ctrl-C and ran to the end (exit 0 in CI, session 47).
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
 def run(script: str, *args: str, cwd: Path, timeout: float = 120, env: dict | None = None):
     return subprocess.run(
         [sys.executable, str(EXP / f"{script}.py"), *args],
@@ -489,7 +497,7 @@ def test_ctrl_c_leaves_the_previous_results_whole(trigger, tmp_path):
         [sys.executable, str(EXP / "table3.py"), "--runs", "6", "--maps", "overtake",
          "--out", str(out)],
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        preexec_fn=_sigint_deliverable,
     )
     try:
         for line in proc.stderr:

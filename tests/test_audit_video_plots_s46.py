@@ -32,6 +32,14 @@ from rrtdrive.types import InputError
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
+def _sigint_deliverable() -> None:
+    # In the child before exec: a pytest-xdist worker hands SIGINT down ignored, and a
+    # worker that ran a bench may hand it down blocked (a mask survives exec); either way
+    # the child never saw the Ctrl-C and ran to the end (exit 0 in CI, session 47).
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
 def _cli(argv: list[str]) -> int:
     try:
         return int(main(argv))
@@ -279,7 +287,7 @@ def test_interrupting_a_video_keeps_the_old_file_and_leaves_no_temp(tmp_path):
             stderr=err,
             # A pytest-xdist worker hands its children SIGINT ignored, and Python keeps an
             # inherited SIG_IGN: the child would never see the Ctrl-C (as the test_bench one).
-            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # noqa: PLW1509
+            preexec_fn=_sigint_deliverable,  # noqa: PLW1509
         )
         deadline = time.monotonic() + 40
         while time.monotonic() < deadline and b"video " not in errfile.read_bytes():

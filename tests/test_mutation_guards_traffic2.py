@@ -656,16 +656,20 @@ def test_the_stock_env_steers_over_the_cars_own_range() -> None:
 
 
 def test_a_stock_drive_ends_when_highway_env_truncates_it() -> None:
-    """highway-env's own time limit (here 1 s) ends the drive, even with more time given.
+    """highway-env's own time limit (here 1 s) ends the drive; a longer one is refused.
 
-    Reference: highway-env's ``truncated`` after 20 steps at 20 Hz; nothing is stepped after it.
+    Reference: highway-env's ``truncated`` after 20 steps at 20 Hz; nothing is stepped after
+    it. More time than the env's own was cut short under a message quoting it (an audit).
     """
     with _recording(duration=1.0) as made:
         run = drive_stock_env("parking-v0", 2, "hybrid-a-star", "pure-pursuit",
-                              EpisodeConfig(max_time_s=3.0, budget=Budget(max_time_s=1e6)))
+                              EpisodeConfig(budget=Budget(max_time_s=1e6)))
     steps = made[0].steps
     assert [s[2] for s in steps] == [False] * 19 + [True]
     assert run.highway_env_truncated and run.episode.log.t[-1] == pytest.approx(1.0)
+    with _recording(duration=1.0), pytest.raises(InputError, match=r"^max_time_s: parking-v0"):
+        drive_stock_env("parking-v0", 2, "hybrid-a-star", "pure-pursuit",
+                        EpisodeConfig(max_time_s=3.0, budget=Budget(max_time_s=1e6)))
 
 
 def _start_and_straight(seed: int, length: float) -> Path:

@@ -213,10 +213,11 @@ def _drive_stock(args: argparse.Namespace, config: Any, stride: int) -> tuple[An
     from rrtdrive.sim.stock import drive_stock_env
 
     def drive(render_stride: int, on_frame: Any = None) -> Any:
-        return drive_stock_env(
-            args.scenario, args.seed, args.planner, args.controller, config,
-            reverse=args.reverse, render_stride=render_stride, on_frame=on_frame,
-        )
+        with flags_for({"max_time_s": "--max-time"}):
+            return drive_stock_env(
+                args.scenario, args.seed, args.planner, args.controller, config,
+                reverse=args.reverse, render_stride=render_stride, on_frame=on_frame,
+            )
 
     if not args.video or stride != 1:
         return drive(stride if args.video else 0), 0

@@ -244,8 +244,9 @@ class EpisodeLoop:
     rule : EndRule
         The task (or :data:`STOP_AT_PATH_END`).
     max_time_s : float
-        Time limit; the episode has at most ``floor(max_time_s / dt)`` steps (a whole
-        step past the limit let a car arriving after it count as a success).
+        Time limit; the episode has at most ``ceil(max_time_s / dt)`` steps, and the end
+        rule counts only within it (a car arriving at 10.90 s in the step that crossed
+        a 10.86 s limit was a success; an audit).
     stop_on_crash : bool
         End the episode at highway-env's first ``crashed``.
     """
@@ -272,7 +273,7 @@ class EpisodeLoop:
         self.max_time_s = float(max_time_s)
         self.stop_on_crash = stop_on_crash
         self.dt = 1.0 / u.config["simulation_frequency"]
-        self.max_steps = int(math.floor(max_time_s / self.dt + 1e-9))
+        self.max_steps = int(math.ceil(max_time_s / self.dt - 1e-9))
         self.t = 0.0
         self.steps = 0
         self.crashed = False
@@ -305,7 +306,9 @@ class EpisodeLoop:
         self.crashed = bool(ego.crashed)
         if self.crashed and self.stop_on_crash:
             self.done = True
-        elif self.rule.reached(ego, self.driver):
+        elif self.steps * self.dt <= self.max_time_s + 1e-9 and self.rule.reached(
+            ego, self.driver
+        ):
             self.reached = self.done = True
         elif self.steps >= self.max_steps:
             self.done = True

@@ -224,7 +224,7 @@ def drive_stock_env(
     config : EpisodeConfig, optional
         Frequency (default 20 Hz; highway-env's policy frequency is set to it),
         speed profile, gains, planning budget; ``max_time_s`` defaults to the
-        env's ``duration`` (a longer one lengthens the env's ``duration`` to it).
+        env's ``duration`` and may not exceed it (:class:`InputError`).
     reverse : bool
         Plan with gear changes.
     vehicle : VehicleParams, optional
@@ -262,10 +262,13 @@ def drive_stock_env(
         attach_ego(env, params)
         duration = float(u.config["duration"])
         max_time = config.max_time_s or duration
-        if max_time > duration:
-            # The env's own limit would end the drive first, under a message quoting
-            # --max-time (an audit): the env is given the time asked for, and a second.
-            u.config["duration"] = max_time + 1.0
+        if max_time > duration + 1e-9:
+            # The env's own limit would end the drive first, under a message quoting the
+            # longer one (an audit); the stock env keeps highway-env's episode.
+            raise InputError(
+                f"max_time_s: {env_id} ends its episodes at {duration:g} s (highway-env's "
+                f"duration); ask for at most that, got {max_time:g} s"
+            )
         m = map_from_env(env, vehicle=params, name=env_id)
         task = CustomTask(map=m, seed=int(seed), reverse=reverse, max_time_s=max_time,
                           closed=False)
@@ -322,7 +325,7 @@ def _drive(
     truncated = reached = False
     success, total = False, 0.0
     t, steps = 0.0, 0
-    max_steps = int(np.floor(max_time / dt + 1e-9))  # never past the limit, as loop.py
+    max_steps = int(np.ceil(max_time / dt - 1e-9))
     wall0 = time.perf_counter()
     tracker.start()
     while steps < max_steps:
@@ -346,8 +349,8 @@ def _drive(
             terminated_at = round(t, 9)
         if ego.crashed:
             break
-        if STOP_AT_PATH_END.reached(ego, tracker):
-            reached = True
+        if t <= max_time + 1e-9 and STOP_AT_PATH_END.reached(ego, tracker):
+            reached = True  # within the limit only, as EpisodeLoop counts it
             break
         if trunc:
             truncated = True
