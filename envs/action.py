@@ -116,7 +116,8 @@ def action_command(
             f"action: expected two finite numbers, got {type(action).__name__} "
             f"{brief_repr(action)}"
         )
-    a = raw.astype(np.float64).reshape(-1)
+    # Exactly (2,): a batch of one, (1, 2), was read as one action (an audit).
+    a = raw.astype(np.float64)
     if a.shape != (2,) or not np.all(np.isfinite(a)):
         raise InputError(f"action: expected two finite numbers, got {brief_repr(action)}")
     a0 = min(max(float(a[0]), -1.0), 1.0)

@@ -578,3 +578,14 @@ def test_numpy_bools_are_taken_as_numpy_ints_are():
         assert env.unwrapped.config.scenario_for(0).reverse is True
     finally:
         env.close()
+
+
+@pytest.mark.parametrize("shape", [(1, 2), (2, 1), (4,)])
+def test_an_action_of_another_shape_is_refused(shape):
+    env = gym.make("rrtdrive/Parking-v0", disable_env_checker=True)
+    try:
+        env.reset(seed=0)
+        with pytest.raises(InputError, match="^action: expected two finite numbers"):
+            env.step(np.zeros(shape, np.float32))
+    finally:
+        env.close()

@@ -524,6 +524,12 @@ def _run(args: argparse.Namespace) -> int:
         # The plan's own status (a capped plan's `timeout` read only in the message; an
         # audit), as bench's episode rows give it.
         "plan_status": None if episode.plan is None else episode.plan.status.value,
+        # The episode's time limit and the plan's grid as used (--max-time, --resolution:
+        # two runs differing in either wrote the same settings; an audit).
+        "max_time_s": config.max_time_s or episode.scenario.max_time_s,
+        "resolution_m": (
+            None if episode.plan is None else episode.plan.stats.get("grid_resolution_m")
+        ),
     }
     extra.update(episode.scenario.describe())
     if replan is not None:  # the re-planning settings asked for, as the traffic's above
