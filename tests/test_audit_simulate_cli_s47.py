@@ -498,6 +498,8 @@ def test_a_stock_run_exits_1_when_highway_env_says_no(capsys, monkeypatch, tmp_p
     data = json.loads(out_json.read_text())
     assert data["success"] is True and data["highway_env_success"] is False
     assert code == 1  # docs/metrics.md: exit 0 only when both say success
+    # The summary says why it exits 1 under a "success" verdict.
+    assert "highway-env's own is_success is false" in stdout
 
 
 def test_an_arrival_after_the_time_limit_is_no_success(capsys, files):

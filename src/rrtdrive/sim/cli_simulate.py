@@ -570,6 +570,12 @@ def _run(args: argparse.Namespace) -> int:
     )
     if diagnosis is not None:  # the planner failed: the constraint, as `plan` prints it
         print(f"  why: {diagnosis.message}", file=out)
+    if report.success and stock is not None and not stock.highway_env_success:
+        # Exit 1 under a "success" line said nothing of why (an audit).
+        print(
+            "  but highway-env's own is_success is false at the end (its goal test): exit 1",
+            file=out,
+        )
     print("\n".join(metrics_block(data)), file=out)
     for exc in unwritten[1:]:
         print(f"rrtdrive simulate: error: {exc}", file=sys.stderr)
