@@ -27,6 +27,7 @@ from rrtdrive.types import (
     Pose,
     VehicleParams,
 )
+from rrtdrive.values import is_finite_number
 
 __all__ = ["SpaceTimeProblem", "SpaceTimePlan", "STATIC_ONLY", "SpaceTimeRRTConnect"]
 
@@ -64,6 +65,26 @@ class SpaceTimeProblem:
     speed: tuple[float, float, float, float, float] = (10.0, 1.0, 1.0, 1.5, 0.5)
     deadline: float | None = None
     steering: tuple[float, float] | None = None
+
+    def __post_init__(self) -> None:
+        # Checked here, named: None failed deep in the search, a NaN v_max as an
+        # IndexError, a negative one was "solved" with nonsense times (an audit).
+        for name, kind in (("map", Map), ("prediction", Prediction), ("timing", ArrivalTiming)):
+            if not isinstance(getattr(self, name), kind):
+                raise InputError(
+                    f"{name}: expected a {kind.__name__}, got {type(getattr(self, name)).__name__}"
+                )
+        speed = tuple(self.speed) if isinstance(self.speed, (tuple, list)) else ()
+        if len(speed) != 5 or not all(is_finite_number(v) for v in speed):
+            raise InputError(
+                "speed: expected (v_max, accel, decel, a_lat_max, v_launch), five finite "
+                f"numbers, got {self.speed!r}"
+            )
+        if min(speed[:4]) <= 0.0 or speed[4] < 0.0:
+            raise InputError(
+                f"speed: v_max, accel, decel and a_lat_max must be > 0 and v_launch >= 0, "
+                f"got {self.speed!r}"
+            )
 
     @property
     def start(self) -> Pose:
@@ -246,6 +267,7 @@ class SpaceTimeRRTConnect(ImprovedRRTConnect):
                 res = dataclasses.replace(
                     res,
                     status=PlanStatus.POSTPROCESS_FAILED,
+                    path=Path.empty(),  # a failure has no path (its conflict was kept; an audit)
                     message=f"traffic conflict at ({x:.1f}, {y:.1f}) on the final check",
                 )
                 times = speeds = np.zeros(0)

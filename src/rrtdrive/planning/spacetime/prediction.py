@@ -56,6 +56,11 @@ class Prediction:
             raise InputError("prediction.times: need an increasing grid starting at 0")
         if not np.allclose(np.diff(t), t[1] - t[0], rtol=1e-6, atol=1e-9):
             raise InputError("prediction.times: the grid must be uniform")
+        if p.size % (len(t) * 3):
+            raise InputError(
+                f"prediction.poses: need (vehicles, {len(t)}, 3) poses for the {len(t)} times, "
+                f"got shape {p.shape}"
+            )
         p = p.reshape(-1, len(t), 3)
         if len(p) != len(s):
             raise InputError(
