@@ -161,7 +161,6 @@ class ImprovedRRTConnect:
             keeps=self._least_clearance(),
         )
 
-
     def _least_clearance(self) -> float:
         """The least body clearance its paths keep: its own, or its escalation's less."""
         own = self.config.body_clearance
