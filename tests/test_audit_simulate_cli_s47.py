@@ -693,6 +693,8 @@ def test_a_bad_plan_file_is_one_line_naming_path(capsys, tmp_path, files, name):
 @pytest.mark.parametrize(("argv", "flag"), [
     (["parking", "--planner", "rrt", "--reverse", "--max-time", "0.01"], "--max-time"),
     (["parking", "--planner", "rrt", "--reverse", "--video-fps", "3"], "--video-fps"),
+    # Refused inside the drive (past parking-v0's own 100 s): the note came first here too.
+    (["parking-v0", "--planner", "rrt", "--reverse", "--max-time", "500"], "--max-time"),
 ])
 def test_bad_input_beside_a_forward_only_note_is_still_one_line(capsys, argv, flag):
     code, _, err = run(capsys, "simulate", *argv)

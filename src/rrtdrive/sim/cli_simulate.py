@@ -373,12 +373,11 @@ def _run(args: argparse.Namespace) -> int:
             raise InputError(f"--planner-option: {args.scenario} re-plans with its own planner")
         with flags_for(planner_option_flags(options, "--planner-option")):
             make_planner(args.planner, **options)
-    # Printed once the input has passed every check: a note, then an error, was two lines.
-    forward_note = (
-        forward_only_note(args.planner)
-        if getattr(args, "reverse", False) and not reverses(args.planner)
-        else None
-    )
+    # Printed once the drive has run, so bad input stays one line (a note, then an error,
+    # was two: the checks go on into the task and the drive).
+    notes = []
+    if getattr(args, "reverse", False) and not reverses(args.planner):
+        notes.append(forward_only_note(args.planner))
     if args.max_time is not None and args.max_time < 1.0 / args.frequency:
         # The loop runs whole steps: a shorter limit would still drive one.
         raise InputError(
@@ -474,14 +473,10 @@ def _run(args: argparse.Namespace) -> int:
     oncoming = getattr(args, "oncoming", 0) or 0
     stock, streamed = None, 0
     if target == "stock":
-        if forward_note is not None:
-            print(f"rrtdrive simulate: {forward_note}", file=sys.stderr)
         stock, streamed = _drive_stock(args, config, stride)
         episode = stock.episode
     else:
         scenario = make_task(args, target, oncoming, traffic_opts, make_scenario, path, made_on)
-        if forward_note is not None:
-            print(f"rrtdrive simulate: {forward_note}", file=sys.stderr)
         if path is None:
             from rrtdrive.collision import CheckerConfig
             from rrtdrive.collision.grid import setup_notice
@@ -493,13 +488,14 @@ def _run(args: argparse.Namespace) -> int:
         if path is None and scenario.reverse and not args.reverse and not reverses(args.planner):
             # u-turn, parallel-parking, parking --reverse-in plan with gear changes unasked.
             asked = f"the {args.scenario} scenario's gear changes take"
-            note = forward_only_note(args.planner, asked=asked)
-            print(f"rrtdrive simulate: {note}", file=sys.stderr)
+            notes.append(forward_only_note(args.planner, asked=asked))
         with flags_for({"episode.max_time_s": "--max-time", "planner": "--planner"}):
             episode = run_episode(
                 scenario, args.planner if path is None else path, args.controller, args.seed,
                 config,
             )
+    for note in notes:
+        print(f"rrtdrive simulate: {note}", file=sys.stderr)
     episode = with_simulate_hint(episode)
     report = evaluate(episode)
     # Drawing a stock env's frames happens during its drive; like writing the video, it

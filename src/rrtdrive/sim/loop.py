@@ -63,6 +63,8 @@ __all__ = [
     "EpisodeLoop",
     "MAX_EPISODE_S",
     "require_episode_time",
+    "step_limit",
+    "in_time",
 ]
 
 #: The longest time limit an episode takes (s): 2e7 steps at 20 Hz, about 11.6 simulated
@@ -78,6 +80,51 @@ def require_episode_time(name: str, value: float) -> float:
             f"{name}: at most {MAX_EPISODE_S:g} s (11.6 simulated days), got {value:g}"
         )
     return float(value)
+
+
+def step_limit(max_time_s: float, dt: float) -> int:
+    """The most steps an episode of ``max_time_s`` runs: the first at or past the limit.
+
+    Parameters
+    ----------
+    max_time_s, dt : float
+        The time limit and the step, seconds.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> step_limit(0.5, 0.05), step_limit(0.51, 0.05)
+    (10, 11)
+    """
+    return int(math.ceil(max_time_s / dt - 1e-9))
+
+
+def in_time(steps: int, dt: float, max_time_s: float) -> bool:
+    """Whether the end rule counts after ``steps`` steps: not past the limit.
+
+    The last step may cross it (:func:`step_limit`); a car arriving at 10.90 s in the
+    step that crossed a 10.86 s limit was a success (an audit).
+
+    Parameters
+    ----------
+    steps : int
+        Steps driven.
+    dt, max_time_s : float
+        The step and the time limit, seconds.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> in_time(217, 0.05, 10.86), in_time(218, 0.05, 10.86)
+    (True, False)
+    """
+    return steps * dt <= max_time_s + 1e-9
 
 
 @runtime_checkable
@@ -244,9 +291,8 @@ class EpisodeLoop:
     rule : EndRule
         The task (or :data:`STOP_AT_PATH_END`).
     max_time_s : float
-        Time limit; the episode has at most ``ceil(max_time_s / dt)`` steps, and the end
-        rule counts only within it (a car arriving at 10.90 s in the step that crossed
-        a 10.86 s limit was a success; an audit).
+        Time limit: at most :func:`step_limit` steps, the end rule counting only
+        :func:`in_time`.
     stop_on_crash : bool
         End the episode at highway-env's first ``crashed``.
     """
@@ -273,7 +319,7 @@ class EpisodeLoop:
         self.max_time_s = float(max_time_s)
         self.stop_on_crash = stop_on_crash
         self.dt = 1.0 / u.config["simulation_frequency"]
-        self.max_steps = int(math.ceil(max_time_s / self.dt - 1e-9))
+        self.max_steps = step_limit(max_time_s, self.dt)
         self.t = 0.0
         self.steps = 0
         self.crashed = False
@@ -306,7 +352,7 @@ class EpisodeLoop:
         self.crashed = bool(ego.crashed)
         if self.crashed and self.stop_on_crash:
             self.done = True
-        elif self.steps * self.dt <= self.max_time_s + 1e-9 and self.rule.reached(
+        elif in_time(self.steps, self.dt, self.max_time_s) and self.rule.reached(
             ego, self.driver
         ):
             self.reached = self.done = True

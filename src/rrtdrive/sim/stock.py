@@ -34,7 +34,7 @@ from highway_env.utils import lmap
 from rrtdrive.controllers import make_controller
 from rrtdrive.sim.episode import DriveLog, Episode, EpisodeStatus, end_message
 from rrtdrive.sim.extract import attach_ego, map_from_env
-from rrtdrive.sim.loop import STOP_AT_PATH_END, PathTracker
+from rrtdrive.sim.loop import STOP_AT_PATH_END, PathTracker, in_time, step_limit
 from rrtdrive.sim.render import prepare_sdl, sdl_that_draws
 from rrtdrive.sim.runner import EpisodeConfig
 from rrtdrive.sim.tasks import DEFAULT_PLANNER, CustomTask
@@ -325,7 +325,7 @@ def _drive(
     truncated = reached = False
     success, total = False, 0.0
     t, steps = 0.0, 0
-    max_steps = int(np.ceil(max_time / dt - 1e-9))
+    max_steps = step_limit(max_time, dt)
     wall0 = time.perf_counter()
     tracker.start()
     while steps < max_steps:
@@ -349,8 +349,8 @@ def _drive(
             terminated_at = round(t, 9)
         if ego.crashed:
             break
-        if t <= max_time + 1e-9 and STOP_AT_PATH_END.reached(ego, tracker):
-            reached = True  # within the limit only, as EpisodeLoop counts it
+        if in_time(steps, dt, max_time) and STOP_AT_PATH_END.reached(ego, tracker):
+            reached = True
             break
         if trunc:
             truncated = True
