@@ -24,14 +24,7 @@ from collections.abc import Callable
 import numpy as np
 
 from rrtdrive.geometry import wrap_angle
-from rrtdrive.planning.base import (
-    PROOF_KEEP_SHARE,
-    PlanningProblem,
-    Stopwatch,
-    failure,
-    polyline_path,
-    precheck,
-)
+from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, polyline_path, precheck
 from rrtdrive.planning.diagnosis import Diagnosis, diagnose
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Pose, Tree
 
@@ -158,10 +151,6 @@ def run_query(
     t0 = time.perf_counter()
     checker = problem.checker
     checker.component_labels  # noqa: B018 - built here, read by the precheck
-    # So are its exact width regions, the car's and the car's with the planner's keep
-    # (3000 tiny obstacles spent a 0.2 s cap building them inside the stopwatch).
-    for keep in {0.0, PROOF_KEEP_SHARE * keeps}:
-        checker.too_narrow_between(problem.start.xy, problem.goal.xy, keep)
     checker.free_cells((problem.start.x, problem.start.y))
     if prepare is not None:
         prepare()
