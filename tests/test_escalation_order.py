@@ -109,7 +109,7 @@ def test_the_fallback_answers_after_a_failed_escalation(monkeypatch: pytest.Monk
     m, problem = _goal_problem(16)
     res = _solve(problem)
     assert res.success and stage_of(res) == "dubins-fallback", res.message
-    assert "; Hybrid A* (with reverse) found none (1 expansions)" in res.message
+    assert "; Hybrid A* (with reverse) found none (1 expansion)" in res.message
     assert res.iterations == res.stats["iterations"] + 1
     assert res.stats["hybrid_expansions"] == 1.0 and res.stats["dubins_time_s"] > 0
     assert verify_path(m, res.path, max_sharpness=0.2).ok

@@ -11,7 +11,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-__all__ = ["brief_repr", "did_you_mean", "is_finite_number"]
+__all__ = ["brief_repr", "counted", "did_you_mean", "is_finite_number"]
 
 
 def brief_repr(value: object, limit: int = 32) -> str:
@@ -84,3 +84,25 @@ def did_you_mean(name: object, choices: Iterable[str]) -> str:
     """
     close = difflib.get_close_matches(name, list(choices), n=1) if isinstance(name, str) else []
     return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def counted(n: int, noun: str) -> str:
+    """``n`` and ``noun``, plural unless ``n`` is 1 (``noun`` is the plural, ending in s).
+
+    Parameters
+    ----------
+    n : int
+        The count.
+    noun : str
+        The plural noun, e.g. ``"expansions"``.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> counted(1, "expansions"), counted(0, "nodes"), counted(2, "iterations")
+    ('1 expansion', '0 nodes', '2 iterations')
+    """
+    return f"{n} {noun.removesuffix('s') if n == 1 else noun}"

@@ -27,6 +27,7 @@ from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, polyline_path, precheck
 from rrtdrive.planning.diagnosis import Diagnosis, diagnose
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Pose, Tree
+from rrtdrive.values import counted
 
 __all__ = [
     "check_query",
@@ -433,9 +434,8 @@ def timeout_message(iterations: int, budget: Budget, unit: str = "iterations") -
     >>> timeout_message(1, Budget(max_time_s=5.0)).split(":")[0]
     'stopped by the 5 s safety cap after 1 iteration'
     """
-    count = unit.removesuffix("s") if iterations == 1 else unit
     return (
-        f"stopped by the {budget.max_time_s:g} s safety cap after {iterations} {count}: "
+        f"stopped by the {budget.max_time_s:g} s safety cap after {counted(iterations, unit)}: "
         "the result depends on this machine's speed; raise --max-time or lower --max-iterations"
     )
 
@@ -512,10 +512,9 @@ def budget_message(iterations: int, budget: Budget, nodes: int) -> str:
     'no path found within the budget: iteration budget of 1 spent (1 iteration, 2 nodes);
     raise --max-iterations'
     """
-    count = "iteration" if iterations == 1 else "iterations"
     return (
         f"no path found within the budget: iteration budget of {budget.max_iterations} spent "
-        f"({iterations} {count}, {nodes} nodes); raise --max-iterations"
+        f"({counted(iterations, 'iterations')}, {counted(nodes, 'nodes')}); raise --max-iterations"
     )
 
 

@@ -373,7 +373,7 @@ class TrafficDriver:
         i_stitch = min(int(np.searchsorted(s_path, s_now + d_stitch)), len(s_path) - 2)
         start = samples[i_stitch]
         timing = ArrivalTiming(
-            0.0, float(ego.speed), self.speed.v_max, self.speed.accel,
+            0.0, max(float(ego.speed), 0.0), self.speed.v_max, self.speed.accel,
             (float(ego.rear[0]), float(ego.rear[1])),
         )
         goal_x = self.cut_in.goal_x(timing, float(start[0]), pred, float(start[1]))

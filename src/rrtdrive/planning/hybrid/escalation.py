@@ -33,6 +33,7 @@ from rrtdrive.planning.hybrid.query import hybrid_query
 from rrtdrive.planning.result import timeout_result
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, PlanResult, PlanStatus
+from rrtdrive.values import counted
 
 __all__ = ["STAGES", "ESCALATES_FROM", "escalate", "stage_of", "with_kept_clearance"]
 
@@ -143,7 +144,7 @@ def escalate(
             out,
             message=(
                 f"{out.message} (in the Hybrid A* escalation, {gear}, after "
-                f"{answer.outcome.expansions} expansions; "
+                f"{counted(answer.outcome.expansions, 'expansions')}; "
                 f"{before or 'the RRT-Connect stages had failed: ' + reason})"
             ),
         )
@@ -200,7 +201,7 @@ def escalate(
     stats["stage"] = NAME  # type: ignore[assignment]  # the one string entry
     message = (
         f"solved by the Hybrid A* escalation{turn_note(answer.outcome)}{answer.note} ({gear}; "
-        f"{answer.outcome.expansions} expansions, "
+        f"{counted(answer.outcome.expansions, 'expansions')}, "
         f"{path.length:.1f} m, {built.segments - 1} cusp(s)); "
         f"{before or 'the RRT-Connect stages failed: ' + reason}" + arcs_note(built)
     )

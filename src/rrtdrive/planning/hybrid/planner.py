@@ -23,6 +23,7 @@ from rrtdrive.planning.hybrid.search import SearchOutcome
 from rrtdrive.planning.result import run_query, solved, timeout_result
 from rrtdrive.planning.smoothing import SmoothingConfig, smoothing_with
 from rrtdrive.types import Budget, InputError, PlanResult, PlanStatus
+from rrtdrive.values import counted
 
 __all__ = [
     "NAME", "HybridAStar", "hybrid_result", "answer_stats", "arcs_note", "path_of", "proof_scope",
@@ -231,7 +232,7 @@ def hybrid_result(
     path = path_of(built)
     cusps = built.segments - 1
     message = (
-        f"solved by Hybrid A*{turn_note(o)}{answer.note}: {o.expansions} expansions, "
+        f"solved by Hybrid A*{turn_note(o)}{answer.note}: {counted(o.expansions, 'expansions')}, "
         f"{path.length:.1f} m, "
         f"{cusps} cusp(s), {built.smoothed}/{built.segments} segment(s) smoothed" + arcs_note(built)
     )

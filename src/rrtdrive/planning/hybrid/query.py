@@ -31,6 +31,7 @@ from rrtdrive.planning.hybrid.resolution import (
 from rrtdrive.planning.hybrid.search import SearchOutcome
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, Tree
+from rrtdrive.values import counted
 
 __all__ = ["HybridAnswer", "hybrid_query"]
 
@@ -88,7 +89,7 @@ def _failure_message(
     ``allowed``: the expansions of a search given a share of those left (``None``: all).
     """
     res = _resolution(cfg)
-    counts = f"{outcome.expansions} expansions, {outcome.nodes} nodes"
+    counts = f"{counted(outcome.expansions, 'expansions')}, {counted(outcome.nodes, 'nodes')}"
     if outcome.reason == "exhausted":
         # "exhausted" is the search from the start's (the goal side's is "no_approach").
         lead = (
@@ -125,7 +126,7 @@ def _failure_message(
         )
     if allowed is not None:
         return (
-            f"no path found at {res} resolution within its share of {allowed} expansions "
+            f"no path found at {res} resolution within its share of {counted(allowed, 'expansions')} "
             f"({counts})"
         )
     return (
@@ -497,9 +498,9 @@ def _why(outcome: SearchOutcome, share: str) -> str:
     'ran out of states after 7 expansions'
     """
     if outcome.reason == "expansions":
-        return f"spent {share}{outcome.expansions} expansions"
+        return f"spent {share}{counted(outcome.expansions, 'expansions')}"
     ending = _ENDINGS.get(outcome.reason, outcome.reason)
-    return f"{ending} after {outcome.expansions} expansions"
+    return f"{ending} after {counted(outcome.expansions, 'expansions')}"
 
 
 #: How a search that did not spend its budget ended, in words.

@@ -25,6 +25,7 @@ from rrtdrive.planning.hybrid.heuristic import HolonomicField
 from rrtdrive.planning.hybrid.resolution import free_cell_graph
 from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
 from rrtdrive.types import Path, PlanResult, Pose
+from rrtdrive.values import counted
 
 __all__ = [
     "DETOURS",
@@ -168,7 +169,7 @@ def shorter_answer(
     config = config or HybridConfig()
     length = escalated.path.length
     if not escalated.success:
-        found = f"none ({int(escalated.stats.get('hybrid_expansions', 0))} expansions)"
+        found = f"none ({counted(int(escalated.stats.get('hybrid_expansions', 0)), 'expansions')})"
     else:
         cost, kept_cost = search_cost(escalated.path, config), search_cost(detour.path, config)
         if cost < kept_cost:

@@ -19,6 +19,7 @@ from rrtdrive.planning.improved.config import NAME, StageBudgets
 from rrtdrive.planning.improved.fallback import dubins_fallback
 from rrtdrive.planning.result import solved, timeout_result
 from rrtdrive.types import PlanResult, PlanStatus
+from rrtdrive.values import counted
 
 __all__ = ["fallback_result", "fallback_failed", "failure_result"]
 
@@ -73,7 +74,7 @@ def fallback_result(
         iterations = escalated.iterations
         expansions = int(stats.get("hybrid_expansions", 0.0))
         gear = "with reverse" if q.problem.reverse else "forward only"
-        note += f"; Hybrid A* ({gear}) found none ({expansions} expansions)"
+        note += f"; Hybrid A* ({gear}) found none ({counted(expansions, 'expansions')})"
     message = f"solved by the Dubins fallback ({word}; {path.length:.1f} m); {note}"
     return solved(
         NAME, watch, path, raw, q.trees, iterations, message, stats,
@@ -137,11 +138,11 @@ def failure_result(q: Any) -> PlanResult:
         )
     if q.stuck_root:
         lead = (
-            f"no path: {q.stuck_words()} ({iterations} iterations)"
+            f"no path: {q.stuck_words()} ({counted(iterations, 'iterations')})"
         )
     else:
         lead = (
-            f"no path within the iteration budget ({iterations} iterations"
+            f"no path within the iteration budget ({counted(iterations, 'iterations')}"
             f"{_share_note(q.limits, watch.budget.max_iterations)})"
         )
     return failure(

@@ -248,7 +248,9 @@ class SpaceTimeRRTConnect(ImprovedRRTConnect):
         inner = PlanningProblem(
             problem.map, as_checker, problem.start, problem.goal, problem.vehicle
         )
+        # The improved planner's result, named after this planner (the name it is registered by).
         res = ImprovedRRTConnect.solve(self, inner, rng, budget)
+        res = dataclasses.replace(res, planner=self.name)
         tree_times = tuple(checker.timing.band(t.nodes)[0] for t in res.trees)
         times = speeds = np.zeros(0)
         if checker.expired:

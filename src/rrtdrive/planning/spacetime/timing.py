@@ -60,6 +60,11 @@ class ArrivalTiming:
     def __post_init__(self) -> None:
         require_finite("timing.t0", self.t0)
         require_finite("timing.v0", self.v0)
+        # Times are seconds after the prediction and speeds are forward: a negative
+        # t0 gave plans negative arrival times, a negative v0 was read as 0.
+        for name, value in (("timing.t0", self.t0), ("timing.v0", self.v0)):
+            if value < 0.0:
+                raise InputError(f"{name}: must be >= 0, got {value!r}")
         require_positive("timing.v_max", self.v_max)
         require_positive("timing.accel", self.accel)
         require_finite("timing.origin", *self.origin)
