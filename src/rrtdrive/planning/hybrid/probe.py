@@ -19,6 +19,7 @@ from rrtdrive.planning.hybrid.path import path_of
 from rrtdrive.planning.hybrid.query import hybrid_query
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget
+from rrtdrive.values import counted
 
 __all__ = ["PROBE_EXPANSIONS", "reverse_probe"]
 
@@ -74,8 +75,8 @@ def reverse_probe(
     return Diagnosis(
         DiagnosisKind.NEEDS_REVERSE,
         f"driving forward no path was found; with reversing allowed, Hybrid A* finds one "
-        f"of {length:.1f} m with {cusps} gear change(s) in {answer.outcome.expansions} "
-        f"expansions (try --reverse)",
+        f"of {length:.1f} m with {cusps} gear change(s) in "
+        f"{counted(answer.outcome.expansions, 'expansions')} (try --reverse)",
         {
             "reverse_length_m": length,
             "reverse_cusps": float(cusps),
