@@ -126,8 +126,8 @@ def _failure_message(
         )
     if allowed is not None:
         return (
-            f"no path found at {res} resolution within its share of {counted(allowed, 'expansions')} "
-            f"({counts})"
+            f"no path found at {res} resolution within its share of "
+            f"{counted(allowed, 'expansions')} ({counts})"
         )
     return (
         f"no path found at {res} resolution within the expansion budget of "
