@@ -47,7 +47,7 @@ def _scipy_stats() -> ModuleType:
     return scipy.stats
 
 
-class Interval(str, Enum):
+class Interval(str, Enum):  # noqa: UP042 (a StrEnum would change str() of a member)
     """Which 95 % interval of the mean :func:`describe` computes."""
 
     T = "t"

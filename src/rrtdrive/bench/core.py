@@ -9,7 +9,7 @@ import platform
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path as FsPath
 from typing import Any, TextIO
 
@@ -266,7 +266,7 @@ def run_bench(
             skipped = len(specs) - len(todo)
             meta = {
                 "command": command,
-                "started_at": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+                "started_at": datetime.now(UTC).isoformat(timespec="seconds"),
                 "config": cfg.to_json(),
                 "seeds": list(range(cfg.seeds)),
                 "runs": len(specs),

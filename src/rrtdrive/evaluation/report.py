@@ -19,7 +19,7 @@ __all__ = [
 ]
 
 
-class Outcome(str, Enum):
+class Outcome(str, Enum):  # noqa: UP042 (a StrEnum would change str() of a member)
     """How an episode ended, as judged by the evaluators.
 
     ``SAFE_FOLLOWING`` is an ``overtake-traffic`` episode that ran out of time
