@@ -236,6 +236,11 @@ class HybridConfig:
         (:func:`~rrtdrive.planning.hybrid.leads.lead_ins`; 0: never). Leaving one
         garage bay for another across a 6 m aisle: 8 426 expansions without, 20 with
         (``experiments/garage_moves.py``).
+    nudge_ends : bool
+        After the searches proved the query unreachable on their lattice, search once
+        more from the start and goal turned by a fraction of a degree over one step
+        where that opens their straight drive out (:mod:`~rrtdrive.planning.hybrid.nudge`:
+        a goal turned 0.46 deg in a slot 0.35 m wider than the car; ``False``: never).
     persist : bool
         When the first search had every goal connection rejected and so had the
         wider-turning and finer searches after it, search once more at the finest
@@ -305,6 +310,7 @@ class HybridConfig:
     turn_moves: int = 12
     abreast_turns: int = 4
     lead_ins: int = 3
+    nudge_ends: bool = True
     persist: bool = True
     lattice_after: int = 800
     lattice_cell: float = 0.5

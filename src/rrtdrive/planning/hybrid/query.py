@@ -21,14 +21,17 @@ import numpy as np
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.diagnosis.checks import ARRIVAL_POCKET_M, pocket_run
 from rrtdrive.planning.hybrid.config import HybridConfig
+from rrtdrive.planning.hybrid.nudge import nudge
 from rrtdrive.planning.hybrid.path import BuiltPath
 from rrtdrive.planning.hybrid.resolution import (
     PROOFS,
     EndClearance,
+    body_test,
     query_clearance,
     search_at_resolution,
 )
 from rrtdrive.planning.hybrid.search import SearchOutcome
+from rrtdrive.planning.hybrid.shots import Piece
 from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget, Tree
 from rrtdrive.values import counted
@@ -362,7 +365,22 @@ def hybrid_query(
         later = any("expansions" in s.after_last for s in ladder[i + 1 :])
         cfg, stage = st.config, st.name
         run(cfg, st.share if later else 1.0)
-    path, outcome, trees = found
+    # After a proof (every search finished), once more from the ends nudged by a
+    # fraction of a degree where that opens their straight drive out (:mod:`.nudge`).
+    last = found
+    nudged, nudge_note = None, ""
+    finished = last[1].reason in PROOFS and not (first == "expansions" and len(tried) > 1)
+    if last[0] is None and finished and config.nudge_ends and left > 0 and not watch.expired():
+        moved = _nudged(problem, cfg, reverse, have)
+        if moved is not None:
+            query, ends, nudge_note = moved
+            goal_first = last[1].reason == "no_approach" and goal_in_pocket()
+            nudged = search_at_resolution(
+                query, left, watch, cfg, reverse, smoothing, have, goal_first, ends
+            )
+            if nudged[0] is not None:
+                last, nudged = nudged, None
+    path, outcome, trees = last
     reason = outcome.reason
     usual = query_clearance(problem, config.body_clearance, have)
     clearance = query_clearance(problem, cfg.body_clearance, have)
@@ -405,7 +423,10 @@ def hybrid_query(
         reason = "rejected"
     if coarse_branch and path is None:
         clearance = usual  # what the failure speaks of: the usual clearance
-    total = SearchOutcome.total(reason, [o for _, o, _ in tried])
+    outcomes = [o for _, o, _ in tried] + ([] if nudged is None else [nudged[1]])
+    if nudged is None and nudge_note:  # the nudged search solved it
+        outcomes.append(outcome)
+    total = SearchOutcome.total(reason, outcomes)
     earlier = tried[:-1]
     answer = functools.partial(
         HybridAnswer, outcome=total, trees=trees,
@@ -415,7 +436,7 @@ def hybrid_query(
     )  # fmt: skip
     how = how_of(cfg) if stage in (*_SNUGGER, "wide", "persist") else ""
     if path is not None:
-        note = f" {how}" if how else ""
+        note = (f" {how}" if how else "") + nudge_note
         if stage in _SNUGGER and base in PROOFS and not coarse_branch:
             note += f" (none keeps {usual:.2f} m)"
         if earlier:
@@ -458,7 +479,34 @@ def hybrid_query(
         snug = c.body_clearance < config.body_clearance
         too = " too" if snug and o.reason in PROOFS and tried[k - 1][1].reason in PROOFS else ""
         message += f"; {how_of(c)}, at {_resolution(c)} the search {_why(o, '')}{too}"
+    if nudged is not None:
+        message += f"; once more{nudge_note}, it {_why(nudged[1], '')}"
     return answer(path=None, message=message)
+
+
+def _nudged(
+    problem: PlanningProblem, cfg: HybridConfig, reverse: bool, have: EndClearance
+) -> tuple[PlanningProblem, tuple[Piece | None, Piece | None], str] | None:
+    """The query between nudged ends, the arcs to drive at them, and a note; or None."""
+    body = body_test(problem.checker, query_clearance(problem, cfg.body_clearance, have))
+    gears = (1, -1) if reverse else (1,)
+    kappa_max = problem.vehicle.kappa_max
+    found = [
+        nudge(end, at_goal, gears, body, kappa_max, cfg.step, cfg.check_spacing)
+        for end, at_goal in ((problem.start, False), (problem.goal, True))
+    ]
+    if found == [None, None]:
+        return None
+    pairs = list(zip(found, (problem.start, problem.goal), ("start", "goal"), strict=True))
+    start, goal = (n.pose if n is not None else end for n, end, _ in pairs)
+    words = [
+        f"the {name}'s heading turned {math.degrees(abs(n.pose.yaw - end.yaw)):.2f} deg"
+        for n, end, name in pairs
+        if n is not None
+    ]
+    ends = (found[0].piece if found[0] else None, found[1].piece if found[1] else None)
+    query = dataclasses.replace(problem, start=start, goal=goal)
+    return query, ends, f", with {' and '.join(words)} over {cfg.step:g} m"
 
 
 #: Search endings that a finer search is tried after (budget left, no path).

@@ -310,11 +310,14 @@ def search_at_resolution(
     smoothing: SmoothingConfig | None,
     have: EndClearance,
     goal_first: bool = False,
+    ends: tuple[Piece | None, Piece | None] = (None, None),
 ) -> tuple[BuiltPath | None, SearchOutcome, tuple[Tree, ...]]:
     """The searches of :func:`hybrid_query` at one resolution, with ``budget`` expansions.
 
     ``have``: the start's and goal's own body clearance (:class:`EndClearance`).
     ``goal_first``: the search from the goal takes the first turn (:func:`~.schedule.alternate`).
+    ``ends``: pieces driven before and after every path found (a nudged start's arc out
+    of the query's start, a nudged goal's arc into its goal: :mod:`.nudge`).
     """
     kappa_max = problem.vehicle.kappa_max
     clearance = query_clearance(problem, config.body_clearance, have)
@@ -348,10 +351,13 @@ def search_at_resolution(
 
     memo = SegmentMemo()
 
+    before, after = ([p] if p is not None else [] for p in ends)
+
     def accept(pieces: list[Piece]) -> BuiltPath | None:
         return build_path(
-            pieces, problem.checker, post, config.arc_fallback, recheck_clearance, kappa_max,
-            config.check_spacing, config.sample_spacing, ramps=ramps, memo=memo,
+            [*before, *pieces, *after], problem.checker, post, config.arc_fallback,
+            recheck_clearance, kappa_max, config.check_spacing, config.sample_spacing,
+            ramps=ramps, memo=memo,
         )  # fmt: skip
 
     to_goal = HolonomicField.towards(grid, goal)
