@@ -57,14 +57,19 @@ def test_a_forward_failure_names_the_reversing_path(planner):
     assert f"{solved.path.length:.1f} m" in found.message
 
 
-def test_the_probe_is_counted_and_runs_apart_from_the_planning_clock():
+def test_the_probe_is_counted_and_runs_apart_from_the_planning_clock(monkeypatch):
+    from rrtdrive.planning.hybrid import probe as probe_module
+
     m = home_garage()
     problem = PlanningProblem.from_map(m)
     first = reverse_probe(problem, HybridConfig(), None, 120.0)
     again = reverse_probe(problem, HybridConfig(), None, 120.0)
     assert first is not None and first == again
     assert 1 <= first.numbers["probe_expansions"] <= PROBE_EXPANSIONS
-    # The safety cap met: no finding either (what it found would depend on the machine).
+    # A short --max-time does not cut the counted probe short (its cap has a floor) ...
+    assert reverse_probe(problem, HybridConfig(), None, 1e-9) == first
+    # ... its own safety cap met: no finding (what it found would depend on the machine).
+    monkeypatch.setattr(probe_module, "PROBE_CAP_FLOOR_S", 1e-9)
     assert reverse_probe(problem, HybridConfig(), None, 1e-9) is None
 
 

@@ -385,7 +385,8 @@ def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
         "--max-time", type=positive_float, default=Budget().max_time_s, metavar="S",
         help="wall-clock safety cap in seconds, set-up excluded (default "
         f"{Budget().max_time_s:g}); reaching it fails with status 'timeout', since the "
-        "result would depend on the machine's speed",
+        "result would depend on the machine's speed; a forward failure's diagnosis may "
+        "then run its counted reverse probe (4000 expansions) for up to 30 s more",
     )
     plan.add_argument(
         "--resolution", type=cell_size, default=None, metavar="M",

@@ -21,13 +21,17 @@ from rrtdrive.planning.smoothing import SmoothingConfig
 from rrtdrive.types import Budget
 from rrtdrive.values import counted
 
-__all__ = ["PROBE_EXPANSIONS", "reverse_probe"]
+__all__ = ["PROBE_CAP_FLOOR_S", "PROBE_EXPANSIONS", "reverse_probe"]
 
 #: The probe's expansion budget: counted, so its finding is the same on any machine
 #: (about 0.6 s at the 6 400 a second of the home garage's forward search here, 20 000
 #: in 3.1 s; bench_hybrid's 60 reversing random-lot queries need a median of 56 and at
 #: most 3 067: ``python experiments/bench_hybrid.py``).
 PROBE_EXPANSIONS = 4000
+#: The probe's own safety cap is at least this long (seconds): capped by a short
+#: ``--max-time``, a slow machine dropped the finding a fast one kept (a helper's audit:
+#: home garage, 10 iterations, --max-time 0.06), though the query's own counts decided.
+PROBE_CAP_FLOOR_S = 30.0
 
 
 def reverse_probe(
@@ -48,8 +52,9 @@ def reverse_probe(
     smoothing : SmoothingConfig, optional
         Its per-segment post-processor.
     max_time_s : float
-        The safety cap: a probe that meets it finds nothing (its answer would depend
-        on the machine's speed).
+        The query's safety cap; the probe's is the larger of it and
+        :data:`PROBE_CAP_FLOOR_S` (a probe that meets it finds nothing: its answer would
+        depend on the machine's speed, and 4 000 expansions take about 0.6 s).
     expansions : int
         The probe's budget.
 
@@ -61,7 +66,7 @@ def reverse_probe(
     """
     if getattr(problem, "reverse", False):
         return None
-    budget = Budget(max_iterations=expansions, max_time_s=max_time_s)
+    budget = Budget(max_iterations=expansions, max_time_s=max(max_time_s, PROBE_CAP_FLOOR_S))
     watch = Stopwatch(budget)
     answer = hybrid_query(problem, budget, watch, config, True, smoothing)
     if answer.path is None or watch.capped:

@@ -186,6 +186,8 @@ def shorter_answer(
         detour,
         message=f"{detour.message}; Hybrid A* ({gear}) found {found}",
         planning_time_s=elapsed,
+        # Every stage's count: the tree's iterations and the escalation's expansions.
+        iterations=max(detour.iterations, escalated.iterations),
         # The escalation's counters, not its stage: the detour's path is returned.
         stats={**{k: v for k, v in escalated.stats.items() if k != "stage"}, **detour.stats},
     )
