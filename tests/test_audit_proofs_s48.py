@@ -222,12 +222,6 @@ def test_wall_ahead_witness_is_curvature_bounded_but_not_sharpness_bounded():
     assert not _check(m, rows, clearance=LEAST_KEEP, max_sharpness=SHARPNESS).ok
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="BUG: why line 'less than the car length the smallest manoeuvre needs; it can only "
-    "be left in reverse' for a goal 2.5 m ahead inside that room; two 6.3 m arcs reach it "
-    "forward (the planner's own message even says 5 goal connections were found)",
-)
 def test_wall_ahead_why_line_does_not_say_reverse_only():
     goal = Pose(12.5, 10.25, 0.0)
     m = _wall_ahead_map(goal)

@@ -107,6 +107,15 @@ def room_at_ends(
         run_fwd = best_run(checker, pose, forward, v, need)
         if run_fwd >= need:
             continue
+        other = goal if label == "start" else start
+        along = forward * (
+            (other.x - pose.x) * math.cos(pose.yaw) + (other.y - pose.y) * math.sin(pose.yaw)
+        )
+        if 0.0 < along <= run_fwd:
+            # The other end lies in that room (a goal 2.5 m ahead of a start 2.6 m from a
+            # wall was told "it can only be left in reverse"; an audit): the room is not
+            # what stops the car.
+            continue
         run_rev = best_run(checker, pose, -forward, v, need)
         ahead, behind = (run_fwd, run_rev) if forward > 0 else (run_rev, run_fwd)
         numbers = {"room_ahead_m": ahead, "room_behind_m": behind, "needed_m": need}
