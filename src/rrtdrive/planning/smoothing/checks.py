@@ -112,14 +112,10 @@ class CheckerView:
     def poses_free(self) -> PosesFree | None:
         """The exact batch body test of a :class:`~rrtdrive.checking.PoseValidityChecker`.
 
-        None also for a checker that times whole paths (one with ``path_times``, the
-        space-time checker): whether a pose is free then depends on when the car gets
-        there along the whole path, which only ``path_free`` knows; its
-        ``poses_free`` uses nominal times, so a piece proven free there could still
-        fail the planner's final check at the exact times.
+        For the space-time checker this tests traffic at the nominal arrival times,
+        not the exact ones of its ``path_free`` (see docs/traffic.md, "What is left":
+        preferring ``path_free`` there was measured in session 48 and not kept).
         """
-        if callable(getattr(self.checker, "path_times", None)):
-            return None
         checker = cast(PoseValidityChecker, self.checker)
         return checker.poses_free if self._is(PoseValidityChecker) else None
 
