@@ -34,7 +34,7 @@ import numpy as np
 from results_io import out_folder  # the sibling module
 
 from rrtdrive.bench.backends import episode_progress, parallel_map
-from rrtdrive.cli_args import flags_for, positive_int
+from rrtdrive.cli_args import flags_for, int_at_least, positive_int
 from rrtdrive.evaluation import TTC_LEAST_MIN_S, EpisodeReport, evaluate, summarise
 from rrtdrive.maps import write_text_atomic
 from rrtdrive.sim.replanning import ReplanConfig
@@ -228,6 +228,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--seeds", type=positive_int, default=100,
                     help="seeds 0..N-1 per density (default: %(default)s)")
+    ap.add_argument("--first-seed", type=int_at_least(0), default=0, metavar="S",
+                    help="start the seeds at S: S..S+N-1, a fresh sample (default: 0)")
     ap.add_argument("--densities", default=",".join(DENSITIES),
                     help="comma-separated: low, default, high or oncoming cars per km\n"
                     "(default: %(default)s)")
@@ -284,7 +286,7 @@ def _run(
     target = densities[-1]
     jobs = [
         (d, seed, args, keep if d == target else None)
-        for d in densities for seed in range(args.seeds)
+        for d in densities for seed in range(args.first_seed, args.first_seed + args.seeds)
     ]
     t0 = time.perf_counter()
     progress = episode_progress()
@@ -311,7 +313,7 @@ def _run(
     tag = f"_{args.tag}" if args.tag else ""
     settings = {
         "command": " ".join(["python", *sys.argv]),
-        "seeds": [0, args.seeds - 1],
+        "seeds": [args.first_seed, args.first_seed + args.seeds - 1],
         "densities": {d: TRAFFIC_DENSITIES.get(d, d) for d in densities},
         "controller": args.controller,
         "lead_model": args.lead_model,
