@@ -379,3 +379,12 @@ def test_the_python_api_agrees_with_the_cli(tmp_path, capsys, map_name, reverse,
         planner_options=options, budget=Budget(), resolution=0.1,
     )  # fmt: skip
     assert counted(api) == counted(cli)
+
+
+def test_a_component_disabled_twice_is_named_once(tmp_path, capsys):
+    code, doc, _ = plan(
+        tmp_path, capsys, "garage", "--disable", "escalation", "--disable", "prune",
+        "--disable", "escalation", "--max-iterations", "200",
+    )
+    assert code in (0, 1)
+    assert doc["planner_options"]["disable"] == ["escalation", "prune"]

@@ -1,8 +1,9 @@
-"""Counts in planner messages read as English: "1 iteration", "2 iterations"."""
+"""Planner messages: counts read as English ("1 iteration"); the summary names the stage."""
 
 from __future__ import annotations
 
 import dataclasses
+import json
 import re
 
 import numpy as np
@@ -47,3 +48,26 @@ def test_counts_agree_with_their_nouns(planner, iterations, reverse):
 def test_the_pattern_catches_both_mistakes():
     assert WRONG.search("after 1 expansions") and WRONG.search("(3 iteration)")
     assert not WRONG.search("1 expansion, 6 nodes; 12 iterations")
+
+
+@pytest.mark.parametrize(
+    ("args", "stage"),
+    [
+        (["garage"], "dubins-fallback"),
+        (["dead_end", "--reverse"], "hybrid-a-star"),
+        (["parking_lot"], None),
+    ],
+)
+def test_the_summary_names_a_later_stage_that_solved_it(args, stage, tmp_path, capsys):
+    from rrtdrive.cli import main
+
+    out = tmp_path / "plan.json"
+    assert main(["plan", *args, "--json", str(out)]) == 0
+    line = capsys.readouterr().out
+    doc = json.loads(out.read_text())
+    # The summary says what the JSON's "stage" says, when it is not the planner's first.
+    assert (doc["stage"] == "improved-rrt-connect") == (stage is None)
+    if stage is None:
+        assert "stage" not in line
+    else:
+        assert doc["stage"] == stage and f", by its {stage} stage" in line

@@ -205,7 +205,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     if args.step is not None:
         options["step"] = args.step
     if args.disable:
-        options["disable"] = tuple(args.disable)
+        options["disable"] = tuple(dict.fromkeys(args.disable))  # each named once
     if args.paper_smoothing:
         if args.planner in PLANNERS and not _takes_option(PLANNERS[args.planner], "disable"):
             raise InputError(
@@ -264,10 +264,15 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     diagnosis_s = result.stats.get("diagnosis_time_s")
     if setup and not result.success and diagnosis_s is not None:  # a big map's whole grid
         setup += f", diagnosis {diagnosis_s:.1f} s"
+    from rrtdrive.planning.hybrid.escalation import stage_of
+
+    stage = stage_of(result) if result.success else result.planner
+    # The stage that solved it when not the planner's first (the JSON's "stage").
+    by = f", by its {stage} stage" if stage != result.planner else ""
     summary = f"{m.name}: {result.planner} seed {args.seed}: " + (
         f"solved, length {result.path.length:.2f} m, {gears}max curvature "
         f"{result.path.max_curvature:.4f} 1/m, {result.nodes} nodes, "
-        f"{1e3 * result.planning_time_s:.1f} ms" + (f" ({setup})" if setup else "")
+        f"{1e3 * result.planning_time_s:.1f} ms{by}" + (f" ({setup})" if setup else "")
         if result.success
         else f"FAILED ({result.status.value}{', ' + setup if setup else ''}): {result.message}"
         + ("" if result.diagnosis is None else f"\n  why: {result.diagnosis.message}")
