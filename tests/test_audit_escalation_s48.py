@@ -388,3 +388,13 @@ def test_a_component_disabled_twice_is_named_once(tmp_path, capsys):
     )
     assert code in (0, 1)
     assert doc["planner_options"]["disable"] == ["escalation", "prune"]
+
+
+def test_a_failed_escalation_counts_the_searchs_nodes_as_a_success_does():
+    # dead_end with reverse and 1 000 iterations: the escalation runs and finds none.
+    problem = PlanningProblem.from_map(builtin_map("dead_end"), reverse=True)
+    res = make_planner("improved-rrt-connect").solve(
+        problem, np.random.default_rng(0), Budget(max_iterations=1000)
+    )
+    assert not res.success and res.stats["hybrid_hybrid_nodes"] > 0
+    assert res.nodes == res.stats["nodes"] + res.stats["hybrid_hybrid_nodes"]

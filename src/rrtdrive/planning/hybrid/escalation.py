@@ -173,6 +173,8 @@ def escalate(
             status=status,
             message=message,
             stats=stats,
+            # Every stage's count, as on success: the tree's nodes and the search's.
+            nodes=failed.nodes + answer.outcome.nodes,
             iterations=used,
             planning_time_s=watch.elapsed(),
         )
@@ -195,6 +197,7 @@ def escalate(
                 "--planner hybrid-a-star gives it, --paper-smoothing accepts it"
             ),
             stats=stats,
+            nodes=failed.nodes + answer.outcome.nodes,
             iterations=used,
             planning_time_s=watch.elapsed(),
         )
