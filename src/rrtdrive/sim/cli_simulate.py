@@ -547,6 +547,9 @@ def _run(args: argparse.Namespace) -> int:
 
         with writing("--trajectory", args.trajectory):
             write_text_atomic(args.trajectory, trajectory_csv(episode))
+        if not report.steps:  # a header-only file said nothing of why (an audit)
+            print("rrtdrive simulate: --trajectory: nothing was driven (the plan failed); "
+                  "the file has its header only", file=sys.stderr)
     if args.json == "-":
         sys.stdout.write(text)
         sys.stdout.flush()

@@ -7,11 +7,12 @@ metre, and the search's arcs turn by whole steps of its curvatures (4.8 deg a st
 full lock), so every move out of the goal collides and the search from it runs out of
 states after one or two expansions: ``proven_unreachable``, although a forward path
 that straightens the car in the slot passes every check (a helper's audit, session 48:
-22 of 128 random slots 1.86-2.2 m wide with a verified forward path were "proven"
+27 of 142 random slots 1.86-2.2 m wide with a verified forward path were "proven"
 unreachable). :func:`nudge` finds, for an end whose straight drive out is short, one
 gentle arc of a step's length that turns its heading by a fraction of a degree so that
-the straight drive out gets longer; :func:`~.query.hybrid_query` searches once more
-from the nudged ends, after a proof, and drives those arcs at them.
+the straight drive out gets longer (0.01-deg steps up to 0.5 deg when none of the
+coarse angles does); :func:`~.query.hybrid_query` searches once more from the nudged
+ends, after a proof, and drives those arcs at them.
 """
 
 from __future__ import annotations
@@ -26,11 +27,13 @@ from rrtdrive.planning.hybrid.primitives import arc_poses
 from rrtdrive.planning.hybrid.shots import Piece
 from rrtdrive.types import Pose
 
-__all__ = ["NUDGES_DEG", "Nudge", "nudge"]
+__all__ = ["FINE_NUDGES_DEG", "NUDGES_DEG", "Nudge", "nudge"]
 
 #: Heading changes a nudge may make, degrees (each way): the search's own arcs turn by
 #: whole steps of several degrees, these by less than one.
 NUDGES_DEG = (0.25, 0.5, 1.0, 2.0)
+#: The fine scan's heading changes when no coarse one qualifies, degrees (each way).
+FINE_NUDGES_DEG = tuple(round(0.01 * k, 2) for k in range(1, 51))
 #: How far the straight drive out of an end is probed, metres.
 PROBE_M = 6.0
 #: A nudge must lengthen the straight drive out by at least this much, metres.
@@ -93,28 +96,49 @@ def nudge(
     -------
     Nudge or None
         None when no gear's straight drive out is shorter than ``PROBE_M`` or no arc
-        of :data:`NUDGES_DEG` lengthens it by ``GAIN_M``.
+        of :data:`NUDGES_DEG`, nor then of :data:`FINE_NUDGES_DEG`, lengthens it by
+        ``GAIN_M``.
     """
     n = max(1, math.ceil(length / spacing))
     s = np.arange(1, n + 1) * (length / n)
-    best: tuple[float, int, float, np.ndarray] | None = None
-    for gear in gears:
-        # The goal's arrival in ``gear``, driven backwards in time, moves the other way.
-        way = -gear if at_goal else gear
-        base = _straight_run(body, end.x, end.y, end.yaw, way, spacing)
-        if base >= PROBE_M:
-            continue
-        for deg in NUDGES_DEG:
-            for turn in (1.0, -1.0):
-                kappa = turn * math.radians(deg) / length
-                if abs(kappa) > kappa_max:
-                    continue
-                arc = arc_poses(end.x, end.y, end.yaw, kappa, way, s)
-                if not body.free(arc).all():
-                    continue
-                run = _straight_run(body, *(float(v) for v in arc[-1]), way, spacing)
-                if run >= base + GAIN_M and (best is None or run > best[0]):
-                    best = (run, gear, kappa, arc)
+
+    def candidates(degrees: tuple[float, ...]) -> list[tuple[float, int, float, np.ndarray]]:
+        """``(run, gear, kappa, arc)`` of every free arc that lengthens the run by GAIN_M."""
+        found = []
+        for gear in gears:
+            # The goal's arrival in ``gear``, driven backwards in time, moves the other way.
+            way = -gear if at_goal else gear
+            base = _straight_run(body, end.x, end.y, end.yaw, way, spacing)
+            if base >= PROBE_M:
+                continue
+            for deg in degrees:
+                for turn in (1.0, -1.0):
+                    kappa = turn * math.radians(deg) / length
+                    if abs(kappa) > kappa_max:
+                        continue
+                    arc = arc_poses(end.x, end.y, end.yaw, kappa, way, s)
+                    if not body.free(arc).all():
+                        continue
+                    run = _straight_run(body, *(float(v) for v in arc[-1]), way, spacing)
+                    if run >= base + GAIN_M:
+                        found.append((run, gear, kappa, arc))
+        return found
+
+    best = None
+    for run, gear, kappa, arc in candidates(NUDGES_DEG):
+        if best is None or run > best[0]:
+            best = (run, gear, kappa, arc)
+    if best is None:
+        # The turn that opens the way out may lie in a narrow window between the coarse
+        # angles (0.325-0.475 deg in one slot, 0.01-0.02 in another; a helper's audit):
+        # scan finely and take the middle of the longest-run window, whose edges leave
+        # the search least room.
+        fine = candidates(FINE_NUDGES_DEG)
+        if fine:
+            top = max(c[0] for c in fine)
+            window = [c for c in fine if c[0] == top]
+            window = sorted((c for c in window if c[1] == window[0][1]), key=lambda c: c[2])
+            best = window[len(window) // 2]
     if best is None:
         return None
     _, gear, kappa, arc = best
