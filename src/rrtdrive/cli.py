@@ -42,7 +42,7 @@ from rrtdrive.cli_args import (
     write_output,
     writing,
 )
-from rrtdrive.cli_signals import EXIT_TERMINATED, Terminated, sigterm_raises
+from rrtdrive.cli_signals import EXIT_TERMINATED, sigterm_raises, sigterm_received
 from rrtdrive.cli_stdout import run_writing_stdout
 from rrtdrive.cli_warnings import warnings_as_lines
 from rrtdrive.json_safe import options_json
@@ -533,7 +533,9 @@ def _main(argv: Sequence[str] | None) -> int:
     except OutputError as exc:
         print(f"rrtdrive {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_FAILED
-    except Terminated:
+    except KeyboardInterrupt:
+        if not sigterm_received():  # Ctrl-C: _interruptible says so
+            raise
         print("rrtdrive: terminated", file=sys.stderr)
         return EXIT_TERMINATED
 

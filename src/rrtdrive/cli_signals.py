@@ -14,7 +14,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from types import FrameType
 
-__all__ = ["EXIT_TERMINATED", "Terminated", "sigterm_raises"]
+__all__ = ["EXIT_TERMINATED", "Terminated", "sigterm_raises", "sigterm_received"]
 
 #: 128 + SIGTERM, as a shell reports a process ended by it.
 EXIT_TERMINATED = 143
@@ -24,7 +24,19 @@ class Terminated(KeyboardInterrupt):
     """SIGTERM arrived: a :class:`KeyboardInterrupt`, so every clean-up for Ctrl-C runs."""
 
 
+#: Set when SIGTERM arrived within :func:`sigterm_raises` (reset on entering it): a
+#: library that catches the :class:`Terminated` and raises a plain KeyboardInterrupt
+#: (Ray's ``ray.get``) still ends as a termination (an audit: exit 130, not 143).
+_received = [False]
+
+
+def sigterm_received() -> bool:
+    """Whether SIGTERM arrived within the current (or last) :func:`sigterm_raises` block."""
+    return _received[0]
+
+
 def _raise_terminated(signum: int, frame: FrameType | None) -> None:
+    _received[0] = True
     raise Terminated
 
 
@@ -47,6 +59,7 @@ def sigterm_raises() -> Iterator[None]:
     if threading.current_thread() is not threading.main_thread():
         yield
         return
+    _received[0] = False
     previous = signal.signal(signal.SIGTERM, _raise_terminated)
     try:
         yield

@@ -439,6 +439,9 @@ class RayBackend:
         self._ray = ray
         self._owns_session = False
         if not ray.is_initialized():
+            # ray.init installs its own SIGTERM handler (sys.exit(15) and a dump): the
+            # CLI's (exit 143, "rrtdrive: terminated", as a local bench) is put back.
+            sigterm = signal.getsignal(signal.SIGTERM)
             try:
                 if address:
                     ray.init(address=address, log_to_driver=False)
@@ -448,6 +451,9 @@ class RayBackend:
                 # Ray's messages run over several lines: the error is one.
                 why = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
                 raise InputError(f"ray: cannot connect to {address or 'Ray'}: {why}") from None
+            finally:
+                if sigterm is not None and threading.current_thread() is threading.main_thread():
+                    signal.signal(signal.SIGTERM, sigterm)
             self._owns_session = True
         self.executor = executor
         self.retries = retries

@@ -29,12 +29,18 @@ __all__ = ["execute_run", "base_row", "error_row"]
 @functools.lru_cache(maxsize=32)
 def _map(spec: str, content: str | None = None) -> Map:
     import json
+    import warnings
 
     from rrtdrive.maps import map_from_json, resolve_map
+    from rrtdrive.types import InputWarning
 
-    if content is not None:
-        return map_from_json(json.loads(content))
-    return resolve_map(spec)
+    # The bench's own process loaded this map first and warned once, on one line; a
+    # worker process printed each warning again in Python's raw form (an audit).
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InputWarning)
+        if content is not None:
+            return map_from_json(json.loads(content))
+        return resolve_map(spec)
 
 
 def base_row(spec: RunSpec) -> dict[str, Any]:
