@@ -31,3 +31,22 @@ def test_an_unknown_controller_is_named_before_the_missing_maps(capsys):
 def test_an_empty_controller_list_is_refused(capsys):
     assert main(["bench", "--maps", "overtake", "--controllers", "", "--seeds", "1"]) == 2
     assert "controllers: give at least one controller" in capsys.readouterr().err
+
+
+def test_a_misspelt_controller_gets_a_suggestion_and_a_plain_list(capsys):
+    assert main(["bench", "--maps", "parking_lot", "--controllers", "pure_pursuit"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown controller 'pure_pursuit' (did you mean 'pure-pursuit'?)" in err
+    assert "choose from lqr, pure-pursuit, stanley" in err
+
+
+@pytest.mark.parametrize("given", [["--controllers", "pure-pursuit"], []])
+def test_controllers_given_to_a_maps_bench_get_the_note_even_the_default(
+    given, tmp_path, capsys
+):
+    code = main(["bench", "--maps", "parking_lot", *given, "--seeds", "1",
+                 "--max-iterations", "200", "--out", str(tmp_path / "b"), "--no-plots",
+                 "--quiet"])  # fmt: skip
+    assert code in (0, 1)
+    noted = "applies to --scenarios runs; --maps runs plan only" in capsys.readouterr().err
+    assert noted == bool(given)

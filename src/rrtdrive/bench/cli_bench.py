@@ -196,15 +196,17 @@ def forward_only_notes(planners: tuple[str, ...]) -> list[str]:
     return notes
 
 
-def unused_controllers_note(cfg: Any) -> str | None:
-    """A note when controllers other than the default were asked for but no run drives.
+def unused_controllers_note(cfg: Any, given: bool = False) -> str | None:
+    """A note when controllers were asked for but no run drives.
 
     ``--maps`` runs plan only; the controllers apply to ``--scenarios`` runs (a map is
     driven with ``--scenarios MAP``). Without the note they were silently left out.
     """
     from rrtdrive.bench.grid import BenchConfig
 
-    if cfg.scenarios or cfg.controllers == BenchConfig.controllers:
+    # ``given``: on the command line, even as the default (an audit: --controllers
+    # pure-pursuit said nothing).
+    if cfg.scenarios or (cfg.controllers == BenchConfig.controllers and not given):
         return None
     return (
         f"note: --controllers {','.join(cfg.controllers)} applies to --scenarios runs; "
@@ -230,7 +232,7 @@ def _run(args: argparse.Namespace) -> int:
     from rrtdrive.cli_args import writing
 
     cfg = config_from_args(args)
-    note = unused_controllers_note(cfg)
+    note = unused_controllers_note(cfg, given=bool(getattr(args, "controllers", None)))
     if note is not None:
         print(f"rrtdrive bench: {note}", file=sys.stderr)
     if cfg.reverse:

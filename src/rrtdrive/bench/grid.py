@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from rrtdrive.types import InputError, brief_repr, is_finite_number, require_int
+from rrtdrive.values import did_you_mean
 
 if TYPE_CHECKING:
     from rrtdrive.maps import Map
@@ -372,7 +373,8 @@ class BenchConfig:
         for c in self.controllers:
             if c not in CONTROLLERS:
                 raise InputError(
-                    f"controllers: unknown controller {c!r}; choose from {sorted(CONTROLLERS)}"
+                    f"controllers: unknown controller {c!r}{did_you_mean(c, CONTROLLERS)}; "
+                    f"choose from {', '.join(sorted(CONTROLLERS))}"
                 )
 
     @property
