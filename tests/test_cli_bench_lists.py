@@ -50,3 +50,16 @@ def test_controllers_given_to_a_maps_bench_get_the_note_even_the_default(
     assert code in (0, 1)
     noted = "applies to --scenarios runs; --maps runs plan only" in capsys.readouterr().err
     assert noted == bool(given)
+
+
+def test_a_bad_value_in_the_config_file_names_the_file(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "b.toml").write_text('[bench]\nseeds = "2"\nmaps = ["parking_lot"]\n')
+    assert main(["bench", "--config", "b.toml"]) == 2
+    assert "seeds: must be an integer in 1..100000, got '2' (in 'b.toml')" in (
+        capsys.readouterr().err
+    )
+    # The same field given as a flag is the flag's error, not the file's.
+    assert main(["bench", "--config", "b.toml", "--seeds", "0"]) == 2
+    err = capsys.readouterr().err
+    assert "--seeds: must be an integer" in err and "b.toml" not in err

@@ -161,17 +161,26 @@ def config_from_args(args: argparse.Namespace) -> Any:
     if args.config == "":  # an unset shell variable: not "no config"
         raise InputError("--config: needs a file name, got an empty one")
     values: dict[str, Any] = load_toml(args.config) if args.config is not None else {}
+    from_file = set(values)
     values.update({k: getattr(args, k) for k in given_flags(args)})  # flags over TOML
+    from_file -= set(given_flags(args))
     for key in ("plots", "reverse", "deterministic"):  # on/off flags over the file's too
         if getattr(args, key, None) is not None:
             values[key] = getattr(args, key)
+            from_file.discard(key)
     if getattr(args, "no_ray", False):
         values["ray"] = None
     if values.get("deterministic") is True and args.max_time_s is not None:
         flag = getattr(args, "deterministic", None)
         whose = "--deterministic" if flag else "the config's deterministic = true"
         raise InputError(f"--max-time: {whose} turns the planning time limit off")
-    return config_from_mapping(values)
+    try:
+        return config_from_mapping(values)
+    except InputError as exc:
+        # A bad value read from the file names the file, as an unknown key there does.
+        if str(exc).split(":", 1)[0] in from_file:
+            raise InputError(f"{exc} (in {args.config!r})") from None
+        raise
 
 
 def forward_only_notes(planners: tuple[str, ...]) -> list[str]:
