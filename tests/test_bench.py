@@ -396,11 +396,16 @@ def test_statistics():
     assert [float(line[k]) for k in ("mean", "std", "ci95_low", "ci95_high")] == [
         stat.mean, stat.std, stat.ci_low, stat.ci_high
     ]
+    # ... and its order statistics, as numpy reads them off the lengths.
+    lengths = np.array([10.0 + i / 3.0 for i in range(3)])
+    assert [float(line[k]) for k in ("median", "min", "max")] == [
+        np.median(lengths), lengths.min(), lengths.max()
+    ]
     # A cell whose every run crashed still has its line (it had none in the CSV).
     crashed = [{"kind": "plan", "map": "m", "planner": "p", "controller": None, "seed": i,
                 "config_hash": "h", "status": "error", "error": "boom"} for i in range(2)]
     (g_err,) = summarise_rows(crashed)
-    assert to_csv([g_err]).splitlines()[1:] == ["plan,m,,p,,2,2,,0,,,,"]
+    assert to_csv([g_err]).splitlines()[1:] == ["plan,m,,p,,2,2,,0,,,,,,,"]
     # Closed loop: a crashed episode has a path and a partly driven curvature; the
     # summary counts path geometry of the successful runs only, as it says.
     episodes = [

@@ -203,18 +203,21 @@ def to_csv(groups: Sequence[GroupSummary]) -> str:
     """
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
+    # The order statistics after the interval: a reader of the columns by name, or of
+    # the first 13, is unchanged (the median and range were only in the box plots).
     w.writerow(["kind", "map", "scenario", "planner", "controller", "runs", "errors",
-                "metric", "n", "mean", "std", "ci95_low", "ci95_high"])
+                "metric", "n", "mean", "std", "ci95_low", "ci95_high", "median", "min",
+                "max"])
     for g in groups:
         cell = [g.kind, g.target if g.kind == "plan" else "",
                 g.target if g.kind == "episode" else "", g.planner, g.controller or "",
                 g.runs, g.errors]  # fmt: skip
         if not g.stats:
-            w.writerow([*cell, "", 0, "", "", "", ""])
+            w.writerow([*cell, "", 0, "", "", "", "", "", "", ""])
         for name in sorted(g.stats):
             s = g.stats[name]
             w.writerow([*cell, name, s.n, _num(s.mean), _num(s.std), _num(s.ci_low),
-                        _num(s.ci_high)])  # fmt: skip
+                        _num(s.ci_high), _num(s.median), _num(s.min), _num(s.max)])  # fmt: skip
     return buf.getvalue()
 
 
