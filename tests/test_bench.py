@@ -859,6 +859,30 @@ def test_a_grid_that_solved_nothing_still_gets_its_length_box_plot(tmp_path, mon
     assert len(labels) == 2 and all(t.endswith("(no success)") for t in labels), labels
 
 
+def test_nearly_equal_lengths_get_plain_ticks_not_an_offset(tmp_path, monkeypatch):
+    # Lengths 33.9354 +- 1e-5 m: the axis read "1e-5+3.39354e1" beside ticks of 0-2.
+    import rrtdrive.plotting
+    from rrtdrive.bench.summary import write_plots
+
+    figures = {}
+    monkeypatch.setattr(rrtdrive.plotting, "save_figure",
+                        lambda fig, path: figures.setdefault(Path(path).name, fig))
+    rows = [
+        {"kind": "plan", "map": "lot", "planner": "hybrid-a-star", "controller": None,
+         "seed": i, "config_hash": "h", "success": True, "status": "solved",
+         "length_m": 33.9354 + 1e-5 * i, "planning_time_s": 0.01, "max_curvature": 0.1}
+        for i in range(3)
+    ]
+    write_plots(rows, tmp_path)
+    fig = figures["box_length.png"]
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    assert ax.xaxis.get_offset_text().get_text() == ""
+    shown = [t.get_text().replace("\u2212", "-") for t in ax.get_xticklabels()]
+    ticks = [float(t) for t in shown if t]
+    assert ticks and all(33.9 < t < 34.0 for t in ticks), ticks
+
+
 def test_the_curvature_histogram_puts_the_limit_on_a_bin_edge(tmp_path, monkeypatch):
     # A bin straddled kappa_max once a baseline's 0.67 1/m widened the range: drivable
     # runs (0.1638 < 1/6) were drawn across the dashed line, mostly right of it.

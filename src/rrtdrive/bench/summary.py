@@ -389,6 +389,10 @@ def _write_plots(rows: Sequence[Mapping[str, Any]], out: str | FsPath) -> list[F
             hi = max(float(np.max(d)) for d in data)
             if lo > 0 and hi / lo > 100:
                 ax.set_xscale("log")
+            else:
+                # Nearly equal values: matplotlib's offset text ("1e-5+3.39354e1") left the
+                # ticks meaningless and overlapped the axis label (an audit).
+                ax.ticklabel_format(axis="x", useOffset=False, style="plain")
         else:
             ax.text(0.5, 0.5, f"{none} in any group", transform=ax.transAxes, ha="center")
         rows_shown = names + [f"{lab} ({none})" for lab in missing]
