@@ -132,7 +132,9 @@ def escalate(
     own = answer_stats(answer, problem.vehicle.wheelbase)
     stats = {**failed.stats, **{f"hybrid_{k}": v for k, v in own.items()}}
     gear = "with reverse" if reverse else "forward only"
+    # Every stage's counts: the tree's and the search's.
     used = failed.iterations + answer.outcome.expansions
+    nodes = failed.nodes + answer.outcome.nodes
     reason = failed.message.removeprefix("post-processing failed: ")
     if answer.path is None and (watch.capped or answer.outcome.reason == "time"):
         # The safety cap stopped the search: a timeout, as anywhere else (what it would
@@ -173,8 +175,7 @@ def escalate(
             status=status,
             message=message,
             stats=stats,
-            # Every stage's count, as on success: the tree's nodes and the search's.
-            nodes=failed.nodes + answer.outcome.nodes,
+            nodes=nodes,
             iterations=used,
             planning_time_s=watch.elapsed(),
         )
@@ -197,7 +198,7 @@ def escalate(
                 "--planner hybrid-a-star gives it, --paper-smoothing accepts it"
             ),
             stats=stats,
-            nodes=failed.nodes + answer.outcome.nodes,
+            nodes=nodes,
             iterations=used,
             planning_time_s=watch.elapsed(),
         )
@@ -214,7 +215,7 @@ def escalate(
         path=path,
         raw_path=built.rows[:, :2],
         trees=(*failed.trees, *answer.trees),
-        nodes=failed.nodes + answer.outcome.nodes,
+        nodes=nodes,
         iterations=used,
         planning_time_s=watch.elapsed(),
         message=message,

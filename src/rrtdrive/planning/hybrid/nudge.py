@@ -101,14 +101,17 @@ def nudge(
     """
     n = max(1, math.ceil(length / spacing))
     s = np.arange(1, n + 1) * (length / n)
+    # Per gear, the way the car moves out of the end (the goal's arrival in ``gear``,
+    # driven backwards in time, moves the other way) and its straight run there now.
+    ways = {gear: -gear if at_goal else gear for gear in gears}
+    bases = {gear: _straight_run(body, end.x, end.y, end.yaw, way, spacing)
+             for gear, way in ways.items()}  # fmt: skip
 
     def candidates(degrees: tuple[float, ...]) -> list[tuple[float, int, float, np.ndarray]]:
         """``(run, gear, kappa, arc)`` of every free arc that lengthens the run by GAIN_M."""
         found = []
-        for gear in gears:
-            # The goal's arrival in ``gear``, driven backwards in time, moves the other way.
-            way = -gear if at_goal else gear
-            base = _straight_run(body, end.x, end.y, end.yaw, way, spacing)
+        for gear, way in ways.items():
+            base = bases[gear]
             if base >= PROBE_M:
                 continue
             for deg in degrees:
@@ -124,10 +127,8 @@ def nudge(
                         found.append((run, gear, kappa, arc))
         return found
 
-    best = None
-    for run, gear, kappa, arc in candidates(NUDGES_DEG):
-        if best is None or run > best[0]:
-            best = (run, gear, kappa, arc)
+    # The longest run, the first found among equals.
+    best = max(candidates(NUDGES_DEG), key=lambda c: c[0], default=None)
     if best is None:
         # The turn that opens the way out may lie in a narrow window between the coarse
         # angles (0.325-0.475 deg in one slot, 0.01-0.02 in another; a helper's audit):

@@ -365,22 +365,24 @@ def hybrid_query(
         later = any("expansions" in s.after_last for s in ladder[i + 1 :])
         cfg, stage = st.config, st.name
         run(cfg, st.share if later else 1.0)
+    # After a first search cut short at its share, nothing the later ones find out is a
+    # proof: the first resolution's search did not finish.
+    coarse_branch = first == "expansions" and len(tried) > 1
     # After a proof (every search finished), once more from the ends nudged by a
     # fraction of a degree where that opens their straight drive out (:mod:`.nudge`).
-    last = found
-    nudged, nudge_note = None, ""
-    finished = last[1].reason in PROOFS and not (first == "expansions" and len(tried) > 1)
-    if last[0] is None and finished and config.nudge_ends and left > 0 and not watch.expired():
+    nudged = None  # that search's (path, outcome, trees), when it ran
+    nudge_note = ""
+    proven = found[0] is None and found[1].reason in PROOFS and not coarse_branch
+    if proven and config.nudge_ends and left > 0 and not watch.expired():
         moved = _nudged(problem, cfg, reverse, have)
         if moved is not None:
             query, ends, nudge_note = moved
-            goal_first = last[1].reason == "no_approach" and goal_in_pocket()
+            goal_first = found[1].reason == "no_approach" and goal_in_pocket()
             nudged = search_at_resolution(
                 query, left, watch, cfg, reverse, smoothing, have, goal_first, ends
             )
-            if nudged[0] is not None:
-                last, nudged = nudged, None
-    path, outcome, trees = last
+    nudge_solved = nudged is not None and nudged[0] is not None
+    path, outcome, trees = nudged if nudge_solved else found
     reason = outcome.reason
     usual = query_clearance(problem, config.body_clearance, have)
     clearance = query_clearance(problem, cfg.body_clearance, have)
@@ -402,9 +404,6 @@ def hybrid_query(
     # The searches at the usual clearance and radius come first; the last resorts follow.
     usual_count = max(k + 1 for k, (c, _, _) in enumerate(tried) if not how_of(c) or k == 0)
     base = tried[usual_count - 1][1].reason
-    # After a first search cut short at its share, nothing the later ones find out is a
-    # proof: the first resolution's search did not finish.
-    coarse_branch = first == "expansions" and len(tried) > 1
     if coarse_branch and path is None and reason in _REFINE_ON:
         reason = "expansions"
     if (
@@ -424,8 +423,6 @@ def hybrid_query(
     if coarse_branch and path is None:
         clearance = usual  # what the failure speaks of: the usual clearance
     outcomes = [o for _, o, _ in tried] + ([] if nudged is None else [nudged[1]])
-    if nudged is None and nudge_note:  # the nudged search solved it
-        outcomes.append(outcome)
     total = SearchOutcome.total(reason, outcomes)
     earlier = tried[:-1]
     answer = functools.partial(
@@ -479,7 +476,7 @@ def hybrid_query(
         snug = c.body_clearance < config.body_clearance
         too = " too" if snug and o.reason in PROOFS and tried[k - 1][1].reason in PROOFS else ""
         message += f"; {how_of(c)}, at {_resolution(c)} the search {_why(o, '')}{too}"
-    if nudged is not None:
+    if nudged is not None:  # it ran and found none
         message += f"; once more{nudge_note}, it {_why(nudged[1], '')}"
     return answer(path=None, message=message)
 
