@@ -19,7 +19,6 @@ Writes ``OUT/ablation.json`` and ``OUT/ablation.md`` with the command and seeds.
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
 import sys
 from pathlib import Path as FsPath
@@ -82,7 +81,7 @@ def table(title: str, header: str, rows: list[tuple[str, dict[str, float]]]) -> 
 
 
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_file, out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_file, out_folder  # the sibling module (run as a script)
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=positive_int, default=20,
@@ -133,7 +132,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{map_name}: sweep done", file=sys.stderr)
     out = FsPath(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "ablation.json", json.dumps(report, indent=1) + "\n")
+    write_text_atomic(out / "ablation.json", json_text(report))
     write_text_atomic(out / "ablation.md", "\n".join(md))
     if args.doc:  # docs/ changes only when asked
         FsPath(args.doc).parent.mkdir(parents=True, exist_ok=True)  # as --out's folder

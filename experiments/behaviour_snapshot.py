@@ -172,6 +172,8 @@ def compare(before: dict[str, dict], after: dict[str, dict]) -> list[str]:
 
 
 def main() -> int:
+    from results_io import json_text  # the sibling module (run as a script)
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     group = ap.add_mutually_exclusive_group(required=True)
     group.add_argument("--record", metavar="FILE", help="write a snapshot to FILE")
@@ -185,7 +187,7 @@ def main() -> int:
     args = ap.parse_args()
     data = snapshot(episodes=not args.plans_only, paper=args.paper)
     if args.record:
-        write_text_atomic(args.record, json.dumps(data, indent=1, sort_keys=True) + "\n")
+        write_text_atomic(args.record, json_text(data, sort_keys=True))
         print(f"recorded {len(data)} entries in {args.record}")
         return 0
     before = json.loads(Path(args.compare).read_text())

@@ -20,7 +20,6 @@ in FILE (or is appended).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import shutil
@@ -75,7 +74,7 @@ def heavy_modules(args: list[str]) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_folder  # the sibling module (run as a script)
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=positive_int, default=15,
@@ -120,7 +119,7 @@ def main(argv: list[str] | None = None) -> int:
     }
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "bench_cli_startup.json", json.dumps(report, indent=1) + "\n")
+    write_text_atomic(out / "bench_cli_startup.json", json_text(report))
     lines = [
         "## CLI start-up",
         "",

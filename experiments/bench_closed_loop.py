@@ -24,7 +24,6 @@ The target is ``closed / raw <= 1.15``. Writes ``OUT/bench_closed_loop.json`` an
 from __future__ import annotations
 
 import argparse
-import json
 import platform
 import sys
 import time
@@ -97,7 +96,7 @@ def time_env_step(ep, sim: SimConfig) -> float:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_folder  # the sibling module (run as a script)
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--seeds", type=positive_int, default=10,
@@ -160,8 +159,8 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(
         out / "bench_closed_loop.json",
-        json.dumps({"settings": settings, "rows": rows,
-                    "ratio_closed_raw_total": total_c / total_r}, indent=1) + "\n",
+        json_text({"settings": settings, "rows": rows,
+                    "ratio_closed_raw_total": total_c / total_r}),
     )
     md = [
         "# Closed loop vs raw highway-env stepping\n",

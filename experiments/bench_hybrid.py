@@ -409,11 +409,13 @@ def interleaved(
 
 def write_results(out: str, name: str, payload: dict, text: str) -> None:
     """``OUT/NAME.json`` and ``OUT/NAME.md``, each written whole (temp file, then rename)."""
+    from results_io import json_text  # the sibling module (run as a script)
+
     from rrtdrive.atomic import write_text_atomic  # this tree's, in the main process only
 
     folder = FsPath(out)
     folder.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(folder / f"{name}.json", json.dumps(payload, indent=1) + "\n")
+    write_text_atomic(folder / f"{name}.json", json_text(payload))
     write_text_atomic(folder / f"{name}.md", text)
 
 

@@ -26,9 +26,8 @@ and ``.md`` with the command, the seeds and every per-run row.
 from __future__ import annotations
 
 import argparse
-import json
+import math
 import os
-import platform
 import statistics
 import sys
 import time
@@ -108,8 +107,13 @@ def summarise(runs: list[dict]) -> dict:
     }
 
 
+def finite(value: float, digits: int) -> str:
+    """A table cell: ``value`` to ``digits`` decimals, "–" for a planner that never solved."""
+    return f"{value:.{digits}f}" if math.isfinite(value) else "–"
+
+
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, machine, out_folder  # the sibling module (run as a script)
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--map", default="parking_lot",
@@ -160,16 +164,22 @@ def main(argv: list[str] | None = None) -> int:
         "seeds": list(range(args.seeds)),
         "ompl_time_cap_s": args.cap,
         "checker_build_s": checker_build_s,
-        "machine": f"{platform.machine()} {platform.python_version()}",
+        "machine": machine(),
+        "date": time.strftime("%Y-%m-%d"),
+        # The times are this machine's under this load; the ratios are side by side.
+        "load_average": [round(v, 2) for v in os.getloadavg()],
         "summary": summary,
         "runs": per_run,
     }
-    write_text_atomic(out / f"bench_planners_{args.map}.json", json.dumps(payload, indent=1) + "\n")
+    write_text_atomic(out / f"bench_planners_{args.map}.json", json_text(payload))
     lines = [
         f"# Planner speed on `{args.map}` ({args.seeds} seeds, same checker)",
         "",
         f"Command: `{payload['command']}`  ",
-        f"Checker construction (once per map, not in any row): {checker_build_s * 1e3:.0f} ms",
+        f"Checker construction (once per map, not in any row): {checker_build_s * 1e3:.0f} ms.  ",
+        f"Times measured on {payload['machine']}, {payload['date']} (load average "
+        f"{' '.join(f'{v:.2f}' for v in payload['load_average'])} at the end), planners "
+        "interleaved seed by seed; the ratios compare them in this one run.",
         "",
         "| planner | success | median time [ms] | mean length [m] | ours / this time "
         "| ours / this length |",
@@ -178,8 +188,8 @@ def main(argv: list[str] | None = None) -> int:
     for name, s in summary.items():
         lines.append(
             f"| {name} | {100 * s['success_rate']:.0f} % | {1e3 * s['median_time_s']:.2f} | "
-            f"{s['mean_length_m']:.2f} | {s['time_ratio_ours_over_this']:.3f} | "
-            f"{s['length_ratio_ours_over_this']:.3f} |"
+            f"{finite(s['mean_length_m'], 2)} | {s['time_ratio_ours_over_this']:.3f} | "
+            f"{finite(s['length_ratio_ours_over_this'], 3)} |"
         )
     text = "\n".join(lines) + "\n"
     write_text_atomic(out / f"bench_planners_{args.map}.md", text)

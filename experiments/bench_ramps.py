@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
-import json
 import os
 import pickle
 import platform
@@ -130,7 +129,7 @@ def _summary(rows: list[dict]) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_folder  # the sibling module (run as a script)
 
     sys.path.insert(0, str(HERE))
     from bench_hybrid import positive_int  # the sibling script's (no rrtdrive import here)
@@ -196,7 +195,7 @@ def main(argv: list[str] | None = None) -> int:
 
     write_text_atomic(
         out / "bench_ramps.json",
-        json.dumps({"meta": meta, "summary": summary, "segments": rows}, indent=1) + "\n",
+        json_text({"meta": meta, "summary": summary, "segments": rows}),
     )
     s = summary
     lines = [

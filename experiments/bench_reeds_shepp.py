@@ -97,7 +97,7 @@ def _ompl_distance(radius: float) -> Callable[[Pose, Pose], float] | None:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark; return 0, or 1 when a length differs from OMPL's by > 1e-6."""
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_folder  # the sibling module (run as a script)
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--pairs", type=positive_int, default=1000,
@@ -177,7 +177,7 @@ def main(argv: list[str] | None = None) -> int:
     }
     out = FsPath(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "reeds_shepp.json", json.dumps(report, indent=1) + "\n")
+    write_text_atomic(out / "reeds_shepp.json", json_text(report))
     for name, t in timings.items():
         print(
             f"{name:22s} mean per call: best {t['wall_mean_us_best']:8.1f} us wall, "

@@ -173,7 +173,7 @@ def trial(grid: str, workers: int, quiet: float | None, quiet_wait: float) -> di
 
 
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_folder  # the sibling module (run as a script)
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--grids", default="closed-loop,planning",
@@ -256,7 +256,7 @@ def main(argv: list[str] | None = None) -> int:
     }
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "bench_scaling.json", json.dumps(payload, indent=1) + "\n")
+    write_text_atomic(out / "bench_scaling.json", json_text(payload))
     lines = [
         "# `rrtdrive bench` throughput: 1 vs 2 local workers (200 runs per bench)",
         "",

@@ -23,7 +23,6 @@ Writes ``OUT/bench_scene_step.json`` and ``.md``.
 from __future__ import annotations
 
 import argparse
-import json
 import platform
 import statistics
 import sys
@@ -75,7 +74,7 @@ def _same(a: Episode, b: Episode) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_folder  # the sibling module (run as a script)
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", type=positive_int, default=10,
@@ -142,7 +141,7 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     meta = {"command": command, "python": platform.python_version(), "machine": platform.machine()}
     write_text_atomic(out / "bench_scene_step.json",
-                      json.dumps({"meta": meta, "summary": summary, "rows": rows}, indent=1) + "\n")
+                      json_text({"meta": meta, "summary": summary, "rows": rows}))
     lines = [
         "# Screened collision step vs highway-env's `Road.step` (whole episodes)", "",
         f"Command: `{command}`  ",

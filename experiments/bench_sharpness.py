@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import statistics
 import sys
 import time
@@ -41,6 +40,7 @@ from rrtdrive.verify import verify_path
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 from random_goals import draw_goals  # noqa: E402
+from results_io import json_text  # noqa: E402
 
 SETTINGS = {
     "default (clothoid)": {},
@@ -142,7 +142,7 @@ def main(argv: list[str] | None = None) -> int:
               "goals": args.goals, "goal_seed": args.goal_seed,
               "budget": {"max_time_s": args.max_time, "max_iterations": budget.max_iterations},
               "maps": maps, "random": random}  # fmt: skip
-    write_text_atomic(out / "sharpness.json", json.dumps(report, indent=1) + "\n")
+    write_text_atomic(out / "sharpness.json", json_text(report))
     md = [
         "# Sharpness of the improved planner's paths: clothoid turns (default) vs the paper's "
         "B-spline", "",
@@ -186,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"{1e3 * s['median_time_s']:.1f} |"
             )
         md.append("")
-    write_text_atomic(out / "sharpness.json", json.dumps(report, indent=1) + "\n")
+    write_text_atomic(out / "sharpness.json", json_text(report))
     write_text_atomic(out / "sharpness.md", "\n".join(md) + "\n")
     print("\n".join(md))
     return 0

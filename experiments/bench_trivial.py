@@ -29,7 +29,6 @@ ratio new / old, and the median ratio.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import statistics
@@ -126,7 +125,7 @@ def _markdown(meta: dict, rows: list[dict], summary: dict) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_folder  # the sibling module (run as a script)
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--ref", default=None, help="the old code's commit (default: no comparison)")
@@ -208,7 +207,7 @@ def main(argv: list[str] | None = None) -> int:
 
     write_text_atomic(
         out / "bench_trivial.json",
-        json.dumps({"meta": meta, "summary": summary, "queries": rows}, indent=1) + "\n",
+        json_text({"meta": meta, "summary": summary, "queries": rows}),
     )
     write_text_atomic(out / "bench_trivial.md", _markdown(meta, rows, summary))
     for r in rows:

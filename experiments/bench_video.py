@@ -25,7 +25,6 @@ the results block of ``docs/video.md``.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import statistics
@@ -65,7 +64,7 @@ def _encode(frames: list, path: FsPath, fps: float) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_folder  # the sibling module (run as a script)
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scenario", default="parking",
@@ -120,8 +119,8 @@ def main(argv: list[str] | None = None) -> int:
     }
     out = FsPath(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "bench_video.json", json.dumps(
-        {"meta": meta, "summary": summary, "times_s": times}, indent=1) + "\n")
+    write_text_atomic(out / "bench_video.json", json_text(
+        {"meta": meta, "summary": summary, "times_s": times}))
     table = [
         f"Command: `{command}`; {args.scenario} seed {args.seed}, {args.controller}: "
         f"{n} frames of {w} x {h}; median of {args.repeats} interleaved repeats; "

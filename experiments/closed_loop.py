@@ -35,7 +35,6 @@ overwrite the forward table.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import platform
@@ -45,7 +44,7 @@ import time
 from pathlib import Path as FsPath
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parent))
-from results_io import check_doc, out_file, out_folder, write_doc, write_image_atomic  # noqa: E402
+from results_io import check_doc, json_text, out_file, out_folder, write_doc, write_image_atomic  # noqa: E402
 
 from rrtdrive.bench.backends import episode_progress, parallel_map  # noqa: E402
 from rrtdrive.cli_args import flags_for, int_at_least, positive_int  # noqa: E402
@@ -353,8 +352,8 @@ def main(argv: list[str] | None = None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(
         out / f"{args.name}.json",
-        json.dumps({"settings": settings, "summaries": summaries, "failures": failures,
-                    "reports": reports}, indent=1, allow_nan=False) + "\n",
+        json_text({"settings": settings, "summaries": summaries, "failures": failures,
+                    "reports": reports}),
     )
     forward = [s for s in scenarios if s not in GEAR_SCENARIOS]
     gear = [s for s in scenarios if s in GEAR_SCENARIOS]

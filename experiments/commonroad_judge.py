@@ -19,7 +19,6 @@ episode each, scenario ``random-maps``, as ``experiments/random_maps_drive.py``)
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 from pathlib import Path
@@ -68,7 +67,7 @@ def run_one(job: tuple[str, str, int, float | None, float]) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_folder  # the sibling module (run as a script)
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=positive_int, default=10,
@@ -144,7 +143,7 @@ def main(argv: list[str] | None = None) -> int:
     write_text_atomic(out / f"commonroad_judge{tag}.md", "\n".join(lines))
     write_text_atomic(
         out / f"commonroad_judge{tag}.json",
-        json.dumps({"command": " ".join(sys.argv), "rows": rows}, indent=1) + "\n",
+        json_text({"command": " ".join(sys.argv), "rows": rows}),
     )
     print("\n".join(lines))
     return 0

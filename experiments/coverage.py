@@ -57,7 +57,7 @@ import numpy as np
 sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 from coverage_report import SHARPNESS_BOUND, report, tight_report  # noqa: E402
 from random_goals import draw_goals  # noqa: E402  (the sibling script's pose sets)
-from results_io import check_doc, out_folder, write_doc  # noqa: E402
+from results_io import check_doc, json_text, out_folder, write_doc  # noqa: E402
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
 from rrtdrive.bench.backends import parallel_map  # noqa: E402
@@ -554,7 +554,7 @@ def main(argv: list[str] | None = None) -> int:
             "jobs": args.jobs, "machine": machine, "wall_time_s": wall, "summary": summary,
             "rows": rows,
         }  # fmt: skip
-        write_text_atomic(out / "coverage_tight.json", json.dumps(payload, indent=1) + "\n")
+        write_text_atomic(out / "coverage_tight.json", json_text(payload))
         text = tight_report(payload)
         write_text_atomic(out / "coverage_tight.md", text)
         if args.doc:
@@ -579,7 +579,7 @@ def main(argv: list[str] | None = None) -> int:
         "rows": rows,
     }
     stem = f"coverage_{args.map}"
-    write_text_atomic(out / f"{stem}.json", json.dumps(payload, indent=1) + "\n")
+    write_text_atomic(out / f"{stem}.json", json_text(payload))
     text = report(payload)
     write_text_atomic(out / f"{stem}.md", text)
     if args.doc:

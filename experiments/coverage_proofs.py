@@ -26,6 +26,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import coverage as cov  # noqa: E402  (the sibling script)
+from results_io import json_text  # noqa: E402  (the sibling module)
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
 from rrtdrive.cli_args import positive_float  # noqa: E402
@@ -79,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     payload = {"command": command, "rows": rows}
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(Path(args.out), json.dumps(payload, indent=1) + "\n")
+    write_text_atomic(Path(args.out), json_text(payload))
     for name in VARIANTS:
         held = sum(r["status"] == "proven_unreachable" for r in rows if r["variant"] == name)
         print(f"{name}: {held}/{len(todo)} still proven unreachable")

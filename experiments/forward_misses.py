@@ -26,7 +26,6 @@ Writes ``OUT/forward_misses.{json,md}``.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import sys
@@ -250,7 +249,7 @@ def _query_lines(payload: dict[str, Any], expansions: int) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_folder  # the sibling module (run as a script)
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--query", default="start:81",
@@ -304,7 +303,7 @@ def main(argv: list[str] | None = None) -> int:
     }  # fmt: skip
     out = FsPath(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "forward_misses.json", json.dumps(payload, indent=1) + "\n")
+    write_text_atomic(out / "forward_misses.json", json_text(payload))
     text = report(payload)
     write_text_atomic(out / "forward_misses.md", text)
     print(text)

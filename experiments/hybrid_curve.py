@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import math
 import statistics
 import sys
@@ -29,7 +28,7 @@ import numpy as np
 
 sys.path.insert(0, str(FsPath(__file__).resolve().parent))
 from random_goals import draw_goals  # noqa: E402
-from results_io import command, out_folder  # noqa: E402
+from results_io import command, json_text, out_folder  # noqa: E402
 
 from rrtdrive.atomic import write_text_atomic  # noqa: E402
 from rrtdrive.cli_args import positive_float, positive_int
@@ -159,7 +158,7 @@ def main(argv: list[str] | None = None) -> int:
     for s in summary.values():
         if s["max_sharpness"] == math.inf:
             s["max_sharpness"] = "inf"
-    write_text_atomic(out / "hybrid_curve.json", json.dumps(payload, indent=1) + "\n")
+    write_text_atomic(out / "hybrid_curve.json", json_text(payload))
     text = "\n".join(lines) + "\n"
     write_text_atomic(out / "hybrid_curve.md", text)
     print(text)

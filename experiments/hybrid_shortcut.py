@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import os
 import platform
 import statistics
@@ -107,7 +106,7 @@ def report(payload: dict[str, Any]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_folder  # the sibling module (run as a script)
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--tries", type=positive_int, default=40,
@@ -135,7 +134,7 @@ def main(argv: list[str] | None = None) -> int:
     }  # fmt: skip
     out = FsPath(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "hybrid_shortcut.json", json.dumps(payload, indent=1) + "\n")
+    write_text_atomic(out / "hybrid_shortcut.json", json_text(payload))
     text = report(payload)
     write_text_atomic(out / "hybrid_shortcut.md", text)
     print(text)

@@ -36,7 +36,6 @@ from __future__ import annotations
 import argparse
 import ast
 import dataclasses
-import json
 import os
 import platform
 import statistics
@@ -201,7 +200,7 @@ def render(summary: list[dict[str, Any]], names: list[str], meta: dict[str, Any]
 
 def main(argv: list[str] | None = None) -> int:
     """Run the variants and write the results."""
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_folder  # the sibling module (run as a script)
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--variants", default=DEFAULT_VARIANTS,
@@ -274,7 +273,7 @@ def main(argv: list[str] | None = None) -> int:
     out = FsPath(args.out)
     out.mkdir(parents=True, exist_ok=True)
     payload = {"meta": meta, "summary": summary, "rows": rows}
-    write_text_atomic(out / "hybrid_variants.json", json.dumps(payload, indent=1) + "\n")
+    write_text_atomic(out / "hybrid_variants.json", json_text(payload))
     text = render(summary, names, meta)
     write_text_atomic(out / "hybrid_variants.md", text)
     print(text)

@@ -23,13 +23,12 @@ from __future__ import annotations
 import argparse
 import collections
 import dataclasses
-import json
 import statistics
 import sys
 from pathlib import Path as FsPath
 
 import numpy as np
-from results_io import machine, out_folder  # the sibling module
+from results_io import json_text, machine, out_folder  # the sibling module
 
 from rrtdrive.cli_args import int_at_least, positive_float, positive_int
 from rrtdrive.maps import BUILTIN_MAPS, builtin_map, write_text_atomic
@@ -124,12 +123,12 @@ def main(argv: list[str] | None = None) -> int:
     out = FsPath(args.out)
     out.mkdir(parents=True, exist_ok=True)
     stem = f"random_{args.vary}s_{args.map}"
-    write_text_atomic(out / f"{stem}.json", json.dumps(
+    write_text_atomic(out / f"{stem}.json", json_text(
         {"command": command, "map": args.map, "seed": args.seed, "vary": args.vary,
          # The wall-clock cap can decide a query on a slow machine: both are recorded.
          "max_time_s": args.max_time, "machine": machine(),
          "summary": summary,
-         "rows": rows}, indent=1) + "\n")
+         "rows": rows}))
     lines = [
         f"# Random {args.vary} poses on `{args.map}`: improved RRT-Connect as shipped and as "
         "the paper's pipeline", "",

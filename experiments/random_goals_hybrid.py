@@ -19,7 +19,6 @@ from __future__ import annotations
 import argparse
 import collections
 import dataclasses
-import json
 import statistics
 import sys
 from pathlib import Path as FsPath
@@ -51,7 +50,7 @@ def verify_gears(m: Map, path: Path) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_folder  # the sibling module (run as a script)
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     add_pose_set_options(ap)
@@ -118,7 +117,7 @@ def main(argv: list[str] | None = None) -> int:
         "reverse": args.reverse, "budget": dataclasses.asdict(budget),
         "config": repr(planner.config), "summary": summary, "rows": rows,
     }  # fmt: skip
-    write_text_atomic(out / f"{stem}.json", json.dumps(record, indent=1) + "\n")
+    write_text_atomic(out / f"{stem}.json", json_text(record))
     s = summary
     fmt = lambda v, f: "-" if v is None else format(v, f)  # noqa: E731
     lines = [

@@ -17,6 +17,7 @@ from pathlib import Path as FsPath
 from typing import Any
 
 from rrtdrive.atomic import write_text_atomic
+from rrtdrive.json_safe import json_safe
 
 
 def machine() -> str:
@@ -63,13 +64,27 @@ def cell(value: float | None, scale: float = 1.0, digits: int = 1, suffix: str =
     return "-" if value is None else f"{value * scale:.{digits}f}{suffix}"
 
 
+def json_text(payload: Any, sort_keys: bool = False) -> str:
+    """``payload`` as a results file's strict JSON: a missing number is ``null``, not ``NaN``.
+
+    ``json.dumps`` writes ``NaN`` by default, which strict readers (``jq``, browsers,
+    ``json.loads(..., parse_constant=...)``) refuse.
+
+    Examples
+    --------
+    >>> json_text({"mean": float("nan"), "n": 0})
+    '{\\n "mean": null,\\n "n": 0\\n}\\n'
+    """
+    return json.dumps(json_safe(payload), indent=1, allow_nan=False, sort_keys=sort_keys) + "\n"
+
+
 def write_results(
     out: str, stem: str, payload: dict[str, Any], report: Callable[[dict[str, Any]], str]
 ) -> str:
     """Write ``OUT/STEM.json`` and the page ``OUT/STEM.md``; return the page."""
     folder = FsPath(out)
     folder.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(folder / f"{stem}.json", json.dumps(payload, indent=1) + "\n")
+    write_text_atomic(folder / f"{stem}.json", json_text(payload))
     text = report(payload)
     write_text_atomic(folder / f"{stem}.md", text)
     return text

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import math
 import sys
 from pathlib import Path
@@ -60,7 +59,7 @@ def _row(map_name: str, rate: float | None, controller: str, plan) -> list[str]:
 
 
 def main() -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_folder  # the sibling module (run as a script)
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=out_folder, default="results/reversing",
@@ -96,7 +95,7 @@ def main() -> int:
         "planner": "hybrid-a-star", "reverse": True, "seed": 0,
         "speed": dataclasses.asdict(SpeedConfig()),
     }
-    write_text_atomic(out / "config.json", json.dumps(config, indent=1) + "\n")
+    write_text_atomic(out / "config.json", json_text(config))
     print(table)
     return 0
 

@@ -24,7 +24,6 @@ with ``rrtdrive simulate parking-v0 --reverse --seed N --deterministic``.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import statistics
@@ -137,7 +136,7 @@ def report(payload: dict[str, Any]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from results_io import out_folder  # the sibling module (run as a script)
+    from results_io import json_text, out_folder  # the sibling module (run as a script)
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seeds", type=positive_int, default=100,
@@ -191,7 +190,7 @@ def main(argv: list[str] | None = None) -> int:
     }  # fmt: skip
     out = FsPath(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out / "stage_order.json", json.dumps(payload, indent=1) + "\n")
+    write_text_atomic(out / "stage_order.json", json_text(payload))
     write_text_atomic(out / "stage_order.md", report(payload))
     for kind, s in summary.items():
         print(f"{kind}: {s['equal']}/{s['plans']} plans equal; stages old {s['stages_old']}, "

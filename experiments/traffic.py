@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import math
 import pickle
 import platform
@@ -31,7 +30,7 @@ from pathlib import Path as FsPath
 from typing import Any
 
 import numpy as np
-from results_io import out_folder  # the sibling module
+from results_io import json_text, out_folder  # the sibling module
 
 from rrtdrive.bench.backends import episode_progress, parallel_map
 from rrtdrive.cli_args import flags_for, int_at_least, positive_int
@@ -340,8 +339,8 @@ def _run(
     out.mkdir(parents=True, exist_ok=True)
     write_text_atomic(
         out / f"traffic{tag}.json",
-        json.dumps({"settings": settings, "summaries": summaries, "not_success": not_success,
-                    "tight_case": video, "reports": reports}, indent=1, allow_nan=False) + "\n",
+        json_text({"settings": settings, "summaries": summaries, "not_success": not_success,
+                    "tight_case": video, "reports": reports}),
     )
     md = (
         f"# Overtaking against oncoming traffic: {args.seeds} seeds x {len(densities)} "

@@ -21,7 +21,6 @@ Usage (needs the optional extra ``rl``: ``pip install ".[rl]"``)::
 from __future__ import annotations
 
 import argparse
-import json
 import platform
 import sys
 import time
@@ -136,6 +135,8 @@ def table(agent: dict[str, Any], plain: dict[str, Any], args: argparse.Namespace
 
 
 def main(argv: list[str] | None = None) -> int:
+    from results_io import json_text  # the sibling module (run as a script)
+
     args = parse_args(argv)
     try:
         import torch
@@ -260,7 +261,7 @@ def main(argv: list[str] | None = None) -> int:
         "plain_returns": plain_returns,
         "video": video,
     }
-    write_text_atomic(out / "train_agent.json", json.dumps(result, indent=1) + "\n")
+    write_text_atomic(out / "train_agent.json", json_text(result))
     md = table(agent, plain, args)
     md += (
         f"\nPPO: {args.timesteps} steps, {args.envs} envs, action repeat {args.action_repeat}, "
