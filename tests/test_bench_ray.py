@@ -92,3 +92,55 @@ def test_an_address_ray_cannot_reach_is_one_line_and_leaves_no_folder(tmp_path):
     assert proc.stderr.count("\n") == 1
     assert "error: --ray: cannot connect to bogus://x" in proc.stderr
     assert not out.exists()
+
+
+def sleepy_executor(spec):
+    """Seed 1 outlasts any short run timeout; the others run as usual."""
+    if spec.seed == 1:
+        import time
+
+        time.sleep(120)
+    return execute_run(spec)
+
+
+def test_ray_run_past_the_run_timeout_fails_with_the_local_message(ray_session, tmp_path):
+    cfg = BenchConfig(
+        maps=("overtake",), planners=("rrt-connect",), seeds=3, ray="", out=str(tmp_path),
+        plots=False, retries=0, run_timeout_s=3.0,
+    )
+    report = run_bench(cfg, executor=sleepy_executor)
+    assert (report.executed, report.errors) == (3, 1)
+    with ResultStore(tmp_path, lock=False) as store:
+        rows = {r["seed"]: r for r in grid_rows(cfg, store)}
+    assert rows[0]["success"] and rows[2]["success"]
+    assert rows[1]["status"] == "error"
+    assert "run exceeded the run timeout of 3 s" in rows[1]["error"]
+
+
+def _closed_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.mark.parametrize("how", ["flag", "env"])
+def test_a_ray_head_that_is_not_there_is_one_line_at_once(tmp_path, how):
+    # Ray itself retries HOST:PORT for minutes (2 min measured): the CLI tries TCP first.
+    import subprocess
+
+    address = f"127.0.0.1:{_closed_port()}"
+    out = tmp_path / "bench"
+    flag = ["--ray", address] if how == "flag" else ["--ray"]
+    env = {**os.environ, "RAY_ADDRESS": address} if how == "env" else None
+    proc = subprocess.run(
+        [sys.executable, "-m", "rrtdrive", "bench", "--maps", "overtake", "--planners",
+         "rrt-connect", "--seeds", "1", *flag, "--out", str(out)],
+        capture_output=True, text=True, timeout=90, check=False, env=env,
+    )
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.count("\n") == 1
+    source = " (from RAY_ADDRESS)" if how == "env" else ""
+    assert f"error: --ray: cannot connect to {address}{source}: Connection refused" in proc.stderr
+    assert not out.exists()

@@ -1,4 +1,4 @@
-"""Where runs execute: local worker processes, or a Ray cluster.
+"""Where runs execute: local worker processes (a Ray cluster: :mod:`.ray_backend`).
 
 Both backends take run specs and yield :class:`Outcome` objects as runs finish,
 in completion order; the caller (the single writer) stores them. A run whose
@@ -47,7 +47,6 @@ __all__ = [
     "Outcome",
     "Executor",
     "LocalBackend",
-    "RayBackend",
     "WorkerStartupError",
     "default_workers",
 ]
@@ -394,117 +393,6 @@ class LocalBackend:
             queue.append((task_id, spec, attempt + 1))
             return
         yield Outcome(spec, None, error, attempt)
-
-
-def _ray_call(executor: Executor, spec: RunSpec) -> tuple[str, Any]:
-    """The Ray task: the same never-raising wrapper as the local workers."""
-    return _call(executor, spec)
-
-
-class RayBackend:
-    """Runs as Ray tasks, on a local Ray or a cluster.
-
-    Parameters
-    ----------
-    address : str
-        ``""`` for ``ray.init()`` (a new local Ray, or ``RAY_ADDRESS``), else the
-        address for ``ray.init(address=...)`` (``"auto"``, ``"ray://head:10001"``).
-        When Ray is already initialised in this process, that session is used.
-    executor : callable
-        Module-level function ``RunSpec -> dict``; it must be importable on the
-        cluster's workers (install rrtdrive there).
-    retries : int
-        Extra attempts of a crashed run (Ray's ``max_retries`` for dead workers,
-        and a resubmission for a run that raised).
-    max_in_flight : int, optional
-        Largest number of submitted, unfinished tasks (default twice the
-        cluster's CPUs).
-    """
-
-    name = "ray"
-
-    def __init__(
-        self,
-        address: str = "",
-        executor: Executor = execute_run,
-        retries: int = 1,
-        max_in_flight: int | None = None,
-    ) -> None:
-        try:
-            import ray
-        except ImportError:
-            raise InputError(
-                "ray: the Ray backend needs Ray; install it with pip install 'rrtdrive[ray]'"
-            ) from None
-        self._ray = ray
-        self._owns_session = False
-        if not ray.is_initialized():
-            # ray.init installs its own SIGTERM handler (sys.exit(15) and a dump): the
-            # CLI's (exit 143, "rrtdrive: terminated", as a local bench) is put back.
-            sigterm = signal.getsignal(signal.SIGTERM)
-            try:
-                if address:
-                    ray.init(address=address, log_to_driver=False)
-                else:
-                    ray.init(log_to_driver=False)
-            except (ConnectionError, ValueError, RuntimeError) as exc:
-                # Ray's messages run over several lines: the error is one.
-                why = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
-                raise InputError(f"ray: cannot connect to {address or 'Ray'}: {why}") from None
-            finally:
-                if sigterm is not None and threading.current_thread() is threading.main_thread():
-                    signal.signal(signal.SIGTERM, sigterm)
-            self._owns_session = True
-        self.executor = executor
-        self.retries = retries
-        cpus = int(ray.cluster_resources().get("CPU", 1))
-        self.max_in_flight = max_in_flight or max(1, 2 * cpus)
-        self._cpus = cpus
-        self._remote = ray.remote(num_cpus=1, max_retries=retries)(_ray_call)
-
-    def describe(self) -> str:
-        """Human-readable backend description."""
-        return f"Ray ({self._cpus} CPUs, up to {self.max_in_flight} runs in flight)"
-
-    def close(self) -> None:
-        """Shut Ray down if this backend started it."""
-        if self._owns_session:
-            self._ray.shutdown()
-            self._owns_session = False
-
-    def run(self, specs: Iterable[RunSpec]) -> Generator[Outcome, None, None]:
-        """Execute ``specs``; yield one :class:`Outcome` per spec as runs finish."""
-        ray = self._ray
-        queue: deque[tuple[RunSpec, int]] = deque((s, 1) for s in specs)
-        in_flight: dict[Any, tuple[RunSpec, int]] = {}
-        try:
-            while queue or in_flight:
-                while queue and len(in_flight) < self.max_in_flight:
-                    spec, attempt = queue.popleft()
-                    in_flight[self._remote.remote(self.executor, spec)] = (spec, attempt)
-                done, _ = ray.wait(list(in_flight), num_returns=1)
-                for ref in done:
-                    spec, attempt = in_flight.pop(ref)
-                    try:
-                        status, payload = ray.get(ref)
-                    except Exception as exc:  # noqa: BLE001 - worker died after Ray's retries
-                        yield Outcome(
-                            spec, None, f"{type(exc).__name__}: {exc}".splitlines()[0],
-                            attempt + self.retries,
-                        )
-                        continue
-                    if status == "ok":
-                        yield Outcome(spec, payload, None, attempt)
-                    elif attempt <= self.retries:
-                        queue.append((spec, attempt + 1))
-                    else:
-                        yield Outcome(spec, None, payload, attempt)
-        finally:
-            for ref in in_flight:
-                try:
-                    ray.cancel(ref, force=True)
-                except Exception:  # noqa: BLE001,S110 - best effort on the way out
-                    pass
 
 
 def episode_progress(every: int = 10) -> Callable[[int, int], None]:

@@ -13,8 +13,9 @@ from datetime import UTC, datetime
 from pathlib import Path as FsPath
 from typing import Any, TextIO
 
-from rrtdrive.bench.backends import Executor, LocalBackend, RayBackend, default_workers
+from rrtdrive.bench.backends import Executor, LocalBackend, default_workers
 from rrtdrive.bench.grid import BenchConfig, RunSpec, expand
+from rrtdrive.bench.ray_backend import RayBackend
 from rrtdrive.bench.store import ResultStore, row_key
 from rrtdrive.bench.summary import remove_plots, summarise_rows, write_plots, write_summary
 from rrtdrive.bench.worker import error_row, execute_run
@@ -250,7 +251,8 @@ def run_bench(
     files: list[str] = []
     # Connect first: an address Ray cannot reach leaves no output folder behind.
     ray_backend = (
-        RayBackend(cfg.ray, executor=executor, retries=cfg.retries, max_in_flight=cfg.workers)
+        RayBackend(cfg.ray, executor=executor, retries=cfg.retries, max_in_flight=cfg.workers,
+                   run_timeout_s=cfg.run_timeout_s)
         if cfg.ray is not None
         else None
     )
