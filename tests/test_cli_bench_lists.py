@@ -63,3 +63,15 @@ def test_a_bad_value_in_the_config_file_names_the_file(tmp_path, capsys, monkeyp
     assert main(["bench", "--config", "b.toml", "--seeds", "0"]) == 2
     err = capsys.readouterr().err
     assert "--seeds: must be an integer" in err and "b.toml" not in err
+
+
+@pytest.mark.parametrize(
+    ("args", "flag"),
+    [(["--maps", ""], "--maps"), (["--scenarios", ""], "--scenarios"),
+     (["--maps", "", "--scenarios", ""], "--maps/--scenarios")],
+)
+def test_an_empty_map_list_names_the_flag_given(tmp_path, capsys, args, flag):
+    assert main(["bench", *args, "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert f"error: {flag}: give at least one map or one scenario" in err
+    assert not (tmp_path / "b").exists()

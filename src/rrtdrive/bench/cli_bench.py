@@ -227,8 +227,12 @@ def run(args: argparse.Namespace) -> int:
     """Run the ``bench`` subcommand; return the exit code."""
     from rrtdrive.cli_args import flags_for
 
+    flags = given_flags(args)
+    if "maps" in flags or "scenarios" in flags:  # `--maps ''` read "maps/scenarios: ..."
+        given = [flags[k] for k in ("maps", "scenarios") if k in flags]
+        flags["maps/scenarios"] = "/".join(given)
     try:
-        with flags_for(given_flags(args)):
+        with flags_for(flags):
             return _run(args)
     except InputError as exc:
         print(f"rrtdrive bench: error: {exc}", file=sys.stderr)
