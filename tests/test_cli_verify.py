@@ -359,3 +359,26 @@ def test_a_plan_whose_own_claims_disagree_with_its_gears_fails(capsys, plans, tm
     # The plan as written claims what it does.
     code, out, _ = run(capsys, "verify", str(plans["reverse"]), "--json", "-")
     assert code == 0 and json.loads(out)["claims_ok"] is True
+
+
+def test_the_json_report_has_pathchecks_fields_and_the_ones_readme_names(capsys, plans):
+    import dataclasses
+    from pathlib import Path
+
+    from rrtdrive.verify import PathCheck
+
+    def refuse(constant):
+        raise ValueError(constant)
+
+    code, out, err = run(capsys, "verify", str(plans["reverse"]), "--json", "-")
+    assert code == 0, err
+    doc = json.loads(out, parse_constant=refuse)
+    extra = {"map", "rows", "length_m", "kappa_given", "kappa_max", "max_sharpness",
+             "clearance", "claims_ok", "failed"}
+    assert set(doc) == {f.name for f in dataclasses.fields(PathCheck)} | extra
+    assert doc["ok"] is True and doc["failed"] == [] and doc["cusps"] >= 1
+    assert doc["first_collision"] is None and doc["collides_with"] == ""
+    readme = Path(__file__).resolve().parents[1] / "README.md"
+    if readme.is_file():  # the README's verify section names every field PathCheck lacks
+        section = readme.read_text().split("### `rrtdrive verify`")[1].split("\n### ")[0]
+        assert all(f"`{key}`" in section for key in extra | {"ok"}), extra
