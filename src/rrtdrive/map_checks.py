@@ -97,11 +97,18 @@ def warn_obstacle_yaws(yaws: Sequence[float]) -> None:
 def check_obstacle_numbers(size: tuple[float, float], yaw: float) -> None:
     """Raise :class:`InputError` naming ``obstacle.size`` or ``obstacle.yaw``.
 
-    For numbers a map cannot use: sizes not > 0, a yaw not finite or beyond
-    :data:`MAX_YAW` (as a pose's). A centre may lie far out: a long wall reaches in.
+    For numbers a map cannot use: sizes not > 0 or beyond :data:`MAX_COORDINATE` (a
+    corner at 5e16 m moves by metres: a wall of 1e17 m refused a start 2 m clear of it),
+    a yaw not finite or beyond :data:`MAX_YAW` (as a pose's). A centre may lie far out:
+    a long wall reaches in.
     """
-    require_positive("obstacle.size", size[0])
-    require_positive("obstacle.size", size[1])
+    for side in size:
+        require_positive("obstacle.size", side)
+        if side > MAX_COORDINATE:
+            raise InputError(
+                f"obstacle.size: {side:g} m is longer than {MAX_COORDINATE:g} m; a wall "
+                "need only reach across the bounds"
+            )
     require_finite("obstacle.yaw", yaw)
     if abs(yaw) > MAX_YAW:
         raise InputError(
@@ -231,8 +238,10 @@ def overlap_depth(a: np.ndarray, b: np.ndarray) -> float:
     least = np.inf
     for poly in (a, b):
         edges = np.roll(poly, -1, axis=0) - poly
-        normals = np.column_stack([-edges[:, 1], edges[:, 0]])
-        normals /= np.hypot(normals[:, 0], normals[:, 1])[:, None]
+        lengths = np.hypot(edges[:, 0], edges[:, 1])
+        # A sliver's edge can be 0 long (its corners coincide): it has no normal.
+        edges, lengths = edges[lengths > 0], lengths[lengths > 0]
+        normals = np.column_stack([-edges[:, 1], edges[:, 0]]) / lengths[:, None]
         pa, pb = a @ normals.T, b @ normals.T
         # The shift along each normal that parts the projections, either way (not their
         # common length: one inside the other needs more than that).
