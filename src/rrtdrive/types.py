@@ -9,10 +9,11 @@ from __future__ import annotations
 import enum
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rrtdrive.arrays import ReadOnlyArrays, read_only_array
 from rrtdrive.values import brief_repr, is_finite_number
 
 if TYPE_CHECKING:  # the diagnosis module imports this one
@@ -251,7 +252,7 @@ class VehicleParams:
 
 
 @dataclass(frozen=True, eq=False)
-class Path:
+class Path(ReadOnlyArrays):
     """A sampled path: rows ``[x, y, yaw, kappa, gear]`` of the rear-axle centre.
 
     ``gear`` is +1 driving forward and -1 in reverse; ``yaw`` is where the car's
@@ -397,33 +398,8 @@ class Path:
         return np.concatenate([[0.0], np.cumsum(steps)])
 
 
-def read_only_array(values: Any, dtype: Any = None) -> np.ndarray:
-    """A read-only array of ``values`` that shares no memory with a writable caller's array.
-
-    Parameters
-    ----------
-    values : array_like
-        The data; a read-only array is kept as it is.
-    dtype : data-type, optional
-        The array's type (default: numpy's choice).
-
-    Examples
-    --------
-    >>> mine = np.zeros(3)
-    >>> kept = read_only_array(mine)
-    >>> mine[0] = 1.0
-    >>> float(kept[0]), kept.flags.writeable
-    (0.0, False)
-    """
-    a = np.asarray(values, dtype=dtype)
-    if a.flags.writeable:
-        a = a.copy()
-        a.setflags(write=False)
-    return a
-
-
 @dataclass(frozen=True, eq=False)
-class Tree:
+class Tree(ReadOnlyArrays):
     """A search tree for plotting: node positions and parent indices (-1 for the root).
 
     Parameters
@@ -515,7 +491,7 @@ class Budget:
 
 
 @dataclass(frozen=True, eq=False)
-class PlanResult:
+class PlanResult(ReadOnlyArrays):
     """What every planner returns, successful or not (never ``None``).
 
     Attributes

@@ -20,6 +20,7 @@ from rrtdrive.collision.config import CheckerConfig
 from rrtdrive.collision.distance import distance_field
 from rrtdrive.collision.exact import RectangleTest
 from rrtdrive.collision.grid import GridCache, grid_origin, grid_resolution, grid_shape, rasterise
+from rrtdrive.collision.lock import QueryLock
 from rrtdrive.collision.lookup import ClearanceLookup
 from rrtdrive.collision.width_proof import free_parts, parts_disconnected
 from rrtdrive.geometry import densify
@@ -30,14 +31,14 @@ from rrtdrive.vehicle import axle_disc_radius, cover_discs, footprint_corners
 __all__ = ["CollisionChecker"]
 
 
-
 class CollisionChecker(ClearanceLookup):
     """Collision queries against one map's obstacles and bounds for one car.
 
     Implements :class:`rrtdrive.checking.Checker`. The clearance look-ups are
     :class:`~rrtdrive.collision.lookup.ClearanceLookup`'s. The grid-derived data lives on
     :attr:`grid` (a :class:`~rrtdrive.collision.grid.GridCache`), built lazily and
-    timed in :attr:`setup_time_s`.
+    timed in :attr:`setup_time_s`. Threads may share it: a planner holds :attr:`lock`
+    for a whole query, and so must code calling its methods from several threads.
 
     Parameters
     ----------
@@ -80,6 +81,8 @@ class CollisionChecker(ClearanceLookup):
         self.bounds = tuple(float(b) for b in bounds)
         self.obstacles = tuple(obstacles)
         self.vehicle = vehicle
+        #: Held by a planner for a whole query; threads sharing this checker take turns.
+        self.lock = QueryLock()
         config = config or CheckerConfig()
         self.requested_resolution = config.resolution
         t_setup = time.perf_counter()

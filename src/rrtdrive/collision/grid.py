@@ -350,6 +350,7 @@ class GridCache:
         if self._labels is None:
             t0 = time.perf_counter()
             self._labels, _ = self.reachable_components()
+            self._labels.flags.writeable = False  # shared by every query on the map
             self.setup_time_s += time.perf_counter() - t0
         return self._labels
 
@@ -409,6 +410,7 @@ class GridCache:
             else:
                 stand = self.clearance >= axle_disc_radius(self.vehicle)
                 cells = np.flatnonzero(stand & (self.component_labels == label))
+            cells.flags.writeable = False  # a caller's shuffle would change later plans
             self._free[label] = cells
             self.setup_time_s += time.perf_counter() - t0
         return cells
@@ -483,6 +485,7 @@ class GridCache:
             & (cells[:, 1] > ymin)
             & (cells[:, 1] < ymax)
         ]
+        cells.flags.writeable = False
         self._passages[key] = cells
         self.setup_time_s += time.perf_counter() - t0
         return cells

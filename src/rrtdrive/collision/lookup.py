@@ -38,6 +38,8 @@ class ClearanceLookup:
     ) -> None:
         h = float(resolution)
         self._clearance = np.ascontiguousarray(field, dtype=np.float64)
+        # Read-only: a caller writing into clearance_grid made planners pass through walls.
+        self._clearance.flags.writeable = False
         self._origin = np.asarray(origin, dtype=float)
         nx, ny = self._clearance.shape
         self._shape = (nx, ny)

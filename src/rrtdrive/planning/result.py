@@ -20,6 +20,7 @@ import dataclasses
 import math
 import time
 from collections.abc import Callable
+from contextlib import AbstractContextManager, nullcontext
 
 import numpy as np
 
@@ -149,6 +150,30 @@ def run_query(
     'proven_unreachable'
     """
     check_query(problem, rng, budget)
+    # One query at a time per checker: GEOS prepared geometry is not thread-safe.
+    with query_lock(problem.checker):
+        return _run_query(planner, problem, budget, search, prepare, tree_edges, probe,
+                          reverses, exact_goal_edges, keeps)
+
+
+def query_lock(checker: object) -> AbstractContextManager[object]:
+    """The lock a query on ``checker`` holds (a wrapper's, its static checker's).
+
+    A checker without one (a user's own :class:`~rrtdrive.checking.Checker`) gets none.
+    """
+    lock = getattr(checker, "lock", None)
+    if lock is None:
+        lock = getattr(getattr(checker, "static", None), "lock", None)
+    return lock if lock is not None else nullcontext()
+
+
+def _run_query(
+    planner: str, problem: PlanningProblem, budget: Budget, search: Search,
+    prepare: Callable[[], object] | None, tree_edges: bool,
+    probe: Callable[[], Diagnosis | None] | None, reverses: bool, exact_goal_edges: bool,
+    keeps: float,
+) -> PlanResult:
+    """:func:`run_query`'s body, under the checker's lock."""
     t0 = time.perf_counter()
     checker = problem.checker
     checker.component_labels  # noqa: B018 - built here, read by the precheck

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.base import PlanningProblem, Stopwatch
 from rrtdrive.planning.diagnosis.checks import ARRIVAL_POCKET_M, pocket_run
 from rrtdrive.planning.hybrid.config import HybridConfig
@@ -271,6 +272,21 @@ def _ladder(config: HybridConfig) -> tuple[_Stage, ...]:
     return tuple(stages)
 
 
+def _wrapped(problem: PlanningProblem) -> PlanningProblem:
+    """``problem`` with its start and goal yaw in ``[-pi, pi]`` (itself when they are).
+
+    A start given as 2 pi was searched from cos and sin an ulp off 0's: nodes on cell
+    edges changed bins and the plan changed (an audit). Yaws already in range are kept
+    to the bit, as every plan before.
+    """
+    poses = {
+        name: dataclasses.replace(pose, yaw=wrap_angle(pose.yaw))
+        for name, pose in (("start", problem.start), ("goal", problem.goal))
+        if abs(pose.yaw) > math.pi
+    }
+    return dataclasses.replace(problem, **poses) if poses else problem
+
+
 def hybrid_query(
     problem: PlanningProblem,
     budget: Budget,
@@ -319,6 +335,7 @@ def hybrid_query(
     -------
     HybridAnswer
     """
+    problem = _wrapped(problem)
     left = budget.max_iterations
     have = EndClearance(problem)
     # Each search tried: its settings, how it ended, and its share of the expansions
