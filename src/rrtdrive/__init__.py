@@ -3,11 +3,17 @@
 from __future__ import annotations
 
 import importlib
+import sys
 from typing import TYPE_CHECKING
+
+from rrtdrive.cli_signals import quiet_interrupt_while_loading
+
+# The console script imports this package before its main() can catch a Ctrl-C.
+quiet_interrupt_while_loading(getattr(sys, "argv", None) and sys.argv[0] or "")
 
 # Importing rrtdrive.envs registers the gymnasium ids (rrtdrive/Parking-v0, ...) with
 # entry-point strings: neither highway-env nor pygame is imported here.
-from rrtdrive.envs import ENV_IDS
+from rrtdrive.envs import ENV_IDS  # noqa: E402 - after the handler above
 
 if TYPE_CHECKING:
     from rrtdrive.collision import CheckerConfig, CollisionChecker

@@ -42,7 +42,7 @@ from rrtdrive.cli_args import (
     write_output,
     writing,
 )
-from rrtdrive.cli_signals import EXIT_TERMINATED, sigterm_raises, sigterm_received
+from rrtdrive.cli_signals import EXIT_TERMINATED, loading_done, sigterm_raises, sigterm_received
 from rrtdrive.cli_stdout import run_writing_stdout
 from rrtdrive.cli_warnings import warnings_as_lines
 from rrtdrive.json_safe import options_json
@@ -501,6 +501,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def _interruptible(argv: Sequence[str] | None) -> int:
     # Ctrl-C also while the subcommand's modules load (bench: up to 3 s), not just as it runs.
+    loading_done()  # the package's own imports had their handler (cli_signals)
     try:
         return _main(argv)
     except KeyboardInterrupt:

@@ -8,13 +8,22 @@ exception instead, it unwinds like Ctrl-C's :class:`KeyboardInterrupt`.
 
 from __future__ import annotations
 
+import os
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from types import FrameType
 
-__all__ = ["EXIT_TERMINATED", "Terminated", "sigterm_raises", "sigterm_received"]
+__all__ = [
+    "EXIT_TERMINATED",
+    "Terminated",
+    "loading_done",
+    "quiet_interrupt_while_loading",
+    "sigterm_raises",
+    "sigterm_received",
+]
 
 #: 128 + SIGTERM, as a shell reports a process ended by it.
 EXIT_TERMINATED = 143
@@ -65,3 +74,36 @@ def sigterm_raises() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+#: The console script's names (``rrtdrive``; ``rrtdrive.exe`` on Windows).
+_SCRIPT_NAMES = ("rrtdrive", "rrtdrive.exe")
+
+
+def _interrupted_loading(signum: int, frame: FrameType | None) -> None:
+    # Nothing is open or half-written yet: one line and out, as cli.main says it.
+    sys.stderr.write("rrtdrive: interrupted\n")
+    sys.stderr.flush()
+    os._exit(130)
+
+
+def quiet_interrupt_while_loading(argv0: str) -> None:
+    """In the console script, Ctrl-C before ``cli.main`` runs exits 130 with one line.
+
+    The package's imports (numpy, gymnasium: seconds on a cold machine) run before
+    ``main`` can catch anything, and a Ctrl-C there printed a 20-35 line traceback.
+    Only for the ``rrtdrive`` script (``argv0``) and a default SIGINT handler; ``cli.main``
+    puts the default back (:func:`loading_done`).
+    """
+    if os.path.basename(argv0) not in _SCRIPT_NAMES:
+        return
+    if threading.current_thread() is not threading.main_thread():
+        return
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        signal.signal(signal.SIGINT, _interrupted_loading)
+
+
+def loading_done() -> None:
+    """Ctrl-C raises KeyboardInterrupt again, after :func:`quiet_interrupt_while_loading`."""
+    if signal.getsignal(signal.SIGINT) is _interrupted_loading:
+        signal.signal(signal.SIGINT, signal.default_int_handler)

@@ -180,6 +180,17 @@ def read_image_map(
     )
 
 
+def _yaml_why(exc: Exception) -> str:
+    """A YAML error in one line: PyYAML's problem and where, as JSON's and TOML's read.
+
+    PyYAML's own message runs over 3-4 lines, the offending text and a caret among them.
+    """
+    problem, mark = getattr(exc, "problem", None), getattr(exc, "problem_mark", None)
+    if problem and mark is not None:
+        return f"{problem} (line {mark.line + 1}, column {mark.column + 1})"
+    return "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
+
+
 @functools.cache
 def _yaml_loader() -> type:
     """PyYAML's safe loader reading ``5e-2`` and ``1e-12`` as numbers (YAML 1.2, yaml-cpp).
@@ -254,7 +265,7 @@ def read_ros_map(yaml_file: str | os.PathLike[str], unknown_free: bool = False) 
     except OSError as exc:
         raise InputError(f"map: cannot read {os.fspath(yaml_file)}: {exc.strerror}") from None
     except (yaml.YAMLError, UnicodeDecodeError) as exc:
-        raise InputError(f"map: {os.fspath(yaml_file)} is not YAML: {exc}") from None
+        raise InputError(f"map: {os.fspath(yaml_file)} is not YAML: {_yaml_why(exc)}") from None
     except _DuplicateKey as dup:
         where = (
             f"line {dup.first}" if dup.first == dup.second

@@ -78,6 +78,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help="controllers for scenario runs: pure-pursuit, stanley, lqr (default: pure-pursuit)",
     )
     p.add_argument("--seeds", type=_int_arg, metavar="N", help="seeds 0..N-1 (default 10)")
+    # plan's and simulate's --seed is one seed: argparse read it here as --seeds (a count).
+    p.add_argument("--seed", dest="one_seed", metavar="N", help=argparse.SUPPRESS)
     p.add_argument(
         "--workers", "--jobs", type=_int_arg, metavar="N", dest="workers",
         help="local worker processes (default: one per core); with --ray, runs in flight "
@@ -240,6 +242,11 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
+    if args.one_seed is not None:
+        raise InputError(
+            f"--seed: a bench runs the seeds 0..N-1 of every row; give their count with "
+            f"--seeds N (--seed {args.one_seed} is plan's and simulate's one seed)"
+        )
     from rrtdrive.bench.backends import WorkerStartupError
     from rrtdrive.bench.core import run_bench
     from rrtdrive.cli_args import writing

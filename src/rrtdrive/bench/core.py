@@ -7,6 +7,7 @@ import json
 import logging
 import platform
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import UTC, datetime
@@ -19,6 +20,7 @@ from rrtdrive.bench.ray_backend import RayBackend
 from rrtdrive.bench.store import ResultStore, row_key
 from rrtdrive.bench.summary import remove_plots, summarise_rows, write_plots, write_summary
 from rrtdrive.bench.worker import error_row, execute_run
+from rrtdrive.types import InputWarning
 
 __all__ = ["BenchReport", "Progress", "run_bench", "grid_rows"]
 
@@ -317,6 +319,8 @@ def run_bench(
                             error = outcome.error or "unknown error"
                             row = error_row(outcome.spec, error, outcome.attempts)
                         store.append(row)
+                        for text in row.get("warnings", ()):  # the worker's, said here once
+                            warnings.warn(text, InputWarning, stacklevel=1)
                         executed += 1
                         bar.update(error=outcome.row is None)
                         if on_row is not None:

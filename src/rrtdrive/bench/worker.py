@@ -12,6 +12,7 @@ import functools
 import os
 import socket
 import time
+import warnings
 from datetime import UTC, datetime
 from typing import TYPE_CHECKING, Any
 
@@ -29,7 +30,6 @@ __all__ = ["execute_run", "base_row", "error_row"]
 @functools.lru_cache(maxsize=32)
 def _map(spec: str, content: str | None = None) -> Map:
     import json
-    import warnings
 
     from rrtdrive.maps import map_from_json, resolve_map
     from rrtdrive.types import InputWarning
@@ -108,15 +108,30 @@ def execute_run(spec: RunSpec) -> dict[str, Any]:
     >>> execute_run(spec)["success"]
     True
     """
+    from rrtdrive.types import InputWarning
+
     t0 = time.perf_counter()
-    if spec.kind == "plan":
-        metrics = _plan_metrics(spec)
-    elif spec.kind == "episode":
-        metrics = _episode_metrics(spec)
-    else:
-        raise ValueError(f"kind: unknown run kind {spec.kind!r}")
+    # The run's warnings about its input (a grid coarsened for memory) travel in the row:
+    # the bench's process says each once, on one line, as plan does (a worker printed
+    # them in Python's raw form, once per process; an audit).
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", InputWarning)
+        if spec.kind == "plan":
+            metrics = _plan_metrics(spec)
+        elif spec.kind == "episode":
+            metrics = _episode_metrics(spec)
+        else:
+            raise ValueError(f"kind: unknown run kind {spec.kind!r}")
+    said: list[str] = []
+    for w in caught:
+        if not issubclass(w.category, InputWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        elif str(w.message) not in said:
+            said.append(str(w.message))
     row = base_row(spec)
     row.update(metrics)
+    if said:
+        row["warnings"] = said
     row.update(
         {
             "error": None,
