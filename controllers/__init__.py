@@ -69,19 +69,20 @@ def make_controller(name: str, **options: object) -> TrackingController:
     if not isinstance(name, str):
         raise InputError(
             f"controller: expected a controller name, got {type(name).__name__} "
-            f"{brief_repr(name)}; choose from {sorted(CONTROLLERS)}"
+            f"{brief_repr(name)}; choose from {', '.join(sorted(CONTROLLERS))}"
         )
     try:
         cls = CONTROLLERS[name]
     except KeyError:
         raise InputError(
-            f"controller: unknown controller {name!r}; choose from {sorted(CONTROLLERS)}"
+            f"controller: unknown controller {name!r}; choose from {', '.join(sorted(CONTROLLERS))}"
         ) from None
     known = _option_names(cls)
     for key in options:
         if known is not None and key not in known:
             raise InputError(
-                f"controller.{key}: unknown option of {cls.__name__}; choose from {sorted(known)}"
+                f"controller.{key}: unknown option of {cls.__name__}; "
+                f"choose from {', '.join(sorted(known))}"
             )
     try:
         return cls(**options)  # type: ignore[arg-type]

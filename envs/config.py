@@ -249,7 +249,8 @@ class DriveEnvConfig:
             raise unknown_planner("planner", planner)
         if not isinstance(controller, str) or controller not in CONTROLLERS:
             raise InputError(
-                f"controller: unknown controller {controller!r}; choose from {sorted(CONTROLLERS)}"
+                f"controller: unknown controller {controller!r}; "
+                f"choose from {', '.join(sorted(CONTROLLERS))}"
             )
         if not isinstance(self.residual, (bool, np.bool_)):  # numpy's too, as for the ints
             raise InputError(f"residual: expected True or False, got {self.residual!r}")
@@ -375,7 +376,7 @@ class DriveEnvConfig:
             if key not in SCENARIO_OPTIONS:
                 raise InputError(
                     f"scenario_options.{key}: unknown option of make_scenario; "
-                    f"choose from {list(SCENARIO_OPTIONS)}"
+                    f"choose from {', '.join(SCENARIO_OPTIONS)}"
                 )
         try:
             return make_scenario(self.scenario, seed, **options)
@@ -453,7 +454,8 @@ def _map_task(m: Map, seed: int, options: Mapping[str, Any]) -> Scenario:
     for key in options:
         if key not in MAP_OPTIONS:
             raise InputError(
-                f"scenario_options.{key}: not an option of a map; choose from {list(MAP_OPTIONS)}"
+                f"scenario_options.{key}: not an option of a map; "
+                f"choose from {', '.join(MAP_OPTIONS)}"
             )
     reverse = options.get("reverse", False)
     if not isinstance(reverse, (bool, np.bool_)):

@@ -280,7 +280,7 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
         for key in opts:
             if key not in _RESET_OPTIONS:
                 raise InputError(
-                    f"options.{key}: unknown reset option; choose from {list(_RESET_OPTIONS)}"
+                    f"options.{key}: unknown reset option; choose from {', '.join(_RESET_OPTIONS)}"
                 )
         requested = opts.get("episode_seed")
         if requested is not None:

@@ -882,7 +882,7 @@ def test_an_unknown_controller_option_is_named() -> None:
 
     Guards the factory's own check of option names.
     """
-    named = r"controller\.gain: unknown option of LQR; choose from \["
+    named = r"controller\.gain: unknown option of LQR; choose from approach_angle, bandwidth, "
     with pytest.raises(InputError, match=named):
         make_controller("lqr", gain=3)
 

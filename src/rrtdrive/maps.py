@@ -462,7 +462,8 @@ def builtin_map(name: str) -> Map:
     factory = BUILTIN_MAPS.get(name) if isinstance(name, str) else None
     if factory is None:
         raise InputError(
-            f"map: unknown map {name!r}; built-ins are {sorted(BUILTIN_MAPS)} or give a .json file"
+            f"map: unknown map {name!r}; built-ins are {', '.join(sorted(BUILTIN_MAPS))} "
+            "or give a .json file"
         )
     return _built_map(name, factory)
 

@@ -548,7 +548,7 @@ class PlanResult(ReadOnlyArrays):
                 object.__setattr__(self, "status", PlanStatus(self.status))
             except ValueError:
                 raise InputError(
-                    f"result.status: must be one of {[k.value for k in PlanStatus]}, "
+                    f"result.status: must be one of {', '.join(k.value for k in PlanStatus)}, "
                     f"got {brief_repr(self.status)}"
                 ) from None
         raw = np.zeros((0, 2)) if self.raw_path is None else self.raw_path

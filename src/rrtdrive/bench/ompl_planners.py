@@ -196,7 +196,8 @@ class OmplPlanner:
             raise InputError(f"space: expected one of {SPACES}, got {self.space!r}")
         if self.algorithm not in ALGORITHMS:
             raise InputError(
-                f"algorithm: expected one of {sorted(ALGORITHMS)}, got {self.algorithm!r}"
+                f"algorithm: expected one of {', '.join(sorted(ALGORITHMS))}, "
+                f"got {self.algorithm!r}"
             )
         if self.range_m is not None and not (
             isinstance(self.range_m, (int, float)) and math.isfinite(self.range_m)

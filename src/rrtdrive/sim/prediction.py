@@ -86,7 +86,9 @@ def predict(
     [10.0, 0.0]
     """
     if method not in PREDICTORS:
-        raise InputError(f"predictor: unknown predictor {method!r}; choose from {list(PREDICTORS)}")
+        raise InputError(
+            f"predictor: unknown predictor {method!r}; choose from {', '.join(PREDICTORS)}"
+        )
     require_positive("prediction.horizon", horizon)
     require_positive("prediction.step", step)
     vehicles = list(vehicles)

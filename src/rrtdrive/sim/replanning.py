@@ -154,7 +154,7 @@ class ReplanConfig:
         if self.predictor not in PREDICTORS:
             raise InputError(
                 f"replan.predictor: unknown predictor {self.predictor!r}; "
-                f"choose from {list(PREDICTORS)}"
+                f"choose from {', '.join(PREDICTORS)}"
             )
         for name in (
             "horizon_s", "prediction_step", "complete_gap_m", "max_plan_length_m",

@@ -114,7 +114,7 @@ def make_stock_env(
     import highway_env  # noqa: F401  (registers its envs)
 
     if env_id not in STOCK_ENVS:
-        raise InputError(f"env: unknown stock env {env_id!r}; choose from {list(STOCK_ENVS)}")
+        raise InputError(f"env: unknown stock env {env_id!r}; choose from {', '.join(STOCK_ENVS)}")
     params = vehicle or VehicleParams()
     config = {
         "simulation_frequency": int(frequency),

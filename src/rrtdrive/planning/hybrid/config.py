@@ -391,7 +391,9 @@ class HybridConfig:
                 f"got {self.long_steps!r}"
             )
         if self.curve not in CURVES:
-            raise InputError(f"hybrid.curve: must be one of {list(CURVES)}, got {self.curve!r}")
+            raise InputError(
+                f"hybrid.curve: must be one of {', '.join(CURVES)}, got {self.curve!r}"
+            )
         require_int("hybrid.shot_interval", self.shot_interval)
         require_int("hybrid.max_solutions", self.max_solutions)
         require_int("hybrid.switch_after", self.switch_after, minimum=0)

@@ -307,7 +307,7 @@ class ImprovedConfig:
         require_int("planner.reverse_postprocess_attempts", self.reverse_postprocess_attempts)
         if self.escalation_first not in ESCALATION_FIRST:
             raise InputError(
-                f"planner.escalation_first: must be one of {list(ESCALATION_FIRST)}, "
+                f"planner.escalation_first: must be one of {', '.join(ESCALATION_FIRST)}, "
                 f"got {self.escalation_first!r}"
             )
         require_finite("planner.passage_bias", self.passage_bias)
@@ -518,5 +518,5 @@ def _check_components(components: tuple[str, ...]) -> None:
     for name in components:
         if name not in COMPONENTS:
             raise InputError(
-                f"planner.disable: unknown component {name!r}; choose from {list(COMPONENTS)}"
+                f"planner.disable: unknown component {name!r}; choose from {', '.join(COMPONENTS)}"
             )

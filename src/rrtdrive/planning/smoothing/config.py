@@ -186,7 +186,7 @@ class SmoothingConfig:
             object.__setattr__(self, "curve", CurveKind(self.curve))
         if not isinstance(self.curve, CurveKind):
             raise InputError(
-                f"smoothing.curve: must be one of {[k.value for k in CurveKind]}, "
+                f"smoothing.curve: must be one of {', '.join(k.value for k in CurveKind)}, "
                 f"got {self.curve!r}"
             )
         if self.min_sharpness > self.max_sharpness:

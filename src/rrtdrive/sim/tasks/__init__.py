@@ -322,7 +322,7 @@ def make_scenario(name: str, seed: int = 0, **options: Any) -> Task:
             raise InputError(_NOT_HERE[key])
         del options[key]
     if cls is None:
-        raise InputError(f"scenario: unknown scenario {name!r}; choose from {list(SCENARIOS)}")
+        raise InputError(f"scenario: unknown scenario {name!r}; choose from {', '.join(SCENARIOS)}")
     vehicle = vehicle or VehicleParams()
     offset = tuple(float(rng.uniform(-j, j)) if j > 0 else 0.0 for j in jitter)
     return cls.create(seed, rng, offset, vehicle, **options)  # type: ignore[attr-defined]

@@ -172,7 +172,7 @@ def _density(density: object) -> float:
             density = float(density)
         except ValueError:
             raise InputError(
-                f"density: expected cars per km or one of {sorted(TRAFFIC_DENSITIES)}, "
+                f"density: expected cars per km or one of {', '.join(sorted(TRAFFIC_DENSITIES))}, "
                 f"got {density!r}"
             ) from None
     require_positive("density", density)  # type: ignore[arg-type]
@@ -227,7 +227,7 @@ class OvertakeTrafficTask(Task):
         if self.lead_model not in LEAD_MODELS:
             raise InputError(
                 f"lead_model: unknown lead model {self.lead_model!r}; "
-                f"choose from {list(LEAD_MODELS)}"
+                f"choose from {', '.join(LEAD_MODELS)}"
             )
         if not (math.isfinite(self.ego_speed) and self.ego_speed >= 0):
             raise InputError(f"scenario.ego_speed: must be >= 0, got {self.ego_speed!r}")
@@ -262,7 +262,7 @@ class OvertakeTrafficTask(Task):
         model = "idm" if lead_model is None else lead_model
         if model not in LEAD_MODELS:
             raise InputError(
-                f"lead_model: unknown lead model {model!r}; choose from {list(LEAD_MODELS)}"
+                f"lead_model: unknown lead model {model!r}; choose from {', '.join(LEAD_MODELS)}"
             )
         dx, dy, dyaw = offset
         start = Pose(TRAFFIC_START_X + dx, 44.0 + 0.3 * dy, 0.4 * dyaw)
