@@ -28,8 +28,6 @@ def _committed_json() -> list[Path]:
 
 
 @pytest.mark.skipif(not (ROOT / "results").is_dir(), reason="needs the repository's results/")
-@pytest.mark.xfail(strict=True, reason="table3.json and bench_planners_parking_lot.json were "
-                   "written before json_text; their re-runs are pending")
 def test_every_committed_results_file_is_strict_json():
     files = _committed_json()
     assert len(files) > 10
