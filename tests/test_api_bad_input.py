@@ -7,6 +7,8 @@ Hybrid A* heading bin built a table of gigabytes, and several types went uncheck
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -28,8 +30,16 @@ def test_huge_bounds_are_refused_at_once_naming_bounds(side: float) -> None:
 
 
 @pytest.mark.parametrize("size", [1e18, 1e19, 1e300])
-def test_a_wall_reaching_far_beyond_the_map_still_blocks_it(size: float) -> None:
-    wall = Obstacle((15.0, size / 2), (1.0, size))
+def test_a_wall_longer_than_a_billion_metres_is_refused_naming_its_size(size: float) -> None:
+    # A turned one's corners at +-5e16 m rounded by 8 m and moved the wall (session 49).
+    with pytest.raises(InputError, match=r"^obstacle\.size: .* is longer than 1e\+09 m"):
+        Obstacle((15.0, size / 2), (1.0, size))
+
+
+@pytest.mark.parametrize("yaw", [0.0, 0.3])
+def test_a_wall_reaching_far_beyond_the_map_still_blocks_it(yaw: float) -> None:
+    size = 1e9  # the longest a side may be, straight or turned, centred on the map
+    wall = Obstacle((15.0, 10.0), (size, 1.0), yaw + math.pi / 2)
     m = Map("wall", (0.0, 0.0, 30.0, 20.0), (wall,), START, GOAL)
     problem = PlanningProblem.from_map(m)
     assert not problem.checker.pose_free((15.0, 5.0, 0.0))

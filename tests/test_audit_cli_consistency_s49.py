@@ -408,14 +408,19 @@ def test_simulate_stopped_mid_drive_keeps_the_earlier_json_and_trajectory(tmp_pa
     assert _snapshot(tmp_path / "run") == before
 
 
-def test_ctrl_c_while_the_package_imports_is_exit_130_without_traceback(tmp_path):
+@pytest.mark.parametrize(("sig", "code", "said"), [
+    (signal.SIGINT, 130, "rrtdrive: interrupted"), (signal.SIGTERM, 143, "rrtdrive: terminated"),
+])
+def test_ctrl_c_while_the_package_imports_is_exit_130_without_traceback(tmp_path, sig, code,
+                                                                        said):
     (tmp_path / "run").mkdir()
     # numpy is the first heavy import; the run waits there 5 s, then the signal comes.
-    rc, err = _interrupt(["plan", "garage"], tmp_path, signal.SIGINT, mark="numpy",
+    # (SIGTERM there killed the process without its line: exit -15.)
+    rc, err = _interrupt(["plan", "garage"], tmp_path, sig, mark="numpy",
                          after=0.1, sleep=5.0)
     assert "Traceback" not in err
-    assert rc == 130
-    assert err.strip().splitlines() == ["rrtdrive: interrupted"]
+    assert rc == code
+    assert err.strip().splitlines() == [said]
 
 
 # ------------------------------------------------------ strict JSON, one value per key

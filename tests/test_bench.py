@@ -140,7 +140,7 @@ def test_cli_bad_input_exit_2(tmp_path, capsys):
         (["bench", "--maps", "overtake", "--max-time", "-1", "--out", str(tmp_path)],
          "--max-time"),
         (["bench", "--maps", "overtake", "--out", str(tmp_path / "afile")], "--out"),
-        (["bench", "--config", str(tmp_path / "none.toml")], "config"),
+        (["bench", "--config", str(tmp_path / "none.toml")], "--config"),
     ):
         assert main(argv) == 2
         err = capsys.readouterr().err.strip()

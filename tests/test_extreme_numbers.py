@@ -69,7 +69,9 @@ def test_an_obstacle_far_out_or_turned_too_far(capsys, tmp_path):
     _one_line(*_run(capsys, "plan", turned), "obstacles[0].yaw: 1e+300 rad is beyond")
     with pytest.raises(InputError, match=r"^obstacle\.yaw: "):
         Obstacle((0.0, 0.0), (1.0, 1.0), 1e7)
-    assert Obstacle((0.0, 1e300), (1.0, 2e300)).size[1] == 2e300  # a wall may reach in
+    assert Obstacle((0.0, 1e9), (1.0, 1e9)).size[1] == 1e9  # a wall may reach in
+    with pytest.raises(InputError, match=r"^obstacle\.size: 2e\+300 m is longer than"):
+        Obstacle((0.0, 1e300), (1.0, 2e300))  # not from beyond a billion metres
 
 
 def test_a_yaw_beyond_the_limit_is_one_error_not_a_warning_first(capsys, tmp_path):

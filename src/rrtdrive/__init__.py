@@ -8,8 +8,11 @@ from typing import TYPE_CHECKING
 
 from rrtdrive.cli_signals import quiet_interrupt_while_loading
 
-# The console script imports this package before its main() can catch a Ctrl-C.
-quiet_interrupt_while_loading(getattr(sys, "argv", None) and sys.argv[0] or "")
+# The console script imports this package before its main() can catch a Ctrl-C. Its
+# path as Python was started (orig_argv): a bench's spawned workers get its sys.argv.
+_started = getattr(sys, "orig_argv", [])
+quiet_interrupt_while_loading(_started[1] if len(_started) > 1 else "")
+del _started
 
 # Importing rrtdrive.envs registers the gymnasium ids (rrtdrive/Parking-v0, ...) with
 # entry-point strings: neither highway-env nor pygame is imported here.

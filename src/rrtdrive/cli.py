@@ -38,6 +38,7 @@ from rrtdrive.cli_args import (
     planner_option_flags,
     positive_float,
     positive_int,
+    register_ompl_if_named,
     validate_output,
     write_output,
     writing,
@@ -189,6 +190,11 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     validate_output(args.json, "--json")
     validate_output(args.plot, "--plot", PLOT_SUFFIXES, allow_stdout=False)
     distinct_outputs({"MAP": args.map}, json=args.json, plot=args.plot)
+    register_ompl_if_named(args.planner)
+    if args.planner.startswith("ompl-rs-") and not args.reverse:
+        # Reeds-Shepp curves change gear whatever the problem says: a plan without
+        # --reverse would claim "reverse": false over a path with cusps.
+        raise InputError(f"--planner: {args.planner} changes gear (Reeds-Shepp); give --reverse")
     if args.disable and args.planner in PLANNERS:
         takes = sorted(n for n in PLANNERS if _takes_option(PLANNERS[n], "disable"))
         if args.planner not in takes:
@@ -347,7 +353,9 @@ def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
         metavar="NAME",
         help=f"one of {', '.join(sorted(PLANNERS))} (default: {default_planner})",
     )
-    plan.add_argument("--seed", type=nonneg_int, default=0, help="random seed (default 0)")
+    plan.add_argument(
+        "--seed", type=nonneg_int, default=0, metavar="N", help="random seed (default 0)"
+    )
     plan.add_argument(
         "--step", type=float, default=None,
         help="step in metres: the tree's, or hybrid-a-star's expansion step (planner default)",

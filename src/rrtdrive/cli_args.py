@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from rrtdrive.maps import Map
 
 __all__ = [
+    "register_ompl_if_named",
     "OutputError",
     "cell_size",
     "distinct_outputs",
@@ -218,6 +219,16 @@ def _flagged(text: str, fields: Mapping[str, str]) -> str | None:
     """``text`` (``"field: ..."``) with its field replaced by its flag; ``None`` if not one."""
     field, sep, rest = text.partition(": ")
     return f"{fields[field]}: {rest}" if sep and field in fields else None
+
+
+def register_ompl_if_named(planner: str | None) -> None:
+    """Register the OMPL comparators when ``planner`` names one (``ompl-rs-rrtconnect``).
+
+    They live with the bench (``rrtdrive.bench.ompl_planners``), which ``plan`` and
+    ``simulate`` do not load otherwise; OMPL itself is needed only when one plans.
+    """
+    if isinstance(planner, str) and planner.startswith("ompl-"):
+        import rrtdrive.bench.ompl_planners  # noqa: F401 - registers them by name
 
 
 def parse_planner_options(texts: Sequence[str] | None, flag: str) -> dict[str, object]:

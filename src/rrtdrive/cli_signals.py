@@ -87,13 +87,21 @@ def _interrupted_loading(signum: int, frame: FrameType | None) -> None:
     os._exit(130)
 
 
+def _terminated_loading(signum: int, frame: FrameType | None) -> None:
+    sys.stderr.write("rrtdrive: terminated\n")
+    sys.stderr.flush()
+    os._exit(EXIT_TERMINATED)
+
+
 def quiet_interrupt_while_loading(argv0: str) -> None:
-    """In the console script, Ctrl-C before ``cli.main`` runs exits 130 with one line.
+    """In the console script, Ctrl-C or SIGTERM before the command runs is one line.
 
     The package's imports (numpy, gymnasium: seconds on a cold machine) run before
-    ``main`` can catch anything, and a Ctrl-C there printed a 20-35 line traceback.
-    Only for the ``rrtdrive`` script (``argv0``) and a default SIGINT handler; ``cli.main``
-    puts the default back (:func:`loading_done`).
+    ``main`` can catch anything: a Ctrl-C there printed a 20-35 line traceback, and a
+    SIGTERM before :func:`sigterm_raises` killed the process without its line. Exit
+    130 or 143, as later. Only for the ``rrtdrive`` script (``argv0``) and default
+    handlers; ``cli.main`` puts SIGINT's back (:func:`loading_done`), and
+    :func:`sigterm_raises` takes SIGTERM over for the command.
     """
     if os.path.basename(argv0) not in _SCRIPT_NAMES:
         return
@@ -101,6 +109,8 @@ def quiet_interrupt_while_loading(argv0: str) -> None:
         return
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
         signal.signal(signal.SIGINT, _interrupted_loading)
+    if signal.getsignal(signal.SIGTERM) == signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, _terminated_loading)
 
 
 def loading_done() -> None:

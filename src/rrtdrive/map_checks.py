@@ -73,6 +73,8 @@ def warn_if_degrees(label: str, yaw: float) -> None:
     """
     if _past_a_full_turn(yaw):
         wrapped = math.degrees(math.remainder(yaw, 2.0 * math.pi))
+        if round(wrapped, 1) == 0.0:
+            wrapped = 0.0  # -4 pi read "taken as -0.0 deg"
         warnings.warn(
             f"{label}: yaw {yaw:g} is more than a full turn; yaws are in radians, so it is "
             f"taken as {wrapped:.1f} deg; for {yaw:g} deg write {math.radians(yaw):.4f}",

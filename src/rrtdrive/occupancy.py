@@ -126,6 +126,7 @@ def read_image_map(
         unknown ``mode``.
     """
     import imageio.v3 as iio
+    import PIL.Image
 
     res = _number(resolution, "resolution", 1e-6, 1e3)
     occ = _number(occupied_thresh, "occupied_thresh", 0.0, 1.0)
@@ -139,14 +140,19 @@ def read_image_map(
     x0 = _number(origin[0], "origin", -MAX_COORDINATE, MAX_COORDINATE)
     y0 = _number(origin[1], "origin", -MAX_COORDINATE, MAX_COORDINATE)
     name = os.fspath(image)
-    if not os.path.isfile(name):
-        raise InputError(f"image: {name} is not a file")
+    if not os.path.isfile(name):  # said as a missing .yaml is (an audit)
+        why = "a folder, not a file" if os.path.isdir(name) else "No such file or directory"
+        raise InputError(f"image: cannot read {name}: {why}")
     try:
         with warnings.catch_warnings():  # imageio's plugin probe warns about its DICOM one
             warnings.simplefilter("ignore", DeprecationWarning)
+            warnings.simplefilter("ignore", PIL.Image.DecompressionBombWarning)  # sized below
+            as_mode = _read_mode(name)
             # The first frame of a GIF or page of a TIFF (all of them read as one array:
             # a GIF was refused, a two-page TIFF read as two colour channels; an audit).
-            raw = np.asarray(iio.imread(name, index=0, plugin="pillow"))
+            raw = np.asarray(iio.imread(name, index=0, plugin="pillow", mode=as_mode))
+    except InputError:
+        raise
     except (OSError, ValueError, SyntaxError) as exc:  # pillow's and imageio's failures
         # imageio's own text runs to several lines of plugins to install: one line here.
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
@@ -164,20 +170,60 @@ def read_image_map(
     else:
         scale = 1.0
     pixels = raw.astype(float)
+    see_through = np.zeros(pixels.shape[:2], dtype=bool)
     if pixels.ndim == 3:
         # map_server averages every channel in trinary mode, alpha too ("to preserve
-        # existing behavior"), and leaves alpha (a 2- or 4-channel image's last) out in
-        # scale mode.
+        # existing behavior"); in scale mode it leaves alpha (a 2- or 4-channel image's
+        # last) out of the mean, and a pixel not opaque is unknown ("any transparency
+        # will be interpreted as unknown"; nav2's map_io: alpha != opaque).
         has_alpha = pixels.shape[2] in (2, 4)
-        pixels = (pixels[..., :-1] if mode == "scale" and has_alpha else pixels).mean(axis=2)
+        if mode == "scale" and has_alpha:
+            see_through = pixels[..., -1] < scale
+            pixels = pixels[..., :-1]
+        pixels = pixels.mean(axis=2)
     if pixels.ndim != 2 or pixels.size == 0:
         raise InputError(f"image: expected a 2-D image, got shape {pixels.shape}")
     p = pixels / scale if negate else (scale - pixels) / scale
-    occupied = p > occ
-    unknown = ~occupied & ~(p < free)
+    occupied = (p > occ) & ~see_through
+    unknown = ~occupied & (~(p < free) | see_through)
     return ImageMap(
         occupied | (unknown & (not unknown_free)), res, (x0, y0), int(unknown.sum()), unknown
     )
+
+
+#: The most pixels an image may have: Pillow's own guard against decompression bombs
+#: (a 10000 x 10000 image took 10 s and 2 GB to import; a larger one failed as "an
+#: unknown error occurred while initializing plugin `pillow`"; an audit).
+MAX_IMAGE_PIXELS = 89_478_485
+
+
+def _read_mode(name: str) -> str | None:
+    """The mode to read ``name``'s first frame in; refuse an image too large to read.
+
+    A palette or grey image with a transparent colour (a PNG's tRNS chunk) is read as
+    RGBA, so its transparency counts as in an RGBA picture (imageio read it as RGB,
+    and a transparent background became free floor); a CMYK one as RGB (its four inks
+    were averaged as R, G, B and alpha: white paper read as black). ``None``: as it is.
+    """
+    import PIL.Image
+
+    limit, PIL.Image.MAX_IMAGE_PIXELS = PIL.Image.MAX_IMAGE_PIXELS, None  # the size first
+    try:
+        opened = PIL.Image.open(name)
+    finally:
+        PIL.Image.MAX_IMAGE_PIXELS = limit
+    with opened as im:
+        w, h = im.size
+        if w * h > MAX_IMAGE_PIXELS:
+            raise InputError(
+                f"image: {name} has {w} x {h} = {w * h:,} pixels, more than the "
+                f"{MAX_IMAGE_PIXELS:,} read; crop it or scale it down (and its resolution up)"
+            )
+        if im.mode == "CMYK":
+            return "RGB"
+        if im.mode in ("P", "L", "RGB") and "transparency" in im.info:
+            return "RGBA"
+    return None
 
 
 def _yaml_why(exc: Exception) -> str:

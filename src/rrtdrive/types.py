@@ -337,6 +337,13 @@ class Path(ReadOnlyArrays):
         object.__setattr__(self, "samples", s)
         object.__setattr__(self, "waypoints", w)
 
+    def __repr__(self) -> str:
+        # numpy printed up to a thousand numbers in full (20 161 characters for 195 rows).
+        return (
+            f"Path(rows={len(self.samples)}, length={self.length:.2f} m, "
+            f"cusps={len(self.cusps)}, waypoints={len(self.waypoints)})"
+        )
+
     @classmethod
     def empty(cls) -> Path:
         """An empty path ``(0, 5)``, used by failed plans."""
@@ -520,7 +527,8 @@ class PlanResult(ReadOnlyArrays):
     setup_time_s : float
         Wall time of the per-map set-up this query triggered (connectivity labels,
         sampling cells, expanded obstacles, passage cells), outside ``planning_time_s``
-        and outside the budget; 0 when the map's checker had it all already.
+        and outside the budget; near 0 (its cache look-ups, under a millisecond) when
+        the map's checker had it all already.
     diagnosis : rrtdrive.planning.diagnosis.Diagnosis or None
         On a failure, the constraint that makes the query hard or impossible, in
         the user's terms (:func:`rrtdrive.planning.diagnosis.diagnose`); ``None``

@@ -327,8 +327,9 @@ def run(args: argparse.Namespace) -> int:
             detail = "; ".join(claims) or "reverse and cusps as its path"
             print(f"  {mark} {'the plan says what its path does':48s} {detail}", file=out)
     if check.failed == ("sharpness_ok",):
-        print("  (only the sharpness fails: paths of --paper-smoothing jump in curvature by "
-              "design; --no-sharpness checks the rest)", file=out)
+        print("  (only the sharpness fails: paths of --paper-smoothing and of planners "
+              "without a steering-rate limit, such as OMPL's, jump in curvature by design; "
+              "--no-sharpness checks the rest)", file=out)
     if args.json == "-":
         write_output(args.json, text)
     return EXIT_OK if not failed else EXIT_FAILED

@@ -230,6 +230,8 @@ def run(args: argparse.Namespace) -> int:
     from rrtdrive.cli_args import flags_for
 
     flags = given_flags(args)
+    if args.config:  # the file's own errors name the flag ("config: no such file" did not)
+        flags["config"] = "--config"
     if "maps" in flags or "scenarios" in flags:  # `--maps ''` read "maps/scenarios: ..."
         given = [flags[k] for k in ("maps", "scenarios") if k in flags]
         flags["maps/scenarios"] = "/".join(given)

@@ -191,6 +191,11 @@ class OmplPlanner:
     simplify: bool = True
     name: str = field(init=False)
 
+    @property
+    def reverses(self) -> bool:
+        """Whether its paths change gear: Reeds–Shepp's do, whether or not asked to."""
+        return self.space == "rs"
+
     def __post_init__(self) -> None:
         if self.space not in SPACES:
             raise InputError(f"space: expected one of {SPACES}, got {self.space!r}")
@@ -451,7 +456,9 @@ def _register() -> None:
         for algorithm in ALGORITHMS:
             name = f"ompl-{space}-{algorithm}"
             if name not in PLANNERS:
-                PLANNERS[name] = functools.partial(OmplPlanner, space, algorithm)
+                factory = functools.partial(OmplPlanner, space, algorithm)
+                factory.reverses = space == "rs"  # type: ignore[attr-defined]  # reverses()
+                PLANNERS[name] = factory
 
 
 _register()

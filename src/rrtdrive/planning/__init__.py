@@ -153,7 +153,8 @@ def unknown_planner(field: str, name: object) -> InputError:
     --planner: unknown planner 'hybrid-astar' (did you mean 'hybrid-a-star'?); choose from ...
     """
     hint = ""
-    if isinstance(name, str) and name.startswith("ompl-") and name not in PLANNERS:
+    ompl_known = any(n.startswith("ompl-") for n in PLANNERS)
+    if isinstance(name, str) and name.startswith("ompl-") and not ompl_known:
         # The OMPL comparators register when the bench loads (planning knows no bench).
         hint = (
             "; the OMPL comparators (ompl-r2-*, ompl-rs-*) are registered by "
@@ -196,5 +197,6 @@ def forward_only_note(name: str, *, why: str = "", asked: str = "--reverse takes
     >>> forward_only_note("rrt")
     'note: rrt plans forward only; --reverse takes effect with hybrid-a-star, improved-rrt-connect'
     """
-    takes = ", ".join(sorted(n for n in PLANNERS if reverses(n)))
+    # Not the OMPL comparators: their Reeds-Shepp curves change gear whatever is asked.
+    takes = ", ".join(sorted(n for n in PLANNERS if reverses(n) and not n.startswith("ompl-")))
     return f"note: {name} plans forward only{why}; {asked} effect with {takes}"

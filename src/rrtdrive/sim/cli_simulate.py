@@ -36,6 +36,7 @@ from rrtdrive.cli_args import (
     planner_option_flags,
     positive_float,
     positive_int,
+    register_ompl_if_named,
     validate_output,
     writing,
 )
@@ -363,6 +364,9 @@ def _run(args: argparse.Namespace) -> int:
         )
     if args.planner is None:
         args.planner = DEFAULT_PLANNER
+    register_ompl_if_named(args.planner)
+    if args.planner.startswith("ompl-rs-") and not getattr(args, "reverse", False):
+        raise InputError(f"--planner: {args.planner} changes gear (Reeds-Shepp); give --reverse")
     if args.planner not in PLANNERS:
         from rrtdrive.planning import unknown_planner
 
