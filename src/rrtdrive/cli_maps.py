@@ -136,6 +136,9 @@ def _cmd_import(args: argparse.Namespace) -> int:
         + (f" ({groups} specks of <= {args.despeckle} cells dropped: {cells} cells)"
            if args.despeckle else "")
         + f" -> {args.out}"
+        # Thousands of rectangles: a scan's noise, which slows every query's set-up.
+        + (" (many: if they are a scan's noise, --despeckle N drops them)"
+           if len(m.obstacles) > 5000 and not args.despeckle else "")
     )  # fmt: skip
     return 0
 

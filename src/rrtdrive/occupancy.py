@@ -226,6 +226,17 @@ def _read_mode(name: str) -> str | None:
     return None
 
 
+def _unquoted(value: object) -> object:
+    """A quoted number as the number (``"0.05"``, ``"1"``); anything else as it is."""
+    if isinstance(value, str):
+        try:
+            number = float(value)
+        except ValueError:
+            return value
+        return int(number) if number.is_integer() and value.strip().isdigit() else number
+    return value
+
+
 def _yaml_why(exc: Exception) -> str:
     """A YAML error in one line: PyYAML's problem and where, as JSON's and TOML's read.
 
@@ -325,7 +336,13 @@ def read_ros_map(yaml_file: str | os.PathLike[str], unknown_free: bool = False) 
     for key in ("image", "resolution", "origin"):
         if key not in data:
             raise InputError(f"{key}: missing in {os.fspath(yaml_file)} (a ROS map .yaml)")
+    # map_server (yaml-cpp's as<double>) reads a quoted number as the number: "0.05".
+    for key in ("resolution", "occupied_thresh", "free_thresh", "negate"):
+        if key in data:
+            data[key] = _unquoted(data[key])
     origin = data["origin"]
+    if isinstance(origin, list):
+        origin = [_unquoted(v) for v in origin]
     if not isinstance(origin, list) or len(origin) not in (2, 3):
         raise InputError(f"origin: expected [x, y, yaw], got {brief_repr(origin)}")
     if len(origin) == 3:
