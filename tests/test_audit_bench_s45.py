@@ -233,8 +233,10 @@ def _check_md_against_csv(out: Path) -> int:
                 elif int(s["n"]) < 2:
                     want = fmt.format(mean * scale)
                 else:
+                    med = _f(s["median"])  # the CSV's median, also in the page (s49)
                     want = (f"{fmt.format(mean * scale)} ± {fmt.format(std * scale)} "
-                            f"[{fmt.format(lo * scale)}, {fmt.format(hi * scale)}]")
+                            f"[{fmt.format(lo * scale)}, {fmt.format(hi * scale)}], "
+                            f"median {fmt.format(med * scale)}")
                 assert row[column] == want, (row[first], row["planner"], column)
     return checked
 

@@ -229,19 +229,21 @@ def _cell(s: Stat | None, scale: float, fmt: str) -> str:
     mean = fmt.format(s.mean * scale)
     if s.n < 2:
         return mean
+    # The median too: times are skewed (a few slow runs pull the mean up).
     return (
         f"{mean} ± {fmt.format(s.std * scale)} "
-        f"[{fmt.format(s.ci_low * scale)}, {fmt.format(s.ci_high * scale)}]"
+        f"[{fmt.format(s.ci_low * scale)}, {fmt.format(s.ci_high * scale)}], "
+        f"median {fmt.format(s.median * scale)}"
     )
 
 
 def to_markdown(groups: Sequence[GroupSummary], title: str = "Bench summary") -> str:
-    """Markdown tables (planning-only and closed-loop): mean ± std [95 % CI] per group."""
+    """Markdown tables (planning-only and closed-loop): mean ± std [95 % CI], median."""
     lines = [f"# {title}", ""]
     lines.append(
-        "Cells: mean ± std [95 % CI] over the runs with a value (bootstrap interval "
-        "for non-negative quantities, Student's t for signed ones); rates with the "
-        "Wilson 95 % interval. Lengths and curvatures only of successful runs."
+        "Cells: mean ± std [95 % CI], median, over the runs with a value (bootstrap "
+        "interval for non-negative quantities, Student's t for signed ones); rates with "
+        "the Wilson 95 % interval. Lengths and curvatures only of successful runs."
     )
     for kind, heading in (("plan", "Planning only"), ("episode", "Closed loop")):
         gs = [g for g in groups if g.kind == kind]
