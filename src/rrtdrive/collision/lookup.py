@@ -40,7 +40,8 @@ class ClearanceLookup:
         self._clearance = np.ascontiguousarray(field, dtype=np.float64)
         # Read-only: a caller writing into clearance_grid made planners pass through walls.
         self._clearance.flags.writeable = False
-        self._origin = np.asarray(origin, dtype=float)
+        self._origin = np.array(origin, dtype=float)  # its own, read-only as the field
+        self._origin.flags.writeable = False
         nx, ny = self._clearance.shape
         self._shape = (nx, ny)
         self._inv_h = 1.0 / h

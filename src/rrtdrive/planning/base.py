@@ -147,7 +147,11 @@ _CHECKERS: dict[tuple[object, ...], CollisionChecker] = {}
 
 
 def cached_checker(m: Map, config: CheckerConfig | None = None) -> CollisionChecker:
-    """The checker for ``m``'s obstacles, bounds and car, built once per process."""
+    """The checker for ``m``'s obstacles, bounds and car, built once and kept.
+
+    The process keeps up to 17; an 18th distinct map clears them all (each holds its
+    grids, tens of MB for a 100 m map, and what its queries' set-up builds).
+    """
     config = config or CheckerConfig()
     key = (m.bounds, m.obstacles, m.vehicle, config)
     checker = _CHECKERS.get(key)
