@@ -99,7 +99,7 @@ def test_plan_help_defaults_are_the_json_defaults(work):
     iters = re.search(r"--max-iterations N .*?\(default (\d+)\)", helptext)
     cap = re.search(r"--max-time S .*?\(default ([\d.]+)\)", helptext)
     res = re.search(r"--resolution M .*?\(default ([\d.]+)", helptext)
-    seed = re.search(r"--seed SEED .*?\(default (\d+)\)", helptext)
+    seed = re.search(r"--seed N .*?\(default (\d+)\)", helptext)
     planner = re.search(r"--planner NAME .*?\(default: ([a-z-]+)\)", helptext)
     assert iters and cap and res and seed and planner, helptext
     assert doc["max_iterations"] == int(iters.group(1))
