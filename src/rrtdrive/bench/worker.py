@@ -236,6 +236,8 @@ def _episode_metrics(spec: RunSpec) -> dict[str, Any]:
         report["reverse_in"] = True
     plan_ok = episode.plan is not None and episode.plan.success
     report["plan_status"] = episode.plan.status.value if episode.plan is not None else None
+    # The plan's per-map set-up, apart from its planning time, as simulate's JSON says it.
+    report["setup_time_s"] = episode.plan.setup_time_s if episode.plan is not None else None
     report["verified"] = (
         bool(verify_path(episode.scenario.map, episode.path).ok) if plan_ok else None
     )
