@@ -347,11 +347,12 @@ def run_bench(
     )
     title = f"Bench summary ({len(rows)} runs, seeds 0–{cfg.seeds - 1}{how})"
     files += [str(p) for p in write_summary(groups, out, title)]
-    # An earlier grid's figures in this folder would stay beside the new summary: a
-    # figure without data is not written, and --no-plots writes none.
-    remove_plots(out)
-    if cfg.plots:
-        files += [str(p) for p in write_plots(rows, out)]
+    # A figure not written now (no data for it, or --no-plots) would stay beside the new
+    # summary: removed after the new ones are written, each over its old file, so an
+    # interrupt while plotting leaves the last complete set (it left some removed).
+    plots = write_plots(rows, out) if cfg.plots else []
+    remove_plots(out, keep=plots)
+    files += [str(p) for p in plots]
     errors = sum(1 for r in rows if r.get("status") == "error")
     return BenchReport(
         total=len(specs), skipped=skipped, executed=executed, errors=errors,

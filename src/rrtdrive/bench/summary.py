@@ -289,10 +289,12 @@ def _values(rows: Iterable[Mapping[str, Any]], key: str) -> list[float]:
 PLOT_FILES = ("box_length.png", "box_time.png", "success.png", "curvature_hist.png")
 
 
-def remove_plots(out: str | FsPath) -> None:
-    """Remove :data:`PLOT_FILES` from ``out`` (an earlier grid's, beside a new summary)."""
+def remove_plots(out: str | FsPath, keep: Iterable[str | FsPath] = ()) -> None:
+    """Remove :data:`PLOT_FILES` from ``out`` but those in ``keep`` (just written)."""
+    kept = {FsPath(k).name for k in keep}
     for name in PLOT_FILES:
-        (FsPath(out) / name).unlink(missing_ok=True)
+        if name not in kept:
+            (FsPath(out) / name).unlink(missing_ok=True)
 
 
 def _bench_title(rows: Sequence[Mapping[str, Any]]) -> str:
