@@ -10,9 +10,10 @@ checker's methods from several threads holds it too.
 from __future__ import annotations
 
 import threading
+from contextlib import AbstractContextManager, nullcontext
 from typing import Any
 
-__all__ = ["QueryLock"]
+__all__ = ["QueryLock", "query_lock"]
 
 
 class QueryLock:
@@ -48,3 +49,14 @@ class QueryLock:
 
     def __repr__(self) -> str:
         return "QueryLock()"
+
+
+def query_lock(checker: object) -> AbstractContextManager[object]:
+    """The lock a query on ``checker`` holds (a wrapper's: its static checker's).
+
+    A checker without one (a user's own :class:`~rrtdrive.checking.Checker`) gets none.
+    """
+    lock = getattr(checker, "lock", None)
+    if lock is None:
+        lock = getattr(getattr(checker, "static", None), "lock", None)
+    return lock if lock is not None else nullcontext()

@@ -20,10 +20,10 @@ import dataclasses
 import math
 import time
 from collections.abc import Callable
-from contextlib import AbstractContextManager, nullcontext
 
 import numpy as np
 
+from rrtdrive.collision.lock import query_lock
 from rrtdrive.geometry import wrap_angle
 from rrtdrive.planning.base import PlanningProblem, Stopwatch, failure, polyline_path, precheck
 from rrtdrive.planning.diagnosis import Diagnosis, diagnose
@@ -90,6 +90,7 @@ def run_query(
     reverses: bool = False,
     exact_goal_edges: bool = False,
     keeps: float = 0.0,
+    headings: bool = True,
 ) -> PlanResult:
     """Set the map up, start the stopwatch, fail early on a hopeless query, else search.
 
@@ -134,6 +135,9 @@ def run_query(
     keeps : float
         The least body clearance the planner's paths keep, metres (capped at the
         ends' own): the precheck proves a gap too narrow for the car and that.
+    headings : bool
+        Whether the planner keeps the start's and goal's headings; the tree baselines
+        plan positions only, so a failure of theirs is not blamed on a heading.
 
     Returns
     -------
@@ -153,25 +157,14 @@ def run_query(
     # One query at a time per checker: GEOS prepared geometry is not thread-safe.
     with query_lock(problem.checker):
         return _run_query(planner, problem, budget, search, prepare, tree_edges, probe,
-                          reverses, exact_goal_edges, keeps)
-
-
-def query_lock(checker: object) -> AbstractContextManager[object]:
-    """The lock a query on ``checker`` holds (a wrapper's, its static checker's).
-
-    A checker without one (a user's own :class:`~rrtdrive.checking.Checker`) gets none.
-    """
-    lock = getattr(checker, "lock", None)
-    if lock is None:
-        lock = getattr(getattr(checker, "static", None), "lock", None)
-    return lock if lock is not None else nullcontext()
+                          reverses, exact_goal_edges, keeps, headings)
 
 
 def _run_query(
     planner: str, problem: PlanningProblem, budget: Budget, search: Search,
     prepare: Callable[[], object] | None, tree_edges: bool,
     probe: Callable[[], Diagnosis | None] | None, reverses: bool, exact_goal_edges: bool,
-    keeps: float,
+    keeps: float, headings: bool,
 ) -> PlanResult:
     """:func:`run_query`'s body, under the checker's lock."""
     t0 = time.perf_counter()
@@ -210,6 +203,7 @@ def _run_query(
     found = diagnose(
         asked, tree_edges=tree_edges, no_approach=proved("no_approach"),
         start_exhausted=proved("start_exhausted"), exact_goal_edges=exact_goal_edges,
+        headings=headings,
     )  # fmt: skip
     if found is None and probe is not None and result.status in _PROBED:
         found = probe()

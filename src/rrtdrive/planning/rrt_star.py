@@ -143,7 +143,7 @@ class RRTStarPlanner:
         """
         return run_query(
             self.name, problem, budget, lambda watch: self._search(problem, rng, budget, watch),
-            rng=rng, exact_goal_edges=self.exact_goal_edge,
+            rng=rng, exact_goal_edges=self.exact_goal_edge, headings=False,
         )
 
     def _search(

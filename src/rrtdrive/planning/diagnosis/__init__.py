@@ -92,6 +92,7 @@ def diagnose(
     no_approach: bool = False,
     start_exhausted: bool = False,
     exact_goal_edges: bool = False,
+    headings: bool = True,
 ) -> Diagnosis | None:
     """The constraint that makes ``problem`` hard or impossible, or ``None``.
 
@@ -118,6 +119,10 @@ def diagnose(
         Whether the tree planner tests an edge into the goal exactly when its swept test
         fails (:class:`~rrtdrive.planning.edges.EdgeTester`): then an edge the body
         passes reaches the goal, and its keep does not stop it there.
+    headings : bool
+        Whether the planner keeps the ends' headings. Without (the tree baselines, which
+        plan positions), no finding about them: the room at the ends, the approaches
+        and the U-turn are left out (a baseline's failure was said to need reverse).
 
     Returns
     -------
@@ -159,7 +164,7 @@ def diagnose(
         # with reversing allowed, gear changes leave a boxed end, not a narrow gap.
         return passage
     for step in (
-        lambda: room_at_ends(m, checker, start, goal, reverse),
+        lambda: room_at_ends(m, checker, start, goal, reverse) if headings else None,
         lambda: (
             tight_clearance(m, checker, start, goal, exact_goal_edges) if tree_edges else None
         ),
@@ -168,7 +173,7 @@ def diagnose(
         lambda: no_forward_departure(m, checker, start)
         if start_exhausted and not reverse
         else None,
-        lambda: None if reverse else u_turn(m, checker, start, goal),
+        lambda: None if reverse or not headings else u_turn(m, checker, start, goal),
     ):
         found = step()
         if found is not None:
