@@ -46,6 +46,7 @@ def test_a_quoted_word_is_still_refused_naming_the_field(tmp_path, capsys, field
     assert code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"rrtdrive maps: error: {field}: "), err
+    assert err[0].endswith(f"(in {tmp_path / 'm.yaml'})"), err  # which file it is in
 
 
 def test_thousands_of_rectangles_point_to_despeckle(tmp_path, capsys):

@@ -314,6 +314,18 @@ def read_ros_map(yaml_file: str | os.PathLike[str], unknown_free: bool = False) 
         Naming the field: a missing or malformed one, a rotated origin (yaw != 0: our
         maps' bounds are axis-aligned), a ``mode`` other than ``trinary`` or ``scale``.
     """
+    try:
+        return _read_ros_map(yaml_file, unknown_free)
+    except InputError as exc:
+        # A field's error names the file it is in ("resolution: ..." did not; an audit).
+        name = os.fspath(yaml_file)
+        if name in str(exc) or os.path.basename(name) in str(exc):
+            raise
+        raise InputError(f"{exc} (in {name})") from None
+
+
+def _read_ros_map(yaml_file: str | os.PathLike[str], unknown_free: bool) -> ImageMap:
+    """The body of :func:`read_ros_map`."""
     import yaml
 
     try:
