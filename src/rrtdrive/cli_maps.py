@@ -25,7 +25,8 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
         help=HELP,
         description="List the built-in maps; --export writes them as JSON files; --import "
         "makes a map file from an occupancy image (a ROS map_server .yaml and its image, or "
-        "a PNG/PGM with --resolution).",
+        "a PNG/PGM with --resolution). Exit 0 when done, 1 when an output could not be "
+        "written, 2 on bad input; 130 on Ctrl-C, 143 on SIGTERM.",
     )
     maps.add_argument(
         "--export", metavar="DIR",

@@ -62,7 +62,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "kappa (whose column must agree with the yaw's turn, by the gear), headings at "
         "both ends, exact start and goal poses, sample spacing, and per "
         "gear segment the direction of travel and the cusps. Exit 0 when every check "
-        "passes, 1 when one fails, 2 on bad input.",
+        "passes, 1 when one fails, 2 on bad input; 130 on Ctrl-C, 143 on SIGTERM.",
     )
     p.add_argument("plan", metavar="PLAN", help="the plan JSON ('-' for stdin), e.g. from "
                    "`rrtdrive plan MAP --json plan.json`, or another planner's {\"path\": "

@@ -52,7 +52,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "finished runs. Writes OUT/summary.md, OUT/summary.csv and plots. Lists are "
         "comma-separated or repeated flags; flags override --config. Exit 0 when every run "
         "has a result, 1 when some runs crashed twice (error rows) or the worker processes "
-        "could not start, 2 on bad input.",
+        "could not start, 2 on bad input; 130 on Ctrl-C, 143 on SIGTERM.",
     )
     p.add_argument("--config", metavar="FILE.toml", help="read the bench from a TOML file")
     p.add_argument(

@@ -69,7 +69,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         help=HELP,
         description="Plan a path for SCENARIO, track it in highway-env with a controller at "
         "the simulation frequency, and report the evaluators' metrics. Exit 0 when the "
-        "episode succeeds, 1 when it fails, 2 on bad input.",
+        "episode succeeds, 1 when it fails, 2 on bad input; 130 on Ctrl-C, 143 on SIGTERM.",
     )
     p.add_argument(
         "scenario", metavar="SCENARIO",
