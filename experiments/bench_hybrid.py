@@ -38,7 +38,6 @@ import json
 import math
 import os
 import pickle
-import platform
 import statistics
 import subprocess
 import sys
@@ -409,19 +408,17 @@ def interleaved(
 
 def write_results(out: str, name: str, payload: dict, text: str) -> None:
     """``OUT/NAME.json`` and ``OUT/NAME.md``, each written whole (temp file, then rename)."""
-    from results_io import json_text  # the sibling module (run as a script)
+    # The sibling module imports this tree's rrtdrive: in the main process only.
+    import results_io
 
-    from rrtdrive.atomic import write_text_atomic  # this tree's, in the main process only
-
-    folder = FsPath(out)
-    folder.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(folder / f"{name}.json", json_text(payload))
-    write_text_atomic(folder / f"{name}.md", text)
+    results_io.write_results(out, name, payload, lambda _: text)
 
 
 def machine() -> str:
-    """This machine, for a results page."""
-    return f"{platform.machine()} {os.cpu_count()} CPUs, Python {platform.python_version()}"
+    """This machine, for a results page (the sibling module's line)."""
+    import results_io  # imports this tree's rrtdrive: in the main process only
+
+    return results_io.machine()
 
 
 def _bench(args: argparse.Namespace, ids: list[str]) -> int:

@@ -190,11 +190,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     validate_output(args.json, "--json")
     validate_output(args.plot, "--plot", PLOT_SUFFIXES, allow_stdout=False)
     distinct_outputs({"MAP": args.map}, json=args.json, plot=args.plot)
-    register_ompl_if_named(args.planner)
-    if args.planner.startswith("ompl-rs-") and not args.reverse:
-        # Reeds-Shepp curves change gear whatever the problem says: a plan without
-        # --reverse would claim "reverse": false over a path with cusps.
-        raise InputError(f"--planner: {args.planner} changes gear (Reeds-Shepp); give --reverse")
+    register_ompl_if_named(args.planner, args.reverse)
     if args.disable and args.planner in PLANNERS:
         takes = sorted(n for n in PLANNERS if _takes_option(PLANNERS[n], "disable"))
         if args.planner not in takes:

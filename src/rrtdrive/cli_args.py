@@ -221,14 +221,25 @@ def _flagged(text: str, fields: Mapping[str, str]) -> str | None:
     return f"{fields[field]}: {rest}" if sep and field in fields else None
 
 
-def register_ompl_if_named(planner: str | None) -> None:
+def register_ompl_if_named(planner: str | None, reverse: bool) -> None:
     """Register the OMPL comparators when ``planner`` names one (``ompl-rs-rrtconnect``).
 
     They live with the bench (``rrtdrive.bench.ompl_planners``), which ``plan`` and
     ``simulate`` do not load otherwise; OMPL itself is needed only when one plans.
+
+    Raises
+    ------
+    InputError
+        Naming ``--planner``: a Reeds-Shepp one without ``reverse``. Its curves change
+        gear whatever the problem says: a plan would claim ``"reverse": false`` over
+        a path with cusps.
     """
-    if isinstance(planner, str) and planner.startswith("ompl-"):
-        import rrtdrive.bench.ompl_planners  # noqa: F401 - registers them by name
+    if not (isinstance(planner, str) and planner.startswith("ompl-")):
+        return
+    import rrtdrive.bench.ompl_planners  # noqa: F401 - registers them by name
+
+    if planner.startswith("ompl-rs-") and not reverse:
+        raise InputError(f"--planner: {planner} changes gear (Reeds-Shepp); give --reverse")
 
 
 def parse_planner_options(texts: Sequence[str] | None, flag: str) -> dict[str, object]:

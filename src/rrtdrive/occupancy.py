@@ -26,6 +26,7 @@ import numpy as np
 
 from rrtdrive.map_checks import MAX_COORDINATE
 from rrtdrive.types import InputError, Pose, brief_repr, is_finite_number, require_int
+from rrtdrive.values import one_line
 
 if TYPE_CHECKING:
     import shapely
@@ -245,7 +246,7 @@ def _yaml_why(exc: Exception) -> str:
     problem, mark = getattr(exc, "problem", None), getattr(exc, "problem_mark", None)
     if problem and mark is not None:
         return f"{problem} (line {mark.line + 1}, column {mark.column + 1})"
-    return "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
+    return one_line(exc)
 
 
 @functools.cache

@@ -11,7 +11,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-__all__ = ["brief_repr", "counted", "did_you_mean", "is_finite_number"]
+__all__ = ["brief_repr", "counted", "did_you_mean", "is_finite_number", "one_line"]
 
 
 def brief_repr(value: object, limit: int = 32) -> str:
@@ -106,3 +106,14 @@ def counted(n: int, noun: str) -> str:
     ('1 expansion', '0 nodes', '2 iterations')
     """
     return f"{n} {noun.removesuffix('s') if n == 1 else noun}"
+
+
+def one_line(text: object) -> str:
+    r"""A library's message over several lines as one line: its lines joined by ``; ``.
+
+    Examples
+    --------
+    >>> one_line("Could not connect.\n  Is Ray running?\n")
+    'Could not connect.; Is Ray running?'
+    """
+    return "; ".join(line.strip() for line in str(text).splitlines() if line.strip())

@@ -75,6 +75,11 @@ _MAIN_GUARD_HINT = (
 )
 
 
+def run_timed_out(seconds: float) -> str:
+    """A run's error past the run timeout, the same on every backend."""
+    return f"run exceeded the run timeout of {seconds:g} s"
+
+
 class WorkerStartupError(RuntimeError):
     """Local worker processes die (or hang) before they can take a run.
 
@@ -334,7 +339,7 @@ class LocalBackend:
                 elif slot.task is not None and (
                     time.monotonic() - slot.started > self.run_timeout_s
                 ):
-                    failure = f"run exceeded the run timeout of {self.run_timeout_s:g} s"
+                    failure = run_timed_out(self.run_timeout_s)
                 elif not slot.ready and time.monotonic() - slot.started > self.startup_timeout_s:
                     failure = f"worker process not ready after {self.startup_timeout_s:g} s"
                 if failure is None:

@@ -19,10 +19,11 @@ from types import FrameType
 from typing import Any
 from urllib.parse import urlsplit
 
-from rrtdrive.bench.backends import Executor, Outcome, _call
+from rrtdrive.bench.backends import Executor, Outcome, _call, run_timed_out
 from rrtdrive.bench.grid import RunSpec
 from rrtdrive.bench.worker import execute_run
 from rrtdrive.types import InputError
+from rrtdrive.values import one_line
 
 __all__ = ["RayBackend", "head_endpoint"]
 
@@ -108,7 +109,7 @@ def _ray_call(
     try:
         return _call(executor, spec)
     except _RunTimedOut:
-        return ("error", f"run exceeded the run timeout of {timeout_s:g} s")
+        return ("error", run_timed_out(timeout_s))
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
@@ -157,13 +158,13 @@ class RayBackend:
         self._ray = ray
         self._owns_session = False
         if not ray.is_initialized():
-            # ray.init installs its own SIGTERM handler (sys.exit(15) and a dump): the
-            # CLI's (exit 143, "rrtdrive: terminated", as a local bench) is put back.
             # "" means RAY_ADDRESS when set: an unreachable one hangs as long.
             if address:
                 check_reachable(address)
             elif os.environ.get("RAY_ADDRESS"):
                 check_reachable(os.environ["RAY_ADDRESS"], source=" (from RAY_ADDRESS)")
+            # ray.init installs its own SIGTERM handler (sys.exit(15) and a dump): the
+            # CLI's (exit 143, "rrtdrive: terminated", as a local bench) is put back.
             sigterm = signal.getsignal(signal.SIGTERM)
             try:
                 if address:
@@ -172,8 +173,9 @@ class RayBackend:
                     ray.init(log_to_driver=False)
             except (ConnectionError, ValueError, RuntimeError) as exc:
                 # Ray's messages run over several lines: the error is one.
-                why = "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
-                raise InputError(f"ray: cannot connect to {address or 'Ray'}: {why}") from None
+                raise InputError(
+                    f"ray: cannot connect to {address or 'Ray'}: {one_line(exc)}"
+                ) from None
             finally:
                 if sigterm is not None and threading.current_thread() is threading.main_thread():
                     signal.signal(signal.SIGTERM, sigterm)

@@ -364,9 +364,7 @@ def _run(args: argparse.Namespace) -> int:
         )
     if args.planner is None:
         args.planner = DEFAULT_PLANNER
-    register_ompl_if_named(args.planner)
-    if args.planner.startswith("ompl-rs-") and not getattr(args, "reverse", False):
-        raise InputError(f"--planner: {args.planner} changes gear (Reeds-Shepp); give --reverse")
+    register_ompl_if_named(args.planner, getattr(args, "reverse", False))
     if args.planner not in PLANNERS:
         from rrtdrive.planning import unknown_planner
 
