@@ -297,6 +297,21 @@ def test_colliding_query_pose_is_refused_without_search(case, which, goal_side):
         assert wall < 2.0, f"a refused query took {wall:.2f} s"
 
 
+def wall_with_gap(wall_x: float, yaw: float, gap: float, gap_at: float) -> Map:
+    """A 40 x 30 m map across which a 0.01 m wall runs, cut by a gap, start left, goal right.
+
+    The wall passes through (wall_x, gap_at) at ``yaw`` from vertical, in two pieces long
+    enough to reach past both bounds.
+    """
+    ux, uy = -math.sin(yaw), math.cos(yaw)  # along the wall
+    piece = 60.0
+    obstacles = []
+    for sign in (-1.0, 1.0):
+        d = sign * (gap / 2.0 + piece / 2.0)
+        obstacles.append(((wall_x + d * ux, gap_at + d * uy), (piece, 0.01), yaw + math.pi / 2))
+    return build((0.0, 0.0, 40.0, 30.0), obstacles, (4.0, 15.0, 0.0), (36.0, 15.0, 0.0))
+
+
 @FUZZ
 @given(
     wall_x=st.floats(18.0, 22.0),
@@ -309,17 +324,7 @@ def test_thin_wall_with_a_gap_narrower_than_the_car_is_never_crossed(
     wall_x, yaw, gap, gap_at, reverse
 ):
     """0.01 m walls with a hole narrower than the car (1.8 m): no plan gets through."""
-    bounds = (0.0, 0.0, 40.0, 30.0)
-    # A wall through (wall_x, gap_at) at ``yaw`` from vertical, cut by the gap, in two
-    # pieces long enough to reach past both bounds.
-    ux, uy = -math.sin(yaw), math.cos(yaw)  # along the wall
-    half = gap / 2.0
-    piece = 60.0
-    obstacles = []
-    for sign in (-1.0, 1.0):
-        d = sign * (half + piece / 2.0)
-        obstacles.append(((wall_x + d * ux, gap_at + d * uy), (piece, 0.01), yaw + math.pi / 2))
-    m = build(bounds, obstacles, (4.0, 15.0, 0.0), (36.0, 15.0, 0.0))
+    m = wall_with_gap(wall_x, yaw, gap, gap_at)
     res, wall = plan(m, reverse)
     assert_result_sound(m, res, reverse, wall)
     assert not res.success, "the car passed a gap narrower than itself"
@@ -337,14 +342,7 @@ def test_thin_wall_with_a_car_wide_gap_is_passed_only_through_the_gap(
     wall_x, yaw, gap, gap_at, reverse
 ):
     """0.01 m walls with a hole the car fits: any plan threads the hole, body clear."""
-    bounds = (0.0, 0.0, 40.0, 30.0)
-    ux, uy = -math.sin(yaw), math.cos(yaw)
-    piece = 60.0
-    obstacles = []
-    for sign in (-1.0, 1.0):
-        d = sign * (gap / 2.0 + piece / 2.0)
-        obstacles.append(((wall_x + d * ux, gap_at + d * uy), (piece, 0.01), yaw + math.pi / 2))
-    m = build(bounds, obstacles, (4.0, 15.0, 0.0), (36.0, 15.0, 0.0))
+    m = wall_with_gap(wall_x, yaw, gap, gap_at)
     res, wall = plan(m, reverse)
     assert_result_sound(m, res, reverse, wall)  # the shapely check sees a tunnel
 
