@@ -469,12 +469,8 @@ def test_plan_verify_and_simulate_agree_on_one_paths_numbers(garage_outputs):
     assert v["min_clearance_m"] >= v["clearance"]
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "BUG: one JSON key, two meanings: `max_sharpness` is the path's measured steering rate "
-    "per metre in `plan --json` but the BOUND (0.2 rad/m) in "
-    "`verify --json`, whose measurement is `max_discrete_sharpness` (verify_cli.py JSON; "
-    "its curvature bound is `kappa_max`, measured `max_discrete_curvature`); garage: "
-    "plan 0.194, verify 0.2"))
+# Once one JSON key with two meanings: verify's bound was `max_sharpness` (now
+# `sharpness_bound`), plan's measured value the same name.
 def test_max_sharpness_means_the_same_in_plan_and_verify_json(garage_outputs):
     p, v = garage_outputs["p"], garage_outputs["v"]
     assert v["max_discrete_sharpness"] == pytest.approx(p["max_sharpness"], abs=1e-3)

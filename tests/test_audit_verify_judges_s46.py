@@ -485,7 +485,7 @@ def test_json_schema_is_the_same_for_every_outcome(capsys, genuine, tmp_path):
         "huge": verify_json(capsys, write_plan(tmp_path, [[r[0] * 1e300, *r[1:]] for r in rows],
                                                name="huge"), mapf),
     }  # fmt: skip
-    keys = {"map", "rows", "kappa_given", "length_m", "kappa_max", "max_sharpness",
+    keys = {"map", "rows", "kappa_given", "length_m", "kappa_max", "sharpness_bound",
             "clearance", "ok", "failed", *CHECKS}  # fmt: skip
     shapes = set()
     for name, (code, doc, _) in docs.items():
@@ -497,7 +497,7 @@ def test_json_schema_is_the_same_for_every_outcome(capsys, genuine, tmp_path):
         for c in CHECKS:
             assert isinstance(doc[c], bool), (name, c)
     assert len(shapes) == 1  # one key set whatever the outcome
-    assert docs["reverse"][1]["max_sharpness"] is None
+    assert docs["reverse"][1]["sharpness_bound"] is None
     assert docs["huge"][1]["length_m"] is None or math.isfinite(docs["huge"][1]["length_m"])
     # --json FILE holds the same document as --json -.
     target = tmp_path / "out.json"

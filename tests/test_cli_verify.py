@@ -82,7 +82,8 @@ def test_an_obstacle_on_the_path_fails_the_body_check_alone(capsys, plans, tmp_p
     # The body check and the clearance the plan declares (a body in contact keeps none).
     assert doc["ok"] is False and doc["failed"] == ["collision_free", "clearance_ok"]
     assert doc["min_clearance_m"] == 0.0 and doc["clearance"] == pytest.approx(0.148)
-    assert doc["max_sharpness"] == 0.2 and doc["kappa_max"] == m.vehicle.kappa_max
+    assert doc["sharpness_bound"] == 0.2 and doc["kappa_max"] == m.vehicle.kappa_max
+    assert "max_sharpness" not in doc  # plan --json's name for the measured value
 
 
 def test_a_map_file_and_json_on_stdout(capsys, plans, tmp_path):
@@ -373,7 +374,7 @@ def test_the_json_report_has_pathchecks_fields_and_the_ones_readme_names(capsys,
     code, out, err = run(capsys, "verify", str(plans["reverse"]), "--json", "-")
     assert code == 0, err
     doc = json.loads(out, parse_constant=refuse)
-    extra = {"map", "rows", "length_m", "kappa_given", "kappa_max", "max_sharpness",
+    extra = {"map", "rows", "length_m", "kappa_given", "kappa_max", "sharpness_bound",
              "clearance", "claims_ok", "failed"}
     assert set(doc) == {f.name for f in dataclasses.fields(PathCheck)} | extra
     assert doc["ok"] is True and doc["failed"] == [] and doc["cusps"] >= 1

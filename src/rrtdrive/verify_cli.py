@@ -208,7 +208,7 @@ def _lines(
     )
 
     mark = {True: "ok  ", False: "FAIL"}
-    sharp = bounds["max_sharpness"]
+    sharp = bounds["sharpness_bound"]
     rows = [
         (check.collision_free, "body clear of obstacles and inside the bounds",
          _where(check)),
@@ -287,7 +287,9 @@ def run(args: argparse.Namespace) -> int:
         clearance = float(kept) - CLEARANCE_SLACK_M
         why = f": the plan's {kept:g} less {CLEARANCE_SLACK_M * 1000:g} mm"
     clearance = clearance or 0.0
-    bounds = {"kappa_max": m.vehicle.kappa_max, "max_sharpness": bound, "clearance": clearance}
+    # The sharpness bound is not named max_sharpness: plan --json uses that for the
+    # path's measured value (here max_discrete_sharpness).
+    bounds = {"kappa_max": m.vehicle.kappa_max, "sharpness_bound": bound, "clearance": clearance}
     # With the JSON on stdout, the human lines go to stderr to keep stdout parseable.
     out = sys.stderr if args.json == "-" else sys.stdout
     label = "stdin" if args.plan == "-" else args.plan
