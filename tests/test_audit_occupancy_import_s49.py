@@ -338,7 +338,7 @@ def _floor(tmp_path: Path) -> Path:
         ("image: f.png\nresolution: 0.1\norigin: [0, 0, 0.5]\n", "origin: the map is rotated"),
         ("image: f.png\nresolution: 0.1\norigin: [0, 0, 3.14159]\n", "origin: the map is rotated"),
         ("image: f.png\nresolution: 0.1\norigin: 0\n", "origin: expected [x, y, yaw]"),
-        ("image: f.png\nresolution: 0.1\norigin: [a, 0, 0]\n", "origin: expected a number"),
+        ("image: f.png\nresolution: 0.1\norigin: [a, 0, 0]\n", "origin: x: expected a number"),
         ("image: 7\nresolution: 0.1\norigin: [0, 0, 0]\n", "image: expected the image's"),
         ("image: no.png\nresolution: 0.1\norigin: [0, 0, 0]\n", "image: "),
         ("image: f.png\nresolution: 0.1\norigin: [0, 0, 0]\nnegate: 2\n",

@@ -116,7 +116,7 @@ def test_thresholds_may_sit_at_the_ends_of_their_range(tmp_path: Path) -> None:
         ({"occupied_thresh": 1.5}, "occupied_thresh"),
         ({"free_thresh": -0.1}, "free_thresh"),
         ({"resolution": 1e-7}, "resolution"),
-        ({"origin": (2e9, 0.0)}, "origin"),
+        ({"origin": (2e9, 0.0)}, "origin: x"),
     ],
 )
 def test_numbers_out_of_range_are_named(tmp_path: Path, kwargs: dict, field: str) -> None:
@@ -234,7 +234,7 @@ def test_import_reads_grey_as_asked_and_keeps_start_and_goal(capsys, tmp_path: P
         ("png", ["--out", "o.json", "--resolution", "0.1", "--origin", "1_0,2"],
          "--origin: expected X,Y in metres, got '1_0,2'"),
         ("png", ["--out", "o.json", "--resolution", "0.1", "--origin", "0,nan"],
-         "--origin: expected a number from"),
+         "--origin: y: expected a number from"),
         ("yaml", ["--out", "o.json", "--origin", "1,2"], "--origin: the .yaml gives it"),
     ],
 )

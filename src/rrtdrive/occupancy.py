@@ -73,10 +73,12 @@ class ImageMap:
         return (x0, y0, x0 + cols * self.resolution, y0 + rows * self.resolution)
 
 
-def _number(value: object, field: str, low: float, high: float) -> float:
+def _number(value: object, field: str, low: float, high: float, part: str = "") -> float:
     if not is_finite_number(value) or not low <= float(value) <= high:  # type: ignore[arg-type]
-        raise InputError(f"{field}: expected a number from {low:g} to {high:g}, got "
-                         f"{brief_repr(value)}")  # fmt: skip
+        # ``part`` names the element of a list field ("origin: y: ..."), after the field
+        # so that flags_for still finds the field.
+        raise InputError(f"{field}: {part + ': ' if part else ''}expected a number from "
+                         f"{low:g} to {high:g}, got {brief_repr(value)}")  # fmt: skip
     return float(value)  # type: ignore[arg-type]
 
 
@@ -138,8 +140,8 @@ def read_image_map(
         raise InputError(f"mode: only trinary and scale maps are read, got {brief_repr(mode)}")
     # As far out as a map's own coordinates may lie (a ROS map in UTM coordinates, a
     # northing about 5e6 m, was refused at 1e6; an audit).
-    x0 = _number(origin[0], "origin", -MAX_COORDINATE, MAX_COORDINATE)
-    y0 = _number(origin[1], "origin", -MAX_COORDINATE, MAX_COORDINATE)
+    x0 = _number(origin[0], "origin", -MAX_COORDINATE, MAX_COORDINATE, "x")
+    y0 = _number(origin[1], "origin", -MAX_COORDINATE, MAX_COORDINATE, "y")
     name = os.fspath(image)
     if not os.path.isfile(name):  # said as a missing .yaml is (an audit)
         why = "a folder, not a file" if os.path.isdir(name) else "No such file or directory"
@@ -359,7 +361,7 @@ def _read_ros_map(yaml_file: str | os.PathLike[str], unknown_free: bool) -> Imag
     if not isinstance(origin, list) or len(origin) not in (2, 3):
         raise InputError(f"origin: expected [x, y, yaw], got {brief_repr(origin)}")
     if len(origin) == 3:
-        yaw = _number(origin[2], "origin", -1e3, 1e3)
+        yaw = _number(origin[2], "origin", -1e3, 1e3, "yaw")
         # A full turn written to 6 decimals (6.283185) is a yaw of 0 too (an audit).
         if abs(math.remainder(yaw, math.tau)) > 1e-6:
             raise InputError(
