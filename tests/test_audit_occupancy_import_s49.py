@@ -455,6 +455,33 @@ def test_a_cmyk_image_reads_as_its_grey_picture(tmp_path, capsys):
     assert unions["k.tif"].symmetric_difference(unions["g.png"]).area < 1e-9
 
 
+@pytest.mark.parametrize("dtype", [np.int32, np.float32])
+def test_a_32_bit_tiff_is_refused_not_misread(tmp_path, capsys, dtype):
+    """Its values have no white to be read against (0..255 read against 65535 made
+    every cell occupied); map_server's libtiff refuses such samples too."""
+    grey = np.full((60, 200), 255, dtype)
+    grey[:10, 90:110] = 0
+    Image.fromarray(grey).save(tmp_path / "w.tif")
+    code, _, err = _import(capsys, tmp_path / "w.tif", tmp_path / "o.json", START, GOAL,
+                           "--resolution", str(RES))  # fmt: skip
+    assert code == 2 and err.count("\n") == 1 and "Traceback" not in err, err
+    assert "samples" in err and "8-bit" in err and err.startswith(
+        "rrtdrive maps: error: --import: "), err
+    assert not (tmp_path / "o.json").exists()
+    # The same picture in 16 bits still reads as the 8-bit one.
+    Image.fromarray((grey.astype(np.uint16) * 257)).save(tmp_path / "w16.png")
+    Image.fromarray(grey.astype(np.uint8)).save(tmp_path / "w8.png")
+    unions = []
+    for name in ("w16.png", "w8.png"):
+        out = tmp_path / f"{name}.json"
+        code, _, err = _import(capsys, tmp_path / name, out, START, GOAL, "--resolution",
+                               str(RES))  # fmt: skip
+        assert code == 0, err
+        unions.append(_obstacle_union(out))
+    assert unions[0].symmetric_difference(unions[1]).area < 1e-9
+    assert unions[1].area == pytest.approx(20 * 10 * RES * RES)
+
+
 def test_the_image_path_is_relative_to_the_yaml_folder_not_the_cwd(tmp_path, capsys,
                                                                    monkeypatch):
     sub = tmp_path / "maps" / "site"

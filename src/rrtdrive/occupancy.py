@@ -222,6 +222,16 @@ def _read_mode(name: str) -> str | None:
                 f"image: {name} has {w} x {h} = {w * h:,} pixels, more than the "
                 f"{MAX_IMAGE_PIXELS:,} read; crop it or scale it down (and its resolution up)"
             )
+        bits = getattr(im, "tag_v2", {}).get(258, (0,)) if im.format == "TIFF" else (0,)
+        if im.mode == "F" or max(bits if isinstance(bits, tuple) else (bits,)) > 16:
+            # map_server reads images through SDL_image, whose libtiff refuses samples
+            # beyond 16 bits; there is no white to measure 32-bit values against (one
+            # holding 0..255 was read against 65535: every cell occupied; an audit).
+            kind = "floating-point" if im.mode == "F" else "32-bit"
+            raise InputError(
+                f"image: {name} has {kind} samples; occupancy images are 8- or 16-bit: "
+                "save it as an 8-bit grayscale PNG or PGM"
+            )
         if im.mode == "CMYK":
             return "RGB"
         if im.mode in ("P", "L", "RGB") and "transparency" in im.info:
