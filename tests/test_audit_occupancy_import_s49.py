@@ -469,7 +469,7 @@ def test_a_32_bit_tiff_is_refused_not_misread(tmp_path, capsys, dtype):
         "rrtdrive maps: error: --import: "), err
     assert not (tmp_path / "o.json").exists()
     # The same picture in 16 bits still reads as the 8-bit one.
-    Image.fromarray((grey.astype(np.uint16) * 257)).save(tmp_path / "w16.png")
+    Image.fromarray(grey.astype(np.uint16) * 257).save(tmp_path / "w16.png")
     Image.fromarray(grey.astype(np.uint8)).save(tmp_path / "w8.png")
     unions = []
     for name in ("w16.png", "w8.png"):
