@@ -353,7 +353,7 @@ def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
         "--seed", type=nonneg_int, default=0, metavar="N", help="random seed (default 0)"
     )
     plan.add_argument(
-        "--step", type=float, default=None,
+        "--step", type=positive_float, default=None, metavar="M",
         help="step in metres: the tree's, or hybrid-a-star's expansion step (planner default)",
     )
     plan.add_argument(
