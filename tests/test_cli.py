@@ -432,7 +432,7 @@ def test_a_good_start_replaces_a_bad_one_in_the_map_file(capsys, tmp_path):
 @pytest.mark.parametrize(
     ("argv", "flag"),
     [
-        (["--step", "0"], "--step"),
+        (["--step", "1e9"], "--step"),  # past the planner's 1000 m (0 is argparse's)
         (["--planner", "rrtstar"], "--planner"),
         (["--disable", "foo"], "--disable"),
         (["--goal", "200,44,0"], "--goal"),
@@ -443,8 +443,7 @@ def test_plan_errors_name_the_flag_typed(capsys, argv, flag):
     # They named the API's fields (planner.step, planner, goal: ...) before session 29.
     code, _, err = run(capsys, "plan", "overtake", *argv)
     _one_line_error(code, err, flag)
-    # A value its type refuses is argparse's "argument --step: ..." (as --max-time's).
-    assert f"error: {flag}: " in err or f"error: argument {flag}: " in err
+    assert f"error: {flag}: " in err
 
 
 @pytest.mark.parametrize("value", ["9_2,44,0", "92,4_4,0", "92,44,1_0"])
