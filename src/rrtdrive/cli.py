@@ -100,6 +100,7 @@ def plan_to_json(
     given), so ``rrtdrive verify`` can check the path against them; ``map_file`` the
     absolute path of the map file the plan was made on (``null`` for a built-in map),
     which ``rrtdrive verify`` reads when it is given no map.
+    ``vehicle`` is the car it was planned for (:func:`~rrtdrive.vehicle_json.vehicle_to_json`).
     ``reverse`` is whether gear changes were allowed (``--reverse``); ``path`` rows
     are ``[x, y, yaw, kappa, gear]`` and ``cusps`` counts the gear changes (0 for a
     forward-only path, also when a planner that cannot reverse was allowed to).
@@ -114,6 +115,7 @@ def plan_to_json(
     """
     from rrtdrive.planning.hybrid.escalation import stage_of
     from rrtdrive.planning.smoothing import max_sharpness, steer_rate_speed_limit
+    from rrtdrive.vehicle_json import vehicle_to_json
 
     car = vehicle if vehicle is not None else VehicleParams()
     sharp = max_sharpness(result.path.samples, car.wheelbase) if result.success else None
@@ -128,6 +130,9 @@ def plan_to_json(
         "map_file": None if map_file is None else os.path.abspath(map_file),
         "seed": int(seed),  # np.int64 from a seed sweep: json cannot write it
         "reverse": bool(reverse),
+        # The car it was planned for: verify judges by it (a custom car's path failed
+        # the paper car's curvature; an audit).
+        "vehicle": vehicle_to_json(car),
         "planner_options": options_json(dict(planner_options or {})),
         # What decided the outcome besides the seed and options: a plan cut short by
         # --max-iterations must not read like the default's.

@@ -21,6 +21,7 @@ from rrtdrive.types import InputError, InputWarning, Pose
 
 if TYPE_CHECKING:
     from rrtdrive.maps import Map
+    from rrtdrive.types import VehicleParams
 
 __all__ = [
     "register_ompl_if_named",
@@ -439,9 +440,15 @@ def parse_pose(text: str, name: str) -> Pose:
 
 
 def map_with_poses(
-    spec: str, start: Pose | None, goal: Pose | None, names: Mapping[str, str] | None = None
+    spec: str,
+    start: Pose | None,
+    goal: Pose | None,
+    names: Mapping[str, str] | None = None,
+    vehicle: VehicleParams | None = None,
 ) -> Map:
     """The map ``spec`` with ``--start``/``--goal`` (when given) replacing its poses.
+
+    ``vehicle``: the car instead of the map's (``simulate --path``: the plan's).
 
     The file is read first, so a malformed start in it is named ``start:`` even when
     ``--start`` replaces it; the poses used are then checked, one given on the command
@@ -455,7 +462,7 @@ def map_with_poses(
     names = names or {"start": "--start", "goal": "--goal"}
     flags = {k: names[k] for k, v in (("start", start), ("goal", goal)) if v is not None}
     with flags_for_warnings(flags):  # a given yaw that looks like degrees: named by its flag
-        m = resolve_map(spec, start=start, goal=goal, check_query=False)
+        m = resolve_map(spec, vehicle, start=start, goal=goal, check_query=False)
     with flags_for(flags):
         for label, pose in (("start", m.start), ("goal", m.goal)):
             check_endpoint(m, pose, label, m.vehicle, warn_degrees=False)

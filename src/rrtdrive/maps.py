@@ -6,7 +6,9 @@ The JSON format (SPEC §2)::
      "obstacles": [{"center": [50.0, 20.0], "size": [4.3, 1.8], "yaw": 0.0}],
      "start": [5.0, 5.0, 0.0], "goal": [90.0, 80.0, 1.5708]}
 
-Loading validates every field and names the offending one in an :class:`~rrtdrive.types.InputError`.
+and optionally the car, ``"vehicle": {"length": 5.0, "wheelbase": 3.0, ...}``
+(:mod:`rrtdrive.vehicle_json`; a field left out is the paper's car's). Loading
+validates every field and names the offending one in an :class:`~rrtdrive.types.InputError`.
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ from rrtdrive.types import (
     brief_repr,
     require_finite,
 )
+from rrtdrive.vehicle_json import vehicle_from_json, vehicle_to_json
 
 __all__ = [
     "Obstacle",
@@ -80,7 +83,9 @@ class Map:
     start, goal : Pose
         Rear-axle poses.
     vehicle : VehicleParams
-        The car used to validate the start and goal footprints.
+        The car: the start and goal footprints are validated for it, and planners,
+        controllers and evaluators take it from the map. A map file keeps it when it
+        is not the paper's car.
     check_query : bool
         Validate the start and goal (default). ``False`` for a map that only carries
         the poses a given path is judged against (``rrtdrive verify``: a path from a
@@ -182,19 +187,22 @@ class Map:
         return shapely.union_all([o.polygon() for o in self.obstacles])
 
     def to_json(self) -> dict[str, object]:
-        """JSON-ready dict in the map file format."""
-        return {
+        """JSON-ready dict in the map file format (``vehicle`` when not the paper's car)."""
+        doc: dict[str, object] = {
             "name": self.name,
             "bounds": list(self.bounds),
             "obstacles": [o.to_json() for o in self.obstacles],
             "start": list(self.start.as_tuple()),
             "goal": list(self.goal.as_tuple()),
         }
+        if self.vehicle != VehicleParams():  # the files of the paper's car stay as they were
+            doc["vehicle"] = vehicle_to_json(self.vehicle)
+        return doc
 
 
 # ----------------------------------------------------------------------------- JSON
 
-_MAP_KEYS = {"name", "bounds", "obstacles", "start", "goal"}
+_MAP_KEYS = {"name", "bounds", "obstacles", "start", "goal", "vehicle"}
 _OBSTACLE_KEYS = {"center", "size", "yaw"}
 _RECTANGLES = "obstacles are rectangles: center [x, y], size [length, width], yaw (radians)"
 
@@ -214,7 +222,8 @@ def map_from_json(
     data : object
         Parsed JSON (a dict in the map file format).
     vehicle : VehicleParams, optional
-        The car for the start/goal footprint checks.
+        The car, instead of the file's ``vehicle`` (default: the file's, else the
+        paper's car).
     start, goal : Pose, optional
         Poses that replace the file's (``--start`` / ``--goal``): the file's own must
         still be well-formed, but only the poses used are checked against the map.
@@ -256,6 +265,8 @@ def map_from_json(
     name = data.get("name", "map")
     if not isinstance(name, str):
         raise InputError(f"name: expected a non-empty string, got {brief_repr(name)}")
+    if vehicle is None and data.get("vehicle") is not None:
+        vehicle = vehicle_from_json(data["vehicle"])
     warn_obstacle_yaws([o.yaw for o in obstacles])
     file_start = Pose.from_seq(data["start"], "start")
     file_goal = Pose.from_seq(data["goal"], "goal")
@@ -287,7 +298,7 @@ def load_map(
     path : str or os.PathLike
         A JSON file in the map format.
     vehicle : VehicleParams, optional
-        The car for the start/goal checks.
+        The car, instead of the file's (as for :func:`map_from_json`).
     start, goal, check_query
         As for :func:`map_from_json`: poses that replace the file's, and whether the
         poses used are checked against the map.
@@ -312,7 +323,8 @@ def map_text(m: Map) -> str:
     Parameters
     ----------
     m : Map
-        The map (its name, bounds, obstacles, start and goal; not its car).
+        The map (its name, bounds, obstacles, start and goal; its car when not the
+        paper's).
 
     Returns
     -------
@@ -328,7 +340,8 @@ def save_map(m: Map, path: str | os.PathLike[str]) -> None:
     Parameters
     ----------
     m : Map
-        The map (its name, bounds, obstacles, start and goal; not its car).
+        The map (its name, bounds, obstacles, start and goal; its car when not the
+        paper's).
     path : str or os.PathLike
         The file to write; :func:`load_map` reads it back.
     """

@@ -177,6 +177,30 @@ def _map_of(
     return load(spec)
 
 
+def _with_plan_car(m: Any, data: dict[str, Any]) -> Any:
+    """``m`` with the car the plan was made for (its ``vehicle``; plans before it: the map's).
+
+    The path is judged for its own car: a small car's tight turns are no fault. A map
+    whose own car differs gets a warning saying which one is used.
+    """
+    if data.get("vehicle") is None:
+        return m
+    from rrtdrive.vehicle_json import vehicle_from_json
+
+    car = vehicle_from_json(data["vehicle"], "plan.vehicle")
+    if car == m.vehicle:
+        return m
+    from rrtdrive.types import VehicleParams
+
+    if m.vehicle != VehicleParams():
+        warnings.warn(
+            f"MAP: its car is not the one the plan was made for; the path is judged for "
+            f"the plan's ({car.length:g} x {car.width:g} m, wheelbase {car.wheelbase:g} m, "
+            f"min turning radius {car.min_turning_radius:g} m)", InputWarning, stacklevel=2,
+        )  # fmt: skip
+    return dataclasses.replace(m, vehicle=car, check_query=False)
+
+
 def _metres(value: float, spec: str = ".3f") -> str:
     """``value`` in metres; a path row at 1e308 m shows as 1e+308 m, not 309 digits."""
     return f"{value:{spec}} m" if abs(value) < 1e9 else f"{value:.3g} m"
@@ -268,7 +292,7 @@ def run(args: argparse.Namespace) -> int:
         data, "start"
     )
     goal = parse_pose(args.goal, "--goal") if args.goal is not None else _plan_pose(data, "goal")
-    m = _map_of(args, data, start, goal)
+    m = _with_plan_car(_map_of(args, data, start, goal), data)
     bound = args.max_sharpness
     if bound is None and not args.no_sharpness:
         from rrtdrive.planning.smoothing.config import SmoothingConfig, sharpness_bound

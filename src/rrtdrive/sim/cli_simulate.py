@@ -353,8 +353,9 @@ def _run(args: argparse.Namespace) -> int:
             )
     if args.reverse_in and args.scenario != "parking":
         raise InputError("--reverse-in: only the parking scenario has reverse-in bays")
-    path, made_on = (
-        given_path(args, target) if getattr(args, "path", None) is not None else (None, None)
+    path, made_on, car = (
+        given_path(args, target) if getattr(args, "path", None) is not None
+        else (None, None, None)
     )
 
     if args.controller not in CONTROLLER_NAMES:
@@ -478,7 +479,8 @@ def _run(args: argparse.Namespace) -> int:
         stock, streamed = _drive_stock(args, config, stride)
         episode = stock.episode
     else:
-        scenario = make_task(args, target, oncoming, traffic_opts, make_scenario, path, made_on)
+        scenario = make_task(args, target, oncoming, traffic_opts, make_scenario, path, made_on,
+                             car)
         if path is None:
             from rrtdrive.collision import CheckerConfig
             from rrtdrive.collision.grid import setup_notice

@@ -72,7 +72,7 @@ def _parse_pose(text: str | None, flag: str) -> Any:
     return None if text is None else parse_pose(text, flag)
 
 
-def given_path(args: argparse.Namespace, target: str) -> tuple[Any, str | None]:
+def given_path(args: argparse.Namespace, target: str) -> tuple[Any, str | None, Any]:
     """The path of ``--path``'s plan file and the map it names (``None``: none).
 
     The path is driven on the map as it is (nothing planned).
@@ -112,7 +112,30 @@ def given_path(args: argparse.Namespace, target: str) -> tuple[Any, str | None]:
         )
     _warn_gearless_reverse(data, path)
     made_on = data.get("map")
-    return path, made_on if isinstance(made_on, str) and made_on else None
+    car = None
+    if data.get("vehicle") is not None:  # plans before the field: the map's car
+        from rrtdrive.vehicle_json import vehicle_from_json
+
+        car = vehicle_from_json(data["vehicle"], "--path: vehicle")
+    return path, made_on if isinstance(made_on, str) and made_on else None, car
+
+
+def _warn_other_car(spec: str, car: Any) -> None:
+    """Warn when the map's own car is not the plan's (which drives the path)."""
+    from rrtdrive.maps import resolve_map
+    from rrtdrive.types import InputWarning, VehicleParams
+
+    if car is None:
+        return
+    own = resolve_map(spec, check_query=False).vehicle
+    if own != car and own != VehicleParams():
+        import warnings
+
+        warnings.warn(
+            f"--path: the map's car is not the one the plan was made for; the plan's "
+            f"({car.length:g} x {car.width:g} m, wheelbase {car.wheelbase:g} m) drives it",
+            InputWarning, stacklevel=2,
+        )
 
 
 def _warn_gearless_reverse(data: Any, path: Any) -> None:
@@ -153,13 +176,14 @@ def _warn_gearless_reverse(data: Any, path: Any) -> None:
 
 def make_task(
     args: argparse.Namespace, target: str, oncoming: int, traffic_opts: dict[str, Any],
-    make_scenario: Any, path: Any = None, made_on: str | None = None,
+    make_scenario: Any, path: Any = None, made_on: str | None = None, car: Any = None,
 ) -> Any:
     """The task of a built-in scenario or of a map, with ``--reverse`` applied.
 
     A given ``path`` (``--path``) sets the map's start and goal to its first and last
     rows, and allows gear changes when it has any; a plan made on another map
-    (``made_on``) is driven as asked, with a warning.
+    (``made_on``) is driven as asked, with a warning. ``car``: the plan's car, which
+    drives it (a map whose own car differs gets a warning).
     """
     import dataclasses
 
@@ -172,7 +196,8 @@ def make_task(
         ends = Pose(*path.samples[0, :3]), Pose(*path.samples[-1, :3])
         # The poses are the path's ends, not flags the user gave.
         rows = {"start": "--path: the path's first row", "goal": "--path: the path's last row"}
-        m = map_with_poses(args.scenario, *ends, names=rows)
+        m = map_with_poses(args.scenario, *ends, names=rows, vehicle=car)
+        _warn_other_car(args.scenario, car)
         if made_on is not None and m.name != made_on:
             import warnings
 

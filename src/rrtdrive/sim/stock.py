@@ -253,6 +253,8 @@ def drive_stock_env(
     if config is not None and not isinstance(config, EpisodeConfig):
         raise InputError(f"config: expected an EpisodeConfig, got {type(config).__name__}")
     config = config or EpisodeConfig()
+    if vehicle is not None and not isinstance(vehicle, VehicleParams):
+        raise InputError(f"vehicle: expected a VehicleParams, got {type(vehicle).__name__}")
     params = vehicle or VehicleParams()
     freq = config.sim.simulation_frequency
     env = make_stock_env(env_id, freq, render=render_stride > 0, vehicle=params)
