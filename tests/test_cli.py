@@ -319,7 +319,7 @@ def test_plan_help_lists_every_component_disable_takes(capsys):
     with pytest.raises(SystemExit):
         main(["plan", "--help"])
     text = " ".join(capsys.readouterr().out.split())
-    listed = text.split("improved-rrt-connect only: ")[1].split(" --")[0]
+    listed = text.split("improved-rrt-connect only: ")[1].split(" (")[0].split(" --")[0]
     assert [c.strip() for c in listed.replace("- ", "").split(",")] == list(COMPONENTS)
 
 

@@ -368,7 +368,8 @@ def add_plan_parser(sub: Any) -> argparse.ArgumentParser:
         help="switch off a component of the improved planner (repeatable), for ablation; "
         "improved-rrt-connect only: direct_connect, obtuse_parent, adaptive_step, "
         "obstacle_expansion, prune, sharp_repair, supplement, passage_sampling, "
-        "dubins_fallback, escalation",
+        "dubins_fallback, escalation (supplement acts on the B-spline of "
+        "--paper-smoothing only)",
     )
     plan.add_argument(
         "--planner-option",

@@ -45,6 +45,7 @@ fallback) and :mod:`.planner` (:class:`ImprovedRRTConnect`).
 from __future__ import annotations
 
 from rrtdrive.planning.improved.config import (
+    BEYOND_PAPER,
     COMPONENTS,
     PER_QUERY_SMOOTHING,
     SMOOTHING_COMPONENTS,
@@ -71,6 +72,7 @@ from rrtdrive.planning.improved.growth import (
 from rrtdrive.planning.improved.planner import NAME, ImprovedRRTConnect
 
 __all__ = [
+    "BEYOND_PAPER",
     "COMPONENTS",
     "SMOOTHING_COMPONENTS",
     "PER_QUERY_SMOOTHING",

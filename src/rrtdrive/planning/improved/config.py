@@ -16,6 +16,7 @@ from rrtdrive.types import InputError, require_finite, require_int
 
 __all__ = [
     "NAME",
+    "BEYOND_PAPER",
     "COMPONENTS",
     "ESCALATION_FIRST",
     "SMOOTHING_COMPONENTS",
@@ -41,6 +42,10 @@ COMPONENTS: tuple[str, ...] = (
     "dubins_fallback",
     "escalation",
 )
+
+#: The components this planner adds to the paper's pipeline: off, with the degree-2
+#: B-spline, it is the paper's (Table 3's arm: ``experiments/table3.py``).
+BEYOND_PAPER: tuple[str, ...] = ("passage_sampling", "dubins_fallback", "escalation")
 
 #: When the Hybrid A* escalation runs before the Dubins fallback
 #: (:attr:`ImprovedConfig.escalation_first`).
