@@ -219,9 +219,13 @@ def primitive_sets(
     """The search's primitives of one gear (0: both) and their longer copies, built once.
 
     The first set has arcs of ``length``; then one per factor of ``long_steps``
-    (:meth:`PrimitiveSet.scaled`). The sets are shared: never write to them.
+    (:meth:`PrimitiveSet.scaled`). The sets are shared, their arrays read-only.
     """
     base = PrimitiveSet.build(kappa_max, count, length, spacing, reverse=True)
     if gear:
         base = base.gear(gear)
-    return (base, *(base.scaled(f) for f in long_steps))
+    sets = (base, *(base.scaled(f) for f in long_steps))
+    for one in sets:  # shared by every later query: read-only, so a stray write raises
+        for a in (one.kappas, one.gears, one.local):
+            a.setflags(write=False)
+    return sets

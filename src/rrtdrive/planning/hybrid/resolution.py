@@ -129,7 +129,9 @@ DUBINS_TABLES = 16
 
 @functools.lru_cache(maxsize=DUBINS_TABLES)
 def _dubins_table(radius: float, yaw_bins: int) -> DubinsTable:
-    return DubinsTable.build(radius, yaw_bins=yaw_bins)
+    table = DubinsTable.build(radius, yaw_bins=yaw_bins)
+    table.lengths.setflags(write=False)  # shared by every later query: a write would leak
+    return table
 
 
 #: Most heading bins of a Dubins table (1 degree): a search's bins can be finer, its

@@ -26,14 +26,18 @@ segment it finds ``r - tol`` clear is not blocked, and then nothing is proven. A
 
 from __future__ import annotations
 
-import functools
 import math
+import weakref
+from collections import OrderedDict
 
 import numpy as np
 import shapely
 
 from rrtdrive.collision import CollisionChecker
 from rrtdrive.types import Pose
+
+#: A fan's segment ends, clearance-field minima, half point gap and distances to the edge.
+_Fan = tuple[np.ndarray, np.ndarray, float, np.ndarray]
 
 __all__ = ["ROOT_FAN_TOL", "boxed_end", "open_share", "root_boxed_in", "stuck_root_words"]
 
@@ -102,12 +106,40 @@ def root_boxed_in(checker: CollisionChecker, root: Pose, tol: float = ROOT_FAN_T
     return bool(blocked.all())
 
 
-# The last two fans: a query asks root_boxed_in, then open_share, of its start and goal
-# (a checker never changes once built; the arrays are read-only).
-@functools.lru_cache(maxsize=2)
+#: Each live checker's last two fans: a query asks root_boxed_in, then open_share, of
+#: its start and goal (a checker never changes once built; the arrays are read-only).
+#: Weakly keyed: an lru_cache keyed on the checker kept a user's dropped checker, and
+#: its tens of MB, alive (an audit).
+_FANS: weakref.WeakKeyDictionary[CollisionChecker, OrderedDict[tuple, _Fan]] = (
+    weakref.WeakKeyDictionary()
+)
+_FANS_PER_CHECKER = 2
+
+
 def _fan_room(
     checker: CollisionChecker, root: Pose, back: float, front: float, tol: float
-) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+) -> _Fan:
+    """:func:`_build_fan_room`, remembered per checker (its last two fans)."""
+    fans = _FANS.get(checker)
+    if fans is None:
+        fans = _FANS.setdefault(checker, OrderedDict())
+    key = (root, back, front, tol)
+    fan = fans.get(key)
+    if fan is None:
+        fan = fans[key] = _build_fan_room(checker, root, back, front, tol)
+        while len(fans) > _FANS_PER_CHECKER:
+            fans.popitem(last=False)
+    else:
+        fans.move_to_end(key)
+    return fan
+
+
+_fan_room.cache_clear = _FANS.clear  # type: ignore[attr-defined]  # as lru_cache's
+
+
+def _build_fan_room(
+    checker: CollisionChecker, root: Pose, back: float, front: float, tol: float
+) -> _Fan:
     """The fan's segments and two bounds of their room, for both functions here.
 
     Returns
