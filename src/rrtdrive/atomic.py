@@ -68,12 +68,43 @@ def temp_beside(target: str | os.PathLike[str], suffix: str | None = None) -> Pa
     """
     target = destination(target)
     folder = None if is_stream(target) else (target.parent if str(target.parent) else ".")
-    fd, tmp = tempfile.mkstemp(
-        prefix=f".{target.stem}.", suffix=target.suffix if suffix is None else suffix,
-        dir=folder,
-    )
+    suffix = target.suffix if suffix is None else suffix
+    try:
+        fd, tmp = tempfile.mkstemp(
+            prefix=f".{_fitting_stem(target.stem, suffix, folder)}.", suffix=suffix, dir=folder
+        )
+    except OSError as exc:
+        raise _naming(exc, target) from None
     os.close(fd)
     return Path(tmp)
+
+
+#: Bytes mkstemp adds to prefix and suffix: the dot before the stem, the dot after it
+#: and its 8 random characters.
+_TEMP_EXTRA = 10
+
+
+def _fitting_stem(stem: str, suffix: str, folder: str | os.PathLike[str] | None) -> str:
+    """``stem`` shortened so that the temporary name fits where the target's name fits.
+
+    The temporary file's name is 10 bytes longer than the target's: a target named
+    with 250 bytes, which the file system takes, was refused (an audit).
+    """
+    try:
+        name_max = os.pathconf(folder or tempfile.gettempdir(), "PC_NAME_MAX")
+    except (OSError, ValueError):
+        name_max = 255
+    room = name_max - _TEMP_EXTRA - len(os.fsencode(suffix))
+    encoded = os.fsencode(stem)
+    if len(encoded) <= room:
+        return stem
+    # Cut whole characters: a UTF-8 sequence cut in half is no name.
+    return os.fsdecode(encoded[: max(room, 0)].decode("utf-8", "ignore").encode("utf-8"))
+
+
+def _naming(exc: OSError, target: str | os.PathLike[str]) -> OSError:
+    """``exc`` naming ``target``, not the hidden temporary file it failed on."""
+    return OSError(exc.errno, exc.strerror, os.fspath(target))
 
 
 def publish(tmp: str | os.PathLike[str], target: str | os.PathLike[str]) -> None:
@@ -85,17 +116,20 @@ def publish(tmp: str | os.PathLike[str], target: str | os.PathLike[str]) -> None
     into it.
     """
     target = destination(target)
-    if is_stream(target):
-        with open(tmp, "rb") as src, open(target, "wb") as dst:
-            shutil.copyfileobj(src, dst)
-        os.unlink(tmp)
-        return
     try:
-        mode = stat.S_IMODE(os.stat(target).st_mode)
-    except OSError:
-        mode = 0o666 & ~_umask()
-    os.chmod(tmp, mode)
-    os.replace(tmp, target)
+        if is_stream(target):
+            with open(tmp, "rb") as src, open(target, "wb") as dst:
+                shutil.copyfileobj(src, dst)
+            os.unlink(tmp)
+            return
+        try:
+            mode = stat.S_IMODE(os.stat(target).st_mode)
+        except OSError:
+            mode = 0o666 & ~_umask()
+        os.chmod(tmp, mode)
+        os.replace(tmp, target)
+    except OSError as exc:  # the rename's error names the temporary file too
+        raise _naming(exc, target) from None
 
 
 @contextmanager

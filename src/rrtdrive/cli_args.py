@@ -152,7 +152,9 @@ def writing(flag: str, target: str | os.PathLike[str]) -> Iterator[None]:
     except OSError as exc:
         # The first line only: imageio's error carries ffmpeg's command and output after it.
         why = exc.strerror or (str(exc).strip().splitlines() or [type(exc).__name__])[0]
-        raise OutputError(f"{flag}: cannot write {target}: {why}") from None
+        # The file that failed: a bench's summary.md inside --out, not the folder (an audit).
+        where = exc.filename if isinstance(exc.filename, str) and exc.filename else target
+        raise OutputError(f"{flag}: cannot write {where}: {why}") from None
 
 
 def names_stdout(target: str) -> bool:

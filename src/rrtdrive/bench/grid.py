@@ -235,6 +235,8 @@ class BenchConfig:
             set_(self, "workers", require_int("workers", self.workers, 1))
         if not isinstance(self.out, (str, os.PathLike)) or not str(self.out):
             raise InputError(f"out: expected a folder name, got {self.out!r}")
+        if str(self.out) == "-":  # the other commands' stdout: a folder named "-" surprised
+            raise InputError("out: a bench writes a folder of files, not stdout: name a folder")
         set_(self, "out", str(self.out))
         if not isinstance(self.deterministic, bool):
             raise InputError(

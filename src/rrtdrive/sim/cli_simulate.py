@@ -27,6 +27,7 @@ from typing import Any
 
 from rrtdrive.cli_args import (
     PLOT_SUFFIXES,
+    OutputError,
     cell_size,
     distinct_outputs,
     flags_for,
@@ -540,28 +541,31 @@ def _run(args: argparse.Namespace) -> int:
         extra["path_file"] = args.path  # the driven path's plan file (planner "given")
     if stock is not None:
         extra.update(stock.to_json())
-    # A video or plot that cannot be written fails the run (exit 1) after the JSON, the
-    # trajectory and the summary are out: the drive's metrics are not lost with it.
+    # An output that cannot be written fails the run (exit 1) after the others and the
+    # summary are out, each failure named: the drive's metrics are not lost with it (a
+    # --trajectory failure lost the JSON and the summary; an audit).
     unwritten = write_media(args, episode, stock, streamed, stride, plot, extra)
     data = episode_json(report, extra)
     text = json.dumps(data, indent=2) + "\n"
-    if args.trajectory:
-        from rrtdrive.maps import write_text_atomic
-        from rrtdrive.sim.episode import trajectory_csv
+    from rrtdrive.maps import write_text_atomic
+    from rrtdrive.sim.episode import trajectory_csv
 
-        with writing("--trajectory", args.trajectory):
-            write_text_atomic(args.trajectory, trajectory_csv(episode))
-        if not report.steps:  # a header-only file said nothing of why (an audit)
-            print("rrtdrive simulate: --trajectory: nothing was driven (the plan failed); "
-                  "the file has its header only", file=sys.stderr)
+    for flag, target, content in (("--trajectory", args.trajectory, trajectory_csv),
+                                  ("--json", args.json, lambda _: text)):  # fmt: skip
+        if not target or target == "-":
+            continue
+        try:
+            with writing(flag, target):
+                write_text_atomic(target, content(episode))
+        except OutputError as exc:
+            unwritten.append(exc)
+        else:
+            if flag == "--trajectory" and not report.steps:  # a header-only file (an audit)
+                print("rrtdrive simulate: --trajectory: nothing was driven (the plan failed); "
+                      "the file has its header only", file=sys.stderr)
     if args.json == "-":
         sys.stdout.write(text)
         sys.stdout.flush()
-    elif args.json:
-        from rrtdrive.maps import write_text_atomic
-
-        with writing("--json", args.json):
-            write_text_atomic(args.json, text)
     # With the JSON on stdout, the summary goes to stderr (as `plan` does; README).
     out = sys.stderr if args.json == "-" else sys.stdout
     verdict = "success" if report.success else f"{report.outcome} ({failure_reason(report)})"
