@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import rrtdrive.collision.checker as checker_module
-import rrtdrive.planning.base as base_module
+import rrtdrive.planning.checker_cache as checker_cache
 import rrtdrive.planning.hybrid.resolution as resolution_module
 from rrtdrive.cli import main, plan_to_json
 from rrtdrive.collision import CollisionChecker
@@ -319,7 +319,7 @@ def test_a_kept_detour_counts_the_escalations_expansions():
 
 def test_map_setup_is_setup_time_not_planning_time(tmp_path, capsys, monkeypatch):
     """A slow distance field and a slow Hybrid A* grid: set-up, outside a 0.75 s cap."""
-    monkeypatch.setattr(base_module, "_CHECKERS", {})  # this map's set-up is built afresh
+    monkeypatch.setattr(checker_cache, "_CHECKERS", {})  # this map's set-up is built afresh
     real_field = checker_module.distance_field
     real_grid = resolution_module.free_cell_graph
 

@@ -7,7 +7,7 @@ answer a cold build would.
 
 Inventory (src/rrtdrive, envs/, controllers/), each bounded:
 
-- ``planning.base._CHECKERS``: one checker per (bounds, obstacles, vehicle, config),
+- ``planning.checker_cache._CHECKERS``: one checker per (bounds, obstacles, vehicle, config),
   cleared whole when it holds more than 16 (so at most 17 maps' checkers).
 - per checker, ``collision.grid.GridCache``: ``_free`` (per start component),
   ``_passages`` (component, width), ``_derived`` (keys from config values only:
@@ -193,7 +193,7 @@ def test_many_maps_checkers_evicted_and_freed():
         import gc, json, tracemalloc
         import numpy as np
         from rrtdrive import Budget, CollisionChecker, InputError, Map, Obstacle, Pose
-        from rrtdrive.planning import PlanningProblem, make_planner, base
+        from rrtdrive.planning import PlanningProblem, make_planner, base, checker_cache
         from rrtdrive.planning.improved import boxed
 
         def gen(i):
@@ -224,10 +224,10 @@ def test_many_maps_checkers_evicted_and_freed():
                 PlanningProblem.from_map(m), np.random.default_rng(i),
                 Budget(max_iterations=300, max_time_s=2.0),
             )
-            sizes.append(len(base._CHECKERS))
+            sizes.append(len(checker_cache._CHECKERS))
             live.append(live_checkers())
             mems.append(tracemalloc.get_traced_memory()[0] - base_mem)
-        base._CHECKERS.clear()
+        checker_cache._CHECKERS.clear()
         boxed._fan_room.cache_clear()
         left = live_checkers()
         after = tracemalloc.get_traced_memory()[0] - base_mem
@@ -255,9 +255,9 @@ def test_checker_cache_clears_hot_maps_too():
     as a bug: the README says only that a checker is built "once per process".
     """
     from rrtdrive import Map, Obstacle, Pose
-    from rrtdrive.planning import base
+    from rrtdrive.planning import checker_cache
 
-    base._CHECKERS.clear()  # a known start: other tests of this process filled it
+    checker_cache._CHECKERS.clear()  # a known start: other tests of this process filled it
     hot = builtin_map("garage")
     first = cached_checker(hot)
     rebuilt = []
@@ -423,7 +423,7 @@ def test_kept_results_do_not_pin_evicted_checkers():
         import gc, json
         import numpy as np
         from rrtdrive import Budget, CollisionChecker, builtin_map
-        from rrtdrive.planning import PlanningProblem, make_planner, base
+        from rrtdrive.planning import PlanningProblem, make_planner, base, checker_cache
         from rrtdrive.planning.improved import boxed
         kept = []
         for name in ("garage", "no_path", "dead_end"):
@@ -434,7 +434,7 @@ def test_kept_results_do_not_pin_evicted_checkers():
                 kept.append(make_planner(planner).solve(
                     p, np.random.default_rng(0), Budget(max_iterations=300, max_time_s=5)))
         del p  # the last problem holds its checker, as it should
-        base._CHECKERS.clear()
+        checker_cache._CHECKERS.clear()
         boxed._fan_room.cache_clear()
         gc.collect()
         live = sum(isinstance(o, CollisionChecker) for o in gc.get_objects())

@@ -17,7 +17,7 @@ Complements ``test_audit_long_running_s49.py`` (cache inventory, maxsize of ever
 - ``sim.scenes._LANE_CACHE``: bounded by its cap, and a hit is highway-env's own lane.
 
 Measured (this machine, 40 x 20 m random maps, improved-rrt-connect, tracemalloc):
-traced memory is a sawtooth between about 12 and 64 MB as ``planning.base._CHECKERS``
+traced memory is a sawtooth between about 12 and 64 MB as ``planning.checker_cache._CHECKERS``
 fills to 17 and clears (about 3.5 MB a map: ``collision/lookup.py`` flat copy of the
 field, ``collision/distance.py`` field, ``hybrid/heuristic.py`` distance fields,
 scipy labels); RSS +52 MB after 20 maps, +65-110 MB from 40 to 400 maps, +0-6 MB for
@@ -41,7 +41,7 @@ import pytest
 
 from rrtdrive import Budget, CollisionChecker, Map, Obstacle, Pose
 from rrtdrive.planning import PlanningProblem, make_planner
-from rrtdrive.planning import base as planning_base
+from rrtdrive.planning import checker_cache as cache_module
 
 START, GOAL = Pose(3.0, 10.0, 0.0), Pose(35.0, 10.0, 0.0)
 BOUNDS = (0.0, 0.0, 40.0, 20.0)
@@ -56,10 +56,10 @@ PLANNERS = ("improved-rrt-connect", "rrt-connect", "rrt", "rrt-star", "hybrid-a-
 @pytest.fixture
 def checker_cache():
     """The process-wide checker cache, restored after the test (other tests rely on it)."""
-    saved = dict(planning_base._CHECKERS)
-    yield planning_base._CHECKERS
-    planning_base._CHECKERS.clear()
-    planning_base._CHECKERS.update(saved)
+    saved = dict(cache_module._CHECKERS)
+    yield cache_module._CHECKERS
+    cache_module._CHECKERS.clear()
+    cache_module._CHECKERS.update(saved)
 
 
 def _filler(i: int) -> Map:
@@ -152,7 +152,7 @@ def test_threads_planning_alternate_maps_while_the_cache_overflows(checker_cache
         with problem.checker.lock:
             wall_free = problem.checker.pose_free((19.0, 10.0, 0.0))
         with lock:
-            seen_sizes.append(len(planning_base._CHECKERS))
+            seen_sizes.append(len(cache_module._CHECKERS))
         return kind, result, wall_free
 
     with ThreadPoolExecutor(max_workers=4) as pool:
@@ -229,7 +229,7 @@ _RSS_SCRIPT = """
 import gc, json, resource, sys
 import numpy as np
 from rrtdrive import Budget, InputError, Map, Obstacle, Pose
-from rrtdrive.planning import PlanningProblem, make_planner, base
+from rrtdrive.planning import PlanningProblem, make_planner, base, checker_cache
 
 def rss_mb():  # the peak so far (kB on Linux, bytes on macOS)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -264,7 +264,7 @@ gc.collect(); same = rss_mb()
 sizes, solved = [], 0
 for i, m in enumerate(maps[1:], 1):
     solved += plan(m, i).success
-    sizes.append(len(base._CHECKERS))
+    sizes.append(len(checker_cache._CHECKERS))
     if i == 40:
         gc.collect(); after40 = rss_mb()
 gc.collect(); after200 = rss_mb()
@@ -331,3 +331,26 @@ def test_shared_hybrid_tables_are_read_only():
         for a in (one.kappas, one.gears, one.local):
             with pytest.raises(ValueError, match="read-only"):
                 a.flat[0] = 1.0
+
+
+def test_threads_asking_for_one_new_map_share_one_checker():
+    """cached_checker built one checker per thread when they asked at once (an audit)."""
+    import threading
+
+    from rrtdrive.maps import Map
+    from rrtdrive.planning.checker_cache import cached_checker
+
+    m = Map("fresh", (0.0, 0.0, 61.3, 40.0), (), Pose(5.0, 20.0, 0.0), Pose(50.0, 20.0, 0.0))
+    got: list[object] = []
+    go = threading.Barrier(4)
+
+    def ask() -> None:
+        go.wait()
+        got.append(cached_checker(m))
+
+    threads = [threading.Thread(target=ask) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(got) == 4 and all(c is got[0] for c in got)

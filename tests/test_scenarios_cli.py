@@ -134,7 +134,7 @@ def test_simulate_a_map_plans_and_judges_on_the_grid_asked_for(capsys, tmp_path)
     # any automatic grid, 5 x 5 km, could not be simulated at all: no such option).
     from rrtdrive.collision import CheckerConfig
     from rrtdrive.maps import load_map
-    from rrtdrive.planning.base import _CHECKERS
+    from rrtdrive.planning.checker_cache import _CHECKERS
 
     path = small_map(tmp_path)
     m = load_map(path)

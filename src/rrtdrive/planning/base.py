@@ -16,6 +16,7 @@ from rrtdrive.collision import CheckerConfig, CollisionChecker
 from rrtdrive.geometry import densify
 from rrtdrive.map_checks import warn_if_degrees
 from rrtdrive.maps import MAX_YAW, Map, check_endpoint
+from rrtdrive.planning.checker_cache import cached_checker
 from rrtdrive.types import (
     Budget,
     InputError,
@@ -38,6 +39,7 @@ __all__ = [
     "failure",
     "polyline_path",
     "polyline_curvature",
+    "cached_checker",
 ]
 
 
@@ -141,26 +143,6 @@ class PlanningProblem:
     def bounds(self) -> tuple[float, float, float, float]:
         """The map's ``(xmin, ymin, xmax, ymax)``."""
         return self.map.bounds
-
-
-_CHECKERS: dict[tuple[object, ...], CollisionChecker] = {}
-
-
-def cached_checker(m: Map, config: CheckerConfig | None = None) -> CollisionChecker:
-    """The checker for ``m``'s obstacles, bounds and car, built once and kept.
-
-    The process keeps up to 17; an 18th distinct map clears them all (each holds its
-    grids, tens of MB for a 100 m map, and what its queries' set-up builds).
-    """
-    config = config or CheckerConfig()
-    key = (m.bounds, m.obstacles, m.vehicle, config)
-    checker = _CHECKERS.get(key)
-    if checker is None:
-        if len(_CHECKERS) > 16:
-            _CHECKERS.clear()
-        checker = CollisionChecker.for_map(m, config=config)
-        _CHECKERS[key] = checker
-    return checker
 
 
 @runtime_checkable
