@@ -180,7 +180,10 @@ def config_from_args(args: argparse.Namespace) -> Any:
         return config_from_mapping(values)
     except InputError as exc:
         # A bad value read from the file names the file, as an unknown key there does.
-        if str(exc).split(":", 1)[0] in from_file:
+        field = str(exc).split(":", 1)[0]
+        # An empty file or maps = [] leaves no map or scenario: the file is named too.
+        if field in from_file or (field == "maps/scenarios" and args.config is not None
+                                  and not {"maps", "scenarios"} & set(given_flags(args))):
             raise InputError(f"{exc} (in {args.config!r})") from None
         raise
 

@@ -39,15 +39,17 @@ def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     import tomllib
 
     p = FsPath(path)
+    text = ""
     try:
         # utf-8-sig: a byte-order mark (Windows editors write one) is no error, as in maps.
-        data = tomllib.loads(p.read_text(encoding="utf-8-sig"))
+        text = p.read_text(encoding="utf-8-sig")
+        data = tomllib.loads(text)
     except FileNotFoundError:
         raise InputError(f"config: no such file {str(p)!r}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"config: cannot read {str(p)!r}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"config: malformed TOML in {str(p)!r}: {exc}") from None
+        raise InputError(_toml_error(exc, text, str(p))) from None
     except RecursionError:
         raise InputError(f"config: malformed TOML in {str(p)!r}: nested too deeply") from None
     except ValueError:  # an integer past Python's 4300-digit conversion limit
@@ -78,8 +80,36 @@ def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
         elif ray is False:
             data["ray"] = None
         elif not isinstance(ray, str):
-            raise InputError(f"ray: expected true, false or an address, got {ray!r}")
+            raise InputError(
+                f"ray: expected true, false or an address, got {ray!r} (in {str(p)!r})"
+            )
+    # A shell expands --out ~/x; a file's "~/x" made a folder named "~" (an audit).
+    if isinstance(data.get("out"), str):
+        data["out"] = os.path.expanduser(data["out"])
+    if isinstance(data.get("maps"), list):
+        data["maps"] = [os.path.expanduser(m) if isinstance(m, str) else m for m in data["maps"]]
     return data
+
+
+def _toml_error(exc: Exception, text: str, name: str) -> str:
+    """Tomllib's error in the file's terms.
+
+    A key given twice is named (tomllib says "Cannot overwrite a value"); a JSON or
+    YAML file is told that ``--config`` reads TOML.
+    """
+    import re
+
+    why = str(exc)
+    where = re.search(r"\(at line (\d+), column \d+\)", why)
+    if where and why.startswith(("Cannot overwrite a value", "Cannot declare")):
+        line = text.splitlines()[int(where.group(1)) - 1] if text else ""
+        key = line.split("=", 1)[0].strip().strip("[]\"' ")
+        if key:
+            return f"{key}: given twice in {name!r} (line {where.group(1)}); give it once"
+    hint = ""
+    if name.lower().endswith((".json", ".yaml", ".yml")) or text.lstrip().startswith("{"):
+        hint = "; --config reads TOML (key = value lines), not JSON or YAML"
+    return f"config: malformed TOML in {name!r}: {why}{hint}"
 
 
 def config_from_mapping(values: Mapping[str, Any]) -> BenchConfig:

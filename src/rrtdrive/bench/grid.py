@@ -392,6 +392,8 @@ class BenchConfig:
         out = {k: getattr(self, k) for k in CONFIG_KEYS}
         for k in ("maps", "scenarios", "planners", "controllers"):
             out[k] = list(out[k])
+        if self.deterministic:  # no limit, as a config that is fed back says it (an audit)
+            out["max_time_s"] = None
         out["map_digests"] = dict(self.map_digests)
         out["schema"] = SCHEMA
         return out
