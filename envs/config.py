@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields
@@ -23,7 +24,7 @@ from rrtdrive.controllers import CONTROLLERS, SpeedConfig, TrackingController, m
 from rrtdrive.envs import is_registered_default, scenario_text
 from rrtdrive.envs.action import CommandLimits
 from rrtdrive.envs.reward import RewardWeights
-from rrtdrive.frozen import FrozenOptions
+from rrtdrive.frozen import FrozenOptions, config_of
 from rrtdrive.maps import Map, map_from_json
 from rrtdrive.planning import PLANNERS, forward_only_note, make_planner, reverses, unknown_planner
 from rrtdrive.sim.limits import MAX_REVERSE_SPEED, MAX_SPEED
@@ -220,6 +221,9 @@ class DriveEnvConfig:
             object.__setattr__(self, name, value)
 
         scenario, planner, controller = self.scenario, self.planner, self.controller
+        if isinstance(scenario, os.PathLike):  # a map file as save_map takes it
+            scenario = os.fspath(scenario)
+            put("scenario", scenario)
         if isinstance(scenario, Mapping) and "obstacles" in scenario:
             scenario = map_of_fields(scenario)
             put("scenario", scenario)
@@ -295,10 +299,7 @@ class DriveEnvConfig:
         checked = _planner_options(self.planner_options, planner, replan)
         put("planner_options", FrozenOptions(checked))
         put("speed_options", _frozen("speed_options", self.speed_options))
-        budget = Budget() if self.budget is None else self.budget
-        if not isinstance(budget, Budget):
-            raise InputError(f"budget: expected a rrtdrive.Budget, got {budget!r}")
-        put("budget", budget)
+        put("budget", Budget() if self.budget is None else config_of(Budget, self.budget, "budget"))
         seed_range = self.seed_range
         if (
             not isinstance(seed_range, (tuple, list))

@@ -566,3 +566,11 @@ def test_bench_out_dash_is_refused_not_a_folder_named_dash(capsys, tmp_path, mon
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and "--out: " in err, err
     assert not (tmp_path / "-").exists()
+
+
+def test_maps_export_dash_is_refused_not_a_folder_named_dash(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code = main(["maps", "--export", "-"])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "--export: " in err, err
+    assert not (tmp_path / "-").exists()

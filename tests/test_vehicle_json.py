@@ -166,3 +166,24 @@ def test_a_bad_car_in_a_map_file_is_one_line_exit_2(tmp_path):
     assert run.returncode == 2 and "Traceback" not in run.stderr
     assert run.stderr.strip().count("\n") == 0
     assert "vehicle.wheelbase: must be shorter than the length" in run.stderr
+
+
+def test_maps_import_vehicle_flag_takes_an_object_or_a_file(tmp_path):
+    from PIL import Image
+
+    img = np.full((100, 300), 254, np.uint8)
+    img[:42], img[58:] = 0, 0  # a 1.6 m corridor: the paper's 1.8 m car does not fit
+    Image.fromarray(img).save(tmp_path / "corr.png")
+    base = ["maps", "--import", "corr.png", "--resolution", "0.1", "--start", "2,5,0",
+            "--goal", "26,5,0"]  # fmt: skip
+    run = _cli(*base, "--out", "a.json", cwd=tmp_path)
+    assert run.returncode == 2 and "--vehicle gives another" in run.stderr
+    run = _cli(*base, "--out", "a.json", "--vehicle", json.dumps(vehicle_to_json(TINY)),
+               cwd=tmp_path)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert load_map(tmp_path / "a.json").vehicle == TINY
+    run = _cli(*base, "--out", "b.json", "--vehicle", "a.json", cwd=tmp_path)  # its car
+    assert run.returncode == 0 and load_map(tmp_path / "b.json").vehicle == TINY
+    run = _cli(*base, "--out", "c.json", "--vehicle", '{"width": 0}', cwd=tmp_path)
+    assert run.returncode == 2 and "--vehicle: vehicle.width" in run.stderr
+    assert not (tmp_path / "c.json").exists()

@@ -12,6 +12,7 @@ from rrtdrive.types import InputError
 
 if TYPE_CHECKING:
     from rrtdrive.maps import Map
+    from rrtdrive.types import VehicleParams
 
 __all__ = ["add_parser", "HELP"]
 
@@ -54,6 +55,12 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     imp.add_argument("--unknown-free", action="store_true",
                      help="read the cells between ROS's thresholds (grey, unknown) as free; "
                      "by default they are obstacles")
+    imp.add_argument("--vehicle", metavar="JSON|FILE.json",
+                     help="the map's car, when not the paper's: a vehicle object "
+                     "('{\"length\": 2.5, \"width\": 1.2, \"wheelbase\": 1.6, "
+                     "\"min_turning_radius\": 3}', fields left out are the paper's car's) "
+                     "or a JSON file holding one or a map file with one; the start and goal "
+                     "are checked for it and the map file keeps it")
     imp.add_argument("--despeckle", type=nonneg_int, metavar="N",
                      help="drop groups of at most N occupied cells (touching, corners "
                      "included): a scan's noise; a post or kerb stone that small goes too "
@@ -65,7 +72,8 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
 #: The flags that only an import takes.
 IMPORT_FLAGS = (("start", "--start"), ("goal", "--goal"), ("out", "--out"), ("name", "--name"),
                 ("resolution", "--resolution"), ("origin", "--origin"), ("negate", "--negate"),
-                ("unknown_free", "--unknown-free"), ("despeckle", "--despeckle"))  # fmt: skip
+                ("unknown_free", "--unknown-free"), ("despeckle", "--despeckle"),
+                ("vehicle", "--vehicle"))  # fmt: skip
 
 
 def _cmd_import(args: argparse.Namespace) -> int:
@@ -83,6 +91,7 @@ def _cmd_import(args: argparse.Namespace) -> int:
     validate_output(args.out, "--out", (".json",), allow_stdout=False)
     distinct_outputs({"--import": source}, out=args.out)
     start, goal = parse_pose(args.start, "--start"), parse_pose(args.goal, "--goal")
+    car = _vehicle_arg(args.vehicle)  # before the image is read: bad input first
     is_yaml = source.lower().endswith((".yaml", ".yml"))
     if is_yaml:
         for attr, flag in (("resolution", "--resolution"), ("origin", "--origin"),
@@ -117,11 +126,14 @@ def _cmd_import(args: argparse.Namespace) -> int:
         # image named with a tab was blamed on --name; an audit).
         named = "--name" if args.name is not None else "the image's file name (give --name)"
         with flags_for({"start": "--start", "goal": "--goal", "name": named}):
-            m = map_from_image(grid, name, start, goal)
+            m = map_from_image(grid, name, start, goal, car)
     except InputError as exc:
-        hint = None if args.unknown_free else _unknown_hint(grid, str(exc), start, goal)
+        hint = None if args.unknown_free else _unknown_hint(grid, str(exc), start, goal, car)
         if hint is None and not is_yaml and not getattr(args, "negate", False):
             hint = _dark_floor_hint(grid, str(exc))
+        if car is None and "the car's body" in str(exc):  # whose body (an audit)
+            hint = (f"{hint}; " if hint else "") + (
+                "the car is the paper's, 4.3 x 1.8 m: --vehicle gives another")
         if hint:
             raise InputError(f"{exc} ({hint})") from None
         raise
@@ -143,6 +155,36 @@ def _cmd_import(args: argparse.Namespace) -> int:
     )  # fmt: skip
     return 0
 
+
+
+def _vehicle_arg(text: str | None) -> VehicleParams | None:
+    """``--vehicle``: a vehicle object, or a JSON file of one or of a map holding one."""
+    import json
+
+    from rrtdrive.json_input import parse_json, read_capped
+    from rrtdrive.vehicle_json import vehicle_from_json
+
+    if text is None:
+        return None
+    if text.lstrip().startswith("{"):
+        try:
+            data = json.loads(text)
+        except ValueError as exc:
+            raise InputError(f"--vehicle: not a JSON object: {exc}") from None
+    else:
+        try:
+            with open(text, "rb") as f:
+                data = parse_json(read_capped(f, "--vehicle", text), "--vehicle", text)
+        except OSError as exc:
+            raise InputError(f"--vehicle: cannot read {text}: {exc.strerror}") from None
+        if isinstance(data, dict) and "bounds" in data:  # a map file: its car
+            if data.get("vehicle") is None:
+                raise InputError(f"--vehicle: the map file {text} holds no vehicle")
+            data = data["vehicle"]
+    try:
+        return vehicle_from_json(data)
+    except InputError as exc:
+        raise InputError(f"--vehicle: {exc}") from None
 
 
 def _cmd_maps(args: argparse.Namespace) -> int:
@@ -199,6 +241,9 @@ def _export_folder(text: str, names: Sequence[str]) -> pathlib.Path:
     """
     if not text.strip():
         raise InputError("--export: expected a folder, got an empty value")
+    if text == "-":  # stdout elsewhere; a folder named "-" surprised (an audit)
+        raise InputError("--export: writes one file per map into a folder, not stdout: "
+                         "name a folder (rrtdrive maps --export DIR)")
     out = pathlib.Path(text)
     if out.exists() and not out.is_dir():
         raise InputError(f"--export: {out} is a file; give a folder (it is created if missing)")
@@ -211,7 +256,9 @@ def _export_folder(text: str, names: Sequence[str]) -> pathlib.Path:
     return out
 
 
-def _unknown_hint(grid: Any, error: str, start: Any, goal: Any) -> str | None:
+def _unknown_hint(
+    grid: Any, error: str, start: Any, goal: Any, car: VehicleParams | None = None
+) -> str | None:
     """Why a pose the image refuses may lie on unknown cells, or None when it does not."""
     from rrtdrive.occupancy import unknown_cells_under
     from rrtdrive.vehicle import VehicleParams, footprint_polygon
@@ -223,7 +270,7 @@ def _unknown_hint(grid: Any, error: str, start: Any, goal: Any) -> str | None:
     # A transparent background (matplotlib's transparent=True) reads as unknown: the
     # whole image becomes one obstacle and the pose "overlaps" it, unexplained. A pose on
     # a dark cell alone gets no such hint (it said "0% ... unknown"; an audit).
-    body = footprint_polygon((pose.x, pose.y, pose.yaw), VehicleParams())  # the Map's car
+    body = footprint_polygon((pose.x, pose.y, pose.yaw), car or VehicleParams())  # the Map's
     under = unknown_cells_under(grid, body)
     if not under:
         return None

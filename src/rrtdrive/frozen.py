@@ -9,9 +9,11 @@ could be changed in place after validation and made the config unhashable
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
-from typing import Any
+from typing import Any, TypeVar
 
-__all__ = ["FrozenOptions"]
+__all__ = ["FrozenOptions", "config_of"]
+
+T = TypeVar("T")
 
 
 class FrozenOptions(Mapping[str, Any]):
@@ -81,3 +83,33 @@ def _hashable(value: Any) -> Any:
     except TypeError:
         return repr(value)
     return value
+
+
+def config_of(kind: type[T], value: object, field: str) -> T:
+    """``value`` as a ``kind`` config: itself, or built from a mapping of its fields.
+
+    gymnasium's ``EnvSpec.to_json`` keeps a dataclass option as its fields' dict;
+    ``gym.make`` of that spec gives it back here (a ``Budget`` or ``SafetyConfig``
+    did not survive the round trip; an audit).
+
+    Raises
+    ------
+    InputError
+        Naming ``field``: neither a ``kind`` nor a mapping of its fields.
+
+    Examples
+    --------
+    >>> from rrtdrive.types import Budget
+    >>> config_of(Budget, {"max_iterations": 50}, "budget").max_iterations
+    50
+    """
+    from rrtdrive.types import InputError
+
+    if isinstance(value, kind):
+        return value
+    if isinstance(value, Mapping):
+        try:
+            return kind(**value)
+        except TypeError as exc:  # an unknown or missing field
+            raise InputError(f"{field}: {exc}") from None
+    raise InputError(f"{field}: expected a {kind.__name__} or its fields, got {value!r}")

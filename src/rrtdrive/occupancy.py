@@ -25,7 +25,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rrtdrive.map_checks import MAX_COORDINATE
-from rrtdrive.types import InputError, Pose, brief_repr, is_finite_number, require_int
+from rrtdrive.types import (
+    InputError,
+    Pose,
+    VehicleParams,
+    brief_repr,
+    is_finite_number,
+    require_int,
+)
 from rrtdrive.values import one_line
 
 if TYPE_CHECKING:
@@ -555,7 +562,9 @@ def unknown_cells_under(grid: ImageMap, body: shapely.Polygon) -> int:
     return int(np.count_nonzero(shared > 1e-12))
 
 
-def map_from_image(grid: ImageMap, name: str, start: Pose, goal: Pose) -> Map:
+def map_from_image(
+    grid: ImageMap, name: str, start: Pose, goal: Pose, vehicle: VehicleParams | None = None
+) -> Map:
     """The :class:`~rrtdrive.maps.Map` of an image's occupied cells, bounds its extent.
 
     Parameters
@@ -565,7 +574,9 @@ def map_from_image(grid: ImageMap, name: str, start: Pose, goal: Pose) -> Map:
     name : str
         The map's name.
     start, goal : Pose
-        Rear-axle poses; checked against the obstacles as any map's.
+        Rear-axle poses; checked against the obstacles as any map's, for ``vehicle``.
+    vehicle : VehicleParams, optional
+        The map's car (default: the paper's).
 
     Returns
     -------
@@ -573,5 +584,6 @@ def map_from_image(grid: ImageMap, name: str, start: Pose, goal: Pose) -> Map:
     """
     from rrtdrive.maps import Map
 
-    bounds = (round(v, 9) for v in grid.bounds)
-    return Map(name, tuple(bounds), image_obstacles(grid), start, goal)  # type: ignore[arg-type]
+    bounds = tuple(round(v, 9) for v in grid.bounds)
+    return Map(name, bounds, image_obstacles(grid), start, goal,  # type: ignore[arg-type]
+               vehicle or VehicleParams())  # fmt: skip

@@ -7,7 +7,7 @@ import math
 import time
 import warnings
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -58,8 +58,9 @@ class PlanningProblem:
         The map's collision checker.
     start, goal : Pose
         The query.
-    vehicle : VehicleParams
-        The car.
+    vehicle : VehicleParams, optional
+        The car (default: the map's; it was the paper's car, refused with a map of
+        another car's checker).
     reverse : bool
         Whether the path may change gear (drive in reverse, ``rrtdrive plan
         --reverse``). A planner that cannot reverse ignores it and returns a
@@ -70,10 +71,12 @@ class PlanningProblem:
     checker: CollisionChecker
     start: Pose
     goal: Pose
-    vehicle: VehicleParams = field(default_factory=VehicleParams)
+    vehicle: VehicleParams = None  # type: ignore[assignment]  # the map's, set below
     reverse: bool = False
 
     def __post_init__(self) -> None:
+        if self.vehicle is None and isinstance(self.map, Map):
+            object.__setattr__(self, "vehicle", self.map.vehicle)
         for name, kind in (
             ("map", Map), ("start", Pose), ("goal", Pose), ("vehicle", VehicleParams),
         ):  # fmt: skip

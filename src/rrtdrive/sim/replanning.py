@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from rrtdrive.frozen import config_of
 from rrtdrive.planning.spacetime import SafetyConfig, SpaceTimeRRTConnect
 from rrtdrive.sim.follower import IDMConfig
 from rrtdrive.sim.prediction import PREDICTORS
@@ -172,10 +173,9 @@ class ReplanConfig:
         if self.horizon_s < 2.0:
             raise InputError(f"replan.horizon_s: must be >= 2 s, got {self.horizon_s!r}")
         require_int("replan.check_every", self.check_every)
-        if not isinstance(self.safety, SafetyConfig):
-            raise InputError("replan.safety: expected a SafetyConfig")
-        if not isinstance(self.idm, IDMConfig):
-            raise InputError("replan.idm: expected an IDMConfig")
+        # A mapping of the fields too: a gym spec saved as JSON keeps them so.
+        object.__setattr__(self, "safety", config_of(SafetyConfig, self.safety, "replan.safety"))
+        object.__setattr__(self, "idm", config_of(IDMConfig, self.idm, "replan.idm"))
         # Unknown planner options raise here, not in the middle of an episode.
         SpaceTimeRRTConnect(**dict(self.planner_options))
 

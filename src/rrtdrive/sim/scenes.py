@@ -452,7 +452,8 @@ def populate_road(
         ``("b", "a", 0)``.
     m : Map
         Its obstacles become solid highway-env obstacles (or stopped vehicles, see
-        ``vehicle_obstacles``); its car sizes the moving cars; its bounds the walls.
+        ``vehicle_obstacles``); its bounds the walls. The moving cars are the paper's
+        car's size (a stock car), whatever ``m``'s car.
     np_random : numpy.random.Generator
         The road's generator.
     history : bool
@@ -470,7 +471,9 @@ def populate_road(
     walls : bool
         Close ``m``'s bounds with 1 m walls.
     """
-    vehicle = m.vehicle
+    # The moving cars are stock cars whatever the ego, as overtake's stopped car (a tiny
+    # ego shrank the whole traffic to its size; an audit).
+    vehicle = VehicleParams()
     road = SceneRoad(network=net, np_random=np_random, record_history=history)
     if lead is not None:
         # The moving lead car first (the first vehicle after the ego in every log).

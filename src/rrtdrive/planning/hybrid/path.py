@@ -14,7 +14,6 @@ returned unchecked.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -465,9 +464,3 @@ def build_path(
     measured = (ramps.wheelbase, sharpness) if ramps is not None else None
     return BuiltPath(all_rows, np.vstack(waypoints), len(segs), smoothed, message, measured)
 
-
-def with_smoothing_clearance(
-    smoothing: SmoothingConfig, clearance: float, kappa_max: float
-) -> SmoothingConfig:
-    """``smoothing`` with the query's clearance and curvature limit."""
-    return dataclasses.replace(smoothing, clearance=clearance, kappa_max=kappa_max)

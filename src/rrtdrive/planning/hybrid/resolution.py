@@ -347,9 +347,15 @@ def search_at_resolution(
         ramps = Ramps(bound, problem.vehicle.wheelbase, kappa_max, chunks=config.ramp_chunks)
     post = None
     if config.smooth and ramps is None and smoothing is not None:
-        # The per-segment post-processor keeps the query's clearance and curvature limit
-        # (a validated copy: built only where it is used, not for the default ramps).
-        post = dataclasses.replace(smoothing, clearance=clearance, kappa_max=kappa_max)
+        # The per-segment post-processor keeps the query's clearance, curvature limit and
+        # the car's sharpness bound and wheelbase, as the improved planner's (the car's
+        # steering rate was ignored; an audit). A validated copy, built only where used.
+        bound = sharpness_bound_of(problem, smoothing)
+        post = dataclasses.replace(
+            smoothing, clearance=clearance, kappa_max=kappa_max,
+            wheelbase=problem.vehicle.wheelbase, max_sharpness=bound,
+            min_sharpness=min(smoothing.min_sharpness, bound),
+        )  # fmt: skip
 
     memo = SegmentMemo()
 
