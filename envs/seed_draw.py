@@ -27,11 +27,16 @@ RETRIES_PER_QUERY = 3
 
 
 def failure_text(ref: Reference) -> str:
-    """The plan's failure message, with its diagnosis (``why: ...``) when it has one."""
+    """The plan's failure message, with its diagnosis (``why: ...``) when it has one.
+
+    The planners' "try --reverse" is the command line's; here it is said as the env's
+    option (an audit).
+    """
     plan = ref.plan
-    if plan is None or plan.diagnosis is None:
-        return str(ref.failure)
-    return f"{ref.failure}; why: {plan.diagnosis.message}"
+    text = str(ref.failure)
+    if plan is not None and plan.diagnosis is not None:
+        text = f"{text}; why: {plan.diagnosis.message}"
+    return text.replace("try --reverse", "try scenario_options={'reverse': True}")
 
 
 def start_drawn_episode(

@@ -123,7 +123,8 @@ def main(argv: list[str] | None = None) -> int:
     lines = [
         "## CLI start-up",
         "",
-        f"`{command}`: each command as a fresh process, {args.repeats} rounds interleaved "
+        f"`{command}`: each command as a fresh process, {args.repeats} "
+        f"round{'s' if args.repeats != 1 else ''} interleaved "
         f"after a warm-up, on {report['machine']}"
         + (f" (load average {load[0]:.1f} at the end)" if load else "") + ".",
         "",

@@ -604,3 +604,15 @@ def test_map_env_takes_a_pathlib_path(tmp_path):
         env.reset(seed=0)
     finally:
         env.close()
+
+
+def test_a_requested_seed_failure_names_the_envs_option_not_a_cli_flag():
+    """The planners say "try --reverse" (the CLI's); the env says its own option."""
+    env = gym.make("rrtdrive/Map-v0", scenario="kerbside")
+    try:
+        with pytest.raises(RuntimeError) as info:
+            env.reset(options={"episode_seed": 4})
+    finally:
+        env.close()
+    text = str(info.value)
+    assert "--reverse" not in text and "scenario_options={'reverse': True}" in text, text
