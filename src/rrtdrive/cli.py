@@ -43,7 +43,13 @@ from rrtdrive.cli_args import (
     write_output,
     writing,
 )
-from rrtdrive.cli_signals import EXIT_TERMINATED, loading_done, sigterm_raises, sigterm_received
+from rrtdrive.cli_signals import (
+    EXIT_TERMINATED,
+    interrupt_behind,
+    loading_done,
+    sigterm_raises,
+    sigterm_received,
+)
 from rrtdrive.cli_stdout import run_writing_stdout
 from rrtdrive.cli_warnings import warnings_as_lines
 from rrtdrive.json_safe import options_json
@@ -517,6 +523,11 @@ def _interruptible(argv: Sequence[str] | None) -> int:
     except KeyboardInterrupt:
         print("rrtdrive: interrupted", file=sys.stderr)
         return 130
+    except ImportError as exc:  # Ctrl-C while a C extension initialised (building parsers)
+        if interrupt_behind(exc) is None:
+            raise
+        print("rrtdrive: interrupted", file=sys.stderr)
+        return 130
 
 
 def _main(argv: Sequence[str] | None) -> int:
@@ -537,7 +548,12 @@ def _main(argv: Sequence[str] | None) -> int:
     args.argv = argv  # what was run, for the records (main(argv) is not sys.argv)
     try:
         with sigterm_raises(), warnings_as_lines(f"rrtdrive {args.command}"):
-            return int(args.func(args))
+            try:
+                return int(args.func(args))
+            except ImportError as exc:  # a signal while a C extension initialised
+                if (interrupt := interrupt_behind(exc)) is None:
+                    raise
+                raise interrupt from None
     except InputError as exc:
         print(f"rrtdrive {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -19,6 +19,7 @@ from types import FrameType
 __all__ = [
     "EXIT_TERMINATED",
     "Terminated",
+    "interrupt_behind",
     "loading_done",
     "quiet_interrupt_while_loading",
     "sigterm_raises",
@@ -117,3 +118,32 @@ def loading_done() -> None:
     """Ctrl-C raises KeyboardInterrupt again, after :func:`quiet_interrupt_while_loading`."""
     if signal.getsignal(signal.SIGINT) is _interrupted_loading:
         signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def interrupt_behind(exc: BaseException) -> KeyboardInterrupt | None:
+    """The Ctrl-C or SIGTERM that ``exc`` stands for, if any.
+
+    A signal during a C extension's initialisation surfaces as ``ImportError:
+    initialization failed``, caused by the KeyboardInterrupt (matplotlib's ``_image`` on
+    a loaded machine: a 40-line traceback and exit 1 instead of 130).
+
+    Examples
+    --------
+    >>> try:
+    ...     try:
+    ...         raise KeyboardInterrupt
+    ...     except KeyboardInterrupt as ki:
+    ...         raise ImportError("initialization failed") from ki
+    ... except ImportError as exc:
+    ...     type(interrupt_behind(exc)).__name__
+    'KeyboardInterrupt'
+    """
+    seen: set[int] = set()
+    link: BaseException | None = exc
+    while link is not None and id(link) not in seen:
+        if isinstance(link, KeyboardInterrupt):
+            return link
+        seen.add(id(link))
+        link = link.__cause__ or link.__context__
+    return None
+
