@@ -454,6 +454,8 @@ class DriveEnv(gym.Env[np.ndarray, np.ndarray]):
             self._sim = None
         self._renderer = None
         self._loop = None
+        # The scene's other handles too: a closed env kept its highway-env road alive.
+        self._driver = self._ego = self._road = self._rec = None
         super().close()
 
     # ------------------------------------------------------------------ internals
