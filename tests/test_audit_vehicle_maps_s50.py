@@ -647,9 +647,10 @@ def test_traffic_keeps_its_own_size_whatever_the_ego():
                    scenario_options={"vehicle": VehicleParams(**TINY)})  # fmt: skip
     env.reset(seed=0)
     u = env.unwrapped
-    others = [v for v in u._road.vehicles if v is not u._ego]
+    ego = u._ego
+    others = [v for v in u._road.vehicles if v is not ego]
     env.close()
-    assert others and (u._ego.LENGTH, u._ego.WIDTH) == (2.5, 1.2)
+    assert others and (ego.LENGTH, ego.WIDTH) == (2.5, 1.2)
     assert all((v.LENGTH, v.WIDTH) == (4.3, 1.8) for v in others), [
         (v.LENGTH, v.WIDTH) for v in others
     ]

@@ -187,3 +187,11 @@ def test_maps_import_vehicle_flag_takes_an_object_or_a_file(tmp_path):
     run = _cli(*base, "--out", "c.json", "--vehicle", '{"width": 0}', cwd=tmp_path)
     assert run.returncode == 2 and "--vehicle: vehicle.width" in run.stderr
     assert not (tmp_path / "c.json").exists()
+
+
+def test_an_infinite_steering_rate_is_the_instant_car_and_survives_a_file(tmp_path):
+    instant = VehicleParams(max_steer_rate=math.inf)
+    assert instant == VehicleParams(max_steer_rate=None) and instant.max_steer_rate is None
+    m = dataclasses.replace(builtin_map("overtake"), vehicle=instant)
+    save_map(m, tmp_path / "m.json")
+    assert load_map(tmp_path / "m.json") == m

@@ -177,8 +177,8 @@ class VehicleParams:
         Largest rate of the front-wheel angle in rad/s (default 0.4, CommonRoad's
         vehicles' value): the simulated ego's steering angle slews toward the command
         at no more than this, and the controllers know it (docs/metrics.md
-        "Drivability"). ``None`` or ``inf``: the angle follows the command at once
-        (instant steering, the car before issue 12).
+        "Drivability"). ``None`` or ``inf`` (kept as ``None``): the angle follows the
+        command at once (instant steering, the car before issue 12).
 
     Examples
     --------
@@ -210,6 +210,8 @@ class VehicleParams:
             raise InputError(
                 f"vehicle.max_steer_rate: must be > 0 rad/s, inf or None, got {rate!r}"
             )
+        if rate == math.inf:  # one car, one value: equal to None's, and so in JSON (null)
+            object.__setattr__(self, "max_steer_rate", None)
         if self.min_turning_radius > MAX_TURNING_RADIUS:
             # Arcs of such a radius are sampled over kilometres (gigabytes of poses).
             raise InputError(
