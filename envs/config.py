@@ -459,9 +459,11 @@ def _map_task(m: Map, seed: int, options: Mapping[str, Any]) -> Scenario:
     """The task of driving map ``m`` from its start to its goal (``reverse``: gear changes)."""
     for key in options:
         if key not in MAP_OPTIONS:
+            where = (" (a map's car is its own: the map file's \"vehicle\", or "
+                     "Map(..., vehicle=...))") if key == "vehicle" else ""
             raise InputError(
                 f"scenario_options.{key}: not an option of a map; "
-                f"choose from {', '.join(MAP_OPTIONS)}"
+                f"choose from {', '.join(MAP_OPTIONS)}{where}"
             )
     reverse = options.get("reverse", False)
     if not isinstance(reverse, (bool, np.bool_)):
