@@ -485,7 +485,7 @@ def test_json_schema_is_the_same_for_every_outcome(capsys, genuine, tmp_path):
         "huge": verify_json(capsys, write_plan(tmp_path, [[r[0] * 1e300, *r[1:]] for r in rows],
                                                name="huge"), mapf),
     }  # fmt: skip
-    keys = {"map", "rows", "kappa_given", "length_m", "kappa_max", "sharpness_bound",
+    keys = {"map", "rows", "kappa_given", "length_m", "vehicle", "kappa_max", "sharpness_bound",
             "clearance", "ok", "failed", *CHECKS}  # fmt: skip
     shapes = set()
     for name, (code, doc, _) in docs.items():

@@ -374,7 +374,7 @@ def test_the_json_report_has_pathchecks_fields_and_the_ones_readme_names(capsys,
     code, out, err = run(capsys, "verify", str(plans["reverse"]), "--json", "-")
     assert code == 0, err
     doc = json.loads(out, parse_constant=refuse)
-    extra = {"map", "rows", "length_m", "kappa_given", "kappa_max", "sharpness_bound",
+    extra = {"map", "rows", "length_m", "vehicle", "kappa_given", "kappa_max", "sharpness_bound",
              "clearance", "claims_ok", "failed"}
     assert set(doc) == {f.name for f in dataclasses.fields(PathCheck)} | extra
     assert doc["ok"] is True and doc["failed"] == [] and doc["cusps"] >= 1

@@ -195,3 +195,12 @@ def test_an_infinite_steering_rate_is_the_instant_car_and_survives_a_file(tmp_pa
     m = dataclasses.replace(builtin_map("overtake"), vehicle=instant)
     save_map(m, tmp_path / "m.json")
     assert load_map(tmp_path / "m.json") == m
+
+
+def test_verify_names_the_car_it_judged(tiny_runs):
+    report = json.loads(tiny_runs["verify"].stdout)
+    assert vehicle_from_json(report["vehicle"]) == TINY
+    d = tiny_runs["dir"]
+    run = _cli("verify", "p.json", cwd=d)
+    assert "for a car of 2.5 x 1.2 m, wheelbase 1.6 m, min turning radius 3 m (the plan's)" \
+        in run.stdout, run.stdout

@@ -38,7 +38,14 @@ from rrtdrive.cli_args import (
 )
 from rrtdrive.json_safe import json_safe
 from rrtdrive.plan_file import read_plan_json
-from rrtdrive.types import InputError, InputWarning, Pose, brief_repr, is_finite_number
+from rrtdrive.types import (
+    InputError,
+    InputWarning,
+    Pose,
+    VehicleParams,
+    brief_repr,
+    is_finite_number,
+)
 
 __all__ = ["add_parser", "run", "HELP"]
 
@@ -190,8 +197,6 @@ def _with_plan_car(m: Any, data: dict[str, Any]) -> Any:
     car = vehicle_from_json(data["vehicle"], "plan.vehicle")
     if car == m.vehicle:
         return m
-    from rrtdrive.types import VehicleParams
-
     if m.vehicle != VehicleParams():
         warnings.warn(
             f"MAP: its car is not the one the plan was made for; the path is judged for "
@@ -325,8 +330,10 @@ def run(args: argparse.Namespace) -> int:
     failed = [*check.failed, *(["claims_ok"] if claims else [])]
     text = ""
     if args.json:
+        from rrtdrive.vehicle_json import vehicle_to_json
+
         doc = {"map": m.name, "rows": rows, "kappa_given": kappa_given,
-               "length_m": round(length, 6),
+               "length_m": round(length, 6), "vehicle": vehicle_to_json(m.vehicle),
                **bounds, **dataclasses.asdict(check), "claims_ok": not claims,
                "ok": not failed, "failed": failed}
         # Strict JSON: a non-finite number (a row far off the map) is null, not Infinity.
@@ -347,6 +354,12 @@ def run(args: argparse.Namespace) -> int:
     else:
         verdict = "OK, every check passed" if not failed else "FAILED"
         print(f"{m.name}: {label}: {verdict} ({rows} rows, {_metres(length, '.2f')})", file=out)
+        car = m.vehicle
+        if car != VehicleParams():  # which car was judged: only the bounds showed it
+            print(f"  for a car of {car.length:g} x {car.width:g} m, wheelbase "
+                  f"{car.wheelbase:g} m, min turning radius {car.min_turning_radius:g} m "
+                  f"({'the plan' if data.get('vehicle') is not None else 'the map'}'s)",
+                  file=out)  # fmt: skip
         print("\n".join(_lines(check, bounds, why, kappa_given)), file=out)
         if "reverse" in data or "cusps" in data:
             mark = "FAIL" if claims else "ok  "
