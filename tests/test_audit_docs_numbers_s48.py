@@ -626,8 +626,8 @@ def test_readme_plan_json_example_is_what_plan_writes():
 def test_metrics_md_documents_every_simulate_json_field():
     metrics = _read(DOCS / "metrics.md")
     always = re.findall(r"^\| `([a-z_0-9]+)` \| always \|", metrics, re.M)
-    assert re.search(r"the\s+first\s+thirteen\s+are\s+in\s+every\s+run's\s+JSON", metrics)
-    assert len(always) == 13
+    assert re.search(r"the\s+first\s+fourteen\s+are\s+in\s+every\s+run's\s+JSON", metrics)
+    assert len(always) == 14
     proc = _run("simulate", "overtake", "--max-time", "3", "--json", "-")
     doc = json.loads(proc.stdout)
     stock = json.loads(_run("simulate", "parking-v0", "--max-time", "1", "--json", "-").stdout)

@@ -46,6 +46,7 @@ from rrtdrive.sim.cli_media import write_media
 from rrtdrive.sim.cli_targets import given_path, make_task, target_kind, with_simulate_hint
 from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MAX_VIDEO_FPS, MIN_SIM_FREQUENCY
 from rrtdrive.types import Budget, InputError
+from rrtdrive.vehicle_json import vehicle_to_json
 
 __all__ = ["add_parser", "run", "episode_json", "metrics_block", "HELP", "NO_WALL_LIMIT_S"]
 
@@ -531,6 +532,7 @@ def _run(args: argparse.Namespace) -> int:
         "resolution_m": (
             None if episode.plan is None else episode.plan.stats.get("grid_resolution_m")
         ),
+        "vehicle": vehicle_to_json(episode.scenario.vehicle),  # the ego's car (session 50)
     }
     extra.update(episode.scenario.describe())
     if replan is not None:  # the re-planning settings asked for, as the traffic's above
