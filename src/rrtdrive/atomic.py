@@ -68,10 +68,11 @@ def temp_beside(target: str | os.PathLike[str], suffix: str | None = None) -> Pa
     """
     target = destination(target)
     folder = None if is_stream(target) else (target.parent if str(target.parent) else ".")
-    suffix = target.suffix if suffix is None else suffix
+    suffix = _fitting(target.suffix if suffix is None else suffix, 0, folder)
     try:
         fd, tmp = tempfile.mkstemp(
-            prefix=f".{_fitting_stem(target.stem, suffix, folder)}.", suffix=suffix, dir=folder
+            prefix=f".{_fitting(target.stem, len(os.fsencode(suffix)), folder)}.",
+            suffix=suffix, dir=folder,
         )
     except OSError as exc:
         raise _naming(exc, target) from None
@@ -84,22 +85,23 @@ def temp_beside(target: str | os.PathLike[str], suffix: str | None = None) -> Pa
 _TEMP_EXTRA = 10
 
 
-def _fitting_stem(stem: str, suffix: str, folder: str | os.PathLike[str] | None) -> str:
-    """``stem`` shortened so that the temporary name fits where the target's name fits.
+def _fitting(part: str, taken: int, folder: str | os.PathLike[str] | None) -> str:
+    """``part`` of the temporary name (stem or suffix) cut so the whole name fits.
 
     The temporary file's name is 10 bytes longer than the target's: a target named
-    with 250 bytes, which the file system takes, was refused (an audit).
+    with 250 bytes, which the file system takes, was refused (an audit). ``taken``:
+    bytes the rest of the name already uses (the suffix, for the stem).
     """
     try:
         name_max = os.pathconf(folder or tempfile.gettempdir(), "PC_NAME_MAX")
     except (OSError, ValueError):
         name_max = 255
-    room = name_max - _TEMP_EXTRA - len(os.fsencode(suffix))
-    encoded = os.fsencode(stem)
+    room = max(name_max - _TEMP_EXTRA - taken, 0)
+    encoded = os.fsencode(part)
     if len(encoded) <= room:
-        return stem
+        return part
     # Cut whole characters: a UTF-8 sequence cut in half is no name.
-    return os.fsdecode(encoded[: max(room, 0)].decode("utf-8", "ignore").encode("utf-8"))
+    return os.fsdecode(encoded[:room].decode("utf-8", "ignore").encode("utf-8"))
 
 
 def _naming(exc: OSError, target: str | os.PathLike[str]) -> OSError:

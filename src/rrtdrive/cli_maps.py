@@ -166,7 +166,9 @@ def _vehicle_arg(text: str | None) -> VehicleParams | None:
 
     if text is None:
         return None
-    if text.lstrip().startswith("{"):
+    if not text.strip():
+        raise InputError("--vehicle: needs a vehicle object or a JSON file, got an empty one")
+    if text.lstrip()[:1] in ("{", "["):
         try:
             data = json.loads(text)
         except ValueError as exc:
@@ -177,14 +179,14 @@ def _vehicle_arg(text: str | None) -> VehicleParams | None:
                 data = parse_json(read_capped(f, "--vehicle", text), "--vehicle", text)
         except OSError as exc:
             raise InputError(f"--vehicle: cannot read {text}: {exc.strerror}") from None
-        if isinstance(data, dict) and "bounds" in data:  # a map file: its car
-            if data.get("vehicle") is None:
-                raise InputError(f"--vehicle: the map file {text} holds no vehicle")
-            data = data["vehicle"]
+        if isinstance(data, dict) and "bounds" in data and data.get("vehicle") is None:
+            return None  # a map file of the paper's car (save_map writes no vehicle)
+    if isinstance(data, dict) and isinstance(data.get("vehicle"), dict):
+        data = data["vehicle"]  # a map file's, a plan's, or {"vehicle": {...}}
     try:
-        return vehicle_from_json(data)
+        return vehicle_from_json(data, "vehicle")
     except InputError as exc:
-        raise InputError(f"--vehicle: {exc}") from None
+        raise InputError(f"--vehicle: {str(exc).removeprefix('vehicle: ')}") from None
 
 
 def _cmd_maps(args: argparse.Namespace) -> int:

@@ -265,8 +265,9 @@ def map_from_json(
     name = data.get("name", "map")
     if not isinstance(name, str):
         raise InputError(f"name: expected a non-empty string, got {brief_repr(name)}")
-    if vehicle is None and data.get("vehicle") is not None:
-        vehicle = vehicle_from_json(data["vehicle"])
+    if data.get("vehicle") is not None:  # checked even when ``vehicle`` replaces it
+        own = vehicle_from_json(data["vehicle"])
+        vehicle = own if vehicle is None else vehicle
     warn_obstacle_yaws([o.yaw for o in obstacles])
     file_start = Pose.from_seq(data["start"], "start")
     file_goal = Pose.from_seq(data["goal"], "goal")

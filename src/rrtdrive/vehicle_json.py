@@ -86,7 +86,8 @@ def vehicle_from_json(value: object, field: str = "vehicle") -> VehicleParams:
     if unknown:
         raise InputError(f"{field}: unknown key(s) {unknown}; allowed {', '.join(VEHICLE_KEYS)}")
     for key, number in value.items():
-        if key == "max_steer_rate" and number is None:
+        # Instant steering: null, or inf (gymnasium's spec JSON writes Infinity).
+        if key == "max_steer_rate" and (number is None or number == math.inf):
             continue
         if not is_finite_number(number):
             unit = {"max_steer": "radians", "max_steer_rate": "rad/s"}.get(key, "metres")

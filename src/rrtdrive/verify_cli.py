@@ -203,7 +203,9 @@ def _with_plan_car(m: Any, data: dict[str, Any]) -> Any:
             f"the plan's ({car.length:g} x {car.width:g} m, wheelbase {car.wheelbase:g} m, "
             f"min turning radius {car.min_turning_radius:g} m)", InputWarning, stacklevel=2,
         )  # fmt: skip
-    return dataclasses.replace(m, vehicle=car, check_query=False)
+    with warnings.catch_warnings():  # the map's own warnings were given as it loaded
+        warnings.simplefilter("ignore", InputWarning)
+        return dataclasses.replace(m, vehicle=car, check_query=False)
 
 
 def _metres(value: float, spec: str = ".3f") -> str:

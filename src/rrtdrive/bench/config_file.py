@@ -86,8 +86,9 @@ def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     # A shell expands --out ~/x; a file's "~/x" made a folder named "~" (an audit).
     if isinstance(data.get("out"), str):
         data["out"] = os.path.expanduser(data["out"])
-    if isinstance(data.get("maps"), list):
-        data["maps"] = [os.path.expanduser(m) if isinstance(m, str) else m for m in data["maps"]]
+    for key in ("maps", "scenarios"):  # map files may stand in either list
+        if isinstance(data.get(key), list):
+            data[key] = [os.path.expanduser(m) if isinstance(m, str) else m for m in data[key]]
     return data
 
 
@@ -102,7 +103,8 @@ def _toml_error(exc: Exception, text: str, name: str) -> str:
     why = str(exc)
     where = re.search(r"\(at line (\d+), column \d+\)", why)
     if where and why.startswith(("Cannot overwrite a value", "Cannot declare")):
-        line = text.splitlines()[int(where.group(1)) - 1] if text else ""
+        # "\n" only, as tomllib counts lines (splitlines also splits at U+2028).
+        line = text.split("\n")[int(where.group(1)) - 1] if text else ""
         key = line.split("=", 1)[0].strip().strip("[]\"' ")
         if key:
             return f"{key}: given twice in {name!r} (line {where.group(1)}); give it once"

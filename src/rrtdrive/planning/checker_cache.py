@@ -29,13 +29,16 @@ def cached_checker(m: Map, config: CheckerConfig | None = None) -> CollisionChec
     # set-up time and memory; an audit); different maps still build side by side.
     with _CHECKERS_LOCK:
         building = _BUILDING.setdefault(key, threading.Lock())
-    with building:
-        checker = _CHECKERS.get(key)
-        if checker is None:
-            checker = CollisionChecker.for_map(m, config=config)
-            with _CHECKERS_LOCK:
-                if len(_CHECKERS) > 16:
-                    _CHECKERS.clear()
-                _CHECKERS[key] = checker
-                _BUILDING.pop(key, None)
+    try:
+        with building:
+            checker = _CHECKERS.get(key)
+            if checker is None:
+                checker = CollisionChecker.for_map(m, config=config)
+                with _CHECKERS_LOCK:
+                    if len(_CHECKERS) > 16:
+                        _CHECKERS.clear()
+                    _CHECKERS[key] = checker
+    finally:  # also after a failed build: no lock left behind
+        with _CHECKERS_LOCK:
+            _BUILDING.pop(key, None)
     return checker

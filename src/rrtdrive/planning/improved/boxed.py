@@ -27,6 +27,7 @@ segment it finds ``r - tol`` clear is not blocked, and then nothing is proven. A
 from __future__ import annotations
 
 import math
+import threading
 import weakref
 from collections import OrderedDict
 
@@ -114,23 +115,25 @@ _FANS: weakref.WeakKeyDictionary[CollisionChecker, OrderedDict[tuple, _Fan]] = (
     weakref.WeakKeyDictionary()
 )
 _FANS_PER_CHECKER = 2
+_FANS_LOCK = threading.Lock()
 
 
 def _fan_room(
     checker: CollisionChecker, root: Pose, back: float, front: float, tol: float
 ) -> _Fan:
     """:func:`_build_fan_room`, remembered per checker (its last two fans)."""
-    fans = _FANS.get(checker)
-    if fans is None:
-        fans = _FANS.setdefault(checker, OrderedDict())
     key = (root, back, front, tol)
-    fan = fans.get(key)
-    if fan is None:
-        fan = fans[key] = _build_fan_room(checker, root, back, front, tol)
+    with _FANS_LOCK:  # a query holds its checker's lock, a direct caller may not
+        fans = _FANS.setdefault(checker, OrderedDict())
+        fan = fans.get(key)
+        if fan is not None:
+            fans.move_to_end(key)
+            return fan
+    fan = _build_fan_room(checker, root, back, front, tol)
+    with _FANS_LOCK:
+        fans[key] = fan
         while len(fans) > _FANS_PER_CHECKER:
             fans.popitem(last=False)
-    else:
-        fans.move_to_end(key)
     return fan
 
 
