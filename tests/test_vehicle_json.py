@@ -41,7 +41,7 @@ def cars(draw) -> VehicleParams:
     length = draw(st.floats(1.0, 20.0))
     wheelbase = draw(st.floats(0.3, 0.95)) * length
     max_steer = draw(st.floats(0.1, 1.3))
-    radius = wheelbase / math.tan(max_steer) * draw(st.floats(1.0, 3.0))
+    radius = max(wheelbase / math.tan(max_steer), 0.5) * draw(st.floats(1.0, 3.0))
     rate = draw(st.one_of(st.none(), st.floats(0.05, 5.0)))
     return VehicleParams(length=length, width=draw(st.floats(0.5, 4.0)), wheelbase=wheelbase,
                          min_turning_radius=radius, max_steer=max_steer,
@@ -204,3 +204,20 @@ def test_verify_names_the_car_it_judged(tiny_runs):
     run = _cli("verify", "p.json", cwd=d)
     assert "for a car of 2.5 x 1.2 m, wheelbase 1.6 m, min turning radius 3 m (the plan's)" \
         in run.stdout, run.stdout
+
+
+@pytest.mark.parametrize(
+    ("fields", "message"),
+    [({"max_steer_rate": 1e-12}, "vehicle.max_steer_rate: at least 0.01 rad/s"),
+     ({"length": 0.1, "wheelbase": 0.05}, "vehicle.length: at least 0.5 m"),
+     ({"min_turning_radius": 0.3, "wheelbase": 0.1, "max_steer": 1.2},
+      "vehicle.min_turning_radius: at least 0.5 m")],
+)  # fmt: skip
+def test_cars_too_small_or_too_slow_for_the_sampling_are_refused(fields, message):
+    """A 1e-12 rad/s actuator asked for an 8 GiB allocation; a 1 mm car's rows were too
+    coarse for its turns and verify passed it through a wall (an audit)."""
+    with pytest.raises(InputError, match=f"^{message}"):
+        VehicleParams(**fields)
+    assert VehicleParams(length=0.5, wheelbase=0.3, min_turning_radius=0.5, max_steer=0.6,
+                         max_steer_rate=0.01).length == 0.5  # the least accepted
+
