@@ -30,6 +30,7 @@ import numpy as np
 import pytest
 import shapely
 import shapely.affinity
+from car_bodies import body
 
 from rrtdrive import InputError, VehicleParams
 from rrtdrive.cli import main as cli_main
@@ -93,14 +94,7 @@ def _bay(car: dict) -> dict:
 # ----------------------------------------------------------------------------- judges
 
 
-def _body(car: dict, x: float, y: float, yaw: float) -> shapely.Polygon:
-    """The body at a rear-axle pose: rear overhang (L - wheelbase) / 2, SPEC section 1."""
-    back = (car["length"] - car["wheelbase"]) / 2.0
-    front = car["length"] - back
-    w = car["width"] / 2.0
-    c, s = math.cos(yaw), math.sin(yaw)
-    return shapely.Polygon([(x + c * a - s * b, y + s * a + c * b)
-                            for a, b in ((-back, -w), (front, -w), (front, w), (-back, w))])
+_body = body  # tests/car_bodies.py: the independent body
 
 
 def _least_clearance(doc: dict, car: dict, rows, spacing: float) -> float:

@@ -57,10 +57,11 @@ BEYOND_PAPER = ("passage_sampling", "dubins_fallback", "escalation")
 BUDGET = Budget(max_iterations=100_000, max_time_s=10.0)
 
 
-def paper_planner():
-    """The improved planner with the paper's post-processing and no beyond-paper stage."""
+def paper_planner(*off: str):
+    """The improved planner with the paper's post-processing and no beyond-paper stage
+    (and the components ``off`` switched off too)."""
     return make_planner(
-        "improved-rrt-connect", smoothing={"curve": "bspline"}, disable=BEYOND_PAPER
+        "improved-rrt-connect", smoothing={"curve": "bspline"}, disable=(*BEYOND_PAPER, *off)
     )
 
 
@@ -217,10 +218,7 @@ def test_planner_trees_use_the_adaptive_step(problems):
     """Sec. 3.1.3 in the planner: edges of 2p appear only with the adaptive step on."""
     problem = problems["parking_lot"]
     on = paper_planner().solve(problem, np.random.default_rng(1), BUDGET)
-    off = make_planner(
-        "improved-rrt-connect", smoothing={"curve": "bspline"},
-        disable=(*BEYOND_PAPER, "adaptive_step"),
-    ).solve(problem, np.random.default_rng(1), BUDGET)
+    off = paper_planner("adaptive_step").solve(problem, np.random.default_rng(1), BUDGET)
     assert on.success and off.success
     e_on, e_off = _edge_lengths(on), _edge_lengths(off)
     assert e_on.max() <= 10.0 + 1e-9 and (e_on > 5.0 + 1e-6).any()
@@ -577,10 +575,7 @@ def test_supplement_component_acts_in_the_paper_pipeline(problems):
     """Sec. 3.2.3 is part of the B-spline pipeline: switching it off changes the control points."""
     problem = problems["overtake"]
     on = paper_planner().solve(problem, np.random.default_rng(0), BUDGET)
-    off = make_planner(
-        "improved-rrt-connect", smoothing={"curve": "bspline"},
-        disable=(*BEYOND_PAPER, "supplement"),
-    ).solve(problem, np.random.default_rng(0), BUDGET)
+    off = paper_planner("supplement").solve(problem, np.random.default_rng(0), BUDGET)
     assert on.success and off.success
     assert len(off.path.waypoints) < len(on.path.waypoints)
     legs = np.hypot(*np.diff(off.path.waypoints, axis=0).T)

@@ -25,6 +25,7 @@ import sys
 import numpy as np
 import pytest
 import shapely
+from car_bodies import body
 
 from rrtdrive import Budget, InputError, VehicleParams, builtin_map, load_map, save_map
 from rrtdrive.cli import main as cli_main
@@ -53,14 +54,7 @@ def _cli(*argv: str, cwd) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, timeout=240)  # fmt: skip
 
 
-def _body(car: dict, x: float, y: float, yaw: float) -> shapely.Polygon:
-    """The body at a rear-axle pose: rear overhang (L - wheelbase) / 2, SPEC section 1."""
-    back = (car["length"] - car["wheelbase"]) / 2.0
-    front = car["length"] - back
-    w = car["width"] / 2.0
-    c, s = math.cos(yaw), math.sin(yaw)
-    return shapely.Polygon([(x + c * a - s * b, y + s * a + c * b)
-                            for a, b in ((-back, -w), (front, -w), (front, w), (-back, w))])
+_body = body  # tests/car_bodies.py: the independent body
 
 
 def _world(doc: dict) -> tuple[shapely.Geometry, shapely.Polygon]:
