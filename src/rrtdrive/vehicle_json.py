@@ -39,12 +39,9 @@ def vehicle_to_json(vehicle: VehicleParams) -> dict[str, float | None]:
     >>> vehicle_to_json(VehicleParams(max_steer_rate=None))["max_steer_rate"] is None
     True
     """
-    doc: dict[str, float | None] = {k: float(getattr(vehicle, k)) for k in VEHICLE_KEYS
-                                    if k != "max_steer_rate"}  # fmt: skip
-    rate = vehicle.max_steer_rate
-    # inf and None are the same car (instant steering); strict JSON has no inf.
-    doc["max_steer_rate"] = None if rate is None or math.isinf(rate) else float(rate)
-    return doc
+    # VehicleParams keeps instant steering (inf too) as None: null here.
+    values = {k: getattr(vehicle, k) for k in VEHICLE_KEYS}
+    return {k: None if v is None else float(v) for k, v in values.items()}
 
 
 def vehicle_from_json(value: object, field: str = "vehicle") -> VehicleParams:
