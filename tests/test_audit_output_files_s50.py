@@ -401,7 +401,9 @@ def test_sigterm_while_the_video_is_written_keeps_every_old_output(tmp_path):
     old = {"m.json": b"{}\n", "p.png": b"old png", "t.csv": b"old,csv\n", "v.mp4": b"old mp4"}
     for name, data in old.items():
         (tmp_path / name).write_bytes(data)
-    proc = _rrtdrive("simulate", MAP, "--max-time", "3", "--video-stride", "1",
+    # A 20 s drive: its video takes long enough to encode that the signal, sent when the
+    # encoding starts, lands in it on a loaded machine too (3 s was done first, once).
+    proc = _rrtdrive("simulate", MAP, "--max-time", "20", "--video-stride", "1",
                      *[a for flag, name in (("--json", "m.json"), ("--plot", "p.png"),
                                             ("--trajectory", "t.csv"), ("--video", "v.mp4"))
                        for a in (flag, str(tmp_path / name))])
