@@ -446,11 +446,13 @@ def map_with_poses(
     start: Pose | None,
     goal: Pose | None,
     names: Mapping[str, str] | None = None,
-    vehicle: VehicleParams | None = None,
+    plan_car: VehicleParams | None = None,
 ) -> Map:
     """The map ``spec`` with ``--start``/``--goal`` (when given) replacing its poses.
 
-    ``vehicle``: the car instead of the map's (``simulate --path``: the plan's).
+    ``plan_car``: the car of the plan the poses come from (``simulate --path``), which
+    replaces the map's (:func:`~rrtdrive.plan_file.with_plan_car`: a warning naming
+    SCENARIO when the map file's own car is another); the poses are checked for it.
 
     The file is read first, so a malformed start in it is named ``start:`` even when
     ``--start`` replaces it; the poses used are then checked, one given on the command
@@ -460,11 +462,13 @@ def map_with_poses(
     """
     from rrtdrive.map_checks import check_endpoint
     from rrtdrive.maps import resolve_map
+    from rrtdrive.plan_file import with_plan_car
 
     names = names or {"start": "--start", "goal": "--goal"}
     flags = {k: names[k] for k, v in (("start", start), ("goal", goal)) if v is not None}
     with flags_for_warnings(flags):  # a given yaw that looks like degrees: named by its flag
-        m = resolve_map(spec, vehicle, start=start, goal=goal, check_query=False)
+        m = resolve_map(spec, start=start, goal=goal, check_query=False)
+    m = with_plan_car(m, plan_car, "SCENARIO")
     with flags_for(flags):
         for label, pose in (("start", m.start), ("goal", m.goal)):
             check_endpoint(m, pose, label, m.vehicle, warn_degrees=False)

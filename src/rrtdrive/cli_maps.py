@@ -159,9 +159,7 @@ def _cmd_import(args: argparse.Namespace) -> int:
 
 def _vehicle_arg(text: str | None) -> VehicleParams | None:
     """``--vehicle``: a vehicle object, or a JSON file of one or of a map holding one."""
-    import json
-
-    from rrtdrive.json_input import parse_json, read_capped
+    from rrtdrive.json_input import parse_json, read_json_file
     from rrtdrive.vehicle_json import vehicle_from_json
 
     if text is None:
@@ -169,16 +167,9 @@ def _vehicle_arg(text: str | None) -> VehicleParams | None:
     if not text.strip():
         raise InputError("--vehicle: needs a vehicle object or a JSON file, got an empty one")
     if text.lstrip()[:1] in ("{", "["):
-        try:
-            data = json.loads(text)
-        except ValueError as exc:
-            raise InputError(f"--vehicle: not a JSON object: {exc}") from None
+        data = parse_json(text, "--vehicle", "the value given")
     else:
-        try:
-            with open(text, "rb") as f:
-                data = parse_json(read_capped(f, "--vehicle", text), "--vehicle", text)
-        except OSError as exc:
-            raise InputError(f"--vehicle: cannot read {text}: {exc.strerror}") from None
+        data = read_json_file(text, "--vehicle")
         if isinstance(data, dict) and "bounds" in data and data.get("vehicle") is None:
             return None  # a map file of the paper's car (save_map writes no vehicle)
     if isinstance(data, dict) and isinstance(data.get("vehicle"), dict):

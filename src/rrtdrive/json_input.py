@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import json
+import os
 from typing import BinaryIO
 
 from rrtdrive.types import InputError
 
-__all__ = ["MAX_JSON_BYTES", "json_kind", "parse_json", "read_capped"]
+__all__ = ["MAX_JSON_BYTES", "json_kind", "parse_json", "read_capped", "read_json_file"]
 
 
 #: The largest JSON file (a map, a plan) read, bytes: a map of 20 000 obstacles is 1.5 MB,
@@ -109,6 +110,23 @@ def parse_json(raw: bytes | str, field: str, source: str) -> object:
         raise InputError(f"{bad}: nested too deeply") from None
     except ValueError:  # an integer literal past Python's 4300-digit conversion limit
         raise InputError(f"{bad}: a number has too many digits") from None
+
+
+def read_json_file(path: str | os.PathLike[str], field: str) -> object:
+    """The parsed JSON of file ``path``: :func:`read_capped`, then :func:`parse_json`.
+
+    Raises
+    ------
+    InputError
+        Naming ``field``: a file that cannot be read (``field: cannot read PATH:
+        why``), is too big, or is not UTF-8 JSON.
+    """
+    try:
+        with open(path, "rb") as f:
+            raw = read_capped(f, field, str(path))
+    except OSError as exc:
+        raise InputError(f"{field}: cannot read {path}: {exc.strerror}") from None
+    return parse_json(raw, field, str(path))
 
 
 def json_kind(value: object) -> str:

@@ -25,7 +25,7 @@ import numpy as np
 import shapely
 
 from rrtdrive.atomic import write_text_atomic
-from rrtdrive.json_input import json_kind, parse_json, read_capped
+from rrtdrive.json_input import json_kind, parse_json, read_json_file
 from rrtdrive.map_checks import (
     MAX_COORDINATE,
     MAX_YAW,
@@ -308,13 +308,8 @@ def load_map(
     -------
     Map
     """
-    try:
-        with open(path, "rb") as f:
-            raw = read_capped(f, "map", str(path))
-    except OSError as exc:
-        raise InputError(f"map: cannot read {path}: {exc.strerror}") from None
     return map_from_json(
-        parse_json(raw, "map", str(path)), vehicle, start=start, goal=goal, check_query=check_query
+        read_json_file(path, "map"), vehicle, start=start, goal=goal, check_query=check_query
     )
 
 

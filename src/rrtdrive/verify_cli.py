@@ -37,7 +37,7 @@ from rrtdrive.cli_args import (
     writing,
 )
 from rrtdrive.json_safe import json_safe
-from rrtdrive.plan_file import read_plan_json
+from rrtdrive.plan_file import plan_car, read_plan_json, with_plan_car
 from rrtdrive.types import (
     InputError,
     InputWarning,
@@ -184,30 +184,6 @@ def _map_of(
     return load(spec)
 
 
-def _with_plan_car(m: Any, data: dict[str, Any]) -> Any:
-    """``m`` with the car the plan was made for (its ``vehicle``; plans before it: the map's).
-
-    The path is judged for its own car: a small car's tight turns are no fault. A map
-    whose own car differs gets a warning saying which one is used.
-    """
-    if data.get("vehicle") is None:
-        return m
-    from rrtdrive.vehicle_json import vehicle_from_json
-
-    car = vehicle_from_json(data["vehicle"], "plan.vehicle")
-    if car == m.vehicle:
-        return m
-    if m.vehicle != VehicleParams():
-        warnings.warn(
-            f"MAP: its car is not the one the plan was made for; the path is judged for "
-            f"the plan's ({car.length:g} x {car.width:g} m, wheelbase {car.wheelbase:g} m, "
-            f"min turning radius {car.min_turning_radius:g} m)", InputWarning, stacklevel=2,
-        )  # fmt: skip
-    with warnings.catch_warnings():  # the map's own warnings were given as it loaded
-        warnings.simplefilter("ignore", InputWarning)
-        return dataclasses.replace(m, vehicle=car, check_query=False)
-
-
 def _metres(value: float, spec: str = ".3f") -> str:
     """``value`` in metres; a path row at 1e308 m shows as 1e+308 m, not 309 digits."""
     return f"{value:{spec}} m" if abs(value) < 1e9 else f"{value:.3g} m"
@@ -299,7 +275,7 @@ def run(args: argparse.Namespace) -> int:
         data, "start"
     )
     goal = parse_pose(args.goal, "--goal") if args.goal is not None else _plan_pose(data, "goal")
-    m = _with_plan_car(_map_of(args, data, start, goal), data)
+    m = with_plan_car(_map_of(args, data, start, goal), plan_car(data, "plan.vehicle"), "MAP")
     bound = args.max_sharpness
     if bound is None and not args.no_sharpness:
         from rrtdrive.planning.smoothing.config import SmoothingConfig, sharpness_bound

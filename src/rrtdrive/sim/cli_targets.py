@@ -83,7 +83,7 @@ def given_path(args: argparse.Namespace, target: str) -> tuple[Any, str | None, 
         Naming ``--path``: the target is not a map, the file is unreadable or not a plan,
         its rows are bad, or it has under two rows; naming a planning flag given with it.
     """
-    from rrtdrive.plan_file import read_plan_json
+    from rrtdrive.plan_file import plan_car, read_plan_json
     from rrtdrive.verify import path_from_json
 
     source = args.path
@@ -112,30 +112,8 @@ def given_path(args: argparse.Namespace, target: str) -> tuple[Any, str | None, 
         )
     _warn_gearless_reverse(data, path)
     made_on = data.get("map")
-    car = None
-    if data.get("vehicle") is not None:  # plans before the field: the map's car
-        from rrtdrive.vehicle_json import vehicle_from_json
-
-        car = vehicle_from_json(data["vehicle"], "--path: vehicle")
+    car = plan_car(data, "--path: vehicle")  # None for plans before the field: the map's
     return path, made_on if isinstance(made_on, str) and made_on else None, car
-
-
-def _warn_other_car(spec: str, car: Any) -> None:
-    """Warn when the map's own car is not the plan's (which drives the path)."""
-    from rrtdrive.maps import resolve_map
-    from rrtdrive.types import InputWarning, VehicleParams
-
-    if car is None:
-        return
-    own = resolve_map(spec, check_query=False).vehicle
-    if own != car and own != VehicleParams():
-        import warnings
-
-        warnings.warn(
-            f"--path: the map's car is not the one the plan was made for; the plan's "
-            f"({car.length:g} x {car.width:g} m, wheelbase {car.wheelbase:g} m) drives it",
-            InputWarning, stacklevel=2,
-        )
 
 
 def _warn_gearless_reverse(data: Any, path: Any) -> None:
@@ -196,8 +174,7 @@ def make_task(
         ends = Pose(*path.samples[0, :3]), Pose(*path.samples[-1, :3])
         # The poses are the path's ends, not flags the user gave.
         rows = {"start": "--path: the path's first row", "goal": "--path: the path's last row"}
-        m = map_with_poses(args.scenario, *ends, names=rows, vehicle=car)
-        _warn_other_car(args.scenario, car)
+        m = map_with_poses(args.scenario, *ends, names=rows, plan_car=car)
         if made_on is not None and m.name != made_on:
             import warnings
 
