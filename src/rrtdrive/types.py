@@ -214,15 +214,17 @@ class VehicleParams:
             object.__setattr__(self, "max_steer_rate", None)
         # Paths are rows 0.25 m apart, bodies checked 0.1 m apart; a slower actuator's
         # turns run for kilometres (1e-12 rad/s: an 8 GiB allocation; an audit).
-        for name, least, why in (
-            ("length", "0.5 m", "paths are sampled every 0.25 m"),
-            ("min_turning_radius", "0.5 m", "paths are sampled every 0.25 m"),
-            ("max_steer_rate", "0.01 rad/s", "a slower actuator's turns run for "
+        for name, least, unit, why in (
+            ("length", 0.5, "m", "paths are sampled every 0.25 m"),
+            ("min_turning_radius", 0.5, "m", "paths are sampled every 0.25 m"),
+            ("max_steer_rate", 0.01, "rad/s", "a slower actuator's turns run for "
              "kilometres; None or inf for instant steering"),
         ):  # fmt: skip
             value = getattr(self, name)
-            if value is not None and value < float(least.split()[0]):
-                raise InputError(f"vehicle.{name}: at least {least} ({why}), got {value!r}")
+            if value is not None and value < least:
+                raise InputError(
+                    f"vehicle.{name}: at least {least:g} {unit} ({why}), got {value!r}"
+                )
         if self.min_turning_radius > MAX_TURNING_RADIUS:
             # Arcs of such a radius are sampled over kilometres (gigabytes of poses).
             raise InputError(
