@@ -55,7 +55,8 @@ from rrtdrive.planning.hybrid.shortcut import drop_end_stubs, polyline_length, s
 from rrtdrive.planning.hybrid.shots import SHOT_CUSP_COST_M
 from rrtdrive.planning.hybrid.turn import TurnResult, abreast, multi_point_turn
 from rrtdrive.planning.reeds_shepp import reeds_shepp_distance
-from rrtdrive.planning.smoothing import STEER_RATE_DESIGN_SPEED, SmoothingConfig
+from rrtdrive.planning.smoothing import SmoothingConfig
+from rrtdrive.planning.smoothing.config import sharpness_bound, smoothing_for_car
 from rrtdrive.types import Pose, Tree, VehicleParams
 from rrtdrive.vehicle import cover_discs
 
@@ -85,11 +86,8 @@ def sharpness_bound_of(problem: PlanningProblem, smoothing: SmoothingConfig | No
     ``smoothing.max_sharpness`` (0.2 rad/m without one), or the car's
     ``max_steer_rate / 2 m/s`` when smaller.
     """
-    bound = smoothing.max_sharpness if smoothing is not None else SmoothingConfig().max_sharpness
-    rate = problem.vehicle.max_steer_rate
-    if rate is not None and rate < float("inf"):
-        bound = min(bound, rate / STEER_RATE_DESIGN_SPEED)
-    return bound
+    configured = (smoothing or SmoothingConfig()).max_sharpness
+    return sharpness_bound(configured, problem.vehicle.max_steer_rate)
 
 
 
@@ -347,15 +345,10 @@ def search_at_resolution(
         ramps = Ramps(bound, problem.vehicle.wheelbase, kappa_max, chunks=config.ramp_chunks)
     post = None
     if config.smooth and ramps is None and smoothing is not None:
-        # The per-segment post-processor keeps the query's clearance, curvature limit and
-        # the car's sharpness bound and wheelbase, as the improved planner's (the car's
-        # steering rate was ignored; an audit). A validated copy, built only where used.
-        bound = sharpness_bound_of(problem, smoothing)
-        post = dataclasses.replace(
-            smoothing, clearance=clearance, kappa_max=kappa_max,
-            wheelbase=problem.vehicle.wheelbase, max_sharpness=bound,
-            min_sharpness=min(smoothing.min_sharpness, bound),
-        )  # fmt: skip
+        # The per-segment post-processor keeps the query's clearance and the car's
+        # curvature limit, sharpness bound and wheelbase, as the improved planner's (the
+        # car's steering rate was ignored; an audit). Built only where used.
+        post = smoothing_for_car(smoothing, problem.vehicle, clearance=clearance)
 
     memo = SegmentMemo()
 

@@ -46,7 +46,7 @@ from rrtdrive.planning.improved.growth import (
 from rrtdrive.planning.result import run_query, solved, straight_ahead_result
 from rrtdrive.planning.sampling import SampleSource
 from rrtdrive.planning.smoothing import make_drivable
-from rrtdrive.planning.smoothing.config import sharpness_bound
+from rrtdrive.planning.smoothing.config import smoothing_for_car
 from rrtdrive.types import Budget, InputError, Path, PlanResult, PlanStatus, Tree
 
 __all__ = ["NAME", "ImprovedRRTConnect"]
@@ -179,19 +179,10 @@ class _Query:
         self.checker = checker = problem.checker
         self.start, self.goal = start, goal = problem.start, problem.goal
         # The config's post-processor with the query's PER_QUERY_SMOOTHING fields.
-        vehicle = problem.vehicle
-        bound = sharpness_bound(cfg.smoothing.max_sharpness, vehicle.max_steer_rate)
-        self.smoothing = dataclasses.replace(
-            cfg.smoothing,
-            kappa_max=vehicle.kappa_max,
-            wheelbase=vehicle.wheelbase,
-            max_sharpness=bound,
-            # A car steering slower than 0.04 rad/s brings the bound under the gentlest
-            # turns' sharpness (0.02): those may be no gentler than the bound then.
-            min_sharpness=min(cfg.smoothing.min_sharpness, bound),
-            heading_leg=cfg.step,
+        self.smoothing = smoothing_for_car(
+            cfg.smoothing, problem.vehicle, heading_leg=cfg.step,
             clearance=endpoint_capped_clearance(checker, start, goal, cfg.body_clearance),
-        )
+        )  # fmt: skip
         self.stats: dict[str, float] = {
             "nodes": 0.0,
             "iterations": 0.0,

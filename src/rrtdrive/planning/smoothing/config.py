@@ -11,13 +11,20 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rrtdrive.planning.options import MAX_RADIUS_FACTOR, check_known
-from rrtdrive.types import InputError, require_finite, require_int, require_positive
+from rrtdrive.types import (
+    InputError,
+    VehicleParams,
+    require_finite,
+    require_int,
+    require_positive,
+)
 
 __all__ = [
     "MOVE_DIRECTIONS",
     "DEFAULT_CORNER_MOVES",
     "STEER_RATE_DESIGN_SPEED",
     "sharpness_bound",
+    "smoothing_for_car",
     "CurveKind",
     "SmoothingConfig",
     "SmoothingResult",
@@ -44,6 +51,23 @@ def sharpness_bound(configured: float, max_steer_rate: float | None) -> float:
     if max_steer_rate is None or not math.isfinite(max_steer_rate):
         return configured
     return min(configured, max_steer_rate / STEER_RATE_DESIGN_SPEED)
+
+
+def smoothing_for_car(
+    smoothing: SmoothingConfig, vehicle: VehicleParams, **query: float
+) -> SmoothingConfig:
+    """``smoothing`` for ``vehicle``: its ``kappa_max``, ``wheelbase`` and sharpness bound.
+
+    The bound is :func:`sharpness_bound`'s; a car steering slower than 0.04 rad/s
+    brings it under the gentlest turns' sharpness (0.02), which may then be no
+    gentler than the bound. ``query``: the query's other fields (``clearance``,
+    ``heading_leg``). The improved planner's and Hybrid A*'s post-processors both.
+    """
+    bound = sharpness_bound(smoothing.max_sharpness, vehicle.max_steer_rate)
+    return dataclasses.replace(
+        smoothing, kappa_max=vehicle.kappa_max, wheelbase=vehicle.wheelbase,
+        max_sharpness=bound, min_sharpness=min(smoothing.min_sharpness, bound), **query,
+    )  # fmt: skip
 
 
 class CurveKind(enum.Enum):
