@@ -82,6 +82,11 @@ class BodyTest:
         self.six_need = six_radius + self.clearance
         self._run_offsets = np.concatenate([self.offsets, six])
 
+    @property
+    def screens(self) -> bool:
+        """Whether the sure-collision screen has points (:meth:`hit_at` can say True)."""
+        return self._n_axis > 0
+
     def screen(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(hit, clear, room)`` for poses ``(N, 3)``.
 

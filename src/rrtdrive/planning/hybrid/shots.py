@@ -146,11 +146,48 @@ def walks_hit(
     spacing: float,
     body: BodyTest,
 ) -> list[bool]:
-    """:func:`walk_hits` for several ``(word, lengths)`` from one start, in one screen."""
+    """:func:`walk_hits` for several ``(word, lengths)`` from one start, in one screen.
+
+    A word with a segment end far outside the map's bounds is a hit without its
+    walk: that end is one of the walk's poses, and every screen point of a body
+    whose rear axle is beyond the bounds by more than the car's length (plus a
+    metre for the grid's cells) lies outside them, where the field reads occupied.
+    With a huge turning radius on a small map every word is kilometres long, and
+    walking them took seconds a shot.
+    """
     if not words:
         return []
-    poses, sizes = walk_poses(start, words, radius, spacing)
-    return body.any_hits(poses, sizes).tolist()
+    out = [body.screens and _leaves_map(start, w, lengths, radius, body) for w, lengths in words]
+    inside = [wl for wl, left in zip(words, out, strict=True) if not left]
+    if not inside:
+        return out
+    poses, sizes = walk_poses(start, inside, radius, spacing)
+    hit = iter(body.any_hits(poses, sizes).tolist())
+    return [left or next(hit) for left in out]
+
+
+def _leaves_map(
+    start: Pose, word: str, lengths: Sequence[float], radius: float, body: BodyTest
+) -> bool:
+    """Whether a segment end of the word lies beyond the bounds by more than the margin.
+
+    The ends as :func:`walk_poses` computes them, to rounding (the margin is metres).
+    """
+    x0, y0, x1, y1 = body.checker.bounds
+    margin = body.checker.vehicle.length + 1.0
+    x, y, yaw = start.x, start.y, start.yaw
+    for letter, seg in zip(word, lengths, strict=True):
+        turn = _TURN[letter]
+        c0, s0 = math.cos(yaw), math.sin(yaw)
+        if turn == 0:
+            x, y = x + seg * c0, y + seg * s0
+        else:
+            yaw = yaw + turn * seg / radius
+            x = x + turn * radius * (math.sin(yaw) - s0)
+            y = y - turn * radius * (math.cos(yaw) - c0)
+        if not (x0 - margin <= x <= x1 + margin and y0 - margin <= y <= y1 + margin):
+            return True
+    return False
 
 
 #: Of two Reeds-Shepp words within this many metres of each other, the shots try the one

@@ -56,6 +56,10 @@ class TurnResult(Generic[T]):
     expansions: int = 0
 
 
+#: Poses of a move tested in the first look (a full turn at 6 m is 377 at 0.1 m).
+_MOVE_CHUNK = 512
+
+
 def _move(
     pose: Pose, kappa: float, gear: int, body: BodyTest, longest: float, spacing: float
 ) -> np.ndarray:
@@ -67,8 +71,15 @@ def _move(
     count = max(1, math.ceil(longest / spacing))
     s = np.minimum(np.arange(1, count + 1) * spacing, longest)
     poses = arc_poses(pose.x, pose.y, pose.yaw, kappa, gear, s)
-    free = body.free(poses)
-    n = len(free) if free.all() else int(np.argmin(free))
+    # Tested a chunk at a time up to the first pose that fails (each pose's answer is
+    # its own): a huge turning radius makes a move kilometres long that fails early.
+    n, chunk = 0, _MOVE_CHUNK
+    while n < count:
+        free = body.free(poses[n : n + chunk])
+        if not free.all():
+            n += int(np.argmin(free))
+            break
+        n, chunk = n + len(free), 2 * chunk
     return np.vstack([[pose.x, pose.y, pose.yaw], poses[:n]])
 
 

@@ -80,7 +80,7 @@ def _free_end(
         for cand in dubins_paths(a, b, r_in * step):
             poly = np.vstack([start.xy, cand.polygon(_MAX_ARC)[1:-1], goal.xy])
             pieces = polygon_curve(poly, kappa, sigma)
-            if pieces is not None:
+            if pieces is not None and _pieces_inside(pieces, checker.bounds):
                 length = sum(p.length for p in pieces)
                 found.append((length, len(found), pieces, poly, cand.word, r_in * step))
     # The shortest rounded word first, whatever its radius.
@@ -113,6 +113,19 @@ def _free_end(
                     continue
                 return out, poly, f"{word} of radius {r:.1f} m with clothoid turns"
     return None
+
+
+def _pieces_inside(pieces: Sequence[CurvePiece], bounds: Sequence[float]) -> bool:
+    """Whether every piece of a curve starts inside the map's ``bounds``.
+
+    A rear axle outside the bounds puts the body outside them, so a curve failing
+    this is not clear: dropping it before sampling changes no answer. With a huge
+    turning radius on a small map every word is kilometres long and leaves the
+    map, and sampling and testing it took seconds a call.
+    """
+    x0, y0, x1, y1 = bounds
+    tol = 1e-6
+    return all(x0 - tol <= p.x <= x1 + tol and y0 - tol <= p.y <= y1 + tol for p in pieces)
 
 
 #: ``poses_at(pick, within)``: the poses ``(len(pick), 3)`` at the batch's rows ``pick``
