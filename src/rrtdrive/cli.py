@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any, NoReturn
 
 import numpy as np
 
+from rrtdrive.atomic import write_text_atomic
 from rrtdrive.cli_args import (
     PLOT_SUFFIXES,
     OutputError,
@@ -38,10 +39,11 @@ from rrtdrive.cli_args import (
     planner_option_flags,
     positive_float,
     positive_int,
+    raise_unwritten,
     register_ompl_if_named,
     validate_output,
+    write_each,
     write_output,
-    writing,
 )
 from rrtdrive.cli_signals import (
     EXIT_TERMINATED,
@@ -258,6 +260,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         lambda: planner, m, np.random.default_rng(args.seed), budget, config=config,
         reverse=args.reverse,
     )  # fmt: skip
+    text = ""
     if args.json:
         doc = plan_to_json(
             result, args.seed, m.name, m.vehicle, reverse=args.reverse, start=m.start,
@@ -265,12 +268,21 @@ def _cmd_plan(args: argparse.Namespace) -> int:
             planner_options={**options, **extra}, budget=budget,
             resolution=problem.checker.resolution,
         )  # fmt: skip
-        write_output(args.json, json.dumps(doc) + "\n")
-    if args.plot:
+        text = json.dumps(doc) + "\n"
+    if args.json == "-":
+        write_output(args.json, text)
+
+    def plot() -> None:
         from rrtdrive.plotting import plot_plan, save_figure
 
-        with writing("--plot", args.plot):
-            save_figure(plot_plan(m, result, seed=args.seed, reverse=reversing), args.plot)
+        save_figure(plot_plan(m, result, seed=args.seed, reverse=reversing), args.plot)
+
+    # Each file whatever became of the other; a failure is reported after the summary.
+    unwritten = write_each([
+        ("--json", None if args.json == "-" else args.json,
+         lambda: write_text_atomic(args.json, text)),
+        ("--plot", args.plot, plot),
+    ])  # fmt: skip
     cusps = len(result.path.cusps)
     gears = f"{cusps} gear change{'s' if cusps != 1 else ''}, " if cusps else ""
     setup = f"set-up {result.setup_time_s:.1f} s" if notice is not None else ""
@@ -292,6 +304,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     )
     # With the JSON on stdout, the human summary goes to stderr to keep stdout parseable.
     print(summary, file=sys.stderr if args.json == "-" else sys.stdout)
+    raise_unwritten("plan", unwritten)
     return EXIT_OK if result.success else EXIT_FAILED
 
 

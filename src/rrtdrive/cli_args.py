@@ -39,7 +39,9 @@ __all__ = [
     "parse_pose",
     "positive_float",
     "positive_int",
+    "raise_unwritten",
     "validate_output",
+    "write_each",
     "write_output",
     "writing",
 ]
@@ -141,7 +143,12 @@ class OutputError(Exception):
     """A file the command writes failed after its checks passed (a full disk): exit 1.
 
     Not bad input (exit 2): the same command succeeds once there is room again.
+    ``flag``: the option whose file it was (``--json``), when known.
     """
+
+    def __init__(self, message: str, flag: str = "") -> None:
+        super().__init__(message)
+        self.flag = flag
 
 
 @contextmanager
@@ -154,7 +161,45 @@ def writing(flag: str, target: str | os.PathLike[str]) -> Iterator[None]:
         why = exc.strerror or (str(exc).strip().splitlines() or [type(exc).__name__])[0]
         # The file that failed: a bench's summary.md inside --out, not the folder (an audit).
         where = exc.filename if isinstance(exc.filename, str) and exc.filename else target
-        raise OutputError(f"{flag}: cannot write {where}: {why}") from None
+        raise OutputError(f"{flag}: cannot write {where}: {why}", flag) from None
+
+
+def write_each(
+    outputs: Sequence[tuple[str, str | None, Callable[[], None]]],
+) -> list[OutputError]:
+    """Write every output asked for, each whatever became of the others.
+
+    ``outputs``: ``(flag, target, write)``; ``write`` runs when ``target`` is given,
+    inside :func:`writing`. One that cannot be written (a full disk, a folder gone) does
+    not keep the next from being written: a failed ``--json`` lost the ``--plot`` and
+    the summary of a plan that had run (an audit).
+
+    Returns
+    -------
+    list of OutputError
+        The outputs that could not be written, in order (see :func:`raise_unwritten`).
+    """
+    unwritten: list[OutputError] = []
+    for flag, target, write in outputs:
+        if not target:
+            continue
+        try:
+            with writing(flag, target):
+                write()
+        except OutputError as exc:
+            unwritten.append(exc)
+    return unwritten
+
+
+def raise_unwritten(command: str, unwritten: Sequence[OutputError]) -> None:
+    """After the summary: print every output that failed but the first, then raise that one.
+
+    The command then exits 1 with each failure named (the first by the caller's handler).
+    """
+    for exc in unwritten[1:]:
+        print(f"rrtdrive {command}: error: {exc}", file=sys.stderr)
+    if unwritten:
+        raise unwritten[0]
 
 
 def names_stdout(target: str) -> bool:

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from rrtdrive.atomic import write_text_atomic
 from rrtdrive.cli_args import (
     PLOT_SUFFIXES,
     distinct_outputs,
@@ -32,9 +33,10 @@ from rrtdrive.cli_args import (
     nonneg_float,
     parse_pose,
     positive_float,
+    raise_unwritten,
     validate_output,
+    write_each,
     write_output,
-    writing,
 )
 from rrtdrive.json_safe import json_safe
 from rrtdrive.plan_file import plan_car, read_plan_json, with_plan_car
@@ -316,15 +318,19 @@ def run(args: argparse.Namespace) -> int:
                "ok": not failed, "failed": failed}
         # Strict JSON: a non-finite number (a row far off the map) is null, not Infinity.
         text = json.dumps(json_safe(doc), allow_nan=False) + "\n"
-    # The files first: a reader of stdout that goes away (| head) ends the printing,
-    # and the files asked for were then never written.
-    if plot:
+    def draw() -> None:
         from rrtdrive.plotting import plot_check, save_figure
 
-        with writing("--plot", plot):
-            save_figure(plot_check(m, path, check, label), plot)
-    if args.json and args.json != "-":
-        write_output(args.json, text)
+        save_figure(plot_check(m, path, check, label), plot)
+
+    # The files first: a reader of stdout that goes away (| head) ends the printing,
+    # and the files asked for were then never written. Each is written whatever became
+    # of the other; a failure is reported after the verdict.
+    unwritten = write_each([
+        ("--plot", plot, draw),
+        ("--json", None if args.json == "-" else args.json,
+         lambda: write_text_atomic(args.json, text)),
+    ])  # fmt: skip
     if rows < 2:
         status = data.get("status", "unknown")
         what = "no path" if rows == 0 else "a path of one row (a path needs two)"
@@ -349,6 +355,7 @@ def run(args: argparse.Namespace) -> int:
               "--no-sharpness checks the rest)", file=out)
     if args.json == "-":
         write_output(args.json, text)
+    raise_unwritten("verify", unwritten)
     return EXIT_OK if not failed else EXIT_FAILED
 
 

@@ -27,7 +27,6 @@ from typing import Any
 
 from rrtdrive.cli_args import (
     PLOT_SUFFIXES,
-    OutputError,
     cell_size,
     distinct_outputs,
     flags_for,
@@ -37,8 +36,10 @@ from rrtdrive.cli_args import (
     planner_option_flags,
     positive_float,
     positive_int,
+    raise_unwritten,
     register_ompl_if_named,
     validate_output,
+    write_each,
     writing,
 )
 from rrtdrive.json_safe import options_json
@@ -552,19 +553,19 @@ def _run(args: argparse.Namespace) -> int:
     from rrtdrive.maps import write_text_atomic
     from rrtdrive.sim.episode import trajectory_csv
 
-    for flag, target, content in (("--trajectory", args.trajectory, trajectory_csv),
-                                  ("--json", args.json, lambda _: text)):  # fmt: skip
-        if not target or target == "-":
-            continue
-        try:
-            with writing(flag, target):
-                write_text_atomic(target, content(episode))
-        except OutputError as exc:
-            unwritten.append(exc)
-        else:
-            if flag == "--trajectory" and not report.steps:  # a header-only file (an audit)
-                print("rrtdrive simulate: --trajectory: nothing was driven (the plan failed); "
-                      "the file has its header only", file=sys.stderr)
+    files = write_each([
+        ("--trajectory", None if args.trajectory == "-" else args.trajectory,
+         lambda: write_text_atomic(args.trajectory, trajectory_csv(episode))),
+        ("--json", None if args.json == "-" else args.json,
+         lambda: write_text_atomic(args.json, text)),
+    ])  # fmt: skip
+    unwritten += files
+    written = args.trajectory not in (None, "", "-") and "--trajectory" not in {
+        exc.flag for exc in files
+    }
+    if written and not report.steps:  # a header-only file (an audit)
+        print("rrtdrive simulate: --trajectory: nothing was driven (the plan failed); "
+              "the file has its header only", file=sys.stderr)
     if args.json == "-":
         sys.stdout.write(text)
         sys.stdout.flush()
@@ -586,9 +587,6 @@ def _run(args: argparse.Namespace) -> int:
             file=out,
         )
     print("\n".join(metrics_block(data)), file=out)
-    for exc in unwritten[1:]:
-        print(f"rrtdrive simulate: error: {exc}", file=sys.stderr)
-    if unwritten:
-        raise unwritten[0]
+    raise_unwritten("simulate", unwritten)
     ok = report.success and (stock is None or stock.highway_env_success)
     return EXIT_OK if ok else EXIT_FAILED
