@@ -87,7 +87,7 @@ class ResultStore:
                 self._acquire_lock()
             created = not self.path.exists()
             self._repair_tail()
-            self._fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+            self._fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
         except OSError as exc:
             # A read-only folder, or runs.jsonl a folder: one line, not a traceback.
             self.close()
@@ -110,7 +110,7 @@ class ResultStore:
             import fcntl
         except ImportError:  # pragma: no cover - Windows: no advisory lock
             return
-        fd = os.open(self.dir / ".lock", os.O_RDWR | os.O_CREAT, 0o644)
+        fd = os.open(self.dir / ".lock", os.O_RDWR | os.O_CREAT, 0o666)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
@@ -269,6 +269,6 @@ class ResultStore:
         os.close(self._open_fd())
         os.replace(tmp, self.path)
         _fsync_dir(self.dir)
-        self._fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+        self._fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
         self._keys -= drop
         return removed
