@@ -41,6 +41,15 @@ def _float_arg(text: str) -> float:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
 
 
+class _GivenOnce(argparse.Action):
+    """An option that may be given once: a second ``--config`` silently replaced the first."""
+
+    def __call__(self, parser: Any, namespace: Any, values: Any, option: Any = None) -> None:
+        if getattr(namespace, self.dest, None) is not None:
+            parser.error(f"argument {option}: given twice; give one file")
+        setattr(namespace, self.dest, values)
+
+
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     """Add ``bench`` to an argparse subparsers object and return its parser."""
     p = subparsers.add_parser(
@@ -54,7 +63,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         "has a result, 1 when some runs crashed twice (error rows) or the worker processes "
         "could not start, 2 on bad input; 130 on Ctrl-C, 143 on SIGTERM.",
     )
-    p.add_argument("--config", metavar="FILE.toml", help="read the bench from a TOML file")
+    p.add_argument(
+        "--config", metavar="FILE.toml", action=_GivenOnce,
+        help="read the bench from a TOML file ('-': stdin)",
+    )
     p.add_argument(
         "--maps", action="append", metavar="NAMES",
         help="maps for planning-only runs: built-in names or .json files",
@@ -184,7 +196,8 @@ def config_from_args(args: argparse.Namespace) -> Any:
         # An empty file or maps = [] leaves no map or scenario: the file is named too.
         if field in from_file or (field == "maps/scenarios" and args.config is not None
                                   and not {"maps", "scenarios"} & set(given_flags(args))):
-            raise InputError(f"{exc} (in {args.config!r})") from None
+            where = "stdin" if args.config == "-" else args.config
+            raise InputError(f"{exc} (in {where!r})") from None
         raise
 
 

@@ -7,6 +7,7 @@ The keys are :data:`~rrtdrive.bench.grid.CONFIG_KEYS`, the names of the
 from __future__ import annotations
 
 import os
+import sys
 from collections.abc import Mapping
 from pathlib import Path as FsPath
 from typing import Any
@@ -15,7 +16,7 @@ from rrtdrive.bench.grid import CONFIG_KEYS, DETERMINISTIC_TIME, BenchConfig
 from rrtdrive.types import InputError
 from rrtdrive.values import did_you_mean
 
-__all__ = ["load_toml", "config_from_mapping"]
+__all__ = ["FLAG_KEYS", "load_toml", "config_from_mapping"]
 
 
 def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
@@ -41,8 +42,12 @@ def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     p = FsPath(path)
     text = ""
     try:
-        # utf-8-sig: a byte-order mark (Windows editors write one) is no error, as in maps.
-        text = p.read_text(encoding="utf-8-sig")
+        if str(path) == "-":  # `--config -`: the TOML on stdin (a here-document)
+            p = FsPath("stdin")
+            text = sys.stdin.read().removeprefix("\ufeff")
+        else:
+            # utf-8-sig: a byte-order mark (Windows editors write one) is no error, as in maps.
+            text = p.read_text(encoding="utf-8-sig")
         data = tomllib.loads(text)
     except FileNotFoundError:
         raise InputError(f"config: no such file {str(p)!r}") from None
@@ -69,8 +74,7 @@ def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     unknown = sorted(set(data) - set(CONFIG_KEYS))
     if unknown:
         raise InputError(
-            f"config: unknown key {unknown[0]!r}{did_you_mean(unknown[0], CONFIG_KEYS)} in "
-            f"{str(p)!r}; "
+            f"config: unknown key {unknown[0]!r}{_key_hint(unknown[0])} in {str(p)!r}; "
             f"allowed keys: {', '.join(CONFIG_KEYS)}"
         )
     if "ray" in data:
@@ -90,6 +94,23 @@ def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
         if isinstance(data.get(key), list):
             data[key] = [os.path.expanduser(m) if isinstance(m, str) else m for m in data[key]]
     return data
+
+
+#: The flags whose key is not the flag's own name with ``_`` for ``-``.
+FLAG_KEYS = {"jobs": "workers", "max_time": "max_time_s", "run_timeout": "run_timeout_s"}
+
+
+def _key_hint(key: str) -> str:
+    """`` (the flag --jobs; its key is 'workers')`` for a flag's name, else did-you-mean.
+
+    A user who knows the command line writes ``jobs = 2`` or ``max-time = 5``; difflib
+    finds no key close to ``jobs``.
+    """
+    name = key.lstrip("-").replace("-", "_")
+    real = FLAG_KEYS.get(name, name)
+    if real in CONFIG_KEYS and real != key:
+        return f" (the flag --{name.replace('_', '-')}; its key is {real!r})"
+    return did_you_mean(key, CONFIG_KEYS)
 
 
 def _toml_error(exc: Exception, text: str, name: str) -> str:
