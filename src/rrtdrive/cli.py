@@ -56,6 +56,7 @@ from rrtdrive.cli_stdout import run_writing_stdout
 from rrtdrive.cli_warnings import warnings_as_lines
 from rrtdrive.json_safe import options_json
 from rrtdrive.types import Budget, InputError, PlanResult, Pose, VehicleParams
+from rrtdrive.values import did_you_mean
 
 if TYPE_CHECKING:
     pass
@@ -79,6 +80,13 @@ class _Parser(argparse.ArgumentParser):
             # `--scenarios a.json b.json`: bench's lists are one comma-separated value
             # (or the flag repeated); b.json read as a stray argument (an audit).
             message += "; bench's lists are comma-separated (--scenarios a.json,b.json)"
+        if message.startswith("unrecognized arguments: --"):
+            # `--max-iteratons 5`: the option meant, as for a misspelt name.
+            # Compared without the dashes (--out is not close to --plot).
+            wrong = message.split()[2].split("=", 1)[0].lstrip("-")
+            names = [o[2:] for o in self._option_string_actions if o.startswith("--")]
+            if close := did_you_mean(wrong, names):
+                message += close.replace("'", "'--", 1)
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message} (see --help)\n")
 
 

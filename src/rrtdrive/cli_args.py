@@ -50,8 +50,9 @@ __all__ = [
 #: promise).
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
-# "-5", "-5,6,0", "-.5,1e-3,0": a value, not an option (argparse only knows plain numbers).
-_NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)[\d.,eE+\-]*$")
+# "-5", "-5,6,0", "-.5,1e-3,0", "-inf", "-nan": a value, not an option (argparse only
+# knows plain numbers; "-inf" read "expected one argument").
+_NEGATIVE_VALUE = re.compile(r"^-((\d|\.\d)[\d.,eE+\-]*|(?i:inf|infinity|nan))$")
 
 
 def int_at_least(low: int, unit: str = "", high: int | None = None) -> Callable[[str], int]:

@@ -44,6 +44,7 @@ from rrtdrive.types import (
     brief_repr,
     require_finite,
 )
+from rrtdrive.values import did_you_mean
 from rrtdrive.vehicle_json import vehicle_from_json, vehicle_to_json
 
 __all__ = [
@@ -308,9 +309,14 @@ def load_map(
     -------
     Map
     """
-    return map_from_json(
-        read_json_file(path, "map"), vehicle, start=start, goal=goal, check_query=check_query
-    )
+    data = read_json_file(path, "map")
+    if isinstance(data, dict) and "path" in data and "status" in data:
+        # A plan where a map is wanted: its 27 keys listed as unknown said nothing useful.
+        raise InputError(
+            f"map: {os.fspath(path)!r} is a plan (the JSON of rrtdrive plan), not a map; "
+            "give the map it was planned on (a built-in name or its map file)"
+        )
+    return map_from_json(data, vehicle, start=start, goal=goal, check_query=check_query)
 
 
 def map_text(m: Map) -> str:
@@ -471,8 +477,8 @@ def builtin_map(name: str) -> Map:
     factory = BUILTIN_MAPS.get(name) if isinstance(name, str) else None
     if factory is None:
         raise InputError(
-            f"map: unknown map {name!r}; built-ins are {', '.join(sorted(BUILTIN_MAPS))} "
-            "or give a .json file"
+            f"map: unknown map {name!r}{did_you_mean(name, BUILTIN_MAPS)}; built-ins are "
+            f"{', '.join(sorted(BUILTIN_MAPS))} or give a .json file"
         )
     return _built_map(name, factory)
 

@@ -81,7 +81,8 @@ def make_planner(name: str, **options: object) -> Planner:
         for key in options:
             if key not in allowed:
                 raise InputError(
-                    f"planner.{key}: unknown option for {name}; allowed {sorted(allowed)}"
+                    f"planner.{key}: unknown option for {name}{did_you_mean(key, allowed)}; "
+                    f"allowed {sorted(allowed)}"
                 )
     options = options_from_json(options)
     try:

@@ -7,6 +7,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from rrtdrive.types import InputError, require_finite, require_int, require_positive
+from rrtdrive.values import did_you_mean
 
 __all__ = [
     "MAX_NODES",
@@ -94,12 +95,13 @@ def check_known(names: Iterable[str], allowed: Iterable[str], where: str, what: 
     Examples
     --------
     >>> check_known(["degree"], ["degree", "prune"], "planner.smooth", "field of X")
-    >>> check_known(["degre"], ["degree", "prune"], "planner.smooth", "field of X")
+    >>> check_known(["degre"], ["degree", "prune"], "smooth", "field of X")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    rrtdrive.types.InputError: planner.smooth.degre: unknown field of X; allowed ['degree', 'prune']
+    rrtdrive.types.InputError: smooth.degre: unknown field of X (did you mean 'degree'?); ...
     """
     options = sorted(allowed)
     unknown = sorted(set(names) - set(options))
     if unknown:
-        raise InputError(f"{where}.{unknown[0]}: unknown {what}; allowed {options}")
+        hint = did_you_mean(unknown[0], options)
+        raise InputError(f"{where}.{unknown[0]}: unknown {what}{hint}; allowed {options}")

@@ -47,6 +47,7 @@ from rrtdrive.sim.cli_media import write_media
 from rrtdrive.sim.cli_targets import given_path, make_task, target_kind, with_simulate_hint
 from rrtdrive.sim.limits import MAX_SIM_FREQUENCY, MAX_VIDEO_FPS, MIN_SIM_FREQUENCY
 from rrtdrive.types import Budget, InputError
+from rrtdrive.values import did_you_mean
 from rrtdrive.vehicle_json import vehicle_to_json
 
 __all__ = ["add_parser", "run", "episode_json", "metrics_block", "HELP", "NO_WALL_LIMIT_S"]
@@ -363,7 +364,8 @@ def _run(args: argparse.Namespace) -> int:
 
     if args.controller not in CONTROLLER_NAMES:
         raise InputError(
-            f"--controller: unknown controller {args.controller!r}; "
+            f"--controller: unknown controller {args.controller!r}"
+            f"{did_you_mean(args.controller, CONTROLLER_NAMES)}; "
             f"choose from {', '.join(CONTROLLER_NAMES)}"
         )
     if args.planner is None:

@@ -58,7 +58,9 @@ def target_kind(name: str, scenarios: tuple[str, ...], stock_envs: tuple[str, ..
         return "scenario"
     if name in stock_envs:
         return "stock"
-    if name in BUILTIN_MAPS or names_map_file(name):
+    # "" (an unset $SCENARIO) is no map file either: as a path it named the current
+    # folder, and the error was the map's.
+    if name and (name in BUILTIN_MAPS or names_map_file(name)):
         return "map"
     from rrtdrive.sim.tasks import SCENARIO_VARIANTS, unknown_scenario
 

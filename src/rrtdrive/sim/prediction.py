@@ -27,6 +27,7 @@ import numpy as np
 
 from rrtdrive.planning.spacetime import Prediction
 from rrtdrive.types import InputError, require_positive
+from rrtdrive.values import did_you_mean
 
 __all__ = ["PREDICTORS", "predict", "vehicle_states"]
 
@@ -87,7 +88,8 @@ def predict(
     """
     if method not in PREDICTORS:
         raise InputError(
-            f"predictor: unknown predictor {method!r}; choose from {', '.join(PREDICTORS)}"
+            f"predictor: unknown predictor {method!r}{did_you_mean(method, PREDICTORS)}; "
+            f"choose from {', '.join(PREDICTORS)}"
         )
     require_positive("prediction.horizon", horizon)
     require_positive("prediction.step", step)

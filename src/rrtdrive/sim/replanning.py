@@ -22,6 +22,7 @@ from rrtdrive.planning.spacetime import SafetyConfig, SpaceTimeRRTConnect
 from rrtdrive.sim.follower import IDMConfig
 from rrtdrive.sim.prediction import PREDICTORS
 from rrtdrive.types import InputError, Path, require_finite, require_int, require_positive
+from rrtdrive.values import did_you_mean
 
 __all__ = ["ReplanConfig", "ReplanRecord", "TrafficLog", "lane_path", "merge_path", "SPACING"]
 
@@ -154,7 +155,8 @@ class ReplanConfig:
             )
         if self.predictor not in PREDICTORS:
             raise InputError(
-                f"replan.predictor: unknown predictor {self.predictor!r}; "
+                f"replan.predictor: unknown predictor {self.predictor!r}"
+                f"{did_you_mean(self.predictor, PREDICTORS)}; "
                 f"choose from {', '.join(PREDICTORS)}"
             )
         for name in (

@@ -13,6 +13,7 @@ from rrtdrive.planning.improved.fallback import MAX_FALLBACK_CANDIDATES
 from rrtdrive.planning.options import MAX_RADIUS_FACTOR, check_known, check_step
 from rrtdrive.planning.smoothing import SmoothingConfig, smoothing_with
 from rrtdrive.types import InputError, require_finite, require_int
+from rrtdrive.values import did_you_mean
 
 __all__ = [
     "NAME",
@@ -523,5 +524,6 @@ def _check_components(components: tuple[str, ...]) -> None:
     for name in components:
         if name not in COMPONENTS:
             raise InputError(
-                f"planner.disable: unknown component {name!r}; choose from {', '.join(COMPONENTS)}"
+                f"planner.disable: unknown component {name!r}{did_you_mean(name, COMPONENTS)}; "
+                f"choose from {', '.join(COMPONENTS)}"
             )

@@ -179,8 +179,10 @@ def unknown_scenario(
     maps = sorted(m for m in BUILTIN_MAPS if m not in SCENARIOS)
     hint = did_you_mean(name, [*SCENARIOS, *variants, *stock_envs, *maps])
     stock = f", a stock env ({', '.join(stock_envs)})" if stock_envs else ""
+    # "" (an unset $SCENARIO): said as such, not as an unknown name.
+    what = "needs a scenario, got an empty name" if name == "" else f"unknown scenario {name!r}"
     return InputError(
-        f"{field}: unknown scenario {name!r}{hint}; choose from "
+        f"{field}: {what}{hint}; choose from "
         f"{', '.join([*SCENARIOS, *variants])}{stock}, "
         f"a map file (.json) or a built-in map ({', '.join(maps)})"
     )

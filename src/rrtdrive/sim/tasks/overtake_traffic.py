@@ -34,6 +34,7 @@ from rrtdrive.sim.tasks.base import (
 )
 from rrtdrive.sim.traffic_driver import TrafficDriver
 from rrtdrive.types import Budget, InputError, Path, Pose, VehicleParams, require_positive
+from rrtdrive.values import did_you_mean
 from rrtdrive.vehicle import footprint_corners
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -173,7 +174,7 @@ def _density(density: object) -> float:
         except ValueError:
             raise InputError(
                 f"density: expected cars per km or one of {', '.join(sorted(TRAFFIC_DENSITIES))}, "
-                f"got {density!r}"
+                f"got {density!r}{did_you_mean(density, TRAFFIC_DENSITIES)}"
             ) from None
     require_positive("density", density)  # type: ignore[arg-type]
     if density > 30.0:  # type: ignore[operator]
@@ -226,7 +227,8 @@ class OvertakeTrafficTask(Task):
         super().__post_init__()
         if self.lead_model not in LEAD_MODELS:
             raise InputError(
-                f"lead_model: unknown lead model {self.lead_model!r}; "
+                f"lead_model: unknown lead model {self.lead_model!r}"
+                f"{did_you_mean(self.lead_model, LEAD_MODELS)}; "
                 f"choose from {', '.join(LEAD_MODELS)}"
             )
         if not (math.isfinite(self.ego_speed) and self.ego_speed >= 0):
@@ -262,7 +264,8 @@ class OvertakeTrafficTask(Task):
         model = "idm" if lead_model is None else lead_model
         if model not in LEAD_MODELS:
             raise InputError(
-                f"lead_model: unknown lead model {model!r}; choose from {', '.join(LEAD_MODELS)}"
+                f"lead_model: unknown lead model {model!r}{did_you_mean(model, LEAD_MODELS)}; "
+                f"choose from {', '.join(LEAD_MODELS)}"
             )
         dx, dy, dyaw = offset
         start = Pose(TRAFFIC_START_X + dx, 44.0 + 0.3 * dy, 0.4 * dyaw)
