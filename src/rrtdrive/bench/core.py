@@ -330,10 +330,22 @@ def run_bench(
                 bar.close()
             rows = grid_rows(cfg, store)
             files.append(str(store.path))
+            # Under the folder's lock: a bench that took the folder over once this one's
+            # rows were in found this one's plots written over its own (an audit).
+            files += _write_summary_files(cfg, rows, out)
     finally:
         if ray_backend is not None:
             ray_backend.close()
-    files.append(str(out / "bench_config.json"))
+    errors = sum(1 for r in rows if r.get("status") == "error")
+    return BenchReport(
+        total=len(specs), skipped=skipped, executed=executed, errors=errors,
+        run_wall_s=run_wall, backend=backend.describe(), files=tuple(files),
+    )
+
+
+def _write_summary_files(cfg: BenchConfig, rows: list[dict[str, Any]], out: FsPath) -> list[str]:
+    """Write ``summary.md``, ``summary.csv`` and the plots of ``rows``; the files named."""
+    files = [str(out / "bench_config.json")]
     groups = summarise_rows(rows)
     # How it was run: a forward and a reverse grid's tables looked alike.
     # Without --reverse, the scenarios that reverse anyway are named (u-turn's rows
@@ -353,8 +365,4 @@ def run_bench(
     plots = write_plots(rows, out) if cfg.plots else []
     remove_plots(out, keep=plots)
     files += [str(p) for p in plots]
-    errors = sum(1 for r in rows if r.get("status") == "error")
-    return BenchReport(
-        total=len(specs), skipped=skipped, executed=executed, errors=errors,
-        run_wall_s=run_wall, backend=backend.describe(), files=tuple(files),
-    )
+    return files

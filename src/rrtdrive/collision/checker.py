@@ -396,12 +396,13 @@ class CollisionChecker(ClearanceLookup):
             The distance in metres (shapely's, exact up to floating point).
         """
         rect = shapely.Polygon(footprint_corners(np.asarray(pose, dtype=float)[:3], self.vehicle))
-        if not self._inside.contains(rect):
-            return 0.0
-        to_bounds = self._inside.exterior.distance(rect)
-        if self._union.is_empty:
-            return float(to_bounds)
-        return float(min(to_bounds, self._union.distance(rect)))
+        with self.lock:  # prepared geometry (see _exact)
+            if not self._inside.contains(rect):
+                return 0.0
+            to_bounds = self._inside.exterior.distance(rect)
+            if self._union.is_empty:
+                return float(to_bounds)
+            return float(min(to_bounds, self._union.distance(rect)))
 
     def _corners(self, poses: np.ndarray) -> np.ndarray:
         """:func:`~rrtdrive.vehicle.footprint_corners` of poses ``(N, 3)``, the same floats."""
@@ -429,7 +430,10 @@ class CollisionChecker(ClearanceLookup):
         return self._exact(poses, clearance)
 
     def _exact(self, poses: np.ndarray, clearance: float = 0.0) -> np.ndarray:
-        return self._rectangles.free(poses, clearance)
+        # The prepared union is not thread-safe: a caller of the process's shared checker
+        # that held no lock (random_free_poses, the footprint judge) crashed (SIGSEGV).
+        with self.lock:
+            return self._rectangles.free(poses, clearance)
 
     def path_free(
         self, samples: np.ndarray, spacing: float = 0.1, clearance: float = 0.0
