@@ -76,9 +76,9 @@ def test_an_obstacle_far_out_or_turned_too_far(capsys, tmp_path):
 
 def test_a_yaw_beyond_the_limit_is_one_error_not_a_warning_first(capsys, tmp_path):
     # "warning: --start: yaw 1e+07 ... taken as 155.1 deg", then "error: --start: ...".
-    _one_line(*_run(capsys, "plan", "overtake", "--start", "5,44,1e7"), "--start: yaw 1e+07 rad")
+    _one_line(*_run(capsys, "plan", "overtake", "--start", "5,44,1e7"), "--start: yaw 10000000 rad")
     f = _map_file(tmp_path, start=[5.0, 44.0, 1e7])
-    _one_line(*_run(capsys, "plan", f), "start: yaw 1e+07 rad is beyond")
+    _one_line(*_run(capsys, "plan", f), "start: yaw 10000000 rad is beyond")
     # A yaw in degrees below the limit still warns, and plans.
     code, err = _run(capsys, "plan", "overtake", "--goal", "92,44,12.566370614359172")  # 4 pi
     assert code == 0 and "--goal: yaw 12.5664 is more than a full turn" in err

@@ -177,14 +177,14 @@ def check_endpoint(
     xmin, ymin, xmax, ymax = m.bounds
     if abs(pose.yaw) > MAX_YAW:
         raise InputError(
-            f"{label}: yaw {pose.yaw:g} rad is beyond {MAX_YAW:g} rad either way, where an "
+            f"{label}: yaw {pose.yaw:.10g} rad is beyond {MAX_YAW:g} rad either way, where an "
             "angle keeps less than the precision headings are checked to; give it in [-pi, pi]"
         )
     if warn_degrees:
         warn_if_degrees(label, pose.yaw)
     if not (xmin <= pose.x <= xmax and ymin <= pose.y <= ymax):
         raise InputError(
-            f"{label}: ({pose.x:g}, {pose.y:g}) lies outside the bounds {list(m.bounds)}"
+            f"{label}: ({pose.x:.10g}, {pose.y:.10g}) lies outside the bounds {list(m.bounds)}"
         )
     body = footprint_polygon(pose.as_tuple(), vehicle)
     # The corners strictly inside, compared as numbers: exact at any size (shapely's
@@ -194,7 +194,8 @@ def check_endpoint(
     if not np.all(inside & (ymin < corners[:, 1]) & (corners[:, 1] < ymax)):
         # Touching counts, as for an obstacle: the simulator's walls stand on the bounds.
         raise InputError(
-            f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) leaves or touches the bounds"
+            f"{label}: the car's body at ({pose.x:.10g}, {pose.y:.10g}) leaves or touches the "
+            "bounds"
         )
     polygons = np.array([o.polygon() for o in m.obstacles], dtype=object)
     hits = np.flatnonzero(shapely.intersects(polygons, body))
@@ -209,7 +210,7 @@ def check_endpoint(
             else f"touches obstacle {i} at {list(m.obstacles[i].center)} (touching counts "
             "as a collision: move it clear)"
         )
-        raise InputError(f"{label}: the car's body at ({pose.x:g}, {pose.y:g}) {how}")
+        raise InputError(f"{label}: the car's body at ({pose.x:.10g}, {pose.y:.10g}) {how}")
 
 
 def overlap_depth(a: np.ndarray, b: np.ndarray) -> float:

@@ -299,6 +299,11 @@ def dubins_paths(start: Pose, goal: Pose, radius: float, tol: float = 1e-6) -> l
         path = DubinsPath(start, word, (t * radius, p * radius, q * radius), radius)
         x, y, yaw = path.end()
         dyaw = wrap_angle(yaw - goal.yaw)
+        # No path is shorter than the straight line: a full-turn arc that rounds to 0
+        # (acos(1)) left a word of 0 m to a goal microns behind, ending within the
+        # tolerance, whose snapped end then ran backwards (an audit).
+        if path.length < d * radius - 1e-9:
+            continue
         if math.hypot(x - goal.x, y - goal.y) <= tol * max(1.0, radius) and abs(dyaw) <= tol:
             # dataclasses.replace(path, goal=goal), without its generic field copying.
             out.append(DubinsPath(start, word, path.lengths, radius, goal))
