@@ -434,7 +434,7 @@ def test_a_bench_taking_over_the_folder_is_not_overwritten_by_the_one_before(tmp
 # ------------------------------------------------------------------ interrupting a bench
 
 _SLOW_GRID = ("--maps", "parking_lot,narrow_gap", "--planners", "improved-rrt-connect,rrt-star",
-              "--seeds", "4", "--max-iterations", "20000", "--deterministic", "--no-plots",
+              "--seeds", "40", "--max-iterations", "20000", "--deterministic", "--no-plots",
               "--quiet")
 
 
@@ -482,7 +482,7 @@ def test_stopping_a_bench_with_two_workers_leaves_no_process_and_whole_rows(tmp_
     text = runs.read_text()
     assert text.endswith("\n")
     rows = [json.loads(line) for line in text.splitlines()]
-    assert 1 <= len(rows) < 16
+    assert 1 <= len(rows) < 160  # a grid far longer than the wait (CI once finished 16)
     assert _hidden_leftovers(out) == []
     assert not (out / "summary.md").exists()  # the grid never finished: no summary of it
 

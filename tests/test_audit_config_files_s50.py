@@ -221,8 +221,9 @@ GOOD = 'maps = ["overtake"]\nplanners = ["rrt-connect"]\nseeds = 1\nplots = fals
 
 @pytest.mark.parametrize(("text", "key"), [
     (GOOD + "sede = 2\n", "'sede' (did you mean 'seeds'?)"),
-    (GOOD + "max-time = 2\n", "'max-time' (did you mean 'max_time_s'?)"),
-    (GOOD + "run_timeout = 2\n", "'run_timeout' (did you mean 'run_timeout_s'?)"),
+    (GOOD + "max-time = 2\n", "'max-time' (the flag --max-time; its key is 'max_time_s')"),
+    (GOOD + "run_timeout = 2\n",
+     "'run_timeout' (the flag --run-timeout; its key is 'run_timeout_s')"),
     ("[bench]\n" + GOOD + "retrys = 2\n", "'retrys' (did you mean 'retries'?)"),
     (GOOD + "[extra]\nx = 1\n", "'extra'"),
     ("seeds = 1\n[bench]\nmaps = [\"overtake\"]\n", "'seeds'"),
