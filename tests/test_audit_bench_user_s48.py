@@ -28,10 +28,6 @@ import scipy.stats as st
 
 from rrtdrive.cli import main
 
-# Its module-scoped fixtures are expensive: one xdist worker runs them all (pyproject's
-# --dist loadgroup), not each worker its own copy.
-pytestmark = pytest.mark.xdist_group("test_audit_bench_user_s48")
-
 SMALL = {
     "name": "small", "bounds": [0, 0, 40, 20],
     "obstacles": [{"center": [20.0, 6.0], "size": [4.3, 1.8], "yaw": 0.0}],

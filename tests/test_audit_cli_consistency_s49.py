@@ -29,10 +29,6 @@ from pathlib import Path
 
 import pytest
 
-# Its module-scoped fixtures are expensive: one xdist worker runs them all (pyproject's
-# --dist loadgroup), not each worker its own copy.
-pytestmark = pytest.mark.xdist_group("test_audit_cli_consistency_s49")
-
 _SCRIPT = Path(sys.executable).with_name("rrtdrive")
 RRTDRIVE = [str(_SCRIPT)] if _SCRIPT.exists() else [sys.executable, "-m", "rrtdrive"]
 COMMANDS = ("plan", "maps", "verify", "simulate", "bench")

@@ -438,6 +438,13 @@ _SLOW_GRID = ("--maps", "parking_lot,narrow_gap", "--planners", "improved-rrt-co
               "--quiet")
 
 
+def _sigint_deliverable() -> None:
+    # As a terminal's process: a test run started in the background by a shell (CI) hands
+    # SIGINT down ignored, or blocked from a worker's mask; the bench then ran on.
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
 def _session_processes(sid: int) -> list[str]:
     """Live (not zombie) processes of session ``sid``."""
     ps = subprocess.run(["ps", "-o", "pid=,stat=,args=", "-s", str(sid)], capture_output=True,
@@ -454,7 +461,8 @@ def test_stopping_a_bench_with_two_workers_leaves_no_process_and_whole_rows(tmp_
     out = tmp_path / "bench"
     p = subprocess.Popen(_cli("bench", *_SLOW_GRID, "--jobs", "2", "--out", str(out)),
                          start_new_session=True, stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True)  # fmt: skip
+                         stderr=subprocess.PIPE, text=True,
+                         preexec_fn=_sigint_deliverable)  # fmt: skip
     try:
         runs = out / "runs.jsonl"
         deadline = time.monotonic() + 60

@@ -25,10 +25,6 @@ import pytest
 
 from rrtdrive.cli import main
 
-# Its module-scoped fixtures are expensive: one xdist worker runs them all (pyproject's
-# --dist loadgroup), not each worker its own copy.
-pytestmark = pytest.mark.xdist_group("test_audit_determinism_s45")
-
 #: Timing fields, as the docs name them: plan JSON (docs/planning.md), simulate JSON
 #: (docs/metrics.md: total_time_s, the wall-clock fields, setup_time_s) and bench rows
 #: (docs/bench.md: wall_time_s, worker, finished_at).

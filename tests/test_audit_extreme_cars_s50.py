@@ -35,10 +35,6 @@ from car_bodies import body
 from rrtdrive import InputError, VehicleParams
 from rrtdrive.cli import main as cli_main
 
-# Its module-scoped fixtures are expensive: one xdist worker runs them all (pyproject's
-# --dist loadgroup), not each worker its own copy.
-pytestmark = pytest.mark.xdist_group("test_audit_extreme_cars_s50")
-
 PAPER = {"length": 4.3, "width": 1.8, "wheelbase": 2.51, "min_turning_radius": 6.0,
          "max_steer": math.radians(30.0), "max_steer_rate": 0.4}  # fmt: skip
 CARS = {

@@ -31,10 +31,6 @@ from rrtdrive.sim.runner import EpisodeConfig, run_episode
 from rrtdrive.sim.tasks import make_variant
 from rrtdrive.types import Path
 
-# Its module-scoped fixtures are expensive: one xdist worker runs them all (pyproject's
-# --dist loadgroup), not each worker its own copy.
-pytestmark = pytest.mark.xdist_group("test_audit_metrics_gears_s46")
-
 SCENARIOS = ("parallel-parking", "u-turn", "parking-reverse-in", "parking")
 CONTROLLERS = ("pure-pursuit", "stanley", "lqr")
 SEEDS = (0, 1)

@@ -28,10 +28,6 @@ import zipfile
 
 import pytest
 
-# Its module-scoped fixtures are expensive: one xdist worker runs them all (pyproject's
-# --dist loadgroup), not each worker its own copy.
-pytestmark = pytest.mark.xdist_group("test_audit_packaging_s48")
-
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())
 VERSION = PYPROJECT["project"]["version"]

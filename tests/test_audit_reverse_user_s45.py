@@ -25,10 +25,6 @@ import sys
 import numpy as np
 import pytest
 
-# Its module-scoped fixtures are expensive: one xdist worker runs them all (pyproject's
-# --dist loadgroup), not each worker its own copy.
-pytestmark = pytest.mark.xdist_group("test_audit_reverse_user_s45")
-
 shapely_geometry = pytest.importorskip("shapely.geometry")
 shapely_affinity = pytest.importorskip("shapely.affinity")
 

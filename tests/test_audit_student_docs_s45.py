@@ -20,10 +20,6 @@ from pathlib import Path
 
 import pytest
 
-# Its module-scoped fixtures are expensive: one xdist worker runs them all (pyproject's
-# --dist loadgroup), not each worker its own copy.
-pytestmark = pytest.mark.xdist_group("test_audit_student_docs_s45")
-
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text(encoding="utf-8")
 METRICS = (ROOT / "docs" / "metrics.md").read_text(encoding="utf-8")

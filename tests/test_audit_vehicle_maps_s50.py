@@ -30,10 +30,6 @@ from car_bodies import body
 from rrtdrive import Budget, InputError, VehicleParams, builtin_map, load_map, save_map
 from rrtdrive.cli import main as cli_main
 
-# Its module-scoped fixtures are expensive: one xdist worker runs them all (pyproject's
-# --dist loadgroup), not each worker its own copy.
-pytestmark = pytest.mark.xdist_group("test_audit_vehicle_maps_s50")
-
 TINY = {"length": 2.5, "width": 1.2, "wheelbase": 1.6, "min_turning_radius": 3.0,
         "max_steer": math.radians(35.0), "max_steer_rate": 0.8}  # fmt: skip
 LONG = {"length": 6.0, "width": 2.2, "wheelbase": 3.8, "min_turning_radius": 9.0,

@@ -42,10 +42,6 @@ from rrtdrive.sim.traffic import OncomingGate, conflict_zone
 from rrtdrive.sim.traffic_driver import TrafficDriver
 from rrtdrive.types import Budget, InputError, Path, Pose, VehicleParams
 
-# Its module-scoped fixtures are expensive: one xdist worker runs them all (pyproject's
-# --dist loadgroup), not each worker its own copy.
-pytestmark = pytest.mark.xdist_group("test_traffic")
-
 V = VehicleParams()
 #: Tests ignore the wall clock: an episode then depends on its seed only.
 SEEDED = EpisodeConfig(replan=ReplanConfig(wall_limit=False))

@@ -34,6 +34,7 @@ from rrtdrive.planning.hybrid.resolution import (
 from rrtdrive.planning.hybrid.search import SearchOutcome
 from rrtdrive.planning.hybrid.shots import Piece
 from rrtdrive.planning.smoothing import SmoothingConfig
+from rrtdrive.planning.smoothing.drivable import slow_steering_note
 from rrtdrive.types import Budget, Tree
 from rrtdrive.values import counted
 
@@ -486,6 +487,8 @@ def hybrid_query(
     # Lead with the finest resolution's ending at the usual clearance and radius.
     lead_cfg, lead_outcome, allowed = tried[usual_count - 1]
     message = _failure_message(lead_outcome, lead_cfg, budget, reverse, allowed)
+    if lead_outcome.reason == "rejected" and smoothing is not None:
+        message += slow_steering_note(smoothing)  # when a slow actuator is why
     if usual_count > 1:
         message += f"; {_earlier_note(tried[: usual_count - 1], how_of)}"
     for k in range(usual_count, len(tried)):

@@ -263,6 +263,7 @@ def _clothoid_loop(repairer: Repairer, fitter: ClothoidFitter, cfg: SmoothingCon
             failed = _fix_conflicts(repairer, conflicts)
             if failed is not None:
                 message = turns_too_close(corners, failed, fitter.leg_room(corners, failed))
+                message += slow_steering_note(cfg)
                 break
             continue
         bad = fitter.check_limits(curve, len(corners))
@@ -336,6 +337,35 @@ def turns_too_close(
             max(turn_a, turn_b, key=abs),
             f"the car's tightest turns need {need:.1f} m between them",
         )
+    )
+
+
+def slow_steering_note(cfg: SmoothingConfig) -> str:
+    """Why the turns need that much room, when it is the steering rate: else ``""``.
+
+    The wheels turn at most ``max_sharpness`` radians a metre (a slow actuator's rate
+    at the planning speed), so a turn spends metres getting to full lock and back; a
+    0.01 rad/s car's bay failed on "turns need 68.7 m" without naming its steering.
+    Said when going from straight to full lock takes longer than the turning radius.
+
+    Examples
+    --------
+    >>> slow = SmoothingConfig(kappa_max=1 / 6, wheelbase=2.5, max_sharpness=0.005,
+    ...                        min_sharpness=0.005)
+    >>> print(slow_steering_note(slow))  # doctest: +NORMALIZE_WHITESPACE
+    (the car's steering rate bounds the turns: 0.005 rad of steering a metre, so 79 m
+    of road from straight to full lock; a faster actuator turns in less)
+    >>> slow_steering_note(SmoothingConfig(kappa_max=1 / 6, wheelbase=2.5))
+    ''
+    """
+    full_lock = math.atan(cfg.wheelbase * cfg.kappa_max)
+    run = full_lock / cfg.max_sharpness
+    if run <= 1.0 / cfg.kappa_max:
+        return ""
+    return (
+        f" (the car's steering rate bounds the turns: {cfg.max_sharpness:g} rad of steering "
+        f"a metre, so {run:.0f} m of road from straight to full lock; a faster actuator "
+        "turns in less)"
     )
 
 
