@@ -69,3 +69,9 @@ def test_a_bad_value_on_stdin_is_named_as_from_stdin(tmp_path):
     p = _bench(tmp_path, "--config", "-", stdin='maps = ["parking_lot"]\nseeds = -1\n')
     assert p.returncode == 2 and "Traceback" not in p.stderr
     assert "(in 'stdin')" in p.stderr and "seeds" in p.stderr
+
+
+def test_a_folder_as_config_says_why_once(tmp_path):
+    with pytest.raises(InputError) as err:
+        load_toml(tmp_path)
+    assert str(err.value) == f"config: cannot read {str(tmp_path)!r}: Is a directory"

@@ -47,3 +47,13 @@ def test_a_name_close_to_nothing_gets_no_suggestion(capsys):
     assert code == 2 and "did you mean" not in err
     code, err = _cli(["plan", "parking_lot", "--zzzz-qqq", "1"], capsys)
     assert code == 2 and "did you mean" not in err and "--zzzz-qqq" in err
+
+
+def test_a_car_field_is_suggested_and_null_is_said_in_jsons_words():
+    from rrtdrive.types import InputError
+    from rrtdrive.vehicle_json import vehicle_from_json
+
+    with pytest.raises(InputError, match=r"\['lenght'\] \(did you mean 'length'\?\)"):
+        vehicle_from_json({"lenght": 3.0})
+    with pytest.raises(InputError, match=r"got null$"):
+        vehicle_from_json(None)

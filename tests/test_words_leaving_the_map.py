@@ -74,7 +74,7 @@ def _reference_move(pose, kappa, gear, body, longest, spacing):
     return np.vstack([[pose.x, pose.y, pose.yaw], poses_[:n]])
 
 
-@settings(max_examples=80, deadline=None)
+@settings(max_examples=30, deadline=None)
 @given(poses, radii, st.sampled_from([1, -1]), st.sampled_from([1.0, -1.0]),
        st.floats(0.05, 2 * math.pi))  # fmt: skip
 def test_a_move_tested_in_chunks_stops_where_the_whole_move_did(pose, radius, gear, side, turned):

@@ -12,8 +12,9 @@ import dataclasses
 import math
 from collections.abc import Mapping
 
+from rrtdrive.json_input import json_kind
 from rrtdrive.types import InputError, VehicleParams
-from rrtdrive.values import brief_repr, is_finite_number
+from rrtdrive.values import brief_repr, did_you_mean, is_finite_number
 
 __all__ = ["VEHICLE_KEYS", "vehicle_from_json", "vehicle_to_json"]
 
@@ -72,16 +73,19 @@ def vehicle_from_json(value: object, field: str = "vehicle") -> VehicleParams:
     >>> vehicle_from_json({"lenght": 5.0})  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    rrtdrive.types.InputError: vehicle: unknown key(s) ['lenght']; allowed length, width, ...
+    rrtdrive.types.InputError: vehicle: unknown key(s) ['lenght'] (did you mean 'length'?); ...
     """
     if not isinstance(value, Mapping):
         raise InputError(
             f"{field}: expected an object of the car's fields ({', '.join(VEHICLE_KEYS)}), "
-            f"got {brief_repr(value)}"
+            f"got {json_kind(value)}"
         )
     unknown = sorted(str(k) for k in value if k not in VEHICLE_KEYS)
     if unknown:
-        raise InputError(f"{field}: unknown key(s) {unknown}; allowed {', '.join(VEHICLE_KEYS)}")
+        raise InputError(
+            f"{field}: unknown key(s) {unknown}{did_you_mean(unknown[0], VEHICLE_KEYS)}; "
+            f"allowed {', '.join(VEHICLE_KEYS)}"
+        )
     for key, number in value.items():
         # Instant steering: null, or inf (gymnasium's spec JSON writes Infinity).
         if key == "max_steer_rate" and (number is None or number == math.inf):

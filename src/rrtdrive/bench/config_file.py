@@ -52,7 +52,9 @@ def load_toml(path: str | os.PathLike[str]) -> dict[str, Any]:
     except FileNotFoundError:
         raise InputError(f"config: no such file {str(p)!r}") from None
     except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"config: cannot read {str(p)!r}: {exc}") from None
+        # The reason alone: str(OSError) repeats the errno and the path.
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise InputError(f"config: cannot read {str(p)!r}: {why}") from None
     except tomllib.TOMLDecodeError as exc:
         raise InputError(_toml_error(exc, text, str(p))) from None
     except RecursionError:

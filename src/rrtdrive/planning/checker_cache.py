@@ -40,5 +40,8 @@ def cached_checker(m: Map, config: CheckerConfig | None = None) -> CollisionChec
                     _CHECKERS[key] = checker
     finally:  # also after a failed build: no lock left behind
         with _CHECKERS_LOCK:
-            _BUILDING.pop(key, None)
+            # Only this build's lock: a later one's (after the cache was cleared) kept
+            # its waiters from building the map a second time at once.
+            if _BUILDING.get(key) is building:
+                del _BUILDING[key]
     return checker
