@@ -51,6 +51,20 @@ Shots = Callable[[Pose], Iterable[list[Piece]]]
 _TURN = {"L": 1, "S": 0, "R": -1}
 
 
+def _segment_end(
+    x: float, y: float, yaw: float, c0: float, s0: float, turn: int, u: float, radius: float
+) -> tuple[float, float, float]:
+    """The pose after ``u`` metres of a segment (``turn`` -1, 0, 1) from ``(x, y, yaw)``.
+
+    ``c0, s0``: the cosine and sine of ``yaw``. The arithmetic of :func:`walk_poses`'
+    closed form at the segment's last pose.
+    """
+    if turn == 0:
+        return x + u * c0, y + u * s0, yaw
+    yaw = yaw + turn * u / radius
+    return x + turn * radius * (math.sin(yaw) - s0), y - turn * radius * (math.cos(yaw) - c0), yaw
+
+
 def walk_poses(
     start: Pose, words: Sequence[tuple[str, Sequence[float]]], radius: float, spacing: float
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -87,13 +101,7 @@ def walk_poses(
             firsts.append(total)
             total += n
             sizes[w] += n
-            u = seg * n / n
-            if turn == 0:
-                x, y = x + u * c0, y + u * s0
-            else:
-                yaw = yaw + turn * u / radius
-                x = x + turn * radius * (math.sin(yaw) - s0)
-                y = y - turn * radius * (math.cos(yaw) - c0)
+            x, y, yaw = _segment_end(x, y, yaw, c0, s0, turn, seg * n / n, radius)
     if not counts:
         return np.zeros((0, 3)), np.array(sizes, dtype=np.int64)
     # Each pose's segment columns; k = 1..n within its segment (n exact as a float).
@@ -177,14 +185,8 @@ def _leaves_map(
     margin = body.checker.vehicle.length + 1.0
     x, y, yaw = start.x, start.y, start.yaw
     for letter, seg in zip(word, lengths, strict=True):
-        turn = _TURN[letter]
-        c0, s0 = math.cos(yaw), math.sin(yaw)
-        if turn == 0:
-            x, y = x + seg * c0, y + seg * s0
-        else:
-            yaw = yaw + turn * seg / radius
-            x = x + turn * radius * (math.sin(yaw) - s0)
-            y = y - turn * radius * (math.cos(yaw) - c0)
+        x, y, yaw = _segment_end(x, y, yaw, math.cos(yaw), math.sin(yaw), _TURN[letter], seg,
+                                 radius)  # fmt: skip
         if not (x0 - margin <= x <= x1 + margin and y0 - margin <= y <= y1 + margin):
             return True
     return False
