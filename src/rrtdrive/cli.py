@@ -287,8 +287,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
     # Each file whatever became of the other; a failure is reported after the summary.
     unwritten = write_each([
-        ("--json", None if args.json == "-" else args.json,
-         lambda: write_text_atomic(args.json, text)),
+        ("--json", args.json, lambda: write_text_atomic(args.json, text)),
         ("--plot", args.plot, plot),
     ])  # fmt: skip
     cusps = len(result.path.cusps)

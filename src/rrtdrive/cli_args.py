@@ -170,10 +170,11 @@ def write_each(
 ) -> list[OutputError]:
     """Write every output asked for, each whatever became of the others.
 
-    ``outputs``: ``(flag, target, write)``; ``write`` runs when ``target`` is given,
-    inside :func:`writing`. One that cannot be written (a full disk, a folder gone) does
-    not keep the next from being written: a failed ``--json`` lost the ``--plot`` and
-    the summary of a plan that had run (an audit).
+    ``outputs``: ``(flag, target, write)``; ``write`` runs when ``target`` is a file,
+    inside :func:`writing` (``-``, stdout, is the caller's to print in its place). One
+    that cannot be written (a full disk, a folder gone) does not keep the next from
+    being written: a failed ``--json`` lost the ``--plot`` and the summary of a plan
+    that had run (an audit).
 
     Returns
     -------
@@ -182,7 +183,7 @@ def write_each(
     """
     unwritten: list[OutputError] = []
     for flag, target, write in outputs:
-        if not target:
+        if not target or target == "-":
             continue
         try:
             with writing(flag, target):

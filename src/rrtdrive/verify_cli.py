@@ -328,8 +328,7 @@ def run(args: argparse.Namespace) -> int:
     # of the other; a failure is reported after the verdict.
     unwritten = write_each([
         ("--plot", plot, draw),
-        ("--json", None if args.json == "-" else args.json,
-         lambda: write_text_atomic(args.json, text)),
+        ("--json", args.json, lambda: write_text_atomic(args.json, text)),
     ])  # fmt: skip
     if rows < 2:
         status = data.get("status", "unknown")

@@ -556,10 +556,9 @@ def _run(args: argparse.Namespace) -> int:
     from rrtdrive.sim.episode import trajectory_csv
 
     files = write_each([
-        ("--trajectory", None if args.trajectory == "-" else args.trajectory,
+        ("--trajectory", args.trajectory,
          lambda: write_text_atomic(args.trajectory, trajectory_csv(episode))),
-        ("--json", None if args.json == "-" else args.json,
-         lambda: write_text_atomic(args.json, text)),
+        ("--json", args.json, lambda: write_text_atomic(args.json, text)),
     ])  # fmt: skip
     unwritten += files
     written = args.trajectory not in (None, "", "-") and "--trajectory" not in {
